@@ -1,0 +1,22 @@
+// Big-endian field helpers for codecs. Every protocol drivegate speaks puts the high byte first
+// unless its document says otherwise; codecs that differ say so where they differ.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace drivegate {
+
+constexpr std::uint16_t be16(std::uint8_t hi, std::uint8_t lo) {
+  return static_cast<std::uint16_t>((hi << 8) | lo);
+}
+constexpr std::uint8_t hi8(std::uint16_t v) { return static_cast<std::uint8_t>(v >> 8); }
+constexpr std::uint8_t lo8(std::uint16_t v) { return static_cast<std::uint8_t>(v & 0xFF); }
+
+inline void put_be16(std::vector<std::uint8_t>& out, std::uint16_t v) {
+  out.push_back(hi8(v));
+  out.push_back(lo8(v));
+}
+
+}  // namespace drivegate

@@ -1,0 +1,145 @@
+// The stateful half of an adapter. A Driver never touches a file descriptor, a socket or a timer:
+// the gateway's bus engine asks it what to send, hands it the bytes that came back and the time,
+// and reads the state it publishes. This makes every driver testable with plain byte vectors.
+//
+// One bus engine serves every device on a serial line, one transaction at a time:
+//   1. When the line is free it asks each device's driver for next_exchange(now). Commands go
+//      ahead of polls; among devices of equal priority it goes round-robin, so a silent device
+//      costs the others at most its own time budget (timeout x attempts) per turn.
+//   2. It waits traits().inter_frame_gap of line silence, writes Exchange::frame (discarding and
+//      checking the echo on one-wire lines) and, if a reply is expected, collects bytes.
+//   3. Every byte received, solicited or not, goes to on_receive() until the driver says a reply
+//      is complete; bytes before that are kept, so a driver may return incomplete and see them
+//      again with more appended.
+//   4. On timeout, a bad checksum or a NACK the engine resends the identical frame while attempts
+//      remain, then calls on_no_reply(). The engine owns retry counting, back-off of silent
+//      devices, comm_lost (no good frame for traits().comm_timeout) and all counters.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "drivegate/common.h"
+#include "drivegate/options.h"
+#include "drivegate/point.h"
+
+namespace drivegate {
+
+using Clock = std::chrono::steady_clock;
+using TimePoint = Clock::time_point;
+using Bytes = std::vector<std::uint8_t>;
+using ByteView = std::span<const std::uint8_t>;
+using Millis = std::chrono::milliseconds;
+
+enum class Priority : std::uint8_t { poll = 0, command = 1 };
+enum class ReplyMode : std::uint8_t {
+  expected,  // request / reply: wait for on_receive() to return RxKind::reply
+  none,      // broadcast, or a write the device never acknowledges: done once written
+};
+
+// One transaction on the line.
+struct Exchange {
+  Bytes frame;
+  ReplyMode reply = ReplyMode::expected;
+  Millis timeout{100};         // per attempt: from the last byte written to a complete reply
+  std::uint8_t attempts = 1;   // identical sends in this turn (1 = no retry)
+  Priority priority = Priority::poll;
+};
+
+enum class RxKind : std::uint8_t {
+  incomplete,    // a frame may be under way: wait for more bytes (consumed is usually 0)
+  reply,         // the awaited reply, decoded and applied: the exchange is done
+  frame,         // a good frame that is not the awaited reply (a streamed status): applied
+  nack,          // the device refused the frame at protocol level: resend
+  bad_checksum,  // frame-shaped bytes whose checksum does not hold: dropped, resend
+  foreign,       // a good frame for another address or sequence number: dropped, keep waiting
+  noise,         // bytes that cannot start a frame: dropped, keep waiting
+};
+
+struct RxVerdict {
+  RxKind kind = RxKind::incomplete;
+  std::size_t consumed = 0;  // bytes of the input this verdict covers (dropped from the buffer)
+};
+
+// State every adapter publishes; the gateway turns it into the common register block.
+struct CommonState {
+  bool ready = false;       // the protocol's handshake is done (e.g. ping answered)
+  bool running = false;     // the motor turns or is commanded to
+  bool warning = false;
+  FaultSet faults;          // unified faults now active (comm_lost is added by the gateway)
+  std::uint32_t native_fault = 0;  // the protocol's raw fault code or bitmask
+  std::int32_t speed_rpm = 0;      // actual speed, negative in reverse where the drive says so
+  std::int32_t setpoint_rpm = 0;   // the target the driver works towards
+  Command command = Command::stop; // the command in force
+};
+
+// Ticket of a write in flight; the driver reports its outcome through take_completions().
+using Ticket = std::uint64_t;
+
+enum class WriteStatus : std::uint8_t {
+  done,           // applied without bus traffic (e.g. a setpoint stored while stopped)
+  pending,        // queued: a Completion with this ticket follows
+  invalid_value,  // Modbus exception 0x03 (out of range, a command the drive cannot do)
+  refused,        // Modbus exception 0x04 (the drive is in a state where it cannot)
+};
+
+enum class WriteResult : std::uint8_t {
+  ok,
+  refused,      // the device answered no (exception 0x04)
+  no_response,  // the device did not answer or did not take it in time (exception 0x0B)
+};
+
+struct Completion {
+  Ticket ticket;
+  WriteResult result;
+};
+
+struct DriverTraits {
+  Millis comm_timeout{6000};   // no good frame for this long: comm_lost
+  Millis write_timeout{3000};  // the gateway fails a write still pending after this (0x0B)
+  Millis inter_frame_gap{0};   // line silence the bus keeps before each frame
+};
+
+// What the gateway knows about the device when it creates the driver.
+struct DeviceEnv {
+  std::string name;
+  std::uint32_t address = 0;  // native bus address; 0 where the protocol has none
+  Millis poll_interval{500};
+  Options options;            // validated against the adapter's schema, defaults filled in
+  bool maintenance = false;   // created by `drivegate write`: maintenance-only writes allowed
+};
+
+class Driver {
+ public:
+  virtual ~Driver() = default;
+
+  [[nodiscard]] virtual DriverTraits traits() const = 0;
+  // The adapter's own points, laid out after the common block. Fixed for the driver's lifetime.
+  [[nodiscard]] virtual const std::vector<PointSpec>& points() const = 0;
+  // Current values of points(), same order and size.
+  [[nodiscard]] virtual const std::vector<Value>& values() const = 0;
+  [[nodiscard]] virtual const CommonState& common() const = 0;
+
+  // The next transaction due at `now`, or nothing (then the engine asks again at wake_at()).
+  virtual std::optional<Exchange> next_exchange(TimePoint now) = 0;
+  // When the driver will next have something to send (keep-alive, poll, refresh).
+  [[nodiscard]] virtual TimePoint wake_at() const = 0;
+  virtual RxVerdict on_receive(ByteView rx, TimePoint now) = 0;
+  // The exchange got no valid reply after all its attempts.
+  virtual void on_no_reply(TimePoint now) = 0;
+  // The engine declared comm_lost: forget the handshake, fail pending writes.
+  virtual void on_comm_lost(TimePoint now) = 0;
+
+  // Writes from Modbus, validated for table, access and the point's min/max already.
+  virtual WriteStatus command(Command c, Ticket t, TimePoint now) = 0;
+  virtual WriteStatus setpoint(std::int32_t rpm, Ticket t, TimePoint now) = 0;
+  virtual WriteStatus write(std::size_t point, const Value& v, Ticket t, TimePoint now) = 0;
+  // Outcomes of pending writes since the last call, appended to `out`.
+  virtual void take_completions(std::vector<Completion>& out) = 0;
+};
+
+}  // namespace drivegate
