@@ -18,7 +18,9 @@ enum class OptionType : std::uint8_t { integer, real, boolean, string, string_li
 struct OptionSpec {
   const char* name;
   OptionType type;
-  const char* default_value;  // TOML-like literal: "500", "4.0", "true", "normal", "" = none
+  // Default as text: "500", "4.0", "true", "normal"; string_list: comma-separated ("0D00,0D01"),
+  // "" = empty. Every option has a default, so drivers never meet a missing one.
+  const char* default_value;
   const char* description;
   double min = 0.0;           // integer / real only; min == max means unbounded
   double max = 0.0;
