@@ -1,0 +1,120 @@
+#include "codec.h"
+
+#include <numeric>
+
+namespace drivegate::mdriver {
+namespace {
+
+bool known_command(std::uint8_t cmd) {
+  return cmd == static_cast<std::uint8_t>(Cmd::check) || cmd == static_cast<std::uint8_t>(Cmd::run);
+}
+
+std::uint8_t sum(ByteSpan bytes) {
+  return static_cast<std::uint8_t>(std::accumulate(bytes.begin(), bytes.end(), 0u));
+}
+
+Decoded<Frame> bad(std::size_t consumed, FrameError e) {
+  Decoded<Frame> d;
+  d.status = DecodeStatus::bad;
+  d.consumed = consumed;
+  d.error = make_error_code(e);
+  return d;
+}
+
+// One frame at the start of rx, no resynchronisation.
+Decoded<Frame> decode_at(ByteSpan rx) {
+  // Section 3: D2 is one of the two commands; anything else cannot start a frame.
+  if (rx.size() > 2 && !known_command(rx[2])) return bad(1, FrameError::bad_header);
+  if (rx.size() < kHeaderSize) return {};
+  const std::size_t data_len = std::size_t{rx[3]} + 1;  // D3 = data length - 1
+  if (data_len > kMaxData) return bad(1, FrameError::bad_length);
+  const std::size_t total = kOverhead + data_len;
+  if (rx.size() < total) return {};
+  if (sum(rx.first(total)) != kChecksumTotal) return bad(total, FrameError::bad_checksum);
+  Decoded<Frame> d;
+  d.status = DecodeStatus::frame;
+  d.consumed = total;
+  d.frame.src = rx[0];
+  d.frame.dst = rx[1];
+  d.frame.cmd = rx[2];
+  d.frame.data.assign(rx.begin() + kHeaderSize, rx.begin() + static_cast<long>(total - 1));
+  return d;
+}
+
+}  // namespace
+
+std::uint8_t checksum(ByteSpan bytes) {
+  return static_cast<std::uint8_t>(kChecksumTotal - sum(bytes));
+}
+
+Wire encode(const Frame& f) {
+  Wire out;
+  out.reserve(kOverhead + f.data.size());
+  out.push_back(f.src);
+  out.push_back(f.dst);
+  out.push_back(f.cmd);
+  out.push_back(static_cast<std::uint8_t>(f.data.size() - 1));
+  out.insert(out.end(), f.data.begin(), f.data.end());
+  out.push_back(checksum(out));
+  return out;
+}
+
+Decoded<Frame> decode(ByteSpan rx) {
+  Decoded<Frame> d = decode_at(rx);
+  if (d.status != DecodeStatus::bad || d.error != FrameError::bad_checksum) return d;
+  // A truncated frame followed by a whole one looks like one frame-shaped run with a bad sum:
+  // drop only the bytes before a checked frame that starts inside it.
+  for (std::size_t k = 1; k < d.consumed; ++k) {
+    if (decode_at(rx.subspan(k)).status == DecodeStatus::frame) {
+      return bad(k, FrameError::bad_header);
+    }
+  }
+  return d;
+}
+
+Wire encode_check(std::uint8_t master, std::uint8_t device) {
+  return encode({master,
+                 device,
+                 static_cast<std::uint8_t>(Cmd::check),
+                 {kFixedCode.begin(), kFixedCode.end()}});
+}
+
+Wire encode_run(std::uint8_t master, std::uint8_t device, std::uint8_t code, std::uint8_t change) {
+  // Section 3 No.2: D4 target code, D5 change time, D6 reserved 00.
+  return encode({master, device, static_cast<std::uint8_t>(Cmd::run), {code, change, 0x00}});
+}
+
+Wire encode_check_reply(std::uint8_t device, std::uint8_t master,
+                        const std::array<std::uint8_t, 4>& code) {
+  return encode(
+      {device, master, static_cast<std::uint8_t>(Cmd::check), {code.begin(), code.end()}});
+}
+
+Wire encode_run_reply(std::uint8_t device, std::uint8_t master, const RunReply& r) {
+  return encode({device,
+                 master,
+                 static_cast<std::uint8_t>(Cmd::run),
+                 {r.target_code, r.actual_code, r.reserved, r.error_code, r.ipm_temp_c, r.info[0],
+                  r.info[1], r.info[2]}});
+}
+
+std::optional<std::array<std::uint8_t, 4>> parse_check(const Frame& f) {
+  // Section 3 No.1: D3/R3 = 03, four code bytes.
+  if (f.cmd != static_cast<std::uint8_t>(Cmd::check) || f.data.size() != 4) return std::nullopt;
+  return std::array<std::uint8_t, 4>{f.data[0], f.data[1], f.data[2], f.data[3]};
+}
+
+std::optional<RunReply> parse_run_reply(const Frame& f) {
+  // Section 3 No.2: R3 = 07, eight data bytes R4..R11.
+  if (f.cmd != static_cast<std::uint8_t>(Cmd::run) || f.data.size() != 8) return std::nullopt;
+  const auto& d = f.data;
+  return RunReply{d[0], d[1], d[2], d[3], d[4], {d[5], d[6], d[7]}};
+}
+
+std::optional<RunRequest> parse_run_request(const Frame& f) {
+  // Section 3 No.2: D3 = 02, three data bytes D4..D6.
+  if (f.cmd != static_cast<std::uint8_t>(Cmd::run) || f.data.size() != 3) return std::nullopt;
+  return RunRequest{f.data[0], f.data[1]};
+}
+
+}  // namespace drivegate::mdriver

@@ -1,0 +1,223 @@
+#include "simulator.h"
+
+#include <charconv>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include "error_codes.h"
+#include "rpm_table.h"
+
+namespace drivegate::mdriver {
+namespace {
+
+constexpr const char* kHelp =
+    "state | fault <name|code> | clear | silent on|off | corrupt N | eeprom fail|ok | temp N | "
+    "info <1..3> N | power-cycle";
+
+std::vector<std::string> words(std::string_view line) {
+  std::vector<std::string> out;
+  std::istringstream in{std::string(line)};
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+// Decimal or 0x-prefixed hex, 0..255.
+std::optional<std::uint8_t> parse_byte(std::string_view s) {
+  int base = 10;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    s.remove_prefix(2);
+    base = 16;
+  }
+  unsigned v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
+  if (ec != std::errc{} || p != s.data() + s.size() || v > 0xFF) return std::nullopt;
+  return static_cast<std::uint8_t>(v);
+}
+
+std::string hex(std::uint8_t v) {
+  char b[8];
+  std::snprintf(b, sizeof b, "0x%02x", v);
+  return b;
+}
+
+}  // namespace
+
+MSimulator::MSimulator(std::uint8_t address) : address_(address) {
+  power_on();
+}
+
+void MSimulator::power_on() {
+  buf_.clear();
+  last_frame_.reset();
+  checked_ = false;
+  target_ = 0;
+  change_ = kChangeNormal;
+  actual_ = 0;
+  error_ = 0;
+}
+
+Bytes MSimulator::on_receive(ByteView rx, TimePoint now) {
+  if (!buf_.empty() && now - last_rx_ > kStaleRx) buf_.clear();
+  last_rx_ = now;
+  buf_.insert(buf_.end(), rx.begin(), rx.end());
+  Bytes out;
+  while (!buf_.empty()) {
+    const Decoded<Frame> d = decode(buf_);
+    if (d.status == DecodeStatus::incomplete) break;
+    buf_.erase(buf_.begin(), buf_.begin() + static_cast<long>(d.consumed));
+    if (d.status == DecodeStatus::bad) {
+      ++ignored_;  // "異常信号": ignored, no return signal
+      continue;
+    }
+    Bytes reply = handle(d.frame, now);
+    if (reply.empty() || silent_) continue;
+    if (corrupt_ > 0) {
+      --corrupt_;
+      reply.back() = static_cast<std::uint8_t>(reply.back() ^ 0x5A);
+    }
+    out.insert(out.end(), reply.begin(), reply.end());
+  }
+  return out;
+}
+
+Bytes MSimulator::handle(const Frame& f, TimePoint now) {
+  // Section 2: answer only frames addressed to this driver, to the address they came from.
+  if (f.dst != address_) return {};
+  if (f.cmd == static_cast<std::uint8_t>(Cmd::check)) {
+    const auto code = parse_check(f);
+    if (!code) return ++ignored_, Bytes{};
+    ++frames_;
+    last_frame_ = now;
+    if (eeprom_ok_ && *code == kFixedCode) {
+      checked_ = true;
+      return encode_check_reply(address_, f.src, *code);
+    }
+    return encode_check_reply(address_, f.src, kFixedCodeError);
+  }
+  const auto req = parse_run_request(f);
+  if (!req) return ++ignored_, Bytes{};
+  ++frames_;
+  last_frame_ = now;
+  // Not in the document: before a good fixed-code check the driver does not take run data.
+  if (!checked_) return ++ignored_, Bytes{};
+  if (req->code == kCodeResetStop) error_ = 0;  // [00]: error reset & stop
+  target_ = req->code;
+  change_ = req->change;
+  RunReply r;
+  r.target_code = target_;
+  r.actual_code = actual_;
+  r.error_code = error_;
+  r.ipm_temp_c = temp_c_;
+  r.info = info_;
+  return encode_run_reply(address_, f.src, r);
+}
+
+std::uint8_t MSimulator::effective_target() const {
+  if (error_ != 0 || target_ <= kCodeStopMax) return 0;
+  // Not in the document: codes 0x0F..0x1B (under the lowest running speed) run at 0x1C.
+  return std::max(target_, kCodeLowestRun);
+}
+
+Bytes MSimulator::on_tick(TimePoint now) {
+  if (last_frame_ && now - *last_frame_ >= kSilenceTrip && error_ == 0) {
+    error_ = 0x0C;  // error table: communication error, stop
+    actual_ = 0;
+    last_frame_.reset();
+  }
+  while (now - last_step_ >= kRampStep) {
+    last_step_ = (last_step_ == TimePoint{}) ? now : last_step_ + kRampStep;
+    const std::uint8_t goal = effective_target();
+    if (goal == 0 && actual_ <= kCodeLowestRun) {
+      actual_ = 0;  // under the lowest running speed the motor stops
+    } else if (actual_ < goal) {
+      actual_ = std::max<std::uint8_t>(static_cast<std::uint8_t>(actual_ + 1), kCodeLowestRun);
+    } else if (actual_ > goal) {
+      --actual_;
+    }
+  }
+  return {};
+}
+
+std::string MSimulator::state() const {
+  std::ostringstream s;
+  s << "address=" << hex(address_) << " checked=" << (checked_ ? 1 : 0)
+    << " eeprom=" << (eeprom_ok_ ? "ok" : "fail") << " target=" << hex(target_)
+    << " change=" << hex(change_) << " actual=" << hex(actual_)
+    << " rpm=" << (actual_ == 0 ? 0 : rpm_of_code(actual_)) << " error=" << hex(error_)
+    << " temp=" << unsigned{temp_c_} << " info=" << hex(info_[0]) << "," << hex(info_[1]) << ","
+    << hex(info_[2]) << " silent=" << (silent_ ? "on" : "off") << " corrupt=" << corrupt_
+    << " frames=" << frames_ << " ignored=" << ignored_;
+  return s.str();
+}
+
+std::string MSimulator::control(std::string_view line, TimePoint now) {
+  const auto w = words(line);
+  if (w.empty()) return std::string("error: empty command; commands: ") + kHelp;
+  const std::string& cmd = w[0];
+  if (cmd == "state" && w.size() == 1) return state();
+  if (cmd == "fault" && w.size() == 2) {
+    std::optional<std::uint8_t> code = parse_byte(w[1]);
+    if (!code) {
+      if (auto e = find_error(w[1])) code = e->code;
+    }
+    if (!code) {
+      // Unified names as aliases: the first row that maps to the fault.
+      for (const auto& e : error_codes()) {
+        if (to_string(e.fault) == w[1]) {
+          code = e.code;
+          break;
+        }
+      }
+    }
+    if (!code || *code == 0) {
+      std::string names;
+      for (const auto& e : error_codes()) names += " " + std::string(e.name);
+      return "error: unknown fault '" + w[1] + "'; names:" + names + " (or a code 1..255)";
+    }
+    error_ = *code;
+    actual_ = 0;  // every error of the table stops the motor
+    return "ok error=" + hex(error_);
+  }
+  if (cmd == "clear" && w.size() == 1) {
+    error_ = 0;
+    return "ok";
+  }
+  if (cmd == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
+    silent_ = w[1] == "on";
+    return "ok silent=" + w[1];
+  }
+  if (cmd == "corrupt" && w.size() == 2) {
+    if (auto n = parse_byte(w[1])) {
+      corrupt_ = *n;
+      return "ok corrupt=" + std::to_string(corrupt_);
+    }
+  }
+  if (cmd == "eeprom" && w.size() == 2 && (w[1] == "fail" || w[1] == "ok")) {
+    eeprom_ok_ = w[1] == "ok";
+    if (!eeprom_ok_) checked_ = false;
+    return "ok eeprom=" + w[1];
+  }
+  if (cmd == "temp" && w.size() == 2) {
+    if (auto t = parse_byte(w[1])) {
+      temp_c_ = *t;
+      return "ok temp=" + std::to_string(temp_c_);
+    }
+  }
+  if (cmd == "info" && w.size() == 3) {
+    const auto i = parse_byte(w[1]);
+    const auto v = parse_byte(w[2]);
+    if (i && v && *i >= 1 && *i <= 3) {
+      info_[*i - 1] = *v;
+      return "ok";
+    }
+  }
+  if (cmd == "power-cycle" && w.size() == 1) {
+    power_on();
+    last_step_ = now;
+    return "ok";
+  }
+  return "error: bad command '" + std::string(line) + "'; commands: " + kHelp;
+}
+
+}  // namespace drivegate::mdriver
