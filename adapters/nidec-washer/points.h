@@ -1,0 +1,67 @@
+// The adapter's own points (after the common block) and the enums their values name.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "drivegate/point.h"
+
+namespace drivegate::nidec {
+
+// What run_forward / run_reverse start (holding point `motion`).
+enum class Motion : std::uint16_t {
+  rotation = 0,         // forward = CW 0x09 (5.3), reverse = CCW 0x0B (5.4)
+  spin = 1,             // 0x0D (5.6), forward only
+  agitation = 2,        // 0x0C (5.5), forward only
+  free_shaft_spin = 3,  // 0x1D (5.14), forward only
+};
+
+// One-shot requests (holding point `action`).
+enum class Action : std::uint16_t {
+  none = 0,
+  voltage_detection = 1,     // 0x2B (5.9)
+  weight_detection = 2,      // 0x2C (5.10)
+  fabric_detection = 3,      // 0x2D (5.11)
+  forced_brake_enable = 4,   // 0x1B 01 (5.13)
+  forced_brake_disable = 5,  // 0x1B 00 (5.13)
+  fct_test = 6,              // 0x66 (5.15)
+  ping = 7,                  // 0x02 (5.1), sent again on request
+};
+inline constexpr std::uint16_t kActionMax = 7;
+
+// Outcome of the last `action` (input point `action_status`).
+enum class ActionStatus : std::uint16_t { idle = 0, pending = 1, done = 2, no_response = 3 };
+
+// Indices into points() / values().
+namespace pt {
+inline constexpr std::size_t motion = 0;
+inline constexpr std::size_t accel_time = 1;
+inline constexpr std::size_t agitation_accel = 2;
+inline constexpr std::size_t agitation_decel = 3;
+inline constexpr std::size_t agitation_cw_on = 4;
+inline constexpr std::size_t agitation_cw_off = 5;
+inline constexpr std::size_t agitation_ccw_on = 6;
+inline constexpr std::size_t agitation_ccw_off = 7;
+inline constexpr std::size_t action = 8;
+inline constexpr std::size_t action_status = 9;
+inline constexpr std::size_t inverter_version = 10;
+inline constexpr std::size_t platform = 11;
+inline constexpr std::size_t error_bits = 12;
+inline constexpr std::size_t weight = 13;
+inline constexpr std::size_t raw_weight = 14;
+inline constexpr std::size_t dc_bus_voltage = 15;
+inline constexpr std::size_t forced_brake = 16;
+inline constexpr std::size_t fabric_raw = 17;
+inline constexpr std::size_t fct_error = 18;
+inline constexpr std::size_t fct_speed_rpm = 19;
+inline constexpr std::size_t fct_ipm_temperature = 20;
+inline constexpr std::size_t fct_ipm_model_bus_volt_high = 21;
+inline constexpr std::size_t fct_bus_volt_low = 22;
+inline constexpr std::size_t fct_phase_current = 23;
+inline constexpr std::size_t count = 24;
+}  // namespace pt
+
+std::vector<PointSpec> make_points();
+
+}  // namespace drivegate::nidec

@@ -1,0 +1,120 @@
+// WasherSimulator: operator commands (`drivegate sim nidec-washer` passes stdin lines here).
+#include <charconv>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include "faults.h"
+#include "simulator.h"
+
+namespace drivegate::nidec {
+namespace {
+
+constexpr const char* kHelp =
+    "state, fault <name|raw>, clear, silent on|off, corrupt N, nack N, load N (x100 g), "
+    "bus V, fabric N, version N";
+
+std::vector<std::string> words(std::string_view line) {
+  std::istringstream in{std::string(line)};
+  std::vector<std::string> out;
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+// Decimal or 0x-prefixed hexadecimal, within [0, max].
+std::optional<long> number(const std::string& s, long max) {
+  int base = 10;
+  std::string_view v = s;
+  if (v.size() > 2 && v[0] == '0' && (v[1] == 'x' || v[1] == 'X')) {
+    base = 16;
+    v.remove_prefix(2);
+  }
+  long n = 0;
+  const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n, base);
+  if (ec != std::errc{} || p != v.data() + v.size() || n < 0 || n > max) return std::nullopt;
+  return n;
+}
+
+std::string hex(unsigned v, int width) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%0*X", width, v);
+  return buf;
+}
+
+constexpr const char* kMotionNames[] = {"stopped", "cw",   "ccw",             "agitation",
+                                        "spin",    "free_shaft_spin", "stopping", "braking"};
+
+}  // namespace
+
+std::string WasherSimulator::state() const {
+  std::ostringstream s;
+  s << "pinged=" << pinged_ << " platform=" << int{platform_} << " empty_raw_weight=" << empty_raw_
+    << " version=" << hex(version_, 4) << " motion=" << kMotionNames[static_cast<int>(motion_)]
+    << " target_rpm=" << target_ << " speed_rpm=" << speed() << " faults=" << hex(faults_, 2)
+    << " forced_brake=" << forced_brake_ << " dc_bus=" << dc_bus_ << " load=" << int{load_}
+    << " weighing=" << weighing_since_.has_value() << " weight=" << int{weight()}
+    << " raw_weight=" << raw_weight() << " fabric=" << int{fabric_} << " silent=" << silent_
+    << " corrupt=" << corrupt_ << " nack=" << nack_ << " comm_fault=" << comm_fault_
+    << " frames=" << frames_ << " nacks_sent=" << nacks_sent_;
+  return s.str();
+}
+
+std::string WasherSimulator::control(std::string_view line, TimePoint now) {
+  advance(now);
+  const std::vector<std::string> w = words(line);
+  const auto error = [&](const std::string& why) { return "error: " + why + "; commands: " + kHelp; };
+  if (w.empty()) return error("empty command");
+  const std::string& cmd = w[0];
+  const std::optional<long> arg = w.size() == 2 ? number(w[1], 65535) : std::nullopt;
+  if (cmd == "state" && w.size() == 1) return state();
+  if (cmd == "clear" && w.size() == 1) {
+    faults_ = 0;
+    clear_at_ = {};
+    return "ok faults=0x00";
+  }
+  if (cmd == "fault" && w.size() == 2) {
+    std::optional<std::uint8_t> bits = fault_mask(w[1]);
+    if (!bits) {
+      if (const auto raw = number(w[1], 0xFF); raw && *raw != 0) {
+        bits = static_cast<std::uint8_t>(*raw);
+      }
+    }
+    if (!bits) return error("fault takes " + fault_names() + " or a raw bitmask 1..0xFF");
+    trip(*bits, now);
+    return "ok faults=" + hex(faults_, 2);
+  }
+  if (cmd == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
+    silent_ = w[1] == "on";
+    rx_.clear();
+    return std::string("ok silent=") + (silent_ ? "1" : "0");
+  }
+  const long n = arg.value_or(-1);
+  if (n < 0) return error("unknown command or bad argument '" + std::string(line) + "'");
+  if (cmd == "corrupt") {
+    corrupt_ = static_cast<int>(n);
+    return "ok corrupt=" + std::to_string(corrupt_);
+  }
+  if (cmd == "nack") {
+    nack_ = static_cast<int>(n);
+    return "ok nack=" + std::to_string(nack_);
+  }
+  if (cmd == "load" && n <= 0xFF) {
+    load_ = static_cast<std::uint8_t>(n);
+    return "ok load=" + std::to_string(load_);
+  }
+  if (cmd == "bus") {
+    dc_bus_ = static_cast<std::uint16_t>(n);
+    return "ok dc_bus=" + std::to_string(dc_bus_);
+  }
+  if (cmd == "fabric" && n <= 0xFF) {
+    fabric_ = static_cast<std::uint8_t>(n);
+    return "ok fabric=" + std::to_string(fabric_);
+  }
+  if (cmd == "version") {
+    version_ = static_cast<std::uint16_t>(n);
+    return "ok version=" + hex(version_, 4);
+  }
+  return error("unknown command or bad argument '" + std::string(line) + "'");
+}
+
+}  // namespace drivegate::nidec
