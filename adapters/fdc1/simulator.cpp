@@ -1,0 +1,242 @@
+#include "simulator.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cstdio>
+#include <sstream>
+
+#include "program.h"
+
+namespace drivegate::fdc1 {
+namespace {
+
+struct NamedAlarm {
+  std::string_view name;
+  std::uint8_t code;
+};
+
+// First code of each range (OUTPUT, "Alarm codes").
+constexpr std::array<NamedAlarm, 10> kAlarms = {{{"battery", 16},
+                                                 {"fan", 32},
+                                                 {"start", 48},
+                                                 {"overload", 64},
+                                                 {"temperature", 80},
+                                                 {"fan_eor", 160},
+                                                 {"start_eor", 176},
+                                                 {"overload_eor", 192},
+                                                 {"temperature_eor", 208},
+                                                 {"internal", 240}}};
+
+// Line noise the simulator can inject: contains the first header byte (1B) followed by bytes
+// that cannot continue a header, so a receiver must resynchronise.
+constexpr std::array<std::uint8_t, 8> kNoise = {0x00, 0x1B, 0xFF, 0x4D, 0x55, 0x1B, 0x1B, 0xAA};
+
+constexpr std::string_view kCommands =
+    "state, fault <battery|fan|start|overload|temperature|fan_eor|start_eor|overload_eor|"
+    "temperature_eor|internal|raw>, clear, silent on|off, corrupt N, noise N, mangle N, "
+    "delay S, thermostat on|off";
+
+std::optional<long> parse_number(std::string_view s) {
+  int base = 10;
+  if (s.starts_with("0x") || s.starts_with("0X")) {
+    s.remove_prefix(2);
+    base = 16;
+  }
+  long v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
+  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) return std::nullopt;
+  return v;
+}
+
+}  // namespace
+
+Fdc1Simulator::Fdc1Simulator(const Settings& settings)
+    : mode_(settings.slave_mode ? kModeSlave : 0),
+      speed_(settings.slave_mode ? Speed{0, kMaxRpm} : Speed{2000, 3000}) {}
+
+Bytes Fdc1Simulator::on_receive(ByteView rx, TimePoint now) {
+  if (rx_.empty()) rx_since_ = now;
+  rx_.insert(rx_.end(), rx.begin(), rx.end());
+  Bytes out;
+  while (!rx_.empty()) {
+    const auto d = decode_master(rx_);
+    if (d.status == DecodeStatus::incomplete) break;
+    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(std::max<std::size_t>(1, d.consumed)));
+    rx_since_ = now;
+    if (d.status == DecodeStatus::bad) {
+      ++rejected_;  // INPUT: bad checksums are ignored by the device
+      continue;
+    }
+    if (const auto* s = std::get_if<Speed>(&d.frame)) {
+      handle(*s, now);
+    } else {
+      const Bytes echo = handle(std::get<Program>(d.frame));
+      out.insert(out.end(), echo.begin(), echo.end());
+    }
+  }
+  if (silent_) return {};
+  return out;
+}
+
+void Fdc1Simulator::handle(const Speed& s, TimePoint now) {
+  const bool slave = is_slave(mode_);
+  const auto in_range = [](std::uint16_t v) { return v >= kMinRpm && v <= kMaxRpm; };
+  // INPUT, Programming speed: 1500..3500 rpm; in slave mode min 0 stops, max is irrelevant.
+  const bool ok = slave ? (s.min_rpm == 0 || in_range(s.min_rpm))
+                        : (in_range(s.min_rpm) && in_range(s.max_rpm) && s.min_rpm <= s.max_rpm);
+  if (!ok) {
+    ++rejected_;
+    return;
+  }
+  ++speeds_;
+  speed_ = s;
+  last_speed_ = now;
+  watchdog_tripped_ = false;
+}
+
+Bytes Fdc1Simulator::handle(const Program& p) {
+  ++programs_;
+  stored_ = p;
+  mode_ = p.mode;
+  if (!is_slave(mode_)) speed_ = {p.min_rpm, p.max_rpm};
+  Program echoed = p;
+  if (mangle_ > 0) {
+    --mangle_;
+    echoed.min_rpm = static_cast<std::uint16_t>(echoed.min_rpm + 1);
+  }
+  return emit(encode_echo(echoed));
+}
+
+double Fdc1Simulator::target_rpm() const {
+  if (alarm_ != 0 || restart_left_s_ > 0) return 0;
+  if (is_slave(mode_)) return watchdog_tripped_ ? 0 : speed_.min_rpm;
+  return thermostat_ ? speed_.max_rpm : 0;
+}
+
+void Fdc1Simulator::step(TimePoint now) {
+  const double dt = std::chrono::duration<double>(now - last_tick_).count();
+  last_tick_ = now;
+  if (!rx_.empty() && now - rx_since_ > kFrameWindow) rx_.clear();
+  if (is_slave(mode_) && !watchdog_tripped_ && now - last_speed_ > kSlaveWatchdog) {
+    watchdog_tripped_ = true;
+  }
+  restart_left_s_ = std::max(0.0, restart_left_s_ - dt);
+  const double target = target_rpm();
+  if (target <= 0) {
+    motor_on_ = false;
+    rpm_ = 0;
+    return;
+  }
+  if (!motor_on_) {
+    motor_on_ = true;
+    rpm_ = std::min<double>(target, kMinRpm);
+  }
+  const double step_rpm = kRampRpmPerS * dt;
+  rpm_ = rpm_ < target ? std::min(target, rpm_ + step_rpm) : std::max(target, rpm_ - step_rpm);
+}
+
+Status Fdc1Simulator::status() const {
+  Status s;
+  s.motor_on = motor_on_;
+  if (motor_on_) {
+    s.rpm = static_cast<std::uint16_t>(rpm_ + 0.5);
+    s.word = static_cast<std::uint16_t>(rpm_ * kAmpsPerRpm * kCurrentScale + 0.5);
+  } else {
+    s.alarm = alarm_;
+    s.word = static_cast<std::uint16_t>(std::min(65535.0, restart_left_s_ * kRestartScale + 0.5));
+  }
+  return s;
+}
+
+Bytes Fdc1Simulator::emit(Bytes frame) {
+  if (corrupt_ > 0) {
+    --corrupt_;
+    frame.back() ^= 0xFF;  // checksum_even
+  }
+  return frame;
+}
+
+Bytes Fdc1Simulator::on_tick(TimePoint now) {
+  if (!started_) {
+    started_ = true;
+    last_tick_ = now;
+    next_stream_ = now;
+    last_speed_ = now;
+  }
+  step(now);
+  if (now < next_stream_) return {};
+  next_stream_ += kStreamPeriod;
+  if (next_stream_ <= now) next_stream_ = now + kStreamPeriod;
+  if (silent_) return {};
+  Bytes out;
+  for (; noise_ > 0; --noise_) out.push_back(kNoise[noise_ % kNoise.size()]);
+  ++frames_;
+  const Bytes frame = emit(encode_status(status()));
+  out.insert(out.end(), frame.begin(), frame.end());
+  return out;
+}
+
+std::string Fdc1Simulator::state(TimePoint now) const {
+  std::ostringstream o;
+  char amps[16];
+  std::snprintf(amps, sizeof amps, "%.2f", motor_on_ ? rpm_ * kAmpsPerRpm : 0.0);
+  const auto age = std::chrono::duration_cast<Millis>(now - last_speed_).count();
+  o << "motor=" << (motor_on_ ? "on" : "off") << " rpm=" << static_cast<int>(rpm_ + 0.5)
+    << " target=" << static_cast<int>(target_rpm()) << " current_a=" << amps
+    << " alarm=" << int{alarm_} << " restart_s=" << static_cast<int>(restart_left_s_ + 0.5)
+    << " mode=" << int{mode_} << " slave=" << (is_slave(mode_) ? 1 : 0) << " min=" << speed_.min_rpm
+    << " max=" << speed_.max_rpm << " speed_age_ms=" << age
+    << " watchdog=" << (watchdog_tripped_ ? 1 : 0) << " thermostat=" << (thermostat_ ? 1 : 0)
+    << " silent=" << (silent_ ? 1 : 0) << " corrupt=" << corrupt_ << " noise=" << noise_
+    << " mangle=" << mangle_ << " speeds=" << speeds_ << " programs=" << programs_
+    << " rejected=" << rejected_ << " frames=" << frames_;
+  return o.str();
+}
+
+std::string Fdc1Simulator::control(std::string_view line, TimePoint now) {
+  std::istringstream in{std::string(line)};
+  std::string cmd, arg;
+  in >> cmd >> arg;
+  const auto number = parse_number(arg);
+  const auto on_off = [&](bool& flag) -> std::string {
+    if (arg != "on" && arg != "off") return "error: " + cmd + " takes on|off";
+    flag = arg == "on";
+    return "ok";
+  };
+  if (cmd == "state") return state(now);
+  if (cmd == "fault") {
+    for (const auto& a : kAlarms) {
+      if (arg == a.name) {
+        alarm_ = a.code;
+        return "ok";
+      }
+    }
+    if (number && *number > 0 && *number <= 255) {
+      alarm_ = static_cast<std::uint8_t>(*number);
+      return "ok";
+    }
+    return "error: fault takes a name or a raw code 1..255; commands: " + std::string(kCommands);
+  }
+  if (cmd == "clear") {
+    alarm_ = 0;
+    return "ok";
+  }
+  if (cmd == "silent") return on_off(silent_);
+  if (cmd == "thermostat") return on_off(thermostat_);
+  if (cmd == "corrupt" || cmd == "noise" || cmd == "mangle" || cmd == "delay") {
+    if (!number || *number < 0 || *number > 100000) return "error: " + cmd + " takes a count";
+    if (cmd == "corrupt") corrupt_ = static_cast<int>(*number);
+    if (cmd == "noise") noise_ = static_cast<std::size_t>(*number);
+    if (cmd == "mangle") mangle_ = static_cast<int>(*number);
+    if (cmd == "delay") restart_left_s_ = static_cast<double>(*number);
+    return "ok";
+  }
+  return "error: unknown command '" + cmd + "'; commands: " + std::string(kCommands);
+}
+
+std::unique_ptr<Simulator> make_simulator(const SimEnv& env, std::string&) {
+  return std::make_unique<Fdc1Simulator>(read_settings(env.options));
+}
+
+}  // namespace drivegate::fdc1

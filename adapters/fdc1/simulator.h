@@ -1,0 +1,71 @@
+// A simulated FDC1 controller: streams its status every 0.5 s (both forms), follows slave-mode
+// speed frames, stops after 60 s without one, echoes programming frames, and injects alarms,
+// noise, corruption and silence on operator command.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "codec.h"
+#include "drivegate/simulator.h"
+#include "settings.h"
+
+namespace drivegate::fdc1 {
+
+// OUTPUT: "Every 0'5 s, one of these ... sequences is sent".
+inline constexpr Millis kStreamPeriod{500};
+// INPUT, Programming speed, SLAVE MODE: "the motor will stop if no speed is received within 60s".
+inline constexpr Millis kSlaveWatchdog{60000};
+// INPUT programming: "The whole sequence must be received within 1 second".
+inline constexpr Millis kFrameWindow{1000};
+// Simulator model, not from the document: ramp rate and current per rpm.
+inline constexpr double kRampRpmPerS = 1000.0;
+inline constexpr double kAmpsPerRpm = 0.0012;
+
+class Fdc1Simulator final : public Simulator {
+ public:
+  explicit Fdc1Simulator(const Settings& settings);
+
+  Bytes on_receive(ByteView rx, TimePoint now) override;
+  Bytes on_tick(TimePoint now) override;
+  std::string control(std::string_view line, TimePoint now) override;
+
+ private:
+  void handle(const Speed& s, TimePoint now);
+  Bytes handle(const Program& p);
+  void step(TimePoint now);
+  [[nodiscard]] double target_rpm() const;
+  [[nodiscard]] Status status() const;
+  Bytes emit(Bytes frame);
+  std::string state(TimePoint now) const;
+
+  bool started_ = false;
+  TimePoint last_tick_{};
+  TimePoint next_stream_{};
+  TimePoint last_speed_{};
+  TimePoint rx_since_{};
+
+  Bytes rx_;
+  std::uint8_t mode_ = 0;
+  Speed speed_{};
+  bool thermostat_ = false;  // normal modes: the thermostat asks for cooling
+  bool watchdog_tripped_ = false;
+  bool motor_on_ = false;
+  double rpm_ = 0;
+  std::uint8_t alarm_ = 0;
+  double restart_left_s_ = 0;
+  Program stored_{};
+
+  bool silent_ = false;
+  int corrupt_ = 0;
+  int mangle_ = 0;
+  std::size_t noise_ = 0;
+  int speeds_ = 0;
+  int programs_ = 0;
+  int rejected_ = 0;
+  int frames_ = 0;
+};
+
+std::unique_ptr<Simulator> make_simulator(const SimEnv& env, std::string& error);
+
+}  // namespace drivegate::fdc1
