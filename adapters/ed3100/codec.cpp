@@ -1,0 +1,226 @@
+#include "codec.h"
+
+#include <algorithm>
+
+#include "drivegate/bytes.h"
+
+namespace drivegate::ed3100 {
+namespace {
+
+// Every frame ends in a 2-byte CRC (document, "CRC CHK Low / CRC CHK High").
+constexpr std::size_t kCrcSize = 2;
+// 03 / 06 requests: addr fn reg(2) count-or-value(2) CRC(2) (document, "Ask frame").
+constexpr std::size_t kFixedRequestSize = 8;
+// 10 request header before the data: addr fn reg(2) count(2) byteCount (document, "10H").
+constexpr std::size_t kWriteMultipleHeader = 7;
+// Exception reply: addr fn|80 code CRC(2) (Modbus application protocol 7).
+constexpr std::size_t kExceptionSize = 5;
+// 06 echo and 10 reply: addr fn reg(2) value-or-count(2) CRC(2) (document, "Response frame").
+constexpr std::size_t kWriteReplySize = 8;
+
+bool crc_ok(std::span<const std::uint8_t> frame) {
+  if (frame.size() < kCrcSize + 1) return false;
+  const std::size_t n = frame.size() - kCrcSize;
+  const std::uint16_t want = crc16(frame.first(n));
+  return frame[n] == lo8(want) && frame[n + 1] == hi8(want);
+}
+
+std::vector<std::uint16_t> words_at(std::span<const std::uint8_t> rx, std::size_t offset,
+                                    std::size_t count) {
+  std::vector<std::uint16_t> out;
+  out.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    out.push_back(be16(rx[offset + 2 * i], rx[offset + 2 * i + 1]));
+  }
+  return out;
+}
+
+template <class Frame>
+Decoded<Frame> bad(std::size_t consumed, FrameError e) {
+  Decoded<Frame> d;
+  d.status = DecodeStatus::bad;
+  d.consumed = consumed;
+  d.error = make_error_code(e);
+  return d;
+}
+
+template <class Frame>
+Decoded<Frame> good(std::size_t consumed, Frame f) {
+  Decoded<Frame> d;
+  d.status = DecodeStatus::frame;
+  d.consumed = consumed;
+  d.frame = std::move(f);
+  return d;
+}
+
+}  // namespace
+
+std::uint16_t crc16(std::span<const std::uint8_t> data) {
+  // Document, "RTU mode check code", steps 1-6 and its C example.
+  std::uint16_t reg = 0xFFFF;
+  for (const std::uint8_t b : data) {
+    reg ^= b;
+    for (int bit = 0; bit < 8; ++bit) {
+      reg = (reg & 0x0001) != 0 ? static_cast<std::uint16_t>((reg >> 1) ^ 0xA001)
+                                : static_cast<std::uint16_t>(reg >> 1);
+    }
+  }
+  return reg;
+}
+
+void append_crc(Bytes& frame) {
+  const std::uint16_t c = crc16(frame);
+  frame.push_back(lo8(c));  // low byte first (document, "CRC CHK Low")
+  frame.push_back(hi8(c));
+}
+
+Bytes encode_read(std::uint8_t address, std::uint16_t reg, std::uint16_t count) {
+  Bytes out{address, kFnRead};
+  put_be16(out, reg);
+  put_be16(out, count);
+  append_crc(out);
+  return out;
+}
+
+Bytes encode_write_single(std::uint8_t address, std::uint16_t reg, std::uint16_t value) {
+  Bytes out{address, kFnWriteSingle};
+  put_be16(out, reg);
+  put_be16(out, value);
+  append_crc(out);
+  return out;
+}
+
+Bytes encode_write_multiple(std::uint8_t address, std::uint16_t reg,
+                            std::span<const std::uint16_t> values) {
+  if (values.empty() || values.size() > kMaxWriteWords) return {};
+  Bytes out{address, kFnWriteMultiple};
+  put_be16(out, reg);
+  put_be16(out, static_cast<std::uint16_t>(values.size()));
+  out.push_back(static_cast<std::uint8_t>(2 * values.size()));
+  for (const std::uint16_t v : values) put_be16(out, v);
+  append_crc(out);
+  return out;
+}
+
+Bytes encode_read_reply(std::uint8_t address, std::uint16_t reg,
+                        std::span<const std::uint16_t> words, ReadForm form) {
+  Bytes out{address, kFnRead};
+  if (form == ReadForm::document) {
+    put_be16(out, reg);
+  } else {
+    out.push_back(static_cast<std::uint8_t>(2 * words.size()));
+  }
+  for (const std::uint16_t w : words) put_be16(out, w);
+  append_crc(out);
+  return out;
+}
+
+Bytes encode_write_multiple_reply(std::uint8_t address, std::uint16_t reg, std::uint16_t count) {
+  // "respond frame only return the first six bytes of the asking frame" (document, "10H").
+  Bytes out{address, kFnWriteMultiple};
+  put_be16(out, reg);
+  put_be16(out, count);
+  append_crc(out);
+  return out;
+}
+
+Bytes encode_exception(std::uint8_t address, std::uint8_t function, std::uint8_t code) {
+  Bytes out{address, static_cast<std::uint8_t>(function | kExceptionBit), code};
+  append_crc(out);
+  return out;
+}
+
+Decoded<Request> decode_request(std::span<const std::uint8_t> rx) {
+  if (rx.size() < 2) return {};
+  std::size_t size = kFixedRequestSize;
+  switch (rx[1]) {
+    case kFnRead:
+    case kFnWriteSingle:
+      break;
+    case kFnWriteMultiple:
+      if (rx.size() < kWriteMultipleHeader) return {};
+      if (rx[6] == 0 || rx[6] % 2 != 0) return bad<Request>(1, FrameError::bad_length);
+      size = kWriteMultipleHeader + rx[6] + kCrcSize;
+      break;
+    default:
+      return bad<Request>(1, FrameError::bad_header);
+  }
+  if (rx.size() < size) return {};
+  const auto frame = rx.first(size);
+  if (!crc_ok(frame)) return bad<Request>(size, FrameError::bad_checksum);
+  Request r;
+  r.address = rx[0];
+  r.function = rx[1];
+  r.reg = be16(rx[2], rx[3]);
+  if (r.function == kFnWriteSingle) {
+    r.count = 1;
+    r.words = {be16(rx[4], rx[5])};
+  } else {
+    r.count = be16(rx[4], rx[5]);
+    if (r.function == kFnWriteMultiple) {
+      if (static_cast<std::size_t>(r.count) * 2 != rx[6]) {
+        return bad<Request>(size, FrameError::bad_length);
+      }
+      r.words = words_at(rx, kWriteMultipleHeader, r.count);
+    }
+  }
+  return good(size, std::move(r));
+}
+
+Decoded<Reply> decode_reply(std::span<const std::uint8_t> rx, const ReplyShape& shape) {
+  if (rx.size() < 2) return {};
+  if (rx[1] == (shape.function | kExceptionBit)) {
+    if (rx.size() < kExceptionSize) return {};
+    if (!crc_ok(rx.first(kExceptionSize))) {
+      return bad<Reply>(kExceptionSize, FrameError::bad_checksum);
+    }
+    Reply r;
+    r.address = rx[0];
+    r.function = shape.function;
+    r.kind = ReplyKind::exception;
+    r.exception = rx[2];
+    return good(kExceptionSize, std::move(r));
+  }
+  if (rx[1] != shape.function) return bad<Reply>(1, FrameError::bad_header);
+
+  if (shape.function != kFnRead) {
+    if (rx.size() < kWriteReplySize) return {};
+    if (!crc_ok(rx.first(kWriteReplySize))) {
+      return bad<Reply>(kWriteReplySize, FrameError::bad_checksum);
+    }
+    Reply r;
+    r.address = rx[0];
+    r.function = shape.function;
+    r.kind = ReplyKind::write_echo;
+    r.reg = be16(rx[2], rx[3]);
+    r.value = be16(rx[4], rx[5]);
+    return good(kWriteReplySize, std::move(r));
+  }
+
+  // 03: the standard form is one byte shorter than the document's (a byte count instead of
+  // the 2-byte register echo); shared/specs/README.md: "telling them apart by CRC".
+  const std::size_t data = 2 * static_cast<std::size_t>(shape.words);
+  const std::size_t standard = 3 + data + kCrcSize;
+  const std::size_t document = 4 + data + kCrcSize;
+  if (rx.size() < 3) return {};
+  const bool standard_possible = rx[2] == data;
+  if (standard_possible && rx.size() >= standard && crc_ok(rx.first(standard))) {
+    Reply r;
+    r.address = rx[0];
+    r.function = kFnRead;
+    r.kind = ReplyKind::read_standard;
+    r.words = words_at(rx, 3, shape.words);
+    return good(standard, std::move(r));
+  }
+  if (rx.size() < document) return {};
+  if (!crc_ok(rx.first(document))) return bad<Reply>(document, FrameError::bad_checksum);
+  Reply r;
+  r.address = rx[0];
+  r.function = kFnRead;
+  r.kind = ReplyKind::read_document;
+  r.reg = be16(rx[2], rx[3]);
+  r.words = words_at(rx, 4, shape.words);
+  return good(document, std::move(r));
+}
+
+}  // namespace drivegate::ed3100
