@@ -1,0 +1,127 @@
+#include "codec.h"
+
+#include "drivegate/bytes.h"
+
+namespace drivegate::unicla {
+
+namespace {
+
+// "Cyclic Redundancy Check - CRC": the table in the document is that of polynomial 0x1021.
+constexpr std::uint16_t kCrcPoly = 0x1021;
+// "Payload Size" is the last header byte.
+constexpr std::size_t kPayloadSizeIndex = 7;
+
+Decoded<Frame> bad(std::size_t consumed, FrameError e) {
+  Decoded<Frame> d;
+  d.status = DecodeStatus::bad;
+  d.consumed = consumed;
+  d.error = make_error_code(e);
+  return d;
+}
+
+}  // namespace
+
+std::uint16_t crc16(ByteView data) {
+  std::uint16_t crc = 0;  // calc_crc16 starts from 0
+  for (const std::uint8_t byte : data) {
+    crc = static_cast<std::uint16_t>(crc ^ (byte << 8));
+    for (int bit = 0; bit < 8; ++bit) {
+      const bool top = (crc & 0x8000) != 0;
+      crc = static_cast<std::uint16_t>(crc << 1);
+      if (top) crc = static_cast<std::uint16_t>(crc ^ kCrcPoly);
+    }
+  }
+  return crc;
+}
+
+Bytes frame_body(const Frame& f) {
+  Bytes body;
+  body.reserve(kHeaderSize + f.payload.size() + kCrcSize);
+  body.push_back(f.source);
+  body.push_back(f.destination);
+  body.push_back(f.command);
+  body.push_back(f.message_id);
+  body.push_back(f.sequence);
+  body.push_back(f.reserved1);
+  body.push_back(f.reserved2);
+  body.push_back(static_cast<std::uint8_t>(f.payload.size()));
+  body.insert(body.end(), f.payload.begin(), f.payload.end());
+  // "CRC calculation is done before byte stuffing"; the example sends 0xA7 then 0x70.
+  put_be16(body, crc16(body));
+  return body;
+}
+
+Bytes wrap(ByteView body) {
+  Bytes wire;
+  wire.reserve(body.size() + 8);
+  wire.push_back(kFlag);
+  for (const std::uint8_t b : body) {
+    if (b == kFlag || b == kEscape) {  // "Case 1" and "Case 2"
+      wire.push_back(kEscape);
+      wire.push_back(static_cast<std::uint8_t>(b ^ kEscapeXor));
+    } else {
+      wire.push_back(b);
+    }
+  }
+  wire.push_back(kFlag);
+  return wire;
+}
+
+Bytes encode(const Frame& f) {
+  return wrap(frame_body(f));
+}
+
+Decoded<Frame> decode(ByteView rx) {
+  if (rx.empty()) return {};
+  if (rx[0] != kFlag) {
+    std::size_t n = 1;
+    while (n < rx.size() && rx[n] != kFlag) ++n;
+    return bad(n, FrameError::bad_header);
+  }
+  std::size_t end = 1;
+  while (end < rx.size() && rx[end] != kFlag) ++end;
+  if (end == rx.size()) {
+    // No EOF yet. Past the longest possible frame the SOF was not one: drop it.
+    if (rx.size() > kMaxWireSize) return bad(1, FrameError::bad_length);
+    return {};
+  }
+  if (end == 1) return bad(1, FrameError::bad_length);  // "7E 7E": an EOF followed by a SOF
+
+  Bytes body;
+  body.reserve(end);
+  for (std::size_t i = 1; i < end; ++i) {
+    if (rx[i] != kEscape) {
+      body.push_back(rx[i]);
+      continue;
+    }
+    // Only 0x7E and 0x7D are ever stuffed, as 7D 5E and 7D 5D.
+    if (i + 1 >= end) return bad(end, FrameError::bad_escape);
+    const auto plain = static_cast<std::uint8_t>(rx[i + 1] ^ kEscapeXor);
+    if (plain != kFlag && plain != kEscape) return bad(end, FrameError::bad_escape);
+    body.push_back(plain);
+    ++i;
+  }
+  if (body.size() < kHeaderSize + kCrcSize) return bad(end, FrameError::bad_length);
+  if (body[kPayloadSizeIndex] != body.size() - kHeaderSize - kCrcSize) {
+    return bad(end, FrameError::bad_length);
+  }
+  const std::size_t crc_at = body.size() - kCrcSize;
+  const std::uint16_t want = be16(body[crc_at], body[crc_at + 1]);
+  if (crc16(ByteView(body).first(crc_at)) != want) return bad(end, FrameError::bad_checksum);
+
+  Decoded<Frame> d;
+  d.status = DecodeStatus::frame;
+  d.consumed = end + 1;
+  d.frame.source = body[0];
+  d.frame.destination = body[1];
+  d.frame.command = body[2];
+  d.frame.message_id = body[3];
+  d.frame.sequence = body[4];
+  d.frame.reserved1 = body[5];
+  d.frame.reserved2 = body[6];
+  d.frame.payload.assign(body.begin() + static_cast<long>(kHeaderSize),
+                         body.begin() + static_cast<long>(crc_at));
+  return d;
+}
+
+}  // namespace drivegate::unicla
