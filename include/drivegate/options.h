@@ -47,6 +47,7 @@ class Options {
     return get<std::vector<std::string>>(name);
   }
   [[nodiscard]] bool has(std::string_view name) const { return values_.contains(name); }
+  void set(std::string name, OptionValue value) { values_[std::move(name)] = std::move(value); }
 
  private:
   template <class T>
