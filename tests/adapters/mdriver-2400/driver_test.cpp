@@ -379,6 +379,49 @@ TEST(MdriverDriver, ConfigurableAddresses) {
   EXPECT_FALSE(make_config(0x100, options(), error).has_value());
 }
 
+TEST(MdriverDriver, AnEchoOfAnotherCodeRefusesTheWrite) {
+  Rig r;
+  r.start();
+  ASSERT_EQ(r.driver->command(Command::stop, 9, r.now()), WriteStatus::pending);
+  const auto ex = r.driver->next_exchange(r.now());
+  ASSERT_TRUE(ex.has_value());
+  EXPECT_EQ(ex->frame, kRunStop);
+  EXPECT_EQ(ex->priority, Priority::command);
+  RunReply rr;
+  rr.target_code = 0x05;  // not the D4 sent
+  const auto v = r.driver->on_receive(encode_run_reply(0x01, 0x00, rr), r.now());
+  EXPECT_EQ(v.kind, RxKind::reply);
+  std::vector<Completion> out;
+  r.driver->take_completions(out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].ticket, 9u);
+  EXPECT_EQ(out[0].result, WriteResult::refused);
+}
+
+TEST(MdriverDriver, UnconfirmedWritesExpireAndSupersededOnesFail) {
+  Rig r;
+  r.start();
+  r.driver->setpoint(1149, 1, r.now());
+  ASSERT_EQ(r.driver->command(Command::run_forward, 2, r.now()), WriteStatus::pending);
+  ASSERT_EQ(r.driver->command(Command::stop, 3, r.now()), WriteStatus::pending);
+  const auto ex = r.driver->next_exchange(r.now());
+  ASSERT_TRUE(ex.has_value());
+  EXPECT_EQ(ex->frame, kRunStop);  // the later write wins
+  std::vector<Completion> out;
+  r.driver->take_completions(out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].ticket, 2u);
+  EXPECT_EQ(out[0].result, WriteResult::no_response);
+  // No reply and no on_no_reply: the driver's own deadline fails it.
+  EXPECT_LE(r.driver->wake_at(), r.now() + kConfirmDeadline);
+  r.driver->next_exchange(r.now() + kConfirmDeadline);
+  out.clear();
+  r.driver->take_completions(out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].ticket, 3u);
+  EXPECT_EQ(out[0].result, WriteResult::no_response);
+}
+
 TEST(MdriverDriver, TraitsAndExchangeShape) {
   Rig r;
   EXPECT_EQ(r.driver->traits().comm_timeout, 6000ms);
