@@ -1,0 +1,46 @@
+// OUTPUT, "Alarm codes": ranges of 16 named by their first value (specs README, fdc1).
+#include "alarms.h"
+
+#include <gtest/gtest.h>
+
+namespace drivegate::fdc1 {
+namespace {
+
+TEST(Fdc1Alarms, RangesMapToUnifiedFaults) {
+  struct Case {
+    int first;
+    Fault fault;
+    bool latched;
+  };
+  const Case cases[] = {
+      {16, Fault::supply_fault, false},
+      {32, Fault::fan_fault, false},
+      {48, Fault::stall, false},
+      {64, Fault::overload, false},
+      {80, Fault::drive_over_temperature, false},
+      {160, Fault::fan_fault, true},
+      {176, Fault::stall, true},
+      {192, Fault::overload, true},
+      {208, Fault::drive_over_temperature, true},
+      {240, Fault::internal_error, false},
+  };
+  for (const auto& c : cases) {
+    for (const int code : {c.first, c.first + 7, c.first + 15}) {
+      SCOPED_TRACE(code);
+      const Alarm a = classify_alarm(static_cast<std::uint8_t>(code));
+      EXPECT_EQ(a.fault, c.fault);
+      EXPECT_EQ(a.latched, c.latched);
+    }
+  }
+}
+
+TEST(Fdc1Alarms, ZeroIsNoAlarmAndGapsAreOther) {
+  EXPECT_EQ(classify_alarm(0).fault, Fault::none);
+  for (const int code : {1, 15, 96, 144, 159, 224, 239}) {
+    SCOPED_TRACE(code);
+    EXPECT_EQ(classify_alarm(static_cast<std::uint8_t>(code)).fault, Fault::other);
+  }
+}
+
+}  // namespace
+}  // namespace drivegate::fdc1
