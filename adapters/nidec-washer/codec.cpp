@@ -43,7 +43,8 @@ bool is_v07_mode(std::uint8_t mode) {
     case Mode::voltage_detection:
     case Mode::weight_detection:
     case Mode::fabric_detection:
-    case Mode::fct_test: return true;
+    case Mode::fct_test:
+      return true;
   }
   return false;
 }
@@ -64,7 +65,9 @@ Bytes encode(const Request& r) {
   return out;
 }
 
-Request make_bare(Mode mode) { return Request{mode, {}}; }
+Request make_bare(Mode mode) {
+  return Request{mode, {}};
+}
 
 Request make_ping(std::uint8_t platform, std::uint16_t empty_raw_weight) {
   // 5.1: platform, empty raw weight high, low, then five zero bytes.
@@ -87,7 +90,9 @@ Request make_forced_brake(bool enable) {
   return Request{Mode::forced_brake, {static_cast<std::uint8_t>(enable ? 1 : 0)}};
 }
 
-Request make_fct() { return Request{Mode::fct_test, kFctPattern}; }
+Request make_fct() {
+  return Request{Mode::fct_test, kFctPattern};
+}
 
 Bytes encode(const Reply& r) {
   Bytes out;

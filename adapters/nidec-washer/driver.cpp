@@ -17,13 +17,17 @@ constexpr Millis kWriteTimeout{3000};  // the gateway's 0x0B deadline; ours fire
 // Default agitation pattern (not in the document; see README): 0.5 s ramps, 1.2 s on, 0.8 s off.
 constexpr AgitationTiming kDefaultAgitation{5, 5, 12, 8, 12, 8};
 
-bool is_run(Command c) { return c == Command::run_forward || c == Command::run_reverse; }
+bool is_run(Command c) {
+  return c == Command::run_forward || c == Command::run_reverse;
+}
 
 std::uint16_t clamp16(std::int64_t v) {
   return static_cast<std::uint16_t>(std::clamp<std::int64_t>(v, 0, 0xFFFF));
 }
 
-double tenths(std::int64_t units) { return static_cast<double>(units) / 10.0; }
+double tenths(std::int64_t units) {
+  return static_cast<double>(units) / 10.0;
+}
 
 }  // namespace
 
@@ -56,7 +60,9 @@ WasherDriver::WasherDriver(const DriverConfig& config)
   values_[pt::action_status] = std::int64_t{0};
 }
 
-DriverTraits WasherDriver::traits() const { return {kCommTimeout, kWriteTimeout, kInterFrameGap}; }
+DriverTraits WasherDriver::traits() const {
+  return {kCommTimeout, kWriteTimeout, kInterFrameGap};
+}
 
 Exchange WasherDriver::exchange(const Request& r, Priority p) const {
   Exchange ex;
@@ -111,7 +117,7 @@ RxVerdict WasherDriver::on_receive(ByteView rx, TimePoint now) {
     return {RxKind::foreign, d.consumed};
   }
   apply(d.frame);
-  if (in_flight_ == InFlight::ping) ready_ = true;
+  if (in_flight_ == InFlight::ping) ready_ = common_.ready = true;
   if (in_flight_ == InFlight::queued) complete_front(d.frame);
   in_flight_ = InFlight::none;
   next_poll_ = last_sent_ + config_.poll_interval;
@@ -128,7 +134,7 @@ void WasherDriver::on_no_reply(TimePoint now) {
 
 void WasherDriver::on_comm_lost(TimePoint now) {
   (void)now;
-  ready_ = false;
+  ready_ = common_.ready = false;
   in_flight_ = InFlight::none;
   next_poll_.reset();
   while (!queue_.empty()) {
@@ -174,11 +180,14 @@ void WasherDriver::complete_front(const Reply& r) {
       motion_in_force_ = q.motion;
       set_command(q.command);
       return finish(q, WriteResult::ok);
-    case Job::stop: set_command(q.command); return finish(q, WriteResult::ok);
+    case Job::stop:
+      set_command(q.command);
+      return finish(q, WriteResult::ok);
     case Job::reset_fault:
       // There is no reset frame: a Request tells whether the inverter has cleared the fault.
       return finish(q, r.error() == 0 ? WriteResult::ok : WriteResult::refused);
-    case Job::action: return finish(q, WriteResult::ok);
+    case Job::action:
+      return finish(q, WriteResult::ok);
   }
 }
 

@@ -12,12 +12,12 @@
 namespace drivegate::nidec {
 
 struct DriverConfig {
-  std::uint8_t platform = 7;             // 5.1 ping byte 3
-  std::uint16_t empty_raw_weight = 0;    // 5.1 ping bytes 4..5
-  std::uint16_t accel_100ms = 30;        // 5.3: accel time in 100 ms units
-  std::uint8_t attempts = 3;             // identical sends per turn (section 6: resend)
-  Millis poll_interval{500};             // section 6: 500 ms recommended, 1 s at most
-  Millis confirm_timeout{2500};          // a queued write not confirmed by then fails
+  std::uint8_t platform = 7;           // 5.1 ping byte 3
+  std::uint16_t empty_raw_weight = 0;  // 5.1 ping bytes 4..5
+  std::uint16_t accel_100ms = 30;      // 5.3: accel time in 100 ms units
+  std::uint8_t attempts = 3;           // identical sends per turn (section 6: resend)
+  Millis poll_interval{500};           // section 6: 500 ms recommended, 1 s at most
+  Millis confirm_timeout{2500};        // a queued write not confirmed by then fails
 };
 
 // Reads the validated [device.options] (see plugin.cpp) and the poll interval.
@@ -51,7 +51,7 @@ class WasherDriver final : public Driver {
     Job job;
     Ticket ticket;
     TimePoint deadline;
-    Command command = Command::stop;  // run / stop: the command in force once ACKed
+    Command command = Command::stop;   // run / stop: the command in force once ACKed
     Motion motion = Motion::rotation;  // run: the motion in force once ACKed
   };
   enum class InFlight : std::uint8_t { none, ping, poll, queued };
@@ -74,7 +74,7 @@ class WasherDriver final : public Driver {
   std::vector<Value> values_;
   CommonState common_;
 
-  bool ready_ = false;  // ping answered since start / comm_lost
+  bool ready_ = false;                  // ping answered since start / comm_lost
   std::optional<TimePoint> next_poll_;  // empty: at once
   TimePoint last_sent_{};
   InFlight in_flight_ = InFlight::none;

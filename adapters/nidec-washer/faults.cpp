@@ -14,13 +14,13 @@ struct FaultBit {
 
 // Section 8, FAULT TABLE (two rows share 0x04: DC bus > 500 V and bus over-voltage).
 constexpr std::array<FaultBit, 8> kBits = {{
-    {0x01, "general", Fault::internal_error},                  // micro class B fault
+    {0x01, "general", Fault::internal_error},                       // micro class B fault
     {0x02, "ipm_over_temperature", Fault::drive_over_temperature},  // IPM >= 95 degC
-    {0x04, "over_voltage", Fault::over_voltage},               // DC bus > 500 V / >= 450 V
-    {0x08, "stall", Fault::stall},                             // motor stall or tacho missing
-    {0x10, "over_current", Fault::over_current},               // hardware over-current
-    {0x20, "under_voltage", Fault::under_voltage},             // DC bus <= 190 V
-    {0x40, "phase_loss", Fault::phase_loss},                   // lost phase
+    {0x04, "over_voltage", Fault::over_voltage},                    // DC bus > 500 V / >= 450 V
+    {0x08, "stall", Fault::stall},                                  // motor stall or tacho missing
+    {0x10, "over_current", Fault::over_current},                    // hardware over-current
+    {0x20, "under_voltage", Fault::under_voltage},                  // DC bus <= 190 V
+    {0x40, "phase_loss", Fault::phase_loss},                        // lost phase
     {0x80, "motor_over_temperature", Fault::motor_over_temperature},  // winding >= 140 degC
 }};
 

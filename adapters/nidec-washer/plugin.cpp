@@ -1,8 +1,8 @@
 // The plugin descriptor: options, line defaults and the two factories.
 #include <iterator>
 
-#include "driver.h"
 #include "drivegate/adapter.h"
+#include "driver.h"
 #include "simulator.h"
 
 namespace {
@@ -25,8 +25,7 @@ std::unique_ptr<drivegate::Driver> create_driver(const drivegate::DeviceEnv& env
   return std::make_unique<drivegate::nidec::WasherDriver>(drivegate::nidec::config_from(env));
 }
 
-std::unique_ptr<drivegate::Simulator> create_simulator(const drivegate::SimEnv& env,
-                                                       std::string&) {
+std::unique_ptr<drivegate::Simulator> create_simulator(const drivegate::SimEnv& env, std::string&) {
   return std::make_unique<drivegate::nidec::WasherSimulator>(env);
 }
 

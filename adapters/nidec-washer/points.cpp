@@ -46,12 +46,12 @@ PointSpec agitation_time(std::string name, std::string what) {
 std::vector<PointSpec> make_points() {
   std::vector<PointSpec> p;
   p.reserve(pt::count);
-  p.push_back(holding("motion", 1, "", "what run_forward/run_reverse start (reverse: rotation only)",
-                      0, 3,
+  p.push_back(holding("motion", 1, "",
+                      "what run_forward/run_reverse start (reverse: rotation only)", 0, 3,
                       {{"rotation", 0}, {"spin", 1}, {"agitation", 2}, {"free_shaft_spin", 3}}));
   // 5.3 / 5.4 / 5.6 / 5.14: 16-bit accel time in 100 ms units.
-  p.push_back(holding("accel_time", 0.1, "s", "accel time of CW/CCW/spin/free-shaft spin", 0.0,
-                      6553.5));
+  p.push_back(
+      holding("accel_time", 0.1, "s", "accel time of CW/CCW/spin/free-shaft spin", 0.0, 6553.5));
   p.push_back(agitation_time("agitation_accel", "accel"));
   p.push_back(agitation_time("agitation_decel", "decel"));
   p.push_back(agitation_time("agitation_cw_on", "CW on"));
@@ -76,7 +76,8 @@ std::vector<PointSpec> make_points() {
                          fault_bit_labels());
   bits.bit_labels = true;
   p.push_back(std::move(bits));
-  p.push_back(input("weight", 0.1, "kg", "load weight, 100 g units (5.2 / 5.10), 0 = not detected"));
+  p.push_back(
+      input("weight", 0.1, "kg", "load weight, 100 g units (5.2 / 5.10), 0 = not detected"));
   p.push_back(input("raw_weight", 1, "", "raw weight data from weight detection (5.10)"));
   p.push_back(input("dc_bus_voltage", 1, "V", "DC bus voltage from voltage detection (5.9)"));
   p.push_back(input("forced_brake", 1, "", "forced brake state from its ACK (5.13)",

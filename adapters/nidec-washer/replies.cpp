@@ -9,13 +9,15 @@ void WasherDriver::apply_error(std::uint8_t error) {
   common_.faults = map_faults(error);
   values_[pt::error_bits] = std::int64_t{error};
   // Section 8: every fault stops the motor to zero speed.
-  if (error != 0 && (common_.command == Command::run_forward ||
-                     common_.command == Command::run_reverse)) {
+  if (error != 0 &&
+      (common_.command == Command::run_forward || common_.command == Command::run_reverse)) {
     set_command(Command::stop);
   }
 }
 
-void WasherDriver::apply_speed(std::uint16_t rpm) { common_.speed_rpm = rpm; }
+void WasherDriver::apply_speed(std::uint16_t rpm) {
+  common_.speed_rpm = rpm;
+}
 
 void WasherDriver::apply(const Reply& r) {
   switch (r.mode) {
@@ -54,8 +56,9 @@ void WasherDriver::apply(const Reply& r) {
       values_[pt::weight] = static_cast<double>(r.data[3]) / 10.0;
       return;
     case Mode::fabric_detection: {  // 5.11: no layout in the document: kept raw
-      const std::uint32_t raw = (std::uint32_t{r.data[0]} << 24) | (std::uint32_t{r.data[1]} << 16) |
-                                (std::uint32_t{r.data[2]} << 8) | r.data[3];
+      const std::uint32_t raw = (std::uint32_t{r.data[0]} << 24) |
+                                (std::uint32_t{r.data[1]} << 16) | (std::uint32_t{r.data[2]} << 8) |
+                                r.data[3];
       values_[pt::fabric_raw] = std::int64_t{raw};
       return;
     }

@@ -41,8 +41,8 @@ std::string hex(unsigned v, int width) {
   return buf;
 }
 
-constexpr const char* kMotionNames[] = {"stopped", "cw",   "ccw",             "agitation",
-                                        "spin",    "free_shaft_spin", "stopping", "braking"};
+constexpr const char* kMotionNames[] = {
+    "stopped", "cw", "ccw", "agitation", "spin", "free_shaft_spin", "stopping", "braking"};
 
 }  // namespace
 
@@ -62,7 +62,9 @@ std::string WasherSimulator::state() const {
 std::string WasherSimulator::control(std::string_view line, TimePoint now) {
   advance(now);
   const std::vector<std::string> w = words(line);
-  const auto error = [&](const std::string& why) { return "error: " + why + "; commands: " + kHelp; };
+  const auto error = [&](const std::string& why) {
+    return "error: " + why + "; commands: " + kHelp;
+  };
   if (w.empty()) return error("empty command");
   const std::string& cmd = w[0];
   const std::optional<long> arg = w.size() == 2 ? number(w[1], 65535) : std::nullopt;

@@ -8,17 +8,19 @@
 namespace drivegate::nidec {
 namespace {
 
-constexpr Millis kBusSilence{6000};    // section 7: no bus activity for 6 s stops the motor
-constexpr Millis kFrameGap{50};        // not in the document: a pause this long drops a partial frame
-constexpr Millis kFaultClear{4000};    // section 8: most faults clear after 4 s
+constexpr Millis kBusSilence{6000};  // section 7: no bus activity for 6 s stops the motor
+constexpr Millis kFrameGap{50};      // not in the document: a pause this long drops a partial frame
+constexpr Millis kFaultClear{4000};  // section 8: most faults clear after 4 s
 constexpr Millis kMotorTempClear{20000};  // section 8, 0x80: 20 s
-constexpr Millis kWeighing{35000};     // 5.10: weight detection completes in about 35 s
-constexpr double kStopRamp = 1000.0;   // rpm/s, closed-loop stop (5.7): the simulator's choice
-constexpr double kBrakeRamp = 5000.0;  // rpm/s, brake (5.8): faster than stop
+constexpr Millis kWeighing{35000};        // 5.10: weight detection completes in about 35 s
+constexpr double kStopRamp = 1000.0;      // rpm/s, closed-loop stop (5.7): the simulator's choice
+constexpr double kBrakeRamp = 5000.0;     // rpm/s, brake (5.8): faster than stop
 constexpr std::uint16_t kIpmTemperature = 45;  // FCT (5.15) reading, simulator's choice
 constexpr std::uint8_t kIpmModel = 1;          // FCT byte 9 high nibble, simulator's choice
 
-double seconds(Millis m) { return static_cast<double>(m.count()) / 1000.0; }
+double seconds(Millis m) {
+  return static_cast<double>(m.count()) / 1000.0;
+}
 
 }  // namespace
 
@@ -79,11 +81,20 @@ Bytes WasherSimulator::handle(const Request& r, TimePoint now) {
       platform_ = d[0];
       empty_raw_ = be16(d[1], d[2]);
       return encode_reply(Mode::ping, {platform_, hi8(version_), lo8(version_), 0});
-    case Mode::request: return status_reply(Mode::request, weight());  // 5.2
-    case Mode::cw: start(Motion::cw, r, now); return status_reply(r.mode);
-    case Mode::ccw: start(Motion::ccw, r, now); return status_reply(r.mode);
-    case Mode::agitation: start(Motion::agitation, r, now); return status_reply(r.mode);
-    case Mode::spin: start(Motion::spin, r, now); return status_reply(r.mode);
+    case Mode::request:
+      return status_reply(Mode::request, weight());  // 5.2
+    case Mode::cw:
+      start(Motion::cw, r, now);
+      return status_reply(r.mode);
+    case Mode::ccw:
+      start(Motion::ccw, r, now);
+      return status_reply(r.mode);
+    case Mode::agitation:
+      start(Motion::agitation, r, now);
+      return status_reply(r.mode);
+    case Mode::spin:
+      start(Motion::spin, r, now);
+      return status_reply(r.mode);
     case Mode::free_shaft_spin:
       start(Motion::free_shaft_spin, r, now);
       return status_reply(r.mode);
@@ -154,7 +165,8 @@ void WasherSimulator::trip(std::uint8_t bits, TimePoint now) {
 }
 
 void WasherSimulator::advance(TimePoint now) {
-  const double dt = last_tick_ ? seconds(std::chrono::duration_cast<Millis>(now - *last_tick_)) : 0.0;
+  const double dt =
+      last_tick_ ? seconds(std::chrono::duration_cast<Millis>(now - *last_tick_)) : 0.0;
   last_tick_ = now;
   for (std::size_t bit = 0; bit < 8; ++bit) {
     if (clear_at_[bit] && now >= *clear_at_[bit]) {
@@ -174,7 +186,9 @@ void WasherSimulator::advance(TimePoint now) {
     pinged_ = false;
   }
   switch (motion_) {
-    case Motion::stopped: speed_ = 0.0; break;
+    case Motion::stopped:
+      speed_ = 0.0;
+      break;
     case Motion::stopping:
     case Motion::braking:
       speed_ = std::max(0.0, speed_ - (motion_ == Motion::braking ? kBrakeRamp : kStopRamp) * dt);
@@ -185,10 +199,10 @@ void WasherSimulator::advance(TimePoint now) {
       const long on_cw = agitation_.cw_on * 100L, off_cw = agitation_.cw_off * 100L;
       const long on_ccw = agitation_.ccw_on * 100L, off_ccw = agitation_.ccw_off * 100L;
       const long cycle = on_cw + off_cw + on_ccw + off_ccw;
-      const long t = cycle == 0 ? 0
-                                : std::chrono::duration_cast<Millis>(now - phase_start_).count() %
-                                      cycle;
-      const bool on = cycle == 0 || t < on_cw || (t >= on_cw + off_cw && t < on_cw + off_cw + on_ccw);
+      const long t =
+          cycle == 0 ? 0 : std::chrono::duration_cast<Millis>(now - phase_start_).count() % cycle;
+      const bool on =
+          cycle == 0 || t < on_cw || (t >= on_cw + off_cw && t < on_cw + off_cw + on_ccw);
       speed_ = on ? target_ : 0.0;
       break;
     }
@@ -208,7 +222,9 @@ std::uint16_t WasherSimulator::speed() const {
   return static_cast<std::uint16_t>(std::lround(std::clamp(speed_, 0.0, 65535.0)));
 }
 
-std::uint8_t WasherSimulator::weight() const { return weighed_ ? load_ : 0; }  // 5.2: 0 = none
+std::uint8_t WasherSimulator::weight() const {
+  return weighed_ ? load_ : 0;
+}  // 5.2: 0 = none
 
 std::uint16_t WasherSimulator::raw_weight() const {
   // 5.10: the simulator's own raw table: 1000 empty, +20 per 100 g; 0 until detected.

@@ -22,7 +22,14 @@ class WasherSimulator final : public Simulator {
 
  private:
   enum class Motion : std::uint8_t {
-    stopped, cw, ccw, agitation, spin, free_shaft_spin, stopping, braking
+    stopped,
+    cw,
+    ccw,
+    agitation,
+    spin,
+    free_shaft_spin,
+    stopping,
+    braking
   };
 
   Bytes handle(const Request& r, TimePoint now);

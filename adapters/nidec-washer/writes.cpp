@@ -7,7 +7,9 @@
 namespace drivegate::nidec {
 namespace {
 
-bool is_run(Command c) { return c == Command::run_forward || c == Command::run_reverse; }
+bool is_run(Command c) {
+  return c == Command::run_forward || c == Command::run_reverse;
+}
 
 // The integer a write carries, however the gateway scaled it.
 std::optional<std::int64_t> whole(const Value& v, double factor = 1.0) {
@@ -69,13 +71,13 @@ WriteStatus WasherDriver::setpoint(std::int32_t rpm, Ticket t, TimePoint now) {
   if (!is_run(common_.command)) return WriteStatus::done;  // used by the next run_*
   const std::optional<Request> r = run_request(common_.command, motion_in_force_);
   if (!r) return WriteStatus::done;
-  return enqueue({*r, Job::run, t, now + config_.confirm_timeout, common_.command,
-                  motion_in_force_});
+  return enqueue(
+      {*r, Job::run, t, now + config_.confirm_timeout, common_.command, motion_in_force_});
 }
 
 WriteStatus WasherDriver::write(std::size_t point, const Value& v, Ticket t, TimePoint now) {
-  const bool time_point = point == pt::accel_time ||
-                          (point >= pt::agitation_accel && point <= pt::agitation_ccw_off);
+  const bool time_point =
+      point == pt::accel_time || (point >= pt::agitation_accel && point <= pt::agitation_ccw_off);
   const std::optional<std::int64_t> n = whole(v, time_point ? 10.0 : 1.0);  // 100 ms units
   if (!n || *n < 0) return WriteStatus::invalid_value;
   if (point == pt::motion) {
@@ -109,14 +111,29 @@ WriteStatus WasherDriver::write_action(std::int64_t n, Ticket t, TimePoint now) 
   values_[pt::action] = n;
   std::optional<Request> r;
   switch (action) {
-    case Action::none: return WriteStatus::done;
-    case Action::voltage_detection: r = make_bare(Mode::voltage_detection); break;
-    case Action::weight_detection: r = make_bare(Mode::weight_detection); break;
-    case Action::fabric_detection: r = make_bare(Mode::fabric_detection); break;
-    case Action::forced_brake_enable: r = make_forced_brake(true); break;
-    case Action::forced_brake_disable: r = make_forced_brake(false); break;
-    case Action::fct_test: r = make_fct(); break;
-    case Action::ping: r = make_ping(config_.platform, config_.empty_raw_weight); break;
+    case Action::none:
+      return WriteStatus::done;
+    case Action::voltage_detection:
+      r = make_bare(Mode::voltage_detection);
+      break;
+    case Action::weight_detection:
+      r = make_bare(Mode::weight_detection);
+      break;
+    case Action::fabric_detection:
+      r = make_bare(Mode::fabric_detection);
+      break;
+    case Action::forced_brake_enable:
+      r = make_forced_brake(true);
+      break;
+    case Action::forced_brake_disable:
+      r = make_forced_brake(false);
+      break;
+    case Action::fct_test:
+      r = make_fct();
+      break;
+    case Action::ping:
+      r = make_ping(config_.platform, config_.empty_raw_weight);
+      break;
   }
   values_[pt::action_status] = static_cast<std::int64_t>(ActionStatus::pending);
   return enqueue({*r, Job::action, t, now + config_.confirm_timeout});
