@@ -165,8 +165,8 @@ void Ed3100Driver::apply(const Job& j, const Reply& r) {
   }
   switch (j.op) {
     case Op::read_fault:
-      apply_fault(r.words);
       fault_known_ = true;
+      apply_fault(r.words);
       break;
     case Op::read_monitor:
       apply_monitor(j.slot, r.words);
@@ -236,7 +236,8 @@ void Ed3100Driver::update_speed() {
   if (!speed_hz_) return;
   // Stopped, the monitor shows the reference rather than the output (document example:
   // 42.28 Hz with the stopped bit): the motor does not turn.
-  std::int32_t rpm = speed_stopped_ ? 0 : rpm_from_hz(*speed_hz_);
+  const bool turning = !speed_stopped_ && (!fault_known_ || bit(state_word_, kStRunning));
+  std::int32_t rpm = turning ? rpm_from_hz(*speed_hz_) : 0;
   if (bit(state_word_, kStRunReverse)) rpm = -rpm;
   common_.speed_rpm = rpm;
 }
@@ -317,15 +318,29 @@ WriteStatus Ed3100Driver::setpoint(std::int32_t rpm, Ticket t, TimePoint now) {
   last_now_ = now;
   const auto centi = centi_hz_from_rpm(rpm);
   if (!centi) return WriteStatus::invalid_value;
+  return set_frequency(*centi, rpm, t);
+}
+
+WriteStatus Ed3100Driver::set_frequency(std::uint16_t centi_hz, std::int32_t rpm, Ticket t) {
   common_.setpoint_rpm = rpm;
-  frequency_ = *centi;
+  frequency_ = centi_hz;
   values_[index(Fixed::frequency_setpoint)] = frequency_ * 0.01;
+  // Stopped, the reference travels with the next run command (one 10 write).
   if (!common_.running && !is_run(common_.command)) return WriteStatus::done;
   return queue_write(Job::make(Op::write_frequency, 0, kRegFrequency, {frequency_}), t);
 }
 
 WriteStatus Ed3100Driver::write(std::size_t point, const Value& v, Ticket t, TimePoint now) {
   last_now_ = now;
+  if (point == index(Fixed::frequency_setpoint)) {
+    const long long centi = std::llround(as_double(v) * 100.0);  // 0x2001 in 0.01 Hz
+    if (!std::holds_alternative<std::int64_t>(v) && !std::holds_alternative<double>(v)) {
+      return WriteStatus::invalid_value;
+    }
+    if (centi < 0 || centi > 0xFFFF) return WriteStatus::invalid_value;
+    const auto c = static_cast<std::uint16_t>(centi);
+    return set_frequency(c, rpm_from_hz(c * 0.01), t);
+  }
   const std::size_t first = parameter_index(config_, 0);
   if (point < first || point >= first + config_.parameters.size()) {
     return WriteStatus::invalid_value;

@@ -75,6 +75,7 @@ class Ed3100Driver final : public Driver {
   void update_ready();
   void update_speed();
   WriteStatus queue_write(Job j, Ticket t);
+  WriteStatus set_frequency(std::uint16_t centi_hz, std::int32_t rpm, Ticket t);
   [[nodiscard]] std::int32_t rpm_from_hz(double hz) const;
   [[nodiscard]] std::optional<std::uint16_t> centi_hz_from_rpm(std::int32_t rpm) const;
 

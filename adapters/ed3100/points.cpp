@@ -74,7 +74,10 @@ std::vector<PointSpec> make_points(const Config& c) {
   freq.name = "frequency_setpoint";
   freq.scale = 0.01;  // 0x2001 in 0.01 Hz (README: 0x1388 = 50.00 Hz)
   freq.unit = "Hz";
-  freq.description = "frequency reference for 0x2001 (from setpoint_rpm and poles)";
+  freq.table = Table::holding;
+  freq.description = "frequency reference for 0x2001; setpoint_rpm x poles / 120";
+  freq.min = 0.0;
+  freq.max = 655.35;  // the 16-bit register in 0.01 Hz
 
   for (const MonitorSel& m : c.monitors) {
     const std::string id = hex4(m.reg, false);

@@ -18,7 +18,7 @@ enum class Fixed : std::size_t {
   commanded_direction,  // state bit 3
   accelerating,         // state bit 10
   decelerating,         // state bit 11
-  frequency_setpoint,   // the last frequency reference sent or stored, 0.01 Hz
+  frequency_setpoint,   // holding: the frequency reference for 0x2001, 0.01 Hz
   count,
 };
 
