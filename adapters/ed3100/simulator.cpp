@@ -1,11 +1,7 @@
 #include "simulator.h"
 
-#include <charconv>
-#include <cstdio>
-#include <sstream>
 #include <vector>
 
-#include "config.h"
 #include "registers.h"
 
 namespace drivegate::ed3100 {
@@ -39,24 +35,6 @@ constexpr Millis kStaleRx{100};
 constexpr std::uint16_t fmt(unsigned decimals_bit, int unit_bit) {
   return static_cast<std::uint16_t>((1u << decimals_bit) | (unit_bit < 0 ? 0u : 1u << unit_bit) |
                                     (1u << kFmtNormal));
-}
-
-std::string hex(std::uint16_t v) {
-  char b[8];
-  std::snprintf(b, sizeof b, "0x%04X", v);
-  return b;
-}
-
-std::optional<std::uint16_t> number(std::string_view s) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    s.remove_prefix(2);
-    base = 16;
-  }
-  unsigned v = 0;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (ec != std::errc{} || p != s.data() + s.size() || v > 0xFFFF) return std::nullopt;
-  return static_cast<std::uint16_t>(v);
 }
 
 bool is_param(std::uint16_t reg) {
@@ -272,80 +250,6 @@ std::uint16_t Ed3100Simulator::state_word() const {
   set(kStAccelerating, accelerating_);
   set(kStDecelerating, decelerating_);
   return w;
-}
-
-std::string Ed3100Simulator::state() const {
-  std::ostringstream s;
-  s << "address=" << int{address_}
-    << " form=" << (form_ == ReadForm::document ? "document" : "standard")
-    << " command=" << hex(command_) << " reference=" << hex(reference_) << " output=" << output_
-    << " running=" << running_ << " direction=" << (rotating_reverse_ ? "reverse" : "forward")
-    << " commanded=" << (commanded_reverse_ ? "reverse" : "forward") << " fault=" << hex(fault_)
-    << " state=" << hex(state_word()) << " silent=" << silent_ << " corrupt=" << corrupt_;
-  for (const auto& [reg, value] : params_) {
-    char b[32];
-    std::snprintf(b, sizeof b, " param_%02x_%02x=%s", reg >> 8, reg & 0xFF, hex(value).c_str());
-    s << b;
-  }
-  return s.str();
-}
-
-std::string Ed3100Simulator::control(std::string_view line, TimePoint /*now*/) {
-  std::istringstream in{std::string(line)};
-  std::string cmd, a, b, c;
-  in >> cmd >> a >> b >> c;
-  if (cmd == "state") return state();
-  if (cmd == "fault") {
-    const auto code = number(a);
-    if (!code || *code == kNoFault)
-      return "error: fault <code 0..0xFFFE> (the table is not legible)";
-    fault_ = *code;
-    command_ = kCmdStop;  // a trip coasts the motor
-    running_ = false;
-    output_ = 0;
-    return "ok fault=" + hex(fault_);
-  }
-  if (cmd == "clear") {
-    fault_ = kNoFault;
-    return "ok";
-  }
-  if (cmd == "silent" && (a == "on" || a == "off")) {
-    silent_ = a == "on";
-    return "ok silent=" + a;
-  }
-  if (cmd == "corrupt") {
-    const auto n = number(a);
-    if (!n) return "error: corrupt <count>";
-    corrupt_ = *n;
-    return "ok corrupt=" + a;
-  }
-  if (cmd == "form" && (a == "document" || a == "standard")) {
-    form_ = a == "document" ? ReadForm::document : ReadForm::standard;
-    return "ok form=" + a;
-  }
-  if (cmd == "param") {
-    const auto reg = parse_parameter(a);
-    const auto v = number(b);
-    if (!reg || !v) return "error: param <GG-nn> <value>";
-    params_[*reg] = *v;
-    return "ok";
-  }
-  if (cmd == "monitor") {
-    const auto m = parse_monitor(a);
-    if (!m) return "error: monitor <0D00..0D28> <value> <format> | monitor <0Dnn> auto";
-    if (b == "auto") {
-      monitor_override_.erase(m->reg);
-      return "ok";
-    }
-    const auto v = number(b);
-    const auto f = number(c);
-    if (!v || !f) return "error: monitor <0D00..0D28> <value> <format> | monitor <0Dnn> auto";
-    monitor_override_[m->reg] = {*v, *f};
-    return "ok";
-  }
-  return "error: unknown command; use state | fault <code> | clear | silent on|off | "
-         "corrupt <n> | form document|standard | param <GG-nn> <value> | "
-         "monitor <0Dnn> <value> <format>|auto";
 }
 
 }  // namespace drivegate::ed3100
