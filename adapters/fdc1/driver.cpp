@@ -43,16 +43,17 @@ RxVerdict Fdc1Driver::on_receive(ByteView rx, TimePoint now) {
     const RxVerdict v = on_echo(*echo);
     return {v.kind, d.consumed};
   }
-  apply(std::get<Status>(d.frame));
+  apply(std::get<Status>(d.frame), now);
   return {RxKind::frame, d.consumed};
 }
 
-void Fdc1Driver::apply(const Status& s) {
+void Fdc1Driver::apply(const Status& s, TimePoint now) {
   if (!common_.ready) {
     common_.ready = true;
     // Start-up: assert the command in force at once (slave mode), then refresh it.
     if (settings_.slave_mode) {
       send_now_ = true;
+      due_at_ = now;
       send_priority_ = Priority::poll;
     }
   }
@@ -155,8 +156,8 @@ std::optional<Exchange> Fdc1Driver::next_exchange(TimePoint now) {
 }
 
 TimePoint Fdc1Driver::wake_at() const {
-  if ((slave_ready() && send_now_) || prog_state_ == Programming::queued) return TimePoint::min();
-  TimePoint wake = slave_ready() ? next_refresh_ : TimePoint::max();
+  TimePoint wake = slave_ready() ? (send_now_ ? due_at_ : next_refresh_) : TimePoint::max();
+  if (prog_state_ == Programming::queued) wake = std::min(wake, due_at_);
   if (speed_write_) wake = std::min(wake, speed_write_->deadline);
   return wake;
 }
@@ -174,6 +175,7 @@ void Fdc1Driver::start_speed_write(Ticket t, Expect e, TimePoint now) {
   if (speed_write_) complete(speed_write_->ticket, WriteResult::no_response);  // superseded
   speed_write_ = SpeedWrite{t, e, now + settings_.confirm};
   send_now_ = true;
+  due_at_ = now;
   send_priority_ = Priority::command;
 }
 

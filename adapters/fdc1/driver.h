@@ -55,7 +55,7 @@ class Fdc1Driver final : public Driver {
   };
   enum class Programming : std::uint8_t { idle, queued, awaiting_echo };
 
-  void apply(const Status& s);
+  void apply(const Status& s, TimePoint now);
   void confirm(const Status& s);
   void expire(TimePoint now);
   void start_speed_write(Ticket t, Expect e, TimePoint now);
@@ -63,7 +63,7 @@ class Fdc1Driver final : public Driver {
   [[nodiscard]] Speed wanted_speed() const;
   [[nodiscard]] bool slave_ready() const { return settings_.slave_mode && common_.ready; }
 
-  WriteStatus commit_program(Ticket t);
+  WriteStatus commit_program(Ticket t, TimePoint now);
   std::optional<std::string> gather_program(ProgramSettings& out) const;
   void finish_program(WriteResult r, ProgStatus status, std::string message);
   RxVerdict on_echo(const Echo& echo);
@@ -78,6 +78,7 @@ class Fdc1Driver final : public Driver {
   std::int32_t setpoint_ = 0;  // 0: none written yet
   bool send_now_ = false;      // a speed frame is due at once (start-up or a write)
   Priority send_priority_ = Priority::poll;
+  TimePoint due_at_{};  // when the frame due at once became due (wake_at)
   TimePoint next_refresh_ = TimePoint::max();
   std::optional<SpeedWrite> speed_write_;
 

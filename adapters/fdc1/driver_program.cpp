@@ -12,7 +12,7 @@ struct Field {
 
 }  // namespace
 
-WriteStatus Fdc1Driver::write(std::size_t point, const Value& v, Ticket t, TimePoint) {
+WriteStatus Fdc1Driver::write(std::size_t point, const Value& v, Ticket t, TimePoint now) {
   if (!programming_ || point < pt::prog_min_rpm || point > pt::prog_commit) {
     return WriteStatus::invalid_value;
   }
@@ -22,7 +22,7 @@ WriteStatus Fdc1Driver::write(std::size_t point, const Value& v, Ticket t, TimeP
       x < spec.min || x > spec.max) {
     return WriteStatus::invalid_value;
   }
-  if (point == pt::prog_commit) return commit_program(t);
+  if (point == pt::prog_commit) return commit_program(t, now);
   if (point >= pt::prog_cut_out_12v) {
     values_[point] = x;  // volts
   } else {
@@ -73,7 +73,7 @@ std::optional<std::string> Fdc1Driver::gather_program(ProgramSettings& p) const 
   return std::nullopt;
 }
 
-WriteStatus Fdc1Driver::commit_program(Ticket t) {
+WriteStatus Fdc1Driver::commit_program(Ticket t, TimePoint now) {
   if (prog_state_ != Programming::idle) return WriteStatus::refused;  // one at a time
   ProgramSettings p;
   auto problem = gather_program(p);
@@ -91,6 +91,7 @@ WriteStatus Fdc1Driver::commit_program(Ticket t) {
   prog_sent_ = to_program(p);
   prog_ticket_ = t;
   prog_state_ = Programming::queued;
+  due_at_ = now;
   values_[pt::prog_status] = static_cast<std::int64_t>(ProgStatus::pending);
   values_[pt::prog_message] = std::string();
   return WriteStatus::pending;

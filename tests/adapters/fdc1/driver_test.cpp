@@ -269,6 +269,12 @@ TEST(Fdc1Driver, WakesForTheRefreshAndTheConfirmDeadline) {
   const TimePoint refresh = rig.driver->wake_at();
   EXPECT_GT(refresh, rig.now() + 29s);
   EXPECT_LE(refresh, rig.now() + 30s);
+  rig.driver->setpoint(2000, 1, rig.now());
+  rig.driver->command(Command::run_forward, 2, rig.now());
+  EXPECT_LE(rig.driver->wake_at(), rig.now());  // the run frame is due at once
+  ASSERT_TRUE(rig.driver->next_exchange(rig.now()));
+  EXPECT_GT(rig.driver->wake_at(), rig.now());
+  EXPECT_LE(rig.driver->wake_at(), rig.now() + 5s);  // the confirm deadline
 }
 
 }  // namespace
