@@ -38,6 +38,8 @@ class Backend {
   // Validates synchronously (unknown unit, unmapped address, read-only, range) and returns the
   // exception at once if it fails; otherwise returns none and calls `done` exactly once later,
   // possibly after the connection that asked has gone (the server must tolerate that).
+  // `values` is valid only during the call (it points into the server's scratch): copy what is
+  // kept. `done` may be called from inside write(); the server defers its work to the event loop.
   virtual Exception write(std::uint8_t unit, RegisterTable table, std::uint16_t address,
                           std::span<const std::uint16_t> values, WriteDone done) = 0;
 };

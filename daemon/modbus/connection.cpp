@@ -1,0 +1,296 @@
+#include "connection.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <boost/asio/post.hpp>
+#include <boost/asio/write.hpp>
+#include <cstring>
+
+namespace drivegate::modbus {
+namespace {
+
+namespace asio = boost::asio;
+
+// One read takes up to 16 KiB: dozens of pipelined requests in one system call.
+constexpr std::size_t kReceiveBuffer = 16 * 1024;
+// Replies not yet taken by a slow client: past this the connection stops reading until they are.
+constexpr std::size_t kMaxReplyBacklog = 64 * 1024;
+
+}  // namespace
+
+Connection::Connection(std::shared_ptr<ServerState> state, asio::ip::tcp::socket socket)
+    : state_(std::move(state)),
+      socket_(std::move(socket)),
+      timer_(state_->io),
+      rx_(kReceiveBuffer),
+      writes_(std::max<std::size_t>(1, state_->options.max_pending_writes)) {
+  tx_pending_.reserve(kReceiveBuffer);
+  tx_inflight_.reserve(kReceiveBuffer);
+}
+
+Connection::~Connection() {
+  close();
+}
+
+void Connection::start() {
+  boost::system::error_code ec;
+  socket_.set_option(asio::ip::tcp::no_delay(true), ec);  // replies leave at once (issue 9)
+  peer_ = socket_.remote_endpoint(ec);
+  state_->live.insert(this);
+  ++state_->stats.connections_accepted;
+  ++state_->stats.connections_active;
+  state_->log->debug("modbus: client {}:{} connected", peer_.address().to_string(), peer_.port());
+  last_request_ = Clock::now();
+  if (auto deadline = next_deadline()) arm_timer(*deadline);
+  read();
+}
+
+void Connection::close() {
+  if (closed_) return;
+  closed_ = true;
+  boost::system::error_code ec;
+  socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ec);
+  socket_.close(ec);
+  timer_.cancel();
+  for (auto& w : writes_) {  // late `done` calls find a stale generation and are dropped
+    w.used = false;
+    ++w.generation;
+  }
+  outstanding_ = 0;
+  if (state_->live.erase(this) != 0) --state_->stats.connections_active;
+}
+
+bool Connection::may_read() const {
+  return !closed_ && !reading_ && !close_after_flush_ && outstanding_ < writes_.size() &&
+         tx_pending_.size() < kMaxReplyBacklog && rx_len_ < rx_.size();
+}
+
+void Connection::read() {
+  if (!may_read()) return;
+  reading_ = true;
+  socket_.async_read_some(asio::buffer(rx_.data() + rx_len_, rx_.size() - rx_len_),
+                          [self = shared_from_this()](const boost::system::error_code& ec,
+                                                      std::size_t n) { self->on_read(ec, n); });
+}
+
+void Connection::on_read(const boost::system::error_code& ec, std::size_t n) {
+  reading_ = false;
+  if (closed_) return;
+  if (ec) {
+    if (ec != asio::error::eof && ec != asio::error::operation_aborted) {
+      state_->log->debug("modbus: client {}:{}: {}", peer_.address().to_string(), peer_.port(),
+                         ec.message());
+    }
+    close();
+    return;
+  }
+  rx_len_ += n;
+  process_input(Clock::now());
+  flush();
+  read();
+}
+
+// Dispatches every complete request in the receive buffer, stopping at a partial frame, at a
+// malformed header, or at a write when the connection has as many writes outstanding as it may.
+void Connection::process_input(Clock::time_point now) {
+  std::size_t offset = 0;
+  bool partial = false;
+  while (offset < rx_len_) {
+    const auto parse =
+        parse_mbap(std::span<const std::uint8_t>(rx_.data() + offset, rx_len_ - offset));
+    if (parse.status == MbapParse::Status::indeterminate) {
+      partial = true;
+      break;
+    }
+    if (parse.status == MbapParse::Status::bad) {
+      ++state_->stats.malformed;
+      state_->log->warn("modbus: client {}:{}: {}, closing the connection",
+                        peer_.address().to_string(), peer_.port(), parse.error.message());
+      close_after_flush_ = true;
+      rx_len_ = 0;
+      partial_since_.reset();
+      return;
+    }
+    // At the cap a write waits in the buffer (and so does everything after it, to keep the
+    // order in which requests reach the backend).
+    if (outstanding_ >= writes_.size() && may_write(parse.pdu[0])) break;
+    last_request_ = now;
+    dispatch(parse.header, parse.pdu);
+    offset += parse.consumed;
+    if (closed_) return;
+  }
+  if (offset > 0) {
+    std::memmove(rx_.data(), rx_.data() + offset, rx_len_ - offset);
+    rx_len_ -= offset;
+  }
+  if (!partial) {
+    partial_since_.reset();
+  } else if (offset > 0 || !partial_since_) {
+    partial_since_ = now;  // a new partial frame: its clock starts now
+    if (state_->options.frame_timeout.count() > 0) {
+      const auto deadline = now + state_->options.frame_timeout;
+      if (deadline < timer_deadline_) arm_timer(deadline);
+    }
+  }
+}
+
+std::span<std::uint8_t> Connection::reserve_reply() {
+  const std::size_t at = tx_pending_.size();
+  tx_pending_.resize(at + kMaxAduSize);
+  return {tx_pending_.data() + at + kMbapHeaderSize, kMaxPduSize};
+}
+
+void Connection::commit_reply(std::size_t at, std::uint16_t transaction, std::uint8_t unit,
+                              std::size_t pdu_size) {
+  put_mbap(std::span<std::uint8_t>(tx_pending_.data() + at, kMbapHeaderSize), transaction, unit,
+           pdu_size);
+  tx_pending_.resize(at + kMbapHeaderSize + pdu_size);
+  ++state_->stats.responses;
+  const std::uint8_t fc = tx_pending_[at + kMbapHeaderSize];
+  if ((fc & 0x80) != 0) state_->count_exception(tx_pending_[at + kMbapHeaderSize + 1]);
+}
+
+void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t> pdu) {
+  ++state_->stats.requests;
+  const std::size_t at = tx_pending_.size();
+  const auto out = reserve_reply();
+  Dispatcher::Result result;
+  if (!may_write(pdu[0])) {
+    result = state_->dispatcher.handle(header.unit, pdu, out, {});
+  } else {
+    // A free slot exists: process_input stops at the cap. It is filled before the backend sees
+    // the write, since `done` may fire before write() returns.
+    const auto slot = static_cast<std::size_t>(
+        std::find_if(writes_.begin(), writes_.end(), [](const auto& w) { return !w.used; }) -
+        writes_.begin());
+    PendingWrite& w = writes_[slot];
+    w.used = true;
+    w.done = false;
+    w.transaction = header.transaction;
+    w.unit = header.unit;
+    w.size = static_cast<std::uint8_t>(pdu.size());
+    std::copy(pdu.begin(), pdu.end(), w.request.begin());
+    ++outstanding_;
+    result =
+        state_->dispatcher.handle(header.unit, pdu, out,
+                                  [self = shared_from_this(), slot, generation = w.generation](
+                                      Exception e) { self->on_write_done(slot, generation, e); });
+    if (result.status == Dispatcher::Result::Status::reply) {  // refused before it started
+      w.used = false;
+      ++w.generation;
+      --outstanding_;
+    }
+  }
+  if (result.status == Dispatcher::Result::Status::reply) {
+    commit_reply(at, header.transaction, header.unit, result.size);
+  } else {
+    tx_pending_.resize(at);
+  }
+}
+
+// Never does any work itself: the backend may call it from inside Backend::write (of this or
+// another connection), while the shared dispatcher's scratch still holds that write's values.
+void Connection::on_write_done(std::size_t slot, std::uint32_t generation, Exception result) {
+  if (closed_ || slot >= writes_.size()) return;
+  PendingWrite& w = writes_[slot];
+  if (!w.used || w.generation != generation || w.done) return;
+  w.done = true;
+  w.result = result;
+  if (completions_posted_) return;
+  completions_posted_ = true;
+  asio::post(state_->io, [self = shared_from_this()] { self->process_completions(); });
+}
+
+void Connection::process_completions() {
+  completions_posted_ = false;
+  if (closed_) return;
+  for (auto& w : writes_) {
+    if (!w.used || !w.done) continue;
+    const std::size_t at = tx_pending_.size();
+    const auto out = reserve_reply();
+    const std::size_t size = state_->dispatcher.complete(
+        w.unit, std::span<const std::uint8_t>(w.request.data(), w.size), w.result, out);
+    commit_reply(at, w.transaction, w.unit, size);
+    w.used = false;
+    ++w.generation;
+    --outstanding_;
+  }
+  // Requests held back at the cap may go now.
+  if (!close_after_flush_ && rx_len_ > 0) process_input(Clock::now());
+  flush();
+  read();
+}
+
+void Connection::flush() {
+  if (closed_ || writing_) return;
+  if (tx_pending_.empty()) {
+    if (close_after_flush_) close();
+    return;
+  }
+  std::swap(tx_pending_, tx_inflight_);
+  tx_pending_.clear();
+  writing_ = true;
+  asio::async_write(socket_, asio::buffer(tx_inflight_),
+                    [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+                      self->on_flushed(ec);
+                    });
+}
+
+void Connection::on_flushed(const boost::system::error_code& ec) {
+  writing_ = false;
+  if (closed_) return;
+  if (ec) {
+    close();
+    return;
+  }
+  tx_inflight_.clear();
+  flush();
+  read();
+}
+
+std::optional<Connection::Clock::time_point> Connection::next_deadline() const {
+  std::optional<Clock::time_point> deadline;
+  const auto& o = state_->options;
+  if (o.idle_timeout.count() > 0) deadline = last_request_ + o.idle_timeout;
+  if (partial_since_ && o.frame_timeout.count() > 0) {
+    const auto frame = *partial_since_ + o.frame_timeout;
+    if (!deadline || frame < *deadline) deadline = frame;
+  }
+  return deadline;
+}
+
+// One timer per connection, moved only when a deadline comes earlier than the armed one; when it
+// fires it checks what is really due (requests push the idle deadline without touching it).
+void Connection::arm_timer(Clock::time_point deadline) {
+  timer_deadline_ = deadline;
+  timer_.expires_at(deadline);
+  timer_.async_wait(
+      [self = shared_from_this()](const boost::system::error_code& ec) { self->on_timer(ec); });
+}
+
+void Connection::on_timer(const boost::system::error_code& ec) {
+  if (ec == asio::error::operation_aborted || closed_) return;
+  timer_deadline_ = Clock::time_point::max();
+  const auto now = Clock::now();
+  const auto& o = state_->options;
+  if (partial_since_ && o.frame_timeout.count() > 0 && now - *partial_since_ >= o.frame_timeout) {
+    ++state_->stats.frame_timeouts;
+    state_->log->info("modbus: client {}:{}: partial frame for {} ms, closing",
+                      peer_.address().to_string(), peer_.port(), o.frame_timeout.count());
+    close();
+    return;
+  }
+  if (o.idle_timeout.count() > 0 && outstanding_ == 0 && now - last_request_ >= o.idle_timeout) {
+    ++state_->stats.idle_timeouts;
+    state_->log->info("modbus: client {}:{}: no request for {} ms, closing",
+                      peer_.address().to_string(), peer_.port(), o.idle_timeout.count());
+    close();
+    return;
+  }
+  auto deadline = next_deadline();
+  if (deadline && *deadline <= now) deadline = now + o.idle_timeout;  // waiting on writes
+  if (deadline) arm_timer(*deadline);
+}
+
+}  // namespace drivegate::modbus

@@ -1,0 +1,91 @@
+// One Modbus TCP client. Reads large chunks into a fixed buffer, dispatches every complete request
+// in it, gathers the replies of one read batch into one socket write, and answers reads at once
+// even while earlier writes of the same connection wait for their device (Modbus TCP matches
+// replies by transaction id, so replies may leave out of order). Closes on a malformed MBAP
+// header (after sending the replies already queued), on a partial frame older than
+// frame_timeout, and after idle_timeout without a request.
+#pragma once
+
+#include <array>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "mbap.h"
+#include "server_state.h"
+
+namespace drivegate::modbus {
+
+class Connection : public std::enable_shared_from_this<Connection> {
+ public:
+  Connection(std::shared_ptr<ServerState> state, boost::asio::ip::tcp::socket socket);
+  ~Connection();
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+
+  void start();
+  // Closes the socket at once; writes still pending at the backend are answered into the void.
+  void close();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  // A write request waiting for its device. The request PDU is kept to build the response.
+  struct PendingWrite {
+    bool used = false;
+    bool done = false;
+    Exception result = Exception::none;
+    std::uint32_t generation = 0;
+    std::uint16_t transaction = 0;
+    std::uint8_t unit = 0;
+    std::uint8_t size = 0;
+    std::array<std::uint8_t, kMaxPduSize> request{};
+  };
+
+  void read();
+  void on_read(const boost::system::error_code& ec, std::size_t n);
+  void process_input(Clock::time_point now);
+  void dispatch(const MbapHeader& header, std::span<const std::uint8_t> pdu);
+  std::span<std::uint8_t> reserve_reply();
+  void commit_reply(std::size_t at, std::uint16_t transaction, std::uint8_t unit,
+                    std::size_t pdu_size);
+  void on_write_done(std::size_t slot, std::uint32_t generation, Exception result);
+  void process_completions();
+  void flush();
+  void on_flushed(const boost::system::error_code& ec);
+  bool may_read() const;
+  void arm_timer(Clock::time_point deadline);
+  void on_timer(const boost::system::error_code& ec);
+  std::optional<Clock::time_point> next_deadline() const;
+
+  std::shared_ptr<ServerState> state_;
+  boost::asio::ip::tcp::socket socket_;
+  boost::asio::ip::tcp::endpoint peer_;
+  boost::asio::steady_timer timer_;
+  Clock::time_point timer_deadline_ = Clock::time_point::max();
+
+  // Receive buffer: fixed, large reads (many pipelined requests per read), never reallocated.
+  std::vector<std::uint8_t> rx_;
+  std::size_t rx_len_ = 0;
+  // Replies being gathered for the next write, and the write in flight.
+  std::vector<std::uint8_t> tx_pending_;
+  std::vector<std::uint8_t> tx_inflight_;
+
+  std::vector<PendingWrite> writes_;
+  std::size_t outstanding_ = 0;
+
+  Clock::time_point last_request_;
+  std::optional<Clock::time_point> partial_since_;  // a partial frame is buffered since then
+
+  bool reading_ = false;
+  bool writing_ = false;
+  bool completions_posted_ = false;
+  bool close_after_flush_ = false;  // a malformed header was seen
+  bool closed_ = false;
+};
+
+}  // namespace drivegate::modbus

@@ -1,0 +1,42 @@
+// Settings of the Modbus TCP server and the counters it keeps.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "pdu.h"
+
+namespace drivegate::modbus {
+
+struct ServerOptions {
+  // A numeric IPv4 or IPv6 address ("[::1]" accepted), "localhost" (127.0.0.1), or "" / "*" for
+  // every interface (IPv6 dual stack, IPv4 only where IPv6 is unavailable). No DNS lookup: it
+  // would block the event loop.
+  std::string host = "*";
+  std::uint16_t port = 502;             // 0: an ephemeral port, see Server::port()
+  std::size_t max_clients = 32;         // past it a new client is accepted and closed at once
+  std::size_t max_pending_writes = 16;  // per connection; at the cap the connection stops reading
+  std::chrono::milliseconds frame_timeout{2000};  // a partial frame older than this closes; 0 = off
+  std::chrono::milliseconds idle_timeout{60000};  // no request for this long closes; 0 = off
+  int listen_backlog = 128;
+  DeviceIdentity identity;
+};
+
+struct ServerStats {
+  std::uint64_t connections_accepted = 0;  // served connections (refused ones not included)
+  std::uint64_t connections_refused = 0;   // closed at once: client cap reached
+  std::uint64_t connections_active = 0;
+  std::uint64_t requests = 0;        // well-formed requests dispatched
+  std::uint64_t responses = 0;       // responses and exceptions queued for sending
+  std::uint64_t malformed = 0;       // connections closed on a malformed MBAP header
+  std::uint64_t frame_timeouts = 0;  // connections closed with a stale partial frame
+  std::uint64_t idle_timeouts = 0;   // connections closed for lack of requests
+  // exceptions[code]: exception responses sent, by code (Application Protocol section 7;
+  // codes 0x01..0x0B, larger codes counted in [0]).
+  std::array<std::uint64_t, 12> exceptions{};
+};
+
+}  // namespace drivegate::modbus

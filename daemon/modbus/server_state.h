@@ -1,0 +1,53 @@
+// What the acceptor and every connection of one server share. Owned through shared_ptr by the
+// Server and by every pending handler, so a handler that runs after the Server is gone finds it
+// intact (and closed).
+#pragma once
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <memory>
+#include <unordered_set>
+
+#include "backend.h"
+#include "pdu.h"
+#include "server_options.h"
+
+namespace spdlog {
+class logger;
+}
+
+namespace drivegate::modbus {
+
+class Connection;
+
+struct ServerState {
+  ServerState(boost::asio::io_context& io_context, Backend& backend_, ServerOptions options_,
+              std::shared_ptr<spdlog::logger> log_)
+      : io(io_context),
+        backend(backend_),
+        options(std::move(options_)),
+        log(std::move(log_)),
+        dispatcher(backend_, options.identity),
+        acceptor(io_context),
+        retry_timer(io_context) {}
+
+  void count_exception(std::uint8_t code) {
+    ++stats.exceptions[code < stats.exceptions.size() ? code : 0];
+  }
+
+  boost::asio::io_context& io;
+  Backend& backend;
+  const ServerOptions options;
+  const std::shared_ptr<spdlog::logger> log;
+  ServerStats stats;
+  Dispatcher dispatcher;  // shared: single-threaded, and never re-entered (see Connection)
+  boost::asio::ip::tcp::acceptor acceptor;
+  boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
+  std::unordered_set<Connection*> live;   // open connections
+  bool closed = false;
+  std::chrono::steady_clock::time_point last_refusal_warning{};
+  std::uint64_t refused_since_warning = 0;
+};
+
+}  // namespace drivegate::modbus

@@ -1,0 +1,366 @@
+// Connections over loopback TCP: libmodbus's client for the ordinary paths, raw sockets for the
+// exact bytes, pipelining, late writes, malformed headers and timeouts.
+#include <gtest/gtest.h>
+#include <modbus.h>
+
+#include <set>
+#include <string>
+
+#include "harness.h"
+
+namespace drivegate::modbus {
+namespace {
+
+using namespace test;
+using Mode = FakeBackend::Mode;
+
+// A libmodbus client connected to the harness, unit 1.
+class Libmodbus {
+ public:
+  explicit Libmodbus(std::uint16_t port, int unit = 1) : ctx_(modbus_new_tcp("127.0.0.1", port)) {
+    modbus_set_slave(ctx_, unit);
+    modbus_set_response_timeout(ctx_, 2, 0);
+    connected_ = modbus_connect(ctx_) == 0;
+  }
+  ~Libmodbus() {
+    modbus_close(ctx_);
+    modbus_free(ctx_);
+  }
+  modbus_t* operator*() const { return ctx_; }
+  bool connected() const { return connected_; }
+
+ private:
+  modbus_t* ctx_;
+  bool connected_ = false;
+};
+
+TEST(Connection, LibmodbusReadsAndWritesEveryFunction) {
+  Harness h;
+  ASSERT_FALSE(h.listen_error());
+  Libmodbus c(h.port());
+  ASSERT_TRUE(c.connected());
+
+  ASSERT_EQ(modbus_write_register(*c, 10, 0x1234), 1);
+  const std::uint16_t values[] = {1, 2, 3};
+  ASSERT_EQ(modbus_write_registers(*c, 11, 3, values), 3);
+  std::uint16_t regs[4] = {};
+  ASSERT_EQ(modbus_read_registers(*c, 10, 4, regs), 4);
+  EXPECT_EQ(regs[0], 0x1234);
+  EXPECT_EQ(regs[3], 3);
+
+  h.with_backend([](FakeBackend& b) {
+    b.table(RegisterTable::input_registers)[5] = 0xBEEF;
+    b.table(RegisterTable::discrete_inputs)[7] = 1;
+    return 0;
+  });
+  ASSERT_EQ(modbus_read_input_registers(*c, 5, 1, regs), 1);
+  EXPECT_EQ(regs[0], 0xBEEF);
+  std::uint8_t bits[10] = {};
+  ASSERT_EQ(modbus_read_input_bits(*c, 0, 10, bits), 10);
+  EXPECT_EQ(bits[7], 1);
+  EXPECT_EQ(bits[6], 0);
+
+  ASSERT_EQ(modbus_write_bit(*c, 3, 1), 1);
+  const std::uint8_t coils[] = {1, 0, 1, 1, 0, 0, 0, 0, 1};
+  ASSERT_EQ(modbus_write_bits(*c, 20, 9, coils), 9);
+  std::uint8_t all[29] = {};
+  ASSERT_EQ(modbus_read_bits(*c, 0, 29, all), 29);
+  EXPECT_EQ(all[3], 1);
+  EXPECT_EQ(all[20], 1);
+  EXPECT_EQ(all[21], 0);
+  EXPECT_EQ(all[28], 1);
+
+  const std::uint16_t w[] = {7, 8};
+  ASSERT_EQ(modbus_write_and_read_registers(*c, 30, 2, w, 29, 3, regs), 3);
+  EXPECT_EQ(regs[0], 0);
+  EXPECT_EQ(regs[1], 7);
+  EXPECT_EQ(regs[2], 8);
+}
+
+TEST(Connection, LibmodbusSeesEveryException) {
+  Harness h;
+  Libmodbus c(h.port());
+  ASSERT_TRUE(c.connected());
+  std::uint16_t r[2];
+  EXPECT_EQ(modbus_read_registers(*c, 0x0400, 1, r), -1);  // unmapped
+  EXPECT_EQ(errno, EMBXILADD);
+  modbus_set_slave(*c, 9);  // unknown unit
+  EXPECT_EQ(modbus_read_registers(*c, 0, 1, r), -1);
+  EXPECT_EQ(errno, EMBXGPATH);
+  modbus_set_slave(*c, 1);
+  h.with_backend([](FakeBackend& b) {
+    b.device_result = Exception::server_device_failure;
+    return 0;
+  });
+  EXPECT_EQ(modbus_write_register(*c, 0, 1), -1);  // the drive refused
+  EXPECT_EQ(errno, EMBXSFAIL);
+  h.with_backend([](FakeBackend& b) {
+    b.device_result = Exception::gateway_target_failed;
+    return 0;
+  });
+  EXPECT_EQ(modbus_write_register(*c, 0, 1), -1);  // the drive did not answer
+  EXPECT_EQ(errno, EMBXGTAR);
+  const auto s = h.stats();
+  EXPECT_EQ(s.exceptions[0x02], 1u);
+  EXPECT_EQ(s.exceptions[0x0A], 1u);
+  EXPECT_EQ(s.exceptions[0x04], 1u);
+  EXPECT_EQ(s.exceptions[0x0B], 1u);
+  EXPECT_EQ(s.requests, 4u);
+}
+
+TEST(Connection, PipelinedRequestsInOneSegmentAreAllAnswered) {
+  Harness h;
+  h.with_backend([](FakeBackend& b) {
+    b.table(RegisterTable::holding_registers)[0] = 0x0102;
+    return 0;
+  });
+  RawClient c(h.port());
+  ASSERT_TRUE(c.connected());
+  Bytes wire;
+  for (std::uint16_t t = 1; t <= 20; ++t)
+    wire = wire + request(t, 1, {0x03, 0x00, 0x00, 0x00, 0x01});
+  ASSERT_TRUE(c.send(wire));
+  for (std::uint16_t t = 1; t <= 20; ++t) {
+    EXPECT_EQ(c.reply(), (Bytes{0x00, static_cast<std::uint8_t>(t), 0x00, 0x00, 0x00, 0x05, 0x01,
+                                0x03, 0x02, 0x01, 0x02}));
+  }
+}
+
+TEST(Connection, RequestSplitAtEveryByteIsAnswered) {
+  Harness h;
+  RawClient c(h.port());
+  const Bytes req = request(0x0A0B, 2, {0x04, 0x00, 0x08, 0x00, 0x01});
+  for (std::size_t split = 1; split < req.size(); ++split) {
+    ASSERT_TRUE(c.send(Bytes(req.begin(), req.begin() + static_cast<long>(split))));
+    std::this_thread::sleep_for(2ms);
+    ASSERT_TRUE(c.send(Bytes(req.begin() + static_cast<long>(split), req.end())));
+    EXPECT_EQ(c.reply(), (Bytes{0x0A, 0x0B, 0x00, 0x00, 0x00, 0x05, 0x02, 0x04, 0x02, 0x00, 0x00}))
+        << "split " << split;
+  }
+}
+
+TEST(Connection, ALateWriteDoesNotHoldBackLaterReads) {
+  Harness h;
+  h.with_backend([](FakeBackend& b) {
+    b.mode = Mode::deferred;
+    return 0;
+  });
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(1, 1, {0x06, 0x00, 0x05, 0x00, 0x2A}) +
+                     request(2, 1, {0x03, 0x00, 0x05, 0x00, 0x01})));
+  // The read (transaction 2) is answered with the old value while the write waits.
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x02, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x00}));
+  ASSERT_TRUE(c.send(request(3, 1, {0x03, 0x00, 0x05, 0x00, 0x01})));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x03, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x00}));
+  EXPECT_FALSE(c.readable(50ms));
+  h.with_backend([](FakeBackend& b) {
+    b.complete();
+    return 0;
+  });
+  EXPECT_EQ(c.reply(),
+            (Bytes{0x00, 0x01, 0x00, 0x00, 0x00, 0x06, 0x01, 0x06, 0x00, 0x05, 0x00, 0x2A}));
+  ASSERT_TRUE(c.send(request(4, 1, {0x03, 0x00, 0x05, 0x00, 0x01})));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x04, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x2A}));
+}
+
+TEST(Connection, AtTheWriteCapItStopsReadingUntilAWriteCompletes) {
+  ServerOptions o;
+  o.max_pending_writes = 2;
+  Harness h(o);
+  h.with_backend([](FakeBackend& b) {
+    b.mode = Mode::deferred;
+    return 0;
+  });
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(1, 1, {0x06, 0x00, 0x01, 0x00, 0x01}) +
+                     request(2, 1, {0x06, 0x00, 0x02, 0x00, 0x02}) +
+                     request(3, 1, {0x06, 0x00, 0x03, 0x00, 0x03}) +
+                     request(4, 1, {0x03, 0x00, 0x01, 0x00, 0x01})));
+  EXPECT_FALSE(c.readable(100ms));  // two writes wait; the third and the read are held
+  EXPECT_EQ(h.with_backend([](FakeBackend& b) { return b.pending.size(); }), 2u);
+  h.with_backend([](FakeBackend& b) {
+    b.complete();
+    return 0;
+  });
+  EXPECT_EQ(c.reply(),
+            (Bytes{0x00, 0x01, 0x00, 0x00, 0x00, 0x06, 0x01, 0x06, 0x00, 0x01, 0x00, 0x01}));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x04, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x01}));
+  EXPECT_EQ(h.with_backend([](FakeBackend& b) { return b.pending.size(); }), 2u);
+  h.with_backend([](FakeBackend& b) {
+    b.complete();
+    b.complete(Exception::gateway_target_failed);
+    return 0;
+  });
+  // Both completed before the connection ran again: their replies may leave in either order.
+  const std::set<Bytes> replies{c.reply(), c.reply()};
+  EXPECT_EQ(replies, (std::set<Bytes>{
+                         {0x00, 0x02, 0x00, 0x00, 0x00, 0x06, 0x01, 0x06, 0x00, 0x02, 0x00, 0x02},
+                         {0x00, 0x03, 0x00, 0x00, 0x00, 0x03, 0x01, 0x86, 0x0B}}));
+}
+
+TEST(Connection, AWriteCompletingAfterItsClientLeftIsDropped) {
+  Harness h;
+  h.with_backend([](FakeBackend& b) {
+    b.mode = Mode::deferred;
+    return 0;
+  });
+  {
+    RawClient c(h.port());
+    ASSERT_TRUE(c.send(request(1, 1, {0x06, 0x00, 0x01, 0x00, 0x01})));
+    ASSERT_TRUE(h.wait_clients(1));
+    for (int i = 0; i < 100 && h.with_backend([](FakeBackend& b) { return b.pending.size(); }) == 0;
+         ++i) {
+      std::this_thread::sleep_for(5ms);
+    }
+  }
+  ASSERT_TRUE(h.wait_clients(0));
+  h.with_backend([](FakeBackend& b) {
+    b.complete();
+    return 0;
+  });
+  RawClient d(h.port());
+  ASSERT_TRUE(d.send(request(9, 1, {0x03, 0x00, 0x01, 0x00, 0x01})));
+  EXPECT_EQ(d.reply(), (Bytes{0x00, 0x09, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x01}));
+  EXPECT_EQ(h.stats().responses, 1u);
+}
+
+// --- MBAP outcomes over TCP (Implementation Guide V1.0b, 3.1.3) ----------------------------
+
+struct MbapCase {
+  const char* name;
+  Bytes wire;
+  bool closes;
+};
+void PrintTo(const MbapCase& c, std::ostream* os) {
+  *os << c.name;
+}
+
+class ConnectionMbap : public ::testing::TestWithParam<MbapCase> {};
+
+TEST_P(ConnectionMbap, OutcomeAndOtherClientsUndisturbed) {
+  Harness h;
+  Libmodbus other(h.port());
+  ASSERT_TRUE(other.connected());
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(GetParam().wire));
+  if (GetParam().closes) {
+    EXPECT_TRUE(c.closed_by_peer(500ms));
+  } else {
+    const Bytes r = c.reply();
+    ASSERT_EQ(r.size(), 9u);
+    EXPECT_EQ(r[7], 0xC1);  // function 0x41 is not served: exception 01
+    EXPECT_EQ(r[8], 0x01);
+    EXPECT_FALSE(c.closed_by_peer(50ms));
+  }
+  std::uint16_t v;
+  EXPECT_EQ(modbus_read_registers(*other, 0, 1, &v), 1);
+  EXPECT_EQ(h.clients(), GetParam().closes ? 1u : 2u);
+}
+
+Bytes header(std::uint16_t protocol, std::uint16_t length) {
+  return {0x00,
+          0x01,
+          static_cast<std::uint8_t>(protocol >> 8),
+          static_cast<std::uint8_t>(protocol),
+          static_cast<std::uint8_t>(length >> 8),
+          static_cast<std::uint8_t>(length),
+          0x01};
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Table, ConnectionMbap,
+    ::testing::Values(MbapCase{"protocol_id_1", header(1, 6) + Bytes{0x03, 0, 0, 0, 1}, true},
+                      MbapCase{"length_0", header(0, 0), true},
+                      MbapCase{"length_1", header(0, 1), true},
+                      MbapCase{"length_254", header(0, 254) + Bytes{0x41} + Bytes(252, 0x00),
+                               false},
+                      MbapCase{"length_255", header(0, 255) + Bytes{0x41} + Bytes(253, 0x00), true},
+                      MbapCase{"length_65535", header(0, 65535) + Bytes{0x03, 0, 0, 0, 1}, true}),
+    [](const auto& p) { return std::string(p.param.name); });
+
+TEST(Connection, RequestLongerThanAnnouncedIsAnsweredThenTheRestIsJudged) {
+  Harness h;
+  RawClient c(h.port());
+  // Length 6, then four more bytes: the reply goes out, then "AA BB CC DD" is read as the next
+  // header, whose protocol id (CC DD) is not 0: the connection closes.
+  ASSERT_TRUE(
+      c.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01}) + Bytes{0xAA, 0xBB, 0xCC, 0xDD}));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x01, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x00}));
+  EXPECT_TRUE(c.closed_by_peer(500ms));
+  EXPECT_EQ(h.stats().malformed, 1u);
+}
+
+TEST(Connection, HalfFrameThenStallIsClosedAfterFrameTimeoutWithoutDelayingOthers) {
+  ServerOptions o;
+  o.frame_timeout = 300ms;
+  Harness h(o);
+  RawClient stalled(h.port());
+  Libmodbus other(h.port());
+  ASSERT_TRUE(other.connected());
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_TRUE(stalled.send({0x00, 0x01, 0x00}));
+  auto worst = std::chrono::steady_clock::duration::zero();
+  while (std::chrono::steady_clock::now() - start < 600ms) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::uint16_t v;
+    ASSERT_EQ(modbus_read_registers(*other, 0, 1, &v), 1);
+    worst = std::max(worst, std::chrono::steady_clock::now() - t0);
+  }
+  EXPECT_LT(worst, 100ms);
+  EXPECT_TRUE(stalled.closed_by_peer(1000ms));
+  const auto closed_after = std::chrono::steady_clock::now() - start;
+  EXPECT_GE(closed_after, 290ms);
+  EXPECT_EQ(h.stats().frame_timeouts, 1u);
+}
+
+TEST(Connection, ATrickleOfBytesDoesNotExtendTheFrameTimeout) {
+  ServerOptions o;
+  o.frame_timeout = 300ms;
+  Harness h(o);
+  RawClient c(h.port());
+  const auto start = std::chrono::steady_clock::now();
+  const Bytes req = request(1, 1, {0x10, 0x00, 0x00, 0x00, 0x02, 0x04, 0, 0, 0, 0});
+  bool closed = false;
+  for (std::size_t i = 0; i + 1 < req.size() && !closed; ++i) {  // never the last byte
+    c.send({req[i]});
+    closed = c.closed_by_peer(100ms);
+  }
+  if (!closed) closed = c.closed_by_peer(1000ms);
+  EXPECT_TRUE(closed);
+  const auto elapsed = std::chrono::steady_clock::now() - start;
+  EXPECT_GE(elapsed, 290ms);
+  EXPECT_LT(elapsed, 900ms);
+}
+
+TEST(Connection, IdleClientIsClosedAfterIdleTimeout) {
+  ServerOptions o;
+  o.idle_timeout = 300ms;
+  Harness h(o);
+  RawClient busy(h.port());
+  RawClient idle(h.port());
+  const auto start = std::chrono::steady_clock::now();
+  // `busy` keeps asking and stays; `idle` asks once and is closed 300 ms after that.
+  ASSERT_TRUE(idle.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01})));
+  EXPECT_EQ(idle.reply().size(), 11u);
+  while (std::chrono::steady_clock::now() - start < 500ms) {
+    ASSERT_TRUE(busy.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01})));
+    ASSERT_EQ(busy.reply().size(), 11u);
+    std::this_thread::sleep_for(50ms);
+  }
+  EXPECT_TRUE(idle.closed_by_peer(500ms));
+  EXPECT_FALSE(busy.closed_by_peer(10ms));
+  EXPECT_EQ(h.stats().idle_timeouts, 1u);
+}
+
+TEST(Connection, DeviceIdentificationOverTcp) {
+  ServerOptions o;
+  o.identity = {"drivegate", "drivegated", "0.1.0"};
+  Harness h(o);
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(5, 1, {0x2B, 0x0E, 0x04, 0x02})));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x05, 0x00, 0x00, 0x00, 0x0F, 0x01, 0x2B, 0x0E, 0x04, 0x81,
+                              0x00, 0x00, 0x01, 0x02, 0x05, '0',  '.',  '1',  '.',  '0'}));
+}
+
+}  // namespace
+}  // namespace drivegate::modbus

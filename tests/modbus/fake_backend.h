@@ -1,0 +1,99 @@
+// A register image for the Modbus server tests: four tables of 4096 entries with a hole at
+// 0x0400..0x04FF (unmapped: 0x02), units 1 and 2 known (others: 0x0A), input tables read-only.
+// Writes complete at once (inside write()), later (complete()), or are refused by the device.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include "backend.h"
+
+namespace drivegate::modbus::test {
+
+class FakeBackend : public Backend {
+ public:
+  enum class Mode { immediate, deferred };
+  static constexpr std::size_t kSize = 4096;
+  static constexpr std::uint16_t kHoleBegin = 0x0400;
+  static constexpr std::uint16_t kHoleEnd = 0x0500;
+
+  struct Write {
+    std::uint8_t unit;
+    RegisterTable table;
+    std::uint16_t address;
+    std::vector<std::uint16_t> values;
+  };
+
+  FakeBackend() {
+    for (auto& t : tables_) t.assign(kSize, 0);
+  }
+
+  std::vector<std::uint16_t>& table(RegisterTable t) { return tables_[static_cast<int>(t)]; }
+
+  Exception read(std::uint8_t unit, RegisterTable t, std::uint16_t address,
+                 std::span<std::uint16_t> out) override {
+    ++reads;
+    if (auto e = check(unit, address, out.size()); e != Exception::none) return e;
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = table(t)[address + i];
+    return Exception::none;
+  }
+
+  Exception write(std::uint8_t unit, RegisterTable t, std::uint16_t address,
+                  std::span<const std::uint16_t> values, WriteDone done) override {
+    if (auto e = check(unit, address, values.size()); e != Exception::none) return e;
+    if (t == RegisterTable::input_registers || t == RegisterTable::discrete_inputs) {
+      return Exception::illegal_data_address;
+    }
+    if (reject_value && !values.empty() && values[0] == *reject_value) {
+      return Exception::illegal_data_value;
+    }
+    writes.push_back({unit, t, address, {values.begin(), values.end()}});
+    if (mode == Mode::immediate) {
+      apply(writes.back());
+      done(device_result);
+    } else {
+      pending.push_back({std::move(done), writes.size() - 1});
+    }
+    return Exception::none;
+  }
+
+  // Completes the oldest deferred write: applies it when `result` is none.
+  void complete(Exception result = Exception::none) {
+    auto p = std::move(pending.front());
+    pending.pop_front();
+    if (result == Exception::none) apply(writes[p.index]);
+    p.done(result);
+  }
+
+  Mode mode = Mode::immediate;
+  Exception device_result = Exception::none;  // immediate mode: what `done` reports
+  std::optional<std::uint16_t> reject_value;  // synchronous 0x03 for this first value
+  std::vector<Write> writes;
+  struct Pending {
+    WriteDone done;
+    std::size_t index;
+  };
+  std::deque<Pending> pending;
+  std::size_t reads = 0;
+
+ private:
+  Exception check(std::uint8_t unit, std::uint16_t address, std::size_t count) const {
+    if (unit != 1 && unit != 2) return Exception::gateway_path_unavailable;
+    const std::size_t end = std::size_t{address} + count;
+    if (end > kSize || (address < kHoleEnd && end > kHoleBegin)) {
+      return Exception::illegal_data_address;
+    }
+    return Exception::none;
+  }
+  void apply(const Write& w) {
+    if (device_result != Exception::none && mode == Mode::immediate) return;
+    for (std::size_t i = 0; i < w.values.size(); ++i) table(w.table)[w.address + i] = w.values[i];
+  }
+
+  std::array<std::vector<std::uint16_t>, 4> tables_;
+};
+
+}  // namespace drivegate::modbus::test
