@@ -1,0 +1,162 @@
+#include "daemon.h"
+
+#include <csignal>
+
+#include "core/config_loader.h"
+
+namespace drivegate {
+
+namespace asio = boost::asio;
+
+namespace {
+constexpr Millis kStopLimit{3000};  // longest wait for drives to confirm stop on shutdown
+constexpr Millis kStatusPeriod{2000};
+}  // namespace
+
+Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
+    : options_(std::move(options)),
+      log_(std::move(log)),
+      signals_(io_, SIGINT, SIGTERM, SIGHUP),
+      status_timer_(io_),
+      watchdog_timer_(io_) {}
+
+Daemon::~Daemon() {
+  if (gateway_) gateway_->stop();
+  if (server_) server_->close();
+}
+
+std::optional<Config> Daemon::load_config() {
+  auto result = drivegate::load_config(options_.config, plugins_);
+  for (const auto& e : result.errors) log_->error("{}", e);
+  if (result.config && options_.listen) {
+    result.config->server.host = options_.listen->host;
+    result.config->server.port = options_.listen->port;
+  }
+  return std::move(result.config);
+}
+
+int Daemon::run() {
+  const auto dir = options_.plugin_dir.empty() ? default_plugin_dir() : options_.plugin_dir;
+  for (const auto& refused : plugins_.load_directory(dir)) log_->error("plugin {}", refused);
+  log_->info("adapters from {}: {}", dir.string(), plugins_.ids());
+
+  auto config = load_config();
+  if (!config) {
+    log_->critical("{}: configuration refused, not starting", options_.config.string());
+    return 1;
+  }
+  config_ = std::move(*config);
+  std::vector<std::string> errors;
+  gateway_ = Gateway::build(io_, config_, plugins_, log_, errors);
+  for (const auto& e : errors) log_->error("{}", e);
+  if (!gateway_) return 1;
+
+  modbus::ServerOptions so;
+  so.host = config_.server.host;
+  so.port = config_.server.port;
+  so.max_clients = config_.server.max_clients;
+  so.idle_timeout = config_.server.idle_timeout;
+  so.frame_timeout = config_.server.frame_timeout;
+  so.identity.product = "drivegate Modbus TCP gateway";
+  so.identity.version = DRIVEGATE_VERSION;
+  server_ = std::make_unique<modbus::Server>(io_, backend_, so, log_);
+  if (const auto ec = server_->listen()) {
+    log_->critical("cannot listen on {}:{}: {}", so.host, so.port, ec.message());
+    return 1;
+  }
+  gateway_->start();
+  backend_.set(gateway_.get());
+  log_->info("serving {} devices on {} buses, Modbus TCP on port {}",
+             gateway_->devices().size(), config_.buses.size(), server_->port());
+  wait_signal();
+  notifier_.ready(status_line());
+  tick_status();
+  tick_watchdog();
+  io_.run();
+  log_->info("stopped");
+  return 0;
+}
+
+void Daemon::wait_signal() {
+  signals_.async_wait([this](const boost::system::error_code& ec, int signo) {
+    if (ec) return;
+    if (signo == SIGHUP) {
+      reload();
+      wait_signal();
+      return;
+    }
+    log_->info("signal {}: shutting down", signo == SIGTERM ? "SIGTERM" : "SIGINT");
+    shutdown();
+  });
+}
+
+void Daemon::reload() {
+  notifier_.reloading();
+  log_->info("SIGHUP: re-reading {}", options_.config.string());
+  auto config = load_config();
+  std::vector<std::string> errors;
+  std::unique_ptr<Gateway> next;
+  if (config) next = Gateway::build(io_, *config, plugins_, log_, errors);
+  for (const auto& e : errors) log_->error("{}", e);
+  if (!next) {
+    log_->error("new configuration refused: still running the previous one");
+    notifier_.ready(status_line());
+    return;
+  }
+  if (config->server.host != config_.server.host || config->server.port != config_.server.port ||
+      config->server.max_clients != config_.server.max_clients) {
+    log_->warn("[server] changes take effect at the next restart; devices and buses reloaded");
+    config->server = config_.server;
+  }
+  // The old buses close before the new ones open the same ports.
+  gateway_->stop();
+  next->start();
+  backend_.set(next.get());
+  gateway_ = std::move(next);
+  config_ = std::move(*config);
+  log_->info("configuration reloaded: {} devices on {} buses", gateway_->devices().size(),
+             config_.buses.size());
+  notifier_.ready(status_line());
+}
+
+void Daemon::shutdown() {
+  if (stopping_) return;
+  stopping_ = true;
+  notifier_.stopping();
+  signals_.cancel();
+  gateway_->stop_drives(kStopLimit, [this] {
+    server_->close();
+    gateway_->stop();
+    status_timer_.cancel();
+    watchdog_timer_.cancel();
+    io_.stop();
+  });
+}
+
+std::string Daemon::status_line() const {
+  return std::to_string(gateway_->devices_online()) + "/" +
+         std::to_string(gateway_->devices().size()) + " devices online, " +
+         std::to_string(gateway_->buses_open()) + "/" + std::to_string(config_.buses.size()) +
+         " buses open, " + std::to_string(server_->client_count()) + " Modbus clients";
+}
+
+void Daemon::tick_status() {
+  notifier_.status(status_line());
+  status_timer_.expires_after(kStatusPeriod);
+  status_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (!ec && !stopping_) tick_status();
+  });
+}
+
+// Pinged from the event loop itself: if the loop stalls, systemd's watchdog restarts us.
+void Daemon::tick_watchdog() {
+  const auto period = notifier_.watchdog_period();
+  if (period.count() == 0) return;
+  notifier_.watchdog();
+  watchdog_timer_.expires_after(period);
+  watchdog_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (!ec) tick_watchdog();
+  });
+}
+
+}  // namespace drivegate

@@ -1,0 +1,62 @@
+// drivegated at run time: plugins, configuration, gateway, Modbus TCP server, signals and the
+// systemd protocol, all on one io_context. SIGTERM / SIGINT stop the drives and exit 0; SIGHUP
+// re-reads the configuration and swaps the gateway without dropping a Modbus connection, or
+// keeps the running one when the new file is bad.
+#pragma once
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <spdlog/logger.h>
+#include <string>
+
+#include "backend_switch.h"
+#include "core/config.h"
+#include "core/gateway.h"
+#include "core/plugins.h"
+#include "server.h"
+#include "systemd_notifier.h"
+
+namespace drivegate {
+
+struct DaemonOptions {
+  std::filesystem::path config;
+  std::filesystem::path plugin_dir;     // empty: default_plugin_dir()
+  std::optional<ServerConfig> listen;   // host and port override [server] listen
+};
+
+class Daemon {
+ public:
+  Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log);
+  ~Daemon();
+  // Runs until SIGTERM / SIGINT; returns the process exit code.
+  int run();
+
+ private:
+  std::optional<Config> load_config();
+  void wait_signal();
+  void reload();
+  void shutdown();
+  void tick_status();
+  void tick_watchdog();
+  std::string status_line() const;
+
+  DaemonOptions options_;
+  std::shared_ptr<spdlog::logger> log_;
+  boost::asio::io_context io_;
+  boost::asio::signal_set signals_;
+  boost::asio::steady_timer status_timer_;
+  boost::asio::steady_timer watchdog_timer_;
+  SystemdNotifier notifier_;
+  PluginRegistry plugins_;
+  Config config_;
+  std::unique_ptr<Gateway> gateway_;
+  BackendSwitch backend_;
+  std::unique_ptr<modbus::Server> server_;
+  bool stopping_ = false;
+};
+
+}  // namespace drivegate

@@ -1,0 +1,58 @@
+// The gateway's configuration, as loaded from one TOML file and validated. Every value here has
+// been checked against its range and, for device options, against the adapter's schema.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "drivegate/adapter.h"
+
+namespace drivegate {
+
+struct ServerConfig {
+  std::string host = "0.0.0.0";
+  std::uint16_t port = 502;
+  std::size_t max_clients = 32;
+  Millis idle_timeout{60'000};
+  Millis frame_timeout{2'000};
+};
+
+struct BusConfig {
+  std::string name;
+  std::string port;  // device path, e.g. /dev/ttyUSB0
+  std::uint32_t baud = 0;
+  Parity parity = Parity::none;
+  std::uint8_t data_bits = 8;
+  std::uint8_t stop_bits = 1;
+  bool echo = false;   // one-wire: discard (and check) our own bytes
+  bool rs485 = false;  // kernel RS-485 mode (TIOCSRS485)
+  Millis reopen_max{10'000};
+  int line = 0;  // where it was declared, for messages
+};
+
+struct DeviceConfig {
+  std::string name;
+  std::string bus;
+  std::string adapter;
+  std::uint8_t unit_id = 0;
+  std::uint32_t address = 0;
+  Millis poll_interval{500};
+  Millis budget{1'000};       // most line time one turn of this device may take
+  Millis backoff_max{5'000};  // longest pause between probes of a silent device
+  Options options;
+  int line = 0;
+};
+
+struct Config {
+  std::filesystem::path path;
+  std::filesystem::path plugin_dir;  // empty: the built-in default
+  ServerConfig server;
+  std::vector<BusConfig> buses;
+  std::vector<DeviceConfig> devices;
+};
+
+}  // namespace drivegate

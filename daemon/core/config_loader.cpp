@@ -1,0 +1,616 @@
+#include "config_loader.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace drivegate {
+namespace {
+
+// Collects errors with file and line; one instance per load.
+class Diagnostics {
+ public:
+  explicit Diagnostics(std::string source) : source_(std::move(source)) {}
+  void error(const toml::node* at, std::string_view key, std::string_view what) {
+    const int line = at != nullptr ? static_cast<int>(at->source().begin.line) : 0;
+    error_at(line, key, what);
+  }
+  void error_at(int line, std::string_view key, std::string_view what) {
+    std::string msg = source_;
+    if (line > 0) msg += ":" + std::to_string(line);
+    msg += ": ";
+    if (!key.empty()) msg += std::string(key) + ": ";
+    msg += what;
+    errors.push_back(std::move(msg));
+  }
+  std::vector<std::string> errors;
+
+ private:
+  std::string source_;
+};
+
+int line_of(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
+
+// Reads the keys of one table, refusing the unknown ones.
+class TableReader {
+ public:
+  TableReader(const toml::table& table, std::string prefix, Diagnostics& diag)
+      : table_(table), prefix_(std::move(prefix)), diag_(diag) {}
+
+  ~TableReader() {
+    for (const auto& [key, node] : table_) {
+      if (!seen_.contains(std::string(key.str()))) {
+        diag_.error(&node, qualified(key.str()), "unknown key (known: " + known_list() + ")");
+      }
+    }
+  }
+  TableReader(const TableReader&) = delete;
+  TableReader& operator=(const TableReader&) = delete;
+
+  const toml::node* node(std::string_view key) {
+    seen_.insert(std::string(key));
+    return table_.get(key);
+  }
+
+  std::optional<std::string> string(std::string_view key, bool required) {
+    const toml::node* n = node(key);
+    if (n == nullptr) {
+      if (required) missing(key);
+      return std::nullopt;
+    }
+    if (const auto* s = n->as_string()) return s->get();
+    diag_.error(n, qualified(key), "must be a string");
+    return std::nullopt;
+  }
+
+  std::optional<std::int64_t> integer(std::string_view key, std::int64_t min, std::int64_t max,
+                                      bool required) {
+    const toml::node* n = node(key);
+    if (n == nullptr) {
+      if (required) missing(key);
+      return std::nullopt;
+    }
+    const auto* i = n->as_integer();
+    if (i == nullptr) {
+      diag_.error(n, qualified(key), "must be an integer");
+      return std::nullopt;
+    }
+    if (i->get() < min || i->get() > max) {
+      diag_.error(n, qualified(key),
+                  "must be in " + std::to_string(min) + ".." + std::to_string(max) + " (got " +
+                      std::to_string(i->get()) + ")");
+      return std::nullopt;
+    }
+    return i->get();
+  }
+
+  std::optional<bool> boolean(std::string_view key) {
+    const toml::node* n = node(key);
+    if (n == nullptr) return std::nullopt;
+    if (const auto* b = n->as_boolean()) return b->get();
+    diag_.error(n, qualified(key), "must be true or false");
+    return std::nullopt;
+  }
+
+  void missing(std::string_view key) {
+    diag_.error(&table_, qualified(key), "required key is missing");
+  }
+
+  [[nodiscard]] std::string qualified(std::string_view key) const {
+    return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key);
+  }
+  void expect(std::initializer_list<std::string_view> keys) {
+    for (auto k : keys) known_.emplace_back(k);
+  }
+
+ private:
+  [[nodiscard]] std::string known_list() const {
+    std::string out;
+    for (const auto& k : known_) out += (out.empty() ? "" : ", ") + k;
+    return out;
+  }
+  const toml::table& table_;
+  std::string prefix_;
+  Diagnostics& diag_;
+  std::set<std::string> seen_;
+  std::vector<std::string> known_;
+};
+
+constexpr std::array<std::uint32_t, 12> kBauds = {300,   600,   1200,  2400,   4800,   9600,
+                                                  19200, 38400, 57600, 115200, 230400, 460800};
+
+std::optional<Parity> parse_parity(std::string_view s) {
+  if (s == "none") return Parity::none;
+  if (s == "even") return Parity::even;
+  if (s == "odd") return Parity::odd;
+  return std::nullopt;
+}
+
+}  // namespace
+
+// "host:port", "[v6]:port", or ":port".
+bool parse_listen(const std::string& s, ServerConfig& out) {
+  std::string host;
+  std::string port;
+  if (s.starts_with("[")) {
+    const auto close = s.find("]:");
+    if (close == std::string::npos) return false;
+    host = s.substr(1, close - 1);
+    port = s.substr(close + 2);
+  } else {
+    const auto colon = s.rfind(':');
+    if (colon == std::string::npos) return false;
+    host = s.substr(0, colon);
+    port = s.substr(colon + 1);
+  }
+  unsigned value = 0;
+  const auto [p, ec] = std::from_chars(port.data(), port.data() + port.size(), value);
+  if (ec != std::errc() || p != port.data() + port.size() || value > 65535 || port.empty()) {
+    return false;
+  }
+  out.host = host.empty() ? "0.0.0.0" : host;
+  out.port = static_cast<std::uint16_t>(value);
+  return true;
+}
+
+namespace {
+
+std::vector<std::string> split_list(std::string_view s) {
+  std::vector<std::string> out;
+  std::string item;
+  std::istringstream in{std::string(s)};
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+bool in_choices(std::string_view choices, std::string_view value) {
+  if (choices.empty()) return true;
+  std::size_t start = 0;
+  while (start <= choices.size()) {
+    const auto bar = choices.find('|', start);
+    const auto end = bar == std::string_view::npos ? choices.size() : bar;
+    if (choices.substr(start, end - start) == value) return true;
+    if (bar == std::string_view::npos) break;
+    start = bar + 1;
+  }
+  return false;
+}
+
+std::string range_text(const OptionSpec& spec) {
+  std::ostringstream out;
+  out << spec.min << ".." << spec.max;
+  return out.str();
+}
+
+// One option from the TOML value, checked against its spec.
+std::optional<OptionValue> read_option(const OptionSpec& spec, const toml::node& n,
+                                       const std::string& key, Diagnostics& diag) {
+  const bool bounded = spec.min != spec.max;
+  switch (spec.type) {
+    case OptionType::integer: {
+      const auto* i = n.as_integer();
+      if (i == nullptr) break;
+      const auto v = i->get();
+      if (bounded && (static_cast<double>(v) < spec.min || static_cast<double>(v) > spec.max)) {
+        diag.error(&n, key, "must be in " + range_text(spec) + " (got " + std::to_string(v) + ")");
+        return std::nullopt;
+      }
+      return OptionValue{v};
+    }
+    case OptionType::real: {
+      double v = 0;
+      if (const auto* i = n.as_integer()) {
+        v = static_cast<double>(i->get());
+      } else if (const auto* f = n.as_floating_point()) {
+        v = f->get();
+      } else {
+        break;
+      }
+      if (!std::isfinite(v) || (bounded && (v < spec.min || v > spec.max))) {
+        diag.error(&n, key, "must be a number in " + range_text(spec));
+        return std::nullopt;
+      }
+      return OptionValue{v};
+    }
+    case OptionType::boolean:
+      if (const auto* b = n.as_boolean()) return OptionValue{b->get()};
+      break;
+    case OptionType::string:
+      if (const auto* s = n.as_string()) {
+        if (!in_choices(spec.choices, s->get())) {
+          diag.error(&n, key, std::string("must be one of ") + spec.choices);
+          return std::nullopt;
+        }
+        return OptionValue{s->get()};
+      }
+      break;
+    case OptionType::string_list:
+      if (const auto* a = n.as_array()) {
+        std::vector<std::string> items;
+        for (const auto& item : *a) {
+          const auto* s = item.as_string();
+          if (s == nullptr) {
+            diag.error(&item, key, "must be a list of strings");
+            return std::nullopt;
+          }
+          items.push_back(s->get());
+        }
+        return OptionValue{std::move(items)};
+      }
+      break;
+  }
+  static constexpr std::array<const char*, 5> kTypeNames = {
+      "an integer", "a number", "true or false", "a string", "a list of strings"};
+  diag.error(&n, key, std::string("must be ") + kTypeNames.at(static_cast<std::size_t>(spec.type)));
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<OptionValue> parse_option_text(const OptionSpec& spec, std::string_view text,
+                                             std::string& error) {
+  const std::string t(text);
+  try {
+    std::size_t used = 0;
+    switch (spec.type) {
+      case OptionType::integer: {
+        const auto v = t.empty() ? 0 : std::stoll(t, &used, 0);
+        if (!t.empty() && used != t.size()) break;
+        if (spec.min != spec.max && (static_cast<double>(v) < spec.min ||
+                                     static_cast<double>(v) > spec.max)) {
+          error = std::string(spec.name) + ": must be in " + range_text(spec);
+          return std::nullopt;
+        }
+        return OptionValue{v};
+      }
+      case OptionType::real: {
+        const double v = t.empty() ? 0.0 : std::stod(t, &used);
+        if (!t.empty() && used != t.size()) break;
+        if (spec.min != spec.max && (v < spec.min || v > spec.max)) {
+          error = std::string(spec.name) + ": must be in " + range_text(spec);
+          return std::nullopt;
+        }
+        return OptionValue{v};
+      }
+      case OptionType::boolean:
+        if (t == "true" || t == "false") return OptionValue{t == "true"};
+        break;
+      case OptionType::string:
+        if (!in_choices(spec.choices, t)) {
+          error = std::string(spec.name) + ": must be one of " + spec.choices;
+          return std::nullopt;
+        }
+        return OptionValue{t};
+      case OptionType::string_list: return OptionValue{split_list(t)};
+    }
+  } catch (const std::exception&) {
+  }
+  error = std::string(spec.name) + ": '" + t + "' is not a valid value";
+  return std::nullopt;
+}
+
+Options default_options(const AdapterDescriptor& adapter) {
+  std::map<std::string, OptionValue, std::less<>> values;
+  for (std::size_t i = 0; i < adapter.option_count; ++i) {
+    const OptionSpec& spec = adapter.options[i];
+    std::string ignored;
+    values[spec.name] = parse_option_text(spec, spec.default_value ? spec.default_value : "",
+                                          ignored)
+                            .value_or(OptionValue{std::string()});
+  }
+  return Options(std::move(values));
+}
+
+namespace {
+
+Options read_options(const AdapterDescriptor& adapter, const toml::table* table,
+                     const std::string& prefix, Diagnostics& diag) {
+  Options options = default_options(adapter);
+  std::set<std::string> known;
+  for (std::size_t i = 0; i < adapter.option_count; ++i) {
+    const OptionSpec& spec = adapter.options[i];
+    known.insert(spec.name);
+    if (table == nullptr) continue;
+    if (const toml::node* n = table->get(spec.name)) {
+      if (auto v = read_option(spec, *n, prefix + "." + spec.name, diag)) {
+        options.set(spec.name, std::move(*v));
+      }
+    }
+  }
+  if (table != nullptr) {
+    for (const auto& [key, node] : *table) {
+      if (known.contains(std::string(key.str()))) continue;
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      diag.error(&node, prefix + "." + std::string(key.str()),
+                 "unknown option for adapter '" + std::string(adapter.id) + "' (known: " +
+                     (list.empty() ? "none" : list) + ")");
+    }
+  }
+  return options;
+}
+
+void read_server(const toml::table& root, Config& cfg, Diagnostics& diag) {
+  const toml::node* n = root.get("server");
+  if (n == nullptr) return;
+  const auto* t = n->as_table();
+  if (t == nullptr) {
+    diag.error(n, "server", "must be a table ([server])");
+    return;
+  }
+  TableReader r(*t, "server", diag);
+  r.expect({"listen", "max_clients", "idle_timeout_ms", "frame_timeout_ms"});
+  if (auto listen = r.string("listen", false)) {
+    if (!parse_listen(*listen, cfg.server)) {
+      diag.error(r.node("listen"), "server.listen",
+                 "must be \"host:port\" (e.g. \"0.0.0.0:502\" or \"[::]:502\"), got \"" +
+                     *listen + "\"");
+    }
+  }
+  if (auto v = r.integer("max_clients", 1, 1024, false)) cfg.server.max_clients = *v;
+  if (auto v = r.integer("idle_timeout_ms", 1000, 86'400'000, false)) {
+    cfg.server.idle_timeout = Millis(*v);
+  }
+  if (auto v = r.integer("frame_timeout_ms", 10, 60'000, false)) {
+    cfg.server.frame_timeout = Millis(*v);
+  }
+}
+
+const toml::array* array_of_tables(const toml::table& root, std::string_view key,
+                                   Diagnostics& diag) {
+  const toml::node* n = root.get(key);
+  if (n == nullptr) return nullptr;
+  const auto* a = n->as_array();
+  if (a == nullptr || !a->is_array_of_tables()) {
+    diag.error(n, key, "must be an array of tables ([[" + std::string(key) + "]])");
+    return nullptr;
+  }
+  return a;
+}
+
+// Which line settings a [[bus]] set itself; the rest come from its devices' adapter.
+struct LineGiven {
+  bool baud = false;
+  bool parity = false;
+  bool data_bits = false;
+  bool stop_bits = false;
+  bool echo = false;
+  [[nodiscard]] bool framing() const { return baud && parity && data_bits && stop_bits; }
+};
+
+std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnostics& diag) {
+  std::vector<LineGiven> given;
+  const auto* buses = array_of_tables(root, "bus", diag);
+  if (buses == nullptr) return given;
+  for (std::size_t i = 0; i < buses->size(); ++i) {
+    const auto& t = *buses->get(i)->as_table();
+    const std::string prefix = "bus[" + std::to_string(i) + "]";
+    TableReader r(t, prefix, diag);
+    r.expect({"name", "port", "baud", "parity", "data_bits", "stop_bits", "echo", "rs485",
+              "reopen_max_ms"});
+    BusConfig bus;
+    bus.line = line_of(t);
+    bus.name = r.string("name", true).value_or("");
+    bus.port = r.string("port", true).value_or("");
+    if (auto v = r.integer("baud", 1, 4'000'000, false)) {
+      if (std::find(kBauds.begin(), kBauds.end(), *v) == kBauds.end()) {
+        diag.error(r.node("baud"), prefix + ".baud",
+                   "not a standard rate (300, 600, 1200, 2400, 4800, 9600, 19200, 38400, "
+                   "57600, 115200, 230400, 460800)");
+      } else {
+        bus.baud = static_cast<std::uint32_t>(*v);
+      }
+    }
+    if (auto p = r.string("parity", false)) {
+      if (auto parity = parse_parity(*p)) {
+        bus.parity = *parity;
+      } else {
+        diag.error(r.node("parity"), prefix + ".parity", "must be none, even or odd");
+      }
+    }
+    LineGiven g;
+    g.baud = r.node("baud") != nullptr;
+    g.parity = r.node("parity") != nullptr;
+    if (auto v = r.integer("data_bits", 5, 8, false)) bus.data_bits = static_cast<std::uint8_t>(*v);
+    if (auto v = r.integer("stop_bits", 1, 2, false)) bus.stop_bits = static_cast<std::uint8_t>(*v);
+    g.data_bits = r.node("data_bits") != nullptr;
+    g.stop_bits = r.node("stop_bits") != nullptr;
+    const auto echo = r.boolean("echo");
+    bus.echo = echo.value_or(false);
+    g.echo = echo.has_value();
+    given.push_back(g);
+    bus.rs485 = r.boolean("rs485").value_or(false);
+    if (auto v = r.integer("reopen_max_ms", 100, 600'000, false)) bus.reopen_max = Millis(*v);
+    if (bus.name.empty() && t.get("name") != nullptr) diag.error(&t, prefix + ".name", "empty");
+    for (const auto& other : cfg.buses) {
+      if (!bus.name.empty() && other.name == bus.name) {
+        diag.error(&t, prefix + ".name", "bus '" + bus.name + "' is declared twice");
+      }
+    }
+    cfg.buses.push_back(std::move(bus));
+  }
+  return given;
+}
+
+void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& plugins,
+                  Diagnostics& diag) {
+  const auto* devices = array_of_tables(root, "device", diag);
+  if (devices == nullptr) return;
+  for (std::size_t i = 0; i < devices->size(); ++i) {
+    const auto& t = *devices->get(i)->as_table();
+    const std::string prefix = "device[" + std::to_string(i) + "]";
+    TableReader r(t, prefix, diag);
+    r.expect({"name", "bus", "adapter", "unit_id", "address", "poll_ms", "budget_ms",
+              "backoff_max_ms", "options"});
+    DeviceConfig dev;
+    dev.line = line_of(t);
+    dev.name = r.string("name", true).value_or("");
+    dev.bus = r.string("bus", true).value_or("");
+    dev.adapter = r.string("adapter", true).value_or("");
+    dev.unit_id = static_cast<std::uint8_t>(r.integer("unit_id", 1, 247, true).value_or(0));
+    if (auto v = r.integer("poll_ms", 10, 60'000, false)) dev.poll_interval = Millis(*v);
+    if (auto v = r.integer("budget_ms", 10, 60'000, false)) dev.budget = Millis(*v);
+    if (auto v = r.integer("backoff_max_ms", 100, 600'000, false)) dev.backoff_max = Millis(*v);
+
+    const AdapterDescriptor* adapter = nullptr;
+    if (!dev.adapter.empty()) {
+      adapter = plugins.find(dev.adapter);
+      if (adapter == nullptr) {
+        diag.error(r.node("adapter"), prefix + ".adapter",
+                   "no adapter '" + dev.adapter + "' (installed: " + plugins.ids() + ")");
+      }
+    }
+    const toml::node* address = r.node("address");
+    const toml::node* options = r.node("options");
+    if (adapter != nullptr) {
+      const bool addressed = adapter->address_max != 0;
+      if (address == nullptr) {
+        dev.address = adapter->default_address;
+      } else if (!addressed) {
+        diag.error(address, prefix + ".address",
+                   "adapter '" + dev.adapter + "' has no bus address; remove the key");
+      } else if (auto v = r.integer("address", adapter->address_min, adapter->address_max,
+                                    false)) {
+        dev.address = static_cast<std::uint32_t>(*v);
+      }
+      const toml::table* opts = options != nullptr ? options->as_table() : nullptr;
+      if (options != nullptr && opts == nullptr) {
+        diag.error(options, prefix + ".options", "must be a table ([device.options])");
+      }
+      dev.options = read_options(*adapter, opts, prefix + ".options", diag);
+    }
+    for (const auto& other : cfg.devices) {
+      if (!dev.name.empty() && other.name == dev.name) {
+        diag.error(&t, prefix + ".name", "device '" + dev.name + "' is declared twice");
+      }
+      if (dev.unit_id != 0 && other.unit_id == dev.unit_id) {
+        diag.error(r.node("unit_id"), prefix + ".unit_id",
+                   "unit " + std::to_string(dev.unit_id) + " is already device '" + other.name +
+                       "'");
+      }
+      if (adapter != nullptr && adapter->address_max != 0 && other.bus == dev.bus &&
+          other.address == dev.address) {
+        diag.error(&t, prefix + ".address",
+                   "address " + std::to_string(dev.address) + " is already device '" +
+                       other.name + "' on bus '" + dev.bus + "'");
+      }
+    }
+    cfg.devices.push_back(std::move(dev));
+  }
+}
+
+// Checks references between buses and devices and fills unset line settings from the adapters.
+void cross_check(Config& cfg, const std::vector<LineGiven>& given, const PluginRegistry& plugins,
+                 Diagnostics& diag) {
+  for (const auto& dev : cfg.devices) {
+    if (dev.bus.empty()) continue;
+    const auto bus = std::find_if(cfg.buses.begin(), cfg.buses.end(),
+                                  [&](const BusConfig& b) { return b.name == dev.bus; });
+    if (bus == cfg.buses.end()) {
+      diag.error_at(dev.line, "device '" + dev.name + "'.bus",
+                    "no [[bus]] named '" + dev.bus + "'");
+    }
+  }
+  for (std::size_t b = 0; b < cfg.buses.size(); ++b) {
+    BusConfig& bus = cfg.buses[b];
+    const LineGiven& g = given[b];
+    std::vector<const DeviceConfig*> on_bus;
+    for (const auto& dev : cfg.devices) {
+      if (dev.bus == bus.name) on_bus.push_back(&dev);
+    }
+    const int line = bus.line;
+    if (on_bus.empty()) {
+      diag.error_at(line, "bus '" + bus.name + "'", "no device uses this bus");
+      continue;
+    }
+    const AdapterDescriptor* first = plugins.find(on_bus.front()->adapter);
+    if (first == nullptr) continue;
+    for (const auto* dev : on_bus) {
+      const AdapterDescriptor* a = plugins.find(dev->adapter);
+      if (a == nullptr) continue;
+      if (a->streaming && on_bus.size() > 1) {
+        diag.error_at(dev->line, "device '" + dev->name + "'",
+                      "adapter '" + dev->adapter +
+                          "' streams unsolicited frames and must be alone on its bus");
+      }
+      const bool same = a->line.baud == first->line.baud &&
+                        a->line.parity == first->line.parity &&
+                        a->line.data_bits == first->line.data_bits &&
+                        a->line.stop_bits == first->line.stop_bits;
+      if (!same && !g.framing()) {
+        diag.error_at(line, "bus '" + bus.name + "'",
+                      "its devices' adapters have different native line settings: set baud, "
+                      "parity, data_bits and stop_bits explicitly");
+      }
+    }
+    if (!g.baud) bus.baud = first->line.baud;
+    if (!g.data_bits) bus.data_bits = first->line.data_bits;
+    if (!g.stop_bits) bus.stop_bits = first->line.stop_bits;
+    if (!g.parity) bus.parity = first->line.parity;
+    if (!g.echo) bus.echo = first->line.echo;
+  }
+}
+
+}  // namespace
+
+ConfigResult parse_config(std::string_view text, const std::string& source_name,
+                          const PluginRegistry& plugins) {
+  ConfigResult result;
+  Diagnostics diag(source_name);
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    diag.error_at(static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    result.errors = std::move(diag.errors);
+    return result;
+  }
+  Config cfg;
+  cfg.path = source_name;
+  {
+    TableReader top(root, "", diag);
+    top.expect({"server", "bus", "device"});
+    top.node("server");
+    top.node("bus");
+    top.node("device");
+  }
+  read_server(root, cfg, diag);
+  const auto given = read_buses(root, cfg, diag);
+  read_devices(root, cfg, plugins, diag);
+  if (cfg.devices.empty() && diag.errors.empty()) {
+    diag.error_at(0, "device", "no [[device]] configured: there is nothing to serve");
+  }
+  cross_check(cfg, given, plugins, diag);
+  if (diag.errors.empty()) {
+    result.config = std::move(cfg);
+  } else {
+    result.errors = std::move(diag.errors);
+  }
+  return result;
+}
+
+ConfigResult load_config(const std::filesystem::path& path, const PluginRegistry& plugins) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    ConfigResult r;
+    r.errors.push_back(path.string() + ": cannot open: " + std::strerror(errno));
+    return r;
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  auto result = parse_config(text.str(), path.string(), plugins);
+  if (result.config) result.config->path = path;
+  return result;
+}
+
+}  // namespace drivegate

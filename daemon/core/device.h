@@ -1,0 +1,114 @@
+// One configured drive at run time: its driver, its register image, its counters, its
+// communication state and the Modbus writes waiting for it. The bus engine reports line events
+// to it; the gateway reads and writes its registers.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <span>
+#include <spdlog/logger.h>
+#include <vector>
+
+#include "config.h"
+#include "modbus/backend.h"
+#include "register_map.h"
+
+namespace drivegate {
+
+struct DeviceCounters {
+  std::uint32_t frames_good = 0;
+  std::uint32_t bad_checksum = 0;
+  std::uint32_t timeouts = 0;
+  std::uint32_t retries = 0;
+  std::uint32_t nacks = 0;
+  std::uint32_t foreign = 0;
+  std::uint32_t noise_bytes = 0;
+};
+
+class Device {
+ public:
+  Device(DeviceConfig config, const AdapterDescriptor& adapter, std::unique_ptr<Driver> driver,
+         std::shared_ptr<spdlog::logger> log, TimePoint now);
+
+  [[nodiscard]] const DeviceConfig& config() const { return config_; }
+  [[nodiscard]] const AdapterDescriptor& adapter() const { return adapter_; }
+  [[nodiscard]] const RegisterMap& map() const { return map_; }
+  [[nodiscard]] Driver& driver() { return *driver_; }
+  [[nodiscard]] const DriverTraits& traits() const { return traits_; }
+  DeviceCounters& counters() { return counters_; }
+
+  // --- line events, from the bus engine ---
+  void frame_good(TimePoint now);
+  void turn_failed(TimePoint now);  // an exchange ended without a reply
+  [[nodiscard]] bool comm_lost() const { return comm_lost_; }
+  [[nodiscard]] bool online() const;
+  [[nodiscard]] bool in_backoff(TimePoint now) const { return now < probe_at_; }
+  [[nodiscard]] TimePoint probe_at() const { return probe_at_; }
+  [[nodiscard]] bool has_pending_writes() const { return !pending_.empty(); }
+  // Called whenever a write is queued, so the bus can send it without waiting for a poll.
+  void on_work(std::function<void()> kick) { kick_ = std::move(kick); }
+
+  // Takes the driver's completions and refreshes the register image. Call after any driver call.
+  void sync(TimePoint now);
+  // Periodic: comm_lost detection and write deadlines.
+  void housekeeping(TimePoint now);
+  // Fails every pending write (shutdown, bus closed for good).
+  void fail_pending(modbus::Exception why);
+
+  // --- Modbus side, from the gateway ---
+  modbus::Exception read(Table table, std::uint16_t address, std::span<std::uint16_t> out,
+                         TimePoint now);
+  modbus::Exception write(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
+                          modbus::WriteDone done, TimePoint now);
+  // A command from the gateway itself (shutdown, failsafe), outside Modbus.
+  void command(Command c, modbus::WriteDone done, TimePoint now);
+
+ private:
+  struct Batch;  // one Modbus write request, possibly spanning several points
+  struct Pending {
+    std::shared_ptr<Batch> batch;
+    TimePoint deadline;
+  };
+  struct PointWrite {
+    const MappedPoint* point;
+    Value value;
+  };
+
+  modbus::Exception validate(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
+                             std::vector<PointWrite>& writes) const;
+  WriteStatus submit(const PointWrite& w, Ticket t, TimePoint now);
+  void settle(Ticket t, WriteResult r);
+  void refresh_image(TimePoint now);
+  void refresh_dynamic(TimePoint now);
+  std::span<std::uint16_t> registers(Table t) { return image_[static_cast<int>(t)]; }
+  void log_transitions();
+
+  DeviceConfig config_;
+  const AdapterDescriptor& adapter_;
+  std::unique_ptr<Driver> driver_;
+  DriverTraits traits_;
+  RegisterMap map_;
+  std::shared_ptr<spdlog::logger> log_;
+  DeviceCounters counters_;
+  std::vector<std::uint16_t> image_[4];
+
+  TimePoint last_good_;
+  bool ever_good_ = false;
+  bool comm_lost_ = false;
+  int failures_ = 0;  // consecutive turns without a reply
+  TimePoint probe_at_{};
+  std::uint16_t heartbeat_ = 0;
+
+  Ticket next_ticket_ = 1;
+  std::map<Ticket, Pending> pending_;
+  std::vector<Completion> completions_;  // scratch, reused
+  std::function<void()> kick_;
+
+  // What was last logged, to log changes only.
+  bool logged_online_ = false;
+  FaultSet logged_faults_;
+};
+
+}  // namespace drivegate

@@ -1,0 +1,183 @@
+#include "gateway.h"
+
+#include <algorithm>
+
+namespace drivegate {
+
+namespace asio = boost::asio;
+using modbus::Exception;
+
+namespace {
+constexpr Millis kHousekeepingPeriod{100};
+}
+
+Table to_table(modbus::RegisterTable t) {
+  switch (t) {
+    case modbus::RegisterTable::coils: return Table::coil;
+    case modbus::RegisterTable::discrete_inputs: return Table::discrete;
+    case modbus::RegisterTable::input_registers: return Table::input;
+    case modbus::RegisterTable::holding_registers: return Table::holding;
+  }
+  return Table::input;
+}
+
+std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescriptor& adapter,
+                                    bool maintenance, std::string& error) {
+  DeviceEnv env;
+  env.name = cfg.name;
+  env.address = cfg.address;
+  env.poll_interval = cfg.poll_interval;
+  env.options = cfg.options;
+  env.maintenance = maintenance;
+  std::string why;
+  auto driver = adapter.create_driver(env, why);
+  if (!driver) {
+    error = cfg.name + ": adapter '" + adapter.id + "' refused the device: " +
+            (why.empty() ? "no reason given" : why);
+  }
+  return driver;
+}
+
+Gateway::Gateway(asio::io_context& io, std::shared_ptr<spdlog::logger> log)
+    : io_(io), log_(std::move(log)), tick_(io) {}
+
+Gateway::~Gateway() { stop(); }
+
+std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& config,
+                                        const PluginRegistry& plugins,
+                                        std::shared_ptr<spdlog::logger> log,
+                                        std::vector<std::string>& errors, bool maintenance) {
+  std::unique_ptr<Gateway> gw(new Gateway(io, log));
+  const auto now = Clock::now();
+  for (const auto& dc : config.devices) {
+    const AdapterDescriptor* adapter = plugins.find(dc.adapter);
+    if (adapter == nullptr) {
+      errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
+                       dc.name + "': adapter '" + dc.adapter + "' is not installed");
+      continue;
+    }
+    std::string error;
+    auto driver = make_driver(dc, *adapter, maintenance, error);
+    if (!driver) {
+      errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device " +
+                       error);
+      continue;
+    }
+    try {
+      gw->devices_.push_back(std::make_unique<Device>(dc, *adapter, std::move(driver), log, now));
+    } catch (const std::exception& e) {
+      errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
+                       dc.name + "': " + e.what());
+      continue;
+    }
+    gw->units_[dc.unit_id] = gw->devices_.back().get();
+  }
+  if (!errors.empty()) return nullptr;
+  for (const auto& bc : config.buses) {
+    std::vector<Device*> on_bus;
+    for (const auto& d : gw->devices_) {
+      if (d->config().bus == bc.name) on_bus.push_back(d.get());
+    }
+    gw->buses_.push_back(std::make_shared<Bus>(io, bc, std::move(on_bus), log));
+  }
+  return gw;
+}
+
+void Gateway::start() {
+  running_ = true;
+  for (auto& b : buses_) b->start();
+  housekeeping();
+}
+
+void Gateway::stop() {
+  if (!running_) return;
+  running_ = false;
+  tick_.cancel();
+  for (auto& b : buses_) b->stop();
+  for (auto& d : devices_) d->fail_pending(Exception::gateway_target_failed);
+}
+
+void Gateway::housekeeping() {
+  const auto now = Clock::now();
+  for (auto& d : devices_) d->housekeeping(now);
+  tick_.expires_after(kHousekeepingPeriod);
+  tick_.async_wait([this](const boost::system::error_code& ec) {
+    if (!ec && running_) housekeeping();
+  });
+}
+
+void Gateway::stop_drives(Millis limit, std::function<void()> done) {
+  struct Waiter {
+    int outstanding = 0;
+    std::function<void()> done;
+    asio::steady_timer timer;
+    explicit Waiter(asio::io_context& io) : timer(io) {}
+    void finish() {
+      if (!done) return;
+      timer.cancel();
+      auto d = std::move(done);
+      done = nullptr;
+      d();
+    }
+  };
+  auto waiter = std::make_shared<Waiter>(io_);
+  waiter->done = std::move(done);
+  const auto now = Clock::now();
+  for (auto& d : devices_) {
+    const CommonState& c = d->driver().common();
+    if (!c.running || d->comm_lost()) continue;
+    ++waiter->outstanding;
+    log_->info("device {}: stopping for shutdown", d->config().name);
+    d->command(Command::stop,
+               [waiter, name = d->config().name, log = log_](Exception e) {
+                 if (e != Exception::none) {
+                   log->warn("device {}: stop not confirmed (exception 0x{:02X})", name,
+                             static_cast<int>(e));
+                 }
+                 if (--waiter->outstanding == 0) waiter->finish();
+               },
+               now);
+  }
+  if (waiter->outstanding == 0) {
+    waiter->finish();
+    return;
+  }
+  waiter->timer.expires_after(limit);
+  waiter->timer.async_wait([waiter](const boost::system::error_code& ec) {
+    if (!ec) waiter->finish();
+  });
+}
+
+Exception Gateway::read(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+                        std::span<std::uint16_t> out) {
+  Device* d = units_[unit];
+  if (d == nullptr) return Exception::gateway_path_unavailable;
+  return d->read(to_table(table), address, out, Clock::now());
+}
+
+Exception Gateway::write(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+                         std::span<const std::uint16_t> values, modbus::WriteDone done) {
+  Device* d = units_[unit];
+  if (d == nullptr) return Exception::gateway_path_unavailable;
+  if (!running_) return Exception::gateway_target_failed;
+  return d->write(to_table(table), address, values, std::move(done), Clock::now());
+}
+
+std::size_t Gateway::devices_online() const {
+  return static_cast<std::size_t>(std::count_if(devices_.begin(), devices_.end(),
+                                                [](const auto& d) { return d->online(); }));
+}
+
+std::size_t Gateway::buses_open() const {
+  return static_cast<std::size_t>(
+      std::count_if(buses_.begin(), buses_.end(), [](const auto& b) { return b->is_open(); }));
+}
+
+Device* Gateway::find(std::string_view name) const {
+  for (const auto& d : devices_) {
+    if (d->config().name == name) return d.get();
+  }
+  return nullptr;
+}
+
+}  // namespace drivegate

@@ -1,0 +1,70 @@
+// The gateway: every configured device and bus, and the Modbus backend that serves them. Each
+// Modbus unit id is one device. Reads come from the register image; writes go to the device's
+// driver and are answered when the drive confirmed them.
+#pragma once
+
+#include <array>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <functional>
+#include <memory>
+#include <spdlog/logger.h>
+#include <string>
+#include <vector>
+
+#include "bus.h"
+#include "config.h"
+#include "device.h"
+#include "modbus/backend.h"
+#include "plugins.h"
+
+namespace drivegate {
+
+// Creates a device's driver from its configuration; nullptr and `error` if the adapter refuses.
+std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescriptor& adapter,
+                                    bool maintenance, std::string& error);
+
+class Gateway : public modbus::Backend {
+ public:
+  // Builds every device (drivers created, nothing opened yet). Returns nullptr and fills
+  // `errors` when an adapter refuses its device.
+  static std::unique_ptr<Gateway> build(boost::asio::io_context& io, const Config& config,
+                                        const PluginRegistry& plugins,
+                                        std::shared_ptr<spdlog::logger> log,
+                                        std::vector<std::string>& errors,
+                                        bool maintenance = false);
+  ~Gateway() override;
+  Gateway(const Gateway&) = delete;
+  Gateway& operator=(const Gateway&) = delete;
+
+  void start();  // opens the buses and starts polling
+  void stop();   // closes the buses; pending writes fail with 0x0B
+  // Puts every drive in its stop state and calls `done` once they confirmed or `limit` passed.
+  void stop_drives(Millis limit, std::function<void()> done);
+
+  modbus::Exception read(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+                         std::span<std::uint16_t> out) override;
+  modbus::Exception write(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+                          std::span<const std::uint16_t> values, modbus::WriteDone done) override;
+
+  [[nodiscard]] std::size_t devices_online() const;
+  [[nodiscard]] const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }
+  [[nodiscard]] Device* find(std::string_view name) const;
+  [[nodiscard]] std::size_t buses_open() const;
+
+ private:
+  Gateway(boost::asio::io_context& io, std::shared_ptr<spdlog::logger> log);
+  void housekeeping();
+
+  boost::asio::io_context& io_;
+  std::shared_ptr<spdlog::logger> log_;
+  std::vector<std::unique_ptr<Device>> devices_;
+  std::vector<std::shared_ptr<Bus>> buses_;
+  std::array<Device*, 256> units_{};
+  boost::asio::steady_timer tick_;
+  bool running_ = false;
+};
+
+Table to_table(modbus::RegisterTable t);
+
+}  // namespace drivegate

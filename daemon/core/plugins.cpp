@@ -1,0 +1,111 @@
+#include "plugins.h"
+
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <system_error>
+
+namespace drivegate {
+
+// Owns one dlopen handle.
+class PluginLibrary {
+ public:
+  explicit PluginLibrary(void* handle) : handle_(handle) {}
+  ~PluginLibrary() {
+    if (handle_ != nullptr) dlclose(handle_);
+  }
+  PluginLibrary(const PluginLibrary&) = delete;
+  PluginLibrary& operator=(const PluginLibrary&) = delete;
+  [[nodiscard]] void* handle() const { return handle_; }
+
+ private:
+  void* handle_;
+};
+
+PluginRegistry::PluginRegistry() = default;
+PluginRegistry::~PluginRegistry() {
+  descriptors_.clear();  // before the libraries they point into go away
+  libraries_.clear();
+}
+PluginRegistry::PluginRegistry(PluginRegistry&&) noexcept = default;
+PluginRegistry& PluginRegistry::operator=(PluginRegistry&&) noexcept = default;
+
+std::vector<std::string> PluginRegistry::load_directory(const std::filesystem::path& dir) {
+  std::vector<std::string> refused;
+  std::error_code ec;
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.starts_with("drivegate-") && name.ends_with(".so")) files.push_back(entry.path());
+  }
+  if (ec) {
+    refused.push_back("plugin directory " + dir.string() + ": " + ec.message());
+    return refused;
+  }
+  std::sort(files.begin(), files.end());
+  for (const auto& file : files) {
+    if (std::string why = load_file(file); !why.empty()) refused.push_back(std::move(why));
+  }
+  return refused;
+}
+
+std::string PluginRegistry::load_file(const std::filesystem::path& file) {
+  void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr) return file.string() + ": cannot load: " + dlerror();
+  auto library = std::make_unique<PluginLibrary>(handle);
+  const auto* d = static_cast<const AdapterDescriptor*>(dlsym(handle, kDescriptorSymbol));
+  if (d == nullptr) {
+    return file.string() + ": not a drivegate adapter (no symbol '" + kDescriptorSymbol + "')";
+  }
+  if (d->api_version != kAdapterApiVersion) {
+    return file.string() + ": adapter API version " + std::to_string(d->api_version) +
+           ", this drivegate speaks version " + std::to_string(kAdapterApiVersion) +
+           ": rebuild the plugin against this drivegate";
+  }
+  if (d->id == nullptr || d->create_driver == nullptr || d->create_simulator == nullptr ||
+      (d->options == nullptr && d->option_count != 0)) {
+    return file.string() + ": incomplete adapter descriptor";
+  }
+  if (find(d->id) != nullptr) {
+    return file.string() + ": adapter '" + d->id + "' is already loaded from another file";
+  }
+  descriptors_.push_back(d);
+  libraries_.push_back(std::move(library));
+  return {};
+}
+
+void PluginRegistry::add(const AdapterDescriptor& descriptor) {
+  descriptors_.push_back(&descriptor);
+}
+
+const AdapterDescriptor* PluginRegistry::find(std::string_view id) const {
+  for (const auto* d : descriptors_) {
+    if (id == d->id) return d;
+  }
+  return nullptr;
+}
+
+std::vector<const AdapterDescriptor*> PluginRegistry::all() const { return descriptors_; }
+
+std::string PluginRegistry::ids() const {
+  std::string out;
+  for (const auto* d : descriptors_) {
+    if (!out.empty()) out += ", ";
+    out += d->id;
+  }
+  return out.empty() ? "(none)" : out;
+}
+
+std::filesystem::path default_plugin_dir() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    // In the build tree the programs sit in <build>/bin and the plugins in <build>/adapters.
+    const auto build_dir = exe.parent_path().parent_path() / "adapters";
+    if (std::filesystem::exists(build_dir / ".drivegate-build-tree", ec)) return build_dir;
+  }
+  return DRIVEGATE_PLUGIN_INSTALL_DIR;
+}
+
+}  // namespace drivegate

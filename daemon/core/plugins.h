@@ -1,0 +1,45 @@
+// Loads adapter plugins: every drivegate-*.so in a directory, each found through its versioned,
+// data-only descriptor. A plugin of another API version, or one without a descriptor, is refused
+// with a message naming the file; the others still load.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "drivegate/adapter.h"
+
+namespace drivegate {
+
+class PluginLibrary;
+
+class PluginRegistry {
+ public:
+  PluginRegistry();
+  ~PluginRegistry();
+  PluginRegistry(PluginRegistry&&) noexcept;
+  PluginRegistry& operator=(PluginRegistry&&) noexcept;
+
+  // Loads every plugin in `dir`. Returns one line per plugin refused (empty: all loaded).
+  std::vector<std::string> load_directory(const std::filesystem::path& dir);
+  // Loads one file; returns the reason on failure.
+  std::string load_file(const std::filesystem::path& file);
+  // Registers a descriptor linked into the program (tests).
+  void add(const AdapterDescriptor& descriptor);
+
+  [[nodiscard]] const AdapterDescriptor* find(std::string_view id) const;
+  [[nodiscard]] std::vector<const AdapterDescriptor*> all() const;
+  [[nodiscard]] std::string ids() const;  // "a, b, c" for messages
+
+ private:
+  std::vector<std::unique_ptr<PluginLibrary>> libraries_;
+  std::vector<const AdapterDescriptor*> descriptors_;
+};
+
+// The plugin directory used when none is given: the build tree's when the program runs from it,
+// the installed one otherwise.
+std::filesystem::path default_plugin_dir();
+
+}  // namespace drivegate

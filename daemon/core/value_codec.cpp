@@ -1,0 +1,85 @@
+#include "value_codec.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace drivegate {
+namespace {
+
+template <class T>
+T saturate(double v) {
+  if (std::isnan(v)) return 0;
+  const double lo = static_cast<double>(std::numeric_limits<T>::min());
+  const double hi = static_cast<double>(std::numeric_limits<T>::max());
+  return static_cast<T>(std::llround(std::clamp(v, lo, hi)));
+}
+
+double scaled(const PointSpec& spec, const Value& value) {
+  const double scale = spec.scale == 0.0 ? 1.0 : spec.scale;
+  if (const auto* i = std::get_if<std::int64_t>(&value)) {
+    if (scale == 1.0) return static_cast<double>(*i);
+    return static_cast<double>(*i) / scale;
+  }
+  if (const auto* d = std::get_if<double>(&value)) return *d / scale;
+  return 0.0;
+}
+
+void put32(std::uint32_t v, std::span<std::uint16_t> out) {
+  out[0] = static_cast<std::uint16_t>(v >> 16);
+  out[1] = static_cast<std::uint16_t>(v & 0xFFFF);
+}
+
+}  // namespace
+
+void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint16_t> out) {
+  switch (spec.type) {
+    case PointType::u16: out[0] = saturate<std::uint16_t>(scaled(spec, value)); return;
+    case PointType::i16:
+      out[0] = static_cast<std::uint16_t>(saturate<std::int16_t>(scaled(spec, value)));
+      return;
+    case PointType::u32: put32(saturate<std::uint32_t>(scaled(spec, value)), out); return;
+    case PointType::i32:
+      put32(static_cast<std::uint32_t>(saturate<std::int32_t>(scaled(spec, value))), out);
+      return;
+    case PointType::f32:
+      put32(std::bit_cast<std::uint32_t>(static_cast<float>(as_double(value))), out);
+      return;
+    case PointType::string: {
+      const auto* s = std::get_if<std::string>(&value);
+      for (std::size_t r = 0; r < out.size(); ++r) {
+        const auto ch = [&](std::size_t i) -> std::uint16_t {
+          return s != nullptr && i < s->size() ? static_cast<unsigned char>((*s)[i]) : 0;
+        };
+        out[r] = static_cast<std::uint16_t>((ch(2 * r) << 8) | ch(2 * r + 1));
+      }
+      return;
+    }
+  }
+}
+
+std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::uint16_t> in) {
+  const double scale = spec.scale == 0.0 ? 1.0 : spec.scale;
+  const auto engineering = [&](std::int64_t raw) -> Value {
+    if (scale == 1.0) return raw;
+    return static_cast<double>(raw) * scale;
+  };
+  const std::uint32_t u32 = in.size() >= 2 ? (std::uint32_t{in[0]} << 16) | in[1] : 0;
+  switch (spec.type) {
+    case PointType::u16: return engineering(in[0]);
+    case PointType::i16: return engineering(static_cast<std::int16_t>(in[0]));
+    case PointType::u32: return engineering(u32);
+    case PointType::i32: return engineering(static_cast<std::int32_t>(u32));
+    case PointType::f32: {
+      const float f = std::bit_cast<float>(u32);
+      if (!std::isfinite(f)) return std::nullopt;
+      return static_cast<double>(f);
+    }
+    case PointType::string: return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+}  // namespace drivegate

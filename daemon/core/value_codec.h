@@ -1,0 +1,21 @@
+// Engineering values <-> Modbus registers, per point type and scale. 32-bit values and floats
+// take two registers, high word first; strings two characters a register, first in the high byte.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+
+#include "drivegate/point.h"
+
+namespace drivegate {
+
+// Writes spec.register_count() registers. Values out of the type's range saturate; unknown
+// values encode as 0.
+void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint16_t> out);
+
+// The engineering value a client wrote; nullopt when `in` is not a value of the point's type
+// (a string point is not writable).
+std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::uint16_t> in);
+
+}  // namespace drivegate
