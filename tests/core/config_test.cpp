@@ -1,0 +1,243 @@
+// The configuration loader: good files load with adapter defaults filled in; every kind of bad
+// file is refused with the file, line and key named.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/config_loader.h"
+#include "fake_adapter.h"
+
+namespace drivegate {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using ::testing::IsEmpty;
+
+class ConfigTest : public ::testing::Test {
+ protected:
+  ConfigTest() {
+    plugins_.add(test::kFakeAdapter);
+    plugins_.add(test::kFakeStreamer);
+  }
+  ConfigResult parse(const std::string& text) { return parse_config(text, "gw.toml", plugins_); }
+  std::string only_error(const std::string& text) {
+    auto r = parse(text);
+    EXPECT_FALSE(r.config.has_value());
+    EXPECT_EQ(r.errors.size(), 1u) << ::testing::PrintToString(r.errors);
+    return r.errors.empty() ? "" : r.errors.front();
+  }
+  PluginRegistry plugins_;
+};
+
+constexpr const char* kGood = R"(
+[server]
+listen = "127.0.0.1:1502"
+max_clients = 8
+
+[[bus]]
+name = "line1"
+port = "/dev/ttyUSB0"
+
+[[device]]
+name = "washer"
+bus = "line1"
+adapter = "fake"
+unit_id = 3
+address = 5
+poll_ms = 250
+[device.options]
+count = 9
+names = ["x", "y", "z"]
+)";
+
+TEST(ConfigListen, ParsesHostPortForms) {
+  ServerConfig s;
+  ASSERT_TRUE(parse_listen("127.0.0.1:1502", s));
+  EXPECT_EQ(s.host, "127.0.0.1");
+  EXPECT_EQ(s.port, 1502);
+  ASSERT_TRUE(parse_listen("[::1]:502", s));
+  EXPECT_EQ(s.host, "::1");
+  ASSERT_TRUE(parse_listen(":502", s));
+  EXPECT_EQ(s.host, "0.0.0.0");
+  EXPECT_FALSE(parse_listen("localhost", s));
+  EXPECT_FALSE(parse_listen("h:70000", s));
+  EXPECT_FALSE(parse_listen("h:12ab", s));
+}
+
+TEST_F(ConfigTest, GoodFileLoadsWithAdapterDefaults) {
+  auto r = parse(kGood);
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  const Config& c = *r.config;
+  EXPECT_EQ(c.server.host, "127.0.0.1");
+  EXPECT_EQ(c.server.port, 1502);
+  EXPECT_EQ(c.server.max_clients, 8u);
+  ASSERT_EQ(c.buses.size(), 1u);
+  // Line settings not given come from the adapter: 4800 8O1 with echo.
+  EXPECT_EQ(c.buses[0].baud, 4800u);
+  EXPECT_EQ(c.buses[0].parity, Parity::odd);
+  EXPECT_EQ(c.buses[0].data_bits, 8);
+  EXPECT_EQ(c.buses[0].stop_bits, 1);
+  EXPECT_TRUE(c.buses[0].echo);
+  ASSERT_EQ(c.devices.size(), 1u);
+  const DeviceConfig& d = c.devices[0];
+  EXPECT_EQ(d.unit_id, 3);
+  EXPECT_EQ(d.address, 5u);
+  EXPECT_EQ(d.poll_interval, Millis(250));
+  EXPECT_EQ(d.options.integer("count"), 9);
+  EXPECT_DOUBLE_EQ(d.options.real("ratio"), 0.5);
+  EXPECT_FALSE(d.options.boolean("enabled"));
+  EXPECT_EQ(d.options.string("mode"), "normal");
+  EXPECT_EQ(d.options.string_list("names"), (std::vector<std::string>{"x", "y", "z"}));
+}
+
+TEST_F(ConfigTest, BusSettingsOverrideTheAdapter) {
+  std::string text = kGood;
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21,
+               "port = \"/dev/ttyUSB0\"\nbaud = 9600\nparity = \"even\"\nstop_bits = 2\necho = false");
+  auto r = parse(text);
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  EXPECT_EQ(r.config->buses[0].baud, 9600u);
+  EXPECT_EQ(r.config->buses[0].parity, Parity::even);
+  EXPECT_EQ(r.config->buses[0].stop_bits, 2);
+  EXPECT_FALSE(r.config->buses[0].echo);
+}
+
+TEST_F(ConfigTest, UnknownKeyNamesFileLineAndKey) {
+  std::string text = kGood;
+  text.replace(text.find("poll_ms = 250"), 13, "poll_ms = 250\npol_ms = 5");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("gw.toml:17:"), HasSubstr("device[0].pol_ms"),
+                                      HasSubstr("unknown key")));
+}
+
+TEST_F(ConfigTest, WrongTypeIsNamed) {
+  std::string text = kGood;
+  text.replace(text.find("unit_id = 3"), 11, "unit_id = \"3\"");
+  EXPECT_THAT(only_error(text),
+              AllOf(HasSubstr("gw.toml:14:"), HasSubstr("unit_id"), HasSubstr("integer")));
+}
+
+TEST_F(ConfigTest, OutOfRangeValuesAreRefused) {
+  std::string text = kGood;
+  text.replace(text.find("unit_id = 3"), 11, "unit_id = 248");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("unit_id"), HasSubstr("1..247")));
+  text = kGood;
+  text.replace(text.find("address = 5"), 11, "address = 32");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("address"), HasSubstr("1..31")));
+}
+
+TEST_F(ConfigTest, AdapterOptionsAreCheckedAgainstTheSchema) {
+  std::string text = kGood;
+  text.replace(text.find("count = 9"), 9, "count = 11");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("gw.toml:18:"), HasSubstr("options.count")));
+  text = kGood;
+  text.replace(text.find("count = 9"), 9, "mode = \"turbo\"");
+  EXPECT_THAT(only_error(text), HasSubstr("normal|continuous"));
+  text = kGood;
+  text.replace(text.find("count = 9"), 9, "colour = 1");
+  EXPECT_THAT(only_error(text),
+              AllOf(HasSubstr("options.colour"), HasSubstr("unknown option for adapter 'fake'")));
+}
+
+TEST_F(ConfigTest, UnknownAdapterListsTheInstalledOnes) {
+  std::string text = kGood;
+  text.replace(text.find("adapter = \"fake\""), 16, "adapter = \"fak\"");
+  auto r = parse(text);
+  ASSERT_FALSE(r.config);
+  EXPECT_THAT(r.errors.front(), AllOf(HasSubstr("no adapter 'fak'"), HasSubstr("fake, streamer")));
+}
+
+TEST_F(ConfigTest, ReferencesAreChecked) {
+  std::string text = kGood;
+  text.replace(text.find("bus = \"line1\""), 13, "bus = \"line2\"");
+  auto r = parse(text);
+  ASSERT_FALSE(r.config);
+  EXPECT_THAT(::testing::PrintToString(r.errors), HasSubstr("no [[bus]] named 'line2'"));
+}
+
+TEST_F(ConfigTest, DuplicatesAreRefused) {
+  const std::string text = std::string(kGood) +
+                           "\n[[device]]\nname = \"washer\"\nbus = \"line1\"\nadapter = \"fake\"\n"
+                           "unit_id = 3\naddress = 5\n";
+  auto r = parse(text);
+  ASSERT_FALSE(r.config);
+  const auto all = ::testing::PrintToString(r.errors);
+  EXPECT_THAT(all, HasSubstr("declared twice"));
+  EXPECT_THAT(all, HasSubstr("unit 3 is already device 'washer'"));
+  EXPECT_THAT(all, HasSubstr("address 5 is already device 'washer'"));
+}
+
+TEST_F(ConfigTest, AStreamingDeviceMustBeAloneOnItsBus) {
+  const std::string text = std::string(kGood) +
+                           "\n[[device]]\nname = \"fdc\"\nbus = \"line1\"\nadapter = \"streamer\"\n"
+                           "unit_id = 4\n";
+  auto r = parse(text);
+  ASSERT_FALSE(r.config);
+  EXPECT_THAT(::testing::PrintToString(r.errors), HasSubstr("must be alone on its bus"));
+}
+
+TEST_F(ConfigTest, MixedAdaptersNeedExplicitLineSettings) {
+  const std::string text = R"(
+[[bus]]
+name = "b"
+port = "/dev/ttyS0"
+[[device]]
+name = "a"
+bus = "b"
+adapter = "fake"
+unit_id = 1
+[[device]]
+name = "s"
+bus = "b"
+adapter = "streamer"
+unit_id = 2
+)";
+  auto r = parse(text);
+  ASSERT_FALSE(r.config);
+  EXPECT_THAT(::testing::PrintToString(r.errors), HasSubstr("set baud, parity"));
+}
+
+TEST_F(ConfigTest, SyntaxErrorNamesTheLine) {
+  EXPECT_THAT(only_error("[server]\nlisten = \"x:1\"\nmax_clients = = 3\n"),
+              HasSubstr("gw.toml:3:"));
+}
+
+TEST_F(ConfigTest, EmptyFileSaysThereIsNothingToServe) {
+  EXPECT_THAT(only_error(""), HasSubstr("no [[device]]"));
+}
+
+TEST_F(ConfigTest, BadListenAndBaudAreExplained) {
+  std::string text = kGood;
+  text.replace(text.find("127.0.0.1:1502"), 14, "127.0.0.1");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("gw.toml:3:"), HasSubstr("host:port")));
+  text = kGood;
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21, "port = \"/dev/ttyUSB0\"\nbaud = 9601");
+  EXPECT_THAT(only_error(text), HasSubstr("not a standard rate"));
+}
+
+TEST_F(ConfigTest, MissingFileIsReported) {
+  auto r = load_config("/nonexistent/drivegate.toml", plugins_);
+  ASSERT_FALSE(r.config);
+  EXPECT_THAT(r.errors.front(), HasSubstr("/nonexistent/drivegate.toml: cannot open"));
+}
+
+TEST_F(ConfigTest, AllErrorsAreReportedAtOnce) {
+  std::string text = kGood;
+  text.replace(text.find("unit_id = 3"), 11, "unit_id = 0");
+  text.replace(text.find("poll_ms = 250"), 13, "poll_ms = 1");
+  auto r = parse(text);
+  EXPECT_EQ(r.errors.size(), 2u) << ::testing::PrintToString(r.errors);
+}
+
+TEST_F(ConfigTest, OptionTextParsingFollowsTheSchema) {
+  std::string error;
+  EXPECT_EQ(std::get<std::int64_t>(*parse_option_text(test::kFakeOptions[0], "0x05", error)), 5);
+  EXPECT_FALSE(parse_option_text(test::kFakeOptions[0], "12", error));
+  EXPECT_THAT(error, HasSubstr("1..10"));
+  EXPECT_FALSE(parse_option_text(test::kFakeOptions[0], "4x", error));
+  EXPECT_FALSE(parse_option_text(test::kFakeOptions[2], "yes", error));
+  const Options d = default_options(test::kFakeAdapter);
+  EXPECT_EQ(d.string_list("names"), (std::vector<std::string>{"a", "b"}));
+}
+
+}  // namespace
+}  // namespace drivegate

@@ -1,0 +1,185 @@
+// A device's Modbus side: reads from the image, writes validated, then answered only when the
+// driver settles them; comm_lost and deadlines turn into 0x0B.
+#include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
+
+#include "core/device.h"
+#include "fake_adapter.h"
+
+namespace drivegate {
+namespace {
+
+using modbus::Exception;
+
+class DeviceTest : public ::testing::Test {
+ protected:
+  DeviceTest() {
+    DeviceConfig cfg;
+    cfg.name = "dev";
+    cfg.unit_id = 1;
+    auto driver = std::make_unique<test::FakeDriver>(DeviceEnv{});
+    driver->traits_.comm_timeout = Millis(1000);
+    driver->traits_.write_timeout = Millis(500);
+    fake_ = driver.get();
+    device_ = std::make_unique<Device>(
+        cfg, test::kFakeAdapter, std::move(driver),
+        std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>()),
+        t0_);
+  }
+  std::vector<std::uint16_t> input(std::uint16_t address, std::size_t n, TimePoint at) {
+    std::vector<std::uint16_t> out(n);
+    EXPECT_EQ(device_->read(Table::input, address, out, at), Exception::none);
+    return out;
+  }
+  Exception write(Table t, std::uint16_t address, std::vector<std::uint16_t> v,
+                  std::optional<Exception>& answer) {
+    return device_->write(t, address, v, [&answer](Exception e) { answer = e; }, t0_);
+  }
+
+  TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
+  test::FakeDriver* fake_;
+  std::unique_ptr<Device> device_;
+};
+
+TEST_F(DeviceTest, CommonBlockReflectsTheDriver) {
+  fake_->common_.ready = true;
+  fake_->common_.running = true;
+  fake_->common_.speed_rpm = -800;
+  fake_->common_.native_fault = 0x48;
+  fake_->common_.faults.set(Fault::stall);
+  fake_->common_.faults.set(Fault::phase_loss);
+  device_->frame_good(t0_);
+  device_->sync(t0_);
+  const auto r = input(0, 19, t0_ + Millis(250));
+  EXPECT_EQ(r[0], 0b0000'0111);  // online, running, fault
+  EXPECT_EQ(r[1], static_cast<std::uint16_t>(Fault::phase_loss));  // the more severe
+  EXPECT_EQ((std::uint32_t{r[2]} << 16) | r[3], (1u << 7) | (1u << 8));
+  EXPECT_EQ(r[5], 0x48);
+  EXPECT_EQ(r[6], static_cast<std::uint16_t>(-800));
+  EXPECT_EQ((std::uint32_t{r[7]} << 16) | r[8], 250u);  // data age
+  EXPECT_EQ(r[10], 1u);                                 // frames good
+}
+
+TEST_F(DeviceTest, DataAgeSaysNeverBeforeTheFirstFrame) {
+  const auto r = input(7, 2, t0_);
+  EXPECT_EQ(r[0], 0xFFFF);
+  EXPECT_EQ(r[1], 0xFFFF);
+}
+
+TEST_F(DeviceTest, AdapterPointsAreScaledIntoTheImage) {
+  fake_->values_[0] = -12.3;  // 0.1 degC steps
+  fake_->values_[2] = 1.0;
+  device_->sync(t0_);
+  const auto r = input(32, 3, t0_);
+  EXPECT_EQ(r[0], static_cast<std::uint16_t>(-123));
+  EXPECT_EQ(r[1], 0x3F80);
+  EXPECT_EQ(r[2], 0x0000);
+}
+
+TEST_F(DeviceTest, ReadsOfUnmappedAddressesAreRefused) {
+  std::vector<std::uint16_t> out(2);
+  EXPECT_EQ(device_->read(Table::input, 18, out, t0_), Exception::illegal_data_address);
+  EXPECT_EQ(device_->read(Table::holding, 3, out, t0_), Exception::illegal_data_address);
+  EXPECT_EQ(device_->read(Table::coil, 0, out, t0_), Exception::illegal_data_address);
+}
+
+TEST_F(DeviceTest, WriteIsAnsweredWhenTheDriverConfirms) {
+  std::optional<Exception> answer;
+  ASSERT_EQ(write(Table::holding, 0, {1}, answer), Exception::none);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
+  EXPECT_FALSE(answer);
+  std::vector<std::uint16_t> status(1);
+  device_->read(Table::input, 0, status, t0_);
+  EXPECT_TRUE(status[0] & (1u << 6));  // command_pending
+  fake_->completions.push_back({fake_->last_ticket, WriteResult::ok});
+  device_->sync(t0_);
+  EXPECT_EQ(answer, Exception::none);
+}
+
+TEST_F(DeviceTest, RefusalAndSilenceBecomeExceptions) {
+  std::optional<Exception> a1, a2;
+  write(Table::holding, 0, {0}, a1);
+  fake_->completions.push_back({fake_->last_ticket, WriteResult::refused});
+  device_->sync(t0_);
+  EXPECT_EQ(a1, Exception::server_device_failure);
+  write(Table::holding, 0, {0}, a2);
+  device_->housekeeping(t0_ + Millis(400));
+  EXPECT_FALSE(a2);
+  device_->frame_good(t0_ + Millis(400));
+  device_->housekeeping(t0_ + Millis(501));  // write_timeout passed
+  EXPECT_EQ(a2, Exception::gateway_target_failed);
+}
+
+TEST_F(DeviceTest, ValidationComesFirst) {
+  std::optional<Exception> a;
+  EXPECT_EQ(write(Table::holding, 3, {1}, a), Exception::illegal_data_address);   // unmapped
+  EXPECT_EQ(write(Table::holding, 0, {9}, a), Exception::illegal_data_value);     // no such command
+  EXPECT_EQ(write(Table::holding, 16, {0, 5}, a), Exception::illegal_data_value);  // limit < 10
+  EXPECT_EQ(write(Table::holding, 17, {5}, a), Exception::illegal_data_address);  // mid-point
+  EXPECT_EQ(write(Table::holding, 16, {0}, a), Exception::illegal_data_address);  // half a u32
+  EXPECT_EQ(write(Table::input, 0, {0}, a), Exception::illegal_data_address);     // read-only
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_TRUE(fake_->writes.empty());
+  EXPECT_FALSE(a);
+}
+
+TEST_F(DeviceTest, DriverRefusalIsAnsweredAtOnce) {
+  fake_->answer = WriteStatus::invalid_value;
+  std::optional<Exception> a;
+  EXPECT_EQ(write(Table::holding, 0, {2}, a), Exception::illegal_data_value);
+  fake_->answer = WriteStatus::refused;
+  EXPECT_EQ(write(Table::holding, 0, {2}, a), Exception::server_device_failure);
+  EXPECT_FALSE(a);
+}
+
+TEST_F(DeviceTest, SetpointAppliesBeforeTheCommandInOneRequest) {
+  std::optional<Exception> a;
+  ASSERT_EQ(write(Table::holding, 0, {1, 1200}, a), Exception::none);
+  EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{1200});
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
+  std::vector<std::uint16_t> hr(2);
+  device_->read(Table::holding, 0, hr, t0_);
+  EXPECT_EQ(hr[1], 1200);
+}
+
+TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
+  fake_->answer = WriteStatus::done;
+  std::optional<Exception> a;
+  ASSERT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Exception::none);
+  EXPECT_EQ(a, Exception::none);
+  ASSERT_EQ(fake_->writes.size(), 1u);
+  EXPECT_EQ(fake_->writes[0].first, 1u);
+  EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
+}
+
+TEST_F(DeviceTest, CommLostFailsPendingWritesAndRefusesNewOnes) {
+  std::optional<Exception> a, b;
+  write(Table::holding, 0, {1}, a);
+  device_->housekeeping(t0_ + Millis(1001));
+  EXPECT_EQ(a, Exception::gateway_target_failed);
+  EXPECT_EQ(fake_->comm_losts, 1);
+  EXPECT_TRUE(device_->comm_lost());
+  EXPECT_EQ(input(0, 2, t0_ + Millis(1001))[0] & (1u << 4), 1u << 4);
+  EXPECT_EQ(input(0, 2, t0_ + Millis(1001))[1], static_cast<std::uint16_t>(Fault::comm_lost));
+  EXPECT_EQ(write(Table::holding, 0, {1}, b), Exception::gateway_target_failed);
+  // The heartbeat is the gateway's own register and always takes.
+  EXPECT_EQ(write(Table::holding, 2, {7}, b), Exception::none);
+  EXPECT_EQ(b, Exception::none);
+  device_->frame_good(t0_ + Millis(1100));
+  EXPECT_FALSE(device_->comm_lost());
+}
+
+TEST_F(DeviceTest, SilentDeviceIsBackedOffButProbed) {
+  device_->turn_failed(t0_);
+  EXPECT_FALSE(device_->in_backoff(t0_));  // one miss is not a pattern
+  device_->turn_failed(t0_);
+  EXPECT_TRUE(device_->in_backoff(t0_ + Millis(400)));
+  EXPECT_FALSE(device_->in_backoff(t0_ + Millis(1001)));
+  for (int i = 0; i < 20; ++i) device_->turn_failed(t0_);
+  EXPECT_FALSE(device_->in_backoff(t0_ + Millis(5001)));  // backoff_max
+  device_->frame_good(t0_);
+  EXPECT_FALSE(device_->in_backoff(t0_));
+}
+
+}  // namespace
+}  // namespace drivegate

@@ -1,0 +1,58 @@
+// Engineering values to registers and back: scale, sign, 32-bit word order, floats, strings.
+#include <gtest/gtest.h>
+
+#include "core/value_codec.h"
+
+namespace drivegate {
+namespace {
+
+std::vector<std::uint16_t> enc(const PointSpec& s, const Value& v) {
+  std::vector<std::uint16_t> out(s.register_count());
+  encode_value(s, v, out);
+  return out;
+}
+
+TEST(ValueCodec, ScaleRoundsToTheNearestStep) {
+  PointSpec s{.type = PointType::u16, .scale = 0.01};
+  EXPECT_EQ(enc(s, 42.28), std::vector<std::uint16_t>{4228});
+  EXPECT_EQ(enc(s, 0.005), std::vector<std::uint16_t>{1});  // half away from zero
+  EXPECT_EQ(std::get<double>(*decode_value(s, std::vector<std::uint16_t>{5000})), 50.0);
+}
+
+TEST(ValueCodec, SignedAndSaturating) {
+  PointSpec i16{.type = PointType::i16};
+  EXPECT_EQ(enc(i16, std::int64_t{-1}), std::vector<std::uint16_t>{0xFFFF});
+  EXPECT_EQ(enc(i16, std::int64_t{100000}), std::vector<std::uint16_t>{0x7FFF});
+  EXPECT_EQ(std::get<std::int64_t>(*decode_value(i16, std::vector<std::uint16_t>{0xFFFE})), -2);
+  PointSpec u16{.type = PointType::u16};
+  EXPECT_EQ(enc(u16, std::int64_t{-5}), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(enc(u16, Value{}), std::vector<std::uint16_t>{0});
+}
+
+TEST(ValueCodec, ThirtyTwoBitsHighWordFirst) {
+  PointSpec u32{.type = PointType::u32};
+  EXPECT_EQ(enc(u32, std::int64_t{0x12345678}), (std::vector<std::uint16_t>{0x1234, 0x5678}));
+  PointSpec i32{.type = PointType::i32};
+  EXPECT_EQ(enc(i32, std::int64_t{-2}), (std::vector<std::uint16_t>{0xFFFF, 0xFFFE}));
+  EXPECT_EQ(std::get<std::int64_t>(*decode_value(u32, std::vector<std::uint16_t>{1, 2})), 65538);
+}
+
+TEST(ValueCodec, FloatIsIeeeHighWordFirst) {
+  PointSpec f{.type = PointType::f32};
+  EXPECT_EQ(enc(f, 1.0), (std::vector<std::uint16_t>{0x3F80, 0x0000}));
+  EXPECT_EQ(enc(f, -2.5), (std::vector<std::uint16_t>{0xC020, 0x0000}));
+  EXPECT_EQ(std::get<double>(*decode_value(f, std::vector<std::uint16_t>{0x4049, 0x0FDB})),
+            static_cast<double>(3.14159274f));
+  // NaN and infinity are not values a client may write.
+  EXPECT_FALSE(decode_value(f, std::vector<std::uint16_t>{0x7FC0, 0}));
+}
+
+TEST(ValueCodec, StringsTwoCharactersARegisterZeroPadded) {
+  PointSpec s{.type = PointType::string, .string_registers = 3};
+  EXPECT_EQ(enc(s, std::string("ABC")), (std::vector<std::uint16_t>{0x4142, 0x4300, 0x0000}));
+  EXPECT_EQ(enc(s, std::string("ABCDEFGH")), (std::vector<std::uint16_t>{0x4142, 0x4344, 0x4546}));
+  EXPECT_FALSE(decode_value(s, std::vector<std::uint16_t>{1, 2, 3}));
+}
+
+}  // namespace
+}  // namespace drivegate

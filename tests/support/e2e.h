@@ -1,0 +1,306 @@
+// End-to-end test support: the real programs as child processes (`drivegate sim` on a pty,
+// `drivegated` on a generated configuration) and libmodbus's Modbus TCP client, as a PLC would
+// use it. Paths to the built programs come from the build (DRIVEGATE_TEST_BIN_DIR).
+#pragma once
+
+#include <fcntl.h>
+#include <modbus/modbus.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace drivegate::test {
+
+inline std::filesystem::path bin_dir() { return DRIVEGATE_TEST_BIN_DIR; }
+inline std::filesystem::path plugin_dir() { return DRIVEGATE_TEST_PLUGIN_DIR; }
+
+// A temporary directory removed with its contents at the end of the test.
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "drivegate-test-XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+  [[nodiscard]] std::filesystem::path operator/(const std::string& name) const {
+    return path_ / name;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A child process with its stdin and stdout on pipes; stderr is inherited (test log).
+class Child {
+ public:
+  explicit Child(std::vector<std::string> argv) {
+    int in[2];
+    int out[2];
+    if (::pipe2(in, O_CLOEXEC) != 0 || ::pipe2(out, O_CLOEXEC) != 0) {
+      throw std::runtime_error("pipe failed");
+    }
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, in[0], STDIN_FILENO);
+    posix_spawn_file_actions_adddup2(&fa, out[1], STDOUT_FILENO);
+    std::vector<char*> args;
+    for (auto& a : argv) args.push_back(a.data());
+    args.push_back(nullptr);
+    const int rc = posix_spawn(&pid_, args[0], &fa, nullptr, args.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    ::close(in[0]);
+    ::close(out[1]);
+    stdin_ = in[1];
+    stdout_ = out[0];
+    if (rc != 0) throw std::runtime_error("cannot start " + argv[0]);
+  }
+  ~Child() {
+    terminate();
+    if (stdin_ >= 0) ::close(stdin_);
+    if (stdout_ >= 0) ::close(stdout_);
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+
+  void write_line(const std::string& line) {
+    const std::string l = line + "\n";
+    if (::write(stdin_, l.data(), l.size()) != static_cast<ssize_t>(l.size())) {
+      throw std::runtime_error("write to child failed");
+    }
+  }
+  // One line of stdout, or nullopt after `timeout`.
+  std::optional<std::string> read_line(std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (true) {
+      if (const auto nl = buffer_.find('\n'); nl != std::string::npos) {
+        std::string line = buffer_.substr(0, nl);
+        buffer_.erase(0, nl + 1);
+        return line;
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return std::nullopt;
+      pollfd p{stdout_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) continue;
+      char buf[4096];
+      const ssize_t n = ::read(stdout_, buf, sizeof buf);
+      if (n <= 0) return std::nullopt;
+      buffer_.append(buf, static_cast<std::size_t>(n));
+    }
+  }
+  // Sends `sig` and waits for the exit; returns the exit status (or 128 + signal).
+  int stop(int sig = SIGTERM, std::chrono::milliseconds timeout = std::chrono::seconds(10)) {
+    if (pid_ <= 0) return status_;
+    ::kill(pid_, sig);
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (reap(WNOHANG)) return status_;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    ::kill(pid_, SIGKILL);
+    reap(0);
+    return -1;
+  }
+  [[nodiscard]] bool running() { return pid_ > 0 && !reap(WNOHANG); }
+  void terminate() {
+    if (pid_ > 0) stop(SIGKILL, std::chrono::seconds(5));
+  }
+
+ private:
+  bool reap(int flags) {
+    int status = 0;
+    if (::waitpid(pid_, &status, flags) != pid_) return false;
+    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    pid_ = -1;
+    return true;
+  }
+  pid_t pid_ = -1;
+  int stdin_ = -1;
+  int stdout_ = -1;
+  int status_ = -1;
+  std::string buffer_;
+};
+
+// `drivegate sim ADAPTER ...` on a pty linked at `link`.
+class Sim {
+ public:
+  Sim(const std::string& adapter, const std::filesystem::path& link,
+      std::vector<std::string> extra = {})
+      : link_(link), child_(argv(adapter, link, std::move(extra))) {
+    const auto path = child_.read_line(std::chrono::seconds(10));
+    if (!path) throw std::runtime_error("drivegate sim " + adapter + " did not start");
+    path_ = *path;
+  }
+  // Sends an operator command and returns the first line of its answer.
+  std::string control(const std::string& line) {
+    child_.write_line(line);
+    return child_.read_line(std::chrono::seconds(5)).value_or("<no answer>");
+  }
+  [[nodiscard]] const std::string& path() const { return path_; }
+  Child& process() { return child_; }
+
+ private:
+  static std::vector<std::string> argv(const std::string& adapter,
+                                       const std::filesystem::path& link,
+                                       std::vector<std::string> extra) {
+    std::vector<std::string> a = {(bin_dir() / "drivegate").string(), "sim", adapter, "--link",
+                                  link.string(), "--plugin-dir", plugin_dir().string()};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  }
+  std::filesystem::path link_;
+  Child child_;
+  std::string path_;
+};
+
+// A TCP port nobody listens on right now (bound, then released).
+inline int free_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+// libmodbus's Modbus TCP client, as a PLC would talk to the gateway.
+class Plc {
+ public:
+  explicit Plc(int port, int unit = 1) : ctx_(modbus_new_tcp("127.0.0.1", port)) {
+    modbus_set_response_timeout(ctx_, 10, 0);
+    modbus_set_slave(ctx_, unit);
+  }
+  ~Plc() {
+    modbus_close(ctx_);
+    modbus_free(ctx_);
+  }
+  Plc(const Plc&) = delete;
+  Plc& operator=(const Plc&) = delete;
+  bool connect() { return modbus_connect(ctx_) == 0; }
+  void unit(int u) { modbus_set_slave(ctx_, u); }
+
+  // Registers, or the Modbus exception code (negative: a transport error).
+  struct Read {
+    std::vector<std::uint16_t> regs;
+    int exception = 0;
+    [[nodiscard]] bool ok() const { return exception == 0; }
+    [[nodiscard]] std::uint32_t u32(std::size_t at) const {
+      return (std::uint32_t{regs.at(at)} << 16) | regs.at(at + 1);
+    }
+  };
+  Read input(int address, int count) { return read(address, count, false); }
+  Read holding(int address, int count) { return read(address, count, true); }
+  // 0 on success, else the Modbus exception code (negative: a transport error).
+  int write(int address, std::vector<std::uint16_t> values) {
+    const int rc = values.size() == 1
+                       ? modbus_write_register(ctx_, address, values[0])
+                       : modbus_write_registers(ctx_, address, static_cast<int>(values.size()),
+                                                values.data());
+    return rc >= 0 ? 0 : code(errno);
+  }
+
+ private:
+  static int code(int err) {
+    if (err > MODBUS_ENOBASE && err < MODBUS_ENOBASE + 0x20) return err - MODBUS_ENOBASE;
+    return -err;
+  }
+  Read read(int address, int count, bool holding) {
+    Read r;
+    r.regs.resize(static_cast<std::size_t>(count));
+    const int rc = holding ? modbus_read_registers(ctx_, address, count, r.regs.data())
+                           : modbus_read_input_registers(ctx_, address, count, r.regs.data());
+    if (rc != count) r.exception = code(errno);
+    return r;
+  }
+  modbus_t* ctx_;
+};
+
+// drivegated on a configuration written from `toml`, listening on a free loopback port.
+class Daemon {
+ public:
+  Daemon(const TempDir& dir, const std::string& toml, std::vector<std::string> extra = {})
+      : port_(free_port()), config_(dir / "drivegate.toml"), child_(argv(dir, toml, extra)) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+    while (std::chrono::steady_clock::now() < deadline) {
+      Plc probe(port_);
+      if (probe.connect()) return;
+      if (!child_.running()) throw std::runtime_error("drivegated exited at start-up");
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    throw std::runtime_error("drivegated did not listen");
+  }
+  [[nodiscard]] int port() const { return port_; }
+  [[nodiscard]] const std::filesystem::path& config() const { return config_; }
+  Child& process() { return child_; }
+  int stop() { return child_.stop(SIGTERM); }
+
+ private:
+  std::vector<std::string> argv(const TempDir& dir, const std::string& toml,
+                                const std::vector<std::string>& extra) {
+    std::ofstream(dir / "drivegate.toml") << toml;
+    std::vector<std::string> a = {(bin_dir() / "drivegated").string(),
+                                  "--config",
+                                  (dir / "drivegate.toml").string(),
+                                  "--listen",
+                                  "127.0.0.1:" + std::to_string(port_),
+                                  "--plugin-dir",
+                                  plugin_dir().string()};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  }
+  int port_;
+  std::filesystem::path config_;
+  Child child_;
+};
+
+// Polls `condition` every 20 ms until it holds or `timeout` passes.
+inline bool eventually(const std::function<bool()>& condition,
+                       std::chrono::milliseconds timeout = std::chrono::seconds(5)) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return condition();
+}
+
+// Addresses of the common block (docs/register-map.md).
+namespace reg {
+inline constexpr int status = 0, fault_code = 1, fault_mask = 2, native_fault = 4, speed = 6,
+                     data_age = 7, frames_good = 9, bad_checksum = 11, timeouts = 13,
+                     retries = 15, nacks = 17;
+inline constexpr int command = 0, setpoint = 1, heartbeat = 2;
+inline constexpr std::uint16_t online = 1 << 0, running = 1 << 1, fault = 1 << 2,
+                               warning = 1 << 3, comm_lost = 1 << 4;
+}  // namespace reg
+
+}  // namespace drivegate::test
