@@ -77,8 +77,13 @@ void Connection::read() {
 void Connection::on_read(const boost::system::error_code& ec, std::size_t n) {
   reading_ = false;
   if (closed_) return;
+  if (ec == asio::error::eof) {  // the client is done sending: answer what it asked, then close
+    close_after_flush_ = true;
+    flush();
+    return;
+  }
   if (ec) {
-    if (ec != asio::error::eof && ec != asio::error::operation_aborted) {
+    if (ec != asio::error::operation_aborted) {
       state_->log->debug("modbus: client {}:{}: {}", peer_.address().to_string(), peer_.port(),
                          ec.message());
     }

@@ -352,6 +352,18 @@ TEST(Connection, IdleClientIsClosedAfterIdleTimeout) {
   EXPECT_EQ(h.stats().idle_timeouts, 1u);
 }
 
+TEST(Connection, AClientThatStopsSendingStillGetsItsReplies) {
+  Harness h;
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01}) +
+                     request(2, 1, {0x04, 0x00, 0x00, 0x00, 0x01})));
+  c.shutdown_write();
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x01, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x00}));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x02, 0x00, 0x00, 0x00, 0x05, 0x01, 0x04, 0x02, 0x00, 0x00}));
+  EXPECT_TRUE(c.closed_by_peer(1000ms));
+  EXPECT_TRUE(h.wait_clients(0));
+}
+
 TEST(Connection, DeviceIdentificationOverTcp) {
   ServerOptions o;
   o.identity = {"drivegate", "drivegated", "0.1.0"};

@@ -111,6 +111,7 @@ class RawClient {
     ::close(fd_);
     fd_ = -1;
   }
+  void shutdown_write() { ::shutdown(fd_, SHUT_WR); }
   bool send(const Bytes& b) {
     return ::send(fd_, b.data(), b.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(b.size());
   }
