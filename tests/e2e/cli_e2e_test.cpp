@@ -1,0 +1,102 @@
+// The programs' command lines: usage errors exit 2 with a message, configuration errors exit 1
+// naming file and line, and the register map prints what the daemon serves.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "e2e.h"
+
+namespace drivegate::test {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct Result {
+  int status;
+  std::string out;
+};
+
+// Runs a program to completion, stdout and stderr together.
+Result run(std::vector<std::string> argv) {
+  argv.insert(argv.begin(), {"/bin/sh", "-c", "exec \"$0\" \"$@\" 2>&1"});
+  Child child(argv);
+  std::string out;
+  while (auto line = child.read_line(std::chrono::seconds(20))) out += *line + "\n";
+  return {child.stop(0), out};
+}
+
+std::string drivegated() { return (bin_dir() / "drivegated").string(); }
+std::string drivegate() { return (bin_dir() / "drivegate").string(); }
+
+constexpr const char* kConfig = R"([server]
+listen = "127.0.0.1:1502"
+
+[[bus]]
+name = "line"
+port = "/dev/null"
+
+[[device]]
+name = "washer"
+bus = "line"
+adapter = "nidec-washer"
+unit_id = 1
+)";
+
+TEST(Cli, CheckConfigAcceptsAGoodFile) {
+  TempDir dir;
+  std::ofstream(dir / "good.toml") << kConfig;
+  const auto r = run({drivegated(), "--check-config", (dir / "good.toml").string(),
+                      "--plugin-dir", plugin_dir().string()});
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("OK (1 devices on 1 buses)"));
+}
+
+TEST(Cli, CheckConfigNamesFileLineAndKey) {
+  TempDir dir;
+  std::string text = kConfig;
+  text.replace(text.find("unit_id = 1"), 11, "unit_id = 1\npoll = 5");
+  std::ofstream(dir / "bad.toml") << text;
+  const auto r = run({drivegated(), "--check-config", (dir / "bad.toml").string(),
+                      "--plugin-dir", plugin_dir().string()});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll: unknown key"));
+}
+
+TEST(Cli, DaemonRefusesABadConfigWithExitOne) {
+  TempDir dir;
+  std::ofstream(dir / "bad.toml") << "[[device]]\nname = 1\n";
+  const auto r = run({drivegated(), "--config", (dir / "bad.toml").string(), "--plugin-dir",
+                      plugin_dir().string()});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_THAT(r.out, HasSubstr("bad.toml:2: device[0].name: must be a string"));
+}
+
+TEST(Cli, UsageErrorsExitTwo) {
+  EXPECT_EQ(run({drivegated(), "--frobnicate"}).status, 2);
+  EXPECT_EQ(run({drivegated()}).status, 2);
+  EXPECT_EQ(run({drivegated(), "--listen", "nowhere"}).status, 2);
+  EXPECT_EQ(run({drivegate()}).status, 2);
+  EXPECT_EQ(run({drivegate(), "frobnicate"}).status, 2);
+  EXPECT_EQ(run({drivegate(), "regmap"}).status, 2);
+  const auto sim = run({drivegate(), "sim", "no-such-adapter", "--plugin-dir",
+                        plugin_dir().string()});
+  EXPECT_EQ(sim.status, 1);
+  EXPECT_THAT(sim.out, HasSubstr("no adapter 'no-such-adapter'"));
+}
+
+TEST(Cli, RegmapPrintsTheServedMap) {
+  TempDir dir;
+  std::ofstream(dir / "gw.toml") << kConfig;
+  const auto r = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
+                      "json", "--plugin-dir", plugin_dir().string()});
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("{\"unit_id\": 1, \"name\": \"washer\", \"adapter\": "
+                               "\"nidec-washer\""));
+  EXPECT_THAT(r.out, HasSubstr("{\"name\": \"speed_rpm\", \"table\": \"input\", \"address\": 6, "
+                               "\"type\": \"i16\""));
+  const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(),
+                       "--format", "md", "--plugin-dir", plugin_dir().string()});
+  EXPECT_THAT(md.out, HasSubstr("## Unit 1: washer (nidec-washer)"));
+}
+
+}  // namespace
+}  // namespace drivegate::test
