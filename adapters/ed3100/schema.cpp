@@ -8,11 +8,11 @@ namespace drivegate::ed3100 {
 
 const std::array<OptionSpec, 11> kOptionSpecs = {{
     {"poles", OptionType::integer, "4", "motor poles: rpm = Hz x 120 / poles", 2, 64},
-    {"monitors", OptionType::string_list, R"(["0D00:Hz", "0D01", "0D02", "0D03"])",
+    {"monitors", OptionType::string_list, "0D00:Hz,0D01,0D02,0D03",
      "monitor registers 0D00..0D28 to poll and expose, each optionally with :V, :Hz or :A"},
     {"speed_monitor", OptionType::string, "0D00",
      "the monitor holding the output frequency (speed_rpm); polled even when not in monitors"},
-    {"parameters", OptionType::string_list, "[]",
+    {"parameters", OptionType::string_list, "",
      "drive parameters GG-nn to expose as holding points param_GG_nn (read 03, written 06)"},
     // Document, "communication material structure": >= 10 ms of silence around every frame.
     {"frame_gap_ms", OptionType::integer, "10", "line silence before every frame, ms", 10, 1000},

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "core/config_loader.h"
 #include "core/plugins.h"
 
 namespace drivegate {
@@ -38,7 +39,18 @@ TEST(Plugins, BuiltAdaptersLoadWithCompleteDescriptors) {
     EXPECT_NE(d->create_driver, nullptr) << d->id;
     EXPECT_NE(d->create_simulator, nullptr) << d->id;
     EXPECT_GT(d->line.baud, 0u) << d->id;
+    // Every default in the schema must make a device and a simulator: a newcomer's first
+    // configuration sets no options at all.
+    DeviceEnv env;
+    env.name = "x";
+    env.address = d->default_address;
+    env.options = default_options(*d);
+    std::string why;
+    EXPECT_NE(d->create_driver(env, why), nullptr) << d->id << ": " << why;
+    SimEnv sim{d->default_address, default_options(*d)};
+    EXPECT_NE(d->create_simulator(sim, why), nullptr) << d->id << ": " << why;
   }
+  EXPECT_GE(r.all().size(), 1u);
 }
 
 }  // namespace
