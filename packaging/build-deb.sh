@@ -28,6 +28,7 @@ rm -rf "$stage"
 mkdir -p "$src"
 if git -C "$top" rev-parse --is-inside-work-tree >/dev/null 2>&1; then
     # Files deleted in the working tree are listed by git but gone: skip them.
+    # shellcheck disable=SC2016 # expanded by the inner sh
     (cd "$top" && git ls-files -z --cached --others --exclude-standard) |
         (cd "$top" && xargs -0 -r sh -c 'for f; do [ -e "$f" ] && printf "%s\0" "$f"; done' sh) |
         tar -C "$top" --null --no-recursion -T - -cf - | tar -C "$src" -xf -
