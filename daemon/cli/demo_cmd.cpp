@@ -2,7 +2,6 @@
 // drive started at a typical speed, so a newcomer sees live values within seconds.
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
-#include <boost/asio/steady_timer.hpp>
 #include <modbus/modbus.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -11,7 +10,10 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
+#include <atomic>
 #include <map>
+#include <sstream>
+#include <thread>
 
 #include "cli/commands.h"
 #include "cli/sim_host.h"
@@ -58,7 +60,8 @@ std::filesystem::path daemon_binary() {
   return "/usr/sbin/drivegated";
 }
 
-// Writes setpoint and run_forward in one request, as a PLC would.
+// Waits for the unit to come online, then writes setpoint and run_forward in one request, as
+// a PLC would.
 bool start_drive(const std::string& host, int port, int unit, int rpm) {
   modbus_t* ctx = modbus_new_tcp(host.c_str(), port);
   if (ctx == nullptr) return false;
@@ -66,8 +69,13 @@ bool start_drive(const std::string& host, int port, int unit, int rpm) {
   modbus_set_response_timeout(ctx, 5, 0);
   bool ok = false;
   if (modbus_connect(ctx) == 0) {
+    std::uint16_t status = 0;
+    for (int i = 0; i < 100; ++i) {
+      if (modbus_read_input_registers(ctx, 0, 1, &status) == 1 && (status & 1u) != 0) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
     const std::uint16_t regs[2] = {1 /*run_forward*/, static_cast<std::uint16_t>(rpm)};
-    ok = modbus_write_registers(ctx, 0, 2, regs) == 2;
+    ok = (status & 1u) != 0 && modbus_write_registers(ctx, 0, 2, regs) == 2;
     modbus_close(ctx);
   }
   modbus_free(ctx);
@@ -201,43 +209,45 @@ int demo(std::span<const std::string_view> args) {
   };
   wait_signal();
 
-  // Wait for the server, then start the drives and say how to look at them.
-  asio::steady_timer timer(io);
-  int tries = 0;
-  std::function<void()> when_ready = [&] {
-    if (!port_answers(listen.host, listen.port)) {
+  // The simulators live on this thread's io_context; talking Modbus to the daemon (which waits
+  // on them) happens on another, so neither ever waits for the other.
+  std::atomic<bool> quit{false};
+  std::thread client([&] {
+    int tries = 0;
+    while (!quit && !port_answers(listen.host, listen.port)) {
       if (++tries > 100) {
         std::cerr << "drivegate demo: the daemon does not answer on " << listen_text << "\n";
-        exit_code = 1;
-        io.stop();
+        ::kill(::getpid(), SIGTERM);
         return;
       }
-      timer.expires_after(Millis(100));
-      timer.async_wait([&](const boost::system::error_code& ec) {
-        if (!ec) when_ready();
-      });
-      return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
-    std::cout << "\ndrivegate demo: Modbus TCP on " << listen_text << "\n\n";
-    std::cout << "  unit  adapter          started at\n";
+    std::ostringstream out;
+    out << "\ndrivegate demo: Modbus TCP on " << listen_text << "\n\n"
+        << "  unit  adapter          state\n";
     for (const auto& u : units) {
+      if (quit) return;
       const bool ok = start && start_drive(listen.host, listen.port, u.unit, u.rpm);
-      std::cout << "  " << u.unit << "     " << u.id << std::string(17 - std::min<std::size_t>(16, u.id.size()), ' ')
-                << (ok ? std::to_string(u.rpm) + " rpm" : std::string(start ? "(not started)" : "stopped"))
-                << "\n";
+      std::string name = u.id;
+      name.resize(std::max<std::size_t>(name.size(), 16), ' ');
+      out << "  " << u.unit << "     " << name << " "
+          << (ok ? "running at " + std::to_string(u.rpm) + " rpm"
+                 : std::string(start ? "not started (see the log above)" : "stopped"))
+          << "\n";
     }
-    std::cout << "\nRead unit 1's status, fault and speed (input registers 0..17, see "
-                 "docs/register-map.md):\n"
-              << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 3 -r 1 -c 18 -1 "
-              << (listen.host == "0.0.0.0" ? "127.0.0.1" : listen.host) << "\n"
-              << "Stop it (holding register 0 = command, 0 = stop):\n"
-              << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 4 -r 1 "
-              << (listen.host == "0.0.0.0" ? "127.0.0.1" : listen.host) << " 0\n"
-              << "\nConfiguration: " << config_path.string() << "   Ctrl-C stops the demo.\n"
-              << std::endl;
-  };
-  when_ready();
+    const std::string host = listen.host == "0.0.0.0" ? "127.0.0.1" : listen.host;
+    out << "\nRead unit 1's status, faults, speed and counters (input registers 0..17):\n"
+        << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 3 -r 1 -c 18 -1 " << host << "\n"
+        << "Stop it (holding register 0 is the command; 0 = stop, 1 = run_forward):\n"
+        << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 4 -r 1 " << host << " 0\n"
+        << "The register map of every unit:\n"
+        << "  drivegate regmap --config " << config_path.string() << " --format md\n"
+        << "\nCtrl-C stops the demo.\n";
+    std::cout << out.str() << std::flush;
+  });
   io.run();
+  quit = true;
+  client.join();
 
   if (child > 0) {
     ::kill(child, SIGTERM);
