@@ -1,0 +1,9 @@
+#!/bin/sh
+# Builds drivegate in build/ (or $BUILD_DIR), installing missing Debian packages first.
+# Extra arguments go to cmake's configure step, e.g. -DDRIVEGATE_SANITIZE=address,undefined.
+set -eu
+cd "$(dirname "$0")/.."
+tools/deps.sh
+build="${BUILD_DIR:-build}"
+cmake -S . -B "$build" "$@" >/dev/null
+cmake --build "$build" -j"$(nproc)"

@@ -1,0 +1,8 @@
+#!/bin/sh
+# Builds drivegate and runs every test: codecs, drivers, the core, the Modbus server and the
+# end-to-end tests of the real daemon with simulated drives on pseudo-terminals.
+# Extra arguments go to cmake (e.g. -DDRIVEGATE_SANITIZE=address,undefined with BUILD_DIR=...).
+set -eu
+cd "$(dirname "$0")/.."
+tools/build.sh "$@"
+ctest --test-dir "${BUILD_DIR:-build}" --output-on-failure -j"$(nproc)" --timeout 300
