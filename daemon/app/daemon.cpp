@@ -3,6 +3,7 @@
 #include <csignal>
 
 #include "core/config_loader.h"
+#include "logging.h"
 
 namespace drivegate {
 
@@ -46,6 +47,7 @@ int Daemon::run() {
     return 1;
   }
   config_ = std::move(*config);
+  describe_devices(*log_, config_);  // the journal's DEVICE=, BUS=, UNIT= fields
   std::vector<std::string> errors;
   gateway_ = Gateway::build(io_, config_, plugins_, log_, errors);
   for (const auto& e : errors) log_->error("{}", e);
@@ -114,6 +116,7 @@ void Daemon::reload() {
   backend_.set(next.get());
   gateway_ = std::move(next);
   config_ = std::move(*config);
+  describe_devices(*log_, config_);
   log_->info("configuration reloaded: {} devices on {} buses", gateway_->devices().size(),
              config_.buses.size());
   notifier_.ready(status_line());
