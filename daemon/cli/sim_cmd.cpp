@@ -1,11 +1,12 @@
 // drivegate sim: one adapter's simulated device(s) on a new pseudo-terminal or a real port.
+#include <unistd.h>
+
 #include <boost/asio/posix/stream_descriptor.hpp>
 #include <boost/asio/read_until.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/streambuf.hpp>
 #include <csignal>
 #include <iostream>
-#include <unistd.h>
 
 #include "cli/commands.h"
 #include "cli/sim_host.h"
@@ -20,8 +21,12 @@ namespace {
 constexpr const char* kUsage =
     "usage: drivegate sim ADAPTER [--address N]... [--set OPTION=VALUE]... [--cmd LINE]...\n"
     "                 [--link PATH] [--port DEVICE --baud N --parity none|even|odd]\n"
-    "                 [--echo | --no-echo] [--turnaround-ms N] [--plugin-dir DIR]\n"
+    "                 [--echo | --no-echo] [--turnaround-ms N | --turnaround-us N]\n"
+    "                 [--wire-timing [--wire-log FILE]] [--plugin-dir DIR]\n"
     "\n"
+    "--wire-timing: each byte takes the character time of the line (--baud/--parity, else the\n"
+    "adapter's defaults) and replies start one turnaround after the request's last character.\n"
+    "--wire-log FILE records when each chunk arrived and each reply went out (nanoseconds).\n"
     "Prints the line's path on the first line of stdout, then reads operator commands from\n"
     "stdin (`help` lists them; `@ADDR CMD` sends to one address when there are several).\n";
 
@@ -36,16 +41,16 @@ class ControlConsole {
 
  private:
   void read() {
-    asio::async_read_until(in_, buffer_, '\n', [this](const boost::system::error_code& ec,
-                                                      std::size_t) {
-      if (ec) return;
-      std::istream is(&buffer_);
-      std::string line;
-      std::getline(is, line);
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      if (!line.empty()) std::cout << host_.control(line) << std::endl;
-      read();
-    });
+    asio::async_read_until(in_, buffer_, '\n',
+                           [this](const boost::system::error_code& ec, std::size_t) {
+                             if (ec) return;
+                             std::istream is(&buffer_);
+                             std::string line;
+                             std::getline(is, line);
+                             if (!line.empty() && line.back() == '\r') line.pop_back();
+                             if (!line.empty()) std::cout << host_.control(line) << std::endl;
+                             read();
+                           });
   }
   asio::posix::stream_descriptor in_;
   asio::streambuf buffer_;
@@ -62,12 +67,18 @@ int sim(std::span<const std::string_view> args) {
   std::vector<std::pair<std::string, std::string>> sets;
   std::vector<std::string> commands;
   std::optional<bool> echo;
+  bool wire_timing = false;
   BusConfig port;
+  std::optional<Parity> parity;
   while (!r.done()) {
     const auto arg = r.next();
     if (arg == "--help") {
       std::cout << kUsage;
       return 0;
+    }
+    if (arg == "--wire-timing") {
+      wire_timing = true;
+      continue;
     }
     if (arg == "--echo" || arg == "--no-echo") {
       echo = arg == "--echo";
@@ -99,9 +110,13 @@ int sim(std::span<const std::string_view> args) {
         if (*v != "none" && *v != "even" && *v != "odd") {
           return r.usage("--parity must be none, even or odd", kUsage);
         }
-        port.parity = *v == "none" ? Parity::none : *v == "even" ? Parity::even : Parity::odd;
+        parity = *v == "none" ? Parity::none : *v == "even" ? Parity::even : Parity::odd;
       } else if (arg == "--turnaround-ms") {
         options.turnaround = Millis(std::stoul(*v));
+      } else if (arg == "--turnaround-us") {
+        options.turnaround = std::chrono::microseconds(std::stoul(*v));
+      } else if (arg == "--wire-log") {
+        options.wire_log = *v;
       } else if (arg == "--plugin-dir") {
         plugin_dir = *v;
       } else {
@@ -125,18 +140,23 @@ int sim(std::span<const std::string_view> args) {
     for (std::size_t i = 0; i < adapter->option_count; ++i) {
       if (key == adapter->options[i].name) spec = &adapter->options[i];
     }
-    if (spec == nullptr) return r.usage("adapter '" + adapter_id + "' has no option " + key, kUsage);
+    if (spec == nullptr)
+      return r.usage("adapter '" + adapter_id + "' has no option " + key, kUsage);
     std::string error;
     auto value = parse_option_text(*spec, text, error);
     if (!value) return r.usage(error, kUsage);
     options.options.set(key, std::move(*value));
   }
   options.echo = echo.value_or(adapter->line.echo);
-  if (!port.port.empty()) {
-    if (port.baud == 0) port.baud = adapter->line.baud;
-    port.data_bits = adapter->line.data_bits;
-    port.stop_bits = adapter->line.stop_bits;
-    options.port = port;
+  if (port.baud == 0) port.baud = adapter->line.baud;
+  port.parity = parity.value_or(adapter->line.parity);
+  port.data_bits = adapter->line.data_bits;
+  port.stop_bits = adapter->line.stop_bits;
+  if (!port.port.empty()) options.port = port;
+  if (wire_timing) {
+    options.char_time = character_time(port.baud, port.parity, port.data_bits, port.stop_bits);
+  } else if (options.wire_log) {
+    return r.usage("--wire-log needs --wire-timing", kUsage);
   }
 
   asio::io_context io;
@@ -147,7 +167,11 @@ int sim(std::span<const std::string_view> args) {
   }
   std::cout << host.path() << std::endl;
   std::cerr << "drivegate sim: " << adapter_id << " on " << host.path()
-            << (options.echo ? " (one-wire echo)" : "") << "; type 'help' for commands\n";
+            << (options.echo ? " (one-wire echo)" : "")
+            << (wire_timing ? ", wire timing " + std::to_string(options.char_time.count()) +
+                                  " ns per character"
+                            : std::string())
+            << "; type 'help' for commands\n";
   for (const auto& c : commands) std::cout << host.control(c) << std::endl;
   host.start();
   ControlConsole console(io, host);

@@ -1,9 +1,10 @@
 #include "sim_host.h"
 
-#include <boost/asio/write.hpp>
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <boost/asio/write.hpp>
 #include <sstream>
 
 #include "core/serial_line.h"
@@ -14,12 +15,26 @@ namespace asio = boost::asio;
 
 namespace {
 constexpr Millis kTickPeriod{10};
+
+std::int64_t ns(TimePoint t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
+}  // namespace
+
+std::chrono::nanoseconds character_time(std::uint32_t baud, Parity parity, std::uint8_t data_bits,
+                                        std::uint8_t stop_bits) {
+  if (baud == 0) return std::chrono::nanoseconds(0);
+  // An asynchronous character: 1 start bit, the data bits, an optional parity bit, stop bits.
+  const std::int64_t bits = 1 + data_bits + (parity == Parity::none ? 0 : 1) + stop_bits;
+  return std::chrono::nanoseconds(bits * 1'000'000'000 / baud);
 }
 
 SimHost::SimHost(asio::io_context& io, const AdapterDescriptor& adapter, SimHostOptions options)
-    : io_(io), adapter_(adapter), options_(std::move(options)), line_(io), tick_(io) {}
+    : io_(io), adapter_(adapter), options_(std::move(options)), line_(io), tick_(io), pace_(io) {}
 
-SimHost::~SimHost() { stop(); }
+SimHost::~SimHost() {
+  stop();
+}
 
 std::string SimHost::open() {
   if (options_.addresses.empty()) options_.addresses.push_back(adapter_.default_address);
@@ -41,6 +56,10 @@ std::string SimHost::open() {
     path_ = options_.port->port;
     return {};
   }
+  if (options_.wire_log) {
+    log_.reset(std::fopen(options_.wire_log->c_str(), "w"));
+    if (!log_) return options_.wire_log->string() + ": cannot write";
+  }
   if (const auto ec = pty_.open()) return "cannot create a pseudo-terminal: " + ec.message();
   line_.assign(pty_.release_master());
   path_ = pty_.slave_path();
@@ -54,7 +73,9 @@ std::string SimHost::open() {
   return {};
 }
 
-std::string SimHost::path() const { return path_; }
+std::string SimHost::path() const {
+  return path_;
+}
 
 void SimHost::start() {
   running_ = true;
@@ -66,6 +87,8 @@ void SimHost::stop() {
   if (!running_) return;
   running_ = false;
   tick_.cancel();
+  pace_.cancel();
+  if (log_) std::fflush(log_.get());
   boost::system::error_code ignored;
   line_.close(ignored);
   if (options_.link) {
@@ -75,23 +98,91 @@ void SimHost::stop() {
 }
 
 void SimHost::read_more() {
-  line_.async_read_some(asio::buffer(chunk_), [this](const boost::system::error_code& ec,
-                                                     std::size_t n) {
-    if (ec || !running_) return;  // EIO: nothing holds the slave side; the host holds it, so rare
-    const auto now = Clock::now();
-    const ByteView rx(chunk_.data(), n);
-    if (options_.echo) send(Bytes(rx.begin(), rx.end()), Millis(0));
-    Bytes reply;
-    for (auto& [address, sim] : sims_) {
-      Bytes r = sim->on_receive(rx, now);
-      reply.insert(reply.end(), r.begin(), r.end());
-    }
-    if (!reply.empty()) send(std::move(reply), options_.turnaround);
-    read_more();
-  });
+  line_.async_read_some(
+      asio::buffer(chunk_), [this](const boost::system::error_code& ec, std::size_t n) {
+        if (ec || !running_)
+          return;  // EIO: nothing holds the slave side; the host holds it, so rare
+        const auto now = Clock::now();
+        const ByteView rx(chunk_.data(), n);
+        const bool wire = options_.char_time.count() > 0;
+        TimePoint rx_end = now;
+        if (wire) {
+          // The master's bytes occupy the line one character time each, after anything on it.
+          rx_end = std::max(now, line_free_) + options_.char_time * static_cast<std::int64_t>(n);
+          line_free_ = rx_end;
+          if (log_) {
+            std::fprintf(log_.get(), "rx %lld %lld %zu ", static_cast<long long>(ns(now)),
+                         static_cast<long long>(ns(rx_end)), n);
+            for (const auto b : rx) std::fprintf(log_.get(), "%02x", b);
+            std::fputc('\n', log_.get());
+          }
+        }
+        if (options_.echo) {
+          if (wire) {
+            // The master hears its own bytes as they finish on the line.
+            send(Bytes(rx.begin(), rx.end()),
+                 std::chrono::duration_cast<std::chrono::microseconds>(rx_end - now));
+          } else {
+            send(Bytes(rx.begin(), rx.end()), std::chrono::microseconds(0));
+          }
+        }
+        Bytes reply;
+        for (auto& [address, sim] : sims_) {
+          Bytes r = sim->on_receive(rx, now);
+          reply.insert(reply.end(), r.begin(), r.end());
+        }
+        if (!reply.empty()) {
+          if (wire) {
+            transmit(std::move(reply), rx_end + options_.turnaround);
+          } else {
+            send(std::move(reply), options_.turnaround);
+          }
+        }
+        read_more();
+      });
 }
 
-void SimHost::send(Bytes bytes, Millis delay) {
+void SimHost::transmit(Bytes bytes, TimePoint earliest) {
+  const bool idle = tx_queue_.empty();
+  const TimePoint start = std::max(earliest, line_free_);
+  line_free_ = start + options_.char_time * static_cast<std::int64_t>(bytes.size());
+  tx_queue_.push_back({std::move(bytes), start});
+  if (idle) pace();
+}
+
+// Writes every byte of the front frame whose character has ended by now (a late wake-up writes
+// the ones it missed at once, so lateness does not accumulate), then sleeps until the next.
+void SimHost::pace() {
+  const auto now = Clock::now();
+  while (!tx_queue_.empty()) {
+    Frame& f = tx_queue_.front();
+    std::size_t due = f.written;
+    while (due < f.bytes.size() &&
+           f.start + options_.char_time * static_cast<std::int64_t>(due + 1) <= now) {
+      ++due;
+    }
+    if (due > f.written) {
+      boost::system::error_code ec;
+      asio::write(line_, asio::buffer(f.bytes.data() + f.written, due - f.written), ec);
+      if (f.written == 0) f.first_written = Clock::now();
+      f.written = due;
+    }
+    if (f.written < f.bytes.size()) {
+      pace_.expires_at(f.start + options_.char_time * static_cast<std::int64_t>(f.written + 1));
+      pace_.async_wait([this](const boost::system::error_code& ec) {
+        if (!ec && running_) pace();
+      });
+      return;
+    }
+    if (log_) {
+      std::fprintf(log_.get(), "tx %lld %lld %zu\n", static_cast<long long>(ns(f.first_written)),
+                   static_cast<long long>(ns(Clock::now())), f.bytes.size());
+    }
+    tx_queue_.pop_front();
+  }
+}
+
+void SimHost::send(Bytes bytes, std::chrono::microseconds delay) {
   auto data = std::make_shared<Bytes>(std::move(bytes));
   const auto write = [this, data] {
     if (!running_) return;
@@ -112,7 +203,12 @@ void SimHost::tick() {
   const auto now = Clock::now();
   for (auto& [address, sim] : sims_) {
     Bytes out = sim->on_tick(now);
-    if (!out.empty()) send(std::move(out), Millis(0));
+    if (out.empty()) continue;
+    if (options_.char_time.count() > 0) {
+      transmit(std::move(out), now);
+    } else {
+      send(std::move(out), std::chrono::microseconds(0));
+    }
   }
   tick_.expires_after(kTickPeriod);
   tick_.async_wait([this](const boost::system::error_code& ec) {

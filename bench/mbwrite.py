@@ -1,0 +1,54 @@
+#!/usr/bin/env python3
+"""Tiny Modbus TCP client for the bench scripts (no dependencies).
+
+mbwrite.py PORT UNIT:ADDR=V1,V2,...   write holding registers (FC16) on each unit given
+mbwrite.py --read-timeouts PORT UNIT  print '# unit U status=.. timeouts=..' (common block)
+"""
+import socket
+import struct
+import sys
+
+
+def request(sock, tid, unit, pdu):
+    # MBAP (Modbus Messaging on TCP/IP 3.1.3): tid, protocol 0, length = unit + PDU.
+    sock.sendall(struct.pack(">HHHB", tid, 0, len(pdu) + 1, unit) + pdu)
+    head = b""
+    while len(head) < 7:
+        head += sock.recv(7 - len(head))
+    length = struct.unpack(">H", head[4:6])[0]
+    body = b""
+    while len(body) < length - 1:
+        body += sock.recv(length - 1 - len(body))
+    if body[0] & 0x80:
+        raise RuntimeError(f"unit {unit}: exception {body[1]}")
+    return body
+
+
+def write(sock, unit, addr, values):
+    pdu = struct.pack(">BHHB", 16, addr, len(values), 2 * len(values))
+    pdu += b"".join(struct.pack(">H", v & 0xFFFF) for v in values)
+    request(sock, 1, unit, pdu)
+
+
+def main():
+    if sys.argv[1] == "--read-timeouts":
+        port, unit = int(sys.argv[2]), int(sys.argv[3])
+        with socket.create_connection(("127.0.0.1", port)) as s:
+            body = request(s, 1, unit, struct.pack(">BHH", 4, 0, 19))
+            regs = struct.unpack(">19H", body[2:])
+            print(f"# unit {unit} status=0x{regs[0]:04x} fault_code={regs[1]} "
+                  f"timeouts={(regs[13] << 16) | regs[14]}")
+        return
+    port = int(sys.argv[1])
+    with socket.create_connection(("127.0.0.1", port)) as s:
+        for spec in sys.argv[2:]:
+            target, values = spec.split("=")
+            unit, addr = (int(x) for x in target.split(":"))
+            try:
+                write(s, unit, addr, [int(v) for v in values.split(",")])
+            except RuntimeError as e:
+                print(f"mbwrite: {e}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

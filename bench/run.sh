@@ -1,0 +1,136 @@
+#!/usr/bin/env bash
+# bench/run.sh [BUILD_DIR]: the Modbus TCP benchmark of issue 9, in one command.
+#
+# Starts a simulated drive for each of the five adapters (`drivegate sim` on ptys), drivegated
+# polling them, and the bare libmodbus server (dg-baseline). Both servers are pinned to CPU
+# $SERVER_CPU, the load generator and the simulators to CPU $LOAD_CPU. Then, for ROUNDS rounds,
+# for N in $CONNS, runs dg-loadgen against the baseline and then against drivegate, and prints the
+# median of every figure for each side and the ratio drivegate / baseline.
+# Then the independence check: the ed3100 drive goes silent (times out on every poll) while fdc1
+# keeps streaming, and drivegate is measured again at N = 1 and 8.
+#
+# Both sides get the same request stream (see docs/performance.md for why it is this one):
+#   large: FC04 input registers 32..128 (97 registers, unicla-edrive's points, unit 5)
+#   small: FC04 input registers 0..18 (the common block, unit 5)
+# Environment: ROUNDS (3), DURATION (3 s per run), WARMUP (0.5 s), CONNS ("1 8 64"),
+#   SERVER_CPU (0), LOAD_CPU (1), LARGE (4:32:97), SMALL (4:0:19), UNIT (5).
+set -euo pipefail
+
+B=$(realpath "${1:-build-bench}")
+BIN=$B/bin
+PLUGINS=$B/adapters
+ROUNDS=${ROUNDS:-3}
+DURATION=${DURATION:-3}
+WARMUP=${WARMUP:-0.5}
+CONNS=${CONNS:-"1 8 64"}
+SERVER_CPU=${SERVER_CPU:-0}
+LOAD_CPU=${LOAD_CPU:-1}
+LARGE=${LARGE:-4:32:97}
+SMALL=${SMALL:-4:0:19}
+UNIT=${UNIT:-5}
+DG_PORT=${DG_PORT:-15020}
+BASE_PORT=${BASE_PORT:-15030}
+HERE=$(dirname "$(realpath "$0")")
+
+for exe in drivegated drivegate dg-loadgen dg-baseline; do
+  [[ -x $BIN/$exe ]] || { echo "run.sh: $BIN/$exe missing (build with -DDRIVEGATE_BENCH=ON)" >&2; exit 2; }
+done
+
+W=$(mktemp -d /tmp/dg-bench-XXXXXX)
+PIDS=()
+cleanup() {
+  for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$W"
+}
+trap cleanup EXIT
+
+# adapter unit options
+DRIVES=(
+  "nidec-washer 1 platform=7"
+  "ed3100 2 -"
+  "mdriver-2400 3 -"
+  "fdc1 4 slave_mode=true"
+  "unicla-edrive 5 -"
+)
+declare -A SIM_IN
+{
+  echo "[server]"
+  echo "listen = \"127.0.0.1:$DG_PORT\""
+  echo "max_clients = 256"
+} >"$W/bench.toml"
+for d in "${DRIVES[@]}"; do
+  read -r id unit opt <<<"$d"
+  mkfifo "$W/$id.in"
+  exec {fd}<>"$W/$id.in"
+  SIM_IN[$id]=$fd
+  set_arg=()
+  [[ $opt != - ]] && set_arg=(--set "$opt")
+  taskset -c "$LOAD_CPU" "$BIN/drivegate" sim "$id" --plugin-dir "$PLUGINS" --link "$W/$id" \
+    "${set_arg[@]}" <"$W/$id.in" >"$W/$id.out" 2>&1 &
+  PIDS+=($!)
+  {
+    echo; echo "[[bus]]"; echo "name = \"$id\""; echo "port = \"$W/$id\""
+    echo; echo "[[device]]"; echo "name = \"$id\""; echo "bus = \"$id\""
+    echo "adapter = \"$id\""; echo "unit_id = $unit"
+    if [[ $opt != - ]]; then echo "[device.options]"; echo "${opt%%=*} = ${opt#*=}"; fi
+  } >>"$W/bench.toml"
+done
+for d in "${DRIVES[@]}"; do
+  read -r id _ <<<"$d"
+  for _ in $(seq 50); do [[ -e $W/$id ]] && break; sleep 0.1; done
+done
+
+taskset -c "$SERVER_CPU" "$BIN/drivegated" --config "$W/bench.toml" --plugin-dir "$PLUGINS" \
+  --log-level warn >"$W/drivegated.log" 2>&1 &
+DG_PID=$!
+PIDS+=($DG_PID)
+taskset -c "$SERVER_CPU" "$BIN/dg-baseline" --port "$BASE_PORT" >"$W/baseline.log" 2>&1 &
+BASE_PID=$!
+PIDS+=($BASE_PID)
+
+wait_port() {
+  for _ in $(seq 100); do
+    (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null && return 0
+    sleep 0.1
+  done
+  echo "run.sh: nothing answers on port $1" >&2
+  cat "$W/drivegated.log" >&2
+  exit 1
+}
+wait_port "$DG_PORT"
+wait_port "$BASE_PORT"
+# Start every drive (command = run_forward, setpoint) so the polls carry live values.
+python3 "$HERE/mbwrite.py" "$DG_PORT" 1:0=1,800 2:0=1,1500 3:0=1,1149 4:0=1,2000 5:0=1,3000
+sleep 2
+
+load() {  # load SIDE PORT PID N ROUND TAG
+  local out
+  out=$(taskset -c "$LOAD_CPU" "$BIN/dg-loadgen" --port "$2" --pid "$3" --connections "$4" \
+    --duration "$DURATION" --warmup "$WARMUP" --unit "$UNIT" --large "$LARGE" --small "$SMALL")
+  echo "$6 $1 $4 $5 $out" | tee -a "$W/results.txt" >&2
+}
+
+for round in $(seq "$ROUNDS"); do
+  for n in $CONNS; do
+    load baseline "$BASE_PORT" "$BASE_PID" "$n" "$round" tcp
+    load drivegate "$DG_PORT" "$DG_PID" "$n" "$round" tcp
+  done
+done
+
+# Independence: ed3100 times out on every poll, fdc1 streams, the others are polled.
+echo "silent on" >&"${SIM_IN[ed3100]}"
+sleep 2
+for round in $(seq "$ROUNDS"); do
+  for n in 1 8; do
+    load drivegate "$DG_PORT" "$DG_PID" "$n" "$round" silent
+  done
+done
+python3 "$HERE/mbwrite.py" --read-timeouts "$DG_PORT" 2 >>"$W/results.txt"
+
+echo
+echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) CPUs," \
+  "$(uname -sr); server on CPU $SERVER_CPU, load generator on CPU $LOAD_CPU;" \
+  "$ROUNDS rounds x ${DURATION}s; large=$LARGE small=$SMALL unit=$UNIT"
+python3 "$HERE/summarize.py" "$W/results.txt"
+grep -i "error\|critical" "$W/drivegated.log" | head -5 || true
