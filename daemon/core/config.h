@@ -34,6 +34,22 @@ struct BusConfig {
   int line = 0;  // where it was declared, for messages
 };
 
+// What the gateway does to a drive whose PLC stopped writing (docs/safety.md).
+enum class FailsafeAction : std::uint8_t {
+  stop,        // Command::stop
+  quick_stop,  // Command::quick_stop (a plain stop where the drive refuses it)
+  hold,        // leave the drive as it is; only the status bit says so
+  preset,      // a running drive goes to `failsafe_rpm` (a stopped one stays stopped)
+};
+// What the gateway does to a running drive when the daemon shuts down.
+enum class ShutdownAction : std::uint8_t { stop, hold };
+
+struct FailsafeConfig {
+  Millis timeout{0};  // no valid write to command / setpoint / heartbeat for this long; 0 = off
+  FailsafeAction action = FailsafeAction::stop;
+  std::int32_t preset_rpm = 0;  // for FailsafeAction::preset
+};
+
 struct DeviceConfig {
   std::string name;
   std::string bus;
@@ -43,6 +59,8 @@ struct DeviceConfig {
   Millis poll_interval{500};
   Millis budget{1'000};       // most line time one turn of this device may take
   Millis backoff_max{5'000};  // longest pause between probes of a silent device
+  FailsafeConfig failsafe;
+  ShutdownAction on_shutdown = ShutdownAction::stop;
   Options options;
   int line = 0;
 };

@@ -442,6 +442,53 @@ std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnost
   return given;
 }
 
+std::optional<FailsafeAction> parse_failsafe_action(std::string_view s) {
+  if (s == "stop") return FailsafeAction::stop;
+  if (s == "quick_stop") return FailsafeAction::quick_stop;
+  if (s == "hold") return FailsafeAction::hold;
+  if (s == "preset") return FailsafeAction::preset;
+  return std::nullopt;
+}
+
+// failsafe_timeout_ms, failsafe_action, failsafe_rpm and on_shutdown (docs/safety.md).
+void read_failsafe(TableReader& r, const std::string& prefix, DeviceConfig& dev,
+                   Diagnostics& diag) {
+  // 0 is off. Below 100 ms (the housekeeping period) a timeout could not be kept to anyway.
+  if (auto v = r.integer("failsafe_timeout_ms", 0, 3'600'000, false)) {
+    if (*v != 0 && *v < 100) {
+      diag.error(r.node("failsafe_timeout_ms"), prefix + ".failsafe_timeout_ms",
+                 "must be 0 (off) or 100..3600000");
+    } else {
+      dev.failsafe.timeout = Millis(*v);
+    }
+  }
+  if (auto a = r.string("failsafe_action", false)) {
+    if (auto action = parse_failsafe_action(*a)) {
+      dev.failsafe.action = *action;
+    } else {
+      diag.error(r.node("failsafe_action"), prefix + ".failsafe_action",
+                 "must be stop, quick_stop, hold or preset");
+    }
+  }
+  const toml::node* rpm = r.node("failsafe_rpm");
+  if (dev.failsafe.action == FailsafeAction::preset) {
+    if (auto v = r.integer("failsafe_rpm", 0, 32767, true)) {
+      dev.failsafe.preset_rpm = static_cast<std::int32_t>(*v);
+    }
+  } else if (rpm != nullptr) {
+    diag.error(rpm, prefix + ".failsafe_rpm", "only used with failsafe_action = \"preset\"");
+  }
+  if (auto s = r.string("on_shutdown", false)) {
+    if (*s == "stop") {
+      dev.on_shutdown = ShutdownAction::stop;
+    } else if (*s == "hold") {
+      dev.on_shutdown = ShutdownAction::hold;
+    } else {
+      diag.error(r.node("on_shutdown"), prefix + ".on_shutdown", "must be stop or hold");
+    }
+  }
+}
+
 void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& plugins,
                   Diagnostics& diag) {
   const auto* devices = array_of_tables(root, "device", diag);
@@ -451,7 +498,8 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
     const std::string prefix = "device[" + std::to_string(i) + "]";
     TableReader r(t, prefix, diag);
     r.expect({"name", "bus", "adapter", "unit_id", "address", "poll_ms", "budget_ms",
-              "backoff_max_ms", "options"});
+              "backoff_max_ms", "failsafe_timeout_ms", "failsafe_action", "failsafe_rpm",
+              "on_shutdown", "options"});
     DeviceConfig dev;
     dev.line = line_of(t);
     dev.name = r.string("name", true).value_or("");
@@ -461,6 +509,7 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
     if (auto v = r.integer("poll_ms", 10, 60'000, false)) dev.poll_interval = Millis(*v);
     if (auto v = r.integer("budget_ms", 10, 60'000, false)) dev.budget = Millis(*v);
     if (auto v = r.integer("backoff_max_ms", 100, 600'000, false)) dev.backoff_max = Millis(*v);
+    read_failsafe(r, prefix, dev, diag);
 
     const AdapterDescriptor* adapter = nullptr;
     if (!dev.adapter.empty()) {

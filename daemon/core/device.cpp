@@ -56,7 +56,9 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
       traits_(driver_->traits()),
       map_(driver_->points()),
       log_(std::move(log)),
-      last_good_(now) {
+      last_good_(now),
+      failsafe_(config_.failsafe.timeout),
+      last_tick_(now) {
   for (int t = 0; t < 4; ++t) image_[t].assign(map_.size(static_cast<Table>(t)), 0);
   refresh_image(now);
 }
@@ -102,6 +104,8 @@ void Device::housekeeping(TimePoint now) {
       ++it;
     }
   }
+  last_tick_ = now;
+  failsafe_tick(now);
   refresh_dynamic(now);
 }
 
@@ -163,6 +167,7 @@ void Device::refresh_dynamic(TimePoint now) {
   bit(StatusBit::fault, !faults.empty());
   bit(StatusBit::warning, c.warning);
   bit(StatusBit::comm_lost, comm_lost_);
+  bit(StatusBit::failsafe, failsafe_.latched());
   bit(StatusBit::command_pending, !pending_.empty());
 
   auto in = registers(Table::input);
@@ -269,8 +274,24 @@ WriteStatus Device::submit(const PointWrite& w, Ticket t, TimePoint now) {
 
 Exception Device::write(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
                         modbus::WriteDone done, TimePoint now) {
+  return apply(table, address, in, std::move(done), now, Origin::plc);
+}
+
+Exception Device::apply(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
+                        modbus::WriteDone done, TimePoint now, Origin origin) {
   std::vector<PointWrite> writes;
   if (const Exception e = validate(table, address, in, writes); e != Exception::none) return e;
+  const auto is_common = [](const PointWrite& w, CommonPoint id) {
+    return w.point->common && w.point->common_id == id;
+  };
+  // A valid write to command, setpoint or heartbeat proves the PLC is there, whatever the
+  // drive then makes of it (even 0x0B while comm_lost).
+  if (origin == Origin::plc && std::any_of(writes.begin(), writes.end(), [&](const PointWrite& w) {
+        return is_common(w, CommonPoint::command) || is_common(w, CommonPoint::setpoint_rpm) ||
+               is_common(w, CommonPoint::heartbeat);
+      })) {
+    failsafe_.fed(now);
+  }
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
   std::stable_partition(writes.begin(), writes.end(), [](const PointWrite& w) {
@@ -287,6 +308,13 @@ Exception Device::write(Table table, std::uint16_t address, std::span<const std:
   for (const auto& w : writes) {
     const Ticket t = next_ticket_++;
     const WriteStatus s = submit(w, t, now);
+    const bool taken = s == WriteStatus::pending || s == WriteStatus::done;
+    if (origin == Origin::plc && taken && is_common(w, CommonPoint::command)) {
+      const auto c = command_from_value(static_cast<std::uint16_t>(as_double(w.value)));
+      if ((c == Command::run_forward || c == Command::run_reverse) && failsafe_.reset(now)) {
+        log_->info("device {}: failsafe reset by {} from Modbus", config_.name, to_string(*c));
+      }
+    }
     if (s == WriteStatus::pending) {
       ++batch->outstanding;
       pending_[t] = Pending{batch, now + traits_.write_timeout};
@@ -312,9 +340,101 @@ Exception Device::write(Table table, std::uint16_t address, std::span<const std:
 
 void Device::command(Command c, modbus::WriteDone done, TimePoint now) {
   const std::uint16_t value = static_cast<std::uint16_t>(c);
-  const Exception e = write(Table::holding, 0, std::span<const std::uint16_t>(&value, 1),
-                            done, now);
+  const Exception e = apply(Table::holding, 0, std::span<const std::uint16_t>(&value, 1), done, now,
+                            Origin::gateway);
   if (e != Exception::none) done(e);
 }
+
+// --- PLC-loss failsafe (docs/safety.md) ---
+
+namespace {
+constexpr std::string_view to_string(FailsafeAction a) {
+  switch (a) {
+    case FailsafeAction::stop: return "stop";
+    case FailsafeAction::quick_stop: return "quick_stop";
+    case FailsafeAction::hold: return "hold";
+    case FailsafeAction::preset: return "preset";
+  }
+  return "stop";
+}
+// A failed failsafe write is tried again after this, not on every 100 ms tick.
+constexpr Millis kFailsafeRetry{1000};
+}  // namespace
+
+void Device::failsafe_tick(TimePoint now) {
+  if (failsafe_.expired(now)) {
+    failsafe_now_ = config_.failsafe.action;
+    failsafe_done_ = false;
+    failsafe_gave_up_ = false;
+    failsafe_retry_at_ = {};
+    log_->warn(
+        "device {}: no Modbus write to command, setpoint or heartbeat for {} ms: "
+        "failsafe {} (latched until a run command is written)",
+        config_.name, failsafe_.timeout().count(), to_string(failsafe_now_));
+  }
+  if (failsafe_.latched()) enforce_failsafe(now);
+}
+
+// Takes the action, and keeps it taken while latched: a stop is sent again whenever the driver's
+// command in force becomes a run once more (a driver that resumes its run after comm_lost).
+void Device::enforce_failsafe(TimePoint now) {
+  if (failsafe_now_ == FailsafeAction::hold || failsafe_busy_ || failsafe_gave_up_ || comm_lost_ ||
+      now < failsafe_retry_at_) {
+    return;
+  }
+  const Command in_force = driver_->common().command;
+  const bool runs = in_force == Command::run_forward || in_force == Command::run_reverse;
+  if (failsafe_now_ == FailsafeAction::preset) {
+    if (failsafe_done_) return;
+    if (!runs) {
+      failsafe_done_ = true;  // a stopped drive is not started by a failsafe
+      return;
+    }
+  } else if (failsafe_done_ && !runs) {
+    return;
+  }
+  failsafe_busy_ = true;
+  const FailsafeAction action = failsafe_now_;
+  auto done = [this, action](Exception e) { failsafe_settled(action, e); };
+  Exception e = Exception::none;
+  if (action == FailsafeAction::preset) {
+    const auto rpm = static_cast<std::uint16_t>(config_.failsafe.preset_rpm);
+    e = apply(Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done, now,
+              Origin::gateway);
+  } else {
+    const auto c = static_cast<std::uint16_t>(
+        action == FailsafeAction::quick_stop ? Command::quick_stop : Command::stop);
+    e = apply(Table::holding, 0, std::span<const std::uint16_t>(&c, 1), done, now, Origin::gateway);
+  }
+  if (e != Exception::none) failsafe_settled(action, e);
+}
+
+void Device::failsafe_settled(FailsafeAction action, Exception e) {
+  failsafe_busy_ = false;
+  if (!failsafe_.latched()) return;  // a run command reset it meanwhile
+  if (e == Exception::none) {
+    if (!failsafe_done_) {
+      log_->info("device {}: failsafe {} confirmed by the drive", config_.name, to_string(action));
+    }
+    failsafe_done_ = true;
+    return;
+  }
+  log_->warn("device {}: failsafe {} not confirmed (exception 0x{:02X})", config_.name,
+             to_string(action), static_cast<int>(e));
+  if (action == FailsafeAction::preset ||
+      (action == FailsafeAction::quick_stop && e == Exception::illegal_data_value)) {
+    failsafe_now_ = FailsafeAction::stop;  // next tick: a plain stop instead
+    failsafe_done_ = false;
+    return;
+  }
+  if (e == Exception::illegal_data_value) {
+    failsafe_gave_up_ = true;
+    log_->error("device {}: refuses {} (0x03): the failsafe cannot act on it", config_.name,
+                to_string(action));
+    return;
+  }
+  failsafe_retry_at_ = last_tick_ + kFailsafeRetry;
+}
+
 
 }  // namespace drivegate

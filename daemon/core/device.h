@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "config.h"
+#include "failsafe.h"
 #include "modbus/backend.h"
 #include "register_map.h"
 
@@ -52,7 +53,7 @@ class Device {
 
   // Takes the driver's completions and refreshes the register image. Call after any driver call.
   void sync(TimePoint now);
-  // Periodic: comm_lost detection and write deadlines.
+  // Periodic (every 100 ms): comm_lost detection, write deadlines and the PLC-loss failsafe.
   void housekeeping(TimePoint now);
   // Fails every pending write (shutdown, bus closed for good).
   void fail_pending(modbus::Exception why);
@@ -62,8 +63,11 @@ class Device {
                          TimePoint now);
   modbus::Exception write(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
                           modbus::WriteDone done, TimePoint now);
-  // A command from the gateway itself (shutdown, failsafe), outside Modbus.
+  // A command from the gateway itself (shutdown, failsafe), outside Modbus: it neither feeds
+  // nor resets the failsafe.
   void command(Command c, modbus::WriteDone done, TimePoint now);
+  // The PLC-loss failsafe tripped and no run command was written since (StatusBit::failsafe).
+  [[nodiscard]] bool failsafe_latched() const { return failsafe_.latched(); }
 
  private:
   struct Batch;  // one Modbus write request, possibly spanning several points
@@ -75,6 +79,13 @@ class Device {
     const MappedPoint* point;
     Value value;
   };
+  enum class Origin : std::uint8_t { plc, gateway };
+
+  modbus::Exception apply(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
+                          modbus::WriteDone done, TimePoint now, Origin origin);
+  void failsafe_tick(TimePoint now);
+  void enforce_failsafe(TimePoint now);
+  void failsafe_settled(FailsafeAction action, modbus::Exception e);
 
   modbus::Exception validate(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
                              std::vector<PointWrite>& writes) const;
@@ -100,6 +111,16 @@ class Device {
   int failures_ = 0;  // consecutive turns without a reply
   TimePoint probe_at_{};
   std::uint16_t heartbeat_ = 0;
+
+  // PLC-loss failsafe (docs/safety.md). `failsafe_now_` is the action in force since the trip:
+  // the configured one, or stop when the drive refused quick_stop or the preset speed.
+  FailsafeWatchdog failsafe_;
+  FailsafeAction failsafe_now_ = FailsafeAction::stop;
+  bool failsafe_busy_ = false;     // the action's write is in flight
+  bool failsafe_done_ = false;     // the drive confirmed the action since the trip
+  bool failsafe_gave_up_ = false;  // the drive cannot take a stop at all (exception 0x03)
+  TimePoint failsafe_retry_at_{};
+  TimePoint last_tick_{};
 
   Ticket next_ticket_ = 1;
   std::map<Ticket, Pending> pending_;

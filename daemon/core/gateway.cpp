@@ -126,6 +126,10 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   for (auto& d : devices_) {
     const CommonState& c = d->driver().common();
     if (!c.running || d->comm_lost()) continue;
+    if (d->config().on_shutdown == ShutdownAction::hold) {
+      log_->info("device {}: left as it is for shutdown (on_shutdown = hold)", d->config().name);
+      continue;
+    }
     ++waiter->outstanding;
     log_->info("device {}: stopping for shutdown", d->config().name);
     d->command(Command::stop,

@@ -39,7 +39,8 @@ class Gateway : public modbus::Backend {
 
   void start();  // opens the buses and starts polling
   void stop();   // closes the buses; pending writes fail with 0x0B
-  // Puts every drive in its stop state and calls `done` once they confirmed or `limit` passed.
+  // Puts every running drive whose on_shutdown is stop in its stop state (on_shutdown = hold
+  // leaves it) and calls `done` once they confirmed or `limit` passed.
   void stop_drives(Millis limit, std::function<void()> done);
 
   modbus::Exception read(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,

@@ -1,0 +1,279 @@
+// The PLC-loss failsafe of a device (issue 8): armed by the first valid write to command,
+// setpoint or heartbeat, tripped by the first housekeeping tick after the timeout, latched in
+// status bit 5 until a run command is written, and kept: a drive that runs again is stopped again.
+#include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
+
+#include "core/device.h"
+#include "fake_adapter.h"
+
+namespace drivegate {
+namespace {
+
+using modbus::Exception;
+using namespace std::chrono_literals;
+
+constexpr std::uint16_t kFailsafeBit = 1u << 5;  // StatusBit::failsafe
+constexpr std::uint16_t kCommand = 0, kSetpoint = 1, kHeartbeat = 2, kLimit = 16;
+
+class FailsafeTest : public ::testing::Test {
+ protected:
+  void make(FailsafeAction action, Millis timeout = 1000ms, std::int32_t preset = 0) {
+    DeviceConfig cfg;
+    cfg.name = "dev";
+    cfg.unit_id = 1;
+    cfg.failsafe.timeout = timeout;
+    cfg.failsafe.action = action;
+    cfg.failsafe.preset_rpm = preset;
+    auto driver = std::make_unique<test::FakeDriver>(DeviceEnv{});
+    driver->traits_.comm_timeout = 2000ms;
+    driver->traits_.write_timeout = 60s;
+    driver->common_.ready = true;
+    fake_ = driver.get();
+    device_ = std::make_unique<Device>(
+        cfg, test::kFakeAdapter, std::move(driver),
+        std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>()),
+        t0_);
+    device_->frame_good(t0_);
+  }
+  TimePoint at(Millis ms) const { return t0_ + ms; }
+  // One housekeeping tick with the drive answering.
+  void tick(Millis ms) {
+    device_->frame_good(at(ms));
+    device_->housekeeping(at(ms));
+  }
+  Exception plc(std::uint16_t address, std::vector<std::uint16_t> v, Millis ms) {
+    return device_->write(
+        Table::holding, address, v, [this](Exception e) { answers_.push_back(e); }, at(ms));
+  }
+  // The driver confirms the write it was last given.
+  void confirm(Millis ms, WriteResult r = WriteResult::ok) {
+    fake_->completions.push_back({fake_->last_ticket, r});
+    device_->sync(at(ms));
+  }
+  std::uint16_t status(Millis ms) {
+    std::uint16_t s = 0;
+    EXPECT_EQ(device_->read(Table::input, 0, std::span<std::uint16_t>(&s, 1), at(ms)),
+              Exception::none);
+    return s;
+  }
+  bool discrete_failsafe(Millis ms) {
+    std::uint16_t b = 0;
+    EXPECT_EQ(device_->read(Table::discrete, 5, std::span<std::uint16_t>(&b, 1), at(ms)),
+              Exception::none);
+    return b != 0;
+  }
+
+  TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
+  test::FakeDriver* fake_ = nullptr;
+  std::unique_ptr<Device> device_;
+  std::vector<Exception> answers_;
+};
+
+TEST_F(FailsafeTest, AGatewayNobodyWroteToNeverTrips) {
+  make(FailsafeAction::stop);
+  for (int ms = 100; ms <= 10'000; ms += 100) tick(Millis(ms));
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_EQ(status(10'000ms) & kFailsafeBit, 0);
+}
+
+TEST_F(FailsafeTest, OffByDefault) {
+  make(FailsafeAction::stop, 0ms);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  for (int ms = 100; ms <= 10'000; ms += 100) tick(Millis(ms));
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_FALSE(device_->failsafe_latched());
+}
+
+TEST_F(FailsafeTest, StopsAtTheFirstTickAfterTheTimeoutAndLatches) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kCommand, {1 /*run_forward*/, 800}, 0ms), Exception::none);
+  fake_->common_.command = Command::run_forward;
+  confirm(0ms);
+  fake_->commands.clear();
+  tick(900ms);
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_EQ(status(900ms) & kFailsafeBit, 0);
+  tick(1000ms);
+  ASSERT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+  EXPECT_EQ(status(1000ms) & kFailsafeBit, kFailsafeBit);
+  EXPECT_TRUE(discrete_failsafe(1000ms));
+  fake_->common_.command = Command::stop;
+  confirm(1050ms);
+  for (int ms = 1100; ms <= 5000; ms += 100) tick(Millis(ms));
+  EXPECT_EQ(fake_->commands.size(), 1u);  // confirmed: not sent again
+  EXPECT_EQ(status(5000ms) & kFailsafeBit, kFailsafeBit);
+}
+
+TEST_F(FailsafeTest, EachOfCommandSetpointAndHeartbeatFeedsIt) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  ASSERT_EQ(plc(kSetpoint, {700}, 800ms), Exception::none);
+  tick(1700ms);
+  ASSERT_EQ(plc(kCommand, {0}, 1700ms), Exception::none);
+  confirm(1700ms);
+  fake_->commands.clear();
+  tick(2600ms);
+  ASSERT_EQ(plc(kHeartbeat, {2}, 2600ms), Exception::none);
+  tick(3500ms);
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_FALSE(device_->failsafe_latched());
+  tick(3600ms);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+}
+
+TEST_F(FailsafeTest, AdapterPointsAndInvalidWritesDoNotFeedIt) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  ASSERT_EQ(plc(kLimit, {0, 50}, 500ms), Exception::none);              // adapter point
+  ASSERT_EQ(plc(kCommand, {9}, 600ms), Exception::illegal_data_value);  // no such command
+  tick(1000ms);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+  EXPECT_TRUE(device_->failsafe_latched());
+}
+
+TEST_F(FailsafeTest, OnlyARunCommandWrittenAfterTheTripResetsIt) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  tick(1000ms);
+  confirm(1000ms);
+  ASSERT_TRUE(device_->failsafe_latched());
+  fake_->commands.clear();
+
+  // A setpoint is stored (passed to the driver, which keeps it for the next run), nothing starts.
+  ASSERT_EQ(plc(kSetpoint, {650}, 1200ms), Exception::none);
+  EXPECT_EQ(fake_->setpoints.back(), 650);
+  EXPECT_TRUE(fake_->commands.empty());
+  ASSERT_EQ(plc(kHeartbeat, {2}, 1300ms), Exception::none);
+  ASSERT_EQ(plc(kCommand, {0 /*stop*/}, 1400ms), Exception::none);
+  confirm(1400ms);
+  ASSERT_EQ(plc(kCommand, {4 /*reset_fault*/}, 1500ms), Exception::none);
+  confirm(1500ms);
+  tick(1600ms);
+  EXPECT_TRUE(device_->failsafe_latched());
+  EXPECT_EQ(status(1600ms) & kFailsafeBit, kFailsafeBit);
+
+  ASSERT_EQ(plc(kCommand, {2 /*run_reverse*/}, 1700ms), Exception::none);
+  EXPECT_FALSE(device_->failsafe_latched());
+  EXPECT_EQ(status(1700ms) & kFailsafeBit, 0);
+  EXPECT_EQ(fake_->commands.back(), Command::run_reverse);
+  // The timer runs again from that write.
+  tick(2600ms);
+  EXPECT_FALSE(device_->failsafe_latched());
+  tick(2700ms);
+  EXPECT_TRUE(device_->failsafe_latched());
+}
+
+TEST_F(FailsafeTest, ARunTheDriveRefusesAtOnceDoesNotResetIt) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  tick(1000ms);
+  confirm(1000ms);
+  fake_->answer = WriteStatus::refused;
+  EXPECT_EQ(plc(kCommand, {1}, 1200ms), Exception::server_device_failure);
+  EXPECT_TRUE(device_->failsafe_latched());
+}
+
+TEST_F(FailsafeTest, ADriveThatRunsAgainWhileLatchedIsStoppedAgain) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  tick(1000ms);
+  confirm(1000ms);
+  // E.g. a driver that resumes the run in force after comm_lost.
+  fake_->common_.command = Command::run_forward;
+  device_->sync(at(1500ms));
+  tick(1500ms);
+  EXPECT_EQ(fake_->commands, (std::vector<Command>{Command::stop, Command::stop}));
+}
+
+TEST_F(FailsafeTest, AFailedStopIsRetriedAfterASecondNotOnEveryTick) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  tick(1000ms);
+  confirm(1000ms, WriteResult::no_response);
+  for (int ms = 1100; ms < 2000; ms += 100) tick(Millis(ms));
+  EXPECT_EQ(fake_->commands.size(), 1u);
+  tick(2000ms);
+  EXPECT_EQ(fake_->commands.size(), 2u);
+}
+
+TEST_F(FailsafeTest, ATripDuringCommLostStopsTheDriveWhenItAnswersAgain) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  // No good frame from 0 on: comm_lost after 2 s, failsafe at 1 s with the drive already silent.
+  for (int ms = 100; ms <= 3000; ms += 100) device_->housekeeping(at(Millis(ms)));
+  EXPECT_TRUE(device_->failsafe_latched());
+  EXPECT_TRUE(device_->comm_lost());
+  fake_->commands.clear();  // the stop sent at 1 s failed at comm_lost (0x0B)
+  tick(3100ms);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+}
+
+TEST_F(FailsafeTest, QuickStopFallsBackToStopWhenTheDriveCannot) {
+  make(FailsafeAction::quick_stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  fake_->answer = WriteStatus::invalid_value;
+  tick(1000ms);
+  fake_->answer = WriteStatus::pending;
+  tick(1100ms);
+  EXPECT_EQ(fake_->commands, (std::vector<Command>{Command::quick_stop, Command::stop}));
+}
+
+TEST_F(FailsafeTest, HoldOnlyLatchesTheBit) {
+  make(FailsafeAction::hold);
+  ASSERT_EQ(plc(kCommand, {1}, 0ms), Exception::none);
+  fake_->common_.command = Command::run_forward;
+  confirm(0ms);
+  fake_->commands.clear();
+  for (int ms = 100; ms <= 3000; ms += 100) tick(Millis(ms));
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_TRUE(fake_->setpoints.empty());
+  EXPECT_EQ(status(3000ms) & kFailsafeBit, kFailsafeBit);
+}
+
+TEST_F(FailsafeTest, PresetSlowsARunningDriveAndLeavesAStoppedOne) {
+  make(FailsafeAction::preset, 1000ms, 300);
+  ASSERT_EQ(plc(kCommand, {1}, 0ms), Exception::none);
+  fake_->common_.command = Command::run_forward;
+  confirm(0ms);
+  fake_->commands.clear();
+  tick(1000ms);
+  EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{300});
+  EXPECT_TRUE(fake_->commands.empty());
+  tick(1100ms);
+  EXPECT_EQ(fake_->setpoints.size(), 1u);  // taken once
+
+  make(FailsafeAction::preset, 1000ms, 300);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  for (int ms = 100; ms <= 3000; ms += 100) tick(Millis(ms));
+  EXPECT_TRUE(fake_->setpoints.empty());
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_TRUE(device_->failsafe_latched());
+}
+
+TEST_F(FailsafeTest, APresetTheDriveRefusesBecomesAStop) {
+  make(FailsafeAction::preset, 1000ms, 300);
+  ASSERT_EQ(plc(kCommand, {1}, 0ms), Exception::none);
+  fake_->common_.command = Command::run_forward;
+  confirm(0ms);
+  fake_->commands.clear();
+  fake_->setpoint_answer = WriteStatus::invalid_value;
+  tick(1000ms);
+  tick(1100ms);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+}
+
+TEST_F(FailsafeTest, TheGatewaysOwnCommandsNeitherFeedNorReset) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  device_->command(
+      Command::stop, [](Exception) {}, at(900ms));
+  tick(1000ms);
+  EXPECT_TRUE(device_->failsafe_latched());
+  device_->command(
+      Command::run_forward, [](Exception) {}, at(1100ms));
+  EXPECT_TRUE(device_->failsafe_latched());
+}
+
+}  // namespace
+}  // namespace drivegate
