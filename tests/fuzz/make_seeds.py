@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Writes the seed corpora (tests/fuzz/corpus/<target>/) from the project's golden vectors.
+
+Every brace-enclosed byte list of 3 or more 0xNN bytes in an adapter's codec test becomes a codec,
+a driver and a simulator seed (the adapter target's mode byte and script around it); every request
+PDU of tests/modbus/pdu_test.cpp (`run({...})`, the Application Protocol's own examples) becomes an
+MBAP frame for unit 1, alone and all together in one stream; configurations come from
+etc/drivegate.toml and the raw-string configs of tests/core/config_test.cpp. Re-run after the
+vectors change: python3 tests/fuzz/make_seeds.py
+"""
+import hashlib
+import pathlib
+import re
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+OUT = ROOT / "tests" / "fuzz" / "corpus"
+BYTES = re.compile(r"\{\s*((?:0x[0-9A-Fa-f]{2}\s*,\s*){2,}0x[0-9A-Fa-f]{2})\s*,?\s*\}")
+
+
+def vectors(path):
+    text = path.read_text()
+    for m in BYTES.finditer(text):
+        yield bytes(int(b, 16) for b in re.findall(r"0x([0-9A-Fa-f]{2})", m.group(1)))
+
+
+def write(target, data):
+    d = OUT / target
+    d.mkdir(parents=True, exist_ok=True)
+    (d / ("seed-" + hashlib.sha1(data).hexdigest()[:16])).write_bytes(data)
+
+
+def chunk(op, data):
+    # adapter_fuzz.cpp: an op byte, a length byte, then that many bytes.
+    out = b""
+    for i in range(0, len(data), 255):
+        part = data[i:i + 255]
+        out += bytes([op, len(part)]) + part
+    return out
+
+
+def adapter_seeds(adapter):
+    target = "adapter_" + adapter.replace("-", "_")
+    test = ROOT / "tests" / "adapters" / adapter / "codec_test.cpp"
+    vecs = sorted(set(vectors(test)))
+    # Codec prefix: ed3100 first reads a reply shape (function index, register, words).
+    shape = bytes([0, 0x00, 0x06, 1]) if adapter == "ed3100" else b""
+    for v in vecs:
+        write(target, b"\x00" + shape + v)
+        # Driver: default address, 500 ms polls, not maintenance; ask for an exchange, hear the
+        # vector, run forward at 1000 rpm, take completions, let 600 ms pass, poll again.
+        script = (b"\x00" + chunk(1, v) + b"\x03\x01" + b"\x04\x03\xe8" + b"\x08" +
+                  b"\x02\x02\x58" + b"\x00" + chunk(1, v) + b"\x08")
+        write(target, bytes([1, 0x00, 45, 0]) + script)
+        # Simulator: hear the vector, tick 100 ms, ask for its state.
+        write(target, bytes([2, 0x00]) + chunk(0, v) + b"\x02\x00\x64" + b"\x03\x05state")
+    write(target, bytes([1, 0x00, 45, 0]) + b"\x00\x02\x10\x00\x00\x06\x07\x08")
+
+
+def mbap(transaction, unit, pdu):
+    return (transaction.to_bytes(2, "big") + b"\x00\x00" + (len(pdu) + 1).to_bytes(2, "big") +
+            bytes([unit]) + pdu)
+
+
+def modbus_seeds():
+    text = (ROOT / "tests" / "modbus" / "pdu_test.cpp").read_text()
+    pdus = []
+    for m in re.finditer(r"run\(\s*\{([^}]*)\}", text):
+        found = re.findall(r"0x([0-9A-Fa-f]{2})", m.group(1))
+        if found:
+            pdus.append(bytes(int(b, 16) for b in found))
+    stream = b""
+    for i, pdu in enumerate(pdus):
+        frame = mbap(i + 1, 1, pdu)
+        stream += frame
+        for target in ("modbus_fake", "modbus_gateway"):
+            write(target, b"\x00" + frame)
+    for target in ("modbus_fake", "modbus_gateway"):
+        write(target, b"\x00" + stream)   # one segment, writes complete at once
+        write(target, b"\x09" + stream)   # one byte at a time, writes deferred
+    # The gateway: the common block of every unit (docs/register-map.md), and writes to it.
+    for unit in range(1, 8):
+        write("modbus_gateway", b"\x00" + mbap(unit, unit, bytes([0x04, 0, 0, 0, 32])) +
+              mbap(unit, unit, bytes([0x03, 0, 0, 0, 16])) +
+              mbap(unit, unit, bytes([0x10, 0, 0, 0, 2, 4, 0, 1, 0x03, 0xE8])) +
+              mbap(unit, unit, bytes([0x06, 0, 0, 0, 0])))
+
+
+def config_seeds():
+    write("config", (ROOT / "etc" / "drivegate.toml").read_bytes())
+    text = (ROOT / "tests" / "core" / "config_test.cpp").read_text()
+    for m in re.finditer(r'R"\((.*?)\)"', text, re.S):
+        write("config", m.group(1).encode())
+
+
+def main():
+    for adapter in sorted(p.name for p in (ROOT / "adapters").iterdir() if p.is_dir()):
+        if (ROOT / "tests" / "adapters" / adapter / "codec_test.cpp").exists():
+            adapter_seeds(adapter)
+    modbus_seeds()
+    config_seeds()
+
+
+if __name__ == "__main__":
+    main()
