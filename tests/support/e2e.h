@@ -127,6 +127,9 @@ class Child {
     return -1;
   }
   [[nodiscard]] bool running() { return pid_ > 0 && !reap(WNOHANG); }
+  void signal(int sig) {
+    if (pid_ > 0) ::kill(pid_, sig);
+  }
   void terminate() {
     if (pid_ > 0) stop(SIGKILL, std::chrono::seconds(5));
   }
