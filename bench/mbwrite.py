@@ -3,6 +3,7 @@
 
 mbwrite.py PORT UNIT:ADDR=V1,V2,...   write holding registers (FC16) on each unit given
 mbwrite.py --read-timeouts PORT UNIT  print '# unit U status=.. timeouts=..' (common block)
+mbwrite.py --frames PORT UNIT...      print the sum of frames_good (input 9..10) over the units
 """
 import socket
 import struct
@@ -38,6 +39,15 @@ def main():
             regs = struct.unpack(">19H", body[2:])
             print(f"# unit {unit} status=0x{regs[0]:04x} fault_code={regs[1]} "
                   f"timeouts={(regs[13] << 16) | regs[14]}")
+        return
+    if sys.argv[1] == "--frames":
+        total = 0
+        with socket.create_connection(("127.0.0.1", int(sys.argv[2]))) as s:
+            for unit in sys.argv[3:]:
+                body = request(s, 1, int(unit), struct.pack(">BHH", 4, 9, 2))
+                hi, lo = struct.unpack(">HH", body[2:6])
+                total += (hi << 16) | lo
+        print(total)
         return
     port = int(sys.argv[1])
     with socket.create_connection(("127.0.0.1", port)) as s:
