@@ -5,5 +5,7 @@ set -eu
 cd "$(dirname "$0")/.."
 tools/deps.sh
 build="${BUILD_DIR:-build}"
+# Relative paths in ccache's keys: a second clone (CI's) reuses this one's compiled objects.
+export CCACHE_BASEDIR="$PWD"
 cmake -S . -B "$build" "$@" >/dev/null
 cmake --build "$build" -j"$(nproc)"
