@@ -33,9 +33,10 @@ for id in $ADAPTERS; do
   opt=()
   dev_opt=""
   gap_ms=0  # the adapter's traits().inter_frame_gap (its driver.cpp)
+  streaming=0
   case $id in
     nidec-washer) dev_opt="platform = 7"; opt=(--set platform=7) ;;
-    fdc1) dev_opt="slave_mode = true"; opt=(--set slave_mode=true) ;;
+    fdc1) dev_opt="slave_mode = true"; opt=(--set slave_mode=true); streaming=1 ;;
     ed3100) gap_ms=10 ;;
     mdriver-2400) gap_ms=10 ;;
     unicla-edrive) gap_ms=5 ;;
@@ -60,5 +61,5 @@ for id in $ADAPTERS; do
   kill $DG $SIM; wait $DG $SIM 2>/dev/null || true
   PIDS=()
   sim_line=$(head -2 "$W/$id.sim" | tail -1)
-  python3 "$HERE/serial_report.py" "$id" "$W/$id.wire" "$W/$id.writes" "$TURNAROUND_US" "$sim_line" "$gap_ms"
+  python3 "$HERE/serial_report.py" "$id" "$W/$id.wire" "$W/$id.writes" "$TURNAROUND_US" "$sim_line" "$gap_ms" "$streaming"
 done

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""serial_report.py ADAPTER WIRE_LOG WRITES_LOG TURNAROUND_US SIM_LINE FRAME_GAP_MS
+"""serial_report.py ADAPTER WIRE_LOG WRITES_LOG TURNAROUND_US SIM_LINE FRAME_GAP_MS STREAMING
 
 From a wire-timing simulator log (see daemon/cli/sim_host.h) and cmdlat.py's write log:
   poll cycles: maximal runs of request/reply transactions with no idle time over SPLIT_MS
@@ -17,7 +17,7 @@ import sys
 
 SPLIT_MS = 20.0
 
-adapter, wire_path, writes_path, turnaround_us, sim_line, frame_gap_ms = sys.argv[1:7]
+adapter, wire_path, writes_path, turnaround_us, sim_line, frame_gap_ms, streaming = sys.argv[1:8]
 frame_gap = int(frame_gap_ms) * 1_000_000
 turnaround = int(turnaround_us) * 1000
 m = re.search(r"wire timing (\d+) ns per character", sim_line)
@@ -94,6 +94,10 @@ for line in open(writes_path):
             break
 
 med = lambda v: statistics.median(v) if v else float("nan")
+if streaming == "1":  # unsolicited frames, no poll cycle: only the command latency means anything
+    print(f"| {adapter} | {char_ns / 1000:.1f} | {int(frame_gap_ms)} | - | - | - | - | n/a | - | n/a "
+          f"| - | - | {pct(lat, 0.5) / 1e3:.1f} / {pct(lat, 0.99) / 1e3:.1f} (n={len(lat)}) |")
+    sys.exit(0)
 print(f"| {adapter} | {char_ns / 1000:.1f} | {int(frame_gap_ms)} | {med(tx_per):.0f} | {len(cycles)} | "
       f"{med(meas):.2f} | {med(lim):.2f} | {med(eff):.3f} | {med(lim_gap):.2f} | {med(eff_gap):.3f} | "
       f"{med(gaps) / 1e3:.0f} / {pct(gaps, 0.99) / 1e3:.0f} | "
