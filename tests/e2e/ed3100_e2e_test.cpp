@@ -206,6 +206,28 @@ TEST_F(Ed3100E2E, ReadsAndWritesAParameter) {
   EXPECT_EQ(plc_.holding(ed::param_00_06, 1).regs[0], 0x1388);
 }
 
+TEST_F(Ed3100E2E, AlsoReadsTheStandardReplyForm) {
+  EXPECT_EQ(sim_.control("form standard"), "ok form=standard");
+  ASSERT_TRUE(eventually([&] {  // byte count 04 where the document echoes the register
+    return frames().rx.find("1F 03 04 10 84 41 48 70 BD") != std::string::npos;
+  }));
+  const auto good = plc_.input(reg::status, 19).u32(reg::frames_good);
+  ASSERT_TRUE(eventually([&] { return plc_.input(reg::status, 19).u32(reg::frames_good) > good; }));
+  const auto r = plc_.input(reg::status, 19);
+  EXPECT_TRUE(r.regs[0] & reg::online);
+  EXPECT_EQ(r.u32(reg::bad_checksum), 0u);
+  EXPECT_EQ(plc_.input(ed::monitor_0d00_raw, 1).regs[0], 0x1084);
+}
+
+TEST_F(Ed3100E2E, CorruptReplyIsCountedAndTheSameFrameResent) {
+  EXPECT_EQ(sim_.control("corrupt 1"), "ok corrupt=1");
+  ASSERT_TRUE(eventually([&] { return plc_.input(reg::status, 19).u32(reg::bad_checksum) == 1; }));
+  const auto r = plc_.input(reg::status, 19);
+  EXPECT_GE(r.u32(reg::retries), 1u);
+  EXPECT_TRUE(r.regs[0] & reg::online);  // one bad CRC is not a lost drive
+  EXPECT_EQ(r.regs[reg::fault_code], 0);
+}
+
 TEST_F(Ed3100E2E, SilentDriveIsCommLostWritesGet0x0BAndItComesBack) {
   EXPECT_EQ(sim_.control("silent on"), "ok silent=on");
   const auto lost_at = std::chrono::steady_clock::now();

@@ -186,6 +186,28 @@ TEST_F(MDriverE2E, ReverseAndSpeedsOffTheTableAreIllegalValues) {
   EXPECT_THAT(frames(), Contains("00 01 10 02 1C 01 00 25"));  // section 3 No.2
 }
 
+TEST_F(MDriverE2E, FailedFixedCodeCheckIsHardwareFaultNotOnline) {
+  // The driver forgets the check and answers the next one with zeros (section 3 No.1); run data
+  // goes unanswered meanwhile, so the gateway declares comm_lost (6 s) and checks again.
+  EXPECT_EQ(sim_.control("eeprom fail"), "ok eeprom=fail");
+  ASSERT_TRUE(eventually([&] { return in(reg::fault_code) == 12; }, 15s))  // hardware_fault
+      << sim_.control("state");
+  EXPECT_THAT(frames(), Contains("00 01 00 03 01 12 00 06 38"));
+  const auto r = plc_.input(reg::status, 7);
+  EXPECT_FALSE(r.regs[0] & reg::online);
+  EXPECT_TRUE(r.regs[0] & reg::fault);
+  EXPECT_EQ(r.u32(reg::native_fault), 0x100u);
+  EXPECT_EQ(in(md::fixed_code_state), 2);  // fixed_code_error
+  // It answers, so not 0x0B: a driver that is not ready refuses (README "Commands and writes").
+  EXPECT_EQ(plc_.write(reg::command, {1, 1149}), 0x04);
+
+  EXPECT_EQ(sim_.control("eeprom ok"), "ok eeprom=ok");
+  ASSERT_TRUE(eventually([&] { return (in(reg::status)&reg::online) != 0; }, 10s))
+      << sim_.control("state");
+  EXPECT_EQ(in(reg::fault_code), 0);
+  EXPECT_EQ(in(md::fixed_code_state), 1);
+}
+
 // Polled only every 10 s, longer than the driver's 6 s trip: only the keep-alive can hold it.
 class MDriverKeepAliveE2E : public MDriverE2E {
  protected:
