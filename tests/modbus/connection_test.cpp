@@ -257,6 +257,36 @@ TEST_P(ConnectionMbap, OutcomeAndOtherClientsUndisturbed) {
   EXPECT_EQ(h.clients(), GetParam().closes ? 1u : 2u);
 }
 
+// The same bytes in two segments, split after every byte: the outcome does not depend on how TCP
+// cut the stream (a closing header is judged as soon as its deciding bytes are in; the rest of a
+// split frame that the server already refused may find the connection gone).
+TEST_P(ConnectionMbap, SameOutcomeWhenSplitAtEveryByte) {
+  Harness h;
+  Libmodbus other(h.port());
+  ASSERT_TRUE(other.connected());
+  const Bytes& wire = GetParam().wire;
+  for (std::size_t split = 1; split < wire.size(); ++split) {
+    RawClient c(h.port());
+    ASSERT_TRUE(c.connected());
+    ASSERT_TRUE(c.send(Bytes(wire.begin(), wire.begin() + static_cast<long>(split))));
+    std::this_thread::sleep_for(1ms);
+    const bool sent = c.send(Bytes(wire.begin() + static_cast<long>(split), wire.end()));
+    if (GetParam().closes) {
+      EXPECT_TRUE(c.closed_by_peer(500ms)) << "split " << split;
+    } else {
+      ASSERT_TRUE(sent) << "split " << split;
+      const Bytes r = c.reply();
+      ASSERT_EQ(r.size(), 9u) << "split " << split;
+      EXPECT_EQ(r[7], 0xC1) << "split " << split;
+      EXPECT_EQ(r[8], 0x01) << "split " << split;
+    }
+  }
+  std::uint16_t v;
+  EXPECT_EQ(modbus_read_registers(*other, 0, 1, &v), 1);
+  ASSERT_TRUE(h.wait_clients(1));
+  EXPECT_EQ(h.stats().malformed, GetParam().closes ? wire.size() - 1 : 0u);
+}
+
 Bytes header(std::uint16_t protocol, std::uint16_t length) {
   return {0x00,
           0x01,
@@ -280,6 +310,8 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(Connection, RequestLongerThanAnnouncedIsAnsweredThenTheRestIsJudged) {
   Harness h;
+  Libmodbus other(h.port());
+  ASSERT_TRUE(other.connected());
   RawClient c(h.port());
   // Length 6, then four more bytes: the reply goes out, then "AA BB CC DD" is read as the next
   // header, whose protocol id (CC DD) is not 0: the connection closes.
@@ -288,6 +320,29 @@ TEST(Connection, RequestLongerThanAnnouncedIsAnsweredThenTheRestIsJudged) {
   EXPECT_EQ(c.reply(), (Bytes{0x00, 0x01, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x00}));
   EXPECT_TRUE(c.closed_by_peer(500ms));
   EXPECT_EQ(h.stats().malformed, 1u);
+  std::uint16_t v;
+  EXPECT_EQ(modbus_read_registers(*other, 0, 1, &v), 1);
+  EXPECT_EQ(h.clients(), 1u);
+}
+
+// Several requests in one segment followed by a malformed header: every request before it is
+// answered, in order, then the connection closes; another client notices nothing.
+TEST(Connection, SeveralRequestsThenAMalformedHeaderInOneSegment) {
+  Harness h;
+  Libmodbus other(h.port());
+  ASSERT_TRUE(other.connected());
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01}) +
+                     request(2, 1, {0x04, 0x00, 0x00, 0x00, 0x01}) + request(3, 1, {0x41}) +
+                     header(0, 0)));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x01, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x00}));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x02, 0x00, 0x00, 0x00, 0x05, 0x01, 0x04, 0x02, 0x00, 0x00}));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x03, 0x00, 0x00, 0x00, 0x03, 0x01, 0xC1, 0x01}));
+  EXPECT_TRUE(c.closed_by_peer(500ms));
+  EXPECT_EQ(h.stats().malformed, 1u);
+  std::uint16_t v;
+  EXPECT_EQ(modbus_read_registers(*other, 0, 1, &v), 1);
+  EXPECT_EQ(h.clients(), 1u);
 }
 
 TEST(Connection, HalfFrameThenStallIsClosedAfterFrameTimeoutWithoutDelayingOthers) {
