@@ -37,8 +37,8 @@ std::string_view name_after(std::string_view text, std::string_view prefix, bool
 }
 
 // Entries with their fields, over the journal's native protocol (sd_journal_sendv(3)). When
-// the journal cannot be reached the line goes to stderr, which is the journal's stream, with
-// the "<N>" priority prefix journald reads there (sd-daemon(3)).
+// sending fails (sd_journal_sendv() < 0) the line goes to stderr, which is the journal's stream,
+// with the "<N>" priority prefix journald reads there (sd-daemon(3)).
 class JournalSink final : public spdlog::sinks::base_sink<std::mutex> {
  public:
   void set_devices(std::vector<DeviceTag> devices) {
