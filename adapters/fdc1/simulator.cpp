@@ -35,7 +35,7 @@ constexpr std::array<std::uint8_t, 8> kNoise = {0x00, 0x1B, 0xFF, 0x4D, 0x55, 0x
 constexpr std::string_view kCommands =
     "state, fault <battery|fan|start|overload|temperature|fan_eor|start_eor|overload_eor|"
     "temperature_eor|internal|raw>, clear, silent on|off, corrupt N, noise N, mangle N, "
-    "delay S, thermostat on|off";
+    "delay S, thermostat on|off, window S";
 
 std::optional<long> parse_number(std::string_view s) {
   int base = 10;
@@ -118,7 +118,7 @@ void Fdc1Simulator::step(TimePoint now) {
   const double dt = std::chrono::duration<double>(now - last_tick_).count();
   last_tick_ = now;
   if (!rx_.empty() && now - rx_since_ > kFrameWindow) rx_.clear();
-  if (is_slave(mode_) && !watchdog_tripped_ && now - last_speed_ > kSlaveWatchdog) {
+  if (is_slave(mode_) && !watchdog_tripped_ && now - last_speed_ > watchdog_) {
     watchdog_tripped_ = true;
   }
   restart_left_s_ = std::max(0.0, restart_left_s_ - dt);
@@ -187,10 +187,12 @@ std::string Fdc1Simulator::state(TimePoint now) const {
     << " alarm=" << int{alarm_} << " restart_s=" << static_cast<int>(restart_left_s_ + 0.5)
     << " mode=" << int{mode_} << " slave=" << (is_slave(mode_) ? 1 : 0) << " min=" << speed_.min_rpm
     << " max=" << speed_.max_rpm << " speed_age_ms=" << age
-    << " watchdog=" << (watchdog_tripped_ ? 1 : 0) << " thermostat=" << (thermostat_ ? 1 : 0)
-    << " silent=" << (silent_ ? 1 : 0) << " corrupt=" << corrupt_ << " noise=" << noise_
-    << " mangle=" << mangle_ << " speeds=" << speeds_ << " programs=" << programs_
-    << " rejected=" << rejected_ << " frames=" << frames_;
+    << " watchdog=" << (watchdog_tripped_ ? 1 : 0)
+    << " window_s=" << std::chrono::duration_cast<std::chrono::seconds>(watchdog_).count()
+    << " thermostat=" << (thermostat_ ? 1 : 0) << " silent=" << (silent_ ? 1 : 0)
+    << " corrupt=" << corrupt_ << " noise=" << noise_ << " mangle=" << mangle_
+    << " speeds=" << speeds_ << " programs=" << programs_ << " rejected=" << rejected_
+    << " frames=" << frames_;
   return o.str();
 }
 
@@ -230,6 +232,15 @@ std::string Fdc1Simulator::control(std::string_view line, TimePoint now) {
     if (cmd == "noise") noise_ = static_cast<std::size_t>(*number);
     if (cmd == "mangle") mangle_ = static_cast<int>(*number);
     if (cmd == "delay") restart_left_s_ = static_cast<double>(*number);
+    return "ok";
+  }
+  if (cmd == "window") {
+    // Shortens the slave-mode watchdog so a test can outlast it in seconds; never longer than
+    // the document's 60 s.
+    const bool ok = number && *number >= kMinWatchdog.count() / 1000 &&
+                    *number <= kSlaveWatchdog.count() / 1000;
+    if (!ok) return "error: window takes 1..60 (seconds)";
+    watchdog_ = Millis(*number * 1000);
     return "ok";
   }
   return "error: unknown command '" + cmd + "'; commands: " + std::string(kCommands);

@@ -16,6 +16,8 @@ namespace drivegate::fdc1 {
 inline constexpr Millis kStreamPeriod{500};
 // INPUT, Programming speed, SLAVE MODE: "the motor will stop if no speed is received within 60s".
 inline constexpr Millis kSlaveWatchdog{60000};
+// Shortest window `window S` accepts (a test aid: the document's window is 60 s).
+inline constexpr Millis kMinWatchdog{1000};
 // INPUT programming: "The whole sequence must be received within 1 second".
 inline constexpr Millis kFrameWindow{1000};
 // Simulator model, not from the document: ramp rate and current per rpm.
@@ -50,6 +52,7 @@ class Fdc1Simulator final : public Simulator {
   Speed speed_{};
   bool thermostat_ = false;  // normal modes: the thermostat asks for cooling
   bool watchdog_tripped_ = false;
+  Millis watchdog_ = kSlaveWatchdog;  // `window S` shortens it for tests
   bool motor_on_ = false;
   double rpm_ = 0;
   std::uint8_t alarm_ = 0;

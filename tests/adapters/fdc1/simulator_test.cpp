@@ -96,6 +96,24 @@ TEST(Fdc1Simulator, StopsAfter60sWithoutARefresh) {
   EXPECT_TRUE(rig.has("motor=on"));
 }
 
+TEST(Fdc1Simulator, WindowShortensTheWatchdogForTests) {
+  SimRig rig;
+  EXPECT_TRUE(rig.has("window_s=60"));
+  EXPECT_EQ(rig.control("window 0").rfind("error:", 0), 0u);
+  EXPECT_EQ(rig.control("window 61").rfind("error:", 0), 0u);
+  EXPECT_EQ(rig.control("window x").rfind("error:", 0), 0u);
+  ASSERT_EQ(rig.control("window 5"), "ok");
+  rig.run(100ms);
+  rig.sim->on_receive(kRun2000, rig.now);
+  rig.run(4s);
+  rig.sim->on_receive(kRun2000, rig.now);  // a refresh inside the window
+  rig.run(4s);
+  EXPECT_TRUE(rig.has("motor=on"));
+  rig.run(2s);  // 6 s since the last frame
+  EXPECT_TRUE(rig.has("motor=off"));
+  EXPECT_TRUE(rig.has("watchdog=1"));
+}
+
 TEST(Fdc1Simulator, EchoesProgrammingWith27And80) {
   SimRig rig;
   rig.run(100ms);
