@@ -89,28 +89,27 @@ void Fdc1Driver::confirm(const Status& s) {
       break;
   }
   if (ok) {
-    complete(speed_write_->ticket, WriteResult::ok);
+    finish_speed_write(WriteResult::ok);
   } else if (alarmed && speed_write_->expect != Expect::motor_off) {
-    complete(speed_write_->ticket, WriteResult::refused);  // the controller is in alarm
-  } else {
-    return;
+    finish_speed_write(WriteResult::refused);  // the controller is in alarm
   }
-  speed_write_.reset();
 }
 
 void Fdc1Driver::expire(TimePoint now) {
-  if (speed_write_ && now >= speed_write_->deadline) {
-    complete(speed_write_->ticket, WriteResult::no_response);
-    speed_write_.reset();
-  }
+  if (speed_write_ && now >= speed_write_->deadline) finish_speed_write(WriteResult::no_response);
+}
+
+void Fdc1Driver::finish_speed_write(WriteResult r) {
+  if (!speed_write_) return;
+  for (const Ticket t : speed_write_->tickets) complete(t, r);
+  speed_write_.reset();
 }
 
 void Fdc1Driver::on_comm_lost(TimePoint) {
   common_.ready = false;  // the start-up (re-assert the command in force) runs again
   send_now_ = false;
   next_refresh_ = TimePoint::max();
-  if (speed_write_) complete(speed_write_->ticket, WriteResult::no_response);
-  speed_write_.reset();
+  finish_speed_write(WriteResult::no_response);
   if (prog_state_ != Programming::idle) {
     finish_program(WriteResult::no_response, ProgStatus::no_response, "communication lost");
   }
@@ -172,8 +171,23 @@ void Fdc1Driver::on_no_reply(TimePoint) {
 // ---- writes --------------------------------------------------------------------------------
 
 void Fdc1Driver::start_speed_write(Ticket t, Expect e, TimePoint now) {
-  if (speed_write_) complete(speed_write_->ticket, WriteResult::no_response);  // superseded
-  speed_write_ = SpeedWrite{t, e, now + settings_.confirm};
+  std::vector<Ticket> tickets;
+  if (speed_write_) {
+    // Every frame carries both the command and the setpoint, so a pending write that asked for
+    // the same direction (run / run, stop / stop) is carried out by the new frame too: it waits
+    // with the new write, on the stricter test. One asking the opposite is superseded.
+    const bool old_runs = speed_write_->expect != Expect::motor_off;
+    const bool new_runs = e != Expect::motor_off;
+    if (old_runs == new_runs) {
+      tickets = std::move(speed_write_->tickets);
+      if (speed_write_->expect == Expect::at_setpoint) e = Expect::at_setpoint;
+      speed_write_.reset();
+    } else {
+      finish_speed_write(WriteResult::no_response);
+    }
+  }
+  tickets.push_back(t);
+  speed_write_ = SpeedWrite{std::move(tickets), e, now + settings_.confirm};
   send_now_ = true;
   due_at_ = now;
   send_priority_ = Priority::command;

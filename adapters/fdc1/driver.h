@@ -48,8 +48,10 @@ class Fdc1Driver final : public Driver {
  private:
   // What the stream must show for a pending speed write to complete ok.
   enum class Expect : std::uint8_t { motor_on, motor_off, at_setpoint };
+  // One frame's worth of pending writes: a write that a newer frame still carries out (a
+  // setpoint and a run_forward in one Modbus request, say) waits with it, not against it.
   struct SpeedWrite {
-    Ticket ticket;
+    std::vector<Ticket> tickets;
     Expect expect;
     TimePoint deadline;
   };
@@ -60,6 +62,7 @@ class Fdc1Driver final : public Driver {
   void expire(TimePoint now);
   void start_speed_write(Ticket t, Expect e, TimePoint now);
   void complete(Ticket t, WriteResult r);
+  void finish_speed_write(WriteResult r);
   [[nodiscard]] Speed wanted_speed() const;
   [[nodiscard]] bool slave_ready() const { return settings_.slave_mode && common_.ready; }
 

@@ -210,6 +210,27 @@ TEST(Fdc1Driver, ANewSpeedWriteSupersedesThePendingOne) {
   EXPECT_EQ(rig.bus->sent.size(), 2u);  // only the latest state goes out
 }
 
+// A PLC writes setpoint and run_forward in one request every cycle: while running, the setpoint
+// is a pending speed change and the run a second speed write for the same frame. Both complete
+// ok when the stream shows the new speed, not 0x0B for the first.
+TEST(Fdc1Driver, SetpointAndRunTogetherWhileRunningBothComplete) {
+  Rig rig;
+  rig.bus->run_for(600ms);
+  rig.driver->setpoint(2000, 1, rig.now());
+  rig.driver->command(Command::run_forward, 2, rig.now());
+  ASSERT_TRUE(rig.settle(2));
+  ASSERT_EQ(rig.result(2), WriteResult::ok);
+  rig.bus->run_for(1s);
+  ASSERT_EQ(rig.driver->setpoint(2500, 3, rig.now()), WriteStatus::pending);
+  ASSERT_EQ(rig.driver->command(Command::run_forward, 4, rig.now()), WriteStatus::pending);
+  ASSERT_TRUE(rig.settle(4));
+  ASSERT_TRUE(rig.settle(3));
+  EXPECT_EQ(rig.result(3), WriteResult::ok);
+  EXPECT_EQ(rig.result(4), WriteResult::ok);
+  EXPECT_NEAR(rig.common().speed_rpm, 2500, 100);  // confirmed at the new speed, not before
+  EXPECT_EQ(rig.bus->sent.back(), (Bytes{0x48, 0x73, 0x09, 0xC4, 0x09, 0xC4, 0x55, 0x6E}));
+}
+
 TEST(Fdc1Driver, CommLostFailsPendingWritesAndStartUpRunsAgain) {
   Rig rig;
   rig.bus->run_for(600ms);
