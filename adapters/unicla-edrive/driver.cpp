@@ -210,7 +210,7 @@ void EDriveDriver::confirm(std::optional<PendingWrite>& w, const Status& s) {
 }
 
 void EDriveDriver::finish(std::optional<PendingWrite>& w, WriteResult r) {
-  completions_.push_back({w->ticket, r});
+  for (const Ticket t : w->tickets) completions_.push_back({t, r});
   if (w->kind == WriteKind::run_state && r != WriteResult::ok) {
     common_.command = w->previous;
   }
@@ -247,10 +247,25 @@ bool EDriveDriver::control_disabled() const {
 }
 
 WriteStatus EDriveDriver::queue_run_state(std::uint16_t speed, Command previous, Ticket t) {
-  if (run_write_) finish(run_write_, WriteResult::no_response);  // superseded
   PendingWrite w;
+  if (run_write_) {
+    // The command in force to restore on failure is the one before the unconfirmed write.
+    previous = run_write_->previous;
+    if ((run_write_->speed == 0) == (speed == 0)) {
+      // The same request (run / run, stop / stop; e.g. setpoint and run_forward in one Modbus
+      // write): the new frame carries it out too, so it waits with the new one.
+      w.tickets = std::move(run_write_->tickets);
+    } else {
+      // The opposite request: superseded. It fails without touching the command in force,
+      // which is already the new write's.
+      for (const Ticket old : run_write_->tickets) {
+        completions_.push_back({old, WriteResult::no_response});
+      }
+    }
+    run_write_.reset();
+  }
   w.kind = WriteKind::run_state;
-  w.ticket = t;
+  w.tickets.push_back(t);
   w.speed = speed;
   w.previous = previous;
   run_write_ = w;
@@ -279,7 +294,7 @@ WriteStatus EDriveDriver::command(Command c, Ticket t, TimePoint /*now*/) {
       if (ack_write_) finish(ack_write_, WriteResult::no_response);  // superseded
       PendingWrite w;
       w.kind = WriteKind::acknowledge;
-      w.ticket = t;
+      w.tickets = {t};
       ack_write_ = w;
       return WriteStatus::pending;
     }

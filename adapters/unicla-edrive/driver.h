@@ -46,7 +46,7 @@ class EDriveDriver final : public Driver {
 
   struct PendingWrite {
     WriteKind kind = WriteKind::run_state;
-    Ticket ticket = 0;
+    std::vector<Ticket> tickets;       // writes this frame carries out (one, or joined ones)
     std::uint16_t speed = 0;           // run_state only
     Command previous = Command::stop;  // command in force before, restored on failure
     bool sent = false;

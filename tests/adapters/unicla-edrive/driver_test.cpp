@@ -152,6 +152,49 @@ TEST(UniclaDriver, SpeedChangeWhileRunningIsSentAndConfirmedBySpeed) {
   EXPECT_EQ(r.driver.common().speed_rpm, 4500);
 }
 
+// A PLC writes setpoint and run_forward in one request every cycle. While running that is two
+// Set Run State writes for the same thing: one frame carries both, and both complete ok (not
+// 0x0B for the first, superseded).
+TEST(UniclaDriver, SetpointAndRunTogetherWhileRunningShareOneFrame) {
+  Rig r;
+  r.start();
+  r.driver.setpoint(3000, 1, r.now());
+  r.driver.command(Command::run_forward, 2, r.now());
+  ASSERT_EQ(r.wait(2), WriteResult::ok);
+  r.bus.run_for(Millis(4000));
+  const std::size_t from = r.bus.sent.size();
+  ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
+  ASSERT_EQ(r.driver.command(Command::run_forward, 4, r.now()), WriteStatus::pending);
+  EXPECT_EQ(r.wait(4), WriteResult::ok);
+  EXPECT_EQ(r.wait(3), WriteResult::ok);
+  const auto runs = r.sent_with(kRun, from);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].payload, (Bytes{0x11, 0x94}));  // 4500
+}
+
+// A stop that supersedes an unconfirmed speed change leaves stop in force: a later setpoint is
+// stored, not sent (it must not start the drive).
+TEST(UniclaDriver, StopSupersedingASpeedChangeKeepsStopInForce) {
+  Rig r;
+  r.start();
+  r.driver.setpoint(3000, 1, r.now());
+  r.driver.command(Command::run_forward, 2, r.now());
+  ASSERT_EQ(r.wait(2), WriteResult::ok);
+  r.bus.run_for(Millis(4000));
+  ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
+  ASSERT_EQ(r.driver.command(Command::stop, 4, r.now()), WriteStatus::pending);
+  EXPECT_EQ(r.driver.common().command, Command::stop);
+  EXPECT_EQ(r.wait(3), WriteResult::no_response);  // superseded
+  EXPECT_EQ(r.wait(4), WriteResult::ok);
+  EXPECT_EQ(r.driver.common().command, Command::stop);
+  r.bus.run_for(Millis(3000));
+  const std::size_t from = r.bus.sent.size();
+  EXPECT_EQ(r.driver.setpoint(2000, 5, r.now()), WriteStatus::done);
+  r.bus.run_for(Millis(1000));
+  EXPECT_TRUE(r.sent_with(kRun, from).empty());
+  EXPECT_EQ(r.driver.common().speed_rpm, 0);
+}
+
 TEST(UniclaDriver, OutOfLimitsAndImpossibleCommandsAreRefusedLocally) {
   Rig r;
   // Before the running limits are read nothing can be judged.
