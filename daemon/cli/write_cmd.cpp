@@ -58,6 +58,21 @@ const char* exception_text(modbus::Exception e) {
   }
 }
 
+// The adapter's own explanation of a failed write, when it publishes one: the string point
+// named like the written one with its last word replaced by `message` (fdc1: prog_commit ->
+// prog_message).
+std::string failure_reason(Device& device, const std::string& point) {
+  const auto cut = point.rfind('_');
+  if (cut == std::string::npos) return {};
+  const std::string name = point.substr(0, cut) + "_message";
+  const auto& values = device.driver().values();
+  for (const auto& p : device.map().points()) {
+    if (p.common || p.spec.name != name || p.index >= values.size()) continue;
+    if (const auto* s = std::get_if<std::string>(&values[p.index])) return *s;
+  }
+  return {};
+}
+
 int run_writes(const std::filesystem::path& config_path, const std::filesystem::path& plugin_dir,
                const std::string& device_name, const std::vector<Assignment>& writes,
                Millis timeout) {
@@ -122,8 +137,13 @@ int run_writes(const std::filesystem::path& config_path, const std::filesystem::
     }
     const Resolved& r = resolved[next];
     const auto done = [&](modbus::Exception e) {
-      std::cout << writes[next].point << "=" << writes[next].value << ": " << exception_text(e)
-                << std::endl;
+      std::cout << writes[next].point << "=" << writes[next].value << ": " << exception_text(e);
+      if (e != modbus::Exception::none) {
+        if (const auto why = failure_reason(device, writes[next].point); !why.empty()) {
+          std::cout << ": " << why;
+        }
+      }
+      std::cout << std::endl;
       if (e != modbus::Exception::none) {
         exit_code = 1;
         gateway->stop();
