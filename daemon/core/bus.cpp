@@ -203,6 +203,7 @@ void Bus::process_rx(Device& dev) {
       case RxKind::frame: dev.frame_good(now); break;
       case RxKind::nack:
         ++dev.counters().nacks;
+        if (awaited) answered_ = true;
         if (retry_on_damage) {
           dev.sync(now);
           attempt_failed();
@@ -211,6 +212,7 @@ void Bus::process_rx(Device& dev) {
         break;
       case RxKind::bad_checksum:
         ++dev.counters().bad_checksum;
+        if (awaited) answered_ = true;
         if (retry_on_damage) {
           dev.sync(now);
           attempt_failed();
@@ -270,6 +272,7 @@ void Bus::begin(Device& dev, Exchange ex) {
       Millis(1);
   const auto fit = static_cast<int>(dev.config().budget / per_attempt);
   max_attempts_ = std::clamp(fit, 1, std::max<int>(1, exchange_->attempts));
+  answered_ = false;
   ++counters_.exchanges;
   send_attempt();
 }
@@ -357,7 +360,8 @@ void Bus::attempt_failed() {
   state_ = State::idle;
   echo_.clear();
   dev->driver().on_no_reply(now);
-  dev->turn_failed(now);
+  // A device that NACKs or answers garbled is there: keep its poll rate, back off only silence.
+  if (!answered_) dev->turn_failed(now);
   dev->sync(now);
   pump();
 }

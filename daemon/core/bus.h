@@ -86,6 +86,7 @@ class Bus : public std::enable_shared_from_this<Bus> {
   std::optional<Exchange> exchange_;
   int attempt_ = 0;
   int max_attempts_ = 1;
+  bool answered_ = false;  // the device sent something this exchange, if only a NACK
   std::size_t next_device_ = 0;  // round-robin position
   TimePoint last_activity_{};
   std::chrono::microseconds char_time_;
