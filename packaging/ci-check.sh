@@ -104,6 +104,12 @@ check "Depends carries the shared libraries it links" \
 check "the service is installed disabled" \
     sh -c '! test -e /etc/systemd/system/multi-user.target.wants/drivegate.service'
 
+# An edit to the conffile survives a reinstall (an upgrade keeps it the same way).
+echo "# edited by ci-check" >>/etc/drivegate/drivegate.toml
+apt-get install -y -qq --reinstall "$deb" >/dev/null
+check "the administrator's edit of drivegate.toml survives a reinstall" \
+    grep -qx "# edited by ci-check" /etc/drivegate/drivegate.toml
+
 # --- 4. the unit --------------------------------------------------------------------------------
 verify="$(systemd-analyze verify "$unit" 2>&1)"
 rc=$?
