@@ -91,7 +91,12 @@ void Fdc1Driver::confirm(const Status& s) {
   if (ok) {
     finish_speed_write(WriteResult::ok);
   } else if (alarmed && speed_write_->expect != Expect::motor_off) {
-    finish_speed_write(WriteResult::refused);  // the controller is in alarm
+    // The controller is in alarm: the run was refused, so it must not stay in force (the
+    // controller would start by itself once the alarm clears, after the PLC was told no).
+    finish_speed_write(WriteResult::refused);
+    common_.command = Command::stop;
+    common_.running = false;
+    send_now_ = true;
   }
 }
 

@@ -179,7 +179,15 @@ TEST(Fdc1Driver, RunDuringAnAlarmIsRefusedByTheStream) {
   ASSERT_TRUE(rig.settle(2));
   EXPECT_EQ(rig.result(2), WriteResult::refused);
   EXPECT_TRUE(rig.common().faults.has(Fault::supply_fault));
-  EXPECT_EQ(rig.bus->sent.back(), kRun2000);  // the command in force is still run
+  // A refused run does not stay in force: stop goes out, so the controller does not start by
+  // itself when the alarm clears after the PLC was told no.
+  EXPECT_EQ(rig.common().command, Command::stop);
+  rig.bus->run_for(100ms);
+  EXPECT_EQ(rig.bus->sent.back(), kStopFrame);
+  rig.sim->control("clear", rig.now());
+  rig.bus->run_for(3s);
+  EXPECT_EQ(rig.common().speed_rpm, 0);
+  EXPECT_FALSE(rig.common().running);
 }
 
 TEST(Fdc1Driver, UnconfirmedWriteFailsAfterConfirmMs) {
