@@ -149,7 +149,10 @@ TEST_F(Fdc1E2E, AlarmIsAUnifiedFaultWithItsRawCode) {
   EXPECT_FALSE(r.regs[0] & reg::fault);
   EXPECT_EQ(r.u32(reg::fault_mask), 0u);
   EXPECT_EQ(r.u32(reg::native_fault), 0u);
-  // Cleared, it runs again when asked.
+  // The refused run did not stay in force: cleared, the controller stays off until asked.
+  std::this_thread::sleep_for(1500ms);
+  EXPECT_EQ(plc_.holding(reg::command, 1).regs[0], 0);
+  EXPECT_EQ(plc_.input(reg::speed, 1).regs[0], 0);
   run_at_2000();
 }
 
