@@ -29,6 +29,7 @@ Bus::Bus(asio::io_context& io, BusConfig config, std::vector<Device*> devices,
       char_time_(char_time(config_)) {
   for (Device* d : devices_) {
     if (d->adapter().streaming) streaming_ = d;
+    d->attach_bus(&counters_);
   }
 }
 

@@ -20,15 +20,6 @@
 
 namespace drivegate {
 
-struct BusCounters {
-  std::uint32_t exchanges = 0;
-  std::uint32_t timeouts = 0;
-  std::uint32_t retries = 0;
-  std::uint32_t echo_errors = 0;  // our own bytes did not come back as sent
-  std::uint32_t noise_bytes = 0;  // bytes nobody asked for
-  std::uint32_t reopens = 0;
-};
-
 class Bus : public std::enable_shared_from_this<Bus> {
  public:
   Bus(boost::asio::io_context& io, BusConfig config, std::vector<Device*> devices,

@@ -188,6 +188,14 @@ void Device::refresh_dynamic(TimePoint now) {
   put32(13, counters_.timeouts);
   put32(15, counters_.retries);
   put32(17, counters_.nacks);
+  if (bus_counters_ != nullptr) {
+    put32(19, bus_counters_->exchanges);
+    put32(21, bus_counters_->timeouts);
+    put32(23, bus_counters_->echo_errors);
+    put32(25, bus_counters_->noise_bytes);
+    put32(27, bus_counters_->reopens);
+  }
+  put32(29, counters_.foreign);
   auto di = registers(Table::discrete);
   for (std::size_t b = 0; b < kStatusBitNames.size(); ++b) di[b] = (status >> b) & 1u;
 }

@@ -28,6 +28,16 @@ struct DeviceCounters {
   std::uint32_t noise_bytes = 0;
 };
 
+// Counters of the line a device is on, shown in every one of its devices' common block.
+struct BusCounters {
+  std::uint32_t exchanges = 0;
+  std::uint32_t timeouts = 0;
+  std::uint32_t retries = 0;
+  std::uint32_t echo_errors = 0;  // our own bytes did not come back as sent
+  std::uint32_t noise_bytes = 0;  // bytes nobody asked for
+  std::uint32_t reopens = 0;
+};
+
 class Device {
  public:
   Device(DeviceConfig config, const AdapterDescriptor& adapter, std::unique_ptr<Driver> driver,
@@ -48,6 +58,8 @@ class Device {
   [[nodiscard]] bool in_backoff(TimePoint now) const { return now < probe_at_; }
   [[nodiscard]] TimePoint probe_at() const { return probe_at_; }
   [[nodiscard]] bool has_pending_writes() const { return !pending_.empty(); }
+  // The counters of the bus this device is on (owned by the bus, which outlives reads).
+  void attach_bus(const BusCounters* counters) { bus_counters_ = counters; }
   // Called whenever a write is queued, so the bus can send it without waiting for a poll.
   void on_work(std::function<void()> kick) { kick_ = std::move(kick); }
 
@@ -103,6 +115,7 @@ class Device {
   RegisterMap map_;
   std::shared_ptr<spdlog::logger> log_;
   DeviceCounters counters_;
+  const BusCounters* bus_counters_ = nullptr;
   std::vector<std::uint16_t> image_[4];
 
   TimePoint last_good_;

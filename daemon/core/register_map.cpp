@@ -70,6 +70,21 @@ RegisterMap::RegisterMap(const std::vector<PointSpec>& adapter_points) {
              spec("retries", in, PointType::u32, "", "frames sent again")));
   add(common(CommonPoint::nacks, 17,
              spec("nacks", in, PointType::u32, "", "frames the device refused (NACK)")));
+  // The line's own counters, the same in every device on that bus.
+  add(common(CommonPoint::bus_exchanges, 19,
+             spec("bus_exchanges", in, PointType::u32, "", "transactions on this device's bus")));
+  add(common(CommonPoint::bus_timeouts, 21,
+             spec("bus_timeouts", in, PointType::u32, "", "unanswered attempts on the bus")));
+  add(common(CommonPoint::bus_echo_errors, 23,
+             spec("bus_echo_errors", in, PointType::u32, "",
+                  "one-wire echoes that differed from what was sent, or never came")));
+  add(common(CommonPoint::bus_noise_bytes, 25,
+             spec("bus_noise_bytes", in, PointType::u32, "", "bytes on the bus nobody asked for")));
+  add(common(CommonPoint::bus_reopens, 27,
+             spec("bus_reopens", in, PointType::u32, "", "times the port was reopened")));
+  add(common(CommonPoint::foreign_frames, 29,
+             spec("foreign_frames", in, PointType::u32, "",
+                  "good frames for another address or sequence, dropped")));
 
   auto command = spec("command", hr, PointType::u16, "",
                       "write to command the drive; reads the command in force");

@@ -60,6 +60,20 @@ TEST_F(DeviceTest, CommonBlockReflectsTheDriver) {
   EXPECT_EQ(r[10], 1u);                                 // frames good
 }
 
+TEST_F(DeviceTest, BusCountersShowInEveryDeviceOnTheBus) {
+  BusCounters bus{.exchanges = 70000, .timeouts = 3, .retries = 2, .echo_errors = 4,
+                  .noise_bytes = 5, .reopens = 6};
+  device_->attach_bus(&bus);
+  device_->counters().foreign = 7;
+  const auto r = input(19, 12, t0_);
+  EXPECT_EQ((std::uint32_t{r[0]} << 16) | r[1], 70000u);
+  EXPECT_EQ(r[3], 3);
+  EXPECT_EQ(r[5], 4);
+  EXPECT_EQ(r[7], 5);
+  EXPECT_EQ(r[9], 6);
+  EXPECT_EQ(r[11], 7);
+}
+
 TEST_F(DeviceTest, DataAgeSaysNeverBeforeTheFirstFrame) {
   const auto r = input(7, 2, t0_);
   EXPECT_EQ(r[0], 0xFFFF);
@@ -78,7 +92,7 @@ TEST_F(DeviceTest, AdapterPointsAreScaledIntoTheImage) {
 
 TEST_F(DeviceTest, ReadsOfUnmappedAddressesAreRefused) {
   std::vector<std::uint16_t> out(2);
-  EXPECT_EQ(device_->read(Table::input, 18, out, t0_), Exception::illegal_data_address);
+  EXPECT_EQ(device_->read(Table::input, 30, out, t0_), Exception::illegal_data_address);
   EXPECT_EQ(device_->read(Table::holding, 3, out, t0_), Exception::illegal_data_address);
   EXPECT_EQ(device_->read(Table::coil, 0, out, t0_), Exception::illegal_data_address);
 }

@@ -20,7 +20,9 @@ TEST(RegisterMap, CommonBlockIsFixed) {
   const std::pair<const char*, int> input[] = {
       {"status", 0},      {"fault_code", 1}, {"fault_mask", 2},   {"native_fault", 4},
       {"speed_rpm", 6},   {"data_age_ms", 7}, {"frames_good", 9}, {"bad_checksum", 11},
-      {"timeouts", 13},   {"retries", 15},    {"nacks", 17}};
+      {"timeouts", 13},   {"retries", 15},    {"nacks", 17},       {"bus_exchanges", 19},
+      {"bus_timeouts", 21}, {"bus_echo_errors", 23}, {"bus_noise_bytes", 25},
+      {"bus_reopens", 27},  {"foreign_frames", 29}};
   for (const auto& [name, address] : input) {
     EXPECT_EQ(named(m, name).address, address) << name;
     EXPECT_EQ(named(m, name).spec.table, Table::input) << name;
@@ -53,7 +55,7 @@ TEST(RegisterMap, AdapterPointsFollowTheCommonBlock) {
   EXPECT_EQ(named(m, "h").address, kAdapterHoldingBase);
   EXPECT_EQ(named(m, "d").address, kAdapterDiscreteBase);
   EXPECT_EQ(m.at(Table::input, kAdapterInputBase + 1)->spec.name, "a");
-  EXPECT_EQ(m.at(Table::input, 19), nullptr);  // the reserved gap
+  EXPECT_EQ(m.at(Table::input, 31), nullptr);  // the reserved gap
   EXPECT_EQ(m.at(Table::input, 60000), nullptr);
 }
 

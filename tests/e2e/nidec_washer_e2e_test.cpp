@@ -92,7 +92,7 @@ TEST_F(NidecE2E, UnknownUnitAndBadWritesAreExceptions) {
   EXPECT_EQ(other.input(0, 1).exception, 0x0A);
   EXPECT_EQ(plc_.write(reg::command, {9}), 0x03);    // no such command
   EXPECT_EQ(plc_.write(3, {1}), 0x02);               // unmapped
-  EXPECT_EQ(plc_.input(18, 2).exception, 0x02);      // reserved gap
+  EXPECT_EQ(plc_.input(31, 1).exception, 0x02);      // reserved gap
 }
 
 TEST_F(NidecE2E, SigtermStopsTheRunningDriveThenExitsZero) {
