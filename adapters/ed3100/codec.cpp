@@ -35,24 +35,6 @@ std::vector<std::uint16_t> words_at(std::span<const std::uint8_t> rx, std::size_
   return out;
 }
 
-template <class Frame>
-Decoded<Frame> bad(std::size_t consumed, FrameError e) {
-  Decoded<Frame> d;
-  d.status = DecodeStatus::bad;
-  d.consumed = consumed;
-  d.error = make_error_code(e);
-  return d;
-}
-
-template <class Frame>
-Decoded<Frame> good(std::size_t consumed, Frame f) {
-  Decoded<Frame> d;
-  d.status = DecodeStatus::frame;
-  d.consumed = consumed;
-  d.frame = std::move(f);
-  return d;
-}
-
 }  // namespace
 
 std::uint16_t crc16(std::span<const std::uint8_t> data) {
@@ -139,15 +121,15 @@ Decoded<Request> decode_request(std::span<const std::uint8_t> rx) {
       break;
     case kFnWriteMultiple:
       if (rx.size() < kWriteMultipleHeader) return {};
-      if (rx[6] == 0 || rx[6] % 2 != 0) return bad<Request>(1, FrameError::bad_length);
+      if (rx[6] == 0 || rx[6] % 2 != 0) return decoded_bad<Request>(1, FrameError::bad_length);
       size = kWriteMultipleHeader + rx[6] + kCrcSize;
       break;
     default:
-      return bad<Request>(1, FrameError::bad_header);
+      return decoded_bad<Request>(1, FrameError::bad_header);
   }
   if (rx.size() < size) return {};
   const auto frame = rx.first(size);
-  if (!crc_ok(frame)) return bad<Request>(size, FrameError::bad_checksum);
+  if (!crc_ok(frame)) return decoded_bad<Request>(size, FrameError::bad_checksum);
   Request r;
   r.address = rx[0];
   r.function = rx[1];
@@ -159,12 +141,12 @@ Decoded<Request> decode_request(std::span<const std::uint8_t> rx) {
     r.count = be16(rx[4], rx[5]);
     if (r.function == kFnWriteMultiple) {
       if (static_cast<std::size_t>(r.count) * 2 != rx[6]) {
-        return bad<Request>(size, FrameError::bad_length);
+        return decoded_bad<Request>(size, FrameError::bad_length);
       }
       r.words = words_at(rx, kWriteMultipleHeader, r.count);
     }
   }
-  return good(size, std::move(r));
+  return decoded_frame(size, std::move(r));
 }
 
 Decoded<Reply> decode_reply(std::span<const std::uint8_t> rx, const ReplyShape& shape) {
@@ -172,21 +154,21 @@ Decoded<Reply> decode_reply(std::span<const std::uint8_t> rx, const ReplyShape& 
   if (rx[1] == (shape.function | kExceptionBit)) {
     if (rx.size() < kExceptionSize) return {};
     if (!crc_ok(rx.first(kExceptionSize))) {
-      return bad<Reply>(kExceptionSize, FrameError::bad_checksum);
+      return decoded_bad<Reply>(kExceptionSize, FrameError::bad_checksum);
     }
     Reply r;
     r.address = rx[0];
     r.function = shape.function;
     r.kind = ReplyKind::exception;
     r.exception = rx[2];
-    return good(kExceptionSize, std::move(r));
+    return decoded_frame(kExceptionSize, std::move(r));
   }
-  if (rx[1] != shape.function) return bad<Reply>(1, FrameError::bad_header);
+  if (rx[1] != shape.function) return decoded_bad<Reply>(1, FrameError::bad_header);
 
   if (shape.function != kFnRead) {
     if (rx.size() < kWriteReplySize) return {};
     if (!crc_ok(rx.first(kWriteReplySize))) {
-      return bad<Reply>(kWriteReplySize, FrameError::bad_checksum);
+      return decoded_bad<Reply>(kWriteReplySize, FrameError::bad_checksum);
     }
     Reply r;
     r.address = rx[0];
@@ -194,7 +176,7 @@ Decoded<Reply> decode_reply(std::span<const std::uint8_t> rx, const ReplyShape& 
     r.kind = ReplyKind::write_echo;
     r.reg = be16(rx[2], rx[3]);
     r.value = be16(rx[4], rx[5]);
-    return good(kWriteReplySize, std::move(r));
+    return decoded_frame(kWriteReplySize, std::move(r));
   }
 
   // 03: the standard form is one byte shorter than the document's (a byte count instead of
@@ -210,17 +192,17 @@ Decoded<Reply> decode_reply(std::span<const std::uint8_t> rx, const ReplyShape& 
     r.function = kFnRead;
     r.kind = ReplyKind::read_standard;
     r.words = words_at(rx, 3, shape.words);
-    return good(standard, std::move(r));
+    return decoded_frame(standard, std::move(r));
   }
   if (rx.size() < document) return {};
-  if (!crc_ok(rx.first(document))) return bad<Reply>(document, FrameError::bad_checksum);
+  if (!crc_ok(rx.first(document))) return decoded_bad<Reply>(document, FrameError::bad_checksum);
   Reply r;
   r.address = rx[0];
   r.function = kFnRead;
   r.kind = ReplyKind::read_document;
   r.reg = be16(rx[2], rx[3]);
   r.words = words_at(rx, 4, shape.words);
-  return good(document, std::move(r));
+  return decoded_frame(document, std::move(r));
 }
 
 }  // namespace drivegate::ed3100

@@ -5,24 +5,6 @@
 namespace drivegate::fdc1 {
 namespace {
 
-template <class Frame>
-Decoded<Frame> bad(std::size_t consumed, FrameError e) {
-  Decoded<Frame> d;
-  d.status = DecodeStatus::bad;
-  d.consumed = consumed;
-  d.error = e;
-  return d;
-}
-
-template <class Frame>
-Decoded<Frame> good(std::size_t consumed, Frame f) {
-  Decoded<Frame> d;
-  d.status = DecodeStatus::frame;
-  d.consumed = consumed;
-  d.frame = std::move(f);
-  return d;
-}
-
 // Bytes to drop so that the buffer starts at the next byte that could be a header.
 std::size_t resync(ByteView rx, std::uint8_t head) {
   for (std::size_t i = 1; i < rx.size(); ++i) {
@@ -114,12 +96,12 @@ Bytes encode_echo(const Program& p) {
 Decoded<DeviceFrame> decode_device(ByteView rx) {
   if (rx.empty()) return {};
   if (rx[0] != kStatusHead0)
-    return bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_header);
+    return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_header);
   if (rx.size() < 2) return {};
   if (rx[1] == kStatusHead1) {
     if (rx.size() < kStatusSize) return {};
     const auto f = rx.first(kStatusSize);
-    if (!pair_holds(f)) return bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
+    if (!pair_holds(f)) return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
     Status s;
     s.motor_on = f[2] != 0;
     if (s.motor_on) {
@@ -128,7 +110,7 @@ Decoded<DeviceFrame> decode_device(ByteView rx) {
       s.alarm = f[3];
     }
     s.word = be16(f[4], f[5]);
-    return good<DeviceFrame>(kStatusSize, s);
+    return decoded_frame<DeviceFrame>(kStatusSize, s);
   }
   if (rx[1] == kProgramHead1) {
     if (rx.size() < kProgramSize) return {};
@@ -138,34 +120,34 @@ Decoded<DeviceFrame> decode_device(ByteView rx) {
       f[0] = kMasterHead0;  // checksum left as sent over 72 80
       holds = pair_holds(f);
     }
-    if (!holds) return bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
-    return good<DeviceFrame>(kProgramSize, Echo{program_fields(f)});
+    if (!holds) return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
+    return decoded_frame<DeviceFrame>(kProgramSize, Echo{program_fields(f)});
   }
-  return bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_header);
+  return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_header);
 }
 
 Decoded<MasterFrame> decode_master(ByteView rx) {
   if (rx.empty()) return {};
   if (rx[0] != kMasterHead0)
-    return bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_header);
+    return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_header);
   if (rx.size() < 2) return {};
   if (rx[1] == kSpeedHead1) {
     if (rx.size() < kSpeedSize) return {};
     const auto f = rx.first(kSpeedSize);
     if (xor_all(f.first(kSpeedSize - 1)) != f[kSpeedSize - 1]) {
-      return bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
+      return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
     }
     if (f[6] != kSpeedFixed)
-      return bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_field);
-    return good<MasterFrame>(kSpeedSize, Speed{be16(f[2], f[3]), be16(f[4], f[5])});
+      return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_field);
+    return decoded_frame<MasterFrame>(kSpeedSize, Speed{be16(f[2], f[3]), be16(f[4], f[5])});
   }
   if (rx[1] == kProgramHead1) {
     if (rx.size() < kProgramSize) return {};
     const auto f = rx.first(kProgramSize);
-    if (!pair_holds(f)) return bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
-    return good<MasterFrame>(kProgramSize, program_fields(f));
+    if (!pair_holds(f)) return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
+    return decoded_frame<MasterFrame>(kProgramSize, program_fields(f));
   }
-  return bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_header);
+  return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_header);
 }
 
 }  // namespace drivegate::fdc1

@@ -31,10 +31,8 @@ RxVerdict Fdc1Driver::on_receive(ByteView rx, TimePoint now) {
   switch (d.status) {
     case DecodeStatus::incomplete:
       return {RxKind::incomplete, 0};
-    case DecodeStatus::bad: {
-      const auto kind = d.error == FrameError::bad_checksum ? RxKind::bad_checksum : RxKind::noise;
-      return {kind, std::max<std::size_t>(1, d.consumed)};
-    }
+    case DecodeStatus::bad:
+      return damaged(d);
     case DecodeStatus::frame:
       break;
   }

@@ -13,24 +13,16 @@ std::uint8_t sum(ByteSpan bytes) {
   return static_cast<std::uint8_t>(std::accumulate(bytes.begin(), bytes.end(), 0u));
 }
 
-Decoded<Frame> bad(std::size_t consumed, FrameError e) {
-  Decoded<Frame> d;
-  d.status = DecodeStatus::bad;
-  d.consumed = consumed;
-  d.error = make_error_code(e);
-  return d;
-}
-
 // One frame at the start of rx, no resynchronisation.
 Decoded<Frame> decode_at(ByteSpan rx) {
   // Section 3: D2 is one of the two commands; anything else cannot start a frame.
-  if (rx.size() > 2 && !known_command(rx[2])) return bad(1, FrameError::bad_header);
+  if (rx.size() > 2 && !known_command(rx[2])) return decoded_bad<Frame>(1, FrameError::bad_header);
   if (rx.size() < kHeaderSize) return {};
   const std::size_t data_len = std::size_t{rx[3]} + 1;  // D3 = data length - 1
-  if (data_len > kMaxData) return bad(1, FrameError::bad_length);
+  if (data_len > kMaxData) return decoded_bad<Frame>(1, FrameError::bad_length);
   const std::size_t total = kOverhead + data_len;
   if (rx.size() < total) return {};
-  if (sum(rx.first(total)) != kChecksumTotal) return bad(total, FrameError::bad_checksum);
+  if (sum(rx.first(total)) != kChecksumTotal) return decoded_bad<Frame>(total, FrameError::bad_checksum);
   Decoded<Frame> d;
   d.status = DecodeStatus::frame;
   d.consumed = total;
@@ -66,7 +58,7 @@ Decoded<Frame> decode(ByteSpan rx) {
   // drop only the bytes before a checked frame that starts inside it.
   for (std::size_t k = 1; k < d.consumed; ++k) {
     if (decode_at(rx.subspan(k)).status == DecodeStatus::frame) {
-      return bad(k, FrameError::bad_header);
+      return decoded_bad<Frame>(k, FrameError::bad_header);
     }
   }
   return d;

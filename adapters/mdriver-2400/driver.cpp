@@ -97,8 +97,7 @@ RxVerdict MDriver::on_receive(ByteView rx, TimePoint now) {
     case DecodeStatus::incomplete:
       return {RxKind::incomplete, 0};
     case DecodeStatus::bad:
-      return {d.error == FrameError::bad_checksum ? RxKind::bad_checksum : RxKind::noise,
-              d.consumed};
+      return damaged(d);
     case DecodeStatus::frame:
       break;
   }

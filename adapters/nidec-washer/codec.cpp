@@ -13,15 +13,6 @@ constexpr std::array<std::uint8_t, 5> kNackBody = {0x00, 0xFF, 0x00, 0xFF, 0x00}
 constexpr std::array<std::uint8_t, kRequestData> kFctPattern = {0x12, 0x00, 0x34, 0x00,
                                                                 0x56, 0x00, 0x78, 0x00};
 
-template <class Frame>
-Decoded<Frame> bad(std::size_t consumed, FrameError e) {
-  Decoded<Frame> d;
-  d.status = DecodeStatus::bad;
-  d.consumed = consumed;
-  d.error = make_error_code(e);
-  return d;
-}
-
 bool checksum_holds(ByteView frame) {
   return xor_of(frame.first(frame.size() - 1)) == frame.back();
 }
@@ -134,16 +125,16 @@ Decoded<Reply> decode_reply(ByteView rx) {
   Decoded<Reply> d;
   if (rx.empty()) return d;
   const std::uint8_t header = rx[0];
-  if (header != kHeader && header != kNackHeader) return bad<Reply>(1, FrameError::bad_header);
+  if (header != kHeader && header != kNackHeader) return decoded_bad<Reply>(1, FrameError::bad_header);
   std::size_t size = kReplySize;
   if (header == kHeader) {
     if (rx.size() < 2) return d;
-    if (!is_v07_mode(rx[1])) return bad<Reply>(1, FrameError::bad_field);
+    if (!is_v07_mode(rx[1])) return decoded_bad<Reply>(1, FrameError::bad_field);
     if (static_cast<Mode>(rx[1]) == Mode::fct_test) size = kFctReplySize;  // 5.15
   }
   if (rx.size() < size) return d;
   const ByteView frame = rx.first(size);
-  if (!checksum_holds(frame)) return bad<Reply>(size, FrameError::bad_checksum);
+  if (!checksum_holds(frame)) return decoded_bad<Reply>(size, FrameError::bad_checksum);
   d.status = DecodeStatus::frame;
   d.consumed = size;
   if (header == kNackHeader) {
@@ -160,11 +151,11 @@ Decoded<Reply> decode_reply(ByteView rx) {
 Decoded<Request> decode_request(ByteView rx) {
   Decoded<Request> d;
   if (rx.empty()) return d;
-  if (rx[0] != kHeader) return bad<Request>(1, FrameError::bad_header);
+  if (rx[0] != kHeader) return decoded_bad<Request>(1, FrameError::bad_header);
   if (rx.size() < kRequestSize) return d;
   const ByteView frame = rx.first(kRequestSize);
-  if (!checksum_holds(frame)) return bad<Request>(kRequestSize, FrameError::bad_checksum);
-  if (!is_v07_mode(frame[1])) return bad<Request>(kRequestSize, FrameError::bad_field);
+  if (!checksum_holds(frame)) return decoded_bad<Request>(kRequestSize, FrameError::bad_checksum);
+  if (!is_v07_mode(frame[1])) return decoded_bad<Request>(kRequestSize, FrameError::bad_field);
   d.status = DecodeStatus::frame;
   d.consumed = kRequestSize;
   d.frame.mode = static_cast<Mode>(frame[1]);

@@ -11,14 +11,6 @@ constexpr std::uint16_t kCrcPoly = 0x1021;
 // "Payload Size" is the last header byte.
 constexpr std::size_t kPayloadSizeIndex = 7;
 
-Decoded<Frame> bad(std::size_t consumed, FrameError e) {
-  Decoded<Frame> d;
-  d.status = DecodeStatus::bad;
-  d.consumed = consumed;
-  d.error = make_error_code(e);
-  return d;
-}
-
 }  // namespace
 
 std::uint16_t crc16(ByteView data) {
@@ -76,16 +68,16 @@ Decoded<Frame> decode(ByteView rx) {
   if (rx[0] != kFlag) {
     std::size_t n = 1;
     while (n < rx.size() && rx[n] != kFlag) ++n;
-    return bad(n, FrameError::bad_header);
+    return decoded_bad<Frame>(n, FrameError::bad_header);
   }
   std::size_t end = 1;
   while (end < rx.size() && rx[end] != kFlag) ++end;
   if (end == rx.size()) {
     // No EOF yet. Past the longest possible frame the SOF was not one: drop it.
-    if (rx.size() > kMaxWireSize) return bad(1, FrameError::bad_length);
+    if (rx.size() > kMaxWireSize) return decoded_bad<Frame>(1, FrameError::bad_length);
     return {};
   }
-  if (end == 1) return bad(1, FrameError::bad_length);  // "7E 7E": an EOF followed by a SOF
+  if (end == 1) return decoded_bad<Frame>(1, FrameError::bad_length);  // "7E 7E": an EOF followed by a SOF
 
   Bytes body;
   body.reserve(end);
@@ -95,19 +87,19 @@ Decoded<Frame> decode(ByteView rx) {
       continue;
     }
     // Only 0x7E and 0x7D are ever stuffed, as 7D 5E and 7D 5D.
-    if (i + 1 >= end) return bad(end, FrameError::bad_escape);
+    if (i + 1 >= end) return decoded_bad<Frame>(end, FrameError::bad_escape);
     const auto plain = static_cast<std::uint8_t>(rx[i + 1] ^ kEscapeXor);
-    if (plain != kFlag && plain != kEscape) return bad(end, FrameError::bad_escape);
+    if (plain != kFlag && plain != kEscape) return decoded_bad<Frame>(end, FrameError::bad_escape);
     body.push_back(plain);
     ++i;
   }
-  if (body.size() < kHeaderSize + kCrcSize) return bad(end, FrameError::bad_length);
+  if (body.size() < kHeaderSize + kCrcSize) return decoded_bad<Frame>(end, FrameError::bad_length);
   if (body[kPayloadSizeIndex] != body.size() - kHeaderSize - kCrcSize) {
-    return bad(end, FrameError::bad_length);
+    return decoded_bad<Frame>(end, FrameError::bad_length);
   }
   const std::size_t crc_at = body.size() - kCrcSize;
   const std::uint16_t want = be16(body[crc_at], body[crc_at + 1]);
-  if (crc16(ByteView(body).first(crc_at)) != want) return bad(end, FrameError::bad_checksum);
+  if (crc16(ByteView(body).first(crc_at)) != want) return decoded_bad<Frame>(end, FrameError::bad_checksum);
 
   Decoded<Frame> d;
   d.status = DecodeStatus::frame;

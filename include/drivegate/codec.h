@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <string>
 #include <system_error>
+#include <utility>
 
 namespace drivegate {
 
@@ -57,6 +58,24 @@ struct Decoded {
   Frame frame{};           // valid when status == frame
   std::error_code error;   // set when status == bad
 };
+
+// The two non-incomplete answers, for decoders to return.
+template <class Frame>
+Decoded<Frame> decoded_bad(std::size_t consumed, FrameError e) {
+  Decoded<Frame> d;
+  d.status = DecodeStatus::bad;
+  d.consumed = consumed;
+  d.error = make_error_code(e);
+  return d;
+}
+template <class Frame>
+Decoded<Frame> decoded_frame(std::size_t consumed, Frame f) {
+  Decoded<Frame> d;
+  d.status = DecodeStatus::frame;
+  d.consumed = consumed;
+  d.frame = std::move(f);
+  return d;
+}
 
 }  // namespace drivegate
 

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "drivegate/codec.h"
 #include "drivegate/common.h"
 #include "drivegate/options.h"
 #include "drivegate/point.h"
@@ -64,6 +65,13 @@ struct RxVerdict {
   RxKind kind = RxKind::incomplete;
   std::size_t consumed = 0;  // bytes of the input this verdict covers (dropped from the buffer)
 };
+
+// The verdict for bytes a codec rejected: a checksum failure costs the exchange an attempt,
+// anything else is line noise to skip.
+template <class Frame>
+RxVerdict damaged(const Decoded<Frame>& d) {
+  return {d.error == FrameError::bad_checksum ? RxKind::bad_checksum : RxKind::noise, d.consumed};
+}
 
 // State every adapter publishes; the gateway turns it into the common register block.
 struct CommonState {
