@@ -101,7 +101,8 @@ Decoded<DeviceFrame> decode_device(ByteView rx) {
   if (rx[1] == kStatusHead1) {
     if (rx.size() < kStatusSize) return {};
     const auto f = rx.first(kStatusSize);
-    if (!pair_holds(f)) return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
+    if (!pair_holds(f))
+      return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
     Status s;
     s.motor_on = f[2] != 0;
     if (s.motor_on) {
@@ -144,7 +145,8 @@ Decoded<MasterFrame> decode_master(ByteView rx) {
   if (rx[1] == kProgramHead1) {
     if (rx.size() < kProgramSize) return {};
     const auto f = rx.first(kProgramSize);
-    if (!pair_holds(f)) return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
+    if (!pair_holds(f))
+      return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
     return decoded_frame<MasterFrame>(kProgramSize, program_fields(f));
   }
   return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_header);

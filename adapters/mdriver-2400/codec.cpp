@@ -22,7 +22,8 @@ Decoded<Frame> decode_at(ByteSpan rx) {
   if (data_len > kMaxData) return decoded_bad<Frame>(1, FrameError::bad_length);
   const std::size_t total = kOverhead + data_len;
   if (rx.size() < total) return {};
-  if (sum(rx.first(total)) != kChecksumTotal) return decoded_bad<Frame>(total, FrameError::bad_checksum);
+  if (sum(rx.first(total)) != kChecksumTotal)
+    return decoded_bad<Frame>(total, FrameError::bad_checksum);
   Decoded<Frame> d;
   d.status = DecodeStatus::frame;
   d.consumed = total;

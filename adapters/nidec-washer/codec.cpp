@@ -125,7 +125,8 @@ Decoded<Reply> decode_reply(ByteView rx) {
   Decoded<Reply> d;
   if (rx.empty()) return d;
   const std::uint8_t header = rx[0];
-  if (header != kHeader && header != kNackHeader) return decoded_bad<Reply>(1, FrameError::bad_header);
+  if (header != kHeader && header != kNackHeader)
+    return decoded_bad<Reply>(1, FrameError::bad_header);
   std::size_t size = kReplySize;
   if (header == kHeader) {
     if (rx.size() < 2) return d;

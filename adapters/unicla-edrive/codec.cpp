@@ -77,7 +77,8 @@ Decoded<Frame> decode(ByteView rx) {
     if (rx.size() > kMaxWireSize) return decoded_bad<Frame>(1, FrameError::bad_length);
     return {};
   }
-  if (end == 1) return decoded_bad<Frame>(1, FrameError::bad_length);  // "7E 7E": an EOF followed by a SOF
+  if (end == 1)
+    return decoded_bad<Frame>(1, FrameError::bad_length);  // "7E 7E": an EOF followed by a SOF
 
   Bytes body;
   body.reserve(end);
@@ -99,7 +100,8 @@ Decoded<Frame> decode(ByteView rx) {
   }
   const std::size_t crc_at = body.size() - kCrcSize;
   const std::uint16_t want = be16(body[crc_at], body[crc_at + 1]);
-  if (crc16(ByteView(body).first(crc_at)) != want) return decoded_bad<Frame>(end, FrameError::bad_checksum);
+  if (crc16(ByteView(body).first(crc_at)) != want)
+    return decoded_bad<Frame>(end, FrameError::bad_checksum);
 
   Decoded<Frame> d;
   d.status = DecodeStatus::frame;

@@ -68,8 +68,8 @@ int Daemon::run() {
   }
   gateway_->start();
   backend_.set(gateway_.get());
-  log_->info("serving {} devices on {} buses, Modbus TCP on port {}",
-             gateway_->devices().size(), config_.buses.size(), server_->port());
+  log_->info("serving {} devices on {} buses, Modbus TCP on port {}", gateway_->devices().size(),
+             config_.buses.size(), server_->port());
   wait_signal();
   notifier_.ready(status_line());
   tick_status();

@@ -4,13 +4,14 @@
 // keeps the running one when the new file is bad.
 #pragma once
 
+#include <spdlog/logger.h>
+
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <filesystem>
 #include <memory>
 #include <optional>
-#include <spdlog/logger.h>
 #include <string>
 
 #include "backend_switch.h"
@@ -24,8 +25,8 @@ namespace drivegate {
 
 struct DaemonOptions {
   std::filesystem::path config;
-  std::filesystem::path plugin_dir;     // empty: default_plugin_dir()
-  std::optional<ServerConfig> listen;   // host and port override [server] listen
+  std::filesystem::path plugin_dir;    // empty: default_plugin_dir()
+  std::optional<ServerConfig> listen;  // host and port override [server] listen
 };
 
 class Daemon {

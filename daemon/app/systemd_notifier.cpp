@@ -21,9 +21,17 @@ void SystemdNotifier::send(std::string_view state) {
 void SystemdNotifier::ready(std::string_view status) {
   send("READY=1\nSTATUS=" + std::string(status));
 }
-void SystemdNotifier::status(std::string_view status) { send("STATUS=" + std::string(status)); }
-void SystemdNotifier::reloading() { send("RELOADING=1\nSTATUS=reloading configuration"); }
-void SystemdNotifier::stopping() { send("STOPPING=1\nSTATUS=stopping drives"); }
-void SystemdNotifier::watchdog() { send("WATCHDOG=1"); }
+void SystemdNotifier::status(std::string_view status) {
+  send("STATUS=" + std::string(status));
+}
+void SystemdNotifier::reloading() {
+  send("RELOADING=1\nSTATUS=reloading configuration");
+}
+void SystemdNotifier::stopping() {
+  send("STOPPING=1\nSTATUS=stopping drives");
+}
+void SystemdNotifier::watchdog() {
+  send("WATCHDOG=1");
+}
 
 }  // namespace drivegate

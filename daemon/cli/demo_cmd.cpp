@@ -1,16 +1,16 @@
 // drivegate demo: a simulator for every installed adapter, the real daemon on them, and each
 // drive started at a typical speed, so a newcomer sees live values within seconds.
-#include <boost/asio/io_context.hpp>
-#include <boost/asio/signal_set.hpp>
 #include <modbus/modbus.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
 #include <csignal>
 #include <fstream>
 #include <iostream>
-#include <atomic>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -163,8 +163,8 @@ int demo(std::span<const std::string_view> args) {
     host->start();
     const int unit = static_cast<int>(units.size()) + 1;
     config << "\n[[bus]]\nname = \"" << a->id << "\"\nport = \"" << host->path() << "\"\n"
-           << "\n[[device]]\nname = \"" << a->id << "\"\nbus = \"" << a->id
-           << "\"\nadapter = \"" << a->id << "\"\nunit_id = " << unit << "\n";
+           << "\n[[device]]\nname = \"" << a->id << "\"\nbus = \"" << a->id << "\"\nadapter = \""
+           << a->id << "\"\nunit_id = " << unit << "\n";
     if (*drive.options != '\0') config << "[device.options]\n" << drive.options;
     units.push_back({unit, a->id, drive.rpm});
     sims.push_back(std::move(host));
@@ -174,8 +174,8 @@ int demo(std::span<const std::string_view> args) {
 
   const auto daemon = daemon_binary();
   const std::string listen_text = listen.host + ":" + std::to_string(listen.port);
-  std::vector<std::string> argv_s = {daemon.string(), "--config", config_path.string(),
-                                     "--listen", listen_text};
+  std::vector<std::string> argv_s = {daemon.string(), "--config", config_path.string(), "--listen",
+                                     listen_text};
   if (!plugin_dir.empty()) {
     argv_s.push_back("--plugin-dir");
     argv_s.push_back(plugin_dir.string());

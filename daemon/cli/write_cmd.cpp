@@ -5,11 +5,11 @@
 #include <boost/asio/steady_timer.hpp>
 #include <iostream>
 
+#include "app/logging.h"
 #include "cli/commands.h"
 #include "core/config_loader.h"
 #include "core/gateway.h"
 #include "core/value_codec.h"
-#include "app/logging.h"
 
 namespace drivegate::cli {
 
@@ -48,13 +48,18 @@ std::optional<double> parse_number(const std::string& s) {
 
 const char* exception_text(modbus::Exception e) {
   switch (e) {
-    case modbus::Exception::none: return "ok";
-    case modbus::Exception::illegal_data_address: return "not a writable point (0x02)";
-    case modbus::Exception::illegal_data_value: return "value refused (0x03)";
-    case modbus::Exception::server_device_failure: return "the device refused it (0x04)";
+    case modbus::Exception::none:
+      return "ok";
+    case modbus::Exception::illegal_data_address:
+      return "not a writable point (0x02)";
+    case modbus::Exception::illegal_data_value:
+      return "value refused (0x03)";
+    case modbus::Exception::server_device_failure:
+      return "the device refused it (0x04)";
     case modbus::Exception::gateway_target_failed:
       return "the device did not confirm it in time (0x0B)";
-    default: return "failed";
+    default:
+      return "failed";
   }
 }
 
@@ -152,8 +157,8 @@ int run_writes(const std::filesystem::path& config_path, const std::filesystem::
       ++next;
       asio::post(io, step);
     };
-    const auto e = device.write(r.point->spec.table, r.point->address, r.registers, done,
-                                Clock::now());
+    const auto e =
+        device.write(r.point->spec.table, r.point->address, r.registers, done, Clock::now());
     if (e != modbus::Exception::none) done(e);
   };
   std::function<void()> wait_online = [&] {
@@ -217,7 +222,8 @@ int write(std::span<const std::string_view> args) {
       return r.usage("unknown argument '" + std::string(arg) + "'", kUsage);
     }
   }
-  if (config.empty() || device.empty()) return r.usage("--config and --device are required", kUsage);
+  if (config.empty() || device.empty())
+    return r.usage("--config and --device are required", kUsage);
   if (writes.empty()) return r.usage("nothing to write", kUsage);
   return run_writes(config, plugin_dir, device, writes, timeout);
 }

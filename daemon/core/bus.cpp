@@ -1,8 +1,9 @@
 #include "bus.h"
 
+#include <spdlog/fmt/bin_to_hex.h>
+
 #include <boost/asio/post.hpp>
 #include <boost/asio/write.hpp>
-#include <spdlog/fmt/bin_to_hex.h>
 
 #include "serial_line.h"
 
@@ -114,16 +115,16 @@ void Bus::port_failed(const std::string& what) {
 }
 
 void Bus::read_more() {
-  port_.async_read_some(asio::buffer(chunk_), [self = shared_from_this()](
-                                                  const boost::system::error_code& ec,
-                                                  std::size_t n) {
-    if (ec) {
-      if (ec != asio::error::operation_aborted) self->port_failed("read: " + ec.message());
-      return;
-    }
-    self->on_bytes(n);
-    if (self->state_ != State::closed) self->read_more();
-  });
+  port_.async_read_some(
+      asio::buffer(chunk_),
+      [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
+        if (ec) {
+          if (ec != asio::error::operation_aborted) self->port_failed("read: " + ec.message());
+          return;
+        }
+        self->on_bytes(n);
+        if (self->state_ != State::closed) self->read_more();
+      });
 }
 
 // --- receiving ---
@@ -132,9 +133,9 @@ void Bus::on_bytes(std::size_t n) {
   const auto now = Clock::now();
   last_activity_ = now;
   log_->trace("bus {}: rx {:n}", config_.name, spdlog::to_hex(chunk_.begin(), chunk_.begin() + n));
-  const bool in_exchange = exchange_ && (state_ == State::writing ||
-                                         state_ == State::awaiting_echo ||
-                                         state_ == State::awaiting_reply);
+  const bool in_exchange =
+      exchange_ && (state_ == State::writing || state_ == State::awaiting_echo ||
+                    state_ == State::awaiting_reply);
   if (!in_exchange && streaming_ == nullptr) {
     counters_.noise_bytes += static_cast<std::uint32_t>(n);  // a late reply or line noise
     return;
@@ -201,7 +202,9 @@ void Bus::process_rx(Device& dev) {
           return;
         }
         break;
-      case RxKind::frame: dev.frame_good(now); break;
+      case RxKind::frame:
+        dev.frame_good(now);
+        break;
       case RxKind::nack:
         ++dev.counters().nacks;
         if (awaited) answered_ = true;
@@ -220,11 +223,14 @@ void Bus::process_rx(Device& dev) {
           return;
         }
         break;
-      case RxKind::foreign: ++dev.counters().foreign; break;
+      case RxKind::foreign:
+        ++dev.counters().foreign;
+        break;
       case RxKind::noise:
         dev.counters().noise_bytes += static_cast<std::uint32_t>(used);
         break;
-      case RxKind::incomplete: break;
+      case RxKind::incomplete:
+        break;
     }
   }
   dev.sync(now);
@@ -325,8 +331,8 @@ void Bus::after_sent() {
   }
   state_ = State::awaiting_reply;
   // The write completes when the kernel has the bytes, not when they have left the UART.
-  const auto on_wire = config_.echo ? std::chrono::microseconds(0)
-                                    : char_time_ * static_cast<long>(tx_.size());
+  const auto on_wire =
+      config_.echo ? std::chrono::microseconds(0) : char_time_ * static_cast<long>(tx_.size());
   arm(exchange_->timeout + on_wire, &Bus::on_reply_timeout);
   if (!rx_.empty()) process_rx(*current_);
 }
@@ -379,11 +385,11 @@ void Bus::finish() {
 void Bus::arm(std::chrono::steady_clock::duration after, void (Bus::*handler)()) {
   const std::uint64_t generation = ++timer_generation_;
   timer_.expires_after(after);
-  timer_.async_wait([self = shared_from_this(), generation,
-                     handler](const boost::system::error_code& ec) {
-    if (ec || generation != self->timer_generation_ || self->stopped_) return;
-    ((*self).*handler)();
-  });
+  timer_.async_wait(
+      [self = shared_from_this(), generation, handler](const boost::system::error_code& ec) {
+        if (ec || generation != self->timer_generation_ || self->stopped_) return;
+        ((*self).*handler)();
+      });
 }
 
 }  // namespace drivegate

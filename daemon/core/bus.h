@@ -7,12 +7,13 @@
 // The port is reopened by itself, with back-off, when it fails or vanishes.
 #pragma once
 
+#include <spdlog/logger.h>
+
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/serial_port.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <memory>
 #include <optional>
-#include <spdlog/logger.h>
 #include <vector>
 
 #include "config.h"
@@ -70,14 +71,14 @@ class Bus : public std::enable_shared_from_this<Bus> {
   State state_ = State::closed;
   std::array<std::uint8_t, 512> chunk_{};
   Bytes rx_;
-  Bytes tx_;                 // the frame being written (owned here while asio writes it)
-  Bytes echo_;               // bytes still expected back on a one-wire line
+  Bytes tx_;    // the frame being written (owned here while asio writes it)
+  Bytes echo_;  // bytes still expected back on a one-wire line
   bool echo_broken_ = false;
   Device* current_ = nullptr;
   std::optional<Exchange> exchange_;
   int attempt_ = 0;
   int max_attempts_ = 1;
-  bool answered_ = false;  // the device sent something this exchange, if only a NACK
+  bool answered_ = false;        // the device sent something this exchange, if only a NACK
   std::size_t next_device_ = 0;  // round-robin position
   TimePoint last_activity_{};
   std::chrono::microseconds char_time_;

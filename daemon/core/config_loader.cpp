@@ -37,7 +37,9 @@ class Diagnostics {
   std::string source_;
 };
 
-int line_of(const toml::node& n) { return static_cast<int>(n.source().begin.line); }
+int line_of(const toml::node& n) {
+  return static_cast<int>(n.source().begin.line);
+}
 
 // Reads the keys of one table, refusing the unknown ones.
 class TableReader {
@@ -266,8 +268,8 @@ std::optional<OptionValue> parse_option_text(const OptionSpec& spec, std::string
       case OptionType::integer: {
         const auto v = t.empty() ? 0 : std::stoll(t, &used, 0);
         if (!t.empty() && used != t.size()) break;
-        if (spec.min != spec.max && (static_cast<double>(v) < spec.min ||
-                                     static_cast<double>(v) > spec.max)) {
+        if (spec.min != spec.max &&
+            (static_cast<double>(v) < spec.min || static_cast<double>(v) > spec.max)) {
           error = std::string(spec.name) + ": must be in " + range_text(spec);
           return std::nullopt;
         }
@@ -291,7 +293,8 @@ std::optional<OptionValue> parse_option_text(const OptionSpec& spec, std::string
           return std::nullopt;
         }
         return OptionValue{t};
-      case OptionType::string_list: return OptionValue{split_list(t)};
+      case OptionType::string_list:
+        return OptionValue{split_list(t)};
     }
   } catch (const std::exception&) {
   }
@@ -304,9 +307,9 @@ Options default_options(const AdapterDescriptor& adapter) {
   for (std::size_t i = 0; i < adapter.option_count; ++i) {
     const OptionSpec& spec = adapter.options[i];
     std::string ignored;
-    values[spec.name] = parse_option_text(spec, spec.default_value ? spec.default_value : "",
-                                          ignored)
-                            .value_or(OptionValue{std::string()});
+    values[spec.name] =
+        parse_option_text(spec, spec.default_value ? spec.default_value : "", ignored)
+            .value_or(OptionValue{std::string()});
   }
   return Options(std::move(values));
 }
@@ -333,8 +336,8 @@ Options read_options(const AdapterDescriptor& adapter, const toml::table* table,
       std::string list;
       for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
       diag.error(&node, prefix + "." + std::string(key.str()),
-                 "unknown option for adapter '" + std::string(adapter.id) + "' (known: " +
-                     (list.empty() ? "none" : list) + ")");
+                 "unknown option for adapter '" + std::string(adapter.id) +
+                     "' (known: " + (list.empty() ? "none" : list) + ")");
     }
   }
   return options;
@@ -352,9 +355,9 @@ void read_server(const toml::table& root, Config& cfg, Diagnostics& diag) {
   r.expect({"listen", "max_clients", "idle_timeout_ms", "frame_timeout_ms"});
   if (auto listen = r.string("listen", false)) {
     if (!parse_listen(*listen, cfg.server)) {
-      diag.error(r.node("listen"), "server.listen",
-                 "must be \"host:port\" (e.g. \"0.0.0.0:502\" or \"[::]:502\"), got \"" +
-                     *listen + "\"");
+      diag.error(
+          r.node("listen"), "server.listen",
+          "must be \"host:port\" (e.g. \"0.0.0.0:502\" or \"[::]:502\"), got \"" + *listen + "\"");
     }
   }
   if (auto v = r.integer("max_clients", 1, 1024, false)) cfg.server.max_clients = *v;
@@ -528,8 +531,7 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
       } else if (!addressed) {
         diag.error(address, prefix + ".address",
                    "adapter '" + dev.adapter + "' has no bus address; remove the key");
-      } else if (auto v = r.integer("address", adapter->address_min, adapter->address_max,
-                                    false)) {
+      } else if (auto v = r.integer("address", adapter->address_min, adapter->address_max, false)) {
         dev.address = static_cast<std::uint32_t>(*v);
       }
       const toml::table* opts = options != nullptr ? options->as_table() : nullptr;
@@ -543,15 +545,15 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
         diag.error(&t, prefix + ".name", "device '" + dev.name + "' is declared twice");
       }
       if (dev.unit_id != 0 && other.unit_id == dev.unit_id) {
-        diag.error(r.node("unit_id"), prefix + ".unit_id",
-                   "unit " + std::to_string(dev.unit_id) + " is already device '" + other.name +
-                       "'");
+        diag.error(
+            r.node("unit_id"), prefix + ".unit_id",
+            "unit " + std::to_string(dev.unit_id) + " is already device '" + other.name + "'");
       }
       if (adapter != nullptr && adapter->address_max != 0 && other.bus == dev.bus &&
           other.address == dev.address) {
         diag.error(&t, prefix + ".address",
-                   "address " + std::to_string(dev.address) + " is already device '" +
-                       other.name + "' on bus '" + dev.bus + "'");
+                   "address " + std::to_string(dev.address) + " is already device '" + other.name +
+                       "' on bus '" + dev.bus + "'");
       }
     }
     cfg.devices.push_back(std::move(dev));
@@ -592,8 +594,7 @@ void cross_check(Config& cfg, const std::vector<LineGiven>& given, const PluginR
                       "adapter '" + dev->adapter +
                           "' streams unsolicited frames and must be alone on its bus");
       }
-      const bool same = a->line.baud == first->line.baud &&
-                        a->line.parity == first->line.parity &&
+      const bool same = a->line.baud == first->line.baud && a->line.parity == first->line.parity &&
                         a->line.data_bits == first->line.data_bits &&
                         a->line.stop_bits == first->line.stop_bits;
       if (!same && !g.framing()) {

@@ -33,9 +33,12 @@ namespace {
 
 Exception to_exception(WriteResult r) {
   switch (r) {
-    case WriteResult::ok: return Exception::none;
-    case WriteResult::refused: return Exception::server_device_failure;
-    case WriteResult::no_response: return Exception::gateway_target_failed;
+    case WriteResult::ok:
+      return Exception::none;
+    case WriteResult::refused:
+      return Exception::server_device_failure;
+    case WriteResult::no_response:
+      return Exception::gateway_target_failed;
   }
   return Exception::server_device_failure;
 }
@@ -48,8 +51,7 @@ std::uint32_t clamp_u32(long long v) {
 }  // namespace
 
 Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
-               std::unique_ptr<Driver> driver, std::shared_ptr<spdlog::logger> log,
-               TimePoint now)
+               std::unique_ptr<Driver> driver, std::shared_ptr<spdlog::logger> log, TimePoint now)
     : config_(std::move(config)),
       adapter_(adapter),
       driver_(std::move(driver)),
@@ -63,7 +65,9 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
   refresh_image(now);
 }
 
-bool Device::online() const { return ever_good_ && !comm_lost_ && driver_->common().ready; }
+bool Device::online() const {
+  return ever_good_ && !comm_lost_ && driver_->common().ready;
+}
 
 void Device::frame_good(TimePoint now) {
   ++counters_.frames_good;
@@ -147,8 +151,8 @@ void Device::refresh_image(TimePoint now) {
   const CommonState& c = driver_->common();
   auto hr = registers(Table::holding);
   hr[0] = static_cast<std::uint16_t>(c.command);
-  hr[1] = static_cast<std::uint16_t>(static_cast<std::int16_t>(
-      std::clamp<std::int32_t>(c.setpoint_rpm, -32768, 32767)));
+  hr[1] = static_cast<std::uint16_t>(
+      static_cast<std::int16_t>(std::clamp<std::int32_t>(c.setpoint_rpm, -32768, 32767)));
   hr[2] = heartbeat_;
   refresh_dynamic(now);
 }
@@ -276,7 +280,8 @@ WriteStatus Device::submit(const PointWrite& w, Ticket t, TimePoint now) {
     case CommonPoint::heartbeat:
       heartbeat_ = static_cast<std::uint16_t>(as_int());
       return WriteStatus::done;
-    default: return WriteStatus::invalid_value;
+    default:
+      return WriteStatus::invalid_value;
   }
 }
 
@@ -358,10 +363,14 @@ void Device::command(Command c, modbus::WriteDone done, TimePoint now) {
 namespace {
 constexpr std::string_view to_string(FailsafeAction a) {
   switch (a) {
-    case FailsafeAction::stop: return "stop";
-    case FailsafeAction::quick_stop: return "quick_stop";
-    case FailsafeAction::hold: return "hold";
-    case FailsafeAction::preset: return "preset";
+    case FailsafeAction::stop:
+      return "stop";
+    case FailsafeAction::quick_stop:
+      return "quick_stop";
+    case FailsafeAction::hold:
+      return "hold";
+    case FailsafeAction::preset:
+      return "preset";
   }
   return "stop";
 }
@@ -443,6 +452,5 @@ void Device::failsafe_settled(FailsafeAction action, Exception e) {
   }
   failsafe_retry_at_ = last_tick_ + kFailsafeRetry;
 }
-
 
 }  // namespace drivegate

@@ -3,12 +3,13 @@
 // to it; the gateway reads and writes its registers.
 #pragma once
 
+#include <spdlog/logger.h>
+
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
 #include <span>
-#include <spdlog/logger.h>
 #include <vector>
 
 #include "config.h"

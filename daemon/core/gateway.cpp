@@ -13,10 +13,14 @@ constexpr Millis kHousekeepingPeriod{100};
 
 Table to_table(modbus::RegisterTable t) {
   switch (t) {
-    case modbus::RegisterTable::coils: return Table::coil;
-    case modbus::RegisterTable::discrete_inputs: return Table::discrete;
-    case modbus::RegisterTable::input_registers: return Table::input;
-    case modbus::RegisterTable::holding_registers: return Table::holding;
+    case modbus::RegisterTable::coils:
+      return Table::coil;
+    case modbus::RegisterTable::discrete_inputs:
+      return Table::discrete;
+    case modbus::RegisterTable::input_registers:
+      return Table::input;
+    case modbus::RegisterTable::holding_registers:
+      return Table::holding;
   }
   return Table::input;
 }
@@ -32,8 +36,8 @@ std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescri
   std::string why;
   auto driver = adapter.create_driver(env, why);
   if (!driver) {
-    error = cfg.name + ": adapter '" + adapter.id + "' refused the device: " +
-            (why.empty() ? "no reason given" : why);
+    error = cfg.name + ": adapter '" + adapter.id +
+            "' refused the device: " + (why.empty() ? "no reason given" : why);
   }
   return driver;
 }
@@ -41,7 +45,9 @@ std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescri
 Gateway::Gateway(asio::io_context& io, std::shared_ptr<spdlog::logger> log)
     : io_(io), log_(std::move(log)), tick_(io) {}
 
-Gateway::~Gateway() { stop(); }
+Gateway::~Gateway() {
+  stop();
+}
 
 std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& config,
                                         const PluginRegistry& plugins,
@@ -59,8 +65,7 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
     std::string error;
     auto driver = make_driver(dc, *adapter, maintenance, error);
     if (!driver) {
-      errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device " +
-                       error);
+      errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device " + error);
       continue;
     }
     try {
@@ -132,15 +137,16 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
     }
     ++waiter->outstanding;
     log_->info("device {}: stopping for shutdown", d->config().name);
-    d->command(Command::stop,
-               [waiter, name = d->config().name, log = log_](Exception e) {
-                 if (e != Exception::none) {
-                   log->warn("device {}: stop not confirmed (exception 0x{:02X})", name,
-                             static_cast<int>(e));
-                 }
-                 if (--waiter->outstanding == 0) waiter->finish();
-               },
-               now);
+    d->command(
+        Command::stop,
+        [waiter, name = d->config().name, log = log_](Exception e) {
+          if (e != Exception::none) {
+            log->warn("device {}: stop not confirmed (exception 0x{:02X})", name,
+                      static_cast<int>(e));
+          }
+          if (--waiter->outstanding == 0) waiter->finish();
+        },
+        now);
   }
   if (waiter->outstanding == 0) {
     waiter->finish();
@@ -168,8 +174,8 @@ Exception Gateway::write(std::uint8_t unit, modbus::RegisterTable table, std::ui
 }
 
 std::size_t Gateway::devices_online() const {
-  return static_cast<std::size_t>(std::count_if(devices_.begin(), devices_.end(),
-                                                [](const auto& d) { return d->online(); }));
+  return static_cast<std::size_t>(
+      std::count_if(devices_.begin(), devices_.end(), [](const auto& d) { return d->online(); }));
 }
 
 std::size_t Gateway::buses_open() const {

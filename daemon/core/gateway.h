@@ -3,12 +3,13 @@
 // driver and are answered when the drive confirmed them.
 #pragma once
 
+#include <spdlog/logger.h>
+
 #include <array>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <functional>
 #include <memory>
-#include <spdlog/logger.h>
 #include <string>
 #include <vector>
 
@@ -31,8 +32,7 @@ class Gateway : public modbus::Backend {
   static std::unique_ptr<Gateway> build(boost::asio::io_context& io, const Config& config,
                                         const PluginRegistry& plugins,
                                         std::shared_ptr<spdlog::logger> log,
-                                        std::vector<std::string>& errors,
-                                        bool maintenance = false);
+                                        std::vector<std::string>& errors, bool maintenance = false);
   ~Gateway() override;
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;

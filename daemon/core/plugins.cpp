@@ -86,7 +86,9 @@ const AdapterDescriptor* PluginRegistry::find(std::string_view id) const {
   return nullptr;
 }
 
-std::vector<const AdapterDescriptor*> PluginRegistry::all() const { return descriptors_; }
+std::vector<const AdapterDescriptor*> PluginRegistry::all() const {
+  return descriptors_;
+}
 
 std::string PluginRegistry::ids() const {
   std::string out;

@@ -49,12 +49,14 @@ RegisterMap::RegisterMap(const std::vector<PointSpec>& adapter_points) {
   auto fault = spec("fault_code", in, PointType::u16, "", "most severe active fault (unified)");
   fault.labels = enum_labels(kFaultNames);
   add(common(CommonPoint::fault_code, 1, fault));
-  auto mask = spec("fault_mask", in, PointType::u32, "", "every active fault (bit n = fault_code n)");
+  auto mask =
+      spec("fault_mask", in, PointType::u32, "", "every active fault (bit n = fault_code n)");
   mask.labels = enum_labels(kFaultNames);
   mask.bit_labels = true;
   add(common(CommonPoint::fault_mask, 2, mask));
-  add(common(CommonPoint::native_fault, 4,
-             spec("native_fault", in, PointType::u32, "", "the protocol's raw fault code or bits")));
+  add(common(
+      CommonPoint::native_fault, 4,
+      spec("native_fault", in, PointType::u32, "", "the protocol's raw fault code or bits")));
   add(common(CommonPoint::speed_rpm, 6,
              spec("speed_rpm", in, PointType::i16, "rpm", "actual speed (negative: reverse)")));
   add(common(CommonPoint::data_age_ms, 7,

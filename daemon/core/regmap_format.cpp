@@ -8,22 +8,32 @@ namespace {
 
 const char* table_name(Table t) {
   switch (t) {
-    case Table::coil: return "coil";
-    case Table::discrete: return "discrete";
-    case Table::input: return "input";
-    case Table::holding: return "holding";
+    case Table::coil:
+      return "coil";
+    case Table::discrete:
+      return "discrete";
+    case Table::input:
+      return "input";
+    case Table::holding:
+      return "holding";
   }
   return "input";
 }
 
 const char* type_name(PointType t) {
   switch (t) {
-    case PointType::u16: return "u16";
-    case PointType::i16: return "i16";
-    case PointType::u32: return "u32";
-    case PointType::i32: return "i32";
-    case PointType::f32: return "f32";
-    case PointType::string: return "string";
+    case PointType::u16:
+      return "u16";
+    case PointType::i16:
+      return "i16";
+    case PointType::u32:
+      return "u32";
+    case PointType::i32:
+      return "i32";
+    case PointType::f32:
+      return "f32";
+    case PointType::string:
+      return "string";
   }
   return "u16";
 }
@@ -32,10 +42,18 @@ std::string json_string(std::string_view s) {
   std::string out = "\"";
   for (const char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buf[8];
@@ -125,9 +143,8 @@ std::string to_csv(const std::vector<DeviceRegisters>& devices) {
       out << int{dev.device->unit_id} << "," << csv_field(dev.device->name) << ","
           << csv_field(dev.device->adapter) << "," << csv_field(p.spec.name) << ","
           << table_name(p.spec.table) << "," << p.address << "," << type_of(p) << ","
-          << p.spec.register_count() << "," << number(p.spec.scale) << ","
-          << csv_field(p.spec.unit) << ","
-          << (p.spec.access() == Access::read_write ? "rw" : "r") << ","
+          << p.spec.register_count() << "," << number(p.spec.scale) << "," << csv_field(p.spec.unit)
+          << "," << (p.spec.access() == Access::read_write ? "rw" : "r") << ","
           << csv_field(p.spec.description) << "," << csv_field(labels_text(p.spec)) << "\n";
     }
   }
@@ -145,11 +162,11 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices) {
         << "| table | address | name | type | scale | unit | access | description | labels |\n"
         << "|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& p : dev.map.points()) {
-      out << "| " << table_name(p.spec.table) << " | " << p.address << " | " << md_field(p.spec.name)
-          << " | " << type_of(p) << " | " << number(p.spec.scale) << " | "
-          << md_field(p.spec.unit) << " | "
-          << (p.spec.access() == Access::read_write ? "rw" : "r") << " | "
-          << md_field(p.spec.description) << " | " << md_field(labels_text(p.spec)) << " |\n";
+      out << "| " << table_name(p.spec.table) << " | " << p.address << " | "
+          << md_field(p.spec.name) << " | " << type_of(p) << " | " << number(p.spec.scale) << " | "
+          << md_field(p.spec.unit) << " | " << (p.spec.access() == Access::read_write ? "rw" : "r")
+          << " | " << md_field(p.spec.description) << " | " << md_field(labels_text(p.spec))
+          << " |\n";
     }
   }
   return out.str();
@@ -159,9 +176,12 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices) {
 
 std::string format_regmap(const std::vector<DeviceRegisters>& devices, RegmapFormat format) {
   switch (format) {
-    case RegmapFormat::json: return to_json(devices);
-    case RegmapFormat::csv: return to_csv(devices);
-    case RegmapFormat::markdown: return to_markdown(devices);
+    case RegmapFormat::json:
+      return to_json(devices);
+    case RegmapFormat::csv:
+      return to_csv(devices);
+    case RegmapFormat::markdown:
+      return to_markdown(devices);
   }
   return {};
 }

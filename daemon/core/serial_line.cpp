@@ -42,8 +42,7 @@ std::error_code open_serial(asio::serial_port& port, const BusConfig& bus) {
 }
 
 std::chrono::microseconds char_time(const BusConfig& bus) {
-  const unsigned bits = 1u + bus.data_bits + (bus.parity == Parity::none ? 0u : 1u) +
-                        bus.stop_bits;
+  const unsigned bits = 1u + bus.data_bits + (bus.parity == Parity::none ? 0u : 1u) + bus.stop_bits;
   return std::chrono::microseconds(bits * 1'000'000ull / std::max<std::uint32_t>(bus.baud, 1));
 }
 

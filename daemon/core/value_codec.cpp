@@ -36,11 +36,15 @@ void put32(std::uint32_t v, std::span<std::uint16_t> out) {
 
 void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint16_t> out) {
   switch (spec.type) {
-    case PointType::u16: out[0] = saturate<std::uint16_t>(scaled(spec, value)); return;
+    case PointType::u16:
+      out[0] = saturate<std::uint16_t>(scaled(spec, value));
+      return;
     case PointType::i16:
       out[0] = static_cast<std::uint16_t>(saturate<std::int16_t>(scaled(spec, value)));
       return;
-    case PointType::u32: put32(saturate<std::uint32_t>(scaled(spec, value)), out); return;
+    case PointType::u32:
+      put32(saturate<std::uint32_t>(scaled(spec, value)), out);
+      return;
     case PointType::i32:
       put32(static_cast<std::uint32_t>(saturate<std::int32_t>(scaled(spec, value))), out);
       return;
@@ -68,16 +72,21 @@ std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::ui
   };
   const std::uint32_t u32 = in.size() >= 2 ? (std::uint32_t{in[0]} << 16) | in[1] : 0;
   switch (spec.type) {
-    case PointType::u16: return engineering(in[0]);
-    case PointType::i16: return engineering(static_cast<std::int16_t>(in[0]));
-    case PointType::u32: return engineering(u32);
-    case PointType::i32: return engineering(static_cast<std::int32_t>(u32));
+    case PointType::u16:
+      return engineering(in[0]);
+    case PointType::i16:
+      return engineering(static_cast<std::int16_t>(in[0]));
+    case PointType::u32:
+      return engineering(u32);
+    case PointType::i32:
+      return engineering(static_cast<std::int32_t>(u32));
     case PointType::f32: {
       const float f = std::bit_cast<float>(u32);
       if (!std::isfinite(f)) return std::nullopt;
       return static_cast<double>(f);
     }
-    case PointType::string: return std::nullopt;
+    case PointType::string:
+      return std::nullopt;
   }
   return std::nullopt;
 }

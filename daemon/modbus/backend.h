@@ -23,7 +23,12 @@ enum class Exception : std::uint8_t {
   gateway_target_failed = 0x0B,
 };
 
-enum class RegisterTable : std::uint8_t { coils, discrete_inputs, input_registers, holding_registers };
+enum class RegisterTable : std::uint8_t {
+  coils,
+  discrete_inputs,
+  input_registers,
+  holding_registers
+};
 
 using WriteDone = std::function<void(Exception)>;
 

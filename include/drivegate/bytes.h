@@ -11,8 +11,12 @@ namespace drivegate {
 constexpr std::uint16_t be16(std::uint8_t hi, std::uint8_t lo) {
   return static_cast<std::uint16_t>((hi << 8) | lo);
 }
-constexpr std::uint8_t hi8(std::uint16_t v) { return static_cast<std::uint8_t>(v >> 8); }
-constexpr std::uint8_t lo8(std::uint16_t v) { return static_cast<std::uint8_t>(v & 0xFF); }
+constexpr std::uint8_t hi8(std::uint16_t v) {
+  return static_cast<std::uint8_t>(v >> 8);
+}
+constexpr std::uint8_t lo8(std::uint16_t v) {
+  return static_cast<std::uint8_t>(v & 0xFF);
+}
 
 inline void put_be16(std::vector<std::uint8_t>& out, std::uint16_t v) {
   out.push_back(hi8(v));

@@ -17,12 +17,12 @@ enum class DecodeStatus : unsigned char {
 
 enum class FrameError {
   ok = 0,
-  bad_checksum = 1,   // frame-shaped, but the checksum does not hold
-  bad_header,         // the first byte(s) cannot start a frame
-  bad_length,         // a length field outside what the protocol allows
-  bad_field,          // a field value the protocol does not define
-  bad_escape,         // a stuffing escape followed by a byte it cannot escape
-  unexpected_frame,   // a good frame of a kind not expected here
+  bad_checksum = 1,  // frame-shaped, but the checksum does not hold
+  bad_header,        // the first byte(s) cannot start a frame
+  bad_length,        // a length field outside what the protocol allows
+  bad_field,         // a field value the protocol does not define
+  bad_escape,        // a stuffing escape followed by a byte it cannot escape
+  unexpected_frame,  // a good frame of a kind not expected here
 };
 
 class FrameErrorCategory final : public std::error_category {
@@ -30,13 +30,20 @@ class FrameErrorCategory final : public std::error_category {
   const char* name() const noexcept override { return "drivegate.frame"; }
   std::string message(int ev) const override {
     switch (static_cast<FrameError>(ev)) {
-      case FrameError::ok: return "ok";
-      case FrameError::bad_checksum: return "bad checksum";
-      case FrameError::bad_header: return "bad header";
-      case FrameError::bad_length: return "bad length";
-      case FrameError::bad_field: return "bad field";
-      case FrameError::bad_escape: return "bad escape sequence";
-      case FrameError::unexpected_frame: return "unexpected frame";
+      case FrameError::ok:
+        return "ok";
+      case FrameError::bad_checksum:
+        return "bad checksum";
+      case FrameError::bad_header:
+        return "bad header";
+      case FrameError::bad_length:
+        return "bad length";
+      case FrameError::bad_field:
+        return "bad field";
+      case FrameError::bad_escape:
+        return "bad escape sequence";
+      case FrameError::unexpected_frame:
+        return "unexpected frame";
     }
     return "unknown frame error";
   }
@@ -55,8 +62,8 @@ template <class Frame>
 struct Decoded {
   DecodeStatus status = DecodeStatus::incomplete;
   std::size_t consumed = 0;
-  Frame frame{};           // valid when status == frame
-  std::error_code error;   // set when status == bad
+  Frame frame{};          // valid when status == frame
+  std::error_code error;  // set when status == bad
 };
 
 // The two non-incomplete answers, for decoders to return.

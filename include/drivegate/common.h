@@ -76,19 +76,33 @@ class FaultSet {
 // Names used in the register map, the config and the logs.
 inline constexpr std::array<std::string_view, 5> kCommandNames = {
     "stop", "run_forward", "run_reverse", "quick_stop", "reset_fault"};
-inline constexpr std::array<std::string_view, kFaultCount> kFaultNames = {
-    "none",          "comm_lost",     "over_voltage",           "under_voltage",
-    "over_current",  "drive_over_temperature", "motor_over_temperature", "stall",
-    "phase_loss",    "overload",      "supply_fault",           "sensor_fault",
-    "hardware_fault", "internal_error", "config_error",         "process_limit",
-    "fan_fault",     "other"};
+inline constexpr std::array<std::string_view, kFaultCount> kFaultNames = {"none",
+                                                                          "comm_lost",
+                                                                          "over_voltage",
+                                                                          "under_voltage",
+                                                                          "over_current",
+                                                                          "drive_over_temperature",
+                                                                          "motor_over_temperature",
+                                                                          "stall",
+                                                                          "phase_loss",
+                                                                          "overload",
+                                                                          "supply_fault",
+                                                                          "sensor_fault",
+                                                                          "hardware_fault",
+                                                                          "internal_error",
+                                                                          "config_error",
+                                                                          "process_limit",
+                                                                          "fan_fault",
+                                                                          "other"};
 inline constexpr std::array<std::string_view, 7> kStatusBitNames = {
     "online", "running", "fault", "warning", "comm_lost", "failsafe", "command_pending"};
 
 constexpr std::string_view to_string(Command c) {
   return kCommandNames.at(static_cast<std::size_t>(c));
 }
-constexpr std::string_view to_string(Fault f) { return kFaultNames.at(static_cast<std::size_t>(f)); }
+constexpr std::string_view to_string(Fault f) {
+  return kFaultNames.at(static_cast<std::size_t>(f));
+}
 constexpr std::string_view to_string(StatusBit b) {
   return kStatusBitNames.at(static_cast<std::size_t>(b));
 }
@@ -102,24 +116,42 @@ constexpr std::optional<Command> command_from_value(std::uint16_t v) {
 // limits. The order is drivegate's choice; no vendor document ranks its faults.
 constexpr int severity(Fault f) {
   switch (f) {
-    case Fault::none: return 0;
-    case Fault::other: return 1;
-    case Fault::process_limit: return 2;
-    case Fault::config_error: return 3;
-    case Fault::comm_lost: return 4;
-    case Fault::sensor_fault: return 5;
-    case Fault::fan_fault: return 6;
-    case Fault::supply_fault: return 7;
-    case Fault::under_voltage: return 8;
-    case Fault::overload: return 9;
-    case Fault::stall: return 10;
-    case Fault::phase_loss: return 11;
-    case Fault::motor_over_temperature: return 12;
-    case Fault::drive_over_temperature: return 13;
-    case Fault::over_voltage: return 14;
-    case Fault::over_current: return 15;
-    case Fault::internal_error: return 16;
-    case Fault::hardware_fault: return 17;
+    case Fault::none:
+      return 0;
+    case Fault::other:
+      return 1;
+    case Fault::process_limit:
+      return 2;
+    case Fault::config_error:
+      return 3;
+    case Fault::comm_lost:
+      return 4;
+    case Fault::sensor_fault:
+      return 5;
+    case Fault::fan_fault:
+      return 6;
+    case Fault::supply_fault:
+      return 7;
+    case Fault::under_voltage:
+      return 8;
+    case Fault::overload:
+      return 9;
+    case Fault::stall:
+      return 10;
+    case Fault::phase_loss:
+      return 11;
+    case Fault::motor_over_temperature:
+      return 12;
+    case Fault::drive_over_temperature:
+      return 13;
+    case Fault::over_voltage:
+      return 14;
+    case Fault::over_current:
+      return 15;
+    case Fault::internal_error:
+      return 16;
+    case Fault::hardware_fault:
+      return 17;
   }
   return 0;
 }
@@ -133,7 +165,7 @@ constexpr Fault most_severe(FaultSet s) {
 }
 
 inline constexpr std::array<Command, 5> kAllCommands = {Command::stop, Command::run_forward,
-                                                       Command::run_reverse, Command::quick_stop,
-                                                       Command::reset_fault};
+                                                        Command::run_reverse, Command::quick_stop,
+                                                        Command::reset_fault};
 
 }  // namespace drivegate

@@ -46,8 +46,8 @@ enum class ReplyMode : std::uint8_t {
 struct Exchange {
   Bytes frame;
   ReplyMode reply = ReplyMode::expected;
-  Millis timeout{100};         // per attempt: from the last byte written to a complete reply
-  std::uint8_t attempts = 1;   // identical sends in this turn (1 = no retry)
+  Millis timeout{100};        // per attempt: from the last byte written to a complete reply
+  std::uint8_t attempts = 1;  // identical sends in this turn (1 = no retry)
   Priority priority = Priority::poll;
 };
 
@@ -75,14 +75,14 @@ RxVerdict damaged(const Decoded<Frame>& d) {
 
 // State every adapter publishes; the gateway turns it into the common register block.
 struct CommonState {
-  bool ready = false;       // the protocol's handshake is done (e.g. ping answered)
-  bool running = false;     // the motor turns or is commanded to
+  bool ready = false;    // the protocol's handshake is done (e.g. ping answered)
+  bool running = false;  // the motor turns or is commanded to
   bool warning = false;
-  FaultSet faults;          // unified faults now active (comm_lost is added by the gateway)
-  std::uint32_t native_fault = 0;  // the protocol's raw fault code or bitmask
-  std::int32_t speed_rpm = 0;      // actual speed, negative in reverse where the drive says so
-  std::int32_t setpoint_rpm = 0;   // the target the driver works towards
-  Command command = Command::stop; // the command in force
+  FaultSet faults;                  // unified faults now active (comm_lost is added by the gateway)
+  std::uint32_t native_fault = 0;   // the protocol's raw fault code or bitmask
+  std::int32_t speed_rpm = 0;       // actual speed, negative in reverse where the drive says so
+  std::int32_t setpoint_rpm = 0;    // the target the driver works towards
+  Command command = Command::stop;  // the command in force
 };
 
 // Ticket of a write in flight; the driver reports its outcome through take_completions().
@@ -117,8 +117,8 @@ struct DeviceEnv {
   std::string name;
   std::uint32_t address = 0;  // native bus address; 0 where the protocol has none
   Millis poll_interval{500};
-  Options options;            // validated against the adapter's schema, defaults filled in
-  bool maintenance = false;   // created by `drivegate write`: maintenance-only writes allowed
+  Options options;           // validated against the adapter's schema, defaults filled in
+  bool maintenance = false;  // created by `drivegate write`: maintenance-only writes allowed
 };
 
 class Driver {

@@ -22,9 +22,9 @@ struct OptionSpec {
   // "" = empty. Every option has a default, so drivers never meet a missing one.
   const char* default_value;
   const char* description;
-  double min = 0.0;           // integer / real only; min == max means unbounded
+  double min = 0.0;  // integer / real only; min == max means unbounded
   double max = 0.0;
-  const char* choices = "";   // string only: "normal|continuous"; empty = free text
+  const char* choices = "";  // string only: "normal|continuous"; empty = free text
 };
 
 using OptionValue = std::variant<std::int64_t, double, bool, std::string, std::vector<std::string>>;
@@ -37,7 +37,9 @@ class Options {
   explicit Options(std::map<std::string, OptionValue, std::less<>> values)
       : values_(std::move(values)) {}
 
-  [[nodiscard]] std::int64_t integer(std::string_view name) const { return get<std::int64_t>(name); }
+  [[nodiscard]] std::int64_t integer(std::string_view name) const {
+    return get<std::int64_t>(name);
+  }
   [[nodiscard]] double real(std::string_view name) const { return get<double>(name); }
   [[nodiscard]] bool boolean(std::string_view name) const { return get<bool>(name); }
   [[nodiscard]] const std::string& string(std::string_view name) const {

@@ -22,7 +22,7 @@ struct Label {
 };
 
 struct PointSpec {
-  std::string name;         // snake_case, unique within the device
+  std::string name;  // snake_case, unique within the device
   Table table = Table::input;
   PointType type = PointType::u16;
   // Engineering value = register value x scale (f32 and string points use 1).
@@ -45,9 +45,12 @@ struct PointSpec {
     switch (type) {
       case PointType::u32:
       case PointType::i32:
-      case PointType::f32: return 2;
-      case PointType::string: return string_registers;
-      default: return 1;
+      case PointType::f32:
+        return 2;
+      case PointType::string:
+        return string_registers;
+      default:
+        return 1;
     }
   }
 };

@@ -3,9 +3,18 @@
 
 #ifdef BAD_API_VERSION
 extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter = {
-    999,     "from-the-future", "an adapter built for another drivegate", nullptr, 0,
+    999,
+    "from-the-future",
+    "an adapter built for another drivegate",
+    nullptr,
+    0,
     {9600, drivegate::Parity::none, 8, 1, false},
-    0,       0,               0,     false, nullptr, nullptr};
+    0,
+    0,
+    0,
+    false,
+    nullptr,
+    nullptr};
 #else
 extern "C" DRIVEGATE_EXPORT const int not_a_drivegate_adapter;
 const int not_a_drivegate_adapter = 1;

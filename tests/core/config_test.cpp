@@ -92,8 +92,9 @@ TEST_F(ConfigTest, GoodFileLoadsWithAdapterDefaults) {
 
 TEST_F(ConfigTest, BusSettingsOverrideTheAdapter) {
   std::string text = kGood;
-  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21,
-               "port = \"/dev/ttyUSB0\"\nbaud = 9600\nparity = \"even\"\nstop_bits = 2\necho = false");
+  text.replace(
+      text.find("port = \"/dev/ttyUSB0\""), 21,
+      "port = \"/dev/ttyUSB0\"\nbaud = 9600\nparity = \"even\"\nstop_bits = 2\necho = false");
   auto r = parse(text);
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   EXPECT_EQ(r.config->buses[0].baud, 9600u);

@@ -1,9 +1,10 @@
 // A device's Modbus side: reads from the image, writes validated, then answered only when the
 // driver settles them; comm_lost and deadlines turn into 0x0B.
+#include "core/device.h"
+
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 
-#include "core/device.h"
 #include "fake_adapter.h"
 
 namespace drivegate {
@@ -33,7 +34,8 @@ class DeviceTest : public ::testing::Test {
   }
   Exception write(Table t, std::uint16_t address, std::vector<std::uint16_t> v,
                   std::optional<Exception>& answer) {
-    return device_->write(t, address, v, [&answer](Exception e) { answer = e; }, t0_);
+    return device_->write(
+        t, address, v, [&answer](Exception e) { answer = e; }, t0_);
   }
 
   TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
@@ -51,7 +53,7 @@ TEST_F(DeviceTest, CommonBlockReflectsTheDriver) {
   device_->frame_good(t0_);
   device_->sync(t0_);
   const auto r = input(0, 19, t0_ + Millis(250));
-  EXPECT_EQ(r[0], 0b0000'0111);  // online, running, fault
+  EXPECT_EQ(r[0], 0b0000'0111);                                    // online, running, fault
   EXPECT_EQ(r[1], static_cast<std::uint16_t>(Fault::phase_loss));  // the more severe
   EXPECT_EQ((std::uint32_t{r[2]} << 16) | r[3], (1u << 7) | (1u << 8));
   EXPECT_EQ(r[5], 0x48);
@@ -61,8 +63,12 @@ TEST_F(DeviceTest, CommonBlockReflectsTheDriver) {
 }
 
 TEST_F(DeviceTest, BusCountersShowInEveryDeviceOnTheBus) {
-  BusCounters bus{.exchanges = 70000, .timeouts = 3, .retries = 2, .echo_errors = 4,
-                  .noise_bytes = 5, .reopens = 6};
+  BusCounters bus{.exchanges = 70000,
+                  .timeouts = 3,
+                  .retries = 2,
+                  .echo_errors = 4,
+                  .noise_bytes = 5,
+                  .reopens = 6};
   device_->attach_bus(&bus);
   device_->counters().foreign = 7;
   const auto r = input(19, 12, t0_);
@@ -126,12 +132,12 @@ TEST_F(DeviceTest, RefusalAndSilenceBecomeExceptions) {
 
 TEST_F(DeviceTest, ValidationComesFirst) {
   std::optional<Exception> a;
-  EXPECT_EQ(write(Table::holding, 3, {1}, a), Exception::illegal_data_address);   // unmapped
-  EXPECT_EQ(write(Table::holding, 0, {9}, a), Exception::illegal_data_value);     // no such command
+  EXPECT_EQ(write(Table::holding, 3, {1}, a), Exception::illegal_data_address);  // unmapped
+  EXPECT_EQ(write(Table::holding, 0, {9}, a), Exception::illegal_data_value);    // no such command
   EXPECT_EQ(write(Table::holding, 16, {0, 5}, a), Exception::illegal_data_value);  // limit < 10
-  EXPECT_EQ(write(Table::holding, 17, {5}, a), Exception::illegal_data_address);  // mid-point
-  EXPECT_EQ(write(Table::holding, 16, {0}, a), Exception::illegal_data_address);  // half a u32
-  EXPECT_EQ(write(Table::input, 0, {0}, a), Exception::illegal_data_address);     // read-only
+  EXPECT_EQ(write(Table::holding, 17, {5}, a), Exception::illegal_data_address);   // mid-point
+  EXPECT_EQ(write(Table::holding, 16, {0}, a), Exception::illegal_data_address);   // half a u32
+  EXPECT_EQ(write(Table::input, 0, {0}, a), Exception::illegal_data_address);      // read-only
   EXPECT_TRUE(fake_->commands.empty());
   EXPECT_TRUE(fake_->writes.empty());
   EXPECT_FALSE(a);

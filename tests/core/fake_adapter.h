@@ -105,11 +105,29 @@ inline std::unique_ptr<Simulator> no_sim(const SimEnv&, std::string& error) {
   return nullptr;
 }
 
-inline const AdapterDescriptor kFakeAdapter = {
-    kAdapterApiVersion, "fake", "a scriptable adapter", kFakeOptions, std::size(kFakeOptions),
-    {4800, Parity::odd, 8, 1, true}, 1, 31, 1, false, make_fake, no_sim};
-inline const AdapterDescriptor kFakeStreamer = {
-    kAdapterApiVersion, "streamer", "streams", nullptr, 0, {1200, Parity::none, 8, 1, false},
-    0, 0, 0, true, make_fake, no_sim};
+inline const AdapterDescriptor kFakeAdapter = {kAdapterApiVersion,
+                                               "fake",
+                                               "a scriptable adapter",
+                                               kFakeOptions,
+                                               std::size(kFakeOptions),
+                                               {4800, Parity::odd, 8, 1, true},
+                                               1,
+                                               31,
+                                               1,
+                                               false,
+                                               make_fake,
+                                               no_sim};
+inline const AdapterDescriptor kFakeStreamer = {kAdapterApiVersion,
+                                                "streamer",
+                                                "streams",
+                                                nullptr,
+                                                0,
+                                                {1200, Parity::none, 8, 1, false},
+                                                0,
+                                                0,
+                                                0,
+                                                true,
+                                                make_fake,
+                                                no_sim};
 
 }  // namespace drivegate::test

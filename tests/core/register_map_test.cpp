@@ -1,8 +1,9 @@
 // The register map: the common block sits at the same addresses for every adapter; adapter
 // points follow it without overlap.
+#include "core/register_map.h"
+
 #include <gtest/gtest.h>
 
-#include "core/register_map.h"
 #include "drivegate/common.h"
 
 namespace drivegate {
@@ -18,9 +19,10 @@ const MappedPoint& named(const RegisterMap& m, const std::string& name) {
 TEST(RegisterMap, CommonBlockIsFixed) {
   const RegisterMap m({});
   const std::pair<const char*, int> input[] = {
-      {"status", 0},      {"fault_code", 1}, {"fault_mask", 2},   {"native_fault", 4},
-      {"speed_rpm", 6},   {"data_age_ms", 7}, {"frames_good", 9}, {"bad_checksum", 11},
-      {"timeouts", 13},   {"retries", 15},    {"nacks", 17},       {"bus_exchanges", 19},
+      {"status", 0},        {"fault_code", 1},       {"fault_mask", 2},
+      {"native_fault", 4},  {"speed_rpm", 6},        {"data_age_ms", 7},
+      {"frames_good", 9},   {"bad_checksum", 11},    {"timeouts", 13},
+      {"retries", 15},      {"nacks", 17},           {"bus_exchanges", 19},
       {"bus_timeouts", 21}, {"bus_echo_errors", 23}, {"bus_noise_bytes", 25},
       {"bus_reopens", 27},  {"foreign_frames", 29}};
   for (const auto& [name, address] : input) {

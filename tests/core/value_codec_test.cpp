@@ -1,7 +1,7 @@
 // Engineering values to registers and back: scale, sign, 32-bit word order, floats, strings.
-#include <gtest/gtest.h>
-
 #include "core/value_codec.h"
+
+#include <gtest/gtest.h>
 
 namespace drivegate {
 namespace {

@@ -24,8 +24,12 @@ Result run(std::vector<std::string> argv) {
   return {child.stop(0), out};
 }
 
-std::string drivegated() { return (bin_dir() / "drivegated").string(); }
-std::string drivegate() { return (bin_dir() / "drivegate").string(); }
+std::string drivegated() {
+  return (bin_dir() / "drivegated").string();
+}
+std::string drivegate() {
+  return (bin_dir() / "drivegate").string();
+}
 
 constexpr const char* kConfig = R"([server]
 listen = "127.0.0.1:1502"
@@ -44,8 +48,8 @@ unit_id = 1
 TEST(Cli, CheckConfigAcceptsAGoodFile) {
   TempDir dir;
   std::ofstream(dir / "good.toml") << kConfig;
-  const auto r = run({drivegated(), "--check-config", (dir / "good.toml").string(),
-                      "--plugin-dir", plugin_dir().string()});
+  const auto r = run({drivegated(), "--check-config", (dir / "good.toml").string(), "--plugin-dir",
+                      plugin_dir().string()});
   EXPECT_EQ(r.status, 0) << r.out;
   EXPECT_THAT(r.out, HasSubstr("OK (1 devices on 1 buses)"));
 }
@@ -55,8 +59,8 @@ TEST(Cli, CheckConfigNamesFileLineAndKey) {
   std::string text = kConfig;
   text.replace(text.find("unit_id = 1"), 11, "unit_id = 1\npoll = 5");
   std::ofstream(dir / "bad.toml") << text;
-  const auto r = run({drivegated(), "--check-config", (dir / "bad.toml").string(),
-                      "--plugin-dir", plugin_dir().string()});
+  const auto r = run({drivegated(), "--check-config", (dir / "bad.toml").string(), "--plugin-dir",
+                      plugin_dir().string()});
   EXPECT_EQ(r.status, 1);
   EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll: unknown key"));
 }
@@ -77,8 +81,8 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(run({drivegate()}).status, 2);
   EXPECT_EQ(run({drivegate(), "frobnicate"}).status, 2);
   EXPECT_EQ(run({drivegate(), "regmap"}).status, 2);
-  const auto sim = run({drivegate(), "sim", "no-such-adapter", "--plugin-dir",
-                        plugin_dir().string()});
+  const auto sim =
+      run({drivegate(), "sim", "no-such-adapter", "--plugin-dir", plugin_dir().string()});
   EXPECT_EQ(sim.status, 1);
   EXPECT_THAT(sim.out, HasSubstr("no adapter 'no-such-adapter'"));
 }
@@ -93,8 +97,8 @@ TEST(Cli, RegmapPrintsTheServedMap) {
                                "\"nidec-washer\""));
   EXPECT_THAT(r.out, HasSubstr("{\"name\": \"speed_rpm\", \"table\": \"input\", \"address\": 6, "
                                "\"type\": \"i16\""));
-  const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(),
-                       "--format", "md", "--plugin-dir", plugin_dir().string()});
+  const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
+                       "md", "--plugin-dir", plugin_dir().string()});
   EXPECT_THAT(md.out, HasSubstr("## Unit 1: washer (nidec-washer)"));
 }
 

@@ -21,8 +21,8 @@ class NidecE2E : public ::testing::Test {
   NidecE2E() : sim_("nidec-washer", dir_ / "washer"), daemon_(dir_, config(dir_ / "washer")) {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; },
-                           10s))
+    ASSERT_TRUE(
+        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
         << "never online; sim says " << sim_.control("state");
   }
   TempDir dir_;
@@ -70,8 +70,8 @@ TEST_F(NidecE2E, NativeFaultBecomesUnifiedFault) {
 TEST_F(NidecE2E, SilentDriveIsCommLostAndWritesGet0x0B) {
   sim_.control("silent on");
   const auto lost_at = std::chrono::steady_clock::now();
-  ASSERT_TRUE(eventually(
-      [&] { return (plc_.input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 8s));
+  ASSERT_TRUE(
+      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 8s));
   EXPECT_LT(std::chrono::steady_clock::now() - lost_at, 7s);
   const auto r = plc_.input(reg::status, 19);
   EXPECT_FALSE(r.regs[0] & reg::online);
@@ -81,8 +81,8 @@ TEST_F(NidecE2E, SilentDriveIsCommLostAndWritesGet0x0B) {
   EXPECT_EQ(plc_.write(reg::command, {1, 800}), 0x0B);
   // It is still probed, and comes back by itself.
   sim_.control("silent off");
-  ASSERT_TRUE(eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; },
-                         10s));
+  ASSERT_TRUE(
+      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
   EXPECT_EQ(plc_.write(reg::command, {1, 500}), 0);
 }
 
@@ -90,9 +90,9 @@ TEST_F(NidecE2E, UnknownUnitAndBadWritesAreExceptions) {
   Plc other(daemon_.port(), 9);
   ASSERT_TRUE(other.connect());
   EXPECT_EQ(other.input(0, 1).exception, 0x0A);
-  EXPECT_EQ(plc_.write(reg::command, {9}), 0x03);    // no such command
-  EXPECT_EQ(plc_.write(3, {1}), 0x02);               // unmapped
-  EXPECT_EQ(plc_.input(31, 1).exception, 0x02);      // reserved gap
+  EXPECT_EQ(plc_.write(reg::command, {9}), 0x03);  // no such command
+  EXPECT_EQ(plc_.write(3, {1}), 0x02);             // unmapped
+  EXPECT_EQ(plc_.input(31, 1).exception, 0x02);    // reserved gap
 }
 
 TEST_F(NidecE2E, SigtermStopsTheRunningDriveThenExitsZero) {

@@ -12,7 +12,8 @@ using namespace std::chrono_literals;
 std::string washer(const std::filesystem::path& port, int unit) {
   return "[[bus]]\nname = \"line\"\nport = \"" + port.string() +
          "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\nadapter = \"nidec-washer\"\n"
-         "unit_id = " + std::to_string(unit) + "\n";
+         "unit_id = " +
+         std::to_string(unit) + "\n";
 }
 
 bool online(Plc& plc) {

@@ -29,8 +29,12 @@ extern char** environ;
 
 namespace drivegate::test {
 
-inline std::filesystem::path bin_dir() { return DRIVEGATE_TEST_BIN_DIR; }
-inline std::filesystem::path plugin_dir() { return DRIVEGATE_TEST_PLUGIN_DIR; }
+inline std::filesystem::path bin_dir() {
+  return DRIVEGATE_TEST_BIN_DIR;
+}
+inline std::filesystem::path plugin_dir() {
+  return DRIVEGATE_TEST_PLUGIN_DIR;
+}
 
 // A temporary directory removed with its contents at the end of the test.
 class TempDir {
@@ -171,8 +175,13 @@ class Sim {
   static std::vector<std::string> argv(const std::string& adapter,
                                        const std::filesystem::path& link,
                                        std::vector<std::string> extra) {
-    std::vector<std::string> a = {(bin_dir() / "drivegate").string(), "sim", adapter, "--link",
-                                  link.string(), "--plugin-dir", plugin_dir().string()};
+    std::vector<std::string> a = {(bin_dir() / "drivegate").string(),
+                                  "sim",
+                                  adapter,
+                                  "--link",
+                                  link.string(),
+                                  "--plugin-dir",
+                                  plugin_dir().string()};
     a.insert(a.end(), extra.begin(), extra.end());
     return a;
   }
@@ -224,10 +233,10 @@ class Plc {
   Read holding(int address, int count) { return read(address, count, true); }
   // 0 on success, else the Modbus exception code (negative: a transport error).
   int write(int address, std::vector<std::uint16_t> values) {
-    const int rc = values.size() == 1
-                       ? modbus_write_register(ctx_, address, values[0])
-                       : modbus_write_registers(ctx_, address, static_cast<int>(values.size()),
-                                                values.data());
+    const int rc =
+        values.size() == 1
+            ? modbus_write_register(ctx_, address, values[0])
+            : modbus_write_registers(ctx_, address, static_cast<int>(values.size()), values.data());
     return rc >= 0 ? 0 : code(errno);
   }
 
@@ -299,11 +308,11 @@ inline bool eventually(const std::function<bool()>& condition,
 // Addresses of the common block (docs/register-map.md).
 namespace reg {
 inline constexpr int status = 0, fault_code = 1, fault_mask = 2, native_fault = 4, speed = 6,
-                     data_age = 7, frames_good = 9, bad_checksum = 11, timeouts = 13,
-                     retries = 15, nacks = 17;
+                     data_age = 7, frames_good = 9, bad_checksum = 11, timeouts = 13, retries = 15,
+                     nacks = 17;
 inline constexpr int command = 0, setpoint = 1, heartbeat = 2;
-inline constexpr std::uint16_t online = 1 << 0, running = 1 << 1, fault = 1 << 2,
-                               warning = 1 << 3, comm_lost = 1 << 4;
+inline constexpr std::uint16_t online = 1 << 0, running = 1 << 1, fault = 1 << 2, warning = 1 << 3,
+                               comm_lost = 1 << 4;
 }  // namespace reg
 
 }  // namespace drivegate::test

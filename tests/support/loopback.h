@@ -70,9 +70,14 @@ class Loopback {
       advance(now_ + turnaround);
       if (line_filter) reply = line_filter(std::move(reply));
       switch (deliver(reply)) {
-        case Outcome::reply: return;
-        case Outcome::resend: continue;
-        case Outcome::silence: ++timeouts; advance(now_ + ex.timeout); continue;
+        case Outcome::reply:
+          return;
+        case Outcome::resend:
+          continue;
+        case Outcome::silence:
+          ++timeouts;
+          advance(now_ + ex.timeout);
+          continue;
       }
     }
     driver_.on_no_reply(now_);
@@ -89,11 +94,23 @@ class Loopback {
       pending_.erase(pending_.begin(),
                      pending_.begin() + static_cast<long>(std::max<std::size_t>(1, v.consumed)));
       switch (v.kind) {
-        case RxKind::reply: good(); pending_.clear(); return Outcome::reply;
-        case RxKind::frame: good(); break;
-        case RxKind::nack: ++nacks; outcome = Outcome::resend; break;
-        case RxKind::bad_checksum: ++bad_frames; outcome = Outcome::resend; break;
-        default: break;
+        case RxKind::reply:
+          good();
+          pending_.clear();
+          return Outcome::reply;
+        case RxKind::frame:
+          good();
+          break;
+        case RxKind::nack:
+          ++nacks;
+          outcome = Outcome::resend;
+          break;
+        case RxKind::bad_checksum:
+          ++bad_frames;
+          outcome = Outcome::resend;
+          break;
+        default:
+          break;
       }
     }
     if (outcome == Outcome::resend) pending_.clear();
