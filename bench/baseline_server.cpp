@@ -21,7 +21,9 @@
 
 namespace {
 
-constexpr int kHoldingRegisters = 125;  // the FC03 maximum quantity (Application Protocol 6.3)
+// FC03 of 125 (the maximum quantity, Application Protocol 6.3) from address 16, as drivegate
+// serves it from the ed3100 parameters.
+constexpr int kHoldingRegisters = 16 + 125;
 
 volatile std::sig_atomic_t g_stop = 0;  // signal handler flag: the one global this tool needs
 void on_signal(int) {

@@ -9,11 +9,11 @@
 # Then the independence check: the ed3100 drive goes silent (times out on every poll) while fdc1
 # keeps streaming, and drivegate is measured again at N = 1 and 8.
 #
-# Both sides get the same request stream (see docs/performance.md for why it is this one):
-#   large: FC04 input registers 32..128 (97 registers, unicla-edrive's points, unit 5)
-#   small: FC04 input registers 0..18 (the common block, unit 5)
+# Both sides get the same request stream (see docs/performance.md):
+#   large: FC03 holding registers 16..140 (125 registers: the ed3100's 125 parameters, unit 2)
+#   small: FC04 input registers 0..18 (the common block, unit 2)
 # Environment: ROUNDS (3), DURATION (3 s per run), WARMUP (0.5 s), CONNS ("1 8 64"),
-#   SERVER_CPU (0), LOAD_CPU (1), LARGE (4:32:97), SMALL (4:0:19), UNIT (5).
+#   SERVER_CPU (0), LOAD_CPU (1), LARGE (3:16:125), SMALL (4:0:19), UNIT (2).
 set -euo pipefail
 
 B=$(realpath "${1:-build-bench}")
@@ -25,9 +25,9 @@ WARMUP=${WARMUP:-0.5}
 CONNS=${CONNS:-"1 8 64"}
 SERVER_CPU=${SERVER_CPU:-0}
 LOAD_CPU=${LOAD_CPU:-1}
-LARGE=${LARGE:-4:32:97}
+LARGE=${LARGE:-3:16:125}
 SMALL=${SMALL:-4:0:19}
-UNIT=${UNIT:-5}
+UNIT=${UNIT:-2}
 DG_PORT=${DG_PORT:-15020}
 BASE_PORT=${BASE_PORT:-15030}
 HERE=$(dirname "$(realpath "$0")")
@@ -74,6 +74,15 @@ for d in "${DRIVES[@]}"; do
     echo; echo "[[device]]"; echo "name = \"$id\""; echo "bus = \"$id\""
     echo "adapter = \"$id\""; echo "unit_id = $unit"
     if [[ $opt != - ]]; then echo "[device.options]"; echo "${opt%%=*} = ${opt#*=}"; fi
+    # 125 ed3100 parameters: holding registers 16..140, the FC03 of 125 the issue asks for.
+    if [[ $id == ed3100 ]]; then
+      echo "[device.options]"
+      printf 'parameters = ['
+      for i in $(seq 0 124); do
+        printf '%s"%02d-%02d"' "$([[ $i -gt 0 ]] && echo ,)" $((i / 100)) $((i % 100))
+      done
+      echo ']'
+    fi
   } >>"$W/bench.toml"
 done
 for d in "${DRIVES[@]}"; do
