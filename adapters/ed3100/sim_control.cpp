@@ -1,9 +1,9 @@
 // The simulator's operator commands (`drivegate sim` passes stdin lines to control()).
-#include <charconv>
 #include <cstdio>
 #include <sstream>
 
 #include "config.h"
+#include "drivegate/sim_text.h"
 #include "registers.h"
 #include "simulator.h"
 
@@ -17,15 +17,8 @@ std::string hex(std::uint16_t v) {
 }
 
 std::optional<std::uint16_t> number(std::string_view s) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    s.remove_prefix(2);
-    base = 16;
-  }
-  unsigned v = 0;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (ec != std::errc{} || p != s.data() + s.size() || v > 0xFFFF) return std::nullopt;
-  return static_cast<std::uint16_t>(v);
+  if (const auto v = parse_unsigned(s, 0xFFFF)) return static_cast<std::uint16_t>(*v);
+  return std::nullopt;
 }
 
 }  // namespace

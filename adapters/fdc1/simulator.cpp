@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cstdio>
 #include <sstream>
 
+#include "drivegate/sim_text.h"
 #include "program.h"
 
 namespace drivegate::fdc1 {
@@ -38,15 +38,8 @@ constexpr std::string_view kCommands =
     "delay S, thermostat on|off, window S";
 
 std::optional<long> parse_number(std::string_view s) {
-  int base = 10;
-  if (s.starts_with("0x") || s.starts_with("0X")) {
-    s.remove_prefix(2);
-    base = 16;
-  }
-  long v = 0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) return std::nullopt;
-  return v;
+  if (const auto v = parse_unsigned(s)) return static_cast<long>(*v);
+  return std::nullopt;
 }
 
 }  // namespace

@@ -1,10 +1,10 @@
 #include "simulator.h"
 
-#include <charconv>
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
+#include "drivegate/sim_text.h"
 #include "error_codes.h"
 #include "rpm_table.h"
 
@@ -16,23 +16,13 @@ constexpr const char* kHelp =
     "info <1..3> N | power-cycle";
 
 std::vector<std::string> words(std::string_view line) {
-  std::vector<std::string> out;
-  std::istringstream in{std::string(line)};
-  for (std::string w; in >> w;) out.push_back(w);
-  return out;
+  return split_words(line);
 }
 
 // Decimal or 0x-prefixed hex, 0..255.
 std::optional<std::uint8_t> parse_byte(std::string_view s) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    s.remove_prefix(2);
-    base = 16;
-  }
-  unsigned v = 0;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (ec != std::errc{} || p != s.data() + s.size() || v > 0xFF) return std::nullopt;
-  return static_cast<std::uint8_t>(v);
+  if (const auto v = parse_unsigned(s, 0xFF)) return static_cast<std::uint8_t>(*v);
+  return std::nullopt;
 }
 
 std::string hex(std::uint8_t v) {

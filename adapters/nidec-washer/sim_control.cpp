@@ -1,9 +1,9 @@
 // WasherSimulator: operator commands (`drivegate sim nidec-washer` passes stdin lines here).
-#include <charconv>
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
+#include "drivegate/sim_text.h"
 #include "faults.h"
 #include "simulator.h"
 
@@ -15,24 +15,13 @@ constexpr const char* kHelp =
     "bus V, fabric N, version N";
 
 std::vector<std::string> words(std::string_view line) {
-  std::istringstream in{std::string(line)};
-  std::vector<std::string> out;
-  for (std::string w; in >> w;) out.push_back(w);
-  return out;
+  return split_words(line);
 }
 
 // Decimal or 0x-prefixed hexadecimal, within [0, max].
 std::optional<long> number(const std::string& s, long max) {
-  int base = 10;
-  std::string_view v = s;
-  if (v.size() > 2 && v[0] == '0' && (v[1] == 'x' || v[1] == 'X')) {
-    base = 16;
-    v.remove_prefix(2);
-  }
-  long n = 0;
-  const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n, base);
-  if (ec != std::errc{} || p != v.data() + v.size() || n < 0 || n > max) return std::nullopt;
-  return n;
+  if (const auto v = parse_unsigned(s, static_cast<std::uint32_t>(max))) return long{*v};
+  return std::nullopt;
 }
 
 std::string hex(unsigned v, int width) {

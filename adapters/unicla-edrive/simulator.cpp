@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
+#include "drivegate/sim_text.h"
 #include "faults.h"
 #include "labels.h"
 
@@ -31,28 +31,13 @@ bool is_fault(OpState s) {
   return is_fault_state(static_cast<std::uint8_t>(s));
 }
 
-std::vector<std::string_view> words(std::string_view line) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-  return out;
+std::vector<std::string> words(std::string_view line) {
+  return split_words(line);
 }
 
 std::optional<long> number(std::string_view s) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    s.remove_prefix(2);
-    base = 16;
-  }
-  long v = 0;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (ec != std::errc() || p != s.data() + s.size()) return std::nullopt;
-  return v;
+  if (const auto v = parse_unsigned(s)) return static_cast<long>(*v);
+  return std::nullopt;
 }
 
 std::optional<bool> on_off(std::string_view s) {
