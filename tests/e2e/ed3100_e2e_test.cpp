@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "e2e.h"
+#include "trace_log.h"
 
 namespace drivegate::test {
 namespace {
@@ -40,61 +41,6 @@ std::string config(const std::filesystem::path& port) {
          "unit_id = 1\naddress = 31\n[device.options]\nparameters = [\"00-06\"]\n";
 }
 
-// Points this process's stderr at `file` until restore(): a child started meanwhile keeps it.
-class StderrToFile {
- public:
-  explicit StderrToFile(const std::filesystem::path& file) : saved_(::dup(STDERR_FILENO)) {
-    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw std::runtime_error("cannot open " + file.string());
-    ::dup2(fd, STDERR_FILENO);
-    ::close(fd);
-  }
-  ~StderrToFile() { restore(); }
-  StderrToFile(const StderrToFile&) = delete;
-  StderrToFile& operator=(const StderrToFile&) = delete;
-  void restore() {
-    if (saved_ < 0) return;
-    ::dup2(saved_, STDERR_FILENO);
-    ::close(saved_);
-    saved_ = -1;
-  }
-
- private:
-  int saved_;
-};
-
-// Hex bytes as "1F 03 ..." whatever spacing and case the log used.
-std::string normalise(const std::string& hex) {
-  std::istringstream in(hex);
-  std::string out;
-  for (std::string b; in >> b;) {
-    std::transform(b.begin(), b.end(), b.begin(), [](unsigned char c) { return std::toupper(c); });
-    out += (out.empty() ? "" : " ") + b;
-  }
-  return out;
-}
-
-// What drivegated logged at trace level for one bus: every "tx" line is one frame; the "rx" lines
-// are the chunks it read, joined into one byte stream.
-struct Wire {
-  std::vector<std::string> tx;
-  std::string rx;
-};
-Wire wire(const std::filesystem::path& log) {
-  const std::string tx = std::string("bus ") + kBus + ": tx ";
-  const std::string rx = std::string("bus ") + kBus + ": rx ";
-  Wire w;
-  std::ifstream in(log);
-  for (std::string line; std::getline(in, line);) {
-    if (const auto p = line.find(tx); p != std::string::npos) {
-      w.tx.push_back(normalise(line.substr(p + tx.size())));
-    } else if (const auto q = line.find(rx); q != std::string::npos) {
-      w.rx += (w.rx.empty() ? "" : " ") + normalise(line.substr(q + rx.size()));
-    }
-  }
-  return w;
-}
-
 float f32(const Plc::Read& r, std::size_t at) {
   return std::bit_cast<float>(r.u32(at));
 }
@@ -106,17 +52,14 @@ class Ed3100E2E : public ::testing::Test {
  protected:
   Ed3100E2E()
       : sim_("ed3100", dir_ / "ed", {"--address", "31"}),
-        capture_(dir_ / "drivegated.log"),
-        daemon_(dir_, config(dir_ / "ed"), {"--log-level", "trace"}) {
-    capture_.restore();
-  }
+        daemon_(dir_, config(dir_ / "ed"), {"--log-level", "trace"}, dir_ / "drivegated.log") {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
     ASSERT_TRUE(
         eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
         << "never online; sim says " << sim_.control("state");
   }
-  Wire frames() { return wire(dir_ / "drivegated.log"); }
+  Wire frames() { return read_wire(dir_ / "drivegated.log", kBus); }
   // True once `frame` has been sent (and, if given, `reply` received) on the line.
   bool seen(const std::string& frame, const std::string& reply = "") {
     const Wire w = frames();
@@ -127,7 +70,6 @@ class Ed3100E2E : public ::testing::Test {
 
   TempDir dir_;
   Sim sim_;
-  StderrToFile capture_;
   Daemon daemon_;
   Plc plc_{daemon_.port()};
 };

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "e2e.h"
+#include "trace_log.h"
 
 namespace drivegate::test {
 namespace {
@@ -38,85 +39,24 @@ std::string config(const std::filesystem::path& port, int poll_ms) {
          "\"\nadapter = \"mdriver-2400\"\nunit_id = 1\npoll_ms = " + std::to_string(poll_ms) + "\n";
 }
 
-// Points this process's stderr at `file` until restore(): a child started meanwhile keeps it.
-class StderrToFile {
- public:
-  explicit StderrToFile(const std::filesystem::path& file) : saved_(::dup(STDERR_FILENO)) {
-    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw std::runtime_error("cannot open " + file.string());
-    ::dup2(fd, STDERR_FILENO);
-    ::close(fd);
-  }
-  ~StderrToFile() { restore(); }
-  StderrToFile(const StderrToFile&) = delete;
-  StderrToFile& operator=(const StderrToFile&) = delete;
-  void restore() {
-    if (saved_ < 0) return;
-    ::dup2(saved_, STDERR_FILENO);
-    ::close(saved_);
-    saved_ = -1;
-  }
-
- private:
-  int saved_;
-};
-
-std::string normalise(const std::string& hex) {
-  std::istringstream in(hex);
-  std::string out;
-  for (std::string b; in >> b;) {
-    std::transform(b.begin(), b.end(), b.begin(), [](unsigned char c) { return std::toupper(c); });
-    out += (out.empty() ? "" : " ") + b;
-  }
-  return out;
-}
-
-// One frame drivegated sent, with the log's time of day in ms ("YYYY-MM-DD HH:MM:SS.mmm ...").
-struct Sent {
-  std::string frame;
-  long ms = 0;
-};
-std::vector<Sent> sent(const std::filesystem::path& log) {
-  const std::string tx = std::string("bus ") + kBus + ": tx ";
-  std::vector<Sent> out;
-  std::ifstream in(log);
-  for (std::string line; std::getline(in, line);) {
-    const auto p = line.find(tx);
-    if (p == std::string::npos) continue;
-    Sent s{normalise(line.substr(p + tx.size()))};
-    int h = 0, m = 0, sec = 0, milli = 0;
-    if (std::sscanf(line.c_str(), "%*d-%*d-%*d %d:%d:%d.%d", &h, &m, &sec, &milli) == 4) {
-      s.ms = ((h * 60L + m) * 60L + sec) * 1000L + milli;
-    }
-    out.push_back(std::move(s));
-  }
-  return out;
-}
-
 class MDriverE2E : public ::testing::Test {
  protected:
   explicit MDriverE2E(int poll_ms = 500)
       : sim_("mdriver-2400", dir_ / "compressor"),
-        capture_(dir_ / "drivegated.log"),
-        daemon_(dir_, config(dir_ / "compressor", poll_ms), {"--log-level", "trace"}) {
-    capture_.restore();
-  }
+        daemon_(dir_, config(dir_ / "compressor", poll_ms), {"--log-level", "trace"},
+                dir_ / "drivegated.log") {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
     ASSERT_TRUE(
         eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
         << "never online; sim says " << sim_.control("state");
   }
-  std::vector<std::string> frames() {
-    std::vector<std::string> f;
-    for (auto& s : sent(dir_ / "drivegated.log")) f.push_back(std::move(s.frame));
-    return f;
-  }
+  std::vector<std::string> frames() { return wire().tx; }
+  Wire wire() { return read_wire(dir_ / "drivegated.log", kBus); }
   std::uint16_t in(int address) { return plc_.input(address, 1).regs[0]; }
 
   TempDir dir_;
   Sim sim_;
-  StderrToFile capture_;
   Daemon daemon_;
   Plc plc_{daemon_.port()};
 };
@@ -216,16 +156,16 @@ class MDriverKeepAliveE2E : public MDriverE2E {
 
 TEST_F(MDriverKeepAliveE2E, KeepsTheDriverRunningWellPast6sWithoutModbusTraffic) {
   ASSERT_EQ(plc_.write(reg::command, {1, 1149}), 0);
-  const std::size_t before = sent(dir_ / "drivegated.log").size();
+  const std::size_t before = wire().tx.size();
   std::this_thread::sleep_for(9s);  // no Modbus traffic
   EXPECT_THAT(sim_.control("state"), HasSubstr("target=0x40 change=0x01 actual=0x40"));
   EXPECT_THAT(sim_.control("state"), HasSubstr("error=0x00"));
-  const auto s = sent(dir_ / "drivegated.log");
+  const Wire w = wire();
   long gap = 0;
   std::size_t runs = 0;
-  for (std::size_t i = before; i < s.size(); ++i) {
-    EXPECT_EQ(s[i].frame, kRun1149);  // the current target, every time
-    if (i > before) gap = std::max(gap, s[i].ms - s[i - 1].ms);
+  for (std::size_t i = before; i < w.tx.size(); ++i) {
+    EXPECT_EQ(w.tx[i], kRun1149);  // the current target, every time
+    if (i > before) gap = std::max(gap, w.tx_ms[i] - w.tx_ms[i - 1]);
     ++runs;
   }
   EXPECT_GE(runs, 6u);    // keepalive_ms 1000 over 9 s

@@ -62,7 +62,8 @@ class TempDir {
 // A child process with its stdin and stdout on pipes; stderr is inherited (test log).
 class Child {
  public:
-  explicit Child(std::vector<std::string> argv) {
+  // `stderr_file`: where the child's stderr goes (empty: inherited, into the test's log).
+  explicit Child(std::vector<std::string> argv, const std::filesystem::path& stderr_file = {}) {
     int in[2];
     int out[2];
     if (::pipe2(in, O_CLOEXEC) != 0 || ::pipe2(out, O_CLOEXEC) != 0) {
@@ -72,6 +73,10 @@ class Child {
     posix_spawn_file_actions_init(&fa);
     posix_spawn_file_actions_adddup2(&fa, in[0], STDIN_FILENO);
     posix_spawn_file_actions_adddup2(&fa, out[1], STDOUT_FILENO);
+    if (!stderr_file.empty()) {
+      posix_spawn_file_actions_addopen(&fa, STDERR_FILENO, stderr_file.c_str(),
+                                       O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    }
     std::vector<char*> args;
     for (auto& a : argv) args.push_back(a.data());
     args.push_back(nullptr);
@@ -259,8 +264,10 @@ class Plc {
 // drivegated on a configuration written from `toml`, listening on a free loopback port.
 class Daemon {
  public:
-  Daemon(const TempDir& dir, const std::string& toml, std::vector<std::string> extra = {})
-      : port_(free_port()), config_(dir / "drivegate.toml"), child_(argv(dir, toml, extra)) {
+  // `log`: where its stderr goes (empty: the test's own stderr).
+  Daemon(const TempDir& dir, const std::string& toml, std::vector<std::string> extra = {},
+         const std::filesystem::path& log = {})
+      : port_(free_port()), config_(dir / "drivegate.toml"), child_(argv(dir, toml, extra), log) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
     while (std::chrono::steady_clock::now() < deadline) {
       Plc probe(port_);
