@@ -2,15 +2,11 @@
 // 9600 8E1 line, the simulator answering as the document's examples do, driven from Modbus TCP
 // as a PLC would. The frames on the line are taken from drivegated's trace log and compared with
 // the frames the document prints (adapters/ed3100/README.md, "Golden vectors").
-#include <fcntl.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
-#include <cctype>
-#include <cstring>
 #include <sstream>
 
 #include "e2e.h"
