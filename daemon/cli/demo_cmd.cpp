@@ -51,12 +51,17 @@ const std::map<std::string, DemoDrive, std::less<>>& demo_drives() {
   return drives;
 }
 
-std::filesystem::path daemon_binary() {
+std::filesystem::path self_path() {
   std::error_code ec;
-  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec && std::filesystem::exists(self.parent_path() / "drivegated")) {
-    return self.parent_path() / "drivegated";
-  }
+  auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path("drivegate") : self;
+}
+
+// The daemon beside this program (the build tree's bin/), else the installed one.
+std::filesystem::path daemon_binary() {
+  const auto beside = self_path().parent_path() / "drivegated";
+  std::error_code ec;
+  if (std::filesystem::exists(beside, ec)) return beside;
   return "/usr/sbin/drivegated";
 }
 
@@ -190,18 +195,27 @@ int demo(std::span<const std::string_view> args) {
   }
 
   int exit_code = 0;
+  // Ctrl-C: the daemon is told first and the simulators keep answering until it has stopped
+  // every drive and exited, as a real shutdown would go; only then does the demo end.
+  bool stopping = false;
   asio::signal_set signals(io, SIGINT, SIGTERM, SIGCHLD);
   std::function<void()> wait_signal = [&] {
     signals.async_wait([&](const boost::system::error_code& ec, int signo) {
       if (ec) return;
-      if (signo == SIGCHLD) {
-        int status = 0;
-        if (::waitpid(child, &status, WNOHANG) != child) {
-          wait_signal();
-          return;
-        }
+      if (signo != SIGCHLD) {
+        if (!stopping && child > 0) ::kill(child, signo);
+        stopping = true;
+        wait_signal();
+        return;
+      }
+      int status = 0;
+      if (::waitpid(child, &status, WNOHANG) != child) {
+        wait_signal();
+        return;
+      }
+      child = -1;
+      if (!stopping) {
         std::cerr << "drivegate demo: the daemon exited\n";
-        child = -1;
         exit_code = 1;
       }
       io.stop();
@@ -212,11 +226,13 @@ int demo(std::span<const std::string_view> args) {
   // The simulators live on this thread's io_context; talking Modbus to the daemon (which waits
   // on them) happens on another, so neither ever waits for the other.
   std::atomic<bool> quit{false};
+  std::atomic<bool> gave_up{false};
   std::thread client([&] {
     int tries = 0;
     while (!quit && !port_answers(listen.host, listen.port)) {
       if (++tries > 100) {
         std::cerr << "drivegate demo: the daemon does not answer on " << listen_text << "\n";
+        gave_up = true;
         ::kill(::getpid(), SIGTERM);
         return;
       }
@@ -236,20 +252,23 @@ int demo(std::span<const std::string_view> args) {
           << "\n";
     }
     const std::string host = listen.host == "0.0.0.0" ? "127.0.0.1" : listen.host;
-    out << "\nRead unit 1's status, faults, speed and counters (input registers 0..17):\n"
-        << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 3 -r 1 -c 18 -1 " << host << "\n"
+    out << "\nRead unit 1's status, faults, speed and counters (input registers 0..18; mbpoll's\n"
+        << "-r is the 1-based PLC reference, and it shows 32-bit values as two 16-bit words):\n"
+        << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 3 -r 1 -c 19 -1 " << host << "\n"
         << "Stop it (holding register 0 is the command; 0 = stop, 1 = run_forward):\n"
         << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 4 -r 1 " << host << " 0\n"
         << "The register map of every unit:\n"
-        << "  drivegate regmap --config " << config_path.string() << " --format md\n"
+        << "  " << self_path().string() << " regmap --config " << config_path.string()
+        << " --format md\n"
         << "\nCtrl-C stops the demo.\n";
     std::cout << out.str() << std::flush;
   });
   io.run();
   quit = true;
   client.join();
+  if (gave_up) exit_code = 1;
 
-  if (child > 0) {
+  if (child > 0) {  // the client thread gave up on the daemon
     ::kill(child, SIGTERM);
     int status = 0;
     ::waitpid(child, &status, 0);
