@@ -54,6 +54,24 @@ TEST(Cli, CheckConfigAcceptsAGoodFile) {
   EXPECT_THAT(r.out, HasSubstr("OK (1 devices on 1 buses)"));
 }
 
+// The configurations people copy from must stay valid: the README's sample and the installed
+// example (both name ports that need not exist; --check-config does not open them).
+TEST(Cli, TheDocumentedConfigurationsAreValid) {
+  std::ifstream readme(std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "README.md");
+  std::string text((std::istreambuf_iterator<char>(readme)), std::istreambuf_iterator<char>());
+  const auto start = text.find("```toml\n");
+  ASSERT_NE(start, std::string::npos);
+  const auto end = text.find("```", start + 8);
+  TempDir dir;
+  std::ofstream(dir / "readme.toml") << text.substr(start + 8, end - start - 8);
+  for (const auto& file : {dir / "readme.toml",
+                           std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "etc/drivegate.toml"}) {
+    const auto r =
+        run({drivegated(), "--check-config", file.string(), "--plugin-dir", plugin_dir().string()});
+    EXPECT_EQ(r.status, 0) << file << ": " << r.out;
+  }
+}
+
 TEST(Cli, CheckConfigNamesFileLineAndKey) {
   TempDir dir;
   std::string text = kConfig;
