@@ -150,7 +150,6 @@ void EDriveDriver::apply(MessageId id, const Frame& f, TimePoint now, bool& ok) 
                       : SpeedLimits{l->min_speed, l->max_speed};
         control_enabled_ = l->control_enabled;
         phase_ = Phase::polling;
-        common_.ready = true;
         next_poll_ = now;
         ok = true;
       }
@@ -158,6 +157,8 @@ void EDriveDriver::apply(MessageId id, const Frame& f, TimePoint now, bool& ok) 
     case MessageId::status:
       if (const auto s = parse_status(f.payload, settings_.byte_order)) {
         apply_status(*s);
+        // Online only once the status, the data a PLC reads, is there too.
+        common_.ready = phase_ == Phase::polling;
         ok = true;
       }
       break;
