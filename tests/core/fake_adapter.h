@@ -94,7 +94,7 @@ inline const OptionSpec kFakeOptions[] = {
 };
 
 inline std::unique_ptr<Driver> make_fake(const DeviceEnv& env, std::string& error) {
-  if (env.options.integer("count") == 7) {
+  if (env.options.has("count") && env.options.integer("count") == 7) {
     error = "count 7 is unlucky";
     return nullptr;
   }
