@@ -225,11 +225,9 @@ void Device::log_transitions() {
 Exception Device::read(Table table, std::uint16_t address, std::span<std::uint16_t> out,
                        TimePoint now) {
   const auto regs = registers(table);
-  if (std::size_t{address} + out.size() > regs.size()) return Exception::illegal_data_address;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    if (map_.at(table, static_cast<std::uint16_t>(address + i)) == nullptr) {
-      return Exception::illegal_data_address;
-    }
+  if (std::size_t{address} + out.size() > regs.size() ||
+      map_.mapped_from(table, address) < out.size()) {
+    return Exception::illegal_data_address;
   }
   if (table == Table::input || table == Table::discrete) refresh_dynamic(now);
   std::copy_n(regs.begin() + address, out.size(), out.begin());

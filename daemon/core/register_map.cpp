@@ -125,6 +125,16 @@ RegisterMap::RegisterMap(const std::vector<PointSpec>& adapter_points) {
     }
     add(std::move(p));
   }
+
+  for (int t = 0; t < 4; ++t) {
+    const auto& owner = owner_[t];
+    auto& run = run_[t];
+    run.assign(owner.size(), 0);
+    for (std::size_t a = owner.size(); a-- > 0;) {
+      if (owner[a] < 0) continue;
+      run[a] = static_cast<std::uint16_t>(a + 1 < owner.size() ? run[a + 1] + 1 : 1);
+    }
+  }
 }
 
 void RegisterMap::add(MappedPoint p) {
@@ -151,6 +161,11 @@ const MappedPoint* RegisterMap::at(Table t, std::uint16_t address) const {
   const auto& owner = owner_[static_cast<int>(t)];
   if (address >= owner.size() || owner[address] < 0) return nullptr;
   return &points_[static_cast<std::size_t>(owner[address])];
+}
+
+std::size_t RegisterMap::mapped_from(Table t, std::uint16_t address) const {
+  const auto& run = run_[static_cast<int>(t)];
+  return address < run.size() ? run[address] : 0;
 }
 
 }  // namespace drivegate

@@ -65,12 +65,16 @@ class RegisterMap {
   [[nodiscard]] std::uint16_t size(Table t) const { return sizes_[static_cast<int>(t)]; }
   // The point covering `address` in `t`, if any.
   [[nodiscard]] const MappedPoint* at(Table t, std::uint16_t address) const;
+  // How many consecutive addresses from `address` on are mapped (0 when `address` is not): a
+  // read of any range is checked in one lookup, not one per register.
+  [[nodiscard]] std::size_t mapped_from(Table t, std::uint16_t address) const;
 
  private:
   void add(MappedPoint p);
   std::vector<MappedPoint> points_;
   std::uint16_t sizes_[4] = {0, 0, 0, 0};
   std::vector<std::int32_t> owner_[4];  // per table and address: index into points_, -1 = none
+  std::vector<std::uint16_t> run_[4];   // per table and address: mapped_from()
 };
 
 }  // namespace drivegate

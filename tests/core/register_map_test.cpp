@@ -61,6 +61,31 @@ TEST(RegisterMap, AdapterPointsFollowTheCommonBlock) {
   EXPECT_EQ(m.at(Table::input, 60000), nullptr);
 }
 
+// mapped_from (one lookup per read) agrees with at() (one per register) at every address.
+TEST(RegisterMap, MappedFromCountsTheMappedRunAtEveryAddress) {
+  PointSpec a{.name = "a", .table = Table::input, .type = PointType::f32};
+  PointSpec h{.name = "h", .table = Table::holding, .type = PointType::u32};
+  PointSpec c{.name = "c", .table = Table::coil};
+  const RegisterMap m({a, h, c});
+  for (const Table t : {Table::input, Table::holding, Table::discrete, Table::coil}) {
+    for (std::uint32_t address = 0; address <= 0xFFFF; ++address) {
+      std::size_t expected = 0;
+      while (address + expected <= 0xFFFF &&
+             m.at(t, static_cast<std::uint16_t>(address + expected)) != nullptr) {
+        ++expected;
+      }
+      ASSERT_EQ(m.mapped_from(t, static_cast<std::uint16_t>(address)), expected)
+          << "table " << static_cast<int>(t) << " address " << address;
+    }
+  }
+  EXPECT_EQ(m.mapped_from(Table::input, 0), 31u);  // the common block up to the reserved gap
+  EXPECT_EQ(m.mapped_from(Table::input, 31), 0u);
+  EXPECT_EQ(m.mapped_from(Table::input, kAdapterInputBase), 2u);
+  EXPECT_EQ(m.mapped_from(Table::holding, 0), 3u);
+  EXPECT_EQ(m.mapped_from(Table::holding, kAdapterHoldingBase + 1), 1u);
+  EXPECT_EQ(m.mapped_from(Table::coil, 0), 1u);
+}
+
 TEST(RegisterMap, DuplicateStringOfZeroRegistersIsRefused) {
   PointSpec s{.name = "s", .table = Table::input, .type = PointType::string};
   EXPECT_THROW(RegisterMap({s}), std::invalid_argument);
