@@ -48,11 +48,12 @@ RxVerdict Fdc1Driver::on_receive(ByteView rx, TimePoint now) {
 void Fdc1Driver::apply(const Status& s, TimePoint now) {
   if (!common_.ready) {
     common_.ready = true;
-    // Start-up: assert the command in force at once (slave mode), then refresh it.
+    // Start-up: assert the command in force at once (slave mode), then refresh it. A write that
+    // came before the first frame keeps its command priority.
     if (settings_.slave_mode) {
       send_now_ = true;
       due_at_ = now;
-      send_priority_ = Priority::poll;
+      send_priority_ = speed_write_ ? Priority::command : Priority::poll;
     }
   }
   motor_on_ = s.motor_on;
@@ -206,7 +207,8 @@ WriteStatus Fdc1Driver::command(Command c, Ticket t, TimePoint now) {
       break;
   }
   if (!settings_.slave_mode) return WriteStatus::invalid_value;  // speed set by IN1/IN2 then
-  if (!common_.ready) return WriteStatus::refused;
+  // Before the controller is first heard the write waits: the start-up sends the command in
+  // force as soon as the stream begins, and confirm_ms bounds the wait (then 0x0B).
   if (c == Command::run_forward) {
     if (setpoint_ == 0) return WriteStatus::refused;  // no speed to run at yet
     common_.command = c;
@@ -229,7 +231,6 @@ WriteStatus Fdc1Driver::setpoint(std::int32_t rpm, Ticket t, TimePoint now) {
     common_.setpoint_rpm = rpm;
     return WriteStatus::done;  // used by the next run_forward
   }
-  if (!common_.ready) return WriteStatus::refused;
   setpoint_ = rpm;
   common_.setpoint_rpm = rpm;
   start_speed_write(t, Expect::at_setpoint, now);

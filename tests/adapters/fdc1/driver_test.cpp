@@ -136,11 +136,30 @@ TEST(Fdc1Driver, WritesTheControllerCannotDo) {
   EXPECT_EQ(rig.bus->sent.size(), 1u);
 }
 
-TEST(Fdc1Driver, WritesBeforeTheDeviceIsHeardAreRefused) {
+// A PLC that starts the compressor as the gateway comes up is not told no: the run waits for
+// the stream, goes out as the start-up frame, and is confirmed from the stream.
+TEST(Fdc1Driver, ARunBeforeTheDeviceIsHeardWaitsForTheStream) {
   Rig rig;
   EXPECT_EQ(rig.driver->setpoint(2000, 1, rig.now()), WriteStatus::done);
-  EXPECT_EQ(rig.driver->command(Command::run_forward, 2, rig.now()), WriteStatus::refused);
-  EXPECT_EQ(rig.driver->command(Command::stop, 3, rig.now()), WriteStatus::refused);
+  EXPECT_EQ(rig.driver->command(Command::run_forward, 2, rig.now()), WriteStatus::pending);
+  EXPECT_FALSE(rig.driver->next_exchange(rig.now()));  // nothing until the controller is heard
+  ASSERT_TRUE(rig.settle(2));
+  EXPECT_EQ(rig.result(2), WriteResult::ok);
+  EXPECT_EQ(rig.bus->sent, (std::vector<Bytes>{kRun2000}));  // the start-up frame is the run
+  EXPECT_EQ(rig.common().command, Command::run_forward);
+}
+
+// ...and a controller never heard answers 0x0B once it is declared lost (stale_ms, 2000), not
+// a refusal.
+TEST(Fdc1Driver, AWriteToAControllerNeverHeardIsNoResponse) {
+  Rig rig;
+  rig.sim->control("silent on", rig.now());
+  EXPECT_EQ(rig.driver->command(Command::stop, 1, rig.now()), WriteStatus::pending);
+  rig.bus->run_for(1900ms);
+  EXPECT_FALSE(rig.completed(1));
+  ASSERT_TRUE(rig.settle(1, 200ms));
+  EXPECT_EQ(rig.result(1), WriteResult::no_response);
+  EXPECT_TRUE(rig.bus->sent.empty());
 }
 
 TEST(Fdc1Driver, AlarmsBecomeUnifiedFaultsWithTheRawCode) {
