@@ -50,6 +50,7 @@ def main():
         print(total)
         return
     port = int(sys.argv[1])
+    failed = False
     with socket.create_connection(("127.0.0.1", port)) as s:
         for spec in sys.argv[2:]:
             target, values = spec.split("=")
@@ -58,6 +59,8 @@ def main():
                 write(s, unit, addr, [int(v) for v in values.split(",")])
             except RuntimeError as e:
                 print(f"mbwrite: {e}", file=sys.stderr)
+                failed = True
+    sys.exit(1 if failed else 0)  # every write is tried; a drive not started spoils the run
 
 
 if __name__ == "__main__":

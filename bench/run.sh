@@ -4,22 +4,25 @@
 # Starts a simulated drive for each of the five adapters (`drivegate sim` on ptys), drivegated
 # polling them, and the bare libmodbus server (dg-baseline). Both servers are pinned to CPU
 # $SERVER_CPU, the load generator and the simulators to CPU $LOAD_CPU. Then, for ROUNDS rounds,
-# for N in $CONNS, runs dg-loadgen against the baseline and then against drivegate, and prints the
-# median of every figure for each side and the ratio drivegate / baseline.
+# for N in $CONNS, runs dg-loadgen against the baseline and against drivegate (alternating which
+# goes first), and prints the median of every figure for each side and the ratio drivegate / baseline.
 # Then the independence check: the ed3100 drive goes silent (times out on every poll) while fdc1
 # keeps streaming, and drivegate is measured again at N = 1 and 8.
 #
 # Both sides get the same request stream (see docs/performance.md):
 #   large: FC03 holding registers 16..140 (125 registers: the ed3100's 125 parameters, unit 2)
 #   small: FC04 input registers 0..18 (the common block, unit 2)
-# Environment: ROUNDS (3), DURATION (3 s per run), WARMUP (0.5 s), CONNS ("1 8 64"),
-#   SERVER_CPU (0), LOAD_CPU (1), LARGE (3:16:125), SMALL (4:0:19), UNIT (2).
+# Environment: ROUNDS (4; even, so each side goes first equally often), DURATION (3 s per run),
+#   WARMUP (0.5 s), CONNS ("1 8 64"), SERVER_CPU (0), LOAD_CPU (1), LARGE (3:16:125),
+#   SMALL (4:0:19), UNIT (2).
+#   AGAINST=OTHER_BUILD_DIR: the baseline side is that build's drivegated (with five simulated
+#   drives of its own) instead of dg-baseline: a change to drivegate measured side by side
+#   against the build before it.
 set -euo pipefail
 
 B=$(realpath "${1:-build-bench}")
 BIN=$B/bin
-PLUGINS=$B/adapters
-ROUNDS=${ROUNDS:-3}
+ROUNDS=${ROUNDS:-4}
 DURATION=${DURATION:-3}
 WARMUP=${WARMUP:-0.5}
 CONNS=${CONNS:-"1 8 64"}
@@ -31,6 +34,12 @@ UNIT=${UNIT:-2}
 DG_PORT=${DG_PORT:-15020}
 BASE_PORT=${BASE_PORT:-15030}
 HERE=$(dirname "$(realpath "$0")")
+AGAINST=${AGAINST:-}
+AGAINST_BIN=
+if [[ -n $AGAINST ]]; then
+  AGAINST_BIN=$(realpath "$AGAINST")/bin
+  [[ -x $AGAINST_BIN/drivegated ]] || { echo "run.sh: $AGAINST_BIN/drivegated missing" >&2; exit 2; }
+fi
 
 for exe in drivegated drivegate dg-loadgen dg-baseline; do
   [[ -x $BIN/$exe ]] || { echo "run.sh: $BIN/$exe missing (build with -DDRIVEGATE_BENCH=ON)" >&2; exit 2; }
@@ -54,49 +63,65 @@ DRIVES=(
   "unicla-edrive 5 -"
 )
 declare -A SIM_IN
-{
-  echo "[server]"
-  echo "listen = \"127.0.0.1:$DG_PORT\""
-  echo "max_clients = 256"
-} >"$W/bench.toml"
-for d in "${DRIVES[@]}"; do
-  read -r id unit opt <<<"$d"
-  mkfifo "$W/$id.in"
-  exec {fd}<>"$W/$id.in"
-  SIM_IN[$id]=$fd
-  set_arg=()
-  [[ $opt != - ]] && set_arg=(--set "$opt")
-  taskset -c "$LOAD_CPU" "$BIN/drivegate" sim "$id" --plugin-dir "$PLUGINS" --link "$W/$id" \
-    "${set_arg[@]}" <"$W/$id.in" >"$W/$id.out" 2>&1 &
-  PIDS+=($!)
-  {
-    echo; echo "[[bus]]"; echo "name = \"$id\""; echo "port = \"$W/$id\""
-    echo; echo "[[device]]"; echo "name = \"$id\""; echo "bus = \"$id\""
-    echo "adapter = \"$id\""; echo "unit_id = $unit"
-    if [[ $opt != - ]]; then echo "[device.options]"; echo "${opt%%=*} = ${opt#*=}"; fi
-    # 125 ed3100 parameters: holding registers 16..140, the FC03 of 125 the issue asks for.
-    if [[ $id == ed3100 ]]; then
-      echo "[device.options]"
-      printf 'parameters = ['
-      for i in $(seq 0 124); do
-        printf '%s"%02d-%02d"' "$([[ $i -gt 0 ]] && echo ,)" $((i / 100)) $((i % 100))
-      done
-      echo ']'
-    fi
-  } >>"$W/bench.toml"
-done
-for d in "${DRIVES[@]}"; do
-  read -r id _ <<<"$d"
-  for _ in $(seq 50); do [[ -e $W/$id ]] && break; sleep 0.1; done
-done
 
-taskset -c "$SERVER_CPU" "$BIN/drivegated" --config "$W/bench.toml" --plugin-dir "$PLUGINS" \
-  --log-level warn >"$W/drivegated.log" 2>&1 &
-DG_PID=$!
-PIDS+=($DG_PID)
-taskset -c "$SERVER_CPU" "$BIN/dg-baseline" --port "$BASE_PORT" >"$W/baseline.log" 2>&1 &
-BASE_PID=$!
-PIDS+=($BASE_PID)
+# start_gateway BIN_DIR PORT TAG: five simulated drives (on $LOAD_CPU) and a drivegated of BIN_DIR
+# polling them (on $SERVER_CPU); sets GATEWAY_PID. The simulators' stdin fifos are kept in SIM_IN
+# under "TAG/adapter".
+start_gateway() {
+  local bin=$1 port=$2 tag=$3 dir=$W/$3
+  mkdir -p "$dir"
+  {
+    echo "[server]"
+    echo "listen = \"127.0.0.1:$port\""
+    echo "max_clients = 256"
+  } >"$dir/bench.toml"
+  local d id unit opt fd set_arg
+  for d in "${DRIVES[@]}"; do
+    read -r id unit opt <<<"$d"
+    mkfifo "$dir/$id.in"
+    exec {fd}<>"$dir/$id.in"
+    SIM_IN[$tag/$id]=$fd
+    set_arg=()
+    [[ $opt != - ]] && set_arg=(--set "$opt")
+    taskset -c "$LOAD_CPU" "$bin/drivegate" sim "$id" --plugin-dir "$bin/../adapters" \
+      --link "$dir/$id" "${set_arg[@]}" <"$dir/$id.in" >"$dir/$id.out" 2>&1 &
+    PIDS+=($!)
+    {
+      echo; echo "[[bus]]"; echo "name = \"$id\""; echo "port = \"$dir/$id\""
+      echo; echo "[[device]]"; echo "name = \"$id\""; echo "bus = \"$id\""
+      echo "adapter = \"$id\""; echo "unit_id = $unit"
+      if [[ $opt != - ]]; then echo "[device.options]"; echo "${opt%%=*} = ${opt#*=}"; fi
+      # 125 ed3100 parameters: holding registers 16..140, the FC03 of 125 the issue asks for.
+      if [[ $id == ed3100 ]]; then
+        echo "[device.options]"
+        printf 'parameters = ['
+        for i in $(seq 0 124); do
+          printf '%s"%02d-%02d"' "$([[ $i -gt 0 ]] && echo ,)" $((i / 100)) $((i % 100))
+        done
+        echo ']'
+      fi
+    } >>"$dir/bench.toml"
+  done
+  for d in "${DRIVES[@]}"; do
+    read -r id _ <<<"$d"
+    for _ in $(seq 50); do [[ -e $dir/$id ]] && break; sleep 0.1; done
+  done
+  taskset -c "$SERVER_CPU" "$bin/drivegated" --config "$dir/bench.toml" \
+    --plugin-dir "$bin/../adapters" --log-level warn >"$dir/drivegated.log" 2>&1 &
+  GATEWAY_PID=$!
+  PIDS+=($GATEWAY_PID)
+}
+
+start_gateway "$BIN" "$DG_PORT" dg
+DG_PID=$GATEWAY_PID
+if [[ -n $AGAINST ]]; then
+  start_gateway "$AGAINST_BIN" "$BASE_PORT" base
+else
+  taskset -c "$SERVER_CPU" "$BIN/dg-baseline" --port "$BASE_PORT" >"$W/baseline.log" 2>&1 &
+  GATEWAY_PID=$!
+  PIDS+=($GATEWAY_PID)
+fi
+BASE_PID=$GATEWAY_PID
 
 wait_port() {
   for _ in $(seq 100); do
@@ -104,13 +129,15 @@ wait_port() {
     sleep 0.1
   done
   echo "run.sh: nothing answers on port $1" >&2
-  cat "$W/drivegated.log" >&2
+  cat "$W"/*/drivegated.log >&2
   exit 1
 }
 wait_port "$DG_PORT"
 wait_port "$BASE_PORT"
 # Start every drive (command = run_forward, setpoint) so the polls carry live values.
-python3 "$HERE/mbwrite.py" "$DG_PORT" 1:0=1,800 2:0=1,1500 3:0=1,1149 4:0=1,2000 5:0=1,3000
+START=(1:0=1,800 2:0=1,1500 3:0=1,1149 4:0=1,2000 5:0=1,3000)
+python3 "$HERE/mbwrite.py" "$DG_PORT" "${START[@]}"
+[[ -n $AGAINST ]] && python3 "$HERE/mbwrite.py" "$BASE_PORT" "${START[@]}"
 sleep 2
 
 load() {  # load SIDE PORT PID N ROUND TAG
@@ -120,15 +147,23 @@ load() {  # load SIDE PORT PID N ROUND TAG
   echo "$6 $1 $4 $5 $out" | tee -a "$W/results.txt" >&2
 }
 
+# The side measured second gains a few per cent (an A/A run of one binary against itself showed
+# it: docs/performance.md), so the order alternates: baseline first in odd rounds, drivegate
+# first in even ones.
 for round in $(seq "$ROUNDS"); do
   for n in $CONNS; do
-    load baseline "$BASE_PORT" "$BASE_PID" "$n" "$round" tcp
-    load drivegate "$DG_PORT" "$DG_PID" "$n" "$round" tcp
+    if ((round % 2 == 1)); then
+      load baseline "$BASE_PORT" "$BASE_PID" "$n" "$round" tcp
+      load drivegate "$DG_PORT" "$DG_PID" "$n" "$round" tcp
+    else
+      load drivegate "$DG_PORT" "$DG_PID" "$n" "$round" tcp
+      load baseline "$BASE_PORT" "$BASE_PID" "$n" "$round" tcp
+    fi
   done
 done
 
 # Independence: ed3100 times out on every poll, fdc1 streams, the others are polled.
-echo "silent on" >&"${SIM_IN[ed3100]}"
+echo "silent on" >&"${SIM_IN[dg/ed3100]}"
 sleep 2
 for round in $(seq "$ROUNDS"); do
   for n in 1 8; do
@@ -141,5 +176,6 @@ echo
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) CPUs," \
   "$(uname -sr); server on CPU $SERVER_CPU, load generator on CPU $LOAD_CPU;" \
   "$ROUNDS rounds x ${DURATION}s; large=$LARGE small=$SMALL unit=$UNIT"
+[[ -n $AGAINST ]] && echo "# baseline side: drivegated of $AGAINST" >>"$W/results.txt"
 python3 "$HERE/summarize.py" "$W/results.txt"
-grep -i "error\|critical" "$W/drivegated.log" | head -5 || true
+grep -i "error\|critical" "$W"/*/drivegated.log | head -5 || true
