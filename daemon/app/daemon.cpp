@@ -1,5 +1,7 @@
 #include "daemon.h"
 
+#include <fmt/ranges.h>
+
 #include <csignal>
 
 #include "core/config_loader.h"
@@ -110,15 +112,17 @@ void Daemon::reload() {
     log_->warn("[server] changes take effect at the next restart; devices and buses reloaded");
     config->server = config_.server;
   }
-  // The old buses close before the new ones open the same ports.
+  // Unchanged buses move over running; the others close before the new ones open their ports.
+  const auto kept = next->adopt_unchanged(*gateway_);
   gateway_->stop();
   next->start();
   backend_.set(next.get());
   gateway_ = std::move(next);
   config_ = std::move(*config);
   describe_devices(*log_, config_);
-  log_->info("configuration reloaded: {} devices on {} buses", gateway_->devices().size(),
-             config_.buses.size());
+  log_->info("configuration reloaded: {} devices on {} buses; {} unchanged kept running{}{}",
+             gateway_->devices().size(), config_.buses.size(), kept.size(),
+             kept.empty() ? "" : ": ", fmt::join(kept, ", "));
   notifier_.ready(status_line());
 }
 

@@ -35,6 +35,8 @@ Bus::Bus(asio::io_context& io, BusConfig config, std::vector<Device*> devices,
 }
 
 void Bus::start() {
+  if (started_) return;
+  started_ = true;
   std::weak_ptr<Bus> weak = weak_from_this();
   for (Device* d : devices_) {
     d->on_work([weak] {

@@ -26,6 +26,7 @@ class Bus : public std::enable_shared_from_this<Bus> {
   Bus(boost::asio::io_context& io, BusConfig config, std::vector<Device*> devices,
       std::shared_ptr<spdlog::logger> log);
 
+  // Opens the port and starts polling; a started bus (one kept across a reload) stays as it is.
   void start();
   void stop();
   // Something new may be due (a write was queued): look now if the line is free.
@@ -66,6 +67,7 @@ class Bus : public std::enable_shared_from_this<Bus> {
   std::uint64_t timer_generation_ = 0;
   boost::asio::steady_timer reopen_timer_;
   Millis reopen_delay_{500};
+  bool started_ = false;
   bool stopped_ = false;
 
   State state_ = State::closed;

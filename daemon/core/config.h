@@ -32,6 +32,7 @@ struct BusConfig {
   bool rs485 = false;  // kernel RS-485 mode (TIOCSRS485)
   Millis reopen_max{10'000};
   int line = 0;  // where it was declared, for messages
+  friend bool operator==(const BusConfig&, const BusConfig&) = default;
 };
 
 // What the gateway does to a drive whose PLC stopped writing (docs/safety.md).
@@ -48,6 +49,7 @@ struct FailsafeConfig {
   Millis timeout{0};  // no valid write to command / setpoint / heartbeat for this long; 0 = off
   FailsafeAction action = FailsafeAction::stop;
   std::int32_t preset_rpm = 0;  // for FailsafeAction::preset
+  friend bool operator==(const FailsafeConfig&, const FailsafeConfig&) = default;
 };
 
 struct DeviceConfig {
@@ -63,6 +65,7 @@ struct DeviceConfig {
   ShutdownAction on_shutdown = ShutdownAction::stop;
   Options options;
   int line = 0;
+  friend bool operator==(const DeviceConfig&, const DeviceConfig&) = default;
 };
 
 struct Config {

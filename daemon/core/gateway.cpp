@@ -9,7 +9,17 @@ using modbus::Exception;
 
 namespace {
 constexpr Millis kHousekeepingPeriod{100};
+
+// Equal but for where in the file they were declared.
+bool same_settings(BusConfig a, BusConfig b) {
+  a.line = b.line = 0;
+  return a == b;
 }
+bool same_settings(DeviceConfig a, DeviceConfig b) {
+  a.line = b.line = 0;
+  return a == b;
+}
+}  // namespace
 
 Table to_table(modbus::RegisterTable t) {
   switch (t) {
@@ -79,13 +89,50 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
   }
   if (!errors.empty()) return nullptr;
   for (const auto& bc : config.buses) {
-    std::vector<Device*> on_bus;
-    for (const auto& d : gw->devices_) {
-      if (d->config().bus == bc.name) on_bus.push_back(d.get());
-    }
-    gw->buses_.push_back(std::make_shared<Bus>(io, bc, std::move(on_bus), log));
+    gw->buses_.push_back(std::make_shared<Bus>(io, bc, gw->devices_on(bc.name), log));
   }
   return gw;
+}
+
+std::vector<Device*> Gateway::devices_on(const std::string& bus) const {
+  std::vector<Device*> on_bus;
+  for (const auto& d : devices_) {
+    if (d->config().bus == bus) on_bus.push_back(d.get());
+  }
+  return on_bus;
+}
+
+std::unique_ptr<Device>& Gateway::owner(const Device* d) {
+  return *std::find_if(devices_.begin(), devices_.end(),
+                       [d](const auto& p) { return p.get() == d; });
+}
+
+std::vector<std::string> Gateway::adopt_unchanged(Gateway& old) {
+  std::vector<std::string> kept;
+  for (auto& fresh_bus : buses_) {
+    const auto old_bus = std::find_if(old.buses_.begin(), old.buses_.end(), [&](const auto& b) {
+      return same_settings(b->config(), fresh_bus->config());
+    });
+    if (old_bus == old.buses_.end()) continue;
+    const auto running = old.devices_on((*old_bus)->config().name);
+    const auto fresh = devices_on(fresh_bus->config().name);
+    if (running.size() != fresh.size() || !std::equal(running.begin(), running.end(), fresh.begin(),
+                                                      [](const Device* a, const Device* b) {
+                                                        return same_settings(a->config(),
+                                                                             b->config());
+                                                      })) {
+      continue;
+    }
+    fresh_bus = std::move(*old_bus);  // the fresh bus, never started, goes first
+    old.buses_.erase(old_bus);
+    for (std::size_t i = 0; i < fresh.size(); ++i)
+      owner(fresh[i]) = std::move(old.owner(running[i]));
+    std::erase(old.devices_, nullptr);
+    kept.push_back(fresh_bus->config().name);
+  }
+  units_.fill(nullptr);
+  for (const auto& d : devices_) units_[d->config().unit_id] = d.get();
+  return kept;
 }
 
 void Gateway::start() {

@@ -37,7 +37,14 @@ class Gateway : public modbus::Backend {
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;
 
-  void start();  // opens the buses and starts polling
+  // For a reload, before start(): every bus of this (new, not started) gateway whose settings and
+  // devices are all unchanged in `old` is taken from `old` as it runs, devices and all (commands
+  // in force, failsafe timers, counters, writes in flight), in place of the fresh one. A drive on
+  // a kept bus sees no new start-up, so a reload that adds a drive elsewhere stops nothing.
+  // What stays in `old` is then stopped by the caller. Returns the names of the buses kept.
+  std::vector<std::string> adopt_unchanged(Gateway& old);
+
+  void start();  // opens the buses and starts polling (kept buses poll on)
   void stop();   // closes the buses; pending writes fail with 0x0B
   // Puts every running drive whose on_shutdown is stop in its stop state (on_shutdown = hold
   // leaves it) and calls `done` once they confirmed or `limit` passed.
@@ -56,6 +63,8 @@ class Gateway : public modbus::Backend {
  private:
   Gateway(boost::asio::io_context& io, std::shared_ptr<spdlog::logger> log);
   void housekeeping();
+  [[nodiscard]] std::vector<Device*> devices_on(const std::string& bus) const;
+  std::unique_ptr<Device>& owner(const Device* d);
 
   boost::asio::io_context& io_;
   std::shared_ptr<spdlog::logger> log_;

@@ -50,6 +50,7 @@ class Options {
   }
   [[nodiscard]] bool has(std::string_view name) const { return values_.contains(name); }
   void set(std::string name, OptionValue value) { values_[std::move(name)] = std::move(value); }
+  friend bool operator==(const Options&, const Options&) = default;
 
  private:
   template <class T>

@@ -201,6 +201,36 @@ TEST_F(Fdc1E2E, CommLostAfterStaleMsWhenTheStreamStops) {
   EXPECT_EQ(plc_.input(reg::fault_code, 1).regs[0], 0);
 }
 
+// A reload that adds a compressor on another line leaves the running one alone: its bus and
+// device move over as they run. A fresh device would begin with a start-up that asserts stop,
+// so the compressor would stop within a stream period (0.5 s).
+TEST_F(Fdc1E2E, AReloadAddingALineLeavesTheRunningCompressorAlone) {
+  run_at_2000();
+  Sim freezer("fdc1", dir_ / "fdc1-b", {"--set", "slave_mode=true"});
+  std::ofstream(daemon_.config())
+      << config(dir_ / "fdc1") << "\n[[bus]]\nname = \"line-b\"\nport = \""
+      << (dir_ / "fdc1-b").string()
+      << "\"\n\n[[device]]\nname = \"freezer\"\nbus = \"line-b\"\nadapter = \"fdc1\"\n"
+         "unit_id = 2\n[device.options]\nslave_mode = true\n";
+  daemon_.process().signal(SIGHUP);
+  plc_.unit(2);
+  ASSERT_TRUE(
+      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
+      << "the added compressor never came online";
+
+  plc_.unit(1);
+  const auto until = std::chrono::steady_clock::now() + 2s;  // four stream periods
+  while (std::chrono::steady_clock::now() < until) {
+    ASSERT_NE(state().find("motor=on"), std::string::npos) << state();
+    const auto command = plc_.holding(reg::command, 2);
+    ASSERT_TRUE(command.ok());
+    EXPECT_EQ(command.regs[0], 1);  // run_forward still in force
+    EXPECT_EQ(command.regs[1], 2000);
+    std::this_thread::sleep_for(100ms);
+  }
+  EXPECT_EQ(plc_.input(reg::speed, 1).regs[0], 2000);
+}
+
 TEST_F(Fdc1E2E, NoiseAndBadChecksumsCostFramesNotTheLink) {
   const auto before = plc_.input(reg::status, 19);
   sim_.control("noise 20");
