@@ -125,8 +125,9 @@ std::vector<std::string> Gateway::adopt_unchanged(Gateway& old) {
     }
     fresh_bus = std::move(*old_bus);  // the fresh bus, never started, goes first
     old.buses_.erase(old_bus);
-    for (std::size_t i = 0; i < fresh.size(); ++i)
-      owner(fresh[i]) = std::move(old.owner(running[i]));
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      owner(fresh[i]) = std::move(old.owner(running[i]));  // the fresh device is dropped
+    }
     std::erase(old.devices_, nullptr);
     kept.push_back(fresh_bus->config().name);
   }
