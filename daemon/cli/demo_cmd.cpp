@@ -17,6 +17,7 @@
 
 #include "cli/commands.h"
 #include "cli/sim_host.h"
+#include "core/adapter_options.h"
 #include "core/config_loader.h"
 
 extern char** environ;

@@ -10,7 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/sim_host.h"
-#include "core/config_loader.h"
+#include "core/adapter_options.h"
 
 namespace drivegate::cli {
 

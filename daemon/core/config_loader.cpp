@@ -1,7 +1,5 @@
 #include "config_loader.h"
 
-#include <toml++/toml.h>
-
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -12,119 +10,11 @@
 #include <set>
 #include <sstream>
 
+#include "adapter_options.h"
+#include "toml_reader.h"
+
 namespace drivegate {
 namespace {
-
-// Collects errors with file and line; one instance per load.
-class Diagnostics {
- public:
-  explicit Diagnostics(std::string source) : source_(std::move(source)) {}
-  void error(const toml::node* at, std::string_view key, std::string_view what) {
-    const int line = at != nullptr ? static_cast<int>(at->source().begin.line) : 0;
-    error_at(line, key, what);
-  }
-  void error_at(int line, std::string_view key, std::string_view what) {
-    std::string msg = source_;
-    if (line > 0) msg += ":" + std::to_string(line);
-    msg += ": ";
-    if (!key.empty()) msg += std::string(key) + ": ";
-    msg += what;
-    errors.push_back(std::move(msg));
-  }
-  std::vector<std::string> errors;
-
- private:
-  std::string source_;
-};
-
-int line_of(const toml::node& n) {
-  return static_cast<int>(n.source().begin.line);
-}
-
-// Reads the keys of one table, refusing the unknown ones.
-class TableReader {
- public:
-  TableReader(const toml::table& table, std::string prefix, Diagnostics& diag)
-      : table_(table), prefix_(std::move(prefix)), diag_(diag) {}
-
-  ~TableReader() {
-    for (const auto& [key, node] : table_) {
-      if (!seen_.contains(std::string(key.str()))) {
-        diag_.error(&node, qualified(key.str()), "unknown key (known: " + known_list() + ")");
-      }
-    }
-  }
-  TableReader(const TableReader&) = delete;
-  TableReader& operator=(const TableReader&) = delete;
-
-  const toml::node* node(std::string_view key) {
-    seen_.insert(std::string(key));
-    return table_.get(key);
-  }
-
-  std::optional<std::string> string(std::string_view key, bool required) {
-    const toml::node* n = node(key);
-    if (n == nullptr) {
-      if (required) missing(key);
-      return std::nullopt;
-    }
-    if (const auto* s = n->as_string()) return s->get();
-    diag_.error(n, qualified(key), "must be a string");
-    return std::nullopt;
-  }
-
-  std::optional<std::int64_t> integer(std::string_view key, std::int64_t min, std::int64_t max,
-                                      bool required) {
-    const toml::node* n = node(key);
-    if (n == nullptr) {
-      if (required) missing(key);
-      return std::nullopt;
-    }
-    const auto* i = n->as_integer();
-    if (i == nullptr) {
-      diag_.error(n, qualified(key), "must be an integer");
-      return std::nullopt;
-    }
-    if (i->get() < min || i->get() > max) {
-      diag_.error(n, qualified(key),
-                  "must be in " + std::to_string(min) + ".." + std::to_string(max) + " (got " +
-                      std::to_string(i->get()) + ")");
-      return std::nullopt;
-    }
-    return i->get();
-  }
-
-  std::optional<bool> boolean(std::string_view key) {
-    const toml::node* n = node(key);
-    if (n == nullptr) return std::nullopt;
-    if (const auto* b = n->as_boolean()) return b->get();
-    diag_.error(n, qualified(key), "must be true or false");
-    return std::nullopt;
-  }
-
-  void missing(std::string_view key) {
-    diag_.error(&table_, qualified(key), "required key is missing");
-  }
-
-  [[nodiscard]] std::string qualified(std::string_view key) const {
-    return prefix_.empty() ? std::string(key) : prefix_ + "." + std::string(key);
-  }
-  void expect(std::initializer_list<std::string_view> keys) {
-    for (auto k : keys) known_.emplace_back(k);
-  }
-
- private:
-  [[nodiscard]] std::string known_list() const {
-    std::string out;
-    for (const auto& k : known_) out += (out.empty() ? "" : ", ") + k;
-    return out;
-  }
-  const toml::table& table_;
-  std::string prefix_;
-  Diagnostics& diag_;
-  std::set<std::string> seen_;
-  std::vector<std::string> known_;
-};
 
 constexpr std::array<std::uint32_t, 12> kBauds = {300,   600,   1200,  2400,   4800,   9600,
                                                   19200, 38400, 57600, 115200, 230400, 460800};
@@ -164,35 +54,6 @@ bool parse_listen(const std::string& s, ServerConfig& out) {
 }
 
 namespace {
-
-std::vector<std::string> split_list(std::string_view s) {
-  std::vector<std::string> out;
-  std::string item;
-  std::istringstream in{std::string(s)};
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
-
-bool in_choices(std::string_view choices, std::string_view value) {
-  if (choices.empty()) return true;
-  std::size_t start = 0;
-  while (start <= choices.size()) {
-    const auto bar = choices.find('|', start);
-    const auto end = bar == std::string_view::npos ? choices.size() : bar;
-    if (choices.substr(start, end - start) == value) return true;
-    if (bar == std::string_view::npos) break;
-    start = bar + 1;
-  }
-  return false;
-}
-
-std::string range_text(const OptionSpec& spec) {
-  std::ostringstream out;
-  out << spec.min << ".." << spec.max;
-  return out.str();
-}
 
 // One option from the TOML value, checked against its spec.
 std::optional<OptionValue> read_option(const OptionSpec& spec, const toml::node& n,
@@ -256,65 +117,6 @@ std::optional<OptionValue> read_option(const OptionSpec& spec, const toml::node&
   diag.error(&n, key, std::string("must be ") + kTypeNames.at(static_cast<std::size_t>(spec.type)));
   return std::nullopt;
 }
-
-}  // namespace
-
-std::optional<OptionValue> parse_option_text(const OptionSpec& spec, std::string_view text,
-                                             std::string& error) {
-  const std::string t(text);
-  try {
-    std::size_t used = 0;
-    switch (spec.type) {
-      case OptionType::integer: {
-        const auto v = t.empty() ? 0 : std::stoll(t, &used, 0);
-        if (!t.empty() && used != t.size()) break;
-        if (spec.min != spec.max &&
-            (static_cast<double>(v) < spec.min || static_cast<double>(v) > spec.max)) {
-          error = std::string(spec.name) + ": must be in " + range_text(spec);
-          return std::nullopt;
-        }
-        return OptionValue{v};
-      }
-      case OptionType::real: {
-        const double v = t.empty() ? 0.0 : std::stod(t, &used);
-        if (!t.empty() && used != t.size()) break;
-        if (spec.min != spec.max && (v < spec.min || v > spec.max)) {
-          error = std::string(spec.name) + ": must be in " + range_text(spec);
-          return std::nullopt;
-        }
-        return OptionValue{v};
-      }
-      case OptionType::boolean:
-        if (t == "true" || t == "false") return OptionValue{t == "true"};
-        break;
-      case OptionType::string:
-        if (!in_choices(spec.choices, t)) {
-          error = std::string(spec.name) + ": must be one of " + spec.choices;
-          return std::nullopt;
-        }
-        return OptionValue{t};
-      case OptionType::string_list:
-        return OptionValue{split_list(t)};
-    }
-  } catch (const std::exception&) {
-  }
-  error = std::string(spec.name) + ": '" + t + "' is not a valid value";
-  return std::nullopt;
-}
-
-Options default_options(const AdapterDescriptor& adapter) {
-  std::map<std::string, OptionValue, std::less<>> values;
-  for (std::size_t i = 0; i < adapter.option_count; ++i) {
-    const OptionSpec& spec = adapter.options[i];
-    std::string ignored;
-    values[spec.name] =
-        parse_option_text(spec, spec.default_value ? spec.default_value : "", ignored)
-            .value_or(OptionValue{std::string()});
-  }
-  return Options(std::move(values));
-}
-
-namespace {
 
 Options read_options(const AdapterDescriptor& adapter, const toml::table* table,
                      const std::string& prefix, Diagnostics& diag) {

@@ -21,12 +21,6 @@ struct ConfigResult {
 // "host:port", "[v6]:port" or ":port" into `out`; false when it is none of these.
 bool parse_listen(const std::string& text, ServerConfig& out);
 
-// One adapter option from text (command lines, defaults), checked against its spec.
-std::optional<OptionValue> parse_option_text(const OptionSpec& spec, std::string_view text,
-                                             std::string& error);
-// Every option of an adapter at its default.
-Options default_options(const AdapterDescriptor& adapter);
-
 ConfigResult load_config(const std::filesystem::path& path, const PluginRegistry& plugins);
 // The same from text already in memory; `source_name` stands for the file in messages.
 ConfigResult parse_config(std::string_view text, const std::string& source_name,

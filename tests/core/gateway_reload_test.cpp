@@ -5,7 +5,7 @@
 
 #include <boost/asio/io_context.hpp>
 
-#include "core/config_loader.h"
+#include "core/adapter_options.h"
 #include "core/gateway.h"
 #include "fake_adapter.h"
 
@@ -112,7 +112,7 @@ TEST_F(GatewayReload, ReadsReachTheKeptDevicesByUnit) {
   next->adopt_unchanged(*old);
   old.reset();  // the old gateway is gone; the kept devices live on in the new one
   std::array<std::uint16_t, 1> status{};
-  for (std::uint8_t unit : {1, 2, 3}) {
+  for (const std::uint8_t unit : {std::uint8_t{1}, std::uint8_t{2}, std::uint8_t{3}}) {
     EXPECT_EQ(next->read(unit, modbus::RegisterTable::input_registers, 0, status),
               modbus::Exception::none);
   }

@@ -3,7 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "core/config_loader.h"
+#include "core/adapter_options.h"
 #include "core/plugins.h"
 
 namespace drivegate {

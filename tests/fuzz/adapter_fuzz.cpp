@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "check.h"
-#include "core/config_loader.h"
+#include "core/adapter_options.h"
 #include "core/value_codec.h"
 #include "drivegate/adapter.h"
 
