@@ -1,0 +1,104 @@
+// The device's PLC-loss failsafe (docs/safety.md): what it does when the PLC stops writing, and
+// how it retries a failsafe write the drive did not take. The timer itself is failsafe.h.
+#include <string_view>
+
+#include "device.h"
+
+namespace drivegate {
+
+using modbus::Exception;
+
+namespace {
+constexpr std::string_view to_string(FailsafeAction a) {
+  switch (a) {
+    case FailsafeAction::stop:
+      return "stop";
+    case FailsafeAction::quick_stop:
+      return "quick_stop";
+    case FailsafeAction::hold:
+      return "hold";
+    case FailsafeAction::preset:
+      return "preset";
+  }
+  return "stop";
+}
+// A failed failsafe write is tried again after this, not on every 100 ms tick.
+constexpr Millis kFailsafeRetry{1000};
+}  // namespace
+
+void Device::failsafe_tick(TimePoint now) {
+  if (failsafe_.expired(now)) {
+    failsafe_now_ = config_.failsafe.action;
+    failsafe_done_ = false;
+    failsafe_gave_up_ = false;
+    failsafe_retry_at_ = {};
+    log_->warn(
+        "device {}: no Modbus write to command, setpoint or heartbeat for {} ms: "
+        "failsafe {} (latched until a run command is written)",
+        config_.name, failsafe_.timeout().count(), to_string(failsafe_now_));
+  }
+  if (failsafe_.latched()) enforce_failsafe(now);
+}
+
+// Takes the action, and keeps it taken while latched: a stop is sent again whenever the driver's
+// command in force becomes a run once more (a driver that resumes its run after comm_lost).
+void Device::enforce_failsafe(TimePoint now) {
+  if (failsafe_now_ == FailsafeAction::hold || failsafe_busy_ || failsafe_gave_up_ || comm_lost_ ||
+      now < failsafe_retry_at_) {
+    return;
+  }
+  const Command in_force = driver_->common().command;
+  const bool runs = in_force == Command::run_forward || in_force == Command::run_reverse;
+  if (failsafe_now_ == FailsafeAction::preset) {
+    if (failsafe_done_) return;
+    if (!runs) {
+      failsafe_done_ = true;  // a stopped drive is not started by a failsafe
+      return;
+    }
+  } else if (failsafe_done_ && !runs) {
+    return;
+  }
+  failsafe_busy_ = true;
+  const FailsafeAction action = failsafe_now_;
+  auto done = [this, action](Exception e) { failsafe_settled(action, e); };
+  Exception e = Exception::none;
+  if (action == FailsafeAction::preset) {
+    const auto rpm = static_cast<std::uint16_t>(config_.failsafe.preset_rpm);
+    e = apply(Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done, now,
+              Origin::gateway);
+  } else {
+    const auto c = static_cast<std::uint16_t>(
+        action == FailsafeAction::quick_stop ? Command::quick_stop : Command::stop);
+    e = apply(Table::holding, 0, std::span<const std::uint16_t>(&c, 1), done, now, Origin::gateway);
+  }
+  if (e != Exception::none) failsafe_settled(action, e);
+}
+
+void Device::failsafe_settled(FailsafeAction action, Exception e) {
+  failsafe_busy_ = false;
+  if (!failsafe_.latched()) return;  // a run command reset it meanwhile
+  if (e == Exception::none) {
+    if (!failsafe_done_) {
+      log_->info("device {}: failsafe {} confirmed by the drive", config_.name, to_string(action));
+    }
+    failsafe_done_ = true;
+    return;
+  }
+  log_->warn("device {}: failsafe {} not confirmed (exception 0x{:02X})", config_.name,
+             to_string(action), static_cast<int>(e));
+  if (action == FailsafeAction::preset ||
+      (action == FailsafeAction::quick_stop && e == Exception::illegal_data_value)) {
+    failsafe_now_ = FailsafeAction::stop;  // next tick: a plain stop instead
+    failsafe_done_ = false;
+    return;
+  }
+  if (e == Exception::illegal_data_value) {
+    failsafe_gave_up_ = true;
+    log_->error("device {}: refuses {} (0x03): the failsafe cannot act on it", config_.name,
+                to_string(action));
+    return;
+  }
+  failsafe_retry_at_ = last_tick_ + kFailsafeRetry;
+}
+
+}  // namespace drivegate
