@@ -100,7 +100,24 @@ void Fdc1Driver::confirm(const Status& s) {
 }
 
 void Fdc1Driver::expire(TimePoint now) {
-  if (speed_write_ && now >= speed_write_->deadline) finish_speed_write(WriteResult::no_response);
+  if (speed_write_ && now >= speed_write_->deadline) give_up_speed_write();
+}
+
+// The pending writes get 0x0B. If no frame ever carried them (the controller was not heard since
+// they were asked for), they must not stay in force: the start-up after the controller appears
+// would otherwise carry out what the PLC was told failed, starting the compressor hours later.
+// A frame that did go out may have been acted on, so then the command stays in force (and is
+// sent again when the stream returns, as for any command in force).
+void Fdc1Driver::give_up_speed_write() {
+  if (!speed_write_) return;
+  const bool sent = speed_write_->sent;
+  const InForce before = speed_write_->before;
+  finish_speed_write(WriteResult::no_response);
+  if (sent) return;
+  common_.command = before.command;
+  setpoint_ = before.setpoint;
+  common_.setpoint_rpm = before.setpoint;
+  common_.running = motor_on_ || common_.command == Command::run_forward;
 }
 
 void Fdc1Driver::finish_speed_write(WriteResult r) {
@@ -113,7 +130,7 @@ void Fdc1Driver::on_comm_lost(TimePoint) {
   common_.ready = false;  // the start-up (re-assert the command in force) runs again
   send_now_ = false;
   next_refresh_ = TimePoint::max();
-  finish_speed_write(WriteResult::no_response);
+  give_up_speed_write();
   if (prog_state_ != Programming::idle) {
     finish_program(WriteResult::no_response, ProgStatus::no_response, "communication lost");
   }
@@ -141,6 +158,7 @@ std::optional<Exchange> Fdc1Driver::next_exchange(TimePoint now) {
     ex.reply = ReplyMode::none;  // INPUT, Programming speed: never acknowledged
     ex.priority = send_now_ ? send_priority_ : Priority::poll;
     send_now_ = false;
+    if (speed_write_) speed_write_->sent = true;
     next_refresh_ = now + settings_.refresh;
     values_[pt::sent_speed_rpm] = std::int64_t{speed.min_rpm};
     return ex;
@@ -174,9 +192,10 @@ void Fdc1Driver::on_no_reply(TimePoint) {
 
 // ---- writes --------------------------------------------------------------------------------
 
-void Fdc1Driver::start_speed_write(Ticket t, Expect e, TimePoint now) {
+void Fdc1Driver::start_speed_write(Ticket t, Expect e, InForce before, TimePoint now) {
   std::vector<Ticket> tickets;
   if (speed_write_) {
+    before = speed_write_->before;  // what was in force before any of the unsettled writes
     // Every frame carries both the command and the setpoint, so a pending write that asked for
     // the same direction (run / run, stop / stop) is carried out by the new frame too: it waits
     // with the new write, on the stricter test. One asking the opposite is superseded.
@@ -191,7 +210,7 @@ void Fdc1Driver::start_speed_write(Ticket t, Expect e, TimePoint now) {
     }
   }
   tickets.push_back(t);
-  speed_write_ = SpeedWrite{std::move(tickets), e, now + settings_.confirm};
+  speed_write_ = SpeedWrite{std::move(tickets), e, now + settings_.confirm, before};
   send_now_ = true;
   due_at_ = now;
   send_priority_ = Priority::command;
@@ -208,18 +227,19 @@ WriteStatus Fdc1Driver::command(Command c, Ticket t, TimePoint now) {
   }
   if (!settings_.slave_mode) return WriteStatus::invalid_value;  // speed set by IN1/IN2 then
   // Before the controller is first heard the write waits: the start-up sends the command in
-  // force as soon as the stream begins, and confirm_ms bounds the wait (then 0x0B).
+  // force as soon as the stream begins (give_up_speed_write() if it never does).
+  const InForce before = in_force();
   if (c == Command::run_forward) {
     if (setpoint_ == 0) return WriteStatus::refused;  // no speed to run at yet
     common_.command = c;
     common_.running = true;
-    start_speed_write(t, Expect::motor_on, now);
+    start_speed_write(t, Expect::motor_on, before, now);
     return WriteStatus::pending;
   }
   // stop, and quick_stop: the protocol has no faster stop than speed 0.
   common_.command = c;
   common_.running = motor_on_;
-  start_speed_write(t, Expect::motor_off, now);
+  start_speed_write(t, Expect::motor_off, before, now);
   return WriteStatus::pending;
 }
 
@@ -231,9 +251,10 @@ WriteStatus Fdc1Driver::setpoint(std::int32_t rpm, Ticket t, TimePoint now) {
     common_.setpoint_rpm = rpm;
     return WriteStatus::done;  // used by the next run_forward
   }
+  const InForce before = in_force();
   setpoint_ = rpm;
   common_.setpoint_rpm = rpm;
-  start_speed_write(t, Expect::at_setpoint, now);
+  start_speed_write(t, Expect::at_setpoint, before, now);
   return WriteStatus::pending;
 }
 

@@ -50,19 +50,28 @@ class Fdc1Driver final : public Driver {
   enum class Expect : std::uint8_t { motor_on, motor_off, at_setpoint };
   // One frame's worth of pending writes: a write that a newer frame still carries out (a
   // setpoint and a run_forward in one Modbus request, say) waits with it, not against it.
+  // The command and setpoint in force.
+  struct InForce {
+    Command command;
+    std::int32_t setpoint;
+  };
   struct SpeedWrite {
     std::vector<Ticket> tickets;
     Expect expect;
     TimePoint deadline;
+    InForce before;     // in force before the first of these writes
+    bool sent = false;  // a frame carrying them went out
   };
   enum class Programming : std::uint8_t { idle, queued, awaiting_echo };
 
   void apply(const Status& s, TimePoint now);
   void confirm(const Status& s);
   void expire(TimePoint now);
-  void start_speed_write(Ticket t, Expect e, TimePoint now);
+  void start_speed_write(Ticket t, Expect e, InForce before, TimePoint now);
   void complete(Ticket t, WriteResult r);
   void finish_speed_write(WriteResult r);
+  void give_up_speed_write();
+  [[nodiscard]] InForce in_force() const { return {common_.command, setpoint_}; }
   [[nodiscard]] Speed wanted_speed() const;
   [[nodiscard]] bool slave_ready() const { return settings_.slave_mode && common_.ready; }
 

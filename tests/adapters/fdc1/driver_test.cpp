@@ -150,16 +150,47 @@ TEST(Fdc1Driver, ARunBeforeTheDeviceIsHeardWaitsForTheStream) {
 }
 
 // ...and a controller never heard answers 0x0B once it is declared lost (stale_ms, 2000), not
-// a refusal.
-TEST(Fdc1Driver, AWriteToAControllerNeverHeardIsNoResponse) {
+// a refusal. The run it was told failed does not stay in force: when the controller appears
+// later, the start-up asserts stop, not the run.
+TEST(Fdc1Driver, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
   Rig rig;
   rig.sim->control("silent on", rig.now());
-  EXPECT_EQ(rig.driver->command(Command::stop, 1, rig.now()), WriteStatus::pending);
+  ASSERT_EQ(rig.driver->setpoint(2000, 1, rig.now()), WriteStatus::done);
+  EXPECT_EQ(rig.driver->command(Command::run_forward, 2, rig.now()), WriteStatus::pending);
   rig.bus->run_for(1900ms);
-  EXPECT_FALSE(rig.completed(1));
-  ASSERT_TRUE(rig.settle(1, 200ms));
-  EXPECT_EQ(rig.result(1), WriteResult::no_response);
+  EXPECT_FALSE(rig.completed(2));
+  ASSERT_TRUE(rig.settle(2, 200ms));
+  EXPECT_EQ(rig.result(2), WriteResult::no_response);
   EXPECT_TRUE(rig.bus->sent.empty());
+  EXPECT_EQ(rig.common().command, Command::stop);
+  EXPECT_FALSE(rig.common().running);
+
+  rig.bus->run_for(1h);  // hours later the controller is powered up
+  rig.sim->control("silent off", rig.now());
+  rig.bus->run_for(2s);
+  ASSERT_TRUE(rig.common().ready);
+  ASSERT_EQ(rig.bus->sent.size(), 1u);
+  EXPECT_EQ(rig.bus->sent[0], kStopFrame);
+  EXPECT_EQ(int_of(rig.value(pt::motor_on)), 0);
+}
+
+// A setpoint change while running that no frame ever carried goes back too.
+TEST(Fdc1Driver, ASpeedChangeNeverSentGoesBackWithTheLink) {
+  Rig rig;
+  rig.bus->run_for(600ms);
+  rig.driver->setpoint(2000, 1, rig.now());
+  rig.driver->command(Command::run_forward, 2, rig.now());
+  ASSERT_TRUE(rig.settle(2));
+  rig.sim->control("silent on", rig.now());
+  rig.bus->run_for(2500ms);  // comm_lost: not ready
+  EXPECT_FALSE(rig.common().ready);
+  // The device layer answers 0x0B itself while comm_lost; the driver on its own still copes.
+  EXPECT_EQ(rig.driver->setpoint(3000, 3, rig.now()), WriteStatus::pending);
+  rig.driver->on_comm_lost(rig.now());
+  ASSERT_TRUE(rig.settle(3, 100ms));
+  EXPECT_EQ(rig.result(3), WriteResult::no_response);
+  EXPECT_EQ(rig.common().setpoint_rpm, 2000);
+  EXPECT_EQ(rig.common().command, Command::run_forward);  // the confirmed run stays in force
 }
 
 TEST(Fdc1Driver, AlarmsBecomeUnifiedFaultsWithTheRawCode) {
