@@ -1,13 +1,19 @@
 #!/usr/bin/env python3
 """Tiny Modbus TCP client for the bench scripts (no dependencies).
 
-mbwrite.py PORT UNIT:ADDR=V1,V2,...   write holding registers (FC16) on each unit given
+mbwrite.py [--wait-online] PORT UNIT:ADDR=V1,V2,...
+                                      write holding registers (FC16) on each unit given; with
+                                      --wait-online, first wait (10 s at most) for the unit's
+                                      online status bit, so start-up handshakes are done
 mbwrite.py --read-timeouts PORT UNIT  print '# unit U status=.. timeouts=..' (common block)
 mbwrite.py --frames PORT UNIT...      print the sum of frames_good (input 9..10) over the units
 """
 import socket
 import struct
 import sys
+import time
+
+ONLINE = 1  # status bit 0 (include/drivegate/common.h)
 
 
 def request(sock, tid, unit, pdu):
@@ -23,6 +29,19 @@ def request(sock, tid, unit, pdu):
     if body[0] & 0x80:
         raise RuntimeError(f"unit {unit}: exception {body[1]}")
     return body
+
+
+def wait_online(sock, unit, seconds=10.0):
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        try:
+            body = request(sock, 1, unit, struct.pack(">BHH", 4, 0, 1))
+            if struct.unpack(">H", body[2:4])[0] & ONLINE:
+                return
+        except RuntimeError:
+            pass
+        time.sleep(0.1)
+    raise RuntimeError(f"unit {unit}: not online after {seconds:.0f} s")
 
 
 def write(sock, unit, addr, values):
@@ -49,13 +68,19 @@ def main():
                 total += (hi << 16) | lo
         print(total)
         return
-    port = int(sys.argv[1])
+    args = sys.argv[1:]
+    wait = args[0] == "--wait-online"
+    if wait:
+        args = args[1:]
+    port = int(args[0])
     failed = False
     with socket.create_connection(("127.0.0.1", port)) as s:
-        for spec in sys.argv[2:]:
+        for spec in args[1:]:
             target, values = spec.split("=")
             unit, addr = (int(x) for x in target.split(":"))
             try:
+                if wait:
+                    wait_online(s, unit)
                 write(s, unit, addr, [int(v) for v in values.split(",")])
             except RuntimeError as e:
                 print(f"mbwrite: {e}", file=sys.stderr)

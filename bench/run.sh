@@ -17,7 +17,8 @@
 #   SMALL (4:0:19), UNIT (2).
 #   AGAINST=OTHER_BUILD_DIR: the baseline side is that build's drivegated (with five simulated
 #   drives of its own) instead of dg-baseline: a change to drivegate measured side by side
-#   against the build before it.
+#   against the build before it. (Its independence figures then include the second daemon's
+#   polling on the same CPU, so they are not the published ones.)
 set -euo pipefail
 
 B=$(realpath "${1:-build-bench}")
@@ -36,14 +37,22 @@ BASE_PORT=${BASE_PORT:-15030}
 HERE=$(dirname "$(realpath "$0")")
 AGAINST=${AGAINST:-}
 AGAINST_BIN=
+
+need() {  # need FILE WHAT
+  [[ -e $1 ]] || { echo "run.sh: $1 missing ($2)" >&2; exit 2; }
+}
+need "$BIN/drivegated" "build with -DDRIVEGATE_BENCH=ON"
+need "$BIN/drivegate" "build with -DDRIVEGATE_BENCH=ON"
+need "$BIN/dg-loadgen" "build with -DDRIVEGATE_BENCH=ON"
 if [[ -n $AGAINST ]]; then
   AGAINST_BIN=$(realpath "$AGAINST")/bin
-  [[ -x $AGAINST_BIN/drivegated ]] || { echo "run.sh: $AGAINST_BIN/drivegated missing" >&2; exit 2; }
+  need "$AGAINST_BIN/drivegated" "AGAINST must be a build directory"
+  need "$AGAINST_BIN/drivegate" "AGAINST must be a build directory"
+  need "$AGAINST_BIN/../adapters" "AGAINST must be a build directory"
+else
+  need "$BIN/dg-baseline" "build with -DDRIVEGATE_BENCH=ON"
 fi
-
-for exe in drivegated drivegate dg-loadgen dg-baseline; do
-  [[ -x $BIN/$exe ]] || { echo "run.sh: $BIN/$exe missing (build with -DDRIVEGATE_BENCH=ON)" >&2; exit 2; }
-done
+((ROUNDS % 2 == 0)) || echo "run.sh: ROUNDS=$ROUNDS is odd: the baseline goes first once more" >&2
 
 W=$(mktemp -d /tmp/dg-bench-XXXXXX)
 PIDS=()
@@ -136,8 +145,8 @@ wait_port "$DG_PORT"
 wait_port "$BASE_PORT"
 # Start every drive (command = run_forward, setpoint) so the polls carry live values.
 START=(1:0=1,800 2:0=1,1500 3:0=1,1149 4:0=1,2000 5:0=1,3000)
-python3 "$HERE/mbwrite.py" "$DG_PORT" "${START[@]}"
-[[ -n $AGAINST ]] && python3 "$HERE/mbwrite.py" "$BASE_PORT" "${START[@]}"
+python3 "$HERE/mbwrite.py" --wait-online "$DG_PORT" "${START[@]}"
+[[ -n $AGAINST ]] && python3 "$HERE/mbwrite.py" --wait-online "$BASE_PORT" "${START[@]}"
 sleep 2
 
 load() {  # load SIDE PORT PID N ROUND TAG
