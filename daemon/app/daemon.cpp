@@ -2,6 +2,7 @@
 
 #include <fmt/ranges.h>
 
+#include <boost/asio/post.hpp>
 #include <csignal>
 
 #include "core/config_loader.h"
@@ -117,6 +118,9 @@ void Daemon::reload() {
   gateway_->stop();
   next->start();
   backend_.set(next.get());
+  // The old gateway goes only after the handlers already queued for it (a housekeeping tick
+  // that expired in this turn of the loop cannot be cancelled, and would find it freed).
+  boost::asio::post(io_, [old = std::shared_ptr<Gateway>(std::move(gateway_))] {});
   gateway_ = std::move(next);
   config_ = std::move(*config);
   describe_devices(*log_, config_);
