@@ -3,9 +3,8 @@
 // modbus_receive + modbus_reply on a modbus_mapping_t. Nothing here is tuned either way.
 //
 // The mapping has 141 holding registers (FC03 16..140, the benchmark's large read, works) and
-// --inputs input registers (default 129,
-// so FC04 0..18, the common block, and FC04 32..128, unicla-edrive's point range, both work),
-// filled with a counting pattern. Accepted sockets get TCP_NODELAY, as drivegate's do.
+// --inputs input registers (default 129, so FC04 0..18, the common block, and FC04 32..128,
+// unicla-edrive's point range, both work), filled with a counting pattern. Accepted sockets get TCP_NODELAY, as drivegate's do.
 #include <errno.h>
 #include <modbus/modbus.h>
 #include <netinet/in.h>
