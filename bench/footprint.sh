@@ -12,14 +12,9 @@ PLUGINS=$B/adapters
 HERE=$(dirname "$(realpath "$0")")
 SECONDS_EACH=${SECONDS_EACH:-20}
 PORT=${PORT:-15050}
-W=$(mktemp -d /tmp/dg-foot-XXXXXX)
-PIDS=()
-cleanup() {
-  for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$W"
-}
-trap cleanup EXIT
+# shellcheck source=bench/common.sh
+source "$HERE/common.sh"
+bench_workdir foot
 
 ticks() { awk '{print $14 + $15}' "/proc/$1/stat"; }
 
@@ -29,7 +24,7 @@ measure() {  # measure NAME CONFIG UNITS...
     >"$W/$name.log" 2>&1 &
   local dg=$!
   PIDS+=($dg)
-  for _ in $(seq 100); do (exec 3<>"/dev/tcp/127.0.0.1/$PORT") 2>/dev/null && break; sleep 0.1; done
+  wait_for_port "$PORT"
   sleep 3
   local f0 f1 t0 t1 hz rss
   hz=$(getconf CLK_TCK)
@@ -65,7 +60,7 @@ for d in "nidec-washer platform=7" "ed3100 -" "mdriver-2400 -" "fdc1 slave_mode=
   "$BIN/drivegate" sim "$id" --plugin-dir "$PLUGINS" --link "$W/$id" "${set_arg[@]}" \
     </dev/null >/dev/null 2>&1 &
   PIDS+=($!)
-  for _ in $(seq 50); do [[ -e $W/$id ]] && break; sleep 0.1; done
+  wait_for_path "$W/$id" || true
   { echo "[[bus]]"; echo "name = \"$id\""; echo "port = \"$W/$id\""
     echo "[[device]]"; echo "name = \"$id\""; echo "bus = \"$id\""; echo "adapter = \"$id\""
     echo "unit_id = $unit"
@@ -82,7 +77,7 @@ for b in $(seq 32); do
   "$BIN/drivegate" sim ed3100 --plugin-dir "$PLUGINS" --link "$W/bus$b" --address 1 --address 2 \
     --address 3 --address 4 </dev/null >/dev/null 2>&1 &
   PIDS+=($!)
-  for _ in $(seq 50); do [[ -e $W/bus$b ]] && break; sleep 0.1; done
+  wait_for_path "$W/bus$b" || true
   { echo "[[bus]]"; echo "name = \"bus$b\""; echo "port = \"$W/bus$b\""; } >>"$cfg"
   for a in 1 2 3 4; do
     u=$(((b - 1) * 4 + a))

@@ -54,14 +54,9 @@ else
 fi
 ((ROUNDS % 2 == 0)) || echo "run.sh: ROUNDS=$ROUNDS is odd: the baseline goes first once more" >&2
 
-W=$(mktemp -d /tmp/dg-bench-XXXXXX)
-PIDS=()
-cleanup() {
-  for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$W"
-}
-trap cleanup EXIT
+# shellcheck source=bench/common.sh
+source "$HERE/common.sh"
+bench_workdir bench
 
 # adapter unit options
 DRIVES=(
@@ -113,7 +108,7 @@ start_gateway() {
   done
   for d in "${DRIVES[@]}"; do
     read -r id _ <<<"$d"
-    for _ in $(seq 50); do [[ -e $dir/$id ]] && break; sleep 0.1; done
+    wait_for_path "$dir/$id" || true
   done
   taskset -c "$SERVER_CPU" "$bin/drivegated" --config "$dir/bench.toml" \
     --plugin-dir "$bin/../adapters" --log-level warn >"$dir/drivegated.log" 2>&1 &
@@ -133,11 +128,7 @@ fi
 BASE_PID=$GATEWAY_PID
 
 wait_port() {
-  for _ in $(seq 100); do
-    (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null && return 0
-    sleep 0.1
-  done
-  echo "run.sh: nothing answers on port $1" >&2
+  wait_for_port "$1" && return 0
   cat "$W"/*/drivegated.log >&2
   exit 1
 }

@@ -18,14 +18,9 @@ WRITE_MS=${WRITE_MS:-150}
 PORT=${PORT:-15040}
 ADAPTERS=${ADAPTERS:-"nidec-washer ed3100 mdriver-2400 fdc1 unicla-edrive"}
 
-W=$(mktemp -d /tmp/dg-serial-XXXXXX)
-PIDS=()
-cleanup() {
-  for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$W"
-}
-trap cleanup EXIT
+# shellcheck source=bench/common.sh
+source "$HERE/common.sh"
+bench_workdir serial
 
 echo "| adapter | char us | frame gap ms | tx/cycle | cycles | cycle ms | limit ms | eff | limit+gap ms | eff+gap | gateway gap us p50 / p99 | above silence us p50 / p99 | command latency ms p50 / p99 |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
@@ -44,7 +39,7 @@ for id in $ADAPTERS; do
   "$BIN/drivegate" sim "$id" --plugin-dir "$PLUGINS" --link "$W/$id" "${opt[@]}" --wire-timing \
     --turnaround-us "$TURNAROUND_US" --wire-log "$W/$id.wire" </dev/null >"$W/$id.sim" 2>&1 &
   SIM=$!
-  for _ in $(seq 50); do [[ -e $W/$id ]] && break; sleep 0.1; done
+  wait_for_path "$W/$id" || true
   {
     echo "[server]"; echo "listen = \"127.0.0.1:$PORT\""
     echo "[[bus]]"; echo "name = \"b\""; echo "port = \"$W/$id\""
@@ -56,7 +51,7 @@ for id in $ADAPTERS; do
     >"$W/$id.log" 2>&1 &
   DG=$!
   PIDS=($SIM $DG)
-  for _ in $(seq 100); do (exec 3<>"/dev/tcp/127.0.0.1/$PORT") 2>/dev/null && break; sleep 0.1; done
+  wait_for_port "$PORT"
   python3 "$HERE/cmdlat.py" "$PORT" "$SECONDS_EACH" "$WRITE_MS" "$W/$id.writes"
   kill $DG $SIM; wait $DG $SIM 2>/dev/null || true
   PIDS=()

@@ -1,0 +1,30 @@
+# bench/common.sh: what the bench scripts share. Sourced, not run.
+
+# bench_workdir NAME: a fresh working directory in W, and PIDS, whose processes are killed (and
+# the directory removed) when the script exits.
+bench_workdir() {
+  W=$(mktemp -d "/tmp/dg-$1-XXXXXX")
+  PIDS=()
+  trap bench_cleanup EXIT
+}
+bench_cleanup() {
+  for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$W"
+}
+
+# wait_for_path PATH: until a simulator has created its pty link (5 s at most).
+wait_for_path() {
+  for _ in $(seq 50); do [[ -e $1 ]] && return 0; sleep 0.1; done
+  return 1
+}
+
+# wait_for_port PORT: until something accepts TCP connections on 127.0.0.1:PORT (10 s at most).
+wait_for_port() {
+  for _ in $(seq 100); do
+    (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null && return 0
+    sleep 0.1
+  done
+  echo "${0##*/}: nothing answers on port $1" >&2
+  return 1
+}
