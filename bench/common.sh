@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # bench/common.sh: what the bench scripts share. Sourced, not run.
 
 # bench_workdir NAME: a fresh working directory in W, and PIDS, whose processes are killed (and

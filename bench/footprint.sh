@@ -23,7 +23,7 @@ measure() {  # measure NAME CONFIG UNITS...
   "$BIN/drivegated" --config "$config" --plugin-dir "$PLUGINS" --log-level warn \
     >"$W/$name.log" 2>&1 &
   local dg=$!
-  PIDS+=($dg)
+  PIDS+=("$dg")
   wait_for_port "$PORT"
   sleep 3
   local f0 f1 t0 t1 hz rss
@@ -81,7 +81,7 @@ for b in $(seq 32); do
   { echo "[[bus]]"; echo "name = \"bus$b\""; echo "port = \"$W/bus$b\""; } >>"$cfg"
   for a in 1 2 3 4; do
     u=$(((b - 1) * 4 + a))
-    units+=($u)
+    units+=("$u")
     { echo "[[device]]"; echo "name = \"d$u\""; echo "bus = \"bus$b\""; echo "adapter = \"ed3100\""
       echo "unit_id = $u"; echo "address = $a"; } >>"$cfg"
   done

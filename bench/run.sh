@@ -113,7 +113,7 @@ start_gateway() {
   taskset -c "$SERVER_CPU" "$bin/drivegated" --config "$dir/bench.toml" \
     --plugin-dir "$bin/../adapters" --log-level warn >"$dir/drivegated.log" 2>&1 &
   GATEWAY_PID=$!
-  PIDS+=($GATEWAY_PID)
+  PIDS+=("$GATEWAY_PID")
 }
 
 start_gateway "$BIN" "$DG_PORT" dg
@@ -123,7 +123,7 @@ if [[ -n $AGAINST ]]; then
 else
   taskset -c "$SERVER_CPU" "$BIN/dg-baseline" --port "$BASE_PORT" >"$W/baseline.log" 2>&1 &
   GATEWAY_PID=$!
-  PIDS+=($GATEWAY_PID)
+  PIDS+=("$GATEWAY_PID")
 fi
 BASE_PID=$GATEWAY_PID
 
@@ -135,6 +135,7 @@ wait_port() {
 wait_port "$DG_PORT"
 wait_port "$BASE_PORT"
 # Start every drive (command = run_forward, setpoint) so the polls carry live values.
+# shellcheck disable=SC2054 # the commas are in the values (UNIT:ADDR=V1,V2)
 START=(1:0=1,800 2:0=1,1500 3:0=1,1149 4:0=1,2000 5:0=1,3000)
 python3 "$HERE/mbwrite.py" --wait-online "$DG_PORT" "${START[@]}"
 [[ -n $AGAINST ]] && python3 "$HERE/mbwrite.py" --wait-online "$BASE_PORT" "${START[@]}"

@@ -50,7 +50,7 @@ for id in $ADAPTERS; do
   "$BIN/drivegated" --config "$W/$id.toml" --plugin-dir "$PLUGINS" --log-level warn \
     >"$W/$id.log" 2>&1 &
   DG=$!
-  PIDS=($SIM $DG)
+  PIDS=("$SIM" "$DG")
   wait_for_port "$PORT"
   python3 "$HERE/cmdlat.py" "$PORT" "$SECONDS_EACH" "$WRITE_MS" "$W/$id.writes"
   kill $DG $SIM; wait $DG $SIM 2>/dev/null || true
