@@ -21,37 +21,36 @@ bool online(Plc& plc) {
   return r.ok() && (r.regs[0] & reg::online) != 0;
 }
 
-TEST(ReloadE2E, GoodConfigSwapsDevicesKeepingConnections) {
-  TempDir dir;
-  Sim sim("nidec-washer", dir / "washer");
-  Daemon daemon(dir, washer(dir / "washer", 1));
-  Plc plc(daemon.port(), 1);
-  ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s));
+// A washer at unit 1, online, with a PLC connected to the daemon.
+class ReloadE2E : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(plc_.connect());
+    ASSERT_TRUE(eventually([&] { return online(plc_); }, 10s));
+  }
+  TempDir dir_;
+  Sim sim_{"nidec-washer", dir_ / "washer"};
+  Daemon daemon_{dir_, washer(dir_ / "washer", 1)};
+  Plc plc_{daemon_.port(), 1};
+};
 
+TEST_F(ReloadE2E, GoodConfigSwapsDevicesKeepingConnections) {
   // The same drive moves to unit 2; the open connection sees the change.
-  std::ofstream(daemon.config()) << washer(dir / "washer", 2);
-  daemon.process().signal(SIGHUP);
-  ASSERT_TRUE(eventually([&] { return plc.input(reg::status, 1).exception == 0x0A; }, 10s));
-  plc.unit(2);
-  EXPECT_TRUE(eventually([&] { return online(plc); }, 10s));
-  EXPECT_TRUE(daemon.process().running());
+  std::ofstream(daemon_.config()) << washer(dir_ / "washer", 2);
+  daemon_.process().signal(SIGHUP);
+  ASSERT_TRUE(eventually([&] { return plc_.input(reg::status, 1).exception == 0x0A; }, 10s));
+  plc_.unit(2);
+  EXPECT_TRUE(eventually([&] { return online(plc_); }, 10s));
+  EXPECT_TRUE(daemon_.process().running());
 }
 
-TEST(ReloadE2E, BadConfigIsRefusedAndTheOldOneKeepsServing) {
-  TempDir dir;
-  Sim sim("nidec-washer", dir / "washer");
-  Daemon daemon(dir, washer(dir / "washer", 1));
-  Plc plc(daemon.port(), 1);
-  ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s));
-
-  std::ofstream(daemon.config()) << "[[device]]\nname = 5\n";
-  daemon.process().signal(SIGHUP);
+TEST_F(ReloadE2E, BadConfigIsRefusedAndTheOldOneKeepsServing) {
+  std::ofstream(daemon_.config()) << "[[device]]\nname = 5\n";
+  daemon_.process().signal(SIGHUP);
   std::this_thread::sleep_for(1s);
-  EXPECT_TRUE(daemon.process().running());
-  EXPECT_TRUE(online(plc));
-  EXPECT_EQ(plc.write(reg::command, {1, 700}), 0);
+  EXPECT_TRUE(daemon_.process().running());
+  EXPECT_TRUE(online(plc_));
+  EXPECT_EQ(plc_.write(reg::command, {1, 700}), 0);
 }
 
 }  // namespace
