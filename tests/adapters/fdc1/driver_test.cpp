@@ -92,10 +92,7 @@ TEST(Fdc1Driver, RefreshKeepsTheMotorRunningPastTheWatchdog) {
 
 TEST(Fdc1Driver, SetpointWhileRunningIsSentAndConfirmedAtSpeed) {
   Rig rig;
-  rig.bus->run_for(600ms);
-  rig.driver->setpoint(2000, 1, rig.now());
-  rig.driver->command(Command::run_forward, 2, rig.now());
-  ASSERT_TRUE(rig.settle(2));
+  ASSERT_TRUE(rig.run_at(2000));
   rig.bus->run_for(1s);
   EXPECT_EQ(rig.driver->setpoint(3000, 3, rig.now()), WriteStatus::pending);
   ASSERT_TRUE(rig.settle(3));
@@ -109,10 +106,7 @@ TEST(Fdc1Driver, StopAndQuickStopSendSpeedZero) {
   for (const Command c : {Command::stop, Command::quick_stop}) {
     SCOPED_TRACE(to_string(c));
     Rig rig;
-    rig.bus->run_for(600ms);
-    rig.driver->setpoint(2500, 1, rig.now());
-    rig.driver->command(Command::run_forward, 2, rig.now());
-    ASSERT_TRUE(rig.settle(2));
+    ASSERT_TRUE(rig.run_at(2500));
     EXPECT_EQ(rig.driver->command(c, 3, rig.now()), WriteStatus::pending);
     ASSERT_TRUE(rig.settle(3));
     EXPECT_EQ(rig.result(3), WriteResult::ok);
@@ -177,10 +171,7 @@ TEST(Fdc1Driver, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
 // A setpoint change while running that no frame ever carried goes back too.
 TEST(Fdc1Driver, ASpeedChangeNeverSentGoesBackWithTheLink) {
   Rig rig;
-  rig.bus->run_for(600ms);
-  rig.driver->setpoint(2000, 1, rig.now());
-  rig.driver->command(Command::run_forward, 2, rig.now());
-  ASSERT_TRUE(rig.settle(2));
+  ASSERT_TRUE(rig.run_at(2000));
   rig.sim->control("silent on", rig.now());
   rig.bus->run_for(2500ms);  // comm_lost: not ready
   EXPECT_FALSE(rig.common().ready);
@@ -273,10 +264,7 @@ TEST(Fdc1Driver, ANewSpeedWriteSupersedesThePendingOne) {
 // ok when the stream shows the new speed, not 0x0B for the first.
 TEST(Fdc1Driver, SetpointAndRunTogetherWhileRunningBothComplete) {
   Rig rig;
-  rig.bus->run_for(600ms);
-  rig.driver->setpoint(2000, 1, rig.now());
-  rig.driver->command(Command::run_forward, 2, rig.now());
-  ASSERT_TRUE(rig.settle(2));
+  ASSERT_TRUE(rig.run_at(2000));
   ASSERT_EQ(rig.result(2), WriteResult::ok);
   rig.bus->run_for(1s);
   ASSERT_EQ(rig.driver->setpoint(2500, 3, rig.now()), WriteStatus::pending);
@@ -291,10 +279,7 @@ TEST(Fdc1Driver, SetpointAndRunTogetherWhileRunningBothComplete) {
 
 TEST(Fdc1Driver, CommLostFailsPendingWritesAndStartUpRunsAgain) {
   Rig rig;
-  rig.bus->run_for(600ms);
-  rig.driver->setpoint(2000, 1, rig.now());
-  rig.driver->command(Command::run_forward, 2, rig.now());
-  ASSERT_TRUE(rig.settle(2));
+  ASSERT_TRUE(rig.run_at(2000));
   rig.sim->control("silent on", rig.now());
   ASSERT_EQ(rig.driver->setpoint(2500, 3, rig.now()), WriteStatus::pending);
   ASSERT_TRUE(rig.bus->run_until([&] { return rig.bus->comm_lost(); }, 3s));

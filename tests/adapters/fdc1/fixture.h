@@ -55,6 +55,14 @@ struct Rig {
   bool settle(Ticket t, Millis limit = Millis(20000)) {
     return bus->run_until([&] { return completed(t); }, limit);
   }
+  // The controller heard, then set to `rpm` (ticket 1) and run (ticket 2) until the stream
+  // confirms the run; false if it never does.
+  bool run_at(std::int32_t rpm) {
+    bus->run_for(Millis(600));
+    driver->setpoint(rpm, 1, now());
+    driver->command(Command::run_forward, 2, now());
+    return settle(2);
+  }
 
   std::unique_ptr<Driver> driver;
   std::unique_ptr<Simulator> sim;
