@@ -22,7 +22,7 @@ using namespace std::chrono_literals;
 // What systemd's end of NOTIFY_SOCKET would read: one datagram per sd_notify() call.
 class NotifySocket {
  public:
-  explicit NotifySocket(const std::filesystem::path& path) : path_(path) {
+  explicit NotifySocket(const std::filesystem::path& path) {
     fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
     sockaddr_un addr{};
     addr.sun_family = AF_UNIX;
@@ -68,7 +68,6 @@ class NotifySocket {
   std::vector<std::string> received;
 
  private:
-  std::filesystem::path path_;
   int fd_ = -1;
 };
 
