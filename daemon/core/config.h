@@ -2,11 +2,13 @@
 // been checked against its range and, for device options, against the adapter's schema.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "drivegate/adapter.h"
@@ -42,6 +44,12 @@ enum class FailsafeAction : std::uint8_t {
   hold,        // leave the drive as it is; only the status bit says so
   preset,      // a running drive goes to `failsafe_rpm` (a stopped one stays stopped)
 };
+// Their names in drivegate.toml (`failsafe_action`) and in the log, in enum order.
+inline constexpr std::array<std::string_view, 4> kFailsafeActionNames = {"stop", "quick_stop",
+                                                                         "hold", "preset"};
+constexpr std::string_view to_string(FailsafeAction a) {
+  return kFailsafeActionNames.at(static_cast<std::size_t>(a));
+}
 // What the gateway does to a running drive when the daemon shuts down.
 enum class ShutdownAction : std::uint8_t { stop, hold };
 

@@ -248,11 +248,9 @@ std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnost
 }
 
 std::optional<FailsafeAction> parse_failsafe_action(std::string_view s) {
-  if (s == "stop") return FailsafeAction::stop;
-  if (s == "quick_stop") return FailsafeAction::quick_stop;
-  if (s == "hold") return FailsafeAction::hold;
-  if (s == "preset") return FailsafeAction::preset;
-  return std::nullopt;
+  const auto it = std::find(kFailsafeActionNames.begin(), kFailsafeActionNames.end(), s);
+  if (it == kFailsafeActionNames.end()) return std::nullopt;
+  return static_cast<FailsafeAction>(it - kFailsafeActionNames.begin());
 }
 
 // failsafe_timeout_ms, failsafe_action, failsafe_rpm and on_shutdown (docs/safety.md).

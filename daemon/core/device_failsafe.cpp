@@ -1,7 +1,5 @@
 // The device's PLC-loss failsafe (docs/safety.md): what it does when the PLC stops writing, and
 // how it retries a failsafe write the drive did not take. The timer itself is failsafe.h.
-#include <string_view>
-
 #include "device.h"
 
 namespace drivegate {
@@ -9,19 +7,6 @@ namespace drivegate {
 using modbus::Exception;
 
 namespace {
-constexpr std::string_view to_string(FailsafeAction a) {
-  switch (a) {
-    case FailsafeAction::stop:
-      return "stop";
-    case FailsafeAction::quick_stop:
-      return "quick_stop";
-    case FailsafeAction::hold:
-      return "hold";
-    case FailsafeAction::preset:
-      return "preset";
-  }
-  return "stop";
-}
 // A failed failsafe write is tried again after this, not on every 100 ms tick.
 constexpr Millis kFailsafeRetry{1000};
 }  // namespace
