@@ -137,10 +137,7 @@ TEST(UniclaDriver, SetRunStateFrameExact) {
 
 TEST(UniclaDriver, SpeedChangeWhileRunningIsSentAndConfirmedBySpeed) {
   Rig r;
-  r.start();
-  r.driver.setpoint(3000, 1, r.now());
-  r.driver.command(Command::run_forward, 2, r.now());
-  ASSERT_EQ(r.wait(2), WriteResult::ok);
+  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
   r.bus.run_for(Millis(4000));
   const std::size_t from = r.bus.sent.size();
   ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
@@ -157,10 +154,7 @@ TEST(UniclaDriver, SpeedChangeWhileRunningIsSentAndConfirmedBySpeed) {
 // 0x0B for the first, superseded).
 TEST(UniclaDriver, SetpointAndRunTogetherWhileRunningShareOneFrame) {
   Rig r;
-  r.start();
-  r.driver.setpoint(3000, 1, r.now());
-  r.driver.command(Command::run_forward, 2, r.now());
-  ASSERT_EQ(r.wait(2), WriteResult::ok);
+  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
   r.bus.run_for(Millis(4000));
   const std::size_t from = r.bus.sent.size();
   ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
@@ -176,10 +170,7 @@ TEST(UniclaDriver, SetpointAndRunTogetherWhileRunningShareOneFrame) {
 // stored, not sent (it must not start the drive).
 TEST(UniclaDriver, StopSupersedingASpeedChangeKeepsStopInForce) {
   Rig r;
-  r.start();
-  r.driver.setpoint(3000, 1, r.now());
-  r.driver.command(Command::run_forward, 2, r.now());
-  ASSERT_EQ(r.wait(2), WriteResult::ok);
+  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
   r.bus.run_for(Millis(4000));
   ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
   ASSERT_EQ(r.driver.command(Command::stop, 4, r.now()), WriteStatus::pending);
@@ -228,10 +219,7 @@ TEST(UniclaDriver, QuickStopIsAPlainStop) {
 
 TEST(UniclaDriver, MotorFaultMapsAndResetFaultClearsIt) {
   Rig r;
-  r.start();
-  r.driver.setpoint(3000, 1, r.now());
-  r.driver.command(Command::run_forward, 2, r.now());
-  ASSERT_EQ(r.wait(2), WriteResult::ok);
+  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
   r.bus.run_for(Millis(2000));
   r.sim.control("fault motor", r.now());  // Fault - Motor + ST over current
   r.bus.run_for(Millis(600));

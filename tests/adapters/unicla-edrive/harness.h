@@ -43,6 +43,14 @@ struct Rig {
     return r;
   }
 
+  // Started (start()), then set to `rpm` (ticket 1) and run (ticket 2); returns the run's result.
+  std::optional<WriteResult> run_at(std::int32_t rpm) {
+    start();
+    driver.setpoint(rpm, 1, now());
+    driver.command(Command::run_forward, 2, now());
+    return wait(2);
+  }
+
   // Frames sent since index `from` with this message id.
   std::vector<Frame> sent_with(std::uint8_t id, std::size_t from = 0) const {
     std::vector<Frame> out;
