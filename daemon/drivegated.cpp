@@ -7,8 +7,8 @@
 
 #include "app/daemon.h"
 #include "app/logging.h"
-#include "core/config_loader.h"
-#include "core/gateway.h"
+#include "config/config_loader.h"
+#include "gateway/gateway.h"
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <boost/asio/post.hpp>
 #include <csignal>
 
-#include "core/config_loader.h"
+#include "config/config_loader.h"
 #include "logging.h"
 
 namespace drivegate {

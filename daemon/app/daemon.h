@@ -15,10 +15,10 @@
 #include <string>
 
 #include "backend_switch.h"
-#include "core/config.h"
-#include "core/gateway.h"
-#include "core/plugins.h"
-#include "server.h"
+#include "config/config.h"
+#include "gateway/gateway.h"
+#include "config/plugins.h"
+#include "modbus/server.h"
 #include "systemd_notifier.h"
 
 namespace drivegate {

@@ -3,8 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "core/adapter_options.h"
-#include "core/config_loader.h"
+#include "config/adapter_options.h"
+#include "config/config_loader.h"
 #include "fake_adapter.h"
 
 namespace drivegate {

@@ -1,6 +1,6 @@
 // A device's Modbus side: reads from the image, writes validated, then answered only when the
 // driver settles them; comm_lost and deadlines turn into 0x0B.
-#include "core/device.h"
+#include "gateway/device.h"
 
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>

@@ -3,7 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "core/config_loader.h"
+#include "config/config_loader.h"
 #include "fake_adapter.h"
 
 namespace drivegate {

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 
-#include "core/device.h"
+#include "gateway/device.h"
 #include "fake_adapter.h"
 
 namespace drivegate {

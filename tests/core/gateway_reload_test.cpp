@@ -5,8 +5,8 @@
 
 #include <boost/asio/io_context.hpp>
 
-#include "core/adapter_options.h"
-#include "core/gateway.h"
+#include "config/adapter_options.h"
+#include "gateway/gateway.h"
 #include "fake_adapter.h"
 
 namespace drivegate {

@@ -3,8 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "core/adapter_options.h"
-#include "core/plugins.h"
+#include "config/adapter_options.h"
+#include "config/plugins.h"
 
 namespace drivegate {
 namespace {

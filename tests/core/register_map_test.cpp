@@ -1,6 +1,6 @@
 // The register map: the common block sits at the same addresses for every adapter; adapter
 // points follow it without overlap.
-#include "core/register_map.h"
+#include "gateway/register_map.h"
 
 #include <gtest/gtest.h>
 

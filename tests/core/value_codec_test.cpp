@@ -1,5 +1,5 @@
 // Engineering values to registers and back: scale, sign, 32-bit word order, floats, strings.
-#include "core/value_codec.h"
+#include "gateway/value_codec.h"
 
 #include <gtest/gtest.h>
 

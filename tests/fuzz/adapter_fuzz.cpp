@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "check.h"
-#include "core/adapter_options.h"
-#include "core/value_codec.h"
+#include "config/adapter_options.h"
+#include "gateway/value_codec.h"
 #include "drivegate/adapter.h"
 
 extern "C" const drivegate::AdapterDescriptor drivegate_adapter;

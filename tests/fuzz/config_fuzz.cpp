@@ -10,8 +10,8 @@
 #include <string_view>
 
 #include "check.h"
-#include "core/config_loader.h"
-#include "core/gateway.h"
+#include "config/config_loader.h"
+#include "gateway/gateway.h"
 #include "linked_adapters.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

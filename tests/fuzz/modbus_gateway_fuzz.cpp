@@ -13,8 +13,8 @@
 #include <string>
 
 #include "check.h"
-#include "core/config_loader.h"
-#include "core/gateway.h"
+#include "config/config_loader.h"
+#include "gateway/gateway.h"
 #include "fuzz_input.h"
 #include "linked_adapters.h"
 #include "modbus_stream.h"

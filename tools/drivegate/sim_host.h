@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "core/config.h"
+#include "config/config.h"
 #include "drivegate/adapter.h"
 #include "pty.h"
 

@@ -15,10 +15,10 @@
 #include <sstream>
 #include <thread>
 
-#include "cli/commands.h"
-#include "cli/sim_host.h"
-#include "core/adapter_options.h"
-#include "core/config_loader.h"
+#include "commands.h"
+#include "sim_host.h"
+#include "config/adapter_options.h"
+#include "config/config_loader.h"
 
 extern char** environ;
 

@@ -1,10 +1,10 @@
 // drivegate regmap: the register map of a configuration, as the daemon would serve it.
 #include <iostream>
 
-#include "cli/commands.h"
-#include "core/config_loader.h"
-#include "core/gateway.h"
-#include "core/regmap_format.h"
+#include "commands.h"
+#include "config/config_loader.h"
+#include "gateway/gateway.h"
+#include "format/regmap_format.h"
 
 namespace drivegate::cli {
 

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <system_error>
 
-#include "config.h"
+#include "config/config.h"
 
 namespace drivegate {
 

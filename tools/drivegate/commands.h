@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "core/plugins.h"
+#include "config/plugins.h"
 
 namespace drivegate::cli {
 

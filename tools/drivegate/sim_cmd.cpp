@@ -8,9 +8,9 @@
 #include <csignal>
 #include <iostream>
 
-#include "cli/commands.h"
-#include "cli/sim_host.h"
-#include "core/adapter_options.h"
+#include "commands.h"
+#include "sim_host.h"
+#include "config/adapter_options.h"
 
 namespace drivegate::cli {
 

@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "bus.h"
-#include "config.h"
+#include "line/bus.h"
+#include "config/config.h"
 #include "device.h"
 #include "modbus/backend.h"
-#include "plugins.h"
+#include "config/plugins.h"
 
 namespace drivegate {
 

@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "config.h"
-#include "register_map.h"
+#include "config/config.h"
+#include "gateway/register_map.h"
 
 namespace drivegate {
 

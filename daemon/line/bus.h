@@ -16,8 +16,8 @@
 #include <optional>
 #include <vector>
 
-#include "config.h"
-#include "device.h"
+#include "config/config.h"
+#include "gateway/device.h"
 
 namespace drivegate {
 

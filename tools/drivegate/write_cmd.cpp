@@ -6,10 +6,10 @@
 #include <iostream>
 
 #include "app/logging.h"
-#include "cli/commands.h"
-#include "core/config_loader.h"
-#include "core/gateway.h"
-#include "core/value_codec.h"
+#include "commands.h"
+#include "config/config_loader.h"
+#include "gateway/gateway.h"
+#include "gateway/value_codec.h"
 
 namespace drivegate::cli {
 

@@ -7,7 +7,7 @@
 #include <boost/asio/write.hpp>
 #include <sstream>
 
-#include "core/serial_line.h"
+#include "line/serial_line.h"
 
 namespace drivegate {
 

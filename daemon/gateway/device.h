@@ -12,7 +12,7 @@
 #include <span>
 #include <vector>
 
-#include "config.h"
+#include "config/config.h"
 #include "failsafe.h"
 #include "modbus/backend.h"
 #include "register_map.h"
