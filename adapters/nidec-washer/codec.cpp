@@ -17,6 +17,23 @@ bool checksum_holds(ByteView frame) {
   return xor_of(frame.first(frame.size() - 1)) == frame.back();
 }
 
+// 4.2 / 5.16: a slave frame starts A5, or 5A for the NACK. 4.1: a master frame starts A5.
+bool starts_reply(std::uint8_t b) {
+  return b == kHeader || b == kNackHeader;
+}
+bool starts_request(std::uint8_t b) {
+  return b == kHeader;
+}
+
+// A frame-shaped run whose XOR does not hold. A byte may have been lost, so a good frame can
+// start inside it: drop only up to the next frame start after its first byte, or the whole run
+// when it holds none. Still a bad checksum, so the bus counts a damaged frame.
+template <class Frame, class Starts>
+Decoded<Frame> bad_checksum(ByteView run, Starts starts) {
+  const auto next = std::find_if(run.begin() + 1, run.end(), starts);
+  return decoded_bad<Frame>(static_cast<std::size_t>(next - run.begin()), FrameError::bad_checksum);
+}
+
 }  // namespace
 
 bool is_v07_mode(std::uint8_t mode) {
@@ -135,7 +152,7 @@ Decoded<Reply> decode_reply(ByteView rx) {
   }
   if (rx.size() < size) return d;
   const ByteView frame = rx.first(size);
-  if (!checksum_holds(frame)) return decoded_bad<Reply>(size, FrameError::bad_checksum);
+  if (!checksum_holds(frame)) return bad_checksum<Reply>(frame, starts_reply);
   d.status = DecodeStatus::frame;
   d.consumed = size;
   if (header == kNackHeader) {
@@ -155,7 +172,7 @@ Decoded<Request> decode_request(ByteView rx) {
   if (rx[0] != kHeader) return decoded_bad<Request>(1, FrameError::bad_header);
   if (rx.size() < kRequestSize) return d;
   const ByteView frame = rx.first(kRequestSize);
-  if (!checksum_holds(frame)) return decoded_bad<Request>(kRequestSize, FrameError::bad_checksum);
+  if (!checksum_holds(frame)) return bad_checksum<Request>(frame, starts_request);
   if (!is_v07_mode(frame[1])) return decoded_bad<Request>(kRequestSize, FrameError::bad_field);
   d.status = DecodeStatus::frame;
   d.consumed = kRequestSize;

@@ -96,6 +96,9 @@ Bytes encode_fct_reply(std::array<std::uint8_t, kMaxReplyData> data);
 Bytes encode_nack();  // 5.16: 5A 00 FF 00 FF 00 5A
 
 // Incremental decoders over a receive buffer that starts at a frame boundary (or at noise).
+// A frame-shaped run with a bad XOR answers `bad` / bad_checksum and consumes only up to the
+// next frame start inside it (A5, or 5A too for decode_reply), or the whole run when there is
+// none, so that a good frame which began inside the damaged one is still found.
 Decoded<Reply> decode_reply(ByteView rx);      // master side
 Decoded<Request> decode_request(ByteView rx);  // inverter side (the simulator)
 

@@ -38,6 +38,34 @@ Decoded<Reply> expect_reply(const Buffer& wire) {
   return decode_reply(wire);
 }
 
+// A run with a bad XOR must answer bad / bad_checksum and drop exactly `dropped` bytes, whole
+// and split at every byte.
+template <class Frame>
+void expect_bad_checksum(const Buffer& wire, std::size_t dropped,
+                         Decoded<Frame> (*decode)(ByteView)) {
+  for (std::size_t split = 0; split <= wire.size(); ++split) {
+    const Decoded<Frame> d = test::feed_split<Frame>(wire, split, decode);
+    EXPECT_EQ(d.status, DecodeStatus::bad) << "split " << split;
+    EXPECT_EQ(d.error, make_error_code(FrameError::bad_checksum)) << "split " << split;
+    EXPECT_EQ(d.consumed, dropped) << "split " << split;
+  }
+}
+
+// A damaged frame, then a good one that starts inside it: the first decode drops only the
+// `dropped` bytes before the good frame's header, and what is left decodes, whole and split at
+// every byte, to that frame.
+template <class Frame>
+Frame expect_resync(const Buffer& wire, std::size_t dropped, Decoded<Frame> (*decode)(ByteView)) {
+  expect_bad_checksum(wire, dropped, decode);
+  const Buffer rest(wire.begin() + static_cast<long>(dropped), wire.end());
+  for (std::size_t split = 0; split <= rest.size(); ++split) {
+    const Decoded<Frame> d = test::feed_split<Frame>(rest, split, decode);
+    EXPECT_EQ(d.status, DecodeStatus::frame) << "split " << split;
+    EXPECT_EQ(d.consumed, rest.size()) << "split " << split;
+  }
+  return decode(rest).frame;
+}
+
 // README vectors (shared/specs/README.md, nidec-washer), each recomputed there.
 TEST(NidecCodec, PollRequestVector_5_2) {
   expect_request(make_bare(Mode::request),
@@ -151,6 +179,83 @@ TEST(NidecCodec, BadChecksum) {
   poll[10] ^= 0x01;
   EXPECT_EQ(decode_request(poll).error, make_error_code(FrameError::bad_checksum));
   EXPECT_EQ(decode_request(poll).consumed, 11u);
+}
+
+// Resynchronisation after a bad XOR: only the bytes before the next frame start are dropped.
+TEST(NidecCodec, BadChecksumResyncsOnAnAckInside_4_2) {
+  // The request ACK of 5.2 (800 rpm, 3.5 kg) lost its byte 4 (03); the next request ACK's A5
+  // falls at offset 6 of the first seven bytes.
+  Reply r = expect_resync<Reply>({0xA5, 0x05, 0x00, 0x20, 0x23, 0xA0,  //
+                                  0xA5, 0x05, 0x00, 0x03, 0x20, 0x23, 0xA0},
+                                 6, decode_reply);
+  EXPECT_EQ(r.mode, Mode::request);
+  EXPECT_EQ(r.u16(1), 800);
+  // A reply cut short after three bytes: the good one's A5 is at offset 3.
+  r = expect_resync<Reply>({0xA5, 0x05, 0x00,  //
+                            0xA5, 0x05, 0x00, 0x03, 0x20, 0x23, 0xA0},
+                           3, decode_reply);
+  EXPECT_EQ(r.u16(1), 800);
+  EXPECT_EQ(r.data[3], 0x23);
+}
+
+TEST(NidecCodec, BadChecksumResyncsOnANackHeaderToo_4_2_5_16) {
+  // 4.2: a slave frame starts A5, or 5A for the NACK; both are frame starts.
+  EXPECT_TRUE(expect_resync<Reply>({0xA5, 0x05, 0x00,  //
+                                    0x5A, 0x00, 0xFF, 0x00, 0xFF, 0x00, 0x5A},
+                                   3, decode_reply)
+                  .nack);
+  const Reply r = expect_resync<Reply>({0x5A, 0x00, 0xFF,  //
+                                        0xA5, 0x05, 0x00, 0x03, 0x20, 0x23, 0xA0},
+                                       3, decode_reply);
+  EXPECT_FALSE(r.nack);
+  EXPECT_EQ(r.u16(1), 800);
+}
+
+TEST(NidecCodec, BadChecksumResyncsInsideAnFctAck_5_15) {
+  // Five bytes of an FCT ACK, then the whole FCT ACK: the 13 bytes examined hold its A5 at 5.
+  const Reply r = expect_resync<Reply>(
+      {0xA5, 0x66, 0x00, 0x08, 0x00,  //
+       0xA5, 0x66, 0x00, 0x08, 0x00, 0x00, 0x00, 0x2D, 0x11, 0x37, 0x00, 0x00, 0xC0},
+      5, decode_reply);
+  EXPECT_EQ(r.mode, Mode::fct_test);
+  EXPECT_EQ(r.size, 10);
+  EXPECT_EQ(r.u16(4), 45);
+}
+
+TEST(NidecCodec, BadChecksumResyncsOnAMasterFrameInside_4_1) {
+  // Four bytes of a poll (5.2), then the Stop vector of 5.7.
+  const Request r =
+      expect_resync<Request>({0xA5, 0x05, 0x00, 0x00,  //
+                              0xA5, 0x27, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x82},
+                             4, decode_request);
+  EXPECT_EQ(r, make_bare(Mode::stop));
+  // 4.1: a master frame starts A5 only, so a 5A inside one (platform 0x5A, 5.1) is no restart.
+  Buffer ping = encode(make_ping(0x5A, 0));
+  ASSERT_EQ(ping, Buffer({0xA5, 0x02, 0x5A, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xFD}));
+  ping[10] ^= 0x01;
+  expect_bad_checksum<Request>(ping, 11, decode_request);
+}
+
+TEST(NidecCodec, BadChecksumWithoutAFrameStartInsideIsDroppedWhole) {
+  // 4.2 request ACK, 5.16 NACK, 5.15 FCT ACK, 4.1 poll, each with its XOR flipped.
+  expect_bad_checksum<Reply>({0xA5, 0x05, 0x00, 0x03, 0x20, 0x23, 0xA1}, 7, decode_reply);
+  expect_bad_checksum<Reply>({0x5A, 0x00, 0xFF, 0x00, 0xFF, 0x00, 0x5B}, 7, decode_reply);
+  expect_bad_checksum<Reply>(
+      {0xA5, 0x66, 0x00, 0x08, 0x00, 0x00, 0x00, 0x2D, 0x11, 0x37, 0x00, 0x00, 0xC1}, 13,
+      decode_reply);
+  expect_bad_checksum<Request>({0xA5, 0x05, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xA1},
+                               11, decode_request);
+}
+
+TEST(NidecCodec, FrameStartsInsideFramesOnlyMatterOnABadChecksum_4_2) {
+  // 5.2: a weight of 0xA5 (16.5 kg) in a good request ACK is data, the frame decodes whole.
+  const Decoded<Reply> d = expect_reply({0xA5, 0x05, 0x00, 0x03, 0x20, 0xA5, 0x26});
+  EXPECT_EQ(d.frame.data[3], 0xA5);
+  // A bad XOR byte that happens to be A5 is where the next frame may start: six bytes go, and
+  // the lone A5 left waits for more.
+  const Buffer wire = {0xA5, 0x05, 0x00, 0x03, 0x20, 0x23, 0xA5};
+  expect_bad_checksum<Reply>(wire, 6, decode_reply);
+  EXPECT_EQ(decode_reply(ByteView(wire).subspan(6)).status, DecodeStatus::incomplete);
 }
 
 TEST(NidecCodec, BadHeader) {
