@@ -265,6 +265,15 @@ std::optional<Connection::Clock::time_point> Connection::next_deadline() const {
   return deadline;
 }
 
+void Connection::limits_changed() {
+  if (closed_) return;
+  // A deadline already past (a client silent for longer than the new idle_timeout) arms the timer
+  // for now: its handler runs in a later turn of the loop and closes the connection there.
+  if (auto deadline = next_deadline(); deadline && *deadline < timer_deadline_) {
+    arm_timer(*deadline);
+  }
+}
+
 // One timer per connection, moved only when a deadline comes earlier than the armed one; when it
 // fires it checks what is really due (requests push the idle deadline without touching it).
 void Connection::arm_timer(Clock::time_point deadline) {

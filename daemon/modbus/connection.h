@@ -3,7 +3,9 @@
 // even while earlier writes of the same connection wait for their device (Modbus TCP matches
 // replies by transaction id, so replies may leave out of order). Closes on a malformed MBAP
 // header (after sending the replies already queued), on a partial frame older than
-// frame_timeout, and after idle_timeout without a request.
+// frame_timeout, and after idle_timeout without a request. Both timeouts are read from the
+// shared ServerState when a deadline is computed, so new values (Server::set_limits) apply to an
+// open connection, measured from its last request or partial frame as before.
 #pragma once
 
 #include <array>
@@ -30,6 +32,10 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void start();
   // Closes the socket at once; writes still pending at the backend are answered into the void.
   void close();
+  // The server's idle_timeout or frame_timeout changed: moves the timer earlier when the new
+  // values bring the next deadline forward (a later one is found when the armed timer fires).
+  // Never closes the connection itself: the timer does, in a later turn of the event loop.
+  void limits_changed();
 
  private:
   using Clock = std::chrono::steady_clock;

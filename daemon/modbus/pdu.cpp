@@ -217,7 +217,9 @@ Result Dispatcher::write_multiple_registers(std::uint8_t unit,
 
 // 6.17: fc | read start (2) | read quantity (2) | write start (2) | write quantity (2) |
 // byte count = 2 x write quantity | registers -> fc | byte count | read registers. The write is
-// performed before the read.
+// performed before the read, but a read that cannot be served must not leave its write behind
+// (the client sees an exception and expects nothing to have changed): the read range is tried
+// first, and its exception answers the request without any write.
 Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::uint8_t> request,
                                         std::span<std::uint8_t> out, WriteDone done) {
   const std::uint8_t fc = request[0];
@@ -233,6 +235,16 @@ Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::
   }
   if (overflows(read_address, read_count) || overflows(write_address, write_count)) {
     return fail(fc, Exception::illegal_data_address, out);
+  }
+  // The same Backend::read that builds the response in complete(), so "readable" has one
+  // definition. It reads into the scratch past the write values (scratch_[0, kMaxRwWrite)), so
+  // neither clobbers the other whatever their order; what it reads is discarded (the response
+  // reads again, after the write).
+  static_assert(kMaxRwWrite + kMaxRwRead <= std::tuple_size_v<decltype(scratch_)>);
+  const std::span<std::uint16_t> probe(scratch_.data() + kMaxRwWrite, read_count);
+  if (auto e = backend_.read(unit, RegisterTable::holding_registers, read_address, probe);
+      e != Exception::none) {
+    return fail(fc, e, out);
   }
   for (std::size_t i = 0; i < write_count; ++i) scratch_[i] = get16(request, 10 + 2 * i);
   return start_write(unit, RegisterTable::holding_registers, write_address, write_count, out, fc,

@@ -132,6 +132,20 @@ tcp::endpoint Server::local_endpoint() const {
   return state_->acceptor.local_endpoint(ec);
 }
 
+void Server::set_limits(const ServerLimits& limits) {
+  auto& o = state_->options;
+  o.max_clients = limits.max_clients;  // on_accept reads it for each new client
+  o.frame_timeout = limits.frame_timeout;
+  o.idle_timeout = limits.idle_timeout;
+  // A copy, as in close(): the loop must not depend on what a connection does to `live`.
+  const std::vector<Connection*> open(state_->live.begin(), state_->live.end());
+  for (Connection* c : open) c->limits_changed();
+}
+
+ServerLimits Server::limits() const {
+  return state_->options.limits();
+}
+
 const ServerStats& Server::stats() const {
   return state_->stats;
 }

@@ -34,6 +34,21 @@ class Server {
   boost::asio::ip::tcp::endpoint local_endpoint() const;
   std::uint16_t port() const { return local_endpoint().port(); }
 
+  // New limits while running, without closing or pausing anything. Call on the io_context's
+  // thread (like everything here). The exact rule:
+  // - max_clients is read at each accept: clients accepted from now on are counted against it.
+  //   Lowering it below the number connected closes no one (the oldest are never dropped); new
+  //   clients are refused until enough have left.
+  // - idle_timeout and frame_timeout apply to every open connection at once, measured from the
+  //   same instants as before (its last request; the first byte of its pending partial frame), as
+  //   if they had always been in force: a connection already silent for longer than the new
+  //   idle_timeout is closed when its re-armed timer fires, in a later turn of the event loop,
+  //   never inside this call. A timer already armed for an earlier instant is left as it is: it
+  //   finds nothing due, and re-arms for the deadline the new values give.
+  // host, port, listen_backlog, max_pending_writes and identity cannot change while running.
+  void set_limits(const ServerLimits& limits);
+  ServerLimits limits() const;
+
   const ServerStats& stats() const;
   std::size_t client_count() const;
 

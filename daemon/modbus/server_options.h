@@ -11,6 +11,16 @@
 
 namespace drivegate::modbus {
 
+// The settings that may change while the server runs (Server::set_limits). Their meaning is that
+// of the ServerOptions fields of the same names.
+struct ServerLimits {
+  std::size_t max_clients;
+  std::chrono::milliseconds frame_timeout;
+  std::chrono::milliseconds idle_timeout;
+  friend bool operator==(const ServerLimits&, const ServerLimits&) = default;
+};
+
+// Fixed for the server's life, except the three of ServerLimits.
 struct ServerOptions {
   // A numeric IPv4 or IPv6 address ("[::1]" accepted), "localhost" (127.0.0.1), or "" / "*" for
   // every interface (IPv6 dual stack, IPv4 only where IPv6 is unavailable). No DNS lookup: it
@@ -23,6 +33,8 @@ struct ServerOptions {
   std::chrono::milliseconds idle_timeout{60000};  // no request for this long closes; 0 = off
   int listen_backlog = 128;
   DeviceIdentity identity;
+
+  ServerLimits limits() const { return {max_clients, frame_timeout, idle_timeout}; }
 };
 
 struct ServerStats {

@@ -39,7 +39,10 @@ struct ServerState {
 
   boost::asio::io_context& io;
   Backend& backend;
-  const ServerOptions options;
+  // Changed only by Server::set_limits (max_clients, idle_timeout, frame_timeout); the rest is
+  // fixed once the server is built (the socket is bound once, the write slots and the identity
+  // are sized and copied at construction).
+  ServerOptions options;
   const std::shared_ptr<spdlog::logger> log;
   ServerStats stats;
   Dispatcher dispatcher;  // shared: single-threaded, and never re-entered (see Connection)

@@ -163,6 +163,41 @@ TEST(Connection, ALateWriteDoesNotHoldBackLaterReads) {
   EXPECT_EQ(c.reply(), (Bytes{0x00, 0x04, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x2A}));
 }
 
+// Application Protocol 6.17 over TCP: an unmapped read range is answered 0x97 0x02 at once and
+// the write never reaches the backend; a good one is written, then read.
+TEST(Connection, ReadWriteWithAnUnmappedReadRangeIsRefusedBeforeTheWrite) {
+  Harness h;
+  h.with_backend([](FakeBackend& b) {
+    b.mode = Mode::deferred;  // a write that started would be left pending: no reply at all
+    return 0;
+  });
+  RawClient c(h.port());
+  // Read 0x0400 x 1 (the hole), write 0x0010 = 0x1234.
+  ASSERT_TRUE(c.send(
+      request(7, 1, {0x17, 0x04, 0x00, 0x00, 0x01, 0x00, 0x10, 0x00, 0x01, 0x02, 0x12, 0x34})));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x07, 0x00, 0x00, 0x00, 0x03, 0x01, 0x97, 0x02}));
+  EXPECT_EQ(h.with_backend([](FakeBackend& b) { return b.writes.size(); }), 0u);
+  EXPECT_EQ(h.with_backend(
+                [](FakeBackend& b) { return b.table(RegisterTable::holding_registers)[0x10]; }),
+            0);
+
+  // The same write with a readable range goes to the device and is answered once it completed.
+  ASSERT_TRUE(c.send(
+      request(8, 1, {0x17, 0x00, 0x10, 0x00, 0x01, 0x00, 0x10, 0x00, 0x01, 0x02, 0x12, 0x34})));
+  for (int i = 0; i < 100 && h.with_backend([](FakeBackend& b) { return b.pending.size(); }) == 0;
+       ++i) {
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_EQ(h.with_backend([](FakeBackend& b) { return b.pending.size(); }), 1u);
+  EXPECT_FALSE(c.readable(50ms));  // the read waits for the write
+  h.with_backend([](FakeBackend& b) {
+    b.complete();
+    return 0;
+  });
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x08, 0x00, 0x00, 0x00, 0x05, 0x01, 0x17, 0x02, 0x12, 0x34}));
+  EXPECT_EQ(h.with_backend([](FakeBackend& b) { return b.writes.size(); }), 1u);
+}
+
 TEST(Connection, AtTheWriteCapItStopsReadingUntilAWriteCompletes) {
   ServerOptions o;
   o.max_pending_writes = 2;

@@ -306,7 +306,7 @@ INSTANTIATE_TEST_SUITE_P(
         Check{"fc23_write_overflow",
               cat({{0x17}, regs(0, 1), regs(0xFFFF, 2), {0x04, 0, 0, 0, 0}}),
               {0x97, 0x02}},
-        Check{"fc23_read_after_write_fails",
+        Check{"fc23_read_unmapped",
               cat({{0x17}, regs(0x0400, 1), regs(0, 1), {0x02, 0, 0}}),
               {0x97, 0x02}},
         // section 7, code 01: functions not served
@@ -366,6 +366,72 @@ TEST_F(Pdu, DeviceRefusalAndTimeoutBecomeExceptions) {
   backend_.complete(Exception::gateway_target_failed);
   EXPECT_EQ(finish(), (Bytes{0x97, 0x0B}));
   EXPECT_EQ(backend_.table(RegisterTable::coils)[1], 0);
+}
+
+// 6.17: a read range that cannot be served is refused before the write starts, so the write is
+// never applied (before the fix the setpoint changed and the client saw 0x97 0x02).
+TEST_F(Pdu, ReadWriteWithAnUnmappedReadRangeWritesNothing_6_17) {
+  auto& holding = backend_.table(RegisterTable::holding_registers);
+  // Read 0x03FF..0x0400 (0x0400 is in the hole), write 0x0010 = 0x1234.
+  EXPECT_EQ(run(cat({{0x17}, regs(0x03FF, 2), regs(0x0010, 1), {0x02, 0x12, 0x34}})),
+            (Bytes{0x97, 0x02}));
+  EXPECT_FALSE(pending_);
+  EXPECT_FALSE(done_.has_value());
+  EXPECT_TRUE(backend_.writes.empty());
+  EXPECT_EQ(holding[0x10], 0);
+  // A deferred backend is not even asked: nothing waits for a device.
+  backend_.mode = FakeBackend::Mode::deferred;
+  EXPECT_EQ(run(cat({{0x17}, regs(0x04FF, 1), regs(0x0010, 1), {0x02, 0x12, 0x34}})),
+            (Bytes{0x97, 0x02}));
+  EXPECT_TRUE(backend_.writes.empty());
+  EXPECT_TRUE(backend_.pending.empty());
+}
+
+TEST_F(Pdu, ReadWriteWithAReadRangePastTheTableEndWritesNothing_6_17) {
+  // 0xFF84 + 125 = 65537 > 65536: 0x02 without asking the backend for anything.
+  EXPECT_EQ(run(cat({{0x17}, regs(0xFF84, 125), regs(0x0010, 1), {0x02, 0x12, 0x34}})),
+            (Bytes{0x97, 0x02}));
+  // 0x0FFF + 2 is within 65536 but past the fake's 4096-entry image: the backend's own 0x02.
+  EXPECT_EQ(run(cat({{0x17}, regs(0x0FFF, 2), regs(0x0010, 1), {0x02, 0x12, 0x34}})),
+            (Bytes{0x97, 0x02}));
+  EXPECT_TRUE(backend_.writes.empty());
+  EXPECT_EQ(backend_.table(RegisterTable::holding_registers)[0x10], 0);
+}
+
+TEST_F(Pdu, ReadWriteWithAnUnknownUnitWritesNothing_6_17) {
+  EXPECT_EQ(run(cat({{0x17}, regs(3, 1), regs(0x0010, 1), {0x02, 0x12, 0x34}}), 9),
+            (Bytes{0x97, 0x0A}));
+  EXPECT_TRUE(backend_.writes.empty());
+}
+
+TEST_F(Pdu, ReadWriteWithAGoodReadRangeStillWritesThenReads_6_17) {
+  backend_.mode = FakeBackend::Mode::deferred;
+  // Read 0x0F..0x11, write 0x10..0x11: pending until the drive confirms.
+  EXPECT_EQ(run(cat({{0x17}, regs(0x0F, 3), regs(0x10, 2), {0x04, 0x12, 0x34, 0x56, 0x78}})),
+            Bytes{});
+  EXPECT_TRUE(pending_);
+  ASSERT_EQ(backend_.writes.size(), 1u);
+  EXPECT_EQ(backend_.writes[0].address, 0x10);
+  EXPECT_EQ(backend_.writes[0].values, (std::vector<std::uint16_t>{0x1234, 0x5678}));
+  backend_.complete();
+  EXPECT_EQ(finish(), (Bytes{0x17, 0x06, 0x00, 0x00, 0x12, 0x34, 0x56, 0x78}));
+}
+
+// The longest write beside the longest read: the read range check must not clobber the values.
+TEST_F(Pdu, ReadWriteLargestQuantitiesKeepTheWriteValues_6_17) {
+  Bytes payload;
+  for (std::uint16_t i = 0; i < 121; ++i) {
+    payload.push_back(static_cast<std::uint8_t>(0xA0 | (i >> 8)));
+    payload.push_back(static_cast<std::uint8_t>(i));
+  }
+  const Bytes r = run(cat({{0x17}, regs(0x0200, 125), regs(0x0200, 121), {242}, payload}));
+  ASSERT_EQ(r.size(), 2u + 250);
+  ASSERT_EQ(backend_.writes.size(), 1u);
+  for (std::uint16_t i = 0; i < 121; ++i) {
+    EXPECT_EQ(backend_.writes[0].values[i], 0xA000 | i) << i;
+    EXPECT_EQ(r[2 + 2 * i], 0xA0 | (i >> 8)) << i;
+    EXPECT_EQ(r[3 + 2 * i], static_cast<std::uint8_t>(i)) << i;
+  }
 }
 
 TEST_F(Pdu, ReadsAreServedWhileAWriteIsPending) {
