@@ -1,10 +1,10 @@
 // The plugin contract. An adapter is a shared object exporting one data-only, versioned
 // descriptor under the C symbol `drivegate_adapter`; the gateway finds it with dlsym, refuses any
 // api_version but its own, validates the device options against `options`, and then only ever
-// calls the two factories.
+// calls the two factories. adapters/README.md describes the folder every adapter has.
 //
-//   extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter = {
-//       drivegate::kAdapterApiVersion, "nidec-washer", "Nidec washer inverter (spec V07)", ...};
+//   extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
+//       .api_version = drivegate::kAdapterApiVersion, .id = "nidec-washer", ...};
 #pragma once
 
 #include <cstddef>
@@ -13,6 +13,7 @@
 #include <string>
 
 #include "drivegate/driver.h"
+#include "drivegate/line.h"
 #include "drivegate/simulator.h"
 
 #define DRIVEGATE_EXPORT __attribute__((visibility("default")))
@@ -20,24 +21,40 @@
 namespace drivegate {
 
 // Bumped whenever anything in include/drivegate/ changes layout or meaning.
-inline constexpr std::uint32_t kAdapterApiVersion = 1;
+inline constexpr std::uint32_t kAdapterApiVersion = 2;
 inline constexpr const char* kDescriptorSymbol = "drivegate_adapter";
-
-enum class Parity : std::uint8_t { none, even, odd };
-
-// The device's native line settings, used for a [[bus]] that does not set its own.
-struct LineDefaults {
-  std::uint32_t baud;
-  Parity parity;
-  std::uint8_t data_bits;
-  std::uint8_t stop_bits;
-  bool echo;  // one-wire line: the master hears its own bytes
-};
 
 // Returns nullptr and sets `error` (one line, naming the option) when the options are
 // individually valid but do not make a device together.
 using DriverFactory = std::unique_ptr<Driver> (*)(const DeviceEnv& env, std::string& error);
 using SimulatorFactory = std::unique_ptr<Simulator> (*)(const SimEnv& env, std::string& error);
+
+// One option of a demo or test device, as text (parsed like the command line's --set).
+struct OptionSetting {
+  const char* name;
+  const char* value;
+};
+
+// How `drivegate demo` shows the adapter: the options its simulated device and the gateway's
+// device both get, and a speed typical of the machine it drives, which the demo runs it at.
+struct DemoSetup {
+  const OptionSetting* options = nullptr;
+  std::size_t option_count = 0;
+  std::int32_t running_rpm = 1000;
+};
+
+// A maintenance action, run with the daemon stopped: `drivegate action --config FILE --device
+// NAME ACTION key=value...` writes maintenance point `<parameter_prefix><key>` for each key, in
+// order, then 1 to `commit_point`, which carries the action out; when the drive or the driver's
+// own validation refuses it, string point `message_point` says why. The validation lives in the
+// adapter's driver, never in the tool.
+struct MaintenanceAction {
+  const char* name;              // "program"
+  const char* summary;           // one line for `drivegate action --help`
+  const char* parameter_prefix;  // "prog_"
+  const char* commit_point;      // "prog_commit"
+  const char* message_point;     // "prog_message"
+};
 
 struct AdapterDescriptor {
   std::uint32_t api_version;
@@ -52,6 +69,9 @@ struct AdapterDescriptor {
   bool streaming;  // transmits unsolicited frames: must be the only device on its bus
   DriverFactory create_driver;
   SimulatorFactory create_simulator;
+  DemoSetup demo;
+  const MaintenanceAction* actions = nullptr;  // none for most adapters
+  std::size_t action_count = 0;
 };
 
 }  // namespace drivegate

@@ -1,5 +1,6 @@
-// Big-endian field helpers for codecs. Every protocol drivegate speaks puts the high byte first
-// unless its document says otherwise; codecs that differ say so where they differ.
+// Bytes on a line, and big-endian field helpers for codecs. Every protocol drivegate speaks puts
+// the high byte first unless its document says otherwise; codecs that differ say so where they
+// differ.
 #pragma once
 
 #include <cstdint>
@@ -7,6 +8,9 @@
 #include <vector>
 
 namespace drivegate {
+
+using Bytes = std::vector<std::uint8_t>;         // a frame, owned
+using ByteView = std::span<const std::uint8_t>;  // bytes received or to decode, borrowed
 
 constexpr std::uint16_t be16(std::uint8_t hi, std::uint8_t lo) {
   return static_cast<std::uint16_t>((hi << 8) | lo);

@@ -106,6 +106,10 @@ constexpr std::string_view to_string(Fault f) {
 constexpr std::string_view to_string(StatusBit b) {
   return kStatusBitNames.at(static_cast<std::size_t>(b));
 }
+// Whether a command sets the motor turning.
+constexpr bool is_run(Command c) {
+  return c == Command::run_forward || c == Command::run_reverse;
+}
 constexpr std::optional<Command> command_from_value(std::uint16_t v) {
   if (v >= kCommandNames.size()) return std::nullopt;
   return static_cast<Command>(v);

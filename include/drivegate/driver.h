@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "drivegate/bytes.h"
 #include "drivegate/codec.h"
 #include "drivegate/common.h"
 #include "drivegate/options.h"
@@ -32,8 +33,6 @@ namespace drivegate {
 
 using Clock = std::chrono::steady_clock;
 using TimePoint = Clock::time_point;
-using Bytes = std::vector<std::uint8_t>;
-using ByteView = std::span<const std::uint8_t>;
 using Millis = std::chrono::milliseconds;
 
 enum class Priority : std::uint8_t { poll = 0, command = 1 };
@@ -88,11 +87,39 @@ struct CommonState {
 // Ticket of a write in flight; the driver reports its outcome through take_completions().
 using Ticket = std::uint64_t;
 
+// One part of a Modbus write request, as the gateway hands it to a driver. The gateway has checked
+// table, access and the point's min / max already, and orders a request's setpoint before its
+// command ("run at this speed").
+struct WriteOp {
+  enum class Target : std::uint8_t { command, setpoint, point };
+  Target target = Target::command;
+  Command command = Command::stop;  // Target::command
+  std::int32_t rpm = 0;             // Target::setpoint
+  std::size_t point = 0;            // Target::point: index into points()
+  Value value;                      // Target::point: the engineering value
+
+  static WriteOp of_command(Command c) { return {Target::command, c, 0, 0, {}}; }
+  static WriteOp of_setpoint(std::int32_t rpm) {
+    return {Target::setpoint, Command::stop, rpm, 0, {}};
+  }
+  static WriteOp of_point(std::size_t index, Value v) {
+    return {Target::point, Command::stop, 0, index, std::move(v)};
+  }
+};
+
+// A driver's answer to a whole request before any part of it is applied.
+enum class WriteCheck : std::uint8_t {
+  ok,
+  invalid_value,  // Modbus exception 0x03 (out of range, a command the drive cannot do)
+  refused,        // Modbus exception 0x04 (the drive is in a state where it cannot)
+};
+
+// What apply() did with one part.
 enum class WriteStatus : std::uint8_t {
   done,           // applied without bus traffic (e.g. a setpoint stored while stopped)
   pending,        // queued: a Completion with this ticket follows
-  invalid_value,  // Modbus exception 0x03 (out of range, a command the drive cannot do)
-  refused,        // Modbus exception 0x04 (the drive is in a state where it cannot)
+  invalid_value,  // Modbus exception 0x03 (the state changed since check())
+  refused,        // Modbus exception 0x04
 };
 
 enum class WriteResult : std::uint8_t {
@@ -106,10 +133,33 @@ struct Completion {
   WriteResult result;
 };
 
+// What a request would leave in force, part by part: a driver's check() judges each part against
+// the state the parts before it would leave, not against the state now.
+struct Proposed {
+  Command command = Command::stop;
+  std::int32_t setpoint_rpm = 0;
+};
+
+// The usual body of Driver::check(): `judge(op, proposed)` answers for one part; the setpoint and
+// command of each accepted part are carried into the parts after it; the first answer that is not
+// ok is the request's.
+template <class Judge>
+WriteCheck check_in_order(std::span<const WriteOp> request, Proposed proposed, Judge judge) {
+  for (const WriteOp& op : request) {
+    if (const WriteCheck c = judge(op, proposed); c != WriteCheck::ok) return c;
+    if (op.target == WriteOp::Target::setpoint) proposed.setpoint_rpm = op.rpm;
+    if (op.target == WriteOp::Target::command) proposed.command = op.command;
+  }
+  return WriteCheck::ok;
+}
+
 struct DriverTraits {
-  Millis comm_timeout{6000};   // no good frame for this long: comm_lost
-  Millis write_timeout{3000};  // the gateway fails a write still pending after this (0x0B)
-  Millis inter_frame_gap{0};   // line silence the bus keeps before each frame
+  Millis comm_timeout{6000};  // no good frame for this long: comm_lost
+  // The gateway fails a part of a write still pending this long after apply() took it (0x0B).
+  // A backstop: the driver's own confirmation deadline should be shorter and fail it first, so
+  // that nothing the PLC was told failed is still on its way to the drive.
+  Millis write_timeout{3000};
+  Millis inter_frame_gap{0};  // line silence the bus keeps before each frame
 };
 
 // What the gateway knows about the device when it creates the driver.
@@ -119,6 +169,9 @@ struct DeviceEnv {
   Millis poll_interval{500};
   Options options;           // validated against the adapter's schema, defaults filled in
   bool maintenance = false;  // created by `drivegate write`: maintenance-only writes allowed
+  // One character on the line as the [[bus]] really runs it (its baud may not be the adapter's
+  // native one): for a driver's own deadlines that must cover frames on the wire.
+  std::chrono::nanoseconds char_time{0};
 };
 
 class Driver {
@@ -142,11 +195,14 @@ class Driver {
   // The engine declared comm_lost: forget the handshake, fail pending writes.
   virtual void on_comm_lost(TimePoint now) = 0;
 
-  // Writes from Modbus, validated for table, access and the point's min/max already.
-  virtual WriteStatus command(Command c, Ticket t, TimePoint now) = 0;
-  virtual WriteStatus setpoint(std::int32_t rpm, Ticket t, TimePoint now) = 0;
-  virtual WriteStatus write(std::size_t point, const Value& v, Ticket t, TimePoint now) = 0;
-  // Outcomes of pending writes since the last call, appended to `out`.
+  // Writes. A Modbus request is all or nothing from the PLC's point of view: the gateway asks
+  // check() about every part first (no side effects; nothing is applied unless it says ok), then
+  // applies the parts one at a time in order, each only once the one before it settled (done,
+  // or its Completion came back ok), so a later part finds the earlier ones in force. A part that
+  // fails ends the request: the parts after it are never applied.
+  [[nodiscard]] virtual WriteCheck check(std::span<const WriteOp> request) const = 0;
+  virtual WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) = 0;
+  // Outcomes of pending parts since the last call, appended to `out`.
   virtual void take_completions(std::vector<Completion>& out) = 0;
 };
 

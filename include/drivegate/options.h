@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -48,6 +49,9 @@ class Options {
   [[nodiscard]] const std::vector<std::string>& string_list(std::string_view name) const {
     return get<std::vector<std::string>>(name);
   }
+  [[nodiscard]] const OptionValue& value(std::string_view name) const {
+    return get<OptionValue>(name);
+  }
   [[nodiscard]] bool has(std::string_view name) const { return values_.contains(name); }
   void set(std::string name, OptionValue value) { values_[std::move(name)] = std::move(value); }
   friend bool operator==(const Options&, const Options&) = default;
@@ -57,9 +61,13 @@ class Options {
   const T& get(std::string_view name) const {
     const auto it = values_.find(name);
     if (it == values_.end()) throw std::logic_error("option not in schema: " + std::string(name));
-    const T* v = std::get_if<T>(&it->second);
-    if (v == nullptr) throw std::logic_error("option has another type: " + std::string(name));
-    return *v;
+    if constexpr (std::is_same_v<T, OptionValue>) {
+      return it->second;
+    } else {
+      const T* v = std::get_if<T>(&it->second);
+      if (v == nullptr) throw std::logic_error("option has another type: " + std::string(name));
+      return *v;
+    }
   }
   std::map<std::string, OptionValue, std::less<>> values_;
 };

@@ -14,6 +14,20 @@ enum class Table : std::uint8_t { coil, discrete, input, holding };
 enum class PointType : std::uint8_t { u16, i16, u32, i32, f32, string };
 enum class Access : std::uint8_t { read, read_write };
 
+// Registers a value of `type` takes: 32-bit values and floats two, a string its own count.
+constexpr std::uint16_t registers_of(PointType type, std::uint16_t string_registers = 0) {
+  switch (type) {
+    case PointType::u32:
+    case PointType::i32:
+    case PointType::f32:
+      return 2;
+    case PointType::string:
+      return string_registers;
+    default:
+      return 1;
+  }
+}
+
 // A label gives a name to a value (enums) or to a bit number (bit fields): the register map
 // prints them so that a PLC programmer never has to guess what 3 means.
 struct Label {
@@ -38,22 +52,70 @@ struct PointSpec {
   double min = 0.0;
   double max = 0.0;
 
+  // Modifiers for building point lists: input_point("speed", ...).scaled(0.1).
+  PointSpec& scaled(double s) {
+    scale = s;
+    return *this;
+  }
+  PointSpec& limited(double lo, double hi) {
+    min = lo;
+    max = hi;
+    return *this;
+  }
+  PointSpec& named_values(std::vector<Label> l) {
+    labels = std::move(l);
+    bit_labels = false;
+    return *this;
+  }
+  PointSpec& named_bits(std::vector<Label> l) {
+    labels = std::move(l);
+    bit_labels = true;
+    return *this;
+  }
+
   [[nodiscard]] Access access() const {
     return table == Table::holding || table == Table::coil ? Access::read_write : Access::read;
   }
-  [[nodiscard]] std::uint16_t register_count() const {
-    switch (type) {
-      case PointType::u32:
-      case PointType::i32:
-      case PointType::f32:
-        return 2;
-      case PointType::string:
-        return string_registers;
-      default:
-        return 1;
-    }
-  }
+  [[nodiscard]] std::uint16_t register_count() const;
 };
+
+inline std::uint16_t PointSpec::register_count() const {
+  return registers_of(type, string_registers);
+}
+
+// Builders for the common shapes; the modifiers above add scale, limits and labels.
+inline PointSpec make_point(Table table, PointType type, std::string name, std::string unit,
+                            std::string description) {
+  PointSpec p;
+  p.name = std::move(name);
+  p.table = table;
+  p.type = type;
+  p.unit = std::move(unit);
+  p.description = std::move(description);
+  return p;
+}
+inline PointSpec input_point(std::string name, PointType type, std::string unit,
+                             std::string description) {
+  return make_point(Table::input, type, std::move(name), std::move(unit), std::move(description));
+}
+inline PointSpec holding_point(std::string name, PointType type, std::string unit,
+                               std::string description) {
+  return make_point(Table::holding, type, std::move(name), std::move(unit), std::move(description));
+}
+inline PointSpec string_point(std::string name, std::uint16_t registers, std::string description) {
+  PointSpec p = input_point(std::move(name), PointType::string, "", std::move(description));
+  p.string_registers = registers;
+  return p;
+}
+
+// Labels for values (or bit numbers) 0, 1, 2 ... named in that order.
+template <class Names>
+std::vector<Label> labels_in_order(const Names& names) {
+  std::vector<Label> out;
+  std::uint32_t value = 0;
+  for (const auto& n : names) out.push_back({std::string(n), value++});
+  return out;
+}
 
 // A point's current engineering value. std::monostate means "not known yet" (served as 0, with
 // the device's data_age and status telling the client how far to trust it).
