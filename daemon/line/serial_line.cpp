@@ -4,46 +4,76 @@
 #include <sys/ioctl.h>
 #include <termios.h>
 
+#include <cerrno>
+
 namespace drivegate {
 
 namespace asio = boost::asio;
 
-std::error_code open_serial(asio::serial_port& port, const BusConfig& bus) {
-  boost::system::error_code ec;
-  port.open(bus.port, ec);
-  if (ec) return std::error_code(ec.value(), std::generic_category());
+namespace {
+
+// Boost's system and generic categories carry errno values on Linux, so those become std's
+// generic category and compare equal to std::errc. Asio's own categories (asio.misc: already_open
+// is 1, which is not EPERM) are not errno values: Boost's std interoperability (Boost >= 1.65)
+// wraps them, keeping value, name and message.
+std::error_code to_std(const boost::system::error_code& ec) {
+  if (!ec) return {};
+  if (ec.category() == boost::system::system_category() ||
+      ec.category() == boost::system::generic_category()) {
+    return {ec.value(), std::generic_category()};
+  }
+  return ec;
+}
+
+std::error_code last_errno() {
+  return {errno, std::generic_category()};
+}
+
+// Baud, character size, parity, stop bits, no flow control; stops at the first that fails.
+std::error_code set_framing(asio::serial_port& port, const BusConfig& bus) {
   using sp = asio::serial_port_base;
   const auto parity = bus.parity == Parity::none   ? sp::parity::none
                       : bus.parity == Parity::even ? sp::parity::even
                                                    : sp::parity::odd;
   const auto stop = bus.stop_bits == 2 ? sp::stop_bits::two : sp::stop_bits::one;
+  boost::system::error_code ec;
   port.set_option(sp::baud_rate(bus.baud), ec);
   if (!ec) port.set_option(sp::character_size(bus.data_bits), ec);
   if (!ec) port.set_option(sp::parity(parity), ec);
   if (!ec) port.set_option(sp::stop_bits(stop), ec);
   if (!ec) port.set_option(sp::flow_control(sp::flow_control::none), ec);
-  if (ec) {
-    port.close();
-    return std::error_code(ec.value(), std::generic_category());
-  }
+  return to_std(ec);
+}
+
+// Everything after open(): the port is open, and the caller closes it if this fails.
+std::error_code configure(asio::serial_port& port, const BusConfig& bus) {
+  if (const std::error_code ec = set_framing(port, bus)) return ec;
   const int fd = port.native_handle();
   // Drop whatever the line held before we owned it.
-  ::tcflush(fd, TCIOFLUSH);
+  if (::tcflush(fd, TCIOFLUSH) != 0) return last_errno();
   if (bus.rs485) {
+    // The UART drives the transceiver's DE line with RTS while it sends.
     serial_rs485 rs485{};
     rs485.flags = SER_RS485_ENABLED | SER_RS485_RTS_ON_SEND;
-    if (::ioctl(fd, TIOCSRS485, &rs485) != 0) {
-      const int err = errno;
-      port.close();
-      return std::error_code(err, std::generic_category());
-    }
+    if (::ioctl(fd, TIOCSRS485, &rs485) != 0) return last_errno();
   }
   return {};
 }
 
-std::chrono::microseconds char_time(const BusConfig& bus) {
-  const unsigned bits = 1u + bus.data_bits + (bus.parity == Parity::none ? 0u : 1u) + bus.stop_bits;
-  return std::chrono::microseconds(bits * 1'000'000ull / std::max<std::uint32_t>(bus.baud, 1));
+}  // namespace
+
+std::error_code open_serial(asio::serial_port& port, const BusConfig& bus) {
+  boost::system::error_code opened;
+  port.open(bus.port, opened);
+  if (opened) return to_std(opened);
+  const std::error_code ec = configure(port, bus);
+  if (ec) {
+    // The error_code overload: this path reports, it never throws. The step's error is the one
+    // worth reporting, not close()'s.
+    boost::system::error_code ignored;
+    port.close(ignored);
+  }
+  return ec;
 }
 
 }  // namespace drivegate

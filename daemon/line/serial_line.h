@@ -3,7 +3,6 @@
 #pragma once
 
 #include <boost/asio/serial_port.hpp>
-#include <chrono>
 #include <system_error>
 
 #include "config/config.h"
@@ -11,8 +10,5 @@
 namespace drivegate {
 
 std::error_code open_serial(boost::asio::serial_port& port, const BusConfig& bus);
-
-// Time one character takes on the wire: start bit, data bits, parity bit, stop bits.
-std::chrono::microseconds char_time(const BusConfig& bus);
 
 }  // namespace drivegate

@@ -1,0 +1,379 @@
+#include "line/bus_engine.h"
+
+#include <spdlog/fmt/bin_to_hex.h>
+
+#include <algorithm>
+
+namespace drivegate {
+
+namespace {
+// A reply buffer that grows past this without a frame is line garbage, not a frame in progress.
+constexpr std::size_t kMaxRxBuffer = 4096;
+// An idle line looks again at least this often, whatever the devices said.
+constexpr Millis kLongestIdle{1000};
+// The echo of a one-wire frame is back once the frame has crossed the wire, plus this margin
+// (two characters and the UART's and kernel's latency).
+constexpr std::size_t kEchoSlackChars = 2;
+constexpr Millis kEchoSlack{50};
+}  // namespace
+
+BusEngine::BusEngine(const BusConfig& config, std::vector<Station*> stations, BusClock& clock,
+                     BusLine& line, std::shared_ptr<spdlog::logger> log)
+    : name_(config.name),
+      echo_line_(config.echo),
+      char_time_(character_time(config.baud, config.parity, config.data_bits, config.stop_bits)),
+      stations_(std::move(stations)),
+      clock_(clock),
+      line_(line),
+      log_(std::move(log)) {
+  for (Station* st : stations_) {
+    if (st->link().policy.streaming) streaming_ = st;
+    st->link().bus = &counters_;
+  }
+}
+
+BusEngine::~BusEngine() = default;
+
+void BusEngine::start() {
+  if (started_) return;
+  started_ = true;
+  for (Station* st : stations_) st->on_work([this] { kick(); });
+  next_tick_ = clock_.now();
+  clock_.set_alarm(next_tick_);
+}
+
+void BusEngine::stop() {
+  if (!started_) return;
+  started_ = false;
+  state_ = State::down;
+  exchange_.reset();
+  current_ = nullptr;
+  for (Station* st : stations_) st->on_work(nullptr);
+}
+
+void BusEngine::kick() {
+  kicked_ = true;
+  if (started_) clock_.set_alarm(clock_.now());
+}
+
+// --- the line opening and failing ---
+
+void BusEngine::line_up(bool reopened) {
+  if (!started_) return;
+  const TimePoint now = clock_.now();
+  if (reopened) ++counters_.reopens;
+  state_ = State::idle;
+  rx_.clear();
+  last_activity_ = now;
+  pump(now);
+  rearm(now);
+}
+
+void BusEngine::line_down() {
+  if (!started_ || state_ == State::down) return;
+  const TimePoint now = clock_.now();
+  if (Station* st = current_; st != nullptr) {
+    exchange_.reset();
+    current_ = nullptr;
+    st->on_no_reply(now);
+    st->link().health.turn_failed(now, st->link().policy);
+  }
+  state_ = State::down;
+  echo_.clear();
+  rearm(now);
+}
+
+// --- time ---
+
+void BusEngine::on_alarm() {
+  if (!started_) return;
+  const TimePoint now = clock_.now();
+  if (now >= next_tick_) {
+    tick(now);
+    next_tick_ = now + kTickPeriod;
+  }
+  const bool waiting =
+      state_ == State::gap || state_ == State::awaiting_echo || state_ == State::awaiting_reply;
+  if (waiting && now >= deadline_) on_deadline(now);
+  if (state_ == State::idle) pump(now);
+  rearm(now);
+}
+
+void BusEngine::tick(TimePoint now) {
+  for (Station* st : stations_) {
+    Link& link = st->link();
+    if (link.health.lost_by(now, link.policy.comm_timeout)) {
+      link.log->warn("device {}: no good frame for {} ms: comm_lost", st->name(),
+                     link.policy.comm_timeout.count());
+      st->on_comm_lost(now);
+    }
+    st->on_tick(now);
+  }
+}
+
+void BusEngine::rearm(TimePoint now) {
+  TimePoint at = next_tick_;
+  switch (state_) {
+    case State::gap:
+    case State::awaiting_echo:
+    case State::awaiting_reply:
+      at = std::min(at, deadline_);
+      break;
+    case State::idle:
+      at = std::min(at, kicked_ ? now : idle_wake(now));
+      break;
+    case State::sending:  // on_sent() comes
+    case State::down:     // line_up() comes
+      break;
+  }
+  clock_.set_alarm(at);
+}
+
+// The earliest a device wants the line: its driver's wake-up, or its next probe when backed off.
+TimePoint BusEngine::idle_wake(TimePoint now) const {
+  TimePoint wake = now + kLongestIdle;
+  for (Station* st : stations_) {
+    const LinkHealth& h = st->link().health;
+    const TimePoint w = h.in_backoff(now) ? h.probe_at() : st->wake_at();
+    wake = std::min(wake, std::max(w, now + Millis(1)));
+  }
+  return wake;
+}
+
+void BusEngine::on_deadline(TimePoint now) {
+  switch (state_) {
+    case State::gap:
+      send_attempt(now);
+      return;
+    case State::awaiting_reply: {
+      ++counters_.timeouts;
+      Link& link = current_->link();
+      ++link.counters.timeouts;
+      link.log->debug("bus {}: device {} did not answer (attempt {} of {})", name_,
+                      current_->name(), attempt_ + 1, max_attempts_);
+      attempt_failed(now);
+      return;
+    }
+    case State::awaiting_echo:
+      ++counters_.echo_errors;
+      log_->debug("bus {}: our own frame did not come back (one-wire line broken?)", name_);
+      attempt_failed(now);
+      return;
+    default:
+      return;
+  }
+}
+
+// --- transmitting ---
+
+void BusEngine::pump(TimePoint now) {
+  if (state_ != State::idle || stations_.empty()) return;
+  kicked_ = false;
+  const std::size_t n = stations_.size();
+  // Writes first, then polls, each round-robin from where the last turn ended.
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t idx = (next_station_ + i) % n;
+      Station& st = *stations_[idx];
+      const bool writes = st.has_pending_writes();
+      if (pass == 0 && !writes) continue;
+      if (pass == 1 && (writes || st.link().health.in_backoff(now) || st.wake_at() > now)) {
+        continue;
+      }
+      if (std::optional<Exchange> ex = st.next_exchange(now)) {
+        next_station_ = (idx + 1) % n;
+        begin(st, std::move(*ex), now);
+        return;
+      }
+    }
+  }
+}
+
+void BusEngine::begin(Station& st, Exchange ex, TimePoint now) {
+  current_ = &st;
+  exchange_ = std::move(ex);
+  attempt_ = 0;
+  // The device's time budget caps how many attempts one turn may take.
+  const auto wire = on_wire(exchange_->frame.size()) * (echo_line_ ? 2 : 1);
+  const auto per_attempt =
+      std::chrono::duration_cast<Millis>(exchange_->timeout + wire) + Millis(1);
+  const auto fit = static_cast<int>(st.link().policy.budget / per_attempt);
+  max_attempts_ = std::clamp(fit, 1, std::max<int>(1, exchange_->attempts));
+  answered_ = false;
+  ++counters_.exchanges;
+  send_attempt(now);
+}
+
+void BusEngine::send_attempt(TimePoint now) {
+  const Millis gap = current_->link().policy.inter_frame_gap;
+  if (now - last_activity_ < gap) {
+    state_ = State::gap;
+    deadline_ = last_activity_ + gap;
+    return;
+  }
+  state_ = State::sending;
+  const Bytes& frame = exchange_->frame;
+  echo_ = echo_line_ ? frame : Bytes{};
+  echo_broken_ = false;
+  if (streaming_ == nullptr) rx_.clear();
+  log_->trace("bus {}: tx {:n}", name_, spdlog::to_hex(frame));
+  line_.send(frame);
+}
+
+void BusEngine::on_sent() {
+  if (!started_ || state_ != State::sending) return;
+  const TimePoint now = clock_.now();
+  // The kernel has the bytes; they leave the UART over the frame's time on the wire, and the gap
+  // before the next frame counts from then (on a one-wire line the echo shows it).
+  note_activity(echo_line_ ? now : now + on_wire(exchange_->frame.size()));
+  if (echo_line_) {
+    state_ = State::awaiting_echo;
+    deadline_ =
+        now +
+        std::chrono::duration_cast<Millis>(on_wire(exchange_->frame.size() + kEchoSlackChars)) +
+        kEchoSlack;
+    advance(now);
+  } else {
+    after_sent(now);
+  }
+  rearm(now);
+}
+
+void BusEngine::after_sent(TimePoint now) {
+  if (exchange_->reply == ReplyMode::none) {
+    finish(now);
+    return;
+  }
+  state_ = State::awaiting_reply;
+  // The write completes when the kernel has the bytes, not when they have left the UART; on a
+  // one-wire line the echo has already shown them leave.
+  const auto wire = echo_line_ ? std::chrono::nanoseconds(0) : on_wire(exchange_->frame.size());
+  deadline_ = now + exchange_->timeout + std::chrono::duration_cast<Millis>(wire);
+  if (!rx_.empty()) process_rx(*current_, now);
+}
+
+void BusEngine::attempt_failed(TimePoint now) {
+  if (++attempt_ < max_attempts_) {
+    ++counters_.retries;
+    ++current_->link().counters.retries;
+    send_attempt(now);
+    return;
+  }
+  Station* st = current_;
+  exchange_.reset();
+  current_ = nullptr;
+  state_ = State::idle;
+  echo_.clear();
+  st->on_no_reply(now);
+  // A device that NACKs or answers garbled is there: keep its poll rate, back off only silence.
+  if (!answered_) st->link().health.turn_failed(now, st->link().policy);
+  pump(now);
+}
+
+void BusEngine::finish(TimePoint now) {
+  exchange_.reset();
+  current_ = nullptr;
+  state_ = State::idle;
+  echo_.clear();
+  pump(now);
+}
+
+// --- receiving ---
+
+void BusEngine::on_received(ByteView bytes) {
+  if (!started_ || state_ == State::down || bytes.empty()) return;
+  const TimePoint now = clock_.now();
+  note_activity(now);
+  log_->trace("bus {}: rx {:n}", name_, spdlog::to_hex(bytes.begin(), bytes.end()));
+  const bool in_exchange =
+      exchange_ && (state_ == State::sending || state_ == State::awaiting_echo ||
+                    state_ == State::awaiting_reply);
+  if (!in_exchange && streaming_ == nullptr) {
+    counters_.noise_bytes += static_cast<std::uint32_t>(bytes.size());  // late, or line noise
+    return;
+  }
+  rx_.insert(rx_.end(), bytes.begin(), bytes.end());
+  if (in_exchange) {
+    advance(now);
+  } else {
+    process_rx(*streaming_, now);
+  }
+  rearm(now);
+}
+
+// Moves an exchange forward with what rx_ holds: the echo first, then the reply.
+void BusEngine::advance(TimePoint now) {
+  if (!echo_.empty() && !rx_.empty()) {
+    const std::size_t k = std::min(rx_.size(), echo_.size());
+    if (!std::equal(rx_.begin(), rx_.begin() + static_cast<long>(k), echo_.begin())) {
+      ++counters_.echo_errors;
+      log_->debug("bus {}: echo differs from what was sent (collision?)", name_);
+      echo_broken_ = true;
+      echo_.clear();
+      rx_.clear();
+    } else {
+      rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(k));
+      echo_.erase(echo_.begin(), echo_.begin() + static_cast<long>(k));
+    }
+  }
+  if (state_ == State::sending) return;  // on_sent() continues
+  if (state_ == State::awaiting_echo) {
+    if (echo_broken_) {
+      attempt_failed(now);
+    } else if (echo_.empty()) {
+      after_sent(now);
+    }
+    return;
+  }
+  if (state_ == State::awaiting_reply && !rx_.empty()) process_rx(*current_, now);
+}
+
+void BusEngine::process_rx(Station& st, TimePoint now) {
+  Link& link = st.link();
+  while (!rx_.empty()) {
+    const RxVerdict v = st.on_receive(rx_, now);
+    if (v.kind == RxKind::incomplete) {
+      if (rx_.size() > kMaxRxBuffer) {
+        link.counters.noise_bytes += static_cast<std::uint32_t>(rx_.size());
+        rx_.clear();
+      }
+      return;
+    }
+    const std::size_t used = std::clamp<std::size_t>(v.consumed, 1, rx_.size());
+    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(used));
+    // On a streaming line a damaged frame is usually someone else's (the stream's), so it does
+    // not cost the exchange an attempt; on a request / reply line it is the reply, damaged.
+    const bool awaited = state_ == State::awaiting_reply && current_ == &st;
+    const bool retry_on_damage = awaited && streaming_ == nullptr;
+    switch (v.kind) {
+      case RxKind::reply:
+      case RxKind::frame:
+        ++link.counters.frames_good;
+        if (link.health.frame_good(now)) link.log->info("device {}: answering again", st.name());
+        if (v.kind == RxKind::reply && awaited) {
+          finish(now);
+          return;
+        }
+        break;
+      case RxKind::nack:
+      case RxKind::bad_checksum:
+        ++(v.kind == RxKind::nack ? link.counters.nacks : link.counters.bad_checksum);
+        if (awaited) answered_ = true;
+        if (retry_on_damage) {
+          attempt_failed(now);
+          return;
+        }
+        break;
+      case RxKind::foreign:
+        ++link.counters.foreign;
+        break;
+      case RxKind::noise:
+        link.counters.noise_bytes += static_cast<std::uint32_t>(used);
+        break;
+      case RxKind::incomplete:
+        break;
+    }
+  }
+}
+
+}  // namespace drivegate

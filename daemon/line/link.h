@@ -1,0 +1,103 @@
+// What the bus engine keeps about each device on its line and about the line itself: health
+// (last good frame, comm_lost, back-off of a silent device) and counters. A device owns its Link,
+// so a device kept across a reload keeps its history; the engine updates it; the register image
+// shows it. Timekeeping and counting only: no I/O.
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+
+#include "drivegate/driver.h"
+
+namespace drivegate {
+
+struct DeviceCounters {
+  std::uint32_t frames_good = 0;
+  std::uint32_t bad_checksum = 0;
+  std::uint32_t timeouts = 0;
+  std::uint32_t retries = 0;
+  std::uint32_t nacks = 0;
+  std::uint32_t foreign = 0;
+  std::uint32_t noise_bytes = 0;
+};
+
+// Counters of one line, shown in every one of its devices' common block.
+struct BusCounters {
+  std::uint32_t exchanges = 0;
+  std::uint32_t timeouts = 0;
+  std::uint32_t retries = 0;
+  std::uint32_t echo_errors = 0;  // our own bytes did not come back as sent
+  std::uint32_t noise_bytes = 0;  // bytes nobody asked for
+  std::uint32_t reopens = 0;
+};
+
+// How the engine treats one device, from its configuration and its driver's traits.
+struct LinkPolicy {
+  Millis poll_interval{500};
+  Millis budget{1000};        // most line time one turn of this device may take
+  Millis backoff_max{5000};   // longest pause between probes of a silent device
+  Millis comm_timeout{6000};  // no good frame for this long: comm_lost
+  Millis inter_frame_gap{0};  // line silence before each of its frames
+  bool streaming = false;     // sends unsolicited frames (alone on its line)
+};
+
+// Whether a device answers: comm_lost once no good frame came for the comm timeout, and a
+// back-off that spaces out the probes of a device that stopped answering.
+class LinkHealth {
+ public:
+  explicit LinkHealth(TimePoint since) : last_good_(since) {}
+
+  // A good frame: answers again. True if it was comm_lost until now.
+  bool frame_good(TimePoint now) {
+    const bool was_lost = comm_lost_;
+    last_good_ = now;
+    ever_good_ = true;
+    comm_lost_ = false;
+    failures_ = 0;
+    probe_at_ = {};
+    return was_lost;
+  }
+  // A turn ended without an answer: the pause before the next probe doubles from one poll
+  // interval up to backoff_max, so a dead drive costs its line little while still probed.
+  void turn_failed(TimePoint now, const LinkPolicy& p) {
+    ++failures_;
+    const int shift = std::min(failures_ - 1, 10);
+    const Millis pause = std::min<Millis>(p.poll_interval * (1 << shift), p.backoff_max);
+    probe_at_ = failures_ > 1 ? now + pause : TimePoint{};
+  }
+  // True once: at the first call after the comm timeout passed without a good frame.
+  bool lost_by(TimePoint now, Millis comm_timeout) {
+    if (comm_lost_ || now - last_good_ <= comm_timeout) return false;
+    comm_lost_ = true;
+    return true;
+  }
+  // When lost_by() can next become true.
+  [[nodiscard]] TimePoint loss_due(Millis comm_timeout) const { return last_good_ + comm_timeout; }
+
+  [[nodiscard]] bool comm_lost() const { return comm_lost_; }
+  [[nodiscard]] bool ever_good() const { return ever_good_; }
+  [[nodiscard]] TimePoint last_good() const { return last_good_; }
+  [[nodiscard]] bool in_backoff(TimePoint now) const { return now < probe_at_; }
+  [[nodiscard]] TimePoint probe_at() const { return probe_at_; }
+
+ private:
+  TimePoint last_good_;
+  bool ever_good_ = false;
+  bool comm_lost_ = false;
+  int failures_ = 0;  // consecutive turns without an answer
+  TimePoint probe_at_{};
+};
+
+// One device's place on its line.
+struct Link {
+  LinkPolicy policy;
+  LinkHealth health;
+  DeviceCounters counters;
+  const BusCounters* bus = nullptr;     // its line's, set by the engine that serves it
+  std::shared_ptr<spdlog::logger> log;  // the device's own (journal fields DEVICE=, BUS=, UNIT=)
+};
+
+}  // namespace drivegate

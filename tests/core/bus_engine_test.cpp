@@ -1,0 +1,325 @@
+// The bus engine on simulated time (tests/support/bus_rig.h) with a tiny request / reply
+// protocol of the test's own: polls at the poll interval, resends, the time budget, back-off of a
+// silent device, comm_lost, writes before polls, and the one-wire echo, asserted on the frames
+// the line carried and the registers a PLC reads.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "bus_rig.h"
+#include "fake_adapter.h"
+
+namespace drivegate {
+namespace {
+
+using namespace std::chrono_literals;
+using modbus::Exception;
+
+// The test protocol: poll A0 addr -> B0 addr value; command C0 addr cmd -> D0 addr cmd;
+// a NACK is EE addr 00; a damaged reply is BE addr xx (a "bad checksum").
+constexpr std::uint8_t kPoll = 0xA0, kPollReply = 0xB0, kCommand = 0xC0, kCommandReply = 0xD0,
+                       kNack = 0xEE, kDamaged = 0xBE;
+
+class PingDriver final : public Driver {
+ public:
+  PingDriver(std::uint8_t address, Millis poll) : address_(address), poll_(poll) {
+    points_.push_back(input_point("value", PointType::u16, "", "the polled value"));
+    values_.resize(1);
+  }
+  DriverTraits traits() const override { return {Millis(1000), Millis(3000), Millis(2)}; }
+  const std::vector<PointSpec>& points() const override { return points_; }
+  const std::vector<Value>& values() const override { return values_; }
+  const CommonState& common() const override { return common_; }
+  std::optional<Exchange> next_exchange(TimePoint now) override {
+    Exchange ex;
+    ex.timeout = Millis(50);
+    ex.attempts = 3;
+    if (pending_ && !pending_sent_) {
+      pending_sent_ = true;
+      ex.frame = {kCommand, address_, static_cast<std::uint8_t>(pending_command_)};
+      ex.priority = Priority::command;
+      return ex;
+    }
+    if (now < next_poll_) return std::nullopt;
+    next_poll_ = now + poll_;
+    ex.frame = {kPoll, address_};
+    return ex;
+  }
+  TimePoint wake_at() const override {
+    return pending_ && !pending_sent_ ? TimePoint{} : next_poll_;
+  }
+  RxVerdict on_receive(ByteView rx, TimePoint) override {
+    if (rx.size() < 3) return {RxKind::incomplete, 0};
+    if (rx[1] != address_) return {RxKind::foreign, 3};
+    switch (rx[0]) {
+      case kPollReply:
+        common_.ready = true;
+        values_[0] = std::int64_t{rx[2]};
+        return {RxKind::reply, 3};
+      case kCommandReply:
+        common_.command = static_cast<Command>(rx[2]);
+        if (pending_) completions_.push_back({*pending_, WriteResult::ok});
+        pending_.reset();
+        return {RxKind::reply, 3};
+      case kNack:
+        return {RxKind::nack, 3};
+      case kDamaged:
+        return {RxKind::bad_checksum, 3};
+      default:
+        return {RxKind::noise, 1};
+    }
+  }
+  void on_no_reply(TimePoint) override {
+    if (pending_ && pending_sent_) {
+      completions_.push_back({*pending_, WriteResult::no_response});
+      pending_.reset();
+    }
+  }
+  void on_comm_lost(TimePoint) override { common_.ready = false; }
+  WriteCheck check(std::span<const WriteOp>) const override { return WriteCheck::ok; }
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint) override {
+    if (op.target != WriteOp::Target::command) return WriteStatus::done;
+    pending_ = t;
+    pending_sent_ = false;
+    pending_command_ = op.command;
+    return WriteStatus::pending;
+  }
+  void take_completions(std::vector<Completion>& out) override {
+    out.insert(out.end(), completions_.begin(), completions_.end());
+    completions_.clear();
+  }
+
+ private:
+  std::uint8_t address_;
+  Millis poll_;
+  TimePoint next_poll_{};
+  std::vector<PointSpec> points_;
+  std::vector<Value> values_;
+  CommonState common_;
+  std::optional<Ticket> pending_;
+  bool pending_sent_ = false;
+  Command pending_command_ = Command::stop;
+  std::vector<Completion> completions_;
+};
+
+// The device side: answers its address; silent, NACKing or damaging on request.
+class PingSim final : public Simulator {
+ public:
+  enum class Mode { answer, silent, nack, damage };
+  explicit PingSim(std::uint8_t address) : address_(address) {}
+  Bytes on_receive(ByteView rx, TimePoint) override {
+    if (rx.size() < 2 || rx[1] != address_ || mode == Mode::silent) return {};
+    if (mode == Mode::nack) return {kNack, address_, 0};
+    if (mode == Mode::damage) return {kDamaged, address_, 0};
+    if (rx[0] == kCommand && rx.size() == 3) return {kCommandReply, address_, rx[2]};
+    return {kPollReply, address_, value};
+  }
+  Bytes on_tick(TimePoint) override { return {}; }
+  std::string control(std::string_view, TimePoint) override { return {}; }
+  Mode mode = Mode::answer;
+  std::uint8_t value = 42;
+
+ private:
+  std::uint8_t address_;
+};
+
+BusConfig line(bool echo = false) {
+  BusConfig b;
+  b.name = "test";
+  b.baud = 9600;  // 8N1: 10 bits a character, 1.0417 ms
+  b.echo = echo;
+  return b;
+}
+
+struct Bench {
+  explicit Bench(BusConfig config = line()) : rig(test::kFakeAdapter, std::move(config)) {}
+  Device& add(std::uint8_t address, Millis poll = 100ms, Millis budget = 1000ms) {
+    DeviceConfig c = rig.device_config("dev" + std::to_string(address), address);
+    c.poll_interval = poll;
+    c.budget = budget;
+    c.backoff_max = 2000ms;
+    auto& d = rig.add_device(c, std::make_unique<PingDriver>(address, poll));
+    auto sim = std::make_unique<PingSim>(address);
+    sims.push_back(sim.get());
+    rig.add_simulator(std::move(sim));
+    return d;
+  }
+  // Frames sent to `address` with `kind`, and when.
+  std::vector<TimePoint> sent(std::uint8_t kind, std::uint8_t address, TimePoint from = {}) {
+    std::vector<TimePoint> out;
+    for (const auto& f : rig.sent()) {
+      if (f.at >= from && f.bytes.size() >= 2 && f.bytes[0] == kind && f.bytes[1] == address) {
+        out.push_back(f.at);
+      }
+    }
+    return out;
+  }
+  test::BusRig rig;
+  std::vector<PingSim*> sims;
+};
+
+TEST(BusEngine, PollsAtThePollIntervalAndPublishesTheValue) {
+  Bench b;
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.run_for(1020ms);  // the last poll's answer is in too
+  const auto polls = b.sent(kPoll, 1);
+  ASSERT_GE(polls.size(), 9u);
+  // The first waits for the 2 ms inter-frame gap after the line opened; each next poll is due
+  // 100 ms after the one before was asked for.
+  EXPECT_EQ(polls[1] - polls[0], 98ms);
+  for (std::size_t i = 2; i < polls.size(); ++i) EXPECT_EQ(polls[i] - polls[i - 1], 100ms);
+  EXPECT_TRUE(d.online());
+  EXPECT_EQ(b.rig.read(d, "value"), std::vector<std::uint16_t>{42});
+  EXPECT_EQ(b.rig.read(d, Table::input, 9, 2)[1], polls.size());  // frames_good
+  EXPECT_EQ(b.rig.counters().exchanges, polls.size());
+}
+
+TEST(BusEngine, ASilentReplyIsResentAfterItsTimeoutCountingTheWire) {
+  Bench b;
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.run_for(50ms);
+  b.sims[0]->mode = PingSim::Mode::silent;
+  const TimePoint from = b.rig.now();
+  ASSERT_TRUE(b.rig.run_until([&] { return b.rig.read(d, Table::input, 13, 2)[1] == 3; }, 1s));
+  const auto polls = b.sent(kPoll, 1, from);
+  // Three attempts, then at once the next turn (the next poll is overdue and one silent turn is
+  // not yet backed off). 2 bytes at 9600 8N1 leave the UART in 2.08 ms (counted as 2): the 50 ms
+  // wait counts from then, and the identical frame goes again at once (the gap is long past).
+  ASSERT_EQ(polls.size(), 4u);
+  EXPECT_EQ(polls[1] - polls[0], 52ms);
+  EXPECT_EQ(polls[2] - polls[1], 52ms);
+  EXPECT_EQ(polls[3] - polls[2], 52ms);
+  EXPECT_EQ(b.rig.read(d, Table::input, 15, 2)[1], 2);  // retries: 3 attempts, 2 of them resends
+}
+
+TEST(BusEngine, NacksAndDamagedRepliesAreResentAtOnceWithoutBackOff) {
+  Bench b;
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.run_for(50ms);
+  b.sims[0]->mode = PingSim::Mode::nack;
+  b.rig.run_for(300ms);
+  b.sims[0]->mode = PingSim::Mode::damage;
+  b.rig.run_for(300ms);
+  EXPECT_GT(b.rig.read(d, Table::input, 17, 2)[1], 0);  // nacks
+  EXPECT_GT(b.rig.read(d, Table::input, 11, 2)[1], 0);  // bad checksums
+  EXPECT_EQ(b.rig.read(d, Table::input, 13, 2)[1], 0);  // no timeouts: it answered
+  // It answers, garbled: its poll rate stays (no back-off), 3 attempts every 100 ms.
+  EXPECT_GE(b.sent(kPoll, 1, b.rig.now() - 300ms).size(), 9u);
+}
+
+TEST(BusEngine, ASilentDeviceGoesCommLostAndIsBackedOffWhileTheOtherKeepsItsRate) {
+  Bench b;
+  Device& alive = b.add(1, 100ms);
+  Device& dead = b.add(2, 100ms, 200ms);
+  b.rig.start();
+  b.rig.run_for(500ms);
+  b.sims[1]->mode = PingSim::Mode::silent;
+  b.rig.run_for(1200ms);
+  EXPECT_TRUE(dead.comm_lost());
+  EXPECT_FALSE(alive.comm_lost());
+  const auto lost = b.rig.read(dead, Table::input, 0, 2);
+  EXPECT_EQ(lost[0] & (1u << 4), 1u << 4);  // status comm_lost
+  EXPECT_EQ(lost[1], static_cast<std::uint16_t>(Fault::comm_lost));
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(10s);
+  // The live device keeps its 100 ms polls but for the dead one's probes (3 x 52 ms every 2 s);
+  // the dead one is probed, backed off to 2 s.
+  EXPECT_GE(b.sent(kPoll, 1, from).size(), 90u);
+  const auto probes = b.sent(kPoll, 2, from);
+  EXPECT_LE(probes.size(), 3u * 6u);  // at most 6 turns of 3 attempts in 10 s
+  EXPECT_GE(probes.size(), 3u * 4u);
+  b.sims[1]->mode = PingSim::Mode::answer;
+  ASSERT_TRUE(b.rig.run_until([&] { return !dead.comm_lost(); }, 3s));
+}
+
+TEST(BusEngine, TheBudgetCapsTheAttemptsOfOneTurn) {
+  Bench b;
+  Device& d = b.add(1, 100ms, 60ms);  // room for one 50 ms attempt only
+  b.rig.start();
+  b.rig.run_for(50ms);
+  b.sims[0]->mode = PingSim::Mode::silent;
+  b.rig.run_for(500ms);
+  EXPECT_EQ(b.rig.read(d, Table::input, 15, 2)[1], 0);  // never a resend
+  EXPECT_GT(b.rig.read(d, Table::input, 13, 2)[1], 0);
+}
+
+TEST(BusEngine, AWriteGoesOutAheadOfThePollsAndIsAnsweredOnceConfirmed) {
+  Bench b;
+  Device& d1 = b.add(1, 20ms);
+  b.add(2, 20ms);
+  b.rig.start();
+  b.rig.run_for(200ms);
+  const auto w = b.rig.write(d1, Table::holding, 0, {1});
+  EXPECT_FALSE(w->settled());
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  const auto commands = b.sent(kCommand, 1);
+  ASSERT_EQ(commands.size(), 1u);
+  // Sent as soon as the exchange on the line when it was asked ended (one poll at most).
+  EXPECT_LE(commands[0] - asked, 10ms);
+  EXPECT_EQ(b.rig.read(d1, Table::holding, 0, 1), std::vector<std::uint16_t>{1});
+}
+
+TEST(BusEngine, AWriteToADeviceThatStopsAnsweringFailsWith0x0B) {
+  Bench b;
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.run_for(200ms);
+  b.sims[0]->mode = PingSim::Mode::silent;
+  EXPECT_EQ(b.rig.write_and_wait(d, Table::holding, 0, {1}), Exception::gateway_target_failed);
+  b.rig.run_for(2s);
+  EXPECT_TRUE(d.comm_lost());
+  // Now refused at once, without a frame.
+  const auto before = b.sent(kCommand, 1).size();
+  EXPECT_EQ(b.rig.write(d, Table::holding, 0, {1})->result, Exception::gateway_target_failed);
+  EXPECT_EQ(b.sent(kCommand, 1).size(), before);
+}
+
+TEST(BusEngine, OnAOneWireLineTheEchoIsCheckedAndDropped) {
+  Bench b(line(/*echo=*/true));
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.run_for(1000ms);
+  EXPECT_TRUE(d.online());
+  EXPECT_EQ(b.rig.counters().echo_errors, 0u);
+  EXPECT_EQ(b.rig.read(d, Table::input, 13, 2)[1], 0);  // the echo is not mistaken for a reply
+  // A collision: the echo comes back different.
+  b.rig.line().connected = false;  // nothing reaches the device...
+  b.rig.run_for(300ms);
+  EXPECT_EQ(b.rig.counters().echo_errors, 0u);  // ...but the echo still comes back intact
+  b.rig.line().connected = true;
+}
+
+TEST(BusEngine, ARepliesForAnotherAddressAreCountedForeign) {
+  Bench b;
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.line().device_filter = [](Bytes bytes) {
+    if (bytes.size() == 3) bytes[1] = 9;  // someone else's reply
+    return bytes;
+  };
+  b.rig.run_for(300ms);
+  EXPECT_GT(b.rig.read(d, Table::input, 29, 2)[1], 0);  // foreign_frames
+  EXPECT_FALSE(d.online());
+}
+
+TEST(BusEngine, ThePortFailingFailsTheExchangeAndReopeningCounts) {
+  Bench b;
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.run_for(200ms);
+  b.rig.line_down();
+  const auto before = b.rig.sent().size();
+  b.rig.run_for(500ms);
+  EXPECT_EQ(b.rig.sent().size(), before);  // nothing sent on a closed line
+  b.rig.line_up();
+  b.rig.run_for(200ms);
+  EXPECT_GT(b.rig.sent().size(), before);
+  EXPECT_EQ(b.rig.read(d, Table::input, 27, 2)[1], 1);  // bus_reopens
+}
+
+}  // namespace
+}  // namespace drivegate

@@ -1,0 +1,119 @@
+// The real bus engine and real devices (gateway/device.h) on simulated time and a simulated line:
+// an adapter's driver against its own simulator exactly as the daemon runs them, writes made the
+// way the Modbus server makes them and registers read the way a PLC reads them, but deterministic
+// and fast. Adapter tests, multi-device tests and the core's tests all run on it.
+//
+//   test::BusRig rig(drivegate_adapter);
+//   Device& drive = rig.add_device("edrive", 1);  // the adapter's factory, default options
+//   rig.add_simulator(1);
+//   rig.start();
+//   ASSERT_TRUE(rig.run_until([&] { return drive.online(); }, 3s));
+//   EXPECT_EQ(rig.write_and_wait(drive, Table::holding, 0, {1, 3000}), Exception::none);
+//   EXPECT_EQ(rig.sent().back(), (Bytes{0x7E, ...}));
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <initializer_list>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "config/config.h"
+#include "drivegate/adapter.h"
+#include "gateway/device.h"
+#include "line/bus_engine.h"
+#include "modbus/backend.h"
+#include "sim_clock.h"
+#include "sim_line.h"
+
+namespace drivegate::test {
+
+using modbus::Exception;
+
+// Adapter options as text, over the schema's defaults (parsed as `drivegate sim --set` does).
+using OptionText = std::vector<std::pair<std::string, std::string>>;
+Options options_of(const AdapterDescriptor& adapter, const OptionText& set = {});
+
+// The outcome of one Modbus write: the exception returned at once, or the one `done` reported.
+struct WriteOutcome {
+  std::optional<Exception> result;
+  [[nodiscard]] bool settled() const { return result.has_value(); }
+};
+
+class BusRig {
+ public:
+  // A line with the adapter's native settings (baud, parity, echo...).
+  explicit BusRig(const AdapterDescriptor& adapter);
+  // A line with these settings (a test of the engine with a fake adapter).
+  BusRig(const AdapterDescriptor& adapter, BusConfig line);
+  ~BusRig();
+  BusRig(const BusRig&) = delete;
+  BusRig& operator=(const BusRig&) = delete;
+
+  // The configuration a device of this rig gets unless the test changes it.
+  [[nodiscard]] DeviceConfig device_config(std::string name, std::uint32_t address,
+                                           const OptionText& options = {}) const;
+  // A device made by the adapter's own factory. Before start().
+  Device& add_device(const DeviceConfig& config, bool maintenance = false);
+  Device& add_device(std::string name, std::uint32_t address, const OptionText& options = {});
+  // A device around a driver the test made (fake drivers). Before start().
+  Device& add_device(const DeviceConfig& config, std::unique_ptr<Driver> driver);
+  // The adapter's simulator answering at `address`. Before start().
+  Simulator& add_simulator(std::uint32_t address, const OptionText& options = {});
+  Simulator& add_simulator(std::unique_ptr<Simulator> sim);
+
+  // The engine starts and the line comes up.
+  void start();
+  // The port fails, and comes back (a USB adapter unplugged and plugged in again).
+  void line_down() { engine_->line_down(); }
+  void line_up() { engine_->line_up(true); }
+
+  void run_for(Millis span) { clock_.run_for(span); }
+  bool run_until(const std::function<bool()>& done, Millis limit) {
+    return clock_.run_until(done, limit);
+  }
+  [[nodiscard]] TimePoint now() const { return clock_.now(); }
+
+  // A Modbus write request, as the server makes it (registers, or 0 / 1 per coil).
+  std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
+                                      std::vector<std::uint16_t> values);
+  // Runs until the write settled or `limit` passed; its exception, nullopt if still pending.
+  std::optional<Exception> wait(const std::shared_ptr<WriteOutcome>& w,
+                                Millis limit = Millis(5000));
+  std::optional<Exception> write_and_wait(Device& d, Table table, std::uint16_t address,
+                                          std::vector<std::uint16_t> values,
+                                          Millis limit = Millis(5000));
+  // Registers (or bits) as a PLC reads them; empty when the read fails.
+  std::vector<std::uint16_t> read(Device& d, Table table, std::uint16_t address, std::size_t n);
+  // The named point's registers.
+  std::vector<std::uint16_t> read(Device& d, std::string_view point);
+  // Unit id -> device, as the gateway serves them (for the Modbus dispatcher).
+  modbus::Backend& backend();
+
+  [[nodiscard]] const std::vector<SimLine::Frame>& sent() const { return line_->sent; }
+  [[nodiscard]] const std::vector<SimLine::Frame>& answers() const { return line_->answers; }
+  SimLine& line() { return *line_; }
+  SimClock& clock() { return clock_; }
+  [[nodiscard]] const BusCounters& counters() const { return engine_->counters(); }
+  [[nodiscard]] const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }
+  Simulator& simulator(std::size_t i = 0) { return *sims_.at(i); }
+  [[nodiscard]] const AdapterDescriptor& adapter() const { return adapter_; }
+
+ private:
+  class Units;
+
+  const AdapterDescriptor& adapter_;
+  BusConfig line_config_;
+  std::shared_ptr<spdlog::logger> log_;
+  SimClock clock_;
+  std::unique_ptr<SimLine> line_;
+  std::vector<std::unique_ptr<Device>> devices_;
+  std::vector<std::unique_ptr<Simulator>> sims_;
+  std::unique_ptr<BusEngine> engine_;
+  std::unique_ptr<Units> units_;
+};
+
+}  // namespace drivegate::test
