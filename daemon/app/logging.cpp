@@ -1,4 +1,4 @@
-#include "logging.h"
+#include "app/logging.h"
 
 #include <spdlog/pattern_formatter.h>
 #include <spdlog/sinks/base_sink.h>
@@ -28,49 +28,39 @@ bool stderr_is_journal() {
   return expected == js;
 }
 
-// The name after `prefix` up to ": " (or, with stop_at_space, up to the first space).
-std::string_view name_after(std::string_view text, std::string_view prefix, bool stop_at_space) {
-  if (!text.starts_with(prefix)) return {};
-  text.remove_prefix(prefix.size());
-  const auto end = stop_at_space ? text.find_first_of(" :") : text.find(": ");
-  return end == std::string_view::npos ? std::string_view{} : text.substr(0, end);
-}
-
 // Entries with their fields, over the journal's native protocol (sd_journal_sendv(3)). When
 // sending fails (sd_journal_sendv() < 0) the line goes to stderr, which is the journal's stream,
-// with the "<N>" priority prefix journald reads there (sd-daemon(3)).
-class JournalSink final : public spdlog::sinks::base_sink<std::mutex> {
+// with the "<N>" priority prefix journald reads there (sd-daemon(3)). Each device's and bus's
+// logger has its own sink, made by for_context(), carrying that device's or bus's fields.
+class JournalSink final : public spdlog::sinks::base_sink<std::mutex>, public ContextSink {
  public:
-  void set_devices(std::vector<DeviceTag> devices) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    devices_ = std::move(devices);
+  JournalSink() = default;
+  explicit JournalSink(LogContext context) : context_(std::move(context)) {}
+
+  [[nodiscard]] spdlog::sink_ptr for_context(const LogContext& context) const override {
+    auto copy = std::make_shared<JournalSink>(context);
+    copy->set_level(level());
+    return copy;
   }
 
  protected:
   void sink_it_(const spdlog::details::log_msg& msg) override {
     const std::string_view text(msg.payload.data(), msg.payload.size());
-    const int priority = syslog_priority(msg.level);
-    const LogSubject subject = log_subject(text, devices_);
-    std::vector<std::string> fields;
-    fields.reserve(6);
-    fields.push_back("MESSAGE=" + std::string(text));
-    fields.push_back("PRIORITY=" + std::to_string(priority));
-    fields.push_back("SYSLOG_IDENTIFIER=" +
-                     std::string(msg.logger_name.data(), msg.logger_name.size()));
-    if (!subject.device.empty()) fields.push_back("DEVICE=" + subject.device);
-    if (!subject.bus.empty()) fields.push_back("BUS=" + subject.bus);
-    if (subject.unit) fields.push_back("UNIT=" + std::to_string(*subject.unit));
+    std::vector<std::string> fields =
+        journal_fields(text, msg.level,
+                       std::string_view(msg.logger_name.data(), msg.logger_name.size()), context_);
     std::vector<iovec> iov;
     iov.reserve(fields.size());
     for (auto& f : fields) iov.push_back({f.data(), f.size()});
     if (sd_journal_sendv(iov.data(), static_cast<int>(iov.size())) < 0) {
-      std::fprintf(stderr, "<%d>%.*s\n", priority, static_cast<int>(text.size()), text.data());
+      std::fprintf(stderr, "<%d>%.*s\n", syslog_priority(msg.level), static_cast<int>(text.size()),
+                   text.data());
     }
   }
   void flush_() override { std::fflush(stderr); }
 
  private:
-  std::vector<DeviceTag> devices_;  // guarded by base_sink's mutex_
+  const LogContext context_;
 };
 
 }  // namespace
@@ -95,45 +85,17 @@ int syslog_priority(spdlog::level::level_enum level) {
   return 6;
 }
 
-LogSubject log_subject(std::string_view message, const std::vector<DeviceTag>& devices) {
-  constexpr std::string_view kDevice = "device ";
-  constexpr std::string_view kBus = "bus ";
-  LogSubject s;
-  if (const auto dev = name_after(message, kDevice, false); !dev.empty()) {
-    s.device = dev;
-  } else if (const auto bus = name_after(message, kBus, false); !bus.empty()) {
-    s.bus = bus;
-    // "bus B: device D did not answer": D ends at a space, unless a known name is longer.
-    std::string_view rest = message.substr(kBus.size() + bus.size() + 2);
-    if (rest.starts_with(kDevice)) {
-      rest.remove_prefix(kDevice.size());
-      s.device = rest.substr(0, rest.find_first_of(" :"));
-      for (const auto& d : devices) {
-        const bool ends = rest.size() == d.name.size() || rest[d.name.size()] == ' ' ||
-                          rest[d.name.size()] == ':';
-        if (rest.starts_with(d.name) && ends && d.name.size() > s.device.size()) s.device = d.name;
-      }
-    }
-  }
-  for (const auto& d : devices) {
-    if (s.device.empty() || d.name != s.device) continue;
-    if (s.bus.empty()) s.bus = d.bus;
-    s.unit = d.unit_id;
-  }
-  return s;
-}
-
-void describe_devices(spdlog::logger& log, std::vector<DeviceTag> devices) {
-  for (const auto& sink : log.sinks()) {
-    if (auto* journal = dynamic_cast<JournalSink*>(sink.get())) journal->set_devices(devices);
-  }
-}
-
-void describe_devices(spdlog::logger& log, const Config& config) {
-  std::vector<DeviceTag> tags;
-  tags.reserve(config.devices.size());
-  for (const auto& d : config.devices) tags.push_back({d.name, d.bus, d.unit_id});
-  describe_devices(log, std::move(tags));
+std::vector<std::string> journal_fields(std::string_view message, spdlog::level::level_enum level,
+                                        std::string_view identifier, const LogContext& context) {
+  std::vector<std::string> fields;
+  fields.reserve(6);
+  fields.push_back("MESSAGE=" + std::string(message));
+  fields.push_back("PRIORITY=" + std::to_string(syslog_priority(level)));
+  fields.push_back("SYSLOG_IDENTIFIER=" + std::string(identifier));
+  if (!context.device.empty()) fields.push_back("DEVICE=" + context.device);
+  if (!context.bus.empty()) fields.push_back("BUS=" + context.bus);
+  if (context.unit) fields.push_back("UNIT=" + std::to_string(*context.unit));
+  return fields;
 }
 
 std::shared_ptr<spdlog::logger> make_logger(std::string_view name,

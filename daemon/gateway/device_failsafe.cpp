@@ -1,6 +1,6 @@
 // The device's PLC-loss failsafe (docs/safety.md): what it does when the PLC stops writing, and
 // how it retries a failsafe write the drive did not take. The timer itself is failsafe.h.
-#include "device.h"
+#include "gateway/device.h"
 
 namespace drivegate {
 
@@ -28,12 +28,11 @@ void Device::failsafe_tick(TimePoint now) {
 // Takes the action, and keeps it taken while latched: a stop is sent again whenever the driver's
 // command in force becomes a run once more (a driver that resumes its run after comm_lost).
 void Device::enforce_failsafe(TimePoint now) {
-  if (failsafe_now_ == FailsafeAction::hold || failsafe_busy_ || failsafe_gave_up_ || comm_lost_ ||
+  if (failsafe_now_ == FailsafeAction::hold || failsafe_busy_ || failsafe_gave_up_ || comm_lost() ||
       now < failsafe_retry_at_) {
     return;
   }
-  const Command in_force = driver_->common().command;
-  const bool runs = in_force == Command::run_forward || in_force == Command::run_reverse;
+  const bool runs = is_run(driver_->common().command);
   if (failsafe_now_ == FailsafeAction::preset) {
     if (failsafe_done_) return;
     if (!runs) {
@@ -49,12 +48,13 @@ void Device::enforce_failsafe(TimePoint now) {
   Exception e = Exception::none;
   if (action == FailsafeAction::preset) {
     const auto rpm = static_cast<std::uint16_t>(config_.failsafe.preset_rpm);
-    e = apply(Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done, now,
-              Origin::gateway);
+    e = submit(Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done, now,
+               Origin::gateway);
   } else {
     const auto c = static_cast<std::uint16_t>(
         action == FailsafeAction::quick_stop ? Command::quick_stop : Command::stop);
-    e = apply(Table::holding, 0, std::span<const std::uint16_t>(&c, 1), done, now, Origin::gateway);
+    e = submit(Table::holding, 0, std::span<const std::uint16_t>(&c, 1), done, now,
+               Origin::gateway);
   }
   if (e != Exception::none) failsafe_settled(action, e);
 }

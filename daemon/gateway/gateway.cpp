@@ -1,6 +1,9 @@
-#include "gateway.h"
+#include "gateway/gateway.h"
 
 #include <algorithm>
+#include <boost/asio/steady_timer.hpp>
+
+#include "gateway/log_context.h"
 
 namespace drivegate {
 
@@ -8,7 +11,6 @@ namespace asio = boost::asio;
 using modbus::Exception;
 
 namespace {
-constexpr Millis kHousekeepingPeriod{100};
 
 // Equal but for where in the file they were declared.
 bool same_settings(BusConfig a, BusConfig b) {
@@ -36,13 +38,16 @@ Table to_table(modbus::RegisterTable t) {
 }
 
 std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescriptor& adapter,
-                                    bool maintenance, std::string& error) {
+                                    bool maintenance, std::string& error, const BusConfig* line) {
   DeviceEnv env;
   env.name = cfg.name;
   env.address = cfg.address;
   env.poll_interval = cfg.poll_interval;
   env.options = cfg.options;
   env.maintenance = maintenance;
+  if (line != nullptr) {
+    env.char_time = character_time(line->baud, line->parity, line->data_bits, line->stop_bits);
+  }
   std::string why;
   auto driver = adapter.create_driver(env, why);
   if (!driver) {
@@ -53,7 +58,7 @@ std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescri
 }
 
 Gateway::Gateway(asio::io_context& io, std::shared_ptr<spdlog::logger> log)
-    : io_(io), log_(std::move(log)), tick_(io) {}
+    : io_(io), log_(std::move(log)) {}
 
 Gateway::~Gateway() {
   stop();
@@ -72,14 +77,19 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
                        dc.name + "': adapter '" + dc.adapter + "' is not installed");
       continue;
     }
+    const auto bus = std::find_if(config.buses.begin(), config.buses.end(),
+                                  [&](const BusConfig& b) { return b.name == dc.bus; });
     std::string error;
-    auto driver = make_driver(dc, *adapter, maintenance, error);
+    auto driver =
+        make_driver(dc, *adapter, maintenance, error, bus != config.buses.end() ? &*bus : nullptr);
     if (!driver) {
       errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device " + error);
       continue;
     }
     try {
-      gw->devices_.push_back(std::make_unique<Device>(dc, *adapter, std::move(driver), log, now));
+      gw->devices_.push_back(std::make_unique<Device>(
+          dc, *adapter, std::move(driver),
+          context_logger(*log, {.device = dc.name, .bus = dc.bus, .unit = dc.unit_id}), now));
     } catch (const std::exception& e) {
       errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
                        dc.name + "': " + e.what());
@@ -89,7 +99,9 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
   }
   if (!errors.empty()) return nullptr;
   for (const auto& bc : config.buses) {
-    gw->buses_.push_back(std::make_shared<Bus>(io, bc, gw->devices_on(bc.name), log));
+    gw->buses_.push_back(std::make_shared<Bus>(
+        io, bc, gw->stations_on(bc.name),
+        context_logger(*log, {.device = "", .bus = bc.name, .unit = std::nullopt})));
   }
   return gw;
 }
@@ -100,6 +112,11 @@ std::vector<Device*> Gateway::devices_on(const std::string& bus) const {
     if (d->config().bus == bus) on_bus.push_back(d.get());
   }
   return on_bus;
+}
+
+std::vector<Station*> Gateway::stations_on(const std::string& bus) const {
+  const auto devices = devices_on(bus);
+  return {devices.begin(), devices.end()};
 }
 
 std::unique_ptr<Device>& Gateway::owner(const Device* d) {
@@ -139,24 +156,13 @@ std::vector<std::string> Gateway::adopt_unchanged(Gateway& old) {
 void Gateway::start() {
   running_ = true;
   for (auto& b : buses_) b->start();
-  housekeeping();
 }
 
 void Gateway::stop() {
   if (!running_) return;
   running_ = false;
-  tick_.cancel();
   for (auto& b : buses_) b->stop();
   for (auto& d : devices_) d->fail_pending(Exception::gateway_target_failed);
-}
-
-void Gateway::housekeeping() {
-  const auto now = Clock::now();
-  for (auto& d : devices_) d->housekeeping(now);
-  tick_.expires_after(kHousekeepingPeriod);
-  tick_.async_wait([this](const boost::system::error_code& ec) {
-    if (!ec && running_) housekeeping();
-  });
 }
 
 void Gateway::stop_drives(Millis limit, std::function<void()> done) {
@@ -177,8 +183,7 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   waiter->done = std::move(done);
   const auto now = Clock::now();
   for (auto& d : devices_) {
-    const CommonState& c = d->driver().common();
-    if (!c.running || d->comm_lost()) continue;
+    if (!d->state().running || d->comm_lost()) continue;
     if (d->config().on_shutdown == ShutdownAction::hold) {
       log_->info("device {}: left as it is for shutdown (on_shutdown = hold)", d->config().name);
       continue;

@@ -7,23 +7,25 @@
 
 #include <array>
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/steady_timer.hpp>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "line/bus.h"
 #include "config/config.h"
-#include "device.h"
-#include "modbus/backend.h"
 #include "config/plugins.h"
+#include "device.h"
+#include "line/bus.h"
+#include "modbus/backend.h"
 
 namespace drivegate {
 
 // Creates a device's driver from its configuration; nullptr and `error` if the adapter refuses.
+// `line`: the bus it is on (for DeviceEnv::char_time), or nullptr where no line is involved
+// (printing the register map).
 std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescriptor& adapter,
-                                    bool maintenance, std::string& error);
+                                    bool maintenance, std::string& error,
+                                    const BusConfig* line = nullptr);
 
 class Gateway : public modbus::Backend {
  public:
@@ -62,8 +64,8 @@ class Gateway : public modbus::Backend {
 
  private:
   Gateway(boost::asio::io_context& io, std::shared_ptr<spdlog::logger> log);
-  void housekeeping();
   [[nodiscard]] std::vector<Device*> devices_on(const std::string& bus) const;
+  [[nodiscard]] std::vector<Station*> stations_on(const std::string& bus) const;
   std::unique_ptr<Device>& owner(const Device* d);
 
   boost::asio::io_context& io_;
@@ -71,7 +73,6 @@ class Gateway : public modbus::Backend {
   std::vector<std::unique_ptr<Device>> devices_;
   std::vector<std::shared_ptr<Bus>> buses_;
   std::array<Device*, 256> units_{};
-  boost::asio::steady_timer tick_;
   bool running_ = false;
 };
 

@@ -1,5 +1,6 @@
 // Where every point of a device lives in the Modbus tables. The common block is the same for
-// every adapter (one PLC faceplate serves all drives); the adapter's own points follow it.
+// every adapter (common_block.h); the adapter's own points follow it, in the order the driver
+// lists them, each table on its own:
 //
 //   input registers  0..31  common block (status, faults, speed, data age, counters)
 //                   32..    adapter input points
@@ -11,56 +12,44 @@
 #pragma once
 
 #include <cstdint>
-#include <optional>
+#include <span>
+#include <string_view>
 #include <vector>
 
 #include "drivegate/point.h"
+#include "gateway/common_block.h"
 
 namespace drivegate {
 
-// The common points, in register order within their table.
-enum class CommonPoint : std::uint8_t {
-  status,
-  fault_code,
-  fault_mask,
-  native_fault,
-  speed_rpm,
-  data_age_ms,
-  frames_good,
-  bad_checksum,
-  timeouts,
-  retries,
-  nacks,
-  bus_exchanges,
-  bus_timeouts,
-  bus_echo_errors,
-  bus_noise_bytes,
-  bus_reopens,
-  foreign_frames,
-  command,
-  setpoint_rpm,
-  heartbeat,
-  status_bit,  // discrete inputs 0..6, one per StatusBit
+// Where a mapped point's value comes from.
+enum class PointSource : std::uint8_t {
+  adapter,     // `index` into the driver's points() and values()
+  common,      // `index` into kCommonBlock
+  status_bit,  // `index` is the StatusBit
 };
-
-inline constexpr std::uint16_t kAdapterInputBase = 32;
-inline constexpr std::uint16_t kAdapterHoldingBase = 16;
-inline constexpr std::uint16_t kAdapterDiscreteBase = 16;
-inline constexpr std::uint16_t kAdapterCoilBase = 0;
 
 struct MappedPoint {
   PointSpec spec;
   std::uint16_t address = 0;
-  bool common = false;
-  CommonPoint common_id = CommonPoint::status;  // when common
-  std::size_t index = 0;                        // adapter point index, or status bit number
+  PointSource source = PointSource::adapter;
+  std::size_t index = 0;
+
+  [[nodiscard]] bool common() const { return source != PointSource::adapter; }
+  [[nodiscard]] const CommonRow* row() const {
+    return source == PointSource::common ? &kCommonBlock[index] : nullptr;
+  }
 };
 
 class RegisterMap {
  public:
+  // Throws std::invalid_argument when the adapter's points overlap or overflow a table.
   explicit RegisterMap(const std::vector<PointSpec>& adapter_points);
 
   [[nodiscard]] const std::vector<MappedPoint>& points() const { return points_; }
+  // The common block and the status bits: the first points, before the adapter's.
+  [[nodiscard]] std::span<const MappedPoint> common_points() const {
+    return std::span(points_).first(kCommonBlock.size() + kStatusBitNames.size());
+  }
   // Registers (or bits) each table needs.
   [[nodiscard]] std::uint16_t size(Table t) const { return sizes_[static_cast<int>(t)]; }
   // The point covering `address` in `t`, if any.
@@ -68,6 +57,8 @@ class RegisterMap {
   // How many consecutive addresses from `address` on are mapped (0 when `address` is not): a
   // read of any range is checked in one lookup, not one per register.
   [[nodiscard]] std::size_t mapped_from(Table t, std::uint16_t address) const;
+  // The point named `name`, if any.
+  [[nodiscard]] const MappedPoint* find(std::string_view name) const;
 
  private:
   void add(MappedPoint p);

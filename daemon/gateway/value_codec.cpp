@@ -1,4 +1,4 @@
-#include "value_codec.h"
+#include "gateway/value_codec.h"
 
 #include <algorithm>
 #include <bit>
@@ -61,6 +61,35 @@ void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint
       }
       return;
     }
+  }
+}
+
+void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t> out) {
+  const auto sat = [value](auto lo, auto hi) {
+    return std::clamp<std::int64_t>(value, static_cast<std::int64_t>(lo),
+                                    static_cast<std::int64_t>(hi));
+  };
+  switch (type) {
+    case PointType::u16:
+      out[0] = static_cast<std::uint16_t>(sat(0, 0xFFFF));
+      return;
+    case PointType::i16:
+      out[0] = static_cast<std::uint16_t>(static_cast<std::int16_t>(sat(-32768, 32767)));
+      return;
+    case PointType::u32:
+      put32(static_cast<std::uint32_t>(sat(0, 0xFFFFFFFFu)), out);
+      return;
+    case PointType::i32:
+      put32(
+          static_cast<std::uint32_t>(static_cast<std::int32_t>(sat(
+              std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::max()))),
+          out);
+      return;
+    case PointType::f32:
+      put32(std::bit_cast<std::uint32_t>(static_cast<float>(value)), out);
+      return;
+    case PointType::string:
+      return;
   }
 }
 

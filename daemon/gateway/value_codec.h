@@ -14,6 +14,10 @@ namespace drivegate {
 // values encode as 0.
 void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint16_t> out);
 
+// An integer (already in register units) into a u16 / i16 / u32 / i32 point's registers,
+// saturating at the type's limits: what the common block's rows hold.
+void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t> out);
+
 // The engineering value a client wrote; nullopt when `in` is not a value of the point's type
 // (a string point is not writable).
 std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::uint16_t> in);

@@ -1,5 +1,6 @@
-// A device's Modbus side: reads from the image, writes validated, then answered only when the
-// driver settles them; comm_lost and deadlines turn into 0x0B.
+// A device's Modbus side: reads from the image, writes validated, judged whole by the driver, then
+// applied part by part and answered only when the driver settles them; comm_lost and deadlines
+// turn into 0x0B. The device is driven here through its Station calls, as the engine drives it.
 #include "gateway/device.h"
 
 #include <gtest/gtest.h>
@@ -32,11 +33,22 @@ class DeviceTest : public ::testing::Test {
     EXPECT_EQ(device_->read(Table::input, address, out, at), Exception::none);
     return out;
   }
+  std::vector<std::uint16_t> holding(std::uint16_t address, std::size_t n) {
+    std::vector<std::uint16_t> out(n);
+    EXPECT_EQ(device_->read(Table::holding, address, out, t0_), Exception::none);
+    return out;
+  }
   Exception write(Table t, std::uint16_t address, std::vector<std::uint16_t> v,
                   std::optional<Exception>& answer) {
     return device_->write(
         t, address, v, [&answer](Exception e) { answer = e; }, t0_);
   }
+  // The driver settles the write it was given last; the device learns it at its next call.
+  void complete(WriteResult r, TimePoint at) {
+    fake_->completions.push_back({fake_->last_ticket, r});
+    device_->next_exchange(at);
+  }
+  void heard(TimePoint at) { device_->link().health.frame_good(at); }
 
   TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
   test::FakeDriver* fake_;
@@ -50,8 +62,8 @@ TEST_F(DeviceTest, CommonBlockReflectsTheDriver) {
   fake_->common_.native_fault = 0x48;
   fake_->common_.faults.set(Fault::stall);
   fake_->common_.faults.set(Fault::phase_loss);
-  device_->frame_good(t0_);
-  device_->sync(t0_);
+  heard(t0_);
+  device_->link().counters.frames_good = 1;
   const auto r = input(0, 19, t0_ + Millis(250));
   EXPECT_EQ(r[0], 0b0000'0111);                                    // online, running, fault
   EXPECT_EQ(r[1], static_cast<std::uint16_t>(Fault::phase_loss));  // the more severe
@@ -69,8 +81,8 @@ TEST_F(DeviceTest, BusCountersShowInEveryDeviceOnTheBus) {
                   .echo_errors = 4,
                   .noise_bytes = 5,
                   .reopens = 6};
-  device_->attach_bus(&bus);
-  device_->counters().foreign = 7;
+  device_->link().bus = &bus;
+  device_->link().counters.foreign = 7;
   const auto r = input(19, 12, t0_);
   EXPECT_EQ((std::uint32_t{r[0]} << 16) | r[1], 70000u);
   EXPECT_EQ(r[3], 3);
@@ -89,7 +101,7 @@ TEST_F(DeviceTest, DataAgeSaysNeverBeforeTheFirstFrame) {
 TEST_F(DeviceTest, AdapterPointsAreScaledIntoTheImage) {
   fake_->values_[0] = -12.3;  // 0.1 degC steps
   fake_->values_[2] = 1.0;
-  device_->sync(t0_);
+  device_->next_exchange(t0_);
   const auto r = input(32, 3, t0_);
   EXPECT_EQ(r[0], static_cast<std::uint16_t>(-123));
   EXPECT_EQ(r[1], 0x3F80);
@@ -108,25 +120,22 @@ TEST_F(DeviceTest, WriteIsAnsweredWhenTheDriverConfirms) {
   ASSERT_EQ(write(Table::holding, 0, {1}, answer), Exception::none);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
   EXPECT_FALSE(answer);
-  std::vector<std::uint16_t> status(1);
-  device_->read(Table::input, 0, status, t0_);
-  EXPECT_TRUE(status[0] & (1u << 6));  // command_pending
-  fake_->completions.push_back({fake_->last_ticket, WriteResult::ok});
-  device_->sync(t0_);
+  EXPECT_TRUE(input(0, 1, t0_)[0] & (1u << 6));  // command_pending
+  EXPECT_TRUE(device_->has_pending_writes());
+  complete(WriteResult::ok, t0_);
   EXPECT_EQ(answer, Exception::none);
+  EXPECT_FALSE(input(0, 1, t0_)[0] & (1u << 6));
 }
 
 TEST_F(DeviceTest, RefusalAndSilenceBecomeExceptions) {
   std::optional<Exception> a1, a2;
   write(Table::holding, 0, {0}, a1);
-  fake_->completions.push_back({fake_->last_ticket, WriteResult::refused});
-  device_->sync(t0_);
+  complete(WriteResult::refused, t0_);
   EXPECT_EQ(a1, Exception::server_device_failure);
   write(Table::holding, 0, {0}, a2);
-  device_->housekeeping(t0_ + Millis(400));
+  device_->on_tick(t0_ + Millis(400));
   EXPECT_FALSE(a2);
-  device_->frame_good(t0_ + Millis(400));
-  device_->housekeeping(t0_ + Millis(501));  // write_timeout passed
+  device_->on_tick(t0_ + Millis(501));  // write_timeout passed
   EXPECT_EQ(a2, Exception::gateway_target_failed);
 }
 
@@ -138,17 +147,19 @@ TEST_F(DeviceTest, ValidationComesFirst) {
   EXPECT_EQ(write(Table::holding, 17, {5}, a), Exception::illegal_data_address);   // mid-point
   EXPECT_EQ(write(Table::holding, 16, {0}, a), Exception::illegal_data_address);   // half a u32
   EXPECT_EQ(write(Table::input, 0, {0}, a), Exception::illegal_data_address);      // read-only
+  EXPECT_EQ(fake_->checks, 0);
   EXPECT_TRUE(fake_->commands.empty());
   EXPECT_TRUE(fake_->writes.empty());
   EXPECT_FALSE(a);
 }
 
 TEST_F(DeviceTest, DriverRefusalIsAnsweredAtOnce) {
-  fake_->answer = WriteStatus::invalid_value;
+  fake_->check_answer = WriteCheck::invalid_value;
   std::optional<Exception> a;
   EXPECT_EQ(write(Table::holding, 0, {2}, a), Exception::illegal_data_value);
-  fake_->answer = WriteStatus::refused;
+  fake_->check_answer = WriteCheck::refused;
   EXPECT_EQ(write(Table::holding, 0, {2}, a), Exception::server_device_failure);
+  EXPECT_TRUE(fake_->commands.empty());  // judged, never applied
   EXPECT_FALSE(a);
 }
 
@@ -157,9 +168,41 @@ TEST_F(DeviceTest, SetpointAppliesBeforeTheCommandInOneRequest) {
   ASSERT_EQ(write(Table::holding, 0, {1, 1200}, a), Exception::none);
   EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{1200});
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
-  std::vector<std::uint16_t> hr(2);
-  device_->read(Table::holding, 0, hr, t0_);
-  EXPECT_EQ(hr[1], 1200);
+  EXPECT_EQ(holding(0, 2)[1], 1200);
+}
+
+// FC 0x10 writing command = run_reverse and setpoint_rpm = 1500 to a drive that cannot reverse:
+// the whole request is refused and the setpoint is not touched.
+TEST_F(DeviceTest, ARequestTheDriverRefusesChangesNothing) {
+  fake_->refuse_command = Command::run_reverse;
+  std::optional<Exception> a;
+  EXPECT_EQ(write(Table::holding, 0, {2, 1500}, a), Exception::server_device_failure);
+  EXPECT_TRUE(fake_->setpoints.empty());
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_EQ(holding(0, 2)[1], 0);
+  EXPECT_FALSE(a);
+}
+
+// The command goes to the driver only once the setpoint before it settled; a setpoint the drive
+// did not take ends the request: the run is never sent.
+TEST_F(DeviceTest, PartsApplyOneAfterTheOtherAndAFailureStopsTheRest) {
+  fake_->setpoint_answer = WriteStatus::pending;
+  std::optional<Exception> a;
+  ASSERT_EQ(write(Table::holding, 0, {1, 1200}, a), Exception::none);
+  EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{1200});
+  EXPECT_TRUE(fake_->commands.empty());  // waits for the setpoint
+  complete(WriteResult::no_response, t0_);
+  EXPECT_EQ(a, Exception::gateway_target_failed);
+  EXPECT_TRUE(fake_->commands.empty());
+
+  std::optional<Exception> b;
+  ASSERT_EQ(write(Table::holding, 0, {1, 900}, b), Exception::none);
+  complete(WriteResult::ok, t0_);  // the setpoint
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
+  EXPECT_FALSE(b);
+  complete(WriteResult::refused, t0_);  // the run, after the setpoint took effect
+  EXPECT_EQ(b, Exception::server_device_failure);
+  EXPECT_EQ(holding(0, 2)[1], 900);  // what the drive holds
 }
 
 TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
@@ -175,7 +218,8 @@ TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
 TEST_F(DeviceTest, CommLostFailsPendingWritesAndRefusesNewOnes) {
   std::optional<Exception> a, b;
   write(Table::holding, 0, {1}, a);
-  device_->housekeeping(t0_ + Millis(1001));
+  ASSERT_TRUE(device_->link().health.lost_by(t0_ + Millis(1001), Millis(1000)));
+  device_->on_comm_lost(t0_ + Millis(1001));
   EXPECT_EQ(a, Exception::gateway_target_failed);
   EXPECT_EQ(fake_->comm_losts, 1);
   EXPECT_TRUE(device_->comm_lost());
@@ -185,20 +229,42 @@ TEST_F(DeviceTest, CommLostFailsPendingWritesAndRefusesNewOnes) {
   // The heartbeat is the gateway's own register and always takes.
   EXPECT_EQ(write(Table::holding, 2, {7}, b), Exception::none);
   EXPECT_EQ(b, Exception::none);
-  device_->frame_good(t0_ + Millis(1100));
+  heard(t0_ + Millis(1100));
   EXPECT_FALSE(device_->comm_lost());
 }
 
-TEST_F(DeviceTest, SilentDeviceIsBackedOffButProbed) {
-  device_->turn_failed(t0_);
-  EXPECT_FALSE(device_->in_backoff(t0_));  // one miss is not a pattern
-  device_->turn_failed(t0_);
-  EXPECT_TRUE(device_->in_backoff(t0_ + Millis(400)));
-  EXPECT_FALSE(device_->in_backoff(t0_ + Millis(1001)));
-  for (int i = 0; i < 20; ++i) device_->turn_failed(t0_);
-  EXPECT_FALSE(device_->in_backoff(t0_ + Millis(5001)));  // backoff_max
-  device_->frame_good(t0_);
-  EXPECT_FALSE(device_->in_backoff(t0_));
+// The drive's last faults were worse than losing it, but they are stale: fault_code says
+// comm_lost while fault_mask and native_fault keep what was last known.
+TEST_F(DeviceTest, WhileCommLostFaultCodeSaysSo) {
+  fake_->common_.faults.set(Fault::over_current);
+  fake_->common_.native_fault = 0x10;
+  heard(t0_);
+  EXPECT_EQ(input(1, 1, t0_)[0], static_cast<std::uint16_t>(Fault::over_current));
+  ASSERT_TRUE(device_->link().health.lost_by(t0_ + Millis(1001), Millis(1000)));
+  const auto r = input(0, 6, t0_ + Millis(1001));
+  EXPECT_EQ(r[1], static_cast<std::uint16_t>(Fault::comm_lost));
+  const std::uint32_t mask = (std::uint32_t{r[2]} << 16) | r[3];
+  EXPECT_EQ(mask, (1u << static_cast<unsigned>(Fault::over_current)) |
+                      (1u << static_cast<unsigned>(Fault::comm_lost)));
+  EXPECT_EQ(r[5], 0x10);
+}
+
+TEST(LinkHealth, ASilentDeviceIsBackedOffButProbed) {
+  const TimePoint t0 = TimePoint{} + std::chrono::hours(1);
+  LinkPolicy policy;
+  policy.poll_interval = Millis(500);
+  policy.backoff_max = Millis(5000);
+  LinkHealth h(t0);
+  h.turn_failed(t0, policy);
+  EXPECT_FALSE(h.in_backoff(t0));  // one miss is not a pattern
+  h.turn_failed(t0, policy);
+  EXPECT_TRUE(h.in_backoff(t0 + Millis(400)));
+  EXPECT_FALSE(h.in_backoff(t0 + Millis(1001)));
+  for (int i = 0; i < 20; ++i) h.turn_failed(t0, policy);
+  EXPECT_TRUE(h.in_backoff(t0 + Millis(4999)));
+  EXPECT_FALSE(h.in_backoff(t0 + Millis(5001)));  // backoff_max
+  h.frame_good(t0);
+  EXPECT_FALSE(h.in_backoff(t0));
 }
 
 }  // namespace

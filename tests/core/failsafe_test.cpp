@@ -1,11 +1,11 @@
 // The PLC-loss failsafe of a device (issue 8): armed by the first valid write to command,
-// setpoint or heartbeat, tripped by the first housekeeping tick after the timeout, latched in
+// setpoint or heartbeat, tripped by the first tick after the timeout, latched in
 // status bit 5 until a run command is written, and kept: a drive that runs again is stopped again.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 
-#include "gateway/device.h"
 #include "fake_adapter.h"
+#include "gateway/device.h"
 
 namespace drivegate {
 namespace {
@@ -34,13 +34,20 @@ class FailsafeTest : public ::testing::Test {
         cfg, test::kFakeAdapter, std::move(driver),
         std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>()),
         t0_);
-    device_->frame_good(t0_);
+    device_->link().health.frame_good(t0_);
   }
   TimePoint at(Millis ms) const { return t0_ + ms; }
-  // One housekeeping tick with the drive answering.
+  // What the bus engine does at each tick (line/bus_engine.cpp): comm_lost when due, then the
+  // device's own tick.
+  void engine_tick(Millis ms) {
+    Link& link = device_->link();
+    if (link.health.lost_by(at(ms), link.policy.comm_timeout)) device_->on_comm_lost(at(ms));
+    device_->on_tick(at(ms));
+  }
+  // One tick with the drive answering.
   void tick(Millis ms) {
-    device_->frame_good(at(ms));
-    device_->housekeeping(at(ms));
+    device_->link().health.frame_good(at(ms));
+    engine_tick(ms);
   }
   Exception plc(std::uint16_t address, std::vector<std::uint16_t> v, Millis ms) {
     return device_->write(
@@ -49,7 +56,7 @@ class FailsafeTest : public ::testing::Test {
   // The driver confirms the write it was last given.
   void confirm(Millis ms, WriteResult r = WriteResult::ok) {
     fake_->completions.push_back({fake_->last_ticket, r});
-    device_->sync(at(ms));
+    device_->next_exchange(at(ms));
   }
   std::uint16_t status(Millis ms) {
     std::uint16_t s = 0;
@@ -181,7 +188,7 @@ TEST_F(FailsafeTest, ADriveThatRunsAgainWhileLatchedIsStoppedAgain) {
   confirm(1000ms);
   // E.g. a driver that resumes the run in force after comm_lost.
   fake_->common_.command = Command::run_forward;
-  device_->sync(at(1500ms));
+  device_->next_exchange(at(1500ms));
   tick(1500ms);
   EXPECT_EQ(fake_->commands, (std::vector<Command>{Command::stop, Command::stop}));
 }
@@ -201,7 +208,7 @@ TEST_F(FailsafeTest, ATripDuringCommLostStopsTheDriveWhenItAnswersAgain) {
   make(FailsafeAction::stop);
   ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
   // No good frame from 0 on: comm_lost after 2 s, failsafe at 1 s with the drive already silent.
-  for (int ms = 100; ms <= 3000; ms += 100) device_->housekeeping(at(Millis(ms)));
+  for (int ms = 100; ms <= 3000; ms += 100) engine_tick(Millis(ms));
   EXPECT_TRUE(device_->failsafe_latched());
   EXPECT_TRUE(device_->comm_lost());
   fake_->commands.clear();  // the stop sent at 1 s failed at comm_lost (0x0B)

@@ -4,6 +4,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 
 #include "drivegate/adapter.h"
 
@@ -47,21 +48,30 @@ class FakeDriver final : public Driver {
   RxVerdict on_receive(ByteView rx, TimePoint) override { return {RxKind::noise, rx.size()}; }
   void on_no_reply(TimePoint) override { ++no_replies; }
   void on_comm_lost(TimePoint) override { ++comm_losts; }
-  WriteStatus command(Command c, Ticket t, TimePoint) override {
-    commands.push_back(c);
-    last_ticket = t;
-    return answer;
+  WriteCheck check(std::span<const WriteOp> request) const override {
+    ++checks;
+    for (const WriteOp& op : request) {
+      if (op.target == WriteOp::Target::command && op.command == refuse_command) {
+        return WriteCheck::refused;
+      }
+    }
+    return check_answer;
   }
-  WriteStatus setpoint(std::int32_t rpm, Ticket t, TimePoint) override {
-    setpoints.push_back(rpm);
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint) override {
     last_ticket = t;
-    common_.setpoint_rpm = rpm;
-    return setpoint_answer;
-  }
-  WriteStatus write(std::size_t point, const Value& v, Ticket t, TimePoint) override {
-    writes.emplace_back(point, v);
-    last_ticket = t;
-    return answer;
+    switch (op.target) {
+      case WriteOp::Target::command:
+        commands.push_back(op.command);
+        return answer;
+      case WriteOp::Target::setpoint:
+        setpoints.push_back(op.rpm);
+        common_.setpoint_rpm = op.rpm;
+        return setpoint_answer;
+      case WriteOp::Target::point:
+        writes.emplace_back(op.point, op.value);
+        return answer;
+    }
+    return WriteStatus::invalid_value;
   }
   void take_completions(std::vector<Completion>& out) override {
     out.insert(out.end(), completions.begin(), completions.end());
@@ -74,6 +84,9 @@ class FakeDriver final : public Driver {
   std::vector<Value> values_;
   CommonState common_;
   std::deque<Exchange> outbox;
+  WriteCheck check_answer = WriteCheck::ok;
+  std::optional<Command> refuse_command;  // check() refuses a request carrying it
+  mutable int checks = 0;
   WriteStatus answer = WriteStatus::pending;
   WriteStatus setpoint_answer = WriteStatus::done;
   std::vector<Command> commands;
@@ -105,29 +118,46 @@ inline std::unique_ptr<Simulator> no_sim(const SimEnv&, std::string& error) {
   return nullptr;
 }
 
-inline const AdapterDescriptor kFakeAdapter = {kAdapterApiVersion,
-                                               "fake",
-                                               "a scriptable adapter",
-                                               kFakeOptions,
-                                               std::size(kFakeOptions),
-                                               {4800, Parity::odd, 8, 1, true},
-                                               1,
-                                               31,
-                                               1,
-                                               false,
-                                               make_fake,
-                                               no_sim};
-inline const AdapterDescriptor kFakeStreamer = {kAdapterApiVersion,
-                                                "streamer",
-                                                "streams",
-                                                nullptr,
-                                                0,
-                                                {1200, Parity::none, 8, 1, false},
-                                                0,
-                                                0,
-                                                0,
-                                                true,
-                                                make_fake,
-                                                no_sim};
+inline const AdapterDescriptor kFakeAdapter = {.api_version = kAdapterApiVersion,
+                                               .id = "fake",
+                                               .summary = "a scriptable adapter",
+                                               .options = kFakeOptions,
+                                               .option_count = std::size(kFakeOptions),
+                                               .line = {4800, Parity::odd, 8, 1, true},
+                                               .address_min = 1,
+                                               .address_max = 31,
+                                               .default_address = 1,
+                                               .streaming = false,
+                                               .create_driver = make_fake,
+                                               .create_simulator = no_sim,
+                                               .demo = {}};
+inline const AdapterDescriptor kFakeStreamer = {.api_version = kAdapterApiVersion,
+                                                .id = "streamer",
+                                                .summary = "streams",
+                                                .options = nullptr,
+                                                .option_count = 0,
+                                                .line = {1200, Parity::none, 8, 1, false},
+                                                .address_min = 0,
+                                                .address_max = 0,
+                                                .default_address = 0,
+                                                .streaming = true,
+                                                .create_driver = make_fake,
+                                                .create_simulator = no_sim,
+                                                .demo = {}};
+// Polled like "fake" and framed like it (4800 8O1), but on a two-wire line: no echo. Sharing a
+// bus with "fake" needs the [[bus]] to say which echo holds.
+inline const AdapterDescriptor kFakeQuiet = {.api_version = kAdapterApiVersion,
+                                             .id = "quiet",
+                                             .summary = "a fake without echo",
+                                             .options = nullptr,
+                                             .option_count = 0,
+                                             .line = {4800, Parity::odd, 8, 1, false},
+                                             .address_min = 0,
+                                             .address_max = 0,
+                                             .default_address = 0,
+                                             .streaming = false,
+                                             .create_driver = make_fake,
+                                             .create_simulator = no_sim,
+                                             .demo = {}};
 
 }  // namespace drivegate::test

@@ -6,8 +6,8 @@
 #include <boost/asio/io_context.hpp>
 
 #include "config/adapter_options.h"
-#include "gateway/gateway.h"
 #include "fake_adapter.h"
+#include "gateway/gateway.h"
 
 namespace drivegate {
 namespace {

@@ -91,5 +91,17 @@ TEST(RegisterMap, DuplicateStringOfZeroRegistersIsRefused) {
   EXPECT_THROW(RegisterMap({s}), std::invalid_argument);
 }
 
+TEST(RegisterMap, EveryNameIsOneAndOnlyOnePoint) {
+  PointSpec a{.name = "a", .table = Table::input, .type = PointType::u16};
+  EXPECT_THROW(RegisterMap({a, a}), std::invalid_argument);
+  PointSpec clash{.name = "fault_code", .table = Table::input, .type = PointType::u16};
+  EXPECT_THROW(RegisterMap({clash}), std::invalid_argument);  // the common block's
+  PointSpec nameless{.table = Table::input, .type = PointType::u16};
+  EXPECT_THROW(RegisterMap({nameless}), std::invalid_argument);
+  const RegisterMap m({a});
+  EXPECT_EQ(m.find("a")->address, kAdapterInputBase);
+  EXPECT_EQ(m.find("missing"), nullptr);
+}
+
 }  // namespace
 }  // namespace drivegate

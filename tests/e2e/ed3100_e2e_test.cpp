@@ -23,7 +23,7 @@ constexpr const char* kBus = "ed-line";
 
 // Register map of this configuration (`drivegate regmap`): adapter points after the common block.
 namespace ed {
-inline constexpr int fault_code = 32, state_word = 33, running = 34, direction = 35;
+inline constexpr int drive_fault_code = 32, state_word = 33, running = 34, direction = 35;
 inline constexpr int monitor_0d00 = 39, monitor_0d00_raw = 41, monitor_0d00_format = 42;
 inline constexpr int frequency_setpoint = 16, param_00_06 = 17;  // holding
 }  // namespace ed
@@ -80,7 +80,7 @@ TEST_F(Ed3100E2E, ReadsTheOutputFrequencyInTheDocumentsOwnFrames) {
   EXPECT_EQ(m.regs[2], 0x1084);
   EXPECT_EQ(m.regs[3], 0x4148);
   EXPECT_EQ(speed(), 0);  // the stopped bit: the reference on display, the motor does not turn
-  const auto st = plc_.input(ed::fault_code, 3);
+  const auto st = plc_.input(ed::drive_fault_code, 3);
   EXPECT_EQ(st.regs[0], 0xFFFF);  // no fault
   EXPECT_EQ(st.regs[1], 0x0148);
   EXPECT_EQ(st.regs[2], 0);  // not running
@@ -108,7 +108,7 @@ TEST_F(Ed3100E2E, RunsForwardAndReverseFromModbusTcp) {
   EXPECT_TRUE(seen("1F 10 20 00 00 02 04 00 1E 10 88 67 E6", "1F 10 20 00 00 02 49 B6"));
   EXPECT_THAT(sim_.control("state"), HasSubstr("command=0x001E reference=0x1088"));
   ASSERT_TRUE(eventually([&] { return speed() == 1270; }, 10s)) << sim_.control("state");
-  auto st = plc_.input(ed::fault_code, 4);
+  auto st = plc_.input(ed::drive_fault_code, 4);
   EXPECT_EQ(st.regs[2], 1);  // running
   EXPECT_EQ(st.regs[3], 0);  // forward
   EXPECT_TRUE(plc_.input(reg::status, 1).regs[0] & reg::running);
@@ -117,7 +117,7 @@ TEST_F(Ed3100E2E, RunsForwardAndReverseFromModbusTcp) {
   ASSERT_EQ(plc_.write(reg::command, {2 /*run_reverse*/}), 0);
   EXPECT_TRUE(seen("1F 10 20 00 00 02 04 00 2E 10 88 67 E9"));
   ASSERT_TRUE(eventually([&] { return speed() == -1270; }, 10s)) << sim_.control("state");
-  st = plc_.input(ed::fault_code, 4);
+  st = plc_.input(ed::drive_fault_code, 4);
   EXPECT_EQ(st.regs[2], 1);  // running
   EXPECT_EQ(st.regs[3], 1);  // reverse
   EXPECT_EQ(plc_.holding(reg::command, 1).regs[0], 2);

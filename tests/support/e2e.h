@@ -135,6 +135,15 @@ class Child {
     reap(0);
     return -1;
   }
+  // Waits for the exit without sending anything; its status, or -1 after `timeout`.
+  int wait_exit(std::chrono::milliseconds timeout = std::chrono::seconds(10)) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (pid_ > 0 && std::chrono::steady_clock::now() < deadline) {
+      if (reap(WNOHANG)) return status_;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return pid_ > 0 ? -1 : status_;
+  }
   [[nodiscard]] bool running() { return pid_ > 0 && !reap(WNOHANG); }
   void signal(int sig) {
     if (pid_ > 0) ::kill(pid_, sig);
@@ -260,6 +269,48 @@ class Plc {
   }
   modbus_t* ctx_;
 };
+
+// One Modbus TCP request as raw bytes, the way any client puts it on the wire: the MBAP header
+// (transaction 1, protocol 0, length, unit) and `pdu`; returns the response PDU as received (empty
+// on a transport failure). Tests assert exact bytes with it, not a client library's reading.
+inline std::vector<std::uint8_t> raw_request(int port, std::uint8_t unit,
+                                             const std::vector<std::uint8_t>& pdu) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  std::vector<std::uint8_t> out;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+    const auto length = static_cast<std::uint16_t>(pdu.size() + 1);
+    std::vector<std::uint8_t> adu = {0x00,
+                                     0x01,
+                                     0x00,
+                                     0x00,
+                                     static_cast<std::uint8_t>(length >> 8),
+                                     static_cast<std::uint8_t>(length & 0xFF),
+                                     unit};
+    adu.insert(adu.end(), pdu.begin(), pdu.end());
+    if (::write(fd, adu.data(), adu.size()) == static_cast<ssize_t>(adu.size())) {
+      std::vector<std::uint8_t> in;
+      std::uint8_t buf[300];
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+      while (std::chrono::steady_clock::now() < deadline) {
+        pollfd p{fd, POLLIN, 0};
+        if (::poll(&p, 1, 100) <= 0) continue;
+        const ssize_t n = ::read(fd, buf, sizeof buf);
+        if (n <= 0) break;
+        in.insert(in.end(), buf, buf + n);
+        if (in.size() >= 7 && in.size() >= 6u + ((in[4] << 8) | in[5])) {
+          out.assign(in.begin() + 7, in.begin() + 6 + ((in[4] << 8) | in[5]));
+          break;
+        }
+      }
+    }
+  }
+  ::close(fd);
+  return out;
+}
 
 // drivegated on a configuration written from `toml`, listening on a free loopback port.
 class Daemon {

@@ -1,0 +1,89 @@
+// The device's register image: the common block from its table (common_block.h), the adapter's
+// points from the driver's values, and reads served from it, never waiting on the line.
+#include <algorithm>
+#include <chrono>
+#include <limits>
+
+#include "gateway/device.h"
+#include "gateway/value_codec.h"
+
+namespace drivegate {
+
+using modbus::Exception;
+
+// The adapter's points: they change only when the driver is called (publish() marks them stale).
+void Device::refresh_image() {
+  const auto& values = driver_->values();
+  for (const auto& p : map_.points()) {
+    if (p.source != PointSource::adapter) continue;
+    const bool bits = p.spec.table == Table::discrete || p.spec.table == Table::coil;
+    auto regs = registers(p.spec.table).subspan(p.address, bits ? 1 : p.spec.register_count());
+    const Value& v = p.index < values.size() ? values[p.index] : Value{};
+    if (bits) {
+      regs[0] = as_double(v) != 0.0 ? 1 : 0;
+    } else {
+      encode_value(p.spec, v, regs);
+    }
+  }
+  image_stale_ = false;
+}
+
+// The common block, which also changes with time (data age) and with the line (counters).
+void Device::refresh_common(TimePoint now) {
+  const CommonState& c = driver_->common();
+  const bool lost = link_.health.comm_lost();
+  FaultSet faults = c.faults;
+  if (lost) faults.set(Fault::comm_lost);
+  std::uint16_t status = 0;
+  const auto bit = [&](StatusBit b, bool on) {
+    if (on) status |= static_cast<std::uint16_t>(1u << static_cast<unsigned>(b));
+  };
+  bit(StatusBit::online, online());
+  bit(StatusBit::running, c.running);
+  bit(StatusBit::fault, !faults.empty());
+  bit(StatusBit::warning, c.warning);
+  bit(StatusBit::comm_lost, lost);
+  bit(StatusBit::failsafe, failsafe_.latched());
+  bit(StatusBit::command_pending, !requests_.empty());
+
+  const auto age = std::chrono::duration_cast<Millis>(now - link_.health.last_good()).count();
+  const BusCounters no_bus{};
+  const CommonSnapshot snapshot{
+      .status = status,
+      .faults = faults,
+      // The drive's last known faults stay in fault_mask and native_fault, but while nothing is
+      // heard from it they are stale: fault_code says why nothing is current.
+      .fault_code = lost ? Fault::comm_lost : most_severe(faults),
+      .drive = c,
+      .device = link_.counters,
+      .bus = link_.bus != nullptr ? *link_.bus : no_bus,
+      .data_age_ms = link_.health.ever_good()
+                         ? static_cast<std::uint32_t>(std::clamp<long long>(
+                               age, 0, std::numeric_limits<std::uint32_t>::max()))
+                         : std::numeric_limits<std::uint32_t>::max(),
+      .heartbeat = heartbeat_,
+  };
+  for (const auto& p : map_.common_points()) {
+    if (const CommonRow* row = p.row()) {
+      encode_integer(row->type, row->value(snapshot),
+                     registers(row->table).subspan(p.address, p.spec.register_count()));
+    } else if (p.source == PointSource::status_bit) {
+      registers(Table::discrete)[p.address] = (status >> p.index) & 1u;
+    }
+  }
+}
+
+Exception Device::read(Table table, std::uint16_t address, std::span<std::uint16_t> out,
+                       TimePoint now) {
+  const auto regs = registers(table);
+  if (std::size_t{address} + out.size() > regs.size() ||
+      map_.mapped_from(table, address) < out.size()) {
+    return Exception::illegal_data_address;
+  }
+  if (image_stale_) refresh_image();
+  refresh_common(now);
+  std::copy_n(regs.begin() + address, out.size(), out.begin());
+  return Exception::none;
+}
+
+}  // namespace drivegate
