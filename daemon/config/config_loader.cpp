@@ -360,6 +360,49 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
   }
 }
 
+// The adapters of a bus's devices, for the checks that they can share the line.
+std::vector<const AdapterDescriptor*> adapters_on(const std::vector<const DeviceConfig*>& on_bus,
+                                                  const PluginRegistry& plugins) {
+  std::vector<const AdapterDescriptor*> out;
+  for (const auto* dev : on_bus) {
+    if (const AdapterDescriptor* a = plugins.find(dev->adapter)) out.push_back(a);
+  }
+  return out;
+}
+
+bool same_framing(const LineDefaults& a, const LineDefaults& b) {
+  return a.baud == b.baud && a.parity == b.parity && a.data_bits == b.data_bits &&
+         a.stop_bits == b.stop_bits;
+}
+
+// Devices on one bus share its line settings. Those the [[bus]] leaves unset come from the
+// adapters, so the adapters must agree on them: the framing, and echo, which decides whether the
+// bus engine takes the first bytes it hears for its own. A device on the wrong side of either
+// misreads every reply, so the user must choose rather than get the first device's setting.
+void check_shared_line(const BusConfig& bus, const LineGiven& g,
+                       const std::vector<const AdapterDescriptor*>& adapters, Diagnostics& diag) {
+  const AdapterDescriptor* first = adapters.front();
+  const std::string key = "bus '" + bus.name + "'";
+  const auto framing = std::find_if(adapters.begin(), adapters.end(), [&](const auto* a) {
+    return !same_framing(a->line, first->line);
+  });
+  if (!g.framing() && framing != adapters.end()) {
+    diag.error_at(bus.line, key,
+                  "its devices' adapters have different native line settings: set baud, "
+                  "parity, data_bits and stop_bits explicitly");
+  }
+  const auto echo = std::find_if(adapters.begin(), adapters.end(),
+                                 [&](const auto* a) { return a->line.echo != first->line.echo; });
+  if (!g.echo && echo != adapters.end()) {
+    const auto echo_of = [](const AdapterDescriptor* a) {
+      return "'" + std::string(a->id) + "' echo = " + (a->line.echo ? "true" : "false");
+    };
+    diag.error_at(bus.line, key,
+                  "its devices' adapters disagree on echo (" + echo_of(first) + ", " +
+                      echo_of(*echo) + "): set echo explicitly");
+  }
+}
+
 // Checks references between buses and devices and fills unset line settings from the adapters.
 void cross_check(Config& cfg, const std::vector<LineGiven>& given, const PluginRegistry& plugins,
                  Diagnostics& diag) {
@@ -379,30 +422,21 @@ void cross_check(Config& cfg, const std::vector<LineGiven>& given, const PluginR
     for (const auto& dev : cfg.devices) {
       if (dev.bus == bus.name) on_bus.push_back(&dev);
     }
-    const int line = bus.line;
     if (on_bus.empty()) {
-      diag.error_at(line, "bus '" + bus.name + "'", "no device uses this bus");
+      diag.error_at(bus.line, "bus '" + bus.name + "'", "no device uses this bus");
       continue;
     }
     const AdapterDescriptor* first = plugins.find(on_bus.front()->adapter);
     if (first == nullptr) continue;
     for (const auto* dev : on_bus) {
       const AdapterDescriptor* a = plugins.find(dev->adapter);
-      if (a == nullptr) continue;
-      if (a->streaming && on_bus.size() > 1) {
+      if (a != nullptr && a->streaming && on_bus.size() > 1) {
         diag.error_at(dev->line, "device '" + dev->name + "'",
                       "adapter '" + dev->adapter +
                           "' streams unsolicited frames and must be alone on its bus");
       }
-      const bool same = a->line.baud == first->line.baud && a->line.parity == first->line.parity &&
-                        a->line.data_bits == first->line.data_bits &&
-                        a->line.stop_bits == first->line.stop_bits;
-      if (!same && !g.framing()) {
-        diag.error_at(line, "bus '" + bus.name + "'",
-                      "its devices' adapters have different native line settings: set baud, "
-                      "parity, data_bits and stop_bits explicitly");
-      }
     }
+    check_shared_line(bus, g, adapters_on(on_bus, plugins), diag);
     if (!g.baud) bus.baud = first->line.baud;
     if (!g.data_bits) bus.data_bits = first->line.data_bits;
     if (!g.stop_bits) bus.stop_bits = first->line.stop_bits;

@@ -4,7 +4,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <system_error>
+
+#include "adapter_options.h"
 
 namespace drivegate {
 
@@ -50,6 +53,29 @@ std::vector<std::string> PluginRegistry::load_directory(const std::filesystem::p
   return refused;
 }
 
+namespace {
+
+// Why a descriptor cannot be used, or empty. Checked once here, so that the configuration loader,
+// the tools and the drivers can rely on it: a complete descriptor of our API version whose option
+// defaults parse against their own specs.
+std::string descriptor_problem(const AdapterDescriptor& d) {
+  if (d.api_version != kAdapterApiVersion) {
+    return "adapter API version " + std::to_string(d.api_version) +
+           ", this drivegate speaks version " + std::to_string(kAdapterApiVersion) +
+           ": rebuild the plugin against this drivegate";
+  }
+  if (d.id == nullptr || d.create_driver == nullptr || d.create_simulator == nullptr ||
+      (d.options == nullptr && d.option_count != 0)) {
+    return "incomplete adapter descriptor";
+  }
+  if (std::string why = check_option_schema(d); !why.empty()) {
+    return "adapter '" + std::string(d.id) + "': " + why;
+  }
+  return {};
+}
+
+}  // namespace
+
 std::string PluginRegistry::load_file(const std::filesystem::path& file) {
   void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle == nullptr) return file.string() + ": cannot load: " + dlerror();
@@ -58,15 +84,7 @@ std::string PluginRegistry::load_file(const std::filesystem::path& file) {
   if (d == nullptr) {
     return file.string() + ": not a drivegate adapter (no symbol '" + kDescriptorSymbol + "')";
   }
-  if (d->api_version != kAdapterApiVersion) {
-    return file.string() + ": adapter API version " + std::to_string(d->api_version) +
-           ", this drivegate speaks version " + std::to_string(kAdapterApiVersion) +
-           ": rebuild the plugin against this drivegate";
-  }
-  if (d->id == nullptr || d->create_driver == nullptr || d->create_simulator == nullptr ||
-      (d->options == nullptr && d->option_count != 0)) {
-    return file.string() + ": incomplete adapter descriptor";
-  }
+  if (std::string why = descriptor_problem(*d); !why.empty()) return file.string() + ": " + why;
   if (find(d->id) != nullptr) {
     return file.string() + ": adapter '" + d->id + "' is already loaded from another file";
   }
@@ -76,6 +94,13 @@ std::string PluginRegistry::load_file(const std::filesystem::path& file) {
 }
 
 void PluginRegistry::add(const AdapterDescriptor& descriptor) {
+  // A descriptor linked into the program is the program's own bug: no caller has a user to tell.
+  if (std::string why = descriptor_problem(descriptor); !why.empty()) {
+    throw std::invalid_argument(why);
+  }
+  if (find(descriptor.id) != nullptr) {
+    throw std::invalid_argument("adapter '" + std::string(descriptor.id) + "' is added twice");
+  }
   descriptors_.push_back(&descriptor);
 }
 

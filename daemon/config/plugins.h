@@ -24,9 +24,12 @@ class PluginRegistry {
 
   // Loads every plugin in `dir`. Returns one line per plugin refused (empty: all loaded).
   std::vector<std::string> load_directory(const std::filesystem::path& dir);
-  // Loads one file; returns the reason on failure.
+  // Loads one file; returns the reason on failure. Besides the API version and a complete
+  // descriptor, every option must have a name of its own, a description and a default that its own
+  // spec accepts: "FILE: adapter 'ID': option 'NAME': default '12' is invalid: must be in 1..10".
   std::string load_file(const std::filesystem::path& file);
-  // Registers a descriptor linked into the program (tests).
+  // Registers a descriptor linked into the program (tests), checked as load_file() checks a
+  // plugin's; throws std::invalid_argument with the reason when it fails.
   void add(const AdapterDescriptor& descriptor);
 
   [[nodiscard]] const AdapterDescriptor* find(std::string_view id) const;

@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "config/adapter_options.h"
 #include "config/config_loader.h"
 #include "fake_adapter.h"
@@ -232,13 +234,106 @@ TEST_F(ConfigTest, AllErrorsAreReportedAtOnce) {
 
 TEST_F(ConfigTest, OptionTextParsingFollowsTheSchema) {
   std::string error;
-  EXPECT_EQ(std::get<std::int64_t>(*parse_option_text(test::kFakeOptions[0], "0x05", error)), 5);
+  EXPECT_EQ(std::get<std::int64_t>(*parse_option_text(test::kFakeOptions[0], "5", error)), 5);
   EXPECT_FALSE(parse_option_text(test::kFakeOptions[0], "12", error));
   EXPECT_THAT(error, HasSubstr("1..10"));
   EXPECT_FALSE(parse_option_text(test::kFakeOptions[0], "4x", error));
   EXPECT_FALSE(parse_option_text(test::kFakeOptions[2], "yes", error));
   const Options d = default_options(test::kFakeAdapter);
   EXPECT_EQ(d.string_list("names"), (std::vector<std::string>{"a", "b"}));
+}
+
+// The command line (`drivegate sim --set`) and the schema's defaults read numbers as TOML does:
+// decimal, whatever the leading zeros, and nothing else.
+TEST_F(ConfigTest, OptionTextIntegersAreDecimalOnly) {
+  const OptionSpec& count = test::kFakeOptions[0];  // 1..10
+  const auto integer = [](const OptionSpec& spec, std::string_view text) {
+    std::string error;
+    const auto v = parse_option_text(spec, text, error);
+    EXPECT_TRUE(v) << text << ": " << error;
+    return v ? std::get<std::int64_t>(*v) : -1;
+  };
+  const auto refused = [](const OptionSpec& spec, std::string_view text) {
+    std::string error;
+    EXPECT_FALSE(parse_option_text(spec, text, error)) << text;
+    return error;
+  };
+  EXPECT_EQ(integer(count, "010"), 10);
+  EXPECT_EQ(integer(count, "07"), 7);
+  EXPECT_EQ(refused(count, "0x10"), "count: '0x10' is not a decimal integer");
+  for (const char* bad : {"0x5", "0X5", "+5", " 5", "5 ", "", "-", "5.0", "1e1", "0b1"}) {
+    EXPECT_THAT(refused(count, bad), HasSubstr("is not a decimal integer")) << bad;
+  }
+  const OptionSpec any{"offset", OptionType::integer, "0", "unbounded"};
+  EXPECT_EQ(integer(any, "-42"), -42);
+  EXPECT_EQ(integer(any, "-9223372036854775808"), std::numeric_limits<std::int64_t>::min());
+  EXPECT_EQ(integer(any, "9223372036854775807"), std::numeric_limits<std::int64_t>::max());
+  EXPECT_THAT(refused(any, "9223372036854775808"), HasSubstr("out of the 64-bit integer range"));
+  EXPECT_THAT(refused(any, "-9223372036854775809"), HasSubstr("out of the 64-bit integer range"));
+  EXPECT_THAT(refused(any, "--1"), HasSubstr("is not a decimal integer"));
+}
+
+TEST_F(ConfigTest, OptionTextRealsAreFiniteDecimalOnly) {
+  const OptionSpec& ratio = test::kFakeOptions[1];  // 0.0..1.0
+  std::string error;
+  for (const auto& [text, value] : std::vector<std::pair<const char*, double>>{
+           {"0.25", 0.25}, {"1", 1.0}, {"0", 0.0}, {"2.5e-1", 0.25}, {"0.50", 0.5}}) {
+    const auto v = parse_option_text(ratio, text, error);
+    ASSERT_TRUE(v) << text << ": " << error;
+    EXPECT_DOUBLE_EQ(std::get<double>(*v), value) << text;
+  }
+  // std::stod took all of these: hex floats, infinities and NaNs, a '+', leading blanks.
+  for (const char* bad :
+       {"0x1p-2", "inf", "-inf", "nan", "infinity", "+0.5", " 0.5", "0.5x", "", "1e400"}) {
+    EXPECT_FALSE(parse_option_text(ratio, bad, error)) << bad;
+    EXPECT_THAT(error, HasSubstr("is not a finite decimal number")) << bad;
+  }
+  EXPECT_FALSE(parse_option_text(ratio, "1.5", error));
+  EXPECT_THAT(error, HasSubstr("must be in 0..1"));
+}
+
+// Devices on one bus share its echo as they share its framing.
+constexpr const char* kFakeAndQuiet = R"(
+[[bus]]
+name = "b"
+port = "/dev/ttyS0"
+[[device]]
+name = "a"
+bus = "b"
+adapter = "fake"
+unit_id = 1
+[[device]]
+name = "q"
+bus = "b"
+adapter = "quiet"
+unit_id = 2
+)";
+
+TEST_F(ConfigTest, AdaptersDisagreeingOnEchoNeedAnExplicitEcho) {
+  plugins_.add(test::kFakeQuiet);
+  EXPECT_THAT(only_error(kFakeAndQuiet),
+              AllOf(HasSubstr("gw.toml:2: bus 'b': its devices' adapters disagree on echo"),
+                    HasSubstr("'fake' echo = true, 'quiet' echo = false"),
+                    HasSubstr("set echo explicitly")));
+  // Giving the framing is not enough: echo is a setting of its own.
+  std::string text = kFakeAndQuiet;
+  text.replace(text.find("port = \"/dev/ttyS0\""), 19,
+               "port = \"/dev/ttyS0\"\nbaud = 4800\nparity = \"odd\"\ndata_bits = 8\n"
+               "stop_bits = 1");
+  EXPECT_THAT(only_error(text), HasSubstr("disagree on echo"));
+}
+
+TEST_F(ConfigTest, AnExplicitEchoAppliesToEveryDeviceOnTheBus) {
+  plugins_.add(test::kFakeQuiet);
+  for (const bool echo : {false, true}) {
+    std::string text = kFakeAndQuiet;
+    text.replace(text.find("port = \"/dev/ttyS0\""), 19,
+                 std::string("port = \"/dev/ttyS0\"\necho = ") + (echo ? "true" : "false"));
+    auto r = parse(text);
+    ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+    EXPECT_EQ(r.config->buses[0].echo, echo);
+    EXPECT_EQ(r.config->buses[0].baud, 4800u);
+  }
 }
 
 }  // namespace
