@@ -4,9 +4,11 @@
 
 #include <boost/asio/post.hpp>
 #include <csignal>
+#include <string>
+#include <vector>
 
+#include "app/logging.h"
 #include "config/config_loader.h"
-#include "logging.h"
 
 namespace drivegate {
 
@@ -15,6 +17,38 @@ namespace asio = boost::asio;
 namespace {
 constexpr Millis kStopLimit{3000};  // longest wait for drives to confirm stop on shutdown
 constexpr Millis kStatusPeriod{2000};
+
+// [server] on SIGHUP. The listening socket is bound once, at start-up (binding another address
+// while running could fail and leave no listener), so listen changes wait for a restart; the
+// limits apply to the running server at once (modbus::Server::set_limits says how). Returns the
+// [server] the daemon now runs with.
+ServerConfig reload_server(const ServerConfig& running, const ServerConfig& next,
+                           modbus::Server& server, spdlog::logger& log) {
+  ServerConfig applied = next;
+  if (next.host != running.host || next.port != running.port) {
+    log.warn("[server] listen changes take effect at the next restart: still listening on {}:{}",
+             running.host, running.port);
+    applied.host = running.host;
+    applied.port = running.port;
+  }
+  std::vector<std::string> changed;
+  if (next.max_clients != running.max_clients) {
+    changed.push_back(fmt::format("max_clients {} -> {}", running.max_clients, next.max_clients));
+  }
+  if (next.idle_timeout != running.idle_timeout) {
+    changed.push_back(fmt::format("idle_timeout_ms {} -> {}", running.idle_timeout.count(),
+                                  next.idle_timeout.count()));
+  }
+  if (next.frame_timeout != running.frame_timeout) {
+    changed.push_back(fmt::format("frame_timeout_ms {} -> {}", running.frame_timeout.count(),
+                                  next.frame_timeout.count()));
+  }
+  if (!changed.empty()) {
+    server.set_limits({applied.max_clients, applied.frame_timeout, applied.idle_timeout});
+    log.info("[server] applied without closing a connection: {}", fmt::join(changed, ", "));
+  }
+  return applied;
+}
 }  // namespace
 
 Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
@@ -50,7 +84,6 @@ int Daemon::run() {
     return 1;
   }
   config_ = std::move(*config);
-  describe_devices(*log_, config_);  // the journal's DEVICE=, BUS=, UNIT= fields
   std::vector<std::string> errors;
   gateway_ = Gateway::build(io_, config_, plugins_, log_, errors);
   for (const auto& e : errors) log_->error("{}", e);
@@ -108,11 +141,7 @@ void Daemon::reload() {
     notifier_.ready(status_line());
     return;
   }
-  if (config->server.host != config_.server.host || config->server.port != config_.server.port ||
-      config->server.max_clients != config_.server.max_clients) {
-    log_->warn("[server] changes take effect at the next restart; devices and buses reloaded");
-    config->server = config_.server;
-  }
+  config->server = reload_server(config_.server, config->server, *server_, *log_);
   // Unchanged buses move over running; the others close before the new ones open their ports.
   const auto kept = next->adopt_unchanged(*gateway_);
   gateway_->stop();
@@ -123,7 +152,6 @@ void Daemon::reload() {
   boost::asio::post(io_, [old = std::shared_ptr<Gateway>(std::move(gateway_))] {});
   gateway_ = std::move(next);
   config_ = std::move(*config);
-  describe_devices(*log_, config_);
   log_->info("configuration reloaded: {} devices on {} buses; {} unchanged kept running{}{}",
              gateway_->devices().size(), config_.buses.size(), kept.size(),
              kept.empty() ? "" : ": ", fmt::join(kept, ", "));

@@ -1,7 +1,8 @@
 // drivegated at run time: plugins, configuration, gateway, Modbus TCP server, signals and the
 // systemd protocol, all on one io_context. SIGTERM / SIGINT stop the drives and exit 0; SIGHUP
-// re-reads the configuration and swaps the gateway without dropping a Modbus connection, or
-// keeps the running one when the new file is bad.
+// re-reads the configuration and swaps the gateway without dropping a Modbus connection (and
+// applies the new [server] limits; a new listen address waits for a restart), or keeps the
+// running one when the new file is bad.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -16,8 +17,8 @@
 
 #include "backend_switch.h"
 #include "config/config.h"
-#include "gateway/gateway.h"
 #include "config/plugins.h"
+#include "gateway/gateway.h"
 #include "modbus/server.h"
 #include "systemd_notifier.h"
 

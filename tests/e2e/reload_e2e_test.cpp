@@ -1,6 +1,9 @@
 // SIGHUP: a good new configuration is applied without dropping a Modbus TCP connection; a bad
-// one is refused and the daemon keeps serving the old one.
+// one is refused and the daemon keeps serving the old one. [server] limits apply at once to the
+// open connections; a listen change waits for a restart.
 #include <gtest/gtest.h>
+
+#include <sstream>
 
 #include "e2e.h"
 
@@ -51,6 +54,133 @@ TEST_F(ReloadE2E, BadConfigIsRefusedAndTheOldOneKeepsServing) {
   EXPECT_TRUE(daemon_.process().running());
   EXPECT_TRUE(online(plc_));
   EXPECT_EQ(plc_.write(reg::command, {1, 700}), 0);
+}
+
+// --- [server] on SIGHUP -------------------------------------------------------------------
+
+std::string server_section(const std::string& keys) {
+  return "[server]\n" + keys + "\n\n";
+}
+
+std::string slurp(const std::filesystem::path& file) {
+  std::ostringstream text;
+  text << std::ifstream(file).rdbuf();
+  return text.str();
+}
+
+// A TCP client that connects and never sends a byte.
+class SilentClient {
+ public:
+  explicit SilentClient(int port) : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  }
+  ~SilentClient() { ::close(fd_); }
+  SilentClient(const SilentClient&) = delete;
+  SilentClient& operator=(const SilentClient&) = delete;
+  [[nodiscard]] bool connected() const { return connected_; }
+  // True when the daemon closed the connection (EOF or reset) within `timeout`.
+  bool closed_by_peer(std::chrono::milliseconds timeout) {
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return false;
+    char b;
+    return ::recv(fd_, &b, 1, 0) <= 0;
+  }
+
+ private:
+  int fd_;
+  bool connected_ = false;
+};
+
+TEST(ReloadServerE2E, ShorterIdleTimeoutClosesASilentClientWhileAPollingOneIsServed) {
+  TempDir dir;
+  Sim sim{"nidec-washer", dir / "washer"};
+  const auto log = dir / "drivegated.log";
+  Daemon daemon{
+      dir, server_section("idle_timeout_ms = 60000") + washer(dir / "washer", 1), {}, log};
+  Plc busy{daemon.port(), 1};
+  ASSERT_TRUE(busy.connect());
+  ASSERT_TRUE(eventually([&] { return online(busy); }, 10s));
+  SilentClient silent(daemon.port());
+  ASSERT_TRUE(silent.connected());
+  // `busy` asks every 50 ms or so throughout: the new timeout counts from a client's last request,
+  // so a pause here longer than 1 s would (rightly) close it too at the reload.
+  const auto poll_busy = [&] {
+    const auto r = busy.input(reg::status, 1);
+    ASSERT_TRUE(r.ok()) << "the polling client lost service: " << r.exception;
+  };
+  // `silent` stays silent past the coming 1 s: the 60 s in force keeps it open.
+  const auto connected = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - connected < 1500ms) {
+    poll_busy();
+    if (HasFatalFailure()) return;
+    ASSERT_FALSE(silent.closed_by_peer(50ms));
+  }
+
+  std::ofstream(daemon.config()) << server_section("idle_timeout_ms = 1000") +
+                                        washer(dir / "washer", 1);
+  daemon.process().signal(SIGHUP);
+  const auto sighup = std::chrono::steady_clock::now();
+  bool closed = false;
+  while (!closed && std::chrono::steady_clock::now() - sighup < 5s) {
+    poll_busy();
+    if (HasFatalFailure()) return;
+    closed = silent.closed_by_peer(50ms);
+  }
+  EXPECT_TRUE(closed) << "the silent client was not closed within 5 s of SIGHUP";
+  EXPECT_TRUE(online(busy));
+  EXPECT_TRUE(eventually([&] {
+    return slurp(log).find(
+               "[server] applied without closing a connection: idle_timeout_ms "
+               "60000 -> 1000") != std::string::npos;
+  }));
+  EXPECT_EQ(slurp(log).find("listen changes"), std::string::npos);
+  EXPECT_TRUE(daemon.process().running());
+}
+
+// The listening socket stays where it is; the log says a restart is needed. Started without
+// --listen (which would override [server] listen, and so hide the change).
+TEST(ReloadServerE2E, ListenChangeIsLoggedAndTheOldAddressKeepsServing) {
+  TempDir dir;
+  Sim sim{"nidec-washer", dir / "washer"};
+  const auto log = dir / "drivegated.log";
+  const int port = free_port();
+  int other = free_port();
+  while (other == port) other = free_port();
+  const auto config = [&](int p) {
+    return server_section("listen = \"127.0.0.1:" + std::to_string(p) + "\"") +
+           washer(dir / "washer", 1);
+  };
+  std::ofstream(dir / "drivegate.toml") << config(port);
+  Child daemon({(bin_dir() / "drivegated").string(), "--config", (dir / "drivegate.toml").string(),
+                "--plugin-dir", plugin_dir().string()},
+               log);
+  ASSERT_TRUE(eventually(
+      [&] {
+        Plc probe(port);
+        return probe.connect();
+      },
+      15s));
+  Plc plc{port, 1};
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s));
+
+  std::ofstream(dir / "drivegate.toml") << config(other);
+  daemon.signal(SIGHUP);
+  EXPECT_TRUE(
+      eventually([&] { return slurp(log).find("configuration reloaded") != std::string::npos; }));
+  EXPECT_NE(slurp(log).find("[server] listen changes take effect at the next restart"),
+            std::string::npos);
+  EXPECT_EQ(slurp(log).find("[server] applied"), std::string::npos);  // nothing else changed
+  EXPECT_TRUE(online(plc));
+  Plc newcomer{port, 1};
+  EXPECT_TRUE(newcomer.connect());
+  Plc elsewhere{other, 1};
+  EXPECT_FALSE(elsewhere.connect());
+  EXPECT_TRUE(daemon.running());
 }
 
 }  // namespace
