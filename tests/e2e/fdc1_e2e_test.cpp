@@ -1,6 +1,6 @@
 // fdc1 end to end: the daemon on a simulated FDC1 controller (a streaming device, 1200 8N1), driven
-// from Modbus TCP as a PLC would (issue 5, "Not done until"), and `drivegate fdc1-program` on the
-// same simulator with the daemon not running.
+// from Modbus TCP as a PLC would (issue 5, "Not done until"), and `drivegate action ... program` on
+// the same simulator with the daemon not running.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -255,7 +255,8 @@ TEST_F(Fdc1E2E, NoiseAndBadChecksumsCostFramesNotTheLink) {
   EXPECT_LT(after.u32(reg::data_age), 1000u);
 }
 
-// `drivegate fdc1-program` with the daemon NOT running: the CLI owns the line.
+// `drivegate action ... program` (the adapter's maintenance action) with the daemon NOT running:
+// the CLI owns the line.
 class Fdc1ProgramE2E : public ::testing::Test {
  protected:
   Fdc1ProgramE2E() : sim_("fdc1", dir_ / "fdc1") {
@@ -264,13 +265,14 @@ class Fdc1ProgramE2E : public ::testing::Test {
   // Runs the CLI to its end; returns its exit status and stdout.
   std::pair<int, std::string> program(std::vector<std::string> settings) {
     std::vector<std::string> argv = {(bin_dir() / "drivegate").string(),
-                                     "fdc1-program",
+                                     "action",
                                      "--config",
                                      (dir_ / "drivegate.toml").string(),
                                      "--device",
                                      "fridge",
                                      "--plugin-dir",
-                                     plugin_dir().string()};
+                                     plugin_dir().string(),
+                                     "program"};
     argv.insert(argv.end(), settings.begin(), settings.end());
     Child cli(argv);
     std::string out;
@@ -284,11 +286,9 @@ class Fdc1ProgramE2E : public ::testing::Test {
 
 // The README's standard example: 2000..3000 rpm, slave mode, 10.5/12.5, 21/25, 36/44 V.
 std::vector<std::string> standard(std::string cut_out_12v) {
-  return {"--min-rpm",    "2000", "--max-rpm",     "3000",
-          "--mode",       "2",    "--cut-out-12v", std::move(cut_out_12v),
-          "--cut-in-12v", "12.5", "--cut-out-24v", "21",
-          "--cut-in-24v", "25",   "--cut-out-42v", "36",
-          "--cut-in-42v", "44"};
+  return {"min_rpm=2000",    "max_rpm=3000",   "mode=2",        "cut_out_12v=" + cut_out_12v,
+          "cut_in_12v=12.5", "cut_out_24v=21", "cut_in_24v=25", "cut_out_42v=36",
+          "cut_in_42v=44"};
 }
 
 TEST_F(Fdc1ProgramE2E, AValidProgramIsConfirmedByTheEcho) {

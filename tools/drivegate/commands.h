@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "config/plugins.h"
+#include "point_writes.h"
 
 namespace drivegate::cli {
 
@@ -16,7 +17,7 @@ int regmap(std::span<const std::string_view> args);
 int sim(std::span<const std::string_view> args);
 int demo(std::span<const std::string_view> args);
 int write(std::span<const std::string_view> args);
-int fdc1_program(std::span<const std::string_view> args);
+int action(std::span<const std::string_view> args);
 
 // Reads "--name VALUE" pairs and positionals, for the subcommands' small grammars.
 class ArgReader {
@@ -34,6 +35,19 @@ class ArgReader {
   std::span<const std::string_view> args_;
   std::size_t pos_ = 0;
 };
+
+// The options `write` and `action` share: --config, --device, --plugin-dir, --timeout-ms.
+struct DeviceArgs {
+  std::filesystem::path config;
+  std::filesystem::path plugin_dir;
+  std::string name;
+  Millis timeout{10'000};
+  // Reads the value of `flag`, one of the above; a usage error (2) otherwise.
+  int read(ArgReader& r, std::string_view flag, const char* usage_text);
+};
+
+// "POINT=VALUE" (or "KEY=VALUE"); nullopt when there is no '=' or nothing before it.
+std::optional<Assignment> parse_assignment(std::string_view arg);
 
 // Loads the plugins from --plugin-dir or the default place, reporting refusals on stderr.
 PluginRegistry load_plugins(const std::filesystem::path& dir);

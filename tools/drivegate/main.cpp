@@ -1,4 +1,5 @@
 // drivegate: the command-line companion of drivegated. See drivegate(1).
+#include <charconv>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -18,6 +19,34 @@ std::optional<std::string> ArgReader::value(std::string_view flag) {
 int ArgReader::usage(const std::string& what, const char* usage_text) const {
   std::cerr << "drivegate " << command_ << ": " << what << "\n" << usage_text;
   return 2;
+}
+
+int DeviceArgs::read(ArgReader& r, std::string_view flag, const char* usage_text) {
+  auto v = r.value(flag);
+  if (!v) return 2;
+  if (flag == "--config") {
+    config = *v;
+  } else if (flag == "--device") {
+    name = *v;
+  } else if (flag == "--plugin-dir") {
+    plugin_dir = *v;
+  } else if (flag == "--timeout-ms") {
+    unsigned long ms = 0;
+    const auto [p, ec] = std::from_chars(v->data(), v->data() + v->size(), ms);
+    if (ec != std::errc{} || p != v->data() + v->size() || ms < 1 || ms > 3'600'000) {
+      return r.usage("--timeout-ms needs a number of milliseconds (1..3600000)", usage_text);
+    }
+    timeout = Millis(static_cast<long>(ms));
+  } else {
+    return r.usage("unknown argument '" + std::string(flag) + "'", usage_text);
+  }
+  return 0;
+}
+
+std::optional<Assignment> parse_assignment(std::string_view arg) {
+  const auto eq = arg.find('=');
+  if (eq == std::string_view::npos || eq == 0) return std::nullopt;
+  return Assignment{std::string(arg.substr(0, eq)), std::string(arg.substr(eq + 1))};
 }
 
 PluginRegistry load_plugins(const std::filesystem::path& dir) {
@@ -42,8 +71,9 @@ constexpr const char* kUsage =
     "                                   print the Modbus register map\n"
     "  write --config FILE --device NAME POINT=VALUE...\n"
     "                                   write points directly, without the Modbus server\n"
-    "  fdc1-program --config FILE --device NAME --KEY VALUE...\n"
-    "                                   program an FDC1's non-volatile settings\n"
+    "  action --config FILE --device NAME [ACTION KEY=VALUE...]\n"
+    "                                   a maintenance action of the device's adapter\n"
+    "                                   (e.g. an FDC1's non-volatile programming)\n"
     "  version\n"
     "\n"
     "Every command takes --plugin-dir DIR; `drivegate COMMAND --help` describes it.\n";
@@ -62,7 +92,7 @@ int main(int argc, char** argv) {
     if (command == "sim") return drivegate::cli::sim(args);
     if (command == "demo") return drivegate::cli::demo(args);
     if (command == "write") return drivegate::cli::write(args);
-    if (command == "fdc1-program") return drivegate::cli::fdc1_program(args);
+    if (command == "action") return drivegate::cli::action(args);
     if (command == "version" || command == "--version") {
       std::cout << "drivegate " << DRIVEGATE_VERSION << "\n";
       return 0;

@@ -3,8 +3,8 @@
 
 #include "commands.h"
 #include "config/config_loader.h"
-#include "gateway/gateway.h"
 #include "format/regmap_format.h"
+#include "gateway/gateway.h"
 
 namespace drivegate::cli {
 

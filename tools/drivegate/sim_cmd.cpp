@@ -9,8 +9,8 @@
 #include <iostream>
 
 #include "commands.h"
-#include "sim_host.h"
 #include "config/adapter_options.h"
+#include "sim_host.h"
 
 namespace drivegate::cli {
 
@@ -136,16 +136,10 @@ int sim(std::span<const std::string_view> args) {
   }
   options.options = default_options(*adapter);
   for (const auto& [key, text] : sets) {
-    const OptionSpec* spec = nullptr;
-    for (std::size_t i = 0; i < adapter->option_count; ++i) {
-      if (key == adapter->options[i].name) spec = &adapter->options[i];
-    }
-    if (spec == nullptr)
-      return r.usage("adapter '" + adapter_id + "' has no option " + key, kUsage);
     std::string error;
-    auto value = parse_option_text(*spec, text, error);
-    if (!value) return r.usage(error, kUsage);
-    options.options.set(key, std::move(*value));
+    if (!set_option_text(*adapter, options.options, key, text, error)) {
+      return r.usage(error, kUsage);
+    }
   }
   options.echo = echo.value_or(adapter->line.echo);
   if (port.baud == 0) port.baud = adapter->line.baud;

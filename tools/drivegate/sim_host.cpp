@@ -21,14 +21,6 @@ std::int64_t ns(TimePoint t) {
 }
 }  // namespace
 
-std::chrono::nanoseconds character_time(std::uint32_t baud, Parity parity, std::uint8_t data_bits,
-                                        std::uint8_t stop_bits) {
-  if (baud == 0) return std::chrono::nanoseconds(0);
-  // An asynchronous character: 1 start bit, the data bits, an optional parity bit, stop bits.
-  const std::int64_t bits = 1 + data_bits + (parity == Parity::none ? 0 : 1) + stop_bits;
-  return std::chrono::nanoseconds(bits * 1'000'000'000 / baud);
-}
-
 SimHost::SimHost(asio::io_context& io, const AdapterDescriptor& adapter, SimHostOptions options)
     : io_(io), adapter_(adapter), options_(std::move(options)), line_(io), tick_(io), pace_(io) {}
 

@@ -42,10 +42,6 @@ struct SimHostOptions {
   std::optional<std::filesystem::path> wire_log;
 };
 
-// The character time of a line: start bit + data bits + parity bit (if any) + stop bits.
-std::chrono::nanoseconds character_time(std::uint32_t baud, Parity parity, std::uint8_t data_bits,
-                                        std::uint8_t stop_bits);
-
 class SimHost {
  public:
   SimHost(boost::asio::io_context& io, const AdapterDescriptor& adapter, SimHostOptions options);

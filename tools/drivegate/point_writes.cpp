@@ -1,0 +1,161 @@
+#include "point_writes.h"
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <functional>
+#include <iostream>
+
+#include "app/logging.h"
+#include "gateway/gateway.h"
+#include "gateway/value_codec.h"
+
+namespace drivegate::cli {
+
+namespace asio = boost::asio;
+
+namespace {
+
+std::optional<double> parse_number(const std::string& s) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(s, &used);
+    if (used == s.size()) return v;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
+
+const char* exception_text(modbus::Exception e) {
+  switch (e) {
+    case modbus::Exception::none:
+      return "ok";
+    case modbus::Exception::illegal_data_address:
+      return "not a writable point (0x02)";
+    case modbus::Exception::illegal_data_value:
+      return "value refused (0x03)";
+    case modbus::Exception::server_device_failure:
+      return "the device refused it (0x04)";
+    case modbus::Exception::gateway_target_failed:
+      return "the device did not confirm it in time (0x0B)";
+    default:
+      return "failed";
+  }
+}
+
+// The current text of a string point of the device, if it has it.
+std::string string_value(const Device& device, const std::string& point) {
+  const MappedPoint* p = device.map().find(point);
+  const auto& values = device.driver().values();
+  if (p == nullptr || p->common() || p->index >= values.size()) return {};
+  const auto* s = std::get_if<std::string>(&values[p->index]);
+  return s != nullptr ? *s : std::string();
+}
+
+struct Resolved {
+  const MappedPoint* point;
+  std::vector<std::uint16_t> registers;
+};
+
+// Every assignment resolved to a point and its registers, before anything is sent.
+std::optional<std::vector<Resolved>> resolve(const Device& device,
+                                             const std::vector<Assignment>& writes) {
+  std::vector<Resolved> out;
+  for (const auto& w : writes) {
+    const MappedPoint* point = device.map().find(w.point);
+    if (point == nullptr || point->spec.access() != Access::read_write) {
+      std::cerr << "drivegate: " << device.name() << " has no writable point '" << w.point << "'\n";
+      return std::nullopt;
+    }
+    std::optional<double> v = parse_number(w.value);
+    for (const auto& l : point->spec.labels) {
+      if (l.name == w.value) v = l.value;
+    }
+    if (!v) {
+      std::cerr << "drivegate: " << w.point << ": '" << w.value << "' is not a number"
+                << (point->spec.labels.empty() ? "" : " or a label of the point") << "\n";
+      return std::nullopt;
+    }
+    std::vector<std::uint16_t> regs(point->spec.register_count(), 0);
+    encode_value(point->spec, Value{*v}, regs);
+    out.push_back({point, std::move(regs)});
+  }
+  return out;
+}
+
+}  // namespace
+
+int run_point_writes(const PointWriteJob& job) {
+  Config cfg = *job.config;
+  std::erase_if(cfg.devices, [&](const DeviceConfig& d) { return d.name != job.device; });
+  if (cfg.devices.empty()) {
+    std::cerr << "drivegate: no device '" << job.device << "' in " << cfg.path.string() << "\n";
+    return 1;
+  }
+  std::erase_if(cfg.buses, [&](const BusConfig& b) { return b.name != cfg.devices[0].bus; });
+
+  asio::io_context io;
+  auto log = make_logger("drivegate", spdlog::level::warn);
+  std::vector<std::string> errors;
+  auto gateway = Gateway::build(io, cfg, *job.plugins, log, errors, /*maintenance=*/true);
+  for (const auto& e : errors) std::cerr << e << "\n";
+  if (!gateway) return 1;
+  Device& device = *gateway->devices().front();
+  const auto resolved = resolve(device, job.writes);
+  if (!resolved) return 1;
+
+  int exit_code = 0;
+  std::size_t next = 0;
+  asio::steady_timer timer(io);
+  const auto deadline = Clock::now() + job.timeout;
+  std::function<void()> step = [&] {
+    if (next == resolved->size()) {
+      gateway->stop();
+      return;
+    }
+    const Resolved& r = (*resolved)[next];
+    const auto done = [&](modbus::Exception e) {
+      const Assignment& w = job.writes[next];
+      std::cout << w.point << "=" << w.value << ": " << exception_text(e);
+      if (e != modbus::Exception::none && !job.message_point.empty()) {
+        if (const auto why = string_value(device, job.message_point); !why.empty()) {
+          std::cout << ": " << why;
+        }
+      }
+      std::cout << std::endl;
+      if (e != modbus::Exception::none) {
+        exit_code = 1;
+        gateway->stop();
+        return;
+      }
+      ++next;
+      asio::post(io, step);
+    };
+    const auto e =
+        device.write(r.point->spec.table, r.point->address, r.registers, done, Clock::now());
+    if (e != modbus::Exception::none) done(e);
+  };
+  std::function<void()> wait_online = [&] {
+    if (device.online()) {
+      step();
+      return;
+    }
+    if (Clock::now() > deadline) {
+      std::cerr << "drivegate: " << job.device << " did not come online within "
+                << job.timeout.count() << " ms\n";
+      exit_code = 1;
+      gateway->stop();
+      return;
+    }
+    timer.expires_after(Millis(50));
+    timer.async_wait([&](const boost::system::error_code& ec) {
+      if (!ec) wait_online();
+    });
+  };
+  gateway->start();
+  wait_online();
+  io.run();
+  return exit_code;
+}
+
+}  // namespace drivegate::cli
