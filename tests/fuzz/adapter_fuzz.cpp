@@ -1,8 +1,9 @@
 // Fuzz target body shared by every adapter. Input: a mode byte, then a script for that mode.
 //   mode % 3 == 0: the codec's incremental decoders over the rest (codec_<id>.cpp)
 //   mode % 3 == 1: a Driver, created through the plugin descriptor with its default options and
-//                  driven like the bus engine drives it (daemon/core/bus.cpp): receive chunks,
-//                  the time, commands, setpoints and point writes validated as Device does
+//                  driven like the bus engine drives it (daemon/line/bus_engine.cpp): receive
+//                  chunks, the time, and commands, setpoints and point writes validated as the
+//                  device does (daemon/gateway/device_writes.cpp), judged by check() first
 //   mode % 3 == 2: a Simulator: master bytes in chunks, ticks, operator control lines
 #include "adapter_fuzz.h"
 
@@ -15,15 +16,15 @@
 
 #include "check.h"
 #include "config/adapter_options.h"
-#include "gateway/value_codec.h"
 #include "drivegate/adapter.h"
+#include "gateway/value_codec.h"
 
 extern "C" const drivegate::AdapterDescriptor drivegate_adapter;
 
 namespace drivegate::fuzz {
 namespace {
 
-// daemon/core/bus.cpp: an incomplete reply longer than this is dropped as noise.
+// daemon/line/bus_engine.cpp: an incomplete reply longer than this is dropped as noise.
 constexpr std::size_t kMaxRxBuffer = 4096;
 
 std::uint32_t pick_address(const AdapterDescriptor& a, std::uint8_t choice) {
@@ -65,11 +66,11 @@ class DriverRun {
         now_ += Millis(in.u16());
         break;
       case 3:
-        track(d_.command(static_cast<Command>(in.u8() % kAllCommands.size()), ++ticket_, now_));
+        submit(WriteOp::of_command(static_cast<Command>(in.u8() % kAllCommands.size())));
         break;
       case 4:
         // The common block's setpoint_rpm register is i16 (docs/register-map.md).
-        track(d_.setpoint(static_cast<std::int16_t>(in.u16()), ++ticket_, now_));
+        submit(WriteOp::of_setpoint(static_cast<std::int16_t>(in.u16())));
         break;
       case 5:
         write_point(in);
@@ -84,9 +85,14 @@ class DriverRun {
       case 8:
         take_completions();
         break;
-      default:
+      default: {
+        // A "run at this speed" request, judged only: check() must not change anything.
+        const WriteOp request[] = {WriteOp::of_setpoint(static_cast<std::int16_t>(in.u16())),
+                                   WriteOp::of_command(Command::run_forward)};
+        (void)d_.check(request);
         (void)d_.traits();
         break;
+      }
     }
     check_published(d_);
   }
@@ -103,7 +109,12 @@ class DriverRun {
   }
 
  private:
-  void track(WriteStatus s) {
+  // As the device applies a one-part request: judged first, applied only when accepted.
+  void submit(const WriteOp& op) {
+    if (d_.check(std::span<const WriteOp>(&op, 1)) != WriteCheck::ok) return;
+    const WriteStatus s = d_.apply(op, ++ticket_, now_);
+    // Driver contract (driver.h): what check() accepts, apply() takes in the same state.
+    FUZZ_CHECK(s == WriteStatus::done || s == WriteStatus::pending);
     if (s == WriteStatus::pending) pending_.emplace(ticket_, true);
   }
 
@@ -141,7 +152,7 @@ class DriverRun {
       const double x = as_double(v);
       if ((p.min != 0.0 || p.max != 0.0) && (x < p.min || x > p.max)) return;
     }
-    track(d_.write(index, v, ++ticket_, now_));
+    submit(WriteOp::of_point(index, std::move(v)));
   }
 
   Driver& d_;
