@@ -1,6 +1,7 @@
 #include "codec.h"
 
 #include <numeric>
+#include <utility>
 
 namespace drivegate::mdriver {
 namespace {
@@ -9,12 +10,12 @@ bool known_command(std::uint8_t cmd) {
   return cmd == static_cast<std::uint8_t>(Cmd::check) || cmd == static_cast<std::uint8_t>(Cmd::run);
 }
 
-std::uint8_t sum(ByteSpan bytes) {
+std::uint8_t sum(ByteView bytes) {
   return static_cast<std::uint8_t>(std::accumulate(bytes.begin(), bytes.end(), 0u));
 }
 
 // One frame at the start of rx, no resynchronisation.
-Decoded<Frame> decode_at(ByteSpan rx) {
+Decoded<Frame> decode_at(ByteView rx) {
   // Section 3: D2 is one of the two commands; anything else cannot start a frame.
   if (rx.size() > 2 && !known_command(rx[2])) return decoded_bad<Frame>(1, FrameError::bad_header);
   if (rx.size() < kHeaderSize) return {};
@@ -24,24 +25,19 @@ Decoded<Frame> decode_at(ByteSpan rx) {
   if (rx.size() < total) return {};
   if (sum(rx.first(total)) != kChecksumTotal)
     return decoded_bad<Frame>(total, FrameError::bad_checksum);
-  Decoded<Frame> d;
-  d.status = DecodeStatus::frame;
-  d.consumed = total;
-  d.frame.src = rx[0];
-  d.frame.dst = rx[1];
-  d.frame.cmd = rx[2];
-  d.frame.data.assign(rx.begin() + kHeaderSize, rx.begin() + static_cast<long>(total - 1));
-  return d;
+  Frame f{
+      rx[0], rx[1], rx[2], {rx.begin() + kHeaderSize, rx.begin() + static_cast<long>(total - 1)}};
+  return decoded_frame<Frame>(total, std::move(f));
 }
 
 }  // namespace
 
-std::uint8_t checksum(ByteSpan bytes) {
+std::uint8_t checksum(ByteView bytes) {
   return static_cast<std::uint8_t>(kChecksumTotal - sum(bytes));
 }
 
-Wire encode(const Frame& f) {
-  Wire out;
+Bytes encode(const Frame& f) {
+  Bytes out;
   out.reserve(kOverhead + f.data.size());
   out.push_back(f.src);
   out.push_back(f.dst);
@@ -52,7 +48,7 @@ Wire encode(const Frame& f) {
   return out;
 }
 
-Decoded<Frame> decode(ByteSpan rx) {
+Decoded<Frame> decode(ByteView rx) {
   Decoded<Frame> d = decode_at(rx);
   if (d.status != DecodeStatus::bad || d.error != FrameError::bad_checksum) return d;
   // A truncated frame followed by a whole one looks like one frame-shaped run with a bad sum:
@@ -65,25 +61,25 @@ Decoded<Frame> decode(ByteSpan rx) {
   return d;
 }
 
-Wire encode_check(std::uint8_t master, std::uint8_t device) {
+Bytes encode_check(std::uint8_t master, std::uint8_t device) {
   return encode({master,
                  device,
                  static_cast<std::uint8_t>(Cmd::check),
                  {kFixedCode.begin(), kFixedCode.end()}});
 }
 
-Wire encode_run(std::uint8_t master, std::uint8_t device, std::uint8_t code, std::uint8_t change) {
+Bytes encode_run(std::uint8_t master, std::uint8_t device, std::uint8_t code, std::uint8_t change) {
   // Section 3 No.2: D4 target code, D5 change time, D6 reserved 00.
   return encode({master, device, static_cast<std::uint8_t>(Cmd::run), {code, change, 0x00}});
 }
 
-Wire encode_check_reply(std::uint8_t device, std::uint8_t master,
-                        const std::array<std::uint8_t, 4>& code) {
+Bytes encode_check_reply(std::uint8_t device, std::uint8_t master,
+                         const std::array<std::uint8_t, 4>& code) {
   return encode(
       {device, master, static_cast<std::uint8_t>(Cmd::check), {code.begin(), code.end()}});
 }
 
-Wire encode_run_reply(std::uint8_t device, std::uint8_t master, const RunReply& r) {
+Bytes encode_run_reply(std::uint8_t device, std::uint8_t master, const RunReply& r) {
   return encode({device,
                  master,
                  static_cast<std::uint8_t>(Cmd::run),

@@ -10,15 +10,20 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
-#include <span>
 #include <vector>
 
+#include "drivegate/bytes.h"
 #include "drivegate/codec.h"
+#include "drivegate/line.h"
 
 namespace drivegate::mdriver {
 
-using ByteSpan = std::span<const std::uint8_t>;
-using Wire = std::vector<std::uint8_t>;
+// Section 1 No.1..3: full-duplex UART, 2400 bps, 1 start bit, 8 data bits, no parity, 1 stop bit
+// (so no echo of our own bytes).
+inline constexpr LineDefaults kLine{2400, Parity::none, 8, 1, false};
+// One character on that line (4.17 ms): the driver's timing choices are counted in these.
+inline constexpr std::chrono::nanoseconds kCharacterTime =
+    character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits);
 
 // Section 2: "checksum (D0~D6 Total 55)": the sum of every byte of the frame is 0x55.
 inline constexpr std::uint8_t kChecksumTotal = 0x55;
@@ -61,9 +66,9 @@ struct Frame {
 };
 
 // The byte that makes the sum of `bytes` plus itself 0x55.
-std::uint8_t checksum(ByteSpan bytes);
+std::uint8_t checksum(ByteView bytes);
 // Whole frame on the wire, checksum appended. `data` must hold 1..kMaxData bytes.
-Wire encode(const Frame& f);
+Bytes encode(const Frame& f);
 
 // Incremental decoder: looks at the start of `rx`.
 //  - incomplete: a frame may still be under way;
@@ -72,15 +77,15 @@ Wire encode(const Frame& f);
 //    kMaxData - 1, 1 byte dropped), bad_checksum (the whole frame-shaped run dropped), or, when a
 //    checked frame starts inside a frame-shaped run whose checksum fails, bad_header with the bytes
 //    before that frame (resynchronisation after a truncated frame).
-Decoded<Frame> decode(ByteSpan rx);
+Decoded<Frame> decode(ByteView rx);
 
 // Master -> driver frames of section 3.
-Wire encode_check(std::uint8_t master, std::uint8_t device);
-Wire encode_run(std::uint8_t master, std::uint8_t device, std::uint8_t code, std::uint8_t change);
+Bytes encode_check(std::uint8_t master, std::uint8_t device);
+Bytes encode_run(std::uint8_t master, std::uint8_t device, std::uint8_t code, std::uint8_t change);
 
 // Driver -> master replies of section 3.
-Wire encode_check_reply(std::uint8_t device, std::uint8_t master,
-                        const std::array<std::uint8_t, 4>& code);
+Bytes encode_check_reply(std::uint8_t device, std::uint8_t master,
+                         const std::array<std::uint8_t, 4>& code);
 
 // Section 3 No.2, R4..R11.
 struct RunReply {
@@ -92,7 +97,7 @@ struct RunReply {
   std::array<std::uint8_t, 3> info{};  // R9..R11 情報 1..3
   friend bool operator==(const RunReply&, const RunReply&) = default;
 };
-Wire encode_run_reply(std::uint8_t device, std::uint8_t master, const RunReply& r);
+Bytes encode_run_reply(std::uint8_t device, std::uint8_t master, const RunReply& r);
 
 // Field layouts by command and direction; nullopt when the length does not fit.
 std::optional<std::array<std::uint8_t, 4>> parse_check(const Frame& f);  // both directions

@@ -1,47 +1,39 @@
-// The stateful mdriver-2400 driver: fixed-code check until answered, then the run command as poll
-// and keep-alive, writes confirmed by the target code the run reply echoes.
+// The stateful mdriver-2400 driver: the fixed-code check until it is answered, then the run
+// command as poll and keep-alive, carrying the target code in force; a write is in force once the
+// run reply echoed the code that carries it.
+//
+//   driver.cpp         the poll plan, replies into points and the common state
+//   driver_writes.cpp  check() and apply(), the writes waiting for the line, their confirmation
 #pragma once
 
+#include <deque>
 #include <optional>
 #include <vector>
 
 #include "codec.h"
-#include "config.h"
 #include "drivegate/driver.h"
+#include "settings.h"
 
 namespace drivegate::mdriver {
 
-// Indices into points() / values().
-enum class Pt : std::size_t {
-  target_code,
-  target_rpm,
-  actual_code,
-  error_code,
-  ipm_temperature,
-  info_1,
-  info_2,
-  info_3,
-  sent_code,
-  fixed_code_state,
-  count,
-};
-std::vector<PointSpec> make_points();
-
-// Values of the fixed_code_state point.
-enum class FixedCodeState : std::uint8_t { unchecked = 0, ok = 1, error = 2 };
-
 // Section 3 No.2: codes up to 0x0E stop; the driver stops with 0x01 (0x00 would also reset a
-// latched error).
+// latched error, so it is kept for reset_fault).
 inline constexpr std::uint8_t kStopCode = 0x01;
-// The driver fails a write its reply has not confirmed after this (under the gateway's 3 s).
+// The driver fails a write the drive has not confirmed after this, under the gateway's 3 s
+// (traits().write_timeout), so that the PLC gets the driver's own answer.
 inline constexpr Millis kConfirmDeadline{2500};
-// 2400 baud: a 13-byte reply takes 54 ms on the wire; the document gives no answer time.
+// Not in the document, which gives no answer time: a 13-byte run reply takes 54 ms on the wire
+// (section 3 No.2), and 200 ms leaves the driver over 100 ms to start answering.
 inline constexpr Millis kReplyTimeout{200};
+static_assert(kReplyTimeout > 3 * 13 * kCharacterTime);
 inline constexpr std::uint8_t kAttempts = 3;
+// Not in the document: 10 ms of line silence before each frame, 2.4 characters.
+inline constexpr Millis kInterFrameGap{10};
+static_assert(kInterFrameGap > 2 * kCharacterTime);
 
-class MDriver final : public Driver {
+class Mdriver2400Driver final : public Driver {
  public:
-  MDriver(const Config& config, Millis poll_interval);
+  Mdriver2400Driver(std::uint8_t address, const Settings& settings, Millis poll_interval);
 
   [[nodiscard]] DriverTraits traits() const override;
   [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
@@ -54,44 +46,56 @@ class MDriver final : public Driver {
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;
 
-  WriteStatus command(Command c, Ticket t, TimePoint now) override;
-  WriteStatus setpoint(std::int32_t rpm, Ticket t, TimePoint now) override;
-  WriteStatus write(std::size_t point, const Value& v, Ticket t, TimePoint now) override;
+  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
   void take_completions(std::vector<Completion>& out) override;
 
  private:
   enum class Phase : std::uint8_t { check, ready, fixed_code_error };
   enum class Awaiting : std::uint8_t { nothing, check, run };
+  // What a write puts in force once the drive has confirmed it.
+  enum class Change : std::uint8_t { run, stop, reset, setpoint };
   struct Pending {
     Ticket ticket;
-    std::uint8_t code;  // the D4 that confirms it when echoed in R4
+    Change change;
+    std::uint8_t setpoint_code;  // Change::setpoint: the code asked for
     TimePoint deadline;
-    bool in_flight;
+    std::optional<std::uint8_t> sent;  // the D4 that carries it, once on the line
   };
 
-  [[nodiscard]] std::uint8_t target_code() const;
+  // driver.cpp
   [[nodiscard]] bool device_error() const;
-  [[nodiscard]] bool has_unsent() const;
-  Exchange make_exchange(Wire frame, Priority p) const;
+  [[nodiscard]] std::uint8_t code_in_force() const;
+  [[nodiscard]] Exchange make_exchange(Bytes frame, Priority p) const;
+  Exchange run_exchange(std::uint8_t code, Priority p, TimePoint now);
   RxKind on_check_reply(const Frame& f, TimePoint now);
   RxKind on_run_reply(const Frame& f);
-  WriteStatus queue(Ticket t, std::uint8_t code, TimePoint now);
-  void finish_in_flight(WriteResult r);
+  void refresh();
+  // driver_writes.cpp
+  [[nodiscard]] Proposed in_force() const;
+  [[nodiscard]] WriteCheck judge(const WriteOp& op, const Proposed& p) const;
+  [[nodiscard]] std::optional<std::uint8_t> code_of(const Pending& w) const;
+  std::optional<Exchange> next_write(TimePoint now);
+  void confirm(const RunReply& r);
+  void complete(const Pending& w, WriteResult r);
+  void supersede();
+  void fail_sent(WriteResult r);
   void fail_all();
   void expire(TimePoint now);
-  void refresh();
 
-  Config cfg_;
+  Settings settings_;
+  std::uint8_t address_;
   Millis cadence_;
   Phase phase_ = Phase::check;
   Awaiting awaiting_ = Awaiting::nothing;
   TimePoint next_due_{};  // epoch: at once
-  Command command_ = Command::stop;
+  // In force: what the drive has confirmed, and a setpoint stored while stopped. Only these go
+  // out with the keep-alive, so a write that failed is undone on the drive too.
+  Command command_ = Command::stop;  // stop or run_forward
   std::optional<std::uint8_t> setpoint_code_;
-  bool reset_requested_ = false;
   std::optional<RunReply> last_;
   std::optional<std::uint8_t> sent_code_;
-  std::vector<Pending> pending_;
+  std::deque<Pending> writes_;  // oldest first; only the first one is ever on the line
   std::vector<Completion> done_;
   std::vector<PointSpec> points_;
   std::vector<Value> values_;

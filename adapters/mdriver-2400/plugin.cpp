@@ -1,58 +1,52 @@
-// The mdriver-2400 plugin descriptor: option schema, line defaults and the two factories.
-#include <array>
+// The mdriver-2400 plugin descriptor: option schema, line defaults, the two factories and how
+// `drivegate demo` shows the compressor.
 #include <memory>
+#include <string>
 
-#include "config.h"
+#include "codec.h"
 #include "drivegate/adapter.h"
 #include "driver.h"
+#include "settings.h"
 #include "simulator.h"
 
+namespace drivegate::mdriver {
 namespace {
 
-using drivegate::OptionSpec;
-using drivegate::OptionType;
-
-constexpr std::array<OptionSpec, 3> kOptions = {{
-    // Section 3: master (PC) address [00].
-    {drivegate::mdriver::kOptMasterAddress, OptionType::integer, "0",
-     "the gateway's own address (D0 of every frame it sends)", 0, 255},
-    // Section 3 No.2 / 連続運転モード: D5 = 0x01 (normal, 360 rpm/s) or 0xFF (continuous).
-    {drivegate::mdriver::kOptMode, OptionType::string, "normal",
-     "frequency change time D5: normal (0x01, 360 rpm/s) or continuous (0xFF)", 0, 0,
-     "normal|continuous"},
-    // Error table 0x0C: the driver stops after 6 s without a frame; 5 s leaves a margin.
-    {drivegate::mdriver::kOptKeepalive, OptionType::integer, "1000",
-     "longest gap between two run commands (the driver trips after 6 s)", 100, 5000},
-}};
-
-std::unique_ptr<drivegate::Driver> create_driver(const drivegate::DeviceEnv& env,
-                                                 std::string& error) {
-  const auto cfg = drivegate::mdriver::make_config(env.address, env.options, error);
-  if (!cfg) return nullptr;
-  return std::make_unique<drivegate::mdriver::MDriver>(*cfg, env.poll_interval);
+std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
+  const auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  const auto address = device_address(env.address, *settings, error);
+  if (!address) return nullptr;
+  return std::make_unique<Mdriver2400Driver>(*address, *settings, env.poll_interval);
 }
 
-std::unique_ptr<drivegate::Simulator> create_simulator(const drivegate::SimEnv& env,
-                                                       std::string& error) {
-  const auto cfg = drivegate::mdriver::make_config(env.address, env.options, error);
-  if (!cfg) return nullptr;
-  return std::make_unique<drivegate::mdriver::MSimulator>(cfg->device);
+std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
+  const auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  const auto address = device_address(env.address, *settings, error);
+  if (!address) return nullptr;
+  return std::make_unique<Mdriver2400Simulator>(*address);
 }
 
 }  // namespace
+}  // namespace drivegate::mdriver
 
-extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter = {
-    drivegate::kAdapterApiVersion,
-    "mdriver-2400",
-    "compressor motor driver, sum-0x55 frames (Japanese spec)",
-    kOptions.data(),
-    kOptions.size(),
-    // Section 1: 2400 bps, 8 data bits, no parity, 1 stop bit, full duplex (no echo).
-    {2400, drivegate::Parity::none, 8, 1, false},
-    0,  // Section 2: one-byte addresses
-    255,
-    0x01,  // Section 3: slave (driver) address [01]
-    false,
-    &create_driver,
-    &create_simulator,
+extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
+    .api_version = drivegate::kAdapterApiVersion,
+    .id = "mdriver-2400",
+    .summary = "compressor motor driver, sum-0x55 frames (Japanese spec)",
+    .options = drivegate::mdriver::kOptionSchema.data(),
+    .option_count = drivegate::mdriver::kOptionSchema.size(),
+    .line = drivegate::mdriver::kLine,
+    // Section 2: one-byte addresses; section 3: slave (driver) address [01].
+    .address_min = 0,
+    .address_max = 255,
+    .default_address = 0x01,
+    .streaming = false,  // section 2: the driver only ever answers the master
+    .create_driver = &drivegate::mdriver::create_driver,
+    .create_simulator = &drivegate::mdriver::create_simulator,
+    // Default options; code 0x40 of the conversion table, 1149 rpm.
+    .demo = {.options = nullptr, .option_count = 0, .running_rpm = 1149},
+    .actions = nullptr,  // no maintenance actions
+    .action_count = 0,
 };

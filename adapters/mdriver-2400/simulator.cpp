@@ -1,11 +1,12 @@
 #include "simulator.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
 #include "drivegate/sim_text.h"
-#include "error_codes.h"
+#include "faults.h"
 #include "rpm_table.h"
 
 namespace drivegate::mdriver {
@@ -14,10 +15,6 @@ namespace {
 constexpr const char* kHelp =
     "state | fault <name|code> | clear | silent on|off | corrupt N | eeprom fail|ok | temp N | "
     "info <1..3> N | power-cycle";
-
-std::vector<std::string> words(std::string_view line) {
-  return split_words(line);
-}
 
 // Decimal or 0x-prefixed hex, 0..255.
 std::optional<std::uint8_t> parse_byte(std::string_view s) {
@@ -33,11 +30,11 @@ std::string hex(std::uint8_t v) {
 
 }  // namespace
 
-MSimulator::MSimulator(std::uint8_t address) : address_(address) {
+Mdriver2400Simulator::Mdriver2400Simulator(std::uint8_t address) : address_(address) {
   power_on();
 }
 
-void MSimulator::power_on() {
+void Mdriver2400Simulator::power_on() {
   buf_.clear();
   last_frame_.reset();
   checked_ = false;
@@ -47,7 +44,7 @@ void MSimulator::power_on() {
   error_ = 0;
 }
 
-Bytes MSimulator::on_receive(ByteView rx, TimePoint now) {
+Bytes Mdriver2400Simulator::on_receive(ByteView rx, TimePoint now) {
   if (!buf_.empty() && now - last_rx_ > kStaleRx) buf_.clear();
   last_rx_ = now;
   buf_.insert(buf_.end(), rx.begin(), rx.end());
@@ -71,7 +68,7 @@ Bytes MSimulator::on_receive(ByteView rx, TimePoint now) {
   return out;
 }
 
-Bytes MSimulator::handle(const Frame& f, TimePoint now) {
+Bytes Mdriver2400Simulator::handle(const Frame& f, TimePoint now) {
   // Section 2: answer only frames addressed to this driver, to the address they came from.
   if (f.dst != address_) return {};
   if (f.cmd == static_cast<std::uint8_t>(Cmd::check)) {
@@ -103,15 +100,15 @@ Bytes MSimulator::handle(const Frame& f, TimePoint now) {
   return encode_run_reply(address_, f.src, r);
 }
 
-std::uint8_t MSimulator::effective_target() const {
+std::uint8_t Mdriver2400Simulator::effective_target() const {
   if (error_ != 0 || target_ <= kCodeStopMax) return 0;
   // Not in the document: codes 0x0F..0x1B (under the lowest running speed) run at 0x1C.
   return std::max(target_, kCodeLowestRun);
 }
 
-Bytes MSimulator::on_tick(TimePoint now) {
+Bytes Mdriver2400Simulator::on_tick(TimePoint now) {
   if (last_frame_ && now - *last_frame_ >= kSilenceTrip && error_ == 0) {
-    error_ = 0x0C;  // error table: communication error, stop
+    error_ = kCommErrorCode;  // and the motor stops
     actual_ = 0;
     last_frame_.reset();
   }
@@ -129,7 +126,7 @@ Bytes MSimulator::on_tick(TimePoint now) {
   return {};
 }
 
-std::string MSimulator::state() const {
+std::string Mdriver2400Simulator::state() const {
   std::ostringstream s;
   s << "address=" << hex(address_) << " checked=" << (checked_ ? 1 : 0)
     << " eeprom=" << (eeprom_ok_ ? "ok" : "fail") << " target=" << hex(target_)
@@ -141,8 +138,8 @@ std::string MSimulator::state() const {
   return s.str();
 }
 
-std::string MSimulator::control(std::string_view line, TimePoint now) {
-  const auto w = words(line);
+std::string Mdriver2400Simulator::control(std::string_view line, TimePoint now) {
+  const auto w = split_words(line);
   if (w.empty()) return std::string("error: empty command; commands: ") + kHelp;
   const std::string& cmd = w[0];
   if (cmd == "state" && w.size() == 1) return state();

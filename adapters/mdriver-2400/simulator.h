@@ -6,15 +6,16 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "codec.h"
 #include "drivegate/simulator.h"
 
 namespace drivegate::mdriver {
 
-class MSimulator final : public Simulator {
+class Mdriver2400Simulator final : public Simulator {
  public:
-  explicit MSimulator(std::uint8_t address);
+  explicit Mdriver2400Simulator(std::uint8_t address);
 
   Bytes on_receive(ByteView rx, TimePoint now) override;
   Bytes on_tick(TimePoint now) override;
@@ -22,9 +23,8 @@ class MSimulator final : public Simulator {
 
   // Section 3 No.2: 360 rpm/s = 20 codes of 18 rpm a second: one code every 50 ms.
   static constexpr Millis kRampStep{50};
-  // Error table, 0x0C: no frame from the master for 6 s.
-  static constexpr Millis kSilenceTrip{6000};
-  // A partial frame older than this is dropped when new bytes come (a truncated frame).
+  // A partial frame older than this is dropped when new bytes come (a truncated frame): 24
+  // characters at 2400 bps, and a master sends the bytes of one frame back to back.
   static constexpr Millis kStaleRx{100};
 
  private:

@@ -1,8 +1,12 @@
 // The simulator follows the document: check, run data, ramp, 6 s trip, silence on bad frames.
-#include "simulator.h"
+#include "drivegate/simulator.h"
 
 #include <gtest/gtest.h>
 
+#include <memory>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
 #include "codec.h"
 
 namespace drivegate::mdriver {
@@ -15,8 +19,20 @@ const Bytes kCheck{0x00, 0x01, 0x00, 0x03, 0x01, 0x12, 0x00, 0x06, 0x38};
 const Bytes kCheckEcho{0x01, 0x00, 0x00, 0x03, 0x01, 0x12, 0x00, 0x06, 0x38};
 const Bytes kCheckZeros{0x01, 0x00, 0x00, 0x03, 0x00, 0x00, 0x00, 0x00, 0x51};
 
+// The simulator the adapter's own factory makes, default options, at address 01.
+std::unique_ptr<Simulator> make_simulator() {
+  SimEnv env;
+  env.address = 0x01;
+  env.options = test::options_of(drivegate_adapter);
+  std::string error;
+  auto sim = drivegate_adapter.create_simulator(env, error);
+  EXPECT_NE(sim, nullptr) << error;
+  return sim;
+}
+
 struct SimRig {
-  MSimulator sim{0x01};
+  std::unique_ptr<Simulator> made = make_simulator();
+  Simulator& sim = *made;
   TimePoint now = t0;
   void tick(Millis span) {
     const TimePoint end = now + span;
@@ -47,7 +63,7 @@ TEST(MdriverSim, AnswersZerosOnEepromFailureOrWrongCode) {
   EXPECT_EQ(s.send(kCheck), kCheckZeros);
   EXPECT_TRUE(s.send(encode_run(0x00, 0x01, 0x40, kChangeNormal)).empty());
   SimRig w;
-  const Wire wrong = encode({0x00, 0x01, 0x00, {0x01, 0x12, 0x00, 0x07}});
+  const Bytes wrong = encode({0x00, 0x01, 0x00, {0x01, 0x12, 0x00, 0x07}});
   EXPECT_EQ(w.send(wrong), kCheckZeros);
 }
 

@@ -82,11 +82,11 @@ constexpr std::array<Row, 160> kDocumentRows = {{
 TEST(MdriverTable, EveryCodeOfBothTablesIsAGoldenRunFrame) {
   for (const Row& row : kDocumentRows) {
     SCOPED_TRACE(testing::Message() << "code 0x" << std::hex << int{row.code});
-    const Wire normal{0x00, 0x01, 0x10, 0x02, row.code, 0x01, 0x00, row.cs_normal};
-    const Wire continuous{0x00, 0x01, 0x10, 0x02, row.code, 0xFF, 0x00, row.cs_continuous};
+    const Bytes normal{0x00, 0x01, 0x10, 0x02, row.code, 0x01, 0x00, row.cs_normal};
+    const Bytes continuous{0x00, 0x01, 0x10, 0x02, row.code, 0xFF, 0x00, row.cs_continuous};
     EXPECT_EQ(encode_run(0x00, 0x01, row.code, kChangeNormal), normal);
     EXPECT_EQ(encode_run(0x00, 0x01, row.code, kChangeContinuous), continuous);
-    for (const Wire* w : {&normal, &continuous}) {
+    for (const Bytes* w : {&normal, &continuous}) {
       const auto d = decode(*w);
       ASSERT_EQ(d.status, DecodeStatus::frame);
       EXPECT_EQ(d.consumed, w->size());

@@ -1,4 +1,4 @@
-#include "error_codes.h"
+#include "faults.h"
 
 #include <array>
 
@@ -24,6 +24,15 @@ constexpr std::array<ErrorCodeInfo, 14> kErrors = {{
     {0x0E, "ipm_over_temperature", "IPM over-temperature", Fault::drive_over_temperature},
 }};
 
+// The table runs 0x01..0x0E without a gap, so its names in order label the codes.
+constexpr bool codes_in_order() {
+  for (std::size_t i = 0; i < kErrors.size(); ++i) {
+    if (kErrors[i].code != i + 1) return false;
+  }
+  return true;
+}
+static_assert(codes_in_order());
+
 }  // namespace
 
 std::span<const ErrorCodeInfo> error_codes() {
@@ -46,6 +55,12 @@ Fault fault_of(std::uint8_t code) {
   if (code == 0) return Fault::none;
   const auto e = find_error(code);
   return e ? e->fault : Fault::other;
+}
+
+std::vector<Label> error_code_labels() {
+  std::vector<std::string_view> names{"none"};  // 0x00: 異常なし
+  for (const auto& e : kErrors) names.push_back(e.name);
+  return labels_in_order(names);
 }
 
 }  // namespace drivegate::mdriver

@@ -1,0 +1,254 @@
+// Writes as the Modbus server makes them, on the real bus engine: what goes on the wire, the
+// exception the PLC gets, and what `command` and `setpoint_rpm` read afterwards. A write is in
+// force once the run reply echoed the code that carried it (README, "Commands and writes").
+#include <gtest/gtest.h>
+
+#include "bench.h"
+#include "driver.h"
+
+namespace drivegate::mdriver {
+namespace {
+
+TEST(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  const auto before = b.rig.sent().size();
+  // Stored without traffic: settled as soon as it is written.
+  EXPECT_EQ(b.start_write({1149}, kSetpointRegister)->result, Exception::none);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+  const TimePoint asked = b.rig.now();
+  const auto run = b.start_write({kRunForward});
+  EXPECT_FALSE(run->settled());
+  EXPECT_EQ(b.read("command"), kStop);  // not in force before the drive confirmed it
+  EXPECT_NE(b.read("status") & kCommandPending, 0u);
+  EXPECT_EQ(b.rig.wait(run), Exception::none);
+  // At once (the line was idle), not at the next poll.
+  const auto runs = b.times_of(kRun1149, asked);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_LE(runs[0] - asked, kInterFrameGap);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_NE(b.read("status") & kRunning, 0u);
+  b.rig.run_for(4s);  // 0x1C..0x40 at 20 codes a second
+  EXPECT_EQ(b.read("speed_rpm"), 1149u);
+  EXPECT_EQ(b.read("actual_code"), 0x40u);
+  EXPECT_EQ(b.read("target_code"), 0x40u);
+  EXPECT_EQ(b.read("target_rpm"), 1149u);
+  EXPECT_EQ(b.read("sent_code"), 0x40u);
+  EXPECT_EQ(b.last(), kRun1149);  // the keep-alive carries the target in force
+}
+
+TEST(MdriverWrites, ContinuousModeSendsFF) {
+  Bench b(test::OptionText{{"mode", "continuous"}});
+  ASSERT_TRUE(b.ready());
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kRunForward, 1149}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kRun1149Continuous);
+}
+
+TEST(MdriverWrites, ASetpointWhileRunningIsInForceOnceTheDriveEchoedIt) {
+  Bench b;
+  ASSERT_TRUE(b.running_at_1149());
+  const auto w = b.start_write({504}, kSetpointRegister);
+  EXPECT_FALSE(w->settled());
+  ASSERT_TRUE(b.rig.run_until([&] { return b.last() == kRun504; }, 100ms));
+  // On the wire, not answered yet: the drive holds 1149 rpm still.
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.read("setpoint_rpm"), 504u);
+  EXPECT_EQ(b.read("target_code"), 0x1Cu);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  b.rig.run_for(1s);
+  EXPECT_EQ(b.last(), kRun504);
+}
+
+TEST(MdriverWrites, SetpointRangeAndNearestEntry) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  // Section 3 No.2: nothing under 504 rpm; the table ends at 2856 rpm.
+  EXPECT_EQ(b.write({503}, kSetpointRegister), Exception::illegal_data_value);
+  EXPECT_EQ(b.write({0}, kSetpointRegister), Exception::illegal_data_value);
+  EXPECT_EQ(b.write({2857}, kSetpointRegister), Exception::illegal_data_value);
+  EXPECT_EQ(b.write({static_cast<std::uint16_t>(-600)}, kSetpointRegister),
+            Exception::illegal_data_value);
+  EXPECT_EQ(b.read("setpoint_rpm"), 0u);  // none of them stored
+  EXPECT_EQ(b.write({2856}, kSetpointRegister), Exception::none);
+  EXPECT_EQ(b.read("setpoint_rpm"), 2856u);
+  EXPECT_EQ(b.write({1160}, kSetpointRegister), Exception::none);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1167u);  // the nearest entry, 0x41
+}
+
+TEST(MdriverWrites, StopQuickStopAndReverse) {
+  Bench b;
+  ASSERT_TRUE(b.running_at_1149());
+  const auto before = b.rig.sent().size();
+  EXPECT_EQ(b.start_write({kRunReverse})->result, Exception::illegal_data_value);  // one direction
+  EXPECT_EQ(b.rig.sent().size(), before);
+  TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kQuickStop}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kRunStop);  // the protocol has one stop
+  EXPECT_EQ(b.read("command"), kStop);
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({kStop}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kRunStop);
+  b.rig.run_for(3s);
+  EXPECT_EQ(b.last(), kRunStop);
+  EXPECT_EQ(b.read("status") & kRunning, 0u);
+  EXPECT_EQ(b.read("speed_rpm"), 0u);
+  EXPECT_EQ(b.count(kRunReset), 0u);  // a plain stop never resets errors
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+}
+
+TEST(MdriverWrites, CommandsAreRefusedBeforeTheCheckAndARunWithoutSetpoint) {
+  Bench b;
+  EXPECT_EQ(b.start_write({kStop})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.start_write({1149}, kSetpointRegister)->result, Exception::none);  // stored
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+  EXPECT_TRUE(b.rig.sent().empty());
+
+  Bench fresh;
+  ASSERT_TRUE(fresh.ready());
+  const auto before = fresh.rig.sent().size();
+  EXPECT_EQ(fresh.start_write({kRunForward})->result, Exception::server_device_failure);
+  EXPECT_EQ(fresh.rig.sent().size(), before);
+  EXPECT_EQ(fresh.read("command"), kStop);
+}
+
+TEST(MdriverWrites, ACommandWrittenOverAnotherNotYetSentSupersedesIt) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  ASSERT_EQ(b.write({1149}, kSetpointRegister), Exception::none);
+  const TimePoint asked = b.rig.now();
+  const auto run = b.start_write({kRunForward});  // from one client...
+  const auto stop = b.start_write({kStop});       // ...and before it reached the wire, another
+  EXPECT_EQ(run->result, Exception::gateway_target_failed);
+  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRunStop});  // the compressor never started
+  EXPECT_EQ(b.read("command"), kStop);
+}
+
+// --- truthful writes: what the drive did not take is not in force ---
+
+TEST(MdriverWrites, ARequestWithAnInvalidPartChangesNothing) {
+  Bench b;
+  ASSERT_TRUE(b.running_at_1149());
+  // Setpoint 600 rpm (code 0x21) with run_reverse: the setpoint alone would go on the line.
+  const auto before = b.rig.sent().size();
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.start_write({kRunReverse, 600})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  b.rig.run_for(1s);
+  for (const auto& f : b.frames(asked)) EXPECT_EQ(f, kRun1149);  // keep-alives only
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+  EXPECT_EQ(b.read("command"), kRunForward);
+
+  // Tripped: run_forward is refused, so the setpoint in the same request is not sent either.
+  b.control("fault stall");
+  b.rig.run_for(600ms);
+  ASSERT_NE(b.read("status") & kFaulted, 0u);
+  const TimePoint tripped = b.rig.now();
+  EXPECT_EQ(b.start_write({kRunForward, 600})->result, Exception::server_device_failure);
+  b.rig.run_for(1s);
+  for (const auto& f : b.frames(tripped)) EXPECT_EQ(f, kRun1149);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+}
+
+TEST(MdriverWrites, ASetpointTheDriveDoesNotAnswerLeavesTheOldOneInForce) {
+  Bench b;
+  ASSERT_TRUE(b.running_at_1149());
+  b.control("silent on");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({504}, kSetpointRegister), Exception::gateway_target_failed);
+  EXPECT_EQ(b.times_of(kRun504, asked).size(), kAttempts);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  // Should the drive have taken 504 unheard, the keep-alive puts it back on what is in force.
+  b.control("silent off");
+  const TimePoint after = b.rig.now();
+  b.rig.run_for(1s);
+  const auto next = b.frames(after);
+  ASSERT_FALSE(next.empty());
+  EXPECT_EQ(next.front(), kRun1149);
+  EXPECT_NE(b.control("state").find("target=0x40"), std::string::npos);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+}
+
+TEST(MdriverWrites, ASetpointTheDriveDoesNotTakeIsRefusedAndTheOldOneStays) {
+  Bench b;
+  ASSERT_TRUE(b.running_at_1149());
+  // The drive answers 504 rpm (0x1C) with the target it holds, 0x40.
+  b.rig.line().device_filter = [](Bytes a) {
+    return a.size() == 13 && a[4] == 0x1C ? with_reply(a, 0x40, 0x00) : a;
+  };
+  EXPECT_EQ(b.write({504}, kSetpointRegister), Exception::server_device_failure);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+  EXPECT_EQ(b.read("target_code"), 0x40u);
+  b.rig.run_for(1s);
+  EXPECT_EQ(b.last(), kRun1149);
+}
+
+TEST(MdriverWrites, ACommandTheDriveRefusesIsTheExceptionAndTheRunStaysInForce) {
+  Bench b;
+  ASSERT_TRUE(b.running_at_1149());
+  // The drive answers the stop code with another target than the one sent.
+  b.rig.line().device_filter = [](Bytes a) {
+    return a.size() == 13 && a[4] == 0x01 ? with_reply(a, 0x05, 0x00) : a;
+  };
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kStop}), Exception::server_device_failure);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_NE(b.read("status") & kRunning, 0u);
+  b.rig.run_for(1s);
+  const auto sent = b.frames(asked);
+  ASSERT_GE(sent.size(), 2u);
+  EXPECT_EQ(sent[0], kRunStop);
+  EXPECT_EQ(sent[1], kRun1149);  // the keep-alive carries the run in force
+}
+
+TEST(MdriverWrites, ARunAnsweredWithAnErrorIsRefusedAndNotInForce) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  ASSERT_EQ(b.write({1149}, kSetpointRegister), Exception::none);
+  // The drive takes the target (R4 echoes it) but answers with error 0x04 (stall) latched.
+  bool once = true;
+  b.rig.line().device_filter = [&once](Bytes a) {
+    if (!once || a.size() != 13 || a[4] != 0x40) return a;
+    once = false;
+    return with_reply(a, 0x40, 0x04);
+  };
+  EXPECT_EQ(b.write({kRunForward}), Exception::server_device_failure);
+  EXPECT_EQ(b.read("command"), kStop);
+  const TimePoint after = b.rig.now();
+  b.rig.run_for(1s);
+  EXPECT_EQ(b.frames(after).at(0), kRunStop);  // the drive is told what is in force: stop
+  EXPECT_EQ(b.read("status") & kRunning, 0u);
+}
+
+TEST(MdriverWrites, ARunThatGotNoAnswerIsNotInForce) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  ASSERT_EQ(b.write({1149}, kSetpointRegister), Exception::none);
+  b.control("silent on");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kRunForward}), Exception::gateway_target_failed);
+  // Three identical attempts, each after the 200 ms reply timeout from the frame's end.
+  const auto tries = b.times_of(kRun1149, asked);
+  ASSERT_EQ(tries.size(), kAttempts);
+  const Millis per_attempt =
+      kReplyTimeout +
+      std::chrono::duration_cast<Millis>(kCharacterTime * static_cast<long>(kRun1149.size()));
+  EXPECT_EQ(tries[1] - tries[0], per_attempt);
+  EXPECT_EQ(tries[2] - tries[1], per_attempt);
+  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("status") & kRunning, 0u);
+  // The drive may have taken it unheard: the keep-alive says stop.
+  b.control("silent off");
+  const TimePoint after = b.rig.now();
+  b.rig.run_for(1s);
+  EXPECT_EQ(b.frames(after).at(0), kRunStop);
+  EXPECT_NE(b.control("state").find("target=0x01"), std::string::npos);
+  EXPECT_EQ(b.read("command"), kStop);
+}
+
+}  // namespace
+}  // namespace drivegate::mdriver
