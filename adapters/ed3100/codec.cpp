@@ -1,9 +1,5 @@
 #include "codec.h"
 
-#include <algorithm>
-
-#include "drivegate/bytes.h"
-
 namespace drivegate::ed3100 {
 namespace {
 
@@ -18,15 +14,14 @@ constexpr std::size_t kExceptionSize = 5;
 // 06 echo and 10 reply: addr fn reg(2) value-or-count(2) CRC(2) (document, "Response frame").
 constexpr std::size_t kWriteReplySize = 8;
 
-bool crc_ok(std::span<const std::uint8_t> frame) {
+bool crc_ok(ByteView frame) {
   if (frame.size() < kCrcSize + 1) return false;
   const std::size_t n = frame.size() - kCrcSize;
   const std::uint16_t want = crc16(frame.first(n));
   return frame[n] == lo8(want) && frame[n + 1] == hi8(want);
 }
 
-std::vector<std::uint16_t> words_at(std::span<const std::uint8_t> rx, std::size_t offset,
-                                    std::size_t count) {
+std::vector<std::uint16_t> words_at(ByteView rx, std::size_t offset, std::size_t count) {
   std::vector<std::uint16_t> out;
   out.reserve(count);
   for (std::size_t i = 0; i < count; ++i) {
@@ -37,7 +32,7 @@ std::vector<std::uint16_t> words_at(std::span<const std::uint8_t> rx, std::size_
 
 }  // namespace
 
-std::uint16_t crc16(std::span<const std::uint8_t> data) {
+std::uint16_t crc16(ByteView data) {
   // Document, "RTU mode check code", steps 1-6 and its C example.
   std::uint16_t reg = 0xFFFF;
   for (const std::uint8_t b : data) {
@@ -112,7 +107,7 @@ Bytes encode_exception(std::uint8_t address, std::uint8_t function, std::uint8_t
   return out;
 }
 
-Decoded<Request> decode_request(std::span<const std::uint8_t> rx) {
+Decoded<Request> decode_request(ByteView rx) {
   if (rx.size() < 2) return {};
   std::size_t size = kFixedRequestSize;
   switch (rx[1]) {
@@ -149,7 +144,7 @@ Decoded<Request> decode_request(std::span<const std::uint8_t> rx) {
   return decoded_frame(size, std::move(r));
 }
 
-Decoded<Reply> decode_reply(std::span<const std::uint8_t> rx, const ReplyShape& shape) {
+Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
   if (rx.size() < 2) return {};
   if (rx[1] == (shape.function | kExceptionBit)) {
     if (rx.size() < kExceptionSize) return {};

@@ -11,8 +11,8 @@
 #include <span>
 #include <vector>
 
+#include "drivegate/bytes.h"
 #include "drivegate/codec.h"
-#include "drivegate/driver.h"
 
 namespace drivegate::ed3100 {
 
@@ -30,7 +30,7 @@ inline constexpr std::size_t kMaxWriteWords = 2;
 inline constexpr std::uint8_t kBroadcast = 0x00;
 
 // CRC-16, init FFFF, polynomial A001, sent low byte first (document, "RTU mode check code").
-std::uint16_t crc16(std::span<const std::uint8_t> data);
+std::uint16_t crc16(ByteView data);
 void append_crc(Bytes& frame);
 
 // Master requests.
@@ -61,7 +61,7 @@ struct Request {
 };
 
 // Requests are framed by their function code: 03 and 06 are 8 bytes, 10 is 9 + its byte count.
-Decoded<Request> decode_request(std::span<const std::uint8_t> rx);
+Decoded<Request> decode_request(ByteView rx);
 
 // What the master expects back for the request it sent.
 struct ReplyShape {
@@ -86,6 +86,6 @@ struct Reply {
 // address). bad + bad_header (consumed 1): rx[1] is neither the function nor its exception;
 // bad + bad_checksum: every length the shape allows is present and none has a good CRC
 // (consumed = the longest of them).
-Decoded<Reply> decode_reply(std::span<const std::uint8_t> rx, const ReplyShape& shape);
+Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape);
 
 }  // namespace drivegate::ed3100

@@ -1,5 +1,9 @@
-// The ED3100 driver: a Modbus RTU master that reads the drive's parameters at start-up, then
-// polls the fault/state word and the chosen monitors, and translates commands and writes.
+// The ED3100 driver: a Modbus RTU master that reads the drive's parameters at start-up, then polls
+// the fault/state word and the chosen monitors; writes go out as 06 / 10 and are in force once the
+// drive's reply confirmed them.
+//
+//   driver.cpp         the poll plan, the line side, replies into points and the common state
+//   driver_writes.cpp  check() and apply(), the writes waiting for the line, their confirmation
 #pragma once
 
 #include <deque>
@@ -7,15 +11,28 @@
 #include <vector>
 
 #include "codec.h"
-#include "config.h"
 #include "drivegate/driver.h"
 #include "registers.h"
+#include "settings.h"
 
 namespace drivegate::ed3100 {
 
+// Not in the document, which gives no baud table: the time on the wire allowed per attempt for
+// a request and its reply. The longest pair, a 13-byte 10 write and its 8-byte reply, takes
+// 96 ms at 2400 baud 8E1 (11 bits a character).
+inline constexpr Millis kWireAllowance{100};
+// Another device's turn the line may be busy with before a write: its time budget, 1 s unless
+// its configuration says otherwise (DeviceConfig::budget).
+inline constexpr Millis kOtherTurnAllowance{1000};
+// The API's default write_timeout, kept as the floor.
+inline constexpr Millis kWriteTimeoutFloor{3000};
+// The gateway looks at its write deadlines every 100 ms: room so that a driver's own answer
+// never races the gateway's.
+inline constexpr Millis kDeadlineMargin{200};
+
 class Ed3100Driver final : public Driver {
  public:
-  Ed3100Driver(Config config, Millis poll_interval);
+  Ed3100Driver(std::uint8_t address, Settings settings, Millis poll_interval);
 
   [[nodiscard]] DriverTraits traits() const override;
   [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
@@ -28,64 +45,73 @@ class Ed3100Driver final : public Driver {
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;
 
-  WriteStatus command(Command c, Ticket t, TimePoint now) override;
-  WriteStatus setpoint(std::int32_t rpm, Ticket t, TimePoint now) override;
-  WriteStatus write(std::size_t point, const Value& v, Ticket t, TimePoint now) override;
+  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
   void take_completions(std::vector<Completion>& out) override;
 
  private:
-  enum class Op : std::uint8_t {
-    read_fault,
-    read_monitor,
-    read_param,
-    write_command,
-    write_frequency,
-    write_param,
-    write_reset
+  // What a write puts in force once the drive confirmed it.
+  enum class Change : std::uint8_t { command, reset, reference, parameter };
+  struct Write {
+    Ticket ticket = 0;
+    Change change = Change::command;
+    Command command = Command::stop;  // Change::command: run_forward, run_reverse or stop
+    std::uint16_t value = 0;          // reference (0.01 Hz) or parameter value
+    std::int32_t rpm = 0;             // Change::reference: what setpoint_rpm reads then
+    std::size_t slot = 0;             // Change::parameter: index into the parameters
+    TimePoint send_by{};              // not on the line by then: failed, and never sent
   };
 
+  enum class Op : std::uint8_t { read_fault, read_monitor, read_param, write };
   // One transaction, queued or on the line.
   struct Job {
     Op op = Op::read_fault;
     std::size_t slot = 0;  // monitor or parameter index
     std::uint16_t reg = 0;
-    std::vector<std::uint16_t> words;  // writes: the values
-    std::optional<Ticket> ticket;
-    Command command = Command::stop;  // write_command: what it means once confirmed
-
-    static Job make(Op op, std::size_t slot, std::uint16_t reg,
-                    std::vector<std::uint16_t> words = {}) {
-      Job j;
-      j.op = op;
-      j.slot = slot;
-      j.reg = reg;
-      j.words = std::move(words);
-      return j;
-    }
+    std::vector<std::uint16_t> words;  // writes: the values sent
+    std::optional<Write> write;        // Op::write: what it carries
   };
 
-  [[nodiscard]] bool broadcast() const { return config_.address == kBroadcast; }
+  // driver.cpp
+  [[nodiscard]] bool broadcast() const { return address_ == kBroadcast; }
   [[nodiscard]] ReplyShape shape(const Job& j) const;
   [[nodiscard]] Exchange exchange(const Job& j) const;
+  [[nodiscard]] Millis turn() const;
+  [[nodiscard]] Millis send_limit() const;
+  static Job read_job(Op op, std::size_t slot, std::uint16_t reg);
   void start_cycle(TimePoint now);
-  void apply(const Job& j, const Reply& r);
+  void on_reply(const Job& j, const Reply& r);
   void apply_fault(const std::vector<std::uint16_t>& w);
   void apply_monitor(std::size_t slot, const std::vector<std::uint16_t>& w);
-  void complete(const Job& j, WriteResult r);
   void update_ready();
   void update_speed();
-  WriteStatus queue_write(Job j, Ticket t);
-  WriteStatus set_frequency(std::uint16_t centi_hz, std::int32_t rpm, Ticket t);
   [[nodiscard]] std::int32_t rpm_from_hz(double hz) const;
   [[nodiscard]] std::optional<std::uint16_t> centi_hz_from_rpm(std::int32_t rpm) const;
 
-  Config config_;
+  // driver_writes.cpp
+  [[nodiscard]] WriteCheck judge(const WriteOp& op) const;
+  [[nodiscard]] std::optional<Write> write_of(const WriteOp& op) const;
+  [[nodiscard]] bool drive_runs() const;
+  [[nodiscard]] bool run_under_way() const;
+  [[nodiscard]] std::uint16_t register_of(const Write& w) const;
+  [[nodiscard]] std::optional<Job> job_of(const Write& w) const;
+  std::optional<Job> next_write();
+  void confirm(const Job& j, const Reply& r);
+  void put_in_force(const Write& w);
+  void set_reference(std::uint16_t centi_hz, std::int32_t rpm);
+  void complete(const Write& w, WriteResult r);
+  void supersede(std::uint16_t reg);
+  void expire(TimePoint now);
+  void fail_all();
+
+  Settings settings_;
+  std::uint8_t address_;
   Millis poll_interval_;
   std::vector<PointSpec> points_;
   std::vector<Value> values_;
   CommonState common_;
 
-  std::deque<Job> writes_;
+  std::deque<Write> writes_;  // waiting for the line, oldest first
   std::deque<Job> reads_;
   std::optional<Job> inflight_;
   std::vector<Completion> completions_;
@@ -95,7 +121,7 @@ class Ed3100Driver final : public Driver {
   bool fault_known_ = false;       // 0x0E01 answered since the last (re)connect
   std::uint16_t fault_word_ = kNoFault;
   std::uint16_t state_word_ = 0;
-  std::uint16_t frequency_ = 0;     // 0x2001 reference, 0.01 Hz
+  std::uint16_t reference_ = 0;     // 0x2001 in force, 0.01 Hz: what the next run carries
   std::optional<double> speed_hz_;  // the speed monitor's last value
   bool speed_stopped_ = true;       // its format word's "stopped" bit
 };

@@ -1,21 +1,57 @@
-// The ed3100 plugin descriptor.
-#include "drivegate/adapter.h"
-#include "schema.h"
+// The ed3100 plugin descriptor: option schema, line defaults, the two factories and how
+// `drivegate demo` shows the drive.
+#include <memory>
+#include <string>
 
-// Line: the document offers 8N2, 8E1 and 8O1 and leaves the baud rate to a parameter table it
-// does not include; 9600 8E1 is drivegate's default (README.md). Addresses 1..31, 0 broadcast,
-// factory setting 01 (document, "address").
-extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter = {
-    drivegate::kAdapterApiVersion,
-    "ed3100",
-    "ED3100 variable-frequency drive, Modbus RTU with its 03 reply quirk",
-    drivegate::ed3100::kOptionSpecs.data(),
-    drivegate::ed3100::kOptionSpecs.size(),
-    {9600, drivegate::Parity::even, 8, 1, false},
-    0,
-    31,
-    1,
-    false,
-    &drivegate::ed3100::create_driver,
-    &drivegate::ed3100::create_simulator,
+#include "drivegate/adapter.h"
+#include "driver.h"
+#include "settings.h"
+#include "simulator.h"
+
+namespace drivegate::ed3100 {
+namespace {
+
+std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
+  auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  const auto address = device_address(env.address, error);
+  if (!address) return nullptr;
+  return std::make_unique<Ed3100Driver>(*address, std::move(*settings), env.poll_interval);
+}
+
+std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
+  const auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  const auto address = device_address(env.address, error);
+  if (!address) return nullptr;
+  return std::make_unique<Ed3100Simulator>(*address, settings->sim_reply_form);
+}
+
+}  // namespace
+}  // namespace drivegate::ed3100
+
+extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
+    .api_version = drivegate::kAdapterApiVersion,
+    .id = "ed3100",
+    .summary = "ED3100 variable-frequency drive, Modbus RTU with its 03 reply quirk",
+    .options = drivegate::ed3100::kOptionSchema.data(),
+    .option_count = drivegate::ed3100::kOptionSchema.size(),
+    // The document offers 8N2, 8E1 and 8O1 and leaves the baud rate to a parameter table it does
+    // not include: 9600 8E1 is drivegate's default (README.md, "Choices", 1).
+    .line = {.baud = 9600,
+             .parity = drivegate::Parity::even,
+             .data_bits = 8,
+             .stop_bits = 1,
+             .echo = false},
+    // Document, "Address": 1..31 drives, 0 the broadcast, factory setting 01.
+    .address_min = 0,
+    .address_max = 31,
+    .default_address = 1,
+    .streaming = false,  // document, "communication protocol": the drive only ever answers
+    .create_driver = &drivegate::ed3100::create_driver,
+    .create_simulator = &drivegate::ed3100::create_simulator,
+    // Default options; a typical running speed, 50 Hz at the default 4 poles.
+    .demo = {.options = nullptr, .option_count = 0, .running_rpm = 1500},
+    .actions = nullptr,  // no maintenance actions
+    .action_count = 0,
 };

@@ -1,7 +1,9 @@
 #include "points.h"
 
 #include <cstdio>
+#include <string>
 
+#include "faults.h"
 #include "registers.h"
 
 namespace drivegate::ed3100 {
@@ -13,20 +15,18 @@ std::string hex4(std::uint16_t v, bool upper) {
   return buf;
 }
 
-PointSpec flag(std::string name, std::string description, std::vector<Label> labels) {
-  PointSpec p;
-  p.name = std::move(name);
-  p.description = std::move(description);
-  p.labels = std::move(labels);
-  return p;
+// One bit of the state word as a 0/1 point.
+PointSpec flag(std::string name, std::string description, const char* off, const char* on) {
+  return input_point(std::move(name), PointType::u16, "", std::move(description))
+      .named_values({{off, 0}, {on, 1}});
 }
 
+// Document, "B0 ~ B3 Parameters".
 std::vector<Label> format_labels() {
-  // Document, "B0 ~ B3 Parameters".
   return {{"decimals_minus_1", kFmtDecimalsMinus1},
           {"decimals_0", kFmtDecimals0},
-          {"decimals_1", 2},
-          {"decimals_2", 3},
+          {"decimals_1", kFmtDecimals1},
+          {"decimals_2", kFmtDecimals2},
           {"decimals_3", kFmtDecimals3},
           {"volt", kFmtVolt},
           {"hertz", kFmtHertz},
@@ -37,79 +37,59 @@ std::vector<Label> format_labels() {
           {"stopped", kFmtStopped}};
 }
 
+// Document, "B4 ~ B7 Parameters".
+std::vector<Label> state_labels() {
+  return {{"running_reverse", kStRunReverse},
+          {"phase_order_reverse", kStPhaseReverse},
+          {"commanded_reverse", kStCmdReverse},
+          {"running", kStRunning},
+          {"fault", kStFault},
+          {"digital_frequency", kStDigitalChannel},
+          {"accelerating", kStAccelerating},
+          {"decelerating", kStDecelerating}};
+}
+
 }  // namespace
 
-std::vector<PointSpec> make_points(const Config& c) {
-  std::vector<PointSpec> pts(kFixedCount);
-  PointSpec& fault = pts[index(Fixed::fault_code)];
-  fault.name = "fault_code";
-  fault.description = "0x0E01 word 1: drive fault code, 0xFFFF = no fault (table not legible)";
-  fault.labels = {{"no_fault", kNoFault}};
+std::vector<PointSpec> make_points(const Settings& s) {
+  std::vector<PointSpec> pts(pt::count);
+  pts[pt::drive_fault_code] =
+      input_point("drive_fault_code", PointType::u16, "",
+                  "0x0E01 word 1: drive fault code, 0xFFFF = no fault (table not legible)")
+          .named_values(fault_code_labels());
+  pts[pt::state_word] =
+      input_point("state_word", PointType::u16, "", "0x0E01 word 2: drive state bits")
+          .named_bits(state_labels());
+  pts[pt::running] = flag("running", "state bit 4: the drive is running", "stopped", "running");
+  pts[pt::direction] = flag("direction", "state bit 1: running direction", "forward", "reverse");
+  pts[pt::commanded_direction] =
+      flag("commanded_direction", "state bit 3: commanded direction", "forward", "reverse");
+  pts[pt::accelerating] = flag("accelerating", "state bit 10: accelerating", "no", "yes");
+  pts[pt::decelerating] = flag("decelerating", "state bit 11: decelerating", "no", "yes");
+  // 0x2001 in 0.01 Hz (specs README: 0x1388 = 50.00 Hz); the 16-bit register tops at 655.35 Hz.
+  pts[pt::frequency_setpoint] =
+      holding_point("frequency_setpoint", PointType::u16, "Hz",
+                    "frequency reference for 0x2001; setpoint_rpm x poles / 120")
+          .scaled(0.01)
+          .limited(0.0, 655.35);
 
-  PointSpec& state = pts[index(Fixed::state_word)];
-  state.name = "state_word";
-  state.description = "0x0E01 word 2: drive state bits";
-  state.bit_labels = true;
-  state.labels = {{"running_reverse", kStRunReverse},
-                  {"phase_order_reverse", kStPhaseReverse},
-                  {"commanded_reverse", kStCmdReverse},
-                  {"running", kStRunning},
-                  {"fault", kStFault},
-                  {"digital_frequency", kStDigitalChannel},
-                  {"accelerating", kStAccelerating},
-                  {"decelerating", kStDecelerating}};
-
-  pts[index(Fixed::running)] =
-      flag("running", "state bit 4: the drive is running", {{"stopped", 0}, {"running", 1}});
-  pts[index(Fixed::direction)] =
-      flag("direction", "state bit 1: running direction", {{"forward", 0}, {"reverse", 1}});
-  pts[index(Fixed::commanded_direction)] = flag(
-      "commanded_direction", "state bit 3: commanded direction", {{"forward", 0}, {"reverse", 1}});
-  pts[index(Fixed::accelerating)] =
-      flag("accelerating", "state bit 10: accelerating", {{"no", 0}, {"yes", 1}});
-  pts[index(Fixed::decelerating)] =
-      flag("decelerating", "state bit 11: decelerating", {{"no", 0}, {"yes", 1}});
-
-  PointSpec& freq = pts[index(Fixed::frequency_setpoint)];
-  freq.name = "frequency_setpoint";
-  freq.scale = 0.01;  // 0x2001 in 0.01 Hz (README: 0x1388 = 50.00 Hz)
-  freq.unit = "Hz";
-  freq.table = Table::holding;
-  freq.description = "frequency reference for 0x2001; setpoint_rpm x poles / 120";
-  freq.min = 0.0;
-  freq.max = 655.35;  // the 16-bit register in 0.01 Hz
-
-  for (const MonitorSel& m : c.monitors) {
-    const std::string id = hex4(m.reg, false);
-    const std::string ID = hex4(m.reg, true);
-    PointSpec value;
-    value.name = "monitor_" + id;
-    value.type = PointType::f32;
-    value.unit = m.unit;
-    value.description = "monitor 0x" + ID + " scaled by its format word";
-    PointSpec raw;
-    raw.name = "monitor_" + id + "_raw";
-    raw.description = "monitor 0x" + ID + " word 1, unscaled";
-    PointSpec format;
-    format.name = "monitor_" + id + "_format";
-    format.description = "monitor 0x" + ID + " word 2: decimals, unit, stopped";
-    format.bit_labels = true;
-    format.labels = format_labels();
-    pts.push_back(std::move(value));
-    pts.push_back(std::move(raw));
-    pts.push_back(std::move(format));
+  for (const MonitorSel& m : s.monitors) {
+    const std::string id = "monitor_" + hex4(m.reg, false);
+    const std::string reg = "monitor 0x" + hex4(m.reg, true);
+    pts.push_back(input_point(id, PointType::f32, m.unit, reg + " scaled by its format word"));
+    pts.push_back(input_point(id + "_raw", PointType::u16, "", reg + " word 1, unscaled"));
+    pts.push_back(
+        input_point(id + "_format", PointType::u16, "", reg + " word 2: decimals, unit, stopped")
+            .named_bits(format_labels()));
   }
 
-  for (const std::uint16_t p : c.parameters) {
+  for (const std::uint16_t p : s.parameters) {
     char name[16];
     std::snprintf(name, sizeof name, "param_%02x_%02x", p >> 8, p & 0xFF);
-    PointSpec param;
-    param.name = name;
-    param.table = Table::holding;
-    param.description = "drive parameter at 0x" + hex4(p, true) + ", raw (read 03, written 06)";
-    param.min = 0;
-    param.max = 0xFFFF;
-    pts.push_back(std::move(param));
+    pts.push_back(
+        holding_point(name, PointType::u16, "",
+                      "drive parameter at 0x" + hex4(p, true) + ", raw (read 03, written 06)")
+            .limited(0, 0xFFFF));
   }
   return pts;
 }

@@ -1,41 +1,44 @@
-// The ed3100 point table: fixed state points, then three per monitor, then one per parameter.
+// The adapter's own points: the fault/state pair of 0x0E01 and its bits, the frequency reference,
+// then three points per monitor and one per parameter, as the options list them.
 #pragma once
 
 #include <cstddef>
 #include <vector>
 
-#include "config.h"
 #include "drivegate/point.h"
+#include "settings.h"
 
 namespace drivegate::ed3100 {
 
-// Fixed points, in this order at the start of the table.
-enum class Fixed : std::size_t {
-  fault_code,           // 0x0E01 word 1, raw
-  state_word,           // 0x0E01 word 2, raw
-  running,              // state bit 4
-  direction,            // state bit 1
-  commanded_direction,  // state bit 3
-  accelerating,         // state bit 10
-  decelerating,         // state bit 11
-  frequency_setpoint,   // holding: the frequency reference for 0x2001, 0.01 Hz
-  count,
-};
+// Index of each fixed point in points() / values(); the monitors' and parameters' follow.
+namespace pt {
+inline constexpr std::size_t drive_fault_code = 0;     // 0x0E01 word 1, raw
+inline constexpr std::size_t state_word = 1;           // 0x0E01 word 2, raw
+inline constexpr std::size_t running = 2;              // state bit 4
+inline constexpr std::size_t direction = 3;            // state bit 1
+inline constexpr std::size_t commanded_direction = 4;  // state bit 3
+inline constexpr std::size_t accelerating = 5;         // state bit 10
+inline constexpr std::size_t decelerating = 6;         // state bit 11
+inline constexpr std::size_t frequency_setpoint = 7;   // holding: the reference for 0x2001
+inline constexpr std::size_t count = 8;                // fixed points
 
-inline constexpr std::size_t index(Fixed f) {
-  return static_cast<std::size_t>(f);
+// Per monitor m: its scaled value, its raw value, its format word.
+inline constexpr std::size_t kPerMonitor = 3;
+constexpr std::size_t monitor_value(std::size_t m) {
+  return count + kPerMonitor * m;
 }
-inline constexpr std::size_t kFixedCount = index(Fixed::count);
-// Per monitor: scaled value, raw value, format word.
-inline constexpr std::size_t kPointsPerMonitor = 3;
+constexpr std::size_t monitor_raw(std::size_t m) {
+  return monitor_value(m) + 1;
+}
+constexpr std::size_t monitor_format(std::size_t m) {
+  return monitor_value(m) + 2;
+}
+// Parameter p, after every monitor.
+inline std::size_t parameter(const Settings& s, std::size_t p) {
+  return count + kPerMonitor * s.monitors.size() + p;
+}
+}  // namespace pt
 
-inline constexpr std::size_t monitor_value_index(std::size_t m) {
-  return kFixedCount + kPointsPerMonitor * m;
-}
-inline std::size_t parameter_index(const Config& c, std::size_t p) {
-  return kFixedCount + kPointsPerMonitor * c.monitors.size() + p;
-}
-
-std::vector<PointSpec> make_points(const Config& c);
+std::vector<PointSpec> make_points(const Settings& s);
 
 }  // namespace drivegate::ed3100

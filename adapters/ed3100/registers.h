@@ -31,6 +31,8 @@ inline constexpr std::uint16_t kMonitorWords = 2;
 // bits 1-4 = 0..3 decimals).
 inline constexpr unsigned kFmtDecimalsMinus1 = 0;
 inline constexpr unsigned kFmtDecimals0 = 1;
+inline constexpr unsigned kFmtDecimals1 = 2;
+inline constexpr unsigned kFmtDecimals2 = 3;
 inline constexpr unsigned kFmtDecimals3 = 4;
 inline constexpr unsigned kFmtVolt = 5;
 inline constexpr unsigned kFmtHertz = 6;
@@ -43,13 +45,13 @@ inline constexpr unsigned kFmtStopped = 14;
 // Fault and state (document, "Read fault code"; "B4 ~ B7 Parameters").
 inline constexpr std::uint16_t kRegFault = 0x0E01;
 inline constexpr std::uint16_t kFaultWords = 2;
-inline constexpr std::uint16_t kNoFault = 0xFFFF;
-inline constexpr unsigned kStRunReverse = 1;      // running direction, 1 = reverse
-inline constexpr unsigned kStPhaseReverse = 2;    // output phase order, 1 = reverse
-inline constexpr unsigned kStCmdReverse = 3;      // commanded direction, 1 = reverse
-inline constexpr unsigned kStRunning = 4;         // "Operation"
-inline constexpr unsigned kStFault = 5;           // "Failure"
-inline constexpr unsigned kStDigitalChannel = 6;  // frequency channel 0 (digital setting)
+inline constexpr std::uint16_t kNoFault = 0xFFFF;  // word 1 when no fault occurs
+inline constexpr unsigned kStRunReverse = 1;       // running direction, 1 = reverse
+inline constexpr unsigned kStPhaseReverse = 2;     // output phase order, 1 = reverse
+inline constexpr unsigned kStCmdReverse = 3;       // commanded direction, 1 = reverse
+inline constexpr unsigned kStRunning = 4;          // "Operation"
+inline constexpr unsigned kStFault = 5;            // "Failure"
+inline constexpr unsigned kStDigitalChannel = 6;   // frequency channel 0 (digital setting)
 inline constexpr unsigned kStAccelerating = 10;
 inline constexpr unsigned kStDecelerating = 11;
 
@@ -63,6 +65,17 @@ inline constexpr std::uint16_t kRetainedCount = 0x0000;
 
 constexpr bool bit(std::uint16_t word, unsigned n) {
   return ((word >> n) & 1u) != 0;
+}
+
+// The factor a monitor's value is read with: the lowest of format bits 0..4 that is set gives
+// the decimals, bit 0 one negative decimal (x10), bit 1 none, bit 2 one, bit 3 two, bit 4 three
+// (shared/specs/README.md, "ed3100"). None set: unscaled.
+constexpr double format_scale(std::uint16_t format) {
+  constexpr double kScales[] = {10.0, 1.0, 0.1, 0.01, 0.001};
+  for (unsigned b = kFmtDecimalsMinus1; b <= kFmtDecimals3; ++b) {
+    if (bit(format, b)) return kScales[b];
+  }
+  return 1.0;
 }
 
 }  // namespace drivegate::ed3100

@@ -84,6 +84,8 @@ Bytes Ed3100Simulator::finish(Bytes reply) {
 }
 
 Bytes Ed3100Simulator::handle(const Request& r) {
+  if (locked_ && r.function != kFnRead)
+    return encode_exception(address_, r.function, kDeviceFailure);
   switch (r.function) {
     case kFnRead:
       return read(r);
@@ -217,11 +219,11 @@ std::pair<std::uint16_t, std::uint16_t> Ed3100Simulator::monitor(std::uint16_t r
   switch (reg) {
     case 0x0D00:  // output frequency, 2 decimals, Hz; stopped: the reference
       value = running_ ? output_ : reference_;
-      format = fmt(3, kFmtHertz);
+      format = fmt(kFmtDecimals2, kFmtHertz);
       break;
     case 0x0D01:  // output current, 1 decimal, A (simulated load)
       value = running_ ? static_cast<std::uint16_t>(15 + output_ / 500) : 0;
-      format = fmt(2, kFmtAmpere);
+      format = fmt(kFmtDecimals1, kFmtAmpere);
       break;
     case 0x0D02:  // output voltage, 0 decimals, V (V/f)
       value = static_cast<std::uint16_t>(running_ ? output_ * kRatedVolts / kRatedCentiHz : 0);

@@ -50,6 +50,8 @@ class Ed3100Simulator final : public Simulator {
   bool decelerating_ = false;
   std::uint16_t fault_;
   bool silent_ = false;
+  // Writes refused with exception 04, as by a drive whose command source is not the bus.
+  bool locked_ = false;
   int corrupt_ = 0;
 };
 

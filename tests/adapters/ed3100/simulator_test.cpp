@@ -1,8 +1,11 @@
-// The simulator answers as the document's examples do (vendor document, "Appendix ED3100").
-#include "simulator.h"
-
+// The simulator answers as the document's examples do (vendor document, "Appendix ED3100"), and
+// its operator commands. Made by the plugin's own factory, as `drivegate sim` makes it.
 #include <gtest/gtest.h>
 
+#include <memory>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
 #include "codec.h"
 #include "registers.h"
 
@@ -11,6 +14,14 @@ namespace {
 
 using B = Bytes;
 const TimePoint kT0 = TimePoint{} + std::chrono::hours(1);
+
+std::unique_ptr<Simulator> make_simulator() {
+  const SimEnv env{0x1F, test::options_of(drivegate_adapter)};
+  std::string error;
+  auto sim = drivegate_adapter.create_simulator(env, error);
+  EXPECT_TRUE(sim) << error;
+  return sim;
+}
 
 class SimTest : public ::testing::Test {
  protected:
@@ -29,7 +40,8 @@ class SimTest : public ::testing::Test {
     return d.frame.words;
   }
 
-  Ed3100Simulator sim{0x1F, ReadForm::document};
+  std::unique_ptr<Simulator> owned = make_simulator();
+  Simulator& sim = *owned;
   TimePoint now = kT0;
 };
 
@@ -156,6 +168,19 @@ TEST_F(SimTest, SilenceAndCorruption) {
   EXPECT_EQ(send(req), (B{0x1F, 0x03, 0x00, 0x06, 0x10, 0x88, 0xAB, 0xD3}));
 }
 
+TEST_F(SimTest, LockRefusesWritesButAnswersReads) {
+  EXPECT_EQ(sim.control("lock on", now), "ok lock=on");
+  EXPECT_EQ(send(encode_write_single(0x1F, 0x2000, kCmdStop)), encode_exception(0x1F, 0x06, 0x04));
+  const std::uint16_t run[] = {kCmdForward, 0x1388};
+  EXPECT_EQ(send(encode_write_multiple(0x1F, 0x2000, run)), encode_exception(0x1F, 0x10, 0x04));
+  EXPECT_EQ(send(encode_write_single(0x1F, 0x0006, 0x1234)), encode_exception(0x1F, 0x06, 0x04));
+  EXPECT_EQ(read_words(0x0006, 1), std::vector<std::uint16_t>{0x1088});  // nothing stored
+  EXPECT_EQ(read_words(kRegFault, 0), (std::vector<std::uint16_t>{0xFFFF, 0x0148}));
+  EXPECT_EQ(sim.control("lock off", now), "ok lock=off");
+  const Bytes w = encode_write_single(0x1F, 0x0006, 0x1234);
+  EXPECT_EQ(send(w), w);
+}
+
 TEST_F(SimTest, ControlStateAndErrors) {
   const std::string s = sim.control("state", now);
   for (const char* key : {"address=31", "form=document", "command=0x0001", "reference=0x1084",
@@ -163,6 +188,8 @@ TEST_F(SimTest, ControlStateAndErrors) {
     EXPECT_NE(s.find(key), std::string::npos) << key << " in " << s;
   }
   EXPECT_EQ(sim.control("bogus", now).rfind("error:", 0), 0u);
+  EXPECT_NE(sim.control("help", now).find("lock on|off"), std::string::npos);
+  EXPECT_EQ(sim.control("help", now).rfind("error:", 0), std::string::npos);
   EXPECT_EQ(sim.control("fault", now).rfind("error:", 0), 0u);
   EXPECT_EQ(sim.control("monitor 0D05 123 0x0104", now), "ok");
   EXPECT_EQ(read_words(0x0D05, 0), (std::vector<std::uint16_t>{123, 0x0104}));

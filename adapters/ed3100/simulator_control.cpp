@@ -2,9 +2,9 @@
 #include <cstdio>
 #include <sstream>
 
-#include "config.h"
 #include "drivegate/sim_text.h"
 #include "registers.h"
+#include "settings.h"
 #include "simulator.h"
 
 namespace drivegate::ed3100 {
@@ -15,6 +15,11 @@ std::string hex(std::uint16_t v) {
   std::snprintf(b, sizeof b, "0x%04X", v);
   return b;
 }
+
+constexpr const char* kUsage =
+    "use state | fault <code> | clear | silent on|off | lock on|off | corrupt <n> | "
+    "form document|standard | "
+    "param <GG-nn> <value> | monitor <0Dnn> <value> <format>|auto | help";
 
 std::optional<std::uint16_t> number(std::string_view s) {
   if (const auto v = parse_unsigned(s, 0xFFFF)) return static_cast<std::uint16_t>(*v);
@@ -30,7 +35,8 @@ std::string Ed3100Simulator::state() const {
     << " command=" << hex(command_) << " reference=" << hex(reference_) << " output=" << output_
     << " running=" << running_ << " direction=" << (rotating_reverse_ ? "reverse" : "forward")
     << " commanded=" << (commanded_reverse_ ? "reverse" : "forward") << " fault=" << hex(fault_)
-    << " state=" << hex(state_word()) << " silent=" << silent_ << " corrupt=" << corrupt_;
+    << " state=" << hex(state_word()) << " silent=" << silent_ << " lock=" << locked_
+    << " corrupt=" << corrupt_;
   for (const auto& [reg, value] : params_) {
     char b[32];
     std::snprintf(b, sizeof b, " param_%02x_%02x=%s", reg >> 8, reg & 0xFF, hex(value).c_str());
@@ -62,6 +68,10 @@ std::string Ed3100Simulator::control(std::string_view line, TimePoint /*now*/) {
     silent_ = a == "on";
     return "ok silent=" + a;
   }
+  if (cmd == "lock" && (a == "on" || a == "off")) {
+    locked_ = a == "on";
+    return "ok lock=" + a;
+  }
   if (cmd == "corrupt") {
     const auto n = number(a);
     if (!n) return "error: corrupt <count>";
@@ -92,9 +102,8 @@ std::string Ed3100Simulator::control(std::string_view line, TimePoint /*now*/) {
     monitor_override_[m->reg] = {*v, *f};
     return "ok";
   }
-  return "error: unknown command; use state | fault <code> | clear | silent on|off | "
-         "corrupt <n> | form document|standard | param <GG-nn> <value> | "
-         "monitor <0Dnn> <value> <format>|auto";
+  if (cmd == "help") return kUsage;
+  return std::string("error: unknown command; ") + kUsage;
 }
 
 }  // namespace drivegate::ed3100
