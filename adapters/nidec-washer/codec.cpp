@@ -2,8 +2,6 @@
 
 #include <algorithm>
 
-#include "drivegate/bytes.h"
-
 namespace drivegate::nidec {
 namespace {
 

@@ -6,15 +6,17 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <span>
-#include <vector>
 
+#include "drivegate/bytes.h"
 #include "drivegate/codec.h"
+#include "drivegate/line.h"
 
 namespace drivegate::nidec {
 
-using Bytes = std::vector<std::uint8_t>;
-using ByteView = std::span<const std::uint8_t>;
+// Section 3: 4800 baud, 8 information bits, odd parity, one stop bit; section 2: one wire, half
+// duplex, so the master hears its own bytes.
+inline constexpr LineDefaults kLine{
+    .baud = 4800, .parity = Parity::odd, .data_bits = 8, .stop_bits = 1, .echo = true};
 
 inline constexpr std::uint8_t kHeader = 0xA5;      // 4.1 / 4.2: 10100101
 inline constexpr std::uint8_t kNackHeader = 0x5A;  // 4.2 / 5.16: 01011010 = NACK
@@ -85,9 +87,8 @@ struct Reply {
   friend bool operator==(const Reply&, const Reply&) = default;
 
   [[nodiscard]] std::uint8_t error() const { return data[0]; }
-  [[nodiscard]] std::uint16_t u16(std::size_t i) const {
-    return static_cast<std::uint16_t>((data[i] << 8) | data[i + 1]);
-  }
+  // 4.2 / section 5: multi-byte fields are high byte first.
+  [[nodiscard]] std::uint16_t u16(std::size_t i) const { return be16(data[i], data[i + 1]); }
 };
 
 Bytes encode(const Reply& r);

@@ -1,95 +1,95 @@
+// NidecWasherDriver: the ping handshake, the poll plan, and what the bus engine hands back.
 #include "driver.h"
 
 #include <algorithm>
-#include <cmath>
-
-#include "faults.h"
+#include <chrono>
 
 namespace drivegate::nidec {
 namespace {
 
-constexpr Millis kReplyTimeout{100};   // section 6: resend after 100 ms without a reply
-constexpr Millis kCommTimeout{6000};   // section 6: no reply for 6 s = communication fault
-constexpr Millis kMaxPoll{1000};       // 5.2 / section 6: poll every 1 s at least
-constexpr Millis kInterFrameGap{5};    // not in the document: about two byte times at 4800 baud
-constexpr Millis kWriteTimeout{3000};  // the gateway's 0x0B deadline; ours fires before it
+constexpr Millis kReplyTimeout{100};  // section 6: resend after 100 ms without a reply
+constexpr Millis kCommTimeout{6000};  // section 6: no reply for 6 s = communication fault
+constexpr Millis kMaxPoll{1000};      // 5.2 / section 6: a frame every second at least
+constexpr Millis kMinPoll{10};        // not in the document: below this the line is only polls
+// Not in the document: two characters of line silence before each frame (4.6 ms at 4800 8O1),
+// so that the inverter sees where one frame ends and the next begins.
+constexpr Millis kInterFrameGap = std::chrono::ceil<Millis>(
+    2 * character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits));
+// The gateway fails a write still pending after this (0x0B); the driver's own confirmation
+// deadline (driver_writes.cpp) comes before it.
+constexpr Millis kWriteTimeout{3000};
 
-// Default agitation pattern (not in the document; see README): 0.5 s ramps, 1.2 s on, 0.8 s off.
+// The longest one attempt at a frame of `bytes` takes: the frame and its echo on the native line
+// (section 3; the engine waits for the echo before it times the reply), the 100 ms reply timeout
+// (section 6), and the gap before the next attempt.
+Millis attempt_time(std::size_t bytes) {
+  const auto wire = character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits) *
+                    static_cast<long>(2 * bytes);
+  return std::chrono::ceil<Millis>(wire) + kReplyTimeout + kInterFrameGap;
+}
+
+// Not in the document (see README): 0.5 s ramps, 1.2 s on, 0.8 s off each way.
 constexpr AgitationTiming kDefaultAgitation{5, 5, 12, 8, 12, 8};
-
-bool is_run(Command c) {
-  return c == Command::run_forward || c == Command::run_reverse;
-}
-
-std::uint16_t clamp16(std::int64_t v) {
-  return static_cast<std::uint16_t>(std::clamp<std::int64_t>(v, 0, 0xFFFF));
-}
-
-double tenths(std::int64_t units) {
-  return static_cast<double>(units) / 10.0;
-}
 
 }  // namespace
 
-DriverConfig config_from(const DeviceEnv& env) {
-  DriverConfig c;
-  const Options& o = env.options;
-  if (o.has("platform")) c.platform = static_cast<std::uint8_t>(o.integer("platform"));
-  if (o.has("empty_raw_weight")) c.empty_raw_weight = clamp16(o.integer("empty_raw_weight"));
-  if (o.has("accel_time_ms")) c.accel_100ms = clamp16((o.integer("accel_time_ms") + 50) / 100);
-  if (o.has("attempts")) c.attempts = static_cast<std::uint8_t>(o.integer("attempts"));
-  c.poll_interval = std::clamp(env.poll_interval, Millis{10}, kMaxPoll);
-  return c;
-}
-
-WasherDriver::WasherDriver(const DriverConfig& config)
-    : config_(config),
+NidecWasherDriver::NidecWasherDriver(const Settings& settings, Millis poll_interval)
+    : settings_(settings),
+      poll_interval_(std::clamp(poll_interval, kMinPoll, kMaxPoll)),
       points_(make_points()),
       values_(pt::count),
-      accel_100ms_(config.accel_100ms),
+      accel_100ms_(settings.accel_100ms),
       agitation_(kDefaultAgitation) {
-  values_[pt::motion] = std::int64_t{0};
-  values_[pt::accel_time] = tenths(accel_100ms_);
-  values_[pt::agitation_accel] = tenths(agitation_.accel);
-  values_[pt::agitation_decel] = tenths(agitation_.decel);
-  values_[pt::agitation_cw_on] = tenths(agitation_.cw_on);
-  values_[pt::agitation_cw_off] = tenths(agitation_.cw_off);
-  values_[pt::agitation_ccw_on] = tenths(agitation_.ccw_on);
-  values_[pt::agitation_ccw_off] = tenths(agitation_.ccw_off);
-  values_[pt::action] = std::int64_t{0};
-  values_[pt::action_status] = std::int64_t{0};
+  values_[pt::motion] = std::int64_t{static_cast<std::int64_t>(motion_)};
+  values_[pt::accel_time] = seconds_of(accel_100ms_);
+  values_[pt::agitation_accel] = seconds_of(agitation_.accel);
+  values_[pt::agitation_decel] = seconds_of(agitation_.decel);
+  values_[pt::agitation_cw_on] = seconds_of(agitation_.cw_on);
+  values_[pt::agitation_cw_off] = seconds_of(agitation_.cw_off);
+  values_[pt::agitation_ccw_on] = seconds_of(agitation_.ccw_on);
+  values_[pt::agitation_ccw_off] = seconds_of(agitation_.ccw_off);
+  values_[pt::action] = std::int64_t{static_cast<std::int64_t>(Action::none)};
+  values_[pt::action_status] = std::int64_t{static_cast<std::int64_t>(ActionStatus::idle)};
 }
 
-DriverTraits WasherDriver::traits() const {
+DriverTraits NidecWasherDriver::traits() const {
   return {kCommTimeout, kWriteTimeout, kInterFrameGap};
 }
 
-Exchange WasherDriver::exchange(const Request& r, Priority p) const {
+Exchange NidecWasherDriver::exchange(const Request& r, Priority p) const {
   Exchange ex;
   ex.frame = encode(r);
-  ex.reply = ReplyMode::expected;
+  ex.reply = ReplyMode::expected;  // 5.16: the inverter answers every frame, an ACK or a NACK
   ex.timeout = kReplyTimeout;
-  ex.attempts = config_.attempts;
+  ex.attempts = settings_.attempts;
   ex.priority = p;
   return ex;
 }
 
-std::optional<Exchange> WasherDriver::next_exchange(TimePoint now) {
+std::optional<Exchange> NidecWasherDriver::next_exchange(TimePoint now) {
   expire(now);
-  if (!ready_) {
-    // 5.1: ping after every start or reconnect, before anything else.
+  if (!common_.ready) {
+    // 5.1: the ping goes after every start or reconnect, before anything else; writes wait
+    // behind it, and make it urgent.
     if (next_poll_ && now < *next_poll_ && queue_.empty()) return std::nullopt;
     in_flight_ = InFlight::ping;
     expected_ = Mode::ping;
     last_sent_ = now;
-    return exchange(make_ping(config_.platform, config_.empty_raw_weight),
+    return exchange(make_ping(settings_.platform, settings_.empty_raw_weight),
                     queue_.empty() ? Priority::poll : Priority::command);
   }
-  if (!queue_.empty()) {
+  if (const Queued* q = front_to_send()) {
     in_flight_ = InFlight::queued;
-    expected_ = queue_.front().request.mode;
+    expected_ = q->request->mode;
     last_sent_ = now;
-    return exchange(queue_.front().request, Priority::command);
+    Exchange ex = exchange(*q->request, Priority::command);
+    // Only the attempts that start before the write's deadline (expire() has kept it, so one at
+    // least): an ACK long after it would put in force a write the gateway may have failed.
+    const auto fit = (q->deadline - now + attempt_time(ex.frame.size()) - Millis(1)) /
+                     attempt_time(ex.frame.size());
+    ex.attempts = static_cast<std::uint8_t>(
+        std::clamp<std::int64_t>(fit, 1, std::int64_t{settings_.attempts}));
+    return ex;
   }
   if (next_poll_ && now < *next_poll_) return std::nullopt;
   in_flight_ = InFlight::poll;
@@ -98,43 +98,42 @@ std::optional<Exchange> WasherDriver::next_exchange(TimePoint now) {
   return exchange(make_bare(Mode::request), Priority::poll);  // 5.2
 }
 
-TimePoint WasherDriver::wake_at() const {
+TimePoint NidecWasherDriver::wake_at() const {
   if (!queue_.empty()) return TimePoint::min();
   return next_poll_.value_or(TimePoint::min());
 }
 
-RxVerdict WasherDriver::on_receive(ByteView rx, TimePoint now) {
+RxVerdict NidecWasherDriver::on_receive(ByteView rx, TimePoint now) {
   (void)now;
   const Decoded<Reply> d = decode_reply(rx);
   if (d.status == DecodeStatus::incomplete) return {RxKind::incomplete, 0};
-  if (d.status == DecodeStatus::bad) {
-    const bool checksum = d.error == make_error_code(FrameError::bad_checksum);
-    return {checksum ? RxKind::bad_checksum : RxKind::noise, d.consumed};
-  }
+  if (d.status == DecodeStatus::bad) return damaged(d);
   if (d.frame.nack) return {RxKind::nack, d.consumed};  // 5.16: the engine resends
-  // The inverter only ever answers the frame just sent (section 2): anything else is stale.
+  // Section 2: the inverter only ever answers the frame just sent, so a good frame of another
+  // mode is a late answer to an earlier one.
   if (in_flight_ == InFlight::none || d.frame.mode != expected_) {
     return {RxKind::foreign, d.consumed};
   }
-  apply(d.frame);
-  if (in_flight_ == InFlight::ping) ready_ = common_.ready = true;
+  apply_reply(d.frame);
+  if (in_flight_ == InFlight::ping) common_.ready = true;
   if (in_flight_ == InFlight::queued) complete_front(d.frame);
   in_flight_ = InFlight::none;
-  next_poll_ = last_sent_ + config_.poll_interval;
+  // Section 6: the next frame one poll interval after this one went, whatever it was.
+  next_poll_ = last_sent_ + poll_interval_;
   update_running();
   return {RxKind::reply, d.consumed};
 }
 
-void WasherDriver::on_no_reply(TimePoint now) {
-  // Section 6: keep resending the same frame (a queued write stays at the front until its
-  // deadline); the engine backs off a silent device on a shared bus.
+void NidecWasherDriver::on_no_reply(TimePoint now) {
+  // Section 6: resend the same frame (a queued write stays at the front until it is answered or
+  // its deadline passes); the engine backs off a silent device.
   in_flight_ = InFlight::none;
   next_poll_ = now;
 }
 
-void WasherDriver::on_comm_lost(TimePoint now) {
+void NidecWasherDriver::on_comm_lost(TimePoint now) {
   (void)now;
-  ready_ = common_.ready = false;
+  common_.ready = false;
   in_flight_ = InFlight::none;
   next_poll_.reset();
   while (!queue_.empty()) {
@@ -143,64 +142,20 @@ void WasherDriver::on_comm_lost(TimePoint now) {
     finish(q, WriteResult::no_response);
   }
   // Section 7: after 6 s without bus activity the inverter stops the motor by itself.
-  set_command(Command::stop);
   common_.speed_rpm = 0;
-  update_running();
+  set_command(Command::stop);
 }
 
-void WasherDriver::expire(TimePoint now) {
-  for (auto it = queue_.begin(); it != queue_.end();) {
-    if (it->deadline <= now) {
-      const Queued q = *it;
-      it = queue_.erase(it);
-      finish(q, WriteResult::no_response);
-    } else {
-      ++it;
-    }
-  }
-}
-
-void WasherDriver::finish(const Queued& q, WriteResult result) {
-  completions_.push_back({q.ticket, result});
-  if (q.job == Job::action) {
-    const ActionStatus s =
-        result == WriteResult::ok ? ActionStatus::done : ActionStatus::no_response;
-    values_[pt::action_status] = static_cast<std::int64_t>(s);
-  }
-}
-
-void WasherDriver::complete_front(const Reply& r) {
-  if (queue_.empty()) return;
-  const Queued q = queue_.front();
-  queue_.pop_front();
-  switch (q.job) {
-    case Job::run:
-      // Section 8: a faulted inverter keeps the motor stopped; its ACK carries the Error bits.
-      if (r.error() != 0) return finish(q, WriteResult::refused);
-      motion_in_force_ = q.motion;
-      set_command(q.command);
-      return finish(q, WriteResult::ok);
-    case Job::stop:
-      set_command(q.command);
-      return finish(q, WriteResult::ok);
-    case Job::reset_fault:
-      // There is no reset frame: a Request tells whether the inverter has cleared the fault.
-      return finish(q, r.error() == 0 ? WriteResult::ok : WriteResult::refused);
-    case Job::action:
-      return finish(q, WriteResult::ok);
-  }
-}
-
-void WasherDriver::set_command(Command c) {
+void NidecWasherDriver::set_command(Command c) {
   common_.command = c;
   update_running();
 }
 
-void WasherDriver::update_running() {
+void NidecWasherDriver::update_running() {
   common_.running = is_run(common_.command) || common_.speed_rpm != 0;
 }
 
-void WasherDriver::take_completions(std::vector<Completion>& out) {
+void NidecWasherDriver::take_completions(std::vector<Completion>& out) {
   out.insert(out.end(), completions_.begin(), completions_.end());
   completions_.clear();
 }

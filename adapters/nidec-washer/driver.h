@@ -1,4 +1,5 @@
-// The Nidec washer driver: ping handshake, poll plan, command translation and fault mapping.
+// The Nidec washer driver: ping handshake and poll plan (driver.cpp), what each ACK tells
+// (driver_replies.cpp), and Modbus writes judged, queued and confirmed (driver_writes.cpp).
 #pragma once
 
 #include <deque>
@@ -8,24 +9,14 @@
 #include "codec.h"
 #include "drivegate/driver.h"
 #include "points.h"
+#include "settings.h"
 
 namespace drivegate::nidec {
 
-struct DriverConfig {
-  std::uint8_t platform = 7;           // 5.1 ping byte 3
-  std::uint16_t empty_raw_weight = 0;  // 5.1 ping bytes 4..5
-  std::uint16_t accel_100ms = 30;      // 5.3: accel time in 100 ms units
-  std::uint8_t attempts = 3;           // identical sends per turn (section 6: resend)
-  Millis poll_interval{500};           // section 6: 500 ms recommended, 1 s at most
-  Millis confirm_timeout{2500};        // a queued write not confirmed by then fails
-};
-
-// Reads the validated [device.options] (see plugin.cpp) and the poll interval.
-DriverConfig config_from(const DeviceEnv& env);
-
-class WasherDriver final : public Driver {
+class NidecWasherDriver final : public Driver {
  public:
-  explicit WasherDriver(const DriverConfig& config);
+  // `poll_interval` is the device's; section 6 wants a frame every second at least.
+  NidecWasherDriver(const Settings& settings, Millis poll_interval);
 
   [[nodiscard]] DriverTraits traits() const override;
   [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
@@ -38,43 +29,67 @@ class WasherDriver final : public Driver {
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;
 
-  WriteStatus command(Command c, Ticket t, TimePoint now) override;
-  WriteStatus setpoint(std::int32_t rpm, Ticket t, TimePoint now) override;
-  WriteStatus write(std::size_t point, const Value& v, Ticket t, TimePoint now) override;
+  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
   void take_completions(std::vector<Completion>& out) override;
 
  private:
-  // What a queued frame is for: decides how its ACK completes the write.
-  enum class Job : std::uint8_t { run, stop, reset_fault, action };
+  // What a queued write is for: decides how its frame is made and how its ACK completes it.
+  enum class Job : std::uint8_t { run, setpoint, stop, reset_fault, action };
   struct Queued {
-    Request request;
-    Job job;
-    Ticket ticket;
-    TimePoint deadline;
+    Job job = Job::action;
+    Ticket ticket = 0;
+    TimePoint deadline{};
     Command command = Command::stop;   // run / stop: the command in force once ACKed
     Motion motion = Motion::rotation;  // run: the motion in force once ACKed
+    std::uint16_t rpm = 0;             // setpoint: the setpoint in force once ACKed
+    // The frame. Run and setpoint frames are made when they first reach the line, from what is
+    // in force then (driver_writes.cpp); every other frame when the write is applied.
+    std::optional<Request> request;
   };
   enum class InFlight : std::uint8_t { none, ping, poll, queued };
 
-  Exchange exchange(const Request& r, Priority p) const;
-  std::optional<Request> run_request(Command c, Motion m) const;
-  WriteStatus enqueue(Queued q);
-  void expire(TimePoint now);
-  void finish(const Queued& q, WriteResult result);
-  void complete_front(const Reply& r);
-  void apply(const Reply& r);
-  void apply_error(std::uint8_t error);
-  void apply_speed(std::uint16_t rpm);
+  // The state a write is judged against: as it is now (judged_now()), or as the parts of a
+  // request before it would leave it (check()).
+  struct Judged {
+    Motion motion = Motion::rotation;  // what a run starts (the `motion` point)
+    bool faulted = false;              // the last ACK carried Error bits (section 8)
+    bool forced_brake = false;         // 5.13
+  };
+
+  // driver.cpp
+  [[nodiscard]] Exchange exchange(const Request& r, Priority p) const;
   void set_command(Command c);
   void update_running();
-  WriteStatus write_action(std::int64_t n, Ticket t, TimePoint now);
 
-  DriverConfig config_;
+  // driver_replies.cpp
+  void apply_reply(const Reply& r);
+  void apply_error(std::uint8_t error);
+  void apply_speed(std::uint16_t rpm);
+
+  // driver_writes.cpp
+  [[nodiscard]] Judged judged_now() const;
+  [[nodiscard]] static WriteCheck judge(const WriteOp& op, Judged& state);
+  [[nodiscard]] std::optional<Request> run_request(Command c, Motion m, std::uint16_t rpm) const;
+  WriteStatus apply_command(Command c, Ticket t, TimePoint deadline);
+  WriteStatus apply_setpoint(std::uint16_t rpm, Ticket t, TimePoint deadline);
+  WriteStatus apply_point(std::size_t point, const Value& v, Ticket t, TimePoint deadline);
+  WriteStatus apply_action(Action a, Ticket t, TimePoint deadline);
+  WriteStatus enqueue(Queued q);
+  void supersede_motion();
+  [[nodiscard]] bool motion_queued() const;
+  const Queued* front_to_send();
+  void expire(TimePoint now);
+  void complete_front(const Reply& r);
+  void finish(const Queued& q, WriteResult result);
+
+  Settings settings_;
+  Millis poll_interval_;
   std::vector<PointSpec> points_;
   std::vector<Value> values_;
   CommonState common_;
 
-  bool ready_ = false;                  // ping answered since start / comm_lost
+  // Line
   std::optional<TimePoint> next_poll_;  // empty: at once
   TimePoint last_sent_{};
   InFlight in_flight_ = InFlight::none;
@@ -82,11 +97,13 @@ class WasherDriver final : public Driver {
   std::deque<Queued> queue_;
   std::vector<Completion> completions_;
 
+  // Settings of the next run, written through points: the gateway's, not the drive's.
   Motion motion_ = Motion::rotation;
-  Motion motion_in_force_ = Motion::rotation;
-  std::uint16_t setpoint_ = 0;
   std::uint16_t accel_100ms_;
   AgitationTiming agitation_;
+
+  // In force at the drive, as its ACKs showed.
+  Motion motion_in_force_ = Motion::rotation;
   bool forced_brake_ = false;
 };
 

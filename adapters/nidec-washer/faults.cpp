@@ -24,6 +24,14 @@ constexpr std::array<FaultBit, 8> kBits = {{
     {0x80, "motor_over_temperature", Fault::motor_over_temperature},  // winding >= 140 degC
 }};
 
+constexpr bool in_bit_order() {
+  for (std::size_t bit = 0; bit < kBits.size(); ++bit) {
+    if (kBits[bit].mask != (1u << bit)) return false;
+  }
+  return true;
+}
+static_assert(in_bit_order(), "fault_bit_labels() labels bit n with entry n");
+
 }  // namespace
 
 FaultSet map_faults(std::uint8_t error_bits) {
@@ -35,11 +43,10 @@ FaultSet map_faults(std::uint8_t error_bits) {
 }
 
 std::vector<Label> fault_bit_labels() {
-  std::vector<Label> labels;
-  for (std::uint32_t bit = 0; bit < kBits.size(); ++bit) {
-    labels.push_back({std::string(kBits[bit].name), bit});
-  }
-  return labels;
+  // kBits is in bit order (entry n is mask 1 << n), so the names label bits 0..7 in order.
+  std::array<std::string_view, kBits.size()> names{};
+  for (std::size_t bit = 0; bit < kBits.size(); ++bit) names[bit] = kBits[bit].name;
+  return labels_in_order(names);
 }
 
 std::optional<std::uint8_t> fault_mask(std::string_view name) {

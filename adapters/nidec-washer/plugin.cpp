@@ -1,48 +1,54 @@
-// The plugin descriptor: options, line defaults and the two factories.
-#include <iterator>
+// The nidec-washer plugin descriptor: option schema, line defaults, the two factories and how
+// `drivegate demo` shows the washer.
+#include <array>
+#include <memory>
+#include <string>
 
+#include "codec.h"
 #include "drivegate/adapter.h"
 #include "driver.h"
+#include "settings.h"
 #include "simulator.h"
 
+namespace drivegate::nidec {
 namespace {
 
-using drivegate::OptionSpec;
-using drivegate::OptionType;
-
-const OptionSpec kOptions[] = {
-    {"platform", OptionType::integer, "7",
-     "washer platform sent in the ping (5.1), e.g. 7 for a 7 kg washer", 0, 255},
-    {"empty_raw_weight", OptionType::integer, "0",
-     "empty-basket raw weight sent in the ping (5.1); 0 = no adjustment", 0, 65535},
-    {"accel_time_ms", OptionType::integer, "3000",
-     "initial accel time of CW/CCW/spin/free-shaft spin (sent in 100 ms units, 5.3)", 0, 6553500},
-    {"attempts", OptionType::integer, "3",
-     "identical sends per bus turn before giving the line to others (section 6: resend)", 1, 20},
-};
-
-std::unique_ptr<drivegate::Driver> create_driver(const drivegate::DeviceEnv& env, std::string&) {
-  return std::make_unique<drivegate::nidec::WasherDriver>(drivegate::nidec::config_from(env));
+std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
+  const auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  return std::make_unique<NidecWasherDriver>(*settings, env.poll_interval);
 }
 
-std::unique_ptr<drivegate::Simulator> create_simulator(const drivegate::SimEnv& env, std::string&) {
-  return std::make_unique<drivegate::nidec::WasherSimulator>(env);
+std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
+  // The options only shape the master's frames (the ping's platform and empty raw weight, 5.1),
+  // but a simulator is refused for the same options a device is.
+  if (!parse_settings(env.options, error)) return nullptr;
+  return std::make_unique<NidecWasherSimulator>();
 }
+
+// `drivegate demo`: a 7 kg washer (5.1: platform 0x07), rotating at 800 rpm.
+constexpr std::array<OptionSetting, 1> kDemoOptions = {{{"platform", "7"}}};
 
 }  // namespace
+}  // namespace drivegate::nidec
 
-extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter = {
-    drivegate::kAdapterApiVersion,
-    "nidec-washer",
-    "Nidec washing-machine inverter, Elaraby bus protocol spec V07",
-    kOptions,
-    std::size(kOptions),
-    // Section 3: 4800 baud, 8 data bits, odd parity, one stop bit; one wire, half duplex.
-    {4800, drivegate::Parity::odd, 8, 1, true},
-    0,  // section 2: one inverter per wire, no address in the frame
-    0,
-    0,
-    false,  // section 2: the inverter only answers
-    create_driver,
-    create_simulator,
+extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
+    .api_version = drivegate::kAdapterApiVersion,
+    .id = "nidec-washer",
+    .summary = "Nidec washing-machine inverter, Elaraby bus protocol spec V07",
+    .options = drivegate::nidec::kOptionSchema.data(),
+    .option_count = drivegate::nidec::kOptionSchema.size(),
+    .line = drivegate::nidec::kLine,  // section 3: 4800 8O1; section 2: one wire
+    // Section 2: one inverter per wire, no address in the frame.
+    .address_min = 0,
+    .address_max = 0,
+    .default_address = 0,
+    .streaming = false,  // section 2: the inverter only answers the master
+    .create_driver = &drivegate::nidec::create_driver,
+    .create_simulator = &drivegate::nidec::create_simulator,
+    .demo = {.options = drivegate::nidec::kDemoOptions.data(),
+             .option_count = drivegate::nidec::kDemoOptions.size(),
+             .running_rpm = 800},
+    .actions = nullptr,  // no maintenance actions
+    .action_count = 0,
 };

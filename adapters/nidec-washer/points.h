@@ -1,8 +1,11 @@
-// The adapter's own points (after the common block) and the enums their values name.
+// The adapter's own points (after the common block), their indices, and the enums their values
+// name.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "drivegate/point.h"
@@ -16,6 +19,8 @@ enum class Motion : std::uint16_t {
   agitation = 2,        // 0x0C (5.5), forward only
   free_shaft_spin = 3,  // 0x1D (5.14), forward only
 };
+inline constexpr std::array<std::string_view, 4> kMotionNames = {"rotation", "spin", "agitation",
+                                                                 "free_shaft_spin"};
 
 // One-shot requests (holding point `action`).
 enum class Action : std::uint16_t {
@@ -28,10 +33,19 @@ enum class Action : std::uint16_t {
   fct_test = 6,              // 0x66 (5.15)
   ping = 7,                  // 0x02 (5.1), sent again on request
 };
-inline constexpr std::uint16_t kActionMax = 7;
+inline constexpr std::array<std::string_view, 8> kActionNames = {"none",
+                                                                 "voltage_detection",
+                                                                 "weight_detection",
+                                                                 "fabric_detection",
+                                                                 "forced_brake_enable",
+                                                                 "forced_brake_disable",
+                                                                 "fct_test",
+                                                                 "ping"};
 
 // Outcome of the last `action` (input point `action_status`).
 enum class ActionStatus : std::uint16_t { idle = 0, pending = 1, done = 2, no_response = 3 };
+inline constexpr std::array<std::string_view, 4> kActionStatusNames = {"idle", "pending", "done",
+                                                                       "no_response"};
 
 // Indices into points() / values().
 namespace pt {
@@ -61,6 +75,16 @@ inline constexpr std::size_t fct_bus_volt_low = 22;
 inline constexpr std::size_t fct_phase_current = 23;
 inline constexpr std::size_t count = 24;
 }  // namespace pt
+
+// The seconds a time point shows for a field of 100 ms units (5.3 accel, 5.5 agitation).
+constexpr double seconds_of(std::int64_t units_100ms) {
+  return static_cast<double>(units_100ms) / 10.0;
+}
+
+// Whether a point is one of the agitation times (5.5), laid out in frame order.
+constexpr bool is_agitation_time(std::size_t point) {
+  return point >= pt::agitation_accel && point <= pt::agitation_ccw_off;
+}
 
 std::vector<PointSpec> make_points();
 

@@ -24,11 +24,7 @@ double seconds(Millis m) {
 
 }  // namespace
 
-WasherSimulator::WasherSimulator(const SimEnv& env) {
-  (void)env;  // no address on this bus (section 2: one inverter per wire)
-}
-
-Bytes WasherSimulator::send(Bytes frame) {
+Bytes NidecWasherSimulator::send(Bytes frame) {
   if (corrupt_ > 0) {
     --corrupt_;
     frame.back() ^= 0xFF;
@@ -36,7 +32,7 @@ Bytes WasherSimulator::send(Bytes frame) {
   return frame;
 }
 
-Bytes WasherSimulator::on_receive(ByteView rx, TimePoint now) {
+Bytes NidecWasherSimulator::on_receive(ByteView rx, TimePoint now) {
   if (silent_) return {};  // "silent on": as if unplugged, it neither hears nor answers
   advance(now);
   if (!rx_.empty() && last_byte_ && now - *last_byte_ > kFrameGap) rx_.clear();
@@ -68,12 +64,12 @@ Bytes WasherSimulator::on_receive(ByteView rx, TimePoint now) {
   return out;
 }
 
-Bytes WasherSimulator::status_reply(Mode m, std::uint8_t last) const {
+Bytes NidecWasherSimulator::status_reply(Mode m, std::uint8_t last) const {
   const std::uint16_t s = speed();
   return encode_reply(m, {faults_, hi8(s), lo8(s), last});
 }
 
-Bytes WasherSimulator::handle(const Request& r, TimePoint now) {
+Bytes NidecWasherSimulator::handle(const Request& r, TimePoint now) {
   const auto& d = r.data;
   switch (r.mode) {
     case Mode::ping:  // 5.1
@@ -132,7 +128,7 @@ Bytes WasherSimulator::handle(const Request& r, TimePoint now) {
   return encode_nack();
 }
 
-void WasherSimulator::start(Motion m, const Request& r, TimePoint now) {
+void NidecWasherSimulator::start(Motion m, const Request& r, TimePoint now) {
   // 5.1: no motion before the ping; section 8: none while a fault is reported; 5.13: none
   // while the forced brake holds. The ACK still goes out (with the Error bits).
   if (!pinged_ || faults_ != 0 || forced_brake_) return;
@@ -149,7 +145,7 @@ void WasherSimulator::start(Motion m, const Request& r, TimePoint now) {
   ramp_ = accel_s > 0.0 ? std::max<double>(target_, 1.0) / accel_s : 1e9;
 }
 
-void WasherSimulator::trip(std::uint8_t bits, TimePoint now) {
+void NidecWasherSimulator::trip(std::uint8_t bits, TimePoint now) {
   faults_ |= bits;
   for (std::size_t bit = 0; bit < 8; ++bit) {
     const auto mask = static_cast<std::uint8_t>(1u << bit);
@@ -164,7 +160,7 @@ void WasherSimulator::trip(std::uint8_t bits, TimePoint now) {
   speed_ = 0.0;
 }
 
-void WasherSimulator::advance(TimePoint now) {
+void NidecWasherSimulator::advance(TimePoint now) {
   const double dt =
       last_tick_ ? seconds(std::chrono::duration_cast<Millis>(now - *last_tick_)) : 0.0;
   last_tick_ = now;
@@ -213,20 +209,20 @@ void WasherSimulator::advance(TimePoint now) {
   }
 }
 
-Bytes WasherSimulator::on_tick(TimePoint now) {
+Bytes NidecWasherSimulator::on_tick(TimePoint now) {
   advance(now);
   return {};  // section 2: the inverter never speaks unasked
 }
 
-std::uint16_t WasherSimulator::speed() const {
+std::uint16_t NidecWasherSimulator::speed() const {
   return static_cast<std::uint16_t>(std::lround(std::clamp(speed_, 0.0, 65535.0)));
 }
 
-std::uint8_t WasherSimulator::weight() const {
+std::uint8_t NidecWasherSimulator::weight() const {
   return weighed_ ? load_ : 0;
 }  // 5.2: 0 = none
 
-std::uint16_t WasherSimulator::raw_weight() const {
+std::uint16_t NidecWasherSimulator::raw_weight() const {
   // 5.10: the simulator's own raw table: 1000 empty, +20 per 100 g; 0 until detected.
   return weighed_ ? static_cast<std::uint16_t>(1000 + 20 * load_) : 0;
 }

@@ -12,9 +12,11 @@
 
 namespace drivegate::nidec {
 
-class WasherSimulator final : public Simulator {
+class NidecWasherSimulator final : public Simulator {
  public:
-  explicit WasherSimulator(const SimEnv& env);
+  // Section 2: one inverter per wire and no address in the frame; the platform and empty raw
+  // weight come with the ping (5.1), so no device option concerns the inverter's side.
+  NidecWasherSimulator() = default;
 
   Bytes on_receive(ByteView rx, TimePoint now) override;
   Bytes on_tick(TimePoint now) override;

@@ -1,7 +1,15 @@
-// The simulated inverter, driven byte by byte like a master on the wire would.
+// The simulated inverter, made by the adapter's own factory and driven byte by byte like a
+// master on the wire would, and its operator commands.
 #include "simulator.h"
 
 #include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
+#include "codec.h"
 
 namespace drivegate::nidec {
 namespace {
@@ -10,6 +18,15 @@ using namespace std::chrono_literals;
 
 const Bytes kPoll = {0xA5, 0x05, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xA0};  // 5.2
 const Bytes kNack = {0x5A, 0x00, 0xFF, 0x00, 0xFF, 0x00, 0x5A};                          // 5.16
+
+std::unique_ptr<Simulator> make_simulator() {
+  SimEnv env;
+  env.options = test::options_of(drivegate_adapter);
+  std::string error;
+  auto sim = drivegate_adapter.create_simulator(env, error);
+  EXPECT_NE(sim, nullptr) << error;
+  return sim;
+}
 
 class Sim : public ::testing::Test {
  protected:
@@ -20,7 +37,8 @@ class Sim : public ::testing::Test {
   std::string state() { return sim.control("state", now); }
   bool has(const std::string& kv) { return state().find(kv) != std::string::npos; }
 
-  WasherSimulator sim{SimEnv{}};
+  std::unique_ptr<Simulator> owned = make_simulator();
+  Simulator& sim = *owned;
   TimePoint now = TimePoint{} + 1h;
 };
 
@@ -142,6 +160,31 @@ TEST_F(Sim, FctReplyIsThirteenBytes_5_15) {
   EXPECT_EQ(r[1], 0x66);
   const Decoded<Reply> d = decode_reply(r);
   EXPECT_EQ(d.status, DecodeStatus::frame);
+}
+
+TEST_F(Sim, HelpListsTheCommands) {
+  const std::string h = sim.control("help", now);
+  EXPECT_EQ(h.rfind("commands: ", 0), 0u);
+  for (const char* c : {"state", "fault", "clear", "silent on|off", "corrupt N", "nack N", "load N",
+                        "bus V", "fabric N", "version N"}) {
+    EXPECT_NE(h.find(c), std::string::npos) << c;
+  }
+}
+
+TEST_F(Sim, LoadFabricAndVersionShowInTheirAcks_5_1_5_10_5_11) {
+  EXPECT_EQ(sim.control("version 0x0203", now), "ok version=0x0203");
+  EXPECT_EQ(send(encode(make_ping(7, 0))), encode_reply(Mode::ping, {7, 0x02, 0x03, 0}));
+  EXPECT_EQ(sim.control("load 40", now), "ok load=40");
+  send(encode(make_bare(Mode::weight_detection)));  // 5.10: done in about 35 s
+  wait(36s);
+  const Decoded<Reply> w = decode_reply(send(encode(make_bare(Mode::weight_detection))));
+  ASSERT_EQ(w.status, DecodeStatus::frame);
+  EXPECT_EQ(w.frame.u16(1), 1800);  // the simulator's table: 1000 + 20 per 100 g
+  EXPECT_EQ(w.frame.data[3], 40);
+  EXPECT_EQ(sim.control("fabric 3", now), "ok fabric=3");
+  const Decoded<Reply> f = decode_reply(send(encode(make_bare(Mode::fabric_detection))));
+  EXPECT_EQ(f.frame.data[1], 3);
+  EXPECT_EQ(sim.control("load 256", now).rfind("error: ", 0), 0u);
 }
 
 TEST_F(Sim, ControlAnswersUnknownCommandsWithTheList) {

@@ -1,4 +1,4 @@
-// WasherSimulator: operator commands (`drivegate sim nidec-washer` passes stdin lines here).
+// NidecWasherSimulator: operator commands (`drivegate sim nidec-washer` passes stdin lines here).
 #include <cstdio>
 #include <sstream>
 #include <vector>
@@ -12,11 +12,7 @@ namespace {
 
 constexpr const char* kHelp =
     "state, fault <name|raw>, clear, silent on|off, corrupt N, nack N, load N (x100 g), "
-    "bus V, fabric N, version N";
-
-std::vector<std::string> words(std::string_view line) {
-  return split_words(line);
-}
+    "bus V, fabric N, version N, help";
 
 // Decimal or 0x-prefixed hexadecimal, within [0, max].
 std::optional<long> number(const std::string& s, long max) {
@@ -35,7 +31,7 @@ constexpr const char* kMotionNames[] = {
 
 }  // namespace
 
-std::string WasherSimulator::state() const {
+std::string NidecWasherSimulator::state() const {
   std::ostringstream s;
   s << "pinged=" << pinged_ << " platform=" << int{platform_} << " empty_raw_weight=" << empty_raw_
     << " version=" << hex(version_, 4) << " motion=" << kMotionNames[static_cast<int>(motion_)]
@@ -48,15 +44,16 @@ std::string WasherSimulator::state() const {
   return s.str();
 }
 
-std::string WasherSimulator::control(std::string_view line, TimePoint now) {
+std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) {
   advance(now);
-  const std::vector<std::string> w = words(line);
+  const std::vector<std::string> w = split_words(line);
   const auto error = [&](const std::string& why) {
     return "error: " + why + "; commands: " + kHelp;
   };
   if (w.empty()) return error("empty command");
   const std::string& cmd = w[0];
   const std::optional<long> arg = w.size() == 2 ? number(w[1], 65535) : std::nullopt;
+  if (cmd == "help" && w.size() == 1) return std::string("commands: ") + kHelp;
   if (cmd == "state" && w.size() == 1) return state();
   if (cmd == "clear" && w.size() == 1) {
     faults_ = 0;

@@ -1,0 +1,123 @@
+// The one-shot requests of holding point `action`, written as a PLC writes them, on the real bus
+// engine: the frame of section 5 on the wire, `action_status`, and the points their ACKs fill.
+#include <gtest/gtest.h>
+
+#include "bench.h"
+#include "points.h"
+
+namespace drivegate::nidec {
+namespace {
+
+constexpr std::uint16_t value_of(Action a) {
+  return static_cast<std::uint16_t>(a);
+}
+constexpr std::uint32_t status_of(ActionStatus s) {
+  return static_cast<std::uint32_t>(s);
+}
+
+TEST(NidecActions, VoltageDetection_5_9) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::idle));
+  const TimePoint asked = b.rig.now();
+  const auto w = b.start_write("action", {value_of(Action::voltage_detection)});
+  EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::pending));
+  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x2B, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x8E}));
+  EXPECT_EQ(b.read("dc_bus_voltage"), 311u);
+  EXPECT_EQ(b.read("action"), value_of(Action::voltage_detection));
+  EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::done));
+}
+
+TEST(NidecActions, WeightDetectionTakes35s_5_10) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Exception::none);
+  EXPECT_EQ(b.read("raw_weight"), 0u);  // 5.10: 0 until detected
+  EXPECT_EQ(b.read("weight"), 0u);
+  b.rig.run_for(36s);
+  EXPECT_EQ(b.read("weight"), 35u);  // 3.5 kg: the Request ACK (5.2) reports it too
+  EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Exception::none);
+  EXPECT_EQ(b.read("raw_weight"), 1700u);
+}
+
+TEST(NidecActions, FabricDetectionIsKeptRaw_5_11) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("fabric 3");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write("action", {value_of(Action::fabric_detection)}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x2D, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x88}));
+  EXPECT_EQ(b.read("fabric_raw"), 0x00030000u);
+}
+
+TEST(NidecActions, ForcedBrakeBlocksAndStopsMotion_5_13) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_enable)}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x1B, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBF}));
+  EXPECT_EQ(b.read("forced_brake"), 1u);
+  // 5.13: the motor is held stopped: no run is in force, and none is taken.
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  const std::size_t before = b.rig.sent().size();
+  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  asked = b.rig.now();
+  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_disable)}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x1B, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBE}));
+  EXPECT_EQ(b.read("forced_brake"), 0u);
+  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+}
+
+TEST(NidecActions, FctTest_5_15) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("fault stall");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write("action", {value_of(Action::fct_test)}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kFct);
+  EXPECT_EQ(b.read("fct_error"), 0x0008u);
+  EXPECT_EQ(b.read("fct_speed_rpm"), 0u);
+  EXPECT_EQ(b.read("fct_ipm_temperature"), 45u);
+  EXPECT_EQ(b.read("fct_ipm_model_bus_volt_high"), 0x11u);
+  EXPECT_EQ(b.read("fct_bus_volt_low"), 0x37u);
+  EXPECT_EQ(b.read("fct_phase_current"), 0u);
+  // Its 16-bit Error is not the section 8 byte: the common faults wait for the next poll.
+  EXPECT_EQ(b.read("native_fault"), 0u);
+}
+
+TEST(NidecActions, PingAgainOnRequest_5_1) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("version 0x0203");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write("action", {value_of(Action::ping)}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kPing7);
+  EXPECT_EQ(b.read("inverter_version"), 0x0203u);
+  // `none` is taken without traffic; the gateway keeps values the table does not name.
+  const std::size_t before = b.rig.sent().size();
+  EXPECT_EQ(b.start_write("action", {value_of(Action::none)})->result, Exception::none);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("action"), value_of(Action::none));
+  EXPECT_EQ(b.write("action", {8}), Exception::illegal_data_value);
+  EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::done));
+}
+
+TEST(NidecActions, AnUnansweredActionIsNoResponse) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("silent on");
+  EXPECT_EQ(b.write("action", {value_of(Action::voltage_detection)}),
+            Exception::gateway_target_failed);
+  EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::no_response));
+  EXPECT_EQ(b.read("dc_bus_voltage"), 0u);
+}
+
+}  // namespace
+}  // namespace drivegate::nidec

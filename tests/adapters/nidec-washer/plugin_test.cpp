@@ -1,0 +1,124 @@
+// The descriptor the plugin exports, as the loader, `drivegate demo` and `drivegate regmap` read
+// it, the settings its options make, and the points of a device it creates.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <string_view>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
+#include "driver.h"
+#include "points.h"
+#include "settings.h"
+
+namespace drivegate::nidec {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(NidecPlugin, Descriptor) {
+  const AdapterDescriptor& a = drivegate_adapter;
+  EXPECT_EQ(a.api_version, kAdapterApiVersion);
+  EXPECT_EQ(std::string_view(a.id), "nidec-washer");
+  // Section 3: 4800 baud, 8 bits, odd parity, one stop bit; section 2: one wire, no address.
+  EXPECT_EQ(a.line.baud, 4800u);
+  EXPECT_EQ(a.line.parity, Parity::odd);
+  EXPECT_EQ(a.line.data_bits, 8);
+  EXPECT_EQ(a.line.stop_bits, 1);
+  EXPECT_TRUE(a.line.echo);
+  EXPECT_EQ(a.address_min, 0u);
+  EXPECT_EQ(a.address_max, 0u);
+  EXPECT_EQ(a.default_address, 0u);
+  EXPECT_FALSE(a.streaming);
+  EXPECT_EQ(a.option_count, kOptionSchema.size());
+  // `drivegate demo`: a 7 kg washer at 800 rpm; no maintenance actions.
+  ASSERT_EQ(a.demo.option_count, 1u);
+  EXPECT_EQ(std::string_view(a.demo.options[0].name), "platform");
+  EXPECT_EQ(std::string_view(a.demo.options[0].value), "7");
+  EXPECT_EQ(a.demo.running_rpm, 800);
+  EXPECT_EQ(a.action_count, 0u);
+  EXPECT_EQ(a.actions, nullptr);
+}
+
+TEST(NidecPlugin, SettingsFromTheOptions) {
+  std::string error;
+  const auto defaults = parse_settings(test::options_of(drivegate_adapter), error);
+  ASSERT_TRUE(defaults.has_value()) << error;
+  EXPECT_EQ(defaults->platform, 7);
+  EXPECT_EQ(defaults->empty_raw_weight, 0);
+  EXPECT_EQ(defaults->accel_100ms, 30);
+  EXPECT_EQ(defaults->attempts, 3);
+  const auto set = parse_settings(test::options_of(drivegate_adapter, {{"platform", "8"},
+                                                                       {"empty_raw_weight", "300"},
+                                                                       {"accel_time_ms", "6553500"},
+                                                                       {"attempts", "20"}}),
+                                  error);
+  ASSERT_TRUE(set.has_value()) << error;
+  EXPECT_EQ(set->platform, 8);
+  EXPECT_EQ(set->empty_raw_weight, 300);
+  EXPECT_EQ(set->accel_100ms, 65535);
+  EXPECT_EQ(set->attempts, 20);
+  // 5.3: 100 ms units, rounded to the nearest.
+  EXPECT_EQ(parse_settings(test::options_of(drivegate_adapter, {{"accel_time_ms", "149"}}), error)
+                ->accel_100ms,
+            1);
+  EXPECT_EQ(parse_settings(test::options_of(drivegate_adapter, {{"accel_time_ms", "150"}}), error)
+                ->accel_100ms,
+            2);
+  // The schema keeps out what a frame cannot carry.
+  EXPECT_THROW(test::options_of(drivegate_adapter, {{"platform", "256"}}), std::invalid_argument);
+  EXPECT_THROW(test::options_of(drivegate_adapter, {{"empty_raw_weight", "65536"}}),
+               std::invalid_argument);
+  EXPECT_THROW(test::options_of(drivegate_adapter, {{"accel_time_ms", "6553501"}}),
+               std::invalid_argument);
+  EXPECT_THROW(test::options_of(drivegate_adapter, {{"attempts", "0"}}), std::invalid_argument);
+}
+
+TEST(NidecPlugin, TheFactoriesMakeADriverAndASimulator) {
+  std::string error;
+  DeviceEnv env;
+  env.options = test::options_of(drivegate_adapter);
+  EXPECT_NE(drivegate_adapter.create_driver(env, error), nullptr) << error;
+  SimEnv sim_env;
+  sim_env.options = env.options;
+  EXPECT_NE(drivegate_adapter.create_simulator(sim_env, error), nullptr) << error;
+}
+
+TEST(NidecPlugin, PointsAreAFixedTableWithLabels) {
+  DeviceEnv env;
+  env.options = test::options_of(drivegate_adapter);
+  std::string error;
+  const auto d = drivegate_adapter.create_driver(env, error);
+  ASSERT_NE(d, nullptr) << error;
+  const std::vector<PointSpec>& p = d->points();
+  ASSERT_EQ(p.size(), pt::count);
+  ASSERT_EQ(d->values().size(), pt::count);
+  EXPECT_EQ(p[pt::motion].name, "motion");
+  EXPECT_EQ(p[pt::motion].table, Table::holding);
+  EXPECT_EQ(p[pt::motion].labels.size(), 4u);
+  EXPECT_EQ(p[pt::motion].labels[3].name, "free_shaft_spin");
+  EXPECT_EQ(p[pt::action].labels.size(), 8u);
+  EXPECT_EQ(p[pt::action].labels[7].name, "ping");
+  EXPECT_DOUBLE_EQ(p[pt::action].max, 7.0);
+  EXPECT_EQ(p[pt::action_status].table, Table::input);
+  EXPECT_TRUE(p[pt::error_bits].bit_labels);
+  EXPECT_EQ(p[pt::error_bits].labels[3].name, "stall");
+  EXPECT_EQ(p[pt::fabric_raw].register_count(), 2);
+  EXPECT_DOUBLE_EQ(p[pt::accel_time].scale, 0.1);
+  EXPECT_DOUBLE_EQ(p[pt::accel_time].max, 6553.5);       // 5.3: 16 bits of 100 ms
+  EXPECT_DOUBLE_EQ(p[pt::agitation_ccw_off].max, 25.5);  // 5.5: one byte of 100 ms
+  EXPECT_DOUBLE_EQ(p[pt::weight].scale, 0.1);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    EXPECT_FALSE(p[i].description.empty()) << p[i].name;
+    if (p[i].table == Table::holding) {
+      EXPECT_LT(p[i].min, p[i].max) << p[i].name;
+    }
+  }
+  // What a device starts with: the accel time of the options, the default agitation pattern.
+  EXPECT_DOUBLE_EQ(as_double(d->values()[pt::accel_time]), 3.0);
+  EXPECT_DOUBLE_EQ(as_double(d->values()[pt::agitation_cw_on]), 1.2);
+  EXPECT_DOUBLE_EQ(as_double(d->values()[pt::agitation_ccw_off]), 0.8);
+}
+
+}  // namespace
+}  // namespace drivegate::nidec

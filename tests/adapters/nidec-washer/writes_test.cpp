@@ -1,0 +1,330 @@
+// Writes as the Modbus server makes them, on the real bus engine: what goes on the wire, the
+// exception the PLC gets, and what `command` and `setpoint_rpm` read afterwards. A write is in
+// force once the inverter ACKed the frame that carries it without Error bits (README, "Writes").
+#include <gtest/gtest.h>
+
+#include "bench.h"
+
+namespace drivegate::nidec {
+namespace {
+
+TEST(NidecWrites, ASetpointWhileStoppedIsStoredThenRunForwardIsCw_5_3) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  const std::size_t before = b.rig.sent().size();
+  // Stored without traffic: settled as soon as it is written.
+  EXPECT_EQ(b.start_write({800}, kSetpointRegister)->result, Exception::none);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  const TimePoint asked = b.rig.now();
+  const auto run = b.start_write({cmd::run_forward});
+  EXPECT_FALSE(run->settled());
+  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the inverter ACKed it
+  EXPECT_NE(b.status() & kCommandPending, 0u);
+  EXPECT_EQ(b.rig.wait(run), Exception::none);
+  // At once (the line was idle), not at the next poll.
+  const auto runs = b.times_of(kCw800, asked);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_LE(runs[0] - asked, 5ms);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+  EXPECT_NE(b.status() & kRunning, 0u);
+  EXPECT_EQ(b.status() & kCommandPending, 0u);
+  b.rig.run_for(4s);  // 3.0 s accel
+  EXPECT_EQ(b.read("speed_rpm"), 800u);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  EXPECT_EQ(b.last(), kPoll);  // the motion runs on; polls keep the line alive
+}
+
+TEST(NidecWrites, RunReverseIsCcw_5_4) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::run_reverse, 800}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kCcw800);
+  EXPECT_EQ(b.read("command"), cmd::run_reverse);
+  EXPECT_TRUE(b.sim_says("motion=ccw"));
+}
+
+TEST(NidecWrites, MotionChoosesSpinAgitationOrFreeShaft_5_5_5_6_5_14) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  EXPECT_EQ(b.write("motion", {1}), Exception::none);  // spin
+  EXPECT_EQ(b.read("motion"), 1u);
+  // 5.6 has no direction.
+  EXPECT_EQ(b.write({cmd::run_reverse, 1200}), Exception::illegal_data_value);
+  TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::run_forward, 1200}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x0D, 0x04, 0xB0, 0x00, 0x1E, 0x00, 0x00, 0x00, 0x00, 0x02}));
+
+  // A setpoint while spinning re-sends the motion in force, even with `motion` changed since.
+  EXPECT_EQ(b.write("motion", {2}), Exception::none);  // agitation, for the next run
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({60}, kSetpointRegister), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x0D, 0x00, 0x3C, 0x00, 0x1E, 0x00, 0x00, 0x00, 0x00, 0x8A}));
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x0C, 0x00, 0x3C, 0x05, 0x05, 0x0C, 0x08, 0x0C, 0x08, 0x95}));
+
+  EXPECT_EQ(b.write("motion", {3}), Exception::none);  // free-shaft spin
+  EXPECT_EQ(b.write("accel_time", {50}), Exception::none);
+  EXPECT_EQ(b.read("accel_time"), 50u);
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({1500}, kSetpointRegister), Exception::none);  // agitation in force
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x0C, 0x05, 0xDC, 0x05, 0x05, 0x0C, 0x08, 0x0C, 0x08, 0x70}));
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0),
+            (Bytes{0xA5, 0x1D, 0x05, 0xDC, 0x00, 0x32, 0x00, 0x00, 0x00, 0x00, 0x53}));
+  EXPECT_TRUE(b.sim_says("motion=free_shaft_spin"));
+  // The gateway keeps a motion the table does not name.
+  EXPECT_EQ(b.write("motion", {4}), Exception::illegal_data_value);
+  EXPECT_EQ(b.read("motion"), 3u);
+}
+
+TEST(NidecWrites, AgitationTimingPoints_5_5) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  EXPECT_EQ(b.write("motion", {2}), Exception::none);
+  // accel 0.3 s, decel 0.4 s, CW on 2.0 s, off 1.0 s, CCW on 2.5 s, off 25.5 s, in one request.
+  EXPECT_EQ(b.write("agitation_accel", {3, 4, 20, 10, 25, 255}), Exception::none);
+  EXPECT_EQ(b.write("agitation_ccw_off", {256}), Exception::illegal_data_value);  // 5.5: a byte
+  EXPECT_EQ(b.read("agitation_ccw_off"), 255u);
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::run_forward, 100}), Exception::none);
+  Bytes want = {0xA5, 0x0C, 0x00, 0x64, 3, 4, 20, 10, 25, 255};
+  want.push_back(xor_of(want));
+  EXPECT_EQ(b.frames(asked).at(0), want);
+  EXPECT_EQ(b.read("agitation_ccw_on"), 25u);
+}
+
+TEST(NidecWrites, ASetpointWhileRunningIsInForceOnceTheInverterAckedIt_5_3) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  const auto w = b.start_write({1000}, kSetpointRegister);
+  EXPECT_FALSE(w->settled());
+  ASSERT_TRUE(b.rig.run_until([&] { return b.last() == kCw1000; }, 100ms));
+  // On the wire, not answered yet: the inverter holds 800 rpm still.
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  EXPECT_NE(b.status() & kCommandPending, 0u);
+  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1000u);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+  EXPECT_EQ(b.count(kCw1000), 1u);
+  b.rig.run_for(2s);
+  EXPECT_EQ(b.read("speed_rpm"), 1000u);
+  // 5.3: an unsigned speed: a negative setpoint is refused before anything is sent.
+  const std::size_t before = b.rig.sent().size();
+  EXPECT_EQ(b.start_write({static_cast<std::uint16_t>(-1)}, kSetpointRegister)->result,
+            Exception::illegal_data_value);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1000u);
+}
+
+TEST(NidecWrites, StopAndQuickStop_5_7_5_8) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::quick_stop}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kBrake);
+  EXPECT_EQ(b.read("command"), cmd::quick_stop);
+  EXPECT_TRUE(b.sim_says("motion=braking"));
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::stop}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  b.rig.run_for(2s);
+  EXPECT_EQ(b.read("speed_rpm"), 0u);
+  EXPECT_EQ(b.status() & kRunning, 0u);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+}
+
+TEST(NidecWrites, ResetFaultAsksWhetherTheFaultCleared_section8) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("fault general");  // section 8: kept until power off
+  b.rig.run_for(5s);
+  TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::reset_fault}), Exception::server_device_failure);
+  EXPECT_EQ(b.frames(asked).at(0), kPoll);  // a Request (5.2): the protocol has no reset
+  EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::internal_error));
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  b.control("clear");
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::reset_fault}), Exception::none);
+  EXPECT_EQ(b.frames(asked).at(0), kPoll);
+  EXPECT_EQ(b.read("fault_mask"), 0u);
+  EXPECT_EQ(b.read("command"), cmd::stop);  // a reset is no command in force
+}
+
+// --- truthful writes: what the inverter did not take is not in force ---
+
+TEST(NidecWrites, ARequestWithAnInvalidPartChangesNothing) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  ASSERT_EQ(b.write("motion", {1}), Exception::none);  // spin, for the next run
+  // Setpoint 1000 with run_reverse: spin has no direction. The setpoint alone would have gone on
+  // the line (a run is in force); nothing does.
+  std::size_t before = b.rig.sent().size();
+  TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.start_write({cmd::run_reverse, 1000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  b.rig.run_for(1s);
+  for (const Bytes& f : b.frames(asked)) EXPECT_EQ(f, kPoll);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+  EXPECT_TRUE(b.sim_says("target_rpm=800"));
+
+  // Stopped and faulted: run_forward is refused, so the setpoint in the same request is not
+  // stored either, though alone it would have been.
+  ASSERT_EQ(b.write({cmd::stop}), Exception::none);
+  b.control("fault stall");
+  ASSERT_TRUE(b.after_next_poll());
+  ASSERT_NE(b.status() & kFaulted, 0u);
+  before = b.rig.sent().size();
+  EXPECT_EQ(b.start_write({cmd::run_forward, 600})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  EXPECT_EQ(b.read("command"), cmd::stop);
+}
+
+TEST(NidecWrites, ASetpointTheInverterRefusesLeavesTheOldOne_section8) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  ASSERT_TRUE(b.after_next_poll());
+  // A stall between two polls: the driver does not know yet, so the new speed goes on the line
+  // and its ACK carries the Error bits.
+  b.control("fault stall");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({1000}, kSetpointRegister), Exception::server_device_failure);
+  EXPECT_EQ(b.frames(asked).at(0), kCw1000);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  // Section 8: the fault stopped the motor: no run is in force.
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  EXPECT_EQ(b.read("native_fault"), 0x08u);
+}
+
+TEST(NidecWrites, ASetpointTheInverterNeverAnsweredLeavesTheOldOne_section6) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  ASSERT_TRUE(b.after_next_poll());
+  b.control("nack 100");  // every frame refused at protocol level (5.16)
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({1000}, kSetpointRegister), Exception::gateway_target_failed);
+  EXPECT_GE(b.count(kCw1000, asked), 10u);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);  // the inverter runs on at 800 rpm
+  EXPECT_TRUE(b.sim_says("target_rpm=800"));
+  // Not sent again once the PLC was told it failed.
+  b.control("nack 0");
+  const TimePoint failed = b.rig.now();
+  b.rig.run_for(2s);
+  EXPECT_EQ(b.count(kCw1000, failed), 0u);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  EXPECT_EQ(b.read("speed_rpm"), 800u);
+}
+
+TEST(NidecWrites, ACommandTheInverterRefusesIsTheExceptionAndCommandReadsWhatIsInForce) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  // A stop NACKed until it fails: the motor runs on, and so does run_forward.
+  ASSERT_TRUE(b.after_next_poll());
+  b.control("nack 100");
+  TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::stop}), Exception::gateway_target_failed);
+  EXPECT_GE(b.count(kStop, asked), 10u);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+  EXPECT_NE(b.status() & kRunning, 0u);
+  b.control("nack 0");
+  ASSERT_TRUE(b.after_next_poll());
+  EXPECT_TRUE(b.sim_says("motion=cw"));
+
+  // A phase lost between two polls: run_reverse goes on the line and its ACK carries the Error
+  // bits (section 8). Exception 0x04, and the command in force is what the fault left: stop.
+  b.control("fault phase_loss");
+  asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::run_reverse}), Exception::server_device_failure);
+  EXPECT_EQ(b.frames(asked).at(0), kCcw800);
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  EXPECT_EQ(b.read("native_fault"), 0x40u);
+  EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::phase_loss));
+  // Known now: the next run is refused before anything is sent.
+  const std::size_t before = b.rig.sent().size();
+  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("command"), cmd::stop);
+}
+
+TEST(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("silent on");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({cmd::run_forward, 800}), Exception::gateway_target_failed);
+  EXPECT_LE(b.rig.now() - asked, 2600ms);
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  EXPECT_EQ(b.read("setpoint_rpm"), 800u);  // stored while stopped, before the run was tried
+  b.control("silent off");
+  const TimePoint back = b.rig.now();
+  b.rig.run_for(2s);
+  EXPECT_EQ(b.count(kCw800, back), 0u);
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  EXPECT_TRUE(b.sim_says("motion=stopped"));
+}
+
+TEST(NidecWrites, AStopOvertakesARunNotYetOnTheLine) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  ASSERT_EQ(b.write({800}, kSetpointRegister), Exception::none);
+  // While a poll is on the line, a run from one client and a stop from another.
+  const std::size_t polls = b.count(kPoll);
+  ASSERT_TRUE(b.rig.run_until([&] { return b.count(kPoll) > polls; }, 1s));
+  const std::size_t mark = b.rig.sent().size();
+  const auto run = b.start_write({cmd::run_forward});
+  const auto stop = b.start_write({cmd::stop});
+  EXPECT_EQ(run->result, Exception::gateway_target_failed);  // superseded at once
+  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.frames_after(mark), std::vector<Bytes>{kStop});  // the motor never started
+  EXPECT_EQ(b.read("command"), cmd::stop);
+}
+
+TEST(NidecWrites, ASetpointQueuedBehindAStopIsStoredNotSent) {
+  Bench b;
+  ASSERT_TRUE(b.running_at(800));
+  // While a poll is on the line: a stop, then a new speed for the run in force now.
+  const std::size_t polls = b.count(kPoll);
+  ASSERT_TRUE(b.rig.run_until([&] { return b.count(kPoll) > polls; }, 1s));
+  const std::size_t mark = b.rig.sent().size();
+  const auto stop = b.start_write({cmd::stop});
+  const auto speed = b.start_write({1000}, kSetpointRegister);
+  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.rig.wait(speed), Exception::none);
+  // Once the stop was in force the setpoint was only stored: the motor is not started again.
+  EXPECT_EQ(b.frames_after(mark), std::vector<Bytes>{kStop});
+  EXPECT_EQ(b.read("setpoint_rpm"), 1000u);
+  EXPECT_EQ(b.read("command"), cmd::stop);
+  EXPECT_TRUE(b.sim_says("motion=stopping"));
+}
+
+TEST(NidecWrites, ASetpointWrittenWhileARunIsOnItsWayIsSentAfterIt) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  ASSERT_EQ(b.write({800}, kSetpointRegister), Exception::none);
+  const std::size_t polls = b.count(kPoll);
+  ASSERT_TRUE(b.rig.run_until([&] { return b.count(kPoll) > polls; }, 1s));
+  const std::size_t mark = b.rig.sent().size();
+  const auto run = b.start_write({cmd::run_forward});
+  const auto speed = b.start_write({1000}, kSetpointRegister);
+  EXPECT_FALSE(speed->settled());  // the run will carry 800 rpm: 1000 needs the line too
+  EXPECT_EQ(b.rig.wait(run), Exception::none);
+  EXPECT_EQ(b.rig.wait(speed), Exception::none);
+  EXPECT_EQ(b.frames_after(mark), (std::vector<Bytes>{kCw800, kCw1000}));
+  EXPECT_EQ(b.read("setpoint_rpm"), 1000u);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+}
+
+}  // namespace
+}  // namespace drivegate::nidec
