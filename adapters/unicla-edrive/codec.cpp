@@ -1,6 +1,6 @@
 #include "codec.h"
 
-#include "drivegate/bytes.h"
+#include <utility>
 
 namespace drivegate::unicla {
 
@@ -77,8 +77,8 @@ Decoded<Frame> decode(ByteView rx) {
     if (rx.size() > kMaxWireSize) return decoded_bad<Frame>(1, FrameError::bad_length);
     return {};
   }
-  if (end == 1)
-    return decoded_bad<Frame>(1, FrameError::bad_length);  // "7E 7E": an EOF followed by a SOF
+  // "7E 7E": an EOF followed by a SOF. Drop the first flag only: the second opens the next frame.
+  if (end == 1) return decoded_bad<Frame>(1, FrameError::bad_length);
 
   Bytes body;
   body.reserve(end);
@@ -100,22 +100,23 @@ Decoded<Frame> decode(ByteView rx) {
   }
   const std::size_t crc_at = body.size() - kCrcSize;
   const std::uint16_t want = be16(body[crc_at], body[crc_at + 1]);
-  if (crc16(ByteView(body).first(crc_at)) != want)
+  if (crc16(ByteView(body).first(crc_at)) != want) {
     return decoded_bad<Frame>(end, FrameError::bad_checksum);
+  }
 
-  Decoded<Frame> d;
-  d.status = DecodeStatus::frame;
-  d.consumed = end + 1;
-  d.frame.source = body[0];
-  d.frame.destination = body[1];
-  d.frame.command = body[2];
-  d.frame.message_id = body[3];
-  d.frame.sequence = body[4];
-  d.frame.reserved1 = body[5];
-  d.frame.reserved2 = body[6];
-  d.frame.payload.assign(body.begin() + static_cast<long>(kHeaderSize),
-                         body.begin() + static_cast<long>(crc_at));
-  return d;
+  // "Message Structure": source, destination, command, message id, sequence, two reserved bytes,
+  // payload size, then the payload.
+  Frame f;
+  f.source = body[0];
+  f.destination = body[1];
+  f.command = body[2];
+  f.message_id = body[3];
+  f.sequence = body[4];
+  f.reserved1 = body[5];
+  f.reserved2 = body[6];
+  f.payload.assign(body.begin() + static_cast<long>(kHeaderSize),
+                   body.begin() + static_cast<long>(crc_at));
+  return decoded_frame(end + 1, std::move(f));  // SOF through EOF
 }
 
 }  // namespace drivegate::unicla

@@ -3,17 +3,22 @@
 // CRC-16/XMODEM sent high byte first. Bytes in, frames out: no I/O, no clock, no logging.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
-#include <span>
-#include <vector>
 
+#include "drivegate/bytes.h"
 #include "drivegate/codec.h"
+#include "drivegate/line.h"
 
 namespace drivegate::unicla {
 
-using Bytes = std::vector<std::uint8_t>;
-using ByteView = std::span<const std::uint8_t>;
+// "Communications Settings": 8 data bits, 1 stop bit, parity 0 (none), no flow control; "Baud
+// Rate ... Default Value 19200". RS-485 half duplex with a driver-enable line: no echo.
+inline constexpr LineDefaults kLine{19200, Parity::none, 8, 1, false};
+// One character on that line (0.52 ms): the driver's timing choices are counted in these.
+inline constexpr std::chrono::nanoseconds kCharacterTime =
+    character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits);
 
 // "Start and End of Frame": SOF and EOF are both 0x7E.
 inline constexpr std::uint8_t kFlag = 0x7E;
@@ -28,9 +33,13 @@ inline constexpr std::size_t kMaxPayload = 255;
 // Longest frame on the wire: every body byte stuffed, plus SOF and EOF.
 inline constexpr std::size_t kMaxWireSize = 2 * (kHeaderSize + kMaxPayload + kCrcSize) + 2;
 
-// "Device Address": the master is always 0x00, 0xFF addresses every device.
+// "Device Address": the master is always 0x00, 0xFF addresses every device; so a drive's own id is
+// 1..254. "Configurable Parameters": Device ID, default 0x01.
 inline constexpr std::uint8_t kMasterAddress = 0x00;
 inline constexpr std::uint8_t kBroadcastAddress = 0xFF;
+inline constexpr std::uint8_t kFirstDeviceId = 0x01;
+inline constexpr std::uint8_t kLastDeviceId = 0xFE;
+inline constexpr std::uint8_t kDefaultDeviceId = 0x01;
 
 // "Commands": 0xC0 read, 0xC1 write.
 enum class CommandByte : std::uint8_t { read = 0xC0, write = 0xC1 };

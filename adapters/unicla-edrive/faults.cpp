@@ -1,77 +1,138 @@
 #include "faults.h"
 
 #include <array>
+#include <string_view>
+
+#include "op_state.h"
 
 namespace drivegate::unicla {
 
 namespace {
 
-constexpr std::uint16_t kCompressorFlagsUsed = 0xFFF0;    // bits 0-3 are "X"
-constexpr std::uint32_t kElectricalFlagsUsed = 0xFF07FF;  // bits 11-15 are "X"
-
-// "Motor Safety Flags - Run, Start", bit n -> unified fault (none: bit 0 is "X").
-constexpr std::array<Fault, 16> kMotorFlagFaults = {
-    Fault::none,                    // 0  X
-    Fault::other,                   // 1  Switch Temperature Low
-    Fault::drive_over_temperature,  // 2  Switch Temperature High
-    Fault::other,                   // 3  Motor Temperature Low
-    Fault::motor_over_temperature,  // 4  Motor Temperature High
-    Fault::overload,                // 5  Motor Power Run Limit
-    Fault::overload,                // 6  Motor Power Absolute Limit
-    Fault::hardware_fault,          // 7  ST Motor Control Fault
-    Fault::internal_error,          // 8  ST Motor Control - High FOC Rate
-    Fault::over_voltage,            // 9  ST Motor Control - Over voltage
-    Fault::under_voltage,           // 10 ST Motor Control - Under Voltage
-    Fault::drive_over_temperature,  // 11 ST Motor Control - Over Temperature
-    Fault::stall,                   // 12 ST Motor Control - Startup Fail
-    Fault::stall,                   // 13 ST Motor Control - Speed Feedback Error
-    Fault::over_current,            // 14 ST Motor Control - Over Current
-    Fault::internal_error,          // 15 ST Motor Control - Software Error
+// One bit of a flag word: its name in the document ("" where it says "X": unused) and the unified
+// fault it stands for.
+struct FlagBit {
+  std::string_view name;
+  Fault fault;
 };
 
-}  // namespace
+// "Compressor Safety Flags - Run, Start": refrigerant-side limits, every one a process limit.
+constexpr std::array<FlagBit, 16> kCompressorFlags = {{
+    {"", Fault::none},
+    {"", Fault::none},
+    {"", Fault::none},
+    {"", Fault::none},
+    {"Low Side Superheat High", Fault::process_limit},
+    {"Low Side Superheat Low", Fault::process_limit},
+    {"High Side Superheat High", Fault::process_limit},
+    {"High Side Superheat Low", Fault::process_limit},
+    {"Low Side Temperature High", Fault::process_limit},
+    {"Low Side Temperature Low", Fault::process_limit},
+    {"Low Side Pressure High", Fault::process_limit},
+    {"Low Side Pressure Low", Fault::process_limit},
+    {"High Side Temperature High", Fault::process_limit},
+    {"High Side Temperature Low", Fault::process_limit},
+    {"High Side Pressure High", Fault::process_limit},
+    {"High Side Pressure Low", Fault::process_limit},
+}};
 
-bool is_fault_state(std::uint8_t s) {
-  return s >= static_cast<std::uint8_t>(OpState::fault_compressor_safety) &&
-         s <= static_cast<std::uint8_t>(OpState::fault_xc_comms);
-}
+// "Motor Safety Flags - Run, Start".
+constexpr std::array<FlagBit, 16> kMotorFlags = {{
+    {"", Fault::none},
+    {"Switch Temperature Low", Fault::other},
+    {"Switch Temperature High", Fault::drive_over_temperature},
+    {"Motor Temperature Low", Fault::other},
+    {"Motor Temperature High", Fault::motor_over_temperature},
+    {"Motor Power Run Limit", Fault::overload},
+    {"Motor Power Absolute Limit", Fault::overload},
+    {"ST Motor Control Fault", Fault::hardware_fault},
+    {"ST Motor Control - High FOC Rate", Fault::internal_error},
+    {"ST Motor Control - Over voltage", Fault::over_voltage},
+    {"ST Motor Control - Under Voltage", Fault::under_voltage},
+    {"ST Motor Control - Over Temperature", Fault::drive_over_temperature},
+    {"ST Motor Control - Startup Fail", Fault::stall},
+    {"ST Motor Control - Speed Feedback Error", Fault::stall},
+    {"ST Motor Control - Over Current", Fault::over_current},
+    {"ST Motor Control - Software Error", Fault::internal_error},
+}};
 
-bool is_running_state(std::uint8_t s) {
-  const auto st = static_cast<OpState>(s);
-  return st == OpState::starting || st == OpState::running || st == OpState::oil_balance_running;
-}
+// "Electrical Safety Flags": supply rails of the FMC (bits 0..10) and CMC (16..23) boards.
+constexpr std::array<FlagBit, 24> kElectricalFlags = {{
+    {"FMC Data Invalid", Fault::hardware_fault},
+    {"FMC 3.3V Fault", Fault::hardware_fault},
+    {"FMC 5.0V Fault", Fault::hardware_fault},
+    {"FMC VMON 24V Low", Fault::hardware_fault},
+    {"FMC VMON 24V High", Fault::hardware_fault},
+    {"FMC VMON UDXC 24V Low", Fault::hardware_fault},
+    {"FMC VMON UDXC 24V High", Fault::hardware_fault},
+    {"FMC VMON UDXC 5V Low", Fault::hardware_fault},
+    {"FMC VMON UDXC 5V High", Fault::hardware_fault},
+    {"FMC CT 5V Low", Fault::hardware_fault},
+    {"FMC CT 5V High", Fault::hardware_fault},
+    {"", Fault::none},
+    {"", Fault::none},
+    {"", Fault::none},
+    {"", Fault::none},
+    {"", Fault::none},
+    {"CMC 3V3 Fault", Fault::hardware_fault},
+    {"CMC 5V0 Fault", Fault::hardware_fault},
+    {"CMC VMON 5V Low", Fault::hardware_fault},
+    {"CMC VMON 5V High", Fault::hardware_fault},
+    {"CMC AUX VMON VCC Low", Fault::hardware_fault},
+    {"CMC AUX VMON VCC High", Fault::hardware_fault},
+    {"CMC UDPC VCC Low", Fault::hardware_fault},
+    {"CMC UDPC VCC High", Fault::hardware_fault},
+}};
 
-bool refuses_run(std::uint8_t s) {
-  const auto st = static_cast<OpState>(s);
-  return is_fault_state(s) || st == OpState::not_ready || st == OpState::locked ||
-         st == OpState::motor_thermal_inhibit || s >= kOpStateCount;
-}
-
-FaultSet map_compressor_flags(std::uint16_t flags) {
+template <std::size_t N>
+FaultSet map_flags(const std::array<FlagBit, N>& bits, std::uint32_t flags) {
   FaultSet f;
-  if ((flags & kCompressorFlagsUsed) != 0) f.set(Fault::process_limit);
-  return f;
-}
-
-FaultSet map_motor_flags(std::uint16_t flags) {
-  FaultSet f;
-  for (std::size_t bit = 0; bit < kMotorFlagFaults.size(); ++bit) {
-    if ((flags & (1u << bit)) != 0 && kMotorFlagFaults[bit] != Fault::none) {
-      f.set(kMotorFlagFaults[bit]);
-    }
+  for (std::size_t bit = 0; bit < N; ++bit) {
+    if ((flags & (1u << bit)) != 0 && bits[bit].fault != Fault::none) f.set(bits[bit].fault);
   }
   return f;
 }
 
+template <std::size_t N>
+std::vector<Label> labels_of(const std::array<FlagBit, N>& bits) {
+  std::array<std::string_view, N> names{};
+  for (std::size_t bit = 0; bit < N; ++bit) names[bit] = bits[bit].name;
+  std::vector<Label> labels = labels_in_order(names);
+  std::erase_if(labels, [](const Label& l) { return l.name.empty(); });  // "X"
+  return labels;
+}
+
+}  // namespace
+
+FaultSet map_compressor_flags(std::uint16_t flags) {
+  return map_flags(kCompressorFlags, flags);
+}
+
+FaultSet map_motor_flags(std::uint16_t flags) {
+  return map_flags(kMotorFlags, flags);
+}
+
 FaultSet map_electrical_flags(std::uint32_t flags) {
-  FaultSet f;
-  if ((flags & kElectricalFlagsUsed) != 0) f.set(Fault::hardware_fault);  // FMC / CMC rails
-  return f;
+  return map_flags(kElectricalFlags, flags);
+}
+
+std::vector<Label> compressor_flag_labels() {
+  return labels_of(kCompressorFlags);
+}
+
+std::vector<Label> motor_flag_labels() {
+  return labels_of(kMotorFlags);
+}
+
+std::vector<Label> electrical_flag_labels() {
+  return labels_of(kElectricalFlags);
 }
 
 FaultView map_faults(const Status& s) {
+  // The run and start words of a kind say the same things at two moments: either counts.
+  const FaultSet motor = map_motor_flags(s.motor_run_flags | s.motor_start_flags);
   FaultSet flagged = map_compressor_flags(s.compressor_run_flags | s.compressor_start_flags);
-  flagged |= map_motor_flags(s.motor_run_flags | s.motor_start_flags);
+  flagged |= motor;
   flagged |= map_electrical_flags(s.electrical_flags);
 
   FaultView v;
@@ -89,9 +150,7 @@ FaultView map_faults(const Status& s) {
       v.faults.set(Fault::process_limit);
       break;
     case OpState::fault_motor:
-      if (map_motor_flags(s.motor_run_flags | s.motor_start_flags).empty()) {
-        v.faults.set(Fault::other);
-      }
+      if (motor.empty()) v.faults.set(Fault::other);  // no motor flag says more
       break;
     case OpState::fault_fmc:
     case OpState::fault_electrical:

@@ -1,9 +1,9 @@
 #include "payloads.h"
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
-
-#include "drivegate/bytes.h"
+#include <utility>
 
 namespace drivegate::unicla {
 

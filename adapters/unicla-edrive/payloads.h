@@ -4,11 +4,12 @@
 // (see README.md, "Payload layouts").
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
 
-#include "codec.h"
+#include "drivegate/bytes.h"
 
 namespace drivegate::unicla {
 
@@ -21,28 +22,6 @@ inline constexpr std::size_t kStatusSize = 64;         // 8 rows ("Status": 0x40
 inline constexpr std::size_t kBuildInfoSize = 80;      // 10 rows
 inline constexpr std::size_t kRunningLimitsSize = 64;  // 8 rows
 inline constexpr std::size_t kSetRunStateSize = 2;     // "Set Run State: 2, unsigned 16bit"
-
-// ED_OP_STATE ("Interpretation of consolidated data"), first entry = 0.
-enum class OpState : std::uint8_t {
-  not_ready = 0,
-  starting = 1,
-  running = 2,
-  stopped = 3,
-  wait_compressor_safety = 4,
-  wait_anti_short = 5,
-  fault_compressor_safety = 6,
-  fault_motor = 7,
-  fault_fmc = 8,
-  fault_electrical = 9,
-  fault_configuration = 10,
-  fault_xc_comms = 11,
-  locked = 12,
-  motor_thermal_inhibit = 13,
-  oil_balance_running = 14,
-  oil_balance_required = 15,
-  oil_balance_run_wait = 16,
-};
-inline constexpr std::uint8_t kOpStateCount = 17;
 
 struct Range {
   float low = 0;
@@ -60,8 +39,8 @@ struct Status {
   std::uint16_t rpm = 0;
   std::uint16_t volts = 0;
   std::uint16_t watts = 0;
-  std::uint16_t torque = 0;  // Nm
-  std::uint8_t op_state = 0;
+  std::uint16_t torque = 0;   // Nm
+  std::uint8_t op_state = 0;  // ED_OP_STATE (op_state.h), raw: a state past the list is kept
   std::uint8_t control_mode = 0;
   std::uint8_t demand = 0;  // %
   std::uint8_t remote_enable = 0;

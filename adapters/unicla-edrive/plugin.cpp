@@ -1,4 +1,10 @@
-// The plugin descriptor of the Unicla eDrive adapter.
+// The unicla-edrive plugin descriptor: option schema, line defaults, device ids, the two
+// factories and how `drivegate demo` shows the compressor.
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "codec.h"
 #include "drivegate/adapter.h"
 #include "driver.h"
 #include "settings.h"
@@ -7,48 +13,49 @@
 namespace drivegate::unicla {
 namespace {
 
-// "Device ID: uint8, 0x00 is reserved for master device id"; 0xFF is the global address.
-constexpr std::uint32_t kAddressMin = 1;
-constexpr std::uint32_t kAddressMax = 254;
-constexpr std::uint32_t kDefaultAddress = 1;  // "Device ID ... Default Value 0x01"
+// "Device Address": 0x00 is the master's, 0xFF every device's; a drive has one of the others.
+std::optional<std::uint8_t> device_id(std::uint32_t address, std::string& error) {
+  if (address < kFirstDeviceId || address > kLastDeviceId) {
+    error = "address: eDrive device ids are 1..254";
+    return std::nullopt;
+  }
+  return static_cast<std::uint8_t>(address);
+}
 
 std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
-  if (env.address < kAddressMin || env.address > kAddressMax) {
-    error = "address: eDrive device ids are 1..254";
-    return nullptr;
-  }
   const auto settings = parse_settings(env.options, error);
   if (!settings) return nullptr;
-  return std::make_unique<EDriveDriver>(static_cast<std::uint8_t>(env.address), env.poll_interval,
-                                        *settings);
+  const auto id = device_id(env.address, error);
+  if (!id) return nullptr;
+  return std::make_unique<EDriveDriver>(*id, env.poll_interval, *settings);
 }
 
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
-  if (env.address < kAddressMin || env.address > kAddressMax) {
-    error = "address: eDrive device ids are 1..254";
-    return nullptr;
-  }
   const auto settings = parse_settings(env.options, error);
   if (!settings) return nullptr;
-  return std::make_unique<EDriveSimulator>(static_cast<std::uint8_t>(env.address),
-                                           settings->byte_order);
+  const auto id = device_id(env.address, error);
+  if (!id) return nullptr;
+  return std::make_unique<EDriveSimulator>(*id, settings->byte_order);
 }
 
 }  // namespace
 }  // namespace drivegate::unicla
 
-extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter = {
-    drivegate::kAdapterApiVersion,
-    "unicla-edrive",
-    "Unicla eDrive compressor, RS-485 interface V16",
-    drivegate::unicla::kOptionSchema.data(),
-    drivegate::unicla::kOptionSchema.size(),
-    // "Communications Settings": 8 data bits, 1 stop bit, no parity; "Baud Rate ... 19200".
-    {19200, drivegate::Parity::none, 8, 1, false},
-    drivegate::unicla::kAddressMin,
-    drivegate::unicla::kAddressMax,
-    drivegate::unicla::kDefaultAddress,
-    false,  // "all transfers are required to be master initiated"
-    &drivegate::unicla::create_driver,
-    &drivegate::unicla::create_simulator,
+extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
+    .api_version = drivegate::kAdapterApiVersion,
+    .id = "unicla-edrive",
+    .summary = "Unicla eDrive compressor, RS-485 interface V16",
+    .options = drivegate::unicla::kOptionSchema.data(),
+    .option_count = drivegate::unicla::kOptionSchema.size(),
+    .line = drivegate::unicla::kLine,
+    .address_min = drivegate::unicla::kFirstDeviceId,
+    .address_max = drivegate::unicla::kLastDeviceId,
+    .default_address = drivegate::unicla::kDefaultDeviceId,
+    .streaming = false,  // "all transfers are required to be master initiated"
+    .create_driver = &drivegate::unicla::create_driver,
+    .create_simulator = &drivegate::unicla::create_simulator,
+    // Default options; half the simulated drive's 6000 rpm running limit.
+    .demo = {.options = nullptr, .option_count = 0, .running_rpm = 3000},
+    .actions = nullptr,  // no maintenance actions
+    .action_count = 0,
 };

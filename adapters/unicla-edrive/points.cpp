@@ -1,59 +1,28 @@
 #include "points.h"
 
-#include <span>
+#include <array>
+#include <string>
 #include <string_view>
 
+#include "faults.h"
 #include "labels.h"
 
 namespace drivegate::unicla {
 
 namespace {
 
-std::vector<Label> labels_of(std::span<const std::string_view> names) {
-  std::vector<Label> out;
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (!names[i].empty()) out.push_back({std::string(names[i]), static_cast<std::uint32_t>(i)});
-  }
-  return out;
-}
-
-PointSpec input(std::string name, PointType type, std::string unit, std::string description) {
-  PointSpec p;
-  p.name = std::move(name);
-  p.table = Table::input;
-  p.type = type;
-  p.unit = std::move(unit);
-  p.description = std::move(description);
-  return p;
-}
-
 PointSpec real(std::string name, std::string unit, std::string description) {
-  return input(std::move(name), PointType::f32, std::move(unit), std::move(description));
+  return input_point(std::move(name), PointType::f32, std::move(unit), std::move(description));
 }
 
 PointSpec word(std::string name, std::string unit, std::string description) {
-  return input(std::move(name), PointType::u16, std::move(unit), std::move(description));
+  return input_point(std::move(name), PointType::u16, std::move(unit), std::move(description));
 }
 
-PointSpec enumeration(std::string name, std::string description,
-                      std::span<const std::string_view> names) {
-  PointSpec p = word(std::move(name), "", std::move(description));
-  p.labels = labels_of(names);
-  return p;
-}
-
-PointSpec flags(std::string name, PointType type, std::string description,
-                std::span<const std::string_view> names) {
-  PointSpec p = input(std::move(name), type, "", std::move(description));
-  p.labels = labels_of(names);
-  p.bit_labels = true;
-  return p;
-}
-
+// An ASCII field of `chars` characters, two to a register.
 PointSpec text(std::string name, std::size_t chars, std::string description) {
-  PointSpec p = input(std::move(name), PointType::string, "", std::move(description));
-  p.string_registers = static_cast<std::uint16_t>(chars / 2);  // two characters a register
-  return p;
+  return string_point(std::move(name), static_cast<std::uint16_t>(chars / 2),
+                      std::move(description));
 }
 
 std::int64_t i(unsigned v) {
@@ -66,125 +35,142 @@ double d(float v) {
 }  // namespace
 
 std::vector<PointSpec> make_points() {
-  std::vector<PointSpec> p;
-  p.reserve(kPointCount);
-  // Status (0x01), "Status" table.
-  p.push_back(real("suction_pressure", "bar", "suction pressure (absolute)"));
-  p.push_back(real("discharge_pressure", "bar", "discharge pressure (absolute)"));
-  p.push_back(real("suction_temperature", "degC", "suction temperature"));
-  p.push_back(real("discharge_temperature", "degC", "discharge temperature"));
-  p.push_back(real("suction_superheat", "K", "suction superheat"));
-  p.push_back(real("discharge_superheat", "K", "discharge superheat"));
-  p.push_back(word("compressor_rpm", "rpm", "compressor speed as reported"));
-  p.push_back(word("motor_voltage", "V", "motor voltage"));
-  p.push_back(word("motor_power", "W", "motor power"));
-  p.push_back(word("motor_torque", "Nm", "motor torque"));
-  p.push_back(enumeration("op_state", "operating state (ED_OP_STATE)", kOpStateNames));
-  p.push_back(enumeration("control_mode", "control mode (ED_CONTROL_MODE)", kControlModeNames));
-  p.push_back(word("demand", "%", "% demand"));
-  p.push_back(word("remote_enable", "", "remote enable input as reported (0 = off)"));
-  p.push_back(
-      word("anti_short", "", "anti-short-cycle byte as reported (no unit in the document)"));
-  p.push_back(real("motor_temperature", "degC", "motor temperature"));
-  p.push_back(real("switch_temperature", "degC", "power switch temperature"));
-  p.push_back(flags("compressor_safety_run", PointType::u16, "compressor safety flags - run",
-                    kCompressorFlagNames));
-  p.push_back(flags("compressor_safety_start", PointType::u16, "compressor safety flags - start",
-                    kCompressorFlagNames));
-  p.push_back(
-      flags("motor_safety_run", PointType::u16, "motor safety flags - run", kMotorFlagNames));
-  p.push_back(
-      flags("motor_safety_start", PointType::u16, "motor safety flags - start", kMotorFlagNames));
-  p.push_back(flags("electrical_safety", PointType::u32, "electrical safety flags (24 bits)",
-                    kElectricalFlagNames));
-  // Build Information (0x02), "Build Information" table.
-  p.push_back(text("model", kModelChars, "model"));
-  p.push_back(text("serial_number", kSerialChars, "serial number"));
-  p.push_back(enumeration("refrigerant", "refrigerant (ED_REFRIGERANTS)", kRefrigerantNames));
-  p.push_back(enumeration("oil", "oil (ED_OILS)", kOilNames));
-  p.push_back(word("build_min_speed", "rpm", "compressor build minimum speed"));
-  p.push_back(word("build_max_speed", "rpm", "compressor build maximum speed"));
-  p.push_back(word("rated_voltage", "V", "electrical build operating voltage"));
-  p.push_back(word("rated_power", "W", "electrical build power rating"));
-  p.push_back(text("device_name", kDeviceNameChars, "device name"));
-  // Running Limits / RS485 Config (0x03).
-  p.push_back(word("limit_min_speed", "rpm", "running limit: minimum speed (Set Run State floor)"));
-  p.push_back(word("limit_max_speed", "rpm", "running limit: maximum speed (Set Run State cap)"));
-  p.push_back(real("suction_pressure_low", "bar", "running limit: suction pressure low"));
-  p.push_back(real("suction_pressure_high", "bar", "running limit: suction pressure high"));
-  p.push_back(real("discharge_pressure_low", "bar", "running limit: discharge pressure low"));
-  p.push_back(real("discharge_pressure_high", "bar", "running limit: discharge pressure high"));
-  p.push_back(real("suction_temperature_low", "degC", "running limit: suction temperature low"));
-  p.push_back(real("suction_temperature_high", "degC", "running limit: suction temperature high"));
-  p.push_back(
-      real("discharge_temperature_low", "degC", "running limit: discharge temperature low"));
-  p.push_back(
-      real("discharge_temperature_high", "degC", "running limit: discharge temperature high"));
-  p.push_back(real("suction_superheat_low", "K", "running limit: suction superheat low"));
-  p.push_back(real("suction_superheat_high", "K", "running limit: suction superheat high"));
-  p.push_back(real("discharge_superheat_low", "K", "running limit: discharge superheat low"));
-  p.push_back(real("discharge_superheat_high", "K", "running limit: discharge superheat high"));
-  p.push_back(word("rs485_device_id", "", "RS485 config: device id"));
-  PointSpec control = word("control_enabled", "", "RS485 config: control enabled");
-  control.labels = {{"disabled", 0}, {"enabled", 1}};
-  p.push_back(std::move(control));
+  std::vector<PointSpec> p(pt::count);
+  // "Status" table.
+  p[pt::suction_pressure] = real("suction_pressure", "bar", "suction pressure (absolute)");
+  p[pt::discharge_pressure] = real("discharge_pressure", "bar", "discharge pressure (absolute)");
+  p[pt::suction_temperature] = real("suction_temperature", "degC", "suction temperature");
+  p[pt::discharge_temperature] = real("discharge_temperature", "degC", "discharge temperature");
+  p[pt::suction_superheat] = real("suction_superheat", "K", "suction superheat");
+  p[pt::discharge_superheat] = real("discharge_superheat", "K", "discharge superheat");
+  p[pt::compressor_rpm] = word("compressor_rpm", "rpm", "compressor speed as reported");
+  p[pt::motor_voltage] = word("motor_voltage", "V", "motor voltage");
+  p[pt::motor_power] = word("motor_power", "W", "motor power");
+  p[pt::motor_torque] = word("motor_torque", "Nm", "motor torque");
+  p[pt::op_state] = word("op_state", "", "operating state (ED_OP_STATE)")
+                        .named_values(labels_in_order(kOpStateNames));
+  p[pt::control_mode] = word("control_mode", "", "control mode (ED_CONTROL_MODE)")
+                            .named_values(labels_in_order(kControlModeNames));
+  p[pt::demand] = word("demand", "%", "% demand");
+  p[pt::remote_enable] = word("remote_enable", "", "remote enable input as reported (0 = off)");
+  p[pt::anti_short] =
+      word("anti_short", "", "anti-short-cycle byte as reported (no unit in the document)");
+  p[pt::motor_temperature] = real("motor_temperature", "degC", "motor temperature");
+  p[pt::switch_temperature] = real("switch_temperature", "degC", "power switch temperature");
+  p[pt::compressor_safety_run] = word("compressor_safety_run", "", "compressor safety flags - run")
+                                     .named_bits(compressor_flag_labels());
+  p[pt::compressor_safety_start] =
+      word("compressor_safety_start", "", "compressor safety flags - start")
+          .named_bits(compressor_flag_labels());
+  p[pt::motor_safety_run] =
+      word("motor_safety_run", "", "motor safety flags - run").named_bits(motor_flag_labels());
+  p[pt::motor_safety_start] =
+      word("motor_safety_start", "", "motor safety flags - start").named_bits(motor_flag_labels());
+  p[pt::electrical_safety] =
+      input_point("electrical_safety", PointType::u32, "", "electrical safety flags (24 bits)")
+          .named_bits(electrical_flag_labels());
+  // "Build Information" table.
+  p[pt::model] = text("model", kModelChars, "model");
+  p[pt::serial_number] = text("serial_number", kSerialChars, "serial number");
+  p[pt::refrigerant] = word("refrigerant", "", "refrigerant (ED_REFRIGERANTS)")
+                           .named_values(labels_in_order(kRefrigerantNames));
+  p[pt::oil] = word("oil", "", "oil (ED_OILS)").named_values(labels_in_order(kOilNames));
+  p[pt::build_min_speed] = word("build_min_speed", "rpm", "compressor build minimum speed");
+  p[pt::build_max_speed] = word("build_max_speed", "rpm", "compressor build maximum speed");
+  p[pt::rated_voltage] = word("rated_voltage", "V", "electrical build operating voltage");
+  p[pt::rated_power] = word("rated_power", "W", "electrical build power rating");
+  p[pt::device_name] = text("device_name", kDeviceNameChars, "device name");
+  // "Running Limits/ RS485 Config" table.
+  p[pt::limit_min_speed] =
+      word("limit_min_speed", "rpm", "running limit: minimum speed (Set Run State floor)");
+  p[pt::limit_max_speed] =
+      word("limit_max_speed", "rpm", "running limit: maximum speed (Set Run State cap)");
+  p[pt::suction_pressure_low] =
+      real("suction_pressure_low", "bar", "running limit: suction pressure low");
+  p[pt::suction_pressure_high] =
+      real("suction_pressure_high", "bar", "running limit: suction pressure high");
+  p[pt::discharge_pressure_low] =
+      real("discharge_pressure_low", "bar", "running limit: discharge pressure low");
+  p[pt::discharge_pressure_high] =
+      real("discharge_pressure_high", "bar", "running limit: discharge pressure high");
+  p[pt::suction_temperature_low] =
+      real("suction_temperature_low", "degC", "running limit: suction temperature low");
+  p[pt::suction_temperature_high] =
+      real("suction_temperature_high", "degC", "running limit: suction temperature high");
+  p[pt::discharge_temperature_low] =
+      real("discharge_temperature_low", "degC", "running limit: discharge temperature low");
+  p[pt::discharge_temperature_high] =
+      real("discharge_temperature_high", "degC", "running limit: discharge temperature high");
+  p[pt::suction_superheat_low] =
+      real("suction_superheat_low", "K", "running limit: suction superheat low");
+  p[pt::suction_superheat_high] =
+      real("suction_superheat_high", "K", "running limit: suction superheat high");
+  p[pt::discharge_superheat_low] =
+      real("discharge_superheat_low", "K", "running limit: discharge superheat low");
+  p[pt::discharge_superheat_high] =
+      real("discharge_superheat_high", "K", "running limit: discharge superheat high");
+  p[pt::rs485_device_id] = word("rs485_device_id", "", "RS485 config: device id");
+  // "Control Enabled" is a flag: 0 the drive ignores writes from the bus (README.md).
+  constexpr std::array<std::string_view, 2> kControlEnabled = {"disabled", "enabled"};
+  p[pt::control_enabled] = word("control_enabled", "", "RS485 config: control enabled")
+                               .named_values(labels_in_order(kControlEnabled));
   return p;
 }
 
 void fill_status(std::vector<Value>& v, const Status& s) {
-  v[kSuctionPressure] = d(s.suction_pressure);
-  v[kDischargePressure] = d(s.discharge_pressure);
-  v[kSuctionTemperature] = d(s.suction_temperature);
-  v[kDischargeTemperature] = d(s.discharge_temperature);
-  v[kSuctionSuperheat] = d(s.suction_superheat);
-  v[kDischargeSuperheat] = d(s.discharge_superheat);
-  v[kRpm] = i(s.rpm);
-  v[kVolts] = i(s.volts);
-  v[kWatts] = i(s.watts);
-  v[kTorque] = i(s.torque);
-  v[kOpState] = i(s.op_state);
-  v[kControlMode] = i(s.control_mode);
-  v[kDemand] = i(s.demand);
-  v[kRemoteEnable] = i(s.remote_enable);
-  v[kAntiShort] = i(s.anti_short);
-  v[kMotorTemperature] = d(s.motor_temperature);
-  v[kSwitchTemperature] = d(s.switch_temperature);
-  v[kCompressorRunFlags] = i(s.compressor_run_flags);
-  v[kCompressorStartFlags] = i(s.compressor_start_flags);
-  v[kMotorRunFlags] = i(s.motor_run_flags);
-  v[kMotorStartFlags] = i(s.motor_start_flags);
-  v[kElectricalFlags] = i(s.electrical_flags);
+  v[pt::suction_pressure] = d(s.suction_pressure);
+  v[pt::discharge_pressure] = d(s.discharge_pressure);
+  v[pt::suction_temperature] = d(s.suction_temperature);
+  v[pt::discharge_temperature] = d(s.discharge_temperature);
+  v[pt::suction_superheat] = d(s.suction_superheat);
+  v[pt::discharge_superheat] = d(s.discharge_superheat);
+  v[pt::compressor_rpm] = i(s.rpm);
+  v[pt::motor_voltage] = i(s.volts);
+  v[pt::motor_power] = i(s.watts);
+  v[pt::motor_torque] = i(s.torque);
+  v[pt::op_state] = i(s.op_state);
+  v[pt::control_mode] = i(s.control_mode);
+  v[pt::demand] = i(s.demand);
+  v[pt::remote_enable] = i(s.remote_enable);
+  v[pt::anti_short] = i(s.anti_short);
+  v[pt::motor_temperature] = d(s.motor_temperature);
+  v[pt::switch_temperature] = d(s.switch_temperature);
+  v[pt::compressor_safety_run] = i(s.compressor_run_flags);
+  v[pt::compressor_safety_start] = i(s.compressor_start_flags);
+  v[pt::motor_safety_run] = i(s.motor_run_flags);
+  v[pt::motor_safety_start] = i(s.motor_start_flags);
+  v[pt::electrical_safety] = i(s.electrical_flags);
 }
 
 void fill_build_info(std::vector<Value>& v, const BuildInfo& b) {
-  v[kModel] = b.model;
-  v[kSerialNumber] = b.serial;
-  v[kRefrigerant] = i(b.refrigerant);
-  v[kOil] = i(b.oil);
-  v[kBuildMinSpeed] = i(b.min_speed);
-  v[kBuildMaxSpeed] = i(b.max_speed);
-  v[kRatedVoltage] = i(b.voltage);
-  v[kRatedPower] = i(b.power);
-  v[kDeviceName] = b.device_name;
+  v[pt::model] = b.model;
+  v[pt::serial_number] = b.serial;
+  v[pt::refrigerant] = i(b.refrigerant);
+  v[pt::oil] = i(b.oil);
+  v[pt::build_min_speed] = i(b.min_speed);
+  v[pt::build_max_speed] = i(b.max_speed);
+  v[pt::rated_voltage] = i(b.voltage);
+  v[pt::rated_power] = i(b.power);
+  v[pt::device_name] = b.device_name;
 }
 
 void fill_running_limits(std::vector<Value>& v, const RunningLimits& l) {
-  v[kLimitMinSpeed] = i(l.min_speed);
-  v[kLimitMaxSpeed] = i(l.max_speed);
-  v[kSuctionPressureLow] = d(l.suction_pressure.low);
-  v[kSuctionPressureHigh] = d(l.suction_pressure.high);
-  v[kDischargePressureLow] = d(l.discharge_pressure.low);
-  v[kDischargePressureHigh] = d(l.discharge_pressure.high);
-  v[kSuctionTemperatureLow] = d(l.suction_temperature.low);
-  v[kSuctionTemperatureHigh] = d(l.suction_temperature.high);
-  v[kDischargeTemperatureLow] = d(l.discharge_temperature.low);
-  v[kDischargeTemperatureHigh] = d(l.discharge_temperature.high);
-  v[kSuctionSuperheatLow] = d(l.suction_superheat.low);
-  v[kSuctionSuperheatHigh] = d(l.suction_superheat.high);
-  v[kDischargeSuperheatLow] = d(l.discharge_superheat.low);
-  v[kDischargeSuperheatHigh] = d(l.discharge_superheat.high);
-  v[kRs485DeviceId] = i(l.device_id);
-  v[kControlEnabled] = i(l.control_enabled);
+  v[pt::limit_min_speed] = i(l.min_speed);
+  v[pt::limit_max_speed] = i(l.max_speed);
+  v[pt::suction_pressure_low] = d(l.suction_pressure.low);
+  v[pt::suction_pressure_high] = d(l.suction_pressure.high);
+  v[pt::discharge_pressure_low] = d(l.discharge_pressure.low);
+  v[pt::discharge_pressure_high] = d(l.discharge_pressure.high);
+  v[pt::suction_temperature_low] = d(l.suction_temperature.low);
+  v[pt::suction_temperature_high] = d(l.suction_temperature.high);
+  v[pt::discharge_temperature_low] = d(l.discharge_temperature.low);
+  v[pt::discharge_temperature_high] = d(l.discharge_temperature.high);
+  v[pt::suction_superheat_low] = d(l.suction_superheat.low);
+  v[pt::suction_superheat_high] = d(l.suction_superheat.high);
+  v[pt::discharge_superheat_low] = d(l.discharge_superheat.low);
+  v[pt::discharge_superheat_high] = d(l.discharge_superheat.high);
+  v[pt::rs485_device_id] = i(l.device_id);
+  v[pt::control_enabled] = i(l.control_enabled);
 }
 
 }  // namespace drivegate::unicla

@@ -4,12 +4,12 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
-#include <vector>
 
 #include "drivegate/sim_text.h"
-#include "faults.h"
 #include "labels.h"
+#include "op_state.h"
 
 namespace drivegate::unicla {
 
@@ -22,22 +22,13 @@ constexpr Millis kStartingTime{500};
 constexpr std::size_t kMaxBuffer = 4 * kMaxWireSize;
 
 constexpr const char* kHelp =
-    "commands: state | fault <motor|overcurrent|overvoltage|undervoltage|overtemp|startup|"
+    "commands: help | state | fault <motor|overcurrent|overvoltage|undervoltage|overtemp|startup|"
     "pressure|superheat|fmc|electrical|config|xc|<op state number>> | clear | "
     "flags <compressor_run|compressor_start|motor_run|motor_start|electrical> <value> | "
     "sticky on|off | control on|off | limits <min> <max> | silent on|off | corrupt <n>";
 
 bool is_fault(OpState s) {
   return is_fault_state(static_cast<std::uint8_t>(s));
-}
-
-std::vector<std::string> words(std::string_view line) {
-  return split_words(line);
-}
-
-std::optional<long> number(std::string_view s) {
-  if (const auto v = parse_unsigned(s)) return static_cast<long>(*v);
-  return std::nullopt;
 }
 
 std::optional<bool> on_off(std::string_view s) {
@@ -240,35 +231,50 @@ Bytes EDriveSimulator::on_tick(TimePoint now) {
 }
 
 std::string EDriveSimulator::fault_command(std::string_view arg) {
+  // The flag word a named fault sets a bit in, beside its Fault-* state.
+  enum class Word : std::uint8_t { none, compressor_run, motor_run, electrical };
   struct Named {
     std::string_view name;
     OpState state;
-    int word;  // 0 none, 1 compressor run, 2 motor run, 3 electrical
-    std::uint32_t bit;
+    Word word;
+    unsigned bit;
   };
+  // Bits of "Interpreting Safety Flags": motor 14 ST Motor Control - Over Current, 9 Over voltage,
+  // 10 Under Voltage, 11 Over Temperature, 12 Startup Fail; compressor 14 High Side Pressure High,
+  // 5 Low Side Superheat Low; electrical 1 FMC 3.3V Fault, 16 CMC 3V3 Fault.
   static constexpr Named kNamed[] = {
-      {"motor", OpState::fault_motor, 2, 14},  // ST Motor Control - Over Current
-      {"overcurrent", OpState::fault_motor, 2, 14},
-      {"overvoltage", OpState::fault_motor, 2, 9},
-      {"undervoltage", OpState::fault_motor, 2, 10},
-      {"overtemp", OpState::fault_motor, 2, 11},
-      {"startup", OpState::fault_motor, 2, 12},
-      {"pressure", OpState::fault_compressor_safety, 1, 14},  // High Side Pressure High
-      {"superheat", OpState::fault_compressor_safety, 1, 5},  // Low Side Superheat Low
-      {"fmc", OpState::fault_fmc, 3, 1},                      // FMC 3.3V Fault
-      {"electrical", OpState::fault_electrical, 3, 16},       // CMC 3V3 Fault
-      {"config", OpState::fault_configuration, 0, 0},
-      {"xc", OpState::fault_xc_comms, 0, 0},
+      {"motor", OpState::fault_motor, Word::motor_run, 14},
+      {"overcurrent", OpState::fault_motor, Word::motor_run, 14},
+      {"overvoltage", OpState::fault_motor, Word::motor_run, 9},
+      {"undervoltage", OpState::fault_motor, Word::motor_run, 10},
+      {"overtemp", OpState::fault_motor, Word::motor_run, 11},
+      {"startup", OpState::fault_motor, Word::motor_run, 12},
+      {"pressure", OpState::fault_compressor_safety, Word::compressor_run, 14},
+      {"superheat", OpState::fault_compressor_safety, Word::compressor_run, 5},
+      {"fmc", OpState::fault_fmc, Word::electrical, 1},
+      {"electrical", OpState::fault_electrical, Word::electrical, 16},
+      {"config", OpState::fault_configuration, Word::none, 0},
+      {"xc", OpState::fault_xc_comms, Word::none, 0},
   };
   for (const Named& n : kNamed) {
     if (n.name != arg) continue;
     trip(n.state);
-    if (n.word == 1) compressor_run_ |= static_cast<std::uint16_t>(1u << n.bit);
-    if (n.word == 2) motor_run_ |= static_cast<std::uint16_t>(1u << n.bit);
-    if (n.word == 3) electrical_ |= 1u << n.bit;
+    switch (n.word) {
+      case Word::compressor_run:
+        compressor_run_ |= static_cast<std::uint16_t>(1u << n.bit);
+        break;
+      case Word::motor_run:
+        motor_run_ |= static_cast<std::uint16_t>(1u << n.bit);
+        break;
+      case Word::electrical:
+        electrical_ |= 1u << n.bit;
+        break;
+      case Word::none:
+        break;
+    }
     return "ok " + state_line();
   }
-  if (const auto raw = number(arg); raw && *raw >= 0 && *raw <= 0xFF) {
+  if (const auto raw = parse_unsigned(arg, 0xFF)) {
     trip(OpState::stopped);
     raw_ = true;
     raw_state_ = static_cast<std::uint8_t>(*raw);
@@ -278,8 +284,8 @@ std::string EDriveSimulator::fault_command(std::string_view arg) {
 }
 
 std::string EDriveSimulator::flags_command(std::string_view word, std::string_view value) {
-  const auto v = number(value);
-  if (!v || *v < 0) return std::string("error: bad flag value; ") + kHelp;
+  const auto v = parse_unsigned(value);
+  if (!v) return std::string("error: bad flag value; ") + kHelp;
   const auto w16 = static_cast<std::uint16_t>(*v & 0xFFFF);
   if (word == "compressor_run") {
     compressor_run_ = w16;
@@ -290,7 +296,7 @@ std::string EDriveSimulator::flags_command(std::string_view word, std::string_vi
   } else if (word == "motor_start") {
     motor_start_ = w16;
   } else if (word == "electrical") {
-    electrical_ = static_cast<std::uint32_t>(*v) & 0xFFFFFF;  // 24 bits
+    electrical_ = *v & 0xFFFFFF;  // "Electrical Safety Flags": 24 bits
   } else {
     return std::string("error: unknown flag word; ") + kHelp;
   }
@@ -298,9 +304,10 @@ std::string EDriveSimulator::flags_command(std::string_view word, std::string_vi
 }
 
 std::string EDriveSimulator::control(std::string_view line, TimePoint /*now*/) {
-  const auto w = words(line);
+  const auto w = split_words(line);
   if (w.empty()) return std::string("error: empty command; ") + kHelp;
   const std::string_view cmd = w[0];
+  if (cmd == "help" && w.size() == 1) return kHelp;
   if (cmd == "state" && w.size() == 1) return state_line();
   if (cmd == "fault" && w.size() == 2) return fault_command(w[1]);
   if (cmd == "clear" && w.size() == 1) {
@@ -320,15 +327,15 @@ std::string EDriveSimulator::control(std::string_view line, TimePoint /*now*/) {
     return "ok " + state_line();
   }
   if (cmd == "corrupt" && w.size() == 2) {
-    const auto n = number(w[1]);
-    if (!n || *n < 0) return std::string("error: expected a count; ") + kHelp;
+    const auto n = parse_unsigned(w[1], 0xFFFF);
+    if (!n) return std::string("error: expected a count; ") + kHelp;
     corrupt_ = static_cast<int>(*n);
     return "ok " + state_line();
   }
   if (cmd == "limits" && w.size() == 3) {
-    const auto lo = number(w[1]);
-    const auto hi = number(w[2]);
-    if (!lo || !hi || *lo < 0 || *hi > 0xFFFF || *lo > *hi) {
+    const auto lo = parse_unsigned(w[1], 0xFFFF);  // "Speed Control": u16 rpm
+    const auto hi = parse_unsigned(w[2], 0xFFFF);
+    if (!lo || !hi || *lo > *hi) {
       return std::string("error: expected 0 <= min <= max <= 65535; ") + kHelp;
     }
     limits_.min_speed = static_cast<std::uint16_t>(*lo);

@@ -8,6 +8,7 @@
 
 #include "codec.h"
 #include "drivegate/simulator.h"
+#include "op_state.h"
 #include "payloads.h"
 
 namespace drivegate::unicla {

@@ -1,479 +1,298 @@
-// The driver against the simulator on a simulated line: exact frames, poll plan, retries,
-// write confirmation through status reads, fault mapping and comm_lost recovery.
-#include "driver.h"
-
+// The driver against its simulator on the real bus engine: the poll plan with its exact frames
+// and times, the points a PLC reads, resends, replies that are not the awaited one, comm_lost and
+// recovery, and the float byte order option.
 #include <gtest/gtest.h>
 
-#include "faults.h"
-#include "harness.h"
+#include "bench.h"
 #include "points.h"
 
 namespace drivegate::unicla {
 namespace {
 
-using test_support::Rig;
-using test_support::sent_frame;
-
-constexpr std::uint8_t kStatus = 0x01, kBuild = 0x02, kLimits = 0x03, kRun = 0xC0, kAck = 0xC1;
-
-std::int64_t as_int(const Value& v) {
-  return std::get<std::int64_t>(v);
-}
+// README.md, "Frames": the driver's start-up reads and first poll, device 1.
+const Bytes kBuildRead1 = {0x7E, 0x00, 0x01, 0xC0, 0x02, 0x01, 0x00, 0x00, 0x00, 0x34, 0x66, 0x7E};
+const Bytes kLimitsRead2 = {0x7E, 0x00, 0x01, 0xC0, 0x03, 0x02, 0x00, 0x00, 0x00, 0x05, 0xEB, 0x7E};
+const Bytes kStatusRead3 = {0x7E, 0x00, 0x01, 0xC0, 0x01, 0x03, 0x00, 0x00, 0x00, 0x37, 0xDC, 0x7E};
 
 TEST(UniclaDriver, StartUpReadsBuildThenLimitsThenPollsStatus) {
-  Rig r;
-  r.start();
-  ASSERT_GE(r.bus.sent.size(), 3u);
-  // Sequence numbers start at 1; CRCs per "Cyclic Redundancy Check" (see codec_test).
-  EXPECT_EQ(r.bus.sent[0],
-            (Bytes{0x7E, 0x00, 0x01, 0xC0, 0x02, 0x01, 0x00, 0x00, 0x00, 0x34, 0x66, 0x7E}));
-  EXPECT_EQ(r.bus.sent[1],
-            (Bytes{0x7E, 0x00, 0x01, 0xC0, 0x03, 0x02, 0x00, 0x00, 0x00, 0x05, 0xEB, 0x7E}));
-  EXPECT_EQ(r.bus.sent[2],
-            (Bytes{0x7E, 0x00, 0x01, 0xC0, 0x01, 0x03, 0x00, 0x00, 0x00, 0x37, 0xDC, 0x7E}));
-  EXPECT_TRUE(r.driver.common().ready);
-  const auto& v = r.driver.values();
-  EXPECT_EQ(std::get<std::string>(v[kModel]), "EDRIVE-SIM-24V");
-  EXPECT_EQ(std::get<std::string>(v[kSerialNumber]), "SIM1000001");
-  EXPECT_EQ(std::get<std::string>(v[kDeviceName]), "drivegate simulated eDrive 1");
-  EXPECT_EQ(as_int(v[kRefrigerant]), 2);
-  EXPECT_EQ(as_int(v[kOil]), 5);
-  EXPECT_EQ(as_int(v[kLimitMinSpeed]), 1500);
-  EXPECT_EQ(as_int(v[kLimitMaxSpeed]), 6000);
-  EXPECT_EQ(as_int(v[kControlEnabled]), 1);
-  EXPECT_DOUBLE_EQ(std::get<double>(v[kSuctionPressure]), 4.5);
-  EXPECT_DOUBLE_EQ(std::get<double>(v[kDischargePressure]), 6.5);
-  EXPECT_EQ(as_int(v[kOpState]), 3);  // Stopped
-  EXPECT_EQ(v.size(), r.driver.points().size());
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  const auto sent = b.sent();
+  ASSERT_GE(sent.size(), 3u);
+  // Sequence numbers from 1; each read as soon as the one before was answered, after the gap.
+  EXPECT_EQ(sent[0].bytes, kBuildRead1);
+  EXPECT_EQ(sent[1].bytes, kLimitsRead2);
+  EXPECT_EQ(sent[2].bytes, kStatusRead3);
+  const auto& answers = b.rig.answers();
+  ASSERT_GE(answers.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const TimePoint answered = answers[i].at + wire_time(answers[i].bytes.size());
+    EXPECT_EQ(sent[i + 1].at, answered + kInterFrameGap) << i;
+  }
+  EXPECT_NE(b.read("status") & kOnline, 0u);
+  EXPECT_EQ(b.read_text("model"), "EDRIVE-SIM-24V");
+  EXPECT_EQ(b.read_text("serial_number"), "SIM1000001");
+  EXPECT_EQ(b.read_text("device_name"), "drivegate simulated eDrive 1");
+  EXPECT_EQ(b.read("refrigerant"), 2u);  // R1234YF
+  EXPECT_EQ(b.read("oil"), 5u);          // POE68
+  EXPECT_EQ(b.read("build_min_speed"), 1000u);
+  EXPECT_EQ(b.read("build_max_speed"), 6500u);
+  EXPECT_EQ(b.read("limit_min_speed"), 1500u);
+  EXPECT_EQ(b.read("limit_max_speed"), 6000u);
+  EXPECT_EQ(b.read("control_enabled"), 1u);
+  EXPECT_EQ(b.read("rs485_device_id"), 1u);
+  EXPECT_FLOAT_EQ(b.read_f32("discharge_pressure_high"), 28.0F);
+  // The simulated drive at rest: equalised pressures, stopped.
+  EXPECT_FLOAT_EQ(b.read_f32("suction_pressure"), 4.5F);
+  EXPECT_FLOAT_EQ(b.read_f32("discharge_pressure"), 6.5F);
+  EXPECT_EQ(b.read("op_state"), kStopped);
+  EXPECT_EQ(b.read("control_mode"), 4u);  // External Serial
+  EXPECT_EQ(b.read("status") & kRunning, 0u);
+  // Nothing was written: nothing is in force but stop.
+  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("setpoint_rpm"), 0u);
 }
 
 TEST(UniclaDriver, PollsStatusAtThePollInterval) {
-  Rig r;
-  r.start();
-  const std::size_t from = r.bus.sent.size();
-  r.bus.run_for(Millis(5000));
-  const auto polls = r.sent_with(kStatus, from);
-  EXPECT_GE(polls.size(), 9u);
-  EXPECT_LE(polls.size(), 11u);
-  EXPECT_EQ(r.sent_with(kBuild, from).size(), 0u);  // build / limits only at start-up
-  for (std::size_t i = 1; i < polls.size(); ++i) {
-    EXPECT_EQ(polls[i].sequence, static_cast<std::uint8_t>(polls[i - 1].sequence + 1));
-    EXPECT_EQ(polls[i].command, 0xC0);
-    EXPECT_TRUE(polls[i].payload.empty());
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(5s);
+  const auto polls = b.sent(from);
+  ASSERT_EQ(polls.size(), 10u);  // nothing but status reads, every 500 ms
+  for (std::size_t i = 0; i < polls.size(); ++i) {
+    const Frame& f = polls[i].frame;
+    EXPECT_EQ(f.message_id, kStatus);
+    EXPECT_EQ(f.command, kRead);
+    EXPECT_EQ(f.destination, 0x01);
+    EXPECT_TRUE(f.payload.empty());  // "Read: payload 0"
+    if (i == 0) continue;
+    EXPECT_EQ(polls[i].at - polls[i - 1].at, 500ms) << i;
+    EXPECT_EQ(f.sequence, static_cast<std::uint8_t>(polls[i - 1].frame.sequence + 1));
   }
+  EXPECT_EQ(b.read("timeouts"), 0u);
+  EXPECT_EQ(b.read("retries"), 0u);
+}
+
+TEST(UniclaDriver, PollIntervalIsTheDevicesOwn) {
+  Bench b({}, 200ms);
+  ASSERT_TRUE(b.ready());
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(1s);
+  const auto polls = b.sent(from, kStatus);
+  ASSERT_EQ(polls.size(), 5u);
+  for (std::size_t i = 1; i < polls.size(); ++i) EXPECT_EQ(polls[i].at - polls[i - 1].at, 200ms);
 }
 
 TEST(UniclaDriver, PointsCarryTypesUnitsAndLabels) {
-  Rig r;
-  const auto& p = r.driver.points();
-  ASSERT_EQ(p.size(), kPointCount);
-  EXPECT_EQ(p[kSuctionPressure].type, PointType::f32);
-  EXPECT_EQ(p[kSuctionPressure].unit, "bar");
-  EXPECT_EQ(p[kSuctionTemperature].unit, "degC");
-  EXPECT_EQ(p[kSuctionSuperheat].unit, "K");
-  EXPECT_EQ(p[kModel].type, PointType::string);
-  EXPECT_EQ(p[kModel].string_registers, 8);
-  EXPECT_EQ(p[kDeviceName].string_registers, 16);
-  EXPECT_EQ(p[kOpState].labels.size(), 17u);
-  EXPECT_EQ(p[kOpState].labels[7].name, "Fault - Motor");
-  EXPECT_EQ(p[kMotorRunFlags].labels.back().name, "ST Motor Control - Software Error");
-  EXPECT_TRUE(p[kMotorRunFlags].bit_labels);
-  EXPECT_EQ(p[kElectricalFlags].type, PointType::u32);
-  EXPECT_EQ(p[kElectricalFlags].labels.size(), 19u);  // 24 bits minus five "X"
-  for (const PointSpec& s : p) EXPECT_EQ(s.access(), Access::read) << s.name;
-}
-
-TEST(UniclaDriver, RunAt3000ConfirmedByStatusThenStop) {
-  Rig r;
-  r.start();
-  EXPECT_EQ(r.driver.setpoint(3000, 1, r.now()), WriteStatus::done);  // stored while stopped
-  EXPECT_EQ(r.driver.common().setpoint_rpm, 3000);
-  const std::size_t from = r.bus.sent.size();
-  ASSERT_EQ(r.driver.command(Command::run_forward, 2, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(2), WriteResult::ok);
-  const auto runs = r.sent_with(kRun, from);
-  ASSERT_EQ(runs.size(), 1u);
-  EXPECT_EQ(runs[0].command, 0xC1);
-  EXPECT_EQ(runs[0].destination, 0x01);
-  EXPECT_EQ(runs[0].payload, (Bytes{0x0B, 0xB8}));  // 3000 rpm
-  // The write goes out first, the confirming status read right after it.
-  EXPECT_EQ(sent_frame(r.bus.sent[from]).message_id, kRun);
-  EXPECT_EQ(sent_frame(r.bus.sent[from + 1]).message_id, kStatus);
-  EXPECT_EQ(r.driver.common().command, Command::run_forward);
-  r.bus.run_for(Millis(4000));
-  EXPECT_EQ(r.driver.common().speed_rpm, 3000);
-  EXPECT_TRUE(r.driver.common().running);
-  EXPECT_EQ(as_int(r.driver.values()[kOpState]), 2);  // Running
-  EXPECT_LT(std::get<double>(r.driver.values()[kSuctionPressure]), 4.5);
-
-  const std::size_t stop_from = r.bus.sent.size();
-  ASSERT_EQ(r.driver.command(Command::stop, 3, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(3), WriteResult::ok);
-  const auto stops = r.sent_with(kRun, stop_from);
-  ASSERT_EQ(stops.size(), 1u);
-  EXPECT_EQ(stops[0].payload, (Bytes{0x00, 0x00}));  // "a value of 0 is treated as a stop"
-  r.bus.run_for(Millis(3000));
-  EXPECT_EQ(r.driver.common().speed_rpm, 0);
-  EXPECT_FALSE(r.driver.common().running);
-  EXPECT_EQ(r.driver.common().command, Command::stop);
-}
-
-TEST(UniclaDriver, SetRunStateFrameExact) {
-  Rig r;
-  r.start();
-  r.driver.setpoint(3000, 1, r.now());
-  const std::size_t from = r.bus.sent.size();
-  const std::uint8_t seq = static_cast<std::uint8_t>(sent_frame(r.bus.sent.back()).sequence + 1);
-  r.driver.command(Command::run_forward, 2, r.now());
-  r.wait(2);
-  Frame want;
-  want.destination = 0x01;
-  want.command = 0xC1;
-  want.message_id = 0xC0;
-  want.sequence = seq;
-  want.payload = {0x0B, 0xB8};
-  EXPECT_EQ(r.bus.sent[from], encode(want));
-}
-
-TEST(UniclaDriver, SpeedChangeWhileRunningIsSentAndConfirmedBySpeed) {
-  Rig r;
-  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
-  r.bus.run_for(Millis(4000));
-  const std::size_t from = r.bus.sent.size();
-  ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(3), WriteResult::ok);
-  const auto runs = r.sent_with(kRun, from);
-  ASSERT_EQ(runs.size(), 1u);
-  EXPECT_EQ(runs[0].payload, (Bytes{0x11, 0x94}));  // 4500
-  r.bus.run_for(Millis(3000));
-  EXPECT_EQ(r.driver.common().speed_rpm, 4500);
-}
-
-// A PLC writes setpoint and run_forward in one request every cycle. While running that is two
-// Set Run State writes for the same thing: one frame carries both, and both complete ok (not
-// 0x0B for the first, superseded).
-TEST(UniclaDriver, SetpointAndRunTogetherWhileRunningShareOneFrame) {
-  Rig r;
-  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
-  r.bus.run_for(Millis(4000));
-  const std::size_t from = r.bus.sent.size();
-  ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
-  ASSERT_EQ(r.driver.command(Command::run_forward, 4, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(4), WriteResult::ok);
-  EXPECT_EQ(r.wait(3), WriteResult::ok);
-  const auto runs = r.sent_with(kRun, from);
-  ASSERT_EQ(runs.size(), 1u);
-  EXPECT_EQ(runs[0].payload, (Bytes{0x11, 0x94}));  // 4500
-}
-
-// A stop that supersedes an unconfirmed speed change leaves stop in force: a later setpoint is
-// stored, not sent (it must not start the drive).
-TEST(UniclaDriver, StopSupersedingASpeedChangeKeepsStopInForce) {
-  Rig r;
-  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
-  r.bus.run_for(Millis(4000));
-  ASSERT_EQ(r.driver.setpoint(4500, 3, r.now()), WriteStatus::pending);
-  ASSERT_EQ(r.driver.command(Command::stop, 4, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.driver.common().command, Command::stop);
-  EXPECT_EQ(r.wait(3), WriteResult::no_response);  // superseded
-  EXPECT_EQ(r.wait(4), WriteResult::ok);
-  EXPECT_EQ(r.driver.common().command, Command::stop);
-  r.bus.run_for(Millis(3000));
-  const std::size_t from = r.bus.sent.size();
-  EXPECT_EQ(r.driver.setpoint(2000, 5, r.now()), WriteStatus::done);
-  r.bus.run_for(Millis(1000));
-  EXPECT_TRUE(r.sent_with(kRun, from).empty());
-  EXPECT_EQ(r.driver.common().speed_rpm, 0);
-}
-
-TEST(UniclaDriver, OutOfLimitsAndImpossibleCommandsAreRefusedLocally) {
-  Rig r;
-  // Before the running limits are read nothing can be judged.
-  EXPECT_EQ(r.driver.setpoint(3000, 1, r.now()), WriteStatus::refused);
-  EXPECT_EQ(r.driver.command(Command::run_forward, 2, r.now()), WriteStatus::refused);
-  r.start();
-  EXPECT_EQ(r.driver.setpoint(7000, 3, r.now()), WriteStatus::invalid_value);  // max 6000
-  EXPECT_EQ(r.driver.setpoint(1000, 4, r.now()), WriteStatus::invalid_value);  // min 1500
-  EXPECT_EQ(r.driver.setpoint(-5, 5, r.now()), WriteStatus::invalid_value);
-  EXPECT_EQ(r.driver.command(Command::run_reverse, 6, r.now()), WriteStatus::invalid_value);
-  // Setpoint still 0: cannot run at 0 rpm.
-  EXPECT_EQ(r.driver.command(Command::run_forward, 7, r.now()), WriteStatus::invalid_value);
-  EXPECT_EQ(r.driver.write(kOpState, Value{std::int64_t{1}}, 8, r.now()),
-            WriteStatus::invalid_value);
-  const std::size_t from = r.bus.sent.size();
-  r.bus.run_for(Millis(1000));
-  EXPECT_TRUE(r.sent_with(kRun, from).empty());
-  EXPECT_TRUE(r.bus.completions.empty());
-}
-
-TEST(UniclaDriver, QuickStopIsAPlainStop) {
-  Rig r;
-  r.start();
-  const std::size_t from = r.bus.sent.size();
-  ASSERT_EQ(r.driver.command(Command::quick_stop, 1, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(1), WriteResult::ok);
-  const auto runs = r.sent_with(kRun, from);
-  ASSERT_EQ(runs.size(), 1u);
-  EXPECT_EQ(runs[0].payload, (Bytes{0x00, 0x00}));
-}
-
-TEST(UniclaDriver, MotorFaultMapsAndResetFaultClearsIt) {
-  Rig r;
-  ASSERT_EQ(r.run_at(3000), WriteResult::ok);
-  r.bus.run_for(Millis(2000));
-  r.sim.control("fault motor", r.now());  // Fault - Motor + ST over current
-  r.bus.run_for(Millis(600));
-  const CommonState& c = r.driver.common();
-  EXPECT_TRUE(c.faults.has(Fault::over_current));
-  EXPECT_EQ(most_severe(c.faults), Fault::over_current);
-  EXPECT_EQ(c.native_fault, 7u);
-  EXPECT_EQ(as_int(r.driver.values()[kMotorRunFlags]), 0x4000);
-  // A run command is refused by a faulted drive: the next status shows the fault.
-  EXPECT_EQ(r.driver.command(Command::run_forward, 3, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(3), WriteResult::refused);
-
-  const std::size_t from = r.bus.sent.size();
-  ASSERT_EQ(r.driver.command(Command::reset_fault, 4, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(4), WriteResult::ok);
-  const auto acks = r.sent_with(kAck, from);
-  ASSERT_EQ(acks.size(), 1u);
-  EXPECT_EQ(acks[0].command, 0xC1);
-  EXPECT_TRUE(acks[0].payload.empty());  // "Acknowledge Faults: payload 0"
-  EXPECT_TRUE(r.driver.common().faults.empty());
-  EXPECT_EQ(r.driver.common().native_fault, 0u);
-  EXPECT_EQ(as_int(r.driver.values()[kOpState]), 3);
-}
-
-TEST(UniclaDriver, AcknowledgeThatDoesNotClearIsRefused) {
-  Rig r;
-  r.start();
-  r.sim.control("fault pressure", r.now());
-  r.sim.control("sticky on", r.now());
-  r.bus.run_for(Millis(600));
-  EXPECT_TRUE(r.driver.common().faults.has(Fault::process_limit));
-  EXPECT_EQ(r.driver.common().native_fault, 6u);
-  ASSERT_EQ(r.driver.command(Command::reset_fault, 1, r.now()), WriteStatus::pending);
-  const TimePoint sent = r.now();
-  EXPECT_EQ(r.wait(1), WriteResult::refused);
-  EXPECT_GE(r.now() - sent, Millis(2000));  // confirm_timeout_ms
-}
-
-TEST(UniclaDriver, IgnoredWriteEndsInNoResponse) {
-  Rig r;
-  r.start();
-  r.sim.control("control off", r.now());  // the drive now ignores writes
-  r.driver.setpoint(3000, 1, r.now());
-  ASSERT_EQ(r.driver.command(Command::run_forward, 2, r.now()), WriteStatus::pending);
-  EXPECT_EQ(r.wait(2), WriteResult::no_response);
-  EXPECT_EQ(r.driver.common().command, Command::stop);  // restored
-}
-
-TEST(UniclaDriver, ControlDisabledInLimitsRefusesWritesAtOnce) {
-  Rig r;
-  r.sim.control("control off", r.now());
-  r.start();
-  EXPECT_EQ(as_int(r.driver.values()[kControlEnabled]), 0);
-  r.driver.setpoint(3000, 1, r.now());
-  EXPECT_EQ(r.driver.command(Command::run_forward, 2, r.now()), WriteStatus::refused);
-  EXPECT_EQ(r.driver.command(Command::stop, 3, r.now()), WriteStatus::refused);
-  EXPECT_EQ(r.driver.command(Command::reset_fault, 4, r.now()), WriteStatus::refused);
-}
-
-TEST(UniclaDriver, BadCrcIsResentIdentically) {
-  Rig r;
-  r.start();
-  r.sim.control("corrupt 1", r.now());
-  const std::size_t from = r.bus.sent.size();
-  r.bus.run_for(Millis(600));
-  ASSERT_GE(r.bus.sent.size(), from + 2);
-  EXPECT_EQ(r.bus.sent[from], r.bus.sent[from + 1]);  // same frame, same sequence
-  EXPECT_EQ(r.bus.bad_frames, 1);
-  EXPECT_EQ(r.bus.retries, 1);
-}
-
-TEST(UniclaDriver, ForeignSequenceSourceAndDestinationAreDropped) {
-  Rig r;
-  r.start();
-  TimePoint now = r.now() + Millis(1000);
-  const auto ex = r.driver.next_exchange(now);
-  ASSERT_TRUE(ex);
-  const Frame req = sent_frame(ex->frame);
-  Frame rep;
-  rep.source = 0x01;
-  rep.command = 0xC0;
-  rep.message_id = kStatus;
-  rep.sequence = static_cast<std::uint8_t>(req.sequence - 1);  // a late reply to an earlier read
-  rep.payload = encode_status(r.sim.status(), ByteOrder::big);
-  Bytes wire = encode(rep);
-  RxVerdict v = r.driver.on_receive(wire, now);
-  EXPECT_EQ(v.kind, RxKind::foreign);
-  EXPECT_EQ(v.consumed, wire.size());
-  rep.sequence = req.sequence;
-  rep.source = 0x02;  // another drive
-  wire = encode(rep);
-  EXPECT_EQ(r.driver.on_receive(wire, now).kind, RxKind::foreign);
-  rep.source = 0x01;
-  rep.destination = 0x05;  // not for the master
-  wire = encode(rep);
-  EXPECT_EQ(r.driver.on_receive(wire, now).kind, RxKind::foreign);
-  EXPECT_EQ(r.driver.on_receive(ex->frame, now).kind, RxKind::foreign);  // a request
-  rep.destination = 0x00;
-  rep.message_id = kBuild;  // right sequence, wrong message
-  wire = encode(rep);
-  EXPECT_EQ(r.driver.on_receive(wire, now).kind, RxKind::foreign);
-  rep.message_id = kStatus;
-  rep.payload.resize(10);  // checked but short: not a status
-  wire = encode(rep);
-  EXPECT_EQ(r.driver.on_receive(wire, now).kind, RxKind::noise);
-  rep.payload = encode_status(r.sim.status(), ByteOrder::big);
-  wire = encode(rep);
-  // Split at every byte: incomplete until the EOF, then the reply.
-  for (std::size_t n = 1; n < wire.size(); ++n) {
-    const RxVerdict part = r.driver.on_receive(ByteView(wire).first(n), now);
-    ASSERT_EQ(part.kind, RxKind::incomplete) << n;
-    EXPECT_EQ(part.consumed, 0u);
+  Bench b;
+  const auto& p = b.drive->driver().points();
+  ASSERT_EQ(p.size(), pt::count);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    EXPECT_FALSE(p[i].name.empty()) << i;  // every index has its point
+    EXPECT_EQ(p[i].access(), Access::read) << p[i].name;
   }
-  v = r.driver.on_receive(wire, now);
-  EXPECT_EQ(v.kind, RxKind::reply);
-  EXPECT_EQ(v.consumed, wire.size());
-  // Once answered, the same reply again is foreign.
-  EXPECT_EQ(r.driver.on_receive(wire, now).kind, RxKind::foreign);
+  EXPECT_EQ(p[pt::suction_pressure].name, "suction_pressure");
+  EXPECT_EQ(p[pt::suction_pressure].type, PointType::f32);
+  EXPECT_EQ(p[pt::suction_pressure].unit, "bar");
+  EXPECT_EQ(p[pt::suction_temperature].unit, "degC");
+  EXPECT_EQ(p[pt::suction_superheat].unit, "K");
+  EXPECT_EQ(p[pt::compressor_rpm].unit, "rpm");
+  EXPECT_EQ(p[pt::model].type, PointType::string);
+  EXPECT_EQ(p[pt::model].string_registers, 8);
+  EXPECT_EQ(p[pt::serial_number].string_registers, 8);
+  EXPECT_EQ(p[pt::device_name].string_registers, 16);
+  EXPECT_EQ(p[pt::op_state].labels.size(), 17u);
+  EXPECT_EQ(p[pt::op_state].labels[7].name, "Fault - Motor");
+  EXPECT_EQ(p[pt::op_state].labels[7].value, 7u);
+  EXPECT_EQ(p[pt::refrigerant].labels[2].name, "R1234YF");
+  EXPECT_EQ(p[pt::oil].labels[5].name, "POE68");
+  EXPECT_EQ(p[pt::control_mode].labels[4].name, "External Serial");
+  EXPECT_TRUE(p[pt::motor_safety_run].bit_labels);
+  EXPECT_EQ(p[pt::motor_safety_run].labels.size(), 15u);  // bit 0 is "X"
+  EXPECT_EQ(p[pt::motor_safety_run].labels.front().value, 1u);
+  EXPECT_EQ(p[pt::motor_safety_run].labels.back().name, "ST Motor Control - Software Error");
+  EXPECT_EQ(p[pt::compressor_safety_start].labels.size(), 12u);  // bits 0..3 are "X"
+  EXPECT_EQ(p[pt::compressor_safety_start].labels.front().value, 4u);
+  EXPECT_EQ(p[pt::electrical_safety].type, PointType::u32);
+  EXPECT_EQ(p[pt::electrical_safety].labels.size(), 19u);     // 24 bits minus five "X"
+  EXPECT_EQ(p[pt::electrical_safety].labels[11].value, 16u);  // CMC 3V3 Fault
+  EXPECT_EQ(p[pt::control_enabled].labels.size(), 2u);
+  // The register map lays them out after the common block, in this order (the e2e test and the
+  // printed register map rely on it): suction_pressure at input 32, model at 63.
+  EXPECT_EQ(b.drive->map().find("suction_pressure")->address, 32);
+  EXPECT_EQ(b.drive->map().find("model")->address, 63);
 }
 
-TEST(UniclaDriver, BadBytesGiveVerdictsThatConsume) {
-  Rig r;
-  const TimePoint now = r.now();
-  const Bytes noise = {0x01, 0x02, 0x7E};
-  RxVerdict v = r.driver.on_receive(noise, now);
-  EXPECT_EQ(v.kind, RxKind::noise);
-  EXPECT_EQ(v.consumed, 2u);
-  const Bytes bad_crc = {0x7E, 0x01, 0x00, 0xC0, 0x01, 0x36, 0x00, 0x00, 0x00, 0x00, 0x00, 0x7E};
-  v = r.driver.on_receive(bad_crc, now);
-  EXPECT_EQ(v.kind, RxKind::bad_checksum);
-  EXPECT_GT(v.consumed, 0u);
+TEST(UniclaDriver, ABadCrcIsResentIdenticallyAfterTheGap) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("corrupt 1");
+  const TimePoint from = b.rig.now();
+  const std::size_t answered = b.rig.answers().size();
+  b.rig.run_for(600ms);
+  const auto sent = b.sent(from);
+  ASSERT_GE(sent.size(), 2u);
+  EXPECT_EQ(sent[0].bytes, sent[1].bytes);  // the same frame, the same sequence
+  // At once: the gap after the damaged reply ended, not after the reply timeout.
+  const auto& damaged = b.rig.answers().at(answered);
+  EXPECT_EQ(sent[1].at, damaged.at + wire_time(damaged.bytes.size()) + kInterFrameGap);
+  EXPECT_EQ(b.read("bad_checksum"), 1u);
+  EXPECT_EQ(b.read("retries"), 1u);
+  EXPECT_EQ(b.read("timeouts"), 0u);
+  EXPECT_NE(b.read("status") & kOnline, 0u);
 }
 
-TEST(UniclaDriver, CommLostFailsWritesAndRedoesStartUp) {
-  Rig r;
-  r.start();
-  r.sim.control("silent on", r.now());
-  r.driver.setpoint(3000, 1, r.now());
-  ASSERT_EQ(r.driver.command(Command::run_forward, 2, r.now()), WriteStatus::pending);
-  // The drive takes the write but never answers a read: no_response at the confirm deadline.
-  EXPECT_EQ(r.wait(2), WriteResult::no_response);
-  ASSERT_TRUE(r.bus.run_until([&] { return r.bus.comm_lost(); }, Millis(10000)));
-  EXPECT_FALSE(r.driver.common().ready);
-  ASSERT_EQ(r.driver.command(Command::reset_fault, 3, r.now()), WriteStatus::pending);
-  r.bus.run_for(Millis(20));
-  const std::size_t from = r.bus.sent.size();
-  r.sim.control("silent off", r.now());
-  ASSERT_TRUE(r.bus.run_until([&] { return r.driver.common().ready; }, Millis(3000)));
-  const auto build = r.sent_with(kBuild, from);
-  const auto limits = r.sent_with(kLimits, from);
-  EXPECT_EQ(build.size(), 1u);
-  EXPECT_EQ(limits.size(), 1u);
-  EXPECT_FALSE(r.bus.comm_lost());
+TEST(UniclaDriver, ASilentReadIsTriedThreeTimesEachAfterTheReplyTimeout) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("silent on");
+  const TimePoint from = b.rig.now();
+  ASSERT_TRUE(b.rig.run_until([&] { return b.read("timeouts") == 3; }, 1s));
+  EXPECT_EQ(b.read("retries"), 2u);
+  b.rig.run_for(500ms);
+  const auto sent = b.sent(from);
+  ASSERT_GE(sent.size(), 4u);
+  EXPECT_EQ(sent[0].bytes, sent[1].bytes);
+  EXPECT_EQ(sent[1].bytes, sent[2].bytes);
+  // reply_timeout_ms (100) from the end of the 12-byte frame (6.25 ms, counted as 6).
+  EXPECT_EQ(sent[1].at - sent[0].at, 106ms);
+  EXPECT_EQ(sent[2].at - sent[1].at, 106ms);
+  // Then the next poll, a new frame, at the poll interval from the first.
+  EXPECT_NE(sent[3].bytes, sent[2].bytes);
+  EXPECT_EQ(sent[3].frame.sequence, static_cast<std::uint8_t>(sent[0].frame.sequence + 1));
+  EXPECT_EQ(sent[3].at - sent[0].at, 500ms);
 }
 
-TEST(UniclaDriver, PendingWriteFailsOnCommLost) {
-  Rig r;
-  r.start();
-  r.sim.control("silent on", r.now());
-  r.driver.setpoint(3000, 1, r.now());
-  ASSERT_EQ(r.driver.command(Command::run_forward, 2, r.now()), WriteStatus::pending);
-  r.driver.on_comm_lost(r.now());  // before the write even went out
-  std::vector<Completion> out;
-  r.driver.take_completions(out);
-  ASSERT_EQ(out.size(), 1u);
-  EXPECT_EQ(out[0].ticket, 2u);
-  EXPECT_EQ(out[0].result, WriteResult::no_response);
+TEST(UniclaDriver, RetriesAndReplyTimeoutFollowTheOptions) {
+  Bench b({{"retries", "0"}, {"reply_timeout_ms", "250"}});
+  ASSERT_TRUE(b.ready());
+  b.control("silent on");
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(1s);
+  const auto sent = b.sent(from);
+  ASSERT_GE(sent.size(), 2u);
+  // One attempt a turn: the next poll is a new frame (new sequence), at the poll interval.
+  EXPECT_NE(sent[0].bytes, sent[1].bytes);
+  EXPECT_EQ(sent[1].frame.sequence, static_cast<std::uint8_t>(sent[0].frame.sequence + 1));
+  EXPECT_EQ(sent[1].at - sent[0].at, 500ms);
+  EXPECT_EQ(b.read("retries"), 0u);
+}
+
+// Good frames that are not the awaited reply: a reply to an earlier sequence, another drive's,
+// one for another master address. Each is counted foreign, the read is resent, and the real
+// reply is taken.
+TEST(UniclaDriver, RepliesThatAreNotTheAwaitedOneAreForeign) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  int changed = 0;
+  b.rig.line().device_filter = [&changed](Bytes bytes) {
+    Frame f = decoded(bytes);
+    if (f.message_id != kStatus || changed >= 3) return bytes;
+    switch (changed++) {
+      case 0:
+        f.sequence = static_cast<std::uint8_t>(f.sequence - 1);  // a late reply
+        break;
+      case 1:
+        f.source = 0x02;  // another drive
+        break;
+      default:
+        f.destination = 0x05;  // not for the master
+        break;
+    }
+    return encode(f);
+  };
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(2s);
+  EXPECT_EQ(b.read("foreign_frames"), 3u);
+  EXPECT_EQ(b.read("timeouts"), 3u);  // each attempt waited out its timeout
+  const auto sent = b.sent(from, kStatus);
+  ASSERT_GE(sent.size(), 4u);
+  EXPECT_EQ(sent[0].bytes, sent[1].bytes);
+  EXPECT_EQ(sent[1].bytes, sent[2].bytes);
+  EXPECT_NE(b.read("status") & kOnline, 0u);
+  EXPECT_EQ(b.read("bad_checksum"), 0u);
+}
+
+// A checked frame whose payload is shorter than a status: not the reply, and not counted good.
+TEST(UniclaDriver, AShortStatusPayloadIsNotAReply) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  bool once = true;
+  b.rig.line().device_filter = [&once](Bytes bytes) {
+    Frame f = decoded(bytes);
+    if (!once || f.message_id != kStatus) return bytes;
+    once = false;
+    f.payload.resize(kStatusSize - 1);
+    return encode(f);
+  };
+  const std::uint32_t good = b.read("frames_good");
+  b.rig.run_for(600ms);
+  EXPECT_EQ(b.read("timeouts"), 1u);
+  EXPECT_EQ(b.read("retries"), 1u);
+  EXPECT_EQ(b.read("foreign_frames"), 0u);
+  EXPECT_EQ(b.read("frames_good"), good + 1);  // only the resent read's reply
+}
+
+TEST(UniclaDriver, CommLostRedoesStartUpAndComesBack) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("silent on");
+  ASSERT_TRUE(b.rig.run_until([&] { return b.drive->comm_lost(); }, 10s));
+  // No good frame for comm_timeout: max(3 s, 4 x 500 ms + 3 x 100 ms).
+  EXPECT_EQ(b.drive->driver().traits().comm_timeout, 3000ms);
+  EXPECT_EQ(b.read("status") & (kOnline | kCommLost), kCommLost);
+  EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::comm_lost));
+  // From then on the drive is probed with the start-up read, backed off.
+  b.rig.run_for(100ms);
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(3s);
+  const auto probes = b.sent(from);
+  ASSERT_FALSE(probes.empty());
+  for (const auto& p : probes) EXPECT_EQ(p.frame.message_id, kBuild);
+  b.control("silent off");
+  const TimePoint back = b.rig.now();
+  ASSERT_TRUE(b.rig.run_until([&] { return b.drive->online(); }, 10s));
+  const auto reads = b.sent(back);
+  ASSERT_GE(reads.size(), 3u);
+  EXPECT_EQ(reads[reads.size() - 3].frame.message_id, kBuild);
+  EXPECT_EQ(reads[reads.size() - 2].frame.message_id, kLimits);
+  EXPECT_EQ(reads[reads.size() - 1].frame.message_id, kStatus);
+  EXPECT_EQ(b.read("status") & kCommLost, 0u);
+  EXPECT_EQ(b.read("fault_code"), 0u);
 }
 
 TEST(UniclaDriver, LittleEndianFloatsFollowTheOption) {
-  Settings little;
-  little.byte_order = ByteOrder::little;
-  Rig r(3, little, ByteOrder::little);
-  r.start();
-  EXPECT_DOUBLE_EQ(std::get<double>(r.driver.values()[kSuctionPressure]), 4.5);
-  EXPECT_DOUBLE_EQ(std::get<double>(r.driver.values()[kDischargePressureHigh]), 28.0);
-  EXPECT_EQ(as_int(r.driver.values()[kLimitMaxSpeed]), 6000);
-  Rig mismatched(3, Settings{}, ByteOrder::little);
-  mismatched.start();
-  EXPECT_NE(std::get<double>(mismatched.driver.values()[kSuctionPressure]), 4.5);
-  EXPECT_EQ(as_int(mismatched.driver.values()[kLimitMaxSpeed]), 6000);  // integers unaffected
+  Bench b({{"byte_order", "little"}}, 500ms, 3);
+  ASSERT_TRUE(b.ready());
+  EXPECT_FLOAT_EQ(b.read_f32("suction_pressure"), 4.5F);
+  EXPECT_FLOAT_EQ(b.read_f32("discharge_pressure_high"), 28.0F);
+  EXPECT_EQ(b.read("limit_max_speed"), 6000u);
+  EXPECT_EQ(b.read("rs485_device_id"), 3u);
+
+  // A drive sending its floats the other way than configured: integers still hold.
+  Bench mismatched({}, {{"byte_order", "little"}}, 500ms, 3);
+  ASSERT_TRUE(mismatched.ready());
+  EXPECT_NE(mismatched.read_f32("suction_pressure"), 4.5F);
+  EXPECT_EQ(mismatched.read("limit_max_speed"), 6000u);
 }
 
-TEST(UniclaDriver, TraitsFollowOptions) {
-  Settings s;
-  s.confirm_timeout = Millis(1500);
-  Rig r(1, s);
-  EXPECT_EQ(r.driver.traits().write_timeout, Millis(2500));
-  EXPECT_GE(r.driver.traits().comm_timeout, Millis(3000));
-}
-
-TEST(UniclaFaults, MotorFlagsMapToUnifiedCodes) {
-  EXPECT_TRUE(map_motor_flags(1u << 14).has(Fault::over_current));
-  EXPECT_TRUE(map_motor_flags(1u << 9).has(Fault::over_voltage));
-  EXPECT_TRUE(map_motor_flags(1u << 10).has(Fault::under_voltage));
-  EXPECT_TRUE(map_motor_flags(1u << 11).has(Fault::drive_over_temperature));
-  EXPECT_TRUE(map_motor_flags(1u << 4).has(Fault::motor_over_temperature));
-  EXPECT_TRUE(map_motor_flags(1u << 12).has(Fault::stall));
-  EXPECT_TRUE(map_motor_flags(1u << 5).has(Fault::overload));
-  EXPECT_TRUE(map_motor_flags(1u << 0).empty());      // "X"
-  EXPECT_TRUE(map_compressor_flags(0x000F).empty());  // bits 0-3 "X"
-  EXPECT_TRUE(map_compressor_flags(0x0010).has(Fault::process_limit));
-  EXPECT_TRUE(map_electrical_flags(1u << 11).empty());  // bits 11-15 "X"
-  EXPECT_TRUE(map_electrical_flags(1u << 23).has(Fault::hardware_fault));
-  EXPECT_TRUE(map_electrical_flags(1u << 0).has(Fault::hardware_fault));
-}
-
-TEST(UniclaFaults, OpStatesMapToUnifiedCodes) {
-  Status s;
-  const auto faults_of = [&s](OpState st) {
-    s.op_state = static_cast<std::uint8_t>(st);
-    return map_faults(s);
-  };
-  EXPECT_TRUE(faults_of(OpState::fault_compressor_safety).faults.has(Fault::process_limit));
-  EXPECT_TRUE(faults_of(OpState::fault_motor).faults.has(Fault::other));  // no flag says more
-  EXPECT_TRUE(faults_of(OpState::fault_fmc).faults.has(Fault::hardware_fault));
-  EXPECT_TRUE(faults_of(OpState::fault_electrical).faults.has(Fault::hardware_fault));
-  EXPECT_TRUE(faults_of(OpState::fault_configuration).faults.has(Fault::config_error));
-  EXPECT_TRUE(faults_of(OpState::fault_xc_comms).faults.has(Fault::comm_lost));
-  EXPECT_EQ(faults_of(OpState::fault_xc_comms).native, 11u);
-  EXPECT_TRUE(faults_of(OpState::running).faults.empty());
-  EXPECT_FALSE(faults_of(OpState::running).warning);
-  EXPECT_TRUE(faults_of(OpState::wait_compressor_safety).warning);
-  EXPECT_TRUE(faults_of(OpState::locked).warning);
-  s.motor_run_flags = 1u << 14;
-  const FaultView motor = faults_of(OpState::fault_motor);
-  EXPECT_TRUE(motor.faults.has(Fault::over_current));
-  EXPECT_FALSE(motor.faults.has(Fault::other));
-  // The same flag while running is a warning, not a fault.
-  const FaultView running = faults_of(OpState::running);
-  EXPECT_TRUE(running.faults.empty());
-  EXPECT_TRUE(running.warning);
-}
-
-TEST(UniclaSettings, ParsesOptionsAndDefaults) {
-  std::string error;
-  auto s = parse_settings(Options{}, error);
-  ASSERT_TRUE(s);
-  EXPECT_EQ(s->byte_order, ByteOrder::big);
-  EXPECT_EQ(s->attempts, 3);
-  EXPECT_EQ(s->reply_timeout, Millis(100));
-  s = parse_settings(Options({{"byte_order", std::string("little")},
-                              {"retries", std::int64_t{0}},
-                              {"reply_timeout_ms", std::int64_t{250}},
-                              {"confirm_timeout_ms", std::int64_t{1000}}}),
-                     error);
-  ASSERT_TRUE(s);
-  EXPECT_EQ(s->byte_order, ByteOrder::little);
-  EXPECT_EQ(s->attempts, 1);
-  EXPECT_EQ(s->reply_timeout, Millis(250));
-  EXPECT_EQ(s->confirm_timeout, Millis(1000));
-  EXPECT_FALSE(parse_settings(Options({{"byte_order", std::string("middle")}}), error));
-  EXPECT_NE(error.find("byte_order"), std::string::npos);
-  EXPECT_EQ(kOptionSchema.size(), 4u);
+TEST(UniclaDriver, FaultsAndWarningsAsAPlcReadsThem) {
+  Bench b;
+  ASSERT_TRUE(b.ready());
+  b.control("fault overvoltage");
+  b.rig.run_for(600ms);
+  EXPECT_NE(b.read("status") & kFaulted, 0u);
+  EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::over_voltage));
+  EXPECT_EQ(b.read("native_fault"), kFaultMotor);
+  EXPECT_EQ(b.read("motor_safety_run"), 1u << 9);
+  b.control("clear");
+  b.control("flags compressor_start 0x0800");  // Low Side Pressure Low, no Fault-* state
+  b.rig.run_for(600ms);
+  EXPECT_EQ(b.read("status") & kFaulted, 0u);
+  EXPECT_NE(b.read("status") & kWarning, 0u);
+  EXPECT_EQ(b.read("native_fault"), 0u);
+  EXPECT_EQ(b.read("compressor_safety_start"), 0x0800u);
 }
 
 }  // namespace

@@ -1,103 +1,135 @@
 // Several eDrives on one line ("multiple eDrives can be connected to the same RS485 network by
-// use of different device ids"): two drivers and two simulators in one process.
+// use of different device ids"): two devices and two simulators on one simulated line, the
+// real bus engine between them, each device made by the adapter's factory.
 #include <gtest/gtest.h>
 
-#include "codec.h"
-#include "driver.h"
-#include "multibus.h"
-#include "points.h"
-#include "simulator.h"
+#include <algorithm>
+
+#include "bench.h"
 
 namespace drivegate::unicla {
 namespace {
 
-using test_support::MultiBus;
-
 struct Pair {
-  EDriveDriver d1{1, Millis(500), Settings{}};
-  EDriveDriver d2{2, Millis(500), Settings{}};
-  EDriveSimulator s1{1, ByteOrder::big};
-  EDriveSimulator s2{2, ByteOrder::big};
-  MultiBus bus{{&d1, &d2}, {&s1, &s2}};
+  Pair() : rig(drivegate_adapter) {
+    d1 = &rig.add_device("left", 1);
+    d2 = &rig.add_device("right", 2);
+    s1 = &rig.add_simulator(1);
+    s2 = &rig.add_simulator(2);
+    rig.start();
+  }
+  bool online() {
+    return rig.run_until([&] { return d1->online() && d2->online(); }, 3s);
+  }
+  std::uint32_t read(Device& d, std::string_view point) { return value_of(rig, d, point); }
+  // Frames to drive `id` with message `msg` from `from` on, and when they went out.
+  std::vector<Sent> sent_to(std::uint8_t id, TimePoint from, std::optional<std::uint8_t> msg) {
+    std::vector<Sent> out;
+    for (const auto& f : rig.sent()) {
+      if (f.at < from) continue;
+      Sent s{f.at, f.bytes, decoded(f.bytes)};
+      if (s.frame.destination == id && (!msg || s.frame.message_id == *msg)) out.push_back(s);
+    }
+    return out;
+  }
+
+  test::BusRig rig;
+  Device* d1 = nullptr;
+  Device* d2 = nullptr;
+  Simulator* s1 = nullptr;
+  Simulator* s2 = nullptr;
 };
 
-std::vector<TimePoint> status_polls(const MultiBus& bus, std::size_t device, TimePoint from) {
-  std::vector<TimePoint> out;
-  for (const auto& s : bus.sent) {
-    if (s.device != device || s.at < from) continue;
-    const auto d = decode(s.frame);
-    if (d.status == DecodeStatus::frame && d.frame.message_id == 0x01) out.push_back(s.at);
-  }
-  return out;
-}
-
-Millis max_gap(const std::vector<TimePoint>& t) {
+Millis max_gap(const std::vector<Sent>& frames) {
   Millis gap{0};
-  for (std::size_t i = 1; i < t.size(); ++i) {
-    gap = std::max(gap, std::chrono::duration_cast<Millis>(t[i] - t[i - 1]));
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    gap = std::max(gap, std::chrono::duration_cast<Millis>(frames[i].at - frames[i - 1].at));
   }
   return gap;
 }
 
 TEST(UniclaMultidrop, TwoDrivesOnOneLineKeepTheirOwnState) {
   Pair p;
-  p.bus.run_for(Millis(1500));
-  ASSERT_TRUE(p.d1.common().ready);
-  ASSERT_TRUE(p.d2.common().ready);
-  EXPECT_EQ(std::get<std::string>(p.d1.values()[kSerialNumber]), "SIM1000001");
-  EXPECT_EQ(std::get<std::string>(p.d2.values()[kSerialNumber]), "SIM1000002");
-  // Every frame of driver n is addressed to device n.
-  for (const auto& s : p.bus.sent) {
-    const auto d = decode(s.frame);
-    ASSERT_EQ(d.status, DecodeStatus::frame);
-    EXPECT_EQ(d.frame.destination, s.device + 1);
-    EXPECT_EQ(d.frame.source, 0x00);
+  ASSERT_TRUE(p.online());
+  // Each unit shows its own drive: serial numbers are SIM100000<id>.
+  EXPECT_EQ(text_of(p.rig, *p.d1, "serial_number"), "SIM1000001");
+  EXPECT_EQ(text_of(p.rig, *p.d2, "serial_number"), "SIM1000002");
+  // Every frame is the master's, to drive 1 or 2; each drive's sequence numbers are its own.
+  for (const auto& f : p.rig.sent()) {
+    const Frame fr = decoded(f.bytes);
+    EXPECT_EQ(fr.source, kMasterAddress);
+    EXPECT_TRUE(fr.destination == 1 || fr.destination == 2);
   }
-  const TimePoint now = p.bus.now();
-  ASSERT_EQ(p.d2.setpoint(3000, 1, now), WriteStatus::done);
-  ASSERT_EQ(p.d2.command(Command::run_forward, 2, now), WriteStatus::pending);
-  p.bus.run_for(Millis(5000));
-  std::vector<Completion> c1, c2;
-  p.d1.take_completions(c1);
-  p.d2.take_completions(c2);
-  EXPECT_TRUE(c1.empty());
-  ASSERT_EQ(c2.size(), 1u);
-  EXPECT_EQ(c2[0].result, WriteResult::ok);
-  EXPECT_EQ(p.d2.common().speed_rpm, 3000);
-  EXPECT_EQ(p.d1.common().speed_rpm, 0);
-  EXPECT_FALSE(p.d1.common().running);
+  const auto to1 = p.sent_to(1, {}, std::nullopt);
+  const auto to2 = p.sent_to(2, {}, std::nullopt);
+  ASSERT_GE(to1.size(), 3u);
+  ASSERT_GE(to2.size(), 3u);
+  EXPECT_EQ(to1[0].bytes, master_frame(1, kRead, kBuild, 1));
+  EXPECT_EQ(to2[0].bytes, master_frame(2, kRead, kBuild, 1));
+  EXPECT_EQ(p.read(*p.d1, "rs485_device_id"), 1u);
+  EXPECT_EQ(p.read(*p.d2, "rs485_device_id"), 2u);
 
-  p.s1.control("fault xc", p.bus.now());
-  p.bus.run_for(Millis(1000));
-  EXPECT_TRUE(p.d1.common().faults.has(Fault::comm_lost));
-  EXPECT_TRUE(p.d2.common().faults.empty());
+  // Right runs, left stays stopped.
+  const TimePoint asked = p.rig.now();
+  EXPECT_EQ(p.rig.write_and_wait(*p.d2, Table::holding, kCommandRegister, {kRunForward, 3000}),
+            Exception::none);
+  const auto runs = p.rig.sent();
+  for (const auto& f : runs) {
+    if (f.at < asked) continue;
+    const Frame fr = decoded(f.bytes);
+    if (fr.command == kWrite) {
+      EXPECT_EQ(fr.destination, 2);
+    }
+  }
+  ASSERT_TRUE(p.rig.run_until([&] { return p.read(*p.d2, "speed_rpm") == 3000; }, 10s));
+  EXPECT_EQ(p.read(*p.d1, "speed_rpm"), 0u);
+  EXPECT_EQ(p.read(*p.d1, "status") & kRunning, 0u);
+  EXPECT_EQ(p.read(*p.d1, "command"), kStop);
+  EXPECT_EQ(p.read(*p.d2, "command"), kRunForward);
+
+  // Left's drive loses its XC link (Fault - XC Comms): left's fault, not right's.
+  p.s1->control("fault xc", p.rig.now());
+  p.rig.run_for(1s);
+  EXPECT_NE(p.read(*p.d1, "fault_mask") & (1u << static_cast<unsigned>(Fault::comm_lost)), 0u);
+  EXPECT_NE(p.read(*p.d1, "status") & kOnline, 0u);  // the line itself is fine
+  EXPECT_EQ(p.read(*p.d2, "fault_mask"), 0u);
 }
 
-TEST(UniclaMultidrop, SilentDriveCostsTheOtherAtMostItsTimeoutBudget) {
+TEST(UniclaMultidrop, ASilentDriveCostsTheOtherAtMostItsTimeBudget) {
   Pair p;
-  p.bus.run_for(Millis(1500));
-  ASSERT_TRUE(p.d1.common().ready);
-  const TimePoint quiet_from = p.bus.now();
-  p.bus.run_for(Millis(10000));
-  const auto normal = status_polls(p.bus, 0, quiet_from);
+  ASSERT_TRUE(p.online());
+  p.rig.run_for(100ms);
+  const TimePoint quiet_from = p.rig.now();
+  p.rig.run_for(10s);
+  const auto normal = p.sent_to(1, quiet_from, kStatus);
+  // Both answering: left is polled every 500 ms to the microsecond, right's reads fit between.
+  EXPECT_EQ(max_gap(normal), 500ms);
 
-  p.s2.control("silent on", p.bus.now());
-  const TimePoint silent_from = p.bus.now() + Millis(100);
-  p.bus.run_for(Millis(10000));
-  const auto with_silent = status_polls(p.bus, 0, silent_from);
-  EXPECT_TRUE(p.bus.comm_lost(1));
-  EXPECT_FALSE(p.bus.comm_lost(0));
+  p.s2->control("silent on", p.rig.now());
+  const TimePoint silent_from = p.rig.now();
+  p.rig.run_for(10s);
+  EXPECT_TRUE(p.d2->comm_lost());
+  EXPECT_FALSE(p.d1->comm_lost());
+  EXPECT_NE(p.read(*p.d1, "status") & kOnline, 0u);
+  const auto with_silent = p.sent_to(1, silent_from, kStatus);
+  // A silent turn of right's costs at most its attempts: 3 x (100 ms + the frame's 6 ms).
+  const Millis turn = 3 * 106ms;
+  EXPECT_LE(max_gap(with_silent), 500ms + turn);
+  EXPECT_GE(with_silent.size() + 1, normal.size() * 500 / (500 + turn.count()));
+  // Right was asked again and again, three identical attempts each turn, backed off.
+  const auto to_silent = p.sent_to(2, silent_from, std::nullopt);
+  ASSERT_GE(to_silent.size(), 9u);
+  for (std::size_t i = 0; i + 2 < to_silent.size(); i += 3) {
+    EXPECT_EQ(to_silent[i].bytes, to_silent[i + 1].bytes) << i;
+    EXPECT_EQ(to_silent[i + 1].bytes, to_silent[i + 2].bytes) << i;
+    EXPECT_EQ(to_silent[i + 1].at - to_silent[i].at, 106ms) << i;
+  }
+  EXPECT_LT(to_silent.size(), with_silent.size());  // backed off: fewer than the live one's
 
-  // Budget of the silent drive: reply_timeout x attempts = 100 ms x 3, plus the turnaround.
-  const Settings s;
-  const Millis budget = s.reply_timeout * s.attempts + Millis(20);
-  EXPECT_LE(max_gap(normal), Millis(500) + Millis(20));
-  EXPECT_LE(max_gap(with_silent), Millis(500) + budget);
-  EXPECT_GE(with_silent.size() + 1, normal.size() * 500 / (500 + budget.count()));
-  // The silent drive was asked again and again, with three identical attempts each time.
-  int to_silent = 0;
-  for (const auto& x : p.bus.sent) to_silent += (x.device == 1 && x.at >= silent_from) ? 1 : 0;
-  EXPECT_GE(to_silent, 9);
+  // Left still takes writes while its neighbour is silent.
+  EXPECT_EQ(p.rig.write_and_wait(*p.d1, Table::holding, kCommandRegister, {kRunForward, 3000}),
+            Exception::none);
+  EXPECT_EQ(p.read(*p.d1, "command"), kRunForward);
 }
 
 }  // namespace

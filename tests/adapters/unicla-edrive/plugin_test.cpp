@@ -1,0 +1,108 @@
+// The descriptor the plugin exports, as the loader, `drivegate demo` and `drivegate regmap` read
+// it, and the options into settings.
+#include <gtest/gtest.h>
+
+#include <string_view>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
+#include "driver.h"
+#include "settings.h"
+
+namespace drivegate::unicla {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(UniclaPlugin, Descriptor) {
+  const AdapterDescriptor& a = drivegate_adapter;
+  EXPECT_EQ(a.api_version, kAdapterApiVersion);
+  EXPECT_EQ(std::string_view(a.id), "unicla-edrive");
+  // "Communications Settings": 19200 (the default), 8 data bits, no parity, 1 stop bit.
+  EXPECT_EQ(a.line.baud, 19200u);
+  EXPECT_EQ(a.line.parity, Parity::none);
+  EXPECT_EQ(a.line.data_bits, 8);
+  EXPECT_EQ(a.line.stop_bits, 1);
+  EXPECT_FALSE(a.line.echo);
+  // "Device Address": 0x00 the master, 0xFF everyone; "Device ID ... Default Value 0x01".
+  EXPECT_EQ(a.address_min, 1u);
+  EXPECT_EQ(a.address_max, 254u);
+  EXPECT_EQ(a.default_address, 1u);
+  EXPECT_FALSE(a.streaming);  // "all transfers are required to be master initiated"
+  EXPECT_EQ(a.options, kOptionSchema.data());
+  EXPECT_EQ(a.option_count, kOptionSchema.size());
+  // `drivegate demo`: default options, running at 3000 rpm; no maintenance actions.
+  EXPECT_EQ(a.demo.option_count, 0u);
+  EXPECT_EQ(a.demo.options, nullptr);
+  EXPECT_EQ(a.demo.running_rpm, 3000);
+  EXPECT_EQ(a.action_count, 0u);
+  EXPECT_EQ(a.actions, nullptr);
+}
+
+TEST(UniclaPlugin, FactoriesRefuseTheMasterAndGlobalAddresses) {
+  for (const std::uint32_t address : {0u, 255u, 256u}) {
+    DeviceEnv env;
+    env.address = address;
+    env.options = test::options_of(drivegate_adapter);
+    std::string error;
+    EXPECT_EQ(drivegate_adapter.create_driver(env, error), nullptr) << address;
+    EXPECT_NE(error.find("address"), std::string::npos);
+    SimEnv sim;
+    sim.address = address;
+    sim.options = env.options;
+    error.clear();
+    EXPECT_EQ(drivegate_adapter.create_simulator(sim, error), nullptr) << address;
+    EXPECT_NE(error.find("address"), std::string::npos);
+  }
+}
+
+TEST(UniclaSettings, FromTheOptions) {
+  std::string error;
+  const auto defaults = parse_settings(test::options_of(drivegate_adapter), error);
+  ASSERT_TRUE(defaults.has_value()) << error;
+  EXPECT_EQ(defaults->byte_order, ByteOrder::big);
+  EXPECT_EQ(defaults->attempts, 3);
+  EXPECT_EQ(defaults->reply_timeout, 100ms);
+  EXPECT_EQ(defaults->confirm_timeout, 2000ms);
+  // The schema's defaults are the ones Settings states.
+  EXPECT_EQ(defaults->reply_timeout, Settings{}.reply_timeout);
+  EXPECT_EQ(defaults->confirm_timeout, Settings{}.confirm_timeout);
+  EXPECT_EQ(defaults->attempts, Settings{}.attempts);
+
+  const auto set =
+      parse_settings(test::options_of(drivegate_adapter, {{"byte_order", "little"},
+                                                          {"retries", "0"},
+                                                          {"reply_timeout_ms", "250"},
+                                                          {"confirm_timeout_ms", "1000"}}),
+                     error);
+  ASSERT_TRUE(set.has_value()) << error;
+  EXPECT_EQ(set->byte_order, ByteOrder::little);
+  EXPECT_EQ(set->attempts, 1);
+  EXPECT_EQ(set->reply_timeout, 250ms);
+  EXPECT_EQ(set->confirm_timeout, 1000ms);
+  // The schema keeps out what the protocol cannot do.
+  EXPECT_THROW(test::options_of(drivegate_adapter, {{"byte_order", "middle"}}),
+               std::invalid_argument);
+  EXPECT_THROW(test::options_of(drivegate_adapter, {{"retries", "6"}}), std::invalid_argument);
+  EXPECT_THROW(test::options_of(drivegate_adapter, {{"confirm_timeout_ms", "100"}}),
+               std::invalid_argument);
+}
+
+TEST(UniclaSettings, TraitsFollowTheOptions) {
+  DeviceEnv env;
+  env.address = 1;
+  env.poll_interval = 1000ms;
+  env.options = test::options_of(drivegate_adapter, {{"confirm_timeout_ms", "1500"}});
+  std::string error;
+  const auto d = drivegate_adapter.create_driver(env, error);
+  ASSERT_NE(d, nullptr) << error;
+  const DriverTraits t = d->traits();
+  // The gateway's write deadline comes after the driver's own verdict.
+  EXPECT_EQ(t.write_timeout, 2500ms);
+  // 4 polls + 3 attempts x 100 ms.
+  EXPECT_EQ(t.comm_timeout, 4300ms);
+  EXPECT_EQ(t.inter_frame_gap, kInterFrameGap);
+}
+
+}  // namespace
+}  // namespace drivegate::unicla
