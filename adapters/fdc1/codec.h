@@ -9,18 +9,35 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
-#include <span>
 #include <variant>
-#include <vector>
 
+#include "drivegate/bytes.h"
 #include "drivegate/codec.h"
+#include "drivegate/line.h"
 
 namespace drivegate::fdc1 {
 
-using Bytes = std::vector<std::uint8_t>;
-using ByteView = std::span<const std::uint8_t>;
+// HARDWARE: "UART 1200 baud 1 start bit ... 8 bits of data ... no parity 1 stop bit", TTL with
+// separate RxD (pin 1) and TxD (pin 6): no echo of the master's own bytes.
+inline constexpr LineDefaults kLine{1200, Parity::none, 8, 1, false};
+// One character on that line (8.33 ms): an 8-byte frame takes 67 ms, a 22-byte one 183 ms.
+inline constexpr std::chrono::nanoseconds kCharacterTime =
+    character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits);
+
+// The protocol's timing (constants only: the codec itself keeps no time).
+// OUTPUT: "Every 0'5 s, one of these ... sequences is sent".
+inline constexpr std::chrono::milliseconds kStreamPeriod{500};
+// INPUT, Programming speed, SLAVE MODE: "the motor will stop if no speed is received within 60s".
+inline constexpr std::chrono::seconds kSlaveWatchdog{60};
+// INPUT programming: "The whole sequence must be received within 1 second".
+inline constexpr std::chrono::milliseconds kFrameWindow{1000};
+
+// INPUT, both frames: "The speeds ... should be between 1500 and 3500 rpm".
+inline constexpr std::uint16_t kMinRpm = 1500;
+inline constexpr std::uint16_t kMaxRpm = 3500;
 
 // OUTPUT: the controller's unsolicited status, 8 bytes every 0.5 s.
 inline constexpr std::uint8_t kStatusHead0 = 27;  // OUTPUT, byte 1

@@ -1,12 +1,15 @@
-// The FDC1 driver. The controller streams its status unasked every 0.5 s; the driver judges
-// those bytes, publishes the state, and in slave mode sends the speed frame (72 115 ...) for the
-// command in force: at start-up, on every write, and every refresh_s so that the controller's
-// 60 s watchdog never stops the motor. Speed frames are never acknowledged: a write completes
-// when the stream shows it. The 22-byte programming frame (non-volatile memory) is offered only
-// in maintenance or with allow_nv_programming, and completes by the controller's echo.
+// The FDC1 driver. The controller streams its status unasked every 0.5 s; the driver judges those
+// bytes and publishes the state. In slave mode it sends the speed frame (72 115 ...) for the order
+// it carries out: at start-up, for every write, and every refresh_s so that the controller's 60 s
+// watchdog never stops the motor. Speed frames are never acknowledged: a write is in force once
+// the stream shows it. The 22-byte programming frame (non-volatile memory) is offered only in
+// maintenance or with allow_nv_programming, and completes by the controller's echo.
+//
+//   driver.cpp          the stream into points and the common state; what to send and when
+//   driver_writes.cpp   check() and apply() of command and setpoint, their confirmation
+//   driver_program.cpp  the programming points, prog_commit and the echo
 #pragma once
 
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,9 +23,11 @@
 namespace drivegate::fdc1 {
 
 // Waiting for the programming echo: the controller writes non-volatile memory first, and the
-// document gives no time. drivegate's choice; the echo alone is 183 ms at 1200 baud.
+// document gives no time (README, "Choices"). The echo alone is 22 characters on the wire.
 inline constexpr Millis kEchoTimeout{2000};
-// Programming frames are sent at most twice (a resend writes the identical parameters).
+static_assert(kEchoTimeout > 2 * kProgramSize * kCharacterTime);
+// Programming frames go at most twice (a resend writes the identical parameters); the bus engine
+// sends the second only when the device's budget_ms holds both attempts (README).
 inline constexpr std::uint8_t kEchoAttempts = 2;
 
 class Fdc1Driver final : public Driver {
@@ -40,45 +45,67 @@ class Fdc1Driver final : public Driver {
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;
 
-  WriteStatus command(Command c, Ticket t, TimePoint now) override;
-  WriteStatus setpoint(std::int32_t rpm, Ticket t, TimePoint now) override;
-  WriteStatus write(std::size_t point, const Value& v, Ticket t, TimePoint now) override;
+  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
   void take_completions(std::vector<Completion>& out) override;
 
  private:
-  // What the stream must show for a pending speed write to complete ok.
-  enum class Expect : std::uint8_t { motor_on, motor_off, at_setpoint };
-  // One frame's worth of pending writes: a write that a newer frame still carries out (a
-  // setpoint and a run_forward in one Modbus request, say) waits with it, not against it.
-  // The command and setpoint in force.
-  struct InForce {
-    Command command;
-    std::int32_t setpoint;
+  // What the speed frame tells the controller: a command, and the setpoint a run runs at.
+  struct Order {
+    Command command = Command::stop;
+    std::int32_t setpoint = 0;  // 0: none written yet
   };
+  // What the stream must show for a speed write to be in force.
+  enum class Expect : std::uint8_t { motor_off, motor_on, at_setpoint };
+  // One write waiting for the stream: its ticket, and the speed it asked for if it was a setpoint.
+  struct Asked {
+    Ticket ticket;
+    std::optional<std::int32_t> rpm;
+  };
+  // The speed write being carried out. Every frame carries the whole order, so a write that a
+  // newer one still carries out (run and run, stop and stop, the same speed) waits with it, on the
+  // stricter test; one asking the opposite, or another speed, is superseded.
   struct SpeedWrite {
-    std::vector<Ticket> tickets;
+    std::vector<Asked> asked;
+    Order order;
     Expect expect;
     TimePoint deadline;
-    InForce before;     // in force before the first of these writes
-    bool sent = false;  // a frame carrying them went out
+    bool sent = false;  // a frame carrying it went out
   };
   enum class Programming : std::uint8_t { idle, queued, awaiting_echo };
+  // Why a prog_commit would not go now, and the exception it gets.
+  struct Blocker {
+    WriteCheck verdict;
+    std::string why;
+  };
 
-  void apply(const Status& s, TimePoint now);
-  void confirm(const Status& s);
-  void expire(TimePoint now);
-  void start_speed_write(Ticket t, Expect e, InForce before, TimePoint now);
-  void complete(Ticket t, WriteResult r);
-  void finish_speed_write(WriteResult r);
-  void give_up_speed_write();
-  [[nodiscard]] InForce in_force() const { return {common_.command, setpoint_}; }
-  [[nodiscard]] Speed wanted_speed() const;
+  // driver.cpp
+  void on_status(const Status& s, TimePoint now);
+  void publish_common();
+  void send_soon(TimePoint now, Priority p);
+  [[nodiscard]] Order on_line() const { return write_ ? write_->order : in_force_; }
   [[nodiscard]] bool slave_ready() const { return settings_.slave_mode && common_.ready; }
-
-  WriteStatus commit_program(Ticket t, TimePoint now);
-  std::optional<std::string> gather_program(ProgramSettings& out) const;
+  // driver_writes.cpp
+  [[nodiscard]] Proposed in_force() const;
+  [[nodiscard]] WriteCheck judge(const WriteOp& op, const Proposed& p) const;
+  WriteStatus apply_setpoint(std::int32_t rpm, Ticket t, TimePoint now);
+  WriteStatus apply_command(Command c, Ticket t, TimePoint now);
+  [[nodiscard]] bool shows(const Status& s, const Order& o, Expect e) const;
+  WriteStatus start_write(Asked a, Order order, Expect e, TimePoint now);
+  void confirm(const Status& s, TimePoint now);
+  void fail_write(WriteResult r, TimePoint now);
+  void expire(TimePoint now);
+  void complete(Ticket t, WriteResult r);
+  // driver_program.cpp
+  [[nodiscard]] WriteCheck judge_point(const WriteOp& op, const std::vector<Value>& fields) const;
+  static void store_field(const WriteOp& op, std::vector<Value>& fields);
+  [[nodiscard]] std::optional<Blocker> commit_blocker(const std::vector<Value>& fields) const;
+  [[nodiscard]] std::optional<std::string> gather_program(const std::vector<Value>& fields,
+                                                          ProgramSettings& out) const;
+  WriteStatus apply_point(const WriteOp& op, Ticket t, TimePoint now);
   void finish_program(WriteResult r, ProgStatus status, std::string message);
-  RxVerdict on_echo(const Echo& echo);
+  void publish_program();
+  RxVerdict on_echo(const Echo& echo, std::size_t consumed);
 
   Settings settings_;
   bool programming_;
@@ -86,21 +113,24 @@ class Fdc1Driver final : public Driver {
   std::vector<Value> values_;
   CommonState common_;
 
-  bool motor_on_ = false;
-  std::int32_t setpoint_ = 0;  // 0: none written yet
-  bool send_now_ = false;      // a speed frame is due at once (start-up or a write)
+  std::optional<Status> last_status_;  // the latest streamed status since start / comm_lost
+  // Slave mode. In force: what the stream confirmed, and a setpoint stored while stopped; this is
+  // what common() shows. The frames carry the order of the write under way, if any, else this.
+  Order in_force_;
+  std::optional<SpeedWrite> write_;
+  bool send_now_ = false;  // a speed frame is due at once (start-up, a write, an undo)
   Priority send_priority_ = Priority::poll;
   TimePoint due_at_{};  // when the frame due at once became due (wake_at)
   TimePoint next_refresh_ = TimePoint::max();
-  std::optional<SpeedWrite> speed_write_;
 
+  // Programming. A failed commit's outcome stays in prog_status / prog_message until a field is
+  // written again.
   Programming prog_state_ = Programming::idle;
   Program prog_sent_;
   Ticket prog_ticket_ = 0;
+  std::optional<std::pair<ProgStatus, std::string>> prog_outcome_;
 
   std::vector<Completion> completions_;
 };
-
-std::unique_ptr<Driver> make_driver(const DeviceEnv& env, std::string& error);
 
 }  // namespace drivegate::fdc1

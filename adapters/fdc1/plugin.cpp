@@ -1,36 +1,64 @@
-// The fdc1 plugin descriptor.
+// The fdc1 plugin descriptor: option schema, line defaults, the two factories, how `drivegate
+// demo` shows the controller, and the maintenance action `program`.
+#include <memory>
+#include <string>
+
+#include "codec.h"
 #include "drivegate/adapter.h"
 #include "driver.h"
+#include "points.h"
 #include "settings.h"
 #include "simulator.h"
 
+namespace drivegate::fdc1 {
 namespace {
 
-std::unique_ptr<drivegate::Driver> create_driver(const drivegate::DeviceEnv& env,
-                                                 std::string& error) {
-  return drivegate::fdc1::make_driver(env, error);
+std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
+  const auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  // The programming points exist only where non-volatile memory may be written.
+  return std::make_unique<Fdc1Driver>(*settings, env.maintenance || settings->allow_nv_programming);
 }
 
-std::unique_ptr<drivegate::Simulator> create_simulator(const drivegate::SimEnv& env,
-                                                       std::string& error) {
-  return drivegate::fdc1::make_simulator(env, error);
+std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
+  const auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  return std::make_unique<Fdc1Simulator>(*settings);
 }
+
+// `drivegate demo`: a controller in slave mode, the only one the gateway can run and stop.
+constexpr OptionSetting kDemoOptions[] = {{"slave_mode", "true"}};
+
+constexpr MaintenanceAction kActions[] = {{
+    .name = kProgramAction,
+    .summary = "programs the non-volatile settings (speeds, mode, battery cut-out / cut-in), "
+               "validated against every limit of the document",
+    .parameter_prefix = kProgramPrefix,
+    .commit_point = kCommitPoint,
+    .message_point = kMessagePoint,
+}};
 
 }  // namespace
+}  // namespace drivegate::fdc1
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    drivegate::kAdapterApiVersion,
-    "fdc1",
-    "FDC1 12-42 V DC compressor controller, protocol v2 (streaming)",
-    drivegate::fdc1::kOptionSchema.data(),
-    drivegate::fdc1::kOptionSchema.size(),
-    // HARDWARE: "1200 baud 1 start bit ... 8 bits of data ... no parity 1 stop bit"; TTL UART
-    // with separate RxD / TxD: no echo.
-    {1200, drivegate::Parity::none, 8, 1, false},
-    0,  // the protocol has no address
-    0,
-    0,
-    true,  // OUTPUT: transmits every 0.5 s unasked
-    create_driver,
-    create_simulator,
+    .api_version = drivegate::kAdapterApiVersion,
+    .id = "fdc1",
+    .summary = "FDC1 12-42 V DC compressor controller, protocol v2 (streaming)",
+    .options = drivegate::fdc1::kOptionSchema.data(),
+    .option_count = drivegate::fdc1::kOptionSchema.size(),
+    .line = drivegate::fdc1::kLine,
+    // The protocol has no address: one controller per line.
+    .address_min = 0,
+    .address_max = 0,
+    .default_address = 0,
+    .streaming = true,  // OUTPUT: transmits every 0.5 s unasked
+    .create_driver = &drivegate::fdc1::create_driver,
+    .create_simulator = &drivegate::fdc1::create_simulator,
+    // INPUT, Programming speed: 1500..3500 rpm; the specs README's example range starts at 2000.
+    .demo = {.options = drivegate::fdc1::kDemoOptions,
+             .option_count = std::size(drivegate::fdc1::kDemoOptions),
+             .running_rpm = 2000},
+    .actions = drivegate::fdc1::kActions,
+    .action_count = std::size(drivegate::fdc1::kActions),
 };

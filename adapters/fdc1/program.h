@@ -1,5 +1,5 @@
 // The 22-byte programming frame in engineering units, and the limits the document sets on it
-// (INPUT, "Programming mode + parameters"). Pure.
+// (INPUT, "Programming mode + parameters"; the speed range kMinRpm..kMaxRpm is in codec.h). Pure.
 #pragma once
 
 #include <cstdint>
@@ -10,15 +10,14 @@
 
 namespace drivegate::fdc1 {
 
-// INPUT: "The speeds ... should be between 1500 and 3500 rpm" (both input frames).
-inline constexpr std::uint16_t kMinRpm = 1500;
-inline constexpr std::uint16_t kMaxRpm = 3500;
-
 // Members of the mode byte (INPUT, "The mode byte is the sum of the next members").
 inline constexpr std::uint8_t kModeControlMask = 0x03;   // 0 normal, 2 slave, 3 proportional
 inline constexpr std::uint8_t kModeSlave = 2;            // "2: external thermostat = SLAVE MODE"
 inline constexpr std::uint8_t kModeProportional = 3;     // "3: speed proportional to battery"
 inline constexpr std::uint8_t kModeSpeedMask = 0x0C;     // 0 normal, 4 smart, 8 sleep, 12 eco
+inline constexpr std::uint8_t kModeSmartSpeed = 4;       // "4: Smart Speed"
+inline constexpr std::uint8_t kModeSleep = 8;            // "8: Sleep mode"
+inline constexpr std::uint8_t kModeEnergySaving = 12;    // "12: Energy Saving Sleep mode"
 inline constexpr std::uint8_t kModeExternalLimits = 16;  // "16: external battery limits"
 inline constexpr std::uint8_t kModeSpecial = 32;         // "32: special battery system" (bit 5)
 inline constexpr std::uint8_t kModeUnused = 64;          // no member has this value

@@ -1,25 +1,15 @@
 #include "settings.h"
 
 namespace drivegate::fdc1 {
-namespace {
 
-template <class T, class Get>
-T get_or(const Options& o, const char* name, T fallback, Get get) {
-  return o.has(name) ? static_cast<T>(get(name)) : fallback;
-}
-
-}  // namespace
-
-Settings read_settings(const Options& o) {
+std::optional<Settings> parse_settings(const Options& options, std::string& /*error*/) {
   Settings s;
-  const auto integer = [&](const char* n) { return o.integer(n); };
-  const auto boolean = [&](const char* n) { return o.boolean(n); };
-  s.slave_mode = get_or(o, "slave_mode", s.slave_mode, boolean);
-  s.refresh = std::chrono::seconds(get_or(o, "refresh_s", s.refresh.count(), integer));
-  s.confirm = std::chrono::milliseconds(get_or(o, "confirm_ms", s.confirm.count(), integer));
-  s.stale = std::chrono::milliseconds(get_or(o, "stale_ms", s.stale.count(), integer));
-  s.tolerance_rpm = get_or(o, "tolerance_rpm", s.tolerance_rpm, integer);
-  s.allow_nv_programming = get_or(o, "allow_nv_programming", s.allow_nv_programming, boolean);
+  s.slave_mode = options.boolean("slave_mode");
+  s.refresh = std::chrono::seconds(options.integer("refresh_s"));
+  s.confirm = std::chrono::milliseconds(options.integer("confirm_ms"));
+  s.stale = std::chrono::milliseconds(options.integer("stale_ms"));
+  s.tolerance_rpm = static_cast<int>(options.integer("tolerance_rpm"));
+  s.allow_nv_programming = options.boolean("allow_nv_programming");
   return s;
 }
 

@@ -6,27 +6,11 @@
 #include <sstream>
 
 #include "drivegate/sim_text.h"
+#include "faults.h"
 #include "program.h"
 
 namespace drivegate::fdc1 {
 namespace {
-
-struct NamedAlarm {
-  std::string_view name;
-  std::uint8_t code;
-};
-
-// First code of each range (OUTPUT, "Alarm codes").
-constexpr std::array<NamedAlarm, 10> kAlarms = {{{"battery", 16},
-                                                 {"fan", 32},
-                                                 {"start", 48},
-                                                 {"overload", 64},
-                                                 {"temperature", 80},
-                                                 {"fan_eor", 160},
-                                                 {"start_eor", 176},
-                                                 {"overload_eor", 192},
-                                                 {"temperature_eor", 208},
-                                                 {"internal", 240}}};
 
 // Line noise the simulator can inject: contains the first header byte (1B) followed by bytes
 // that cannot continue a header, so a receiver must resynchronise.
@@ -34,21 +18,19 @@ constexpr std::array<std::uint8_t, 8> kNoise = {0x00, 0x1B, 0xFF, 0x4D, 0x55, 0x
 
 constexpr std::string_view kCommands =
     "state, fault <battery|fan|start|overload|temperature|fan_eor|start_eor|overload_eor|"
-    "temperature_eor|internal|raw>, clear, silent on|off, corrupt N, noise N, mangle N, "
-    "delay S, thermostat on|off, window S";
-
-std::optional<long> parse_number(std::string_view s) {
-  if (const auto v = parse_unsigned(s)) return static_cast<long>(*v);
-  return std::nullopt;
-}
+    "temperature_eor|internal|raw>, clear, silent on|off, deaf on|off, corrupt N, noise N, "
+    "mangle N, delay S, thermostat on|off, window S, help";
 
 }  // namespace
 
+// Slave mode starts stopped (the stop frame the driver sends); normal mode with the specs
+// README's example range, 2000..3000 rpm, as if programmed so.
 Fdc1Simulator::Fdc1Simulator(const Settings& settings)
     : mode_(settings.slave_mode ? kModeSlave : 0),
       speed_(settings.slave_mode ? Speed{0, kMaxRpm} : Speed{2000, 3000}) {}
 
 Bytes Fdc1Simulator::on_receive(ByteView rx, TimePoint now) {
+  if (deaf_) return {};  // the master's bytes never reach the UART
   if (rx_.empty()) rx_since_ = now;
   rx_.insert(rx_.end(), rx.begin(), rx.end());
   Bytes out;
@@ -183,31 +165,30 @@ std::string Fdc1Simulator::state(TimePoint now) const {
     << " watchdog=" << (watchdog_tripped_ ? 1 : 0)
     << " window_s=" << std::chrono::duration_cast<std::chrono::seconds>(watchdog_).count()
     << " thermostat=" << (thermostat_ ? 1 : 0) << " silent=" << (silent_ ? 1 : 0)
-    << " corrupt=" << corrupt_ << " noise=" << noise_ << " mangle=" << mangle_
-    << " speeds=" << speeds_ << " programs=" << programs_ << " rejected=" << rejected_
-    << " frames=" << frames_;
+    << " deaf=" << (deaf_ ? 1 : 0) << " corrupt=" << corrupt_ << " noise=" << noise_
+    << " mangle=" << mangle_ << " speeds=" << speeds_ << " programs=" << programs_
+    << " rejected=" << rejected_ << " frames=" << frames_;
   return o.str();
 }
 
 std::string Fdc1Simulator::control(std::string_view line, TimePoint now) {
-  std::istringstream in{std::string(line)};
-  std::string cmd, arg;
-  in >> cmd >> arg;
-  const auto number = parse_number(arg);
+  const std::vector<std::string> words = split_words(line);
+  const std::string cmd = words.empty() ? std::string() : words[0];
+  const std::string arg = words.size() > 1 ? words[1] : std::string();
+  const auto number = parse_unsigned(arg);
   const auto on_off = [&](bool& flag) -> std::string {
     if (arg != "on" && arg != "off") return "error: " + cmd + " takes on|off";
     flag = arg == "on";
     return "ok";
   };
   if (cmd == "state") return state(now);
+  if (cmd == "help") return "commands: " + std::string(kCommands);
   if (cmd == "fault") {
-    for (const auto& a : kAlarms) {
-      if (arg == a.name) {
-        alarm_ = a.code;
-        return "ok";
-      }
+    if (const auto a = find_alarm(arg)) {
+      alarm_ = a->first;
+      return "ok";
     }
-    if (number && *number > 0 && *number <= 255) {
+    if (number && *number > 0 && *number <= 255) {  // OUTPUT: A is one byte
       alarm_ = static_cast<std::uint8_t>(*number);
       return "ok";
     }
@@ -218,11 +199,12 @@ std::string Fdc1Simulator::control(std::string_view line, TimePoint now) {
     return "ok";
   }
   if (cmd == "silent") return on_off(silent_);
+  if (cmd == "deaf") return on_off(deaf_);
   if (cmd == "thermostat") return on_off(thermostat_);
   if (cmd == "corrupt" || cmd == "noise" || cmd == "mangle" || cmd == "delay") {
-    if (!number || *number < 0 || *number > 100000) return "error: " + cmd + " takes a count";
+    if (!number || *number > 100000) return "error: " + cmd + " takes a count";
     if (cmd == "corrupt") corrupt_ = static_cast<int>(*number);
-    if (cmd == "noise") noise_ = static_cast<std::size_t>(*number);
+    if (cmd == "noise") noise_ = *number;
     if (cmd == "mangle") mangle_ = static_cast<int>(*number);
     if (cmd == "delay") restart_left_s_ = static_cast<double>(*number);
     return "ok";
@@ -230,17 +212,14 @@ std::string Fdc1Simulator::control(std::string_view line, TimePoint now) {
   if (cmd == "window") {
     // Shortens the slave-mode watchdog so a test can outlast it in seconds; never longer than
     // the document's 60 s.
-    const bool ok = number && *number >= kMinWatchdog.count() / 1000 &&
-                    *number <= kSlaveWatchdog.count() / 1000;
-    if (!ok) return "error: window takes 1..60 (seconds)";
-    watchdog_ = Millis(*number * 1000);
+    const auto shortest = std::chrono::duration_cast<std::chrono::seconds>(kMinWatchdog).count();
+    if (!number || *number < shortest || *number > kSlaveWatchdog.count()) {
+      return "error: window takes 1..60 (seconds)";
+    }
+    watchdog_ = std::chrono::seconds(*number);
     return "ok";
   }
   return "error: unknown command '" + cmd + "'; commands: " + std::string(kCommands);
-}
-
-std::unique_ptr<Simulator> make_simulator(const SimEnv& env, std::string&) {
-  return std::make_unique<Fdc1Simulator>(read_settings(env.options));
 }
 
 }  // namespace drivegate::fdc1

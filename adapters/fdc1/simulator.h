@@ -1,9 +1,9 @@
 // A simulated FDC1 controller: streams its status every 0.5 s (both forms), follows slave-mode
 // speed frames, stops after 60 s without one, echoes programming frames, and injects alarms,
-// noise, corruption and silence on operator command.
+// noise, corruption, silence and a deaf receiver on operator command. The protocol's timing
+// (stream period, watchdog, 1 s frame window) is in codec.h.
 #pragma once
 
-#include <memory>
 #include <string>
 
 #include "codec.h"
@@ -12,14 +12,8 @@
 
 namespace drivegate::fdc1 {
 
-// OUTPUT: "Every 0'5 s, one of these ... sequences is sent".
-inline constexpr Millis kStreamPeriod{500};
-// INPUT, Programming speed, SLAVE MODE: "the motor will stop if no speed is received within 60s".
-inline constexpr Millis kSlaveWatchdog{60000};
 // Shortest window `window S` accepts (a test aid: the document's window is 60 s).
 inline constexpr Millis kMinWatchdog{1000};
-// INPUT programming: "The whole sequence must be received within 1 second".
-inline constexpr Millis kFrameWindow{1000};
 // Simulator model, not from the document: ramp rate and current per rpm.
 inline constexpr double kRampRpmPerS = 1000.0;
 inline constexpr double kAmpsPerRpm = 0.0012;
@@ -60,6 +54,7 @@ class Fdc1Simulator final : public Simulator {
   Program stored_{};
 
   bool silent_ = false;
+  bool deaf_ = false;  // RxD cut: hears nothing from the master, keeps streaming
   int corrupt_ = 0;
   int mangle_ = 0;
   std::size_t noise_ = 0;
@@ -68,7 +63,5 @@ class Fdc1Simulator final : public Simulator {
   int rejected_ = 0;
   int frames_ = 0;
 };
-
-std::unique_ptr<Simulator> make_simulator(const SimEnv& env, std::string& error);
 
 }  // namespace drivegate::fdc1

@@ -1,26 +1,24 @@
-// The simulated controller on its own: the stream, slave-mode speed, the 60 s watchdog,
-// the programming echo, and the operator commands.
+// The simulated controller on its own, as `drivegate sim` hosts it (made by the adapter's own
+// factory from options as text): the stream, slave-mode speed, the 60 s watchdog, the
+// programming echo, and the operator commands.
 #include "simulator.h"
 
 #include <gtest/gtest.h>
 
+#include "adapter_under_test.h"
+#include "bench.h"
 #include "codec.h"
-#include "fixture.h"
 
 namespace drivegate::fdc1 {
 namespace {
 
-using namespace test_support;
-using namespace std::chrono_literals;
-
 struct SimRig {
   explicit SimRig(bool slave = true) {
-    auto options = slave_options();
-    options["slave_mode"] = slave;
     SimEnv env;
-    env.options = Options(options);
+    env.options = test::options_of(drivegate_adapter, {{"slave_mode", slave ? "true" : "false"}});
     std::string error;
-    sim = make_simulator(env, error);
+    sim = drivegate_adapter.create_simulator(env, error);
+    EXPECT_NE(sim, nullptr) << error;
   }
   // Ticks every 10 ms for `span`, collecting what the simulator sends.
   Bytes run(Millis span) {
@@ -188,11 +186,38 @@ TEST(Fdc1Simulator, InjectsAlarmsNoiseCorruptionAndSilence) {
   EXPECT_FALSE(rig.run(1s).empty());
 }
 
+// RxD cut: the controller hears nothing the master sends, and keeps streaming.
+TEST(Fdc1Simulator, DeafIgnoresTheMasterButKeepsStreaming) {
+  SimRig rig;
+  rig.run(100ms);
+  EXPECT_EQ(rig.control("deaf on"), "ok");
+  EXPECT_TRUE(rig.has("deaf=1"));
+  rig.sim->on_receive(kRun2000, rig.now);
+  EXPECT_TRUE(rig.sim->on_receive(encode_program(Program{2000, 3000, 0, 2, {}}), rig.now).empty());
+  EXPECT_FALSE(rig.statuses(1s).empty());
+  EXPECT_TRUE(rig.has("min=0"));
+  EXPECT_TRUE(rig.has("speeds=0"));
+  EXPECT_TRUE(rig.has("programs=0"));
+  EXPECT_EQ(rig.control("deaf off"), "ok");
+  rig.sim->on_receive(kRun2000, rig.now);
+  EXPECT_TRUE(rig.has("min=2000"));
+  EXPECT_EQ(rig.control("deaf maybe").rfind("error:", 0), 0u);
+}
+
+TEST(Fdc1Simulator, HelpListsTheCommands) {
+  SimRig rig;
+  const std::string help = rig.control("help");
+  for (const char* cmd : {"state", "fault", "clear", "silent", "deaf", "corrupt", "noise", "mangle",
+                          "delay", "thermostat", "window"}) {
+    EXPECT_NE(help.find(cmd), std::string::npos) << cmd;
+  }
+}
+
 TEST(Fdc1Simulator, ControlAnswers) {
   SimRig rig;
   const std::string state = rig.control("state");
   for (const char* key : {"motor=", "rpm=", "alarm=", "restart_s=", "mode=", "slave=", "min=",
-                          "max=", "silent=", "corrupt=", "speeds=", "programs="}) {
+                          "max=", "silent=", "deaf=", "corrupt=", "speeds=", "programs="}) {
     EXPECT_NE(state.find(key), std::string::npos) << key;
   }
   const std::string unknown = rig.control("explode");

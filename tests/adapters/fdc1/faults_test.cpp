@@ -1,12 +1,13 @@
-// OUTPUT, "Alarm codes": ranges of 16 named by their first value (specs README, fdc1).
-#include "alarms.h"
+// OUTPUT, "Alarm codes": ranges of 16 named by their first value (specs README, fdc1), the unified
+// faults they stand for, and the alarm_code point's labels.
+#include "faults.h"
 
 #include <gtest/gtest.h>
 
 namespace drivegate::fdc1 {
 namespace {
 
-TEST(Fdc1Alarms, RangesMapToUnifiedFaults) {
+TEST(Fdc1Faults, RangesMapToUnifiedFaults) {
   struct Case {
     int first;
     Fault fault;
@@ -34,12 +35,31 @@ TEST(Fdc1Alarms, RangesMapToUnifiedFaults) {
   }
 }
 
-TEST(Fdc1Alarms, ZeroIsNoAlarmAndGapsAreOther) {
+TEST(Fdc1Faults, ZeroIsNoAlarmAndGapsAreOther) {
   EXPECT_EQ(classify_alarm(0).fault, Fault::none);
   for (const int code : {1, 15, 96, 144, 159, 224, 239}) {
     SCOPED_TRACE(code);
     EXPECT_EQ(classify_alarm(static_cast<std::uint8_t>(code)).fault, Fault::other);
+    EXPECT_FALSE(classify_alarm(static_cast<std::uint8_t>(code)).latched);
   }
+}
+
+TEST(Fdc1Faults, LabelsNameTheFirstCodeOfEachRange) {
+  const std::vector<Label> labels = alarm_labels();
+  ASSERT_EQ(labels.size(), 11u);
+  EXPECT_EQ(labels[0].name, "none");
+  EXPECT_EQ(labels[0].value, 0u);
+  EXPECT_EQ(labels[3].name, "motor failed to start");
+  EXPECT_EQ(labels[3].value, 48u);
+  EXPECT_EQ(labels[10].name, "internal error");
+  EXPECT_EQ(labels[10].value, 240u);
+}
+
+TEST(Fdc1Faults, TheSimulatorsNamesFindTheirRange) {
+  ASSERT_TRUE(find_alarm("start_eor").has_value());
+  EXPECT_EQ(find_alarm("start_eor")->first, 176);
+  EXPECT_EQ(find_alarm("battery")->fault, Fault::supply_fault);
+  EXPECT_FALSE(find_alarm("nonsense").has_value());
 }
 
 }  // namespace

@@ -1,0 +1,357 @@
+// Writes as the Modbus server makes them, on the real bus engine: the speed frame on the wire, the
+// exception the PLC gets, and what `command` and `setpoint_rpm` read before and after. Speed
+// frames are never acknowledged: a write is in force once the stream shows it (README, "Writes").
+#include <gtest/gtest.h>
+
+#include "bench.h"
+#include "driver.h"
+
+namespace drivegate::fdc1 {
+namespace {
+
+TEST(Fdc1Writes, ASetpointWhileStoppedIsStoredThenTheRunIsInForceOnceTheMotorRuns) {
+  Bench b;
+  ASSERT_TRUE(b.heard());
+  const auto before = b.rig.sent().size();
+  // Stored without traffic: settled as soon as it is written.
+  EXPECT_EQ(b.start_write({2000}, kSetpointRegister)->result, Exception::none);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
+  const TimePoint asked = b.rig.now();
+  const auto run = b.start_write({kRunForward});
+  EXPECT_FALSE(run->settled());
+  EXPECT_EQ(b.read("command"), kStop);  // not in force before the stream shows it
+  EXPECT_NE(b.read("status") & kCommandPending, 0u);
+  ASSERT_TRUE(b.rig.run_until([&] { return b.rig.sent().size() > before; }, 100ms));
+  EXPECT_EQ(b.rig.sent().back().bytes, kRun2000);
+  EXPECT_EQ(b.rig.sent().back().at, asked);  // at once: the line was free
+  EXPECT_EQ(b.read("command"), kStop);       // on the wire, never acknowledged: not yet
+  EXPECT_EQ(b.rig.wait(run), Exception::none);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("motor_on"), 1u);  // the status that confirmed it
+  EXPECT_NE(b.read("status") & kRunning, 0u);
+  EXPECT_EQ(b.read("status") & kCommandPending, 0u);
+  // Confirmed by the first ON frame after the run frame arrived (67 ms on the wire).
+  EXPECT_LE(b.rig.now() - asked, wire(8) + kStreamPeriod);
+  b.rig.run_for(2s);
+  EXPECT_EQ(b.read("speed_rpm"), 2000u);
+  EXPECT_EQ(b.read("sent_speed_rpm"), 2000u);
+}
+
+TEST(Fdc1Writes, SetpointAndRunInOneRequestRunAtThatSpeed) {
+  Bench b;
+  ASSERT_TRUE(b.heard());
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kRunForward, 2500}), Exception::none);
+  EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2500});
+  EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_TRUE(b.sim_has("min=2500"));
+}
+
+TEST(Fdc1Writes, ASetpointWhileRunningIsInForceOnceTheStreamShowsTheSpeed) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  const TimePoint asked = b.rig.now();
+  const auto w = b.start_write({3000}, kSetpointRegister);
+  EXPECT_FALSE(w->settled());
+  // On the wire at once; the motor ramps at 1000 rpm/s and the setpoint in force stays 2000 rpm
+  // until the stream shows it within tolerance_rpm of 3000.
+  ASSERT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") > 2000; }, 2s));
+  EXPECT_EQ(b.times_of(kRun3000), std::vector<TimePoint>{asked});
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
+  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
+  EXPECT_GE(b.read("speed_rpm"), 2900u);
+  EXPECT_EQ(b.read("command"), kRunForward);
+}
+
+TEST(Fdc1Writes, StopAndQuickStopSendSpeedZero) {
+  for (const std::uint16_t c : {kStop, kQuickStop}) {
+    SCOPED_TRACE(c);
+    Bench b;
+    ASSERT_TRUE(b.run_at(2500));
+    const TimePoint asked = b.rig.now();
+    const auto w = b.start_write({c});
+    b.rig.run_for(1ms);
+    EXPECT_EQ(b.read("command"), kRunForward);  // the motor still turns
+    EXPECT_EQ(b.rig.wait(w), Exception::none);
+    EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});  // one stop: speed 0
+    EXPECT_EQ(b.read("command"), c);
+    EXPECT_EQ(b.read("status") & kRunning, 0u);
+    EXPECT_EQ(b.read("speed_rpm"), 0u);
+    EXPECT_EQ(b.read("setpoint_rpm"), 2500u);  // kept for the next run
+  }
+}
+
+TEST(Fdc1Writes, WritesTheControllerCannotDoChangeNothing) {
+  Bench b;
+  ASSERT_TRUE(b.heard());
+  const auto before = b.rig.sent().size();
+  // One direction, and no fault reset in the protocol.
+  EXPECT_EQ(b.start_write({kRunReverse})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({kResetFault})->result, Exception::illegal_data_value);
+  // INPUT, Programming speed: 1500..3500 rpm.
+  for (const std::uint16_t rpm : {std::uint16_t{1499}, std::uint16_t{3501}, std::uint16_t{0}}) {
+    EXPECT_EQ(b.start_write({rpm}, kSetpointRegister)->result, Exception::illegal_data_value)
+        << rpm;
+  }
+  // No setpoint yet: nothing to run at.
+  EXPECT_EQ(b.start_write({kRunForward})->result, Exception::server_device_failure);
+  b.rig.run_for(1s);
+  EXPECT_EQ(b.rig.sent().size(), before);
+  EXPECT_EQ(b.read("setpoint_rpm"), 0u);
+  EXPECT_EQ(b.read("command"), kStop);
+}
+
+// A PLC that starts the compressor as the gateway comes up is not told no: the run waits for the
+// stream, goes out as the start-up frame, and is confirmed from the stream.
+TEST(Fdc1Writes, ARunBeforeTheControllerIsHeardWaitsForTheStream) {
+  Bench b;
+  const auto w = b.start_write({kRunForward, 2000});
+  EXPECT_FALSE(w->settled());
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // stored: nothing was running
+  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.frames(), std::vector<Bytes>{kRun2000});  // the start-up frame is the run
+  EXPECT_EQ(b.read("command"), kRunForward);
+}
+
+// ...and a controller never heard answers 0x0B once it is declared lost (stale_ms), not a
+// refusal. The run it was told failed is not in force: when the controller appears hours later,
+// the start-up asserts stop, not the run.
+TEST(Fdc1Writes, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
+  Bench b;
+  b.control("silent on");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kRunForward, 2000}), Exception::gateway_target_failed);
+  EXPECT_GE(b.rig.now() - asked, 2000ms);  // stale_ms
+  EXPECT_TRUE(b.rig.sent().empty());
+  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("status") & kRunning, 0u);
+  b.rig.run_for(1h);
+  b.control("silent off");
+  ASSERT_TRUE(b.heard());
+  EXPECT_EQ(b.frames(), std::vector<Bytes>{kStopFrame});
+  b.rig.run_for(3s);
+  EXPECT_EQ(b.read("motor_on"), 0u);
+}
+
+TEST(Fdc1Writes, ANewCommandSupersedesOneNotYetSent) {
+  Bench b;
+  ASSERT_TRUE(b.heard());
+  ASSERT_EQ(b.write({2000}, kSetpointRegister), Exception::none);
+  const TimePoint asked = b.rig.now();
+  const auto run = b.start_write({kRunForward});  // from one client...
+  const auto stop = b.start_write({kStop});       // ...and before it reached the wire, another
+  EXPECT_EQ(b.rig.wait(run), Exception::gateway_target_failed);
+  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});  // the compressor never started
+  EXPECT_EQ(b.read("command"), kStop);
+}
+
+// Two clients, the same direction: one frame carries both, and both are in force with it.
+TEST(Fdc1Writes, ASpeedChangeAndARunFromAnotherClientWaitTogether) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  const TimePoint asked = b.rig.now();
+  const auto faster = b.start_write({3000}, kSetpointRegister);
+  const auto run = b.start_write({kRunForward});
+  EXPECT_EQ(b.rig.wait(run), Exception::none);
+  EXPECT_EQ(b.rig.wait(faster), Exception::none);
+  EXPECT_GE(b.read("speed_rpm"), 2900u);  // both confirmed at the new speed
+  EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
+  EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun3000});
+}
+
+// Two clients, two speeds: the later one goes on the line; the earlier was never in force.
+TEST(Fdc1Writes, ASetpointOvertakenByAnotherSpeedIsNoResponse) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  const TimePoint asked = b.rig.now();
+  const auto first = b.start_write({2500}, kSetpointRegister);
+  const auto second = b.start_write({3000}, kSetpointRegister);
+  EXPECT_EQ(b.rig.wait(first), Exception::gateway_target_failed);
+  EXPECT_EQ(b.rig.wait(second), Exception::none);
+  EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
+  EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun3000});
+}
+
+// A setpoint written while a stop is on its way is stored with the stop, once the motor is off.
+TEST(Fdc1Writes, ASetpointWhileAStopIsOnItsWayIsStoredWithIt) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  const TimePoint asked = b.rig.now();
+  const auto stop = b.start_write({kStop});
+  const auto setpoint = b.start_write({2500}, kSetpointRegister);
+  EXPECT_FALSE(setpoint->settled());
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // the motor still runs at 2000
+  EXPECT_EQ(b.rig.wait(setpoint), Exception::none);
+  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
+  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});
+  // The next run uses it.
+  EXPECT_EQ(b.write({kRunForward}), Exception::none);
+  EXPECT_EQ(b.last(), kRun2500);
+}
+
+// A PLC writes setpoint and run_forward in one request every cycle: while running, the setpoint
+// is a speed change confirmed at the new speed, and the run that follows it is held already.
+TEST(Fdc1Writes, SetpointAndRunTogetherWhileRunningTakeOneFrame) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kRunForward, 2500}), Exception::none);
+  EXPECT_NEAR(b.read("speed_rpm"), 2500, 100);  // confirmed at the new speed, not before
+  EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2500});
+  EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
+  // Rewritten every 100 ms for a second, it costs the line nothing more.
+  const TimePoint cyclic = b.rig.now();
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_EQ(b.write({kRunForward, 2500}), Exception::none);
+    b.rig.run_for(100ms);
+  }
+  EXPECT_TRUE(b.frames(cyclic).empty());
+}
+
+// --- truthful writes: what the controller did not take is not in force ---
+
+TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  const TimePoint asked = b.rig.now();
+  // Setpoint 3000 rpm with run_reverse: the setpoint alone would go on the line.
+  EXPECT_EQ(b.start_write({kRunReverse, 3000})->result, Exception::illegal_data_value);
+  // A valid run with a setpoint outside 1500..3500.
+  EXPECT_EQ(b.start_write({kRunForward, 1000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.read("status") & kCommandPending, 0u);
+  b.rig.run_for(1s);
+  EXPECT_TRUE(b.frames(asked).empty());  // no frame at all
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_TRUE(b.sim_has("min=2000"));
+
+  // Stopped, without a setpoint: the run is refused, and the setpoint before it in the same
+  // request is not stored either.
+  Bench fresh;
+  ASSERT_TRUE(fresh.heard());
+  const auto before = fresh.rig.sent().size();
+  EXPECT_EQ(fresh.start_write({kRunReverse, 2000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(fresh.read("setpoint_rpm"), 0u);
+  EXPECT_EQ(fresh.rig.sent().size(), before);
+}
+
+// The controller's receiver is cut (`deaf on`): it keeps streaming, at 2000 rpm.
+TEST(Fdc1Writes, ASetpointWhileRunningThatTheControllerDoesNotTakeLeavesTheOldOne) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  ASSERT_EQ(b.control("deaf on"), "ok");
+  const TimePoint asked = b.rig.now();
+  const auto w = b.start_write({3000}, kSetpointRegister);
+  b.rig.run_for(4s);
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // never the one merely asked for
+  EXPECT_EQ(b.rig.wait(w), Exception::gateway_target_failed);
+  EXPECT_EQ(b.rig.now() - asked, 5000ms);  // confirm_ms, the driver's own deadline
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  // The controller is told what is in force again at once, should it have heard the 3000.
+  b.rig.run_for(10ms);
+  EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kRun3000, kRun2000}));
+  const auto undo = b.times_of(kRun2000, asked);
+  ASSERT_EQ(undo.size(), 1u);
+  EXPECT_LE(undo[0] - (asked + 5000ms), 1ms);  // the engine's shortest idle wait
+  // And the refresh carries 2000 rpm from then on.
+  b.control("deaf off");
+  b.rig.run_for(31s);
+  EXPECT_EQ(b.last(), kRun2000);
+  EXPECT_TRUE(b.sim_has("min=2000"));
+}
+
+TEST(Fdc1Writes, ASpeedChangeDuringAnAlarmIsRefusedAndTheOldOneStays) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  ASSERT_EQ(b.control("fault overload"), "ok");
+  ASSERT_TRUE(b.next_status());
+  EXPECT_EQ(b.read("motor_on"), 0u);
+  EXPECT_EQ(b.write({3000}, kSetpointRegister), Exception::server_device_failure);
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
+  // The run stays in force: the controller retries by itself once the alarm clears.
+  EXPECT_EQ(b.read("command"), kRunForward);
+  b.rig.run_for(10ms);
+  EXPECT_EQ(b.last(), kRun2000);  // and is what the controller is told again, at once
+  b.control("clear");
+  b.rig.run_for(3s);
+  EXPECT_EQ(b.read("speed_rpm"), 2000u);
+}
+
+TEST(Fdc1Writes, ARunTheControllerRefusesIsTheExceptionAndStopStaysInForce) {
+  Bench b;
+  ASSERT_TRUE(b.heard());
+  ASSERT_EQ(b.control("fault battery"), "ok");
+  ASSERT_TRUE(b.next_status());
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kRunForward, 2000}), Exception::server_device_failure);
+  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("status") & kRunning, 0u);
+  EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::supply_fault));
+  // The refused run must not start the compressor when the alarm clears: stop goes out at once.
+  b.rig.run_for(10ms);
+  EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kRun2000, kStopFrame}));
+  b.control("clear");
+  b.rig.run_for(3s);
+  EXPECT_EQ(b.read("speed_rpm"), 0u);
+  EXPECT_TRUE(b.sim_has("motor=off"));
+}
+
+TEST(Fdc1Writes, AStopTheStreamNeverShowsIsNoResponseAndTheRunStaysInForce) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  ASSERT_EQ(b.control("deaf on"), "ok");
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kStop}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.read("command"), kRunForward);  // what the controller does, and is told again
+  EXPECT_NE(b.read("status") & kRunning, 0u);
+  b.rig.run_for(10ms);
+  EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kStopFrame, kRun2000}));
+  EXPECT_EQ(b.read("speed_rpm"), 2000u);
+}
+
+TEST(Fdc1Writes, ARunNotShownWithinConfirmMsIsNoResponseAndIsUndone) {
+  Bench b;
+  ASSERT_TRUE(b.heard());
+  ASSERT_EQ(b.control("delay 10"), "ok");  // 10 s until the next start, no alarm
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({kRunForward, 2000}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.rig.now() - asked, 5000ms);
+  EXPECT_EQ(b.read("command"), kStop);
+  b.rig.run_for(10ms);
+  EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kRun2000, kStopFrame}));
+  // When the restart delay ends, the compressor the PLC was told did not start stays off.
+  b.rig.run_for(10s);
+  EXPECT_TRUE(b.sim_has("motor=off"));
+  EXPECT_EQ(b.read("speed_rpm"), 0u);
+}
+
+// The controller goes silent with a speed change on the wire: it takes the new speed unheard,
+// the PLC gets 0x0B, and when the stream returns the start-up puts it back on what is in force.
+TEST(Fdc1Writes, CommLostFailsTheWriteAndTheStartUpRestoresWhatIsInForce) {
+  Bench b;
+  ASSERT_TRUE(b.run_at(2000));
+  b.control("silent on");
+  EXPECT_EQ(b.write({2500}, kSetpointRegister), Exception::gateway_target_failed);
+  EXPECT_NE(b.read("status") & kCommLost, 0u);
+  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
+  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_TRUE(b.sim_has("min=2500"));  // it did take it, unheard
+  b.control("silent off");
+  const TimePoint back = b.rig.now();
+  ASSERT_TRUE(b.heard());
+  EXPECT_EQ(b.frames(back), std::vector<Bytes>{kRun2000});
+  b.rig.run_for(2s);
+  EXPECT_EQ(b.read("speed_rpm"), 2000u);
+  EXPECT_TRUE(b.sim_has("min=2000"));
+}
+
+}  // namespace
+}  // namespace drivegate::fdc1
