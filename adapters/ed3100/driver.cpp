@@ -84,7 +84,6 @@ Exchange Ed3100Driver::exchange(const Job& j) const {
     case Op::write:
       ex.frame = j.words.size() > 1 ? encode_write_multiple(address_, j.reg, j.words)
                                     : encode_write_single(address_, j.reg, j.words.at(0));
-      ex.priority = Priority::command;
       break;
   }
   ex.reply = broadcast() ? ReplyMode::none : ReplyMode::expected;

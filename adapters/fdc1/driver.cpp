@@ -47,7 +47,7 @@ void Fdc1Driver::on_status(const Status& s, TimePoint now) {
     common_.ready = true;
     // Start-up (and after comm_lost): tell the controller at once what the gateway holds, or the
     // write under way, rather than leave it on whatever an earlier session sent it.
-    if (settings_.slave_mode) send_soon(now, write_ ? Priority::command : Priority::poll);
+    if (settings_.slave_mode) send_soon(now);
     publish_program();  // a commit may go now
   }
   last_status_ = s;
@@ -90,10 +90,9 @@ void Fdc1Driver::on_comm_lost(TimePoint now) {
 
 // ---- what to send --------------------------------------------------------------------------
 
-void Fdc1Driver::send_soon(TimePoint now, Priority p) {
+void Fdc1Driver::send_soon(TimePoint now) {
   send_now_ = true;
   due_at_ = now;
-  send_priority_ = p;
 }
 
 std::optional<Exchange> Fdc1Driver::next_exchange(TimePoint now) {
@@ -107,7 +106,6 @@ std::optional<Exchange> Fdc1Driver::next_exchange(TimePoint now) {
     Exchange ex;
     ex.frame = encode_speed(is_run(order.command) ? Speed{rpm, rpm} : Speed{0, kMaxRpm});
     ex.reply = ReplyMode::none;  // INPUT, Programming speed: never acknowledged
-    ex.priority = send_now_ ? send_priority_ : Priority::poll;
     send_now_ = false;
     if (write_) write_->sent = true;
     next_refresh_ = now + settings_.refresh;
@@ -120,7 +118,6 @@ std::optional<Exchange> Fdc1Driver::next_exchange(TimePoint now) {
     ex.reply = ReplyMode::expected;
     ex.timeout = kEchoTimeout;
     ex.attempts = kEchoAttempts;
-    ex.priority = Priority::command;
     prog_state_ = Programming::awaiting_echo;
     return ex;
   }

@@ -82,7 +82,7 @@ class Fdc1Driver final : public Driver {
   // driver.cpp
   void on_status(const Status& s, TimePoint now);
   void publish_common();
-  void send_soon(TimePoint now, Priority p);
+  void send_soon(TimePoint now);
   [[nodiscard]] Order on_line() const { return write_ ? write_->order : in_force_; }
   [[nodiscard]] bool slave_ready() const { return settings_.slave_mode && common_.ready; }
   // driver_writes.cpp
@@ -119,8 +119,7 @@ class Fdc1Driver final : public Driver {
   Order in_force_;
   std::optional<SpeedWrite> write_;
   bool send_now_ = false;  // a speed frame is due at once (start-up, a write, an undo)
-  Priority send_priority_ = Priority::poll;
-  TimePoint due_at_{};  // when the frame due at once became due (wake_at)
+  TimePoint due_at_{};     // when the frame due at once became due (wake_at)
   TimePoint next_refresh_ = TimePoint::max();
 
   // Programming. A failed commit's outcome stays in prog_status / prog_message until a field is

@@ -142,7 +142,7 @@ WriteStatus Fdc1Driver::start_write(Asked a, Order order, Expect e, TimePoint no
   write_ = SpeedWrite{std::move(asked), order, e, now + settings_.confirm, false};
   // Before the controller is first heard the write waits: the start-up sends it with the first
   // status, and comm_lost fails it if the controller never streams.
-  send_soon(now, Priority::command);
+  send_soon(now);
   publish_common();
   return WriteStatus::pending;
 }
@@ -168,7 +168,7 @@ void Fdc1Driver::fail_write(WriteResult r, TimePoint now) {
   write_.reset();
   // In force is still what was. The controller may have acted on a frame of the failed write:
   // tell it what is in force, at once (after comm_lost the start-up does, once it streams again).
-  if (sent && slave_ready()) send_soon(now, Priority::command);
+  if (sent && slave_ready()) send_soon(now);
   publish_common();
 }
 

@@ -39,22 +39,21 @@ std::uint8_t Mdriver2400Driver::code_in_force() const {
   return kStopCode;
 }
 
-Exchange Mdriver2400Driver::make_exchange(Bytes frame, Priority p) const {
+Exchange Mdriver2400Driver::make_exchange(Bytes frame) const {
   Exchange ex;
   ex.frame = std::move(frame);
   ex.reply = ReplyMode::expected;
   ex.timeout = kReplyTimeout;
   ex.attempts = kAttempts;
-  ex.priority = p;
   return ex;
 }
 
-Exchange Mdriver2400Driver::run_exchange(std::uint8_t code, Priority p, TimePoint now) {
+Exchange Mdriver2400Driver::run_exchange(std::uint8_t code, TimePoint now) {
   sent_code_ = code;
   next_due_ = now + cadence_;  // every run command is a keep-alive
   awaiting_ = Awaiting::run;
   refresh();
-  return make_exchange(encode_run(settings_.master, address_, code, settings_.change), p);
+  return make_exchange(encode_run(settings_.master, address_, code, settings_.change));
 }
 
 std::optional<Exchange> Mdriver2400Driver::next_exchange(TimePoint now) {
@@ -65,11 +64,11 @@ std::optional<Exchange> Mdriver2400Driver::next_exchange(TimePoint now) {
     if (now < next_due_) return std::nullopt;
     next_due_ = now + cadence_;
     awaiting_ = Awaiting::check;
-    return make_exchange(encode_check(settings_.master, address_), Priority::poll);
+    return make_exchange(encode_check(settings_.master, address_));
   }
   if (auto write = next_write(now)) return write;
   if (now < next_due_) return std::nullopt;
-  return run_exchange(code_in_force(), Priority::poll, now);
+  return run_exchange(code_in_force(), now);
 }
 
 TimePoint Mdriver2400Driver::wake_at() const {

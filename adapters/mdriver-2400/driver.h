@@ -66,8 +66,8 @@ class Mdriver2400Driver final : public Driver {
   // driver.cpp
   [[nodiscard]] bool device_error() const;
   [[nodiscard]] std::uint8_t code_in_force() const;
-  [[nodiscard]] Exchange make_exchange(Bytes frame, Priority p) const;
-  Exchange run_exchange(std::uint8_t code, Priority p, TimePoint now);
+  [[nodiscard]] Exchange make_exchange(Bytes frame) const;
+  Exchange run_exchange(std::uint8_t code, TimePoint now);
   RxKind on_check_reply(const Frame& f, TimePoint now);
   RxKind on_run_reply(const Frame& f);
   void refresh();

@@ -111,7 +111,7 @@ std::optional<Exchange> Mdriver2400Driver::next_write(TimePoint now) {
     Pending& w = writes_.front();
     if (const auto code = code_of(w)) {
       w.sent = *code;
-      return run_exchange(*code, Priority::command, now);
+      return run_exchange(*code, now);
     }
     if (w.change == Change::setpoint) setpoint_code_ = w.setpoint_code;
     complete(w, w.change == Change::setpoint ? WriteResult::ok : WriteResult::refused);

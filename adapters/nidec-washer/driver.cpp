@@ -56,13 +56,12 @@ DriverTraits NidecWasherDriver::traits() const {
   return {kCommTimeout, kWriteTimeout, kInterFrameGap};
 }
 
-Exchange NidecWasherDriver::exchange(const Request& r, Priority p) const {
+Exchange NidecWasherDriver::exchange(const Request& r) const {
   Exchange ex;
   ex.frame = encode(r);
   ex.reply = ReplyMode::expected;  // 5.16: the inverter answers every frame, an ACK or a NACK
   ex.timeout = kReplyTimeout;
   ex.attempts = settings_.attempts;
-  ex.priority = p;
   return ex;
 }
 
@@ -70,19 +69,18 @@ std::optional<Exchange> NidecWasherDriver::next_exchange(TimePoint now) {
   expire(now);
   if (!common_.ready) {
     // 5.1: the ping goes after every start or reconnect, before anything else; writes wait
-    // behind it, and make it urgent.
+    // behind it (and make the engine ask at once: the device has writes pending).
     if (next_poll_ && now < *next_poll_ && queue_.empty()) return std::nullopt;
     in_flight_ = InFlight::ping;
     expected_ = Mode::ping;
     last_sent_ = now;
-    return exchange(make_ping(settings_.platform, settings_.empty_raw_weight),
-                    queue_.empty() ? Priority::poll : Priority::command);
+    return exchange(make_ping(settings_.platform, settings_.empty_raw_weight));
   }
   if (const Queued* q = front_to_send()) {
     in_flight_ = InFlight::queued;
     expected_ = q->request->mode;
     last_sent_ = now;
-    Exchange ex = exchange(*q->request, Priority::command);
+    Exchange ex = exchange(*q->request);
     // Only the attempts that start before the write's deadline (expire() has kept it, so one at
     // least): an ACK long after it would put in force a write the gateway may have failed.
     const auto fit = (q->deadline - now + attempt_time(ex.frame.size()) - Millis(1)) /
@@ -95,7 +93,7 @@ std::optional<Exchange> NidecWasherDriver::next_exchange(TimePoint now) {
   in_flight_ = InFlight::poll;
   expected_ = Mode::request;
   last_sent_ = now;
-  return exchange(make_bare(Mode::request), Priority::poll);  // 5.2
+  return exchange(make_bare(Mode::request));  // 5.2
 }
 
 TimePoint NidecWasherDriver::wake_at() const {

@@ -58,7 +58,7 @@ class NidecWasherDriver final : public Driver {
   };
 
   // driver.cpp
-  [[nodiscard]] Exchange exchange(const Request& r, Priority p) const;
+  [[nodiscard]] Exchange exchange(const Request& r) const;
   void set_command(Command c);
   void update_running();
 

@@ -65,7 +65,6 @@ Exchange EDriveDriver::read(TimePoint now) {
   ex.reply = ReplyMode::expected;  // "Successful read commands always get a reply"
   ex.timeout = settings_.reply_timeout;
   ex.attempts = settings_.attempts;
-  ex.priority = Priority::poll;
   return ex;
 }
 

@@ -195,7 +195,6 @@ Exchange EDriveDriver::send(Pending& w, TimePoint now) {
   ex.reply = ReplyMode::none;  // "Write commands are not acknowledged"
   ex.timeout = settings_.reply_timeout;
   ex.attempts = 1;  // an identical resend of an unacknowledged write proves nothing
-  ex.priority = Priority::command;
   return ex;
 }
 

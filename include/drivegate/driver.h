@@ -3,9 +3,10 @@
 // and reads the state it publishes. This makes every driver testable with plain byte vectors.
 //
 // One bus engine serves every device on a serial line, one transaction at a time:
-//   1. When the line is free it asks each device's driver for next_exchange(now). Commands go
-//      ahead of polls; among devices of equal priority it goes round-robin, so a silent device
-//      costs the others at most its own time budget (timeout x attempts) per turn.
+//   1. When the line is free it asks each device's driver for next_exchange(now): first the
+//      devices with a Modbus write in flight, then the others whose wake_at() has come, each
+//      group round-robin, so a silent device costs the others at most its own time budget
+//      (timeout x attempts) per turn. Which of its own frames goes first is the driver's choice.
 //   2. It waits traits().inter_frame_gap of line silence, writes Exchange::frame (discarding and
 //      checking the echo on one-wire lines) and, if a reply is expected, collects bytes.
 //   3. Every byte received, solicited or not, goes to on_receive() until the driver says a reply
@@ -35,7 +36,6 @@ using Clock = std::chrono::steady_clock;
 using TimePoint = Clock::time_point;
 using Millis = std::chrono::milliseconds;
 
-enum class Priority : std::uint8_t { poll = 0, command = 1 };
 enum class ReplyMode : std::uint8_t {
   expected,  // request / reply: wait for on_receive() to return RxKind::reply
   none,      // broadcast, or a write the device never acknowledges: done once written
@@ -47,7 +47,6 @@ struct Exchange {
   ReplyMode reply = ReplyMode::expected;
   Millis timeout{100};        // per attempt: from the last byte written to a complete reply
   std::uint8_t attempts = 1;  // identical sends in this turn (1 = no retry)
-  Priority priority = Priority::poll;
 };
 
 enum class RxKind : std::uint8_t {

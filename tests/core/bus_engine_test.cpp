@@ -37,7 +37,6 @@ class PingDriver final : public Driver {
     if (pending_ && !pending_sent_) {
       pending_sent_ = true;
       ex.frame = {kCommand, address_, static_cast<std::uint8_t>(pending_command_)};
-      ex.priority = Priority::command;
       return ex;
     }
     if (now < next_poll_) return std::nullopt;

@@ -136,7 +136,6 @@ TEST(Fdc1Contract, WakesForTheStartUpTheRefreshAndTheConfirmDeadline) {
   EXPECT_LE(h.d->wake_at(), h.now);  // the run frame is due at once
   const auto ex = h.d->next_exchange(h.now);
   ASSERT_TRUE(ex.has_value());
-  EXPECT_EQ(ex->priority, Priority::command);
   EXPECT_EQ(ex->reply, ReplyMode::none);      // INPUT, Programming speed: never acknowledged
   EXPECT_EQ(h.d->wake_at(), h.now + 5000ms);  // the confirm deadline comes before the refresh
   std::vector<Completion> out;

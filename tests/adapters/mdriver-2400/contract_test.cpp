@@ -69,7 +69,6 @@ TEST(MdriverContract, VerdictsOnWhatComesBack) {
   ASSERT_TRUE(ex.has_value());
   EXPECT_EQ(ex->frame, encode_check(0x00, 0x01));
   EXPECT_EQ(ex->reply, ReplyMode::expected);
-  EXPECT_EQ(ex->priority, Priority::poll);
   EXPECT_EQ(ex->attempts, kAttempts);
   EXPECT_EQ(ex->timeout, kReplyTimeout);
   EXPECT_FALSE(h.d->next_exchange(h.now).has_value());  // one at a time
@@ -207,7 +206,6 @@ TEST(MdriverContract, AWriteNotConfirmedInTimeFailsAtTheDriversOwnDeadline) {
   const auto ex = h.d->next_exchange(h.now);
   ASSERT_TRUE(ex.has_value());
   EXPECT_EQ(ex->frame, encode_run(0x00, 0x01, kStopCode, kChangeNormal));
-  EXPECT_EQ(ex->priority, Priority::command);
   // No reply, and no on_no_reply either: the driver's own deadline, under the gateway's 3 s.
   EXPECT_LE(h.d->wake_at(), h.now + kConfirmDeadline);
   EXPECT_TRUE(h.completions().empty());

@@ -100,7 +100,6 @@ TEST(NidecContract, VerdictsOnWhatComesBack) {
   ASSERT_TRUE(ex.has_value());
   EXPECT_EQ(ex->frame, encode(make_ping(7, 0)));
   EXPECT_EQ(ex->reply, ReplyMode::expected);
-  EXPECT_EQ(ex->priority, Priority::poll);
   EXPECT_EQ(ex->attempts, 3);
   EXPECT_EQ(ex->timeout, 100ms);  // section 6
   EXPECT_EQ(h.d->traits().inter_frame_gap, 5ms);
@@ -140,7 +139,6 @@ TEST(NidecContract, AQueuedWriteIsSentOnlyInAttemptsThatStartBeforeItsDeadline) 
   std::optional<Exchange> ex = h.d->next_exchange(h.now);
   ASSERT_TRUE(ex.has_value());
   EXPECT_EQ(ex->attempts, 3);
-  EXPECT_EQ(ex->priority, Priority::command);
   h.now = applied + 2400ms;
   h.d->on_no_reply(h.now);
   ex = h.d->next_exchange(h.now);

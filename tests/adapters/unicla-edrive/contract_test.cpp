@@ -119,8 +119,7 @@ TEST(UniclaContract, ExchangesAsTheDocumentAsks) {
   const auto read = h.d->next_exchange(h.now);
   ASSERT_TRUE(read.has_value());
   EXPECT_EQ(read->reply, ReplyMode::expected);  // "Successful read commands always get a reply"
-  EXPECT_EQ(read->priority, Priority::poll);
-  EXPECT_EQ(read->attempts, 3);  // 1 + retries
+  EXPECT_EQ(read->attempts, 3);                 // 1 + retries
   EXPECT_EQ(read->timeout, 100ms);
   EXPECT_EQ(h.d->traits().inter_frame_gap, kInterFrameGap);
   EXPECT_EQ(h.d->points().size(), h.d->values().size());
@@ -132,7 +131,6 @@ TEST(UniclaContract, ExchangesAsTheDocumentAsks) {
   const auto write = w.d->next_exchange(w.now);
   ASSERT_TRUE(write.has_value());
   EXPECT_EQ(write->reply, ReplyMode::none);  // "Write commands are not acknowledged"
-  EXPECT_EQ(write->priority, Priority::command);
   EXPECT_EQ(write->attempts, 1);
   // The confirming status read right after it.
   const auto confirm = w.d->next_exchange(w.now);
