@@ -3,11 +3,11 @@
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/sinks/stdout_sinks.h>
 
-#include <array>
 #include <cstdlib>
 #include <stdexcept>
 
 #include "config/adapter_options.h"
+#include "gateway/gateway.h"
 
 namespace drivegate::test {
 
@@ -57,21 +57,16 @@ class BusRig::Units final : public modbus::Backend {
                  std::span<std::uint16_t> out) override {
     Device* d = find(unit);
     return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->read(table_of(table), address, out, rig_.now());
+                        : d->read(to_table(table), address, out, rig_.now());
   }
   Exception write(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
                   std::span<const std::uint16_t> values, modbus::WriteDone done) override {
     Device* d = find(unit);
     return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->write(table_of(table), address, values, std::move(done), rig_.now());
+                        : d->write(to_table(table), address, values, std::move(done), rig_.now());
   }
 
  private:
-  static Table table_of(modbus::RegisterTable t) {
-    constexpr std::array<Table, 4> kTables = {Table::coil, Table::discrete, Table::input,
-                                              Table::holding};
-    return kTables.at(static_cast<std::size_t>(t));
-  }
   Device* find(std::uint8_t unit) const {
     for (const auto& d : rig_.devices()) {
       if (d->config().unit_id == unit) return d.get();
@@ -190,6 +185,23 @@ std::vector<std::uint16_t> BusRig::read(Device& d, std::string_view point) {
   if (p == nullptr) throw std::invalid_argument("no point " + std::string(point));
   const bool bits = p->spec.table == Table::discrete || p->spec.table == Table::coil;
   return read(d, p->spec.table, p->address, bits ? 1 : p->spec.register_count());
+}
+
+std::uint32_t BusRig::value(Device& d, std::string_view point) {
+  const auto regs = read(d, point);
+  if (regs.size() == 2) return (std::uint32_t{regs[0]} << 16) | regs[1];
+  return regs.empty() ? 0xFFFFFFFFu : regs[0];
+}
+
+std::string BusRig::text(Device& d, std::string_view point) {
+  std::string out;
+  for (const std::uint16_t r : read(d, point)) {
+    for (const auto c : {static_cast<char>(r >> 8), static_cast<char>(r & 0xFF)}) {
+      if (c == '\0') return out;
+      out.push_back(c);
+    }
+  }
+  return out;
 }
 
 modbus::Backend& BusRig::backend() {

@@ -90,6 +90,12 @@ class BusRig {
   std::vector<std::uint16_t> read(Device& d, Table table, std::uint16_t address, std::size_t n);
   // The named point's registers.
   std::vector<std::uint16_t> read(Device& d, std::string_view point);
+  // The named point's value as a PLC reads it: a u16 point's register, a u32 one's two high word
+  // first; all ones when the read fails.
+  std::uint32_t value(Device& d, std::string_view point);
+  // A string point as a PLC reads it: two characters a register, the first in the high byte, cut
+  // at the first NUL.
+  std::string text(Device& d, std::string_view point);
   // Unit id -> device, as the gateway serves them (for the Modbus dispatcher).
   modbus::Backend& backend();
 

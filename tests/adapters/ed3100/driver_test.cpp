@@ -35,7 +35,7 @@ TEST(Ed3100Driver, StartupReadsTheParameterThenTheFaultWordAndTheMonitors) {
   ASSERT_EQ(answers.size(), sent.size());
   EXPECT_EQ(sent[0].at, kStart + 10ms);
   for (std::size_t i = 0; i + 1 < sent.size(); ++i) {
-    const TimePoint reply_end = answers[i].at + on_wire(answers[i].bytes.size());
+    const TimePoint reply_end = answers[i].at + b.on_wire(answers[i].bytes.size());
     EXPECT_EQ(sent[i + 1].at - reply_end, 10ms) << "frame " << i + 1;
   }
 
@@ -48,7 +48,7 @@ TEST(Ed3100Driver, StartupReadsTheParameterThenTheFaultWordAndTheMonitors) {
   EXPECT_EQ(b.read("state_word"), 0x0148u);
   EXPECT_EQ(b.read("commanded_direction"), 1u);
   EXPECT_EQ(b.read("running"), 0u);
-  EXPECT_EQ(b.speed(), 0);  // the stopped bit: 42.28 is the reference on display
+  EXPECT_EQ(b.read_i16("speed_rpm"), 0);  // the stopped bit: 42.28 is the reference on display
   EXPECT_EQ(b.status(), kOnline);
   EXPECT_EQ(b.read("fault_code"), 0u);
   EXPECT_EQ(b.read("native_fault"), 0u);
@@ -70,7 +70,7 @@ TEST(Ed3100Driver, ASilentDriveIsResentToThenCommLostThenStartsUpAgain) {
   ASSERT_TRUE(b.ready());
   b.control("silent on");
   const TimePoint from = b.rig.now();
-  EXPECT_EQ(b.write({kStopCommand}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({cmd::stop}), Exception::gateway_target_failed);
   // attempts = 3, each waiting timeout_ms = 100 from the last byte written (8 bytes at 9600 8E1:
   // 9.17 ms, counted in whole ms).
   const auto stops = b.times_of(kStop, from);
@@ -83,11 +83,11 @@ TEST(Ed3100Driver, ASilentDriveIsResentToThenCommLostThenStartsUpAgain) {
   ASSERT_TRUE(b.rig.run_until([&] { return (b.status() & kCommLost) != 0; }, 5s));
   EXPECT_GE(b.rig.now() - last_good, 3000ms);
   EXPECT_LE(b.rig.now() - last_good, 3200ms);
-  EXPECT_EQ(b.status() & kOnline, 0);
+  EXPECT_EQ(b.status() & kOnline, 0u);
   EXPECT_EQ(b.read("fault_code"), 1u);  // comm_lost
   // Writes answer 0x0B at once and send nothing.
   const TimePoint lost = b.rig.now();
-  EXPECT_EQ(b.start_write({kRunForward})->result, Exception::gateway_target_failed);
+  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Exception::gateway_target_failed);
   b.rig.run_for(500ms);
   EXPECT_TRUE(b.writes(lost).empty());
 
@@ -118,7 +118,7 @@ TEST(Ed3100Driver, ABadChecksumIsResentIdenticallyAtOnce) {
   EXPECT_EQ(first->bytes, kReadFault);
   EXPECT_EQ((first + 1)->bytes, kReadFault);
   const auto& bad = b.rig.answers()[static_cast<std::size_t>(first - sent.begin())];
-  EXPECT_EQ((first + 1)->at - (bad.at + on_wire(bad.bytes.size())), 10ms);
+  EXPECT_EQ((first + 1)->at - (bad.at + b.on_wire(bad.bytes.size())), 10ms);
   EXPECT_EQ(b.read("bad_checksum"), 1u);
   EXPECT_EQ(b.read("retries"), 1u);
   EXPECT_EQ(b.read("timeouts"), 0u);
@@ -196,13 +196,13 @@ TEST(Ed3100Driver, TheBroadcastAddressIsNeverPolledAndItsWritesAreUnanswered) {
   rig.start();
   rig.run_for(2s);
   EXPECT_TRUE(rig.sent().empty());
-  EXPECT_EQ(rig.write_and_wait(all, Table::holding, kCommandRegister, {kRunForward}),
+  EXPECT_EQ(rig.write_and_wait(all, Table::holding, kCommandRegister, {cmd::run_forward}),
             Exception::none);
   ASSERT_EQ(rig.sent().size(), 1u);
   const std::uint16_t forward[] = {0x001E, 0x0000};  // run forward at the reference in force
   EXPECT_EQ(rig.sent()[0].bytes, encode_write_multiple(0x00, 0x2000, forward));
   EXPECT_TRUE(rig.answers().empty());
-  EXPECT_EQ(rig.read(all, "command"), std::vector<std::uint16_t>{kRunForward});
+  EXPECT_EQ(rig.read(all, "command"), std::vector<std::uint16_t>{cmd::run_forward});
   rig.run_for(10s);
   EXPECT_NE(sim.control("state", rig.now()).find("running=1"), std::string::npos);
   EXPECT_EQ(rig.sent().size(), 1u);

@@ -1,12 +1,11 @@
-// The options as the gateway hands them over (text over the schema's defaults), the point table
-// they make, and the descriptor the plugin exports.
+// The options as the gateway hands them over (text over the schema's defaults), and the point
+// table they make.
 #include "settings.h"
 
 #include <gtest/gtest.h>
 
 #include "adapter_under_test.h"
 #include "bus_rig.h"
-#include "config/adapter_options.h"
 #include "points.h"
 
 namespace drivegate::ed3100 {
@@ -102,43 +101,6 @@ TEST(Ed3100Points, TableLayout) {
   EXPECT_EQ(pts[pt::parameter(*s, 1)].name, "param_0a_01");
   EXPECT_EQ(pts[pt::parameter(*s, 1)].table, Table::holding);
   EXPECT_EQ(pts[pt::parameter(*s, 1)].max, 65535);
-}
-
-TEST(Ed3100Plugin, TheDescriptor) {
-  const AdapterDescriptor& a = drivegate_adapter;
-  EXPECT_EQ(a.api_version, kAdapterApiVersion);
-  EXPECT_STREQ(a.id, "ed3100");
-  EXPECT_EQ(check_option_schema(a), "");  // every option has a default its own spec accepts
-  EXPECT_EQ(a.option_count, kOptionSchema.size());
-  EXPECT_EQ(a.line.baud, 9600u);
-  EXPECT_EQ(a.line.parity, Parity::even);
-  EXPECT_EQ(a.address_min, 0u);
-  EXPECT_EQ(a.address_max, 31u);
-  EXPECT_EQ(a.default_address, 1u);
-  EXPECT_FALSE(a.streaming);
-  EXPECT_EQ(a.demo.option_count, 0u);
-  EXPECT_EQ(a.demo.running_rpm, 1500);
-  EXPECT_EQ(a.action_count, 0u);
-}
-
-TEST(Ed3100Plugin, TheFactoriesUseTheOptions) {
-  DeviceEnv env;
-  env.address = 31;
-  env.options = test::options_of(drivegate_adapter);
-  std::string error;
-  EXPECT_TRUE(drivegate_adapter.create_driver(env, error)) << error;
-  env.address = 40;
-  EXPECT_FALSE(drivegate_adapter.create_driver(env, error));
-  EXPECT_NE(error.find("address"), std::string::npos);
-  env.address = 31;
-  env.options = test::options_of(drivegate_adapter, {{"poles", "5"}});
-  EXPECT_FALSE(drivegate_adapter.create_driver(env, error));
-  EXPECT_NE(error.find("poles"), std::string::npos);
-
-  SimEnv sim{31, test::options_of(drivegate_adapter)};
-  EXPECT_TRUE(drivegate_adapter.create_simulator(sim, error)) << error;
-  sim.address = 32;
-  EXPECT_FALSE(drivegate_adapter.create_simulator(sim, error));
 }
 
 }  // namespace

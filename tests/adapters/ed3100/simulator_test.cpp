@@ -4,8 +4,8 @@
 
 #include <memory>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
 #include "codec.h"
 #include "registers.h"
 
@@ -14,14 +14,6 @@ namespace {
 
 using B = Bytes;
 const TimePoint kT0 = TimePoint{} + std::chrono::hours(1);
-
-std::unique_ptr<Simulator> make_simulator() {
-  const SimEnv env{0x1F, test::options_of(drivegate_adapter)};
-  std::string error;
-  auto sim = drivegate_adapter.create_simulator(env, error);
-  EXPECT_TRUE(sim) << error;
-  return sim;
-}
 
 class SimTest : public ::testing::Test {
  protected:
@@ -40,7 +32,7 @@ class SimTest : public ::testing::Test {
     return d.frame.words;
   }
 
-  std::unique_ptr<Simulator> owned = make_simulator();
+  std::unique_ptr<Simulator> owned = test::make_simulator(drivegate_adapter, 0x1F);
   Simulator& sim = *owned;
   TimePoint now = kT0;
 };

@@ -4,35 +4,28 @@
 #include <gtest/gtest.h>
 
 #include <memory>
-#include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
-#include "adapter_under_test.h"
-#include "bus_rig.h"
+#include "adapter_factories.h"
+#include "bench.h"
 #include "codec.h"
 #include "driver.h"
+#include "driver_by_hand.h"
 #include "points.h"
+#include "write_contract.h"
 
 namespace drivegate::fdc1 {
 namespace {
 
-using namespace std::chrono_literals;
-
-const test::OptionText kSlave = {{"slave_mode", "true"}};
-
 // A driver from the adapter's own factory, and the controller played by hand: it streams
 // `status` every 0.5 s, follows every speed frame (unless in alarm), and echoes programming frames.
-struct Hand {
-  explicit Hand(const test::OptionText& options = kSlave, bool maintenance = false) {
-    DeviceEnv env;
-    env.name = "fridge";
-    env.options = test::options_of(drivegate_adapter, options);
-    env.maintenance = maintenance;
-    std::string error;
-    d = drivegate_adapter.create_driver(env, error);
-    EXPECT_NE(d, nullptr) << error;
-  }
+struct Hand : test::DriverByHand {
+  explicit Hand(const test::OptionText& options = kSlave, bool maintenance = false)
+      : DriverByHand(test::make_driver(drivegate_adapter,
+                                       {.options = options, .maintenance = maintenance})) {}
 
   // Everything the driver wants to send now, answered as the controller would.
   void exchanges() {
@@ -62,27 +55,14 @@ struct Hand {
     EXPECT_EQ(d->on_receive(frame, now).kind, RxKind::frame);
     exchanges();
   }
-  WriteStatus apply(const WriteOp& op) { return d->apply(op, ++ticket, now); }
-  // Steps until ticket `t` completes; its result.
-  std::optional<WriteResult> settle(Ticket t) {
-    for (int i = 0; i < 30; ++i) {
-      std::vector<Completion> out;
-      d->take_completions(out);
-      for (const auto& c : out) {
-        if (c.ticket == t) return c.result;
-      }
-      step();
-    }
-    return std::nullopt;
+  bool turn() override {
+    step();
+    return true;
   }
 
-  std::unique_ptr<Driver> d;
-  TimePoint now = TimePoint{} + 1h;
   Status status;
   std::uint16_t speed = 0;  // the controller's slave speed (0: stopped)
   std::uint8_t alarm = 0;
-  Ticket ticket = 0;
-  std::vector<Bytes> sent;
 };
 
 TEST(Fdc1Contract, VerdictsOnWhatComesBack) {
@@ -146,116 +126,8 @@ TEST(Fdc1Contract, WakesForTheStartUpTheRefreshAndTheConfirmDeadline) {
   EXPECT_EQ(h.d->common().command, Command::stop);
 }
 
-// The states a request may find the driver in.
-enum class State { not_heard, stopped, stored, running, alarm_stopped, alarm_running, monitor };
-
-void bring(Hand& h, State s) {
-  if (s == State::not_heard) return;
-  h.step();
-  if (s == State::stopped || s == State::monitor) return;
-  if (s == State::alarm_stopped) {
-    h.alarm = 48;
-    h.step();
-    return;
-  }
-  ASSERT_EQ(h.apply(WriteOp::of_setpoint(2000)), WriteStatus::done);
-  if (s == State::stored) return;
-  ASSERT_EQ(h.apply(WriteOp::of_command(Command::run_forward)), WriteStatus::pending);
-  ASSERT_EQ(h.settle(h.ticket), WriteResult::ok);
-  ASSERT_EQ(h.d->common().command, Command::run_forward);
-  if (s == State::running) return;
-  h.alarm = 64;  // motor overload: the controller stops and will retry
-  h.step();
-}
-
-const State kStates[] = {State::not_heard,     State::stopped,       State::stored, State::running,
-                         State::alarm_stopped, State::alarm_running, State::monitor};
-
-test::OptionText options_in(State s) {
-  return s == State::monitor ? test::OptionText{} : kSlave;
-}
-
-std::vector<std::vector<WriteOp>> speed_requests() {
-  std::vector<std::vector<WriteOp>> out;
-  const std::optional<std::int32_t> setpoints[] = {std::nullopt, 0, 1499, 1500, 2000, 3500, 3501};
-  for (const auto& rpm : setpoints) {
-    std::vector<WriteOp> base;
-    if (rpm) base.push_back(WriteOp::of_setpoint(*rpm));
-    if (!base.empty()) out.push_back(base);
-    for (const Command c : kAllCommands) {
-      auto r = base;
-      r.push_back(WriteOp::of_command(c));
-      out.push_back(r);
-    }
-  }
-  out.push_back({WriteOp::of_point(pt::motor_on, Value{std::int64_t{1}})});
-  out.push_back({WriteOp::of_point(pt::prog_commit, Value{std::int64_t{1}})});
-  return out;
-}
-
-WriteCheck as_check(WriteStatus s) {
-  return s == WriteStatus::invalid_value ? WriteCheck::invalid_value : WriteCheck::refused;
-}
-
-std::string describe(const std::vector<WriteOp>& request) {
-  std::string out;
-  for (const WriteOp& op : request) {
-    switch (op.target) {
-      case WriteOp::Target::setpoint:
-        out += "setpoint " + std::to_string(op.rpm) + "; ";
-        break;
-      case WriteOp::Target::command:
-        out += std::string(to_string(op.command)) + "; ";
-        break;
-      case WriteOp::Target::point:
-        out += "point " + std::to_string(op.point) + " = " + std::to_string(as_double(op.value)) +
-               "; ";
-        break;
-    }
-  }
-  return out;
-}
-
-// Applies `request` as the gateway does, a part once the one before it settled, and says what
-// check() should have answered. Nothing when the controller refused a part from the stream (an
-// alarm): a verdict no driver can give in advance, after which the later parts are never applied.
-std::optional<WriteCheck> applied(Hand& h, const std::vector<WriteOp>& request) {
-  for (const WriteOp& op : request) {
-    const WriteStatus st = h.apply(op);
-    if (st == WriteStatus::invalid_value || st == WriteStatus::refused) return as_check(st);
-    if (st == WriteStatus::pending) {
-      const auto r = h.settle(h.ticket);
-      EXPECT_TRUE(r.has_value()) << "never settled";
-      if (r != WriteResult::ok) return std::nullopt;
-    }
-  }
-  return WriteCheck::ok;
-}
-
-TEST(Fdc1Contract, CheckAcceptsARequestExactlyWhenApplyTakesItsPartsInOrder) {
-  int compared = 0;
-  for (const State s : kStates) {
-    for (const auto& request : speed_requests()) {
-      SCOPED_TRACE(testing::Message()
-                   << "state " << static_cast<int>(s) << ": " << describe(request));
-      Hand h(options_in(s));
-      bring(h, s);
-      const WriteCheck judged = h.d->check(request);
-      const auto taken = applied(h, request);
-      if (taken) {
-        EXPECT_EQ(judged, *taken);
-        ++compared;
-      } else {
-        // Only an alarm refuses what the driver took.
-        EXPECT_TRUE(s == State::alarm_stopped || s == State::alarm_running);
-      }
-    }
-  }
-  EXPECT_GT(compared, 250);  // of 301
-}
-
 // Programming requests, as `drivegate action` makes them one part at a time or a PLC in one.
-std::vector<std::vector<WriteOp>> program_requests() {
+std::vector<test::Request> program_requests() {
   const auto field = [](std::size_t point, double v) { return WriteOp::of_point(point, Value{v}); };
   const WriteOp commit = WriteOp::of_point(pt::prog_commit, Value{std::int64_t{1}});
   const std::vector<WriteOp> standard = {
@@ -264,7 +136,7 @@ std::vector<std::vector<WriteOp>> program_requests() {
       field(pt::prog_cut_in_12v, 12.5), field(pt::prog_cut_out_24v, 21),
       field(pt::prog_cut_in_24v, 25),   field(pt::prog_cut_out_42v, 36),
       field(pt::prog_cut_in_42v, 44)};
-  std::vector<std::vector<WriteOp>> out;
+  std::vector<test::Request> out;
   out.push_back({commit});
   out.push_back({commit, commit});
   out.push_back({field(pt::prog_cut_out_12v, 13), commit});  // above cut-in: invalid
@@ -300,51 +172,90 @@ void fill(Hand& h, Fields f) {
   }
 }
 
+// The states a request may find the driver in.
+enum class State { not_heard, stopped, stored, running, alarm_stopped, alarm_running, monitor };
+
+void bring(Hand& h, State s) {
+  if (s == State::not_heard) return;
+  h.step();
+  if (s == State::stopped || s == State::monitor) return;
+  if (s == State::alarm_stopped) {
+    h.alarm = 48;
+    h.step();
+    return;
+  }
+  ASSERT_EQ(h.apply(WriteOp::of_setpoint(2000)), WriteStatus::done);
+  if (s == State::stored) return;
+  ASSERT_EQ(h.apply(WriteOp::of_command(Command::run_forward)), WriteStatus::pending);
+  ASSERT_EQ(h.settle(h.ticket), WriteResult::ok);
+  ASSERT_EQ(h.d->common().command, Command::run_forward);
+  if (s == State::running) return;
+  h.alarm = 64;  // motor overload: the controller stops and will retry
+  h.step();
+}
+
+constexpr std::pair<State, std::string_view> kStates[] = {
+    {State::not_heard, "not heard"},          {State::stopped, "stopped"},
+    {State::stored, "setpoint stored"},       {State::running, "running"},
+    {State::alarm_stopped, "alarm, stopped"}, {State::alarm_running, "alarm, running"},
+    {State::monitor, "monitor only"}};
+
+// Each state on a fresh driver; in maintenance mode with valid programming fields stored too.
+std::vector<test::WriteState> states(bool programmed = false) {
+  std::vector<test::WriteState> out;
+  for (const auto& [state, name] : kStates) {
+    const State s = state;  // a copy the lambda can hold
+    const test::OptionText options = s == State::monitor ? test::OptionText{} : kSlave;
+    out.push_back({std::string(name), [=] {
+                     auto h = std::make_unique<Hand>(options, /*maintenance=*/programmed);
+                     bring(*h, s);
+                     if (programmed) fill(*h, Fields::valid);
+                     return h;
+                   }});
+  }
+  return out;
+}
+
+std::vector<test::Request> speed_requests() {
+  auto out = test::command_requests({0, 1499, 1500, 2000, 3500, 3501});
+  out.push_back({WriteOp::of_point(pt::motor_on, Value{std::int64_t{1}})});
+  out.push_back({WriteOp::of_point(pt::prog_commit, Value{std::int64_t{1}})});
+  return out;
+}
+
+// The controller refuses a part from the stream only in an alarm: a verdict no driver can give in
+// advance, after which the later parts are never applied.
+TEST(Fdc1Contract, CheckAcceptsARequestExactlyWhenApplyTakesItsPartsInOrder) {
+  const auto tally = test::expect_check_is_apply(states(), speed_requests());
+  for (const auto& ended : tally.ended_by_device) {
+    EXPECT_TRUE(ended.state.starts_with("alarm")) << ended.state << ": " << ended.request;
+  }
+  EXPECT_GT(tally.compared, 250);  // of 301
+}
+
 TEST(Fdc1Contract, CheckJudgesAProgrammingRequestAsApplyTakesIt) {
+  std::vector<test::WriteState> programming;
   for (const bool heard : {false, true}) {
-    for (const Fields f : {Fields::none, Fields::valid, Fields::invalid}) {
-      for (const auto& request : program_requests()) {
-        SCOPED_TRACE(testing::Message() << (heard ? "heard" : "not heard") << ", fields "
-                                        << static_cast<int>(f) << ": " << describe(request));
-        Hand h(kSlave, /*maintenance=*/true);
-        if (heard) h.step();
-        fill(h, f);
-        const WriteCheck judged = h.d->check(request);
-        EXPECT_EQ(std::optional<WriteCheck>(judged), applied(h, request));
-      }
+    for (const auto& [fields, name] :
+         {std::pair{Fields::none, "no fields"}, std::pair{Fields::valid, "valid fields"},
+          std::pair{Fields::invalid, "invalid fields"}}) {
+      const Fields f = fields;  // a copy the lambda can hold
+      programming.push_back({std::string(heard ? "heard, " : "not heard, ") + name, [=] {
+                               auto h = std::make_unique<Hand>(kSlave, /*maintenance=*/true);
+                               if (heard) h->step();
+                               fill(*h, f);
+                               return h;
+                             }});
     }
   }
+  const auto tally = test::expect_check_is_apply(programming, program_requests());
+  EXPECT_TRUE(tally.ended_by_device.empty());
 }
 
 TEST(Fdc1Contract, CheckHasNoSideEffects) {
-  for (const State s : kStates) {
-    SCOPED_TRACE(static_cast<int>(s));
-    Hand judged(options_in(s), true);
-    Hand untouched(options_in(s), true);
-    bring(judged, s);
-    bring(untouched, s);
-    fill(judged, Fields::valid);
-    fill(untouched, Fields::valid);
-    for (const auto& request : speed_requests()) (void)judged.d->check(request);
-    for (const auto& request : program_requests()) (void)judged.d->check(request);
-    std::vector<Completion> none;
-    judged.d->take_completions(none);
-    EXPECT_TRUE(none.empty());
-    const CommonState& a = judged.d->common();
-    const CommonState& b = untouched.d->common();
-    EXPECT_EQ(a.command, b.command);
-    EXPECT_EQ(a.setpoint_rpm, b.setpoint_rpm);
-    EXPECT_EQ(a.running, b.running);
-    EXPECT_EQ(a.ready, b.ready);
-    EXPECT_EQ(judged.d->values(), untouched.d->values());
-    EXPECT_EQ(judged.d->wake_at(), untouched.d->wake_at());
-    // And the line carries the same from here on.
-    for (int i = 0; i < 80; ++i) {
-      judged.step();
-      untouched.step();
-    }
-    EXPECT_EQ(judged.sent, untouched.sent);
-  }
+  auto requests = speed_requests();
+  for (auto& r : program_requests()) requests.push_back(std::move(r));
+  test::expect_check_has_no_side_effects(states(/*programmed=*/true), requests, /*turns=*/80);
 }
 
 }  // namespace

@@ -13,7 +13,7 @@ namespace drivegate::fdc1 {
 namespace {
 
 TEST(Fdc1Driver, TraitsFollowTheOptions) {
-  Bench b(test::OptionText{{"slave_mode", "true"}, {"stale_ms", "3000"}, {"confirm_ms", "8000"}});
+  Bench b({.options = {{"slave_mode", "true"}, {"stale_ms", "3000"}, {"confirm_ms", "8000"}}});
   const DriverTraits t = b.drive->driver().traits();
   EXPECT_EQ(t.comm_timeout, 3000ms);
   EXPECT_EQ(t.write_timeout, 9000ms);  // outlasts confirm_ms: the driver answers first
@@ -31,11 +31,11 @@ TEST(Fdc1Driver, StartUpWaitsForTheStreamThenAssertsStopAtOnce) {
   ASSERT_EQ(b.rig.sent().size(), 1u);
   EXPECT_EQ(b.rig.sent()[0].bytes, kStopFrame);
   ASSERT_FALSE(b.rig.answers().empty());
-  const TimePoint first_status = b.rig.answers()[0].at + wire(kStatusSize);
+  const TimePoint first_status = b.rig.answers()[0].at + b.on_wire(kStatusSize);
   EXPECT_GE(b.rig.sent()[0].at, first_status);
   EXPECT_LE(b.rig.sent()[0].at - first_status, 1ms);  // the engine's shortest idle wait
   EXPECT_EQ(b.read("status") & (kOnline | kRunning | kFaulted), kOnline);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.read("setpoint_rpm"), 0u);
   EXPECT_EQ(b.read("motor_on"), 0u);
   EXPECT_EQ(b.read("sent_speed_rpm"), 0u);
@@ -43,14 +43,14 @@ TEST(Fdc1Driver, StartUpWaitsForTheStreamThenAssertsStopAtOnce) {
 }
 
 TEST(Fdc1Driver, OutsideSlaveModeTheLineOnlyMonitors) {
-  Bench b(test::OptionText{});
+  Bench b({.options = {}});
   ASSERT_TRUE(b.heard());
   b.rig.run_for(5s);
   EXPECT_TRUE(b.rig.sent().empty());
   EXPECT_NE(b.read("status") & kOnline, 0u);
   // IN1 / IN2 and the thermostat set the speed: the line cannot run, stop or set it (0x03).
-  EXPECT_EQ(b.write({kRunForward}), Exception::illegal_data_value);
-  EXPECT_EQ(b.write({kStop}), Exception::illegal_data_value);
+  EXPECT_EQ(b.write({cmd::run_forward}), Exception::illegal_data_value);
+  EXPECT_EQ(b.write({cmd::stop}), Exception::illegal_data_value);
   EXPECT_EQ(b.write({2000}, kSetpointRegister), Exception::illegal_data_value);
   EXPECT_TRUE(b.rig.sent().empty());
   // What the controller does on its own is still monitored.
@@ -58,7 +58,7 @@ TEST(Fdc1Driver, OutsideSlaveModeTheLineOnlyMonitors) {
   b.rig.run_for(3s);
   EXPECT_EQ(b.read("speed_rpm"), 3000u);  // normal mode runs at the programmed maximum
   EXPECT_NE(b.read("status") & kRunning, 0u);
-  EXPECT_EQ(b.read("command"), kStop);  // the gateway commanded nothing
+  EXPECT_EQ(b.read("command"), cmd::stop);  // the gateway commanded nothing
 }
 
 TEST(Fdc1Driver, TheRefreshKeepsTheMotorRunningPastTheWatchdog) {
@@ -79,7 +79,7 @@ TEST(Fdc1Driver, TheRefreshKeepsTheMotorRunningPastTheWatchdog) {
 }
 
 TEST(Fdc1Driver, ARefreshEveryFewSecondsOutlastsAShortenedWindow) {
-  Bench b(test::OptionText{{"slave_mode", "true"}, {"refresh_s", "2"}});
+  Bench b({.options = {{"slave_mode", "true"}, {"refresh_s", "2"}}});
   ASSERT_EQ(b.control("window 5"), "ok");
   ASSERT_TRUE(b.run_at(2000));
   b.rig.run_for(20s);
@@ -98,7 +98,7 @@ TEST(Fdc1Driver, TheStreamAsAPlcReadsIt) {
   EXPECT_EQ(b.read("sent_speed_rpm"), 2000u);
   EXPECT_EQ(b.read("alarm_code"), 0u);
   EXPECT_NE(b.read("status") & kRunning, 0u);
-  ASSERT_EQ(b.write({kStop}), Exception::none);
+  ASSERT_EQ(b.write({cmd::stop}), Exception::none);
   ASSERT_EQ(b.control("delay 100"), "ok");  // 100 s until the next start, no alarm
   b.rig.run_for(1s);
   EXPECT_EQ(b.read("motor_on"), 0u);
@@ -147,7 +147,7 @@ TEST(Fdc1Driver, CommLostThenTheStartUpSendsTheOrderInForceAgain) {
   EXPECT_EQ(b.read("status") & kOnline, 0u);
   b.rig.run_for(60s);
   EXPECT_TRUE(b.frames(silent).empty());  // nothing is sent to a controller not heard
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
   b.control("silent off");
   const TimePoint back = b.rig.now();

@@ -1,46 +1,36 @@
-// The descriptor the plugin exports, as the loader, `drivegate demo`, `drivegate regmap` and
-// `drivegate action` read it, and the settings the factories make of the options.
+// The descriptor the plugin exports, with the facts of the document every adapter states
+// (tests/support/descriptor_contract.h), its maintenance action, and the settings the factories
+// make of the options.
 #include <gtest/gtest.h>
 
 #include <string_view>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
+#include "descriptor_contract.h"
 #include "points.h"
 #include "settings.h"
 
 namespace drivegate::fdc1 {
 namespace {
 
-TEST(Fdc1Plugin, Descriptor) {
-  const AdapterDescriptor& a = drivegate_adapter;
-  EXPECT_EQ(a.api_version, kAdapterApiVersion);
-  EXPECT_EQ(std::string_view(a.id), "fdc1");
-  // HARDWARE: 1200 baud, 8 data bits, no parity, 1 stop bit, separate RxD / TxD.
-  EXPECT_EQ(a.line.baud, 1200u);
-  EXPECT_EQ(a.line.parity, Parity::none);
-  EXPECT_EQ(a.line.data_bits, 8);
-  EXPECT_EQ(a.line.stop_bits, 1);
-  EXPECT_FALSE(a.line.echo);
-  // No address in the protocol; it streams, so it is alone on its line.
-  EXPECT_EQ(a.address_min, 0u);
-  EXPECT_EQ(a.address_max, 0u);
-  EXPECT_TRUE(a.streaming);
-  EXPECT_EQ(a.option_count, kOptionSchema.size());
-}
+using test::DescriptorContract;
 
-TEST(Fdc1Plugin, DemoRunsASlaveModeControllerAt2000) {
-  const DemoSetup& demo = drivegate_adapter.demo;
-  ASSERT_EQ(demo.option_count, 1u);
-  EXPECT_EQ(std::string_view(demo.options[0].name), "slave_mode");
-  EXPECT_EQ(std::string_view(demo.options[0].value), "true");
-  EXPECT_EQ(demo.running_rpm, 2000);
-  // The demo's options parse against the schema, and the demo speed is one the driver takes.
-  const Options o = test::options_of(drivegate_adapter, {{"slave_mode", "true"}});
-  EXPECT_TRUE(o.boolean("slave_mode"));
-  EXPECT_GE(demo.running_rpm, kMinRpm);
-  EXPECT_LE(demo.running_rpm, kMaxRpm);
-}
+// HARDWARE: 1200 baud, 8 data bits, no parity, 1 stop bit, separate RxD / TxD. No address in the
+// protocol; it streams, so it is alone on its line. `drivegate demo`: a slave-mode controller at
+// 2000 rpm (INPUT, Programming speed: 1500..3500; the specs README's example range starts at
+// 2000). One maintenance action, `program`.
+const test::DescriptorFacts kFacts{.id = "fdc1",
+                                   .options = kOptionSchema,
+                                   .line = {1200, Parity::none, 8, 1, false},
+                                   .address_min = 0,
+                                   .address_max = 0,
+                                   .default_address = 0,
+                                   .streaming = true,
+                                   .demo_options = {{"slave_mode", "true"}},
+                                   .demo_rpm = 2000,
+                                   .action_count = 1};
+INSTANTIATE_TEST_SUITE_P(Fdc1, DescriptorContract, testing::Values(kFacts));
 
 TEST(Fdc1Plugin, OneMaintenanceActionProgram) {
   ASSERT_EQ(drivegate_adapter.action_count, 1u);
@@ -85,20 +75,14 @@ TEST(Fdc1Plugin, SettingsFromTheOptions) {
   EXPECT_THROW(test::options_of(drivegate_adapter, {{"stale_ms", "999"}}), std::invalid_argument);
 }
 
-TEST(Fdc1Plugin, FactoriesMakeTheDriverAndTheSimulator) {
-  std::string error;
-  DeviceEnv env;
-  env.options = test::options_of(drivegate_adapter);
-  const auto plain = drivegate_adapter.create_driver(env, error);
-  ASSERT_NE(plain, nullptr) << error;
+// The programming points exist only in maintenance mode (or by option: program_action_test.cpp).
+TEST(Fdc1Plugin, MaintenanceModeAddsTheProgrammingPoints) {
+  const auto plain = test::make_driver(drivegate_adapter);
+  ASSERT_NE(plain, nullptr);
   EXPECT_EQ(plain->points().size(), pt::prog_min_rpm);
-  env.maintenance = true;
-  const auto maintenance = drivegate_adapter.create_driver(env, error);
-  ASSERT_NE(maintenance, nullptr) << error;
+  const auto maintenance = test::make_driver(drivegate_adapter, {.maintenance = true});
+  ASSERT_NE(maintenance, nullptr);
   EXPECT_EQ(maintenance->points().size(), pt::count);
-  SimEnv senv;
-  senv.options = env.options;
-  EXPECT_NE(drivegate_adapter.create_simulator(senv, error), nullptr) << error;
 }
 
 }  // namespace

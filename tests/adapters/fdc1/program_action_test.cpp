@@ -31,7 +31,7 @@ const MaintenanceAction& program_action() {
 
 struct Maintenance : Bench {
   explicit Maintenance(Millis budget = Millis(1000))
-      : Bench(test::OptionText{}, /*maintenance=*/true, budget) {}
+      : Bench({.options = {}, .budget = budget, .maintenance = true}) {}
 
   // `drivegate action`: each parameter, then the commit; the first failure ends it.
   std::optional<Exception> action(const std::vector<std::pair<std::string, double>>& params) {
@@ -42,8 +42,8 @@ struct Maintenance : Bench {
     }
     return write_point(a.commit_point, 1);
   }
-  std::string message() { return text(program_action().message_point); }
-  ProgStatus status() { return static_cast<ProgStatus>(read("prog_status")); }
+  std::string message() { return read_text(program_action().message_point); }
+  ProgStatus program_status() { return static_cast<ProgStatus>(read("prog_status")); }
 };
 
 TEST(Fdc1ProgramAction, TheActionFitsItsPoints) {
@@ -78,7 +78,7 @@ TEST(Fdc1ProgramAction, TheActionFitsItsPoints) {
 TEST(Fdc1ProgramAction, OnlyInMaintenanceOrByOption) {
   Bench plain;
   EXPECT_EQ(plain.drive->map().find("prog_commit"), nullptr);
-  Bench allowed(test::OptionText{{"allow_nv_programming", "true"}});
+  Bench allowed({.options = {{"allow_nv_programming", "true"}}});
   EXPECT_NE(allowed.drive->map().find("prog_commit"), nullptr);
 }
 
@@ -86,25 +86,25 @@ TEST(Fdc1ProgramAction, AValidProgramIsSentAndConfirmedByTheEcho) {
   Maintenance m;
   ASSERT_TRUE(m.heard());
   EXPECT_TRUE(m.rig.sent().empty());  // outside slave mode nothing else is ever sent
-  EXPECT_EQ(m.status(), ProgStatus::invalid);
+  EXPECT_EQ(m.program_status(), ProgStatus::invalid);
   EXPECT_EQ(m.message(), "prog_min_rpm is not set");
   for (const auto& [key, value] : kStandard) {
     ASSERT_EQ(m.write_point("prog_" + key, value), Exception::none) << key;
   }
   EXPECT_TRUE(m.rig.sent().empty());  // the fields are only stored
-  EXPECT_EQ(m.status(), ProgStatus::idle);
+  EXPECT_EQ(m.program_status(), ProgStatus::idle);
   EXPECT_EQ(m.message(), "");
   const TimePoint asked = m.rig.now();
   const auto commit = m.start_point_write("prog_commit", {1});
   m.rig.run_for(1ms);
-  EXPECT_EQ(m.status(), ProgStatus::pending);
+  EXPECT_EQ(m.program_status(), ProgStatus::pending);
   EXPECT_EQ(m.rig.wait(commit), Exception::none);
   ASSERT_EQ(m.rig.sent().size(), 1u);
   EXPECT_EQ(m.rig.sent()[0].bytes, kProgramStandard);
   EXPECT_EQ(m.rig.sent()[0].at, asked);
   // Confirmed by the echo: 22 bytes out, the controller's turnaround, 22 bytes back.
-  EXPECT_EQ(m.rig.now() - asked, wire(22) + m.rig.line().turnaround + wire(22));
-  EXPECT_EQ(m.status(), ProgStatus::ok);
+  EXPECT_EQ(m.rig.now() - asked, m.on_wire(22) + m.rig.line().turnaround + m.on_wire(22));
+  EXPECT_EQ(m.program_status(), ProgStatus::ok);
   EXPECT_EQ(m.message(), "");
   EXPECT_TRUE(m.sim_has("programs=1"));
   EXPECT_TRUE(m.sim_has("mode=2"));  // the controller applied the stored mode
@@ -128,7 +128,7 @@ TEST(Fdc1ProgramAction, AViolatedLimitIsInvalidNamedAndNothingIsSent) {
   EXPECT_EQ(m.action(params), Exception::illegal_data_value);
   // What `drivegate action` prints after "value refused (0x03)".
   EXPECT_EQ(m.message(), "cut_out_12v 13.00 V must be below cut_in_12v 12.50 V");
-  EXPECT_EQ(m.status(), ProgStatus::invalid);
+  EXPECT_EQ(m.program_status(), ProgStatus::invalid);
   m.rig.run_for(3s);
   EXPECT_TRUE(m.rig.sent().empty());
   EXPECT_TRUE(m.sim_has("programs=0"));
@@ -182,11 +182,11 @@ TEST(Fdc1ProgramAction, AMismatchedEchoIsRefused) {
   ASSERT_TRUE(m.heard());
   m.control("mangle 1");
   EXPECT_EQ(m.action(kStandard), Exception::server_device_failure);
-  EXPECT_EQ(m.status(), ProgStatus::refused);
+  EXPECT_EQ(m.program_status(), ProgStatus::refused);
   EXPECT_EQ(m.message(), "the controller's echo differs from the frame sent");
   // Committed again as it is, it goes again.
   EXPECT_EQ(m.write_point("prog_commit", 1), Exception::none);
-  EXPECT_EQ(m.status(), ProgStatus::ok);
+  EXPECT_EQ(m.program_status(), ProgStatus::ok);
 }
 
 // The controller does not hear the frame (`deaf on`) and keeps streaming: no echo.
@@ -198,8 +198,8 @@ TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
     const TimePoint asked = m.rig.now();
     EXPECT_EQ(m.action(kStandard), Exception::gateway_target_failed);
     EXPECT_EQ(m.times_of(kProgramStandard), std::vector<TimePoint>{asked});
-    EXPECT_EQ(m.rig.now() - asked, kEchoTimeout + std::chrono::floor<Millis>(wire(22)));
-    EXPECT_EQ(m.status(), ProgStatus::no_response);
+    EXPECT_EQ(m.rig.now() - asked, kEchoTimeout + std::chrono::floor<Millis>(m.on_wire(22)));
+    EXPECT_EQ(m.program_status(), ProgStatus::no_response);
     EXPECT_EQ(m.message(), "the controller did not echo the programming frame");
   }
   {
@@ -211,7 +211,7 @@ TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
     const auto sends = m.times_of(kProgramStandard);
     ASSERT_EQ(sends.size(), kEchoAttempts);
     EXPECT_EQ(sends[0], asked);
-    EXPECT_EQ(sends[1] - sends[0], kEchoTimeout + std::chrono::floor<Millis>(wire(22)));
+    EXPECT_EQ(sends[1] - sends[0], kEchoTimeout + std::chrono::floor<Millis>(m.on_wire(22)));
     EXPECT_EQ(m.read("retries"), 1u);
   }
 }

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "adapter_under_test.h"
+#include "adapter_factories.h"
 #include "bench.h"
 #include "codec.h"
 
@@ -13,13 +13,9 @@ namespace drivegate::fdc1 {
 namespace {
 
 struct SimRig {
-  explicit SimRig(bool slave = true) {
-    SimEnv env;
-    env.options = test::options_of(drivegate_adapter, {{"slave_mode", slave ? "true" : "false"}});
-    std::string error;
-    sim = drivegate_adapter.create_simulator(env, error);
-    EXPECT_NE(sim, nullptr) << error;
-  }
+  explicit SimRig(bool slave = true)
+      : sim(test::make_simulator(drivegate_adapter, 0,
+                                 {{"slave_mode", slave ? "true" : "false"}})) {}
   // Ticks every 10 ms for `span`, collecting what the simulator sends.
   Bytes run(Millis span) {
     Bytes out;

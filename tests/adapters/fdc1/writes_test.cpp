@@ -13,26 +13,23 @@ TEST(Fdc1Writes, ASetpointWhileStoppedIsStoredThenTheRunIsInForceOnceTheMotorRun
   Bench b;
   ASSERT_TRUE(b.heard());
   const auto before = b.rig.sent().size();
-  // Stored without traffic: settled as soon as it is written.
-  EXPECT_EQ(b.start_write({2000}, kSetpointRegister)->result, Exception::none);
-  EXPECT_EQ(b.rig.sent().size(), before);
-  EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
+  EXPECT_TRUE(b.stores_without_traffic(2000));
   const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({kRunForward});
+  const auto run = b.start_write({cmd::run_forward});
   EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), kStop);  // not in force before the stream shows it
+  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the stream shows it
   EXPECT_NE(b.read("status") & kCommandPending, 0u);
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.sent().size() > before; }, 100ms));
   EXPECT_EQ(b.rig.sent().back().bytes, kRun2000);
   EXPECT_EQ(b.rig.sent().back().at, asked);  // at once: the line was free
-  EXPECT_EQ(b.read("command"), kStop);       // on the wire, never acknowledged: not yet
+  EXPECT_EQ(b.read("command"), cmd::stop);   // on the wire, never acknowledged: not yet
   EXPECT_EQ(b.rig.wait(run), Exception::none);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_EQ(b.read("motor_on"), 1u);  // the status that confirmed it
   EXPECT_NE(b.read("status") & kRunning, 0u);
   EXPECT_EQ(b.read("status") & kCommandPending, 0u);
   // Confirmed by the first ON frame after the run frame arrived (67 ms on the wire).
-  EXPECT_LE(b.rig.now() - asked, wire(8) + kStreamPeriod);
+  EXPECT_LE(b.rig.now() - asked, b.on_wire(8) + kStreamPeriod);
   b.rig.run_for(2s);
   EXPECT_EQ(b.read("speed_rpm"), 2000u);
   EXPECT_EQ(b.read("sent_speed_rpm"), 2000u);
@@ -42,10 +39,10 @@ TEST(Fdc1Writes, SetpointAndRunInOneRequestRunAtThatSpeed) {
   Bench b;
   ASSERT_TRUE(b.heard());
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kRunForward, 2500}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward, 2500}), Exception::none);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2500});
   EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_TRUE(b.sim_has("min=2500"));
 }
 
@@ -63,18 +60,18 @@ TEST(Fdc1Writes, ASetpointWhileRunningIsInForceOnceTheStreamShowsTheSpeed) {
   EXPECT_EQ(b.rig.wait(w), Exception::none);
   EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
   EXPECT_GE(b.read("speed_rpm"), 2900u);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
 TEST(Fdc1Writes, StopAndQuickStopSendSpeedZero) {
-  for (const std::uint16_t c : {kStop, kQuickStop}) {
+  for (const std::uint16_t c : {cmd::stop, cmd::quick_stop}) {
     SCOPED_TRACE(c);
     Bench b;
     ASSERT_TRUE(b.run_at(2500));
     const TimePoint asked = b.rig.now();
     const auto w = b.start_write({c});
     b.rig.run_for(1ms);
-    EXPECT_EQ(b.read("command"), kRunForward);  // the motor still turns
+    EXPECT_EQ(b.read("command"), cmd::run_forward);  // the motor still turns
     EXPECT_EQ(b.rig.wait(w), Exception::none);
     EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});  // one stop: speed 0
     EXPECT_EQ(b.read("command"), c);
@@ -89,32 +86,32 @@ TEST(Fdc1Writes, WritesTheControllerCannotDoChangeNothing) {
   ASSERT_TRUE(b.heard());
   const auto before = b.rig.sent().size();
   // One direction, and no fault reset in the protocol.
-  EXPECT_EQ(b.start_write({kRunReverse})->result, Exception::illegal_data_value);
-  EXPECT_EQ(b.start_write({kResetFault})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::run_reverse})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::reset_fault})->result, Exception::illegal_data_value);
   // INPUT, Programming speed: 1500..3500 rpm.
   for (const std::uint16_t rpm : {std::uint16_t{1499}, std::uint16_t{3501}, std::uint16_t{0}}) {
     EXPECT_EQ(b.start_write({rpm}, kSetpointRegister)->result, Exception::illegal_data_value)
         << rpm;
   }
   // No setpoint yet: nothing to run at.
-  EXPECT_EQ(b.start_write({kRunForward})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Exception::server_device_failure);
   b.rig.run_for(1s);
   EXPECT_EQ(b.rig.sent().size(), before);
   EXPECT_EQ(b.read("setpoint_rpm"), 0u);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
 // A PLC that starts the compressor as the gateway comes up is not told no: the run waits for the
 // stream, goes out as the start-up frame, and is confirmed from the stream.
 TEST(Fdc1Writes, ARunBeforeTheControllerIsHeardWaitsForTheStream) {
   Bench b;
-  const auto w = b.start_write({kRunForward, 2000});
+  const auto w = b.start_write({cmd::run_forward, 2000});
   EXPECT_FALSE(w->settled());
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // stored: nothing was running
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.rig.wait(w), Exception::none);
   EXPECT_EQ(b.frames(), std::vector<Bytes>{kRun2000});  // the start-up frame is the run
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
 // ...and a controller never heard answers 0x0B once it is declared lost (stale_ms), not a
@@ -124,10 +121,10 @@ TEST(Fdc1Writes, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
   Bench b;
   b.control("silent on");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kRunForward, 2000}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Exception::gateway_target_failed);
   EXPECT_GE(b.rig.now() - asked, 2000ms);  // stale_ms
   EXPECT_TRUE(b.rig.sent().empty());
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.read("status") & kRunning, 0u);
   b.rig.run_for(1h);
   b.control("silent off");
@@ -142,12 +139,12 @@ TEST(Fdc1Writes, ANewCommandSupersedesOneNotYetSent) {
   ASSERT_TRUE(b.heard());
   ASSERT_EQ(b.write({2000}, kSetpointRegister), Exception::none);
   const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({kRunForward});  // from one client...
-  const auto stop = b.start_write({kStop});       // ...and before it reached the wire, another
+  const auto run = b.start_write({cmd::run_forward});  // from one client...
+  const auto stop = b.start_write({cmd::stop});        // ...and before it reached the wire, another
   EXPECT_EQ(b.rig.wait(run), Exception::gateway_target_failed);
   EXPECT_EQ(b.rig.wait(stop), Exception::none);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});  // the compressor never started
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
 // Two clients, the same direction: one frame carries both, and both are in force with it.
@@ -156,7 +153,7 @@ TEST(Fdc1Writes, ASpeedChangeAndARunFromAnotherClientWaitTogether) {
   ASSERT_TRUE(b.run_at(2000));
   const TimePoint asked = b.rig.now();
   const auto faster = b.start_write({3000}, kSetpointRegister);
-  const auto run = b.start_write({kRunForward});
+  const auto run = b.start_write({cmd::run_forward});
   EXPECT_EQ(b.rig.wait(run), Exception::none);
   EXPECT_EQ(b.rig.wait(faster), Exception::none);
   EXPECT_GE(b.read("speed_rpm"), 2900u);  // both confirmed at the new speed
@@ -182,17 +179,17 @@ TEST(Fdc1Writes, ASetpointWhileAStopIsOnItsWayIsStoredWithIt) {
   Bench b;
   ASSERT_TRUE(b.run_at(2000));
   const TimePoint asked = b.rig.now();
-  const auto stop = b.start_write({kStop});
+  const auto stop = b.start_write({cmd::stop});
   const auto setpoint = b.start_write({2500}, kSetpointRegister);
   EXPECT_FALSE(setpoint->settled());
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // the motor still runs at 2000
   EXPECT_EQ(b.rig.wait(setpoint), Exception::none);
   EXPECT_EQ(b.rig.wait(stop), Exception::none);
   EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});
   // The next run uses it.
-  EXPECT_EQ(b.write({kRunForward}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
   EXPECT_EQ(b.last(), kRun2500);
 }
 
@@ -202,14 +199,14 @@ TEST(Fdc1Writes, SetpointAndRunTogetherWhileRunningTakeOneFrame) {
   Bench b;
   ASSERT_TRUE(b.run_at(2000));
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kRunForward, 2500}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward, 2500}), Exception::none);
   EXPECT_NEAR(b.read("speed_rpm"), 2500, 100);  // confirmed at the new speed, not before
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2500});
   EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
   // Rewritten every 100 ms for a second, it costs the line nothing more.
   const TimePoint cyclic = b.rig.now();
   for (int i = 0; i < 10; ++i) {
-    EXPECT_EQ(b.write({kRunForward, 2500}), Exception::none);
+    EXPECT_EQ(b.write({cmd::run_forward, 2500}), Exception::none);
     b.rig.run_for(100ms);
   }
   EXPECT_TRUE(b.frames(cyclic).empty());
@@ -222,14 +219,14 @@ TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
   ASSERT_TRUE(b.run_at(2000));
   const TimePoint asked = b.rig.now();
   // Setpoint 3000 rpm with run_reverse: the setpoint alone would go on the line.
-  EXPECT_EQ(b.start_write({kRunReverse, 3000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::run_reverse, 3000})->result, Exception::illegal_data_value);
   // A valid run with a setpoint outside 1500..3500.
-  EXPECT_EQ(b.start_write({kRunForward, 1000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::run_forward, 1000})->result, Exception::illegal_data_value);
   EXPECT_EQ(b.read("status") & kCommandPending, 0u);
   b.rig.run_for(1s);
   EXPECT_TRUE(b.frames(asked).empty());  // no frame at all
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_TRUE(b.sim_has("min=2000"));
 
   // Stopped, without a setpoint: the run is refused, and the setpoint before it in the same
@@ -237,7 +234,7 @@ TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
   Bench fresh;
   ASSERT_TRUE(fresh.heard());
   const auto before = fresh.rig.sent().size();
-  EXPECT_EQ(fresh.start_write({kRunReverse, 2000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(fresh.start_write({cmd::run_reverse, 2000})->result, Exception::illegal_data_value);
   EXPECT_EQ(fresh.read("setpoint_rpm"), 0u);
   EXPECT_EQ(fresh.rig.sent().size(), before);
 }
@@ -254,7 +251,7 @@ TEST(Fdc1Writes, ASetpointWhileRunningThatTheControllerDoesNotTakeLeavesTheOldOn
   EXPECT_EQ(b.rig.wait(w), Exception::gateway_target_failed);
   EXPECT_EQ(b.rig.now() - asked, 5000ms);  // confirm_ms, the driver's own deadline
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   // The controller is told what is in force again at once, should it have heard the 3000.
   b.rig.run_for(10ms);
   EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kRun3000, kRun2000}));
@@ -277,7 +274,7 @@ TEST(Fdc1Writes, ASpeedChangeDuringAnAlarmIsRefusedAndTheOldOneStays) {
   EXPECT_EQ(b.write({3000}, kSetpointRegister), Exception::server_device_failure);
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
   // The run stays in force: the controller retries by itself once the alarm clears.
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   b.rig.run_for(10ms);
   EXPECT_EQ(b.last(), kRun2000);  // and is what the controller is told again, at once
   b.control("clear");
@@ -291,8 +288,8 @@ TEST(Fdc1Writes, ARunTheControllerRefusesIsTheExceptionAndStopStaysInForce) {
   ASSERT_EQ(b.control("fault battery"), "ok");
   ASSERT_TRUE(b.next_status());
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kRunForward, 2000}), Exception::server_device_failure);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Exception::server_device_failure);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.read("status") & kRunning, 0u);
   EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::supply_fault));
   // The refused run must not start the compressor when the alarm clears: stop goes out at once.
@@ -309,8 +306,8 @@ TEST(Fdc1Writes, AStopTheStreamNeverShowsIsNoResponseAndTheRunStaysInForce) {
   ASSERT_TRUE(b.run_at(2000));
   ASSERT_EQ(b.control("deaf on"), "ok");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kStop}), Exception::gateway_target_failed);
-  EXPECT_EQ(b.read("command"), kRunForward);  // what the controller does, and is told again
+  EXPECT_EQ(b.write({cmd::stop}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);  // what the controller does, and is told again
   EXPECT_NE(b.read("status") & kRunning, 0u);
   b.rig.run_for(10ms);
   EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kStopFrame, kRun2000}));
@@ -322,9 +319,9 @@ TEST(Fdc1Writes, ARunNotShownWithinConfirmMsIsNoResponseAndIsUndone) {
   ASSERT_TRUE(b.heard());
   ASSERT_EQ(b.control("delay 10"), "ok");  // 10 s until the next start, no alarm
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kRunForward, 2000}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Exception::gateway_target_failed);
   EXPECT_EQ(b.rig.now() - asked, 5000ms);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   b.rig.run_for(10ms);
   EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kRun2000, kStopFrame}));
   // When the restart delay ends, the compressor the PLC was told did not start stays off.
@@ -342,7 +339,7 @@ TEST(Fdc1Writes, CommLostFailsTheWriteAndTheStartUpRestoresWhatIsInForce) {
   EXPECT_EQ(b.write({2500}, kSetpointRegister), Exception::gateway_target_failed);
   EXPECT_NE(b.read("status") & kCommLost, 0u);
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_TRUE(b.sim_has("min=2500"));  // it did take it, unheard
   b.control("silent off");
   const TimePoint back = b.rig.now();

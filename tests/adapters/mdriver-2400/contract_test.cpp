@@ -4,14 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <memory>
-#include <optional>
-#include <string>
+#include <utility>
 #include <vector>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
 #include "codec.h"
 #include "driver.h"
+#include "driver_by_hand.h"
+#include "write_contract.h"
 
 namespace drivegate::mdriver {
 namespace {
@@ -20,15 +21,8 @@ using namespace std::chrono_literals;
 
 // A driver from the adapter's own factory, with the default options, and the drive's side played
 // by hand: every run command echoed with the error code the drive holds.
-struct Hand {
-  Hand() {
-    DeviceEnv env;
-    env.address = 1;
-    env.options = test::options_of(drivegate_adapter);
-    std::string error;
-    d = drivegate_adapter.create_driver(env, error);
-    EXPECT_NE(d, nullptr) << error;
-  }
+struct Hand : test::DriverByHand {
+  Hand() : DriverByHand(test::make_driver(drivegate_adapter, {.address = 1})) {}
 
   // Answers the exchange the driver wants now; false when it wants none.
   bool exchange() {
@@ -43,24 +37,18 @@ struct Hand {
     EXPECT_EQ(d->on_receive(reply, now).kind, RxKind::reply);
     return true;
   }
+  bool turn() override {
+    if (!exchange()) now += 100ms;
+    return true;
+  }
   // The check, then the first status.
   void ready() {
     exchange();
     exchange();
     ASSERT_TRUE(d->common().ready);
   }
-  WriteStatus apply(const WriteOp& op) { return d->apply(op, ++ticket, now); }
-  std::vector<Completion> completions() {
-    std::vector<Completion> out;
-    d->take_completions(out);
-    return out;
-  }
 
-  std::unique_ptr<Driver> d;
-  TimePoint now = TimePoint{} + 1h;
   std::uint8_t r7 = 0;  // the error code of the drive's replies
-  Ticket ticket = 0;
-  std::vector<Bytes> sent;
 };
 
 TEST(MdriverContract, VerdictsOnWhatComesBack) {
@@ -117,86 +105,29 @@ void bring(Hand& h, State s) {
   ASSERT_FALSE(h.d->common().faults.empty());
 }
 
-std::vector<std::vector<WriteOp>> requests() {
-  std::vector<std::vector<WriteOp>> out;
-  const std::optional<std::int32_t> setpoints[] = {std::nullopt, 503, 600, 1149, 2857};
-  for (const auto& rpm : setpoints) {
-    std::vector<WriteOp> base;
-    if (rpm) base.push_back(WriteOp::of_setpoint(*rpm));
-    if (!base.empty()) out.push_back(base);
-    for (const Command c : kAllCommands) {
-      auto r = base;
-      r.push_back(WriteOp::of_command(c));
-      out.push_back(r);
-    }
-  }
+std::vector<test::WriteState> states() {
+  return test::write_states<Hand>({{State::not_ready, "not ready"},
+                                   {State::stopped, "stopped"},
+                                   {State::stored, "setpoint stored"},
+                                   {State::running, "running"},
+                                   {State::tripped, "tripped"}},
+                                  bring);
+}
+
+std::vector<test::Request> requests() {
+  auto out = test::command_requests({503, 600, 1149, 2857});
   out.push_back({WriteOp::of_point(0, Value{std::int64_t{1}})});
   return out;
 }
 
-WriteCheck as_check(WriteStatus s) {
-  return s == WriteStatus::invalid_value ? WriteCheck::invalid_value : WriteCheck::refused;
-}
-
+// Every part the drive is sent, it takes: a refusal is check()'s to give.
 TEST(MdriverContract, CheckAcceptsARequestExactlyWhenApplyTakesItsPartsInOrder) {
-  for (const State s :
-       {State::not_ready, State::stopped, State::stored, State::running, State::tripped}) {
-    for (const auto& request : requests()) {
-      SCOPED_TRACE(testing::Message()
-                   << "state " << static_cast<int>(s) << ", request of " << request.size()
-                   << " parts, last " << static_cast<int>(request.back().target) << "/"
-                   << static_cast<int>(request.back().command) << "/" << request.back().rpm);
-      Hand h;
-      bring(h, s);
-      const WriteCheck judged = h.d->check(request);
-      // Applied as the gateway applies it: a part once the one before it settled.
-      WriteCheck applied = WriteCheck::ok;
-      for (const WriteOp& op : request) {
-        const WriteStatus st = h.apply(op);
-        if (st == WriteStatus::invalid_value || st == WriteStatus::refused) {
-          applied = as_check(st);
-          break;
-        }
-        if (st == WriteStatus::pending) {
-          ASSERT_TRUE(h.exchange());
-          const auto c = h.completions();
-          ASSERT_EQ(c.size(), 1u);
-          ASSERT_EQ(c[0].ticket, h.ticket);
-          ASSERT_EQ(c[0].result, WriteResult::ok);
-        }
-      }
-      EXPECT_EQ(judged, applied);
-    }
-  }
+  const auto tally = test::expect_check_is_apply(states(), requests());
+  EXPECT_TRUE(tally.ended_by_device.empty());
 }
 
 TEST(MdriverContract, CheckHasNoSideEffects) {
-  for (const State s :
-       {State::not_ready, State::stopped, State::stored, State::running, State::tripped}) {
-    SCOPED_TRACE(static_cast<int>(s));
-    Hand judged;
-    Hand untouched;
-    bring(judged, s);
-    bring(untouched, s);
-    for (const auto& request : requests()) (void)judged.d->check(request);
-    EXPECT_TRUE(judged.completions().empty());
-    const CommonState& a = judged.d->common();
-    const CommonState& b = untouched.d->common();
-    EXPECT_EQ(a.command, b.command);
-    EXPECT_EQ(a.setpoint_rpm, b.setpoint_rpm);
-    EXPECT_EQ(a.running, b.running);
-    EXPECT_EQ(a.ready, b.ready);
-    EXPECT_EQ(judged.d->values(), untouched.d->values());
-    EXPECT_EQ(judged.d->wake_at(), untouched.d->wake_at());
-    // And the line carries the same from here on.
-    for (int i = 0; i < 3; ++i) {
-      judged.now += 2s;
-      untouched.now += 2s;
-      judged.exchange();
-      untouched.exchange();
-    }
-    EXPECT_EQ(judged.sent, untouched.sent);
-  }
+  test::expect_check_has_no_side_effects(states(), requests(), /*turns=*/60);
 }
 
 TEST(MdriverContract, AWriteNotConfirmedInTimeFailsAtTheDriversOwnDeadline) {

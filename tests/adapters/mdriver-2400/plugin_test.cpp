@@ -1,37 +1,31 @@
-// The descriptor the plugin exports, as the loader, `drivegate demo` and `drivegate regmap` read
-// it.
+// The descriptor the plugin exports, with the facts of the document every adapter states
+// (tests/support/descriptor_contract.h), and the settings the factories make of the options.
 #include <gtest/gtest.h>
 
 #include <string_view>
 
 #include "adapter_under_test.h"
 #include "bus_rig.h"
+#include "descriptor_contract.h"
 #include "settings.h"
 
 namespace drivegate::mdriver {
 namespace {
 
-TEST(MdriverPlugin, Descriptor) {
-  const AdapterDescriptor& a = drivegate_adapter;
-  EXPECT_EQ(a.api_version, kAdapterApiVersion);
-  EXPECT_EQ(std::string_view(a.id), "mdriver-2400");
-  // Section 1: 2400 bps, 8N1, full duplex (no echo).
-  EXPECT_EQ(a.line.baud, 2400u);
-  EXPECT_EQ(a.line.parity, Parity::none);
-  EXPECT_EQ(a.line.data_bits, 8);
-  EXPECT_EQ(a.line.stop_bits, 1);
-  EXPECT_FALSE(a.line.echo);
-  EXPECT_EQ(a.address_min, 0u);
-  EXPECT_EQ(a.address_max, 255u);
-  EXPECT_EQ(a.default_address, 1u);
-  EXPECT_FALSE(a.streaming);
-  EXPECT_EQ(a.option_count, kOptionSchema.size());
-  // `drivegate demo`: default options, running at 1149 rpm (code 0x40); no maintenance actions.
-  EXPECT_EQ(a.demo.option_count, 0u);
-  EXPECT_EQ(a.demo.running_rpm, 1149);
-  EXPECT_EQ(a.action_count, 0u);
-  EXPECT_EQ(a.actions, nullptr);
-}
+using test::DescriptorContract;
+
+// Section 1: 2400 bps, 8N1, full duplex (no echo); one-byte addresses. `drivegate demo`: default
+// options, running at 1149 rpm (code 0x40); no maintenance actions.
+const test::DescriptorFacts kFacts{.id = "mdriver-2400",
+                                   .options = kOptionSchema,
+                                   .line = {2400, Parity::none, 8, 1, false},
+                                   .address_min = 0,
+                                   .address_max = 255,
+                                   .default_address = 1,
+                                   .streaming = false,
+                                   .demo_options = {},
+                                   .demo_rpm = 1149};
+INSTANTIATE_TEST_SUITE_P(Mdriver, DescriptorContract, testing::Values(kFacts));
 
 TEST(MdriverPlugin, SettingsFromTheOptions) {
   std::string error;

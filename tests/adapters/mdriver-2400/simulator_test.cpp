@@ -5,8 +5,8 @@
 
 #include <memory>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
 #include "codec.h"
 
 namespace drivegate::mdriver {
@@ -19,19 +19,9 @@ const Bytes kCheck{0x00, 0x01, 0x00, 0x03, 0x01, 0x12, 0x00, 0x06, 0x38};
 const Bytes kCheckEcho{0x01, 0x00, 0x00, 0x03, 0x01, 0x12, 0x00, 0x06, 0x38};
 const Bytes kCheckZeros{0x01, 0x00, 0x00, 0x03, 0x00, 0x00, 0x00, 0x00, 0x51};
 
-// The simulator the adapter's own factory makes, default options, at address 01.
-std::unique_ptr<Simulator> make_simulator() {
-  SimEnv env;
-  env.address = 0x01;
-  env.options = test::options_of(drivegate_adapter);
-  std::string error;
-  auto sim = drivegate_adapter.create_simulator(env, error);
-  EXPECT_NE(sim, nullptr) << error;
-  return sim;
-}
-
 struct SimRig {
-  std::unique_ptr<Simulator> made = make_simulator();
+  // The simulator the adapter's own factory makes, default options, at address 01.
+  std::unique_ptr<Simulator> made = test::make_simulator(drivegate_adapter, 0x01);
   Simulator& sim = *made;
   TimePoint now = t0;
   void tick(Millis span) {

@@ -12,22 +12,18 @@ namespace {
 TEST(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
   Bench b;
   ASSERT_TRUE(b.ready());
-  const auto before = b.rig.sent().size();
-  // Stored without traffic: settled as soon as it is written.
-  EXPECT_EQ(b.start_write({1149}, kSetpointRegister)->result, Exception::none);
-  EXPECT_EQ(b.rig.sent().size(), before);
-  EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
+  EXPECT_TRUE(b.stores_without_traffic(1149));
   const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({kRunForward});
+  const auto run = b.start_write({cmd::run_forward});
   EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), kStop);  // not in force before the drive confirmed it
+  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the drive confirmed it
   EXPECT_NE(b.read("status") & kCommandPending, 0u);
   EXPECT_EQ(b.rig.wait(run), Exception::none);
   // At once (the line was idle), not at the next poll.
   const auto runs = b.times_of(kRun1149, asked);
   ASSERT_EQ(runs.size(), 1u);
   EXPECT_LE(runs[0] - asked, kInterFrameGap);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_NE(b.read("status") & kRunning, 0u);
   b.rig.run_for(4s);  // 0x1C..0x40 at 20 codes a second
   EXPECT_EQ(b.read("speed_rpm"), 1149u);
@@ -39,10 +35,10 @@ TEST(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
 }
 
 TEST(MdriverWrites, ContinuousModeSendsFF) {
-  Bench b(test::OptionText{{"mode", "continuous"}});
+  Bench b({.options = {{"mode", "continuous"}}});
   ASSERT_TRUE(b.ready());
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kRunForward, 1149}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward, 1149}), Exception::none);
   EXPECT_EQ(b.frames(asked).at(0), kRun1149Continuous);
 }
 
@@ -57,7 +53,7 @@ TEST(MdriverWrites, ASetpointWhileRunningIsInForceOnceTheDriveEchoedIt) {
   EXPECT_EQ(b.rig.wait(w), Exception::none);
   EXPECT_EQ(b.read("setpoint_rpm"), 504u);
   EXPECT_EQ(b.read("target_code"), 0x1Cu);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   b.rig.run_for(1s);
   EXPECT_EQ(b.last(), kRun504);
 }
@@ -82,14 +78,15 @@ TEST(MdriverWrites, StopQuickStopAndReverse) {
   Bench b;
   ASSERT_TRUE(b.running_at_1149());
   const auto before = b.rig.sent().size();
-  EXPECT_EQ(b.start_write({kRunReverse})->result, Exception::illegal_data_value);  // one direction
+  EXPECT_EQ(b.start_write({cmd::run_reverse})->result,
+            Exception::illegal_data_value);  // one direction
   EXPECT_EQ(b.rig.sent().size(), before);
   TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kQuickStop}), Exception::none);
+  EXPECT_EQ(b.write({cmd::quick_stop}), Exception::none);
   EXPECT_EQ(b.frames(asked).at(0), kRunStop);  // the protocol has one stop
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   asked = b.rig.now();
-  EXPECT_EQ(b.write({kStop}), Exception::none);
+  EXPECT_EQ(b.write({cmd::stop}), Exception::none);
   EXPECT_EQ(b.frames(asked).at(0), kRunStop);
   b.rig.run_for(3s);
   EXPECT_EQ(b.last(), kRunStop);
@@ -101,7 +98,7 @@ TEST(MdriverWrites, StopQuickStopAndReverse) {
 
 TEST(MdriverWrites, CommandsAreRefusedBeforeTheCheckAndARunWithoutSetpoint) {
   Bench b;
-  EXPECT_EQ(b.start_write({kStop})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.start_write({cmd::stop})->result, Exception::server_device_failure);
   EXPECT_EQ(b.start_write({1149}, kSetpointRegister)->result, Exception::none);  // stored
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
   EXPECT_TRUE(b.rig.sent().empty());
@@ -109,9 +106,9 @@ TEST(MdriverWrites, CommandsAreRefusedBeforeTheCheckAndARunWithoutSetpoint) {
   Bench fresh;
   ASSERT_TRUE(fresh.ready());
   const auto before = fresh.rig.sent().size();
-  EXPECT_EQ(fresh.start_write({kRunForward})->result, Exception::server_device_failure);
+  EXPECT_EQ(fresh.start_write({cmd::run_forward})->result, Exception::server_device_failure);
   EXPECT_EQ(fresh.rig.sent().size(), before);
-  EXPECT_EQ(fresh.read("command"), kStop);
+  EXPECT_EQ(fresh.read("command"), cmd::stop);
 }
 
 TEST(MdriverWrites, ACommandWrittenOverAnotherNotYetSentSupersedesIt) {
@@ -119,12 +116,12 @@ TEST(MdriverWrites, ACommandWrittenOverAnotherNotYetSentSupersedesIt) {
   ASSERT_TRUE(b.ready());
   ASSERT_EQ(b.write({1149}, kSetpointRegister), Exception::none);
   const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({kRunForward});  // from one client...
-  const auto stop = b.start_write({kStop});       // ...and before it reached the wire, another
+  const auto run = b.start_write({cmd::run_forward});  // from one client...
+  const auto stop = b.start_write({cmd::stop});        // ...and before it reached the wire, another
   EXPECT_EQ(run->result, Exception::gateway_target_failed);
   EXPECT_EQ(b.rig.wait(stop), Exception::none);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRunStop});  // the compressor never started
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
 // --- truthful writes: what the drive did not take is not in force ---
@@ -135,19 +132,19 @@ TEST(MdriverWrites, ARequestWithAnInvalidPartChangesNothing) {
   // Setpoint 600 rpm (code 0x21) with run_reverse: the setpoint alone would go on the line.
   const auto before = b.rig.sent().size();
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.start_write({kRunReverse, 600})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::run_reverse, 600})->result, Exception::illegal_data_value);
   EXPECT_EQ(b.rig.sent().size(), before);
   b.rig.run_for(1s);
   for (const auto& f : b.frames(asked)) EXPECT_EQ(f, kRun1149);  // keep-alives only
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
 
   // Tripped: run_forward is refused, so the setpoint in the same request is not sent either.
   b.control("fault stall");
   b.rig.run_for(600ms);
   ASSERT_NE(b.read("status") & kFaulted, 0u);
   const TimePoint tripped = b.rig.now();
-  EXPECT_EQ(b.start_write({kRunForward, 600})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.start_write({cmd::run_forward, 600})->result, Exception::server_device_failure);
   b.rig.run_for(1s);
   for (const auto& f : b.frames(tripped)) EXPECT_EQ(f, kRun1149);
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
@@ -161,7 +158,7 @@ TEST(MdriverWrites, ASetpointTheDriveDoesNotAnswerLeavesTheOldOneInForce) {
   EXPECT_EQ(b.write({504}, kSetpointRegister), Exception::gateway_target_failed);
   EXPECT_EQ(b.times_of(kRun504, asked).size(), kAttempts);
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   // Should the drive have taken 504 unheard, the keep-alive puts it back on what is in force.
   b.control("silent off");
   const TimePoint after = b.rig.now();
@@ -169,7 +166,7 @@ TEST(MdriverWrites, ASetpointTheDriveDoesNotAnswerLeavesTheOldOneInForce) {
   const auto next = b.frames(after);
   ASSERT_FALSE(next.empty());
   EXPECT_EQ(next.front(), kRun1149);
-  EXPECT_NE(b.control("state").find("target=0x40"), std::string::npos);
+  EXPECT_TRUE(b.sim_has("target=0x40"));
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
 }
 
@@ -195,8 +192,8 @@ TEST(MdriverWrites, ACommandTheDriveRefusesIsTheExceptionAndTheRunStaysInForce) 
     return a.size() == 13 && a[4] == 0x01 ? with_reply(a, 0x05, 0x00) : a;
   };
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kStop}), Exception::server_device_failure);
-  EXPECT_EQ(b.read("command"), kRunForward);
+  EXPECT_EQ(b.write({cmd::stop}), Exception::server_device_failure);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_NE(b.read("status") & kRunning, 0u);
   b.rig.run_for(1s);
   const auto sent = b.frames(asked);
@@ -216,8 +213,8 @@ TEST(MdriverWrites, ARunAnsweredWithAnErrorIsRefusedAndNotInForce) {
     once = false;
     return with_reply(a, 0x40, 0x04);
   };
-  EXPECT_EQ(b.write({kRunForward}), Exception::server_device_failure);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.write({cmd::run_forward}), Exception::server_device_failure);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   const TimePoint after = b.rig.now();
   b.rig.run_for(1s);
   EXPECT_EQ(b.frames(after).at(0), kRunStop);  // the drive is told what is in force: stop
@@ -230,24 +227,23 @@ TEST(MdriverWrites, ARunThatGotNoAnswerIsNotInForce) {
   ASSERT_EQ(b.write({1149}, kSetpointRegister), Exception::none);
   b.control("silent on");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({kRunForward}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({cmd::run_forward}), Exception::gateway_target_failed);
   // Three identical attempts, each after the 200 ms reply timeout from the frame's end.
   const auto tries = b.times_of(kRun1149, asked);
   ASSERT_EQ(tries.size(), kAttempts);
   const Millis per_attempt =
-      kReplyTimeout +
-      std::chrono::duration_cast<Millis>(kCharacterTime * static_cast<long>(kRun1149.size()));
+      kReplyTimeout + std::chrono::duration_cast<Millis>(b.on_wire(kRun1149.size()));
   EXPECT_EQ(tries[1] - tries[0], per_attempt);
   EXPECT_EQ(tries[2] - tries[1], per_attempt);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.read("status") & kRunning, 0u);
   // The drive may have taken it unheard: the keep-alive says stop.
   b.control("silent off");
   const TimePoint after = b.rig.now();
   b.rig.run_for(1s);
   EXPECT_EQ(b.frames(after).at(0), kRunStop);
-  EXPECT_NE(b.control("state").find("target=0x01"), std::string::npos);
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_TRUE(b.sim_has("target=0x01"));
+  EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
 }  // namespace

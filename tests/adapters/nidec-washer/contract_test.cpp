@@ -5,14 +5,16 @@
 
 #include <memory>
 #include <optional>
-#include <string>
+#include <utility>
 #include <vector>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
 #include "codec.h"
 #include "driver.h"
+#include "driver_by_hand.h"
 #include "points.h"
+#include "write_contract.h"
 
 namespace drivegate::nidec {
 namespace {
@@ -21,14 +23,8 @@ using namespace std::chrono_literals;
 
 // A driver from the adapter's own factory, with the default options, and the inverter's side
 // played by hand: every frame ACKed at once with the Error byte the inverter holds.
-struct Hand {
-  Hand() {
-    DeviceEnv env;
-    env.options = test::options_of(drivegate_adapter);
-    std::string error;
-    d = drivegate_adapter.create_driver(env, error);
-    EXPECT_NE(d, nullptr) << error;
-  }
+struct Hand : test::DriverByHand {
+  Hand() : DriverByHand(test::make_driver(drivegate_adapter)) {}
 
   // Answers the exchange the driver wants now, after waiting up to a poll interval for it; false
   // when it wants none.
@@ -42,7 +38,7 @@ struct Hand {
     const Decoded<Request> req = decode_request(ex->frame);
     EXPECT_EQ(req.status, DecodeStatus::frame);
     const Request& r = req.frame;
-    sent.push_back(r.mode);
+    sent.push_back(ex->frame);
     now += 50ms;
     Bytes ack;
     switch (r.mode) {
@@ -62,22 +58,10 @@ struct Hand {
     EXPECT_EQ(d->on_receive(ack, now).kind, RxKind::reply);
     return true;
   }
+  bool turn() override { return exchange(); }
   void ready() {
     ASSERT_TRUE(exchange());
     ASSERT_TRUE(d->common().ready);
-  }
-  WriteStatus apply(const WriteOp& op) { return d->apply(op, ++ticket, now); }
-  // Answers frames until the write with `t` completed; its result, nullopt if it never did.
-  std::optional<WriteResult> settle(Ticket t) {
-    for (int i = 0; i < 10; ++i) {
-      std::vector<Completion> done;
-      d->take_completions(done);
-      for (const Completion& c : done) {
-        if (c.ticket == t) return c.result;
-      }
-      if (!exchange()) return std::nullopt;
-    }
-    return std::nullopt;
   }
   // Applies and settles one part as the gateway would; its outcome.
   std::optional<WriteResult> take(const WriteOp& op) {
@@ -86,12 +70,10 @@ struct Hand {
     if (s != WriteStatus::pending) return std::nullopt;
     return settle(ticket);
   }
+  // The mode of the last frame the driver sent.
+  [[nodiscard]] Mode last_mode() const { return decode_request(sent.back()).frame.mode; }
 
-  std::unique_ptr<Driver> d;
-  TimePoint now = TimePoint{} + 1h;
   std::uint8_t error_byte = 0;  // the Error byte (section 8) of the inverter's ACKs
-  Ticket ticket = 0;
-  std::vector<Mode> sent;
 };
 
 TEST(NidecContract, VerdictsOnWhatComesBack) {
@@ -185,6 +167,20 @@ std::vector<WriteOp> parts() {
   };
 }
 
+// Every request of one part, of two, and of three (the third from every other part).
+std::vector<test::Request> requests() {
+  const std::vector<WriteOp> ops = parts();
+  std::vector<test::Request> out;
+  for (std::size_t a = 0; a < ops.size(); ++a) {
+    out.push_back({ops[a]});
+    for (std::size_t b = 0; b < ops.size(); ++b) {
+      out.push_back({ops[a], ops[b]});
+      for (std::size_t c = 0; c < ops.size(); c += 2) out.push_back({ops[a], ops[b], ops[c]});
+    }
+  }
+  return out;
+}
+
 enum class State { idle, faulted, forced_brake, spinning };
 
 // A ready driver in `state`.
@@ -213,71 +209,23 @@ void enter(Hand& h, State state) {
   }
 }
 
-WriteStatus status_of(WriteCheck c) {
-  return c == WriteCheck::invalid_value ? WriteStatus::invalid_value : WriteStatus::refused;
+std::vector<test::WriteState> states() {
+  return test::write_states<Hand>({{State::idle, "idle"},
+                                   {State::faulted, "faulted"},
+                                   {State::forced_brake, "forced brake"},
+                                   {State::spinning, "spinning"}},
+                                  enter);
 }
 
-// What a driver publishes, for comparing before and after a call that must change nothing.
-struct Snapshot {
-  std::vector<Value> values;
-  CommonState common;
-  TimePoint wake;
-  bool operator==(const Snapshot& o) const {
-    return values == o.values && wake == o.wake && common.ready == o.common.ready &&
-           common.running == o.common.running && common.faults == o.common.faults &&
-           common.native_fault == o.common.native_fault && common.speed_rpm == o.common.speed_rpm &&
-           common.setpoint_rpm == o.common.setpoint_rpm && common.command == o.common.command;
-  }
-};
-Snapshot snapshot(const Driver& d) {
-  return {d.values(), d.common(), d.wake_at()};
-}
-
-// For one request in one state: check() changes nothing, and apply() takes the parts in order
-// exactly when check() said ok, or refuses the first it refused with the same answer. Parts
-// whose ACK fails end the request there, as they end it at the gateway.
-void expect_check_is_apply(State state, const std::vector<WriteOp>& request,
-                           const std::string& what) {
-  Hand h;
-  enter(h, state);
-  const Snapshot before = snapshot(*h.d);
-  const WriteCheck verdict = h.d->check(request);
-  ASSERT_TRUE(snapshot(*h.d) == before) << what;
-  EXPECT_EQ(h.d->check(request), verdict) << what;
-  for (std::size_t i = 0; i < request.size(); ++i) {
-    const WriteStatus s = h.apply(request[i]);
-    if (s == WriteStatus::done) continue;
-    if (s != WriteStatus::pending) {
-      EXPECT_NE(verdict, WriteCheck::ok) << what << ", part " << i;
-      EXPECT_EQ(s, status_of(verdict)) << what << ", part " << i;
-      return;
-    }
-    if (h.settle(h.ticket) != WriteResult::ok) return;  // ended by the drive, not by check()
-  }
-  EXPECT_EQ(verdict, WriteCheck::ok) << what;
-}
-
+// A part whose ACK carries Error bits ends the request there, as it ends it at the gateway: the
+// drive's verdict, not check()'s.
 TEST(NidecContract, CheckChangesNothingAndJudgesEveryRequestAsApplyTakesIt) {
-  const std::vector<WriteOp> ops = parts();
-  int requests = 0;
-  for (const State state : {State::idle, State::faulted, State::forced_brake, State::spinning}) {
-    for (std::size_t a = 0; a < ops.size(); ++a) {
-      const std::string in = "state " + std::to_string(static_cast<int>(state)) + ", parts ";
-      expect_check_is_apply(state, {ops[a]}, in + std::to_string(a));
-      for (std::size_t b = 0; b < ops.size(); ++b) {
-        expect_check_is_apply(state, {ops[a], ops[b]},
-                              in + std::to_string(a) + " " + std::to_string(b));
-        for (std::size_t c = 0; c < ops.size(); c += 2) {
-          expect_check_is_apply(
-              state, {ops[a], ops[b], ops[c]},
-              in + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c));
-          ++requests;
-        }
-      }
-      if (HasFatalFailure()) return;
-    }
-  }
-  EXPECT_GT(requests, 1000);
+  const auto tally = test::expect_check_is_apply(states(), requests());
+  EXPECT_GT(tally.judged, 1000);
+}
+
+TEST(NidecContract, CheckHasNoSideEffects) {
+  test::expect_check_has_no_side_effects(states(), requests(), /*turns=*/10);
 }
 
 TEST(NidecContract, ARequestIsJudgedAgainstWhatItsEarlierPartsLeave) {
@@ -296,7 +244,7 @@ TEST(NidecContract, ARequestIsJudgedAgainstWhatItsEarlierPartsLeave) {
   EXPECT_EQ(h.d->check(std::vector{brake, forward}), WriteCheck::refused);
   // Nothing of it was applied: the motion for the next run is still spin.
   EXPECT_EQ(std::get<std::int64_t>(h.d->values()[pt::motion]), 1);
-  EXPECT_EQ(h.sent.back(), Mode::spin);
+  EXPECT_EQ(h.last_mode(), Mode::spin);
   EXPECT_EQ(h.d->next_exchange(h.now), std::nullopt);  // no frame queued by check()
 }
 

@@ -34,15 +34,15 @@ TEST(NidecDriver, PingsFirstThenPollsEvery500ms_5_1_section6) {
 
 TEST(NidecDriver, OptionsShapeThePingTheAccelTimeAndTheResends_5_1_section6) {
   // Section 6: a frame every second at least, whatever the device's poll interval says.
-  Bench b({{"platform", "8"},
-           {"empty_raw_weight", "300"},
-           {"accel_time_ms", "5040"},
-           {"attempts", "4"}},
-          5000ms);
+  Bench b({.options = {{"platform", "8"},
+                       {"empty_raw_weight", "300"},
+                       {"accel_time_ms", "5040"},
+                       {"attempts", "4"}},
+           .poll = 5000ms});
   ASSERT_TRUE(b.ready());
   const Bytes ping8{0xA5, 0x02, 0x08, 0x01, 0x2C, 0x00, 0x00, 0x00, 0x00, 0x00, 0x82};
   EXPECT_EQ(b.rig.sent().at(0).bytes, ping8);
-  EXPECT_TRUE(b.sim_says("platform=8 empty_raw_weight=300"));
+  EXPECT_TRUE(b.sim_has("platform=8 empty_raw_weight=300"));
   EXPECT_EQ(b.read("platform"), 8u);
   EXPECT_EQ(b.read("accel_time"), 50u);  // 5.0 s: 5040 ms rounded to 100 ms units (5.3)
   b.rig.run_for(2s);
@@ -58,7 +58,7 @@ TEST(NidecDriver, OptionsShapeThePingTheAccelTimeAndTheResends_5_1_section6) {
   const auto resends = b.times_of(kPoll, from);
   ASSERT_GE(resends.size(), 4u);
   for (std::size_t i = 1; i < 4; ++i) {
-    EXPECT_EQ(resends[i] - resends[i - 1], 100ms + on_wire(11)) << i;
+    EXPECT_EQ(resends[i] - resends[i - 1], 100ms + b.on_wire(11)) << i;
   }
   EXPECT_EQ(b.read("retries"), 3u);  // then a new turn, the same poll (section 6)
 }
@@ -176,7 +176,7 @@ TEST(NidecDriver, CommLostStopsAndDoesNotResumeMotion_section7) {
   EXPECT_EQ(b.read("speed_rpm"), 0u);
   EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.count(kCw800, back), 0u);
-  EXPECT_TRUE(b.sim_says("motion=stopped"));
+  EXPECT_TRUE(b.sim_has("motion=stopped"));
 }
 
 TEST(NidecDriver, WritesWhileCommLostAre0x0BAndFailWhatWasQueued) {

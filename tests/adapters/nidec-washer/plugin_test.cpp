@@ -1,12 +1,14 @@
-// The descriptor the plugin exports, as the loader, `drivegate demo` and `drivegate regmap` read
-// it, the settings its options make, and the points of a device it creates.
+// The descriptor the plugin exports, with the facts of the document every adapter states
+// (tests/support/descriptor_contract.h), the settings its options make, and the points of a
+// device it creates.
 #include <gtest/gtest.h>
 
 #include <string>
 #include <string_view>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
+#include "descriptor_contract.h"
 #include "driver.h"
 #include "points.h"
 #include "settings.h"
@@ -16,29 +18,20 @@ namespace {
 
 using namespace std::chrono_literals;
 
-TEST(NidecPlugin, Descriptor) {
-  const AdapterDescriptor& a = drivegate_adapter;
-  EXPECT_EQ(a.api_version, kAdapterApiVersion);
-  EXPECT_EQ(std::string_view(a.id), "nidec-washer");
-  // Section 3: 4800 baud, 8 bits, odd parity, one stop bit; section 2: one wire, no address.
-  EXPECT_EQ(a.line.baud, 4800u);
-  EXPECT_EQ(a.line.parity, Parity::odd);
-  EXPECT_EQ(a.line.data_bits, 8);
-  EXPECT_EQ(a.line.stop_bits, 1);
-  EXPECT_TRUE(a.line.echo);
-  EXPECT_EQ(a.address_min, 0u);
-  EXPECT_EQ(a.address_max, 0u);
-  EXPECT_EQ(a.default_address, 0u);
-  EXPECT_FALSE(a.streaming);
-  EXPECT_EQ(a.option_count, kOptionSchema.size());
-  // `drivegate demo`: a 7 kg washer at 800 rpm; no maintenance actions.
-  ASSERT_EQ(a.demo.option_count, 1u);
-  EXPECT_EQ(std::string_view(a.demo.options[0].name), "platform");
-  EXPECT_EQ(std::string_view(a.demo.options[0].value), "7");
-  EXPECT_EQ(a.demo.running_rpm, 800);
-  EXPECT_EQ(a.action_count, 0u);
-  EXPECT_EQ(a.actions, nullptr);
-}
+using test::DescriptorContract;
+
+// Section 3: 4800 baud, 8 bits, odd parity, one stop bit; section 2: one wire, no address.
+// `drivegate demo`: a 7 kg washer at 800 rpm; no maintenance actions.
+const test::DescriptorFacts kFacts{.id = "nidec-washer",
+                                   .options = kOptionSchema,
+                                   .line = {4800, Parity::odd, 8, 1, true},
+                                   .address_min = 0,
+                                   .address_max = 0,
+                                   .default_address = 0,
+                                   .streaming = false,
+                                   .demo_options = {{"platform", "7"}},
+                                   .demo_rpm = 800};
+INSTANTIATE_TEST_SUITE_P(Nidec, DescriptorContract, testing::Values(kFacts));
 
 TEST(NidecPlugin, SettingsFromTheOptions) {
   std::string error;
@@ -74,22 +67,9 @@ TEST(NidecPlugin, SettingsFromTheOptions) {
   EXPECT_THROW(test::options_of(drivegate_adapter, {{"attempts", "0"}}), std::invalid_argument);
 }
 
-TEST(NidecPlugin, TheFactoriesMakeADriverAndASimulator) {
-  std::string error;
-  DeviceEnv env;
-  env.options = test::options_of(drivegate_adapter);
-  EXPECT_NE(drivegate_adapter.create_driver(env, error), nullptr) << error;
-  SimEnv sim_env;
-  sim_env.options = env.options;
-  EXPECT_NE(drivegate_adapter.create_simulator(sim_env, error), nullptr) << error;
-}
-
 TEST(NidecPlugin, PointsAreAFixedTableWithLabels) {
-  DeviceEnv env;
-  env.options = test::options_of(drivegate_adapter);
-  std::string error;
-  const auto d = drivegate_adapter.create_driver(env, error);
-  ASSERT_NE(d, nullptr) << error;
+  const auto d = test::make_driver(drivegate_adapter);
+  ASSERT_NE(d, nullptr);
   const std::vector<PointSpec>& p = d->points();
   ASSERT_EQ(p.size(), pt::count);
   ASSERT_EQ(d->values().size(), pt::count);

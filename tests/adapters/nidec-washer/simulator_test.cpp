@@ -7,8 +7,8 @@
 #include <memory>
 #include <string>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
 #include "codec.h"
 
 namespace drivegate::nidec {
@@ -19,15 +19,6 @@ using namespace std::chrono_literals;
 const Bytes kPoll = {0xA5, 0x05, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xA0};  // 5.2
 const Bytes kNack = {0x5A, 0x00, 0xFF, 0x00, 0xFF, 0x00, 0x5A};                          // 5.16
 
-std::unique_ptr<Simulator> make_simulator() {
-  SimEnv env;
-  env.options = test::options_of(drivegate_adapter);
-  std::string error;
-  auto sim = drivegate_adapter.create_simulator(env, error);
-  EXPECT_NE(sim, nullptr) << error;
-  return sim;
-}
-
 class Sim : public ::testing::Test {
  protected:
   Bytes send(const Bytes& frame) { return sim.on_receive(frame, now); }
@@ -37,7 +28,7 @@ class Sim : public ::testing::Test {
   std::string state() { return sim.control("state", now); }
   bool has(const std::string& kv) { return state().find(kv) != std::string::npos; }
 
-  std::unique_ptr<Simulator> owned = make_simulator();
+  std::unique_ptr<Simulator> owned = test::make_simulator(drivegate_adapter);
   Simulator& sim = *owned;
   TimePoint now = TimePoint{} + 1h;
 };

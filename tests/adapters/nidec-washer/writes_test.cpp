@@ -11,11 +11,7 @@ namespace {
 TEST(NidecWrites, ASetpointWhileStoppedIsStoredThenRunForwardIsCw_5_3) {
   Bench b;
   ASSERT_TRUE(b.ready());
-  const std::size_t before = b.rig.sent().size();
-  // Stored without traffic: settled as soon as it is written.
-  EXPECT_EQ(b.start_write({800}, kSetpointRegister)->result, Exception::none);
-  EXPECT_EQ(b.rig.sent().size(), before);
-  EXPECT_EQ(b.read("setpoint_rpm"), 800u);
+  EXPECT_TRUE(b.stores_without_traffic(800));
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});
   EXPECT_FALSE(run->settled());
@@ -42,7 +38,7 @@ TEST(NidecWrites, RunReverseIsCcw_5_4) {
   EXPECT_EQ(b.write({cmd::run_reverse, 800}), Exception::none);
   EXPECT_EQ(b.frames(asked).at(0), kCcw800);
   EXPECT_EQ(b.read("command"), cmd::run_reverse);
-  EXPECT_TRUE(b.sim_says("motion=ccw"));
+  EXPECT_TRUE(b.sim_has("motion=ccw"));
 }
 
 TEST(NidecWrites, MotionChoosesSpinAgitationOrFreeShaft_5_5_5_6_5_14) {
@@ -79,7 +75,7 @@ TEST(NidecWrites, MotionChoosesSpinAgitationOrFreeShaft_5_5_5_6_5_14) {
   EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
   EXPECT_EQ(b.frames(asked).at(0),
             (Bytes{0xA5, 0x1D, 0x05, 0xDC, 0x00, 0x32, 0x00, 0x00, 0x00, 0x00, 0x53}));
-  EXPECT_TRUE(b.sim_says("motion=free_shaft_spin"));
+  EXPECT_TRUE(b.sim_has("motion=free_shaft_spin"));
   // The gateway keeps a motion the table does not name.
   EXPECT_EQ(b.write("motion", {4}), Exception::illegal_data_value);
   EXPECT_EQ(b.read("motion"), 3u);
@@ -131,7 +127,7 @@ TEST(NidecWrites, StopAndQuickStop_5_7_5_8) {
   EXPECT_EQ(b.write({cmd::quick_stop}), Exception::none);
   EXPECT_EQ(b.frames(asked).at(0), kBrake);
   EXPECT_EQ(b.read("command"), cmd::quick_stop);
-  EXPECT_TRUE(b.sim_says("motion=braking"));
+  EXPECT_TRUE(b.sim_has("motion=braking"));
   asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::stop}), Exception::none);
   EXPECT_EQ(b.frames(asked).at(0), kStop);
@@ -176,7 +172,7 @@ TEST(NidecWrites, ARequestWithAnInvalidPartChangesNothing) {
   for (const Bytes& f : b.frames(asked)) EXPECT_EQ(f, kPoll);
   EXPECT_EQ(b.read("setpoint_rpm"), 800u);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
-  EXPECT_TRUE(b.sim_says("target_rpm=800"));
+  EXPECT_TRUE(b.sim_has("target_rpm=800"));
 
   // Stopped and faulted: run_forward is refused, so the setpoint in the same request is not
   // stored either, though alone it would have been.
@@ -217,7 +213,7 @@ TEST(NidecWrites, ASetpointTheInverterNeverAnsweredLeavesTheOldOne_section6) {
   EXPECT_GE(b.count(kCw1000, asked), 10u);
   EXPECT_EQ(b.read("setpoint_rpm"), 800u);
   EXPECT_EQ(b.read("command"), cmd::run_forward);  // the inverter runs on at 800 rpm
-  EXPECT_TRUE(b.sim_says("target_rpm=800"));
+  EXPECT_TRUE(b.sim_has("target_rpm=800"));
   // Not sent again once the PLC was told it failed.
   b.control("nack 0");
   const TimePoint failed = b.rig.now();
@@ -240,7 +236,7 @@ TEST(NidecWrites, ACommandTheInverterRefusesIsTheExceptionAndCommandReadsWhatIsI
   EXPECT_NE(b.status() & kRunning, 0u);
   b.control("nack 0");
   ASSERT_TRUE(b.after_next_poll());
-  EXPECT_TRUE(b.sim_says("motion=cw"));
+  EXPECT_TRUE(b.sim_has("motion=cw"));
 
   // A phase lost between two polls: run_reverse goes on the line and its ACK carries the Error
   // bits (section 8). Exception 0x04, and the command in force is what the fault left: stop.
@@ -272,7 +268,7 @@ TEST(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
   b.rig.run_for(2s);
   EXPECT_EQ(b.count(kCw800, back), 0u);
   EXPECT_EQ(b.read("command"), cmd::stop);
-  EXPECT_TRUE(b.sim_says("motion=stopped"));
+  EXPECT_TRUE(b.sim_has("motion=stopped"));
 }
 
 TEST(NidecWrites, AStopOvertakesARunNotYetOnTheLine) {
@@ -280,8 +276,7 @@ TEST(NidecWrites, AStopOvertakesARunNotYetOnTheLine) {
   ASSERT_TRUE(b.ready());
   ASSERT_EQ(b.write({800}, kSetpointRegister), Exception::none);
   // While a poll is on the line, a run from one client and a stop from another.
-  const std::size_t polls = b.count(kPoll);
-  ASSERT_TRUE(b.rig.run_until([&] { return b.count(kPoll) > polls; }, 1s));
+  ASSERT_TRUE(b.next_poll_on_the_line());
   const std::size_t mark = b.rig.sent().size();
   const auto run = b.start_write({cmd::run_forward});
   const auto stop = b.start_write({cmd::stop});
@@ -295,8 +290,7 @@ TEST(NidecWrites, ASetpointQueuedBehindAStopIsStoredNotSent) {
   Bench b;
   ASSERT_TRUE(b.running_at(800));
   // While a poll is on the line: a stop, then a new speed for the run in force now.
-  const std::size_t polls = b.count(kPoll);
-  ASSERT_TRUE(b.rig.run_until([&] { return b.count(kPoll) > polls; }, 1s));
+  ASSERT_TRUE(b.next_poll_on_the_line());
   const std::size_t mark = b.rig.sent().size();
   const auto stop = b.start_write({cmd::stop});
   const auto speed = b.start_write({1000}, kSetpointRegister);
@@ -306,15 +300,14 @@ TEST(NidecWrites, ASetpointQueuedBehindAStopIsStoredNotSent) {
   EXPECT_EQ(b.frames_after(mark), std::vector<Bytes>{kStop});
   EXPECT_EQ(b.read("setpoint_rpm"), 1000u);
   EXPECT_EQ(b.read("command"), cmd::stop);
-  EXPECT_TRUE(b.sim_says("motion=stopping"));
+  EXPECT_TRUE(b.sim_has("motion=stopping"));
 }
 
 TEST(NidecWrites, ASetpointWrittenWhileARunIsOnItsWayIsSentAfterIt) {
   Bench b;
   ASSERT_TRUE(b.ready());
   ASSERT_EQ(b.write({800}, kSetpointRegister), Exception::none);
-  const std::size_t polls = b.count(kPoll);
-  ASSERT_TRUE(b.rig.run_until([&] { return b.count(kPoll) > polls; }, 1s));
+  ASSERT_TRUE(b.next_poll_on_the_line());
   const std::size_t mark = b.rig.sent().size();
   const auto run = b.start_write({cmd::run_forward});
   const auto speed = b.start_write({1000}, kSetpointRegister);

@@ -5,16 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <memory>
-#include <optional>
-#include <string>
+#include <utility>
 #include <vector>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
 #include "codec.h"
 #include "driver.h"
+#include "driver_by_hand.h"
 #include "op_state.h"
 #include "payloads.h"
+#include "write_contract.h"
 
 namespace drivegate::unicla {
 namespace {
@@ -24,15 +25,8 @@ using namespace std::chrono_literals;
 // A driver from the adapter's own factory with the default options, and the drive's side played
 // by hand: every read answered from what the drive holds, every write taken (Set Run State runs
 // the motor at its speed or stops it, Acknowledge Faults clears a fault).
-struct Hand {
-  Hand() {
-    DeviceEnv env;
-    env.address = 1;
-    env.poll_interval = 500ms;
-    env.options = test::options_of(drivegate_adapter);
-    std::string error;
-    d = drivegate_adapter.create_driver(env, error);
-    EXPECT_NE(d, nullptr) << error;
+struct Hand : test::DriverByHand {
+  Hand() : DriverByHand(test::make_driver(drivegate_adapter, {.address = 1, .poll = 500ms})) {
     limits.min_speed = 1500;
     limits.max_speed = 6000;
     limits.device_id = 1;
@@ -81,37 +75,19 @@ struct Hand {
     status.rpm = rpm;
     status.op_state = static_cast<std::uint8_t>(rpm == 0 ? OpState::stopped : OpState::running);
   }
+  bool turn() override {
+    if (!exchange()) now += 10ms;
+    return true;
+  }
   // Build information, running limits, the first status.
   void ready() {
     for (int i = 0; i < 3; ++i) ASSERT_TRUE(exchange());
     ASSERT_TRUE(d->common().ready);
   }
-  WriteStatus apply(const WriteOp& op) { return d->apply(op, ++ticket, now); }
-  void collect() { d->take_completions(done); }
-  std::vector<Completion> completions() {
-    collect();
-    return std::exchange(done, {});
-  }
-  // Runs the line until ticket `t` completed; its result.
-  std::optional<WriteResult> result_of(Ticket t) {
-    for (int i = 0; i < 100; ++i) {
-      collect();
-      for (const Completion& c : done) {
-        if (c.ticket == t) return c.result;
-      }
-      if (!exchange()) now += 10ms;
-    }
-    return std::nullopt;
-  }
 
-  std::unique_ptr<Driver> d;
-  TimePoint now = TimePoint{} + 1h;
   BuildInfo build;
   RunningLimits limits;
   Status status;
-  Ticket ticket = 0;
-  std::vector<Completion> done;
-  std::vector<Bytes> sent;
 };
 
 TEST(UniclaContract, ExchangesAsTheDocumentAsks) {
@@ -205,8 +181,6 @@ TEST(UniclaContract, WhatTheCodecRejectsIsDamagedOrNoise) {
 
 // The states a request may find the driver in.
 enum class State { not_ready, stopped, stored, running, tripped, control_off };
-constexpr State kStates[] = {State::not_ready, State::stopped, State::stored,
-                             State::running,   State::tripped, State::control_off};
 
 void bring(Hand& h, State s) {
   if (s == State::not_ready) return;
@@ -216,7 +190,7 @@ void bring(Hand& h, State s) {
   ASSERT_EQ(h.apply(WriteOp::of_setpoint(3000)), WriteStatus::done);
   if (s == State::stored) return;
   ASSERT_EQ(h.apply(WriteOp::of_command(Command::run_forward)), WriteStatus::pending);
-  ASSERT_EQ(h.result_of(h.ticket), WriteResult::ok);
+  ASSERT_EQ(h.settle(h.ticket), WriteResult::ok);
   ASSERT_EQ(h.d->common().command, Command::run_forward);
   h.completions();  // the set-up's own
   if (s == State::running) return;
@@ -226,81 +200,30 @@ void bring(Hand& h, State s) {
   ASSERT_FALSE(h.d->common().faults.empty());
 }
 
-std::vector<std::vector<WriteOp>> requests() {
-  std::vector<std::vector<WriteOp>> out;
-  const std::optional<std::int32_t> setpoints[] = {std::nullopt, -5,   0,    1000,
-                                                   1500,         3000, 6000, 7000};
-  for (const auto& rpm : setpoints) {
-    std::vector<WriteOp> base;
-    if (rpm) base.push_back(WriteOp::of_setpoint(*rpm));
-    if (!base.empty()) out.push_back(base);
-    for (const Command c : kAllCommands) {
-      auto r = base;
-      r.push_back(WriteOp::of_command(c));
-      out.push_back(r);
-    }
-  }
+std::vector<test::WriteState> states() {
+  return test::write_states<Hand>({{State::not_ready, "not ready"},
+                                   {State::stopped, "stopped"},
+                                   {State::stored, "setpoint stored"},
+                                   {State::running, "running"},
+                                   {State::tripped, "tripped"},
+                                   {State::control_off, "control off"}},
+                                  bring);
+}
+
+std::vector<test::Request> requests() {
+  auto out = test::command_requests({-5, 0, 1000, 1500, 3000, 6000, 7000});
   out.push_back({WriteOp::of_point(0, Value{std::int64_t{1}})});
   return out;
 }
 
-WriteCheck as_check(WriteStatus s) {
-  return s == WriteStatus::invalid_value ? WriteCheck::invalid_value : WriteCheck::refused;
-}
-
+// The hand-played drive takes every write it is sent: a refusal is check()'s to give.
 TEST(UniclaContract, CheckAcceptsARequestExactlyWhenApplyTakesItsPartsInOrder) {
-  for (const State s : kStates) {
-    for (const auto& request : requests()) {
-      SCOPED_TRACE(testing::Message()
-                   << "state " << static_cast<int>(s) << ", request of " << request.size()
-                   << " parts, last " << static_cast<int>(request.back().target) << "/"
-                   << static_cast<int>(request.back().command) << "/" << request.front().rpm);
-      Hand h;
-      bring(h, s);
-      const WriteCheck judged = h.d->check(request);
-      // Applied as the gateway applies it: a part once the one before it settled.
-      WriteCheck applied = WriteCheck::ok;
-      for (const WriteOp& op : request) {
-        const WriteStatus st = h.apply(op);
-        if (st == WriteStatus::invalid_value || st == WriteStatus::refused) {
-          applied = as_check(st);
-          break;
-        }
-        if (st == WriteStatus::pending) {
-          ASSERT_EQ(h.result_of(h.ticket), WriteResult::ok);
-        }
-      }
-      EXPECT_EQ(judged, applied);
-    }
-  }
+  const auto tally = test::expect_check_is_apply(states(), requests());
+  EXPECT_TRUE(tally.ended_by_device.empty());
 }
 
 TEST(UniclaContract, CheckHasNoSideEffects) {
-  for (const State s : kStates) {
-    SCOPED_TRACE(static_cast<int>(s));
-    Hand judged;
-    Hand untouched;
-    bring(judged, s);
-    bring(untouched, s);
-    for (const auto& request : requests()) (void)judged.d->check(request);
-    EXPECT_TRUE(judged.completions().empty());
-    const CommonState& a = judged.d->common();
-    const CommonState& b = untouched.d->common();
-    EXPECT_EQ(a.command, b.command);
-    EXPECT_EQ(a.setpoint_rpm, b.setpoint_rpm);
-    EXPECT_EQ(a.running, b.running);
-    EXPECT_EQ(a.ready, b.ready);
-    EXPECT_EQ(judged.d->values(), untouched.d->values());
-    EXPECT_EQ(judged.d->wake_at(), untouched.d->wake_at());
-    // And the line carries the same from here on.
-    for (int i = 0; i < 4; ++i) {
-      judged.now += 600ms;
-      untouched.now += 600ms;
-      judged.exchange();
-      untouched.exchange();
-    }
-    EXPECT_EQ(judged.sent, untouched.sent);
-  }
+  test::expect_check_has_no_side_effects(states(), requests(), /*turns=*/250);
 }
 
 TEST(UniclaContract, AWriteNotShownInTimeFailsAtTheDriversOwnDeadline) {

@@ -26,7 +26,7 @@ TEST(UniclaDriver, StartUpReadsBuildThenLimitsThenPollsStatus) {
   const auto& answers = b.rig.answers();
   ASSERT_GE(answers.size(), 2u);
   for (std::size_t i = 0; i < 2; ++i) {
-    const TimePoint answered = answers[i].at + wire_time(answers[i].bytes.size());
+    const TimePoint answered = answers[i].at + b.on_wire(answers[i].bytes.size());
     EXPECT_EQ(sent[i + 1].at, answered + kInterFrameGap) << i;
   }
   EXPECT_NE(b.read("status") & kOnline, 0u);
@@ -49,7 +49,7 @@ TEST(UniclaDriver, StartUpReadsBuildThenLimitsThenPollsStatus) {
   EXPECT_EQ(b.read("control_mode"), 4u);  // External Serial
   EXPECT_EQ(b.read("status") & kRunning, 0u);
   // Nothing was written: nothing is in force but stop.
-  EXPECT_EQ(b.read("command"), kStop);
+  EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.read("setpoint_rpm"), 0u);
 }
 
@@ -75,7 +75,7 @@ TEST(UniclaDriver, PollsStatusAtThePollInterval) {
 }
 
 TEST(UniclaDriver, PollIntervalIsTheDevicesOwn) {
-  Bench b({}, 200ms);
+  Bench b({.poll = 200ms});
   ASSERT_TRUE(b.ready());
   const TimePoint from = b.rig.now();
   b.rig.run_for(1s);
@@ -136,7 +136,7 @@ TEST(UniclaDriver, ABadCrcIsResentIdenticallyAfterTheGap) {
   EXPECT_EQ(sent[0].bytes, sent[1].bytes);  // the same frame, the same sequence
   // At once: the gap after the damaged reply ended, not after the reply timeout.
   const auto& damaged = b.rig.answers().at(answered);
-  EXPECT_EQ(sent[1].at, damaged.at + wire_time(damaged.bytes.size()) + kInterFrameGap);
+  EXPECT_EQ(sent[1].at, damaged.at + b.on_wire(damaged.bytes.size()) + kInterFrameGap);
   EXPECT_EQ(b.read("bad_checksum"), 1u);
   EXPECT_EQ(b.read("retries"), 1u);
   EXPECT_EQ(b.read("timeouts"), 0u);
@@ -165,7 +165,7 @@ TEST(UniclaDriver, ASilentReadIsTriedThreeTimesEachAfterTheReplyTimeout) {
 }
 
 TEST(UniclaDriver, RetriesAndReplyTimeoutFollowTheOptions) {
-  Bench b({{"retries", "0"}, {"reply_timeout_ms", "250"}});
+  Bench b({.options = {{"retries", "0"}, {"reply_timeout_ms", "250"}}});
   ASSERT_TRUE(b.ready());
   b.control("silent on");
   const TimePoint from = b.rig.now();
@@ -263,7 +263,7 @@ TEST(UniclaDriver, CommLostRedoesStartUpAndComesBack) {
 }
 
 TEST(UniclaDriver, LittleEndianFloatsFollowTheOption) {
-  Bench b({{"byte_order", "little"}}, 500ms, 3);
+  Bench b({.options = {{"byte_order", "little"}}, .address = 3});
   ASSERT_TRUE(b.ready());
   EXPECT_FLOAT_EQ(b.read_f32("suction_pressure"), 4.5F);
   EXPECT_FLOAT_EQ(b.read_f32("discharge_pressure_high"), 28.0F);
@@ -271,7 +271,7 @@ TEST(UniclaDriver, LittleEndianFloatsFollowTheOption) {
   EXPECT_EQ(b.read("rs485_device_id"), 3u);
 
   // A drive sending its floats the other way than configured: integers still hold.
-  Bench mismatched({}, {{"byte_order", "little"}}, 500ms, 3);
+  Bench mismatched({.sim_options = test::OptionText{{"byte_order", "little"}}, .address = 3});
   ASSERT_TRUE(mismatched.ready());
   EXPECT_NE(mismatched.read_f32("suction_pressure"), 4.5F);
   EXPECT_EQ(mismatched.read("limit_max_speed"), 6000u);

@@ -21,13 +21,11 @@ struct Pair {
   bool online() {
     return rig.run_until([&] { return d1->online() && d2->online(); }, 3s);
   }
-  std::uint32_t read(Device& d, std::string_view point) { return value_of(rig, d, point); }
+  std::uint32_t read(Device& d, std::string_view point) { return rig.value(d, point); }
   // Frames to drive `id` with message `msg` from `from` on, and when they went out.
   std::vector<Sent> sent_to(std::uint8_t id, TimePoint from, std::optional<std::uint8_t> msg) {
     std::vector<Sent> out;
-    for (const auto& f : rig.sent()) {
-      if (f.at < from) continue;
-      Sent s{f.at, f.bytes, decoded(f.bytes)};
+    for (auto& s : sent_by_master(rig, from)) {
       if (s.frame.destination == id && (!msg || s.frame.message_id == *msg)) out.push_back(s);
     }
     return out;
@@ -52,8 +50,8 @@ TEST(UniclaMultidrop, TwoDrivesOnOneLineKeepTheirOwnState) {
   Pair p;
   ASSERT_TRUE(p.online());
   // Each unit shows its own drive: serial numbers are SIM100000<id>.
-  EXPECT_EQ(text_of(p.rig, *p.d1, "serial_number"), "SIM1000001");
-  EXPECT_EQ(text_of(p.rig, *p.d2, "serial_number"), "SIM1000002");
+  EXPECT_EQ(p.rig.text(*p.d1, "serial_number"), "SIM1000001");
+  EXPECT_EQ(p.rig.text(*p.d2, "serial_number"), "SIM1000002");
   // Every frame is the master's, to drive 1 or 2; each drive's sequence numbers are its own.
   for (const auto& f : p.rig.sent()) {
     const Frame fr = decoded(f.bytes);
@@ -71,7 +69,7 @@ TEST(UniclaMultidrop, TwoDrivesOnOneLineKeepTheirOwnState) {
 
   // Right runs, left stays stopped.
   const TimePoint asked = p.rig.now();
-  EXPECT_EQ(p.rig.write_and_wait(*p.d2, Table::holding, kCommandRegister, {kRunForward, 3000}),
+  EXPECT_EQ(p.rig.write_and_wait(*p.d2, Table::holding, kCommandRegister, {cmd::run_forward, 3000}),
             Exception::none);
   const auto runs = p.rig.sent();
   for (const auto& f : runs) {
@@ -84,8 +82,8 @@ TEST(UniclaMultidrop, TwoDrivesOnOneLineKeepTheirOwnState) {
   ASSERT_TRUE(p.rig.run_until([&] { return p.read(*p.d2, "speed_rpm") == 3000; }, 10s));
   EXPECT_EQ(p.read(*p.d1, "speed_rpm"), 0u);
   EXPECT_EQ(p.read(*p.d1, "status") & kRunning, 0u);
-  EXPECT_EQ(p.read(*p.d1, "command"), kStop);
-  EXPECT_EQ(p.read(*p.d2, "command"), kRunForward);
+  EXPECT_EQ(p.read(*p.d1, "command"), cmd::stop);
+  EXPECT_EQ(p.read(*p.d2, "command"), cmd::run_forward);
 
   // Left's drive loses its XC link (Fault - XC Comms): left's fault, not right's.
   p.s1->control("fault xc", p.rig.now());
@@ -127,9 +125,9 @@ TEST(UniclaMultidrop, ASilentDriveCostsTheOtherAtMostItsTimeBudget) {
   EXPECT_LT(to_silent.size(), with_silent.size());  // backed off: fewer than the live one's
 
   // Left still takes writes while its neighbour is silent.
-  EXPECT_EQ(p.rig.write_and_wait(*p.d1, Table::holding, kCommandRegister, {kRunForward, 3000}),
+  EXPECT_EQ(p.rig.write_and_wait(*p.d1, Table::holding, kCommandRegister, {cmd::run_forward, 3000}),
             Exception::none);
-  EXPECT_EQ(p.read(*p.d1, "command"), kRunForward);
+  EXPECT_EQ(p.read(*p.d1, "command"), cmd::run_forward);
 }
 
 }  // namespace

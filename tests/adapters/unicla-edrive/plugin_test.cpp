@@ -1,11 +1,12 @@
-// The descriptor the plugin exports, as the loader, `drivegate demo` and `drivegate regmap` read
-// it, and the options into settings.
+// The descriptor the plugin exports, with the facts of the document every adapter states
+// (tests/support/descriptor_contract.h), its own address rules, and the options into settings.
 #include <gtest/gtest.h>
 
 #include <string_view>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
+#include "descriptor_contract.h"
 #include "driver.h"
 #include "settings.h"
 
@@ -14,30 +15,22 @@ namespace {
 
 using namespace std::chrono_literals;
 
-TEST(UniclaPlugin, Descriptor) {
-  const AdapterDescriptor& a = drivegate_adapter;
-  EXPECT_EQ(a.api_version, kAdapterApiVersion);
-  EXPECT_EQ(std::string_view(a.id), "unicla-edrive");
-  // "Communications Settings": 19200 (the default), 8 data bits, no parity, 1 stop bit.
-  EXPECT_EQ(a.line.baud, 19200u);
-  EXPECT_EQ(a.line.parity, Parity::none);
-  EXPECT_EQ(a.line.data_bits, 8);
-  EXPECT_EQ(a.line.stop_bits, 1);
-  EXPECT_FALSE(a.line.echo);
-  // "Device Address": 0x00 the master, 0xFF everyone; "Device ID ... Default Value 0x01".
-  EXPECT_EQ(a.address_min, 1u);
-  EXPECT_EQ(a.address_max, 254u);
-  EXPECT_EQ(a.default_address, 1u);
-  EXPECT_FALSE(a.streaming);  // "all transfers are required to be master initiated"
-  EXPECT_EQ(a.options, kOptionSchema.data());
-  EXPECT_EQ(a.option_count, kOptionSchema.size());
-  // `drivegate demo`: default options, running at 3000 rpm; no maintenance actions.
-  EXPECT_EQ(a.demo.option_count, 0u);
-  EXPECT_EQ(a.demo.options, nullptr);
-  EXPECT_EQ(a.demo.running_rpm, 3000);
-  EXPECT_EQ(a.action_count, 0u);
-  EXPECT_EQ(a.actions, nullptr);
-}
+using test::DescriptorContract;
+
+// "Communications Settings": 19200 (the default), 8 data bits, no parity, 1 stop bit. "Device
+// Address": 0x00 the master, 0xFF everyone; "Device ID ... Default Value 0x01". "All transfers are
+// required to be master initiated". `drivegate demo`: default options, running at 3000 rpm; no
+// maintenance actions.
+const test::DescriptorFacts kFacts{.id = "unicla-edrive",
+                                   .options = kOptionSchema,
+                                   .line = {19200, Parity::none, 8, 1, false},
+                                   .address_min = 1,
+                                   .address_max = 254,
+                                   .default_address = 1,
+                                   .streaming = false,
+                                   .demo_options = {},
+                                   .demo_rpm = 3000};
+INSTANTIATE_TEST_SUITE_P(Unicla, DescriptorContract, testing::Values(kFacts));
 
 TEST(UniclaPlugin, FactoriesRefuseTheMasterAndGlobalAddresses) {
   for (const std::uint32_t address : {0u, 255u, 256u}) {
@@ -89,13 +82,10 @@ TEST(UniclaSettings, FromTheOptions) {
 }
 
 TEST(UniclaSettings, TraitsFollowTheOptions) {
-  DeviceEnv env;
-  env.address = 1;
-  env.poll_interval = 1000ms;
-  env.options = test::options_of(drivegate_adapter, {{"confirm_timeout_ms", "1500"}});
-  std::string error;
-  const auto d = drivegate_adapter.create_driver(env, error);
-  ASSERT_NE(d, nullptr) << error;
+  const auto d = test::make_driver(
+      drivegate_adapter,
+      {.options = {{"confirm_timeout_ms", "1500"}}, .address = 1, .poll = 1000ms});
+  ASSERT_NE(d, nullptr);
   const DriverTraits t = d->traits();
   // The gateway's write deadline comes after the driver's own verdict.
   EXPECT_EQ(t.write_timeout, 2500ms);

@@ -6,8 +6,8 @@
 
 #include <memory>
 
+#include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "bus_rig.h"
 #include "codec.h"
 #include "faults.h"
 #include "payloads.h"
@@ -19,13 +19,7 @@ const TimePoint t0 = TimePoint{} + std::chrono::hours(1);
 
 // A simulator as `drivegate sim` makes one: the adapter's factory, options as text.
 std::unique_ptr<Simulator> make(std::uint32_t address, const test::OptionText& options = {}) {
-  SimEnv env;
-  env.address = address;
-  env.options = test::options_of(drivegate_adapter, options);
-  std::string error;
-  auto sim = drivegate_adapter.create_simulator(env, error);
-  EXPECT_NE(sim, nullptr) << error;
-  return sim;
+  return test::make_simulator(drivegate_adapter, address, options);
 }
 
 Bytes read_req(std::uint8_t dst, std::uint8_t id, std::uint8_t seq, std::uint8_t src = 0x00) {
