@@ -33,8 +33,9 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
       failsafe_(config_.failsafe.timeout),
       last_tick_(now) {
   for (int t = 0; t < 4; ++t) image_[t].assign(map_.size(static_cast<Table>(t)), 0);
-  refresh_image();
-  refresh_common(now);
+  refresh_image(now);
+  refresh_common(Table::input, now);
+  refresh_common(Table::discrete, now);
 }
 
 Device::~Device() = default;

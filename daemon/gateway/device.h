@@ -87,8 +87,8 @@ class Device final : public Station {
   void publish(TimePoint now);
   void log_changes();
   // device_image.cpp
-  void refresh_image();
-  void refresh_common(TimePoint now);
+  void refresh_image(TimePoint now);
+  void refresh_common(Table table, TimePoint now);
   std::span<std::uint16_t> registers(Table t) { return image_[static_cast<int>(t)]; }
   // device_writes.cpp
   modbus::Exception submit(Table table, std::uint16_t address, std::span<const std::uint16_t> in,

@@ -11,8 +11,10 @@ namespace drivegate {
 
 using modbus::Exception;
 
-// The adapter's points: they change only when the driver is called (publish() marks them stale).
-void Device::refresh_image() {
+// What changes only when the driver is called or a write is applied (both mark the image
+// stale): the adapter's points and the common holding registers (command and setpoint in force,
+// heartbeat).
+void Device::refresh_image(TimePoint now) {
   const auto& values = driver_->values();
   for (const auto& p : map_.points()) {
     if (p.source != PointSource::adapter) continue;
@@ -25,11 +27,15 @@ void Device::refresh_image() {
       encode_value(p.spec, v, regs);
     }
   }
+  refresh_common(Table::holding, now);
   image_stale_ = false;
 }
 
-// The common block, which also changes with time (data age) and with the line (counters).
-void Device::refresh_common(TimePoint now) {
+// The common block's rows of `table`. The inputs (data age, the line's counters) and the status
+// bits change without the driver being called, so they are computed for every read of their
+// table; the holding rows with refresh_image().
+void Device::refresh_common(Table table, TimePoint now) {
+  if (map_.common_points(table).empty()) return;
   const CommonState& c = driver_->common();
   const bool lost = link_.health.comm_lost();
   FaultSet faults = c.faults;
@@ -63,7 +69,7 @@ void Device::refresh_common(TimePoint now) {
                          : std::numeric_limits<std::uint32_t>::max(),
       .heartbeat = heartbeat_,
   };
-  for (const auto& p : map_.common_points()) {
+  for (const auto& p : map_.common_points(table)) {
     if (const CommonRow* row = p.row()) {
       encode_integer(row->type, row->value(snapshot),
                      registers(row->table).subspan(p.address, p.spec.register_count()));
@@ -80,8 +86,8 @@ Exception Device::read(Table table, std::uint16_t address, std::span<std::uint16
       map_.mapped_from(table, address) < out.size()) {
     return Exception::illegal_data_address;
   }
-  if (image_stale_) refresh_image();
-  refresh_common(now);
+  if (image_stale_) refresh_image(now);
+  if (table == Table::input || table == Table::discrete) refresh_common(table, now);
   std::copy_n(regs.begin() + address, out.size(), out.begin());
   return Exception::none;
 }

@@ -158,6 +158,7 @@ Device::Progress Device::advance(Request& r, TimePoint now, Exception& failure) 
     const std::optional<WriteOp> maybe_op = op_of(*part.point, part.value);
     if (!maybe_op) {
       heartbeat_ = static_cast<std::uint16_t>(whole(part.value));
+      image_stale_ = true;
       continue;
     }
     const WriteOp& op = *maybe_op;

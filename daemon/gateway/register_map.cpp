@@ -55,6 +55,16 @@ RegisterMap::RegisterMap(const std::vector<PointSpec>& adapter_points) {
 }
 
 void RegisterMap::add(MappedPoint p) {
+  // The common block's points come first, each table's together (kCommonBlock is in table order,
+  // then the status bits): common_points() is one slice per table.
+  if (p.common()) {
+    auto& [first, count] = common_[static_cast<int>(p.spec.table)];
+    if (count == 0) first = points_.size();
+    if (first + count != points_.size()) {
+      throw std::logic_error("kCommonBlock must list each table's rows together");
+    }
+    ++count;
+  }
   // Names are how the register map, `drivegate write` and every client that reads it by name find
   // a point: one name, one point.
   if (p.spec.name.empty()) throw std::invalid_argument("a point has no name");

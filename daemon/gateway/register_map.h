@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <string_view>
 #include <vector>
 
@@ -46,9 +47,11 @@ class RegisterMap {
   explicit RegisterMap(const std::vector<PointSpec>& adapter_points);
 
   [[nodiscard]] const std::vector<MappedPoint>& points() const { return points_; }
-  // The common block and the status bits: the first points, before the adapter's.
-  [[nodiscard]] std::span<const MappedPoint> common_points() const {
-    return std::span(points_).first(kCommonBlock.size() + kStatusBitNames.size());
+  // The common block's points in table `t` (the status bits for Table::discrete), in address
+  // order: the image refreshes them on every read of that table.
+  [[nodiscard]] std::span<const MappedPoint> common_points(Table t) const {
+    const auto& [first, count] = common_[static_cast<int>(t)];
+    return std::span(points_).subspan(first, count);
   }
   // Registers (or bits) each table needs.
   [[nodiscard]] std::uint16_t size(Table t) const { return sizes_[static_cast<int>(t)]; }
@@ -66,6 +69,7 @@ class RegisterMap {
   std::uint16_t sizes_[4] = {0, 0, 0, 0};
   std::vector<std::int32_t> owner_[4];  // per table and address: index into points_, -1 = none
   std::vector<std::uint16_t> run_[4];   // per table and address: mapped_from()
+  std::pair<std::size_t, std::size_t> common_[4] = {};  // per table: first index, count
 };
 
 }  // namespace drivegate
