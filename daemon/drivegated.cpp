@@ -9,6 +9,7 @@
 #include "app/logging.h"
 #include "config/config_loader.h"
 #include "gateway/gateway.h"
+#include "modbus/tls.h"
 
 namespace {
 
@@ -18,7 +19,8 @@ constexpr const char* kUsage =
     "       drivegated --version | --help\n"
     "\n"
     "Polls the drives configured in FILE on their serial lines and serves them as one Modbus\n"
-    "TCP server. LEVEL: trace, debug, info (default), warn, error.\n";
+    "TCP server. --listen replaces the address of the first listener (its allow list and access\n"
+    "level stay). LEVEL: trace, debug, info (default), warn, error.\n";
 
 int usage_error(const std::string& what) {
   std::cerr << "drivegated: " << what << "\n" << kUsage;
@@ -37,7 +39,17 @@ int check_config(const std::filesystem::path& file, const std::filesystem::path&
     boost::asio::io_context io;
     auto log = drivegate::make_logger("check", spdlog::level::off);
     drivegate::Gateway::build(io, *result.config, plugins, log, errors);
+    // The TLS files as the listener will read them (permissions, PEM, key matching certificate).
+    for (const auto& l : result.config->listeners) {
+      if (!l.options.policy.tls) continue;
+      std::string error;
+      if (!drivegate::modbus::make_tls_context(*l.options.policy.tls, error)) {
+        errors.push_back(file.string() + ":" + std::to_string(l.line) + ": listener " +
+                         l.options.name() + ": " + error);
+      }
+    }
   }
+  for (const auto& w : result.warnings) std::cerr << "warning: " << w << "\n";
   for (const auto& e : errors) std::cerr << e << "\n";
   if (!errors.empty()) {
     std::cerr << file.string() << ": " << errors.size() << " error"
@@ -45,7 +57,8 @@ int check_config(const std::filesystem::path& file, const std::filesystem::path&
     return 1;
   }
   std::cout << file.string() << ": OK (" << result.config->devices.size() << " devices on "
-            << result.config->buses.size() << " buses)\n";
+            << result.config->buses.size() << " buses, " << result.config->listeners.size()
+            << " listener" << (result.config->listeners.size() == 1 ? "" : "s") << ")\n";
   return 0;
 }
 
@@ -84,11 +97,9 @@ int main(int argc, char** argv) {
       options.plugin_dir = *v;
     } else if (arg == "--listen") {
       auto v = value(arg);
-      drivegate::ServerConfig listen;
-      if (!v || !drivegate::parse_listen(*v, listen)) {
-        return usage_error("--listen needs HOST:PORT (e.g. 127.0.0.1:1502)");
-      }
-      options.listen = listen;
+      auto listen = v ? drivegate::parse_listen(*v) : std::nullopt;
+      if (!listen) return usage_error("--listen needs HOST:PORT (e.g. 127.0.0.1:1502)");
+      options.listen = std::move(*listen);
     } else if (arg == "--log-level") {
       auto v = value(arg);
       auto parsed = v ? drivegate::parse_log_level(*v) : std::nullopt;

@@ -9,15 +9,17 @@ namespace drivegate {
 class BackendSwitch : public modbus::Backend {
  public:
   void set(modbus::Backend* target) { target_ = target; }
-  modbus::Exception read(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+  modbus::Exception read(const modbus::Session& session, std::uint8_t unit,
+                         modbus::RegisterTable table, std::uint16_t address,
                          std::span<std::uint16_t> out) override {
     if (target_ == nullptr) return modbus::Exception::gateway_path_unavailable;
-    return target_->read(unit, table, address, out);
+    return target_->read(session, unit, table, address, out);
   }
-  modbus::Exception write(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+  modbus::Exception write(const modbus::Session& session, std::uint8_t unit,
+                          modbus::RegisterTable table, std::uint16_t address,
                           std::span<const std::uint16_t> values, modbus::WriteDone done) override {
     if (target_ == nullptr) return modbus::Exception::gateway_path_unavailable;
-    return target_->write(unit, table, address, values, std::move(done));
+    return target_->write(session, unit, table, address, values, std::move(done));
   }
 
  private:

@@ -18,19 +18,10 @@ namespace {
 constexpr Millis kStopLimit{3000};  // longest wait for drives to confirm stop on shutdown
 constexpr Millis kStatusPeriod{2000};
 
-// [server] on SIGHUP. The listening socket is bound once, at start-up (binding another address
-// while running could fail and leave no listener), so listen changes wait for a restart; the
-// limits apply to the running server at once (modbus::Server::set_limits says how). Returns the
-// [server] the daemon now runs with.
-ServerConfig reload_server(const ServerConfig& running, const ServerConfig& next,
-                           modbus::Server& server, spdlog::logger& log) {
-  ServerConfig applied = next;
-  if (next.host != running.host || next.port != running.port) {
-    log.warn("[server] listen changes take effect at the next restart: still listening on {}:{}",
-             running.host, running.port);
-    applied.host = running.host;
-    applied.port = running.port;
-  }
+// [server] limits on SIGHUP: applied to the running server at once (modbus::Server::set_limits
+// says how).
+void reload_limits(const ServerConfig& running, const ServerConfig& next, modbus::Server& server,
+                   spdlog::logger& log) {
   std::vector<std::string> changed;
   if (next.max_clients != running.max_clients) {
     changed.push_back(fmt::format("max_clients {} -> {}", running.max_clients, next.max_clients));
@@ -44,11 +35,17 @@ ServerConfig reload_server(const ServerConfig& running, const ServerConfig& next
                                   next.frame_timeout.count()));
   }
   if (!changed.empty()) {
-    server.set_limits({applied.max_clients, applied.frame_timeout, applied.idle_timeout});
+    server.set_limits({next.max_clients, next.frame_timeout, next.idle_timeout});
     log.info("[server] applied without closing a connection: {}", fmt::join(changed, ", "));
   }
-  return applied;
 }
+
+std::vector<modbus::ListenerOptions> listener_options(const std::vector<ListenerConfig>& ls) {
+  std::vector<modbus::ListenerOptions> out;
+  for (const auto& l : ls) out.push_back(l.options);
+  return out;
+}
+
 }  // namespace
 
 Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
@@ -66,9 +63,13 @@ Daemon::~Daemon() {
 std::optional<Config> Daemon::load_config() {
   auto result = drivegate::load_config(options_.config, plugins_);
   for (const auto& e : result.errors) log_->error("{}", e);
+  if (result.config) {
+    for (const auto& w : result.warnings) log_->warn("{}", w);
+  }
   if (result.config && options_.listen) {
-    result.config->server.host = options_.listen->host;
-    result.config->server.port = options_.listen->port;
+    auto& first = result.config->listeners.front().options;
+    first.host = options_.listen->host;
+    first.port = options_.listen->port;
   }
   return std::move(result.config);
 }
@@ -90,22 +91,22 @@ int Daemon::run() {
   if (!gateway_) return 1;
 
   modbus::ServerOptions so;
-  so.host = config_.server.host;
-  so.port = config_.server.port;
+  so.listeners = listener_options(config_.listeners);
   so.max_clients = config_.server.max_clients;
   so.idle_timeout = config_.server.idle_timeout;
   so.frame_timeout = config_.server.frame_timeout;
   so.identity.product = "drivegate Modbus TCP gateway";
   so.identity.version = DRIVEGATE_VERSION;
   server_ = std::make_unique<modbus::Server>(io_, backend_, so, log_);
-  if (const auto ec = server_->listen()) {
-    log_->critical("cannot listen on {}:{}: {}", so.host, so.port, ec.message());
+  if (const auto ec = server_->listen()) {  // the server logged which listener, and why
+    log_->critical("Modbus TCP server not started: {}", ec.message());
     return 1;
   }
   gateway_->start();
   backend_.set(gateway_.get());
-  log_->info("serving {} devices on {} buses, Modbus TCP on port {}", gateway_->devices().size(),
-             config_.buses.size(), server_->port());
+  log_->info("serving {} devices on {} buses, Modbus TCP on {} listener(s), the first on port {}",
+             gateway_->devices().size(), config_.buses.size(), config_.listeners.size(),
+             server_->port());
   wait_signal();
   notifier_.ready(status_line());
   tick_status();
@@ -136,12 +137,23 @@ void Daemon::reload() {
   std::unique_ptr<Gateway> next;
   if (config) next = Gateway::build(io_, *config, plugins_, log_, errors);
   for (const auto& e : errors) log_->error("{}", e);
+  // The listeners' new policies, TLS files re-read; nothing changes if any of it fails.
+  if (next) {
+    const auto listeners = server_->reload_listeners(listener_options(config->listeners));
+    for (const auto& e : listeners.errors) log_->error("listener {}", e);
+    if (!listeners.errors.empty()) next.reset();
+    for (const auto& l : listeners.restart_needed) {
+      log_->warn("listener {}: takes effect at the next restart (listening sockets are bound once)",
+                 l);
+    }
+    if (!listeners.restart_needed.empty()) config->listeners = config_.listeners;
+  }
   if (!next) {
     log_->error("new configuration refused: still running the previous one");
     notifier_.ready(status_line());
     return;
   }
-  config->server = reload_server(config_.server, config->server, *server_, *log_);
+  reload_limits(config_.server, config->server, *server_, *log_);
   // Unchanged buses move over running; the others close before the new ones open their ports.
   const auto kept = next->adopt_unchanged(*gateway_);
   gateway_->stop();

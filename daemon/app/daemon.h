@@ -1,8 +1,8 @@
 // drivegated at run time: plugins, configuration, gateway, Modbus TCP server, signals and the
 // systemd protocol, all on one io_context. SIGTERM / SIGINT stop the drives and exit 0; SIGHUP
 // re-reads the configuration and swaps the gateway without dropping a Modbus connection (and
-// applies the new [server] limits; a new listen address waits for a restart), or keeps the
-// running one when the new file is bad.
+// applies the new [server] limits and listener policies, re-reading TLS files; a listener added,
+// removed or moved waits for a restart), or keeps the running one when the new file is bad.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -27,7 +27,7 @@ namespace drivegate {
 struct DaemonOptions {
   std::filesystem::path config;
   std::filesystem::path plugin_dir;    // empty: default_plugin_dir()
-  std::optional<ServerConfig> listen;  // host and port override [server] listen
+  std::optional<ListenAddress> listen;  // replaces the first listener's address
 };
 
 class Daemon {

@@ -12,15 +12,29 @@
 #include <vector>
 
 #include "drivegate/adapter.h"
+#include "modbus/server_options.h"
 
 namespace drivegate {
 
+// [server]: what all listeners share.
 struct ServerConfig {
-  std::string host = "0.0.0.0";
-  std::uint16_t port = 502;
-  std::size_t max_clients = 32;
+  std::size_t max_clients = 32;  // every listener's clients together
   Millis idle_timeout{60'000};
   Millis frame_timeout{2'000};
+};
+
+struct ListenAddress {
+  std::string host;
+  std::uint16_t port = 0;
+};
+
+// One [[listener]], or the one listener [server] listen declares.
+struct ListenerConfig {
+  modbus::ListenerOptions options;
+  // Declared by [server] listen (or by nothing: the default 0.0.0.0:502): plain TCP, every
+  // address, access maintain, as before listeners existed.
+  bool from_server_listen = false;
+  int line = 0;
 };
 
 struct BusConfig {
@@ -80,6 +94,7 @@ struct Config {
   std::filesystem::path path;
   std::filesystem::path plugin_dir;  // empty: the built-in default
   ServerConfig server;
+  std::vector<ListenerConfig> listeners;  // at least one
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
 };

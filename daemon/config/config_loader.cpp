@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "adapter_options.h"
+#include "server_config.h"
 #include "toml_reader.h"
 
 namespace drivegate {
@@ -27,31 +28,6 @@ std::optional<Parity> parse_parity(std::string_view s) {
 }
 
 }  // namespace
-
-// "host:port", "[v6]:port", or ":port".
-bool parse_listen(const std::string& s, ServerConfig& out) {
-  std::string host;
-  std::string port;
-  if (s.starts_with("[")) {
-    const auto close = s.find("]:");
-    if (close == std::string::npos) return false;
-    host = s.substr(1, close - 1);
-    port = s.substr(close + 2);
-  } else {
-    const auto colon = s.rfind(':');
-    if (colon == std::string::npos) return false;
-    host = s.substr(0, colon);
-    port = s.substr(colon + 1);
-  }
-  unsigned value = 0;
-  const auto [p, ec] = std::from_chars(port.data(), port.data() + port.size(), value);
-  if (ec != std::errc() || p != port.data() + port.size() || value > 65535 || port.empty()) {
-    return false;
-  }
-  out.host = host.empty() ? "0.0.0.0" : host;
-  out.port = static_cast<std::uint16_t>(value);
-  return true;
-}
 
 namespace {
 
@@ -143,44 +119,6 @@ Options read_options(const AdapterDescriptor& adapter, const toml::table* table,
     }
   }
   return options;
-}
-
-void read_server(const toml::table& root, Config& cfg, Diagnostics& diag) {
-  const toml::node* n = root.get("server");
-  if (n == nullptr) return;
-  const auto* t = n->as_table();
-  if (t == nullptr) {
-    diag.error(n, "server", "must be a table ([server])");
-    return;
-  }
-  TableReader r(*t, "server", diag);
-  r.expect({"listen", "max_clients", "idle_timeout_ms", "frame_timeout_ms"});
-  if (auto listen = r.string("listen", false)) {
-    if (!parse_listen(*listen, cfg.server)) {
-      diag.error(
-          r.node("listen"), "server.listen",
-          "must be \"host:port\" (e.g. \"0.0.0.0:502\" or \"[::]:502\"), got \"" + *listen + "\"");
-    }
-  }
-  if (auto v = r.integer("max_clients", 1, 1024, false)) cfg.server.max_clients = *v;
-  if (auto v = r.integer("idle_timeout_ms", 1000, 86'400'000, false)) {
-    cfg.server.idle_timeout = Millis(*v);
-  }
-  if (auto v = r.integer("frame_timeout_ms", 10, 60'000, false)) {
-    cfg.server.frame_timeout = Millis(*v);
-  }
-}
-
-const toml::array* array_of_tables(const toml::table& root, std::string_view key,
-                                   Diagnostics& diag) {
-  const toml::node* n = root.get(key);
-  if (n == nullptr) return nullptr;
-  const auto* a = n->as_array();
-  if (a == nullptr || !a->is_array_of_tables()) {
-    diag.error(n, key, "must be an array of tables ([[" + std::string(key) + "]])");
-    return nullptr;
-  }
-  return a;
 }
 
 // Which line settings a [[bus]] set itself; the rest come from its devices' adapter.
@@ -463,12 +401,14 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   cfg.path = source_name;
   {
     TableReader top(root, "", diag);
-    top.expect({"server", "bus", "device"});
+    top.expect({"server", "listener", "bus", "device"});
     top.node("server");
+    top.node("listener");
     top.node("bus");
     top.node("device");
   }
   read_server(root, cfg, diag);
+  read_listeners(root, cfg, diag);
   const auto given = read_buses(root, cfg, diag);
   read_devices(root, cfg, plugins, diag);
   if (cfg.devices.empty() && diag.errors.empty()) {
@@ -477,6 +417,7 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   cross_check(cfg, given, plugins, diag);
   if (diag.errors.empty()) {
     result.config = std::move(cfg);
+    result.warnings = std::move(diag.warnings);
   } else {
     result.errors = std::move(diag.errors);
   }

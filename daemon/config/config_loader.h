@@ -15,11 +15,12 @@ namespace drivegate {
 
 struct ConfigResult {
   std::optional<Config> config;
-  std::vector<std::string> errors;  // "FILE:LINE: key: what is wrong"
+  std::vector<std::string> errors;    // "FILE:LINE: key: what is wrong"
+  std::vector<std::string> warnings;  // the same shape: valid, but probably not meant
 };
 
-// "host:port", "[v6]:port" or ":port" into `out`; false when it is none of these.
-bool parse_listen(const std::string& text, ServerConfig& out);
+// "host:port", "[v6]:port" or ":port" (every IPv4 interface); nullopt when it is none of these.
+std::optional<ListenAddress> parse_listen(std::string_view text);
 
 ConfigResult load_config(const std::filesystem::path& path, const PluginRegistry& plugins);
 // The same from text already in memory; `source_name` stands for the file in messages.

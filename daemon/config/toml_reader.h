@@ -22,16 +22,24 @@ class Diagnostics {
     error_at(line, key, what);
   }
   void error_at(int line, std::string_view key, std::string_view what) {
+    errors.push_back(message(line, key, what));
+  }
+  // Something valid but probably unwise: reported by --check-config and logged at start-up.
+  void warning_at(int line, std::string_view key, std::string_view what) {
+    warnings.push_back(message(line, key, what));
+  }
+  std::vector<std::string> errors;
+  std::vector<std::string> warnings;
+
+ private:
+  [[nodiscard]] std::string message(int line, std::string_view key, std::string_view what) const {
     std::string msg = source_;
     if (line > 0) msg += ":" + std::to_string(line);
     msg += ": ";
     if (!key.empty()) msg += std::string(key) + ": ";
     msg += what;
-    errors.push_back(std::move(msg));
+    return msg;
   }
-  std::vector<std::string> errors;
-
- private:
   std::string source_;
 };
 
@@ -123,5 +131,18 @@ class TableReader {
   std::set<std::string> seen_;
   std::vector<std::string> known_;
 };
+
+// `root[key]` as an array of tables ([[key]]); nullptr when absent or (with an error) not one.
+inline const toml::array* array_of_tables(const toml::table& root, std::string_view key,
+                                          Diagnostics& diag) {
+  const toml::node* n = root.get(key);
+  if (n == nullptr) return nullptr;
+  const auto* a = n->as_array();
+  if (a == nullptr || !a->is_array_of_tables()) {
+    diag.error(n, key, "must be an array of tables ([[" + std::string(key) + "]])");
+    return nullptr;
+  }
+  return a;
+}
 
 }  // namespace drivegate

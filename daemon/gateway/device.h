@@ -60,14 +60,19 @@ class Device final : public Station {
   void on_tick(TimePoint now) override;
 
   // --- Modbus side, from the gateway ---
-  // Fills `out` from the register image; 0x02 when any address of the range is unmapped.
-  modbus::Exception read(Table table, std::uint16_t address, std::span<std::uint16_t> out,
-                         TimePoint now);
+  // Fills `out` from the register image, 32-bit values in the session's word order; 0x02 when
+  // any address of the range is unmapped.
+  modbus::Exception read(const modbus::Session& session, Table table, std::uint16_t address,
+                         std::span<std::uint16_t> out, TimePoint now);
   // A Modbus write request: validated against the map, checked whole by the driver, then applied
   // part by part; `done` gets the outcome once every part settled, or the first failure. An
   // exception returned here means nothing of the request was applied and `done` is not called.
-  modbus::Exception write(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
-                          modbus::WriteDone done, TimePoint now);
+  // A point beyond the session's access level is exception 01 (illegal function), checked with
+  // the map before the values, so it never reaches the driver; 32-bit values are read in the
+  // session's word order.
+  modbus::Exception write(const modbus::Session& session, Table table, std::uint16_t address,
+                          std::span<const std::uint16_t> in, modbus::WriteDone done,
+                          TimePoint now);
   // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
   // the failsafe. `done` is called exactly once.
   void command(Command c, modbus::WriteDone done, TimePoint now);
@@ -76,6 +81,9 @@ class Device final : public Station {
 
  private:
   enum class Origin : std::uint8_t { plc, gateway };
+  // The gateway's own writes (shutdown, failsafe) may write anything, in the map's word order.
+  static constexpr modbus::Session kGatewaySession{modbus::AccessLevel::maintain,
+                                                   modbus::WordOrder::big};
   struct Part {
     const MappedPoint* point;
     Value value;
@@ -91,10 +99,11 @@ class Device final : public Station {
   void refresh_common(Table table, TimePoint now);
   std::span<std::uint16_t> registers(Table t) { return image_[static_cast<int>(t)]; }
   // device_writes.cpp
-  modbus::Exception submit(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
-                           modbus::WriteDone done, TimePoint now, Origin origin);
-  modbus::Exception validate(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
-                             std::vector<Part>& parts) const;
+  modbus::Exception submit(const modbus::Session& session, Table table, std::uint16_t address,
+                           std::span<const std::uint16_t> in, modbus::WriteDone done,
+                           TimePoint now, Origin origin);
+  modbus::Exception validate(const modbus::Session& session, Table table, std::uint16_t address,
+                             std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
   Progress advance(Request& r, TimePoint now, modbus::Exception& failure);
   void settle(const Completion& c, TimePoint now);
   void finish(const Request* r, modbus::Exception e);

@@ -48,12 +48,12 @@ void Device::enforce_failsafe(TimePoint now) {
   Exception e = Exception::none;
   if (action == FailsafeAction::preset) {
     const auto rpm = static_cast<std::uint16_t>(config_.failsafe.preset_rpm);
-    e = submit(Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done, now,
+    e = submit(kGatewaySession, Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done, now,
                Origin::gateway);
   } else {
     const auto c = static_cast<std::uint16_t>(
         action == FailsafeAction::quick_stop ? Command::quick_stop : Command::stop);
-    e = submit(Table::holding, 0, std::span<const std::uint16_t>(&c, 1), done, now,
+    e = submit(kGatewaySession, Table::holding, 0, std::span<const std::uint16_t>(&c, 1), done, now,
                Origin::gateway);
   }
   if (e != Exception::none) failsafe_settled(action, e);

@@ -79,8 +79,8 @@ void Device::refresh_common(Table table, TimePoint now) {
   }
 }
 
-Exception Device::read(Table table, std::uint16_t address, std::span<std::uint16_t> out,
-                       TimePoint now) {
+Exception Device::read(const modbus::Session& session, Table table, std::uint16_t address,
+                       std::span<std::uint16_t> out, TimePoint now) {
   const auto regs = registers(table);
   if (std::size_t{address} + out.size() > regs.size() ||
       map_.mapped_from(table, address) < out.size()) {
@@ -89,6 +89,16 @@ Exception Device::read(Table table, std::uint16_t address, std::span<std::uint16
   if (image_stale_) refresh_image(now);
   if (table == Table::input || table == Table::discrete) refresh_common(table, now);
   std::copy_n(regs.begin() + address, out.size(), out.begin());
+  if (session.word_order == modbus::WordOrder::little) {
+    // Each register of a 32-bit value shows its partner's word, so a read of half a value (or
+    // of a range cutting one) gives what a little-endian client expects at that address.
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const auto at = static_cast<std::uint16_t>(address + i);
+      const MappedPoint* p = map_.at(table, at);
+      if (p == nullptr || !has_word_order(p->spec)) continue;
+      out[i] = regs[at == p->address ? at + 1 : at - 1];
+    }
+  }
   return Exception::none;
 }
 

@@ -4,6 +4,7 @@
 // a later part after an earlier one took effect, the PLC gets the failure and the register image
 // shows what the drive really holds.
 #include <algorithm>
+#include <array>
 #include <optional>
 
 #include "gateway/device.h"
@@ -38,6 +39,13 @@ CommonWrite write_kind(const MappedPoint& p) {
   return row != nullptr ? row->write : CommonWrite::none;
 }
 
+// Access levels (README, "Listeners and access"): the common command block is operate's, every
+// other writable point maintain's.
+modbus::AccessLevel required_level(const MappedPoint& p) {
+  return write_kind(p) != CommonWrite::none ? modbus::AccessLevel::operate
+                                            : modbus::AccessLevel::maintain;
+}
+
 std::int64_t whole(const Value& v) {
   return static_cast<std::int64_t>(as_double(v));
 }
@@ -61,20 +69,20 @@ std::optional<WriteOp> op_of(const MappedPoint& point, const Value& value) {
 
 }  // namespace
 
-Exception Device::write(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
-                        modbus::WriteDone done, TimePoint now) {
-  return submit(table, address, in, std::move(done), now, Origin::plc);
+Exception Device::write(const modbus::Session& session, Table table, std::uint16_t address,
+                        std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now) {
+  return submit(session, table, address, in, std::move(done), now, Origin::plc);
 }
 
 void Device::command(Command c, modbus::WriteDone done, TimePoint now) {
   const auto value = static_cast<std::uint16_t>(c);
-  const Exception e = submit(Table::holding, 0, std::span<const std::uint16_t>(&value, 1), done,
-                             now, Origin::gateway);
+  const Exception e = submit(kGatewaySession, Table::holding, 0,
+                             std::span<const std::uint16_t>(&value, 1), done, now, Origin::gateway);
   if (e != Exception::none) done(e);
 }
 
-Exception Device::validate(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
-                           std::vector<Part>& parts) const {
+Exception Device::validate(const modbus::Session& session, Table table, std::uint16_t address,
+                           std::span<const std::uint16_t> in, std::vector<Part>& parts) const {
   const bool bits = table == Table::coil;
   std::size_t i = 0;
   while (i < in.size()) {
@@ -85,11 +93,19 @@ Exception Device::validate(Table table, std::uint16_t address, std::span<const s
     const std::size_t count = bits ? 1 : p->spec.register_count();
     if (i + count > in.size()) return Exception::illegal_data_address;
     if (p->spec.access() != Access::read_write) return Exception::illegal_data_address;
+    // backend.h: beyond the session's level is exception 01, and the only reason for it.
+    if (required_level(*p) > session.access) return Exception::illegal_function;
     Value v;
     if (bits) {
       v = std::int64_t{in[i] != 0 ? 1 : 0};
     } else {
-      auto decoded = decode_value(p->spec, in.subspan(i, count));
+      std::array<std::uint16_t, 2> swapped{};
+      auto words = in.subspan(i, count);
+      if (session.word_order == modbus::WordOrder::little && has_word_order(p->spec)) {
+        swapped = {words[1], words[0]};
+        words = swapped;
+      }
+      auto decoded = decode_value(p->spec, words);
       if (!decoded) return Exception::illegal_data_value;
       v = std::move(*decoded);
       const double x = as_double(v);
@@ -103,10 +119,13 @@ Exception Device::validate(Table table, std::uint16_t address, std::span<const s
   return Exception::none;
 }
 
-Exception Device::submit(Table table, std::uint16_t address, std::span<const std::uint16_t> in,
-                         modbus::WriteDone done, TimePoint now, Origin origin) {
+Exception Device::submit(const modbus::Session& session, Table table, std::uint16_t address,
+                         std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now,
+                         Origin origin) {
   std::vector<Part> parts;
-  if (const Exception e = validate(table, address, in, parts); e != Exception::none) return e;
+  if (const Exception e = validate(session, table, address, in, parts); e != Exception::none) {
+    return e;
+  }
   const auto writes = [&](CommonWrite kind) {
     return std::any_of(parts.begin(), parts.end(),
                        [kind](const Part& p) { return write_kind(*p.point) == kind; });

@@ -211,19 +211,21 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   });
 }
 
-Exception Gateway::read(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+Exception Gateway::read(const modbus::Session& session, std::uint8_t unit,
+                        modbus::RegisterTable table, std::uint16_t address,
                         std::span<std::uint16_t> out) {
   Device* d = units_[unit];
   if (d == nullptr) return Exception::gateway_path_unavailable;
-  return d->read(to_table(table), address, out, Clock::now());
+  return d->read(session, to_table(table), address, out, Clock::now());
 }
 
-Exception Gateway::write(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+Exception Gateway::write(const modbus::Session& session, std::uint8_t unit,
+                         modbus::RegisterTable table, std::uint16_t address,
                          std::span<const std::uint16_t> values, modbus::WriteDone done) {
   Device* d = units_[unit];
   if (d == nullptr) return Exception::gateway_path_unavailable;
   if (!running_) return Exception::gateway_target_failed;
-  return d->write(to_table(table), address, values, std::move(done), Clock::now());
+  return d->write(session, to_table(table), address, values, std::move(done), Clock::now());
 }
 
 std::size_t Gateway::devices_online() const {

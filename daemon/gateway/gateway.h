@@ -52,9 +52,11 @@ class Gateway : public modbus::Backend {
   // leaves it) and calls `done` once they confirmed or `limit` passed.
   void stop_drives(Millis limit, std::function<void()> done);
 
-  modbus::Exception read(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+  modbus::Exception read(const modbus::Session& session, std::uint8_t unit,
+                         modbus::RegisterTable table, std::uint16_t address,
                          std::span<std::uint16_t> out) override;
-  modbus::Exception write(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
+  modbus::Exception write(const modbus::Session& session, std::uint8_t unit,
+                          modbus::RegisterTable table, std::uint16_t address,
                           std::span<const std::uint16_t> values, modbus::WriteDone done) override;
 
   [[nodiscard]] std::size_t devices_online() const;

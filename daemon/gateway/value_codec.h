@@ -22,4 +22,10 @@ void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t>
 // (a string point is not writable).
 std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::uint16_t> in);
 
+// True for the values laid over two registers as one 32-bit number (u32, i32, f32): the ones a
+// listener's word_order = "little" serves low word first. Strings are never reordered.
+constexpr bool has_word_order(const PointSpec& spec) {
+  return spec.type == PointType::u32 || spec.type == PointType::i32 || spec.type == PointType::f32;
+}
+
 }  // namespace drivegate

@@ -4,9 +4,11 @@
 // confirmed them or failed to.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string_view>
 
 namespace drivegate::modbus {
 
@@ -30,6 +32,33 @@ enum class RegisterTable : std::uint8_t {
   holding_registers
 };
 
+// What a client may do (README, "Listeners and access"). Ordered: each level includes the ones
+// below it.
+enum class AccessLevel : std::uint8_t {
+  read,      // reads only: every write function is answered 0x01
+  operate,   // also the common command block: command, setpoint_rpm, heartbeat
+  maintain,  // every writable point
+};
+
+// Their names in drivegate.toml and in the log, in enum order.
+inline constexpr std::array<std::string_view, 3> kAccessLevelNames = {"read", "operate",
+                                                                      "maintain"};
+constexpr std::string_view to_string(AccessLevel a) {
+  return kAccessLevelNames.at(static_cast<std::size_t>(a));
+}
+
+// How 32-bit values are laid over two registers for a client: big = high word first (the register
+// map's order), little = low word first. Registers of 16 bits and bits are never reordered.
+enum class WordOrder : std::uint8_t { big, little };
+inline constexpr std::array<std::string_view, 2> kWordOrderNames = {"big", "little"};
+
+// Who is asking: the connection's access level and word order (its listener's, or the role of its
+// TLS client certificate). Passed with every read and write.
+struct Session {
+  AccessLevel access = AccessLevel::maintain;
+  WordOrder word_order = WordOrder::big;
+};
+
 using WriteDone = std::function<void(Exception)>;
 
 class Backend {
@@ -38,15 +67,20 @@ class Backend {
   // Fills `out` (one element per register, or one per bit with 0 / 1 for bit tables) with
   // `out.size()` values from `address`. Unknown unit: gateway_path_unavailable; any address in
   // the range unmapped: illegal_data_address.
-  virtual Exception read(std::uint8_t unit, RegisterTable table, std::uint16_t address,
-                         std::span<std::uint16_t> out) = 0;
+  // `session` gives the word order of 32-bit values.
+  virtual Exception read(const Session& session, std::uint8_t unit, RegisterTable table,
+                         std::uint16_t address, std::span<std::uint16_t> out) = 0;
   // Validates synchronously (unknown unit, unmapped address, read-only, range) and returns the
   // exception at once if it fails; otherwise returns none and calls `done` exactly once later,
   // possibly after the connection that asked has gone (the server must tolerate that).
+  // illegal_function is returned for one reason only: a point of the range needs more than
+  // `session.access` (nothing was applied; the server counts and logs it as a denied write).
+  // `values` are in `session.word_order`.
   // `values` is valid only during the call (it points into the server's scratch): copy what is
   // kept. `done` may be called from inside write(); the server defers its work to the event loop.
-  virtual Exception write(std::uint8_t unit, RegisterTable table, std::uint16_t address,
-                          std::span<const std::uint16_t> values, WriteDone done) = 0;
+  virtual Exception write(const Session& session, std::uint8_t unit, RegisterTable table,
+                          std::uint16_t address, std::span<const std::uint16_t> values,
+                          WriteDone done) = 0;
 };
 
 }  // namespace drivegate::modbus

@@ -1,5 +1,6 @@
 #include "connection.h"
 
+#include <openssl/ssl.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -16,11 +17,21 @@ namespace asio = boost::asio;
 constexpr std::size_t kReceiveBuffer = 16 * 1024;
 // Replies not yet taken by a slow client: past this the connection stops reading until they are.
 constexpr std::size_t kMaxReplyBacklog = 64 * 1024;
+// Longest TLS handshake when frame_timeout is 0 (off): a client that opens a TLS listener and
+// never finishes the handshake holds a client slot, so it is never unbounded.
+constexpr std::chrono::milliseconds kHandshakeLimit{10'000};
+
+// A TLS handshake must finish within frame_timeout (a request must arrive whole within it too).
+std::chrono::milliseconds handshake_limit(const ServerOptions& o) {
+  return o.frame_timeout.count() > 0 ? o.frame_timeout : kHandshakeLimit;
+}
 
 }  // namespace
 
-Connection::Connection(std::shared_ptr<ServerState> state, asio::ip::tcp::socket socket)
+Connection::Connection(std::shared_ptr<ServerState> state, std::shared_ptr<ListenerState> listener,
+                       asio::ip::tcp::socket socket)
     : state_(std::move(state)),
+      listener_(std::move(listener)),
       socket_(std::move(socket)),
       timer_(state_->io),
       rx_(kReceiveBuffer),
@@ -33,6 +44,11 @@ Connection::~Connection() {
   close();
 }
 
+std::string Connection::who() const {
+  return "client " + peer_.address().to_string() + ":" + std::to_string(peer_.port()) + " on " +
+         listener_->options.name();
+}
+
 void Connection::start() {
   boost::system::error_code ec;
   socket_.set_option(asio::ip::tcp::no_delay(true), ec);  // replies leave at once (issue 9)
@@ -40,18 +56,87 @@ void Connection::start() {
   state_->live.insert(this);
   ++state_->stats.connections_accepted;
   ++state_->stats.connections_active;
-  state_->log->debug("modbus: client {}:{} connected", peer_.address().to_string(), peer_.port());
-  last_request_ = Clock::now();
+  state_->log->debug("modbus: {} connected", who());
+  started_ = last_request_ = Clock::now();
+  if (listener_->tls) {
+    tls_context_ = listener_->tls;
+    tls_.emplace(std::move(socket_), *tls_context_);
+    handshaking_ = true;
+    if (auto deadline = next_deadline()) arm_timer(*deadline);
+    handshake();
+    return;
+  }
+  apply_policy();
   if (auto deadline = next_deadline()) arm_timer(*deadline);
   read();
+}
+
+void Connection::handshake() {
+  tls_->async_handshake(asio::ssl::stream_base::server,
+                        [self = shared_from_this()](const boost::system::error_code& ec) {
+                          self->on_handshake(ec);
+                        });
+}
+
+void Connection::on_handshake(const boost::system::error_code& ec) {
+  if (closed_) return;
+  handshaking_ = false;
+  if (ec) {
+    ++state_->stats.tls_handshake_failures;
+    state_->log->warn("modbus: {}: TLS handshake failed: {}; closing", who(), ec.message());
+    close();
+    return;
+  }
+  X509* cert = SSL_get0_peer_certificate(tls_->native_handle());
+  role_ = certificate_role(cert);
+  subject_ = certificate_subject(cert);
+  apply_policy();
+  state_->log->info("modbus: {}: {}, certificate \"{}\", role {}: access {}", who(),
+                    SSL_get_version(tls_->native_handle()), subject_,
+                    role_ ? "\"" + *role_ + "\"" : std::string("(none)"),
+                    to_string(session_.access));
+  last_request_ = Clock::now();
+  if (auto deadline = next_deadline(); deadline && *deadline < timer_deadline_) {
+    arm_timer(*deadline);
+  }
+  read();
+}
+
+// The session from the listener's policy: its word order, and its access level, or on TLS the
+// level of the certificate's role when the roles table names it.
+void Connection::apply_policy() {
+  const ListenerPolicy& p = listener_->options.policy;
+  session_.word_order = p.word_order;
+  session_.access = p.access;
+  if (p.tls && role_) {
+    if (const auto it = p.tls->roles.find(*role_); it != p.tls->roles.end()) {
+      session_.access = it->second;
+    }
+  }
+}
+
+void Connection::policy_changed() {
+  if (closed_) return;
+  if (!allowed(listener_->options.policy.allow, peer_.address())) {
+    state_->log->info("modbus: {}: no longer in the listener's allow list; closing", who());
+    close();
+    return;
+  }
+  const Session before = session_;
+  if (!handshaking_) apply_policy();
+  if (session_.access != before.access) {
+    state_->log->info("modbus: {}: access {} -> {}", who(), to_string(before.access),
+                      to_string(session_.access));
+    denial_logged_ = false;
+  }
 }
 
 void Connection::close() {
   if (closed_) return;
   closed_ = true;
   boost::system::error_code ec;
-  socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ec);
-  socket_.close(ec);
+  tcp().shutdown(asio::ip::tcp::socket::shutdown_both, ec);
+  tcp().close(ec);
   timer_.cancel();
   for (auto& w : writes_) {  // late `done` calls find a stale generation and are dropped
     w.used = false;
@@ -62,30 +147,33 @@ void Connection::close() {
 }
 
 bool Connection::may_read() const {
-  return !closed_ && !reading_ && !close_after_flush_ && outstanding_ < writes_.size() &&
+  return !closed_ && !handshaking_ && !reading_ && !close_after_flush_ && outstanding_ < writes_.size() &&
          tx_pending_.size() < kMaxReplyBacklog && rx_len_ < rx_.size();
 }
 
 void Connection::read() {
   if (!may_read()) return;
   reading_ = true;
-  socket_.async_read_some(asio::buffer(rx_.data() + rx_len_, rx_.size() - rx_len_),
-                          [self = shared_from_this()](const boost::system::error_code& ec,
-                                                      std::size_t n) { self->on_read(ec, n); });
+  with_stream([this](auto& stream) {
+    stream.async_read_some(asio::buffer(rx_.data() + rx_len_, rx_.size() - rx_len_),
+                           [self = shared_from_this()](const boost::system::error_code& ec,
+                                                       std::size_t n) { self->on_read(ec, n); });
+  });
 }
 
 void Connection::on_read(const boost::system::error_code& ec, std::size_t n) {
   reading_ = false;
   if (closed_) return;
-  if (ec == asio::error::eof) {  // the client is done sending: answer what it asked, then close
+  // The client is done sending (a TLS client may close without close_notify: the same): answer
+  // what it asked, then close.
+  if (ec == asio::error::eof || ec == asio::ssl::error::stream_truncated) {
     close_after_flush_ = true;
     flush();
     return;
   }
   if (ec) {
     if (ec != asio::error::operation_aborted) {
-      state_->log->debug("modbus: client {}:{}: {}", peer_.address().to_string(), peer_.port(),
-                         ec.message());
+      state_->log->debug("modbus: {}: {}", who(), ec.message());
     }
     close();
     return;
@@ -110,8 +198,7 @@ void Connection::process_input(Clock::time_point now) {
     }
     if (parse.status == MbapParse::Status::bad) {
       ++state_->stats.malformed;
-      state_->log->warn("modbus: client {}:{}: {}, closing the connection",
-                        peer_.address().to_string(), peer_.port(), parse.error.message());
+      state_->log->warn("modbus: {}: {}, closing the connection", who(), parse.error.message());
       close_after_flush_ = true;
       rx_len_ = 0;
       partial_since_.reset();
@@ -162,7 +249,7 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
   const auto out = reserve_reply();
   Dispatcher::Result result;
   if (!may_write(pdu[0])) {
-    result = state_->dispatcher.handle(header.unit, pdu, out, {});
+    result = state_->dispatcher.handle(session_, header.unit, pdu, out, {});
   } else {
     // A free slot exists: process_input stops at the cap. It is filled before the backend sees
     // the write, since `done` may fire before write() returns.
@@ -177,14 +264,25 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
     w.size = static_cast<std::uint8_t>(pdu.size());
     std::copy(pdu.begin(), pdu.end(), w.request.begin());
     ++outstanding_;
-    result =
-        state_->dispatcher.handle(header.unit, pdu, out,
-                                  [self = shared_from_this(), slot, generation = w.generation](
-                                      Exception e) { self->on_write_done(slot, generation, e); });
+    result = state_->dispatcher.handle(
+        session_, header.unit, pdu, out,
+        [self = shared_from_this(), slot, generation = w.generation](Exception e) {
+          self->on_write_done(slot, generation, e);
+        });
     if (result.status == Dispatcher::Result::Status::reply) {  // refused before it started
       w.used = false;
       ++w.generation;
       --outstanding_;
+    }
+  }
+  if (result.denied) {
+    ++state_->stats.writes_denied;
+    if (!denial_logged_) {  // once per connection: a PLC retrying must not flood the journal
+      denial_logged_ = true;
+      state_->log->warn(
+          "modbus: {}: write (function 0x{:02X}, unit {}) beyond its access level \"{}\": "
+          "refused with exception 01 (further refusals on this connection are counted only)",
+          who(), pdu[0], header.unit, to_string(session_.access));
     }
   }
   if (result.status == Dispatcher::Result::Status::reply) {
@@ -215,7 +313,7 @@ void Connection::process_completions() {
     const std::size_t at = tx_pending_.size();
     const auto out = reserve_reply();
     const std::size_t size = state_->dispatcher.complete(
-        w.unit, std::span<const std::uint8_t>(w.request.data(), w.size), w.result, out);
+        session_, w.unit, std::span<const std::uint8_t>(w.request.data(), w.size), w.result, out);
     commit_reply(at, w.transaction, w.unit, size);
     w.used = false;
     ++w.generation;
@@ -236,10 +334,11 @@ void Connection::flush() {
   std::swap(tx_pending_, tx_inflight_);
   tx_pending_.clear();
   writing_ = true;
-  asio::async_write(socket_, asio::buffer(tx_inflight_),
-                    [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
-                      self->on_flushed(ec);
-                    });
+  with_stream([this](auto& stream) {
+    asio::async_write(stream, asio::buffer(tx_inflight_),
+                      [self = shared_from_this()](const boost::system::error_code& ec,
+                                                  std::size_t) { self->on_flushed(ec); });
+  });
 }
 
 void Connection::on_flushed(const boost::system::error_code& ec) {
@@ -257,6 +356,7 @@ void Connection::on_flushed(const boost::system::error_code& ec) {
 std::optional<Connection::Clock::time_point> Connection::next_deadline() const {
   std::optional<Clock::time_point> deadline;
   const auto& o = state_->options;
+  if (handshaking_) return started_ + handshake_limit(o);
   if (o.idle_timeout.count() > 0) deadline = last_request_ + o.idle_timeout;
   if (partial_since_ && o.frame_timeout.count() > 0) {
     const auto frame = *partial_since_ + o.frame_timeout;
@@ -288,17 +388,24 @@ void Connection::on_timer(const boost::system::error_code& ec) {
   timer_deadline_ = Clock::time_point::max();
   const auto now = Clock::now();
   const auto& o = state_->options;
+  if (handshaking_ && now - started_ >= handshake_limit(o)) {
+    ++state_->stats.tls_handshake_failures;
+    state_->log->warn("modbus: {}: TLS handshake not finished in {} ms; closing", who(),
+                      handshake_limit(o).count());
+    close();
+    return;
+  }
   if (partial_since_ && o.frame_timeout.count() > 0 && now - *partial_since_ >= o.frame_timeout) {
     ++state_->stats.frame_timeouts;
-    state_->log->info("modbus: client {}:{}: partial frame for {} ms, closing",
-                      peer_.address().to_string(), peer_.port(), o.frame_timeout.count());
+    state_->log->info("modbus: {}: partial frame for {} ms, closing", who(),
+                      o.frame_timeout.count());
     close();
     return;
   }
   if (o.idle_timeout.count() > 0 && outstanding_ == 0 && now - last_request_ >= o.idle_timeout) {
     ++state_->stats.idle_timeouts;
-    state_->log->info("modbus: client {}:{}: no request for {} ms, closing",
-                      peer_.address().to_string(), peer_.port(), o.idle_timeout.count());
+    state_->log->info("modbus: {}: no request for {} ms, closing", who(),
+                      o.idle_timeout.count());
     close();
     return;
   }

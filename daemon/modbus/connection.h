@@ -6,10 +6,15 @@
 // frame_timeout, and after idle_timeout without a request. Both timeouts are read from the
 // shared ServerState when a deadline is computed, so new values (Server::set_limits) apply to an
 // open connection, measured from its last request or partial frame as before.
+//
+// On a TLS listener the connection first completes the handshake (the client certificate is
+// verified by OpenSSL against the listener's CA), takes its access level from the certificate's
+// role, and only then reads requests: nothing is read in clear text on a TLS listener.
 #pragma once
 
 #include <array>
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/ssl/stream.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <chrono>
 #include <cstdint>
@@ -24,7 +29,8 @@ namespace drivegate::modbus {
 
 class Connection : public std::enable_shared_from_this<Connection> {
  public:
-  Connection(std::shared_ptr<ServerState> state, boost::asio::ip::tcp::socket socket);
+  Connection(std::shared_ptr<ServerState> state, std::shared_ptr<ListenerState> listener,
+             boost::asio::ip::tcp::socket socket);
   ~Connection();
   Connection(const Connection&) = delete;
   Connection& operator=(const Connection&) = delete;
@@ -36,6 +42,10 @@ class Connection : public std::enable_shared_from_this<Connection> {
   // values bring the next deadline forward (a later one is found when the armed timer fires).
   // Never closes the connection itself: the timer does, in a later turn of the event loop.
   void limits_changed();
+  // The listener's policy changed (reload): the access level and word order are worked out again
+  // (for a TLS client, from the role its certificate carried); a client whose address is no
+  // longer allowed is closed.
+  void policy_changed();
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -52,6 +62,9 @@ class Connection : public std::enable_shared_from_this<Connection> {
     std::array<std::uint8_t, kMaxPduSize> request{};
   };
 
+  void handshake();
+  void on_handshake(const boost::system::error_code& ec);
+  void apply_policy();
   void read();
   void on_read(const boost::system::error_code& ec, std::size_t n);
   void process_input(Clock::time_point now);
@@ -68,9 +81,27 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void on_timer(const boost::system::error_code& ec);
   std::optional<Clock::time_point> next_deadline() const;
 
+  // The byte stream: the TCP socket itself, or TLS over it (the socket then lives in tls_).
+  template <typename F>
+  void with_stream(F&& f) {
+    if (tls_) {
+      f(*tls_);
+    } else {
+      f(socket_);
+    }
+  }
+  boost::asio::ip::tcp::socket& tcp() { return tls_ ? tls_->next_layer() : socket_; }
+  std::string who() const;
+
   std::shared_ptr<ServerState> state_;
+  std::shared_ptr<ListenerState> listener_;
   boost::asio::ip::tcp::socket socket_;
+  std::shared_ptr<boost::asio::ssl::context> tls_context_;  // kept alive for tls_
+  std::optional<boost::asio::ssl::stream<boost::asio::ip::tcp::socket>> tls_;
   boost::asio::ip::tcp::endpoint peer_;
+  Session session_;
+  std::optional<std::string> role_;  // the TLS client certificate's role, if it has one
+  std::string subject_;              // the TLS client certificate's subject
   boost::asio::steady_timer timer_;
   Clock::time_point timer_deadline_ = Clock::time_point::max();
 
@@ -85,8 +116,11 @@ class Connection : public std::enable_shared_from_this<Connection> {
   std::size_t outstanding_ = 0;
 
   Clock::time_point last_request_;
+  Clock::time_point started_;
   std::optional<Clock::time_point> partial_since_;  // a partial frame is buffered since then
 
+  bool handshaking_ = false;     // TLS: no request is read before the handshake completed
+  bool denial_logged_ = false;   // a write beyond the access level is logged once per connection
   bool reading_ = false;
   bool writing_ = false;
   bool completions_posted_ = false;

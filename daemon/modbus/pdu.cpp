@@ -69,9 +69,19 @@ Dispatcher::Dispatcher(Backend& backend, DeviceIdentity identity)
   }
 }
 
-Result Dispatcher::handle(std::uint8_t unit, std::span<const std::uint8_t> request,
-                          std::span<std::uint8_t> out, WriteDone done) {
+Result Dispatcher::handle(const Session& session, std::uint8_t unit,
+                          std::span<const std::uint8_t> request, std::span<std::uint8_t> out,
+                          WriteDone done) {
+  session_ = &session;
   const std::uint8_t fc = request[0];
+  // Modbus/TCP Security (MB-TCP-Security v21, "Authorization"): a request the client's role does
+  // not allow is answered with exception 01. A read-only client may not write at all, so its
+  // writes are refused before any other check and never reach the backend.
+  if (session.access == AccessLevel::read && may_write(fc)) {
+    Result r = fail(fc, Exception::illegal_function, out);
+    r.denied = true;
+    return r;
+  }
   switch (static_cast<Function>(fc)) {
     case Function::read_coils:
       return read_bits(unit, RegisterTable::coils, request, out);
@@ -107,7 +117,7 @@ Result Dispatcher::read_bits(std::uint8_t unit, RegisterTable table,
   if (count < 1 || count > kMaxReadBits) return fail(fc, Exception::illegal_data_value, out);
   if (overflows(address, count)) return fail(fc, Exception::illegal_data_address, out);
   const std::span<std::uint16_t> bits(scratch_.data(), count);
-  if (auto e = backend_.read(unit, table, address, bits); e != Exception::none) {
+  if (auto e = backend_.read(*session_, unit, table, address, bits); e != Exception::none) {
     return fail(fc, e, out);
   }
   const std::size_t bytes = (count + 7u) / 8u;
@@ -138,7 +148,7 @@ std::size_t Dispatcher::read_registers_response(std::uint8_t unit, RegisterTable
                                                 std::uint8_t function,
                                                 std::span<std::uint8_t> out) {
   const std::span<std::uint16_t> regs(scratch_.data(), count);
-  if (auto e = backend_.read(unit, table, address, regs); e != Exception::none) {
+  if (auto e = backend_.read(*session_, unit, table, address, regs); e != Exception::none) {
     return exception_pdu(function, e, out);
   }
   out[0] = function;
@@ -151,9 +161,11 @@ Result Dispatcher::start_write(std::uint8_t unit, RegisterTable table, std::uint
                                std::size_t count, std::span<std::uint8_t> out,
                                std::uint8_t function, WriteDone done) {
   const std::span<const std::uint16_t> values(scratch_.data(), count);
-  if (auto e = backend_.write(unit, table, address, values, std::move(done));
+  if (auto e = backend_.write(*session_, unit, table, address, values, std::move(done));
       e != Exception::none) {
-    return fail(function, e, out);
+    Result r = fail(function, e, out);
+    r.denied = e == Exception::illegal_function;  // backend.h: only for a denied access level
+    return r;
   }
   return {Result::Status::pending, 0};
 }
@@ -242,7 +254,7 @@ Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::
   // reads again, after the write).
   static_assert(kMaxRwWrite + kMaxRwRead <= std::tuple_size_v<decltype(scratch_)>);
   const std::span<std::uint16_t> probe(scratch_.data() + kMaxRwWrite, read_count);
-  if (auto e = backend_.read(unit, RegisterTable::holding_registers, read_address, probe);
+  if (auto e = backend_.read(*session_, unit, RegisterTable::holding_registers, read_address, probe);
       e != Exception::none) {
     return fail(fc, e, out);
   }
@@ -251,8 +263,10 @@ Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::
                      std::move(done));
 }
 
-std::size_t Dispatcher::complete(std::uint8_t unit, std::span<const std::uint8_t> request,
-                                 Exception result, std::span<std::uint8_t> out) {
+std::size_t Dispatcher::complete(const Session& session, std::uint8_t unit,
+                                 std::span<const std::uint8_t> request, Exception result,
+                                 std::span<std::uint8_t> out) {
+  session_ = &session;
   const std::uint8_t fc = request[0];
   if (result != Exception::none) return exception_pdu(fc, result, out);
   switch (static_cast<Function>(fc)) {

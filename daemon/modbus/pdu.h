@@ -49,19 +49,23 @@ class Dispatcher {
     };
     Status status = Status::reply;
     std::size_t size = 0;
+    bool denied = false;  // the reply is exception 01 to a write beyond the session's access
   };
 
   Dispatcher(Backend& backend, DeviceIdentity identity);
 
   // `request` is the PDU (function code + data, 1..253 bytes). `out` must hold kMaxPduSize bytes.
   // `done` is handed to Backend::write when the function writes; it is not used otherwise.
-  Result handle(std::uint8_t unit, std::span<const std::uint8_t> request,
+  // `session` is handed to the backend with every read and write, and refuses every write
+  // function at once (exception 01, `denied`) when its access level is read.
+  Result handle(const Session& session, std::uint8_t unit, std::span<const std::uint8_t> request,
                 std::span<std::uint8_t> out, WriteDone done);
 
   // The response to a write request that handle() left pending, once its `done` reported
   // `result`: the exception, or the function's normal response (for 0x17, the read that follows
   // the write). Returns the PDU size written to `out`.
-  std::size_t complete(std::uint8_t unit, std::span<const std::uint8_t> request, Exception result,
+  std::size_t complete(const Session& session, std::uint8_t unit,
+                       std::span<const std::uint8_t> request, Exception result,
                        std::span<std::uint8_t> out);
 
  private:
@@ -88,6 +92,9 @@ class Dispatcher {
                                       std::span<std::uint8_t> out);
 
   Backend& backend_;
+  // The session of the call in progress (handle / complete), for the backend calls below it. The
+  // dispatcher is shared by a server's connections and never re-entered, like scratch_.
+  const Session* session_ = nullptr;
   std::array<std::string, 3> objects_;  // 6.21 object ids 0x00..0x02
   // Register / bit values between the wire and the backend: 2000 = the largest quantity of any
   // function (read coils / discrete inputs, 6.1 / 6.2).

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <boost/asio/ip/v6_only.hpp>
 #include <vector>
 
@@ -39,73 +40,96 @@ bool parse_host(std::string host, asio::ip::address& out, bool& any) {
   return !ec;
 }
 
-void accept(const std::shared_ptr<ServerState>& state);
+using Listener = std::shared_ptr<ListenerState>;
 
-void on_accept(const std::shared_ptr<ServerState>& state, const boost::system::error_code& ec,
-               tcp::socket socket) {
+void accept(const std::shared_ptr<ServerState>& state, const Listener& listener);
+
+std::string allow_text(const AllowList& allow) {
+  std::string out;
+  for (const auto& r : allow) out += (out.empty() ? "" : ", ") + r.to_string();
+  return out;
+}
+
+// Closes a just-accepted socket before a byte of it is read.
+void refuse(tcp::socket& socket) {
+  boost::system::error_code ignored;
+  socket.close(ignored);
+}
+
+// Refusals are warned about at most once a second per cause, with the number since the last one.
+bool warn_now(std::chrono::steady_clock::time_point& last) {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last < kRefusalWarningInterval) return false;
+  last = now;
+  return true;
+}
+
+void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listener,
+               const boost::system::error_code& ec, tcp::socket socket) {
   if (state->closed || ec == asio::error::operation_aborted) return;
   if (ec) {
-    state->log->warn("modbus: accept failed: {}", ec.message());
+    state->log->warn("modbus: {}: accept failed: {}", listener->options.name(), ec.message());
     if (ec == asio::error::no_descriptors || ec == asio::error::no_buffer_space ||
         ec == asio::error::no_memory || ec.value() == ENFILE) {
-      state->retry_timer.expires_after(kAcceptRetry);
-      state->retry_timer.async_wait([state](const boost::system::error_code& e) {
-        if (!e && !state->closed) accept(state);
+      listener->retry_timer.expires_after(kAcceptRetry);
+      listener->retry_timer.async_wait([state, listener](const boost::system::error_code& e) {
+        if (!e && !state->closed) accept(state, listener);
       });
       return;
     }
-    accept(state);
+    accept(state, listener);
     return;
   }
-  if (state->live.size() >= state->options.max_clients) {
+  boost::system::error_code peer_ec;
+  const auto peer = socket.remote_endpoint(peer_ec);
+  if (peer_ec || !allowed(listener->options.policy.allow, peer.address())) {
+    // Not in the allow list: closed at accept, before anything it sent is read.
+    ++state->stats.connections_not_allowed;
+    ++listener->not_allowed_since_warning;
+    if (warn_now(listener->last_warning)) {
+      state->log->warn("modbus: {}: {} client(s) closed at accept, not in the allow list (last: {})",
+                       listener->options.name(), listener->not_allowed_since_warning,
+                       peer_ec ? peer_ec.message() : peer.address().to_string());
+      listener->not_allowed_since_warning = 0;
+    }
+    refuse(socket);
+  } else if (state->live.size() >= state->options.max_clients) {
     // Past the cap: accepted and closed at once, so the client sees a clean close instead of a
     // connect that hangs in the backlog.
     ++state->stats.connections_refused;
     ++state->refused_since_warning;
-    const auto now = std::chrono::steady_clock::now();
-    if (now - state->last_refusal_warning >= kRefusalWarningInterval) {
+    if (warn_now(state->last_refusal_warning)) {
       state->log->warn("modbus: {} client(s) refused: {} clients connected, max_clients = {}",
                        state->refused_since_warning, state->live.size(),
                        state->options.max_clients);
-      state->last_refusal_warning = now;
       state->refused_since_warning = 0;
     }
-    boost::system::error_code ignored;
-    socket.close(ignored);
+    refuse(socket);
   } else {
-    std::make_shared<Connection>(state, std::move(socket))->start();
+    std::make_shared<Connection>(state, listener, std::move(socket))->start();
   }
-  accept(state);
+  accept(state, listener);
 }
 
-void accept(const std::shared_ptr<ServerState>& state) {
-  state->acceptor.async_accept([state](const boost::system::error_code& ec, tcp::socket socket) {
-    on_accept(state, ec, std::move(socket));
-  });
+void accept(const std::shared_ptr<ServerState>& state, const Listener& listener) {
+  listener->acceptor.async_accept(
+      [state, listener](const boost::system::error_code& ec, tcp::socket socket) {
+        on_accept(state, listener, ec, std::move(socket));
+      });
 }
 
-}  // namespace
-
-Server::Server(asio::io_context& io, Backend& backend, ServerOptions options,
-               std::shared_ptr<spdlog::logger> log)
-    : state_(std::make_shared<ServerState>(io, backend, std::move(options), std::move(log))) {}
-
-Server::~Server() {
-  close();
-}
-
-std::error_code Server::listen() {
-  auto& acceptor = state_->acceptor;
+std::error_code bind(ListenerState& l, int backlog) {
+  auto& acceptor = l.acceptor;
   asio::ip::address address;
   bool any = false;
-  if (!parse_host(state_->options.host, address, any)) {
+  if (!parse_host(l.options.host, address, any)) {
     return std::make_error_code(std::errc::invalid_argument);
   }
   boost::system::error_code ec;
-  tcp::endpoint endpoint(address, state_->options.port);
+  tcp::endpoint endpoint(address, l.options.port);
   acceptor.open(endpoint.protocol(), ec);
   if (ec && any) {  // no IPv6 on this host: every IPv4 interface instead
-    endpoint = tcp::endpoint(asio::ip::address_v4::any(), state_->options.port);
+    endpoint = tcp::endpoint(asio::ip::address_v4::any(), l.options.port);
     acceptor.open(endpoint.protocol(), ec);
   }
   if (ec) return to_std(ec);
@@ -114,22 +138,115 @@ std::error_code Server::listen() {
     acceptor.set_option(asio::ip::v6_only(false), ec);  // dual stack: IPv4 clients too
   }
   acceptor.bind(endpoint, ec);
-  if (!ec) acceptor.listen(state_->options.listen_backlog, ec);
+  if (!ec) acceptor.listen(backlog, ec);
   if (ec) {
     boost::system::error_code ignored;
     acceptor.close(ignored);
     return to_std(ec);
   }
-  const auto bound = acceptor.local_endpoint(ec);
-  state_->log->info("modbus: listening on {}:{} (max_clients {})", bound.address().to_string(),
-                    bound.port(), state_->options.max_clients);
-  accept(state_);
   return {};
 }
 
-tcp::endpoint Server::local_endpoint() const {
+bool same_socket(const ListenerOptions& a, const ListenerOptions& b) {
+  return a.host == b.host && a.port == b.port && a.policy.tls.has_value() == b.policy.tls.has_value();
+}
+
+}  // namespace
+
+Server::Server(asio::io_context& io, Backend& backend, ServerOptions options,
+               std::shared_ptr<spdlog::logger> log)
+    : state_(std::make_shared<ServerState>(io, backend, std::move(options), std::move(log))) {
+  for (const auto& l : state_->options.listeners) {
+    state_->listeners.push_back(std::make_shared<ListenerState>(io, l));
+  }
+}
+
+Server::~Server() {
+  close();
+}
+
+std::error_code Server::listen() {
+  auto& log = *state_->log;
+  for (const auto& l : state_->listeners) {
+    if (const auto& tls = l->options.policy.tls) {
+      std::string error;
+      l->tls = make_tls_context(*tls, error);
+      if (!l->tls) {
+        log.error("modbus: {}: {}", l->options.name(), error);
+        return std::make_error_code(std::errc::invalid_argument);
+      }
+    }
+  }
+  for (const auto& l : state_->listeners) {
+    if (const auto ec = bind(*l, state_->options.listen_backlog)) {
+      log.error("modbus: cannot listen on {}: {}", l->options.name(), ec.message());
+      for (const auto& other : state_->listeners) {
+        boost::system::error_code ignored;
+        other->acceptor.close(ignored);
+      }
+      return ec;
+    }
+  }
+  for (const auto& l : state_->listeners) {
+    boost::system::error_code ec;
+    const auto bound = l->acceptor.local_endpoint(ec);
+    const auto& p = l->options.policy;
+    log.info("modbus: listening on {}:{}{}: access {}{}, {} word order, allow {}",
+             bound.address().to_string(), bound.port(), p.tls ? " (TLS, client certificates)" : "",
+             to_string(p.access), p.tls ? " without a known role" : "",
+             kWordOrderNames.at(static_cast<std::size_t>(p.word_order)),
+             allows_everyone(p.allow) ? std::string("every address") : allow_text(p.allow));
+    accept(state_, l);
+  }
+  log.info("modbus: max_clients {} over {} listener(s)", state_->options.max_clients,
+           state_->listeners.size());
+  return {};
+}
+
+Server::ReloadResult Server::reload_listeners(const std::vector<ListenerOptions>& next) {
+  ReloadResult result;
+  // Everything that can fail is done first; only then is anything changed.
+  std::vector<std::pair<Listener, std::shared_ptr<asio::ssl::context>>> plan;
+  for (const auto& n : next) {
+    const auto it = std::find_if(state_->listeners.begin(), state_->listeners.end(),
+                                 [&](const Listener& l) { return same_socket(l->options, n); });
+    if (it == state_->listeners.end()) {
+      result.restart_needed.push_back(n.name());
+      continue;
+    }
+    std::shared_ptr<asio::ssl::context> tls;
+    if (n.policy.tls) {
+      std::string error;
+      tls = make_tls_context(*n.policy.tls, error);  // re-read: certificates may have been renewed
+      if (!tls) {
+        result.errors.push_back(n.name() + ": " + error);
+        continue;
+      }
+    }
+    plan.emplace_back(*it, std::move(tls));
+  }
+  for (const auto& l : state_->listeners) {
+    if (std::none_of(next.begin(), next.end(),
+                     [&](const ListenerOptions& n) { return same_socket(l->options, n); })) {
+      result.restart_needed.push_back(l->options.name() + " (removed)");
+    }
+  }
+  if (!result.errors.empty()) return result;
+  for (auto& [listener, tls] : plan) {
+    const auto n = std::find_if(next.begin(), next.end(), [&](const ListenerOptions& o) {
+      return same_socket(listener->options, o);
+    });
+    listener->options.policy = n->policy;
+    listener->tls = std::move(tls);
+  }
+  const std::vector<Connection*> open(state_->live.begin(), state_->live.end());
+  for (Connection* c : open) c->policy_changed();
+  return result;
+}
+
+tcp::endpoint Server::local_endpoint(std::size_t listener) const {
   boost::system::error_code ec;
-  return state_->acceptor.local_endpoint(ec);
+  return state_->listeners.at(listener)->acceptor.local_endpoint(ec);
 }
 
 void Server::set_limits(const ServerLimits& limits) {
@@ -157,9 +274,11 @@ std::size_t Server::client_count() const {
 void Server::close() {
   if (state_->closed) return;
   state_->closed = true;
-  boost::system::error_code ignored;
-  state_->acceptor.close(ignored);
-  state_->retry_timer.cancel();
+  for (const auto& l : state_->listeners) {
+    boost::system::error_code ignored;
+    l->acceptor.close(ignored);
+    l->retry_timer.cancel();
+  }
   const std::vector<Connection*> open(state_->live.begin(), state_->live.end());
   for (Connection* c : open) c->close();
 }

@@ -6,7 +6,9 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <memory>
+#include <string>
 #include <system_error>
+#include <vector>
 
 #include "backend.h"
 #include "server_options.h"
@@ -28,11 +30,26 @@ class Server {
   Server(const Server&) = delete;
   Server& operator=(const Server&) = delete;
 
-  // Binds, listens and starts accepting. Errors: the address does not parse, or the system's.
+  // Binds every listener, reads the TLS files of those that have them, and starts accepting.
+  // All or nothing: on an error (an address that does not parse, a TLS file refused, the
+  // system's) nothing listens; the error is logged naming the listener.
   std::error_code listen();
-  // The bound endpoint (and port, useful with port 0) once listen() succeeded.
-  boost::asio::ip::tcp::endpoint local_endpoint() const;
-  std::uint16_t port() const { return local_endpoint().port(); }
+  // The bound endpoint (and port, useful with port 0) of a listener, in ServerOptions order, once
+  // listen() succeeded.
+  boost::asio::ip::tcp::endpoint local_endpoint(std::size_t listener = 0) const;
+  std::uint16_t port(std::size_t listener = 0) const { return local_endpoint(listener).port(); }
+
+  struct ReloadResult {
+    std::vector<std::string> errors;          // nothing was changed (a TLS file refused...)
+    std::vector<std::string> restart_needed;  // listeners added or removed: at the next start
+  };
+  // New policies for the running listeners (SIGHUP), matched by address and TLS-ness: allow
+  // lists, access levels, word order, roles, and the TLS files, re-read (renewed certificates
+  // serve new handshakes; a connection keeps the context it started with). Open connections take
+  // the new access level and word order at once; one whose address is no longer allowed is
+  // closed. A listener that would be added or removed, or whose address changed, is reported
+  // and waits for a restart. All or nothing: when `errors` is not empty nothing changed.
+  ReloadResult reload_listeners(const std::vector<ListenerOptions>& listeners);
 
   // New limits while running, without closing or pausing anything. Call on the io_context's
   // thread (like everything here). The exact rule:

@@ -5,9 +5,13 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
+#include "allow_list.h"
 #include "pdu.h"
+#include "tls.h"
 
 namespace drivegate::modbus {
 
@@ -20,14 +24,37 @@ struct ServerLimits {
   friend bool operator==(const ServerLimits&, const ServerLimits&) = default;
 };
 
-// Fixed for the server's life, except the three of ServerLimits.
-struct ServerOptions {
+// Who a listener serves and what they may do. Everything but host, port and whether it speaks
+// TLS may change while it runs (Server::reload_listeners).
+struct ListenerPolicy {
+  AllowList allow;  // client addresses served; empty: every address
+  // Plain TCP: every client's level. TLS: the level of a client whose certificate carries no
+  // role in tls->roles.
+  AccessLevel access = AccessLevel::maintain;
+  WordOrder word_order = WordOrder::big;
+  std::optional<TlsOptions> tls;  // Modbus/TCP Security: TLS, client certificate required
+  friend bool operator==(const ListenerPolicy&, const ListenerPolicy&) = default;
+};
+
+struct ListenerOptions {
   // A numeric IPv4 or IPv6 address ("[::1]" accepted), "localhost" (127.0.0.1), or "" / "*" for
   // every interface (IPv6 dual stack, IPv4 only where IPv6 is unavailable). No DNS lookup: it
   // would block the event loop.
   std::string host = "*";
-  std::uint16_t port = 502;             // 0: an ephemeral port, see Server::port()
-  std::size_t max_clients = 32;         // past it a new client is accepted and closed at once
+  std::uint16_t port = 502;  // 0: an ephemeral port, see Server::port()
+  ListenerPolicy policy;
+
+  // "host:port" (and " (TLS)"), as the log names it.
+  [[nodiscard]] std::string name() const {
+    return (host.find(':') != std::string::npos && host.front() != '[' ? "[" + host + "]" : host) +
+           ":" + std::to_string(port) + (policy.tls ? " (TLS)" : "");
+  }
+};
+
+// Fixed for the server's life, except the three of ServerLimits and the listeners' policies.
+struct ServerOptions {
+  std::vector<ListenerOptions> listeners{ListenerOptions{}};  // at least one
+  std::size_t max_clients = 32;  // all listeners together; past it a new client is closed at once
   std::size_t max_pending_writes = 16;  // per connection; at the cap the connection stops reading
   std::chrono::milliseconds frame_timeout{2000};  // a partial frame older than this closes; 0 = off
   std::chrono::milliseconds idle_timeout{60000};  // no request for this long closes; 0 = off
@@ -40,6 +67,9 @@ struct ServerOptions {
 struct ServerStats {
   std::uint64_t connections_accepted = 0;  // served connections (refused ones not included)
   std::uint64_t connections_refused = 0;   // closed at once: client cap reached
+  std::uint64_t connections_not_allowed = 0;  // closed at once: address not in the allow list
+  std::uint64_t tls_handshake_failures = 0;   // closed: no valid client certificate, not TLS...
+  std::uint64_t writes_denied = 0;  // writes answered 01: beyond the connection's access level
   std::uint64_t connections_active = 0;
   std::uint64_t requests = 0;        // well-formed requests dispatched
   std::uint64_t responses = 0;       // responses and exceptions queued for sending

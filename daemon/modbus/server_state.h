@@ -1,14 +1,16 @@
-// What the acceptor and every connection of one server share. Owned through shared_ptr by the
+// What the acceptors and every connection of one server share. Owned through shared_ptr by the
 // Server and by every pending handler, so a handler that runs after the Server is gone finds it
 // intact (and closed).
 #pragma once
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/ssl/context.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <chrono>
 #include <memory>
 #include <unordered_set>
+#include <vector>
 
 #include "backend.h"
 #include "pdu.h"
@@ -22,6 +24,20 @@ namespace drivegate::modbus {
 
 class Connection;
 
+// One listening socket: its address and policy, and the TLS context its handshakes use (replaced
+// on reload; a connection keeps the one it started with).
+struct ListenerState {
+  ListenerState(boost::asio::io_context& io, ListenerOptions options_)
+      : options(std::move(options_)), acceptor(io), retry_timer(io) {}
+
+  ListenerOptions options;  // policy changed only by Server::reload_listeners
+  std::shared_ptr<boost::asio::ssl::context> tls;  // set when options.policy.tls is
+  boost::asio::ip::tcp::acceptor acceptor;
+  boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
+  std::chrono::steady_clock::time_point last_warning{};  // refusals: at most one warning a second
+  std::uint64_t not_allowed_since_warning = 0;
+};
+
 struct ServerState {
   ServerState(boost::asio::io_context& io_context, Backend& backend_, ServerOptions options_,
               std::shared_ptr<spdlog::logger> log_)
@@ -29,9 +45,7 @@ struct ServerState {
         backend(backend_),
         options(std::move(options_)),
         log(std::move(log_)),
-        dispatcher(backend_, options.identity),
-        acceptor(io_context),
-        retry_timer(io_context) {}
+        dispatcher(backend_, options.identity) {}
 
   void count_exception(std::uint8_t code) {
     ++stats.exceptions[code < stats.exceptions.size() ? code : 0];
@@ -40,15 +54,15 @@ struct ServerState {
   boost::asio::io_context& io;
   Backend& backend;
   // Changed only by Server::set_limits (max_clients, idle_timeout, frame_timeout); the rest is
-  // fixed once the server is built (the socket is bound once, the write slots and the identity
-  // are sized and copied at construction).
+  // fixed once the server is built (the write slots and the identity are sized and copied at
+  // construction). options.listeners is the start-up list: each listener's current policy is in
+  // its ListenerState.
   ServerOptions options;
   const std::shared_ptr<spdlog::logger> log;
   ServerStats stats;
   Dispatcher dispatcher;  // shared: single-threaded, and never re-entered (see Connection)
-  boost::asio::ip::tcp::acceptor acceptor;
-  boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
-  std::unordered_set<Connection*> live;   // open connections
+  std::vector<std::shared_ptr<ListenerState>> listeners;
+  std::unordered_set<Connection*> live;  // open connections, every listener's
   bool closed = false;
   std::chrono::steady_clock::time_point last_refusal_warning{};
   std::uint64_t refused_since_warning = 0;

@@ -54,25 +54,31 @@ names = ["x", "y", "z"]
 )";
 
 TEST(ConfigListen, ParsesHostPortForms) {
-  ServerConfig s;
-  ASSERT_TRUE(parse_listen("127.0.0.1:1502", s));
-  EXPECT_EQ(s.host, "127.0.0.1");
-  EXPECT_EQ(s.port, 1502);
-  ASSERT_TRUE(parse_listen("[::1]:502", s));
-  EXPECT_EQ(s.host, "::1");
-  ASSERT_TRUE(parse_listen(":502", s));
-  EXPECT_EQ(s.host, "0.0.0.0");
-  EXPECT_FALSE(parse_listen("localhost", s));
-  EXPECT_FALSE(parse_listen("h:70000", s));
-  EXPECT_FALSE(parse_listen("h:12ab", s));
+  auto s = parse_listen("127.0.0.1:1502");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->host, "127.0.0.1");
+  EXPECT_EQ(s->port, 1502);
+  s = parse_listen("[::1]:502");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->host, "::1");
+  s = parse_listen(":502");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->host, "0.0.0.0");
+  EXPECT_FALSE(parse_listen("localhost"));
+  EXPECT_FALSE(parse_listen("h:70000"));
+  EXPECT_FALSE(parse_listen("h:12ab"));
 }
 
 TEST_F(ConfigTest, GoodFileLoadsWithAdapterDefaults) {
   auto r = parse(kGood);
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   const Config& c = *r.config;
-  EXPECT_EQ(c.server.host, "127.0.0.1");
-  EXPECT_EQ(c.server.port, 1502);
+  ASSERT_EQ(c.listeners.size(), 1u);  // [server] listen: one plain listener, as always
+  EXPECT_EQ(c.listeners[0].options.host, "127.0.0.1");
+  EXPECT_EQ(c.listeners[0].options.port, 1502);
+  EXPECT_EQ(c.listeners[0].options.policy.access, modbus::AccessLevel::maintain);
+  EXPECT_TRUE(c.listeners[0].options.policy.allow.empty());
+  EXPECT_TRUE(c.listeners[0].from_server_listen);
   EXPECT_EQ(c.server.max_clients, 8u);
   ASSERT_EQ(c.buses.size(), 1u);
   // Line settings not given come from the adapter: 4800 8O1 with echo.

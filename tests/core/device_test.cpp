@@ -28,20 +28,21 @@ class DeviceTest : public ::testing::Test {
         std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>()),
         t0_);
   }
+  modbus::Session session_;  // every right, map word order, unless a test says otherwise
   std::vector<std::uint16_t> input(std::uint16_t address, std::size_t n, TimePoint at) {
     std::vector<std::uint16_t> out(n);
-    EXPECT_EQ(device_->read(Table::input, address, out, at), Exception::none);
+    EXPECT_EQ(device_->read(session_, Table::input, address, out, at), Exception::none);
     return out;
   }
   std::vector<std::uint16_t> holding(std::uint16_t address, std::size_t n) {
     std::vector<std::uint16_t> out(n);
-    EXPECT_EQ(device_->read(Table::holding, address, out, t0_), Exception::none);
+    EXPECT_EQ(device_->read(session_, Table::holding, address, out, t0_), Exception::none);
     return out;
   }
   Exception write(Table t, std::uint16_t address, std::vector<std::uint16_t> v,
                   std::optional<Exception>& answer) {
     return device_->write(
-        t, address, v, [&answer](Exception e) { answer = e; }, t0_);
+        session_, t, address, v, [&answer](Exception e) { answer = e; }, t0_);
   }
   // The driver settles the write it was given last; the device learns it at its next call.
   void complete(WriteResult r, TimePoint at) {
@@ -110,9 +111,9 @@ TEST_F(DeviceTest, AdapterPointsAreScaledIntoTheImage) {
 
 TEST_F(DeviceTest, ReadsOfUnmappedAddressesAreRefused) {
   std::vector<std::uint16_t> out(2);
-  EXPECT_EQ(device_->read(Table::input, 30, out, t0_), Exception::illegal_data_address);
-  EXPECT_EQ(device_->read(Table::holding, 3, out, t0_), Exception::illegal_data_address);
-  EXPECT_EQ(device_->read(Table::coil, 0, out, t0_), Exception::illegal_data_address);
+  EXPECT_EQ(device_->read(session_, Table::input, 30, out, t0_), Exception::illegal_data_address);
+  EXPECT_EQ(device_->read(session_, Table::holding, 3, out, t0_), Exception::illegal_data_address);
+  EXPECT_EQ(device_->read(session_, Table::coil, 0, out, t0_), Exception::illegal_data_address);
 }
 
 TEST_F(DeviceTest, WriteIsAnsweredWhenTheDriverConfirms) {
@@ -213,6 +214,71 @@ TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
   ASSERT_EQ(fake_->writes.size(), 1u);
   EXPECT_EQ(fake_->writes[0].first, 1u);
   EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
+}
+
+// --- listeners: word order and access levels -------------------------------------------
+
+TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart) {
+  fake_->values_[2] = 1.0;  // pressure, f32 at input 33..34: 0x3F80 0x0000 in the map's order
+  device_->next_exchange(t0_);
+  session_.word_order = modbus::WordOrder::little;
+  auto r = input(32, 3, t0_);
+  EXPECT_EQ(r[0], static_cast<std::uint16_t>(0));  // i16: never reordered
+  EXPECT_EQ(r[1], 0x0000);
+  EXPECT_EQ(r[2], 0x3F80);
+  EXPECT_EQ(input(34, 1, t0_)[0], 0x3F80);  // the high word lives at the second address
+  EXPECT_EQ(input(33, 1, t0_)[0], 0x0000);
+  // The common block's 32-bit counters too (data_age_ms at 7..8: never heard = all ones, so use
+  // fault_mask at 2..3 with a fault bit in its low word).
+  fake_->common_.faults.set(Fault::over_current);
+  device_->next_exchange(t0_);
+  const auto mask = input(2, 2, t0_);
+  session_.word_order = modbus::WordOrder::big;
+  const auto big = input(2, 2, t0_);
+  EXPECT_EQ(mask[0], big[1]);
+  EXPECT_EQ(mask[1], big[0]);
+  EXPECT_NE(big[1], 0);
+}
+
+TEST_F(DeviceTest, ALittleEndianSessionWrites32BitValuesLowWordFirst) {
+  fake_->answer = WriteStatus::done;
+  session_.word_order = modbus::WordOrder::little;
+  std::optional<Exception> a;
+  ASSERT_EQ(write(Table::holding, 16, {0x86A0, 0x0001}, a), Exception::none);
+  ASSERT_EQ(fake_->writes.size(), 1u);
+  EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
+  // Range checks see the value, not the words: 0x0005'0000 little = 5, below the minimum of 10.
+  EXPECT_EQ(write(Table::holding, 16, {0x0005, 0x0000}, a), Exception::illegal_data_value);
+}
+
+TEST_F(DeviceTest, OperateMayWriteTheCommandBlockButNotAdapterPoints) {
+  fake_->answer = WriteStatus::done;
+  session_.access = modbus::AccessLevel::operate;
+  std::optional<Exception> a;
+  EXPECT_EQ(write(Table::holding, 1, {1200}, a), Exception::none);  // setpoint_rpm
+  EXPECT_EQ(write(Table::holding, 2, {7}, a), Exception::none);     // heartbeat
+  EXPECT_EQ(write(Table::holding, 0, {1}, a), Exception::none);     // command run_forward
+  EXPECT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Exception::illegal_function);
+  // A request reaching one maintain point is refused whole: the setpoint before it stays.
+  const auto setpoints = fake_->setpoints.size();
+  EXPECT_EQ(write(Table::holding, 1, {900}, a), Exception::none);
+  EXPECT_EQ(fake_->setpoints.size(), setpoints + 1);
+  EXPECT_TRUE(fake_->writes.empty());
+  session_.access = modbus::AccessLevel::maintain;
+  EXPECT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Exception::none);
+  EXPECT_EQ(fake_->writes.size(), 1u);
+}
+
+TEST_F(DeviceTest, AReadSessionReachingTheDeviceIsRefusedEvenTheHeartbeat) {
+  // The server refuses a read-only client's writes before the backend; the device holds the
+  // same line in case another northbound forgets.
+  session_.access = modbus::AccessLevel::read;
+  std::optional<Exception> a;
+  EXPECT_EQ(write(Table::holding, 2, {7}, a), Exception::illegal_function);
+  EXPECT_EQ(write(Table::holding, 0, {1}, a), Exception::illegal_function);
+  EXPECT_TRUE(fake_->commands.empty());
+  // Unmapped and read-only addresses still answer 02 (nothing to authorise there).
+  EXPECT_EQ(write(Table::holding, 3, {1}, a), Exception::illegal_data_address);
 }
 
 TEST_F(DeviceTest, CommLostFailsPendingWritesAndRefusesNewOnes) {

@@ -49,24 +49,28 @@ class FailsafeTest : public ::testing::Test {
     device_->link().health.frame_good(at(ms));
     engine_tick(ms);
   }
-  Exception plc(std::uint16_t address, std::vector<std::uint16_t> v, Millis ms) {
+  Exception plc(std::uint16_t address, std::vector<std::uint16_t> v, Millis ms,
+                modbus::AccessLevel access = modbus::AccessLevel::operate) {
+    const modbus::Session session{access, modbus::WordOrder::big};
     return device_->write(
-        Table::holding, address, v, [this](Exception e) { answers_.push_back(e); }, at(ms));
+        session, Table::holding, address, v, [this](Exception e) { answers_.push_back(e); },
+        at(ms));
   }
   // The driver confirms the write it was last given.
   void confirm(Millis ms, WriteResult r = WriteResult::ok) {
     fake_->completions.push_back({fake_->last_ticket, r});
     device_->next_exchange(at(ms));
   }
+  static constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
   std::uint16_t status(Millis ms) {
     std::uint16_t s = 0;
-    EXPECT_EQ(device_->read(Table::input, 0, std::span<std::uint16_t>(&s, 1), at(ms)),
+    EXPECT_EQ(device_->read(kReader, Table::input, 0, std::span<std::uint16_t>(&s, 1), at(ms)),
               Exception::none);
     return s;
   }
   bool discrete_failsafe(Millis ms) {
     std::uint16_t b = 0;
-    EXPECT_EQ(device_->read(Table::discrete, 5, std::span<std::uint16_t>(&b, 1), at(ms)),
+    EXPECT_EQ(device_->read(kReader, Table::discrete, 5, std::span<std::uint16_t>(&b, 1), at(ms)),
               Exception::none);
     return b != 0;
   }
@@ -132,8 +136,22 @@ TEST_F(FailsafeTest, EachOfCommandSetpointAndHeartbeatFeedsIt) {
 TEST_F(FailsafeTest, AdapterPointsAndInvalidWritesDoNotFeedIt) {
   make(FailsafeAction::stop);
   ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
-  ASSERT_EQ(plc(kLimit, {0, 50}, 500ms), Exception::none);              // adapter point
+  ASSERT_EQ(plc(kLimit, {0, 50}, 500ms, modbus::AccessLevel::maintain),  // adapter point
+            Exception::none);
   ASSERT_EQ(plc(kCommand, {9}, 600ms), Exception::illegal_data_value);  // no such command
+  tick(1000ms);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+  EXPECT_TRUE(device_->failsafe_latched());
+}
+
+// Only a client allowed to operate is "the PLC": a read-only one (a SCADA viewer, a dashboard)
+// writing the heartbeat is refused and keeps nothing alive.
+TEST_F(FailsafeTest, AClientThatMayOnlyReadDoesNotFeedIt) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  EXPECT_EQ(plc(kHeartbeat, {2}, 600ms, modbus::AccessLevel::read),
+            Exception::illegal_function);
+  EXPECT_EQ(plc(kCommand, {1}, 700ms, modbus::AccessLevel::read), Exception::illegal_function);
   tick(1000ms);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
   EXPECT_TRUE(device_->failsafe_latched());

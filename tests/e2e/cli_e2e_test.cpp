@@ -51,7 +51,10 @@ TEST(Cli, CheckConfigAcceptsAGoodFile) {
   const auto r = run({drivegated(), "--check-config", (dir / "good.toml").string(), "--plugin-dir",
                       plugin_dir().string()});
   EXPECT_EQ(r.status, 0) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("OK (1 devices on 1 buses)"));
+  EXPECT_THAT(r.out, HasSubstr("OK (1 devices on 1 buses, 1 listener)"));
+  // [server] listen serves every address with every right, as it always did: valid, but said.
+  EXPECT_THAT(r.out, HasSubstr(":2: server.listen: 127.0.0.1:1502 lets every address that can "
+                               "reach it write (access maintain)"));
 }
 
 // The configurations people copy from must stay valid: the README's sample and the installed

@@ -64,7 +64,7 @@ void ModbusStream::dispatch(const modbus::MbapHeader& header, std::span<const st
   out_.fill(0xA5);
   modbus::Dispatcher::Result result;
   if (!modbus::may_write(pdu[0])) {
-    result = dispatcher_.handle(header.unit, pdu, out_, {});
+    result = dispatcher_.handle(session_, header.unit, pdu, out_, {});
     FUZZ_CHECK(result.status == modbus::Dispatcher::Result::Status::reply);
   } else {
     auto& slots = *slots_;
@@ -79,7 +79,7 @@ void ModbusStream::dispatch(const modbus::MbapHeader& header, std::span<const st
     s.request.assign(pdu.begin(), pdu.end());
     ++outstanding_;
     std::weak_ptr<std::vector<Slot>> weak = slots_;
-    result = dispatcher_.handle(header.unit, pdu, out_,
+    result = dispatcher_.handle(session_, header.unit, pdu, out_,
                                 [weak, index, generation = s.generation](Exception e) {
                                   const auto alive = weak.lock();
                                   if (!alive)
@@ -107,7 +107,7 @@ void ModbusStream::complete_writes() {
   for (Slot& s : *slots_) {
     if (!s.used || !s.done) continue;
     out_.fill(0xA5);
-    const std::size_t size = dispatcher_.complete(s.unit, s.request, s.result, out_);
+    const std::size_t size = dispatcher_.complete(session_, s.unit, s.request, s.result, out_);
     FUZZ_CHECK(size >= 2 && size <= modbus::kMaxPduSize);
     check_reply(s.request, std::span<const std::uint8_t>(out_.data(), size));
     s.used = false;

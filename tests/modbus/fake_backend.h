@@ -33,17 +33,25 @@ class FakeBackend : public Backend {
 
   std::vector<std::uint16_t>& table(RegisterTable t) { return tables_[static_cast<int>(t)]; }
 
-  Exception read(std::uint8_t unit, RegisterTable t, std::uint16_t address,
+  Exception read(const Session& session, std::uint8_t unit, RegisterTable t, std::uint16_t address,
                  std::span<std::uint16_t> out) override {
     ++reads;
+    last_session = session;
     if (auto e = check(unit, address, out.size()); e != Exception::none) return e;
     for (std::size_t i = 0; i < out.size(); ++i) out[i] = table(t)[address + i];
     return Exception::none;
   }
 
-  Exception write(std::uint8_t unit, RegisterTable t, std::uint16_t address,
-                  std::span<const std::uint16_t> values, WriteDone done) override {
+  Exception write(const Session& session, std::uint8_t unit, RegisterTable t,
+                  std::uint16_t address, std::span<const std::uint16_t> values,
+                  WriteDone done) override {
+    last_session = session;
     if (auto e = check(unit, address, values.size()); e != Exception::none) return e;
+    // As the gateway does for points beyond the common block: backend.h's only 0x01.
+    if (maintain_from && address + values.size() > *maintain_from &&
+        session.access < AccessLevel::maintain) {
+      return Exception::illegal_function;
+    }
     if (t == RegisterTable::input_registers || t == RegisterTable::discrete_inputs) {
       return Exception::illegal_data_address;
     }
@@ -78,6 +86,10 @@ class FakeBackend : public Backend {
   };
   std::deque<Pending> pending;
   std::size_t reads = 0;
+  // Writes reaching this address or above need AccessLevel::maintain (else 0x01, as the gateway
+  // answers for points beyond the common command block).
+  std::optional<std::uint16_t> maintain_from;
+  Session last_session;  // of the last read or write
 
  private:
   Exception check(std::uint8_t unit, std::uint16_t address, std::size_t count) const {

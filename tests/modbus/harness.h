@@ -31,8 +31,10 @@ using namespace std::chrono_literals;
 class Harness {
  public:
   explicit Harness(ServerOptions options = {}) {
-    options.host = options.host == "*" ? "127.0.0.1" : options.host;
-    options.port = 0;
+    for (auto& l : options.listeners) {
+      l.host = l.host == "*" ? "127.0.0.1" : l.host;
+      l.port = 0;
+    }
     auto log = std::make_shared<spdlog::logger>("modbus-test",
                                                 std::make_shared<spdlog::sinks::null_sink_st>());
     server_ = std::make_unique<Server>(io_, backend_, options, log);

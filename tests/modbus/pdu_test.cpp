@@ -57,7 +57,8 @@ class Pdu : public ::testing::Test {
   Bytes run(const Bytes& request, std::uint8_t unit = 1) {
     std::array<std::uint8_t, kMaxPduSize> out{};
     done_.reset();
-    auto r = dispatcher_.handle(unit, request, out, [this](Exception e) { done_ = e; });
+    auto r = dispatcher_.handle(session_, unit, request, out, [this](Exception e) { done_ = e; });
+    denied_ = r.denied;
     if (r.status == Status::reply) {
       pending_ = false;
       return Bytes(out.begin(), out.begin() + static_cast<long>(r.size));
@@ -71,14 +72,16 @@ class Pdu : public ::testing::Test {
   Bytes finish() {
     EXPECT_TRUE(done_.has_value());
     std::array<std::uint8_t, kMaxPduSize> out{};
-    const auto n = dispatcher_.complete(unit_, request_, *done_, out);
+    const auto n = dispatcher_.complete(session_, unit_, request_, *done_, out);
     return Bytes(out.begin(), out.begin() + static_cast<long>(n));
   }
 
   FakeBackend backend_;
   Dispatcher dispatcher_;
+  Session session_;  // every right unless a test says otherwise
   std::optional<Exception> done_;
   bool pending_ = false;
+  bool denied_ = false;
   Bytes request_;
   std::uint8_t unit_ = 0;
 };
@@ -192,18 +195,18 @@ TEST_F(Pdu, DeviceIdentificationMoreFollowsWhenObjectsDoNotFit_6_21) {
   Dispatcher d(backend, {std::string(200, 'v'), std::string(200, 'p'), std::string(200, 'r')});
   std::array<std::uint8_t, kMaxPduSize> out{};
   const Bytes req{0x2B, 0x0E, 0x01, 0x00};
-  auto r = d.handle(1, req, out, {});
+  auto r = d.handle(session_, 1, req, out, {});
   ASSERT_EQ(r.size, 7u + 2 + 200);
   EXPECT_EQ(out[4], 0xFF);  // more follows
   EXPECT_EQ(out[5], 0x01);  // next object id
   EXPECT_EQ(out[6], 1);
   const Bytes next{0x2B, 0x0E, 0x01, 0x01};
-  r = d.handle(1, next, out, {});
+  r = d.handle(session_, 1, next, out, {});
   EXPECT_EQ(out[4], 0xFF);
   EXPECT_EQ(out[5], 0x02);
   EXPECT_EQ(out[7], 0x01);
   const Bytes last{0x2B, 0x0E, 0x01, 0x02};
-  r = d.handle(1, last, out, {});
+  r = d.handle(session_, 1, last, out, {});
   EXPECT_EQ(out[4], 0x00);
   EXPECT_EQ(out[6], 1);
 }
@@ -212,7 +215,7 @@ TEST_F(Pdu, DeviceIdentificationLongObjectIsCut_6_21) {
   Dispatcher d(backend, {std::string(300, 'v'), "p", "1"});
   std::array<std::uint8_t, kMaxPduSize> out{};
   const Bytes req{0x2B, 0x0E, 0x04, 0x00};
-  const auto r = d.handle(1, req, out, {});
+  const auto r = d.handle(session_, 1, req, out, {});
   EXPECT_EQ(r.size, kMaxPduSize);
   EXPECT_EQ(out[8], kMaxPduSize - 9);
 }
@@ -443,6 +446,53 @@ TEST_F(Pdu, ReadsAreServedWhileAWriteIsPending) {
   backend_.complete();
   EXPECT_EQ(finish(), (Bytes{0x06, 0x00, 0x6B, 0x00, 0x07}));
   EXPECT_EQ(run({0x03, 0x00, 0x6B, 0x00, 0x01}), (Bytes{0x03, 0x02, 0x00, 0x07}));
+}
+
+// --- access levels (Modbus/TCP Security: an unauthorised request is exception 01) ----------
+
+TEST_F(Pdu, AReadOnlySessionGetsException01ForEveryWriteFunctionAndTheBackendSeesNone) {
+  session_.access = AccessLevel::read;
+  const std::vector<Bytes> writes = {
+      {0x05, 0x00, 0xAC, 0xFF, 0x00},
+      {0x06, 0x00, 0x01, 0x00, 0x03},
+      {0x0F, 0x00, 0x13, 0x00, 0x0A, 0x02, 0xCD, 0x01},
+      {0x10, 0x00, 0x01, 0x00, 0x02, 0x04, 0x00, 0x0A, 0x01, 0x02},
+      {0x17, 0x00, 0x03, 0x00, 0x06, 0x00, 0x0E, 0x00, 0x03, 0x06, 0x00, 0xFF, 0x00, 0xFF, 0x00,
+       0xFF},
+      // Malformed too: the access check comes first, so nothing about the request is revealed.
+      {0x10, 0x00, 0x01, 0x00, 0x00},
+  };
+  for (const Bytes& w : writes) {
+    EXPECT_EQ(run(w), (Bytes{static_cast<std::uint8_t>(w[0] | 0x80), 0x01})) << int{w[0]};
+    EXPECT_TRUE(denied_);
+  }
+  EXPECT_TRUE(backend_.writes.empty());
+  EXPECT_EQ(backend_.reads, 0u);  // not even 0x17's read range was looked at
+  // Reads are served as before.
+  EXPECT_EQ(run({0x04, 0x00, 0x08, 0x00, 0x01}), (Bytes{0x04, 0x02, 0x00, 0x0A}));
+  EXPECT_FALSE(denied_);
+  EXPECT_EQ(backend_.last_session.access, AccessLevel::read);
+}
+
+TEST_F(Pdu, AnOperateSessionIsRefusedWhatTheBackendReservesForMaintain) {
+  session_.access = AccessLevel::operate;
+  backend_.maintain_from = 0x0100;
+  EXPECT_EQ(run({0x06, 0x00, 0x01, 0x00, 0x03}), (Bytes{0x06, 0x00, 0x01, 0x00, 0x03}));
+  EXPECT_FALSE(denied_);
+  EXPECT_EQ(run({0x10, 0x00, 0xFF, 0x00, 0x02, 0x04, 0x00, 0x0A, 0x01, 0x02}),
+            (Bytes{0x90, 0x01}));
+  EXPECT_TRUE(denied_);
+  EXPECT_EQ(backend_.writes.size(), 1u);
+  session_.access = AccessLevel::maintain;
+  EXPECT_EQ(run({0x10, 0x00, 0xFF, 0x00, 0x02, 0x04, 0x00, 0x0A, 0x01, 0x02}),
+            (Bytes{0x10, 0x00, 0xFF, 0x00, 0x02}));
+  EXPECT_FALSE(denied_);
+}
+
+TEST_F(Pdu, TheSessionReachesTheBackendWithEveryRead) {
+  session_.word_order = WordOrder::little;
+  run({0x03, 0x00, 0x6B, 0x00, 0x01});
+  EXPECT_EQ(backend_.last_session.word_order, WordOrder::little);
 }
 
 TEST(PduMayWrite, OnlyWritingFunctions) {

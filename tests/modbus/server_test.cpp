@@ -33,14 +33,14 @@ TEST(Server, ListensOnAnEphemeralPort) {
 
 TEST(Server, RefusesAnAddressThatDoesNotParse) {
   ServerOptions o;
-  o.host = "not-an-address";
+  o.listeners[0].host = "not-an-address";
   Harness h(o);
   EXPECT_EQ(h.listen_error(), std::errc::invalid_argument);
 }
 
 TEST(Server, ListensOnIpv6Loopback) {
   ServerOptions o;
-  o.host = "[::1]";
+  o.listeners[0].host = "[::1]";
   Harness h(o);
   if (h.listen_error()) GTEST_SKIP() << "no IPv6: " << h.listen_error().message();
   modbus_t* ctx = modbus_new_tcp_pi("::1", std::to_string(h.port()).c_str());
@@ -99,8 +99,8 @@ TEST(Server, CloseDisconnectsEveryClientAndLeavesNothingRunning) {
   backend.mode = FakeBackend::Mode::deferred;
   auto log = std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_st>());
   ServerOptions o;
-  o.host = "127.0.0.1";
-  o.port = 0;
+  o.listeners[0].host = "127.0.0.1";
+  o.listeners[0].port = 0;
   auto server = std::make_unique<Server>(io, backend, o, log);
   ASSERT_FALSE(server->listen());
   const auto port = server->port();
@@ -149,8 +149,8 @@ TEST(Server, CountsRequestsAndConnections) {
 class LiveServer {
  public:
   explicit LiveServer(ServerOptions o) {
-    o.host = "127.0.0.1";
-    o.port = 0;
+    o.listeners[0].host = "127.0.0.1";
+    o.listeners[0].port = 0;
     auto log =
         std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_st>());
     server_ = std::make_unique<Server>(io_, backend_, o, log);

@@ -53,17 +53,19 @@ Options options_of(const AdapterDescriptor& adapter, const OptionText& set) {
 class BusRig::Units final : public modbus::Backend {
  public:
   explicit Units(BusRig& rig) : rig_(rig) {}
-  Exception read(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
-                 std::span<std::uint16_t> out) override {
+  Exception read(const modbus::Session& session, std::uint8_t unit, modbus::RegisterTable table,
+                 std::uint16_t address, std::span<std::uint16_t> out) override {
     Device* d = find(unit);
     return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->read(to_table(table), address, out, rig_.now());
+                        : d->read(session, to_table(table), address, out, rig_.now());
   }
-  Exception write(std::uint8_t unit, modbus::RegisterTable table, std::uint16_t address,
-                  std::span<const std::uint16_t> values, modbus::WriteDone done) override {
+  Exception write(const modbus::Session& session, std::uint8_t unit, modbus::RegisterTable table,
+                  std::uint16_t address, std::span<const std::uint16_t> values,
+                  modbus::WriteDone done) override {
     Device* d = find(unit);
     return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->write(to_table(table), address, values, std::move(done), rig_.now());
+                        : d->write(session, to_table(table), address, values, std::move(done),
+                                   rig_.now());
   }
 
  private:
@@ -155,10 +157,11 @@ void BusRig::start() {
 }
 
 std::shared_ptr<WriteOutcome> BusRig::write(Device& d, Table table, std::uint16_t address,
-                                            std::vector<std::uint16_t> values) {
+                                            std::vector<std::uint16_t> values,
+                                            const modbus::Session& session) {
   auto outcome = std::make_shared<WriteOutcome>();
   const Exception e = d.write(
-      table, address, values, [outcome](Exception r) { outcome->result = r; }, now());
+      session, table, address, values, [outcome](Exception r) { outcome->result = r; }, now());
   if (e != Exception::none) outcome->result = e;
   return outcome;
 }
@@ -169,14 +172,15 @@ std::optional<Exception> BusRig::wait(const std::shared_ptr<WriteOutcome>& w, Mi
 }
 
 std::optional<Exception> BusRig::write_and_wait(Device& d, Table table, std::uint16_t address,
-                                                std::vector<std::uint16_t> values, Millis limit) {
-  return wait(write(d, table, address, std::move(values)), limit);
+                                                std::vector<std::uint16_t> values, Millis limit,
+                                                const modbus::Session& session) {
+  return wait(write(d, table, address, std::move(values), session), limit);
 }
 
 std::vector<std::uint16_t> BusRig::read(Device& d, Table table, std::uint16_t address,
-                                        std::size_t n) {
+                                        std::size_t n, const modbus::Session& session) {
   std::vector<std::uint16_t> out(n);
-  if (d.read(table, address, out, now()) != Exception::none) out.clear();
+  if (d.read(session, table, address, out, now()) != Exception::none) out.clear();
   return out;
 }
 

@@ -1,0 +1,254 @@
+#include "server_config.h"
+
+#include <algorithm>
+#include <charconv>
+
+#include "config_loader.h"
+
+namespace drivegate {
+
+std::optional<ListenAddress> parse_listen(std::string_view s) {
+  std::string_view host;
+  std::string_view port;
+  if (s.starts_with("[")) {
+    const auto close = s.find("]:");
+    if (close == std::string_view::npos) return std::nullopt;
+    host = s.substr(1, close - 1);
+    port = s.substr(close + 2);
+  } else {
+    const auto colon = s.rfind(':');
+    if (colon == std::string_view::npos) return std::nullopt;
+    host = s.substr(0, colon);
+    port = s.substr(colon + 1);
+  }
+  unsigned value = 0;
+  const auto [p, ec] = std::from_chars(port.data(), port.data() + port.size(), value);
+  if (ec != std::errc() || p != port.data() + port.size() || value > 65535 || port.empty()) {
+    return std::nullopt;
+  }
+  return ListenAddress{host.empty() ? "0.0.0.0" : std::string(host),
+                       static_cast<std::uint16_t>(value)};
+}
+
+namespace {
+
+constexpr const char* kListenForm = "must be \"host:port\" (e.g. \"0.0.0.0:502\" or \"[::]:802\")";
+
+// The listener [server] listen declares (or the default one): what drivegate always served.
+ListenerConfig server_listener(ListenAddress at, int line) {
+  ListenerConfig l;
+  l.options.host = std::move(at.host);
+  l.options.port = at.port;
+  l.options.policy.access = modbus::AccessLevel::maintain;
+  l.from_server_listen = true;
+  l.line = line;
+  return l;
+}
+
+template <std::size_t N>
+std::optional<std::size_t> index_of(const std::array<std::string_view, N>& names,
+                                    std::string_view name) {
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) return std::nullopt;
+  return static_cast<std::size_t>(it - names.begin());
+}
+
+std::string one_of(std::span<const std::string_view> names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    out += (i == 0 ? "\"" : (i + 1 == names.size() ? " or \"" : ", \"")) + std::string(names[i]) +
+           "\"";
+  }
+  return out;
+}
+
+std::optional<modbus::AccessLevel> read_access(const toml::node& n, const std::string& key,
+                                               Diagnostics& diag) {
+  const auto* s = n.as_string();
+  const auto i = s != nullptr ? index_of(modbus::kAccessLevelNames, s->get()) : std::nullopt;
+  if (!i) {
+    diag.error(&n, key, "must be " + one_of(modbus::kAccessLevelNames));
+    return std::nullopt;
+  }
+  return static_cast<modbus::AccessLevel>(*i);
+}
+
+modbus::AllowList read_allow(const toml::node& n, const std::string& key, Diagnostics& diag) {
+  modbus::AllowList allow;
+  const auto* a = n.as_array();
+  if (a == nullptr) {
+    diag.error(&n, key, "must be an array of addresses or CIDR ranges, e.g. [\"10.1.2.0/24\"]");
+    return allow;
+  }
+  if (a->empty()) {
+    diag.error(&n, key,
+               "is empty: nobody could connect (leave allow out to serve every address)");
+  }
+  for (const auto& item : *a) {
+    const auto* s = item.as_string();
+    std::string error = "must be a string";
+    const auto range = s != nullptr ? modbus::parse_address_range(s->get(), error) : std::nullopt;
+    if (range) {
+      allow.push_back(*range);
+    } else {
+      diag.error(&item, key, error);
+    }
+  }
+  return allow;
+}
+
+std::optional<modbus::TlsOptions> read_tls(const toml::node& n, const std::string& key,
+                                           Diagnostics& diag) {
+  const auto* t = n.as_table();
+  if (t == nullptr) {
+    diag.error(&n, key, "must be a table: { cert = \"...\", key = \"...\", ca = \"...\" }");
+    return std::nullopt;
+  }
+  TableReader r(*t, key, diag);
+  r.expect({"cert", "key", "ca"});
+  modbus::TlsOptions tls;
+  const auto cert = r.string("cert", true);
+  const auto private_key = r.string("key", true);
+  const auto ca = r.string("ca", true);
+  if (!cert || !private_key || !ca) return std::nullopt;
+  tls.cert = *cert;
+  tls.key = *private_key;
+  tls.ca = *ca;
+  return tls;
+}
+
+modbus::RoleMap read_roles(const toml::node& n, const std::string& key, Diagnostics& diag) {
+  modbus::RoleMap roles;
+  const auto* t = n.as_table();
+  if (t == nullptr) {
+    diag.error(&n, key, "must be a table of role = access level, e.g. { operator = \"operate\" }");
+    return roles;
+  }
+  for (const auto& [role, level] : *t) {
+    const std::string where = key + "." + std::string(role.str());
+    if (auto a = read_access(level, where, diag)) roles.emplace(std::string(role.str()), *a);
+  }
+  return roles;
+}
+
+ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostics& diag) {
+  const std::string prefix = "listener[" + std::to_string(index) + "]";
+  TableReader r(t, prefix, diag);
+  r.expect({"address", "allow", "access", "word_order", "tls", "roles"});
+  ListenerConfig l;
+  l.line = line_of(t);
+  auto& policy = l.options.policy;
+  policy.access = modbus::AccessLevel::read;  // nothing may write unless the file says so
+  if (auto address = r.string("address", true)) {
+    if (auto at = parse_listen(*address)) {
+      l.options.host = at->host;
+      l.options.port = at->port;
+    } else {
+      diag.error(r.node("address"), r.qualified("address"),
+                 std::string(kListenForm) + ", got \"" + *address + "\"");
+    }
+  }
+  if (const auto* n = r.node("allow")) policy.allow = read_allow(*n, r.qualified("allow"), diag);
+  if (const auto* n = r.node("access")) {
+    policy.access = read_access(*n, r.qualified("access"), diag).value_or(policy.access);
+  }
+  if (const auto* n = r.node("word_order")) {
+    const auto* s = n->as_string();
+    const auto i = s != nullptr ? index_of(modbus::kWordOrderNames, s->get()) : std::nullopt;
+    if (i) {
+      policy.word_order = static_cast<modbus::WordOrder>(*i);
+    } else {
+      diag.error(n, r.qualified("word_order"),
+                 "must be " + one_of(modbus::kWordOrderNames) +
+                     " (32-bit values: high word first, or low word first)");
+    }
+  }
+  if (const auto* n = r.node("tls")) policy.tls = read_tls(*n, r.qualified("tls"), diag);
+  if (const auto* n = r.node("roles")) {
+    auto roles = read_roles(*n, r.qualified("roles"), diag);
+    if (!r.node("tls")) {
+      diag.error(n, r.qualified("roles"),
+                 "roles come from TLS client certificates: add tls = { cert, key, ca }");
+    } else if (policy.tls) {
+      policy.tls->roles = std::move(roles);
+    }
+  }
+  return l;
+}
+
+// Whoever can reach this listener may write: worth a line in --check-config and the journal.
+void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
+  const auto& p = l.options.policy;
+  const bool can_write =
+      p.access != modbus::AccessLevel::read ||
+      (p.tls && std::any_of(p.tls->roles.begin(), p.tls->roles.end(), [](const auto& role) {
+         return role.second != modbus::AccessLevel::read;
+       }));
+  if (!can_write || !modbus::allows_everyone(p.allow)) return;
+  const std::string who = p.tls ? "every address with a certificate from its CA"
+                                : "every address that can reach it";
+  const std::string where = l.from_server_listen ? "server.listen" : "listener";
+  diag.warning_at(l.line, where,
+                  l.options.name() + " lets " + who + " write (access " +
+                      std::string(to_string(p.access)) +
+                      "); give it an allow list, or access = \"read\" (docs/security.md)");
+}
+
+}  // namespace
+
+void read_server(const toml::table& root, Config& cfg, Diagnostics& diag) {
+  const toml::node* n = root.get("server");
+  if (n == nullptr) return;
+  const auto* t = n->as_table();
+  if (t == nullptr) {
+    diag.error(n, "server", "must be a table ([server])");
+    return;
+  }
+  TableReader r(*t, "server", diag);
+  r.expect({"listen", "max_clients", "idle_timeout_ms", "frame_timeout_ms"});
+  if (auto listen = r.string("listen", false)) {
+    if (auto at = parse_listen(*listen)) {
+      cfg.listeners.push_back(server_listener(std::move(*at), line_of(*r.node("listen"))));
+    } else {
+      diag.error(r.node("listen"), "server.listen",
+                 std::string(kListenForm) + ", got \"" + *listen + "\"");
+    }
+  }
+  if (auto v = r.integer("max_clients", 1, 1024, false)) cfg.server.max_clients = *v;
+  if (auto v = r.integer("idle_timeout_ms", 1000, 86'400'000, false)) {
+    cfg.server.idle_timeout = Millis(*v);
+  }
+  if (auto v = r.integer("frame_timeout_ms", 10, 60'000, false)) {
+    cfg.server.frame_timeout = Millis(*v);
+  }
+}
+
+void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
+  const toml::array* tables = array_of_tables(root, "listener", diag);
+  if (tables != nullptr && !cfg.listeners.empty()) {
+    diag.error(root.get("listener"), "listener",
+               "[server] listen and [[listener]] cannot both be given: declare that address as "
+               "a [[listener]] too");
+    return;
+  }
+  if (tables != nullptr) {
+    for (std::size_t i = 0; i < tables->size(); ++i) {
+      cfg.listeners.push_back(read_listener(*(*tables)[i].as_table(), i, diag));
+    }
+  }
+  if (cfg.listeners.empty()) cfg.listeners.push_back(server_listener({"0.0.0.0", 502}, 0));
+  for (std::size_t i = 0; i < cfg.listeners.size(); ++i) {
+    const auto& a = cfg.listeners[i].options;
+    for (std::size_t j = 0; j < i; ++j) {
+      const auto& b = cfg.listeners[j].options;
+      if (a.host == b.host && a.port == b.port && a.port != 0) {
+        diag.error_at(cfg.listeners[i].line, "listener",
+                      a.host + ":" + std::to_string(a.port) + " is already the address of the " +
+                          "listener on line " + std::to_string(cfg.listeners[j].line));
+      }
+    }
+    warn_open_writes(cfg.listeners[i], diag);
+  }
+}
+
+}  // namespace drivegate

@@ -1,0 +1,18 @@
+// The Modbus TCP side of the configuration: [server] (what every listener shares) and the
+// [[listener]] tables (address, allow list, access level, word order, TLS and roles). Used by
+// config_loader.cpp only.
+#pragma once
+
+#include <toml++/toml.h>
+
+#include "config.h"
+#include "toml_reader.h"
+
+namespace drivegate {
+
+void read_server(const toml::table& root, Config& cfg, Diagnostics& diag);
+// After read_server: [[listener]], or the single listener of [server] listen. Warns about a
+// listener that lets every address write.
+void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag);
+
+}  // namespace drivegate
