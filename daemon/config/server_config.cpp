@@ -185,13 +185,14 @@ void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
          return role.second != modbus::AccessLevel::read;
        }));
   if (!can_write || !modbus::allows_everyone(p.allow)) return;
-  const std::string who = p.tls ? "every address with a certificate from its CA"
-                                : "every address that can reach it";
   const std::string where = l.from_server_listen ? "server.listen" : "listener";
+  const std::string what =
+      p.tls ? " lets every address with a certificate from its CA and a writing role write"
+            : " lets every address that can reach it write (access " +
+                  std::string(to_string(p.access)) + ")";
   diag.warning_at(l.line, where,
-                  l.options.name() + " lets " + who + " write (access " +
-                      std::string(to_string(p.access)) +
-                      "); give it an allow list, or access = \"read\" (docs/security.md)");
+                  l.options.name() + what +
+                      "; give it an allow list, or access = \"read\" (docs/security.md)");
 }
 
 }  // namespace

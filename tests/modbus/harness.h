@@ -48,7 +48,7 @@ class Harness {
   }
 
   std::error_code listen_error() const { return error_; }
-  std::uint16_t port() const { return port_ = server_->port(); }
+  std::uint16_t port(std::size_t listener = 0) const { return server_->port(listener); }
 
   // Runs `f` on the server's thread and returns its result.
   template <class F>
@@ -58,6 +58,7 @@ class Harness {
     boost::asio::post(io_, [&task] { task(); });
     return result.get();
   }
+  Server& server() { return *server_; }
   ServerStats stats() {
     return on_io([this] { return server_->stats(); });
   }
@@ -86,7 +87,6 @@ class Harness {
       io_.get_executor()};
   std::thread thread_;
   std::error_code error_;
-  mutable std::uint16_t port_ = 0;
 };
 
 // A blocking TCP client speaking raw bytes.

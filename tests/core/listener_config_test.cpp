@@ -1,0 +1,148 @@
+// [[listener]] in drivegate.toml: what is read, the defaults (read-only unless the file says
+// otherwise), every mistake named with its line, and the warning for a listener anyone may write
+// through.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "config/config_loader.h"
+#include "fake_adapter.h"
+
+namespace drivegate {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using ::testing::IsEmpty;
+
+constexpr const char* kDevice = R"(
+[[bus]]
+name = "line1"
+port = "/dev/ttyUSB0"
+
+[[device]]
+name = "washer"
+bus = "line1"
+adapter = "fake"
+unit_id = 3
+)";
+
+class ListenerConfig : public ::testing::Test {
+ protected:
+  ListenerConfig() { plugins_.add(test::kFakeAdapter); }
+  ConfigResult parse(const std::string& listeners) {
+    return parse_config(listeners + kDevice, "gw.toml", plugins_);
+  }
+  std::vector<std::string> errors(const std::string& listeners) {
+    auto r = parse(listeners);
+    EXPECT_FALSE(r.config.has_value());
+    return r.errors;
+  }
+  PluginRegistry plugins_;
+};
+
+TEST_F(ListenerConfig, EveryKeyIsRead) {
+  const auto r = parse(R"(
+[server]
+max_clients = 9
+
+[[listener]]
+address = "0.0.0.0:502"
+allow = ["10.1.2.0/24", "10.1.3.7", "fd00::/8"]
+access = "operate"
+word_order = "little"
+
+[[listener]]
+address = "[::]:802"
+tls = { cert = "/etc/drivegate/tls/server.pem", key = "/etc/drivegate/tls/server.key", ca = "/etc/drivegate/tls/ca.pem" }
+roles = { viewer = "read", operator = "operate", engineer = "maintain" }
+)");
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  const auto& ls = r.config->listeners;
+  ASSERT_EQ(ls.size(), 2u);
+  EXPECT_EQ(r.config->server.max_clients, 9u);
+  const auto& plc = ls[0].options;
+  EXPECT_EQ(plc.host, "0.0.0.0");
+  EXPECT_EQ(plc.port, 502);
+  EXPECT_EQ(ls[0].line, 5);
+  EXPECT_FALSE(ls[0].from_server_listen);
+  ASSERT_EQ(plc.policy.allow.size(), 3u);
+  EXPECT_EQ(plc.policy.allow[0].to_string(), "10.1.2.0/24");
+  EXPECT_EQ(plc.policy.allow[2].to_string(), "fd00::/8");
+  EXPECT_EQ(plc.policy.access, modbus::AccessLevel::operate);
+  EXPECT_EQ(plc.policy.word_order, modbus::WordOrder::little);
+  EXPECT_FALSE(plc.policy.tls);
+  const auto& secure = ls[1].options;
+  EXPECT_EQ(secure.host, "::");
+  EXPECT_EQ(secure.port, 802);
+  EXPECT_EQ(secure.policy.access, modbus::AccessLevel::read);  // the default
+  ASSERT_TRUE(secure.policy.tls);
+  EXPECT_EQ(secure.policy.tls->key, "/etc/drivegate/tls/server.key");
+  EXPECT_EQ(secure.policy.tls->roles.at("engineer"), modbus::AccessLevel::maintain);
+  EXPECT_EQ(secure.policy.tls->roles.size(), 3u);
+  // The plant listener has an allow list: no warning. The TLS one lets any address with a
+  // certificate and a writing role write: said once.
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_THAT(r.warnings[0], AllOf(HasSubstr("gw.toml:11: listener: [::]:802 (TLS) lets every "
+                                             "address with a certificate from its CA")));
+}
+
+TEST_F(ListenerConfig, AListenerThatSaysNothingElseIsReadOnlyAndUnwarned) {
+  const auto r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n");
+  ASSERT_TRUE(r.config);
+  EXPECT_EQ(r.config->listeners[0].options.policy.access, modbus::AccessLevel::read);
+  EXPECT_TRUE(r.config->listeners[0].options.policy.allow.empty());
+  EXPECT_THAT(r.warnings, IsEmpty());
+}
+
+TEST_F(ListenerConfig, ServerListenAndNothingAtAllKeepTheirOldMeaningWithAWarning) {
+  for (const std::string text : {"[server]\nlisten = \"127.0.0.1:1502\"\n", ""}) {
+    const auto r = parse(text);
+    ASSERT_TRUE(r.config);
+    ASSERT_EQ(r.config->listeners.size(), 1u);
+    const auto& l = r.config->listeners[0];
+    EXPECT_TRUE(l.from_server_listen);
+    EXPECT_EQ(l.options.policy.access, modbus::AccessLevel::maintain);
+    EXPECT_EQ(l.options.port, text.empty() ? 502 : 1502);
+    ASSERT_EQ(r.warnings.size(), 1u);
+    EXPECT_THAT(r.warnings[0], HasSubstr("lets every address that can reach it write (access "
+                                         "maintain)"));
+  }
+}
+
+TEST_F(ListenerConfig, MistakesAreNamedWithTheirLine) {
+  EXPECT_THAT(errors("[server]\nlisten = \"0.0.0.0:502\"\n[[listener]]\naddress = \":503\"\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:3: listener:"),
+                                HasSubstr("cannot both be given"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \"10.0.0.1\"\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:2: listener[0].address:"),
+                                HasSubstr("host:port"))));
+  EXPECT_THAT(errors("[[listener]]\naccess = \"read\"\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].address"), HasSubstr("missing"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\naccess = \"write\"\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:3: listener[0].access:"),
+                                HasSubstr("\"read\", \"operate\" or \"maintain\""))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nword_order = \"middle\"\n"),
+              ElementsAre(AllOf(HasSubstr("word_order"), HasSubstr("\"big\" or \"little\""))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nallow = [\"10.1.2.5/24\"]\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:3: listener[0].allow:"),
+                                HasSubstr("bits set beyond /24"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nallow = []\n"),
+              ElementsAre(HasSubstr("nobody could connect")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nroles = { a = \"read\" }\n"),
+              ElementsAre(AllOf(HasSubstr("roles"), HasSubstr("add tls"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":802\"\ntls = { cert = \"c\", key = \"k\" }\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].tls.ca"), HasSubstr("missing"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":802\"\ntls = { cert = \"c\", key = \"k\", "
+                     "ca = \"a\" }\nroles = { op = \"operator\" }\n"),
+              ElementsAre(HasSubstr("listener[0].roles.op")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \"127.0.0.1:502\"\n"
+                     "[[listener]]\naddress = \"127.0.0.1:502\"\naccess = \"read\"\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:3"), HasSubstr("already the address"),
+                                HasSubstr("line 1"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nport = 5\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].port"), HasSubstr("unknown key"))));
+}
+
+}  // namespace
+}  // namespace drivegate
