@@ -54,8 +54,9 @@ inline constexpr std::array<std::string_view, 2> kWordOrderNames = {"big", "litt
 
 // Who is asking: the connection's access level and word order (its listener's, or the role of its
 // TLS client certificate). Passed with every read and write.
+// The default may only read: a session gets more only from its listener or its certificate.
 struct Session {
-  AccessLevel access = AccessLevel::maintain;
+  AccessLevel access = AccessLevel::read;
   WordOrder word_order = WordOrder::big;
 };
 

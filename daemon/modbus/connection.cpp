@@ -83,7 +83,16 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
   handshaking_ = false;
   if (ec) {
     ++state_->stats.tls_handshake_failures;
-    state_->log->warn("modbus: {}: TLS handshake failed: {}; closing", who(), ec.message());
+    // OpenSSL's reason ("certificate verify failed") says little; the verification result
+    // says which check failed, and the subject whose certificate it was.
+    const long verify = SSL_get_verify_result(tls_->native_handle());
+    X509* cert = SSL_get0_peer_certificate(tls_->native_handle());
+    state_->log->warn("modbus: {}: TLS handshake failed: {}{}{}; closing", who(), ec.message(),
+                      verify != X509_V_OK ? std::string(" (") +
+                                                X509_verify_cert_error_string(verify) + ")"
+                                          : std::string(),
+                      cert != nullptr ? ", certificate \"" + certificate_subject(cert) + "\""
+                                      : std::string());
     close();
     return;
   }

@@ -28,7 +28,8 @@ class DeviceTest : public ::testing::Test {
         std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>()),
         t0_);
   }
-  modbus::Session session_;  // every right, map word order, unless a test says otherwise
+  // Every right, the map's word order, unless a test says otherwise.
+  modbus::Session session_{modbus::AccessLevel::maintain, modbus::WordOrder::big};
   std::vector<std::uint16_t> input(std::uint16_t address, std::size_t n, TimePoint at) {
     std::vector<std::uint16_t> out(n);
     EXPECT_EQ(device_->read(session_, Table::input, address, out, at), Exception::none);

@@ -48,7 +48,8 @@ class ModbusStream {
 
   std::function<bool()> settle_;
   modbus::Dispatcher dispatcher_;
-  const modbus::Session session_{};  // every right: the backend's checks are what is fuzzed
+  // Every right: the backend's checks are what is fuzzed.
+  const modbus::Session session_{modbus::AccessLevel::maintain, modbus::WordOrder::big};
   std::vector<std::uint8_t> rx_;
   // Shared with the `done` closures, which may outlive the stream (the backend owns them).
   std::shared_ptr<std::vector<Slot>> slots_;

@@ -78,7 +78,7 @@ class Pdu : public ::testing::Test {
 
   FakeBackend backend_;
   Dispatcher dispatcher_;
-  Session session_;  // every right unless a test says otherwise
+  Session session_{AccessLevel::maintain, WordOrder::big};  // unless a test says otherwise
   std::optional<Exception> done_;
   bool pending_ = false;
   bool denied_ = false;
