@@ -39,7 +39,7 @@ struct ListenerConfig {
 
 struct BusConfig {
   std::string name;
-  std::string port;  // device path, e.g. /dev/ttyUSB0
+  std::string port;  // device path, tcp://host:port or rfc2217://host:port (port_address.h)
   std::uint32_t baud = 0;
   Parity parity = Parity::none;
   std::uint8_t data_bits = 8;
@@ -47,6 +47,7 @@ struct BusConfig {
   bool echo = false;   // one-wire: discard (and check) our own bytes
   bool rs485 = false;  // kernel RS-485 mode (TIOCSRS485)
   Millis reopen_max{10'000};
+  Millis network_delay{0};  // added to every reply timeout (a serial device server's latency)
   int line = 0;  // where it was declared, for messages
   friend bool operator==(const BusConfig&, const BusConfig&) = default;
 };

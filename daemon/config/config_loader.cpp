@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "adapter_options.h"
+#include "port_address.h"
 #include "server_config.h"
 #include "toml_reader.h"
 
@@ -140,11 +141,20 @@ std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnost
     const std::string prefix = "bus[" + std::to_string(i) + "]";
     TableReader r(t, prefix, diag);
     r.expect({"name", "port", "baud", "parity", "data_bits", "stop_bits", "echo", "rs485",
-              "reopen_max_ms"});
+              "reopen_max_ms", "network_delay_ms"});
     BusConfig bus;
     bus.line = line_of(t);
     bus.name = r.string("name", true).value_or("");
-    bus.port = r.string("port", true).value_or("");
+    std::optional<PortAddress> address;
+    if (auto port = r.string("port", true)) {
+      bus.port = *port;
+      std::string error;
+      address = parse_port_address(*port, error);
+      if (!address) diag.error(r.node("port"), prefix + ".port", error);
+    }
+    if (auto v = r.integer("network_delay_ms", 0, 10'000, false)) {
+      bus.network_delay = Millis(*v);
+    }
     if (auto v = r.integer("baud", 1, 4'000'000, false)) {
       if (std::find(kBauds.begin(), kBauds.end(), *v) == kBauds.end()) {
         diag.error(r.node("baud"), prefix + ".baud",
@@ -173,6 +183,11 @@ std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnost
     g.echo = echo.has_value();
     given.push_back(g);
     bus.rs485 = r.boolean("rs485").value_or(false);
+    if (bus.rs485 && address && address->network()) {
+      diag.error(r.node("rs485"), prefix + ".rs485",
+                 "applies to a local serial port only (a device server drives its own RS-485 "
+                 "transceiver)");
+    }
     if (auto v = r.integer("reopen_max_ms", 100, 600'000, false)) bus.reopen_max = Millis(*v);
     if (bus.name.empty() && t.get("name") != nullptr) diag.error(&t, prefix + ".name", "empty");
     for (const auto& other : cfg.buses) {

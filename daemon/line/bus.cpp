@@ -1,8 +1,6 @@
 #include "line/bus.h"
 
-#include <boost/asio/write.hpp>
-
-#include "line/serial_line.h"
+#include <algorithm>
 
 namespace drivegate {
 
@@ -10,18 +8,7 @@ namespace asio = boost::asio;
 
 namespace {
 constexpr Millis kFirstReopenDelay{500};
-
-const char* parity_name(Parity p) {
-  switch (p) {
-    case Parity::none:
-      return "no";
-    case Parity::even:
-      return "even";
-    case Parity::odd:
-      return "odd";
-  }
-  return "?";
-}
+constexpr Millis kSilenceCheck{1000};
 }  // namespace
 
 Bus::Bus(asio::io_context& io, BusConfig config, std::vector<Station*> stations,
@@ -30,16 +17,18 @@ Bus::Bus(asio::io_context& io, BusConfig config, std::vector<Station*> stations,
       config_(std::move(config)),
       log_(std::move(log)),
       engine_(config_, std::move(stations), *this, *this, log_),
-      port_(io),
+      transport_(make_transport(io, config_, log_)),
       alarm_(io),
       reopen_timer_(io),
-      reopen_delay_(kFirstReopenDelay) {}
+      reopen_delay_(kFirstReopenDelay),
+      silence_timer_(io) {}
 
 void Bus::start() {
   if (started_) return;
   started_ = true;
   engine_.start();
   open_port();
+  if (transport_->network()) check_silence();
 }
 
 void Bus::stop() {
@@ -48,8 +37,8 @@ void Bus::stop() {
   ++alarm_generation_;
   alarm_.cancel();
   reopen_timer_.cancel();
-  boost::system::error_code ignored;
-  port_.close(ignored);
+  silence_timer_.cancel();
+  transport_->close();
   engine_.stop();
 }
 
@@ -63,37 +52,43 @@ void Bus::set_alarm(TimePoint at) {
 }
 
 void Bus::send(ByteView frame) {
-  tx_.assign(frame.begin(), frame.end());
-  asio::async_write(port_, asio::buffer(tx_),
-                    [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
-                      if (self->stopped_) return;
-                      if (ec) {
-                        if (ec != asio::error::operation_aborted) {
-                          self->port_failed("write: " + ec.message());
-                        }
-                        return;
-                      }
-                      self->engine_.on_sent();
-                    });
+  transport_->write(frame, [self = shared_from_this()](std::error_code ec) {
+    if (self->stopped_ || !self->open_) return;
+    if (ec) {
+      if (ec != std::errc::operation_canceled) self->port_failed("write: " + ec.message());
+      return;
+    }
+    self->engine_.on_sent();
+  });
 }
 
 // --- the port ---
 
 void Bus::open_port() {
+  if (stopped_ || opening_) return;
+  opening_ = true;
+  transport_->open([self = shared_from_this()](std::error_code ec) { self->port_opened(ec); });
+}
+
+void Bus::port_opened(std::error_code ec) {
+  opening_ = false;
   if (stopped_) return;
-  if (const std::error_code ec = open_serial(port_, config_)) {
+  if (ec) {
     if (reopen_delay_ == kFirstReopenDelay) {
       log_->error("bus {}: cannot open {}: {} (retrying, at most every {} ms)", config_.name,
-                  config_.port, ec.message(), config_.reopen_max.count());
+                  transport_->describe(), ec.message(), config_.reopen_max.count());
     }
+    transport_->close();
     schedule_reopen();
     return;
   }
   reopen_delay_ = kFirstReopenDelay;
-  log_->info("bus {}: {} open ({} baud, {} data, {} parity, {} stop{}{})", config_.name,
-             config_.port, config_.baud, config_.data_bits, parity_name(config_.parity),
-             config_.stop_bits, config_.echo ? ", echo" : "", config_.rs485 ? ", RS-485" : "");
+  log_->info("bus {}: {} open{}", config_.name, transport_->describe(),
+             config_.network_delay.count() > 0
+                 ? fmt::format(" (network_delay {} ms)", config_.network_delay.count())
+                 : std::string());
   open_ = true;
+  last_heard_ = Clock::now();
   const bool reopened = ever_open_;
   ever_open_ = true;
   read_more();
@@ -110,26 +105,46 @@ void Bus::schedule_reopen() {
 
 void Bus::port_failed(const std::string& what) {
   if (stopped_ || !open_) return;
-  log_->warn("bus {}: {}: closing {} and reopening", config_.name, what, config_.port);
+  log_->warn("bus {}: {}: closing {} and reopening", config_.name, what, transport_->describe());
   open_ = false;
-  boost::system::error_code ignored;
-  port_.close(ignored);
+  transport_->close();
   engine_.line_down();
   schedule_reopen();
 }
 
 void Bus::read_more() {
-  port_.async_read_some(
-      asio::buffer(chunk_),
-      [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
-        if (self->stopped_) return;
-        if (ec) {
-          if (ec != asio::error::operation_aborted) self->port_failed("read: " + ec.message());
-          return;
-        }
-        self->engine_.on_received(ByteView(self->chunk_.data(), n));
-        if (self->open_) self->read_more();
-      });
+  transport_->read([self = shared_from_this()](std::error_code ec, ByteView bytes) {
+    if (self->stopped_ || !self->open_) return;
+    if (ec) {
+      if (ec != std::errc::operation_canceled) {
+        self->port_failed(closed_by_peer(ec) ? std::string("the server closed the connection")
+                                                 : "read: " + ec.message());
+      }
+      return;
+    }
+    self->last_heard_ = Clock::now();
+    self->engine_.on_received(bytes);
+    if (self->open_) self->read_more();
+  });
+}
+
+void Bus::check_silence() {
+  silence_timer_.expires_after(kSilenceCheck);
+  silence_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+    if (ec || self->stopped_) return;
+    const auto& stations = self->engine_.stations();
+    const bool all_lost =
+        !stations.empty() && std::all_of(stations.begin(), stations.end(), [](Station* s) {
+          return s->link().health.comm_lost();
+        });
+    Millis longest{0};
+    for (Station* s : stations) longest = std::max(longest, s->link().policy.comm_timeout);
+    if (self->open_ && all_lost && Clock::now() - self->last_heard_ >= longest) {
+      self->port_failed("every device silent for " + std::to_string(longest.count()) +
+                        " ms and nothing from the server");
+    }
+    self->check_silence();
+  });
 }
 
 }  // namespace drivegate

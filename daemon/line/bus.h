@@ -1,19 +1,20 @@
-// One serial line on the daemon's io_context: the Asio wiring of a BusEngine. It owns the port
-// (opened, configured, and reopened with back-off when it fails or vanishes), the engine's alarm
-// timer and the read loop; the engine decides everything else. Nothing here knows a protocol.
+// One serial line on the daemon's io_context: the Asio wiring of a BusEngine. It owns the
+// transport (a local port or a serial device server: opened, configured, and reopened with
+// back-off when it fails or vanishes), the engine's alarm timer and the read loop; the engine
+// decides everything else. Nothing here knows a protocol.
 #pragma once
 
 #include <spdlog/logger.h>
 
 #include <array>
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/serial_port.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <memory>
 #include <vector>
 
 #include "config/config.h"
 #include "line/bus_engine.h"
+#include "line/transport.h"
 
 namespace drivegate {
 
@@ -38,15 +39,17 @@ class Bus final : public std::enable_shared_from_this<Bus>, private BusClock, pr
   void send(ByteView frame) override;
 
   void open_port();
+  void port_opened(std::error_code ec);
   void schedule_reopen();
   void port_failed(const std::string& what);
   void read_more();
+  void check_silence();
 
   boost::asio::io_context& io_;
   BusConfig config_;
   std::shared_ptr<spdlog::logger> log_;
   BusEngine engine_;
-  boost::asio::serial_port port_;
+  std::unique_ptr<Transport> transport_;
   boost::asio::steady_timer alarm_;
   std::uint64_t alarm_generation_ = 0;
   boost::asio::steady_timer reopen_timer_;
@@ -54,9 +57,12 @@ class Bus final : public std::enable_shared_from_this<Bus>, private BusClock, pr
   bool started_ = false;
   bool stopped_ = false;
   bool open_ = false;
+  bool opening_ = false;
   bool ever_open_ = false;
-  std::array<std::uint8_t, 512> chunk_{};
-  Bytes tx_;  // the frame being written (owned here while Asio writes it)
+  // A device server can hang with its TCP connection up: when every device has gone silent and
+  // nothing came for the longest comm timeout, a network bus reconnects.
+  boost::asio::steady_timer silence_timer_;
+  TimePoint last_heard_{};
 };
 
 }  // namespace drivegate

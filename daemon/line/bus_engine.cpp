@@ -21,6 +21,7 @@ BusEngine::BusEngine(const BusConfig& config, std::vector<Station*> stations, Bu
                      BusLine& line, std::shared_ptr<spdlog::logger> log)
     : name_(config.name),
       echo_line_(config.echo),
+      network_delay_(config.network_delay),
       char_time_(character_time(config.baud, config.parity, config.data_bits, config.stop_bits)),
       stations_(std::move(stations)),
       clock_(clock),
@@ -196,7 +197,7 @@ void BusEngine::begin(Station& st, Exchange ex, TimePoint now) {
   // The device's time budget caps how many attempts one turn may take.
   const auto wire = on_wire(exchange_->frame.size()) * (echo_line_ ? 2 : 1);
   const auto per_attempt =
-      std::chrono::duration_cast<Millis>(exchange_->timeout + wire) + Millis(1);
+      std::chrono::duration_cast<Millis>(exchange_->timeout + network_delay_ + wire) + Millis(1);
   const auto fit = static_cast<int>(st.link().policy.budget / per_attempt);
   max_attempts_ = std::clamp(fit, 1, std::max<int>(1, exchange_->attempts));
   answered_ = false;
@@ -231,7 +232,7 @@ void BusEngine::on_sent() {
     deadline_ =
         now +
         std::chrono::duration_cast<Millis>(on_wire(exchange_->frame.size() + kEchoSlackChars)) +
-        kEchoSlack;
+        kEchoSlack + network_delay_;
     advance(now);
   } else {
     after_sent(now);
@@ -248,7 +249,8 @@ void BusEngine::after_sent(TimePoint now) {
   // The write completes when the kernel has the bytes, not when they have left the UART; on a
   // one-wire line the echo has already shown them leave.
   const auto wire = echo_line_ ? std::chrono::nanoseconds(0) : on_wire(exchange_->frame.size());
-  deadline_ = now + exchange_->timeout + std::chrono::duration_cast<Millis>(wire);
+  // Behind a serial device server the reply also crosses the network (network_delay_ms).
+  deadline_ = now + exchange_->timeout + network_delay_ + std::chrono::duration_cast<Millis>(wire);
   if (!rx_.empty()) process_rx(*current_, now);
 }
 

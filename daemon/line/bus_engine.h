@@ -101,6 +101,7 @@ class BusEngine {
 
   std::string name_;
   bool echo_line_;
+  Millis network_delay_;  // added to every reply (and echo) timeout
   std::chrono::nanoseconds char_time_;
   std::vector<Station*> stations_;
   BusClock& clock_;

@@ -1,5 +1,7 @@
 #include "serial_line.h"
 
+#include "line/transport.h"
+
 #include <linux/serial.h>
 #include <sys/ioctl.h>
 #include <termios.h>
@@ -11,19 +13,6 @@ namespace drivegate {
 namespace asio = boost::asio;
 
 namespace {
-
-// Boost's system and generic categories carry errno values on Linux, so those become std's
-// generic category and compare equal to std::errc. Asio's own categories (asio.misc: already_open
-// is 1, which is not EPERM) are not errno values: Boost's std interoperability (Boost >= 1.65)
-// wraps them, keeping value, name and message.
-std::error_code to_std(const boost::system::error_code& ec) {
-  if (!ec) return {};
-  if (ec.category() == boost::system::system_category() ||
-      ec.category() == boost::system::generic_category()) {
-    return {ec.value(), std::generic_category()};
-  }
-  return ec;
-}
 
 std::error_code last_errno() {
   return {errno, std::generic_category()};
@@ -42,7 +31,7 @@ std::error_code set_framing(asio::serial_port& port, const BusConfig& bus) {
   if (!ec) port.set_option(sp::parity(parity), ec);
   if (!ec) port.set_option(sp::stop_bits(stop), ec);
   if (!ec) port.set_option(sp::flow_control(sp::flow_control::none), ec);
-  return to_std(ec);
+  return from_asio(ec);
 }
 
 // Everything after open(): the port is open, and the caller closes it if this fails.
@@ -65,7 +54,7 @@ std::error_code configure(asio::serial_port& port, const BusConfig& bus) {
 std::error_code open_serial(asio::serial_port& port, const BusConfig& bus) {
   boost::system::error_code opened;
   port.open(bus.port, opened);
-  if (opened) return to_std(opened);
+  if (opened) return from_asio(opened);
   const std::error_code ec = configure(port, bus);
   if (ec) {
     // The error_code overload: this path reports, it never throws. The step's error is the one

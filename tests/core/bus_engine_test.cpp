@@ -193,6 +193,24 @@ TEST(BusEngine, ASilentReplyIsResentAfterItsTimeoutCountingTheWire) {
   EXPECT_EQ(b.rig.read(d, Table::input, 15, 2)[1], 2);  // retries: 3 attempts, 2 of them resends
 }
 
+// Behind a serial device server the reply also crosses the network: network_delay_ms is added to
+// every reply timeout, and the budget's count of attempts knows it.
+TEST(BusEngine, ANetworkDelayLengthensEveryReplyTimeout) {
+  BusConfig config = line();
+  config.network_delay = 30ms;
+  Bench b(config);
+  Device& d = b.add(1);
+  b.rig.start();
+  b.rig.run_for(50ms);
+  b.sims[0]->mode = PingSim::Mode::silent;
+  const TimePoint from = b.rig.now();
+  ASSERT_TRUE(b.rig.run_until([&] { return b.rig.read(d, Table::input, 13, 2)[1] == 3; }, 1s));
+  const auto polls = b.sent(kPoll, 1, from);
+  ASSERT_GE(polls.size(), 3u);
+  EXPECT_EQ(polls[1] - polls[0], 82ms);  // 2 ms on the wire + 50 ms timeout + 30 ms network
+  EXPECT_EQ(polls[2] - polls[1], 82ms);
+}
+
 TEST(BusEngine, NacksAndDamagedRepliesAreResentAtOnceWithoutBackOff) {
   Bench b;
   Device& d = b.add(1);

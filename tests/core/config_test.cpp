@@ -342,5 +342,27 @@ TEST_F(ConfigTest, AnExplicitEchoAppliesToEveryDeviceOnTheBus) {
   }
 }
 
+TEST_F(ConfigTest, ABusBehindASerialDeviceServer) {
+  std::string text = kGood;
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21,
+               "port = \"rfc2217://10.1.5.20:4001\"\nnetwork_delay_ms = 20");
+  auto r = parse(text);
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  EXPECT_EQ(r.config->buses[0].port, "rfc2217://10.1.5.20:4001");
+  EXPECT_EQ(r.config->buses[0].network_delay, Millis(20));
+  text = kGood;
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21, "port = \"tcp://10.1.5.20\"");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("gw.toml:8: bus[0].port:"),
+                                      HasSubstr("tcp://host:port")));
+  text = kGood;
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21,
+               "port = \"tcp://10.1.5.20:4001\"\nrs485 = true");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("bus[0].rs485"), HasSubstr("local serial port")));
+  text = kGood;
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21,
+               "port = \"tcp://10.1.5.20:4001\"\nnetwork_delay_ms = 20000");
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("network_delay_ms"), HasSubstr("0..10000")));
+}
+
 }  // namespace
 }  // namespace drivegate

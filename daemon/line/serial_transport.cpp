@@ -1,0 +1,62 @@
+#include "line/serial_transport.h"
+
+#include <boost/asio/post.hpp>
+#include <boost/asio/write.hpp>
+
+#include "line/serial_line.h"
+
+namespace drivegate {
+
+namespace asio = boost::asio;
+
+namespace {
+const char* parity_name(Parity p) {
+  switch (p) {
+    case Parity::none:
+      return "no";
+    case Parity::even:
+      return "even";
+    case Parity::odd:
+      return "odd";
+  }
+  return "?";
+}
+}  // namespace
+
+SerialTransport::SerialTransport(asio::io_context& io, BusConfig bus)
+    : io_(io), bus_(std::move(bus)), port_(io) {}
+
+void SerialTransport::open(Done done) {
+  const std::error_code ec = open_serial(port_, bus_);
+  asio::post(io_, [done = std::move(done), ec] { done(ec); });
+}
+
+void SerialTransport::read(Received received) {
+  port_.async_read_some(asio::buffer(chunk_), [this, received = std::move(received)](
+                                                  const boost::system::error_code& ec,
+                                                  std::size_t n) {
+    received(from_asio(ec), ByteView(chunk_.data(), ec ? 0 : n));
+  });
+}
+
+void SerialTransport::write(ByteView data, Done done) {
+  tx_.assign(data.begin(), data.end());
+  asio::async_write(port_, asio::buffer(tx_),
+                    [done = std::move(done)](const boost::system::error_code& ec, std::size_t) {
+                      done(from_asio(ec));
+                    });
+}
+
+void SerialTransport::close() {
+  boost::system::error_code ignored;
+  port_.close(ignored);
+}
+
+std::string SerialTransport::describe() const {
+  return bus_.port + " (" + std::to_string(bus_.baud) + " baud, " +
+         std::to_string(bus_.data_bits) + " data, " + parity_name(bus_.parity) + " parity, " +
+         std::to_string(bus_.stop_bits) + " stop" + (bus_.echo ? ", echo" : "") +
+         (bus_.rs485 ? ", RS-485" : "") + ")";
+}
+
+}  // namespace drivegate

@@ -1,0 +1,28 @@
+// A local serial port (tty): opened and configured by open_serial (serial_line.h).
+#pragma once
+
+#include <boost/asio/serial_port.hpp>
+
+#include "line/transport.h"
+
+namespace drivegate {
+
+class SerialTransport final : public Transport {
+ public:
+  SerialTransport(boost::asio::io_context& io, BusConfig bus);
+  void open(Done done) override;
+  void read(Received received) override;
+  void write(ByteView data, Done done) override;
+  void close() override;
+  [[nodiscard]] std::string describe() const override;
+  [[nodiscard]] bool network() const override { return false; }
+
+ private:
+  boost::asio::io_context& io_;
+  BusConfig bus_;
+  boost::asio::serial_port port_;
+  std::array<std::uint8_t, 512> chunk_{};
+  Bytes tx_;
+};
+
+}  // namespace drivegate
