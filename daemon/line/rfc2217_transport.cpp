@@ -51,16 +51,17 @@ void Rfc2217Transport::open(Done done) {
   com_port_agreed_ = false;
   queue_.clear();
   writing_ = false;
-  opening_ = std::move(done);
+  // Shared with the handlers below, so what `done` holds (the bus) lives until they ran.
+  opening_ = std::make_shared<Done>(std::move(done));
   const std::uint64_t generation = generation_;
-  tcp_.open([this, generation](std::error_code ec) {
+  tcp_.open([this, generation, keep = opening_](std::error_code ec) {
     if (generation != generation_) return;
     if (ec) {
       finish_open(ec);
       return;
     }
     open_timer_.expires_after(kNegotiationLimit);
-    open_timer_.async_wait([this, generation](const boost::system::error_code& e) {
+    open_timer_.async_wait([this, generation, keep](const boost::system::error_code& e) {
       if (e || generation != generation_ || !opening_) return;
       finish_open(make_error(Failure::no_answer));
     });
@@ -80,7 +81,7 @@ void Rfc2217Transport::open(Done done) {
 // While opening, reads are ours: negotiation and the answers to the settings.
 void Rfc2217Transport::negotiate_more() {
   const std::uint64_t generation = generation_;
-  tcp_.read([this, generation](std::error_code ec, ByteView raw) {
+  tcp_.read([this, generation, keep = opening_](std::error_code ec, ByteView raw) {
     if (generation != generation_ || !opening_) return;
     if (ec) {
       finish_open(ec);
@@ -136,26 +137,26 @@ void Rfc2217Transport::answer(const Event& e) {
 void Rfc2217Transport::finish_open(std::error_code ec) {
   open_timer_.cancel();
   if (!opening_) return;
-  auto done = std::move(opening_);
-  opening_ = nullptr;
-  done(ec);
+  const auto done = std::move(opening_);
+  opening_.reset();
+  (*done)(ec);
 }
 
 void Rfc2217Transport::read(Received received) {
-  reader_ = std::move(received);
   const std::uint64_t generation = generation_;
-  tcp_.read([this, generation](std::error_code ec, ByteView raw) {
+  tcp_.read([this, generation, received = std::move(received)](std::error_code ec,
+                                                                ByteView raw) mutable {
     if (generation != generation_) return;
     if (ec) {
-      reader_(ec, {});
+      received(ec, {});
       return;
     }
     on_bytes(raw);
     if (data_.empty()) {  // only Telnet commands in this chunk: wait for data
-      read(std::move(reader_));
+      read(std::move(received));
       return;
     }
-    reader_(ec, data_);
+    received(ec, data_);
   });
 }
 
@@ -194,7 +195,7 @@ void Rfc2217Transport::send_next() {
 void Rfc2217Transport::close() {
   ++generation_;
   open_timer_.cancel();
-  opening_ = nullptr;
+  opening_.reset();
   queue_.clear();
   writing_ = false;
   tcp_.close();

@@ -43,9 +43,8 @@ class Rfc2217Transport final : public Transport {
   telnet::Decoder decoder_;
   rfc2217::ServerSettings answered_;
   bool com_port_agreed_ = false;
-  Done opening_;  // set while open() waits for the server's answers
+  std::shared_ptr<Done> opening_;  // set while open() waits for the server's answers
   boost::asio::steady_timer open_timer_;
-  Received reader_;
   Bytes data_;  // line data decoded from the last chunk
   std::vector<telnet::Event> events_;
   // Raw writes (data and negotiation replies) one at a time, in order.
