@@ -1,6 +1,7 @@
 #include "server_config.h"
 
 #include <algorithm>
+#include <boost/asio/ip/address.hpp>
 #include <charconv>
 
 #include "config_loader.h"
@@ -31,6 +32,19 @@ std::optional<ListenAddress> parse_listen(std::string_view s) {
 }
 
 namespace {
+
+// A listener binds a numeric address: a name would need a DNS lookup at start-up, which can
+// block, and can change under a running daemon.
+bool bindable(const std::string& host) {
+  if (host.empty() || host == "*" || host == "localhost") return true;
+  boost::system::error_code ec;
+  boost::asio::ip::make_address(host, ec);
+  return !ec;
+}
+
+bool wildcard(const std::string& host) {
+  return host.empty() || host == "*" || host == "0.0.0.0" || host == "::";
+}
 
 constexpr const char* kListenForm = "must be \"host:port\" (e.g. \"0.0.0.0:502\" or \"[::]:802\")";
 
@@ -140,7 +154,11 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
   auto& policy = l.options.policy;
   policy.access = modbus::AccessLevel::read;  // nothing may write unless the file says so
   if (auto address = r.string("address", true)) {
-    if (auto at = parse_listen(*address)) {
+    if (auto at = parse_listen(*address); at && !bindable(at->host)) {
+      diag.error(r.node("address"), r.qualified("address"),
+                 "\"" + at->host + "\" is not a numeric IPv4 or IPv6 address (no name lookup: "
+                 "give the address of the interface, or 0.0.0.0 / [::] for all)");
+    } else if (at) {
       l.options.host = at->host;
       l.options.port = at->port;
     } else {
@@ -242,10 +260,14 @@ void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
     const auto& a = cfg.listeners[i].options;
     for (std::size_t j = 0; j < i; ++j) {
       const auto& b = cfg.listeners[j].options;
-      if (a.host == b.host && a.port == b.port && a.port != 0) {
+      // Two listeners on one port clash when they name the same address, or when either is
+      // every address ([::] is dual stack: it takes the IPv4 port too).
+      if (a.port == b.port && a.port != 0 &&
+          (a.host == b.host || wildcard(a.host) || wildcard(b.host))) {
         diag.error_at(cfg.listeners[i].line, "listener",
-                      a.host + ":" + std::to_string(a.port) + " is already the address of the " +
-                          "listener on line " + std::to_string(cfg.listeners[j].line));
+                      a.host + ":" + std::to_string(a.port) + " overlaps " + b.host + ":" +
+                          std::to_string(b.port) + ", already the address of the listener on " +
+                          "line " + std::to_string(cfg.listeners[j].line));
       }
     }
     warn_open_writes(cfg.listeners[i], diag);

@@ -140,6 +140,13 @@ TEST_F(ListenerConfig, MistakesAreNamedWithTheirLine) {
                      "[[listener]]\naddress = \"127.0.0.1:502\"\naccess = \"read\"\n"),
               ElementsAre(AllOf(HasSubstr("gw.toml:3"), HasSubstr("already the address"),
                                 HasSubstr("line 1"))));
+  // [::] is dual stack: it takes 0.0.0.0's port too.
+  EXPECT_THAT(errors("[[listener]]\naddress = \"0.0.0.0:502\"\n"
+                     "[[listener]]\naddress = \"[::]:502\"\naccess = \"read\"\n"),
+              ElementsAre(HasSubstr("overlaps 0.0.0.0:502")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \"plc.example:502\"\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].address"),
+                                HasSubstr("not a numeric IPv4 or IPv6 address"))));
   EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nport = 5\n"),
               ElementsAre(AllOf(HasSubstr("listener[0].port"), HasSubstr("unknown key"))));
 }
