@@ -56,8 +56,24 @@ Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
       watchdog_timer_(io_) {}
 
 Daemon::~Daemon() {
+  if (http_) http_->close();
   if (gateway_) gateway_->stop();
   if (server_) server_->close();
+}
+
+bool Daemon::start_http() {
+  if (!config_.http.enabled) return true;
+  content_ = std::make_unique<StatusContent>(gateway_, *server_);
+  http::HttpOptions o;
+  o.host = config_.http.listen.host;
+  o.port = config_.http.listen.port;
+  o.allow = config_.http.allow;
+  http_ = std::make_unique<http::HttpServer>(io_, *content_, o, log_);
+  if (const auto ec = http_->listen()) {
+    log_->critical("cannot serve HTTP on {}:{}: {}", o.host, o.port, ec.message());
+    return false;
+  }
+  return true;
 }
 
 std::optional<Config> Daemon::load_config() {
@@ -102,6 +118,7 @@ int Daemon::run() {
     log_->critical("Modbus TCP server not started: {}", ec.message());
     return 1;
   }
+  if (!start_http()) return 1;
   gateway_->start();
   backend_.set(gateway_.get());
   log_->info("serving {} devices on {} buses, Modbus TCP on {} listener(s), the first on port {}",
@@ -154,6 +171,13 @@ void Daemon::reload() {
     return;
   }
   reload_limits(config_.server, config->server, *server_, *log_);
+  if (config->http.enabled != config_.http.enabled ||
+      config->http.listen.host != config_.http.listen.host ||
+      config->http.listen.port != config_.http.listen.port ||
+      config->http.allow != config_.http.allow || config->http.capture != config_.http.capture) {
+    log_->warn("[http] changes take effect at the next restart");
+    config->http = config_.http;
+  }
   // Unchanged buses move over running; the others close before the new ones open their ports.
   const auto kept = next->adopt_unchanged(*gateway_);
   gateway_->stop();
@@ -176,6 +200,7 @@ void Daemon::shutdown() {
   notifier_.stopping();
   signals_.cancel();
   gateway_->stop_drives(kStopLimit, [this] {
+    if (http_) http_->close();
     server_->close();
     gateway_->stop();
     status_timer_.cancel();

@@ -19,7 +19,9 @@
 #include "config/config.h"
 #include "config/plugins.h"
 #include "gateway/gateway.h"
+#include "http/http_server.h"
 #include "modbus/server.h"
+#include "status_content.h"
 #include "systemd_notifier.h"
 
 namespace drivegate {
@@ -44,6 +46,7 @@ class Daemon {
   void shutdown();
   void tick_status();
   void tick_watchdog();
+  bool start_http();
   std::string status_line() const;
 
   DaemonOptions options_;
@@ -58,6 +61,8 @@ class Daemon {
   std::unique_ptr<Gateway> gateway_;
   BackendSwitch backend_;
   std::unique_ptr<modbus::Server> server_;
+  std::unique_ptr<StatusContent> content_;
+  std::unique_ptr<http::HttpServer> http_;
   bool stopping_ = false;
 };
 

@@ -37,6 +37,15 @@ struct ListenerConfig {
   int line = 0;
 };
 
+// [http]: the status page, its JSON and /metrics. Off unless the file has [http].
+struct HttpConfig {
+  bool enabled = false;
+  ListenAddress listen{"127.0.0.1", 8502};
+  modbus::AllowList allow;  // empty: every address
+  bool capture = false;     // whether /api/v1/capture is served
+  int line = 0;
+};
+
 struct BusConfig {
   std::string name;
   std::string port;  // device path, tcp://host:port or rfc2217://host:port (port_address.h)
@@ -96,6 +105,7 @@ struct Config {
   std::filesystem::path plugin_dir;  // empty: the built-in default
   ServerConfig server;
   std::vector<ListenerConfig> listeners;  // at least one
+  HttpConfig http;
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
 };

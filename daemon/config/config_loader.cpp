@@ -416,14 +416,16 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   cfg.path = source_name;
   {
     TableReader top(root, "", diag);
-    top.expect({"server", "listener", "bus", "device"});
+    top.expect({"server", "listener", "http", "bus", "device"});
     top.node("server");
     top.node("listener");
+    top.node("http");
     top.node("bus");
     top.node("device");
   }
   read_server(root, cfg, diag);
   read_listeners(root, cfg, diag);
+  read_http(root, cfg, diag);
   const auto given = read_buses(root, cfg, diag);
   read_devices(root, cfg, plugins, diag);
   if (cfg.devices.empty() && diag.errors.empty()) {

@@ -274,4 +274,45 @@ void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
   }
 }
 
+void read_http(const toml::table& root, Config& cfg, Diagnostics& diag) {
+  const toml::node* n = root.get("http");
+  if (n == nullptr) return;
+  const auto* t = n->as_table();
+  if (t == nullptr) {
+    diag.error(n, "http", "must be a table ([http])");
+    return;
+  }
+  TableReader r(*t, "http", diag);
+  r.expect({"listen", "allow", "capture"});
+  cfg.http.enabled = true;
+  cfg.http.line = line_of(*t);
+  if (auto listen = r.string("listen", false)) {
+    if (auto at = parse_listen(*listen); at && bindable(at->host)) {
+      cfg.http.listen = *at;
+    } else {
+      diag.error(r.node("listen"), "http.listen",
+                 std::string(kListenForm) + " with a numeric address, got \"" + *listen + "\"");
+    }
+  }
+  if (const auto* a = r.node("allow")) cfg.http.allow = read_allow(*a, "http.allow", diag);
+  cfg.http.capture = r.boolean("capture").value_or(false);
+  for (const auto& l : cfg.listeners) {
+    if (l.options.port == cfg.http.listen.port && l.options.port != 0 &&
+        (l.options.host == cfg.http.listen.host || wildcard(l.options.host) ||
+         wildcard(cfg.http.listen.host))) {
+      diag.error(r.node("listen"), "http.listen",
+                 "overlaps the Modbus listener on line " + std::to_string(l.line));
+    }
+  }
+  if (modbus::allows_everyone(cfg.http.allow) && cfg.http.listen.host != "127.0.0.1" &&
+      cfg.http.listen.host != "::1" && cfg.http.listen.host != "localhost") {
+    diag.warning_at(cfg.http.line, "http",
+                    "every address that can reach " + cfg.http.listen.host + ":" +
+                        std::to_string(cfg.http.listen.port) +
+                        " may read the status page and metrics" +
+                        (cfg.http.capture ? " and capture the buses' traffic" : "") +
+                        "; give it an allow list");
+  }
+}
+
 }  // namespace drivegate

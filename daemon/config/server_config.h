@@ -1,6 +1,6 @@
-// The Modbus TCP side of the configuration: [server] (what every listener shares) and the
-// [[listener]] tables (address, allow list, access level, word order, TLS and roles). Used by
-// config_loader.cpp only.
+// The network side of the configuration: [server] (what every Modbus listener shares), the
+// [[listener]] tables (address, allow list, access level, word order, TLS and roles) and [http].
+// Used by config_loader.cpp only.
 #pragma once
 
 #include <toml++/toml.h>
@@ -14,5 +14,7 @@ void read_server(const toml::table& root, Config& cfg, Diagnostics& diag);
 // After read_server: [[listener]], or the single listener of [server] listen. Warns about a
 // listener that lets every address write.
 void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag);
+// [http]: address, allow list, capture. Warns when every address may reach it.
+void read_http(const toml::table& root, Config& cfg, Diagnostics& diag);
 
 }  // namespace drivegate

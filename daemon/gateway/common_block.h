@@ -50,7 +50,14 @@ struct CommonRow {
   CommonWrite write = CommonWrite::none;
   double min = 0.0;  // writable rows: the engineering range a write may carry
   double max = 0.0;
+  bool counter = false;  // only ever grows (wrapping at 2^32): a Prometheus counter, not a gauge
 };
+
+// A row that counts events (see CommonRow::counter).
+constexpr CommonRow counting(CommonRow row) {
+  row.counter = true;
+  return row;
+}
 
 // In address order within each table: a row's address is the sum of the register counts of the
 // rows of its table above it.
@@ -75,33 +82,33 @@ inline constexpr std::array kCommonBlock = {
     CommonRow{Table::input, "data_age_ms", PointType::u32, "ms",
               "time since the last good frame (4294967295: never)",
               [](const CommonSnapshot& s) -> std::int64_t { return s.data_age_ms; }},
-    CommonRow{Table::input, "frames_good", PointType::u32, "", "good frames received",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.device.frames_good; }},
-    CommonRow{Table::input, "bad_checksum", PointType::u32, "", "frames dropped for a bad checksum",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.device.bad_checksum; }},
-    CommonRow{Table::input, "timeouts", PointType::u32, "", "requests that got no reply in time",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.device.timeouts; }},
-    CommonRow{Table::input, "retries", PointType::u32, "", "frames sent again",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.device.retries; }},
-    CommonRow{Table::input, "nacks", PointType::u32, "", "frames the device refused (NACK)",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.device.nacks; }},
+    counting(CommonRow{Table::input, "frames_good", PointType::u32, "", "good frames received",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.device.frames_good; }}),
+    counting(CommonRow{Table::input, "bad_checksum", PointType::u32, "", "frames dropped for a bad checksum",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.device.bad_checksum; }}),
+    counting(CommonRow{Table::input, "timeouts", PointType::u32, "", "requests that got no reply in time",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.device.timeouts; }}),
+    counting(CommonRow{Table::input, "retries", PointType::u32, "", "frames sent again",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.device.retries; }}),
+    counting(CommonRow{Table::input, "nacks", PointType::u32, "", "frames the device refused (NACK)",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.device.nacks; }}),
     // The line's own counters, the same in every device on that bus.
-    CommonRow{Table::input, "bus_exchanges", PointType::u32, "",
+    counting(CommonRow{Table::input, "bus_exchanges", PointType::u32, "",
               "transactions on this device's bus",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.exchanges; }},
-    CommonRow{Table::input, "bus_timeouts", PointType::u32, "", "unanswered attempts on the bus",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.timeouts; }},
-    CommonRow{Table::input, "bus_echo_errors", PointType::u32, "",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.exchanges; }}),
+    counting(CommonRow{Table::input, "bus_timeouts", PointType::u32, "", "unanswered attempts on the bus",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.timeouts; }}),
+    counting(CommonRow{Table::input, "bus_echo_errors", PointType::u32, "",
               "one-wire echoes that differed from what was sent, or never came",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.echo_errors; }},
-    CommonRow{Table::input, "bus_noise_bytes", PointType::u32, "",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.echo_errors; }}),
+    counting(CommonRow{Table::input, "bus_noise_bytes", PointType::u32, "",
               "bytes on the bus nobody asked for",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.noise_bytes; }},
-    CommonRow{Table::input, "bus_reopens", PointType::u32, "", "times the port was reopened",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.reopens; }},
-    CommonRow{Table::input, "foreign_frames", PointType::u32, "",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.noise_bytes; }}),
+    counting(CommonRow{Table::input, "bus_reopens", PointType::u32, "", "times the port was reopened",
+              [](const CommonSnapshot& s) -> std::int64_t { return s.bus.reopens; }}),
+    counting(CommonRow{Table::input, "foreign_frames", PointType::u32, "",
               "good frames for another address or sequence, dropped",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.device.foreign; }},
+              [](const CommonSnapshot& s) -> std::int64_t { return s.device.foreign; }}),
 
     CommonRow{Table::holding, "command", PointType::u16, "",
               "write to command the drive; reads the command in force",

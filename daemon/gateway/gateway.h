@@ -63,6 +63,7 @@ class Gateway : public modbus::Backend {
   [[nodiscard]] const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }
   [[nodiscard]] Device* find(std::string_view name) const;
   [[nodiscard]] std::size_t buses_open() const;
+  [[nodiscard]] const std::vector<std::shared_ptr<Bus>>& buses() const { return buses_; }
 
  private:
   Gateway(boost::asio::io_context& io, std::shared_ptr<spdlog::logger> log);

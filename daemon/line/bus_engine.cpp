@@ -218,6 +218,7 @@ void BusEngine::send_attempt(TimePoint now) {
   echo_broken_ = false;
   if (streaming_ == nullptr) rx_.clear();
   log_->trace("bus {}: tx {:n}", name_, spdlog::to_hex(frame));
+  counters_.bytes_sent += frame.size();
   line_.send(frame);
 }
 
@@ -286,6 +287,7 @@ void BusEngine::on_received(ByteView bytes) {
   if (!started_ || state_ == State::down || bytes.empty()) return;
   const TimePoint now = clock_.now();
   note_activity(now);
+  counters_.bytes_received += bytes.size();
   log_->trace("bus {}: rx {:n}", name_, spdlog::to_hex(bytes.begin(), bytes.end()));
   const bool in_exchange =
       exchange_ && (state_ == State::sending || state_ == State::awaiting_echo ||

@@ -32,6 +32,9 @@ struct BusCounters {
   std::uint32_t echo_errors = 0;  // our own bytes did not come back as sent
   std::uint32_t noise_bytes = 0;  // bytes nobody asked for
   std::uint32_t reopens = 0;
+  // Not in the register map (they would wrap within hours at 115200 baud): for /metrics.
+  std::uint64_t bytes_sent = 0;
+  std::uint64_t bytes_received = 0;  // everything read, a one-wire line's echo included
 };
 
 // How the engine treats one device, from its configuration and its driver's traits.

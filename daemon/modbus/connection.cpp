@@ -56,6 +56,8 @@ void Connection::start() {
   state_->live.insert(this);
   ++state_->stats.connections_accepted;
   ++state_->stats.connections_active;
+  ++listener_->stats.connections_accepted;
+  ++listener_->stats.connections_active;
   state_->log->debug("modbus: {} connected", who());
   started_ = last_request_ = Clock::now();
   if (listener_->tls) {
@@ -83,6 +85,7 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
   handshaking_ = false;
   if (ec) {
     ++state_->stats.tls_handshake_failures;
+    ++listener_->stats.tls_handshake_failures;
     // OpenSSL's reason ("certificate verify failed") says little; the verification result
     // says which check failed, and the subject whose certificate it was.
     const long verify = SSL_get_verify_result(tls_->native_handle());
@@ -152,7 +155,10 @@ void Connection::close() {
     ++w.generation;
   }
   outstanding_ = 0;
-  if (state_->live.erase(this) != 0) --state_->stats.connections_active;
+  if (state_->live.erase(this) != 0) {
+    --state_->stats.connections_active;
+    --listener_->stats.connections_active;
+  }
 }
 
 bool Connection::may_read() const {
@@ -249,7 +255,11 @@ void Connection::commit_reply(std::size_t at, std::uint16_t transaction, std::ui
   tx_pending_.resize(at + kMbapHeaderSize + pdu_size);
   ++state_->stats.responses;
   const std::uint8_t fc = tx_pending_[at + kMbapHeaderSize];
-  if ((fc & 0x80) != 0) state_->count_exception(tx_pending_[at + kMbapHeaderSize + 1]);
+  if ((fc & 0x80) != 0) {
+    const std::uint8_t code = tx_pending_[at + kMbapHeaderSize + 1];
+    state_->count_exception(code);
+    ++listener_->stats.exceptions[code < listener_->stats.exceptions.size() ? code : 0];
+  }
 }
 
 void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t> pdu) {
@@ -284,8 +294,10 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
       --outstanding_;
     }
   }
+  ++listener_->stats.requests[pdu[0] < listener_->stats.requests.size() ? pdu[0] : 0];
   if (result.denied) {
     ++state_->stats.writes_denied;
+    ++listener_->stats.writes_denied;
     if (!denial_logged_) {  // once per connection: a PLC retrying must not flood the journal
       denial_logged_ = true;
       state_->log->warn(
@@ -399,6 +411,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
   const auto& o = state_->options;
   if (handshaking_ && now - started_ >= handshake_limit(o)) {
     ++state_->stats.tls_handshake_failures;
+    ++listener_->stats.tls_handshake_failures;
     state_->log->warn("modbus: {}: TLS handshake not finished in {} ms; closing", who(),
                       handshake_limit(o).count());
     close();

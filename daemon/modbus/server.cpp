@@ -85,6 +85,7 @@ void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listen
   if (peer_ec || !allowed(listener->options.policy.allow, peer.address())) {
     // Not in the allow list: closed at accept, before anything it sent is read.
     ++state->stats.connections_not_allowed;
+    ++listener->stats.connections_not_allowed;
     ++listener->not_allowed_since_warning;
     if (warn_now(listener->last_warning)) {
       state->log->warn("modbus: {}: {} client(s) closed at accept, not in the allow list (last: {})",
@@ -265,6 +266,18 @@ ServerLimits Server::limits() const {
 
 const ServerStats& Server::stats() const {
   return state_->stats;
+}
+
+std::size_t Server::listener_count() const {
+  return state_->listeners.size();
+}
+
+const ListenerOptions& Server::listener(std::size_t i) const {
+  return state_->listeners.at(i)->options;
+}
+
+const ListenerStats& Server::listener_stats(std::size_t i) const {
+  return state_->listeners.at(i)->stats;
 }
 
 std::size_t Server::client_count() const {

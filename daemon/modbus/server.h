@@ -67,6 +67,10 @@ class Server {
   ServerLimits limits() const;
 
   const ServerStats& stats() const;
+  // Each listener, in ServerOptions order: its options (the policy in force) and counters.
+  std::size_t listener_count() const;
+  const ListenerOptions& listener(std::size_t i) const;
+  const ListenerStats& listener_stats(std::size_t i) const;
   std::size_t client_count() const;
 
   // Stops accepting and closes every connection. Replies to pending writes are dropped. Once the

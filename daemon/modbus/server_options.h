@@ -64,6 +64,18 @@ struct ServerOptions {
   ServerLimits limits() const { return {max_clients, frame_timeout, idle_timeout}; }
 };
 
+// One listener's share, for /metrics and the status page.
+struct ListenerStats {
+  std::uint64_t connections_accepted = 0;
+  std::uint64_t connections_active = 0;
+  std::uint64_t connections_not_allowed = 0;
+  std::uint64_t tls_handshake_failures = 0;
+  std::uint64_t writes_denied = 0;
+  // requests[function code] (0x2B is the largest served; others counted in [0]).
+  std::array<std::uint64_t, 0x2C> requests{};
+  std::array<std::uint64_t, 12> exceptions{};  // as ServerStats::exceptions
+};
+
 struct ServerStats {
   std::uint64_t connections_accepted = 0;  // served connections (refused ones not included)
   std::uint64_t connections_refused = 0;   // closed at once: client cap reached

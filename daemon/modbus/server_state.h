@@ -36,6 +36,7 @@ struct ListenerState {
   boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
   std::chrono::steady_clock::time_point last_warning{};  // refusals: at most one warning a second
   std::uint64_t not_allowed_since_warning = 0;
+  ListenerStats stats;
 };
 
 struct ServerState {

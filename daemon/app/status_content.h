@@ -1,0 +1,27 @@
+// The daemon's answer to the HTTP side (http/content.h): each document rendered, when asked, from
+// the gateway running now (reloads swap it) and the Modbus server.
+#pragma once
+
+#include <memory>
+
+#include "gateway/gateway.h"
+#include "http/content.h"
+#include "modbus/server.h"
+
+namespace drivegate {
+
+class StatusContent final : public http::Content {
+ public:
+  // `gateway` is the daemon's own pointer, read at each request.
+  StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server);
+  std::string status_json() override;
+  std::string metrics() override;
+  std::string regmap_json() override;
+
+ private:
+  const std::unique_ptr<Gateway>& gateway_;
+  const modbus::Server& server_;
+  double started_unix_;
+};
+
+}  // namespace drivegate

@@ -1,0 +1,104 @@
+#include "http_server.h"
+
+#include <spdlog/spdlog.h>
+
+#include <vector>
+
+#include "http_connection.h"
+
+namespace drivegate::http {
+
+namespace asio = boost::asio;
+using asio::ip::tcp;
+
+namespace {
+
+void accept(const std::shared_ptr<HttpState>& state);
+
+void on_accept(const std::shared_ptr<HttpState>& state, const boost::system::error_code& ec,
+               tcp::socket socket) {
+  if (state->closed || ec == asio::error::operation_aborted) return;
+  if (!ec) {
+    boost::system::error_code peer_ec;
+    const auto peer = socket.remote_endpoint(peer_ec);
+    boost::system::error_code ignored;
+    if (peer_ec || !modbus::allowed(state->options.allow, peer.address())) {
+      ++state->stats.not_allowed;
+      state->log->debug("http: {} not in the allow list: closed at accept",
+                        peer_ec ? peer_ec.message() : peer.address().to_string());
+      socket.close(ignored);
+    } else if (state->live.size() >= state->options.max_clients) {
+      ++state->stats.refused;
+      socket.close(ignored);
+    } else {
+      std::make_shared<HttpConnection>(state, std::move(socket))->start();
+    }
+  } else {
+    state->log->warn("http: accept failed: {}", ec.message());
+  }
+  accept(state);
+}
+
+void accept(const std::shared_ptr<HttpState>& state) {
+  state->acceptor.async_accept([state](const boost::system::error_code& ec, tcp::socket socket) {
+    on_accept(state, ec, std::move(socket));
+  });
+}
+
+}  // namespace
+
+HttpServer::HttpServer(asio::io_context& io, Content& content, HttpOptions options,
+                       std::shared_ptr<spdlog::logger> log)
+    : state_(std::make_shared<HttpState>(io, content, std::move(options), std::move(log))) {}
+
+HttpServer::~HttpServer() {
+  close();
+}
+
+std::error_code HttpServer::listen() {
+  std::string host = state_->options.host;
+  if (host == "localhost") host = "127.0.0.1";
+  if (host.empty() || host == "*") host = "0.0.0.0";
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(host, ec);
+  if (ec) return std::make_error_code(std::errc::invalid_argument);
+  const tcp::endpoint endpoint(address, state_->options.port);
+  auto& a = state_->acceptor;
+  a.open(endpoint.protocol(), ec);
+  if (!ec) a.set_option(tcp::acceptor::reuse_address(true), ec);
+  if (!ec) a.bind(endpoint, ec);
+  if (!ec) a.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) {
+    boost::system::error_code ignored;
+    a.close(ignored);
+    return ec;
+  }
+  state_->log->info("http: status page, /api/v1/status and /metrics on http://{}:{}/", host,
+                    port());
+  accept(state_);
+  return {};
+}
+
+std::uint16_t HttpServer::port() const {
+  boost::system::error_code ec;
+  return state_->acceptor.local_endpoint(ec).port();
+}
+
+void HttpServer::close() {
+  if (state_->closed) return;
+  state_->closed = true;
+  boost::system::error_code ignored;
+  state_->acceptor.close(ignored);
+  const std::vector<HttpConnection*> open(state_->live.begin(), state_->live.end());
+  for (HttpConnection* c : open) c->close();
+}
+
+const HttpStats& HttpServer::stats() const {
+  return state_->stats;
+}
+
+std::size_t HttpServer::client_count() const {
+  return state_->live.size();
+}
+
+}  // namespace drivegate::http

@@ -1,0 +1,62 @@
+// The HTTP side (README, "Watching it"): the status page, its JSON, the register map and
+// Prometheus metrics, served on the daemon's own event loop with Boost.Beast (no thread of its
+// own). Hostile input gets the care Modbus gets: an allow list checked at accept, a client cap,
+// bounded request headers and no request bodies, and a whole request within request_timeout
+// (a slow client is closed). Read-only: no route writes to a drive.
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <chrono>
+#include <memory>
+#include <string>
+#include <system_error>
+
+#include "content.h"
+#include "modbus/allow_list.h"
+
+namespace drivegate::http {
+
+struct HttpOptions {
+  std::string host = "127.0.0.1";  // numeric, as for Modbus listeners
+  std::uint16_t port = 8502;       // 0: ephemeral
+  modbus::AllowList allow;         // empty: every address
+  std::size_t max_clients = 16;    // past it a client is closed at accept
+  // A request (its line and headers) must arrive whole within this; a keep-alive connection with
+  // no new request for this long is closed.
+  std::chrono::milliseconds request_timeout{10'000};
+};
+
+struct HttpStats {
+  std::uint64_t accepted = 0;
+  std::uint64_t not_allowed = 0;  // closed at accept: address not in the allow list
+  std::uint64_t refused = 0;      // closed at accept: max_clients
+  std::uint64_t requests = 0;
+  std::uint64_t bad_requests = 0;  // malformed, headers too large, a body: 400 / 431, closed
+  std::uint64_t timeouts = 0;      // closed: no whole request within request_timeout
+};
+
+struct HttpState;
+
+class HttpServer {
+ public:
+  HttpServer(boost::asio::io_context& io, Content& content, HttpOptions options,
+             std::shared_ptr<spdlog::logger> log);
+  ~HttpServer();  // close()
+  HttpServer(const HttpServer&) = delete;
+  HttpServer& operator=(const HttpServer&) = delete;
+
+  std::error_code listen();
+  [[nodiscard]] std::uint16_t port() const;
+  // Stops accepting and closes every connection.
+  void close();
+  [[nodiscard]] const HttpStats& stats() const;
+  [[nodiscard]] std::size_t client_count() const;
+
+ private:
+  std::shared_ptr<HttpState> state_;
+};
+
+}  // namespace drivegate::http
