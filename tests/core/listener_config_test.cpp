@@ -151,5 +151,34 @@ TEST_F(ListenerConfig, MistakesAreNamedWithTheirLine) {
               ElementsAre(AllOf(HasSubstr("listener[0].port"), HasSubstr("unknown key"))));
 }
 
+TEST_F(ListenerConfig, HttpIsOffUnlessAskedForAndItsKeysAreRead) {
+  auto r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n");
+  ASSERT_TRUE(r.config);
+  EXPECT_FALSE(r.config->http.enabled);
+  r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nlisten = \"127.0.0.1:8502\"\n"
+            "allow = [\"127.0.0.1\"]\ncapture = true\n");
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  EXPECT_TRUE(r.config->http.enabled);
+  EXPECT_EQ(r.config->http.listen.port, 8502);
+  EXPECT_EQ(r.config->http.allow.size(), 1u);
+  EXPECT_TRUE(r.config->http.capture);
+  EXPECT_THAT(r.warnings, IsEmpty());
+  // Reachable from anywhere, capture on: said.
+  r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nlisten = \"0.0.0.0:8502\"\n"
+            "capture = true\n");
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_THAT(r.warnings[0], AllOf(HasSubstr("gw.toml:3: http:"),
+                                   HasSubstr("capture the buses' traffic")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \"0.0.0.0:8502\"\naccess = \"read\"\n"
+                     "[http]\nlisten = \"127.0.0.1:8502\"\n"),
+              ElementsAre(HasSubstr("overlaps the Modbus listener on line 1")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":1502\"\naccess = \"read\"\n"
+                     "[http]\nlisten = \"status.local:8502\"\n"),
+              ElementsAre(HasSubstr("numeric address")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":1502\"\naccess = \"read\"\n"
+                     "[http]\nport = 8502\n"),
+              ElementsAre(AllOf(HasSubstr("http.port"), HasSubstr("unknown key"))));
+}
+
 }  // namespace
 }  // namespace drivegate
