@@ -28,7 +28,7 @@ namespace drivegate {
 
 struct DaemonOptions {
   std::filesystem::path config;
-  std::filesystem::path plugin_dir;    // empty: default_plugin_dir()
+  std::filesystem::path plugin_dir;     // empty: default_plugin_dir()
   std::optional<ListenAddress> listen;  // replaces the first listener's address
 };
 

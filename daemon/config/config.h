@@ -57,7 +57,7 @@ struct BusConfig {
   bool rs485 = false;  // kernel RS-485 mode (TIOCSRS485)
   Millis reopen_max{10'000};
   Millis network_delay{0};  // added to every reply timeout (a serial device server's latency)
-  int line = 0;  // where it was declared, for messages
+  int line = 0;             // where it was declared, for messages
   friend bool operator==(const BusConfig&, const BusConfig&) = default;
 };
 

@@ -95,8 +95,7 @@ modbus::AllowList read_allow(const toml::node& n, const std::string& key, Diagno
     return allow;
   }
   if (a->empty()) {
-    diag.error(&n, key,
-               "is empty: nobody could connect (leave allow out to serve every address)");
+    diag.error(&n, key, "is empty: nobody could connect (leave allow out to serve every address)");
   }
   for (const auto& item : *a) {
     const auto* s = item.as_string();
@@ -156,8 +155,9 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
   if (auto address = r.string("address", true)) {
     if (auto at = parse_listen(*address); at && !bindable(at->host)) {
       diag.error(r.node("address"), r.qualified("address"),
-                 "\"" + at->host + "\" is not a numeric IPv4 or IPv6 address (no name lookup: "
-                 "give the address of the interface, or 0.0.0.0 / [::] for all)");
+                 "\"" + at->host +
+                     "\" is not a numeric IPv4 or IPv6 address (no name lookup: "
+                     "give the address of the interface, or 0.0.0.0 / [::] for all)");
     } else if (at) {
       l.options.host = at->host;
       l.options.port = at->port;
@@ -208,9 +208,9 @@ void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
       p.tls ? " lets every address with a certificate from its CA and a writing role write"
             : " lets every address that can reach it write (access " +
                   std::string(to_string(p.access)) + ")";
-  diag.warning_at(l.line, where,
-                  l.options.name() + what +
-                      "; give it an allow list, or access = \"read\" (docs/security.md)");
+  diag.warning_at(
+      l.line, where,
+      l.options.name() + what + "; give it an allow list, or access = \"read\" (docs/security.md)");
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 #include "regmap_format.h"
 
-#include "format/json.h"
-
 #include <cstdio>
 #include <sstream>
+
+#include "format/json.h"
 
 namespace drivegate {
 namespace {
@@ -39,7 +39,6 @@ const char* type_name(PointType t) {
   }
   return "u16";
 }
-
 
 std::string number(double v) {
   std::ostringstream out;

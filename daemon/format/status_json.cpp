@@ -47,12 +47,12 @@ void device_json(std::ostringstream& out, Device& d) {
     if (p->common()) {
       common += (common.empty() ? "" : ", ") + json_string(p->spec.name) + ": " + json_value(v);
       if (!label.empty()) {
-        labels += (labels.empty() ? "" : ", ") + json_string(p->spec.name) + ": " +
-                  json_string(label);
+        labels +=
+            (labels.empty() ? "" : ", ") + json_string(p->spec.name) + ": " + json_string(label);
       }
     } else {
-      points += std::string(points.empty() ? "" : ", ") + "{\"name\": " +
-                json_string(p->spec.name) + ", \"value\": " + json_value(v) +
+      points += std::string(points.empty() ? "" : ", ") +
+                "{\"name\": " + json_string(p->spec.name) + ", \"value\": " + json_value(v) +
                 ", \"unit\": " + json_string(p->spec.unit) +
                 (label.empty() ? "" : ", \"label\": " + json_string(label)) + "}";
     }
@@ -65,14 +65,13 @@ void bus_json(std::ostringstream& out, const Bus& b) {
   const auto& n = b.counters();
   char busy[32];
   std::snprintf(busy, sizeof busy, "%.6f", line_busy_seconds(b));
-  out << "{\"name\": " << json_string(b.config().name) << ", \"port\": "
-      << json_string(b.config().port) << ", \"open\": " << boolean(b.is_open())
+  out << "{\"name\": " << json_string(b.config().name)
+      << ", \"port\": " << json_string(b.config().port) << ", \"open\": " << boolean(b.is_open())
       << ", \"baud\": " << b.config().baud << ", \"exchanges\": " << n.exchanges
       << ", \"timeouts\": " << n.timeouts << ", \"retries\": " << n.retries
       << ", \"echo_errors\": " << n.echo_errors << ", \"noise_bytes\": " << n.noise_bytes
       << ", \"reopens\": " << n.reopens << ", \"bytes_sent\": " << n.bytes_sent
-      << ", \"bytes_received\": " << n.bytes_received << ", \"line_busy_seconds\": " << busy
-      << "}";
+      << ", \"bytes_received\": " << n.bytes_received << ", \"line_busy_seconds\": " << busy << "}";
 }
 
 void listener_json(std::ostringstream& out, const modbus::Server& server, std::size_t i) {

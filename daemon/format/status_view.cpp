@@ -1,6 +1,7 @@
+#include "format/status_view.h"
+
 #include <algorithm>
 
-#include "format/status_view.h"
 #include "gateway/value_codec.h"
 
 namespace drivegate {

@@ -71,8 +71,7 @@ class Device final : public Station {
   // the map before the values, so it never reaches the driver; 32-bit values are read in the
   // session's word order.
   modbus::Exception write(const modbus::Session& session, Table table, std::uint16_t address,
-                          std::span<const std::uint16_t> in, modbus::WriteDone done,
-                          TimePoint now);
+                          std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now);
   // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
   // the failsafe. `done` is called exactly once.
   void command(Command c, modbus::WriteDone done, TimePoint now);
@@ -100,8 +99,8 @@ class Device final : public Station {
   std::span<std::uint16_t> registers(Table t) { return image_[static_cast<int>(t)]; }
   // device_writes.cpp
   modbus::Exception submit(const modbus::Session& session, Table table, std::uint16_t address,
-                           std::span<const std::uint16_t> in, modbus::WriteDone done,
-                           TimePoint now, Origin origin);
+                           std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now,
+                           Origin origin);
   modbus::Exception validate(const modbus::Session& session, Table table, std::uint16_t address,
                              std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
   Progress advance(Request& r, TimePoint now, modbus::Exception& failure);

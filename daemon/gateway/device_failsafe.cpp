@@ -48,8 +48,8 @@ void Device::enforce_failsafe(TimePoint now) {
   Exception e = Exception::none;
   if (action == FailsafeAction::preset) {
     const auto rpm = static_cast<std::uint16_t>(config_.failsafe.preset_rpm);
-    e = submit(kGatewaySession, Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done, now,
-               Origin::gateway);
+    e = submit(kGatewaySession, Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done,
+               now, Origin::gateway);
   } else {
     const auto c = static_cast<std::uint16_t>(
         action == FailsafeAction::quick_stop ? Command::quick_stop : Command::stop);

@@ -25,7 +25,8 @@ class Category final : public std::error_category {
       case Failure::settings_differ:
         return "the server did not take the line settings";
       case Failure::no_answer:
-        return "the server did not answer the line settings within 5 s";
+        return "the server did not answer the line settings within 5 s (is the port set up "
+               "for RFC 2217, not raw TCP?)";
     }
     return "rfc2217 error";
   }
@@ -91,8 +92,8 @@ void Rfc2217Transport::negotiate_more() {
     if (!opening_) return;
     if (answered_.complete()) {
       const std::string differs = rfc2217::mismatch(asked_, answered_);
-      if (!differs.empty()) log_->error("bus {}: {}: the server answered {}", bus_, describe(),
-                                        differs);
+      if (!differs.empty())
+        log_->error("bus {}: {}: the server answered {}", bus_, describe(), differs);
       finish_open(differs.empty() ? std::error_code{} : make_error(Failure::settings_differ));
       return;
     }
@@ -112,8 +113,8 @@ void Rfc2217Transport::answer(const Event& e) {
     if (e.option == kComPortOption) rfc2217::take_answer(e.payload, answered_);
     return;
   }
-  const bool ours = e.option == kBinary || e.option == kSuppressGoAhead ||
-                    e.option == kComPortOption;
+  const bool ours =
+      e.option == kBinary || e.option == kSuppressGoAhead || e.option == kComPortOption;
   switch (e.verb) {
     case kDo:  // the server agrees to our WILL, or asks us to
       if (e.option == kComPortOption && !com_port_agreed_) {
@@ -144,20 +145,20 @@ void Rfc2217Transport::finish_open(std::error_code ec) {
 
 void Rfc2217Transport::read(Received received) {
   const std::uint64_t generation = generation_;
-  tcp_.read([this, generation, received = std::move(received)](std::error_code ec,
-                                                                ByteView raw) mutable {
-    if (generation != generation_) return;
-    if (ec) {
-      received(ec, {});
-      return;
-    }
-    on_bytes(raw);
-    if (data_.empty()) {  // only Telnet commands in this chunk: wait for data
-      read(std::move(received));
-      return;
-    }
-    received(ec, data_);
-  });
+  tcp_.read(
+      [this, generation, received = std::move(received)](std::error_code ec, ByteView raw) mutable {
+        if (generation != generation_) return;
+        if (ec) {
+          received(ec, {});
+          return;
+        }
+        on_bytes(raw);
+        if (data_.empty()) {  // only Telnet commands in this chunk: wait for data
+          read(std::move(received));
+          return;
+        }
+        received(ec, data_);
+      });
 }
 
 void Rfc2217Transport::write(ByteView data, Done done) {
@@ -202,9 +203,11 @@ void Rfc2217Transport::close() {
 }
 
 std::string Rfc2217Transport::describe() const {
-  const char* parity = asked_.parity == Parity::none ? "N" : asked_.parity == Parity::even ? "E" : "O";
-  return "rfc2217 " + tcp_.describe().substr(4) + " (set to " + std::to_string(asked_.baud) +
-         " " + std::to_string(asked_.data_bits) + parity + std::to_string(asked_.stop_bits) + ")";
+  const char* parity = asked_.parity == Parity::none   ? "N"
+                       : asked_.parity == Parity::even ? "E"
+                                                       : "O";
+  return "rfc2217 " + tcp_.describe().substr(4) + " (set to " + std::to_string(asked_.baud) + " " +
+         std::to_string(asked_.data_bits) + parity + std::to_string(asked_.stop_bits) + ")";
 }
 
 }  // namespace drivegate

@@ -1,12 +1,12 @@
 #include "serial_line.h"
 
-#include "line/transport.h"
-
 #include <linux/serial.h>
 #include <sys/ioctl.h>
 #include <termios.h>
 
 #include <cerrno>
+
+#include "line/transport.h"
 
 namespace drivegate {
 

@@ -32,11 +32,11 @@ void SerialTransport::open(Done done) {
 }
 
 void SerialTransport::read(Received received) {
-  port_.async_read_some(asio::buffer(chunk_), [this, received = std::move(received)](
-                                                  const boost::system::error_code& ec,
-                                                  std::size_t n) {
-    received(from_asio(ec), ByteView(chunk_.data(), ec ? 0 : n));
-  });
+  port_.async_read_some(
+      asio::buffer(chunk_),
+      [this, received = std::move(received)](const boost::system::error_code& ec, std::size_t n) {
+        received(from_asio(ec), ByteView(chunk_.data(), ec ? 0 : n));
+      });
 }
 
 void SerialTransport::write(ByteView data, Done done) {
@@ -53,10 +53,9 @@ void SerialTransport::close() {
 }
 
 std::string SerialTransport::describe() const {
-  return bus_.port + " (" + std::to_string(bus_.baud) + " baud, " +
-         std::to_string(bus_.data_bits) + " data, " + parity_name(bus_.parity) + " parity, " +
-         std::to_string(bus_.stop_bits) + " stop" + (bus_.echo ? ", echo" : "") +
-         (bus_.rs485 ? ", RS-485" : "") + ")";
+  return bus_.port + " (" + std::to_string(bus_.baud) + " baud, " + std::to_string(bus_.data_bits) +
+         " data, " + parity_name(bus_.parity) + " parity, " + std::to_string(bus_.stop_bits) +
+         " stop" + (bus_.echo ? ", echo" : "") + (bus_.rs485 ? ", RS-485" : "") + ")";
 }
 
 }  // namespace drivegate

@@ -54,11 +54,11 @@ void TcpTransport::open(Done done) {
 }
 
 void TcpTransport::read(Received received) {
-  socket_.async_read_some(asio::buffer(chunk_), [this, received = std::move(received)](
-                                                    const boost::system::error_code& ec,
-                                                    std::size_t n) {
-    received(from_asio(ec), ByteView(chunk_.data(), ec ? 0 : n));
-  });
+  socket_.async_read_some(
+      asio::buffer(chunk_),
+      [this, received = std::move(received)](const boost::system::error_code& ec, std::size_t n) {
+        received(from_asio(ec), ByteView(chunk_.data(), ec ? 0 : n));
+      });
 }
 
 void TcpTransport::write(ByteView data, Done done) {

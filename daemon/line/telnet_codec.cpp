@@ -110,10 +110,9 @@ void append(Bytes& out, const Bytes& more) {
 
 Bytes configure(const LineSettings& s) {
   Bytes out;
-  const std::uint8_t baud[4] = {static_cast<std::uint8_t>(s.baud >> 24),
-                                static_cast<std::uint8_t>(s.baud >> 16),
-                                static_cast<std::uint8_t>(s.baud >> 8),
-                                static_cast<std::uint8_t>(s.baud)};
+  const std::uint8_t baud[4] = {
+      static_cast<std::uint8_t>(s.baud >> 24), static_cast<std::uint8_t>(s.baud >> 16),
+      static_cast<std::uint8_t>(s.baud >> 8), static_cast<std::uint8_t>(s.baud)};
   append(out, command(Command::set_baudrate, ByteView(baud, 4)));
   const std::uint8_t size = s.data_bits;
   append(out, command(Command::set_datasize, ByteView(&size, 1)));

@@ -28,17 +28,17 @@ inline constexpr std::uint8_t kSb = 250;
 inline constexpr std::uint8_t kSe = 240;
 
 // Options.
-inline constexpr std::uint8_t kBinary = 0;              // RFC 856: no CR / NUL stuffing
-inline constexpr std::uint8_t kSuppressGoAhead = 3;     // RFC 858
-inline constexpr std::uint8_t kComPortOption = 44;      // RFC 2217
+inline constexpr std::uint8_t kBinary = 0;           // RFC 856: no CR / NUL stuffing
+inline constexpr std::uint8_t kSuppressGoAhead = 3;  // RFC 858
+inline constexpr std::uint8_t kComPortOption = 44;   // RFC 2217
 
 // What the decoder found besides data, in the order it came.
 struct Event {
   enum class Kind : std::uint8_t { negotiation, subnegotiation };
   Kind kind = Kind::negotiation;
-  std::uint8_t verb = 0;    // negotiation: kDo, kDont, kWill or kWont
+  std::uint8_t verb = 0;  // negotiation: kDo, kDont, kWill or kWont
   std::uint8_t option = 0;
-  Bytes payload;            // subnegotiation: the bytes between option and IAC SE, unescaped
+  Bytes payload;  // subnegotiation: the bytes between option and IAC SE, unescaped
   friend bool operator==(const Event&, const Event&) = default;
 };
 

@@ -70,8 +70,7 @@ std::optional<AddressRange> parse_address_range(std::string_view text, std::stri
     unsigned value = 0;
     const auto [end, perr] = std::from_chars(bits.data(), bits.data() + bits.size(), value);
     if (bits.empty() || perr != std::errc() || end != bits.data() + bits.size() || value > full) {
-      error = "\"" + std::string(text) + "\": the prefix length must be 0.." +
-              std::to_string(full);
+      error = "\"" + std::string(text) + "\": the prefix length must be 0.." + std::to_string(full);
       return std::nullopt;
     }
     r.prefix = value;

@@ -74,10 +74,9 @@ void Connection::start() {
 }
 
 void Connection::handshake() {
-  tls_->async_handshake(asio::ssl::stream_base::server,
-                        [self = shared_from_this()](const boost::system::error_code& ec) {
-                          self->on_handshake(ec);
-                        });
+  tls_->async_handshake(
+      asio::ssl::stream_base::server,
+      [self = shared_from_this()](const boost::system::error_code& ec) { self->on_handshake(ec); });
 }
 
 void Connection::on_handshake(const boost::system::error_code& ec) {
@@ -90,12 +89,11 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
     // says which check failed, and the subject whose certificate it was.
     const long verify = SSL_get_verify_result(tls_->native_handle());
     X509* cert = SSL_get0_peer_certificate(tls_->native_handle());
-    state_->log->warn("modbus: {}: TLS handshake failed: {}{}{}; closing", who(), ec.message(),
-                      verify != X509_V_OK ? std::string(" (") +
-                                                X509_verify_cert_error_string(verify) + ")"
-                                          : std::string(),
-                      cert != nullptr ? ", certificate \"" + certificate_subject(cert) + "\""
-                                      : std::string());
+    state_->log->warn(
+        "modbus: {}: TLS handshake failed: {}{}{}; closing", who(), ec.message(),
+        verify != X509_V_OK ? std::string(" (") + X509_verify_cert_error_string(verify) + ")"
+                            : std::string(),
+        cert != nullptr ? ", certificate \"" + certificate_subject(cert) + "\"" : std::string());
     close();
     return;
   }
@@ -162,8 +160,9 @@ void Connection::close() {
 }
 
 bool Connection::may_read() const {
-  return !closed_ && !handshaking_ && !reading_ && !close_after_flush_ && outstanding_ < writes_.size() &&
-         tx_pending_.size() < kMaxReplyBacklog && rx_len_ < rx_.size();
+  return !closed_ && !handshaking_ && !reading_ && !close_after_flush_ &&
+         outstanding_ < writes_.size() && tx_pending_.size() < kMaxReplyBacklog &&
+         rx_len_ < rx_.size();
 }
 
 void Connection::read() {
@@ -283,11 +282,10 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
     w.size = static_cast<std::uint8_t>(pdu.size());
     std::copy(pdu.begin(), pdu.end(), w.request.begin());
     ++outstanding_;
-    result = state_->dispatcher.handle(
-        session_, header.unit, pdu, out,
-        [self = shared_from_this(), slot, generation = w.generation](Exception e) {
-          self->on_write_done(slot, generation, e);
-        });
+    result =
+        state_->dispatcher.handle(session_, header.unit, pdu, out,
+                                  [self = shared_from_this(), slot, generation = w.generation](
+                                      Exception e) { self->on_write_done(slot, generation, e); });
     if (result.status == Dispatcher::Result::Status::reply) {  // refused before it started
       w.used = false;
       ++w.generation;
@@ -426,8 +424,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
   }
   if (o.idle_timeout.count() > 0 && outstanding_ == 0 && now - last_request_ >= o.idle_timeout) {
     ++state_->stats.idle_timeouts;
-    state_->log->info("modbus: {}: no request for {} ms, closing", who(),
-                      o.idle_timeout.count());
+    state_->log->info("modbus: {}: no request for {} ms, closing", who(), o.idle_timeout.count());
     close();
     return;
   }

@@ -119,8 +119,8 @@ class Connection : public std::enable_shared_from_this<Connection> {
   Clock::time_point started_;
   std::optional<Clock::time_point> partial_since_;  // a partial frame is buffered since then
 
-  bool handshaking_ = false;     // TLS: no request is read before the handshake completed
-  bool denial_logged_ = false;   // a write beyond the access level is logged once per connection
+  bool handshaking_ = false;    // TLS: no request is read before the handshake completed
+  bool denial_logged_ = false;  // a write beyond the access level is logged once per connection
   bool reading_ = false;
   bool writing_ = false;
   bool completions_posted_ = false;

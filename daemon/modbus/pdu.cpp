@@ -254,7 +254,8 @@ Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::
   // reads again, after the write).
   static_assert(kMaxRwWrite + kMaxRwRead <= std::tuple_size_v<decltype(scratch_)>);
   const std::span<std::uint16_t> probe(scratch_.data() + kMaxRwWrite, read_count);
-  if (auto e = backend_.read(*session_, unit, RegisterTable::holding_registers, read_address, probe);
+  if (auto e =
+          backend_.read(*session_, unit, RegisterTable::holding_registers, read_address, probe);
       e != Exception::none) {
     return fail(fc, e, out);
   }

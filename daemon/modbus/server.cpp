@@ -88,9 +88,10 @@ void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listen
     ++listener->stats.connections_not_allowed;
     ++listener->not_allowed_since_warning;
     if (warn_now(listener->last_warning)) {
-      state->log->warn("modbus: {}: {} client(s) closed at accept, not in the allow list (last: {})",
-                       listener->options.name(), listener->not_allowed_since_warning,
-                       peer_ec ? peer_ec.message() : peer.address().to_string());
+      state->log->warn(
+          "modbus: {}: {} client(s) closed at accept, not in the allow list (last: {})",
+          listener->options.name(), listener->not_allowed_since_warning,
+          peer_ec ? peer_ec.message() : peer.address().to_string());
       listener->not_allowed_since_warning = 0;
     }
     refuse(socket);
@@ -149,7 +150,8 @@ std::error_code bind(ListenerState& l, int backlog) {
 }
 
 bool same_socket(const ListenerOptions& a, const ListenerOptions& b) {
-  return a.host == b.host && a.port == b.port && a.policy.tls.has_value() == b.policy.tls.has_value();
+  return a.host == b.host && a.port == b.port &&
+         a.policy.tls.has_value() == b.policy.tls.has_value();
 }
 
 }  // namespace

@@ -77,8 +77,8 @@ struct ListenerStats {
 };
 
 struct ServerStats {
-  std::uint64_t connections_accepted = 0;  // served connections (refused ones not included)
-  std::uint64_t connections_refused = 0;   // closed at once: client cap reached
+  std::uint64_t connections_accepted = 0;     // served connections (refused ones not included)
+  std::uint64_t connections_refused = 0;      // closed at once: client cap reached
   std::uint64_t connections_not_allowed = 0;  // closed at once: address not in the allow list
   std::uint64_t tls_handshake_failures = 0;   // closed: no valid client certificate, not TLS...
   std::uint64_t writes_denied = 0;  // writes answered 01: beyond the connection's access level

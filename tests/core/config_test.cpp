@@ -352,8 +352,8 @@ TEST_F(ConfigTest, ABusBehindASerialDeviceServer) {
   EXPECT_EQ(r.config->buses[0].network_delay, Millis(20));
   text = kGood;
   text.replace(text.find("port = \"/dev/ttyUSB0\""), 21, "port = \"tcp://10.1.5.20\"");
-  EXPECT_THAT(only_error(text), AllOf(HasSubstr("gw.toml:8: bus[0].port:"),
-                                      HasSubstr("tcp://host:port")));
+  EXPECT_THAT(only_error(text),
+              AllOf(HasSubstr("gw.toml:8: bus[0].port:"), HasSubstr("tcp://host:port")));
   text = kGood;
   text.replace(text.find("port = \"/dev/ttyUSB0\""), 21,
                "port = \"tcp://10.1.5.20:4001\"\nrs485 = true");

@@ -149,8 +149,7 @@ TEST_F(FailsafeTest, AdapterPointsAndInvalidWritesDoNotFeedIt) {
 TEST_F(FailsafeTest, AClientThatMayOnlyReadDoesNotFeedIt) {
   make(FailsafeAction::stop);
   ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
-  EXPECT_EQ(plc(kHeartbeat, {2}, 600ms, modbus::AccessLevel::read),
-            Exception::illegal_function);
+  EXPECT_EQ(plc(kHeartbeat, {2}, 600ms, modbus::AccessLevel::read), Exception::illegal_function);
   EXPECT_EQ(plc(kCommand, {1}, 700ms, modbus::AccessLevel::read), Exception::illegal_function);
   tick(1000ms);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});

@@ -111,12 +111,12 @@ TEST_F(ListenerConfig, ServerListenAndNothingAtAllKeepTheirOldMeaningWithAWarnin
 }
 
 TEST_F(ListenerConfig, MistakesAreNamedWithTheirLine) {
-  EXPECT_THAT(errors("[server]\nlisten = \"0.0.0.0:502\"\n[[listener]]\naddress = \":503\"\n"),
-              ElementsAre(AllOf(HasSubstr("gw.toml:3: listener:"),
-                                HasSubstr("cannot both be given"))));
-  EXPECT_THAT(errors("[[listener]]\naddress = \"10.0.0.1\"\n"),
-              ElementsAre(AllOf(HasSubstr("gw.toml:2: listener[0].address:"),
-                                HasSubstr("host:port"))));
+  EXPECT_THAT(
+      errors("[server]\nlisten = \"0.0.0.0:502\"\n[[listener]]\naddress = \":503\"\n"),
+      ElementsAre(AllOf(HasSubstr("gw.toml:3: listener:"), HasSubstr("cannot both be given"))));
+  EXPECT_THAT(
+      errors("[[listener]]\naddress = \"10.0.0.1\"\n"),
+      ElementsAre(AllOf(HasSubstr("gw.toml:2: listener[0].address:"), HasSubstr("host:port"))));
   EXPECT_THAT(errors("[[listener]]\naccess = \"read\"\n"),
               ElementsAre(AllOf(HasSubstr("listener[0].address"), HasSubstr("missing"))));
   EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\naccess = \"write\"\n"),
@@ -155,8 +155,9 @@ TEST_F(ListenerConfig, HttpIsOffUnlessAskedForAndItsKeysAreRead) {
   auto r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n");
   ASSERT_TRUE(r.config);
   EXPECT_FALSE(r.config->http.enabled);
-  r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nlisten = \"127.0.0.1:8502\"\n"
-            "allow = [\"127.0.0.1\"]\ncapture = true\n");
+  r = parse(
+      "[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nlisten = \"127.0.0.1:8502\"\n"
+      "allow = [\"127.0.0.1\"]\ncapture = true\n");
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   EXPECT_TRUE(r.config->http.enabled);
   EXPECT_EQ(r.config->http.listen.port, 8502);
@@ -164,11 +165,12 @@ TEST_F(ListenerConfig, HttpIsOffUnlessAskedForAndItsKeysAreRead) {
   EXPECT_TRUE(r.config->http.capture);
   EXPECT_THAT(r.warnings, IsEmpty());
   // Reachable from anywhere, capture on: said.
-  r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nlisten = \"0.0.0.0:8502\"\n"
-            "capture = true\n");
+  r = parse(
+      "[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nlisten = \"0.0.0.0:8502\"\n"
+      "capture = true\n");
   ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_THAT(r.warnings[0], AllOf(HasSubstr("gw.toml:3: http:"),
-                                   HasSubstr("capture the buses' traffic")));
+  EXPECT_THAT(r.warnings[0],
+              AllOf(HasSubstr("gw.toml:3: http:"), HasSubstr("capture the buses' traffic")));
   EXPECT_THAT(errors("[[listener]]\naddress = \"0.0.0.0:8502\"\naccess = \"read\"\n"
                      "[http]\nlisten = \"127.0.0.1:8502\"\n"),
               ElementsAre(HasSubstr("overlaps the Modbus listener on line 1")));

@@ -18,17 +18,21 @@ TEST(Telnet, DataFFIsDoubledOnTheWire_RFC854) {
 TEST(Telnet, NegotiationAndSubnegotiationBytes_RFC855) {
   EXPECT_EQ(telnet::negotiation(telnet::kWill, telnet::kComPortOption), (Bytes{255, 251, 44}));
   // A payload 0xFF is doubled inside SB ... SE too.
-  EXPECT_EQ(telnet::subnegotiation(44, Bytes{1, 0xFF}), (Bytes{255, 250, 44, 1, 255, 255, 255, 240}));
+  EXPECT_EQ(telnet::subnegotiation(44, Bytes{1, 0xFF}),
+            (Bytes{255, 250, 44, 1, 255, 255, 255, 240}));
 }
 
 TEST(Telnet, DecoderSeparatesDataFromCommandsWhereverTheChunksSplit) {
-  const Bytes wire{0x10, 0xFF, 0xFF, 0x11,                 // data 10 FF 11
-                   255, 253, 44,                           // DO COM-PORT-OPTION
-                   0x12,                                   // data 12
-                   255, 250, 44, 101, 0, 0, 0x4B, 0, 255, 240,  // SB 44 101 (baud 19200) SE
-                   255, 250, 44, 102, 255, 255, 255, 240,  // SB 44 102 FF(escaped) SE
-                   255, 241,                               // NOP: ignored
+  // clang-format off: one wire element a line
+  const Bytes wire{0x10, 0xFF, 0xFF, 0x11,  // data 10 FF 11
+                   255,  253,  44,          // DO COM-PORT-OPTION
+                   0x12,                    // data 12
+                   255,  250,  44,   101,  0,   0,   0x4B, 0,
+                   255,  240,                                    // SB 44 101 (baud 19200) SE
+                   255,  250,  44,   102,  255, 255, 255,  240,  // SB 44 102 FF(escaped) SE
+                   255,  241,                                    // NOP: ignored
                    0x13};
+  // clang-format on
   const Bytes data{0x10, 0xFF, 0x11, 0x12, 0x13};
   const std::vector<Event> events{
       {Event::Kind::negotiation, telnet::kDo, 44, {}},
@@ -64,11 +68,11 @@ TEST(Telnet, AnEndlessSubnegotiationIsBoundedAndTheStreamRecovers) {
 // SET-CONTROL 5 (1 no flow control).
 TEST(Rfc2217, ConfigureAsksForEverySettingInItsOwnSubnegotiation) {
   const Bytes got = rfc2217::configure({19200, 8, Parity::even, 1});
-  const Bytes want{255, 250, 44, 1, 0x00, 0x00, 0x4B, 0x00, 255, 240,
-                   255, 250, 44, 2, 8, 255, 240,
-                   255, 250, 44, 3, 3, 255, 240,
-                   255, 250, 44, 4, 1, 255, 240,
-                   255, 250, 44, 5, 1, 255, 240};
+  // clang-format off: one subnegotiation a line
+  const Bytes want{255, 250, 44,  1,   0x00, 0x00, 0x4B, 0x00, 255, 240, 255, 250, 44,
+                   2,   8,   255, 240, 255,  250,  44,   3,    3,   255, 240, 255, 250,
+                   44,  4,   1,   255, 240,  255,  250,  44,   5,   1,   255, 240};
+  // clang-format on
   EXPECT_EQ(got, want);
   EXPECT_EQ(rfc2217::parity_code(Parity::odd), 2);
   EXPECT_EQ(rfc2217::stop_code(2), 2);
@@ -95,8 +99,7 @@ TEST(Rfc2217, TheServersAnswersAreCheckedAgainstWhatWasAsked) {
   EXPECT_EQ(rfc2217::mismatch(asked, s), "");
   rfc2217::take_answer(Bytes{101, 0, 0, 0x25, 0x80}, s);  // the server kept 9600
   rfc2217::take_answer(Bytes{103, 1}, s);
-  EXPECT_EQ(rfc2217::mismatch(asked, s),
-            "baud 9600 instead of 19200, parity code 1 instead of 3");
+  EXPECT_EQ(rfc2217::mismatch(asked, s), "baud 9600 instead of 19200, parity code 1 instead of 3");
 }
 
 }  // namespace

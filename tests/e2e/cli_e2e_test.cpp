@@ -67,8 +67,8 @@ TEST(Cli, TheDocumentedConfigurationsAreValid) {
   const auto end = text.find("```", start + 8);
   TempDir dir;
   std::ofstream(dir / "readme.toml") << text.substr(start + 8, end - start - 8);
-  for (const auto& file : {dir / "readme.toml",
-                           std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "etc/drivegate.toml"}) {
+  for (const auto& file :
+       {dir / "readme.toml", std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "etc/drivegate.toml"}) {
     const auto r =
         run({drivegated(), "--check-config", file.string(), "--plugin-dir", plugin_dir().string()});
     EXPECT_EQ(r.status, 0) << file << ": " << r.out;

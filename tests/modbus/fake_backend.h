@@ -42,9 +42,8 @@ class FakeBackend : public Backend {
     return Exception::none;
   }
 
-  Exception write(const Session& session, std::uint8_t unit, RegisterTable t,
-                  std::uint16_t address, std::span<const std::uint16_t> values,
-                  WriteDone done) override {
+  Exception write(const Session& session, std::uint8_t unit, RegisterTable t, std::uint16_t address,
+                  std::span<const std::uint16_t> values, WriteDone done) override {
     last_session = session;
     if (auto e = check(unit, address, values.size()); e != Exception::none) return e;
     // As the gateway does for points beyond the common block: backend.h's only 0x01.

@@ -63,9 +63,9 @@ class BusRig::Units final : public modbus::Backend {
                   std::uint16_t address, std::span<const std::uint16_t> values,
                   modbus::WriteDone done) override {
     Device* d = find(unit);
-    return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->write(session, to_table(table), address, values, std::move(done),
-                                   rig_.now());
+    return d == nullptr
+               ? Exception::gateway_path_unavailable
+               : d->write(session, to_table(table), address, values, std::move(done), rig_.now());
   }
 
  private:

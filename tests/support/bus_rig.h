@@ -78,8 +78,7 @@ class BusRig {
   [[nodiscard]] TimePoint now() const { return clock_.now(); }
 
   // A client with every right, in the register map's word order (a `maintain` listener).
-  static constexpr modbus::Session kMaintain{modbus::AccessLevel::maintain,
-                                             modbus::WordOrder::big};
+  static constexpr modbus::Session kMaintain{modbus::AccessLevel::maintain, modbus::WordOrder::big};
 
   // A Modbus write request, as the server makes it (registers, or 0 / 1 per coil).
   std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
