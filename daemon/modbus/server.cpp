@@ -235,12 +235,13 @@ Server::ReloadResult Server::reload_listeners(const std::vector<ListenerOptions>
     }
   }
   if (!result.errors.empty()) return result;
-  for (auto& [listener, tls] : plan) {
+  for (auto& step : plan) {
+    ListenerState& listener = *step.first;
     const auto n = std::find_if(next.begin(), next.end(), [&](const ListenerOptions& o) {
-      return same_socket(listener->options, o);
+      return same_socket(listener.options, o);
     });
-    listener->options.policy = n->policy;
-    listener->tls = std::move(tls);
+    listener.options.policy = n->policy;
+    listener.tls = std::move(step.second);
   }
   const std::vector<Connection*> open(state_->live.begin(), state_->live.end());
   for (Connection* c : open) c->policy_changed();
