@@ -68,6 +68,7 @@ bool Daemon::start_http() {
   o.host = config_.http.listen.host;
   o.port = config_.http.listen.port;
   o.allow = config_.http.allow;
+  o.capture = config_.http.capture;
   http_ = std::make_unique<http::HttpServer>(io_, *content_, o, log_);
   if (const auto ec = http_->listen()) {
     log_->critical("cannot serve HTTP on {}:{}: {}", o.host, o.port, ec.message());
@@ -79,13 +80,17 @@ bool Daemon::start_http() {
 std::optional<Config> Daemon::load_config() {
   auto result = drivegate::load_config(options_.config, plugins_);
   for (const auto& e : result.errors) log_->error("{}", e);
-  if (result.config) {
-    for (const auto& w : result.warnings) log_->warn("{}", w);
-  }
   if (result.config && options_.listen) {
     auto& first = result.config->listeners.front().options;
+    // The file's warning about that listener's address no longer applies: --listen moved it.
+    const std::string moved = first.name() + " lets";
+    std::erase_if(result.warnings,
+                  [&](const std::string& w) { return w.find(moved) != std::string::npos; });
     first.host = options_.listen->host;
     first.port = options_.listen->port;
+  }
+  if (result.config) {
+    for (const auto& w : result.warnings) log_->warn("{}", w);
   }
   return std::move(result.config);
 }

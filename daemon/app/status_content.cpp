@@ -1,21 +1,51 @@
 #include "status_content.h"
 
+#include <algorithm>
 #include <chrono>
+#include <unordered_map>
 
+#include "capture/pcap_tap.h"
 #include "format/regmap_format.h"
 #include "format/status_view.h"
+#include "gateway/device.h"
+#include "line/bus.h"
 
 namespace drivegate {
 
 namespace {
 double unix_now() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
+// A capture of one bus: the tap is on the bus from construction to destruction. Holding the bus
+// keeps it (and its engine) alive should a reload drop it meanwhile; it then just goes quiet.
+class BusCapture final : public http::CaptureStream {
+ public:
+  BusCapture(std::shared_ptr<Bus> bus,
+             std::unordered_map<const Station*, capture::StationInfo> stations,
+             std::size_t max_bytes, std::function<void()> on_data)
+      : bus_(std::move(bus)),
+        tap_(std::move(stations), Clock::now(),
+             std::chrono::duration_cast<std::chrono::microseconds>(
+                 std::chrono::system_clock::now().time_since_epoch())
+                 .count(),
+             max_bytes, std::move(on_data)) {
+    bus_->add_tap(&tap_);
+  }
+  ~BusCapture() override { bus_->remove_tap(&tap_); }
+  BusCapture(const BusCapture&) = delete;
+  BusCapture& operator=(const BusCapture&) = delete;
+
+  std::string take() override { return tap_.take(); }
+  [[nodiscard]] bool full() const override { return tap_.full(); }
+
+ private:
+  std::shared_ptr<Bus> bus_;
+  capture::PcapTap tap_;
+};
+
 }  // namespace
 
-StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway,
-                             const modbus::Server& server)
+StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server)
     : gateway_(gateway), server_(server), started_unix_(unix_now()) {}
 
 std::string StatusContent::status_json() {
@@ -30,6 +60,32 @@ std::string StatusContent::regmap_json() {
   std::vector<DeviceRegisters> devices;
   for (const auto& d : gateway_->devices()) devices.push_back({&d->config(), d->map()});
   return format_regmap(devices, RegmapFormat::json);
+}
+
+bool StatusContent::has_bus(std::string_view name) {
+  const auto& buses = gateway_->buses();
+  return std::any_of(buses.begin(), buses.end(),
+                     [&](const auto& b) { return b->config().name == name; });
+}
+
+std::unique_ptr<http::CaptureStream> StatusContent::start_capture(std::string_view name,
+                                                                  std::size_t max_bytes,
+                                                                  std::function<void()> on_data) {
+  for (const auto& bus : gateway_->buses()) {
+    if (bus->config().name != name) continue;
+    std::unordered_map<const Station*, capture::StationInfo> stations;
+    for (const Station* st : bus->stations()) {
+      capture::StationInfo info;
+      info.device = st->name();
+      if (const Device* d = gateway_->find(st->name())) {
+        info.adapter = d->config().adapter;
+        info.unit_id = d->config().unit_id;
+      }
+      stations.emplace(st, std::move(info));
+    }
+    return std::make_unique<BusCapture>(bus, std::move(stations), max_bytes, std::move(on_data));
+  }
+  return nullptr;
 }
 
 }  // namespace drivegate

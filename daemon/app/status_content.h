@@ -1,5 +1,6 @@
 // The daemon's answer to the HTTP side (http/content.h): each document rendered, when asked, from
-// the gateway running now (reloads swap it) and the Modbus server.
+// the gateway running now (reloads swap it) and the Modbus server; and captures, a frame tap
+// (capture/pcap_tap.h) on one of its buses.
 #pragma once
 
 #include <memory>
@@ -17,6 +18,9 @@ class StatusContent final : public http::Content {
   std::string status_json() override;
   std::string metrics() override;
   std::string regmap_json() override;
+  bool has_bus(std::string_view name) override;
+  std::unique_ptr<http::CaptureStream> start_capture(std::string_view name, std::size_t max_bytes,
+                                                     std::function<void()> on_data) override;
 
  private:
   const std::unique_ptr<Gateway>& gateway_;

@@ -3,9 +3,24 @@
 // client sees, at the moment it is asked for, on the event loop. Read-only: nothing here writes.
 #pragma once
 
+#include <cstddef>
+#include <functional>
+#include <memory>
 #include <string>
+#include <string_view>
 
 namespace drivegate::http {
+
+// A capture of one bus in progress (GET /api/v1/capture, docs/capture.md): a pcap stream. The tap
+// on the bus goes when this does.
+class CaptureStream {
+ public:
+  virtual ~CaptureStream() = default;
+  // The pcap bytes produced since the last call (the global header first), moved out.
+  virtual std::string take() = 0;
+  // It has reached its size cap: nothing more will come.
+  [[nodiscard]] virtual bool full() const = 0;
+};
 
 class Content {
  public:
@@ -16,6 +31,16 @@ class Content {
   virtual std::string metrics() = 0;
   // GET /api/v1/regmap: the register map, as `drivegate regmap --format json` prints it.
   virtual std::string regmap_json() = 0;
+  // Whether a bus of that name runs now.
+  virtual bool has_bus(std::string_view /*name*/) { return false; }
+  // Starts capturing bus `name`, at most `max_bytes` of pcap in all; `on_data` is called (on the
+  // event loop, from inside the bus's own handling) whenever there is something to take() or it
+  // became full. nullptr when there is no such bus.
+  virtual std::unique_ptr<CaptureStream> start_capture(std::string_view /*name*/,
+                                                       std::size_t /*max_bytes*/,
+                                                       std::function<void()> /*on_data*/) {
+    return nullptr;
+  }
 };
 
 }  // namespace drivegate::http

@@ -2,6 +2,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <boost/asio/post.hpp>
+#include <boost/asio/write.hpp>
+#include <boost/beast/http/chunk_encode.hpp>
+#include <boost/beast/http/error.hpp>
 #include <boost/beast/http/read.hpp>
 #include <boost/beast/http/write.hpp>
 
@@ -19,7 +23,10 @@ constexpr std::uint32_t kHeaderLimit = 8 * 1024;
 
 HttpConnection::HttpConnection(std::shared_ptr<HttpState> state,
                                boost::asio::ip::tcp::socket socket)
-    : state_(std::move(state)), stream_(std::move(socket)), buffer_(kHeaderLimit) {}
+    : state_(std::move(state)),
+      stream_(std::move(socket)),
+      buffer_(kHeaderLimit),
+      capture_timer_(stream_.get_executor()) {}
 
 HttpConnection::~HttpConnection() {
   close();
@@ -37,6 +44,8 @@ void HttpConnection::start() {
 void HttpConnection::close() {
   if (closed_) return;
   closed_ = true;
+  capture_timer_.cancel();
+  capture_.reset();  // removes the tap from the bus
   boost::system::error_code ec;
   stream_.socket().shutdown(boost::asio::ip::tcp::socket::shutdown_both, ec);
   stream_.socket().close(ec);
@@ -48,10 +57,19 @@ void HttpConnection::read() {
   parser_->header_limit(kHeaderLimit);
   parser_->body_limit(0);  // GET and HEAD carry no body: one that does is refused
   stream_.expires_after(state_->options.request_timeout);
-  bhttp::async_read(stream_, buffer_, *parser_,
-                    [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
-                      self->on_read(ec);
-                    });
+  // The header only: a request announcing a body (Content-Length or chunked) is refused before a
+  // byte of the body is parsed. Beast 1.74's chunk parser asserts on a final chunk that arrives
+  // a byte at a time (fatal where assertions are on: Debug builds, and Debian's
+  // CMAKE_BUILD_TYPE=None), and a GET has nothing to send anyway.
+  bhttp::async_read_header(
+      stream_, buffer_, *parser_,
+      [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+        if (!ec && !self->parser_->is_done()) {
+          self->on_read(bhttp::error::unexpected_body);
+          return;
+        }
+        self->on_read(ec);
+      });
 }
 
 void HttpConnection::on_read(const boost::system::error_code& ec) {
@@ -78,10 +96,14 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
   }
   ++state_->stats.requests;
   const auto& request = parser_->get();
-  const Response r = route(std::string_view(request.method_string().data(),
-                                            request.method_string().size()),
-                           std::string_view(request.target().data(), request.target().size()),
-                           state_->content);
+  const Response r =
+      route(std::string_view(request.method_string().data(), request.method_string().size()),
+            std::string_view(request.target().data(), request.target().size()), state_->content,
+            RouteOptions{state_->options.capture});
+  if (r.capture && request.method() == bhttp::verb::get) {
+    serve_capture(*r.capture);
+    return;
+  }
   reply(r.status, r.content_type, r.body, request.keep_alive(),
         request.method() == bhttp::verb::head, r.allow);
 }
@@ -105,11 +127,11 @@ void HttpConnection::reply(unsigned status, const std::string& content_type, std
   if (!head) response_.body() = std::move(body);
   response_.content_length(size);
   stream_.expires_after(state_->options.request_timeout);  // a client that does not read
-  bhttp::async_write(stream_, response_,
-                     [self = shared_from_this(), keep_alive](const boost::system::error_code& ec,
-                                                             std::size_t) {
-                       self->on_written(ec, keep_alive);
-                     });
+  bhttp::async_write(
+      stream_, response_,
+      [self = shared_from_this(), keep_alive](const boost::system::error_code& ec, std::size_t) {
+        self->on_written(ec, keep_alive);
+      });
 }
 
 void HttpConnection::on_written(const boost::system::error_code& ec, bool keep_alive) {
@@ -119,6 +141,116 @@ void HttpConnection::on_written(const boost::system::error_code& ec, bool keep_a
     return;
   }
   read();
+}
+
+// --- the capture stream ---
+
+void HttpConnection::serve_capture(const CaptureRequest& request) {
+  std::weak_ptr<HttpConnection> weak = weak_from_this();
+  capture_ = state_->content.start_capture(request.bus, state_->options.capture_max_bytes, [weak] {
+    if (auto self = weak.lock()) self->capture_data();
+  });
+  if (!capture_) {  // the bus went in a reload between route() and now
+    reply(404, "text/plain; charset=utf-8", "no such bus\n", false, false);
+    return;
+  }
+  ++state_->stats.captures;
+  capture_bus_ = request.bus;
+  state_->log->info("http: client {}: capture of bus {} for {} s", peer_, request.bus,
+                    request.duration.count());
+  stream_head_ = {};
+  stream_head_.version(11);
+  stream_head_.result(bhttp::status::ok);
+  stream_head_.set(bhttp::field::server, "drivegate");
+  stream_head_.set(bhttp::field::content_type, "application/vnd.tcpdump.pcap");
+  stream_head_.set(bhttp::field::cache_control, "no-store");
+  std::string file = request.bus;  // a configured name, but a header is no place for quotes
+  for (char& c : file) {
+    if (c == '"' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = '_';
+  }
+  stream_head_.set(bhttp::field::content_disposition, "attachment; filename=\"" + file + ".pcap\"");
+  stream_head_.set("X-Content-Type-Options", "nosniff");
+  stream_head_.keep_alive(false);
+  stream_head_.chunked(true);
+  serializer_.emplace(stream_head_);
+  capture_writing_ = true;
+  stream_.expires_after(state_->options.request_timeout);
+  bhttp::async_write_header(
+      stream_, *serializer_,
+      [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+        self->capture_writing_ = false;
+        if (ec) {
+          self->close();
+          return;
+        }
+        self->pump_capture();
+      });
+  capture_timer_.expires_after(request.duration);
+  capture_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+    if (ec || self->closed_) return;
+    self->capture_ending_ = true;
+    self->pump_capture();
+  });
+  watch_peer();
+}
+
+// Called from inside the bus's handling of a frame: only schedules the write.
+void HttpConnection::capture_data() {
+  if (closed_ || capture_posted_) return;
+  capture_posted_ = true;
+  boost::asio::post(stream_.get_executor(), [self = shared_from_this()] {
+    self->capture_posted_ = false;
+    self->pump_capture();
+  });
+}
+
+void HttpConnection::pump_capture() {
+  if (closed_ || capture_writing_ || capture_done_) return;
+  std::string data = capture_ ? capture_->take() : std::string();
+  if (capture_ && capture_->full()) capture_ending_ = true;
+  if (!data.empty()) {
+    chunk_ = std::move(data);
+    capture_writing_ = true;
+    stream_.expires_after(state_->options.request_timeout);  // a client that does not read
+    boost::asio::async_write(
+        stream_, bhttp::make_chunk(boost::asio::buffer(chunk_)),
+        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+          self->capture_writing_ = false;
+          if (ec) {
+            self->state_->log->debug("http: client {}: capture stream: {}", self->peer_,
+                                     ec.message());
+            self->close();
+            return;
+          }
+          self->pump_capture();
+        });
+    return;
+  }
+  if (!capture_ending_) return;
+  capture_done_ = true;
+  capture_timer_.cancel();
+  capture_.reset();  // the tap goes now; what it held has been written
+  state_->log->info("http: client {}: capture of bus {} done", peer_, capture_bus_);
+  stream_.expires_after(state_->options.request_timeout);
+  boost::asio::async_write(stream_, bhttp::make_chunk_last(),
+                           [self = shared_from_this()](const boost::system::error_code&,
+                                                       std::size_t) { self->close(); });
+}
+
+// The client sends nothing more; a read that ends means it went away: the capture ends with it.
+void HttpConnection::watch_peer() {
+  stream_.socket().async_read_some(
+      boost::asio::buffer(probe_),
+      [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+        if (self->closed_) return;
+        if (ec) {
+          self->state_->log->debug("http: client {}: left during the capture of bus {}",
+                                   self->peer_, self->capture_bus_);
+          self->close();
+          return;
+        }
+        self->watch_peer();
+      });
 }
 
 }  // namespace drivegate::http

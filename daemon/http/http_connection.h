@@ -1,17 +1,24 @@
 // One HTTP client: reads a request (bounded: 8 KiB of headers, no body) within the request
 // timeout, answers it from routes.h, and keeps the connection for the next one when the client
 // asks to. A malformed or oversized request gets 400 or 431 and the connection closes.
+// /api/v1/capture is served as a stream: a chunked pcap for the request's duration (or until the
+// size cap), fed by a tap on the bus, after which the connection closes; a client that goes away
+// ends the capture and its tap.
 #pragma once
 
+#include <array>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
 #include <boost/beast/core/tcp_stream.hpp>
 #include <boost/beast/http/empty_body.hpp>
 #include <boost/beast/http/parser.hpp>
+#include <boost/beast/http/serializer.hpp>
 #include <boost/beast/http/string_body.hpp>
 #include <memory>
 #include <optional>
 
 #include "http_state.h"
+#include "routes.h"
 
 namespace drivegate::http {
 
@@ -28,6 +35,11 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   void reply(unsigned status, const std::string& content_type, std::string body, bool keep_alive,
              bool head, const std::string& allow = {});
   void on_written(const boost::system::error_code& ec, bool keep_alive);
+  // The capture stream: headers, then a chunk per batch of frames, then the last chunk.
+  void serve_capture(const CaptureRequest& request);
+  void capture_data();
+  void pump_capture();
+  void watch_peer();
 
   std::shared_ptr<HttpState> state_;
   boost::beast::tcp_stream stream_;
@@ -36,6 +48,19 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   boost::beast::http::response<boost::beast::http::string_body> response_;
   std::string peer_;
   bool closed_ = false;
+
+  std::unique_ptr<CaptureStream> capture_;
+  std::string capture_bus_;
+  boost::beast::http::response<boost::beast::http::empty_body> stream_head_;
+  std::optional<boost::beast::http::response_serializer<boost::beast::http::empty_body>>
+      serializer_;
+  boost::asio::steady_timer capture_timer_;
+  std::string chunk_;              // being written
+  bool capture_writing_ = false;   // a write is in flight
+  bool capture_posted_ = false;    // pump_capture() is posted
+  bool capture_ending_ = false;    // duration over, cap reached or bus gone: finish
+  bool capture_done_ = false;      // the last chunk is written or being written
+  std::array<char, 256> probe_{};  // what a streaming client sends (nothing, or its close)
 };
 
 }  // namespace drivegate::http

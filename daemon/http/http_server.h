@@ -27,6 +27,9 @@ struct HttpOptions {
   // A request (its line and headers) must arrive whole within this; a keep-alive connection with
   // no new request for this long is closed.
   std::chrono::milliseconds request_timeout{10'000};
+  // [http] capture: /api/v1/capture is served (else 403); a capture's pcap stops at this size.
+  bool capture = false;
+  std::size_t capture_max_bytes = 16 * 1024 * 1024;
 };
 
 struct HttpStats {
@@ -36,6 +39,7 @@ struct HttpStats {
   std::uint64_t requests = 0;
   std::uint64_t bad_requests = 0;  // malformed, headers too large, a body: 400 / 431, closed
   std::uint64_t timeouts = 0;      // closed: no whole request within request_timeout
+  std::uint64_t captures = 0;      // /api/v1/capture streams started
 };
 
 struct HttpState;

@@ -7,24 +7,100 @@ constexpr const char* kJson = "application/json";
 // Prometheus text exposition format, version 0.0.4.
 constexpr const char* kPrometheus = "text/plain; version=0.0.4; charset=utf-8";
 
+constexpr const char* kText = "text/plain; charset=utf-8";
+constexpr const char* kPcap = "application/vnd.tcpdump.pcap";
+
 std::string_view path_of(std::string_view target) {
   return target.substr(0, target.find('?'));
 }
+
+int hex_digit(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// %XX and '+' decoded; nullopt for a broken escape.
+std::optional<std::string> unescape(std::string_view v) {
+  std::string out;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (v[i] == '+') {
+      out.push_back(' ');
+    } else if (v[i] == '%') {
+      if (i + 2 >= v.size()) return std::nullopt;
+      const int hi = hex_digit(v[i + 1]);
+      const int lo = hex_digit(v[i + 2]);
+      if (hi < 0 || lo < 0) return std::nullopt;
+      out.push_back(static_cast<char>(hi * 16 + lo));
+      i += 2;
+    } else {
+      out.push_back(v[i]);
+    }
+  }
+  return out;
+}
+
+// The value of query parameter `key` (the first), decoded; nullopt when absent.
+std::optional<std::string> query_value(std::string_view target, std::string_view key) {
+  const auto q = target.find('?');
+  if (q == std::string_view::npos) return std::nullopt;
+  std::string_view rest = target.substr(q + 1);
+  while (!rest.empty()) {
+    const auto amp = rest.find('&');
+    const std::string_view pair = rest.substr(0, amp);
+    rest = amp == std::string_view::npos ? std::string_view{} : rest.substr(amp + 1);
+    const auto eq = pair.find('=');
+    if (pair.substr(0, eq) != key) continue;
+    if (eq == std::string_view::npos) return std::string();
+    // A broken escape reads as empty: refused like a missing value.
+    return unescape(pair.substr(eq + 1)).value_or(std::string());
+  }
+  return std::nullopt;
+}
+
+Response capture_route(std::string_view target, Content& content, const RouteOptions& options) {
+  if (!options.capture) {
+    return {403, kText, "capture is not enabled ([http] capture = true)\n", {}, {}};
+  }
+  const auto bus = query_value(target, "bus");
+  if (!bus || bus->empty()) return {400, kText, "capture needs ?bus=NAME\n", {}, {}};
+  CaptureRequest req{*bus, kCaptureDefault};
+  if (const auto seconds = query_value(target, "seconds")) {
+    const auto& t = *seconds;
+    long n = 0;
+    const bool digits =
+        !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789") == std::string::npos;
+    if (digits) n = std::stol(t);
+    if (!digits || n < 1 || n > kCaptureMax.count()) {
+      return {
+          400, kText, "seconds must be 1.." + std::to_string(kCaptureMax.count()) + "\n", {}, {}};
+    }
+    req.duration = std::chrono::seconds(n);
+  }
+  if (!content.has_bus(req.bus)) return {404, kText, "no such bus\n", {}, {}};
+  return {200, kPcap, {}, {}, std::move(req)};
+}
 }  // namespace
 
-Response route(std::string_view method, std::string_view target, Content& content) {
+Response route(std::string_view method, std::string_view target, Content& content,
+               const RouteOptions& options) {
   if (method != "GET" && method != "HEAD") {
-    return {405, "text/plain; charset=utf-8", "only GET and HEAD are served: this is read-only\n",
-            "GET, HEAD"};
+    return {405,
+            "text/plain; charset=utf-8",
+            "only GET and HEAD are served: this is read-only\n",
+            "GET, HEAD",
+            {}};
   }
   const std::string_view path = path_of(target);
   if (path == "/" || path == "/index.html") {
-    return {200, "text/html; charset=utf-8", std::string(status_page()), {}};
+    return {200, "text/html; charset=utf-8", std::string(status_page()), {}, {}};
   }
-  if (path == "/api/v1/status") return {200, kJson, content.status_json(), {}};
-  if (path == "/api/v1/regmap") return {200, kJson, content.regmap_json(), {}};
-  if (path == "/metrics") return {200, kPrometheus, content.metrics(), {}};
-  return {404, "text/plain; charset=utf-8", "not found\n", {}};
+  if (path == "/api/v1/status") return {200, kJson, content.status_json(), {}, {}};
+  if (path == "/api/v1/regmap") return {200, kJson, content.regmap_json(), {}, {}};
+  if (path == "/metrics") return {200, kPrometheus, content.metrics(), {}, {}};
+  if (path == "/api/v1/capture") return capture_route(target, content, options);
+  return {404, "text/plain; charset=utf-8", "not found\n", {}, {}};
 }
 
 }  // namespace drivegate::http

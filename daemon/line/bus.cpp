@@ -74,7 +74,9 @@ void Bus::port_opened(std::error_code ec) {
   opening_ = false;
   if (stopped_) return;
   if (ec) {
-    if (reopen_delay_ == kFirstReopenDelay) {
+    // Once per outage (at start-up, or after the line was lost), not at every retry.
+    if (!open_failure_logged_) {
+      open_failure_logged_ = true;
       log_->error("bus {}: cannot open {}: {} (retrying, at most every {} ms)", config_.name,
                   transport_->describe(), ec.message(), config_.reopen_max.count());
     }
@@ -82,7 +84,9 @@ void Bus::port_opened(std::error_code ec) {
     schedule_reopen();
     return;
   }
-  reopen_delay_ = kFirstReopenDelay;
+  // The back-off is reset only once the line gives something (read_more): a device server that
+  // accepts connections but passes nothing must not be reconnected to at the fastest rate.
+  open_failure_logged_ = false;
   log_->info("bus {}: {} open{}", config_.name, transport_->describe(),
              config_.network_delay.count() > 0
                  ? fmt::format(" (network_delay {} ms)", config_.network_delay.count())
@@ -123,6 +127,7 @@ void Bus::read_more() {
       return;
     }
     self->last_heard_ = Clock::now();
+    self->reopen_delay_ = kFirstReopenDelay;
     self->engine_.on_received(bytes);
     if (self->open_) self->read_more();
   });

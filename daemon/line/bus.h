@@ -27,6 +27,11 @@ class Bus final : public std::enable_shared_from_this<Bus>, private BusClock, pr
   void start();
   void stop();
 
+  // A capture's tap on this line (line/frame_tap.h); removed before it goes.
+  void add_tap(FrameTap* tap) { engine_.add_tap(tap); }
+  void remove_tap(FrameTap* tap) { engine_.remove_tap(tap); }
+  [[nodiscard]] const std::vector<Station*>& stations() const { return engine_.stations(); }
+
   [[nodiscard]] const BusConfig& config() const { return config_; }
   [[nodiscard]] const BusCounters& counters() const { return engine_.counters(); }
   [[nodiscard]] bool is_open() const { return open_; }
@@ -59,6 +64,7 @@ class Bus final : public std::enable_shared_from_this<Bus>, private BusClock, pr
   bool open_ = false;
   bool opening_ = false;
   bool ever_open_ = false;
+  bool open_failure_logged_ = false;  // this outage's "cannot open" is in the log
   // A device server can hang with its TCP connection up: when every device has gone silent and
   // nothing came for the longest comm timeout, a network bus reconnects.
   boost::asio::steady_timer silence_timer_;

@@ -15,6 +15,22 @@ constexpr Millis kLongestIdle{1000};
 // (two characters and the UART's and kernel's latency).
 constexpr std::size_t kEchoSlackChars = 2;
 constexpr Millis kEchoSlack{50};
+
+// How a capture flags a frame the station judged `kind`.
+std::uint8_t verdict_flags(RxKind kind) {
+  switch (kind) {
+    case RxKind::bad_checksum:
+      return frame_flags::bad_checksum;
+    case RxKind::nack:
+      return frame_flags::nack;
+    case RxKind::foreign:
+      return frame_flags::foreign;
+    case RxKind::noise:
+      return frame_flags::noise;
+    default:
+      return 0;
+  }
+}
 }  // namespace
 
 BusEngine::BusEngine(const BusConfig& config, std::vector<Station*> stations, BusClock& clock,
@@ -50,6 +66,16 @@ void BusEngine::stop() {
   exchange_.reset();
   current_ = nullptr;
   for (Station* st : stations_) st->on_work(nullptr);
+}
+
+void BusEngine::add_tap(FrameTap* tap) {
+  if (tap != nullptr && std::find(taps_.begin(), taps_.end(), tap) == taps_.end()) {
+    taps_.push_back(tap);
+  }
+}
+
+void BusEngine::remove_tap(FrameTap* tap) {
+  taps_.erase(std::remove(taps_.begin(), taps_.end(), tap), taps_.end());
 }
 
 void BusEngine::kick() {
@@ -216,8 +242,12 @@ void BusEngine::send_attempt(TimePoint now) {
   const Bytes& frame = exchange_->frame;
   echo_ = echo_line_ ? frame : Bytes{};
   echo_broken_ = false;
-  if (streaming_ == nullptr) rx_.clear();
+  if (streaming_ == nullptr) {
+    tap(FrameDirection::from_drive, frame_flags::noise, current_, rx_, now);  // a reply cut short
+    rx_.clear();
+  }
   log_->trace("bus {}: tx {:n}", name_, spdlog::to_hex(frame));
+  tap(FrameDirection::to_drive, attempt_ > 0 ? frame_flags::retry : 0, current_, frame, now);
   counters_.bytes_sent += frame.size();
   line_.send(frame);
 }
@@ -293,6 +323,7 @@ void BusEngine::on_received(ByteView bytes) {
       exchange_ && (state_ == State::sending || state_ == State::awaiting_echo ||
                     state_ == State::awaiting_reply);
   if (!in_exchange && streaming_ == nullptr) {
+    tap(FrameDirection::from_drive, frame_flags::noise, nullptr, bytes, now);
     counters_.noise_bytes += static_cast<std::uint32_t>(bytes.size());  // late, or line noise
     return;
   }
@@ -312,6 +343,7 @@ void BusEngine::advance(TimePoint now) {
     if (!std::equal(rx_.begin(), rx_.begin() + static_cast<long>(k), echo_.begin())) {
       ++counters_.echo_errors;
       log_->debug("bus {}: echo differs from what was sent (collision?)", name_);
+      tap(FrameDirection::from_drive, frame_flags::noise | frame_flags::echo, current_, rx_, now);
       echo_broken_ = true;
       echo_.clear();
       rx_.clear();
@@ -338,12 +370,16 @@ void BusEngine::process_rx(Station& st, TimePoint now) {
     const RxVerdict v = st.on_receive(rx_, now);
     if (v.kind == RxKind::incomplete) {
       if (rx_.size() > kMaxRxBuffer) {
+        tap(FrameDirection::from_drive, frame_flags::noise, &st, rx_, now);
         link.counters.noise_bytes += static_cast<std::uint32_t>(rx_.size());
         rx_.clear();
       }
       return;
     }
     const std::size_t used = std::clamp<std::size_t>(v.consumed, 1, rx_.size());
+    if (!taps_.empty()) {
+      tap(FrameDirection::from_drive, verdict_flags(v.kind), &st, ByteView(rx_).first(used), now);
+    }
     rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(used));
     // On a streaming line a damaged frame is usually someone else's (the stream's), so it does
     // not cost the exchange an attempt; on a request / reply line it is the reply, damaged.

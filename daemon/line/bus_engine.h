@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "config/config.h"
+#include "line/frame_tap.h"
 #include "line/link.h"
 #include "line/station.h"
 
@@ -74,6 +75,10 @@ class BusEngine {
   // Something new may be due (a write was queued): look as soon as the line is free.
   void kick();
 
+  // Every frame sent and received goes to `tap` too, until remove_tap() (line/frame_tap.h).
+  void add_tap(FrameTap* tap);
+  void remove_tap(FrameTap* tap);
+
   [[nodiscard]] const BusCounters& counters() const { return counters_; }
   [[nodiscard]] bool line_is_up() const { return state_ != State::down; }
   [[nodiscard]] const std::vector<Station*>& stations() const { return stations_; }
@@ -95,6 +100,12 @@ class BusEngine {
   [[nodiscard]] TimePoint idle_wake(TimePoint now) const;
   // The line was busy until `t` (bytes in, or ours leaving): the inter-frame gap counts from it.
   void note_activity(TimePoint t) { last_activity_ = std::max(last_activity_, t); }
+  void tap(FrameDirection dir, std::uint8_t flags, const Station* st, ByteView bytes,
+           TimePoint now) const {
+    if (taps_.empty() || bytes.empty()) return;
+    const TappedFrame f{dir, flags, st, bytes};
+    for (FrameTap* t : taps_) t->on_frame(f, now);
+  }
   [[nodiscard]] std::chrono::nanoseconds on_wire(std::size_t bytes) const {
     return char_time_ * static_cast<long>(bytes);
   }
@@ -125,6 +136,7 @@ class BusEngine {
   std::size_t next_station_ = 0;  // round-robin position
   TimePoint last_activity_{};
   BusCounters counters_;
+  std::vector<FrameTap*> taps_;  // captures in progress; usually none
 };
 
 }  // namespace drivegate

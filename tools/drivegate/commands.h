@@ -18,6 +18,7 @@ int sim(std::span<const std::string_view> args);
 int demo(std::span<const std::string_view> args);
 int write(std::span<const std::string_view> args);
 int action(std::span<const std::string_view> args);
+int capture(std::span<const std::string_view> args);
 
 // Reads "--name VALUE" pairs and positionals, for the subcommands' small grammars.
 class ArgReader {

@@ -74,6 +74,9 @@ constexpr const char* kUsage =
     "  action --config FILE --device NAME [ACTION KEY=VALUE...]\n"
     "                                   a maintenance action of the device's adapter\n"
     "                                   (e.g. an FDC1's non-volatile programming)\n"
+    "  capture --bus NAME [--seconds N] [-w FILE] [--http HOST:PORT]\n"
+    "                                   a pcap of one bus from the running daemon\n"
+    "                                   (tools/wireshark/ decodes it)\n"
     "  version\n"
     "\n"
     "Every command takes --plugin-dir DIR; `drivegate COMMAND --help` describes it.\n";
@@ -93,6 +96,7 @@ int main(int argc, char** argv) {
     if (command == "demo") return drivegate::cli::demo(args);
     if (command == "write") return drivegate::cli::write(args);
     if (command == "action") return drivegate::cli::action(args);
+    if (command == "capture") return drivegate::cli::capture(args);
     if (command == "version" || command == "--version") {
       std::cout << "drivegate " << DRIVEGATE_VERSION << "\n";
       return 0;

@@ -1,0 +1,165 @@
+-- drivegate capture: the LINKTYPE_USER0 (147) pseudo-header of `drivegate capture` pcaps
+-- (docs/capture.md), dispatching each frame to its adapter's dissector by adapter id.
+--
+--   tshark -X lua_script:tools/wireshark/drivegate.lua -r bus.pcap
+--
+-- This file loads the five protocol dissectors beside it (drivegate_*.lua); see README.md.
+
+local bxor = (bit32 and bit32.bxor) or bit.bxor
+local band = (bit32 and bit32.band) or bit.band
+
+-- Shared by the protocol files: one table in the Lua state's globals (a script's own globals
+-- may be private to it, so _G is named).
+local drivegate = _G.drivegate or {}
+_G.drivegate = drivegate
+drivegate.loaded = drivegate.loaded or {}
+drivegate.bxor = bxor
+drivegate.band = band
+
+-- XOR of the bytes of `tvb` in [from, from + len).
+function drivegate.xor(tvb, from, len)
+  local x = 0
+  for i = from, from + len - 1 do x = bxor(x, tvb(i, 1):uint()) end
+  return x
+end
+
+-- A checksum field and its generated status (Good / Bad), with an expert item on a mismatch.
+drivegate.checksum_status = { [0] = "Bad", [1] = "Good", [2] = "Unverified" }
+-- `le`: the checksum is sent low byte first.
+function drivegate.add_checksum(tree, pinfo, field, status_field, expert_bad, range, expected, le)
+  local got = le and range:le_uint() or range:uint()
+  local item = le and tree:add_le(field, range) or tree:add(field, range)
+  local ok = got == expected
+  local st = item:add(status_field, ok and 1 or 0):set_generated()
+  if not ok then
+    item:append_text(string.format(" [incorrect, should be 0x%0" .. (range:len() * 2) .. "x]",
+                                   expected))
+    item:add_proto_expert_info(expert_bad,
+                               string.format("Bad checksum: 0x%x, should be 0x%x", got, expected))
+  else
+    item:append_text(" [correct]")
+  end
+  return ok
+end
+
+if drivegate.loaded["drivegate"] then return end
+drivegate.loaded["drivegate"] = true
+
+local p = Proto("drivegate", "drivegate capture pseudo-header")
+
+local directions = { [0] = "gateway -> drive", [1] = "drive -> gateway" }
+local f = {
+  version   = ProtoField.uint8("drivegate.version", "Version", base.DEC),
+  direction = ProtoField.uint8("drivegate.direction", "Direction", base.DEC, directions),
+  flags     = ProtoField.uint8("drivegate.flags", "Flags", base.HEX),
+  bad       = ProtoField.bool("drivegate.flags.bad_checksum", "Bad checksum (station's verdict)", 8, nil, 0x01),
+  noise     = ProtoField.bool("drivegate.flags.noise", "Noise (not a frame)", 8, nil, 0x02),
+  nack      = ProtoField.bool("drivegate.flags.nack", "NACK", 8, nil, 0x04),
+  foreign   = ProtoField.bool("drivegate.flags.foreign", "Foreign (not for us)", 8, nil, 0x08),
+  echo      = ProtoField.bool("drivegate.flags.echo", "Echo mismatch", 8, nil, 0x10),
+  retry     = ProtoField.bool("drivegate.flags.retry", "Resend", 8, nil, 0x20),
+  unit      = ProtoField.uint8("drivegate.unit_id", "Unit id", base.DEC),
+  adapter_len = ProtoField.uint8("drivegate.adapter_len", "Adapter id length", base.DEC),
+  adapter   = ProtoField.string("drivegate.adapter", "Adapter id"),
+  device_len = ProtoField.uint8("drivegate.device_len", "Device name length", base.DEC),
+  device    = ProtoField.string("drivegate.device", "Device"),
+  noise_data = ProtoField.bytes("drivegate.noise_data", "Noise"),
+}
+p.fields = { f.version, f.direction, f.flags, f.bad, f.noise, f.nack, f.foreign, f.echo, f.retry,
+             f.unit, f.adapter_len, f.adapter, f.device_len, f.device, f.noise_data }
+
+local e_short = ProtoExpert.new("drivegate.short", "Truncated pseudo-header",
+                                expert.group.MALFORMED, expert.severity.ERROR)
+local e_version = ProtoExpert.new("drivegate.version.unknown", "Unknown pseudo-header version",
+                                  expert.group.PROTOCOL, expert.severity.WARN)
+local e_noise = ProtoExpert.new("drivegate.noise.expert", "Bytes the gateway could not place",
+                                expert.group.SEQUENCE, expert.severity.NOTE)
+local e_unknown = ProtoExpert.new("drivegate.adapter.unknown", "No dissector for this adapter",
+                                  expert.group.UNDECODED, expert.severity.NOTE)
+p.experts = { e_short, e_version, e_noise, e_unknown }
+
+-- Adapter id -> dissector; the protocol files add themselves.
+local adapters = DissectorTable.new("drivegate.adapter", "drivegate adapter id", ftypes.STRING)
+
+function p.dissector(tvb, pinfo, tree)
+  local len = tvb:len()
+  local t = tree:add(p, tvb(), "drivegate capture")
+  if len < 6 then
+    t:add_proto_expert_info(e_short)
+    return len
+  end
+  local version = tvb(0, 1):uint()
+  t:add(f.version, tvb(0, 1))
+  if version ~= 1 then
+    t:add_proto_expert_info(e_version)
+    return len
+  end
+  local dir = tvb(1, 1):uint()
+  t:add(f.direction, tvb(1, 1))
+  local flags = tvb(2, 1):uint()
+  local ft = t:add(f.flags, tvb(2, 1))
+  for _, b in ipairs({ f.bad, f.noise, f.nack, f.foreign, f.echo, f.retry }) do
+    ft:add(b, tvb(2, 1))
+  end
+  t:add(f.unit, tvb(3, 1))
+  local alen = tvb(4, 1):uint()
+  t:add(f.adapter_len, tvb(4, 1))
+  if len < 6 + alen then
+    t:add_proto_expert_info(e_short)
+    return len
+  end
+  local adapter = alen > 0 and tvb(5, alen):string() or ""
+  if alen > 0 then t:add(f.adapter, tvb(5, alen)) end
+  local dlen = tvb(5 + alen, 1):uint()
+  t:add(f.device_len, tvb(5 + alen, 1))
+  local hlen = 6 + alen + dlen
+  if len < hlen then
+    t:add_proto_expert_info(e_short)
+    return len
+  end
+  local device = dlen > 0 and tvb(6 + alen, dlen):string() or ""
+  if dlen > 0 then t:add(f.device, tvb(6 + alen, dlen)) end
+  t:set_len(hlen)
+  t:append_text(string.format(", %s, %s (%s)", directions[dir] or "?", device, adapter))
+
+  pinfo.p2p_dir = (dir == 0) and 0 or 1  -- P2P_DIR_SENT: ours; P2P_DIR_RECV: the drive's
+  if dir == 0 then
+    pinfo.cols.src = "gateway"
+    pinfo.cols.dst = device ~= "" and device or "bus"
+  else
+    pinfo.cols.src = device ~= "" and device or "bus"
+    pinfo.cols.dst = "gateway"
+  end
+  pinfo.cols.protocol = "drivegate"
+  if len == hlen then return len end
+  local frame = tvb(hlen):tvb()
+  if band(flags, 0x02) ~= 0 then  -- noise: not a frame; shown raw, never decoded
+    pinfo.cols.info = string.format("Noise, %d bytes", len - hlen)
+    local it = tree:add(f.noise_data, tvb(hlen))
+    it:add_proto_expert_info(e_noise)
+    return len
+  end
+  local d = adapters:get_dissector(adapter)
+  if d == nil then
+    tree:add_proto_expert_info(e_unknown)
+    Dissector.get("data"):call(frame, pinfo, tree)
+    return len
+  end
+  d:call(frame, pinfo, tree)
+  return len
+end
+
+DissectorTable.get("wtap_encap"):add(wtap.USER0, p)
+
+-- The protocol dissectors beside this file, unless Wireshark loads them itself (plugin folder).
+local here = (debug and debug.getinfo(1, "S").source or ""):match("^@(.*[/\\])") or ""
+for _, name in ipairs({ "drivegate_nidec_washer.lua", "drivegate_ed3100.lua",
+                        "drivegate_mdriver_2400.lua", "drivegate_fdc1.lua",
+                        "drivegate_unicla_edrive.lua" }) do
+  local path = here .. name
+  local fh = io.open(path, "r")
+  if fh then
+    fh:close()
+    dofile(path)
+  end
+end

@@ -1,0 +1,136 @@
+-- ed3100: ED3100 variable-frequency drive, Modbus RTU with quirks (specs 001; README "ed3100").
+-- address, function, fields, CRC-16 (init FFFF, poly A001, low byte first). Its 03 reply echoes
+-- the 2-byte register address instead of a byte count; the standard form is accepted too.
+local drivegate = _G.drivegate or { loaded = {} }
+_G.drivegate = drivegate
+if drivegate.loaded["ed3100"] then return end
+drivegate.loaded["ed3100"] = true
+
+local bxor = (bit32 and bit32.bxor) or bit.bxor
+local band = (bit32 and bit32.band) or bit.band
+local rshift = (bit32 and bit32.rshift) or bit.rshift
+
+local p = Proto("ed3100", "ED3100 drive Modbus RTU (drivegate ed3100)")
+
+local functions = { [0x03] = "Read registers", [0x06] = "Write register",
+                    [0x10] = "Write registers" }
+local registers = { [0x2000] = "Drive command", [0x2001] = "Frequency (0.01 Hz)",
+                    [0x0E01] = "Fault / state" }
+local commands = { [0x001E] = "Forward continuous", [0x0012] = "Forward one-shot",
+                   [0x002E] = "Reverse continuous", [0x0001] = "Stop" }
+
+local f = {
+  address  = ProtoField.uint8("ed3100.address", "Address", base.DEC),
+  func     = ProtoField.uint8("ed3100.function", "Function", base.HEX, functions, 0x7F),
+  exception_flag = ProtoField.bool("ed3100.exception", "Exception", 8, nil, 0x80),
+  register = ProtoField.uint16("ed3100.register", "Register", base.HEX, registers),
+  count    = ProtoField.uint16("ed3100.count", "Register count", base.DEC),
+  byte_count = ProtoField.uint8("ed3100.byte_count", "Byte count", base.DEC),
+  value    = ProtoField.uint16("ed3100.value", "Value", base.HEX),
+  command  = ProtoField.uint16("ed3100.command", "Drive command", base.HEX, commands),
+  word     = ProtoField.uint16("ed3100.word", "Data word", base.HEX),
+  exception_code = ProtoField.uint8("ed3100.exception_code", "Exception code", base.DEC),
+  data     = ProtoField.bytes("ed3100.data", "Data"),
+  crc      = ProtoField.uint16("ed3100.crc", "CRC-16", base.HEX),
+  crc_status = ProtoField.uint8("ed3100.crc.status", "CRC status", base.DEC,
+                                drivegate.checksum_status),
+}
+p.fields = { f.address, f.func, f.exception_flag, f.register, f.count, f.byte_count, f.value,
+             f.command, f.word, f.exception_code, f.data, f.crc, f.crc_status }
+local e_bad = ProtoExpert.new("ed3100.crc.bad", "Bad CRC", expert.group.CHECKSUM,
+                              expert.severity.ERROR)
+local e_len = ProtoExpert.new("ed3100.length", "Unexpected frame length", expert.group.PROTOCOL,
+                              expert.severity.WARN)
+p.experts = { e_bad, e_len }
+
+local function crc16(tvb, len)
+  local crc = 0xFFFF
+  for i = 0, len - 1 do
+    crc = bxor(crc, tvb(i, 1):uint())
+    for _ = 1, 8 do
+      if band(crc, 1) ~= 0 then crc = bxor(rshift(crc, 1), 0xA001) else crc = rshift(crc, 1) end
+    end
+  end
+  return crc
+end
+
+local function words(t, tvb, from, to)
+  local i = from
+  while i + 1 < to do
+    t:add(f.word, tvb(i, 2))
+    i = i + 2
+  end
+  if i < to then t:add(f.data, tvb(i, to - i)) end
+end
+
+function p.dissector(tvb, pinfo, tree)
+  local len = tvb:len()
+  pinfo.cols.protocol = "ED3100"
+  local t = tree:add(p, tvb())
+  if len < 4 then
+    t:add(f.data, tvb())
+    t:add_proto_expert_info(e_len)
+    return len
+  end
+  local to_drive = pinfo.p2p_dir == 0
+  t:add(f.address, tvb(0, 1))
+  local ft = t:add(f.func, tvb(1, 1))
+  ft:add(f.exception_flag, tvb(1, 1))
+  local fn = tvb(1, 1):uint()
+  local body = len - 2  -- end of the fields, before the CRC
+  local info = (functions[band(fn, 0x7F)] or string.format("Function 0x%02x", fn))
+  if band(fn, 0x80) ~= 0 then
+    info = info .. " exception"
+    if body >= 3 then t:add(f.exception_code, tvb(2, 1)) end
+  elseif fn == 0x03 then
+    if to_drive then
+      if body == 6 then
+        t:add(f.register, tvb(2, 2))
+        t:add(f.count, tvb(4, 2))
+        info = info .. string.format(" 0x%04x x%d", tvb(2, 2):uint(), tvb(4, 2):uint())
+      else
+        t:add_proto_expert_info(e_len)
+      end
+    elseif body >= 3 and tvb(2, 1):uint() == body - 3 then  -- standard: byte count, data
+      t:add(f.byte_count, tvb(2, 1))
+      words(t, tvb, 3, body)
+      info = info .. " reply (standard form)"
+    elseif body >= 4 then  -- ED3100 form: the register address, then the words
+      t:add(f.register, tvb(2, 2))
+      words(t, tvb, 4, body)
+      info = info .. string.format(" reply 0x%04x", tvb(2, 2):uint())
+    else
+      t:add_proto_expert_info(e_len)
+    end
+  elseif fn == 0x06 then
+    if body == 6 then
+      local reg = tvb(2, 2):uint()
+      t:add(f.register, tvb(2, 2))
+      if reg == 0x2000 then t:add(f.command, tvb(4, 2)) else t:add(f.value, tvb(4, 2)) end
+      info = info .. string.format(" 0x%04x = 0x%04x", reg, tvb(4, 2):uint())
+    else
+      t:add_proto_expert_info(e_len)
+    end
+  elseif fn == 0x10 then
+    if body >= 6 then
+      t:add(f.register, tvb(2, 2))
+      t:add(f.count, tvb(4, 2))
+      info = info .. string.format(" 0x%04x x%d", tvb(2, 2):uint(), tvb(4, 2):uint())
+      if to_drive and body >= 7 then
+        t:add(f.byte_count, tvb(6, 1))
+        words(t, tvb, 7, body)
+      end
+    else
+      t:add_proto_expert_info(e_len)
+    end
+  elseif body > 2 then
+    t:add(f.data, tvb(2, body - 2))
+  end
+  pinfo.cols.info = (tvb(0, 1):uint() == 0 and "Broadcast " or "") .. info
+  -- CRC sent low byte first.
+  drivegate.add_checksum(t, pinfo, f.crc, f.crc_status, e_bad, tvb(len - 2, 2),
+                         crc16(tvb, len - 2), true)
+  return len
+end
+
+DissectorTable.get("drivegate.adapter"):add("ed3100", p)

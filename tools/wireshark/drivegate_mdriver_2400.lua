@@ -1,0 +1,91 @@
+-- mdriver-2400: compressor motor driver, 2400 8N1 (specs 002; README "mdriver-2400").
+-- Frame: src dst cmd n data[n+1] cs, n = data length - 1, the sum of ALL bytes including cs is
+-- 0x55 mod 256.
+local drivegate = _G.drivegate or { loaded = {} }
+_G.drivegate = drivegate
+if drivegate.loaded["mdriver-2400"] then return end
+drivegate.loaded["mdriver-2400"] = true
+
+
+local p = Proto("mdriver2400", "Compressor motor driver 2400 (drivegate mdriver-2400)")
+
+local commands = { [0x00] = "Fixed-code check", [0x10] = "Run" }
+local change_times = { [0x01] = "Normal ramp (360 rpm/s)", [0xFF] = "Continuous mode" }
+local errors = {
+  [0x00] = "None", [0x0C] = "No frame from the master for 6 s, motor stopped",
+}
+
+local f = {
+  src     = ProtoField.uint8("mdriver2400.src", "Source", base.HEX),
+  dst     = ProtoField.uint8("mdriver2400.dst", "Destination", base.HEX),
+  cmd     = ProtoField.uint8("mdriver2400.cmd", "Command", base.HEX, commands),
+  n       = ProtoField.uint8("mdriver2400.n", "n (data length - 1)", base.DEC),
+  data    = ProtoField.bytes("mdriver2400.data", "Data"),
+  code    = ProtoField.bytes("mdriver2400.fixed_code", "Fixed code"),
+  target  = ProtoField.uint8("mdriver2400.target_code", "Target frequency code", base.HEX),
+  change  = ProtoField.uint8("mdriver2400.change_time", "Change time", base.HEX, change_times),
+  actual  = ProtoField.uint8("mdriver2400.actual_code", "Actual frequency code", base.HEX),
+  reserved = ProtoField.uint8("mdriver2400.reserved", "Reserved", base.HEX),
+  error   = ProtoField.uint8("mdriver2400.error", "Error code", base.HEX, errors),
+  ipm     = ProtoField.uint8("mdriver2400.ipm_temp", "IPM temperature (deg C)", base.DEC),
+  info    = ProtoField.uint8("mdriver2400.info", "Info", base.HEX),
+  cs      = ProtoField.uint8("mdriver2400.checksum", "Checksum (sum = 0x55)", base.HEX),
+  cs_status = ProtoField.uint8("mdriver2400.checksum.status", "Checksum status", base.DEC,
+                               drivegate.checksum_status),
+}
+p.fields = { f.src, f.dst, f.cmd, f.n, f.data, f.code, f.target, f.change, f.actual, f.reserved,
+             f.error, f.ipm, f.info, f.cs, f.cs_status }
+local e_bad = ProtoExpert.new("mdriver2400.checksum.bad", "Bad checksum", expert.group.CHECKSUM,
+                              expert.severity.ERROR)
+local e_len = ProtoExpert.new("mdriver2400.length", "Length byte does not match the frame",
+                              expert.group.PROTOCOL, expert.severity.WARN)
+p.experts = { e_bad, e_len }
+
+function p.dissector(tvb, pinfo, tree)
+  local len = tvb:len()
+  pinfo.cols.protocol = "MDRIVER-2400"
+  local t = tree:add(p, tvb())
+  if len < 6 then
+    t:add(f.data, tvb())
+    t:add_proto_expert_info(e_len)
+    return len
+  end
+  local to_drive = pinfo.p2p_dir == 0
+  t:add(f.src, tvb(0, 1))
+  t:add(f.dst, tvb(1, 1))
+  t:add(f.cmd, tvb(2, 1))
+  local cmd = tvb(2, 1):uint()
+  local ni = t:add(f.n, tvb(3, 1))
+  local dlen = len - 5
+  if tvb(3, 1):uint() + 1 ~= dlen then ni:add_proto_expert_info(e_len) end
+  local dt = t:add(f.data, tvb(4, dlen))
+  local info = (commands[cmd] or string.format("Command 0x%02x", cmd)) .. (to_drive and "" or " reply")
+  if cmd == 0x00 then
+    dt:add(f.code, tvb(4, dlen))
+  elseif cmd == 0x10 and to_drive and dlen >= 2 then
+    dt:add(f.target, tvb(4, 1))
+    dt:add(f.change, tvb(5, 1))
+    if dlen >= 3 then dt:add(f.reserved, tvb(6, 1)) end
+    info = info .. string.format(", code 0x%02x", tvb(4, 1):uint())
+  elseif cmd == 0x10 and dlen >= 8 then
+    dt:add(f.target, tvb(4, 1))
+    dt:add(f.actual, tvb(5, 1))
+    dt:add(f.reserved, tvb(6, 1))
+    dt:add(f.error, tvb(7, 1))
+    dt:add(f.ipm, tvb(8, 1))
+    for i = 0, 2 do
+      dt:add(f.info, tvb(9 + i, 1)):set_text(string.format("Info %d: 0x%02x", i + 1,
+                                                           tvb(9 + i, 1):uint()))
+    end
+    info = info .. string.format(", actual 0x%02x", tvb(5, 1):uint())
+    if tvb(7, 1):uint() ~= 0 then info = info .. string.format(", error 0x%02x", tvb(7, 1):uint()) end
+  end
+  pinfo.cols.info = info
+  local sum = 0
+  for i = 0, len - 2 do sum = sum + tvb(i, 1):uint() end
+  drivegate.add_checksum(t, pinfo, f.cs, f.cs_status, e_bad, tvb(len - 1, 1),
+                         (0x55 - sum) % 256)
+  return len
+end
+
+DissectorTable.get("drivegate.adapter"):add("mdriver-2400", p)

@@ -1,0 +1,110 @@
+-- nidec-washer: Nidec washing-machine inverter, spec V07 (specs 000; README "nidec-washer").
+-- Master frame (11 bytes): A5 MODE d1..d8 X; slave frame (7): A5 MODE e1..e4 X, FCT reply (13):
+-- A5 66 e1..e10 X; NACK: 5A 00 FF 00 FF 00 5A. X = XOR of every byte before it.
+local drivegate = _G.drivegate or { loaded = {} }
+_G.drivegate = drivegate
+if drivegate.loaded["nidec-washer"] then return end
+drivegate.loaded["nidec-washer"] = true
+
+local p = Proto("nidec_washer", "Nidec washer inverter (drivegate nidec-washer)")
+
+local modes = {
+  [0x02] = "Ping", [0x05] = "Request", [0x09] = "CW", [0x0B] = "CCW", [0x0C] = "Agitation",
+  [0x0D] = "Spin", [0x1B] = "Forced brake", [0x1D] = "Free-shaft spin", [0x27] = "Stop",
+  [0x29] = "Brake", [0x2B] = "Voltage detection", [0x2C] = "Weight detection",
+  [0x2D] = "Fabric detection", [0x66] = "FCT test",
+}
+local headers = { [0xA5] = "Frame (A5)", [0x5A] = "NACK (5A)" }
+
+local f = {
+  header  = ProtoField.uint8("nidec_washer.header", "Header", base.HEX, headers),
+  mode    = ProtoField.uint8("nidec_washer.mode", "Mode", base.HEX, modes),
+  data    = ProtoField.bytes("nidec_washer.data", "Data"),
+  d       = ProtoField.uint8("nidec_washer.d", "d", base.HEX),
+  speed   = ProtoField.uint16("nidec_washer.speed", "Speed (rpm)", base.DEC),
+  accel   = ProtoField.uint16("nidec_washer.accel", "Acceleration time (100 ms)", base.DEC),
+  platform = ProtoField.uint8("nidec_washer.platform", "Platform", base.DEC),
+  weight_raw = ProtoField.uint16("nidec_washer.empty_weight_raw", "Empty-basket raw weight", base.DEC),
+  error   = ProtoField.uint8("nidec_washer.error", "Error", base.HEX),
+  e_general = ProtoField.bool("nidec_washer.error.general", "General fault", 8, nil, 0x01),
+  e_ipm   = ProtoField.bool("nidec_washer.error.ipm_over_temp", "IPM over-temperature", 8, nil, 0x02),
+  e_ov    = ProtoField.bool("nidec_washer.error.dc_over_voltage", "DC bus over-voltage", 8, nil, 0x04),
+  e_stall = ProtoField.bool("nidec_washer.error.stall", "Stall / tacho missing", 8, nil, 0x08),
+  e_oc    = ProtoField.bool("nidec_washer.error.over_current", "Hardware over-current", 8, nil, 0x10),
+  e_uv    = ProtoField.bool("nidec_washer.error.under_voltage", "Bus under-voltage", 8, nil, 0x20),
+  e_phase = ProtoField.bool("nidec_washer.error.lost_phase", "Lost phase", 8, nil, 0x40),
+  e_mot   = ProtoField.bool("nidec_washer.error.motor_over_temp", "Motor over-temperature", 8, nil, 0x80),
+  e       = ProtoField.uint8("nidec_washer.e", "e", base.HEX),
+  checksum = ProtoField.uint8("nidec_washer.checksum", "Checksum (XOR)", base.HEX),
+  checksum_status = ProtoField.uint8("nidec_washer.checksum.status", "Checksum status", base.DEC,
+                                     drivegate.checksum_status),
+}
+p.fields = { f.header, f.mode, f.data, f.d, f.speed, f.accel, f.platform, f.weight_raw, f.error,
+             f.e_general, f.e_ipm, f.e_ov, f.e_stall, f.e_oc, f.e_uv, f.e_phase, f.e_mot, f.e,
+             f.checksum, f.checksum_status }
+local e_bad = ProtoExpert.new("nidec_washer.checksum.bad", "Bad checksum", expert.group.CHECKSUM,
+                              expert.severity.ERROR)
+local e_len = ProtoExpert.new("nidec_washer.length", "Unexpected frame length",
+                              expert.group.PROTOCOL, expert.severity.WARN)
+p.experts = { e_bad, e_len }
+
+local run_modes = { [0x09] = true, [0x0B] = true, [0x0D] = true, [0x1D] = true }
+
+function p.dissector(tvb, pinfo, tree)
+  local len = tvb:len()
+  pinfo.cols.protocol = "NIDEC-WASHER"
+  local t = tree:add(p, tvb())
+  if len < 3 then
+    t:add(f.data, tvb())
+    t:add_proto_expert_info(e_len)
+    return len
+  end
+  local header = tvb(0, 1):uint()
+  local mode = tvb(1, 1):uint()
+  local to_drive = pinfo.p2p_dir == 0
+  t:add(f.header, tvb(0, 1))
+  local n = len - 3  -- data bytes
+  if header == 0x5A then
+    pinfo.cols.info = "NACK"
+    t:add(f.data, tvb(1, n + 0))
+  else
+    t:add(f.mode, tvb(1, 1))
+    local name = modes[mode] or string.format("Mode 0x%02x", mode)
+    pinfo.cols.info = (to_drive and "" or "Reply ") .. name
+    if n > 0 then
+      local dt = t:add(f.data, tvb(2, n))
+      if to_drive then
+        if n ~= 8 then t:add_proto_expert_info(e_len) end
+        for i = 0, n - 1 do
+          dt:add(f.d, tvb(2 + i, 1)):set_text(string.format("d%d: 0x%02x", i + 1, tvb(2 + i, 1):uint()))
+        end
+        if run_modes[mode] and n >= 4 then
+          t:add(f.speed, tvb(2, 2))
+          t:add(f.accel, tvb(4, 2))
+          pinfo.cols.info:append(string.format(", %d rpm", tvb(2, 2):uint()))
+        elseif mode == 0x02 and n >= 3 then
+          t:add(f.platform, tvb(2, 1))
+          t:add(f.weight_raw, tvb(3, 2))
+        end
+      else
+        if n ~= 4 and not (mode == 0x66 and n == 10) then t:add_proto_expert_info(e_len) end
+        local et = dt:add(f.error, tvb(2, 1))
+        for _, b in ipairs({ f.e_general, f.e_ipm, f.e_ov, f.e_stall, f.e_oc, f.e_uv, f.e_phase,
+                             f.e_mot }) do
+          et:add(b, tvb(2, 1))
+        end
+        for i = 1, n - 1 do
+          dt:add(f.e, tvb(2 + i, 1)):set_text(string.format("e%d: 0x%02x", i + 1, tvb(2 + i, 1):uint()))
+        end
+        if tvb(2, 1):uint() ~= 0 then
+          pinfo.cols.info:append(string.format(", error 0x%02x", tvb(2, 1):uint()))
+        end
+      end
+    end
+  end
+  drivegate.add_checksum(t, pinfo, f.checksum, f.checksum_status, e_bad, tvb(len - 1, 1),
+                         drivegate.xor(tvb, 0, len - 1))
+  return len
+end
+
+DissectorTable.get("drivegate.adapter"):add("nidec-washer", p)
