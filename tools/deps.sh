@@ -4,7 +4,7 @@
 set -eu
 packages="build-essential cmake pkg-config ccache libboost-dev libmodbus-dev libtomlplusplus-dev
 libspdlog-dev libsystemd-dev libssl-dev libgtest-dev libgmock-dev mbpoll openssl
-python3-pymodbus python3-serial-asyncio $*"
+python3-pymodbus python3-serial-asyncio ser2net chromium prometheus tshark $*"
 missing=""
 for p in $packages; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

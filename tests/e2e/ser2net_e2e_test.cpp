@@ -1,0 +1,374 @@
+// Buses behind a serial device server, end to end: Debian's ser2net bridges TCP ports on
+// 127.0.0.1 to simulated drives' pseudo-terminals (tests/support/ser2net.h), and drivegated
+// reaches them through `tcp://` and `rfc2217://` buses with no change to any adapter. Shown here:
+// - a polled drive (ed3100) and a streaming one (fdc1) behind ser2net read the same registers as
+//   the same simulator on a local pty, in one daemon, and writes reach the drive behind it;
+// - ser2net killed: the device is comm_lost and writes get 0x0B; ser2net back on the same port:
+//   the bus reconnects by itself;
+// - RFC 2217: drivegate sets the line settings on the server's device, and frames holding 0xFF
+//   (doubled in Telnet) cross both ways.
+#include <fcntl.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <termios.h>
+
+#include <map>
+
+#include "e2e.h"
+#include "ser2net.h"
+
+namespace drivegate::test {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::Contains;
+using ::testing::HasSubstr;
+
+// The adapters' points after the common block (`drivegate regmap`).
+namespace ed {
+inline constexpr int drive_fault_code = 32, running = 34, monitor_0d00_raw = 41, points_end = 55;
+inline constexpr int frequency_setpoint = 16, param_00_06 = 17;  // holding
+}  // namespace ed
+namespace fdc1 {
+inline constexpr int points_end = 38;  // motor_on 32, current_a 33 (mA) .. sent_speed_rpm 37
+}  // namespace fdc1
+inline constexpr int bus_reopens = 27;  // u32, common block
+inline constexpr std::uint16_t kCommLost = 1;
+
+std::string read_file(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+std::string bus(const std::string& name, const std::string& port, const std::string& extra = "") {
+  return "[[bus]]\nname = \"" + name + "\"\nport = \"" + port + "\"\n" + extra + "\n";
+}
+// The ED3100's line (adapters/ed3100/README.md: 9600 8E1 by default).
+const std::string kEdLine = "baud = 9600\nparity = \"even\"\ndata_bits = 8\nstop_bits = 1\n";
+std::string ed_device(const std::string& name, const std::string& on, int unit) {
+  return "[[device]]\nname = \"" + name + "\"\nbus = \"" + on +
+         "\"\nadapter = \"ed3100\"\nunit_id = " + std::to_string(unit) +
+         "\naddress = 31\n[device.options]\nparameters = [\"00-06\"]\n\n";
+}
+std::string fdc1_device(const std::string& name, const std::string& on, int unit) {
+  return "[[device]]\nname = \"" + name + "\"\nbus = \"" + on +
+         "\"\nadapter = \"fdc1\"\nunit_id = " + std::to_string(unit) +
+         "\n[device.options]\nslave_mode = true\n\n";
+}
+std::string tcp(int port) {
+  return "tcp://127.0.0.1:" + std::to_string(port);
+}
+
+// What a PLC reads of a device that does not depend on the line it is on: the common block's
+// status, faults and speed (not data_age and the counters, 7..30), the adapter's input points and
+// the holding registers given as {address, count}. An exception is a value too.
+using Values = std::map<std::string, std::uint16_t>;
+Values values(Plc& plc, int points_end, const std::vector<std::pair<int, int>>& holding) {
+  Values v;
+  const auto put = [&v](const std::string& table, int at, const Plc::Read& r) {
+    if (!r.ok()) {
+      v[table + std::to_string(at) + " exception"] = static_cast<std::uint16_t>(r.exception);
+      return;
+    }
+    for (std::size_t i = 0; i < r.regs.size(); ++i) {
+      v[table + std::to_string(at + static_cast<int>(i))] = r.regs[i];
+    }
+  };
+  put("input ", reg::status, plc.input(reg::status, reg::data_age));
+  put("input ", 32, plc.input(32, points_end - 32));
+  for (const auto& [at, n] : holding) put("holding ", at, plc.holding(at, n));
+  return v;
+}
+std::string differences(const Values& near, const Values& far) {
+  std::ostringstream out;
+  for (const auto& [key, value] : near) {
+    const auto it = far.find(key);
+    if (it == far.end()) {
+      out << key << ": " << value << " on the pty, missing behind ser2net\n";
+    } else if (it->second != value) {
+      out << key << ": " << value << " on the pty, " << it->second << " behind ser2net\n";
+    }
+  }
+  for (const auto& [key, value] : far) {
+    if (!near.contains(key)) out << key << ": " << value << " behind ser2net only\n";
+  }
+  return out.str();
+}
+Values ed_values(Plc& plc) {
+  return values(plc, ed::points_end, {{reg::command, 3}, {ed::frequency_setpoint, 2}});
+}
+Values fdc1_values(Plc& plc) {
+  return values(plc, fdc1::points_end, {{reg::command, 3}});
+}
+
+// The line settings of a tty as `stty -a` names them ("speed 19200", "parodd", "-cstopb", "cs8").
+std::vector<std::string> stty(const std::filesystem::path& tty) {
+  const int fd = ::open(tty.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  termios t{};
+  const bool ok = fd >= 0 && ::tcgetattr(fd, &t) == 0;
+  if (fd >= 0) ::close(fd);
+  if (!ok) return {"cannot read " + tty.string()};
+  const auto flag = [&t](tcflag_t bit, const char* name) {
+    return std::string((t.c_cflag & bit) != 0 ? "" : "-") + name;
+  };
+  std::string speed = "other";
+  using Speed = std::pair<speed_t, const char*>;
+  for (const auto& [code, name] : {Speed{B1200, "1200"}, Speed{B9600, "9600"},
+                                   Speed{B19200, "19200"}, Speed{B38400, "38400"}}) {
+    if (::cfgetospeed(&t) == code) speed = name;
+  }
+  return {"speed " + speed,
+          flag(PARENB, "parenb"),
+          flag(PARODD, "parodd"),
+          flag(CMSPAR, "cmspar"),
+          (t.c_cflag & CSIZE) == CS8 ? "cs8" : "not cs8",
+          flag(CSTOPB, "cstopb")};
+}
+
+bool online(Plc& plc) {
+  const auto r = plc.input(reg::status, 1);
+  return r.ok() && (r.regs[0] & reg::online) != 0;
+}
+std::int16_t speed(Plc& plc) {
+  return static_cast<std::int16_t>(plc.input(reg::speed, 1).regs[0]);
+}
+
+// Two ED3100s at their simulator's defaults in one daemon: "near" on a local pty (unit 1), "far"
+// on the same kind of pty behind ser2net, reached over raw TCP (unit 2).
+class Ser2netEd3100 : public ::testing::Test {
+ protected:
+  Ser2netEd3100()
+      : near_sim_("ed3100", dir_ / "near", {"--address", "31"}),
+        far_sim_("ed3100", dir_ / "far", {"--address", "31"}),
+        ser2net_(dir_, {{.port = port_, .device = dir_ / "far", .settings = "9600e81"}}),
+        daemon_(
+            dir_,
+            bus("near", (dir_ / "near").string(), kEdLine) + ed_device("near", "near", 1) +
+                bus("far", tcp(port_), kEdLine + "network_delay_ms = 20\nreopen_max_ms = 1000\n") +
+                ed_device("far", "far", 2),
+            {}, dir_ / "drivegated.log") {}
+  void SetUp() override {
+    ASSERT_TRUE(near_.connect());
+    ASSERT_TRUE(far_.connect());
+    ASSERT_TRUE(eventually([&] { return online(near_) && online(far_); }, 10s))
+        << "never online; far sim says " << far_sim_.control("state") << "\ndaemon log:\n"
+        << log();
+  }
+  std::string log() { return read_file(dir_ / "drivegated.log"); }
+  std::string far_port() { return "127.0.0.1:" + std::to_string(port_); }
+  void run_far_at_1270() {
+    ASSERT_EQ(far_.write(ed::frequency_setpoint, {4232}), 0);  // 42.32 Hz = 1270 rpm, 4 poles
+    ASSERT_EQ(far_.write(reg::command, {1 /*run_forward*/}), 0);
+    ASSERT_TRUE(eventually([&] { return speed(far_) == 1270; }, 10s)) << far_sim_.control("state");
+  }
+
+  TempDir dir_;
+  int port_ = free_port();
+  Sim near_sim_;
+  Sim far_sim_;
+  Ser2net ser2net_;
+  Daemon daemon_;
+  Plc near_{daemon_.port(), 1};
+  Plc far_{daemon_.port(), 2};
+};
+
+TEST_F(Ser2netEd3100, RawTcpReadsWhatTheLocalPtyReadsAndWritesReachTheDrive) {
+  // Polled through: the document's monitor value and "no fault" (0xFFFF) on both.
+  Values near;
+  Values far;
+  ASSERT_TRUE(eventually(
+      [&] {
+        near = ed_values(near_);
+        far = ed_values(far_);
+        return near == far && far["input 41"] == 0x1084;
+      },
+      5s))
+      << differences(near, far) << "far monitor_0d00_raw " << far["input 41"];
+  EXPECT_EQ(far["input 32"], 0xFFFF);  // drive_fault_code
+  EXPECT_EQ(far["input 0"] & (reg::online | reg::comm_lost), reg::online);
+  EXPECT_EQ(far["holding 17"], 0x1088);  // parameter 00-06, read at start-up
+  const auto counters = far_.input(reg::status, 31);
+  ASSERT_TRUE(counters.ok());
+  EXPECT_GT(counters.u32(reg::frames_good), 0u);
+  EXPECT_EQ(counters.u32(reg::bad_checksum), 0u);
+  EXPECT_LT(counters.u32(reg::data_age), 1500u);
+  EXPECT_THAT(log(), HasSubstr("bus far: tcp " + far_port() + " open (network_delay 20 ms)"));
+
+  // A run order through Modbus reaches the drive behind ser2net, and only that one.
+  run_far_at_1270();
+  EXPECT_THAT(far_sim_.control("state"), HasSubstr("command=0x001E reference=0x1088"));
+  EXPECT_THAT(far_sim_.control("state"), HasSubstr("running=1"));
+  EXPECT_EQ(far_.input(ed::running, 1).regs[0], 1);
+  EXPECT_TRUE(far_.input(reg::status, 1).regs[0] & reg::running);
+  EXPECT_EQ(far_.holding(reg::command, 2).regs, (std::vector<std::uint16_t>{1, 1270}));
+  EXPECT_THAT(near_sim_.control("state"), HasSubstr("running=0"));
+  EXPECT_EQ(speed(near_), 0);
+  // A parameter written and read back from the drive.
+  ASSERT_EQ(far_.write(ed::param_00_06, {0x1388}), 0);
+  EXPECT_THAT(far_sim_.control("state"), HasSubstr("param_00_06=0x1388"));
+  EXPECT_EQ(far_.holding(ed::param_00_06, 1).regs[0], 0x1388);
+}
+
+TEST_F(Ser2netEd3100, KilledServerIsCommLostAndTheBusReconnectsWhenItIsBack) {
+  run_far_at_1270();
+  ser2net_.kill();
+  const auto killed_at = std::chrono::steady_clock::now();
+  ASSERT_TRUE(
+      eventually([&] { return (far_.input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 8s))
+      << log();
+  EXPECT_LT(std::chrono::steady_clock::now() - killed_at, 5s);  // comm_timeout_ms 3000
+  auto r = far_.input(reg::status, 2);
+  EXPECT_FALSE(r.regs[0] & reg::online);
+  EXPECT_EQ(r.regs[reg::fault_code], kCommLost);
+  EXPECT_EQ(far_.write(reg::command, {0}), 0x0B);
+  EXPECT_EQ(far_.write(ed::param_00_06, {0x1388}), 0x0B);
+  EXPECT_TRUE(online(near_));  // the local bus is not concerned
+  EXPECT_THAT(log(), HasSubstr("bus far: the server closed the connection: closing tcp " +
+                               far_port() + " and reopening"));
+
+  // Back on the same port: the bus finds it by itself (reopen_max_ms 1000).
+  ser2net_.start();
+  const auto back_at = std::chrono::steady_clock::now();
+  ASSERT_TRUE(eventually([&] { return online(far_); }, 10s)) << log();
+  RecordProperty("online_after_restart_ms",
+                 static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                      std::chrono::steady_clock::now() - back_at)
+                                      .count()));
+  EXPECT_LT(std::chrono::steady_clock::now() - back_at, 4s);
+  r = far_.input(reg::status, 31);
+  EXPECT_EQ(r.regs[reg::fault_code], 0);
+  EXPECT_GE(r.u32(bus_reopens), 1u);
+  EXPECT_EQ(count(log(), "bus far: tcp " + far_port() + " open"), 2u) << log();
+  // The drive ran on meanwhile; it reads so again, and orders reach it.
+  EXPECT_TRUE(eventually([&] { return speed(far_) == 1270; }, 5s)) << far_sim_.control("state");
+  ASSERT_EQ(far_.write(reg::command, {0 /*stop*/}), 0);
+  EXPECT_THAT(far_sim_.control("state"), HasSubstr("command=0x0001"));
+  EXPECT_TRUE(eventually([&] { return speed(far_) == 0; }, 10s));
+}
+
+// Two FDC1 controllers (streaming, 1200 8N1) in slave mode: "near" on a local pty (unit 1), "far"
+// behind ser2net over raw TCP (unit 2).
+class Ser2netFdc1 : public ::testing::Test {
+ protected:
+  Ser2netFdc1()
+      : near_sim_("fdc1", dir_ / "near", {"--set", "slave_mode=true"}),
+        far_sim_("fdc1", dir_ / "far", {"--set", "slave_mode=true"}),
+        ser2net_(dir_, {{.port = port_, .device = dir_ / "far", .settings = "1200n81"}}),
+        daemon_(dir_,
+                bus("near", (dir_ / "near").string()) + fdc1_device("near", "near", 1) +
+                    bus("far", tcp(port_), "network_delay_ms = 20\n") +
+                    fdc1_device("far", "far", 2),
+                {}, dir_ / "drivegated.log") {}
+  void SetUp() override {
+    ASSERT_TRUE(near_.connect());
+    ASSERT_TRUE(far_.connect());
+    ASSERT_TRUE(eventually([&] { return online(near_) && online(far_); }, 10s))
+        << "never online; far sim says " << far_sim_.control("state") << "\ndaemon log:\n"
+        << read_file(dir_ / "drivegated.log");
+  }
+
+  TempDir dir_;
+  int port_ = free_port();
+  Sim near_sim_;
+  Sim far_sim_;
+  Ser2net ser2net_;
+  Daemon daemon_;
+  Plc near_{daemon_.port(), 1};
+  Plc far_{daemon_.port(), 2};
+};
+
+TEST_F(Ser2netFdc1, TheStreamOverRawTcpReadsAsOnTheLocalPty) {
+  Values near;
+  Values far;
+  ASSERT_TRUE(eventually([&] { return (near = fdc1_values(near_)) == (far = fdc1_values(far_)); }))
+      << differences(near, far);
+  EXPECT_EQ(far["input 0"] & (reg::online | reg::running | reg::comm_lost), reg::online);
+  EXPECT_EQ(far["input 32"], 0);  // motor off
+
+  for (Plc* plc : {&near_, &far_}) ASSERT_EQ(plc->write(reg::command, {1, 2000}), 0);
+  ASSERT_TRUE(eventually([&] { return speed(near_) == 2000 && speed(far_) == 2000; }, 10s))
+      << far_sim_.control("state");
+  ASSERT_TRUE(eventually([&] { return (near = fdc1_values(near_)) == (far = fdc1_values(far_)); }))
+      << differences(near, far);
+  EXPECT_TRUE(far["input 0"] & reg::running);
+  EXPECT_EQ(far["input 32"], 1);     // motor on
+  EXPECT_EQ(far["input 33"], 2400);  // 2000 rpm x 0.0012 A/rpm, in mA
+  EXPECT_EQ(far["input 37"], 2000);  // the speed programmed over the line
+  EXPECT_THAT(far_sim_.control("state"), HasSubstr("motor=on rpm=2000"));
+  const auto counters = far_.input(reg::status, 31);
+  EXPECT_LT(counters.u32(reg::data_age), 1500u);  // streamed every 500 ms
+  EXPECT_GT(counters.u32(reg::frames_good), 0u);
+  EXPECT_THAT(read_file(dir_ / "drivegated.log"),
+              HasSubstr("bus far: tcp 127.0.0.1:" + std::to_string(port_) + " open"));
+}
+
+// RFC 2217: ser2net opens the device at 9600 8N2; the bus asks 19200 8O1 (a line the ED3100
+// document offers). A pty keeps speed, PARODD and CSTOPB (it forces CS8 and clears PARENB), so
+// each setting seen on it differs from ser2net's own. Every status reply carries the drive's
+// "no fault" word 0xFFFF, which ser2net sends doubled.
+TEST(Ser2netRfc2217, DrivegateSetsTheLineAndFramesWith0xFFCrossBothWays) {
+  TempDir dir;
+  const int port = free_port();
+  Sim sim("ed3100", dir / "ed", {"--address", "31"});
+  Ser2net ser2net(dir,
+                  {{.port = port, .device = dir / "ed", .settings = "9600n82", .rfc2217 = true}});
+
+  // A client that negotiates nothing gets the connector's settings.
+  {
+    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    std::vector<std::string> line;
+    EXPECT_TRUE(eventually([&] {
+      line = stty(dir / "ed");
+      return line[0] == "speed 9600";
+    })) << ::testing::PrintToString(line);
+    EXPECT_THAT(line, Contains("-parodd"));
+    EXPECT_THAT(line, Contains("cstopb"));
+    ::close(fd);
+  }
+
+  Daemon daemon(dir,
+                bus("far", "rfc2217://127.0.0.1:" + std::to_string(port),
+                    "baud = 19200\nparity = \"odd\"\ndata_bits = 8\nstop_bits = 1\n"
+                    "network_delay_ms = 20\n") +
+                    ed_device("ed", "far", 1),
+                {}, dir / "drivegated.log");
+  Plc plc(daemon.port());
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s))
+      << "never online; sim says " << sim.control("state") << "\ndaemon log:\n"
+      << read_file(dir / "drivegated.log") << "ser2net log:\n"
+      << ser2net.log();
+  const auto line = stty(dir / "ed");
+  EXPECT_THAT(line, Contains("speed 19200"));
+  EXPECT_THAT(line, Contains("parodd"));  // odd, not mark
+  EXPECT_THAT(line, Contains("-cmspar"));
+  EXPECT_THAT(line, Contains("-cstopb"));  // data bits: a pty is cs8 whatever is asked
+  EXPECT_THAT(read_file(dir / "drivegated.log"),
+              HasSubstr("bus far: rfc2217 127.0.0.1:" + std::to_string(port) +
+                        " (set to 19200 8O1) open (network_delay 20 ms)"));
+
+  // From the drive: "1F 03 0E 01 FF FF 01 48 0F 2B" (fault word 0xFFFF), and the monitor.
+  ASSERT_TRUE(eventually([&] { return plc.input(ed::monitor_0d00_raw, 1).regs[0] == 0x1084; }));
+  EXPECT_EQ(plc.input(ed::drive_fault_code, 1).regs[0], 0xFFFF);
+  const auto counters = plc.input(reg::status, 31);
+  EXPECT_EQ(counters.u32(reg::bad_checksum), 0u);
+  EXPECT_EQ(plc.input(reg::fault_code, 1).regs[0], 0);
+  // To the drive and back: "1F 06 00 06 FF FF ..", answered by its echo.
+  ASSERT_EQ(plc.write(ed::param_00_06, {0xFFFF}), 0);
+  EXPECT_THAT(sim.control("state"), HasSubstr("param_00_06=0xFFFF"));
+  EXPECT_EQ(plc.holding(ed::param_00_06, 1).regs[0], 0xFFFF);
+  EXPECT_EQ(plc.input(reg::status, 31).u32(reg::bad_checksum), 0u);
+}
+
+}  // namespace
+}  // namespace drivegate::test

