@@ -154,7 +154,10 @@ done
 
 config="$run_dir/drivegate.toml"
 sed -e "s|\"/dev/ttyUSB\([0-9]\)\"|\"$run_dir/ttyUSB\1\"|" \
-    -e "s|^listen = .*|listen = \"127.0.0.1:$port\"|" /etc/drivegate/drivegate.toml >"$config"
+    -e "s|^address = \"0.0.0.0:502\"|address = \"127.0.0.1:$port\"|" \
+    -e "s|^allow = \[\"192.168.*|allow = [\"127.0.0.1\"]|" /etc/drivegate/drivegate.toml >"$config"
+check "the adapted example's PLC listener is on loopback" \
+    grep -q "^address = \"127.0.0.1:$port\"" "$config"
 chown drivegate:drivegate "$config"
 check "the adapted example names the simulators' ports" \
     test "$(grep -c "^port = \"$run_dir/ttyUSB" "$config")" -eq 5
