@@ -1,10 +1,10 @@
 #include "server_config.h"
 
 #include <algorithm>
-#include <boost/asio/ip/address.hpp>
 #include <charconv>
 
 #include "config_loader.h"
+#include "modbus/listen_host.h"
 
 namespace drivegate {
 
@@ -36,10 +36,7 @@ namespace {
 // A listener binds a numeric address: a name would need a DNS lookup at start-up, which can
 // block, and can change under a running daemon.
 bool bindable(const std::string& host) {
-  if (host.empty() || host == "*" || host == "localhost") return true;
-  boost::system::error_code ec;
-  boost::asio::ip::make_address(host, ec);
-  return !ec;
+  return modbus::parse_listen_host(host).has_value();
 }
 
 bool wildcard(const std::string& host) {

@@ -39,7 +39,8 @@ void device_json(std::ostringstream& out, Device& d) {
   for (const auto& [p, v] : values) {
     if (p->source == PointSource::status_bit) {
       if (as_double(v) != 0) {
-        bits += (bits.empty() ? "" : ", ") + json_string(p->spec.name.substr(7));  // "status_"
+        // PointSource::status_bit: the index is the StatusBit.
+        bits += (bits.empty() ? "" : ", ") + json_string(kStatusBitNames.at(p->index));
       }
       continue;
     }
@@ -83,9 +84,9 @@ void listener_json(std::ostringstream& out, const modbus::Server& server, std::s
   }
   out << "{\"address\": " << json_string(o.host + ":" + std::to_string(server.port(i)))
       << ", \"tls\": " << boolean(o.policy.tls.has_value())
-      << ", \"access\": " << json_string(to_string(o.policy.access)) << ", \"word_order\": "
-      << json_string(modbus::kWordOrderNames.at(static_cast<std::size_t>(o.policy.word_order)))
-      << ", \"allow\": [" << allow << "], \"clients\": " << s.connections_active
+      << ", \"access\": " << json_string(to_string(o.policy.access))
+      << ", \"word_order\": " << json_string(to_string(o.policy.word_order)) << ", \"allow\": ["
+      << allow << "], \"clients\": " << s.connections_active
       << ", \"accepted\": " << s.connections_accepted
       << ", \"not_allowed\": " << s.connections_not_allowed
       << ", \"tls_handshake_failures\": " << s.tls_handshake_failures

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "http_connection.h"
+#include "modbus/listen_host.h"
 
 namespace drivegate::http {
 
@@ -56,12 +57,12 @@ HttpServer::~HttpServer() {
 }
 
 std::error_code HttpServer::listen() {
-  std::string host = state_->options.host;
-  if (host == "localhost") host = "127.0.0.1";
-  if (host.empty() || host == "*") host = "0.0.0.0";
+  const auto host = modbus::parse_listen_host(state_->options.host);
+  if (!host) return std::make_error_code(std::errc::invalid_argument);
+  // Every interface here is every IPv4 one (the status page is for the plant's network).
+  const asio::ip::address address =
+      host->any ? asio::ip::address(asio::ip::address_v4::any()) : host->address;
   boost::system::error_code ec;
-  const auto address = asio::ip::make_address(host, ec);
-  if (ec) return std::make_error_code(std::errc::invalid_argument);
   const tcp::endpoint endpoint(address, state_->options.port);
   auto& a = state_->acceptor;
   a.open(endpoint.protocol(), ec);
@@ -73,8 +74,8 @@ std::error_code HttpServer::listen() {
     a.close(ignored);
     return ec;
   }
-  state_->log->info("http: status page, /api/v1/status and /metrics on http://{}:{}/", host,
-                    port());
+  state_->log->info("http: status page, /api/v1/status and /metrics on http://{}:{}/",
+                    address.to_string(), port());
   accept(state_);
   return {};
 }

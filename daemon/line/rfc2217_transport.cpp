@@ -206,7 +206,7 @@ std::string Rfc2217Transport::describe() const {
   const char* parity = asked_.parity == Parity::none   ? "N"
                        : asked_.parity == Parity::even ? "E"
                                                        : "O";
-  return "rfc2217 " + tcp_.describe().substr(4) + " (set to " + std::to_string(asked_.baud) + " " +
+  return "rfc2217 " + tcp_.endpoint() + " (set to " + std::to_string(asked_.baud) + " " +
          std::to_string(asked_.data_bits) + parity + std::to_string(asked_.stop_bits) + ")";
 }
 

@@ -80,9 +80,13 @@ void TcpTransport::close() {
   socket_.close(ignored);
 }
 
-std::string TcpTransport::describe() const {
+std::string TcpTransport::endpoint() const {
   const bool v6 = host_.find(':') != std::string::npos;
-  return "tcp " + (v6 ? "[" + host_ + "]" : host_) + ":" + std::to_string(port_);
+  return (v6 ? "[" + host_ + "]" : host_) + ":" + std::to_string(port_);
+}
+
+std::string TcpTransport::describe() const {
+  return "tcp " + endpoint();
 }
 
 }  // namespace drivegate

@@ -23,6 +23,8 @@ class TcpTransport final : public Transport {
 
   // For RFC 2217, which writes its own (already escaped) bytes.
   void write_raw(Bytes bytes, Done done);
+  // "host:port" ("[v6]:port"), as describe() and RFC 2217's describe() name the server.
+  [[nodiscard]] std::string endpoint() const;
 
  private:
   boost::asio::io_context& io_;

@@ -51,6 +51,9 @@ constexpr std::string_view to_string(AccessLevel a) {
 // map's order), little = low word first. Registers of 16 bits and bits are never reordered.
 enum class WordOrder : std::uint8_t { big, little };
 inline constexpr std::array<std::string_view, 2> kWordOrderNames = {"big", "little"};
+constexpr std::string_view to_string(WordOrder w) {
+  return kWordOrderNames.at(static_cast<std::size_t>(w));
+}
 
 // Who is asking: the connection's access level and word order (its listener's, or the role of its
 // TLS client certificate). Passed with every read and write.

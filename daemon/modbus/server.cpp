@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "connection.h"
+#include "listen_host.h"
 #include "server_state.h"
 
 namespace drivegate::modbus {
@@ -23,21 +24,6 @@ constexpr std::chrono::seconds kRefusalWarningInterval{1};
 
 std::error_code to_std(const boost::system::error_code& ec) {
   return {ec.value(), std::system_category()};
-}
-
-bool parse_host(std::string host, asio::ip::address& out, bool& any) {
-  any = host.empty() || host == "*";
-  if (any) {
-    out = asio::ip::address_v6::any();
-    return true;
-  }
-  if (host == "localhost") host = "127.0.0.1";
-  if (host.size() > 2 && host.front() == '[' && host.back() == ']') {
-    host = host.substr(1, host.size() - 2);
-  }
-  boost::system::error_code ec;
-  out = asio::ip::make_address(host, ec);
-  return !ec;
 }
 
 using Listener = std::shared_ptr<ListenerState>;
@@ -122,11 +108,9 @@ void accept(const std::shared_ptr<ServerState>& state, const Listener& listener)
 
 std::error_code bind(ListenerState& l, int backlog) {
   auto& acceptor = l.acceptor;
-  asio::ip::address address;
-  bool any = false;
-  if (!parse_host(l.options.host, address, any)) {
-    return std::make_error_code(std::errc::invalid_argument);
-  }
+  const auto host = parse_listen_host(l.options.host);
+  if (!host) return std::make_error_code(std::errc::invalid_argument);
+  const auto& [address, any] = *host;
   boost::system::error_code ec;
   tcp::endpoint endpoint(address, l.options.port);
   acceptor.open(endpoint.protocol(), ec);
@@ -196,8 +180,7 @@ std::error_code Server::listen() {
     const auto& p = l->options.policy;
     log.info("modbus: listening on {}:{}{}: access {}{}, {} word order, allow {}",
              bound.address().to_string(), bound.port(), p.tls ? " (TLS, client certificates)" : "",
-             to_string(p.access), p.tls ? " without a known role" : "",
-             kWordOrderNames.at(static_cast<std::size_t>(p.word_order)),
+             to_string(p.access), p.tls ? " without a known role" : "", to_string(p.word_order),
              allows_everyone(p.allow) ? std::string("every address") : allow_text(p.allow));
     accept(state_, l);
   }

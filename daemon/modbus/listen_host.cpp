@@ -1,0 +1,19 @@
+#include "listen_host.h"
+
+#include <string>
+
+namespace drivegate::modbus {
+
+std::optional<ListenHost> parse_listen_host(std::string_view host) {
+  if (host.empty() || host == "*") return ListenHost{boost::asio::ip::address_v6::any(), true};
+  if (host == "localhost") host = "127.0.0.1";
+  if (host.size() > 2 && host.front() == '[' && host.back() == ']') {
+    host = host.substr(1, host.size() - 2);
+  }
+  boost::system::error_code ec;
+  const auto address = boost::asio::ip::make_address(std::string(host), ec);
+  if (ec) return std::nullopt;
+  return ListenHost{address, false};
+}
+
+}  // namespace drivegate::modbus

@@ -1,0 +1,20 @@
+// What the host part of a listening address means, for every listener (Modbus and HTTP) and for
+// the configuration's check of it: a numeric IPv4 or IPv6 address ("[::1]" accepted),
+// "localhost" (127.0.0.1), or "" / "*" for every interface. No DNS lookup: it would block the
+// event loop at start-up and could change under a running daemon.
+#pragma once
+
+#include <boost/asio/ip/address.hpp>
+#include <optional>
+#include <string_view>
+
+namespace drivegate::modbus {
+
+struct ListenHost {
+  boost::asio::ip::address address;  // for `any`: the IPv6 any address (dual stack)
+  bool any = false;                  // every interface
+};
+
+std::optional<ListenHost> parse_listen_host(std::string_view host);
+
+}  // namespace drivegate::modbus
