@@ -87,6 +87,7 @@ void Device::publish(TimePoint now) {
     driver_->take_completions(completions);  // applying a next part may settle at once
   }
   log_changes();
+  if (watcher_) watcher_();
 }
 
 void Device::log_changes() {

@@ -59,6 +59,10 @@ class Device final : public Station {
   void on_comm_lost(TimePoint now) override;
   void on_tick(TimePoint now) override;
 
+  // `on_change` is called after each driver call and each write (the image may have changed):
+  // the MQTT northbound samples the device then. One watcher; an empty function removes it.
+  void watch(std::function<void()> on_change) { watcher_ = std::move(on_change); }
+
   // --- Modbus side, from the gateway ---
   // Fills `out` from the register image, 32-bit values in the session's word order; 0x02 when
   // any address of the range is unmapped.
@@ -72,6 +76,16 @@ class Device final : public Station {
   // session's word order.
   modbus::Exception write(const modbus::Session& session, Table table, std::uint16_t address,
                           std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now);
+  // One point of a write by name (an MQTT DCMD) and the engineering value it is to take.
+  struct PointWrite {
+    const MappedPoint* point;
+    Value value;
+  };
+  // Points written as one request: each value is encoded into its point's registers as a client
+  // in the map's word order would write it (a value those registers cannot hold is 0x03), then
+  // the registers are validated, judged whole, applied and confirmed exactly as write() does.
+  modbus::Exception write_points(const modbus::Session& session, std::span<const PointWrite> points,
+                                 modbus::WriteDone done, TimePoint now);
   // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
   // the failsafe. `done` is called exactly once.
   void command(Command c, modbus::WriteDone done, TimePoint now);
@@ -103,6 +117,8 @@ class Device final : public Station {
                            Origin origin);
   modbus::Exception validate(const modbus::Session& session, Table table, std::uint16_t address,
                              std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
+  modbus::Exception enqueue(const modbus::Session& session, std::vector<Part> parts,
+                            modbus::WriteDone done, TimePoint now, Origin origin);
   Progress advance(Request& r, TimePoint now, modbus::Exception& failure);
   void settle(const Completion& c, TimePoint now);
   void finish(const Request* r, modbus::Exception e);
@@ -126,6 +142,7 @@ class Device final : public Station {
   Ticket next_ticket_ = 1;
   std::vector<std::unique_ptr<Request>> requests_;  // in flight, oldest first
   std::function<void()> kick_;
+  std::function<void()> watcher_;
 
   // PLC-loss failsafe (docs/safety.md). `failsafe_now_` is the action in force since the trip:
   // the configured one, or stop when the drive refused quick_stop or the preset speed.

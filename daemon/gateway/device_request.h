@@ -15,7 +15,7 @@ struct Device::Request {
   std::size_t next = 0;     // the first part not applied yet
   std::optional<Ticket> waiting;
   TimePoint deadline;  // of the part in `waiting`
-  Origin origin = Origin::plc;
+  bool feeds_failsafe = true;  // from the PLC, and from a client whose writes prove it is there
   modbus::WriteDone done;
 };
 

@@ -5,6 +5,7 @@
 // shows what the drive really holds.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <optional>
 
 #include "gateway/device.h"
@@ -126,14 +127,62 @@ Exception Device::submit(const modbus::Session& session, Table table, std::uint1
   if (const Exception e = validate(session, table, address, in, parts); e != Exception::none) {
     return e;
   }
+  return enqueue(session, std::move(parts), std::move(done), now, origin);
+}
+
+Exception Device::write_points(const modbus::Session& session, std::span<const PointWrite> points,
+                               modbus::WriteDone done, TimePoint now) {
+  modbus::Session in_map_order = session;
+  in_map_order.word_order = modbus::WordOrder::big;  // encode_value's order
+  std::vector<Part> parts;
+  for (const PointWrite& w : points) {
+    const PointSpec& spec = w.point->spec;
+    const bool bits = spec.table == Table::coil;
+    std::array<std::uint16_t, 2> regs{};
+    const std::size_t count = bits ? 1 : spec.register_count();
+    if (count > regs.size()) return Exception::illegal_data_address;  // strings are not writable
+    const auto words = std::span(regs).first(count);
+    if (bits) {
+      const double x = as_double(w.value);
+      if (x != 0.0 && x != 1.0) return Exception::illegal_data_value;
+      regs[0] = x != 0.0 ? 1 : 0;
+    } else {
+      encode_value(spec, w.value, words);
+      // encode_value saturates and rounds: what the registers hold must be what was asked (a
+      // value between two steps of the point's scale is refused, not rounded; only the error
+      // of binary floating point is let through).
+      const auto held = decode_value(spec, words);
+      const double asked = as_double(w.value);
+      const double step = spec.scale == 0.0 ? 1.0 : spec.scale;
+      const double tolerance = spec.type == PointType::f32
+                                   ? std::max(1e-6 * std::fabs(asked), 1e-30)
+                                   : 1e-6 * std::fabs(step);
+      if (!held || std::fabs(as_double(*held) - asked) > tolerance) {
+        return Exception::illegal_data_value;
+      }
+    }
+    std::vector<Part> one;
+    if (const Exception e = validate(in_map_order, spec.table, w.point->address, words, one);
+        e != Exception::none) {
+      return e;
+    }
+    parts.insert(parts.end(), one.begin(), one.end());
+  }
+  if (parts.empty()) return Exception::illegal_data_value;
+  return enqueue(session, std::move(parts), std::move(done), now, Origin::plc);
+}
+
+Exception Device::enqueue(const modbus::Session& session, std::vector<Part> parts,
+                          modbus::WriteDone done, TimePoint now, Origin origin) {
+  const bool feeds = origin == Origin::plc && session.feeds_failsafe;
   const auto writes = [&](CommonWrite kind) {
     return std::any_of(parts.begin(), parts.end(),
                        [kind](const Part& p) { return write_kind(*p.point) == kind; });
   };
   // A valid write to command, setpoint or heartbeat proves the PLC is there, whatever the drive
   // then makes of it (even 0x0B while comm_lost).
-  if (origin == Origin::plc && (writes(CommonWrite::command) || writes(CommonWrite::setpoint) ||
-                                writes(CommonWrite::heartbeat))) {
+  if (feeds && (writes(CommonWrite::command) || writes(CommonWrite::setpoint) ||
+                writes(CommonWrite::heartbeat))) {
     failsafe_.fed(now);
   }
   // One request writing setpoint and command together means "run at this speed": the setpoint
@@ -158,7 +207,7 @@ Exception Device::submit(const modbus::Session& session, Table table, std::uint1
   auto owned = std::make_unique<Request>();
   Request* r = owned.get();
   r->parts = std::move(parts);
-  r->origin = origin;
+  r->feeds_failsafe = feeds;
   r->done = std::move(done);
   requests_.push_back(std::move(owned));
   Exception failure = Exception::none;
@@ -185,8 +234,8 @@ Device::Progress Device::advance(Request& r, TimePoint now, Exception& failure) 
     const WriteStatus s = driver_->apply(op, t, now);
     image_stale_ = true;
     const bool taken = s == WriteStatus::done || s == WriteStatus::pending;
-    if (taken && r.origin == Origin::plc && op.target == WriteOp::Target::command &&
-        is_run(op.command) && failsafe_.reset(now)) {
+    if (taken && r.feeds_failsafe && op.target == WriteOp::Target::command && is_run(op.command) &&
+        failsafe_.reset(now)) {
       log_->info("device {}: failsafe reset by {} from Modbus", config_.name,
                  to_string(op.command));
     }

@@ -25,6 +25,31 @@ enum class Exception : std::uint8_t {
   gateway_target_failed = 0x0B,
 };
 
+// The exception's name as the specification gives it (section 7), for logs and MQTT results.
+constexpr std::string_view to_string(Exception e) {
+  switch (e) {
+    case Exception::none:
+      return "none";
+    case Exception::illegal_function:
+      return "illegal function";
+    case Exception::illegal_data_address:
+      return "illegal data address";
+    case Exception::illegal_data_value:
+      return "illegal data value";
+    case Exception::server_device_failure:
+      return "server device failure";
+    case Exception::acknowledge:
+      return "acknowledge";
+    case Exception::server_device_busy:
+      return "server device busy";
+    case Exception::gateway_path_unavailable:
+      return "gateway path unavailable";
+    case Exception::gateway_target_failed:
+      return "gateway target device failed to respond";
+  }
+  return "unknown";
+}
+
 enum class RegisterTable : std::uint8_t {
   coils,
   discrete_inputs,
@@ -61,6 +86,9 @@ constexpr std::string_view to_string(WordOrder w) {
 struct Session {
   AccessLevel access = AccessLevel::read;
   WordOrder word_order = WordOrder::big;
+  // Whether this client's valid writes to the command block prove the PLC is there (feed the
+  // PLC-loss failsafe, docs/safety.md). Every Modbus client's do; MQTT's only when configured.
+  bool feeds_failsafe = true;
 };
 
 using WriteDone = std::function<void(Exception)>;

@@ -270,6 +270,57 @@ TEST_F(DeviceTest, OperateMayWriteTheCommandBlockButNotAdapterPoints) {
   EXPECT_EQ(fake_->writes.size(), 1u);
 }
 
+// --- writes by point (the MQTT northbound's DCMD) -----------------------------------------
+
+TEST_F(DeviceTest, WritePointsTakesTheSamePathAsAModbusWrite) {
+  const auto* command = device_->map().find("command");
+  const auto* setpoint = device_->map().find("setpoint_rpm");
+  ASSERT_TRUE(command && setpoint);
+  const std::vector<Device::PointWrite> run = {{command, std::int64_t{1}},
+                                               {setpoint, std::int64_t{900}}};
+  std::optional<Exception> answer;
+  ASSERT_EQ(device_->write_points(
+                session_, run, [&answer](Exception e) { answer = e; }, t0_),
+            Exception::none);
+  // The setpoint first, whatever the order given; answered once the driver settled both.
+  EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{900});
+  EXPECT_FALSE(answer);
+  complete(WriteResult::ok, t0_);
+  fake_->common_.command = Command::run_forward;
+  complete(WriteResult::ok, t0_);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
+  EXPECT_EQ(answer, Exception::none);
+  EXPECT_EQ(holding(0, 2), (std::vector<std::uint16_t>{1, 900}));
+}
+
+TEST_F(DeviceTest, WritePointsRefusesValuesItsRegistersCannotHold) {
+  fake_->answer = WriteStatus::done;
+  const auto* setpoint = device_->map().find("setpoint_rpm");  // i16
+  const auto* limit = device_->map().find("limit");            // u32, 10..100000
+  std::optional<Exception> a;
+  const auto write1 = [&](const MappedPoint* p, Value v) {
+    const std::vector<Device::PointWrite> w = {{p, std::move(v)}};
+    return device_->write_points(
+        session_, w, [&a](Exception e) { a = e; }, t0_);
+  };
+  // A Modbus client cannot send 40000 in an i16; nor may a DCMD have it saturate to 32767.
+  EXPECT_EQ(write1(setpoint, std::int64_t{40000}), Exception::illegal_data_value);
+  EXPECT_EQ(write1(setpoint, 1.7), Exception::illegal_data_value);  // not a whole rpm
+  EXPECT_EQ(write1(device_->map().find("heartbeat"), -1.0), Exception::illegal_data_value);
+  EXPECT_TRUE(fake_->setpoints.empty());
+  EXPECT_EQ(write1(limit, std::int64_t{5}), Exception::illegal_data_value);  // below its range
+  EXPECT_EQ(write1(limit, std::int64_t{100000}), Exception::none);
+  ASSERT_EQ(fake_->writes.size(), 1u);
+  EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
+  // Access is the device's rule, as for Modbus: operate may not write an adapter point.
+  session_.access = modbus::AccessLevel::operate;
+  EXPECT_EQ(write1(limit, std::int64_t{200}), Exception::illegal_function);
+  EXPECT_EQ(fake_->writes.size(), 1u);
+  // Read-only points are not written at all.
+  EXPECT_EQ(write1(device_->map().find("speed_rpm"), std::int64_t{1}),
+            Exception::illegal_data_address);
+}
+
 TEST_F(DeviceTest, AReadSessionReachingTheDeviceIsRefusedEvenTheHeartbeat) {
   // The server refuses a read-only client's writes before the backend; the device holds the
   // same line in case another northbound forgets.

@@ -68,6 +68,12 @@ class FailsafeTest : public ::testing::Test {
               Exception::none);
     return s;
   }
+  std::uint16_t holding_value(std::uint16_t address) {
+    std::uint16_t v = 0;
+    EXPECT_EQ(device_->read(kReader, Table::holding, address, std::span<std::uint16_t>(&v, 1), t0_),
+              Exception::none);
+    return v;
+  }
   bool discrete_failsafe(Millis ms) {
     std::uint16_t b = 0;
     EXPECT_EQ(device_->read(kReader, Table::discrete, 5, std::span<std::uint16_t>(&b, 1), at(ms)),
@@ -114,6 +120,32 @@ TEST_F(FailsafeTest, StopsAtTheFirstTickAfterTheTimeoutAndLatches) {
   for (int ms = 1100; ms <= 5000; ms += 100) tick(Millis(ms));
   EXPECT_EQ(fake_->commands.size(), 1u);  // confirmed: not sent again
   EXPECT_EQ(status(5000ms) & kFailsafeBit, kFailsafeBit);
+}
+
+// A client whose writes do not prove the PLC is there (MQTT unless feed_failsafe): its commands
+// go through, yet neither feed the failsafe nor reset it.
+TEST_F(FailsafeTest, WritesFromANonFeedingSessionDoNotFeedIt) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kCommand, {1 /*run_forward*/, 800}, 0ms), Exception::none);
+  fake_->common_.command = Command::run_forward;
+  confirm(0ms);
+  const modbus::Session mqtt{modbus::AccessLevel::operate, modbus::WordOrder::big, false};
+  const std::uint16_t beat = 9;
+  ASSERT_EQ(device_->write(
+                mqtt, Table::holding, kHeartbeat, std::span(&beat, 1), [](Exception) {}, at(900ms)),
+            Exception::none);
+  EXPECT_EQ(holding_value(kHeartbeat), 9);  // taken
+  fake_->commands.clear();
+  tick(1000ms);  // 1 s after the PLC's last write: trips all the same
+  ASSERT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+  fake_->common_.command = Command::stop;
+  confirm(1000ms);
+  // A run from it is carried out, but the latch holds: it does not say the PLC is back.
+  const std::uint16_t run = 1;
+  ASSERT_EQ(device_->write(
+                mqtt, Table::holding, kCommand, std::span(&run, 1), [](Exception) {}, at(1100ms)),
+            Exception::none);
+  EXPECT_TRUE(device_->failsafe_latched());
 }
 
 TEST_F(FailsafeTest, EachOfCommandSetpointAndHeartbeatFeedsIt) {
