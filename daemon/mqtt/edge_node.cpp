@@ -1,0 +1,336 @@
+#include "mqtt/edge_node.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "mqtt/sparkplug_codec.h"
+
+namespace drivegate::sparkplug {
+
+namespace {
+
+constexpr std::array<std::string_view, 3> kSessionNames = {"offline", "waiting_for_host", "online"};
+
+Metric bd_seq_metric(std::uint8_t bd_seq) {
+  return {std::string(kBdSeq), DataType::uint64, MetricValue{std::uint64_t{bd_seq}}, {}};
+}
+
+Metric string_metric(std::string_view name, std::string value) {
+  return {std::string(name), DataType::string, MetricValue{std::move(value)}, {}};
+}
+
+// Whether `now` differs from `before` enough to be reported under `def`.
+bool moved(const MetricDef& def, const MetricValue& before, const MetricValue& now) {
+  if (before == now) return false;
+  if (def.deadband <= 0.0) return true;
+  const auto a = number_of(before);
+  const auto b = number_of(now);
+  if (!a || !b) return true;  // from or to null: always news
+  return std::fabs(*b - *a) >= def.deadband;
+}
+
+}  // namespace
+
+std::string_view to_string(SessionState s) {
+  return kSessionNames.at(static_cast<std::size_t>(s));
+}
+
+EdgeNode::EdgeNode(EdgeNodeOptions options) : options_(std::move(options)) {}
+
+Payload EdgeNode::begin_connect(const Now& now) {
+  ++bd_seq_;  // wraps 255 -> 0 (spec 6.4.19)
+  return node_death(now);
+}
+
+Payload EdgeNode::node_death(const Now& now) const {
+  Payload p;
+  p.timestamp = now.unix_ms;
+  p.metrics.push_back(bd_seq_metric(bd_seq_));
+  return p;  // no seq in an NDEATH (spec 6.4.1)
+}
+
+std::string EdgeNode::will_topic() const {
+  return topic(options_.group, MessageType::ndeath, options_.edge_node);
+}
+
+std::vector<std::string> EdgeNode::subscriptions() const {
+  std::vector<std::string> s = {topic(options_.group, MessageType::ncmd, options_.edge_node),
+                                topic(options_.group, MessageType::dcmd, options_.edge_node, "+")};
+  if (!options_.primary_host.empty()) s.push_back(state_topic(options_.primary_host));
+  return s;
+}
+
+void EdgeNode::connected(const Now& now, Sink& sink) {
+  if (options_.primary_host.empty()) {
+    state_ = SessionState::online;
+    rebirth(now, sink);
+  } else {
+    state_ = SessionState::waiting_for_host;  // the retained STATE arrives with the subscription
+  }
+}
+
+void EdgeNode::connection_lost() {
+  state_ = SessionState::offline;
+  for (DeviceState& d : devices_) {
+    d.born = false;
+    d.due.reset();
+  }
+}
+
+void EdgeNode::message(std::string_view t, std::string_view payload, const Now& now, Sink& sink) {
+  if (!options_.primary_host.empty() && t == state_topic(options_.primary_host)) {
+    host_state(payload, now, sink);
+    return;
+  }
+  const auto parsed = parse_topic(t);
+  if (!parsed || parsed->group != options_.group || parsed->edge_node != options_.edge_node) {
+    return;  // not ours (a wildcard subscription elsewhere would bring such)
+  }
+  if (parsed->type == MessageType::dcmd) {
+    command(parsed->device, payload, now, sink);
+    return;
+  }
+  if (parsed->type != MessageType::ncmd) return;
+  std::string why;
+  const auto p = decode(payload, why);
+  if (!p) {
+    sink.notice("NCMD ignored: " + why);
+    return;
+  }
+  for (const Metric& m : p->metrics) {
+    if (m.name == kRebirth && m.value == MetricValue{true}) {
+      if (state_ == SessionState::online) rebirth(now, sink);
+    } else {
+      sink.notice("NCMD metric '" + m.name + "' ignored: only " + std::string(kRebirth) +
+                  " = true is understood");
+    }
+  }
+}
+
+void EdgeNode::host_state(std::string_view payload, const Now& now, Sink& sink) {
+  const auto s = parse_host_state(payload);
+  if (!s) {
+    sink.notice("STATE of primary host '" + options_.primary_host +
+                "' ignored: not {\"online\": bool, \"timestamp\": ms}");
+    return;
+  }
+  // Spec 5.13: a STATE older than the newest one seen is stale (a late retained copy).
+  if (s->timestamp < host_timestamp_) return;
+  host_timestamp_ = s->timestamp;
+  if (s->online && state_ == SessionState::waiting_for_host) {
+    state_ = SessionState::online;
+    rebirth(now, sink);
+  } else if (!s->online && state_ == SessionState::online) {
+    sink.publish(will_topic(), node_death(now));
+    ++messages_;
+    connection_lost();
+    sink.drop_session();
+  }
+}
+
+bool EdgeNode::set_devices(std::vector<DeviceDef> devices, const Now& now, Sink& sink) {
+  if (devices == defs_) return false;
+  if (state_ == SessionState::online) {
+    for (std::size_t i = 0; i < defs_.size(); ++i) {
+      const bool kept = std::any_of(devices.begin(), devices.end(),
+                                    [&](const DeviceDef& d) { return d.name == defs_[i].name; });
+      if (!kept && devices_[i].born) death(i, now, sink);
+    }
+  }
+  defs_ = std::move(devices);
+  devices_.assign(defs_.size(), DeviceState{});
+  if (state_ == SessionState::online) rebirth(now, sink);
+  return true;
+}
+
+void EdgeNode::sample(std::size_t device, bool alive, std::vector<MetricValue> values,
+                      const Now& now, Sink& sink) {
+  if (device >= devices_.size() || values.size() != defs_[device].metrics.size()) return;
+  DeviceState& d = devices_[device];
+  d.alive = alive;
+  d.latest = std::move(values);
+  if (state_ != SessionState::online) return;
+  if (!alive) {
+    if (d.born) death(device, now, sink);
+    return;
+  }
+  if (!d.born) {
+    birth(device, now, sink);
+    return;
+  }
+  if (d.due) return;  // held back already: tick() reports the newest values then
+  if (changes(device, now).empty()) return;
+  if (now.mono >= d.last_data + options_.min_interval) {
+    report(device, now, sink);
+  } else {
+    d.due = d.last_data + options_.min_interval;
+  }
+}
+
+void EdgeNode::tick(const Now& now, Sink& sink) {
+  if (state_ != SessionState::online) return;
+  for (std::size_t i = 0; i < devices_.size(); ++i) {
+    DeviceState& d = devices_[i];
+    if (!d.due || now.mono < *d.due) continue;
+    d.due.reset();
+    if (d.born && !changes(i, now).empty()) report(i, now, sink);
+  }
+}
+
+std::optional<TimePoint> EdgeNode::wake_at() const {
+  std::optional<TimePoint> at;
+  for (const DeviceState& d : devices_) {
+    if (d.due && (!at || *d.due < *at)) at = d.due;
+  }
+  return at;
+}
+
+std::vector<std::size_t> EdgeNode::changes(std::size_t device, const Now& now) const {
+  const DeviceState& d = devices_[device];
+  const auto& metrics = defs_[device].metrics;
+  const bool counters_due = now.mono >= d.last_counters + options_.counter_interval;
+  std::vector<std::size_t> out;
+  for (std::size_t j = 0; j < metrics.size(); ++j) {
+    if (metrics[j].counter && !counters_due) continue;
+    if (moved(metrics[j], d.published[j], d.latest[j])) out.push_back(j);
+  }
+  return out;
+}
+
+void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
+  DeviceState& d = devices_[device];
+  const auto changed = changes(device, now);
+  if (changed.empty()) return;
+  Payload p;
+  p.timestamp = now.unix_ms;
+  bool counters = false;
+  for (const std::size_t j : changed) {
+    const MetricDef& def = defs_[device].metrics[j];
+    p.metrics.push_back({def.name, def.type, d.latest[j], {}});
+    d.published[j] = d.latest[j];
+    counters = counters || def.counter;
+  }
+  d.last_data = now.mono;
+  if (counters) d.last_counters = now.mono;
+  send(MessageType::ddata, defs_[device].name, std::move(p), now, sink);
+}
+
+void EdgeNode::rebirth(const Now& now, Sink& sink) {
+  seq_ = 0;  // the NBIRTH's seq is 0 (spec 6.4.1)
+  Payload p;
+  p.timestamp = now.unix_ms;
+  p.metrics.push_back(bd_seq_metric(bd_seq_));
+  p.metrics.push_back({std::string(kRebirth), DataType::boolean, MetricValue{false}, {}});
+  p.metrics.push_back(string_metric(kVersion, options_.version));
+  send(MessageType::nbirth, {}, std::move(p), now, sink);
+  for (std::size_t i = 0; i < devices_.size(); ++i) {
+    devices_[i].born = false;
+    devices_[i].due.reset();
+    if (devices_[i].alive) birth(i, now, sink);
+  }
+}
+
+void EdgeNode::birth(std::size_t device, const Now& now, Sink& sink) {
+  DeviceState& d = devices_[device];
+  const DeviceDef& def = defs_[device];
+  Payload p;
+  p.timestamp = now.unix_ms;
+  for (std::size_t j = 0; j < def.metrics.size(); ++j) {
+    const MetricDef& m = def.metrics[j];
+    p.metrics.push_back({m.name, m.type, d.latest[j], m.properties});
+  }
+  if (options_.commands) {
+    p.metrics.push_back(string_metric(kCommandPoint, ""));
+    p.metrics.push_back(string_metric(kCommandResult, ""));
+  }
+  d.published = d.latest;
+  d.born = true;
+  d.due.reset();
+  d.last_data = now.mono;
+  d.last_counters = now.mono;
+  ++births_;
+  send(MessageType::dbirth, def.name, std::move(p), now, sink);
+}
+
+void EdgeNode::death(std::size_t device, const Now& now, Sink& sink) {
+  devices_[device].born = false;
+  devices_[device].due.reset();
+  Payload p;
+  p.timestamp = now.unix_ms;
+  send(MessageType::ddeath, defs_[device].name, std::move(p), now, sink);
+}
+
+void EdgeNode::send(MessageType type, std::string_view device, Payload payload, const Now& now,
+                    Sink& sink) {
+  (void)now;
+  payload.seq = seq_;
+  seq_ = static_cast<std::uint8_t>(seq_ + 1);  // 255 -> 0 (spec 6.4.1)
+  ++messages_;
+  sink.publish(topic(options_.group, type, options_.edge_node, device), payload);
+}
+
+void EdgeNode::command(std::string_view device, std::string_view payload, const Now& now,
+                       Sink& sink) {
+  const auto it = std::find_if(defs_.begin(), defs_.end(),
+                               [&](const DeviceDef& d) { return d.name == device; });
+  if (it == defs_.end()) {
+    sink.notice("DCMD for unknown device '" + std::string(device) + "' ignored");
+    return;
+  }
+  const auto index = static_cast<std::size_t>(it - defs_.begin());
+  if (!options_.commands) {
+    sink.notice("DCMD for " + std::string(device) + " ignored: [mqtt] commands = false");
+    return;
+  }
+  std::string why;
+  const auto p = decode(payload, why);
+  if (!p) {
+    sink.notice("DCMD for " + std::string(device) + " ignored: " + why);
+    return;
+  }
+  std::vector<PointCommand> points;
+  std::string names;
+  std::string refused;
+  for (const Metric& m : p->metrics) {
+    names += (names.empty() ? "" : ",") + (m.name.empty() ? std::string("<alias>") : m.name);
+    const auto& metrics = it->metrics;
+    const auto def = std::find_if(metrics.begin(), metrics.end(),
+                                  [&](const MetricDef& d) { return d.name == m.name; });
+    if (m.name.empty()) {
+      refused = "metrics must be named (drivegate publishes no aliases)";
+    } else if (def == metrics.end()) {
+      refused = "no metric '" + m.name + "'";
+    } else if (!def->writable) {
+      refused = "'" + m.name + "' is read-only";
+    } else if (std::holds_alternative<std::monostate>(m.value) ||
+               std::holds_alternative<std::string>(m.value)) {
+      refused = "'" + m.name + "' needs a number or a boolean";
+    } else {
+      points.push_back({static_cast<std::size_t>(def - metrics.begin()), m.value});
+      continue;
+    }
+    break;
+  }
+  if (points.empty() && refused.empty()) refused = "no metrics";
+  if (!refused.empty()) {
+    sink.notice("DCMD for " + std::string(device) + " refused: " + refused);
+    command_done(index, names, "refused: " + refused, now, sink);
+    return;
+  }
+  sink.write(index, std::move(points));
+}
+
+void EdgeNode::command_done(std::size_t device, std::string points, std::string result,
+                            const Now& now, Sink& sink) {
+  if (device >= devices_.size() || !devices_[device].born || state_ != SessionState::online) {
+    return;  // its DBIRTH is not out: there is nothing to report it against
+  }
+  Payload p;
+  p.timestamp = now.unix_ms;
+  p.metrics.push_back(string_metric(kCommandPoint, std::move(points)));
+  p.metrics.push_back(string_metric(kCommandResult, std::move(result)));
+  send(MessageType::ddata, defs_[device].name, std::move(p), now, sink);
+}
+
+}  // namespace drivegate::sparkplug

@@ -1,0 +1,166 @@
+// A Sparkplug B 3.0 edge node (spec chapter 5, "Operational Behavior"), as a state machine with
+// no I/O and no clock: the MQTT session's events, the devices' samples and the host's messages go
+// in; what to publish, what to write to a drive and when to drop the session come out through a
+// Sink. The northbound (northbound.cpp) feeds it from the broker and the gateway; the tests feed
+// it by hand on simulated time.
+//
+//   connect      begin_connect() gives the NDEATH will with the session's bdSeq; subscriptions()
+//   online       NBIRTH (seq 0, bdSeq, Node Control/Rebirth), a DBIRTH per device heard from
+//   data         DDATA by exception: deadband per metric, at most one per device per
+//                min_interval, counters at most once per counter_interval; seq 0..255 across
+//                every message of the node
+//   deaths       DDEATH when a device goes comm_lost, DBIRTH when it is back
+//   rebirth      on NCMD Node Control/Rebirth = true, or when the device set changed
+//   primary host with primary_host set: births wait for its STATE online; STATE offline
+//                publishes NDEATH and drops the session (spec 5.13)
+//   commands     DCMD: metrics checked here (known, writable, a value), written by the Sink,
+//                the outcome published as the device's Command/Last Point and Command/Last Result
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "drivegate/driver.h"
+#include "mqtt/sparkplug.h"
+
+namespace drivegate::sparkplug {
+
+// What one metric of a device is, fixed between births.
+struct MetricDef {
+  std::string name;
+  DataType type = DataType::unknown;
+  std::vector<Property> properties;  // sent in the DBIRTH only
+  double deadband = 0.0;             // a number is reported once it moved this far; 0: any change
+  bool counter = false;              // reported at most once per counter_interval
+  bool writable = false;             // a DCMD may write it
+  bool operator==(const MetricDef&) const = default;
+};
+
+struct DeviceDef {
+  std::string name;  // the Sparkplug device id
+  std::vector<MetricDef> metrics;
+  bool operator==(const DeviceDef&) const = default;
+};
+
+// Now, on both clocks: the steady one for intervals, Unix milliseconds for payload timestamps.
+struct Now {
+  TimePoint mono;
+  std::uint64_t unix_ms = 0;
+};
+
+// One point of a DCMD, checked: metrics[index] of the device, to take `value`.
+struct PointCommand {
+  std::size_t index;
+  MetricValue value;
+};
+
+class Sink {
+ public:
+  virtual ~Sink() = default;
+  virtual void publish(const std::string& topic, const Payload& payload) = 0;  // QoS 0
+  // STATE offline: NDEATH was published; the session must end (and be made again later).
+  virtual void drop_session() = 0;
+  // Write `points` of device `device` in one request; answer with EdgeNode::command_done.
+  virtual void write(std::size_t device, std::vector<PointCommand> points) = 0;
+  // Something the log should say (a command refused, a bad STATE payload).
+  virtual void notice(std::string message) = 0;
+};
+
+struct EdgeNodeOptions {
+  std::string group;
+  std::string edge_node;
+  std::string primary_host;  // empty: do not wait for a primary host application
+  Millis min_interval{100};
+  Millis counter_interval{10'000};
+  bool commands = false;
+  std::string version;  // Node Info/Version
+};
+
+enum class SessionState : std::uint8_t { offline, waiting_for_host, online };
+std::string_view to_string(SessionState s);
+
+// The metric names drivegate adds (spec 6.4.19 for the first two).
+inline constexpr std::string_view kBdSeq = "bdSeq";
+inline constexpr std::string_view kRebirth = "Node Control/Rebirth";
+inline constexpr std::string_view kVersion = "Node Info/Version";
+inline constexpr std::string_view kCommandPoint = "Command/Last Point";
+inline constexpr std::string_view kCommandResult = "Command/Last Result";
+
+class EdgeNode {
+ public:
+  explicit EdgeNode(EdgeNodeOptions options);
+
+  // Before each MQTT CONNECT: the next bdSeq (0 first, then +1 mod 256, spec 6.4.19) and the
+  // NDEATH to register as the will (QoS 1, not retained) under will_topic().
+  Payload begin_connect(const Now& now);
+  [[nodiscard]] std::string will_topic() const;
+  // What to subscribe to once connected (QoS 1): NCMD, DCMD for every device, STATE if waiting
+  // for a primary host.
+  [[nodiscard]] std::vector<std::string> subscriptions() const;
+
+  void connected(const Now& now, Sink& sink);
+  void connection_lost();
+  // A message from the broker on one of subscriptions().
+  void message(std::string_view topic, std::string_view payload, const Now& now, Sink& sink);
+
+  // The devices and their metrics. Unchanged: nothing happens. Changed while online: DDEATH for
+  // each device gone, then a rebirth. Returns whether they changed.
+  bool set_devices(std::vector<DeviceDef> devices, const Now& now, Sink& sink);
+  // A device's state now: `alive` (heard from and not comm_lost) and its values, in the order of
+  // its DeviceDef's metrics.
+  void sample(std::size_t device, bool alive, std::vector<MetricValue> values, const Now& now,
+              Sink& sink);
+  // A written command settled: `result` is "ok" or why not.
+  void command_done(std::size_t device, std::string points, std::string result, const Now& now,
+                    Sink& sink);
+  // Publishes the changes held back by min_interval whose time has come.
+  void tick(const Now& now, Sink& sink);
+  // When tick() has something to do; nullopt: nothing held back.
+  [[nodiscard]] std::optional<TimePoint> wake_at() const;
+
+  // An NDEATH for this session now (QoS 1 under will_topic()): published before a clean
+  // DISCONNECT, after which the broker drops the will.
+  [[nodiscard]] Payload node_death(const Now& now) const;
+
+  [[nodiscard]] SessionState state() const { return state_; }
+  [[nodiscard]] std::uint8_t bd_seq() const { return bd_seq_; }
+  [[nodiscard]] const std::vector<DeviceDef>& devices() const { return defs_; }
+  [[nodiscard]] std::uint64_t births() const { return births_; }
+  [[nodiscard]] std::uint64_t messages() const { return messages_; }
+
+ private:
+  struct DeviceState {
+    bool alive = false;
+    bool born = false;  // its DBIRTH went out in this session
+    std::vector<MetricValue> latest;
+    std::vector<MetricValue> published;
+    TimePoint last_data{};
+    TimePoint last_counters{};
+    std::optional<TimePoint> due;  // changes held back until then
+  };
+
+  void rebirth(const Now& now, Sink& sink);
+  void birth(std::size_t device, const Now& now, Sink& sink);
+  void death(std::size_t device, const Now& now, Sink& sink);
+  void report(std::size_t device, const Now& now, Sink& sink);
+  std::vector<std::size_t> changes(std::size_t device, const Now& now) const;
+  void command(std::string_view device, std::string_view payload, const Now& now, Sink& sink);
+  void host_state(std::string_view payload, const Now& now, Sink& sink);
+  void send(MessageType type, std::string_view device, Payload payload, const Now& now, Sink& sink);
+
+  EdgeNodeOptions options_;
+  SessionState state_ = SessionState::offline;
+  std::uint8_t bd_seq_ = 255;  // begin_connect() makes the first 0
+  std::uint8_t seq_ = 0;
+  std::uint64_t host_timestamp_ = 0;  // of the newest STATE accepted
+  std::vector<DeviceDef> defs_;
+  std::vector<DeviceState> devices_;
+  std::uint64_t births_ = 0;
+  std::uint64_t messages_ = 0;
+};
+
+}  // namespace drivegate::sparkplug

@@ -1,0 +1,389 @@
+// The Sparkplug edge node on simulated time: births, sequence numbers, report by exception,
+// deaths, rebirth, the primary host's STATE and commands, recorded from its Sink.
+#include "mqtt/edge_node.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "mqtt/sparkplug_codec.h"
+
+namespace drivegate::sparkplug {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+struct Sent {
+  std::string topic;
+  Payload payload;
+  [[nodiscard]] std::vector<std::string> names() const {
+    std::vector<std::string> n;
+    for (const auto& m : payload.metrics) n.push_back(m.name);
+    return n;
+  }
+  [[nodiscard]] const Metric* metric(std::string_view name) const {
+    for (const auto& m : payload.metrics) {
+      if (m.name == name) return &m;
+    }
+    return nullptr;
+  }
+};
+
+class RecordingSink : public Sink {
+ public:
+  void publish(const std::string& topic, const Payload& payload) override {
+    sent.push_back({topic, payload});
+  }
+  void drop_session() override { ++drops; }
+  void write(std::size_t device, std::vector<PointCommand> points) override {
+    writes.emplace_back(device, std::move(points));
+  }
+  void notice(std::string message) override { notices.push_back(std::move(message)); }
+  std::vector<Sent> take() { return std::exchange(sent, {}); }
+
+  std::vector<Sent> sent;
+  int drops = 0;
+  std::vector<std::pair<std::size_t, std::vector<PointCommand>>> writes;
+  std::vector<std::string> notices;
+};
+
+MetricDef metric(std::string name, DataType type) {
+  MetricDef m;
+  m.name = std::move(name);
+  m.type = type;
+  return m;
+}
+
+// Two drives: speed (Int16), frames (a counter), setpoint (writable).
+std::vector<DeviceDef> drives() {
+  std::vector<DeviceDef> d;
+  for (const char* name : {"washer-a", "washer-b"}) {
+    DeviceDef def{name, {}};
+    def.metrics.push_back(metric("speed_rpm", DataType::int16));
+    auto frames = metric("frames_good", DataType::int64);
+    frames.counter = true;
+    def.metrics.push_back(frames);
+    auto setpoint = metric("setpoint_rpm", DataType::int16);
+    setpoint.writable = true;
+    setpoint.properties.push_back({"engUnit", DataType::string, MetricValue{std::string("rpm")}});
+    def.metrics.push_back(setpoint);
+    d.push_back(std::move(def));
+  }
+  return d;
+}
+
+std::vector<MetricValue> values(std::int64_t speed, std::int64_t frames = 0,
+                                std::int64_t setpoint = 0) {
+  return {MetricValue{speed}, MetricValue{frames}, MetricValue{setpoint}};
+}
+
+class EdgeNodeTest : public ::testing::Test {
+ protected:
+  explicit EdgeNodeTest(EdgeNodeOptions o = options()) : node_(std::move(o)) {
+    node_.set_devices(drives(), at(0ms), sink_);
+  }
+  static EdgeNodeOptions options() {
+    EdgeNodeOptions o;
+    o.group = "plant1";
+    o.edge_node = "gw01";
+    o.min_interval = 100ms;
+    o.counter_interval = 10s;
+    o.commands = true;
+    o.version = "9.9";
+    return o;
+  }
+  Now at(Millis t) const {
+    return {TimePoint{} + t, 1'700'000'000'000 + static_cast<std::uint64_t>(t.count())};
+  }
+  // Connected, both drives heard from: NBIRTH, two DBIRTHs taken.
+  void online() {
+    node_.begin_connect(at(0ms));
+    node_.sample(0, true, values(0), at(0ms), sink_);
+    node_.sample(1, true, values(0), at(0ms), sink_);
+    node_.connected(at(0ms), sink_);
+    ASSERT_EQ(sink_.take().size(), 3u);
+  }
+  EdgeNode node_;
+  RecordingSink sink_;
+};
+
+TEST_F(EdgeNodeTest, TheWillIsAnNdeathWithTheSessionsBdSeq) {
+  auto will = node_.begin_connect(at(0ms));
+  EXPECT_EQ(node_.will_topic(), "spBv1.0/plant1/NDEATH/gw01");
+  EXPECT_FALSE(will.seq);  // spec 6.4.1: no seq in an NDEATH
+  ASSERT_EQ(will.metrics.size(), 1u);
+  EXPECT_EQ(will.metrics[0].name, "bdSeq");
+  EXPECT_EQ(will.metrics[0].type, DataType::uint64);
+  EXPECT_EQ(will.metrics[0].value, MetricValue{std::uint64_t{0}});
+  will = node_.begin_connect(at(1ms));
+  EXPECT_EQ(will.metrics[0].value, MetricValue{std::uint64_t{1}});
+  for (int i = 0; i < 254; ++i) node_.begin_connect(at(1ms));
+  EXPECT_EQ(node_.bd_seq(), 255);
+  EXPECT_EQ(node_.begin_connect(at(1ms)).metrics[0].value, MetricValue{std::uint64_t{0}});
+  EXPECT_THAT(node_.subscriptions(),
+              ElementsAre("spBv1.0/plant1/NCMD/gw01", "spBv1.0/plant1/DCMD/gw01/+"));
+}
+
+TEST_F(EdgeNodeTest, BirthsCarryEveryMetricAndSeqStartsAtZero) {
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1500, 7, 1500), at(0ms), sink_);
+  node_.connected(at(5ms), sink_);
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 2u);  // washer-b never answered: no DBIRTH for it
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/NBIRTH/gw01");
+  EXPECT_EQ(sent[0].payload.seq, 0u);
+  EXPECT_EQ(sent[0].payload.timestamp, 1'700'000'000'005u);
+  EXPECT_THAT(sent[0].names(), ElementsAre("bdSeq", "Node Control/Rebirth", "Node Info/Version"));
+  EXPECT_EQ(sent[0].metric("Node Control/Rebirth")->value, MetricValue{false});
+  EXPECT_EQ(sent[1].topic, "spBv1.0/plant1/DBIRTH/gw01/washer-a");
+  EXPECT_EQ(sent[1].payload.seq, 1u);
+  EXPECT_THAT(sent[1].names(), ElementsAre("speed_rpm", "frames_good", "setpoint_rpm",
+                                           "Command/Last Point", "Command/Last Result"));
+  EXPECT_EQ(sent[1].metric("speed_rpm")->value, MetricValue{std::int64_t{1500}});
+  EXPECT_EQ(sent[1].metric("setpoint_rpm")->properties.at(0).key, "engUnit");
+  // washer-b answers later: its DBIRTH then.
+  node_.sample(1, true, values(0), at(50ms), sink_);
+  const auto later = sink_.take();
+  ASSERT_EQ(later.size(), 1u);
+  EXPECT_EQ(later[0].topic, "spBv1.0/plant1/DBIRTH/gw01/washer-b");
+  EXPECT_EQ(later[0].payload.seq, 2u);
+}
+
+TEST_F(EdgeNodeTest, DataByExceptionOnlyTheChangedMetricsAtMostOncePerInterval) {
+  online();
+  node_.sample(0, true, values(0), at(200ms), sink_);  // nothing changed
+  EXPECT_TRUE(sink_.take().empty());
+  node_.sample(0, true, values(100), at(210ms), sink_);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
+  EXPECT_EQ(sent[0].payload.seq, 3u);
+  EXPECT_THAT(sent[0].names(), ElementsAre("speed_rpm"));
+  // Within min_interval: held back, and the newest value goes when it has passed.
+  node_.sample(0, true, values(150), at(250ms), sink_);
+  node_.sample(0, true, values(180), at(280ms), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_EQ(node_.wake_at(), TimePoint{} + 310ms);
+  node_.tick(at(309ms), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+  node_.tick(at(310ms), sink_);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].metric("speed_rpm")->value, MetricValue{std::int64_t{180}});
+  EXPECT_EQ(sent[0].payload.seq, 4u);
+  EXPECT_FALSE(node_.wake_at());
+  // Another device is not held back by this one's interval.
+  node_.sample(1, true, values(5), at(311ms), sink_);
+  EXPECT_EQ(sink_.take().size(), 1u);
+}
+
+TEST_F(EdgeNodeTest, DeadbandAndCounterInterval) {
+  auto defs = drives();
+  defs[0].metrics[0].deadband = 5;
+  node_.set_devices(defs, at(0ms), sink_);
+  online();
+  node_.sample(0, true, values(4, 1), at(1s), sink_);  // moved 4 < 5; frames not due
+  EXPECT_TRUE(sink_.take().empty());
+  node_.sample(0, true, values(-1, 2), at(2s), sink_);  // -1 from 0: still within
+  EXPECT_TRUE(sink_.take().empty());
+  node_.sample(0, true, values(5, 3), at(3s), sink_);  // 5 from the published 0
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_THAT(sent[0].names(), ElementsAre("speed_rpm"));
+  node_.sample(0, true, values(5, 40), at(10s), sink_);  // the counter's interval has passed
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_THAT(sent[0].names(), ElementsAre("frames_good"));
+  node_.sample(0, true, values(5, 41), at(11s), sink_);  // and not again for 10 s
+  EXPECT_TRUE(sink_.take().empty());
+}
+
+TEST_F(EdgeNodeTest, DeathOnCommLostBirthWhenBack) {
+  online();
+  node_.sample(1, false, values(0), at(1s), sink_);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDEATH/gw01/washer-b");
+  EXPECT_EQ(sent[0].payload.seq, 3u);
+  EXPECT_TRUE(sent[0].payload.metrics.empty());
+  node_.sample(1, false, values(0), at(2s), sink_);  // still dead: said once
+  EXPECT_TRUE(sink_.take().empty());
+  node_.sample(1, true, values(7), at(3s), sink_);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DBIRTH/gw01/washer-b");
+  EXPECT_EQ(sent[0].metric("speed_rpm")->value, MetricValue{std::int64_t{7}});
+}
+
+TEST_F(EdgeNodeTest, SeqWrapsAfter255) {
+  online();
+  for (int i = 1; i <= 253; ++i) node_.sample(0, true, values(i), at(Millis(1000 * i)), sink_);
+  auto sent = sink_.take();
+  EXPECT_EQ(sent.back().payload.seq, 255u);
+  node_.sample(0, true, values(9999), at(300s), sink_);
+  EXPECT_EQ(sink_.take().at(0).payload.seq, 0u);
+}
+
+TEST_F(EdgeNodeTest, RebirthOnRequestKeepsTheBdSeq) {
+  online();
+  node_.sample(0, true, values(10), at(1s), sink_);
+  sink_.take();
+  Payload ncmd;
+  ncmd.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
+  node_.message("spBv1.0/plant1/NCMD/gw01", encode(ncmd), at(2s), sink_);
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 3u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/NBIRTH/gw01");
+  EXPECT_EQ(sent[0].payload.seq, 0u);
+  EXPECT_EQ(sent[0].metric("bdSeq")->value, MetricValue{std::uint64_t{0}});
+  EXPECT_EQ(sent[1].metric("speed_rpm")->value, MetricValue{std::int64_t{10}});
+  EXPECT_EQ(sent[2].payload.seq, 2u);
+  // Another edge node's NCMD, or garbage, changes nothing.
+  node_.message("spBv1.0/plant1/NCMD/gw02", encode(ncmd), at(3s), sink_);
+  node_.message("spBv1.0/plant1/NCMD/gw01", "\xFF\xFF", at(3s), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("NCMD ignored"));
+}
+
+TEST_F(EdgeNodeTest, NothingIsPublishedOffline) {
+  node_.sample(0, true, values(1), at(0ms), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+  online();
+  node_.connection_lost();
+  node_.sample(0, true, values(50), at(1s), sink_);
+  node_.tick(at(2s), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+  // The next session is born afresh, with the newest values.
+  node_.begin_connect(at(3s));
+  node_.connected(at(3s), sink_);
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 3u);
+  EXPECT_EQ(sent[0].metric("bdSeq")->value, MetricValue{std::uint64_t{1}});
+  EXPECT_EQ(sent[1].metric("speed_rpm")->value, MetricValue{std::int64_t{50}});
+}
+
+TEST_F(EdgeNodeTest, ChangedDevicesAreARebirth) {
+  online();
+  auto defs = drives();
+  defs.pop_back();  // washer-b removed
+  EXPECT_TRUE(node_.set_devices(defs, at(1s), sink_));
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDEATH/gw01/washer-b");
+  EXPECT_EQ(sent[1].topic, "spBv1.0/plant1/NBIRTH/gw01");
+  // Births of the devices follow as they are sampled.
+  node_.sample(0, true, values(3), at(1s), sink_);
+  EXPECT_EQ(sink_.take().at(0).topic, "spBv1.0/plant1/DBIRTH/gw01/washer-a");
+  EXPECT_FALSE(node_.set_devices(defs, at(2s), sink_));
+  EXPECT_TRUE(sink_.take().empty());
+}
+
+TEST_F(EdgeNodeTest, CommandsAreCheckedThenWrittenThenReported) {
+  online();
+  Payload dcmd;
+  dcmd.metrics.push_back({"setpoint_rpm", DataType::int16, MetricValue{std::int64_t{800}}, {}});
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-b", encode(dcmd), at(1s), sink_);
+  ASSERT_EQ(sink_.writes.size(), 1u);
+  EXPECT_EQ(sink_.writes[0].first, 1u);
+  ASSERT_EQ(sink_.writes[0].second.size(), 1u);
+  EXPECT_EQ(sink_.writes[0].second[0].index, 2u);
+  EXPECT_EQ(sink_.writes[0].second[0].value, MetricValue{std::int64_t{800}});
+  node_.command_done(1, "setpoint_rpm", "ok", at(1100ms), sink_);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-b");
+  EXPECT_EQ(sent[0].metric("Command/Last Point")->value, MetricValue{std::string("setpoint_rpm")});
+  EXPECT_EQ(sent[0].metric("Command/Last Result")->value, MetricValue{std::string("ok")});
+
+  // Read-only, unknown, alias-only, without a value: refused here, reported, never written.
+  for (Metric bad : {Metric{"speed_rpm", DataType::int16, MetricValue{std::int64_t{1}}, {}},
+                     Metric{"nope", DataType::int16, MetricValue{std::int64_t{1}}, {}},
+                     Metric{"", DataType::int16, MetricValue{std::int64_t{1}}, {}},
+                     Metric{"setpoint_rpm", DataType::string, MetricValue{std::string("1")}, {}}}) {
+    Payload p;
+    p.metrics.push_back(bad);
+    node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(p), at(2s), sink_);
+    sent = sink_.take();
+    ASSERT_EQ(sent.size(), 1u) << bad.name;
+    EXPECT_THAT(std::get<std::string>(sent[0].metric("Command/Last Result")->value),
+                HasSubstr("refused"));
+  }
+  EXPECT_EQ(sink_.writes.size(), 1u);
+  // An unknown device: a notice only.
+  node_.message("spBv1.0/plant1/DCMD/gw01/nobody", encode(dcmd), at(3s), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("unknown device"));
+}
+
+class EdgeNodeNoCommands : public EdgeNodeTest {
+ protected:
+  EdgeNodeNoCommands()
+      : EdgeNodeTest([] {
+          auto o = options();
+          o.commands = false;
+          return o;
+        }()) {}
+};
+
+TEST_F(EdgeNodeNoCommands, DcmdIsIgnoredAndBirthsHaveNoCommandMetrics) {
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(0), at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  const auto sent = sink_.take();
+  EXPECT_THAT(sent.at(1).names(), ElementsAre("speed_rpm", "frames_good", "setpoint_rpm"));
+  Payload dcmd;
+  dcmd.metrics.push_back({"setpoint_rpm", DataType::int16, MetricValue{std::int64_t{800}}, {}});
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(1s), sink_);
+  EXPECT_TRUE(sink_.writes.empty());
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("commands = false"));
+}
+
+class EdgeNodePrimaryHost : public EdgeNodeTest {
+ protected:
+  EdgeNodePrimaryHost()
+      : EdgeNodeTest([] {
+          auto o = options();
+          o.primary_host = "scada";
+          return o;
+        }()) {}
+  void state(bool online, std::uint64_t ts, Millis t) {
+    node_.message("spBv1.0/STATE/scada",
+                  std::string("{\"online\":") + (online ? "true" : "false") +
+                      ",\"timestamp\":" + std::to_string(ts) + "}",
+                  at(t), sink_);
+  }
+};
+
+TEST_F(EdgeNodePrimaryHost, BirthsWaitForTheHostAndItsDeathEndsTheSession) {
+  EXPECT_EQ(node_.subscriptions().back(), "spBv1.0/STATE/scada");
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  node_.sample(0, true, values(2), at(10ms), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+  state(true, 100, 20ms);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/NBIRTH/gw01");
+  EXPECT_EQ(sent[1].metric("speed_rpm")->value, MetricValue{std::int64_t{2}});
+  // An older STATE (a late copy) is ignored.
+  state(false, 99, 30ms);
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_EQ(sink_.drops, 0);
+  state(false, 200, 40ms);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/NDEATH/gw01");
+  EXPECT_EQ(sent[0].metric("bdSeq")->value, MetricValue{std::uint64_t{0}});
+  EXPECT_EQ(sink_.drops, 1);
+  EXPECT_EQ(node_.state(), SessionState::offline);
+  // Garbage in STATE: a notice, nothing else.
+  node_.message("spBv1.0/STATE/scada", "ONLINE", at(50ms), sink_);
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("STATE"));
+}
+
+}  // namespace
+}  // namespace drivegate::sparkplug
