@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "drivegate/adapter.h"
@@ -44,6 +45,34 @@ struct HttpConfig {
   modbus::AllowList allow;  // empty: every address
   bool capture = false;     // whether /api/v1/capture is served
   int line = 0;
+};
+
+// [mqtt]: the Sparkplug B northbound (docs/mqtt.md). Off unless the file has [mqtt].
+struct MqttConfig {
+  bool enabled = false;
+  std::string broker;  // as written, for messages: mqtt://host[:port] or mqtts://host[:port]
+  std::string host;
+  std::uint16_t port = 1883;
+  bool tls = false;
+  std::filesystem::path ca;  // mqtts: the CA the broker's certificate chains to
+  std::filesystem::path cert;
+  std::filesystem::path key;  // mqtts: a client certificate, both or neither
+  std::string client_id;      // default "drivegate-" + edge_node_id
+  std::string group_id;
+  std::string edge_node_id;
+  std::string primary_host_id;  // empty: publish without waiting for a primary host
+  std::string username;
+  std::filesystem::path password_file;                   // its first line is the password
+  std::string password;                                  // read from password_file at load
+  std::vector<std::pair<std::string, double>> deadband;  // point name -> how far it must move
+  Millis min_interval{100};                              // per device, between two DDATA
+  Millis counter_interval{10'000};  // counters change with every frame: reported this often
+  std::chrono::seconds keepalive{30};
+  bool commands = false;                                      // DCMD writes
+  modbus::AccessLevel access = modbus::AccessLevel::operate;  // what a DCMD may write
+  bool feed_failsafe = false;  // whether a DCMD proves the PLC is there
+  int line = 0;
+  friend bool operator==(const MqttConfig&, const MqttConfig&) = default;
 };
 
 struct BusConfig {
@@ -106,6 +135,7 @@ struct Config {
   ServerConfig server;
   std::vector<ListenerConfig> listeners;  // at least one
   HttpConfig http;
+  MqttConfig mqtt;
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;
 };

@@ -12,6 +12,7 @@
 
 #include "adapter_options.h"
 #include "port_address.h"
+#include "mqtt_config.h"
 #include "server_config.h"
 #include "toml_reader.h"
 
@@ -416,10 +417,11 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   cfg.path = source_name;
   {
     TableReader top(root, "", diag);
-    top.expect({"server", "listener", "http", "bus", "device"});
+    top.expect({"server", "listener", "http", "mqtt", "bus", "device"});
     top.node("server");
     top.node("listener");
     top.node("http");
+    top.node("mqtt");
     top.node("bus");
     top.node("device");
   }
@@ -428,6 +430,7 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   read_http(root, cfg, diag);
   const auto given = read_buses(root, cfg, diag);
   read_devices(root, cfg, plugins, diag);
+  read_mqtt(root, cfg, diag);
   if (cfg.devices.empty() && diag.errors.empty()) {
     diag.error_at(0, "device", "no [[device]] configured: there is nothing to serve");
   }

@@ -73,17 +73,6 @@ std::string one_of(std::span<const std::string_view> names) {
   return out;
 }
 
-std::optional<modbus::AccessLevel> read_access(const toml::node& n, const std::string& key,
-                                               Diagnostics& diag) {
-  const auto* s = n.as_string();
-  const auto i = s != nullptr ? index_of(modbus::kAccessLevelNames, s->get()) : std::nullopt;
-  if (!i) {
-    diag.error(&n, key, "must be " + one_of(modbus::kAccessLevelNames));
-    return std::nullopt;
-  }
-  return static_cast<modbus::AccessLevel>(*i);
-}
-
 modbus::AllowList read_allow(const toml::node& n, const std::string& key, Diagnostics& diag) {
   modbus::AllowList allow;
   const auto* a = n.as_array();
@@ -211,6 +200,17 @@ void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
 }
 
 }  // namespace
+
+std::optional<modbus::AccessLevel> read_access(const toml::node& n, const std::string& key,
+                                               Diagnostics& diag) {
+  const auto* s = n.as_string();
+  const auto i = s != nullptr ? index_of(modbus::kAccessLevelNames, s->get()) : std::nullopt;
+  if (!i) {
+    diag.error(&n, key, "must be " + one_of(modbus::kAccessLevelNames));
+    return std::nullopt;
+  }
+  return static_cast<modbus::AccessLevel>(*i);
+}
 
 void read_server(const toml::table& root, Config& cfg, Diagnostics& diag) {
   const toml::node* n = root.get("server");

@@ -23,7 +23,8 @@ std::string failure(const std::filesystem::path& file, std::string_view what,
   return std::string(what) + " " + file.string() + ": " + ec.message();
 }
 
-// A private key others may read is as good as published: refused, whatever else is right.
+}  // namespace
+
 bool key_permissions_ok(const std::filesystem::path& key, std::string& error) {
   struct stat st {};
   if (::stat(key.c_str(), &st) != 0) {
@@ -39,8 +40,6 @@ bool key_permissions_ok(const std::filesystem::path& key, std::string& error) {
   }
   return true;
 }
-
-}  // namespace
 
 std::shared_ptr<ssl::context> make_tls_context(const TlsOptions& o, std::string& error) {
   if (!key_permissions_ok(o.key, error)) return nullptr;
