@@ -40,6 +40,12 @@ void reload_limits(const ServerConfig& running, const ServerConfig& next, modbus
   }
 }
 
+// Whether [mqtt] differs in anything but where it is in the file.
+bool mqtt_changed(const MqttConfig& running, MqttConfig next) {
+  next.line = running.line;
+  return !(next == running);
+}
+
 std::vector<modbus::ListenerOptions> listener_options(const std::vector<ListenerConfig>& ls) {
   std::vector<modbus::ListenerOptions> out;
   for (const auto& l : ls) out.push_back(l.options);
@@ -56,6 +62,7 @@ Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
       watchdog_timer_(io_) {}
 
 Daemon::~Daemon() {
+  mqtt_.reset();
   if (http_) http_->close();
   if (gateway_) gateway_->stop();
   if (server_) server_->close();
@@ -126,6 +133,10 @@ int Daemon::run() {
   if (!start_http()) return 1;
   gateway_->start();
   backend_.set(gateway_.get());
+  if (config_.mqtt.enabled) {
+    mqtt_ = std::make_unique<mqtt::Northbound>(io_, config_.mqtt, DRIVEGATE_VERSION, log_);
+    mqtt_->use(*gateway_);
+  }
   log_->info("serving {} devices on {} buses, Modbus TCP on {} listener(s), the first on port {}",
              gateway_->devices().size(), config_.buses.size(), config_.listeners.size(),
              server_->port());
@@ -183,11 +194,16 @@ void Daemon::reload() {
     log_->warn("[http] changes take effect at the next restart");
     config->http = config_.http;
   }
+  if (mqtt_changed(config_.mqtt, config->mqtt)) {
+    log_->warn("[mqtt] changes take effect at the next restart");
+    config->mqtt = config_.mqtt;
+  }
   // Unchanged buses move over running; the others close before the new ones open their ports.
   const auto kept = next->adopt_unchanged(*gateway_);
   gateway_->stop();
   next->start();
   backend_.set(next.get());
+  if (mqtt_) mqtt_->use(*next);  // a changed device set is a Sparkplug rebirth
   // The old gateway goes only after the handlers already queued for it (a housekeeping tick
   // that expired in this turn of the loop cannot be cancelled, and would find it freed).
   boost::asio::post(io_, [old = std::shared_ptr<Gateway>(std::move(gateway_))] {});
@@ -205,6 +221,7 @@ void Daemon::shutdown() {
   notifier_.stopping();
   signals_.cancel();
   gateway_->stop_drives(kStopLimit, [this] {
+    if (mqtt_) mqtt_->stop();
     if (http_) http_->close();
     server_->close();
     gateway_->stop();

@@ -21,6 +21,7 @@
 #include "gateway/gateway.h"
 #include "http/http_server.h"
 #include "modbus/server.h"
+#include "mqtt/northbound.h"
 #include "status_content.h"
 #include "systemd_notifier.h"
 
@@ -63,6 +64,7 @@ class Daemon {
   std::unique_ptr<modbus::Server> server_;
   std::unique_ptr<StatusContent> content_;
   std::unique_ptr<http::HttpServer> http_;
+  std::unique_ptr<mqtt::Northbound> mqtt_;  // after gateway_: goes first, unhooking its devices
   bool stopping_ = false;
 };
 

@@ -1,0 +1,298 @@
+#include "mqtt/mosquitto_client.h"
+
+#include <mosquitto.h>
+#include <openssl/ssl.h>
+#include <sys/ioctl.h>
+
+#include <boost/asio/ip/address.hpp>
+#include <boost/asio/post.hpp>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
+#include <stdexcept>
+
+namespace drivegate::mqtt {
+
+namespace asio = boost::asio;
+
+namespace {
+
+constexpr std::chrono::seconds kMiscPeriod{1};  // keep-alive pings and their timeouts
+constexpr int kPacketsPerTurn = 64;             // read at most this many before letting others run
+
+// libmosquitto's process-wide set-up, done once before the first client (its documented
+// requirement); never undone, as other clients may still be alive at exit.
+void init_library() {
+  static std::once_flag once;
+  std::call_once(once, [] { mosquitto_lib_init(); });
+}
+
+std::string error_text(int rc) {
+  if (rc == MOSQ_ERR_ERRNO) return std::strerror(errno);
+  return mosquitto_strerror(rc);
+}
+
+bool is_address(const std::string& host) {
+  boost::system::error_code ec;
+  asio::ip::make_address(host, ec);
+  return !ec;
+}
+
+}  // namespace
+
+MosquittoClient::MosquittoClient(asio::io_context& io, BrokerOptions options, Handlers handlers,
+                                 std::shared_ptr<spdlog::logger> log)
+    : io_(io),
+      options_(std::move(options)),
+      handlers_(std::move(handlers)),
+      log_(std::move(log)),
+      resolver_(io),
+      socket_(io),
+      misc_timer_(io),
+      connect_timer_(io) {
+  init_library();
+  mosq_ = mosquitto_new(options_.client_id.c_str(), true, this);
+  if (mosq_ == nullptr) throw std::runtime_error("mosquitto_new failed");
+  mosquitto_connect_callback_set(mosq_, &MosquittoClient::on_connect);
+  mosquitto_disconnect_callback_set(mosq_, &MosquittoClient::on_disconnect);
+  mosquitto_message_callback_set(mosq_, &MosquittoClient::on_message);
+  mosquitto_int_option(mosq_, MOSQ_OPT_TCP_NODELAY, 1);  // a DDATA leaves at once, not batched
+  if (!options_.username.empty()) {
+    check(
+        mosquitto_username_pw_set(mosq_, options_.username.c_str(),
+                                  options_.password.empty() ? nullptr : options_.password.c_str()),
+        "username");
+  }
+  if (options_.tls) {
+    check(mosquitto_tls_set(mosq_, options_.ca.c_str(), nullptr,
+                            options_.cert.empty() ? nullptr : options_.cert.c_str(),
+                            options_.key.empty() ? nullptr : options_.key.c_str(), nullptr),
+          "TLS files");
+    check(mosquitto_tls_opts_set(mosq_, SSL_VERIFY_PEER, "tlsv1.2", nullptr), "TLS options");
+  }
+}
+
+MosquittoClient::~MosquittoClient() {
+  state_ = State::idle;
+  close_socket();
+  mosquitto_destroy(mosq_);
+}
+
+void MosquittoClient::check(int rc, const char* what) {
+  if (rc != MOSQ_ERR_SUCCESS) {
+    throw std::runtime_error(std::string("MQTT ") + what + ": " + error_text(rc));
+  }
+}
+
+void MosquittoClient::connect(const std::string& will_topic, const std::string& will_payload) {
+  state_ = State::idle;
+  close_socket();
+  will_topic_ = will_topic;
+  will_payload_ = will_payload;
+  connect_timer_.expires_after(options_.connect_timeout);
+  const std::uint64_t generation = generation_;
+  connect_timer_.async_wait([this, generation](const boost::system::error_code& ec) {
+    if (ec || generation != generation_ || state_ == State::connected || state_ == State::idle) {
+      return;
+    }
+    fail("no answer within " + std::to_string(options_.connect_timeout.count()) + " ms");
+  });
+  // A name is looked up here, on the loop without waiting; TLS still hands libmosquitto the name
+  // (its certificate check needs it), which it then looks up again.
+  if (is_address(options_.host)) {
+    start(options_.host);
+    return;
+  }
+  state_ = State::resolving;
+  resolver_.async_resolve(
+      options_.host, std::to_string(options_.port),
+      [this, generation](const boost::system::error_code& ec,
+                         const asio::ip::tcp::resolver::results_type& results) {
+        if (generation != generation_ || state_ != State::resolving) return;
+        if (ec || results.empty()) {
+          fail("cannot resolve " + options_.host + ": " + ec.message());
+          return;
+        }
+        start(options_.tls ? options_.host : results.begin()->endpoint().address().to_string());
+      });
+}
+
+void MosquittoClient::start(const std::string& address) {
+  state_ = State::connecting;
+  int rc = mosquitto_will_set(mosq_, will_topic_.c_str(), static_cast<int>(will_payload_.size()),
+                              will_payload_.data(), 1, false);
+  if (rc == MOSQ_ERR_SUCCESS) {
+    rc = mosquitto_connect_async(mosq_, address.c_str(), options_.port,
+                                 static_cast<int>(options_.keepalive.count()));
+  }
+  if (rc != MOSQ_ERR_SUCCESS) {
+    fail(error_text(rc));
+    return;
+  }
+  const int fd = mosquitto_socket(mosq_);
+  if (fd < 0) {
+    fail("no socket");
+    return;
+  }
+  boost::system::error_code ec;
+  socket_.assign(fd, ec);
+  if (ec) {
+    fail("cannot watch the socket: " + ec.message());
+    return;
+  }
+  watch();
+  tick();
+}
+
+void MosquittoClient::watch() {
+  if (state_ == State::idle || state_ == State::resolving || !socket_.is_open()) return;
+  const std::uint64_t generation = generation_;
+  if (!reading_) {
+    reading_ = true;
+    socket_.async_wait(asio::posix::stream_descriptor::wait_read,
+                       [this, generation](const boost::system::error_code& ec) {
+                         if (generation != generation_) return;
+                         reading_ = false;
+                         if (!ec) on_readable(generation);
+                       });
+  }
+  if (!writing_ && mosquitto_want_write(mosq_)) {
+    writing_ = true;
+    socket_.async_wait(asio::posix::stream_descriptor::wait_write,
+                       [this, generation](const boost::system::error_code& ec) {
+                         if (generation != generation_) return;
+                         writing_ = false;
+                         if (!ec) on_writable(generation);
+                       });
+  }
+}
+
+// Asio's reactor is edge-triggered: everything already readable is read now (the socket's bytes
+// and what TLS decrypted ahead), or a packet would wait for the next one to arrive.
+void MosquittoClient::on_readable(std::uint64_t generation) {
+  for (int i = 0; i < kPacketsPerTurn; ++i) {
+    const int rc = mosquitto_loop_read(mosq_, 1);
+    if (generation != generation_) return;  // a callback ended or replaced the session
+    if (rc != MOSQ_ERR_SUCCESS) {
+      fail(error_text(rc));
+      return;
+    }
+    int pending = 0;
+    const int fd = mosquitto_socket(mosq_);
+    if (fd >= 0) ::ioctl(fd, FIONREAD, &pending);
+    if (const auto* ssl = static_cast<SSL*>(mosquitto_ssl_get(mosq_)); ssl != nullptr) {
+      pending += SSL_pending(ssl);
+    }
+    if (pending <= 0) {
+      watch();
+      return;
+    }
+  }
+  watch();
+  asio::post(io_, [this, generation] {
+    if (generation == generation_) on_readable(generation);
+  });
+}
+
+void MosquittoClient::on_writable(std::uint64_t generation) {
+  const int rc = mosquitto_loop_write(mosq_, 1);
+  if (generation != generation_) return;
+  if (rc != MOSQ_ERR_SUCCESS) {
+    fail(error_text(rc));
+    return;
+  }
+  watch();
+}
+
+void MosquittoClient::tick() {
+  misc_timer_.expires_after(kMiscPeriod);
+  const std::uint64_t generation = generation_;
+  misc_timer_.async_wait([this, generation](const boost::system::error_code& ec) {
+    if (ec || generation != generation_ || state_ == State::idle) return;
+    const int rc = mosquitto_loop_misc(mosq_);
+    if (generation != generation_) return;
+    if (rc != MOSQ_ERR_SUCCESS && rc != MOSQ_ERR_NO_CONN) {
+      fail(error_text(rc));
+      return;
+    }
+    watch();  // a ping may have been queued
+    tick();
+  });
+}
+
+bool MosquittoClient::publish(const std::string& topic, const std::string& payload, int qos,
+                              bool retain) {
+  if (state_ != State::connected) return false;
+  const int rc = mosquitto_publish(mosq_, nullptr, topic.c_str(), static_cast<int>(payload.size()),
+                                   payload.data(), qos, retain);
+  if (rc != MOSQ_ERR_SUCCESS) {
+    log_->warn("MQTT: publish to {} failed: {}", topic, error_text(rc));
+    return false;
+  }
+  watch();
+  return true;
+}
+
+bool MosquittoClient::subscribe(const std::string& topic, int qos) {
+  if (state_ != State::connected) return false;
+  const int rc = mosquitto_subscribe(mosq_, nullptr, topic.c_str(), qos);
+  if (rc != MOSQ_ERR_SUCCESS) {
+    log_->warn("MQTT: subscribe to {} failed: {}", topic, error_text(rc));
+    return false;
+  }
+  watch();
+  return true;
+}
+
+void MosquittoClient::disconnect() {
+  const bool was_connected = state_ == State::connected;
+  state_ = State::idle;
+  connect_timer_.cancel();
+  // DISCONNECT goes out before the socket closes: the broker then forgets the will.
+  if (was_connected) mosquitto_disconnect(mosq_);
+  close_socket();
+}
+
+void MosquittoClient::fail(std::string why) {
+  if (state_ == State::idle) return;
+  state_ = State::idle;
+  connect_timer_.cancel();
+  close_socket();
+  if (handlers_.lost) handlers_.lost(std::move(why));
+}
+
+void MosquittoClient::close_socket() {
+  ++generation_;
+  reading_ = false;
+  writing_ = false;
+  resolver_.cancel();
+  misc_timer_.cancel();
+  if (socket_.is_open()) socket_.release();  // libmosquitto owns the descriptor
+}
+
+void MosquittoClient::on_connect(mosquitto* /*m*/, void* self, int rc) {
+  auto* c = static_cast<MosquittoClient*>(self);
+  if (c->state_ != State::connecting) return;
+  if (rc != 0) {
+    c->fail(std::string("broker refused the connection: ") + mosquitto_connack_string(rc));
+    return;
+  }
+  c->state_ = State::connected;
+  c->connect_timer_.cancel();
+  if (c->handlers_.connected) c->handlers_.connected();
+}
+
+void MosquittoClient::on_disconnect(mosquitto* /*m*/, void* self, int rc) {
+  auto* c = static_cast<MosquittoClient*>(self);
+  c->fail(rc == 0 ? std::string("disconnected by the broker") : error_text(rc));
+}
+
+void MosquittoClient::on_message(mosquitto* /*m*/, void* self, const mosquitto_message* msg) {
+  auto* c = static_cast<MosquittoClient*>(self);
+  if (c->handlers_.message == nullptr || msg->topic == nullptr) return;
+  c->handlers_.message(msg->topic,
+                       std::string_view(static_cast<const char*>(msg->payload),
+                                        static_cast<std::size_t>(std::max(msg->payloadlen, 0))));
+}
+
+}  // namespace drivegate::mqtt

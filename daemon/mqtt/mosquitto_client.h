@@ -1,0 +1,98 @@
+// An MQTT 3.1.1 client session on the daemon's event loop: libmosquitto (Debian's
+// libmosquitto-dev) does the protocol; this class gives it the loop (a read and, while it has
+// bytes queued, a write wait on its socket, and a one-second timer for keep-alive), so nothing
+// ever blocks on the broker. One connection attempt at a time; what to do when it is lost
+// (back-off, a new will) is the owner's (northbound.cpp).
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/posix/stream_descriptor.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+
+struct mosquitto;
+struct mosquitto_message;
+
+namespace drivegate::mqtt {
+
+struct BrokerOptions {
+  std::string host;  // an address; a name is resolved before each attempt, off the loop's path
+  std::uint16_t port = 1883;
+  bool tls = false;
+  std::string ca;  // TLS: the CA that signed the broker's certificate
+  std::string cert;
+  std::string key;  // TLS client certificate and key, both or neither
+  std::string client_id;
+  std::string username;  // empty: none
+  std::string password;
+  std::chrono::seconds keepalive{30};
+  std::chrono::milliseconds connect_timeout{10'000};  // TCP, TLS and CONNACK together
+};
+
+class MosquittoClient {
+ public:
+  struct Handlers {
+    std::function<void()> connected;            // CONNACK accepted
+    std::function<void(std::string why)> lost;  // an attempt failed or the session ended
+    std::function<void(std::string_view topic, std::string_view payload)> message;
+  };
+
+  MosquittoClient(boost::asio::io_context& io, BrokerOptions options, Handlers handlers,
+                  std::shared_ptr<spdlog::logger> log);
+  ~MosquittoClient();
+  MosquittoClient(const MosquittoClient&) = delete;
+  MosquittoClient& operator=(const MosquittoClient&) = delete;
+
+  // Starts an attempt with this will (QoS 1, not retained); connected or lost follows. An attempt
+  // or session in progress is abandoned first (without calling lost).
+  void connect(const std::string& will_topic, const std::string& will_payload);
+  // Queues a message; false (nothing queued) when there is no session.
+  bool publish(const std::string& topic, const std::string& payload, int qos, bool retain);
+  bool subscribe(const std::string& topic, int qos);
+  // Ends the session cleanly (DISCONNECT: the broker drops the will). lost is not called.
+  void disconnect();
+
+  [[nodiscard]] bool connected() const { return state_ == State::connected; }
+  [[nodiscard]] const BrokerOptions& options() const { return options_; }
+
+ private:
+  enum class State : std::uint8_t { idle, resolving, connecting, connected };
+
+  void start(const std::string& address);
+  void watch();
+  void on_readable(std::uint64_t generation);
+  void on_writable(std::uint64_t generation);
+  void tick();
+  void fail(std::string why);
+  void close_socket();
+  void check(int rc, const char* what);
+  static void on_connect(mosquitto* m, void* self, int rc);
+  static void on_disconnect(mosquitto* m, void* self, int rc);
+  static void on_message(mosquitto* m, void* self, const mosquitto_message* msg);
+
+  boost::asio::io_context& io_;
+  BrokerOptions options_;
+  Handlers handlers_;
+  std::shared_ptr<spdlog::logger> log_;
+  mosquitto* mosq_ = nullptr;
+  boost::asio::ip::tcp::resolver resolver_;
+  boost::asio::posix::stream_descriptor socket_;
+  boost::asio::steady_timer misc_timer_;
+  boost::asio::steady_timer connect_timer_;
+  State state_ = State::idle;
+  std::uint64_t generation_ = 0;  // bumped whenever the socket changes: older waits are stale
+  bool reading_ = false;
+  bool writing_ = false;
+  std::string will_topic_;
+  std::string will_payload_;
+};
+
+}  // namespace drivegate::mqtt

@@ -1,0 +1,398 @@
+#include "mqtt/northbound.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <boost/asio/post.hpp>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "gateway/value_codec.h"
+#include "mqtt/sparkplug_codec.h"
+
+namespace drivegate::mqtt {
+
+namespace asio = boost::asio;
+using sparkplug::DataType;
+using sparkplug::MetricValue;
+
+namespace {
+
+constexpr Millis kFirstRetry{1'000};
+constexpr Millis kLongestRetry{30'000};
+// Sparkplug timestamps carry a value's age; a per-poll data age would be news at every poll.
+constexpr std::string_view kNotPublished = "data_age_ms";
+constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
+
+bool is_bit(const PointSpec& spec) {
+  return spec.table == Table::coil || spec.table == Table::discrete;
+}
+
+// The Sparkplug datatype of a point (docs/mqtt.md, "Metrics"). A 32-bit unsigned point goes out
+// as Int64: the specification and Eclipse Tahu disagree on which field carries a UInt32.
+DataType datatype_of(const PointSpec& spec) {
+  if (is_bit(spec)) return DataType::boolean;
+  switch (spec.type) {
+    case PointType::string:
+      return DataType::string;
+    case PointType::f32:
+      return DataType::float32;
+    default:
+      break;
+  }
+  if (spec.scale != 1.0 && spec.scale != 0.0) return DataType::float64;
+  switch (spec.type) {
+    case PointType::u16:
+      return DataType::uint16;
+    case PointType::i16:
+      return DataType::int16;
+    case PointType::u32:
+      return DataType::int64;
+    case PointType::i32:
+      return DataType::int32;
+    default:
+      return DataType::float64;
+  }
+}
+
+MetricValue metric_value(DataType type, const Value& v) {
+  if (std::holds_alternative<std::monostate>(v)) return {};
+  switch (type) {
+    case DataType::boolean:
+      return MetricValue{as_double(v) != 0.0};
+    case DataType::string:
+      if (const auto* s = std::get_if<std::string>(&v)) return MetricValue{*s};
+      return {};
+    case DataType::uint16:
+      return MetricValue{static_cast<std::uint64_t>(as_double(v))};
+    case DataType::int16:
+    case DataType::int32:
+    case DataType::int64:
+      if (const auto* i = std::get_if<std::int64_t>(&v)) return MetricValue{*i};
+      return MetricValue{static_cast<std::int64_t>(as_double(v))};
+    default:
+      return MetricValue{as_double(v)};
+  }
+}
+
+Value drive_value(const MetricValue& v) {
+  if (const auto* b = std::get_if<bool>(&v)) return std::int64_t{*b ? 1 : 0};
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return *i;
+  if (const auto* u = std::get_if<std::uint64_t>(&v)) {
+    if (*u <= static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
+      return static_cast<std::int64_t>(*u);
+    }
+    return static_cast<double>(*u);
+  }
+  if (const auto* d = std::get_if<double>(&v)) return *d;
+  return {};
+}
+
+// A scaled point's value on its own grid: 12 steps of 0.1 is 1.2, not 1.2000000000000002.
+Value in_steps(const PointSpec& spec, Value v) {
+  const auto* d = std::get_if<double>(&v);
+  if (d == nullptr || spec.scale == 0.0 || spec.scale >= 1.0) return v;
+  const double per_unit = std::round(1.0 / spec.scale);
+  if (std::fabs(per_unit * spec.scale - 1.0) > 1e-9) return v;  // not 1/n: leave it
+  return std::round(*d * per_unit) / per_unit;
+}
+
+std::string outcome(modbus::Exception e) {
+  if (e == modbus::Exception::none) return "ok";
+  return fmt::format("exception 0x{:02X} ({})", static_cast<unsigned>(e), modbus::to_string(e));
+}
+
+sparkplug::Property property(std::string key, MetricValue value) {
+  DataType type = DataType::string;
+  if (std::holds_alternative<double>(value)) type = DataType::float64;
+  if (std::holds_alternative<bool>(value)) type = DataType::boolean;
+  return {std::move(key), type, std::move(value)};
+}
+
+}  // namespace
+
+Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::string version,
+                       std::shared_ptr<spdlog::logger> log)
+    : io_(io),
+      config_(config),
+      log_(log),
+      edge_(sparkplug::EdgeNodeOptions{config.group_id, config.edge_node_id, config.primary_host_id,
+                                       config.min_interval, config.counter_interval,
+                                       config.commands, std::move(version)}),
+      client_(io,
+              BrokerOptions{config.host, config.port, config.tls, config.ca.string(),
+                            config.cert.string(), config.key.string(), config.client_id,
+                            config.username, config.password, config.keepalive,
+                            std::chrono::milliseconds(10'000)},
+              MosquittoClient::Handlers{
+                  [this] { connected(); }, [this](std::string why) { lost(why); },
+                  [this](std::string_view t, std::string_view p) { message(t, p); }},
+              log),
+      retry_timer_(io),
+      tick_timer_(io) {
+  status_.broker = config.broker;
+}
+
+Northbound::~Northbound() {
+  alive_.reset();
+  for (const Watched& w : watched_) w.device->watch({});
+}
+
+void Northbound::use(Gateway& gateway) {
+  ++generation_;
+  std::vector<sparkplug::DeviceDef> defs;
+  watched_.clear();
+  const std::weak_ptr<bool> token = alive_;
+  for (const auto& d : gateway.devices()) {
+    watched_.push_back({d.get(), {}});
+    defs.push_back(define(*d, watched_.back()));
+    const std::size_t index = watched_.size() - 1;
+    d->watch([this, token, index, generation = generation_] {
+      if (!token.expired()) changed(index, generation);
+    });
+  }
+  for (const auto& [name, amount] : config_.deadband) {
+    const bool known = std::any_of(defs.begin(), defs.end(), [&](const auto& def) {
+      return std::any_of(def.metrics.begin(), def.metrics.end(),
+                         [&](const auto& m) { return m.name == name; });
+    });
+    if (!known) log_->warn("[mqtt] deadband: no device has a point named '{}'", name);
+  }
+  dirty_.assign(watched_.size(), true);
+  if (edge_.set_devices(std::move(defs), now(), *this) && started_) {
+    log_->info("MQTT: devices changed: rebirth");
+  }
+  flush();
+  if (!started_) {
+    started_ = true;
+    connect();
+  }
+}
+
+void Northbound::stop() {
+  stopping_ = true;
+  retry_timer_.cancel();
+  tick_timer_.cancel();
+  if (client_.connected()) {
+    // A clean DISCONNECT makes the broker drop the will: the NDEATH goes out by hand (spec 5.6).
+    client_.publish(edge_.will_topic(), sparkplug::encode(edge_.node_death(now())), 1, false);
+    ++status_.messages;
+  }
+  client_.disconnect();
+  edge_.connection_lost();
+}
+
+NorthboundStatus Northbound::status() const {
+  NorthboundStatus s = status_;
+  s.session = edge_.state();
+  s.connected = client_.connected();
+  s.bd_seq = edge_.bd_seq();
+  s.births = edge_.births();
+  return s;
+}
+
+void Northbound::connect() {
+  if (stopping_) return;
+  const auto will = edge_.begin_connect(now());
+  client_.connect(edge_.will_topic(), sparkplug::encode(will));
+}
+
+void Northbound::connected() {
+  ++status_.connects;
+  status_.last_error.clear();
+  log_->info("MQTT: connected to {} as {} (bdSeq {}){}", config_.broker, config_.client_id,
+             edge_.bd_seq(),
+             config_.primary_host_id.empty()
+                 ? ""
+                 : fmt::format(", waiting for primary host '{}'", config_.primary_host_id));
+  backoff_ = Millis{0};
+  for (const auto& topic : edge_.subscriptions()) client_.subscribe(topic, 1);
+  // Fresh values for the births.
+  std::fill(dirty_.begin(), dirty_.end(), true);
+  flush();
+  edge_.connected(now(), *this);
+  schedule_tick();
+}
+
+void Northbound::lost(const std::string& why) {
+  edge_.connection_lost();
+  if (stopping_) return;
+  ++status_.losses;
+  const bool first = status_.last_error.empty();
+  status_.last_error = why;
+  backoff_ = backoff_.count() == 0 ? kFirstRetry : std::min(backoff_ * 2, kLongestRetry);
+  // One warning per outage; the retries after it only at debug level.
+  if (first) {
+    log_->warn("MQTT: {}: {}; retrying every {} s at most (Modbus is not affected)", config_.broker,
+               why, kLongestRetry.count() / 1000);
+  } else {
+    log_->debug("MQTT: {}: {}; next attempt in {} ms", config_.broker, why, backoff_.count());
+  }
+  retry_timer_.expires_after(backoff_);
+  retry_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (!ec) connect();
+  });
+}
+
+void Northbound::message(std::string_view topic, std::string_view payload) {
+  edge_.message(topic, payload, now(), *this);
+  schedule_tick();
+}
+
+void Northbound::changed(std::size_t index, std::uint64_t generation) {
+  if (generation != generation_ || index >= dirty_.size()) return;
+  dirty_[index] = true;
+  if (flush_posted_) return;
+  flush_posted_ = true;
+  // After the engine's turn: a reply that changed several values is one sample, not several.
+  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_), generation] {
+    if (token.expired()) return;
+    flush_posted_ = false;
+    if (generation == generation_) flush();
+  });
+}
+
+void Northbound::flush() {
+  if (edge_.state() == sparkplug::SessionState::offline && client_.connected() == false) {
+    // Nobody to tell: the next session's births sample every device afresh.
+    return;
+  }
+  const auto t = now();
+  for (std::size_t i = 0; i < watched_.size(); ++i) {
+    if (!dirty_[i]) continue;
+    dirty_[i] = false;
+    const Device& d = *watched_[i].device;
+    const bool alive = d.line().health.ever_good() && !d.comm_lost();
+    edge_.sample(i, alive, sample(watched_[i]), t, *this);
+  }
+  schedule_tick();
+}
+
+void Northbound::schedule_tick() {
+  const auto at = edge_.wake_at();
+  if (!at) return;
+  tick_timer_.expires_at(*at);
+  tick_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (ec) return;
+    edge_.tick(now(), *this);
+    schedule_tick();
+  });
+}
+
+sparkplug::Now Northbound::now() const {
+  const auto unix = std::chrono::duration_cast<std::chrono::milliseconds>(
+      std::chrono::system_clock::now().time_since_epoch());
+  return {Clock::now(), static_cast<std::uint64_t>(unix.count())};
+}
+
+sparkplug::DeviceDef Northbound::define(const Device& device, Watched& watched) const {
+  sparkplug::DeviceDef def{device.name(), {}};
+  for (const MappedPoint& p : device.map().points()) {
+    if (p.spec.name == kNotPublished) continue;
+    sparkplug::MetricDef m;
+    m.name = p.spec.name;
+    m.type = datatype_of(p.spec);
+    const bool writable = p.spec.access() == Access::read_write;
+    if (!p.spec.unit.empty()) m.properties.push_back(property("engUnit", p.spec.unit));
+    if (writable && (p.spec.min != 0.0 || p.spec.max != 0.0)) {
+      m.properties.push_back(property("engLow", p.spec.min));
+      m.properties.push_back(property("engHigh", p.spec.max));
+    }
+    m.properties.push_back(property("readOnly", !(writable && config_.commands)));
+    for (const auto& [name, amount] : config_.deadband) {
+      if (name == m.name) m.deadband = amount;
+    }
+    m.counter = p.row() != nullptr && p.row()->counter;
+    // Whether the command's session may write it is the device's to say, as for Modbus.
+    m.writable = writable;
+    def.metrics.push_back(std::move(m));
+    watched.points.push_back(&p);
+  }
+  return def;
+}
+
+std::vector<MetricValue> Northbound::sample(const Watched& watched) const {
+  std::vector<MetricValue> values;
+  values.reserve(watched.points.size());
+  Device& device = *watched.device;
+  const auto t = Clock::now();
+  std::array<std::uint16_t, 64> regs{};
+  for (const MappedPoint* p : watched.points) {
+    const PointSpec& spec = p->spec;
+    const std::size_t count = is_bit(spec) ? 1 : spec.register_count();
+    if (count > regs.size()) {
+      values.emplace_back();
+      continue;
+    }
+    const auto out = std::span(regs).first(count);
+    if (device.read(kReader, spec.table, p->address, out, t) != modbus::Exception::none) {
+      values.emplace_back();
+      continue;
+    }
+    const DataType type = datatype_of(spec);
+    if (is_bit(spec)) {
+      values.emplace_back(out[0] != 0);
+    } else if (auto v = decode_value(spec, out)) {
+      values.push_back(metric_value(type, in_steps(spec, *v)));
+    } else {
+      values.emplace_back();
+    }
+  }
+  return values;
+}
+
+void Northbound::publish(const std::string& topic, const sparkplug::Payload& payload) {
+  if (client_.publish(topic, sparkplug::encode(payload), 0, false)) ++status_.messages;
+}
+
+void Northbound::drop_session() {
+  log_->warn(
+      "MQTT: primary host '{}' is offline: NDEATH published, session ended; "
+      "reconnecting to wait for it",
+      config_.primary_host_id);
+  client_.disconnect();
+  backoff_ = kFirstRetry;
+  retry_timer_.expires_after(backoff_);
+  retry_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (!ec) connect();
+  });
+}
+
+void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> points) {
+  if (device >= watched_.size()) return;
+  const Watched& w = watched_[device];
+  std::vector<Device::PointWrite> writes;
+  std::string names;
+  for (const auto& pc : points) {
+    const MappedPoint* p = w.points.at(pc.index);
+    writes.push_back({p, drive_value(pc.value)});
+    names += (names.empty() ? "" : ",") + p->spec.name;
+  }
+  ++status_.commands;
+  const modbus::Session session{config_.access, modbus::WordOrder::big, config_.feed_failsafe};
+  const std::string name = w.device->name();
+  log_->info("MQTT: DCMD {} {}", name, names);
+  auto report = [this, token = std::weak_ptr<bool>(alive_), name, names](modbus::Exception e) {
+    if (token.expired()) return;
+    const auto& defs = edge_.devices();
+    const auto it = std::find_if(defs.begin(), defs.end(),
+                                 [&](const sparkplug::DeviceDef& d) { return d.name == name; });
+    if (e != modbus::Exception::none) {
+      log_->warn("MQTT: DCMD {} {}: {}", name, names, outcome(e));
+    }
+    if (it != defs.end()) {
+      edge_.command_done(static_cast<std::size_t>(it - defs.begin()), names, outcome(e), now(),
+                         *this);
+    }
+  };
+  const modbus::Exception e = w.device->write_points(session, writes, report, Clock::now());
+  if (e != modbus::Exception::none) report(e);  // refused before anything was applied
+}
+
+void Northbound::notice(std::string message) {
+  log_->warn("MQTT: {}", message);
+}
+
+}  // namespace drivegate::mqtt

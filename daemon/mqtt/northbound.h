@@ -1,0 +1,95 @@
+// The MQTT northbound: the gateway's devices published as a Sparkplug B edge node (docs/mqtt.md).
+// It wires three things on the daemon's event loop: the broker session (mosquitto_client.h,
+// reconnecting with back-off), the Sparkplug state machine (edge_node.h), and the gateway, whose
+// devices it samples when they change (Device::watch) and whose write path a DCMD takes
+// (Device::write_points: the same validation, access rules and confirmation as a Modbus write).
+// Neither the buses nor the Modbus server ever wait on it.
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "config/config.h"
+#include "gateway/gateway.h"
+#include "mqtt/edge_node.h"
+#include "mqtt/mosquitto_client.h"
+
+namespace drivegate::mqtt {
+
+// What /metrics and the status page show of it.
+struct NorthboundStatus {
+  std::string broker;
+  sparkplug::SessionState session = sparkplug::SessionState::offline;
+  bool connected = false;
+  std::uint8_t bd_seq = 0;
+  std::uint64_t connects = 0;  // sessions begun (CONNACK)
+  std::uint64_t losses = 0;    // attempts failed or sessions lost
+  std::uint64_t messages = 0;  // Sparkplug messages published
+  std::uint64_t births = 0;    // DBIRTHs among them
+  std::uint64_t commands = 0;  // DCMD writes carried out (any outcome)
+  std::string last_error;
+};
+
+class Northbound final : private sparkplug::Sink {
+ public:
+  Northbound(boost::asio::io_context& io, const MqttConfig& config, std::string version,
+             std::shared_ptr<spdlog::logger> log);
+  ~Northbound() override;
+  Northbound(const Northbound&) = delete;
+  Northbound& operator=(const Northbound&) = delete;
+
+  // Publishes `gateway`'s devices (the first call connects). After a reload, the new gateway: a
+  // changed device set is a rebirth.
+  void use(Gateway& gateway);
+  // A clean end: NDEATH published, then DISCONNECT.
+  void stop();
+
+  [[nodiscard]] NorthboundStatus status() const;
+
+ private:
+  struct Watched {
+    Device* device;
+    std::vector<const MappedPoint*> points;  // the device's metrics, in DeviceDef order
+  };
+
+  void connect();
+  void connected();
+  void lost(const std::string& why);
+  void message(std::string_view topic, std::string_view payload);
+  void changed(std::size_t index, std::uint64_t generation);
+  void flush();
+  void schedule_tick();
+  [[nodiscard]] sparkplug::Now now() const;
+  [[nodiscard]] sparkplug::DeviceDef define(const Device& device, Watched& watched) const;
+  [[nodiscard]] std::vector<sparkplug::MetricValue> sample(const Watched& watched) const;
+
+  // Sink
+  void publish(const std::string& topic, const sparkplug::Payload& payload) override;
+  void drop_session() override;
+  void write(std::size_t device, std::vector<sparkplug::PointCommand> points) override;
+  void notice(std::string message) override;
+
+  boost::asio::io_context& io_;
+  MqttConfig config_;
+  std::shared_ptr<spdlog::logger> log_;
+  sparkplug::EdgeNode edge_;
+  MosquittoClient client_;
+  boost::asio::steady_timer retry_timer_;
+  boost::asio::steady_timer tick_timer_;
+  std::vector<Watched> watched_;
+  std::vector<bool> dirty_;
+  bool flush_posted_ = false;
+  std::uint64_t generation_ = 0;  // of watched_: a watcher from before a reload is ignored
+  Millis backoff_{0};
+  bool stopping_ = false;
+  bool started_ = false;
+  NorthboundStatus status_;
+  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // for writes settling later
+};
+
+}  // namespace drivegate::mqtt
