@@ -352,11 +352,16 @@ void Northbound::drop_session() {
       "MQTT: primary host '{}' is offline: NDEATH published, session ended; "
       "reconnecting to wait for it",
       config_.primary_host_id);
-  client_.disconnect();
-  backoff_ = kFirstRetry;
-  retry_timer_.expires_after(backoff_);
-  retry_timer_.async_wait([this](const boost::system::error_code& ec) {
-    if (!ec) connect();
+  // Out of libmosquitto's callback first: inside it, packets are only queued, and the NDEATH
+  // just published must reach the broker before the DISCONNECT that makes it drop the will.
+  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
+    if (token.expired() || stopping_) return;
+    client_.disconnect();
+    backoff_ = kFirstRetry;
+    retry_timer_.expires_after(backoff_);
+    retry_timer_.async_wait([this](const boost::system::error_code& ec) {
+      if (!ec) connect();
+    });
   });
 }
 
