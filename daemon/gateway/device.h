@@ -27,6 +27,11 @@
 
 namespace drivegate {
 
+// The access level a write to `point` needs (README, "Listeners and access"): the common
+// command block (command, setpoint_rpm, heartbeat) is operate's, every other writable point
+// maintain's. Device::write and write_points refuse less with 0x01.
+modbus::AccessLevel required_level(const MappedPoint& point);
+
 class Device final : public Station {
  public:
   Device(DeviceConfig config, const AdapterDescriptor& adapter, std::unique_ptr<Driver> driver,

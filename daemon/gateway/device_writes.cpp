@@ -40,13 +40,6 @@ CommonWrite write_kind(const MappedPoint& p) {
   return row != nullptr ? row->write : CommonWrite::none;
 }
 
-// Access levels (README, "Listeners and access"): the common command block is operate's, every
-// other writable point maintain's.
-modbus::AccessLevel required_level(const MappedPoint& p) {
-  return write_kind(p) != CommonWrite::none ? modbus::AccessLevel::operate
-                                            : modbus::AccessLevel::maintain;
-}
-
 std::int64_t whole(const Value& v) {
   return static_cast<std::int64_t>(as_double(v));
 }
@@ -69,6 +62,11 @@ std::optional<WriteOp> op_of(const MappedPoint& point, const Value& value) {
 }
 
 }  // namespace
+
+modbus::AccessLevel required_level(const MappedPoint& p) {
+  return write_kind(p) != CommonWrite::none ? modbus::AccessLevel::operate
+                                            : modbus::AccessLevel::maintain;
+}
 
 Exception Device::write(const modbus::Session& session, Table table, std::uint16_t address,
                         std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now) {

@@ -300,7 +300,9 @@ sparkplug::DeviceDef Northbound::define(const Device& device, Watched& watched) 
       m.properties.push_back(property("engLow", p.spec.min));
       m.properties.push_back(property("engHigh", p.spec.max));
     }
-    m.properties.push_back(property("readOnly", !(writable && config_.commands)));
+    // What a DCMD could actually write: commands on, and within the session's access level.
+    const bool commandable = writable && config_.commands && required_level(p) <= config_.access;
+    m.properties.push_back(property("readOnly", !commandable));
     for (const auto& [name, amount] : config_.deadband) {
       if (name == m.name) m.deadband = amount;
     }
