@@ -1,0 +1,951 @@
+// MQTT Sparkplug B 3.0 northbound end to end (issue 16, "What must be shown"): the real drivegated
+// on simulated nidec-washer drives (`drivegate sim` on ptys), a real mosquitto broker on loopback
+// (tests/support/mosquitto.h) and an independent Sparkplug host: tests/mqtt/peer/sparkplug_peer.js,
+// Eclipse Tahu's schema and encoder from npm over MQTT.js (tests/support/sparkplug_peer.h). Nothing
+// here decodes a payload with drivegate's own code.
+//
+// Each test starts its own broker, peer, simulators and daemon. tools/deps.sh installs mosquitto,
+// node and the peer's node_modules; without them the tests skip, saying which is missing.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "e2e.h"
+#include "mosquitto.h"
+#include "sparkplug_peer.h"
+
+namespace drivegate::test {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+using ::testing::Not;
+using ::testing::StartsWith;
+namespace fs = std::filesystem;
+
+constexpr const char* kGroup = "plant1";
+constexpr const char* kEdge = "gw01";
+constexpr std::uint16_t kFailsafeBit = 1 << 5;
+constexpr int kAccelTime = 17;  // nidec-washer holding register accel_time
+
+std::string slurp(const fs::path& file) {
+  std::ostringstream text;
+  text << std::ifstream(file).rdbuf();
+  return text.str();
+}
+
+bool executable_in_path(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path != nullptr ? path : "/usr/bin:/bin");
+  std::string d;
+  while (std::getline(dirs, d, ':')) {
+    if (!d.empty() && ::access((fs::path(d) / name).c_str(), X_OK) == 0) return true;
+  }
+  return false;
+}
+
+// Why the tests cannot run here, or nullopt.
+std::optional<std::string> missing_dependency() {
+  if (::access(Broker::kMosquitto.c_str(), X_OK) != 0) {
+    return Broker::kMosquitto.string() + " is not installed (tools/deps.sh installs mosquitto)";
+  }
+  if (!executable_in_path("node")) return std::string("node is not installed (tools/deps.sh)");
+  for (const char* module : {"sparkplug-payload", "mqtt", "long"}) {
+    if (!fs::exists(peer_dir() / "node_modules" / module / "package.json")) {
+      return "the Sparkplug peer's node_modules lack '" + std::string(module) + "' in " +
+             (peer_dir() / "node_modules").string() + " (tools/deps.sh runs npm ci there)";
+    }
+  }
+  return std::nullopt;
+}
+
+std::string node_topic(const std::string& type) {
+  return std::string("spBv1.0/") + kGroup + "/" + type + "/" + kEdge;
+}
+std::string device_topic(const std::string& type, const std::string& device) {
+  return node_topic(type) + "/" + device;
+}
+
+std::string describe(const Message& m) {
+  std::ostringstream s;
+  s << m.kind << " " << m.topic;
+  if (m.seq) s << " seq=" << *m.seq;
+  if (m.kind != "msg") s << " " << m.text;
+  for (const auto& x : m.metrics) s << " [" << x.name << ":" << x.type << "=" << x.value << "]";
+  return s.str();
+}
+
+std::string describe(const std::vector<Message>& h) {
+  std::string out;
+  for (const auto& m : h) out += "  " + describe(m) + "\n";
+  return out;
+}
+
+bool is(const Message& m, std::string_view type, std::string_view device = {}) {
+  return m.kind == "msg" && m.message_type() == type && (device.empty() || m.device() == device);
+}
+
+// The seq of every message the edge node published (NBIRTH, DBIRTH, NDATA, DDATA, DDEATH), in
+// history order: each NBIRTH is 0, each following message the one before + 1 (mod 256). NDEATH
+// carries no seq (spec 6.4.x: bdSeq only) and ends nothing: the next session starts at NBIRTH.
+void expect_seq_consecutive(const std::vector<Message>& history) {
+  std::optional<std::uint64_t> last;
+  int checked = 0;
+  for (const auto& m : history) {
+    if (m.kind != "msg") continue;
+    const auto t = m.message_type();
+    if (t == "NCMD" || t == "DCMD" || t == "NDEATH" || t == "STATE") continue;
+    ASSERT_TRUE(m.seq.has_value()) << "no seq in " << describe(m);
+    EXPECT_TRUE(m.timestamp.has_value()) << "no timestamp in " << describe(m);
+    if (t == "NBIRTH") {
+      EXPECT_EQ(*m.seq, 0u) << describe(m);
+      last = 0;
+      continue;
+    }
+    if (!last) {
+      ADD_FAILURE() << "a message before any NBIRTH: " << describe(m);
+      continue;
+    }
+    EXPECT_EQ(*m.seq, (*last + 1) % 256) << describe(m) << "\nhistory:\n" << describe(history);
+    last = *m.seq;
+    ++checked;
+  }
+  EXPECT_GT(checked, 0);
+  // And a device's DDATA and DDEATH only while it is born: after its DBIRTH in this session and
+  // not after its DDEATH.
+  std::map<std::string, bool> born;
+  for (const auto& m : history) {
+    if (m.kind != "msg") continue;
+    const auto t = m.message_type();
+    if (t == "NBIRTH" || t == "NDEATH") born.clear();
+    if (t == "DBIRTH") born[m.device()] = true;
+    if (t == "DDATA" || t == "DDEATH") {
+      EXPECT_TRUE(born[m.device()]) << describe(m) << " of a device not born\nhistory:\n"
+                                    << describe(history);
+    }
+    if (t == "DDEATH") born[m.device()] = false;
+  }
+}
+
+struct Drive {
+  std::string name;
+  int unit;
+  fs::path link;
+  std::string device_extra;  // more keys of its [[device]] table
+  std::unique_ptr<Sim> sim;
+};
+
+class MqttE2E : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (const auto why = missing_dependency()) GTEST_SKIP() << *why;
+    started_ = std::chrono::steady_clock::now();
+    broker_ = std::make_unique<Broker>(dir_);
+    SparkplugPeer::Options o;
+    o.stderr_file = dir_ / "peer.log";
+    peer_ = std::make_unique<SparkplugPeer>(broker_->port(), o);
+    add_drive("washer-a");
+    add_drive("washer-b");
+  }
+  void TearDown() override {
+    if (HasFailure()) {
+      std::cerr << "--- drivegated.log:\n"
+                << daemon_log() << "--- peer history:\n"
+                << (peer_ ? describe(peer_->history()) : "") << "--- peer.log:\n"
+                << slurp(dir_ / "peer.log") << "--- mosquitto.log:\n"
+                << broker_log() << "\n";
+    }
+    if (started_) {
+      const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                          std::chrono::steady_clock::now() - *started_)
+                          .count();
+      RecordProperty("took_ms", static_cast<int>(ms));
+    }
+  }
+
+  Drive& add_drive(const std::string& name, const std::string& device_extra = "") {
+    Drive d{name, static_cast<int>(drives_.size()) + 1, dir_ / name, device_extra, nullptr};
+    d.sim = std::make_unique<Sim>("nidec-washer", d.link);
+    drives_.push_back(std::move(d));
+    return drives_.back();
+  }
+  Drive& drive(const std::string& name) {
+    for (auto& d : drives_) {
+      if (d.name == name) return d;
+    }
+    throw std::runtime_error("no drive " + name);
+  }
+
+  std::string config(const std::string& mqtt_extra) const {
+    std::string toml;
+    for (const auto& d : drives_) {
+      toml += "[[bus]]\nname = \"line-" + d.name + "\"\nport = \"" + d.link.string() +
+              "\"\n\n[[device]]\nname = \"" + d.name + "\"\nbus = \"line-" + d.name +
+              "\"\nadapter = \"nidec-washer\"\nunit_id = " + std::to_string(d.unit) +
+              "\npoll_ms = " + std::to_string(poll_ms_) + "\n" + d.device_extra + "\n";
+    }
+    return toml + "[mqtt]\nbroker = \"" + broker_->url() + "\"\ngroup_id = \"" + kGroup +
+           "\"\nedge_node_id = \"" + kEdge + "\"\n" + mqtt_extra;
+  }
+
+  void start_daemon(const std::string& mqtt_extra = "") {
+    daemon_ = std::make_unique<Daemon>(dir_, config(mqtt_extra), std::vector<std::string>{},
+                                       dir_ / "drivegated.log");
+    plc_ = std::make_unique<Plc>(daemon_->port());
+    ASSERT_TRUE(plc_->connect());
+    for (const auto& d : drives_) wait_online(d.unit);
+  }
+  void wait_online(int unit) {
+    plc_->unit(unit);
+    ASSERT_TRUE(eventually(
+        [&] {
+          const auto r = plc_->input(reg::status, 1);
+          return r.ok() && (r.regs[0] & reg::online) != 0;
+        },
+        10s))
+        << "unit " << unit << " never online";
+  }
+  std::string daemon_log() const { return slurp(dir_ / "drivegated.log"); }
+  // The broker's log so far, its current run included.
+  std::string broker_log() const {
+    return broker_ ? broker_->log() + slurp(dir_ / "mosquitto.log.part") : "";
+  }
+  // How many times the daemon connected to the broker, from the broker's log.
+  int sessions() const {
+    const std::string log = broker_log();
+    int n = 0;
+    for (auto at = log.find(" as drivegate-gw01 "); at != std::string::npos;
+         at = log.find(" as drivegate-gw01 ", at + 1)) {
+      ++n;
+    }
+    return n;
+  }
+
+  std::uint16_t input(int unit, int address) {
+    plc_->unit(unit);
+    const auto r = plc_->input(address, 1);
+    return r.ok() ? r.regs.at(0) : 0xDEAD;
+  }
+  std::uint16_t holding(int unit, int address) {
+    plc_->unit(unit);
+    const auto r = plc_->holding(address, 1);
+    return r.ok() ? r.regs.at(0) : 0xDEAD;
+  }
+  int speed(int unit) { return static_cast<std::int16_t>(input(unit, reg::speed)); }
+
+  // Reads everything the peer prints for `d` (into history()).
+  void pump(std::chrono::milliseconds d) {
+    peer_->wait_for([](const Message&) { return false; }, d);
+  }
+  std::optional<Message> wait(std::string_view type, std::string_view device = {},
+                              std::chrono::milliseconds timeout = 10s) {
+    return peer_->wait_for([&](const Message& m) { return is(m, type, device); }, timeout);
+  }
+  std::size_t count(std::string_view type, std::string_view device = {}) const {
+    std::size_t n = 0;
+    for (const auto& m : peer_->history()) n += is(m, type, device) ? 1 : 0;
+    return n;
+  }
+  // The next NBIRTH and then a DBIRTH for each drive (of drives_).
+  struct Births {
+    Message node;
+    std::map<std::string, Message> devices;
+  };
+  Births wait_births(std::chrono::milliseconds timeout = 10s) {
+    Births b;
+    auto nb = wait("NBIRTH", {}, timeout);
+    EXPECT_TRUE(nb.has_value()) << "no NBIRTH";
+    if (!nb) return b;
+    b.node = *nb;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (b.devices.size() < drives_.size() && std::chrono::steady_clock::now() < deadline) {
+      const auto m = peer_->wait_for([](const Message& x) { return is(x, "DBIRTH"); },
+                                     std::chrono::duration_cast<std::chrono::milliseconds>(
+                                         deadline - std::chrono::steady_clock::now()));
+      if (!m) break;
+      EXPECT_FALSE(b.devices.contains(m->device())) << "two DBIRTHs: " << describe(*m);
+      b.devices[m->device()] = *m;
+    }
+    EXPECT_EQ(b.devices.size(), drives_.size()) << "DBIRTHs missing";
+    return b;
+  }
+
+  void dcmd(const std::string& device, const std::string& metrics_json) {
+    peer_->publish(device_topic("DCMD", device), R"({"metrics":[)" + metrics_json + "]}");
+  }
+  // The Command/Last Result of the next DDATA of `device` carrying one.
+  std::optional<std::pair<std::string, std::string>> wait_command_result(
+      const std::string& device, std::chrono::milliseconds timeout = 10s) {
+    const auto m = peer_->wait_for(
+        [&](const Message& x) {
+          return is(x, "DDATA", device) && x.metric("Command/Last Result") != nullptr;
+        },
+        timeout);
+    if (!m) return std::nullopt;
+    const auto* point = m->metric("Command/Last Point");
+    const auto* result = m->metric("Command/Last Result");
+    EXPECT_EQ(result->type, "String");
+    EXPECT_NE(point, nullptr) << describe(*m);
+    return std::pair{point != nullptr ? point->value : "", result->value};
+  }
+
+  TempDir dir_;
+  int poll_ms_ = 100;
+  std::optional<std::chrono::steady_clock::time_point> started_;
+  std::unique_ptr<Broker> broker_;
+  std::unique_ptr<SparkplugPeer> peer_;
+  std::vector<Drive> drives_;
+  std::unique_ptr<Daemon> daemon_;
+  std::unique_ptr<Plc> plc_;
+};
+
+// --- 1. births and data ------------------------------------------------------------------------
+
+TEST_F(MqttE2E, BirthsThenDataByExceptionWithConsecutiveSeq) {
+  start_daemon();
+  const Births b = wait_births();
+  ASSERT_FALSE(HasFailure());
+
+  // NBIRTH: seq 0, bdSeq 0 for the first connection, Rebirth false, a version.
+  EXPECT_EQ(b.node.topic, node_topic("NBIRTH"));
+  EXPECT_EQ(b.node.seq, 0u);
+  ASSERT_NE(b.node.metric("bdSeq"), nullptr) << describe(b.node);
+  EXPECT_EQ(b.node.metric("bdSeq")->type, "UInt64");
+  EXPECT_EQ(b.node.metric("bdSeq")->value, "0");
+  ASSERT_NE(b.node.metric("Node Control/Rebirth"), nullptr) << describe(b.node);
+  EXPECT_EQ(b.node.metric("Node Control/Rebirth")->type, "Boolean");
+  EXPECT_EQ(b.node.metric("Node Control/Rebirth")->value, "false");
+  ASSERT_NE(b.node.metric("Node Info/Version"), nullptr) << describe(b.node);
+  EXPECT_EQ(b.node.metric("Node Info/Version")->type, "String");
+  EXPECT_FALSE(b.node.metric("Node Info/Version")->value.empty());
+  EXPECT_FALSE(b.node.retain);
+
+  // A DBIRTH per drive, seq 1 and 2 in the order they came.
+  std::set<std::uint64_t> seqs;
+  for (const auto& [name, m] : b.devices) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(m.topic, device_topic("DBIRTH", name));
+    ASSERT_TRUE(m.seq.has_value());
+    seqs.insert(*m.seq);
+    const Metric* speed = m.metric("speed_rpm");
+    ASSERT_NE(speed, nullptr) << describe(m);
+    EXPECT_EQ(speed->type, "Int16");
+    EXPECT_EQ(speed->properties.count("engUnit") ? speed->properties.at("engUnit") : "", "rpm");
+    EXPECT_EQ(speed->value, "0");
+    for (const auto& [metric, type] :
+         std::vector<std::pair<std::string, std::string>>{{"status", "UInt16"},
+                                                          {"fault_code", "UInt16"},
+                                                          {"setpoint_rpm", "Int16"},
+                                                          {"command", "UInt16"},
+                                                          {"frames_good", "Int64"},
+                                                          {"status_online", "Boolean"},
+                                                          {"status_running", "Boolean"},
+                                                          {"fault_mask", "Int64"},
+                                                          {"accel_time", "Double"}}) {
+      const Metric* x = m.metric(metric);
+      ASSERT_NE(x, nullptr) << metric << " missing: " << describe(m);
+      EXPECT_EQ(x->type, type) << metric;
+    }
+    EXPECT_EQ(m.metric("status_online")->value, "true");
+    EXPECT_EQ(m.metric("fault_code")->value, "0");
+    // A scaled adapter point goes out in engineering units: accel_time 30 x 0.1 s.
+    EXPECT_EQ(m.metric("accel_time")->value, "3");
+    EXPECT_EQ(m.metric("accel_time")->properties.count("engUnit")
+                  ? m.metric("accel_time")->properties.at("engUnit")
+                  : "",
+              "s");
+    EXPECT_EQ(m.metric("data_age_ms"), nullptr) << "data_age_ms is not published";
+    // commands = false (the default): nothing is writable from MQTT.
+    EXPECT_EQ(m.metric("setpoint_rpm")->properties.at("readOnly"), "true");
+    EXPECT_EQ(m.metric("Command/Last Result"), nullptr);
+  }
+  EXPECT_EQ(seqs, (std::set<std::uint64_t>{1, 2}));
+
+  // A PLC runs washer-a: DDATA speed_rpm follows the drive up to what the PLC reads.
+  plc_->unit(1);
+  ASSERT_EQ(plc_->write(reg::command, {1 /*run_forward*/, 800}), 0);
+  ASSERT_TRUE(eventually([&] { return speed(1) == 800; }, 10s)) << speed(1);
+  std::this_thread::sleep_for(300ms);  // settled: held past min_interval
+  const int settled = speed(1);
+  std::vector<std::int64_t> speeds;
+  const auto deadline = std::chrono::steady_clock::now() + 5s;
+  while (std::chrono::steady_clock::now() < deadline &&
+         (speeds.empty() || speeds.back() != settled)) {
+    const auto m = wait("DDATA", "washer-a", 1s);
+    if (m && m->metric("speed_rpm") != nullptr) speeds.push_back(m->metric("speed_rpm")->as_int());
+  }
+  pump(500ms);  // nothing more: the drive is steady
+  speeds.clear();
+  for (const auto& m : peer_->history()) {
+    if (is(m, "DDATA", "washer-a") && m.metric("speed_rpm") != nullptr) {
+      speeds.push_back(m.metric("speed_rpm")->as_int());
+    }
+  }
+  ASSERT_GE(speeds.size(), 2u) << "the ramp was not reported";
+  EXPECT_EQ(speeds.back(), settled);
+  EXPECT_TRUE(std::is_sorted(speeds.begin(), speeds.end())) << ::testing::PrintToString(speeds);
+  EXPECT_EQ(std::set<std::int64_t>(speeds.begin(), speeds.end()).size(), speeds.size())
+      << "DDATA repeated an unchanged speed: " << ::testing::PrintToString(speeds);
+
+  // Every DDATA metric is named, was in its device's DBIRTH, with the same datatype.
+  for (const auto& m : peer_->history()) {
+    if (!is(m, "DDATA")) continue;
+    ASSERT_TRUE(b.devices.contains(m.device())) << describe(m);
+    const Message& birth = b.devices.at(m.device());
+    EXPECT_FALSE(m.metrics.empty()) << describe(m);
+    for (const auto& x : m.metrics) {
+      EXPECT_FALSE(x.from_birth_name()) << "sent without its name: " << describe(m);
+      const Metric* born = birth.metric(x.name);
+      ASSERT_NE(born, nullptr) << x.name << " not in the DBIRTH of " << m.device();
+      EXPECT_EQ(x.type, born->type) << x.name;
+    }
+  }
+  // At most one DDATA per device per min_interval (100 ms), by the payloads' own timestamps;
+  // counters (frames_good...) not before counter_interval (10 s: not in this test).
+  std::optional<std::uint64_t> previous;
+  for (const auto& m : peer_->history()) {
+    if (!is(m, "DDATA", "washer-a")) continue;
+    ASSERT_TRUE(m.timestamp.has_value());
+    if (previous) {
+      EXPECT_GE(*m.timestamp, *previous + 95) << describe(m);
+    }
+    previous = m.timestamp;
+    EXPECT_EQ(m.metric("frames_good"), nullptr) << describe(m);
+    EXPECT_EQ(m.metric("bus_exchanges"), nullptr) << describe(m);
+  }
+  // The running bit came with it.
+  bool running = false;
+  for (const auto& m : peer_->history()) {
+    if (is(m, "DDATA", "washer-a") && m.metric("status_running") != nullptr) {
+      running = m.metric("status_running")->value == "true";
+    }
+  }
+  EXPECT_TRUE(running);
+  expect_seq_consecutive(peer_->history());
+
+  // A clean stop: NDEATH with the bdSeq of the NBIRTH (the will is dropped: only one).
+  EXPECT_EQ(daemon_->stop(), 0);
+  const auto death = wait("NDEATH", {}, 5s);
+  ASSERT_TRUE(death.has_value());
+  ASSERT_NE(death->metric("bdSeq"), nullptr) << describe(*death);
+  EXPECT_EQ(death->metric("bdSeq")->type, "UInt64");
+  EXPECT_EQ(death->metric("bdSeq")->value, b.node.metric("bdSeq")->value);
+  pump(500ms);
+  EXPECT_EQ(count("NDEATH"), 1u);
+}
+
+TEST_F(MqttE2E, DeadbandAndCounterIntervalHoldBackDdata) {
+  start_daemon("deadband = { speed_rpm = 100 }\ncounter_interval_ms = 1000\n");
+  const Births b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  plc_->unit(1);
+  ASSERT_EQ(plc_->write(reg::command, {1 /*run_forward*/, 800}), 0);
+  ASSERT_TRUE(eventually([&] { return speed(1) == 800; }, 10s)) << speed(1);
+  pump(2500ms);
+  std::vector<std::int64_t> speeds{0};  // the DBIRTH's
+  std::vector<std::uint64_t> counted;   // timestamps of DDATA with frames_good
+  for (const auto& m : peer_->history()) {
+    if (!is(m, "DDATA", "washer-a")) continue;
+    if (const Metric* s = m.metric("speed_rpm")) speeds.push_back(s->as_int());
+    if (const Metric* f = m.metric("frames_good")) {
+      EXPECT_EQ(f->type, "Int64");
+      counted.push_back(*m.timestamp);
+    }
+  }
+  ASSERT_GE(speeds.size(), 5u) << ::testing::PrintToString(speeds);
+  for (std::size_t i = 1; i < speeds.size(); ++i) {
+    EXPECT_GE(std::abs(speeds[i] - speeds[i - 1]), 100) << ::testing::PrintToString(speeds);
+  }
+  // The counters came, about once a second, not with every poll.
+  ASSERT_GE(counted.size(), 2u);
+  for (std::size_t i = 1; i < counted.size(); ++i) EXPECT_GE(counted[i] - counted[i - 1], 950u);
+  expect_seq_consecutive(peer_->history());
+}
+
+// --- 2. a device lost and back -----------------------------------------------------------------
+
+TEST_F(MqttE2E, CommLostDeviceGetsDdeathAndADbirthWhenBack) {
+  start_daemon();
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  // Hold the dying pty's slave open until the new simulator is up: otherwise its number may be
+  // reused by any other process's pty (a shared machine), which the stale link would then lead
+  // the daemon's reopen to, off this test's line.
+  const int hold =
+      ::open(drive("washer-b").link.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  ASSERT_GE(hold, 0);
+  const auto lost_at = std::chrono::steady_clock::now();
+  drive("washer-b").sim->process().stop(SIGKILL);
+  const auto death = wait("DDEATH", "washer-b", 15s);
+  ASSERT_TRUE(death.has_value());
+  std::cerr << "DDEATH "
+            << std::chrono::duration_cast<std::chrono::milliseconds>(
+                   std::chrono::steady_clock::now() - lost_at)
+                   .count()
+            << " ms after the sim was killed\n";
+  EXPECT_TRUE(death->metrics.empty()) << describe(*death);
+  EXPECT_TRUE(death->seq.has_value());
+  EXPECT_EQ(input(2, reg::status) & reg::comm_lost, reg::comm_lost);
+  EXPECT_EQ(count("DDEATH", "washer-a"), 0u);
+
+  // washer-a still reports.
+  plc_->unit(1);
+  ASSERT_EQ(plc_->write(reg::command, {1, 600}), 0);
+  const auto data = peer_->wait_for(
+      [](const Message& m) {
+        return is(m, "DDATA", "washer-a") && m.metric("speed_rpm") != nullptr &&
+               m.metric("speed_rpm")->as_int() == 600;
+      },
+      10s);
+  EXPECT_TRUE(data.has_value()) << "washer-a's DDATA stopped with washer-b";
+
+  // A drive answering again on the same line: DBIRTH.
+  drive("washer-b").sim = std::make_unique<Sim>("nidec-washer", drive("washer-b").link);
+  ::close(hold);
+  const auto back_at = std::chrono::steady_clock::now();
+  const auto birth = wait("DBIRTH", "washer-b", 15s);
+  ASSERT_TRUE(birth.has_value()) << "no DBIRTH after the drive came back";
+  std::cerr << "DBIRTH "
+            << std::chrono::duration_cast<std::chrono::milliseconds>(
+                   std::chrono::steady_clock::now() - back_at)
+                   .count()
+            << " ms after the sim was started again\n";
+  ASSERT_NE(birth->metric("status_online"), nullptr);
+  EXPECT_EQ(birth->metric("status_online")->value, "true");
+  EXPECT_EQ(birth->metric("status_comm_lost")->value, "false");
+  EXPECT_EQ(count("DDEATH", "washer-a"), 0u);
+  EXPECT_EQ(count("DBIRTH", "washer-a"), 1u);
+  EXPECT_EQ(count("NBIRTH"), 1u) << "a device coming back is no node rebirth";
+  expect_seq_consecutive(peer_->history());
+}
+
+// --- 3. kill -9: the broker publishes the will ------------------------------------------------
+
+TEST_F(MqttE2E, KilledDaemonLeavesTheWillNdeathWithTheBirthBdSeq) {
+  start_daemon();
+  const Births b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  ASSERT_NE(b.node.metric("bdSeq"), nullptr);
+  EXPECT_EQ(count("NDEATH"), 0u);
+  daemon_->process().stop(SIGKILL);
+  const auto death = wait("NDEATH", {}, 10s);
+  ASSERT_TRUE(death.has_value()) << "the broker did not publish the will";
+  EXPECT_EQ(death->topic, node_topic("NDEATH"));
+  ASSERT_NE(death->metric("bdSeq"), nullptr) << describe(*death);
+  EXPECT_EQ(death->metric("bdSeq")->type, "UInt64");
+  EXPECT_EQ(death->metric("bdSeq")->value, b.node.metric("bdSeq")->value);
+  // The broker saw the connection die, not a DISCONNECT.
+  EXPECT_TRUE(eventually(
+      [&] {
+        return broker_log().find("drivegate-gw01 closed its connection") != std::string::npos;
+      },
+      2s))
+      << broker_log();
+}
+
+// --- 4. rebirth on request ---------------------------------------------------------------------
+
+TEST_F(MqttE2E, NcmdRebirthRepublishesEveryBirthInTheSameSession) {
+  start_daemon();
+  const Births first = wait_births();
+  ASSERT_FALSE(HasFailure());
+  pump(300ms);
+  peer_->publish(node_topic("NCMD"),
+                 R"({"metrics":[{"name":"Node Control/Rebirth","type":"Boolean","value":true}]})");
+  const Births again = wait_births(5s);
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(again.node.seq, 0u);
+  EXPECT_EQ(again.node.metric("bdSeq")->value, first.node.metric("bdSeq")->value)
+      << "a rebirth is not a new session";
+  EXPECT_EQ(again.node.metric("Node Control/Rebirth")->value, "false");
+  for (const auto& [name, m] : again.devices) {
+    EXPECT_EQ(m.metrics.size(), first.devices.at(name).metrics.size()) << name;
+    EXPECT_EQ(m.metric("status_online")->value, "true") << name;
+  }
+  std::set<std::uint64_t> seqs;
+  for (const auto& [name, m] : again.devices) seqs.insert(*m.seq);
+  EXPECT_EQ(seqs, (std::set<std::uint64_t>{1, 2}));
+  EXPECT_EQ(count("NDEATH"), 0u);
+  EXPECT_EQ(sessions(), 1) << "no reconnect for a rebirth:\n" << broker_->log();
+  // A Rebirth = false is not a request.
+  peer_->publish(node_topic("NCMD"),
+                 R"({"metrics":[{"name":"Node Control/Rebirth","type":"Boolean","value":false}]})");
+  pump(1s);
+  EXPECT_EQ(count("NBIRTH"), 2u);
+  expect_seq_consecutive(peer_->history());
+}
+
+// --- 5. DCMD -----------------------------------------------------------------------------------
+
+TEST_F(MqttE2E, DcmdSetpointReachesTheDriveThroughTheModbusWritePath) {
+  start_daemon("commands = true\n");
+  const Births b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  const Message& birth = b.devices.at("washer-a");
+  EXPECT_EQ(birth.metric("setpoint_rpm")->properties.at("readOnly"), "false");
+  EXPECT_EQ(birth.metric("command")->properties.at("readOnly"), "false");
+  EXPECT_EQ(birth.metric("speed_rpm")->properties.at("readOnly"), "true");
+  ASSERT_NE(birth.metric("Command/Last Result"), nullptr) << describe(birth);
+  EXPECT_EQ(birth.metric("Command/Last Result")->type, "String");
+  ASSERT_NE(birth.metric("Command/Last Point"), nullptr);
+
+  // setpoint + run: the PLC sees both registers and the drive speeding up.
+  dcmd("washer-a", R"({"name":"setpoint_rpm","type":"Int16","value":800},)"
+                   R"({"name":"command","type":"UInt16","value":1})");
+  auto r = wait_command_result("washer-a");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->first, "setpoint_rpm,command");
+  EXPECT_EQ(r->second, "ok");
+  EXPECT_EQ(holding(1, reg::setpoint), 800);
+  EXPECT_EQ(holding(1, reg::command), 1);
+  EXPECT_THAT(drive("washer-a").sim->control("state"), HasSubstr("target_rpm=800"));
+  ASSERT_TRUE(eventually([&] { return speed(1) == 800; }, 10s)) << speed(1);
+  EXPECT_EQ(input(1, reg::status) & reg::running, reg::running);
+  EXPECT_EQ(speed(2), 0) << "the other drive was moved";
+
+  // An adapter setting beyond access = operate: the Modbus exception, nothing written.
+  const std::uint16_t accel = holding(1, kAccelTime);
+  dcmd("washer-a", R"({"name":"accel_time","type":"Double","value":5.5})");
+  r = wait_command_result("washer-a");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->first, "accel_time");
+  EXPECT_EQ(r->second, "exception 0x01 (illegal function)");
+  EXPECT_EQ(holding(1, kAccelTime), accel);
+
+  // A read-only metric and an unknown one: refused before the drive.
+  dcmd("washer-a", R"({"name":"speed_rpm","type":"Int16","value":100})");
+  r = wait_command_result("washer-a");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->first, "speed_rpm");
+  EXPECT_THAT(r->second, StartsWith("refused"));
+  dcmd("washer-a", R"({"name":"no_such_point","type":"UInt16","value":1})");
+  r = wait_command_result("washer-a");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_THAT(r->second, StartsWith("refused"));
+  EXPECT_EQ(holding(1, reg::setpoint), 800);
+  EXPECT_EQ(speed(1), 800);
+
+  // Stop over MQTT too.
+  dcmd("washer-a", R"({"name":"command","type":"UInt16","value":0})");
+  r = wait_command_result("washer-a");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->second, "ok");
+  EXPECT_TRUE(eventually([&] { return speed(1) == 0; }, 10s)) << speed(1);
+  expect_seq_consecutive(peer_->history());
+}
+
+TEST_F(MqttE2E, DcmdChangesNothingWhileCommandsAreOff) {
+  start_daemon();  // commands = false by default
+  const Births b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(b.devices.at("washer-a").metric("Command/Last Result"), nullptr);
+  dcmd("washer-a", R"({"name":"setpoint_rpm","type":"Int16","value":800},)"
+                   R"({"name":"command","type":"UInt16","value":1})");
+  EXPECT_TRUE(
+      eventually([&] { return daemon_log().find("commands = false") != std::string::npos; }, 5s))
+      << "no log line about the ignored DCMD";
+  pump(1500ms);
+  EXPECT_EQ(holding(1, reg::setpoint), 0);
+  EXPECT_EQ(holding(1, reg::command), 0);
+  EXPECT_EQ(speed(1), 0);
+  EXPECT_THAT(drive("washer-a").sim->control("state"), HasSubstr("motion=stop"));
+  for (const auto& m : peer_->history()) {
+    EXPECT_EQ(m.metric("Command/Last Result"), nullptr) << describe(m);
+  }
+}
+
+// --- 6. the PLC-loss failsafe is the PLC's ------------------------------------------------------
+
+class MqttE2EFailsafe : public MqttE2E {
+ protected:
+  void SetUp() override {
+    if (const auto why = missing_dependency()) GTEST_SKIP() << *why;
+    started_ = std::chrono::steady_clock::now();
+    broker_ = std::make_unique<Broker>(dir_);
+    SparkplugPeer::Options o;
+    o.stderr_file = dir_ / "peer.log";
+    peer_ = std::make_unique<SparkplugPeer>(broker_->port(), o);
+    add_drive("washer-a", "failsafe_timeout_ms = 1000\nfailsafe_action = \"stop\"\n");
+  }
+  // A PLC runs the drive (arming the failsafe) and goes away; DCMD heartbeats keep coming every
+  // 250 ms for `span`. Returns when the failsafe bit came, or nullopt.
+  std::optional<std::chrono::milliseconds> plc_leaves_mqtt_beats(std::chrono::milliseconds span) {
+    {
+      Plc plc(daemon_->port());
+      EXPECT_TRUE(plc.connect());
+      EXPECT_EQ(plc.write(reg::command, {1 /*run_forward*/, 800}), 0);
+    }
+    const auto left = std::chrono::steady_clock::now();
+    std::uint16_t beat = 0;
+    while (std::chrono::steady_clock::now() - left < span) {
+      dcmd("washer-a",
+           R"({"name":"heartbeat","type":"UInt16","value":)" + std::to_string(++beat) + "}");
+      if ((input(1, reg::status) & kFailsafeBit) != 0) {
+        return std::chrono::duration_cast<std::chrono::milliseconds>(
+            std::chrono::steady_clock::now() - left);
+      }
+      std::this_thread::sleep_for(250ms);
+    }
+    return std::nullopt;
+  }
+};
+
+TEST_F(MqttE2EFailsafe, DcmdHeartbeatsDoNotFeedThePlcFailsafe) {
+  start_daemon("commands = true\n");
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  const auto tripped = plc_leaves_mqtt_beats(4s);
+  ASSERT_TRUE(tripped.has_value()) << "the failsafe never tripped while DCMD heartbeats came";
+  std::cerr << "failsafe tripped " << tripped->count() << " ms after the PLC left\n";
+  EXPECT_GE(*tripped, 900ms);
+  EXPECT_TRUE(eventually(
+      [&] {
+        return drive("washer-a").sim->control("state").find("motion=stop") != std::string::npos;
+      },
+      5s));
+  // The heartbeats were written all the same (and reported ok).
+  const auto r = wait_command_result("washer-a", 2s);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->second, "ok");
+  EXPECT_GT(holding(1, reg::heartbeat), 0);
+  // The DDATA said so too.
+  EXPECT_TRUE(eventually(
+      [&] {
+        pump(100ms);
+        for (const auto& m : peer_->history()) {
+          if (is(m, "DDATA", "washer-a") && m.metric("status_failsafe") != nullptr &&
+              m.metric("status_failsafe")->value == "true") {
+            return true;
+          }
+        }
+        return false;
+      },
+      3s));
+}
+
+TEST_F(MqttE2EFailsafe, WithFeedFailsafeDcmdHeartbeatsKeepTheDriveRunning) {
+  start_daemon("commands = true\nfeed_failsafe = true\n");
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  const auto tripped = plc_leaves_mqtt_beats(3s);
+  EXPECT_FALSE(tripped.has_value()) << "tripped after " << tripped->count() << " ms";
+  EXPECT_EQ(input(1, reg::status) & kFailsafeBit, 0);
+  EXPECT_THAT(drive("washer-a").sim->control("state"), Not(HasSubstr("motion=stop")));
+  // The heartbeats stop: it trips.
+  EXPECT_TRUE(eventually([&] { return (input(1, reg::status) & kFailsafeBit) != 0; }, 3s));
+}
+
+// A drive started and kept alive only over MQTT, with feed_failsafe = true: the DCMDs arm and feed
+// the failsafe like a PLC's writes, and their silence trips it.
+TEST_F(MqttE2EFailsafe, WithFeedFailsafeAnMqttOnlyDriveTripsWhenTheDcmdsStop) {
+  start_daemon("commands = true\nfeed_failsafe = true\n");
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  dcmd("washer-a", R"({"name":"setpoint_rpm","type":"Int16","value":800},)"
+                   R"({"name":"command","type":"UInt16","value":1})");
+  for (int beat = 1; beat <= 10; ++beat) {
+    std::this_thread::sleep_for(250ms);
+    dcmd("washer-a",
+         R"({"name":"heartbeat","type":"UInt16","value":)" + std::to_string(beat) + "}");
+    ASSERT_EQ(input(1, reg::status) & kFailsafeBit, 0) << "tripped while DCMDs came, beat " << beat;
+  }
+  EXPECT_GT(speed(1), 0);
+  const auto silent = std::chrono::steady_clock::now();
+  ASSERT_TRUE(eventually([&] { return (input(1, reg::status) & kFailsafeBit) != 0; }, 3s));
+  const auto took = std::chrono::duration_cast<std::chrono::milliseconds>(
+      std::chrono::steady_clock::now() - silent);
+  std::cerr << "failsafe tripped " << took.count() << " ms after the last DCMD\n";
+  EXPECT_GE(took, 600ms);  // 1000 ms timeout, less the ~250 ms since that DCMD
+  EXPECT_TRUE(eventually(
+      [&] {
+        return drive("washer-a").sim->control("state").find("motion=stop") != std::string::npos;
+      },
+      5s));
+}
+
+// --- 7. broker restart --------------------------------------------------------------------------
+
+TEST_F(MqttE2E, BrokerRestartKeepsModbusServedAndRebirthsWithANewBdSeq) {
+  start_daemon();
+  const Births first = wait_births();
+  ASSERT_FALSE(HasFailure());
+  const auto bd0 = first.node.metric("bdSeq")->as_uint();
+
+  std::atomic<bool> stop{false};
+  std::atomic<int> reads{0};
+  std::atomic<int> failures{0};
+  std::atomic<int> slowest_ms{0};
+  std::thread poller([&] {
+    Plc plc(daemon_->port());
+    if (!plc.connect()) {
+      ++failures;
+      return;
+    }
+    int unit = 1;
+    while (!stop) {
+      plc.unit(unit);
+      unit = 3 - unit;
+      const auto t0 = std::chrono::steady_clock::now();
+      const auto r = plc.input(reg::status, 1);
+      const int ms = static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                          std::chrono::steady_clock::now() - t0)
+                                          .count());
+      if (ms > slowest_ms) slowest_ms = ms;
+      ++reads;
+      if (!r.ok() || (r.regs[0] & reg::online) == 0) ++failures;
+      std::this_thread::sleep_for(50ms);
+    }
+  });
+
+  pump(300ms);
+  broker_->stop();
+  // Long enough for two failed attempts (1 s, then 2 s later): the daemon's next one (4 s later)
+  // comes well after the broker is back and the peer has resubscribed, so the peer cannot miss
+  // the new NBIRTH.
+  std::this_thread::sleep_for(4s);
+  broker_->start();
+  const auto back = peer_->wait_for([](const Message& m) { return m.kind == "reconnected"; }, 5s);
+  EXPECT_TRUE(back.has_value()) << "the peer did not reconnect";
+  const Births again = wait_births(15s);
+  stop = true;
+  poller.join();
+  ASSERT_FALSE(HasFailure());
+  std::cerr << reads << " Modbus reads during the outage, slowest " << slowest_ms << " ms; bdSeq "
+            << bd0 << " then " << again.node.metric("bdSeq")->value << "\n";
+  EXPECT_EQ(failures, 0) << "of " << reads << " reads";
+  EXPECT_GT(reads, 50);
+  EXPECT_EQ(again.node.seq, 0u);
+  EXPECT_GT(again.node.metric("bdSeq")->as_uint(), bd0);
+  EXPECT_EQ(again.node.metric("bdSeq")->type, "UInt64");
+  expect_seq_consecutive(peer_->history());
+}
+
+// --- 8. the primary host's STATE ---------------------------------------------------------------
+
+TEST_F(MqttE2E, BirthsWaitForThePrimaryHostAndEndWhenItGoesOffline) {
+  start_daemon("primary_host_id = \"scada\"\n");
+  pump(2s);
+  EXPECT_EQ(count("NBIRTH"), 0u) << "born without the primary host";
+  EXPECT_EQ(count("DBIRTH"), 0u);
+
+  const std::uint64_t t0 =
+      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                     std::chrono::system_clock::now().time_since_epoch())
+                                     .count());
+  const std::string state = "spBv1.0/STATE/scada";
+  auto state_text = [](bool online, std::uint64_t ts) {
+    return std::string(R"({"online":)") + (online ? "true" : "false") + R"(,"timestamp":)" +
+           std::to_string(ts) + "}";
+  };
+  peer_->publish_text(state, state_text(true, t0), true, 1);
+  const Births first = wait_births(5s);
+  ASSERT_FALSE(HasFailure());
+  const auto bd1 = first.node.metric("bdSeq")->as_uint();
+
+  peer_->publish_text(state, state_text(false, t0 + 1), true, 1);
+  const auto death = wait("NDEATH", {}, 5s);
+  ASSERT_TRUE(death.has_value()) << "no NDEATH when the primary host went offline";
+  EXPECT_EQ(death->metric("bdSeq")->as_uint(), bd1);
+  // Reconnected and waiting again: no birth while the retained STATE says offline.
+  pump(2500ms);
+  EXPECT_EQ(count("NBIRTH"), 1u);
+  EXPECT_EQ(count("NDEATH"), 1u) << "the will came on top of the published NDEATH";
+
+  peer_->publish_text(state, state_text(true, t0 + 2), true, 1);
+  const Births second = wait_births(5s);
+  ASSERT_FALSE(HasFailure());
+  const auto bd2 = second.node.metric("bdSeq")->as_uint();
+  EXPECT_EQ(bd2, (bd1 + 1) % 256) << "one new session";
+  EXPECT_EQ(second.node.seq, 0u);
+
+  // A stale offline (older timestamp) is ignored.
+  peer_->publish_text(state, state_text(false, t0), true, 1);
+  pump(1500ms);
+  EXPECT_EQ(count("NDEATH"), 1u) << "a stale STATE offline ended the session";
+  expect_seq_consecutive(peer_->history());
+}
+
+// --- 9. SIGHUP changing the devices -------------------------------------------------------------
+
+TEST_F(MqttE2E, SighupAddingADeviceRebirthsWithIt) {
+  start_daemon();
+  const Births first = wait_births();
+  ASSERT_FALSE(HasFailure());
+  const auto bd = first.node.metric("bdSeq")->as_uint();
+  add_drive("washer-c");
+  std::ofstream(daemon_->config()) << config("");
+  daemon_->process().signal(SIGHUP);
+  const Births again = wait_births(15s);
+  ASSERT_FALSE(HasFailure());
+  EXPECT_TRUE(again.devices.contains("washer-c"));
+  EXPECT_EQ(again.node.metric("bdSeq")->as_uint(), bd) << "a rebirth, not a reconnect";
+  EXPECT_EQ(again.node.seq, 0u);
+  ASSERT_TRUE(again.devices.contains("washer-c"));
+  const Message& c = again.devices.at("washer-c");
+  ASSERT_NE(c.metric("speed_rpm"), nullptr) << describe(c);
+  EXPECT_EQ(c.metric("speed_rpm")->type, "Int16");
+  wait_online(3);
+  // It reports like the others.
+  plc_->unit(3);
+  ASSERT_EQ(plc_->write(reg::command, {1, 700}), 0);
+  EXPECT_TRUE(peer_
+                  ->wait_for(
+                      [](const Message& m) {
+                        return is(m, "DDATA", "washer-c") && m.metric("speed_rpm") != nullptr &&
+                               m.metric("speed_rpm")->as_int() == 700;
+                      },
+                      10s)
+                  .has_value());
+  expect_seq_consecutive(peer_->history());
+}
+
+TEST_F(MqttE2E, SighupRemovingADeviceSendsItsDdeathThenRebirthsWithoutIt) {
+  start_daemon();
+  const Births first = wait_births();
+  ASSERT_FALSE(HasFailure());
+  const auto bd = first.node.metric("bdSeq")->as_uint();
+  Drive gone = std::move(drives_.back());
+  drives_.pop_back();
+  std::ofstream(daemon_->config()) << config("");
+  daemon_->process().signal(SIGHUP);
+  const auto death = wait("DDEATH", "washer-b", 10s);
+  ASSERT_TRUE(death.has_value()) << "no DDEATH for the device removed";
+  const Births again = wait_births(10s);
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(again.node.metric("bdSeq")->as_uint(), bd);
+  pump(1s);
+  EXPECT_EQ(count("DBIRTH", "washer-b"), 1u) << "the removed device was born again";
+  EXPECT_EQ(count("DBIRTH", "washer-a"), 2u);
+  expect_seq_consecutive(peer_->history());
+}
+
+TEST_F(MqttE2E, SeqWrapsFrom255To0) {
+  // Every poll changes the counters, and nothing holds them back: a DDATA per poll per drive.
+  poll_ms_ = 20;
+  start_daemon("min_interval_ms = 0\ncounter_interval_ms = 0\n");
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  const auto wrapped = peer_->wait_for(
+      [](const Message& m) {
+        return m.kind == "msg" && m.message_type() != "NBIRTH" && m.seq == 0u;
+      },
+      20s);
+  ASSERT_TRUE(wrapped.has_value()) << "no message with seq 0 after 255";
+  pump(200ms);
+  EXPECT_EQ(count("NBIRTH"), 1u);
+  expect_seq_consecutive(peer_->history());
+  std::size_t n = 0;
+  for (const auto& m : peer_->history()) n += is(m, "DDATA") ? 1 : 0;
+  EXPECT_GE(n, 254u);
+}
+
+}  // namespace
+}  // namespace drivegate::test
