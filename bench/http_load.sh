@@ -19,6 +19,9 @@
 #   path per second), KEEPALIVE (0: a new connection per scrape; 1: one kept open per path),
 #   AA (0; 1: the "with" side runs no scraper either, an A/A run of the same comparison),
 #   DECOY (0; 1: also the decoy side; make ROUNDS a multiple of 3),
+#   SCRAPER_IDLE (0; 1: the scraper runs as SCHED_IDLE, `chrt -i 0`: on the load generator's CPU
+#   it then runs only when the load generator does not, and never delays it; the daemon serves
+#   the same scrapes),
 #   SERVER_CPU (0), LOAD_CPU (1), LARGE (3:16:125), SMALL (4:0:19), UNIT (2),
 #   DG_PORT (15070), HTTP_PORT (15071).
 set -euo pipefail
@@ -33,6 +36,7 @@ RATE=${RATE:-10}
 KEEPALIVE=${KEEPALIVE:-0}
 AA=${AA:-0}
 DECOY=${DECOY:-0}
+SCRAPER_IDLE=${SCRAPER_IDLE:-0}
 SERVER_CPU=${SERVER_CPU:-0}
 LOAD_CPU=${LOAD_CPU:-1}
 LARGE=${LARGE:-3:16:125}
@@ -87,7 +91,9 @@ load() {  # load SIDE N ROUND
     local extra=()
     [[ $1 == decoy ]] && extra=(--decoy)
     : >"$W/scrape.txt"
-    taskset -c "$LOAD_CPU" python3 "$HERE/scraper.py" "$HTTP_PORT" "$RATE" \
+    local sched=()
+    ((SCRAPER_IDLE)) && sched=(chrt -i 0)
+    "${sched[@]}" taskset -c "$LOAD_CPU" python3 "$HERE/scraper.py" "$HTTP_PORT" "$RATE" \
       "$(python3 -c "print($WARMUP + $DURATION + 0.5)")" "$W/scrape.txt" "${SCRAPE_ARGS[@]}" \
       "${extra[@]}" 2>>"$W/scraper.err" &
     scraper=$!
@@ -118,7 +124,7 @@ echo
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) CPUs," \
   "$(uname -sr), $(python3 --version); server on CPU $SERVER_CPU, load generator, simulators and" \
   "scraper on CPU $LOAD_CPU; $ROUNDS rounds x ${DURATION}s; large=$LARGE small=$SMALL unit=$UNIT;" \
-  "scrape rate $RATE/s per path, keep-alive $KEEPALIVE, decoy $DECOY$( ((AA)) && echo '; A/A: no scraper on either side')"
+  "scrape rate $RATE/s per path, keep-alive $KEEPALIVE, decoy $DECOY, scraper SCHED_IDLE $SCRAPER_IDLE$( ((AA)) && echo '; A/A: no scraper on either side')"
 python3 "$HERE/http_summary.py" "$W/results.txt"
 if [[ -s $W/scraper.err ]]; then echo "scraper errors:"; sort "$W/scraper.err" | uniq -c | head -5; fi
 grep -i "error\|critical\|warn" "$W"/dg/drivegated.log | head -5 || true

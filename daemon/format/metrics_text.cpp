@@ -1,9 +1,12 @@
 // Prometheus text exposition format 0.0.4: one HELP and one TYPE line per family, then its
 // samples; counters end in _total; label values escape backslash, double quote and newline.
+// Written straight into one string (the event loop waits while it is written): fmt for the
+// numbers, each device's labels written once, no stream and no temporary string per sample.
+#include <fmt/compile.h>
+#include <fmt/format.h>
+
 #include <cmath>
-#include <cstdio>
-#include <functional>
-#include <sstream>
+#include <iterator>
 
 #include "format/status_view.h"
 
@@ -11,8 +14,10 @@ namespace drivegate {
 
 namespace {
 
-std::string escape_label(std::string_view v) {
-  std::string out;
+// A typical document (five drives) is 16 KB.
+constexpr std::size_t kReserve = 32 * 1024;
+
+void append_escaped(std::string& out, std::string_view v) {
   for (const char c : v) {
     if (c == '\\' || c == '"') out += '\\';
     if (c == '\n') {
@@ -21,36 +26,64 @@ std::string escape_label(std::string_view v) {
     }
     out += c;
   }
-  return out;
 }
 
-std::string number(double v) {
-  if (std::isnan(v)) return "NaN";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+// As printf's %.17g (a double read back as itself). Counters and most gauges are whole numbers:
+// those are written as integers, the same digits %.17g gives, without its cost.
+void append_number(std::string& out, double v) {
+  if (std::isnan(v)) {
+    out += "NaN";
+  } else if (v == std::trunc(v) && std::fabs(v) < 1e15) {
+    out += fmt::format_int(static_cast<long long>(v)).c_str();
+    if (v == 0 && std::signbit(v)) out.insert(out.size() - 1, 1, '-');  // %.17g: "-0"
+  } else {
+    fmt::format_to(std::back_inserter(out), FMT_COMPILE("{:.17g}"), v);
+  }
 }
 
 class Writer {
  public:
+  explicit Writer(std::string& out) : out_(out) {}
   void family(std::string_view name, std::string_view type, std::string_view help) {
-    out_ << "# HELP " << name << ' ' << help << "\n# TYPE " << name << ' ' << type << '\n';
+    out_ += "# HELP ";
+    out_ += name;
+    out_ += ' ';
+    out_ += help;
+    out_ += "\n# TYPE ";
+    out_ += name;
+    out_ += ' ';
+    out_ += type;
+    out_ += '\n';
   }
-  void sample(std::string_view name, const std::string& labels, double value) {
-    out_ << name;
-    if (!labels.empty()) out_ << '{' << labels << '}';
-    out_ << ' ' << number(value) << '\n';
+  // `labels` as written between the braces ("" for none), then `extra` (",name=\"value\"")
+  void sample(std::string_view name, std::string_view labels, double value,
+              std::string_view extra = {}) {
+    out_ += name;
+    if (!labels.empty() || !extra.empty()) {
+      out_ += '{';
+      out_ += labels;
+      out_ += extra;
+      out_ += '}';
+    }
+    out_ += ' ';
+    append_number(out_, value);
+    out_ += '\n';
   }
-  std::string str() const { return out_.str(); }
 
  private:
-  std::ostringstream out_;
+  std::string& out_;
 };
 
 std::string device_labels(const Device& d) {
   const auto& c = d.config();
-  return "device=\"" + escape_label(c.name) + "\",adapter=\"" + escape_label(c.adapter) +
-         "\",unit=\"" + std::to_string(c.unit_id) + "\",bus=\"" + escape_label(c.bus) + "\"";
+  std::string out = "device=\"";
+  append_escaped(out, c.name);
+  out += "\",adapter=\"";
+  append_escaped(out, c.adapter);
+  fmt::format_to(std::back_inserter(out), "\",unit=\"{}\",bus=\"", c.unit_id);
+  append_escaped(out, c.bus);
+  out += '"';
+  return out;
 }
 
 // Common rows that are per bus (bus_*) are exported once per bus, not once per device.
@@ -61,59 +94,72 @@ bool per_bus(const std::string& name) {
 void device_metrics(Writer& w, const StatusView& view) {
   struct Row {
     std::string labels;
-    std::vector<std::pair<const MappedPoint*, Value>> values;
+    std::vector<PointValue> values;
     Device* device;
   };
   std::vector<Row> rows;
+  rows.reserve(view.gateway.devices().size());
   for (const auto& d : view.gateway.devices()) {
-    rows.push_back({device_labels(*d), point_values(*d), d.get()});
+    Row& r = rows.emplace_back(Row{device_labels(*d), {}, d.get()});
+    point_values(*d, r.values);
   }
-  const auto each = [&](const std::function<void(const Row&)>& f) {
-    for (const Row& r : rows) f(r);
-  };
   w.family("drivegate_device_online", "gauge",
            "1 when the drive answers and its protocol is up (status bit online)");
-  each([&](const Row& r) { w.sample("drivegate_device_online", r.labels, r.device->online()); });
+  for (const Row& r : rows) w.sample("drivegate_device_online", r.labels, r.device->online());
   w.family("drivegate_device_comm_lost", "gauge", "1 when the drive stopped answering");
-  each([&](const Row& r) {
+  for (const Row& r : rows) {
     w.sample("drivegate_device_comm_lost", r.labels, r.device->comm_lost());
-  });
+  }
   w.family("drivegate_device_failsafe_latched", "gauge",
            "1 while the PLC-loss failsafe holds the drive stopped");
-  each([&](const Row& r) {
+  for (const Row& r : rows) {
     w.sample("drivegate_device_failsafe_latched", r.labels, r.device->failsafe_latched());
-  });
+  }
   // Every numeric common point (gateway/common_block.h): gauges, counters as _total.
   if (rows.empty()) return;
+  std::string name;
   for (std::size_t i = 0; i < rows.front().values.size(); ++i) {
     const MappedPoint* p = rows.front().values[i].first;
     if (!p->common() || p->source == PointSource::status_bit || per_bus(p->spec.name)) continue;
     const CommonRow* row = p->row();
     if (row == nullptr || p->spec.name == "status") continue;  // the bits are the gauges above
     const bool age = p->spec.name == "data_age_ms";
-    const std::string name = "drivegate_device_" +
-                             (age ? std::string("data_age_seconds") : p->spec.name) +
-                             (row->counter ? "_total" : "");
+    name = "drivegate_device_";
+    name += age ? std::string_view("data_age_seconds") : std::string_view(p->spec.name);
+    if (row->counter) name += "_total";
     w.family(name, row->counter ? "counter" : "gauge",
              age ? "seconds since the last good frame (NaN: never heard)" : row->description);
-    each([&](const Row& r) {
+    for (const Row& r : rows) {
       // Every device has the same common block, in the same order.
       const Value& v = r.values.at(i).second;
       double x = as_double(v);
       if (age) x = x >= 4294967295.0 ? NAN : x / 1000.0;  // never heard: NaN
       w.sample(name, r.labels, x);
-    });
+    }
+  }
+}
+
+template <typename F>
+void bus_family(Writer& w, const std::vector<std::string>& labels, const StatusView& view,
+                std::string_view name, std::string_view type, std::string_view help, F f) {
+  w.family(name, type, help);
+  const auto& buses = view.gateway.buses();
+  for (std::size_t i = 0; i < buses.size(); ++i) {
+    w.sample(name, labels[i], static_cast<double>(f(*buses[i])));
   }
 }
 
 void bus_metrics(Writer& w, const StatusView& view) {
   const auto& buses = view.gateway.buses();
-  const auto labels = [](const Bus& b) { return "bus=\"" + escape_label(b.config().name) + "\""; };
+  std::vector<std::string> labels;
+  labels.reserve(buses.size());
+  for (const auto& b : buses) {
+    std::string& l = labels.emplace_back("bus=\"");
+    append_escaped(l, b->config().name);
+    l += '"';
+  }
   const auto family = [&](std::string_view name, std::string_view type, std::string_view help,
-                          const std::function<double(const Bus&)>& f) {
-    w.family(name, type, help);
-    for (const auto& b : buses) w.sample(name, labels(*b), f(*b));
-  };
+                          auto f) { bus_family(w, labels, view, name, type, help, f); };
   family("drivegate_bus_open", "gauge", "1 while the port (or connection) is open",
          [](const Bus& b) { return b.is_open() ? 1.0 : 0.0; });
   family("drivegate_bus_transactions_total", "counter", "request / reply transactions begun",
@@ -130,11 +176,11 @@ void bus_metrics(Writer& w, const StatusView& view) {
   family("drivegate_bus_reopens_total", "counter", "times the port was reopened",
          [](const Bus& b) { return b.counters().reopens; });
   w.family("drivegate_bus_bytes_total", "counter", "bytes written to and read from the line");
-  for (const auto& b : buses) {
-    w.sample("drivegate_bus_bytes_total", labels(*b) + ",direction=\"sent\"",
-             static_cast<double>(b->counters().bytes_sent));
-    w.sample("drivegate_bus_bytes_total", labels(*b) + ",direction=\"received\"",
-             static_cast<double>(b->counters().bytes_received));
+  for (std::size_t i = 0; i < buses.size(); ++i) {
+    w.sample("drivegate_bus_bytes_total", labels[i],
+             static_cast<double>(buses[i]->counters().bytes_sent), ",direction=\"sent\"");
+    w.sample("drivegate_bus_bytes_total", labels[i],
+             static_cast<double>(buses[i]->counters().bytes_received), ",direction=\"received\"");
   }
   family("drivegate_bus_line_busy_seconds_total", "counter",
          "line time the bytes took (its rate is the line's utilisation)",
@@ -143,40 +189,43 @@ void bus_metrics(Writer& w, const StatusView& view) {
 
 void listener_metrics(Writer& w, const StatusView& view) {
   const auto& s = view.server;
-  const auto label = [&](std::size_t i) {
-    const auto& o = s.listener(i);
-    return "listener=\"" + escape_label(o.host) + ":" + std::to_string(s.port(i)) + "\"";
-  };
+  std::vector<std::string> labels;
+  labels.reserve(s.listener_count());
+  for (std::size_t i = 0; i < s.listener_count(); ++i) {
+    std::string& l = labels.emplace_back("listener=\"");
+    append_escaped(l, s.listener(i).host);
+    fmt::format_to(std::back_inserter(l), ":{}\"", s.port(i));
+  }
   const auto family = [&](std::string_view name, std::string_view type, std::string_view help,
-                          const std::function<double(const modbus::ListenerStats&)>& f) {
+                          auto f) {
     w.family(name, type, help);
     for (std::size_t i = 0; i < s.listener_count(); ++i) {
-      w.sample(name, label(i), f(s.listener_stats(i)));
+      w.sample(name, labels[i], static_cast<double>(f(s.listener_stats(i))));
     }
   };
   family("drivegate_modbus_connections", "gauge", "Modbus TCP clients connected",
-         [](const auto& l) { return static_cast<double>(l.connections_active); });
+         [](const auto& l) { return l.connections_active; });
   family("drivegate_modbus_connections_accepted_total", "counter", "connections served",
-         [](const auto& l) { return static_cast<double>(l.connections_accepted); });
+         [](const auto& l) { return l.connections_accepted; });
   family("drivegate_modbus_connections_not_allowed_total", "counter",
          "connections closed at accept: address not in the allow list",
-         [](const auto& l) { return static_cast<double>(l.connections_not_allowed); });
+         [](const auto& l) { return l.connections_not_allowed; });
   family("drivegate_modbus_tls_handshake_failures_total", "counter",
          "TLS handshakes that failed (certificate refused, not TLS, too slow)",
-         [](const auto& l) { return static_cast<double>(l.tls_handshake_failures); });
+         [](const auto& l) { return l.tls_handshake_failures; });
   family("drivegate_modbus_writes_denied_total", "counter",
          "writes refused with exception 01: beyond the connection's access level",
-         [](const auto& l) { return static_cast<double>(l.writes_denied); });
+         [](const auto& l) { return l.writes_denied; });
+  char extra[32];
   w.family("drivegate_modbus_requests_total", "counter", "requests, by function code");
   for (std::size_t i = 0; i < s.listener_count(); ++i) {
     const auto& r = s.listener_stats(i).requests;
     for (std::size_t fc = 0; fc < r.size(); ++fc) {
       if (r[fc] == 0) continue;
-      char code[8];
-      std::snprintf(code, sizeof code, "0x%02X", static_cast<unsigned>(fc));
-      w.sample("drivegate_modbus_requests_total",
-               label(i) + ",function=\"" + (fc == 0 ? std::string("other") : code) + "\"",
-               static_cast<double>(r[fc]));
+      const auto end = fc == 0 ? fmt::format_to(extra, ",function=\"other\"")
+                               : fmt::format_to(extra, ",function=\"0x{:02X}\"", fc);
+      w.sample("drivegate_modbus_requests_total", labels[i], static_cast<double>(r[fc]),
+               std::string_view(extra, static_cast<std::size_t>(end - extra)));
     }
   }
   w.family("drivegate_modbus_exceptions_total", "counter", "exception responses, by code");
@@ -184,26 +233,34 @@ void listener_metrics(Writer& w, const StatusView& view) {
     const auto& e = s.listener_stats(i).exceptions;
     for (std::size_t code = 1; code < e.size(); ++code) {
       if (e[code] == 0) continue;
-      char text[8];
-      std::snprintf(text, sizeof text, "0x%02X", static_cast<unsigned>(code));
-      w.sample("drivegate_modbus_exceptions_total", label(i) + ",code=\"" + text + "\"",
-               static_cast<double>(e[code]));
+      const auto end = fmt::format_to(extra, ",code=\"0x{:02X}\"", code);
+      w.sample("drivegate_modbus_exceptions_total", labels[i], static_cast<double>(e[code]),
+               std::string_view(extra, static_cast<std::size_t>(end - extra)));
     }
   }
 }
 
 }  // namespace
 
-std::string metrics_text(const StatusView& view) {
-  Writer w;
+void metrics_text(const StatusView& view, std::string& out) {
+  Writer w(out);
   w.family("drivegate_build_info", "gauge", "the running drivegate's version");
-  w.sample("drivegate_build_info", "version=\"" + escape_label(view.version) + "\"", 1);
+  std::string version = "version=\"";
+  append_escaped(version, view.version);
+  version += '"';
+  w.sample("drivegate_build_info", version, 1);
   w.family("process_start_time_seconds", "gauge", "start time of the process since the epoch");
   w.sample("process_start_time_seconds", "", view.started_unix);
   device_metrics(w, view);
   bus_metrics(w, view);
   listener_metrics(w, view);
-  return w.str();
+}
+
+std::string metrics_text(const StatusView& view) {
+  std::string out;
+  out.reserve(kReserve);
+  metrics_text(view, out);
+  return out;
 }
 
 }  // namespace drivegate

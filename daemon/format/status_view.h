@@ -3,10 +3,16 @@
 // the Modbus server's listeners and counters, and the process's identity. The documents are
 // rendered from the register map's own rows (gateway/common_block.h), so a counter added there
 // appears in both with no change here.
+//
+// They are rendered on the event loop that also answers Modbus, so a render is time a Modbus
+// request that arrives meanwhile waits (docs/performance.md, bench/http_load.sh): each document is
+// written into one string, reserved up front, with no temporary string per value, and each
+// device's image is read a table at a time, not a point at a time.
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -24,17 +30,25 @@ struct StatusView {
   double now_unix = 0;
 };
 
-// Every point of `device` (the common block, then the adapter's), its value decoded from the
-// register image as a client in the map's word order reads it.
-std::vector<std::pair<const MappedPoint*, Value>> point_values(Device& device);
+using PointValue = std::pair<const MappedPoint*, Value>;
+
+// Every point of `device` (the common block, then the adapter's, in the map's order), its value
+// decoded from the register image as a client in the map's word order reads it, all as of one
+// moment: each table is read in as few Device::read calls as it has mapped runs. `out` is
+// replaced (its capacity kept, for the next device).
+void point_values(Device& device, std::vector<PointValue>& out);
+std::vector<PointValue> point_values(Device& device);
 
 // The name of `value` in the point's labels, or "" (a value without a name, or a bit field).
-std::string label_of(const PointSpec& spec, const Value& value);
+std::string_view label_of(const PointSpec& spec, const Value& value);
 
 // Seconds of line time the bus's bytes took (sent and received, an echo once): its rate is the
 // line's utilisation.
 double line_busy_seconds(const Bus& bus);
 
+// The documents, appended to `out`; the forms that return them reserve room for a typical one.
+void status_json(const StatusView& view, std::string& out);
+void metrics_text(const StatusView& view, std::string& out);
 std::string status_json(const StatusView& view);
 std::string metrics_text(const StatusView& view);
 

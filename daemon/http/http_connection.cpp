@@ -19,6 +19,10 @@ namespace bhttp = boost::beast::http;
 namespace {
 // Request line and headers together; a status page or a scraper sends a few hundred bytes.
 constexpr std::uint32_t kHeaderLimit = 8 * 1024;
+// The most of a response one send may carry. A 17 KB document sent at once is one long system
+// call on the event loop (loopback delivers it to the reader inside it); in slices, a Modbus
+// request that arrives meanwhile is answered between two of them (docs/performance.md).
+constexpr std::size_t kWriteSlice = 4 * 1024;
 }  // namespace
 
 HttpConnection::HttpConnection(std::shared_ptr<HttpState> state,
@@ -96,7 +100,7 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
   }
   ++state_->stats.requests;
   const auto& request = parser_->get();
-  const Response r =
+  Response r =
       route(std::string_view(request.method_string().data(), request.method_string().size()),
             std::string_view(request.target().data(), request.target().size()), state_->content,
             RouteOptions{state_->options.capture});
@@ -104,7 +108,7 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
     serve_capture(*r.capture);
     return;
   }
-  reply(r.status, r.content_type, r.body, request.keep_alive(),
+  reply(r.status, r.content_type, std::move(r.body), request.keep_alive(),
         request.method() == bhttp::verb::head, r.allow);
 }
 
@@ -127,8 +131,10 @@ void HttpConnection::reply(unsigned status, const std::string& content_type, std
   if (!head) response_.body() = std::move(body);
   response_.content_length(size);
   stream_.expires_after(state_->options.request_timeout);  // a client that does not read
+  response_writer_.emplace(response_);
+  response_writer_->limit(kWriteSlice);
   bhttp::async_write(
-      stream_, response_,
+      stream_, *response_writer_,
       [self = shared_from_this(), keep_alive](const boost::system::error_code& ec, std::size_t) {
         self->on_written(ec, keep_alive);
       });

@@ -46,6 +46,10 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   boost::beast::flat_buffer buffer_;
   std::optional<boost::beast::http::request_parser<boost::beast::http::empty_body>> parser_;
   boost::beast::http::response<boost::beast::http::string_body> response_;
+  // Writes response_ a slice at a time (kWriteSlice): between slices the event loop runs what
+  // else is ready, Modbus requests first among them, instead of waiting for one long send.
+  std::optional<boost::beast::http::response_serializer<boost::beast::http::string_body>>
+      response_writer_;
   std::string peer_;
   bool closed_ = false;
 

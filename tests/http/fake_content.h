@@ -13,7 +13,7 @@ class FakeContent : public Content {
  public:
   std::string status_json() override {
     ++status_calls;
-    return R"({"devices":[]})";
+    return status.empty() ? R"({"devices":[]})" : status;
   }
   std::string metrics() override {
     ++metrics_calls;
@@ -26,6 +26,7 @@ class FakeContent : public Content {
   // One bus, "line" (for /api/v1/capture's routing; no capture is started here).
   bool has_bus(std::string_view name) override { return name == "line"; }
   [[nodiscard]] int calls() const { return status_calls + metrics_calls + regmap_calls; }
+  std::string status;  // the status document when set (before the server starts)
   std::atomic<int> status_calls{0};
   std::atomic<int> metrics_calls{0};
   std::atomic<int> regmap_calls{0};

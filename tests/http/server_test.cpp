@@ -236,6 +236,30 @@ TEST(HttpServer, KeepAliveServesSeveralRequestsOnOneConnection) {
   EXPECT_EQ(s.bad_requests, 0u);
 }
 
+// A document many write slices long (the server sends at most a few KB at a time, yielding to
+// the event loop between slices) arrives whole and in order, kept alive or closed after.
+TEST(HttpServer, ALargeDocumentArrivesWholeInSlices) {
+  std::string doc;
+  for (int i = 0; doc.size() < 100 * 1024; ++i) doc += "{\"point\": " + std::to_string(i) + "},\n";
+  Harness h;
+  h.content().status = doc;
+  Client c(h.port());
+  ASSERT_TRUE(c.connected());
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(c.send(get("/api/v1/status")));
+    const std::string r = c.read_response();
+    EXPECT_THAT(r, HasSubstr("Content-Length: " + std::to_string(doc.size()) + "\r\n"));
+    EXPECT_EQ(body_of(r), doc);
+    EXPECT_FALSE(c.closed);
+  }
+  ASSERT_TRUE(c.send("HEAD /api/v1/status HTTP/1.1\r\nHost: x\r\n\r\n"));
+  EXPECT_EQ(body_of(c.read_response(/*head=*/true)), "");
+  ASSERT_TRUE(c.send(get("/api/v1/status", "Connection: close\r\n")));
+  EXPECT_EQ(body_of(c.read_to_close()), doc);
+  EXPECT_TRUE(c.closed);
+  EXPECT_FALSE(c.reset);
+}
+
 TEST(HttpServer, Http10WithoutKeepAliveIsClosedAfterTheAnswer) {
   Harness h;
   Client c(h.port());
