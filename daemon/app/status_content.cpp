@@ -45,15 +45,27 @@ class BusCapture final : public http::CaptureStream {
 
 }  // namespace
 
-StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server)
-    : gateway_(gateway), server_(server), started_unix_(unix_now()) {}
+StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
+                             const std::unique_ptr<mqtt::Northbound>& mqtt)
+    : gateway_(gateway), server_(server), mqtt_(mqtt), started_unix_(unix_now()) {}
+
+StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
+  StatusView v{*gateway_, server_, DRIVEGATE_VERSION, started_unix_, unix_now()};
+  if (mqtt_) {
+    mqtt = mqtt_->status();
+    v.mqtt = &mqtt;
+  }
+  return v;
+}
 
 std::string StatusContent::status_json() {
-  return drivegate::status_json({*gateway_, server_, DRIVEGATE_VERSION, started_unix_, unix_now()});
+  mqtt::NorthboundStatus mqtt;
+  return drivegate::status_json(view(mqtt));
 }
 
 std::string StatusContent::metrics() {
-  return metrics_text({*gateway_, server_, DRIVEGATE_VERSION, started_unix_, unix_now()});
+  mqtt::NorthboundStatus mqtt;
+  return metrics_text(view(mqtt));
 }
 
 std::string StatusContent::regmap_json() {

@@ -5,16 +5,20 @@
 
 #include <memory>
 
+#include "format/status_view.h"
 #include "gateway/gateway.h"
 #include "http/content.h"
 #include "modbus/server.h"
+#include "mqtt/northbound.h"
 
 namespace drivegate {
 
 class StatusContent final : public http::Content {
  public:
-  // `gateway` is the daemon's own pointer, read at each request.
-  StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server);
+  // `gateway` and `mqtt` are the daemon's own pointers, read at each request (`mqtt` is empty
+  // without [mqtt]).
+  StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
+                const std::unique_ptr<mqtt::Northbound>& mqtt);
   std::string status_json() override;
   std::string metrics() override;
   std::string regmap_json() override;
@@ -23,8 +27,11 @@ class StatusContent final : public http::Content {
                                                      std::function<void()> on_data) override;
 
  private:
+  [[nodiscard]] StatusView view(mqtt::NorthboundStatus& mqtt) const;
+
   const std::unique_ptr<Gateway>& gateway_;
   const modbus::Server& server_;
+  const std::unique_ptr<mqtt::Northbound>& mqtt_;
   double started_unix_;
 };
 

@@ -101,7 +101,7 @@ void device_metrics(Writer& w, const StatusView& view) {
   rows.reserve(view.gateway.devices().size());
   for (const auto& d : view.gateway.devices()) {
     Row& r = rows.emplace_back(Row{device_labels(*d), {}, d.get()});
-    point_values(*d, r.values);
+    point_values(*d, Clock::now(), r.values);
   }
   w.family("drivegate_device_online", "gauge",
            "1 when the drive answers and its protocol is up (status bit online)");
@@ -240,6 +240,31 @@ void listener_metrics(Writer& w, const StatusView& view) {
   }
 }
 
+// The Sparkplug B northbound ([mqtt], docs/mqtt.md).
+void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
+  const auto one = [&w](std::string_view name, std::string_view type, std::string_view help,
+                        double value) {
+    w.family(name, type, help);
+    w.sample(name, "", value);
+  };
+  one("drivegate_mqtt_connected", "gauge", "1 while the session with the broker is up",
+      m.connected ? 1 : 0);
+  one("drivegate_mqtt_online", "gauge",
+      "1 once the births are out (and the primary host, if any, is online)",
+      m.session == "online" ? 1 : 0);
+  one("drivegate_mqtt_bdseq", "gauge", "the session's Sparkplug bdSeq", m.bd_seq);
+  one("drivegate_mqtt_connects_total", "counter", "sessions begun with the broker",
+      static_cast<double>(m.connects));
+  one("drivegate_mqtt_connection_losses_total", "counter",
+      "connection attempts that failed and sessions lost", static_cast<double>(m.losses));
+  one("drivegate_mqtt_messages_total", "counter", "Sparkplug messages published",
+      static_cast<double>(m.messages));
+  one("drivegate_mqtt_device_births_total", "counter", "DBIRTH messages published",
+      static_cast<double>(m.births));
+  one("drivegate_mqtt_commands_total", "counter", "DCMD writes carried out, whatever the outcome",
+      static_cast<double>(m.commands));
+}
+
 }  // namespace
 
 void metrics_text(const StatusView& view, std::string& out) {
@@ -254,6 +279,7 @@ void metrics_text(const StatusView& view, std::string& out) {
   device_metrics(w, view);
   bus_metrics(w, view);
   listener_metrics(w, view);
+  if (view.mqtt != nullptr) mqtt_metrics(w, *view.mqtt);
 }
 
 std::string metrics_text(const StatusView& view) {

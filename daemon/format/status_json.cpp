@@ -38,7 +38,7 @@ std::string_view boolean(bool b) {
 
 void device_json(std::string& out, Device& d, std::vector<PointValue>& values) {
   const auto& cfg = d.config();
-  point_values(d, values);
+  point_values(d, Clock::now(), values);
   out += "{\"name\": ";
   append_json_string(out, cfg.name);
   out += ", \"adapter\": ";
@@ -127,8 +127,8 @@ void listener_json(std::string& out, const modbus::Server& server, std::size_t i
   const auto& s = server.listener_stats(i);
   out += "{\"address\": ";
   append_json_string(out, fmt::format("{}:{}", o.host, server.port(i)));
-  fmt::format_to(std::back_inserter(out), ", \"tls\": {}, \"access\": ",
-                 boolean(o.policy.tls.has_value()));
+  fmt::format_to(std::back_inserter(out),
+                 ", \"tls\": {}, \"access\": ", boolean(o.policy.tls.has_value()));
   append_json_string(out, to_string(o.policy.access));
   out += ", \"word_order\": ";
   append_json_string(out, to_string(o.policy.word_order));
@@ -144,6 +144,19 @@ void listener_json(std::string& out, const modbus::Server& server, std::size_t i
                  "\"tls_handshake_failures\": {}, \"writes_denied\": {}}}",
                  s.connections_active, s.connections_accepted, s.connections_not_allowed,
                  s.tls_handshake_failures, s.writes_denied);
+}
+
+void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
+  out += ",\n\"mqtt\": {\"broker\": ";
+  append_json_string(out, m.broker);
+  out += ", \"session\": ";
+  append_json_string(out, m.session);
+  fmt::format_to(std::back_inserter(out),
+                 ", \"connected\": {}, \"bd_seq\": {}, \"connects\": {}, \"losses\": {}, "
+                 "\"messages\": {}, \"births\": {}, \"commands\": {}, \"last_error\": ",
+                 m.connected, m.bd_seq, m.connects, m.losses, m.messages, m.births, m.commands);
+  append_json_string(out, m.last_error);
+  out += '}';
 }
 
 }  // namespace
@@ -175,8 +188,10 @@ void status_json(const StatusView& view, std::string& out) {
   const auto& s = view.server.stats();
   fmt::format_to(std::back_inserter(out),
                  "],\n\"modbus\": {{\"clients\": {}, \"requests\": {}, \"malformed\": {}, "
-                 "\"refused\": {}}}}}\n",
+                 "\"refused\": {}}}",
                  view.server.client_count(), s.requests, s.malformed, s.connections_refused);
+  if (view.mqtt != nullptr) mqtt_json(out, *view.mqtt);
+  out += "}\n";
 }
 
 std::string status_json(const StatusView& view) {

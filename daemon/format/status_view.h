@@ -18,7 +18,9 @@
 
 #include "drivegate/point.h"
 #include "gateway/gateway.h"
+#include "gateway/point_values.h"
 #include "modbus/server.h"
+#include "mqtt/northbound_status.h"
 
 namespace drivegate {
 
@@ -28,16 +30,8 @@ struct StatusView {
   std::string version;
   double started_unix = 0;  // process start, seconds since the epoch
   double now_unix = 0;
+  const mqtt::NorthboundStatus* mqtt = nullptr;  // [mqtt] off: none
 };
-
-using PointValue = std::pair<const MappedPoint*, Value>;
-
-// Every point of `device` (the common block, then the adapter's, in the map's order), its value
-// decoded from the register image as a client in the map's word order reads it, all as of one
-// moment: each table is read in as few Device::read calls as it has mapped runs. `out` is
-// replaced (its capacity kept, for the next device).
-void point_values(Device& device, std::vector<PointValue>& out);
-std::vector<PointValue> point_values(Device& device);
 
 // The name of `value` in the point's labels, or "" (a value without a name, or a bit field).
 std::string_view label_of(const PointSpec& spec, const Value& value);

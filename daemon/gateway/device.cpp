@@ -48,7 +48,7 @@ bool Device::online() const {
 
 std::optional<Exchange> Device::next_exchange(TimePoint now) {
   std::optional<Exchange> ex = driver_->next_exchange(now);
-  publish(now);
+  publish(now, false);  // choosing what to send changes no value a watcher reads
   return ex;
 }
 
@@ -77,17 +77,18 @@ void Device::on_tick(TimePoint now) {
 
 // Settles the writes the driver completed (which may apply the next part of their request) and
 // logs what changed. The image itself is refreshed when it is next read.
-void Device::publish(TimePoint now) {
+void Device::publish(TimePoint now, bool always) {
   image_stale_ = true;
   std::vector<Completion> completions;
   driver_->take_completions(completions);
+  const bool settled = !completions.empty();
   while (!completions.empty()) {
     for (const Completion& c : completions) settle(c, now);
     completions.clear();
     driver_->take_completions(completions);  // applying a next part may settle at once
   }
   log_changes();
-  if (watcher_) watcher_();
+  if (watcher_ && (always || settled)) watcher_();
 }
 
 void Device::log_changes() {

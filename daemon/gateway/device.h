@@ -110,7 +110,8 @@ class Device final : public Station {
   enum class Progress : std::uint8_t { done, waiting, failed };
 
   // device.cpp
-  void publish(TimePoint now);
+  // `always`: tell the watcher even when no write settled (the driver heard or missed a reply).
+  void publish(TimePoint now, bool always = true);
   void log_changes();
   // device_image.cpp
   void refresh_image(TimePoint now);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 
+#include "gateway/point_values.h"
 #include "gateway/value_codec.h"
 #include "mqtt/sparkplug_codec.h"
 
@@ -24,7 +25,6 @@ constexpr Millis kFirstRetry{1'000};
 constexpr Millis kLongestRetry{30'000};
 // Sparkplug timestamps carry a value's age; a per-poll data age would be news at every poll.
 constexpr std::string_view kNotPublished = "data_age_ms";
-constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
 
 bool is_bit(const PointSpec& spec) {
   return spec.table == Table::coil || spec.table == Table::discrete;
@@ -146,7 +146,7 @@ void Northbound::use(Gateway& gateway) {
   watched_.clear();
   const std::weak_ptr<bool> token = alive_;
   for (const auto& d : gateway.devices()) {
-    watched_.push_back({d.get(), {}});
+    watched_.push_back({d.get(), {}, {}, {}});
     defs.push_back(define(*d, watched_.back()));
     const std::size_t index = watched_.size() - 1;
     d->watch([this, token, index, generation = generation_] {
@@ -186,7 +186,7 @@ void Northbound::stop() {
 
 NorthboundStatus Northbound::status() const {
   NorthboundStatus s = status_;
-  s.session = edge_.state();
+  s.session = std::string(sparkplug::to_string(edge_.state()));
   s.connected = client_.connected();
   s.bd_seq = edge_.bd_seq();
   s.births = edge_.births();
@@ -290,7 +290,10 @@ sparkplug::Now Northbound::now() const {
 sparkplug::DeviceDef Northbound::define(const Device& device, Watched& watched) const {
   sparkplug::DeviceDef def{device.name(), {}};
   for (const MappedPoint& p : device.map().points()) {
-    if (p.spec.name == kNotPublished) continue;
+    if (p.spec.name == kNotPublished) {
+      watched.metric_of.push_back(-1);
+      continue;
+    }
     sparkplug::MetricDef m;
     m.name = p.spec.name;
     m.type = datatype_of(p.spec);
@@ -309,38 +312,25 @@ sparkplug::DeviceDef Northbound::define(const Device& device, Watched& watched) 
     m.counter = p.row() != nullptr && p.row()->counter;
     // Whether the command's session may write it is the device's to say, as for Modbus.
     m.writable = writable;
+    watched.metric_of.push_back(static_cast<std::int32_t>(def.metrics.size()));
     def.metrics.push_back(std::move(m));
     watched.points.push_back(&p);
   }
   return def;
 }
 
-std::vector<MetricValue> Northbound::sample(const Watched& watched) const {
-  std::vector<MetricValue> values;
-  values.reserve(watched.points.size());
+std::vector<MetricValue> Northbound::sample(Watched& watched) const {
   Device& device = *watched.device;
-  const auto t = Clock::now();
-  std::array<std::uint16_t, 64> regs{};
-  for (const MappedPoint* p : watched.points) {
-    const PointSpec& spec = p->spec;
-    const std::size_t count = is_bit(spec) ? 1 : spec.register_count();
-    if (count > regs.size()) {
-      values.emplace_back();
-      continue;
-    }
-    const auto out = std::span(regs).first(count);
-    if (device.read(kReader, spec.table, p->address, out, t) != modbus::Exception::none) {
-      values.emplace_back();
-      continue;
-    }
-    const DataType type = datatype_of(spec);
-    if (is_bit(spec)) {
-      values.emplace_back(out[0] != 0);
-    } else if (auto v = decode_value(spec, out)) {
-      values.push_back(metric_value(type, in_steps(spec, *v)));
-    } else {
-      values.emplace_back();
-    }
+  point_values(device, Clock::now(), watched.scratch);
+  // point_values() gives the map's points in its order, leaving out any it cannot read; the
+  // metrics are the map's points but data_age_ms, in the same order.
+  std::vector<MetricValue> values(watched.points.size());
+  const MappedPoint* first = device.map().points().data();
+  for (const auto& [point, value] : watched.scratch) {
+    const auto at = watched.metric_of[static_cast<std::size_t>(point - first)];
+    if (at < 0) continue;
+    const PointSpec& spec = point->spec;
+    values[static_cast<std::size_t>(at)] = metric_value(datatype_of(spec), in_steps(spec, value));
   }
   return values;
 }

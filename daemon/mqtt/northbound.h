@@ -16,24 +16,12 @@
 
 #include "config/config.h"
 #include "gateway/gateway.h"
+#include "gateway/point_values.h"
 #include "mqtt/edge_node.h"
 #include "mqtt/mosquitto_client.h"
+#include "mqtt/northbound_status.h"
 
 namespace drivegate::mqtt {
-
-// What /metrics and the status page show of it.
-struct NorthboundStatus {
-  std::string broker;
-  sparkplug::SessionState session = sparkplug::SessionState::offline;
-  bool connected = false;
-  std::uint8_t bd_seq = 0;
-  std::uint64_t connects = 0;  // sessions begun (CONNACK)
-  std::uint64_t losses = 0;    // attempts failed or sessions lost
-  std::uint64_t messages = 0;  // Sparkplug messages published
-  std::uint64_t births = 0;    // DBIRTHs among them
-  std::uint64_t commands = 0;  // DCMD writes carried out (any outcome)
-  std::string last_error;
-};
 
 class Northbound final : private sparkplug::Sink {
  public:
@@ -55,6 +43,8 @@ class Northbound final : private sparkplug::Sink {
   struct Watched {
     Device* device;
     std::vector<const MappedPoint*> points;  // the device's metrics, in DeviceDef order
+    std::vector<std::int32_t> metric_of;     // per map point: its metric, or -1 (not published)
+    std::vector<PointValue> scratch;         // point_values() of the last sample
   };
 
   void connect();
@@ -66,7 +56,7 @@ class Northbound final : private sparkplug::Sink {
   void schedule_tick();
   [[nodiscard]] sparkplug::Now now() const;
   [[nodiscard]] sparkplug::DeviceDef define(const Device& device, Watched& watched) const;
-  [[nodiscard]] std::vector<sparkplug::MetricValue> sample(const Watched& watched) const;
+  [[nodiscard]] std::vector<sparkplug::MetricValue> sample(Watched& watched) const;
 
   // Sink
   void publish(const std::string& topic, const sparkplug::Payload& payload) override;
