@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "e2e.h"
+#include "http_get.h"
 
 namespace drivegate::test {
 namespace {
@@ -37,48 +38,6 @@ std::string config(const fs::path& a, const fs::path& b, int http_port) {
             "\npoll_ms = 100\n\n";
   }
   return toml + "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) + "\"\n";
-}
-
-struct HttpReply {
-  int status = 0;  // 0: no answer
-  std::string headers;
-  std::string body;
-};
-
-// GET `target` from 127.0.0.1:`port` as HTTP/1.0 (no chunked answers), read to the close.
-HttpReply http_get(int port, const std::string& target) {
-  HttpReply r;
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
-    ::close(fd);
-    return r;
-  }
-  const std::string request = "GET " + target + " HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
-  if (::write(fd, request.data(), request.size()) != static_cast<ssize_t>(request.size())) {
-    ::close(fd);
-    return r;
-  }
-  std::string in;
-  const auto deadline = std::chrono::steady_clock::now() + 5s;
-  while (std::chrono::steady_clock::now() < deadline) {
-    pollfd p{fd, POLLIN, 0};
-    if (::poll(&p, 1, 100) <= 0) continue;
-    char buf[8192];
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n <= 0) break;
-    in.append(buf, static_cast<std::size_t>(n));
-  }
-  ::close(fd);
-  const auto end = in.find("\r\n\r\n");
-  if (end == std::string::npos || in.size() < 12 || !in.starts_with("HTTP/1.")) return r;
-  r.status = std::atoi(in.substr(9, 3).c_str());
-  r.headers = in.substr(0, end);
-  r.body = in.substr(end + 4);
-  return r;
 }
 
 std::string url_encode(const std::string& s) {
@@ -173,8 +132,8 @@ TEST_F(MetricsE2E, PromtoolFindsNothingToLint) {
   EXPECT_THAT(r.body, HasSubstr("drivegate_device_speed_rpm{device=\"washer-b\""));
   std::ofstream(dir_ / "metrics.txt") << r.body;
 
-  const std::string cmd = "promtool check metrics < '" + (dir_ / "metrics.txt").string() +
-                          "' > '" + (dir_ / "promtool.out").string() + "' 2>&1";
+  const std::string cmd = "promtool check metrics < '" + (dir_ / "metrics.txt").string() + "' > '" +
+                          (dir_ / "promtool.out").string() + "' 2>&1";
   const int status = std::system(cmd.c_str());
   const std::string out = slurp(dir_ / "promtool.out");
   ASSERT_TRUE(WIFEXITED(status)) << out;
@@ -204,7 +163,8 @@ TEST_F(MetricsE2E, PrometheusScrapesWhatThePlcReads) {
   };
   ASSERT_TRUE(eventually(
       [&] { return instant_value(query("up{job=\"drivegate\"}")).value_or(0) == 1; }, 10s))
-      << query("up") << "\n" << slurp(dir_ / "prometheus.log");
+      << query("up") << "\n"
+      << slurp(dir_ / "prometheus.log");
 
   // The scrape went through the whole exposition without an error.
   const std::string targets = http_get(prom_port, "/api/v1/targets").body;
@@ -213,8 +173,7 @@ TEST_F(MetricsE2E, PrometheusScrapesWhatThePlcReads) {
 
   for (const auto& [unit, device, expected] :
        {std::tuple{1, "washer-a", a}, std::tuple{2, "washer-b", b}}) {
-    const std::string promql =
-        "drivegate_device_speed_rpm{device=\"" + std::string(device) + "\"}";
+    const std::string promql = "drivegate_device_speed_rpm{device=\"" + std::string(device) + "\"}";
     std::optional<double> seen;
     EXPECT_TRUE(eventually(
         [&, &expected = expected] {

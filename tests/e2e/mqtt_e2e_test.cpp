@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "e2e.h"
+#include "http_get.h"
 #include "mosquitto.h"
 #include "sparkplug_peer.h"
 
@@ -773,9 +774,22 @@ TEST_F(MqttE2EFailsafe, WithFeedFailsafeAnMqttOnlyDriveTripsWhenTheDcmdsStop) {
 
 // --- 7. broker restart --------------------------------------------------------------------------
 
+// One sample of the daemon's /metrics, or -1.
+double metric(int http_port, const std::string& name) {
+  const auto r = http_get(http_port, "/metrics");
+  const auto at = r.body.find("\n" + name + " ");
+  if (r.status != 200 || at == std::string::npos) return -1;
+  return std::atof(r.body.c_str() + at + name.size() + 2);
+}
+
 TEST_F(MqttE2E, BrokerRestartKeepsModbusServedAndRebirthsWithANewBdSeq) {
-  start_daemon();
+  const int http_port = free_port();
+  start_daemon("\n[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) + "\"\n");
   const Births first = wait_births();
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_connected"), 1);
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_online"), 1);
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_connects_total"), 1);
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_device_births_total"), 2);
   ASSERT_FALSE(HasFailure());
   const auto bd0 = first.node.metric("bdSeq")->as_uint();
 
@@ -811,6 +825,12 @@ TEST_F(MqttE2E, BrokerRestartKeepsModbusServedAndRebirthsWithANewBdSeq) {
   // comes well after the broker is back and the peer has resubscribed, so the peer cannot miss
   // the new NBIRTH.
   std::this_thread::sleep_for(4s);
+  // The outage shows in the metrics, and in the status JSON with its reason.
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_connected"), 0);
+  EXPECT_GE(metric(http_port, "drivegate_mqtt_connection_losses_total"), 2);
+  EXPECT_THAT(http_get(http_port, "/api/v1/status").body,
+              ::testing::AllOf(::testing::HasSubstr("\"session\": \"offline\""),
+                               ::testing::Not(::testing::HasSubstr("\"last_error\": \"\""))));
   broker_->start();
   const auto back = peer_->wait_for([](const Message& m) { return m.kind == "reconnected"; }, 5s);
   EXPECT_TRUE(back.has_value()) << "the peer did not reconnect";
@@ -826,6 +846,9 @@ TEST_F(MqttE2E, BrokerRestartKeepsModbusServedAndRebirthsWithANewBdSeq) {
   EXPECT_GT(again.node.metric("bdSeq")->as_uint(), bd0);
   EXPECT_EQ(again.node.metric("bdSeq")->type, "UInt64");
   expect_seq_consecutive(peer_->history());
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_connected"), 1);
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_connects_total"), 2);
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_bdseq"), again.node.metric("bdSeq")->as_uint());
 }
 
 // --- 8. the primary host's STATE ---------------------------------------------------------------

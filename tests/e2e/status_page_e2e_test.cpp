@@ -20,6 +20,7 @@
 #include <map>
 
 #include "e2e.h"
+#include "http_get.h"
 
 namespace drivegate::test {
 namespace {
@@ -49,32 +50,6 @@ const std::vector<Drive>& drives() {
       {"unicla-edrive", 5, 3000, "", ""},
   };
   return d;
-}
-
-// GET `path` from 127.0.0.1:`port` over HTTP/1.0: the body, empty on any failure.
-std::string http_get(int port, const std::string& path) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  std::string in;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
-    const std::string req = "GET " + path + " HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
-    if (::write(fd, req.data(), req.size()) == static_cast<ssize_t>(req.size())) {
-      char buf[8192];
-      while (true) {
-        pollfd p{fd, POLLIN, 0};
-        if (::poll(&p, 1, 5000) <= 0) break;
-        const ssize_t n = ::read(fd, buf, sizeof buf);
-        if (n <= 0) break;
-        in.append(buf, static_cast<std::size_t>(n));
-      }
-    }
-  }
-  ::close(fd);
-  const auto body = in.find("\r\n\r\n");
-  return body == std::string::npos ? std::string() : in.substr(body + 4);
 }
 
 // The text of the element with data-field="field" inside the card of `device`; "<none>" if absent.
@@ -149,7 +124,8 @@ class OneAnswerServer {
         const std::string head = "HTTP/1.1 200 OK\r\nContent-Type: " +
                                  std::string(is_status ? "application/json" : "text/html") +
                                  "\r\nCache-Control: no-store\r\nConnection: close\r\n"
-                                 "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n";
+                                 "Content-Length: " +
+                                 std::to_string(body.size()) + "\r\n\r\n";
         const std::string out = head + body;
         std::size_t sent = 0;
         while (sent < out.size()) {
@@ -189,8 +165,8 @@ class StatusPage : public ::testing::Test {
               "\"\nadapter = \"" + d.adapter + "\"\nunit_id = " + std::to_string(d.unit) + "\n" +
               (d.device_options.empty() ? "" : "[device.options]\n" + d.device_options);
     }
-    daemon_ = std::make_unique<Daemon>(dir_, toml, std::vector<std::string>{},
-                                       dir_ / "drivegated.log");
+    daemon_ =
+        std::make_unique<Daemon>(dir_, toml, std::vector<std::string>{}, dir_ / "drivegated.log");
     plc_ = std::make_unique<Plc>(daemon_->port());
     ASSERT_TRUE(plc_->connect());
   }
@@ -283,14 +259,17 @@ TEST_F(StatusPage, ShowsLiveSpeedsAFaultWithinTwoSecondsAndALostDaemon) {
   ASSERT_THAT(sims_["unicla-edrive"]->control("fault motor"), HasSubstr("op_state=7"));
   ASSERT_TRUE(eventually(
       [&] {
-        return http_get(http_port_, "/api/v1/status").find("\"over_current\"") != std::string::npos;
+        return http_get(http_port_, "/api/v1/status").body.find("\"over_current\"") !=
+               std::string::npos;
       },
       5s));
-  const auto to_json = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - fault_at);
+  const auto to_json =
+      std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - fault_at);
   EXPECT_LE(to_json, kFaultToJson);
   std::chrono::milliseconds took{};
   const std::string faulted = dump(1500, &took);
-  const auto to_page = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - fault_at);
+  const auto to_page =
+      std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - fault_at);
   EXPECT_EQ(field(faulted, "unicla-edrive", "fault_label"), "over_current");
   EXPECT_EQ(field(faulted, "unicla-edrive", "fault_code"), "(4)");
   EXPECT_THAT(faulted, HasSubstr("data-device=\"unicla-edrive\" data-state=\"fault\""));
@@ -316,8 +295,8 @@ TEST_F(StatusPage, ShowsLiveSpeedsAFaultWithinTwoSecondsAndALostDaemon) {
 
   // The daemon gone after one answer: the page says so instead of showing frozen values as live.
   // A stand-in for the daemon serves the page and one status, then drops every request.
-  const std::string page = http_get(http_port_, "/");
-  const std::string status = http_get(http_port_, "/api/v1/status");
+  const std::string page = http_get(http_port_, "/").body;
+  const std::string status = http_get(http_port_, "/api/v1/status").body;
   ASSERT_FALSE(page.empty());
   OneAnswerServer stand_in(page, status);
   http_port_ = stand_in.port();
@@ -325,7 +304,7 @@ TEST_F(StatusPage, ShowsLiveSpeedsAFaultWithinTwoSecondsAndALostDaemon) {
   EXPECT_EQ(body_attr(gone, "data-link"), "unreachable");
   EXPECT_THAT(gone, HasSubstr("does not answer"));
   EXPECT_THAT(gone, HasSubstr("they are not live"));
-  EXPECT_EQ(field(gone, "unicla-edrive", "fault_label"), "over_current");  // the last values...
+  EXPECT_EQ(field(gone, "unicla-edrive", "fault_label"), "over_current");      // the last values...
   EXPECT_THAT(field(gone, "ed3100", "data_age_ms"), HasSubstr("(not live)"));  // ...not as live
   EXPECT_GE(stand_in.refused(), 1);
   std::cerr << "[ status page ] whole scenario "
