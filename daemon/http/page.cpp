@@ -192,6 +192,15 @@ footer a { color: inherit; }
       <th class="l">Word order</th><th class="l">Allow</th><th>Clients</th><th>Accepted</th>
       <th>Not allowed</th><th>TLS failures</th><th>Writes denied</th></tr></thead>
     <tbody></tbody></table></div>
+  <section id="mqtt" hidden>
+    <h2>MQTT Sparkplug B</h2>
+    <p class="mbsum">broker <b data-field="broker">-</b> &middot; session
+      <b data-field="session">-</b> &middot; bdSeq <b data-field="bd_seq">-</b> &middot;
+      connects <b data-field="connects">-</b> &middot; losses <b data-field="losses">-</b>
+      &middot; messages <b data-field="messages">-</b> &middot; births
+      <b data-field="births">-</b> &middot; commands <b data-field="commands">-</b>
+      <span data-field="last_error"></span></p>
+  </section>
 </main>
 <footer>Read-only view, refreshed every second from <a href="/api/v1/status">/api/v1/status</a>
   &middot; <a href="/metrics">/metrics</a> &middot; <a href="/api/v1/regmap">register map</a></footer>
@@ -513,6 +522,18 @@ footer a { color: inherit; }
     const m = s.modbus || {};
     for (const k of ["clients", "requests", "malformed", "refused"]) {
       set(document.querySelector('#modbus [data-field="' + k + '"]'), num(m[k]));
+    }
+    const q = s.mqtt, mq = $("mqtt");
+    mq.hidden = !q;
+    if (q) {
+      const field = (k) => mq.querySelector('[data-field="' + k + '"]');
+      set(field("broker"), q.broker);
+      set(field("session"), q.session);
+      field("session").className = q.session === "online" ? "" : "nz";
+      for (const k of ["bd_seq", "connects", "losses", "messages", "births", "commands"]) {
+        set(field(k), num(q[k]));
+      }
+      set(field("last_error"), q.last_error ? "\u00b7 last error: " + q.last_error : "");
     }
     set($("version"), s.version ? "v" + s.version : "");
     set($("now"), clock(s.now));
