@@ -157,6 +157,10 @@ TEST_F(Fdc1E2E, AlarmIsAUnifiedFaultWithItsRawCode) {
 }
 
 TEST_F(Fdc1E2E, SpeedsOutsideTheRangeAndReverseAre0x03) {
+  // In slave mode the driver sends the order in force (stop) once it is ready: counted from
+  // after that frame, or it races the refused writes below (seen under TSan).
+  ASSERT_TRUE(eventually([&] { return field(state(), "speeds") >= 1; }, 5s))
+      << "the start-up stop order never went out: " << state();
   const long speeds_before = field(state(), "speeds");
   EXPECT_EQ(plc_.write(reg::setpoint, {1499}), 0x03);
   EXPECT_EQ(plc_.write(reg::setpoint, {3501}), 0x03);
