@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "modbus/tls.h"
+#include "mqtt/sparkplug.h"
 #include "server_config.h"
 
 namespace drivegate {
@@ -12,12 +13,6 @@ namespace {
 
 constexpr const char* kBrokerForm =
     "must be \"mqtt://host[:port]\" or \"mqtts://host[:port]\" (e.g. \"mqtt://10.1.2.3:1883\")";
-
-// Sparkplug ids (spec 4.1.1): not empty, none of '/', '+', '#'. Kept here rather than taken from
-// the MQTT layer, which the configuration does not depend on.
-bool sparkplug_id(std::string_view id) {
-  return !id.empty() && id.find_first_of("/+#") == std::string_view::npos;
-}
 
 // "mqtt://host[:port]" / "mqtts://host[:port]", IPv6 in brackets; false when it is not.
 bool parse_broker(std::string_view url, MqttConfig& out) {
@@ -65,7 +60,7 @@ void read_id(TableReader& r, std::string_view key, bool required, std::string& o
              Diagnostics& diag) {
   const auto v = r.string(key, required);
   if (!v) return;
-  if (!sparkplug_id(*v)) {
+  if (!sparkplug::valid_id(*v)) {
     diag.error(r.node(key), r.qualified(key),
                "must be a Sparkplug id: not empty, without '/', '+' or '#'");
     return;
@@ -188,7 +183,7 @@ void read_mqtt(const toml::table& root, Config& cfg, Diagnostics& diag) {
     diag.warning_at(m.line, "mqtt.feed_failsafe", "has no effect while commands = false");
   }
   for (const auto& d : cfg.devices) {
-    if (!sparkplug_id(d.name)) {
+    if (!sparkplug::valid_id(d.name)) {
       diag.error_at(d.line, "device.name",
                     "\"" + d.name + "\" is published as a Sparkplug device id ([mqtt]): it may " +
                         "not contain '/', '+' or '#'");

@@ -123,7 +123,6 @@ void EdgeNode::host_state(std::string_view payload, const Now& now, Sink& sink) 
     rebirth(now, sink);
   } else if (!s->online && state_ == SessionState::online) {
     sink.publish(will_topic(), node_death(now));
-    ++messages_;
     connection_lost();
     sink.drop_session();
   }
@@ -213,7 +212,7 @@ void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
   }
   d.last_data = now.mono;
   if (counters) d.last_counters = now.mono;
-  send(MessageType::ddata, defs_[device].name, std::move(p), now, sink);
+  send(MessageType::ddata, defs_[device].name, std::move(p), sink);
 }
 
 void EdgeNode::rebirth(const Now& now, Sink& sink) {
@@ -223,7 +222,7 @@ void EdgeNode::rebirth(const Now& now, Sink& sink) {
   p.metrics.push_back(bd_seq_metric(bd_seq_));
   p.metrics.push_back({std::string(kRebirth), DataType::boolean, MetricValue{false}, {}});
   p.metrics.push_back(string_metric(kVersion, options_.version));
-  send(MessageType::nbirth, {}, std::move(p), now, sink);
+  send(MessageType::nbirth, {}, std::move(p), sink);
   for (std::size_t i = 0; i < devices_.size(); ++i) {
     devices_[i].born = false;
     devices_[i].due.reset();
@@ -250,7 +249,7 @@ void EdgeNode::birth(std::size_t device, const Now& now, Sink& sink) {
   d.last_data = now.mono;
   d.last_counters = now.mono;
   ++births_;
-  send(MessageType::dbirth, def.name, std::move(p), now, sink);
+  send(MessageType::dbirth, def.name, std::move(p), sink);
 }
 
 void EdgeNode::death(std::size_t device, const Now& now, Sink& sink) {
@@ -258,15 +257,12 @@ void EdgeNode::death(std::size_t device, const Now& now, Sink& sink) {
   devices_[device].due.reset();
   Payload p;
   p.timestamp = now.unix_ms;
-  send(MessageType::ddeath, defs_[device].name, std::move(p), now, sink);
+  send(MessageType::ddeath, defs_[device].name, std::move(p), sink);
 }
 
-void EdgeNode::send(MessageType type, std::string_view device, Payload payload, const Now& now,
-                    Sink& sink) {
-  (void)now;
+void EdgeNode::send(MessageType type, std::string_view device, Payload payload, Sink& sink) {
   payload.seq = seq_;
   seq_ = static_cast<std::uint8_t>(seq_ + 1);  // 255 -> 0 (spec 6.4.1)
-  ++messages_;
   sink.publish(topic(options_.group, type, options_.edge_node, device), payload);
 }
 
@@ -330,7 +326,7 @@ void EdgeNode::command_done(std::size_t device, std::string points, std::string 
   p.timestamp = now.unix_ms;
   p.metrics.push_back(string_metric(kCommandPoint, std::move(points)));
   p.metrics.push_back(string_metric(kCommandResult, std::move(result)));
-  send(MessageType::ddata, defs_[device].name, std::move(p), now, sink);
+  send(MessageType::ddata, defs_[device].name, std::move(p), sink);
 }
 
 }  // namespace drivegate::sparkplug

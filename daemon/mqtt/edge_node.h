@@ -130,7 +130,6 @@ class EdgeNode {
   [[nodiscard]] std::uint8_t bd_seq() const { return bd_seq_; }
   [[nodiscard]] const std::vector<DeviceDef>& devices() const { return defs_; }
   [[nodiscard]] std::uint64_t births() const { return births_; }
-  [[nodiscard]] std::uint64_t messages() const { return messages_; }
 
  private:
   struct DeviceState {
@@ -150,7 +149,7 @@ class EdgeNode {
   std::vector<std::size_t> changes(std::size_t device, const Now& now) const;
   void command(std::string_view device, std::string_view payload, const Now& now, Sink& sink);
   void host_state(std::string_view payload, const Now& now, Sink& sink);
-  void send(MessageType type, std::string_view device, Payload payload, const Now& now, Sink& sink);
+  void send(MessageType type, std::string_view device, Payload payload, Sink& sink);
 
   EdgeNodeOptions options_;
   SessionState state_ = SessionState::offline;
@@ -160,7 +159,6 @@ class EdgeNode {
   std::vector<DeviceDef> defs_;
   std::vector<DeviceState> devices_;
   std::uint64_t births_ = 0;
-  std::uint64_t messages_ = 0;
 };
 
 }  // namespace drivegate::sparkplug

@@ -230,7 +230,11 @@ void Northbound::lost(const std::string& why) {
   } else {
     log_->debug("MQTT: {}: {}; next attempt in {} ms", config_.broker, why, backoff_.count());
   }
-  retry_timer_.expires_after(backoff_);
+  connect_after(backoff_);
+}
+
+void Northbound::connect_after(Millis delay) {
+  retry_timer_.expires_after(delay);
   retry_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (!ec) connect();
   });
@@ -350,10 +354,7 @@ void Northbound::drop_session() {
     if (token.expired() || stopping_) return;
     client_.disconnect();
     backoff_ = kFirstRetry;
-    retry_timer_.expires_after(backoff_);
-    retry_timer_.async_wait([this](const boost::system::error_code& ec) {
-      if (!ec) connect();
-    });
+    connect_after(backoff_);
   });
 }
 

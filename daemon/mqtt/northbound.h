@@ -48,6 +48,7 @@ class Northbound final : private sparkplug::Sink {
   };
 
   void connect();
+  void connect_after(Millis delay);  // a new attempt, once `delay` has passed
   void connected();
   void lost(const std::string& why);
   void message(std::string_view topic, std::string_view payload);
