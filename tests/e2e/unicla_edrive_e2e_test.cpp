@@ -103,7 +103,16 @@ TEST_F(EDriveE2E, RunsAt3000AndBackTo0) {
   EXPECT_TRUE(r.regs[0] & reg::running);
   EXPECT_LT(r.u32(reg::data_age), 1500u);  // polled every 500 ms
   EXPECT_EQ(plc_.input(ed::compressor_rpm, 1).regs[0], 3000);
-  // Half the 6000 rpm maximum: the simulated plant's pressures follow the speed.
+  // Half the 6000 rpm maximum: the simulated plant's pressures follow the speed. The speed
+  // register shows 3000 from 2999.5 rpm on while the drive's ramp ends, so the pressures are read
+  // once a poll has carried the ramp's end.
+  ASSERT_TRUE(eventually(
+      [&] {
+        const auto q = plc_.input(ed::suction_pressure, 4);
+        return q.ok() && f32(q, 0) == 3.75F && f32(q, 2) == 11.5F;
+      },
+      5s))
+      << state();
   const auto p = plc_.input(ed::suction_pressure, 4);
   EXPECT_FLOAT_EQ(f32(p, 0), 3.75F);
   EXPECT_FLOAT_EQ(f32(p, 2), 11.5F);
