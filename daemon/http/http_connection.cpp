@@ -40,6 +40,9 @@ void HttpConnection::start() {
   boost::system::error_code ec;
   const auto peer = stream_.socket().remote_endpoint(ec);
   peer_ = peer.address().to_string() + ":" + std::to_string(peer.port());
+  // Without it, Nagle holds each write slice after the first until the client ACKs the one before,
+  // and a client that delays its ACKs (Linux: 40 ms) gets a kept-alive document that late.
+  stream_.socket().set_option(boost::asio::ip::tcp::no_delay(true), ec);
   state_->live.insert(this);
   ++state_->stats.accepted;
   read();
