@@ -5,13 +5,14 @@
 # bench/run.sh (bench/lib.sh), with a Modbus listener and an [http] listener. The load generator,
 # the simulators and the scraper run on CPU $LOAD_CPU. Then, for ROUNDS rounds, dg-loadgen at
 # N = $CONNS persistent connections (the requests of bench/run.sh: FC03 16..140 alternating with
-# FC04 0..18, unit 2) twice: once alone ("without") and once while bench/scraper.py fetches
-# /metrics and /api/v1/status $RATE times a second each ("with"; the scraper starts just before
+# FC04 0..18, unit 2) twice: once alone ("without") and once while dg-scraper (bench/scraper.cpp)
+# fetches /metrics and /api/v1/status $RATE times a second each ("with"; the scraper starts just before
 # the load generator and runs through its warm-up and measured window). The order alternates:
 # without first in odd rounds, with first in even ones. Prints the medians of each side, the ratio
 # with / without, and the scraper's latencies.
-# The scraper shares the load generator's CPU, so its own work (a Python process connecting and
-# reading 20 times a second) can delay the load generator and show up in its latencies. With
+# The scraper shares the load generator's CPU, so its own work (connecting and reading 20 times a
+# second: ~0.15 ms of CPU each, most of it the kernel's TCP) can delay the load generator and show
+# up in its latencies; it is in C++ for that reason (a Python scraper took 2.5x more). With
 # DECOY=1 a third side, "decoy", runs the same scraper with the same pacing and connections
 # against two paths the daemon answers with a 10-byte 404: what is left of "with" above "decoy"
 # is rendering and sending the pages. The order then rotates over the three sides.
@@ -46,7 +47,7 @@ DG_PORT=${DG_PORT:-15070}
 HTTP_PORT=${HTTP_PORT:-15071}
 HERE=$(dirname "$(realpath "$0")")
 
-for f in drivegated drivegate dg-loadgen; do
+for f in drivegated drivegate dg-loadgen dg-scraper; do
   [[ -e $BIN/$f ]] || { echo "http_load.sh: $BIN/$f missing (build with -DDRIVEGATE_BENCH=ON)" >&2; exit 2; }
 done
 ((ROUNDS % (DECOY ? 3 : 2) == 0)) ||
@@ -68,13 +69,14 @@ DG_PID=$GATEWAY_PID
 
 wait_for_port "$DG_PORT" || { cat "$W"/dg/drivegated.log >&2; exit 1; }
 wait_for_port "$HTTP_PORT" || { cat "$W"/dg/drivegated.log >&2; exit 1; }
+kill -0 "$DG_PID" 2>/dev/null || { echo "http_load.sh: drivegated did not start (a port taken?)" >&2; cat "$W"/dg/drivegated.log >&2; exit 1; }
 python3 "$HERE/mbwrite.py" --wait-online "$DG_PORT" "${START[@]}"
 sleep 2
 
 SCRAPE_ARGS=()
 ((KEEPALIVE)) && SCRAPE_ARGS=(--keep-alive)
 # One scrape of each path first: the scraper works, and the sizes are known before the rounds.
-taskset -c "$LOAD_CPU" python3 "$HERE/scraper.py" "$HTTP_PORT" 2 0.5 "$W/probe.txt"
+taskset -c "$LOAD_CPU" "$BIN/dg-scraper" "$HTTP_PORT" 2 0.5 "$W/probe.txt"
 echo "# probe: $(cat "$W/probe.txt")" >>"$W/results.txt"
 
 failed() {
@@ -93,11 +95,11 @@ load() {  # load SIDE N ROUND
     : >"$W/scrape.txt"
     local sched=()
     ((SCRAPER_IDLE)) && sched=(chrt -i 0)
-    "${sched[@]}" taskset -c "$LOAD_CPU" python3 "$HERE/scraper.py" "$HTTP_PORT" "$RATE" \
+    "${sched[@]}" taskset -c "$LOAD_CPU" "$BIN/dg-scraper" "$HTTP_PORT" "$RATE" \
       "$(python3 -c "print($WARMUP + $DURATION + 0.5)")" "$W/scrape.txt" "${SCRAPE_ARGS[@]}" \
       "${extra[@]}" 2>>"$W/scraper.err" &
     scraper=$!
-    sleep 0.2  # the interpreter's start-up, outside the load generator's window
+    sleep 0.2  # the scraper's start-up, outside the load generator's window
   fi
   out=$(taskset -c "$LOAD_CPU" "$BIN/dg-loadgen" --port "$DG_PORT" --pid "$DG_PID" \
     --connections "$2" --duration "$DURATION" --warmup "$WARMUP" --unit "$UNIT" \

@@ -19,16 +19,22 @@ ONLINE = 1  # status bit 0 (include/drivegate/common.h)
 def request(sock, tid, unit, pdu):
     # MBAP (Modbus Messaging on TCP/IP 3.1.3): tid, protocol 0, length = unit + PDU.
     sock.sendall(struct.pack(">HHHB", tid, 0, len(pdu) + 1, unit) + pdu)
-    head = b""
-    while len(head) < 7:
-        head += sock.recv(7 - len(head))
+    head = recv_exactly(sock, 7)
     length = struct.unpack(">H", head[4:6])[0]
-    body = b""
-    while len(body) < length - 1:
-        body += sock.recv(length - 1 - len(body))
+    body = recv_exactly(sock, length - 1)
     if body[0] & 0x80:
         raise RuntimeError(f"unit {unit}: exception {body[1]}")
     return body
+
+
+def recv_exactly(sock, n):
+    data = b""
+    while len(data) < n:
+        more = sock.recv(n - len(data))
+        if not more:  # closed: not a gateway, or one going away (never spin on it)
+            raise ConnectionError(f"connection closed after {len(data)} of {n} bytes")
+        data += more
+    return data
 
 
 def wait_online(sock, unit, seconds=10.0):
