@@ -95,7 +95,10 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
   }
   if (ec) {
     ++state_->stats.bad_requests;
-    state_->log->info("http: client {}: bad request ({}), closing", peer_, ec.message());
+    if (const auto held = state_->bad_request_log.admit(std::chrono::steady_clock::now())) {
+      state_->log->info("http: client {}: bad request ({}), closing{}", peer_, ec.message(),
+                        modbus::held_note(*held));
+    }
     const bool too_large = ec == bhttp::error::header_limit || ec == bhttp::error::buffer_overflow;
     reply(too_large ? 431 : 400, "text/plain; charset=utf-8",
           too_large ? "request headers too large\n" : "bad request\n", false, false);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "http_connection.h"
+#include "modbus/accept_errors.h"
 #include "modbus/listen_host.h"
 
 namespace drivegate::http {
@@ -35,7 +36,16 @@ void on_accept(const std::shared_ptr<HttpState>& state, const boost::system::err
       std::make_shared<HttpConnection>(state, std::move(socket))->start();
     }
   } else {
-    state->log->warn("http: accept failed: {}", ec.message());
+    if (const auto held = state->accept_error_log.admit(std::chrono::steady_clock::now())) {
+      state->log->warn("http: accept failed: {}{}", ec.message(), modbus::held_note(*held));
+    }
+    if (modbus::accept_needs_back_off(ec)) {
+      state->retry_timer.expires_after(modbus::kAcceptRetry);
+      state->retry_timer.async_wait([state](const boost::system::error_code& e) {
+        if (!e && !state->closed) accept(state);
+      });
+      return;
+    }
   }
   accept(state);
 }
@@ -90,6 +100,7 @@ void HttpServer::close() {
   state_->closed = true;
   boost::system::error_code ignored;
   state_->acceptor.close(ignored);
+  state_->retry_timer.cancel();
   const std::vector<HttpConnection*> open(state_->live.begin(), state_->live.end());
   for (HttpConnection* c : open) c->close();
 }

@@ -4,9 +4,11 @@
 #include <spdlog/logger.h>
 
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <unordered_set>
 
 #include "http_server.h"
+#include "modbus/log_throttle.h"
 
 namespace drivegate::http {
 
@@ -19,14 +21,18 @@ struct HttpState {
         content(content_),
         options(std::move(options_)),
         log(std::move(log_)),
-        acceptor(io_) {}
+        acceptor(io_),
+        retry_timer(io_) {}
   boost::asio::io_context& io;
   Content& content;
   const HttpOptions options;
   const std::shared_ptr<spdlog::logger> log;
   boost::asio::ip::tcp::acceptor acceptor;
+  boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
   std::unordered_set<HttpConnection*> live;
   HttpStats stats;
+  modbus::LogThrottle bad_request_log;   // any client can cause one: a burst, then one a second
+  modbus::LogThrottle accept_error_log;  // accept() failing (out of descriptors and the like)
   bool closed = false;
 };
 

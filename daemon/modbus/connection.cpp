@@ -89,11 +89,14 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
     // says which check failed, and the subject whose certificate it was.
     const long verify = SSL_get_verify_result(tls_->native_handle());
     X509* cert = SSL_get0_peer_certificate(tls_->native_handle());
-    state_->log->warn(
-        "modbus: {}: TLS handshake failed: {}{}{}; closing", who(), ec.message(),
-        verify != X509_V_OK ? std::string(" (") + X509_verify_cert_error_string(verify) + ")"
-                            : std::string(),
-        cert != nullptr ? ", certificate \"" + certificate_subject(cert) + "\"" : std::string());
+    if (const auto held = listener_->handshake_log.admit(Clock::now())) {
+      state_->log->warn(
+          "modbus: {}: TLS handshake failed: {}{}{}; closing{}", who(), ec.message(),
+          verify != X509_V_OK ? std::string(" (") + X509_verify_cert_error_string(verify) + ")"
+                              : std::string(),
+          cert != nullptr ? ", certificate \"" + certificate_subject(cert) + "\"" : std::string(),
+          held_note(*held));
+    }
     close();
     return;
   }
@@ -212,7 +215,10 @@ void Connection::process_input(Clock::time_point now) {
     }
     if (parse.status == MbapParse::Status::bad) {
       ++state_->stats.malformed;
-      state_->log->warn("modbus: {}: {}, closing the connection", who(), parse.error.message());
+      if (const auto held = state_->malformed_log.admit(Clock::now())) {
+        state_->log->warn("modbus: {}: {}, closing the connection{}", who(), parse.error.message(),
+                          held_note(*held));
+      }
       close_after_flush_ = true;
       rx_len_ = 0;
       partial_since_.reset();
@@ -410,15 +416,19 @@ void Connection::on_timer(const boost::system::error_code& ec) {
   if (handshaking_ && now - started_ >= handshake_limit(o)) {
     ++state_->stats.tls_handshake_failures;
     ++listener_->stats.tls_handshake_failures;
-    state_->log->warn("modbus: {}: TLS handshake not finished in {} ms; closing", who(),
-                      handshake_limit(o).count());
+    if (const auto held = listener_->handshake_log.admit(now)) {
+      state_->log->warn("modbus: {}: TLS handshake not finished in {} ms; closing{}", who(),
+                        handshake_limit(o).count(), held_note(*held));
+    }
     close();
     return;
   }
   if (partial_since_ && o.frame_timeout.count() > 0 && now - *partial_since_ >= o.frame_timeout) {
     ++state_->stats.frame_timeouts;
-    state_->log->info("modbus: {}: partial frame for {} ms, closing", who(),
-                      o.frame_timeout.count());
+    if (const auto held = state_->frame_timeout_log.admit(now)) {
+      state_->log->info("modbus: {}: partial frame for {} ms, closing{}", who(),
+                        o.frame_timeout.count(), held_note(*held));
+    }
     close();
     return;
   }

@@ -6,6 +6,7 @@
 #include <boost/asio/ip/v6_only.hpp>
 #include <vector>
 
+#include "accept_errors.h"
 #include "connection.h"
 #include "listen_host.h"
 #include "server_state.h"
@@ -15,12 +16,6 @@ namespace {
 
 namespace asio = boost::asio;
 using asio::ip::tcp;
-
-// Back-off before accepting again after a resource error (EMFILE, ENFILE, ENOBUFS, ENOMEM), so a
-// full descriptor table does not turn the accept loop into a busy loop.
-constexpr std::chrono::milliseconds kAcceptRetry{100};
-// At most one warning per second about refused clients (the count says how many).
-constexpr std::chrono::seconds kRefusalWarningInterval{1};
 
 std::error_code to_std(const boost::system::error_code& ec) {
   return {ec.value(), std::system_category()};
@@ -42,21 +37,15 @@ void refuse(tcp::socket& socket) {
   socket.close(ignored);
 }
 
-// Refusals are warned about at most once a second per cause, with the number since the last one.
-bool warn_now(std::chrono::steady_clock::time_point& last) {
-  const auto now = std::chrono::steady_clock::now();
-  if (now - last < kRefusalWarningInterval) return false;
-  last = now;
-  return true;
-}
-
 void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listener,
                const boost::system::error_code& ec, tcp::socket socket) {
   if (state->closed || ec == asio::error::operation_aborted) return;
   if (ec) {
-    state->log->warn("modbus: {}: accept failed: {}", listener->options.name(), ec.message());
-    if (ec == asio::error::no_descriptors || ec == asio::error::no_buffer_space ||
-        ec == asio::error::no_memory || ec.value() == ENFILE) {
+    if (const auto held = listener->accept_error_log.admit(std::chrono::steady_clock::now())) {
+      state->log->warn("modbus: {}: accept failed: {}{}", listener->options.name(), ec.message(),
+                       held_note(*held));
+    }
+    if (accept_needs_back_off(ec)) {
       listener->retry_timer.expires_after(kAcceptRetry);
       listener->retry_timer.async_wait([state, listener](const boost::system::error_code& e) {
         if (!e && !state->closed) accept(state, listener);
@@ -72,25 +61,20 @@ void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listen
     // Not in the allow list: closed at accept, before anything it sent is read.
     ++state->stats.connections_not_allowed;
     ++listener->stats.connections_not_allowed;
-    ++listener->not_allowed_since_warning;
-    if (warn_now(listener->last_warning)) {
+    if (const auto held = listener->not_allowed_log.admit(std::chrono::steady_clock::now())) {
       state->log->warn(
           "modbus: {}: {} client(s) closed at accept, not in the allow list (last: {})",
-          listener->options.name(), listener->not_allowed_since_warning,
+          listener->options.name(), *held + 1,
           peer_ec ? peer_ec.message() : peer.address().to_string());
-      listener->not_allowed_since_warning = 0;
     }
     refuse(socket);
   } else if (state->live.size() >= state->options.max_clients) {
     // Past the cap: accepted and closed at once, so the client sees a clean close instead of a
     // connect that hangs in the backlog.
     ++state->stats.connections_refused;
-    ++state->refused_since_warning;
-    if (warn_now(state->last_refusal_warning)) {
+    if (const auto held = state->refused_log.admit(std::chrono::steady_clock::now())) {
       state->log->warn("modbus: {} client(s) refused: {} clients connected, max_clients = {}",
-                       state->refused_since_warning, state->live.size(),
-                       state->options.max_clients);
-      state->refused_since_warning = 0;
+                       *held + 1, state->live.size(), state->options.max_clients);
     }
     refuse(socket);
   } else {

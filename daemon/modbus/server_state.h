@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "backend.h"
+#include "log_throttle.h"
 #include "pdu.h"
 #include "server_options.h"
 
@@ -34,8 +35,9 @@ struct ListenerState {
   std::shared_ptr<boost::asio::ssl::context> tls;  // set when options.policy.tls is
   boost::asio::ip::tcp::acceptor acceptor;
   boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
-  std::chrono::steady_clock::time_point last_warning{};  // refusals: at most one warning a second
-  std::uint64_t not_allowed_since_warning = 0;
+  LogThrottle not_allowed_log;            // connections closed at accept: not in the allow list
+  LogThrottle handshake_log;              // TLS handshakes that failed or took too long
+  LogThrottle accept_error_log;           // accept() failing (out of descriptors and the like)
   ListenerStats stats;
 };
 
@@ -65,8 +67,9 @@ struct ServerState {
   std::vector<std::shared_ptr<ListenerState>> listeners;
   std::unordered_set<Connection*> live;  // open connections, every listener's
   bool closed = false;
-  std::chrono::steady_clock::time_point last_refusal_warning{};
-  std::uint64_t refused_since_warning = 0;
+  LogThrottle refused_log;        // connections past max_clients
+  LogThrottle malformed_log;      // frames that are not Modbus TCP
+  LogThrottle frame_timeout_log;  // partial frames left unfinished
 };
 
 }  // namespace drivegate::modbus

@@ -28,6 +28,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "descriptor_limit.h"
 #include "fake_content.h"
 
 namespace drivegate::http::test {
@@ -571,6 +572,30 @@ TEST(HttpServer, OtherClientsAreUnaffectedWhileOneMisbehaves) {
   EXPECT_TRUE(slow.closed);
   // The slow one, and maybe `good` too by now: an idle keep-alive connection times out alike.
   EXPECT_GE(h.stats().timeouts, 1u);
+}
+
+
+// Out of descriptors, accept() fails at once for as long as the connection waits in the backlog.
+// The server backs off instead of accepting again straight away (which spun the event loop at
+// 100 % CPU, starving everything else on it) and serves the client once descriptors are back.
+TEST(HttpServer, OutOfDescriptorsTheAcceptorBacksOffAndRecovers) {
+  Harness h;
+  const std::uint16_t port = h.port();
+  const int lowest_free = drivegate::test::lowest_free_descriptor();
+  ASSERT_GE(lowest_free, 0);
+  // One descriptor left: the client's socket takes it, the server's accept gets EMFILE.
+  drivegate::test::DescriptorLimit limit(static_cast<rlim_t>(lowest_free) + 1);
+  ASSERT_TRUE(limit.ok());
+  Client c(port);
+  ASSERT_TRUE(c.connected());
+  const double cpu0 = drivegate::test::process_cpu_seconds();
+  std::this_thread::sleep_for(500ms);
+  const double spent = drivegate::test::process_cpu_seconds() - cpu0;
+  limit.restore();
+  EXPECT_LT(spent, 0.25) << "the acceptor retried EMFILE in a busy loop";
+  ASSERT_TRUE(c.send(get("/metrics")));
+  EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 200"));
+  EXPECT_EQ(h.stats().accepted, 1u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "descriptor_limit.h"
 #include "harness.h"
 
 namespace drivegate::modbus {
@@ -101,6 +102,29 @@ TEST(Server, TenThousandConnectDisconnectCyclesLeakNoDescriptor) {
   ASSERT_TRUE(h.wait_clients(0));
   EXPECT_EQ(open_descriptors(), before);
   EXPECT_EQ(h.stats().connections_active, 0u);
+}
+
+// Out of descriptors, accept() fails at once for as long as the connection waits in the backlog:
+// the acceptor backs off (it does not spin the event loop that serves every other client) and the
+// client is served once descriptors are back.
+TEST(Server, OutOfDescriptorsTheAcceptorBacksOffAndRecovers) {
+  Harness h;
+  const std::uint16_t port = h.port();
+  const int lowest_free = drivegate::test::lowest_free_descriptor();
+  ASSERT_GE(lowest_free, 0);
+  // One descriptor left: the client's socket takes it, the server's accept gets EMFILE.
+  drivegate::test::DescriptorLimit limit(static_cast<rlim_t>(lowest_free) + 1);
+  ASSERT_TRUE(limit.ok());
+  RawClient c(port);
+  ASSERT_TRUE(c.connected());
+  const double cpu0 = drivegate::test::process_cpu_seconds();
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const double spent = drivegate::test::process_cpu_seconds() - cpu0;
+  limit.restore();
+  EXPECT_LT(spent, 0.25) << "the acceptor retried EMFILE in a busy loop";
+  ASSERT_TRUE(c.send(kRead));
+  EXPECT_EQ(c.reply(), kReadReply);
+  EXPECT_EQ(h.stats().connections_accepted, 1u);
 }
 
 TEST(Server, CloseDisconnectsEveryClientAndLeavesNothingRunning) {
