@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <chrono>
+#include <cmath>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -349,6 +351,30 @@ TEST_F(SecurityTls, PlaintextModbusOnTheTlsPortGetsNoModbusReply) {
   EXPECT_TRUE(r.bytes.empty() || r.bytes[0] == 0x15) << "got " << r.bytes.size() << " bytes";
   EXPECT_TRUE(eventually([&] { return count(log(), "TLS handshake failed") == 1; })) << log();
   // The same request on the plain listener is answered.
+  EXPECT_EQ(raw_request(plain_, 1, {0x04, 0x00, 0x00, 0x00, 0x01}).size(), 4u);
+}
+
+// A client failing its handshake in a loop: the journal gets the first ten failures with their
+// reasons, then at most one a second saying how many it left out (journald would otherwise drop
+// the service's messages, the ones that matter with the flood); the plain listener is served.
+TEST_F(SecurityTls, AHandshakeFloodIsNotLoggedLineByLine) {
+  const auto fail_one = [this] {
+    RawSocket raw(tls_);
+    ASSERT_TRUE(raw.connected());
+    ASSERT_TRUE(raw.send(kReadStatusAdu));
+    EXPECT_TRUE(raw.until_closed(5s).closed);
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 100; ++i) ASSERT_NO_FATAL_FAILURE(fail_one());
+  std::this_thread::sleep_for(1100ms);  // a token back: the next failure is written
+  ASSERT_NO_FATAL_FAILURE(fail_one());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_TRUE(eventually([&] { return log().find("like it not logged)") != std::string::npos; }))
+      << log();
+  const std::size_t lines = count(log(), "TLS handshake failed");
+  EXPECT_GE(lines, 11u) << log();
+  EXPECT_LE(static_cast<double>(lines), 10 + std::ceil(seconds)) << log();
   EXPECT_EQ(raw_request(plain_, 1, {0x04, 0x00, 0x00, 0x00, 0x01}).size(), 4u);
 }
 
