@@ -6,10 +6,10 @@
 # the simulators and the scraper run on CPU $LOAD_CPU. Then, for ROUNDS rounds, dg-loadgen at
 # N = $CONNS persistent connections (the requests of bench/run.sh: FC03 16..140 alternating with
 # FC04 0..18, unit 2) twice: once alone ("without") and once while dg-scraper (bench/scraper.cpp)
-# fetches /metrics and /api/v1/status $RATE times a second each ("with"; the scraper starts just before
-# the load generator and runs through its warm-up and measured window). The order alternates:
-# without first in odd rounds, with first in even ones. Prints the medians of each side, the ratio
-# with / without, and the scraper's latencies.
+# fetches /metrics and /api/v1/status $RATE times a second each ("with"; the scraper starts just
+# before the load generator and runs through its warm-up and measured window). The order
+# alternates: without first in odd rounds, with first in even ones. Prints the medians of each
+# side, the ratio with / without, and the scraper's latencies.
 # The scraper shares the load generator's CPU, so its own work (connecting and reading 20 times a
 # second: ~0.15 ms of CPU each, most of it the kernel's TCP) can delay the load generator and show
 # up in its latencies; it is in C++ for that reason (a Python scraper took 2.5x more). With
