@@ -581,20 +581,13 @@ TEST(HttpServer, OtherClientsAreUnaffectedWhileOneMisbehaves) {
 TEST(HttpServer, OutOfDescriptorsTheAcceptorBacksOffAndRecovers) {
   Harness h;
   const std::uint16_t port = h.port();
-  const int lowest_free = drivegate::test::lowest_free_descriptor();
-  ASSERT_GE(lowest_free, 0);
-  // One descriptor left: the client's socket takes it, the server's accept gets EMFILE.
-  drivegate::test::DescriptorLimit limit(static_cast<rlim_t>(lowest_free) + 1);
-  ASSERT_TRUE(limit.ok());
-  Client c(port);
-  ASSERT_TRUE(c.connected());
-  const double cpu0 = drivegate::test::process_cpu_seconds();
-  std::this_thread::sleep_for(500ms);
-  const double spent = drivegate::test::process_cpu_seconds() - cpu0;
-  limit.restore();
-  EXPECT_LT(spent, 0.25) << "the acceptor retried EMFILE in a busy loop";
-  ASSERT_TRUE(c.send(get("/metrics")));
-  EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 200"));
+  auto s = drivegate::test::connect_out_of_descriptors(
+      [port] { return std::make_unique<Client>(port); });
+  ASSERT_TRUE(s.limited);
+  ASSERT_TRUE(s.client->connected());
+  EXPECT_LT(s.cpu_seconds, 0.25) << "the acceptor retried EMFILE in a busy loop";
+  ASSERT_TRUE(s.client->send(get("/metrics")));
+  EXPECT_THAT(s.client->read_response(), StartsWith("HTTP/1.1 200"));
   EXPECT_EQ(h.stats().accepted, 1u);
 }
 
