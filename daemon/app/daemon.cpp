@@ -70,7 +70,7 @@ Daemon::~Daemon() {
 
 bool Daemon::start_http() {
   if (!config_.http.enabled) return true;
-  content_ = std::make_unique<StatusContent>(gateway_, *server_, mqtt_);
+  content_ = std::make_unique<StatusContent>(gateway_, *server_, mqtt_, http_);
   http::HttpOptions o;
   o.host = config_.http.listen.host;
   o.port = config_.http.listen.port;

@@ -46,14 +46,19 @@ class BusCapture final : public http::CaptureStream {
 }  // namespace
 
 StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
-                             const std::unique_ptr<mqtt::Northbound>& mqtt)
-    : gateway_(gateway), server_(server), mqtt_(mqtt), started_unix_(unix_now()) {}
+                             const std::unique_ptr<mqtt::Northbound>& mqtt,
+                             const std::unique_ptr<http::HttpServer>& http)
+    : gateway_(gateway), server_(server), mqtt_(mqtt), http_(http), started_unix_(unix_now()) {}
 
 StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
   StatusView v{*gateway_, server_, DRIVEGATE_VERSION, started_unix_, unix_now()};
   if (mqtt_) {
     mqtt = mqtt_->status();
     v.mqtt = &mqtt;
+  }
+  if (http_) {
+    v.http = &http_->stats();
+    v.http_clients = http_->client_count();
   }
   return v;
 }

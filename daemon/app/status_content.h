@@ -8,6 +8,7 @@
 #include "format/status_view.h"
 #include "gateway/gateway.h"
 #include "http/content.h"
+#include "http/http_server.h"
 #include "modbus/server.h"
 #include "mqtt/northbound.h"
 
@@ -15,10 +16,11 @@ namespace drivegate {
 
 class StatusContent final : public http::Content {
  public:
-  // `gateway` and `mqtt` are the daemon's own pointers, read at each request (`mqtt` is empty
-  // without [mqtt]).
+  // `gateway`, `mqtt` and `http` are the daemon's own pointers, read at each request (`mqtt` is
+  // empty without [mqtt]; `http` is set once the HTTP server that asks is built).
   StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
-                const std::unique_ptr<mqtt::Northbound>& mqtt);
+                const std::unique_ptr<mqtt::Northbound>& mqtt,
+                const std::unique_ptr<http::HttpServer>& http);
   std::string status_json() override;
   std::string metrics() override;
   std::string regmap_json() override;
@@ -32,6 +34,7 @@ class StatusContent final : public http::Content {
   const std::unique_ptr<Gateway>& gateway_;
   const modbus::Server& server_;
   const std::unique_ptr<mqtt::Northbound>& mqtt_;
+  const std::unique_ptr<http::HttpServer>& http_;
   double started_unix_;
 };
 

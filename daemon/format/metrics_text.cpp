@@ -55,6 +55,11 @@ class Writer {
     out_ += type;
     out_ += '\n';
   }
+  // A family of one sample without labels.
+  void single(std::string_view name, std::string_view type, std::string_view help, double value) {
+    family(name, type, help);
+    sample(name, "", value);
+  }
   // `labels` as written between the braces ("" for none), then `extra` (",name=\"value\"")
   void sample(std::string_view name, std::string_view labels, double value,
               std::string_view extra = {}) {
@@ -242,27 +247,44 @@ void listener_metrics(Writer& w, const StatusView& view) {
 
 // The Sparkplug B northbound ([mqtt], docs/mqtt.md).
 void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
-  const auto one = [&w](std::string_view name, std::string_view type, std::string_view help,
-                        double value) {
-    w.family(name, type, help);
-    w.sample(name, "", value);
-  };
-  one("drivegate_mqtt_connected", "gauge", "1 while the session with the broker is up",
-      m.connected ? 1 : 0);
-  one("drivegate_mqtt_online", "gauge",
-      "1 once the births are out (and the primary host, if any, is online)",
-      m.session == "online" ? 1 : 0);
-  one("drivegate_mqtt_bdseq", "gauge", "the session's Sparkplug bdSeq", m.bd_seq);
-  one("drivegate_mqtt_connects_total", "counter", "sessions begun with the broker",
-      static_cast<double>(m.connects));
-  one("drivegate_mqtt_connection_losses_total", "counter",
-      "connection attempts that failed and sessions lost", static_cast<double>(m.losses));
-  one("drivegate_mqtt_messages_total", "counter", "Sparkplug messages published",
-      static_cast<double>(m.messages));
-  one("drivegate_mqtt_device_births_total", "counter", "DBIRTH messages published",
-      static_cast<double>(m.births));
-  one("drivegate_mqtt_commands_total", "counter", "DCMD writes carried out, whatever the outcome",
-      static_cast<double>(m.commands));
+  w.single("drivegate_mqtt_connected", "gauge", "1 while the session with the broker is up",
+           m.connected ? 1 : 0);
+  w.single("drivegate_mqtt_online", "gauge",
+           "1 once the births are out (and the primary host, if any, is online)",
+           m.session == "online" ? 1 : 0);
+  w.single("drivegate_mqtt_bdseq", "gauge", "the session's Sparkplug bdSeq", m.bd_seq);
+  w.single("drivegate_mqtt_connects_total", "counter", "sessions begun with the broker",
+           static_cast<double>(m.connects));
+  w.single("drivegate_mqtt_connection_losses_total", "counter",
+           "connection attempts that failed and sessions lost", static_cast<double>(m.losses));
+  w.single("drivegate_mqtt_messages_total", "counter", "Sparkplug messages published",
+           static_cast<double>(m.messages));
+  w.single("drivegate_mqtt_device_births_total", "counter", "DBIRTH messages published",
+           static_cast<double>(m.births));
+  w.single("drivegate_mqtt_commands_total", "counter",
+           "DCMD writes carried out, whatever the outcome", static_cast<double>(m.commands));
+}
+
+// The HTTP side itself ([http]): the scrapers and status pages reading these documents.
+void http_metrics(Writer& w, const http::HttpStats& h, std::size_t clients) {
+  const auto count = [](std::uint64_t n) { return static_cast<double>(n); };
+  w.single("drivegate_http_connections", "gauge", "HTTP clients connected",
+           static_cast<double>(clients));
+  w.single("drivegate_http_connections_accepted_total", "counter", "HTTP connections served",
+           count(h.accepted));
+  w.single("drivegate_http_connections_not_allowed_total", "counter",
+           "HTTP connections closed at accept: address not in [http] allow", count(h.not_allowed));
+  w.single("drivegate_http_connections_refused_total", "counter",
+           "HTTP connections closed at accept: too many clients", count(h.refused));
+  w.single("drivegate_http_requests_total", "counter", "HTTP requests answered from a route",
+           count(h.requests));
+  w.single("drivegate_http_bad_requests_total", "counter",
+           "HTTP requests refused as malformed or too large (400, 431)", count(h.bad_requests));
+  w.single("drivegate_http_timeouts_total", "counter",
+           "HTTP connections closed: no whole request within the request timeout",
+           count(h.timeouts));
+  w.single("drivegate_http_captures_total", "counter", "bus captures started (/api/v1/capture)",
+           count(h.captures));
 }
 
 }  // namespace
@@ -274,12 +296,13 @@ void metrics_text(const StatusView& view, std::string& out) {
   append_escaped(version, view.version);
   version += '"';
   w.sample("drivegate_build_info", version, 1);
-  w.family("process_start_time_seconds", "gauge", "start time of the process since the epoch");
-  w.sample("process_start_time_seconds", "", view.started_unix);
+  w.single("process_start_time_seconds", "gauge", "start time of the process since the epoch",
+           view.started_unix);
   device_metrics(w, view);
   bus_metrics(w, view);
   listener_metrics(w, view);
   if (view.mqtt != nullptr) mqtt_metrics(w, *view.mqtt);
+  if (view.http != nullptr) http_metrics(w, *view.http, view.http_clients);
 }
 
 std::string metrics_text(const StatusView& view) {

@@ -159,6 +159,15 @@ void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
   out += '}';
 }
 
+void http_json(std::string& out, const http::HttpStats& h, std::size_t clients) {
+  fmt::format_to(std::back_inserter(out),
+                 ",\n\"http\": {{\"clients\": {}, \"accepted\": {}, \"not_allowed\": {}, "
+                 "\"refused\": {}, \"requests\": {}, \"bad_requests\": {}, \"timeouts\": {}, "
+                 "\"captures\": {}}}",
+                 clients, h.accepted, h.not_allowed, h.refused, h.requests, h.bad_requests,
+                 h.timeouts, h.captures);
+}
+
 }  // namespace
 
 void status_json(const StatusView& view, std::string& out) {
@@ -191,6 +200,7 @@ void status_json(const StatusView& view, std::string& out) {
                  "\"refused\": {}}}",
                  view.server.client_count(), s.requests, s.malformed, s.connections_refused);
   if (view.mqtt != nullptr) mqtt_json(out, *view.mqtt);
+  if (view.http != nullptr) http_json(out, *view.http, view.http_clients);
   out += "}\n";
 }
 

@@ -19,6 +19,7 @@
 #include "drivegate/point.h"
 #include "gateway/gateway.h"
 #include "gateway/point_values.h"
+#include "http/http_stats.h"
 #include "modbus/server.h"
 #include "mqtt/northbound_status.h"
 
@@ -31,6 +32,8 @@ struct StatusView {
   double started_unix = 0;  // process start, seconds since the epoch
   double now_unix = 0;
   const mqtt::NorthboundStatus* mqtt = nullptr;  // [mqtt] off: none
+  const http::HttpStats* http = nullptr;         // the HTTP side serving these documents, if any
+  std::size_t http_clients = 0;
 };
 
 // The name of `value` in the point's labels, or "" (a value without a name, or a bit field).

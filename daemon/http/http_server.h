@@ -15,6 +15,7 @@
 #include <system_error>
 
 #include "content.h"
+#include "http_stats.h"
 #include "modbus/allow_list.h"
 
 namespace drivegate::http {
@@ -30,16 +31,6 @@ struct HttpOptions {
   // [http] capture: /api/v1/capture is served (else 403); a capture's pcap stops at this size.
   bool capture = false;
   std::size_t capture_max_bytes = 16 * 1024 * 1024;
-};
-
-struct HttpStats {
-  std::uint64_t accepted = 0;
-  std::uint64_t not_allowed = 0;  // closed at accept: address not in the allow list
-  std::uint64_t refused = 0;      // closed at accept: max_clients
-  std::uint64_t requests = 0;
-  std::uint64_t bad_requests = 0;  // malformed, headers too large, a body: 400 / 431, closed
-  std::uint64_t timeouts = 0;      // closed: no whole request within request_timeout
-  std::uint64_t captures = 0;      // /api/v1/capture streams started
 };
 
 struct HttpState;

@@ -189,6 +189,20 @@ TEST_F(MetricsE2E, PrometheusScrapesWhatThePlcReads) {
   // One series per device: the labels tell them apart.
   EXPECT_EQ(instant_value(query("count(drivegate_device_speed_rpm)")).value_or(0), 2);
   EXPECT_EQ(instant_value(query("sum(drivegate_device_online)")).value_or(0), 2);
+
+  // Prometheus keeps its connection between scrapes (the case docs/performance.md measures for
+  // the Modbus side's p99): the daemon's own HTTP counters, scraped, show requests growing on
+  // the connections it had already accepted.
+  const auto accepted = instant_value(query("drivegate_http_connections_accepted_total"));
+  const auto requests = instant_value(query("drivegate_http_requests_total"));
+  ASSERT_TRUE(accepted && requests) << query("{__name__=~\"drivegate_http_.*\"}");
+  EXPECT_TRUE(eventually(
+      [&] {
+        return instant_value(query("drivegate_http_requests_total")).value_or(0) >= *requests + 3;
+      },
+      10s));
+  EXPECT_EQ(instant_value(query("drivegate_http_connections_accepted_total")), accepted);
+  EXPECT_EQ(instant_value(query("drivegate_http_bad_requests_total")), 0);
   EXPECT_EQ(prometheus.stop(SIGTERM, 10s), 0) << slurp(dir_ / "prometheus.log");
 }
 
