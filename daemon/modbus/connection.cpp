@@ -215,7 +215,7 @@ void Connection::process_input(Clock::time_point now) {
     }
     if (parse.status == MbapParse::Status::bad) {
       ++state_->stats.malformed;
-      if (const auto held = state_->malformed_log.admit(Clock::now())) {
+      if (const auto held = state_->malformed_log.admit(now)) {
         state_->log->warn("modbus: {}: {}, closing the connection{}", who(), parse.error.message(),
                           held_note(*held));
       }
