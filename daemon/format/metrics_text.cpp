@@ -221,6 +221,16 @@ void listener_metrics(Writer& w, const StatusView& view) {
   family("drivegate_modbus_writes_denied_total", "counter",
          "writes refused with exception 01: beyond the connection's access level",
          [](const auto& l) { return l.writes_denied; });
+  const auto& all = s.stats();  // the server's, every listener's together
+  w.single("drivegate_modbus_connections_refused_total", "counter",
+           "connections closed at accept: max_clients reached",
+           static_cast<double>(all.connections_refused));
+  w.single("drivegate_modbus_malformed_total", "counter",
+           "connections closed on a frame that is not Modbus TCP",
+           static_cast<double>(all.malformed));
+  w.single("drivegate_modbus_frame_timeouts_total", "counter",
+           "connections closed with a partial frame left unfinished",
+           static_cast<double>(all.frame_timeouts));
   char extra[32];
   w.family("drivegate_modbus_requests_total", "counter", "requests, by function code");
   for (std::size_t i = 0; i < s.listener_count(); ++i) {

@@ -3,7 +3,7 @@
 // in a loop must not flood the journal: journald drops a service's messages past its rate limit,
 // and would drop the ones that matter with the flood. A token bucket per cause: a burst of
 // `burst` lines, then one per `interval`; the lines not written are counted, and the next line
-// written says how many (the counters in /metrics and the status JSON have every one).
+// written says how many (the daemon's counters, in /metrics, count every occurrence).
 // Pure: the caller says what time it is.
 #pragma once
 
@@ -20,7 +20,9 @@ class LogThrottle {
   using Clock = std::chrono::steady_clock;
 
   explicit LogThrottle(unsigned burst = 10, Clock::duration interval = std::chrono::seconds(1))
-      : burst_(burst), interval_(interval), tokens_(burst) {}
+      : burst_(burst > 0 ? burst : 1),
+        interval_(interval > Clock::duration::zero() ? interval : Clock::duration(1)),
+        tokens_(burst_) {}
 
   // One occurrence at `now`. nullopt: not to be written (it is counted); else write it, saying
   // that this many before it were not.

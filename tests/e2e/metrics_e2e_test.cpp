@@ -201,7 +201,10 @@ TEST_F(MetricsE2E, PrometheusScrapesWhatThePlcReads) {
         return instant_value(query("drivegate_http_requests_total")).value_or(0) >= *requests + 3;
       },
       10s));
-  EXPECT_EQ(instant_value(query("drivegate_http_connections_accepted_total")), accepted);
+  // At most one new connection over three scrapes or more (a scrape that times out on a loaded
+  // machine makes Prometheus reconnect once); a new connection per scrape would be three.
+  EXPECT_LE(instant_value(query("drivegate_http_connections_accepted_total")).value_or(1e9),
+            *accepted + 1);
   EXPECT_EQ(instant_value(query("drivegate_http_bad_requests_total")), 0);
   EXPECT_EQ(prometheus.stop(SIGTERM, 10s), 0) << slurp(dir_ / "prometheus.log");
 }

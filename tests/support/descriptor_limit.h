@@ -3,6 +3,7 @@
 // over a wait, to tell a busy loop from a wait.
 #pragma once
 
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -14,8 +15,8 @@ namespace drivegate::test {
 class OneDescriptorLeft {
  public:
   OneDescriptorLeft() {
-    // The lowest number not in use: with the soft limit at it + 1, one more can be opened.
-    const int fd = ::dup(0);
+    // With the soft limit at the lowest number not in use + 1, one more can be opened.
+    const int fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);  // the lowest free number
     if (fd < 0) return;
     ::close(fd);
     ::getrlimit(RLIMIT_NOFILE, &saved_);
