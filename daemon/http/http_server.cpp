@@ -36,16 +36,11 @@ void on_accept(const std::shared_ptr<HttpState>& state, const boost::system::err
       std::make_shared<HttpConnection>(state, std::move(socket))->start();
     }
   } else {
-    if (const auto held = state->accept_error_log.admit(std::chrono::steady_clock::now())) {
-      state->log->warn("http: accept failed: {}{}", ec.message(), modbus::held_note(*held));
-    }
-    if (modbus::accept_needs_back_off(ec)) {
-      state->retry_timer.expires_after(modbus::kAcceptRetry);
-      state->retry_timer.async_wait([state](const boost::system::error_code& e) {
-        if (!e && !state->closed) accept(state);
-      });
-      return;
-    }
+    modbus::after_accept_error(ec, "http", *state->log, state->accept_error_log, state->retry_timer,
+                               [state] {
+                                 if (!state->closed) accept(state);
+                               });
+    return;
   }
   accept(state);
 }

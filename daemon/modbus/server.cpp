@@ -41,18 +41,10 @@ void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listen
                const boost::system::error_code& ec, tcp::socket socket) {
   if (state->closed || ec == asio::error::operation_aborted) return;
   if (ec) {
-    if (const auto held = listener->accept_error_log.admit(std::chrono::steady_clock::now())) {
-      state->log->warn("modbus: {}: accept failed: {}{}", listener->options.name(), ec.message(),
-                       held_note(*held));
-    }
-    if (accept_needs_back_off(ec)) {
-      listener->retry_timer.expires_after(kAcceptRetry);
-      listener->retry_timer.async_wait([state, listener](const boost::system::error_code& e) {
-        if (!e && !state->closed) accept(state, listener);
-      });
-      return;
-    }
-    accept(state, listener);
+    after_accept_error(ec, "modbus: " + listener->options.name(), *state->log,
+                       listener->accept_error_log, listener->retry_timer, [state, listener] {
+                         if (!state->closed) accept(state, listener);
+                       });
     return;
   }
   boost::system::error_code peer_ec;
