@@ -25,9 +25,11 @@ Ed3100Driver::Ed3100Driver(std::uint8_t address, Settings settings, Millis poll_
   values_[pt::frequency_setpoint] = 0.0;
 }
 
-// The longest one exchange of this drive takes: every attempt's wait, gap and time on the wire.
+// The longest one exchange of this drive takes: every attempt's wait and the engine's guard time
+// after it, gap and time on the wire.
 Millis Ed3100Driver::turn() const {
-  return settings_.attempts * (settings_.timeout + settings_.frame_gap + kWireAllowance);
+  return settings_.attempts *
+         (unanswered_attempt(settings_.timeout) + settings_.frame_gap + kWireAllowance);
 }
 
 // A write waits for the line at most one exchange of this drive in flight (a poll) and one turn
@@ -163,7 +165,9 @@ RxVerdict Ed3100Driver::on_receive(ByteView rx, TimePoint now) {
   const Job job = std::move(*inflight_);
   inflight_.reset();
   on_reply(job, r);
-  return {RxKind::reply, d.consumed};
+  // A write's echo or an exception says nothing of the drive's state: data_age_ms runs on.
+  const bool state = job.op != Op::write && r.kind != ReplyKind::exception;
+  return {state ? RxKind::reply : RxKind::ack, d.consumed};
 }
 
 void Ed3100Driver::on_reply(const Job& j, const Reply& r) {

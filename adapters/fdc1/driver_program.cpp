@@ -130,7 +130,8 @@ RxVerdict Fdc1Driver::on_echo(const Echo& echo, std::size_t consumed) {
     finish_program(WriteResult::refused, ProgStatus::refused,
                    "the controller's echo differs from the frame sent");
   }
-  return {RxKind::reply, consumed};
+  // The echo of a programming frame carries no status: data_age_ms runs on.
+  return {RxKind::ack, consumed};
 }
 
 void Fdc1Driver::finish_program(WriteResult r, ProgStatus status, std::string message) {

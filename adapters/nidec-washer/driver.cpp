@@ -21,11 +21,11 @@ constexpr Millis kWriteTimeout{3000};
 
 // The longest one attempt at a frame of `bytes` takes: the frame and its echo on the native line
 // (section 3; the engine waits for the echo before it times the reply), the 100 ms reply timeout
-// (section 6), and the gap before the next attempt.
+// (section 6) and the engine's guard time after it, and the gap before the next attempt.
 Millis attempt_time(std::size_t bytes) {
   const auto wire = character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits) *
                     static_cast<long>(2 * bytes);
-  return std::chrono::ceil<Millis>(wire) + kReplyTimeout + kInterFrameGap;
+  return std::chrono::ceil<Millis>(wire) + unanswered_attempt(kReplyTimeout) + kInterFrameGap;
 }
 
 // Not in the document (see README): 0.5 s ramps, 1.2 s on, 0.8 s off each way.

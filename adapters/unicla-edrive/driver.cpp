@@ -18,7 +18,7 @@ EDriveDriver::EDriveDriver(std::uint8_t address, Millis poll_interval, const Set
 
 DriverTraits EDriveDriver::traits() const {
   DriverTraits t;
-  const Millis one_read = settings_.attempts * settings_.reply_timeout;
+  const Millis one_read = settings_.attempts * unanswered_attempt(settings_.reply_timeout);
   t.comm_timeout = std::max(kMinCommTimeout, 4 * poll_interval_ + one_read);
   t.write_timeout = settings_.confirm_timeout + kWriteTimeoutSlack;
   t.inter_frame_gap = kInterFrameGap;

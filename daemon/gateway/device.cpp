@@ -46,9 +46,14 @@ bool Device::online() const {
 
 // --- the engine's calls, each followed by publish() ---
 
-std::optional<Exchange> Device::next_exchange(TimePoint now) {
+std::optional<Exchange> Device::next_exchange(TimePoint now, Turn turn) {
+  const bool applied = turn == Turn::write && release(now, true);
+  last_exchange_wrote_ = handed_ || urgent_unsent_;
+  handed_ = false;
+  urgent_unsent_ = false;
   std::optional<Exchange> ex = driver_->next_exchange(now);
-  publish(now, false);  // choosing what to send changes no value a watcher reads
+  // Choosing what to send changes no value a watcher reads; a part applied may have.
+  publish(now, applied);
   return ex;
 }
 

@@ -6,7 +6,8 @@
 //
 //   device.cpp           the Station side: driver calls, comm_lost, ticks, logging of changes
 //   device_image.cpp     the register image (common block and adapter points) and reads
-//   device_writes.cpp    Modbus write requests: validated, checked whole, applied part by part
+//   device_writes.cpp    Modbus write requests: validated, checked whole, queued (bounded, one
+//                        write turn of the line per part), applied part by part, confirmed
 //   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
 #pragma once
 
@@ -24,6 +25,7 @@
 #include "gateway/register_map.h"
 #include "line/station.h"
 #include "modbus/backend.h"
+#include "modbus/log_throttle.h"
 
 namespace drivegate {
 
@@ -31,6 +33,18 @@ namespace drivegate {
 // command block (command, setpoint_rpm, heartbeat) is operate's, every other writable point
 // maintain's. Device::write and write_points refuse less with 0x01.
 modbus::AccessLevel required_level(const MappedPoint& point);
+
+// Writes waiting at one device, the one being carried out included (docs/safety.md, "Fair line
+// time"): past it a write is refused at once with 0x06 (server device busy). Stops have as many
+// places again of their own, so a full queue never holds one back.
+inline constexpr std::size_t kMaxQueuedWrites = 4;
+
+// What happened to the writes a device was asked for, beyond what the line counters say.
+struct WriteStats {
+  std::uint64_t busy = 0;       // refused with 0x06: the queue was full
+  std::uint64_t coalesced = 0;  // identical to the one waiting before it: answered with it
+  std::uint64_t refused_failsafe = 0;  // a run from a source that cannot clear a latched failsafe
+};
 
 class Device final : public Station {
  public:
@@ -55,9 +69,9 @@ class Device final : public Station {
   // --- Station: the bus engine's side ---
   [[nodiscard]] const std::string& name() const override { return config_.name; }
   Link& link() override { return link_; }
-  [[nodiscard]] bool has_pending_writes() const override { return !requests_.empty(); }
+  [[nodiscard]] PendingWrites pending_writes(TimePoint now) const override;
   void on_work(std::function<void()> kick) override { kick_ = std::move(kick); }
-  std::optional<Exchange> next_exchange(TimePoint now) override;
+  std::optional<Exchange> next_exchange(TimePoint now, Turn turn) override;
   [[nodiscard]] TimePoint wake_at() const override { return driver_->wake_at(); }
   RxVerdict on_receive(ByteView rx, TimePoint now) override;
   void on_no_reply(TimePoint now) override;
@@ -96,6 +110,9 @@ class Device final : public Station {
   void command(Command c, modbus::WriteDone done, TimePoint now);
   // Fails every request in flight (shutdown, bus closed for good).
   void fail_pending(modbus::Exception why);
+  // Writes waiting or being carried out (status bit command_pending).
+  [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
+  [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }
 
  private:
   enum class Origin : std::uint8_t { plc, gateway };
@@ -118,6 +135,15 @@ class Device final : public Station {
   void refresh_common(Table table, TimePoint now);
   std::span<std::uint16_t> registers(Table t) { return image_[static_cast<int>(t)]; }
   // device_writes.cpp
+  // Hands the oldest queued write's next parts to the driver, on a write turn or whenever the
+  // device owes no poll (may_release); true if any part was applied.
+  bool release(TimePoint now, bool write_turn);
+  [[nodiscard]] bool may_release(TimePoint now) const;
+  void next_request(TimePoint now);
+  [[nodiscard]] Request* queue_head() const;
+  [[nodiscard]] std::size_t queued(bool urgent) const;
+  modbus::Exception refuse_run_while_latched(const char* source, TimePoint now);
+  void supersede_runs(TimePoint now);
   modbus::Exception submit(const modbus::Session& session, Table table, std::uint16_t address,
                            std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now,
                            Origin origin);
@@ -127,7 +153,7 @@ class Device final : public Station {
                             modbus::WriteDone done, TimePoint now, Origin origin);
   Progress advance(Request& r, TimePoint now, modbus::Exception& failure);
   void settle(const Completion& c, TimePoint now);
-  void finish(const Request* r, modbus::Exception e);
+  void finish(const Request* r, modbus::Exception e, TimePoint now);
   void expire_requests(TimePoint now);
   // device_failsafe.cpp
   void failsafe_tick(TimePoint now);
@@ -146,7 +172,14 @@ class Device final : public Station {
   std::uint16_t heartbeat_ = 0;
 
   Ticket next_ticket_ = 1;
-  std::vector<std::unique_ptr<Request>> requests_;  // in flight, oldest first
+  // In flight, oldest first: stops (urgent) are handed to the driver at once, the others one at
+  // a time, oldest first, each part on a write turn the bus engine gives (release()).
+  std::vector<std::unique_ptr<Request>> requests_;
+  bool urgent_unsent_ = false;  // a stop was handed to the driver since its last next_exchange
+  bool handed_ = false;         // a queued write's part likewise
+  bool last_exchange_wrote_ = false;  // the device's last exchange carried a write
+  WriteStats write_stats_;
+  modbus::LogThrottle refusal_log_;  // refusals any client can cause, per device
   std::function<void()> kick_;
   std::function<void()> watcher_;
 

@@ -52,7 +52,8 @@ void Device::refresh_common(Table table, TimePoint now) {
   bit(StatusBit::failsafe, failsafe_.latched());
   bit(StatusBit::command_pending, !requests_.empty());
 
-  const auto age = std::chrono::duration_cast<Millis>(now - link_.health.last_good()).count();
+  // The age of the drive's state: of the last frame that carried it, never of a write's echo.
+  const std::optional<TimePoint> data_at = link_.health.last_data();
   const BusCounters no_bus{};
   const CommonSnapshot snapshot{
       .status = status,
@@ -63,10 +64,11 @@ void Device::refresh_common(Table table, TimePoint now) {
       .drive = c,
       .device = link_.counters,
       .bus = link_.bus != nullptr ? *link_.bus : no_bus,
-      .data_age_ms = link_.health.ever_good()
-                         ? static_cast<std::uint32_t>(std::clamp<long long>(
-                               age, 0, std::numeric_limits<std::uint32_t>::max()))
-                         : std::numeric_limits<std::uint32_t>::max(),
+      .data_age_ms =
+          data_at ? static_cast<std::uint32_t>(std::clamp<long long>(
+                        std::chrono::duration_cast<Millis>(now - *data_at).count(), 0,
+                        std::numeric_limits<std::uint32_t>::max() - 1))
+                  : std::numeric_limits<std::uint32_t>::max(),
       .heartbeat = heartbeat_,
   };
   for (const auto& p : map_.common_points(table)) {

@@ -1,6 +1,6 @@
-// A Modbus write request in flight at one device (device_writes.cpp): its parts in the order they
-// are applied, which part is next, the ticket of the part the driver is still carrying out, and
-// when the PLC is answered 0x0B if that part has not settled by then.
+// A write request in flight at one device (device_writes.cpp): its parts in the order they are
+// applied, which part is next, the ticket of the part the driver is still carrying out, and when
+// the client is answered 0x0B if it has not settled by then.
 #pragma once
 
 #include <optional>
@@ -14,9 +14,15 @@ struct Device::Request {
   std::vector<Part> parts;  // the setpoint before the command
   std::size_t next = 0;     // the first part not applied yet
   std::optional<Ticket> waiting;
-  TimePoint deadline;  // of the part in `waiting`
+  // Queued: the latest it may start (never applied after). Started: when the part in `waiting`,
+  // or the wait for the next write turn, has taken too long.
+  TimePoint deadline;
+  bool urgent = false;         // a stop, or the gateway's own: handed to the driver at once
   bool feeds_failsafe = true;  // from the PLC, and from a client whose writes prove it is there
-  modbus::WriteDone done;
+  // Whom to answer: the client that asked, and any that asked the same while it waited.
+  std::vector<modbus::WriteDone> done;
+
+  [[nodiscard]] bool started() const { return next > 0; }
 };
 
 }  // namespace drivegate

@@ -1,8 +1,17 @@
-// Modbus writes at one device. A request is validated against the register map, judged whole by
-// the driver (Driver::check), and only then applied, one part at a time, each part once the one
+// Writes at one device. A request is validated against the register map, judged whole by the
+// driver (Driver::check), and only then applied, one part at a time, each part once the one
 // before it settled. So a request the drive cannot take changes nothing, and when the line fails
-// a later part after an earlier one took effect, the PLC gets the failure and the register image
-// shows what the drive really holds.
+// a later part after an earlier one took effect, the client gets the failure and the register
+// image shows what the drive really holds.
+//
+// Requests wait in a short queue (kMaxQueuedWrites; past it 0x06 at once) and are carried out
+// oldest first, one part at a time. A part goes to the driver at once when the device owes no
+// poll; after a write, if a poll of its own is due, the next part waits for a write turn, which
+// the bus engine alternates with the line's polls: however many clients write, every device, the
+// written one included, keeps being polled. A request equal
+// to the one still queued before it is answered with it. A stop (a client's, the failsafe's,
+// shutdown's) does not queue: it goes to the driver at once, and the queued requests that would
+// run the motor after it are dropped, never sent (0x0B).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -44,21 +53,41 @@ std::int64_t whole(const Value& v) {
   return static_cast<std::int64_t>(as_double(v));
 }
 
+// The command a command part carries (validate() kept the value within the command names).
+Command command_of(const Value& v) {
+  return command_from_value(static_cast<std::uint16_t>(whole(v))).value_or(Command::stop);
+}
+
 // What the driver is asked for a validated part; nothing for the heartbeat, the gateway's own.
 std::optional<WriteOp> op_of(const MappedPoint& point, const Value& value) {
   switch (write_kind(point)) {
     case CommonWrite::heartbeat:
       return std::nullopt;
     case CommonWrite::command:
-      // validate() kept the value within the command names.
-      return WriteOp::of_command(
-          command_from_value(static_cast<std::uint16_t>(whole(value))).value_or(Command::stop));
+      return WriteOp::of_command(command_of(value));
     case CommonWrite::setpoint:
       return WriteOp::of_setpoint(static_cast<std::int32_t>(whole(value)));
     case CommonWrite::none:
       break;
   }
   return WriteOp::of_point(point.index, value);
+}
+
+template <class Parts>
+bool commands(const Parts& parts, bool (*which)(Command)) {
+  return std::any_of(parts.begin(), parts.end(), [which](const auto& p) {
+    return write_kind(*p.point) == CommonWrite::command && which(command_of(p.value));
+  });
+}
+
+bool is_stop(Command c) {
+  return c == Command::stop || c == Command::quick_stop;
+}
+
+// Whether a number can be written at all: NaN and the infinities never reach a drive.
+bool finite(const Value& v) {
+  const auto* d = std::get_if<double>(&v);
+  return d == nullptr || std::isfinite(*d);
 }
 
 }  // namespace
@@ -104,8 +133,9 @@ Exception Device::validate(const modbus::Session& session, Table table, std::uin
         swapped = {words[1], words[0]};
         words = swapped;
       }
+      // A float register holding NaN or an infinity does not decode: 0x03.
       auto decoded = decode_value(p->spec, words);
-      if (!decoded) return Exception::illegal_data_value;
+      if (!decoded || !finite(*decoded)) return Exception::illegal_data_value;
       v = std::move(*decoded);
       const double x = as_double(v);
       if ((p->spec.min != 0.0 || p->spec.max != 0.0) && (x < p->spec.min || x > p->spec.max)) {
@@ -139,6 +169,8 @@ Exception Device::write_points(const modbus::Session& session, std::span<const P
     std::array<std::uint16_t, 2> regs{};
     const std::size_t count = bits ? 1 : spec.register_count();
     if (count > regs.size()) return Exception::illegal_data_address;  // strings are not writable
+    // NaN would encode as 0 (and compare unequal to everything below): refused before that.
+    if (!finite(w.value)) return Exception::illegal_data_value;
     const auto words = std::span(regs).first(count);
     if (bits) {
       const double x = as_double(w.value);
@@ -155,7 +187,7 @@ Exception Device::write_points(const modbus::Session& session, std::span<const P
       const double tolerance = spec.type == PointType::f32
                                    ? std::max(1e-6 * std::fabs(asked), 1e-30)
                                    : 1e-6 * std::fabs(step);
-      if (!held || std::fabs(as_double(*held) - asked) > tolerance) {
+      if (!held || !(std::fabs(as_double(*held) - asked) <= tolerance)) {
         return Exception::illegal_data_value;
       }
     }
@@ -170,19 +202,22 @@ Exception Device::write_points(const modbus::Session& session, std::span<const P
   return enqueue(session, std::move(parts), std::move(done), now, Origin::plc);
 }
 
+// docs/safety.md, "Command authority": while the failsafe is latched, only a run from a source
+// that feeds it (the PLC) clears it; a run from anywhere else is refused before it is applied.
+Exception Device::refuse_run_while_latched(const char* source, TimePoint now) {
+  ++write_stats_.refused_failsafe;
+  if (const auto held = refusal_log_.admit(now)) {
+    log_->warn(
+        "device {}: run from {} refused (0x04): the failsafe is latched, and only a run from the "
+        "PLC clears it{}",
+        config_.name, source, modbus::held_note(*held));
+  }
+  return Exception::server_device_failure;
+}
+
 Exception Device::enqueue(const modbus::Session& session, std::vector<Part> parts,
                           modbus::WriteDone done, TimePoint now, Origin origin) {
   const bool feeds = origin == Origin::plc && session.feeds_failsafe;
-  const auto writes = [&](CommonWrite kind) {
-    return std::any_of(parts.begin(), parts.end(),
-                       [kind](const Part& p) { return write_kind(*p.point) == kind; });
-  };
-  // A valid write to command, setpoint or heartbeat proves the PLC is there, whatever the drive
-  // then makes of it (even 0x0B while comm_lost).
-  if (feeds && (writes(CommonWrite::command) || writes(CommonWrite::setpoint) ||
-                writes(CommonWrite::heartbeat))) {
-    failsafe_.fed(now);
-  }
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
   std::stable_partition(parts.begin(), parts.end(),
@@ -192,6 +227,10 @@ Exception Device::enqueue(const modbus::Session& session, std::vector<Part> part
   const bool heartbeat_only =
       parts.size() == 1 && write_kind(*parts[0].point) == CommonWrite::heartbeat;
   if (comm_lost() && !heartbeat_only) return Exception::gateway_target_failed;
+  if (failsafe_.latched() && !feeds && commands(parts, &is_run)) {
+    return refuse_run_while_latched(
+        origin == Origin::plc ? "a client that does not feed it" : "the gateway", now);
+  }
 
   // The driver judges the whole request before any part of it is applied.
   std::vector<WriteOp> ops;
@@ -202,20 +241,113 @@ Exception Device::enqueue(const modbus::Session& session, std::vector<Part> part
     if (const WriteCheck c = driver_->check(ops); c != WriteCheck::ok) return to_exception(c);
   }
 
+  const bool urgent = origin == Origin::gateway || commands(parts, &is_stop);
+  if (!urgent && !heartbeat_only) {
+    // Equal to the request queued last, which has not started: the same effect, one answer.
+    const auto last = std::find_if(requests_.rbegin(), requests_.rend(),
+                                   [](const auto& r) { return !r->urgent; });
+    if (last != requests_.rend() && !(*last)->started() &&
+        (*last)->feeds_failsafe == feeds &&
+        std::equal(parts.begin(), parts.end(), (*last)->parts.begin(), (*last)->parts.end(),
+                   [](const Part& a, const Part& b) {
+                     return a.point == b.point && a.value == b.value;
+                   })) {
+      ++write_stats_.coalesced;
+      (*last)->done.push_back(std::move(done));
+      return Exception::none;
+    }
+  }
+  if (!heartbeat_only && queued(urgent) >= kMaxQueuedWrites) {
+    ++write_stats_.busy;
+    return Exception::server_device_busy;
+  }
+  if (urgent) supersede_runs(now);
+
   auto owned = std::make_unique<Request>();
   Request* r = owned.get();
   r->parts = std::move(parts);
+  r->urgent = urgent;
   r->feeds_failsafe = feeds;
-  r->done = std::move(done);
+  r->done.push_back(std::move(done));
+  r->deadline = now + traits_.write_timeout;
   requests_.push_back(std::move(owned));
+  if (!urgent && !heartbeat_only) {
+    if (queue_head() != r || !may_release(now)) {
+      if (kick_) kick_();  // the engine gives it a write turn
+      return Exception::none;
+    }
+  }
+  // A stop and the heartbeat go to the driver (or the image) at once.
   Exception failure = Exception::none;
   const Progress progress = advance(*r, now, failure);
-  if (progress == Progress::failed) r->done = nullptr;  // answered by the return value instead
-  if (progress != Progress::waiting) finish(r, failure);
+  if (progress == Progress::failed) r->done.clear();  // answered by the return value instead
+  if (progress != Progress::waiting) finish(r, failure, now);
   publish(now);
   if (progress == Progress::waiting && kick_) kick_();
   return failure;
 }
+
+std::size_t Device::queued(bool urgent) const {
+  return static_cast<std::size_t>(std::count_if(
+      requests_.begin(), requests_.end(), [urgent](const auto& r) { return r->urgent == urgent; }));
+}
+
+// A stop is on its way: the queued requests that would run the motor after it never reach it.
+void Device::supersede_runs(TimePoint now) {
+  std::vector<const Request*> dropped;
+  for (const auto& r : requests_) {
+    if (!r->urgent && !r->started() && commands(r->parts, &is_run)) dropped.push_back(r.get());
+  }
+  for (const Request* r : dropped) finish(r, Exception::gateway_target_failed, now);
+}
+
+// The oldest request that is not a stop: the only one of them the driver may be carrying out.
+Device::Request* Device::queue_head() const {
+  const auto it =
+      std::find_if(requests_.begin(), requests_.end(), [](const auto& r) { return !r->urgent; });
+  return it != requests_.end() ? it->get() : nullptr;
+}
+
+PendingWrites Device::pending_writes(TimePoint now) const {
+  if (urgent_unsent_) return PendingWrites::urgent;
+  // A part the driver still carries may want the line again (resent each turn until confirmed or
+  // its deadline passes, which the driver judges when asked), even while the device is backed
+  // off.
+  const bool driver_due = driver_->wake_at() <= now;
+  bool carried = false;
+  for (const auto& r : requests_) {
+    if (!r->waiting || !driver_due) continue;
+    if (r->urgent) return PendingWrites::urgent;
+    carried = true;
+  }
+  if (handed_ || carried) return PendingWrites::waiting;
+  const Request* head = queue_head();
+  return head != nullptr && !head->waiting ? PendingWrites::waiting : PendingWrites::none;
+}
+
+// A queued write's part may go to the driver outside a write turn unless the device's last
+// exchange carried a write and a poll of its own is now due: then that poll goes first.
+bool Device::may_release(TimePoint now) const {
+  return !last_exchange_wrote_ || driver_->wake_at() > now;
+}
+
+// The head request's next parts go to the driver, up to the first one that needs the line;
+// requests that finish without it (a setpoint stored while stopped) make way for the next at
+// once. Outside a write turn only while the device owes no poll.
+bool Device::release(TimePoint now, bool write_turn) {
+  bool applied = false;
+  while (Request* r = queue_head()) {
+    if (r->waiting || (!write_turn && !may_release(now))) break;
+    Exception failure = Exception::none;
+    const Progress progress = advance(*r, now, failure);
+    applied = true;
+    if (progress == Progress::waiting) break;
+    finish(r, failure, now);
+  }
+  return applied;
+}
+
+
 
 // Applies parts from r.next on until one is pending or fails.
 Device::Progress Device::advance(Request& r, TimePoint now, Exception& failure) {
@@ -228,12 +360,17 @@ Device::Progress Device::advance(Request& r, TimePoint now, Exception& failure) 
       continue;
     }
     const WriteOp& op = *maybe_op;
+    const bool run = op.target == WriteOp::Target::command && is_run(op.command);
+    // The failsafe may have latched while the request waited.
+    if (run && failsafe_.latched() && !r.feeds_failsafe) {
+      failure = refuse_run_while_latched("a client that does not feed it", now);
+      return Progress::failed;
+    }
     const Ticket t = next_ticket_++;
     const WriteStatus s = driver_->apply(op, t, now);
     image_stale_ = true;
     const bool taken = s == WriteStatus::done || s == WriteStatus::pending;
-    if (taken && r.feeds_failsafe && op.target == WriteOp::Target::command && is_run(op.command) &&
-        failsafe_.reset(now)) {
+    if (taken && r.feeds_failsafe && run && failsafe_.reset(now)) {
       log_->info("device {}: failsafe reset by {} from Modbus", config_.name,
                  to_string(op.command));
     }
@@ -242,10 +379,11 @@ Device::Progress Device::advance(Request& r, TimePoint now, Exception& failure) 
         continue;
       case WriteStatus::pending:
         // Each part gets the driver's whole write_timeout from when it is applied: the driver's
-        // own deadline (shorter) fails it first, so a part the PLC was told failed is never
+        // own deadline (shorter) fails it first, so a part the client was told failed is never
         // still on its way to the drive.
         r.waiting = t;
         r.deadline = now + traits_.write_timeout;
+        (r.urgent ? urgent_unsent_ : handed_) = true;
         return Progress::waiting;
       case WriteStatus::invalid_value:
         failure = Exception::illegal_data_value;
@@ -264,38 +402,68 @@ void Device::settle(const Completion& c, TimePoint now) {
   if (it == requests_.end()) return;  // its request timed out already
   Request* r = it->get();
   r->waiting.reset();
-  if (c.result != WriteResult::ok) {
-    finish(r, to_exception(c.result));  // the parts after it are never applied
+  if (c.result != WriteResult::ok || r->next == r->parts.size()) {
+    // Done, or failed: the parts after it are never applied. The next request may go.
+    finish(r, to_exception(c.result), now);
+    next_request(now);
+    return;
+  }
+  if (!r->urgent) {
+    // The next part goes now, or at the device's next write turn if a poll is due first.
+    r->deadline = now + traits_.write_timeout;
+    release(now, false);
+    if (kick_) kick_();
     return;
   }
   Exception failure = Exception::none;
   const Progress progress = advance(*r, now, failure);
-  if (progress != Progress::waiting) finish(r, failure);
+  if (progress != Progress::waiting) finish(r, failure, now);
   if (progress == Progress::waiting && kick_) kick_();
 }
 
-void Device::finish(const Request* r, Exception e) {
+void Device::finish(const Request* r, Exception e, TimePoint now) {
   const auto it = std::find_if(requests_.begin(), requests_.end(),
                                [r](const auto& owned) { return owned.get() == r; });
   if (it == requests_.end()) return;
   const std::unique_ptr<Request> owned = std::move(*it);
   requests_.erase(it);
-  if (owned->done) owned->done(e);
+  // Only a write that succeeded proves the PLC is there: one refused for any reason (by the
+  // gateway or by the drive) or unanswered feeds nothing (docs/safety.md).
+  if (e == Exception::none && owned->feeds_failsafe &&
+      std::any_of(owned->parts.begin(), owned->parts.end(),
+                  [](const Part& p) { return write_kind(*p.point) != CommonWrite::none; })) {
+    failsafe_.fed(now);
+  }
+  for (auto& done : owned->done) {
+    if (done) done(e);
+  }
 }
 
+// Requests not settled by their deadline: 0x0B. One still queued is never applied after it.
 void Device::expire_requests(TimePoint now) {
   std::vector<const Request*> late;
   for (const auto& r : requests_) {
     if (now >= r->deadline) late.push_back(r.get());
   }
-  for (const Request* r : late) finish(r, Exception::gateway_target_failed);
+  for (const Request* r : late) finish(r, Exception::gateway_target_failed, now);
+  if (!late.empty()) next_request(now);
+}
+
+// A request left the queue: the next one's first part goes now, or at a write turn.
+void Device::next_request(TimePoint now) {
+  if (queue_head() == nullptr) return;
+  release(now, false);
+  if (kick_) kick_();
 }
 
 void Device::fail_pending(Exception why) {
   auto failing = std::move(requests_);
   requests_.clear();
+  urgent_unsent_ = false;
   for (auto& r : failing) {
-    if (r->done) r->done(why);
+    for (auto& done : r->done) {
+      if (done) done(why);
+    }
   }
 }
 

@@ -15,6 +15,12 @@ constexpr Millis kLongestIdle{1000};
 // (two characters and the UART's and kernel's latency).
 constexpr std::size_t kEchoSlackChars = 2;
 constexpr Millis kEchoSlack{50};
+// Late bytes extend the guard time after a reply timeout, but a line that never falls quiet
+// (noise, a babbling device) holds the next frame back at most this many guard times.
+constexpr int kGuardLimit = 4;
+// The most a device's lateness may lengthen its guard time: a drive later than this is as good
+// as silent, and every one of its turns would cost its neighbours that much line time.
+constexpr Millis kMaxGuard{1000};
 
 // How a capture flags a frame the station judged `kind`.
 std::uint8_t verdict_flags(RxKind kind) {
@@ -107,6 +113,8 @@ void BusEngine::line_down() {
   }
   state_ = State::down;
   echo_.clear();
+  quiet_until_ = {};
+  guard_owner_ = nullptr;
   rearm(now);
 }
 
@@ -178,6 +186,8 @@ void BusEngine::on_deadline(TimePoint now) {
       ++link.counters.timeouts;
       link.log->debug("bus {}: device {} did not answer (attempt {} of {})", name_,
                       current_->name(), attempt_ + 1, max_attempts_);
+      timed_out_ = true;
+      start_guard(*current_, now);
       attempt_failed(now);
       return;
     }
@@ -193,51 +203,75 @@ void BusEngine::on_deadline(TimePoint now) {
 
 // --- transmitting ---
 
+// Urgent writes first; then, when writes and polls both wait, whichever did not have the last
+// turn: a write storm takes at most every other exchange of the line.
 void BusEngine::pump(TimePoint now) {
   if (state_ != State::idle || stations_.empty()) return;
   kicked_ = false;
+  if (take_turn(Pick::urgent, now)) return;
+  const Pick first = last_turn_was_write_ ? Pick::poll : Pick::write;
+  if (take_turn(first, now)) return;
+  take_turn(first == Pick::poll ? Pick::write : Pick::poll, now);
+}
+
+// One turn of `pick`, round-robin from where the last turn ended; false when nobody wanted it.
+bool BusEngine::take_turn(Pick pick, TimePoint now) {
   const std::size_t n = stations_.size();
-  // Writes first, then polls, each round-robin from where the last turn ended.
-  for (int pass = 0; pass < 2; ++pass) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t idx = (next_station_ + i) % n;
-      Station& st = *stations_[idx];
-      const bool writes = st.has_pending_writes();
-      if (pass == 0 && !writes) continue;
-      if (pass == 1 && (writes || st.link().health.in_backoff(now) || st.wake_at() > now)) {
-        continue;
-      }
-      if (std::optional<Exchange> ex = st.next_exchange(now)) {
-        next_station_ = (idx + 1) % n;
-        begin(st, std::move(*ex), now);
-        return;
-      }
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t idx = (next_station_ + i) % n;
+    Station& st = *stations_[idx];
+    const PendingWrites writes = st.pending_writes(now);
+    switch (pick) {
+      case Pick::urgent:
+        if (writes != PendingWrites::urgent) continue;
+        break;
+      case Pick::write:
+        if (writes == PendingWrites::none) continue;
+        break;
+      case Pick::poll:
+        if (st.link().health.in_backoff(now) || st.wake_at() > now) continue;
+        break;
+    }
+    if (std::optional<Exchange> ex =
+            st.next_exchange(now, pick == Pick::poll ? Turn::poll : Turn::write)) {
+      next_station_ = (idx + 1) % n;
+      last_turn_was_write_ = pick != Pick::poll;
+      begin(st, std::move(*ex), now);
+      return true;
     }
   }
+  return false;
 }
 
 void BusEngine::begin(Station& st, Exchange ex, TimePoint now) {
   current_ = &st;
   exchange_ = std::move(ex);
   attempt_ = 0;
-  // The device's time budget caps how many attempts one turn may take.
+  // The device's time budget caps how many attempts one turn may take: each costs its time on
+  // the wire, the reply timeout and, when it times out, the guard time after it (none on a
+  // streaming line).
   const auto wire = on_wire(exchange_->frame.size()) * (echo_line_ ? 2 : 1);
+  const Millis wait = exchange_->timeout + network_delay_;
+  const Millis guard = streaming_ == nullptr ? guard_for(st.link(), wait) : Millis(0);
   const auto per_attempt =
-      std::chrono::duration_cast<Millis>(exchange_->timeout + network_delay_ + wire) + Millis(1);
+      std::chrono::duration_cast<Millis>(wait + guard + wire) + Millis(1);
   const auto fit = static_cast<int>(st.link().policy.budget / per_attempt);
   max_attempts_ = std::clamp(fit, 1, std::max<int>(1, exchange_->attempts));
   answered_ = false;
+  timed_out_ = false;
   ++counters_.exchanges;
   send_attempt(now);
 }
 
 void BusEngine::send_attempt(TimePoint now) {
-  const Millis gap = current_->link().policy.inter_frame_gap;
-  if (now - last_activity_ < gap) {
+  if (const TimePoint at = clear_at(current_->link().policy.inter_frame_gap); now < at) {
     state_ = State::gap;
-    deadline_ = last_activity_ + gap;
+    deadline_ = at;
     return;
   }
+  guard_owner_ = nullptr;
+  if (attempt_ == 0) first_sent_ = now;
+  last_sent_ = now;
   state_ = State::sending;
   const Bytes& frame = exchange_->frame;
   echo_ = echo_line_ ? frame : Bytes{};
@@ -323,8 +357,13 @@ void BusEngine::on_received(ByteView bytes) {
       exchange_ && (state_ == State::sending || state_ == State::awaiting_echo ||
                     state_ == State::awaiting_reply);
   if (!in_exchange && streaming_ == nullptr) {
-    tap(FrameDirection::from_drive, frame_flags::noise, nullptr, bytes, now);
-    counters_.noise_bytes += static_cast<std::uint32_t>(bytes.size());  // late, or line noise
+    if (guard_owner_ != nullptr && now < quiet_until_) {
+      late_bytes(bytes, now);
+    } else {
+      tap(FrameDirection::from_drive, frame_flags::noise, nullptr, bytes, now);
+      counters_.noise_bytes += static_cast<std::uint32_t>(bytes.size());  // line noise
+    }
+    rearm(now);
     return;
   }
   rx_.insert(rx_.end(), bytes.begin(), bytes.end());
@@ -334,6 +373,66 @@ void BusEngine::on_received(ByteView bytes) {
     process_rx(*streaming_, now);
   }
   rearm(now);
+}
+
+// A reply timed out: nothing is sent for a guard time, so that a reply still on its way is not
+// taken for the answer to what is sent next. Not on a streaming line, whose bytes are the
+// stream's.
+void BusEngine::start_guard(Station& owner, TimePoint now) {
+  if (streaming_ != nullptr) return;
+  const Link& link = owner.link();
+  guard_ = guard_for(link, exchange_->timeout + network_delay_);
+  guard_owner_ = &owner;
+  guard_last_sent_ = last_sent_;
+  guard_spread_ = last_sent_ - first_sent_;
+  guard_started_ = now;
+  // A device known to answer late may still answer every attempt of this exchange.
+  const auto spread = link.health.lateness().count() > 0 ? guard_spread_ : decltype(guard_spread_){};
+  quiet_until_ = now + guard_ + spread;
+}
+
+// The guard time after a timeout of the device on `link`: the reply timeout again, or the
+// lateness the device has shown (at most kMaxGuard), whichever is longer.
+Millis BusEngine::guard_for(const Link& link, Millis wait) {
+  return std::max(guard_time(wait), std::min(link.health.lateness(), kMaxGuard));
+}
+
+// Bytes in the guard time: a late reply. Dropped and counted. The device answers late: its
+// lateness is noted (at least the time since its exchange's last frame), a resend of that
+// exchange waiting for the quiet is given up, and the quiet lasts until replies to all its
+// attempts can have come: from these bytes, the guard (now at least that lateness) and the
+// time between the exchange's first and last frame, within kGuardLimit of such spans.
+void BusEngine::late_bytes(ByteView bytes, TimePoint now) {
+  tap(FrameDirection::from_drive, frame_flags::noise, guard_owner_, bytes, now);
+  const auto n = static_cast<std::uint32_t>(bytes.size());
+  counters_.late_bytes += n;
+  Link& link = guard_owner_->link();
+  link.counters.late_bytes += n;
+  const Millis lateness =
+      std::min(std::chrono::duration_cast<Millis>(now - guard_last_sent_), kMaxGuard);
+  link.health.saw_late(lateness);
+  guard_ = std::max<std::chrono::nanoseconds>(guard_, lateness);
+  const auto span = guard_ + guard_spread_;
+  quiet_until_ = std::min(guard_started_ + kGuardLimit * span, std::max(quiet_until_, now + span));
+  if (state_ != State::gap) return;
+  if (current_ == guard_owner_ && attempt_ > 0) {
+    give_up(now);
+    return;
+  }
+  deadline_ = clear_at(current_->link().policy.inter_frame_gap);
+}
+
+// The device in the exchange waiting to be resent answers, but late: no more attempts; it counts
+// as a turn without an answer (backed off like a silent device).
+void BusEngine::give_up(TimePoint now) {
+  Station* st = current_;
+  exchange_.reset();
+  current_ = nullptr;
+  state_ = State::idle;
+  echo_.clear();
+  st->on_no_reply(now);
+  st->link().health.turn_failed(now, st->link().policy);
+  pump(now);
 }
 
 // Moves an exchange forward with what rx_ holds: the echo first, then the reply.
@@ -387,14 +486,22 @@ void BusEngine::process_rx(Station& st, TimePoint now) {
     const bool retry_on_damage = awaited && streaming_ == nullptr;
     switch (v.kind) {
       case RxKind::reply:
-      case RxKind::frame:
+      case RxKind::ack:
+      case RxKind::frame: {
         ++link.counters.frames_good;
-        if (link.health.frame_good(now)) link.log->info("device {}: answering again", st.name());
-        if (v.kind == RxKind::reply && awaited) {
+        // Only a frame carrying the drive's state makes its data fresh; an ack (a write's echo)
+        // shows the drive answers, nothing more.
+        const bool back =
+            v.kind == RxKind::ack ? link.health.frame_good(now) : link.health.data_good(now);
+        if (back) link.log->info("device {}: answering again", st.name());
+        if (v.kind != RxKind::frame && awaited) {
+          // Answered only after a timeout: a reply to an attempt that timed out may still come.
+          if (timed_out_) start_guard(st, now);
           finish(now);
           return;
         }
         break;
+      }
       case RxKind::nack:
       case RxKind::bad_checksum:
         ++(v.kind == RxKind::nack ? link.counters.nacks : link.counters.bad_checksum);

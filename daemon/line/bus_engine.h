@@ -3,8 +3,23 @@
 // and owns everything about time on the line: the inter-frame gap, reply timeouts counting the
 // frame's own time on the wire, identical resends on timeout, bad checksum or NACK, one-wire echo
 // suppression that checks the echo equals what was sent, unsolicited frames for a streaming
-// device, writes before polls, round-robin among equals, each device's time budget, back-off of
-// silent devices, comm_lost, and the counters.
+// device, each device's time budget, back-off of silent devices, comm_lost, and the counters.
+//
+// Fair line time. Urgent writes (a stop) go first. Otherwise, when writes and polls both wait,
+// a write turn and a poll turn alternate, each round-robin among the devices, so a write storm
+// to one device takes at most every other exchange and every device on the line, the written
+// one included, keeps being polled (docs/safety.md, "Fair line time").
+//
+// Late replies. After a reply timeout the line is kept quiet for a guard time (the exchange's
+// reply timeout again, guard_time()) before the resend or the next exchange. Bytes that arrive
+// in it are a late reply: dropped and counted as late_bytes. The device is then known to answer
+// late: the exchange gets no more attempts (a reply in the next attempt's window could be the
+// late one), the quiet lasts until the replies to all its attempts can have come (the guard
+// again from the late bytes, plus the time between its first and last attempt), and from then
+// on the device's guard is at least the lateness seen (at most kMaxGuard). An exchange answered
+// only after a timeout, by a device known to answer late, is followed by such a quiet too. So a
+// reply is never taken for the answer to another request, and a drive that always answers late
+// goes comm_lost.
 //
 // Time and the line are injected: the daemon wires BusClock and BusLine to Asio (line/bus.h), the
 // tests to a simulated clock and line (tests/support/sim_line.h), and both run this same code.
@@ -85,9 +100,11 @@ class BusEngine {
 
  private:
   enum class State : std::uint8_t { down, idle, gap, sending, awaiting_echo, awaiting_reply };
+  enum class Pick : std::uint8_t { urgent, write, poll };
 
   void tick(TimePoint now);
   void pump(TimePoint now);
+  bool take_turn(Pick pick, TimePoint now);
   void begin(Station& st, Exchange ex, TimePoint now);
   void send_attempt(TimePoint now);
   void after_sent(TimePoint now);
@@ -100,6 +117,14 @@ class BusEngine {
   [[nodiscard]] TimePoint idle_wake(TimePoint now) const;
   // The line was busy until `t` (bytes in, or ours leaving): the inter-frame gap counts from it.
   void note_activity(TimePoint t) { last_activity_ = std::max(last_activity_, t); }
+  // The next frame may go once the gap after the last activity and any guard time have passed.
+  [[nodiscard]] TimePoint clear_at(Millis gap) const {
+    return std::max(last_activity_ + gap, quiet_until_);
+  }
+  void start_guard(Station& owner, TimePoint now);
+  void give_up(TimePoint now);
+  [[nodiscard]] static Millis guard_for(const Link& link, Millis wait);
+  void late_bytes(ByteView bytes, TimePoint now);
   void tap(FrameDirection dir, std::uint8_t flags, const Station* st, ByteView bytes,
            TimePoint now) const {
     if (taps_.empty() || bytes.empty()) return;
@@ -134,7 +159,19 @@ class BusEngine {
   int max_attempts_ = 1;
   bool answered_ = false;         // the device sent something this exchange, if only a NACK
   std::size_t next_station_ = 0;  // round-robin position
+  bool last_turn_was_write_ = false;
   TimePoint last_activity_{};
+  // The guard time after a reply timeout: nothing is sent before quiet_until_, and bytes before
+  // it are guard_owner_'s late reply. The guard is extended by late bytes up to guard_limit_.
+  TimePoint quiet_until_{};
+  TimePoint guard_started_{};
+  std::chrono::nanoseconds guard_{0};
+  Station* guard_owner_ = nullptr;
+  TimePoint guard_last_sent_{};                // the guarded exchange's last frame went then
+  std::chrono::nanoseconds guard_spread_{0};   // from its first frame to its last
+  TimePoint first_sent_{};  // when the exchange in progress sent its first frame
+  TimePoint last_sent_{};   // and its latest
+  bool timed_out_ = false;  // an attempt of the exchange in progress timed out
   BusCounters counters_;
   std::vector<FrameTap*> taps_;  // captures in progress; usually none
 };

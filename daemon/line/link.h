@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 #include "drivegate/driver.h"
 
@@ -22,6 +23,9 @@ struct DeviceCounters {
   std::uint32_t nacks = 0;
   std::uint32_t foreign = 0;
   std::uint32_t noise_bytes = 0;
+  // Bytes that came after this device's reply timeout, in the quiet guard time that follows it:
+  // dropped, never taken as the answer to a later request (docs/safety.md, "Late replies").
+  std::uint32_t late_bytes = 0;
 };
 
 // Counters of one line, shown in every one of its devices' common block.
@@ -32,6 +36,7 @@ struct BusCounters {
   std::uint32_t echo_errors = 0;  // our own bytes did not come back as sent
   std::uint32_t noise_bytes = 0;  // bytes nobody asked for
   std::uint32_t reopens = 0;
+  std::uint32_t late_bytes = 0;  // bytes in a guard time after a reply timeout, dropped
   // Not in the register map (they would wrap within hours at 115200 baud): for /metrics.
   std::uint64_t bytes_sent = 0;
   std::uint64_t bytes_received = 0;  // everything read, a one-wire line's echo included
@@ -48,11 +53,20 @@ struct LinkPolicy {
 };
 
 // Whether a device answers: comm_lost once no good frame came for the comm timeout, and a
-// back-off that spaces out the probes of a device that stopped answering.
+// back-off that spaces out the probes of a device that stopped answering. Apart from that, how
+// old the drive's state is: only a frame that carried it (a status, a poll's reply) makes it new;
+// a write's echo proves the drive answers but says nothing about its state.
 class LinkHealth {
  public:
   explicit LinkHealth(TimePoint since) : last_good_(since) {}
 
+  // A good frame that carried the drive's state (RxKind::reply or frame): answers again, and the
+  // data is fresh. True if it was comm_lost until now.
+  bool data_good(TimePoint now) {
+    last_data_ = now;
+    ever_data_ = true;
+    return frame_good(now);
+  }
   // A good frame: answers again. True if it was comm_lost until now.
   bool frame_good(TimePoint now) {
     const bool was_lost = comm_lost_;
@@ -83,12 +97,23 @@ class LinkHealth {
   [[nodiscard]] bool comm_lost() const { return comm_lost_; }
   [[nodiscard]] bool ever_good() const { return ever_good_; }
   [[nodiscard]] TimePoint last_good() const { return last_good_; }
+  // A reply came this long after its exchange's first frame was sent, too late to be taken: the
+  // guard time after this device's timeouts is at least this from now on (bus_engine.h).
+  void saw_late(Millis lateness) { lateness_ = std::max(lateness_, lateness); }
+  [[nodiscard]] Millis lateness() const { return lateness_; }
+  // When the drive's state last arrived (data_age_ms counts from it); nothing before the first.
+  [[nodiscard]] std::optional<TimePoint> last_data() const {
+    return ever_data_ ? std::optional<TimePoint>(last_data_) : std::nullopt;
+  }
   [[nodiscard]] bool in_backoff(TimePoint now) const { return now < probe_at_; }
   [[nodiscard]] TimePoint probe_at() const { return probe_at_; }
 
  private:
   TimePoint last_good_;
   bool ever_good_ = false;
+  TimePoint last_data_{};
+  bool ever_data_ = false;
+  Millis lateness_{0};
   bool comm_lost_ = false;
   int failures_ = 0;  // consecutive turns without an answer
   TimePoint probe_at_{};

@@ -3,18 +3,27 @@
 // and reads the state it publishes. This makes every driver testable with plain byte vectors.
 //
 // One bus engine serves every device on a serial line, one transaction at a time:
-//   1. When the line is free it asks each device's driver for next_exchange(now): first the
-//      devices with a Modbus write in flight, then the others whose wake_at() has come, each
-//      group round-robin, so a silent device costs the others at most its own time budget
-//      (timeout x attempts) per turn. Which of its own frames goes first is the driver's choice.
+//   1. When the line is free it asks a device's driver for next_exchange(now): a device with a
+//      Modbus write to send (the gateway hands a driver one part of a write at a time, on a write
+//      turn), or one whose wake_at() has come, each round-robin, so a silent device costs the
+//      others at most its own time budget (attempts x (timeout + guard)) per turn. Which of its
+//      own frames goes first is the driver's choice; a part the gateway handed over goes first.
 //   2. It waits traits().inter_frame_gap of line silence, writes Exchange::frame (discarding and
 //      checking the echo on one-wire lines) and, if a reply is expected, collects bytes.
 //   3. Every byte received, solicited or not, goes to on_receive() until the driver says a reply
 //      is complete; bytes before that are kept, so a driver may return incomplete and see them
-//      again with more appended.
+//      again with more appended. A driver takes a frame as the reply only when it matches the
+//      request in flight (function, address or register echo, length, sequence): anything else
+//      is foreign.
 //   4. On timeout, a bad checksum or a NACK the engine resends the identical frame while attempts
-//      remain, then calls on_no_reply(). The engine owns retry counting, back-off of silent
-//      devices, comm_lost (no good frame for traits().comm_timeout) and all counters.
+//      remain, then calls on_no_reply(). After a timeout the line is kept quiet for a guard time
+//      (the exchange's timeout) before anything is sent, and what arrives in it is dropped as late,
+//      so a reply that comes after its timeout is never taken for the answer to a later request.
+//      The engine owns retry counting, back-off of silent devices, comm_lost (no good frame for
+//      traits().comm_timeout), data age (the last reply or frame carrying state, never an ack)
+//      and all counters.
+//   5. Writes and polls share the line fairly: when both wait, the engine alternates a write turn
+//      and a poll turn, so no write load keeps any device on the line from being polled.
 #pragma once
 
 #include <chrono>
@@ -41,6 +50,17 @@ enum class ReplyMode : std::uint8_t {
   none,      // broadcast, or a write the device never acknowledges: done once written
 };
 
+// After an attempt that got no reply the engine keeps the line quiet for this guard time before
+// it sends anything, and drops what arrives in it as a late reply (bus_engine.h).
+constexpr Millis guard_time(Millis reply_timeout) {
+  return reply_timeout;
+}
+// The most line time an unanswered attempt costs beyond its frame on the wire: for a driver's
+// own deadlines that must hold a number of attempts.
+constexpr Millis unanswered_attempt(Millis reply_timeout) {
+  return reply_timeout + guard_time(reply_timeout);
+}
+
 // One transaction on the line.
 struct Exchange {
   Bytes frame;
@@ -51,7 +71,9 @@ struct Exchange {
 
 enum class RxKind : std::uint8_t {
   incomplete,    // a frame may be under way: wait for more bytes (consumed is usually 0)
-  reply,         // the awaited reply, decoded and applied: the exchange is done
+  reply,         // the awaited reply, carrying the drive's state, applied: the exchange is done
+  ack,           // the awaited reply, carrying no state (a write's echo, a refused read): done,
+                 // the drive answers, but data_age_ms does not restart (docs/safety.md)
   frame,         // a good frame that is not the awaited reply (a streamed status): applied
   nack,          // the device refused the frame at protocol level: resend
   bad_checksum,  // frame-shaped bytes whose checksum does not hold: dropped, resend

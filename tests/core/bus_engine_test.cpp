@@ -1,7 +1,8 @@
 // The bus engine on simulated time (tests/support/bus_rig.h) with a tiny request / reply
 // protocol of the test's own: polls at the poll interval, resends, the time budget, back-off of a
-// silent device, comm_lost, writes before polls, and the one-wire echo, asserted on the frames
-// the line carried and the registers a PLC reads.
+// silent device, comm_lost, writes and polls sharing the line fairly, late replies kept out of
+// later exchanges, data age, and the one-wire echo, asserted on the frames the line carried and
+// the registers a PLC reads.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -56,10 +57,14 @@ class PingDriver final : public Driver {
         values_[0] = std::int64_t{rx[2]};
         return {RxKind::reply, 3};
       case kCommandReply:
+        // The command's echo: it says the drive took it, nothing about its state.
+        if (!pending_ || !pending_sent_ || rx[2] != static_cast<std::uint8_t>(pending_command_)) {
+          return {RxKind::foreign, 3};
+        }
         common_.command = static_cast<Command>(rx[2]);
-        if (pending_) completions_.push_back({*pending_, WriteResult::ok});
+        completions_.push_back({*pending_, WriteResult::ok});
         pending_.reset();
-        return {RxKind::reply, 3};
+        return {RxKind::ack, 3};
       case kNack:
         return {RxKind::nack, 3};
       case kDamaged:
@@ -101,25 +106,37 @@ class PingDriver final : public Driver {
   std::vector<Completion> completions_;
 };
 
-// The device side: answers its address; silent, NACKing or damaging on request.
+// The device side: answers its address; silent, NACKing or damaging on request, answering only
+// commands (its polls NACKed), or answering 70 ms late (from its 10 ms ticks).
 class PingSim final : public Simulator {
  public:
-  enum class Mode { answer, silent, nack, damage };
+  enum class Mode { answer, silent, nack, damage, commands_only, late };
   explicit PingSim(std::uint8_t address) : address_(address) {}
-  Bytes on_receive(ByteView rx, TimePoint) override {
+  Bytes on_receive(ByteView rx, TimePoint now) override {
     if (rx.size() < 2 || rx[1] != address_ || mode == Mode::silent) return {};
     if (mode == Mode::nack) return {kNack, address_, 0};
     if (mode == Mode::damage) return {kDamaged, address_, 0};
     if (rx[0] == kCommand && rx.size() == 3) return {kCommandReply, address_, rx[2]};
+    if (mode == Mode::commands_only) return {kNack, address_, 0};
+    if (mode == Mode::late) {
+      late_ = {now + 70ms, {kPollReply, address_, value}};
+      return {};
+    }
     return {kPollReply, address_, value};
   }
-  Bytes on_tick(TimePoint) override { return {}; }
+  Bytes on_tick(TimePoint now) override {
+    if (!late_ || now < late_->first) return {};
+    Bytes out = std::move(late_->second);
+    late_.reset();
+    return out;
+  }
   std::string control(std::string_view, TimePoint) override { return {}; }
   Mode mode = Mode::answer;
   std::uint8_t value = 42;
 
  private:
   std::uint8_t address_;
+  std::optional<std::pair<TimePoint, Bytes>> late_;
 };
 
 BusConfig line(bool echo = false) {
@@ -182,14 +199,16 @@ TEST(BusEngine, ASilentReplyIsResentAfterItsTimeoutCountingTheWire) {
   b.sims[0]->mode = PingSim::Mode::silent;
   const TimePoint from = b.rig.now();
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.read(d, Table::input, 13, 2)[1] == 3; }, 1s));
+  b.rig.run_for(60ms);
   const auto polls = b.sent(kPoll, 1, from);
-  // Three attempts, then at once the next turn (the next poll is overdue and one silent turn is
-  // not yet backed off). 2 bytes at 9600 8N1 leave the UART in 2.08 ms (counted as 2): the 50 ms
-  // wait counts from then, and the identical frame goes again at once (the gap is long past).
+  // Three attempts, then the next turn (the next poll is overdue and one silent turn is not yet
+  // backed off). 2 bytes at 9600 8N1 leave the UART in 2.08 ms (counted as 2): the 50 ms wait
+  // counts from then, then the line is kept quiet for the guard time (the timeout again) before
+  // the identical frame goes again.
   ASSERT_EQ(polls.size(), 4u);
-  EXPECT_EQ(polls[1] - polls[0], 52ms);
-  EXPECT_EQ(polls[2] - polls[1], 52ms);
-  EXPECT_EQ(polls[3] - polls[2], 52ms);
+  EXPECT_EQ(polls[1] - polls[0], 102ms);
+  EXPECT_EQ(polls[2] - polls[1], 102ms);
+  EXPECT_EQ(polls[3] - polls[2], 102ms);
   EXPECT_EQ(b.rig.read(d, Table::input, 15, 2)[1], 2);  // retries: 3 attempts, 2 of them resends
 }
 
@@ -207,8 +226,9 @@ TEST(BusEngine, ANetworkDelayLengthensEveryReplyTimeout) {
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.read(d, Table::input, 13, 2)[1] == 3; }, 1s));
   const auto polls = b.sent(kPoll, 1, from);
   ASSERT_GE(polls.size(), 3u);
-  EXPECT_EQ(polls[1] - polls[0], 82ms);  // 2 ms on the wire + 50 ms timeout + 30 ms network
-  EXPECT_EQ(polls[2] - polls[1], 82ms);
+  // 2 ms on the wire + 50 ms timeout + 30 ms network, and the guard time: 80 ms again.
+  EXPECT_EQ(polls[1] - polls[0], 162ms);
+  EXPECT_EQ(polls[2] - polls[1], 162ms);
 }
 
 TEST(BusEngine, NacksAndDamagedRepliesAreResentAtOnceWithoutBackOff) {
@@ -242,19 +262,20 @@ TEST(BusEngine, ASilentDeviceGoesCommLostAndIsBackedOffWhileTheOtherKeepsItsRate
   EXPECT_EQ(lost[1], static_cast<std::uint16_t>(Fault::comm_lost));
   const TimePoint from = b.rig.now();
   b.rig.run_for(10s);
-  // The live device keeps its 100 ms polls but for the dead one's probes (3 x 52 ms every 2 s);
-  // the dead one is probed, backed off to 2 s.
+  // The live device keeps its 100 ms polls but for the dead one's probes, which its 200 ms budget
+  // holds to one attempt of 102 ms (timeout and guard) every 2 s; the dead one is probed, backed
+  // off to 2 s.
   EXPECT_GE(b.sent(kPoll, 1, from).size(), 90u);
   const auto probes = b.sent(kPoll, 2, from);
-  EXPECT_LE(probes.size(), 3u * 6u);  // at most 6 turns of 3 attempts in 10 s
-  EXPECT_GE(probes.size(), 3u * 4u);
+  EXPECT_LE(probes.size(), 6u);  // at most 6 turns of one attempt in 10 s
+  EXPECT_GE(probes.size(), 4u);
   b.sims[1]->mode = PingSim::Mode::answer;
   ASSERT_TRUE(b.rig.run_until([&] { return !dead.comm_lost(); }, 3s));
 }
 
 TEST(BusEngine, TheBudgetCapsTheAttemptsOfOneTurn) {
   Bench b;
-  Device& d = b.add(1, 100ms, 60ms);  // room for one 50 ms attempt only
+  Device& d = b.add(1, 100ms, 150ms);  // room for one attempt of 50 ms and its 50 ms guard only
   b.rig.start();
   b.rig.run_for(50ms);
   b.sims[0]->mode = PingSim::Mode::silent;
@@ -263,7 +284,7 @@ TEST(BusEngine, TheBudgetCapsTheAttemptsOfOneTurn) {
   EXPECT_GT(b.rig.read(d, Table::input, 13, 2)[1], 0);
 }
 
-TEST(BusEngine, AWriteGoesOutAheadOfThePollsAndIsAnsweredOnceConfirmed) {
+TEST(BusEngine, AWriteGoesOutAtTheNextTurnAndIsAnsweredOnceConfirmed) {
   Bench b;
   Device& d1 = b.add(1, 20ms);
   b.add(2, 20ms);
@@ -336,6 +357,157 @@ TEST(BusEngine, ThePortFailingFailsTheExchangeAndReopeningCounts) {
   b.rig.run_for(200ms);
   EXPECT_GT(b.rig.sent().size(), before);
   EXPECT_EQ(b.rig.read(d, Table::input, 27, 2)[1], 1);  // bus_reopens
+}
+
+
+// --- late replies (docs/safety.md, "Late replies") ---------------------------------------------
+
+// A device that answers 70 ms after each request, its timeout being 50 ms: every reply arrives in
+// the guard time after its timeout, is dropped and counted late, and none is ever taken for the
+// answer to the resend or to the next poll. With no good frame, the device goes comm_lost.
+TEST(BusEngine, AReplyAfterItsTimeoutIsDroppedAsLateNeverCreditedToALaterRequest) {
+  Bench b;
+  Device& d = b.add(1);
+  b.rig.line().turnaround = 70ms;
+  b.sims[0]->value = 7;
+  b.rig.start();
+  b.rig.run_for(3s);
+  EXPECT_TRUE(d.comm_lost());
+  EXPECT_FALSE(d.online());
+  EXPECT_EQ(b.rig.read(d, Table::input, 9, 2)[1], 0);        // frames_good: none
+  EXPECT_NE(b.rig.read(d, "value"), std::vector<std::uint16_t>{7});  // never taken
+  EXPECT_GT(d.line().counters.late_bytes, 0u);
+  EXPECT_EQ(d.line().counters.late_bytes, b.rig.counters().late_bytes);
+  // Nothing was sent while a reply was still on its way: every poll went at least one timeout
+  // plus one guard after the one before.
+  const auto polls = b.sent(kPoll, 1);
+  for (std::size_t i = 1; i < polls.size(); ++i) EXPECT_GE(polls[i] - polls[i - 1], 100ms);
+  // Answering in time again, it is back.
+  b.rig.line().turnaround = 5ms;
+  ASSERT_TRUE(b.rig.run_until([&] { return d.online(); }, 3s));
+  EXPECT_EQ(b.rig.read(d, "value"), std::vector<std::uint16_t>{7});
+}
+
+// Two devices on a line, one of them late: its late replies never land in its neighbour's
+// exchange, and the neighbour keeps being polled and answering.
+TEST(BusEngine, ALateDeviceNeverAnswersForItsNeighbour) {
+  Bench b;
+  Device& late = b.add(1);
+  Device& good = b.add(2);
+  b.rig.start();
+  b.rig.run_for(300ms);
+  b.sims[0]->mode = PingSim::Mode::late;
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(3s);
+  ASSERT_TRUE(late.comm_lost());
+  EXPECT_TRUE(good.online());
+  EXPECT_GT(late.line().counters.late_bytes, 0u);
+  EXPECT_EQ(b.rig.read(good, Table::input, 29, 2)[1], 0);  // not one foreign frame in its turns
+  EXPECT_GE(b.sent(kPoll, 2, from).size(), 15u);           // half its rate at least
+}
+
+// --- fair line time (docs/safety.md, "Fair line time") -----------------------------------------
+
+// A client that keeps writing to device 1 (each write followed by the next as soon as it is
+// answered) never stops the line's polls: device 2 keeps its poll rate to within half, device 1
+// itself is still polled (a value changed at the drive is seen), and neither goes comm_lost.
+TEST(BusEngine, AWriteStormLeavesEveryDevicePolled) {
+  Bench b;
+  Device& written = b.add(1, 100ms);
+  Device& neighbour = b.add(2, 100ms);
+  b.rig.start();
+  b.rig.run_for(300ms);
+  const TimePoint from = b.rig.now();
+  int answered = 0;
+  std::function<void()> next;
+  std::vector<std::shared_ptr<test::WriteOutcome>> outstanding;
+  for (int i = 0; i < 2; ++i) outstanding.push_back(b.rig.write(written, Table::holding, 0, {1}));
+  b.sims[0]->value = 99;
+  const TimePoint end = from + 5s;
+  while (b.rig.now() < end) {
+    b.rig.run_for(1ms);
+    for (auto& w : outstanding) {
+      if (!w->settled()) continue;
+      EXPECT_EQ(w->result, Exception::none);
+      ++answered;
+      w = b.rig.write(written, Table::holding, 0, {static_cast<std::uint16_t>(1 + answered % 2)});
+    }
+    ASSERT_FALSE(neighbour.comm_lost());
+    ASSERT_FALSE(written.comm_lost());
+  }
+  EXPECT_GT(answered, 50);  // the storm really went on
+  // At least half of the 50 polls 5 s at 100 ms make, for both.
+  EXPECT_GE(b.sent(kPoll, 2, from).size(), 25u);
+  EXPECT_GE(b.sent(kPoll, 1, from).size(), 25u);
+  EXPECT_EQ(b.rig.read(written, "value"), std::vector<std::uint16_t>{99});
+}
+
+// Writes wait in a short queue: past kMaxQueuedWrites the answer is 0x06 at once, not a timeout;
+// a write equal to the one queued before it waits with it and is answered with it.
+TEST(BusEngine, AFullWriteQueueAnswersBusyAtOnceAndEqualWritesCoalesce) {
+  Bench b;
+  Device& d = b.add(1, 100ms);
+  b.rig.start();
+  b.rig.run_for(200ms);
+  std::vector<std::shared_ptr<test::WriteOutcome>> writes;
+  for (std::uint16_t rpm = 1; rpm <= kMaxQueuedWrites; ++rpm) {
+    writes.push_back(b.rig.write(d, Table::holding, 0, {static_cast<std::uint16_t>(rpm % 2 + 1)}));
+  }
+  const auto same =
+      b.rig.write(d, Table::holding, 0, {static_cast<std::uint16_t>(kMaxQueuedWrites % 2 + 1)});
+  EXPECT_FALSE(same->settled());  // coalesced with the last one: no place taken
+  const auto busy = b.rig.write(d, Table::holding, 0, {4});  // reset_fault: queued like a run
+  ASSERT_TRUE(busy->settled());
+  EXPECT_EQ(busy->result, Exception::server_device_busy);
+  for (auto& w : writes) EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.rig.wait(same), Exception::none);
+  EXPECT_EQ(d.write_stats().busy, 1u);
+  EXPECT_EQ(d.write_stats().coalesced, 1u);
+  // One frame per queued write, in the order asked; the coalesced one sent nothing of its own.
+  EXPECT_EQ(b.sent(kCommand, 1).size(), kMaxQueuedWrites);
+}
+
+// A stop does not queue: it goes to the line at the next turn, and the queued writes that would
+// run the motor after it are dropped, never sent (0x0B).
+TEST(BusEngine, AStopOvertakesTheQueueAndDropsTheRunsQueuedBeforeIt) {
+  Bench b;
+  Device& d = b.add(1, 100ms);
+  b.rig.start();
+  b.rig.run_for(200ms);
+  const auto first = b.rig.write(d, Table::holding, 0, {1});
+  const auto second = b.rig.write(d, Table::holding, 0, {2});
+  const auto stop = b.rig.write(d, Table::holding, 0, {0});
+  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.rig.wait(second), Exception::gateway_target_failed);
+  b.rig.wait(first);
+  b.rig.run_for(300ms);
+  // Run reverse (2) never reached the line.
+  for (const auto& f : b.rig.sent()) {
+    EXPECT_FALSE(f.bytes.size() == 3 && f.bytes[0] == kCommand && f.bytes[2] == 2);
+  }
+  EXPECT_EQ(b.rig.read(d, Table::holding, 0, 1), std::vector<std::uint16_t>{0});
+}
+
+// --- data age (docs/safety.md, "Data age") ------------------------------------------------------
+
+// A drive that acknowledges every command but whose polls fail: it answers (never comm_lost while
+// commands flow), but data_age_ms counts from its last status, not from the echoes.
+TEST(BusEngine, AWriteEchoDoesNotMakeTheDataFresh) {
+  Bench b;
+  Device& d = b.add(1, 100ms);
+  b.rig.start();
+  b.rig.run_for(300ms);
+  b.sims[0]->mode = PingSim::Mode::commands_only;
+  const TimePoint from = b.rig.now();
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_EQ(b.rig.write_and_wait(d, Table::holding, 0, {static_cast<std::uint16_t>(1 + i % 2)}),
+              Exception::none);
+    b.rig.run_for(40ms);
+  }
+  const auto age = b.rig.read(d, Table::input, 7, 2);
+  const auto age_ms = (std::uint32_t{age[0]} << 16) | age[1];
+  EXPECT_GE(age_ms, std::chrono::duration_cast<Millis>(b.rig.now() - from).count() - 100);
+  EXPECT_GT(b.rig.read(d, Table::input, 9, 2)[1], 20);  // the echoes count as good frames
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 #include "gateway/device.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <spdlog/sinks/null_sink.h>
 
 #include "fake_adapter.h"
@@ -40,17 +42,23 @@ class DeviceTest : public ::testing::Test {
     EXPECT_EQ(device_->read(session_, Table::holding, address, out, t0_), Exception::none);
     return out;
   }
+  // A write as the Modbus server makes it, then the write turn the engine gives the device.
   Exception write(Table t, std::uint16_t address, std::vector<std::uint16_t> v,
                   std::optional<Exception>& answer) {
-    return device_->write(
+    const Exception result = device_->write(
         session_, t, address, v, [&answer](Exception e) { answer = e; }, t0_);
+    device_->next_exchange(t0_, Turn::write);
+    return result;
   }
-  // The driver settles the write it was given last; the device learns it at its next call.
+  // The driver settles the write it was given last; the device learns it at its next call, and
+  // the engine's next write turn hands the driver the next part, if any.
   void complete(WriteResult r, TimePoint at) {
     fake_->completions.push_back({fake_->last_ticket, r});
-    device_->next_exchange(at);
+    device_->next_exchange(at, Turn::poll);
+    device_->next_exchange(at, Turn::write);
   }
-  void heard(TimePoint at) { device_->link().health.frame_good(at); }
+  // A reply carrying the drive's state.
+  void heard(TimePoint at) { device_->link().health.data_good(at); }
 
   TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
   test::FakeDriver* fake_;
@@ -103,7 +111,7 @@ TEST_F(DeviceTest, DataAgeSaysNeverBeforeTheFirstFrame) {
 TEST_F(DeviceTest, AdapterPointsAreScaledIntoTheImage) {
   fake_->values_[0] = -12.3;  // 0.1 degC steps
   fake_->values_[2] = 1.0;
-  device_->next_exchange(t0_);
+  device_->next_exchange(t0_, Turn::poll);
   const auto r = input(32, 3, t0_);
   EXPECT_EQ(r[0], static_cast<std::uint16_t>(-123));
   EXPECT_EQ(r[1], 0x3F80);
@@ -123,7 +131,7 @@ TEST_F(DeviceTest, WriteIsAnsweredWhenTheDriverConfirms) {
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
   EXPECT_FALSE(answer);
   EXPECT_TRUE(input(0, 1, t0_)[0] & (1u << 6));  // command_pending
-  EXPECT_TRUE(device_->has_pending_writes());
+  EXPECT_EQ(device_->writes_in_flight(), 1u);
   complete(WriteResult::ok, t0_);
   EXPECT_EQ(answer, Exception::none);
   EXPECT_FALSE(input(0, 1, t0_)[0] & (1u << 6));
@@ -221,7 +229,7 @@ TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
 
 TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart) {
   fake_->values_[2] = 1.0;  // pressure, f32 at input 33..34: 0x3F80 0x0000 in the map's order
-  device_->next_exchange(t0_);
+  device_->next_exchange(t0_, Turn::poll);
   session_.word_order = modbus::WordOrder::little;
   auto r = input(32, 3, t0_);
   EXPECT_EQ(r[0], static_cast<std::uint16_t>(0));  // i16: never reordered
@@ -232,7 +240,7 @@ TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart
   // The common block's 32-bit counters too (data_age_ms at 7..8: never heard = all ones, so use
   // fault_mask at 2..3 with a fault bit in its low word).
   fake_->common_.faults.set(Fault::over_current);
-  device_->next_exchange(t0_);
+  device_->next_exchange(t0_, Turn::poll);
   const auto mask = input(2, 2, t0_);
   session_.word_order = modbus::WordOrder::big;
   const auto big = input(2, 2, t0_);
@@ -282,6 +290,7 @@ TEST_F(DeviceTest, WritePointsTakesTheSamePathAsAModbusWrite) {
   ASSERT_EQ(device_->write_points(
                 session_, run, [&answer](Exception e) { answer = e; }, t0_),
             Exception::none);
+  device_->next_exchange(t0_, Turn::write);
   // The setpoint first, whatever the order given; answered once the driver settled both.
   EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{900});
   EXPECT_FALSE(answer);
@@ -300,8 +309,10 @@ TEST_F(DeviceTest, WritePointsRefusesValuesItsRegistersCannotHold) {
   std::optional<Exception> a;
   const auto write1 = [&](const MappedPoint* p, Value v) {
     const std::vector<Device::PointWrite> w = {{p, std::move(v)}};
-    return device_->write_points(
+    const Exception result = device_->write_points(
         session_, w, [&a](Exception e) { a = e; }, t0_);
+    device_->next_exchange(t0_, Turn::write);
+    return result;
   };
   // A Modbus client cannot send 40000 in an i16; nor may a DCMD have it saturate to 32767.
   EXPECT_EQ(write1(setpoint, std::int64_t{40000}), Exception::illegal_data_value);
@@ -319,6 +330,39 @@ TEST_F(DeviceTest, WritePointsRefusesValuesItsRegistersCannotHold) {
   // Read-only points are not written at all.
   EXPECT_EQ(write1(device_->map().find("speed_rpm"), std::int64_t{1}),
             Exception::illegal_data_address);
+}
+
+// NaN and the infinities never reach a drive, whatever the path: a DCMD's setpoint or heartbeat,
+// or a Modbus float register holding their bit patterns (docs/safety.md, "Command authority").
+TEST_F(DeviceTest, NaNAndInfinitiesAreRefusedOnEveryWritePath) {
+  fake_->answer = WriteStatus::done;
+  std::optional<Exception> a;
+  const auto write1 = [&](std::string_view point, Value v) {
+    const std::vector<Device::PointWrite> w = {{device_->map().find(point), std::move(v)}};
+    return device_->write_points(
+        session_, w, [&a](Exception e) { a = e; }, t0_);
+  };
+  for (const double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+    EXPECT_EQ(write1("setpoint_rpm", bad), Exception::illegal_data_value);
+    EXPECT_EQ(write1("heartbeat", bad), Exception::illegal_data_value);
+    EXPECT_EQ(write1("command", bad), Exception::illegal_data_value);
+    EXPECT_EQ(write1("gain", bad), Exception::illegal_data_value);
+  }
+  // Modbus: 0x7FC00000 is a quiet NaN, 0x7F800000 +infinity, 0xFF800000 -infinity.
+  for (const int high : {0x7FC0, 0x7F80, 0xFF80}) {
+    EXPECT_EQ(write(Table::holding, 18, {static_cast<std::uint16_t>(high), 0x0000}, a),
+              Exception::illegal_data_value);
+  }
+  device_->next_exchange(t0_, Turn::write);
+  EXPECT_TRUE(fake_->setpoints.empty());
+  EXPECT_TRUE(fake_->commands.empty());
+  EXPECT_TRUE(fake_->writes.empty());
+  EXPECT_EQ(holding(2, 1)[0], 0);  // the heartbeat untouched
+  EXPECT_FALSE(a);
+  // A finite float goes through.
+  EXPECT_EQ(write(Table::holding, 18, {0x3FC0, 0x0000}, a), Exception::none);
+  ASSERT_EQ(fake_->writes.size(), 1u);
+  EXPECT_EQ(std::get<double>(fake_->writes[0].second), 1.5);
 }
 
 TEST_F(DeviceTest, AReadSessionReachingTheDeviceIsRefusedEvenTheHeartbeat) {

@@ -52,14 +52,17 @@ class FailsafeTest : public ::testing::Test {
   Exception plc(std::uint16_t address, std::vector<std::uint16_t> v, Millis ms,
                 modbus::AccessLevel access = modbus::AccessLevel::operate) {
     const modbus::Session session{access, modbus::WordOrder::big};
-    return device_->write(
+    const Exception result = device_->write(
         session, Table::holding, address, v, [this](Exception e) { answers_.push_back(e); },
         at(ms));
+    device_->next_exchange(at(ms), Turn::write);  // the engine's write turn
+    return result;
   }
-  // The driver confirms the write it was last given.
+  // The driver confirms the write it was last given; the engine's next write turn follows.
   void confirm(Millis ms, WriteResult r = WriteResult::ok) {
     fake_->completions.push_back({fake_->last_ticket, r});
-    device_->next_exchange(at(ms));
+    device_->next_exchange(at(ms), Turn::poll);
+    device_->next_exchange(at(ms), Turn::write);
   }
   static constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
   std::uint16_t status(Millis ms) {
@@ -122,8 +125,9 @@ TEST_F(FailsafeTest, StopsAtTheFirstTickAfterTheTimeoutAndLatches) {
   EXPECT_EQ(status(5000ms) & kFailsafeBit, kFailsafeBit);
 }
 
-// A client whose writes do not prove the PLC is there (MQTT unless feed_failsafe): its commands
-// go through, yet neither feed the failsafe nor reset it.
+// A client whose writes do not prove the PLC is there (MQTT unless feed_failsafe): its writes go
+// through but feed nothing, and while the failsafe is latched its run is refused (0x04) before
+// the driver sees it: only the PLC's run clears the latch (docs/safety.md, "Command authority").
 TEST_F(FailsafeTest, WritesFromANonFeedingSessionDoNotFeedIt) {
   make(FailsafeAction::stop);
   ASSERT_EQ(plc(kCommand, {1 /*run_forward*/, 800}, 0ms), Exception::none);
@@ -140,12 +144,26 @@ TEST_F(FailsafeTest, WritesFromANonFeedingSessionDoNotFeedIt) {
   ASSERT_EQ(fake_->commands, std::vector<Command>{Command::stop});
   fake_->common_.command = Command::stop;
   confirm(1000ms);
-  // A run from it is carried out, but the latch holds: it does not say the PLC is back.
+  // A run from it is refused, the latch holds: it does not say the PLC is back.
+  fake_->commands.clear();
   const std::uint16_t run = 1;
-  ASSERT_EQ(device_->write(
+  EXPECT_EQ(device_->write(
                 mqtt, Table::holding, kCommand, std::span(&run, 1), [](Exception) {}, at(1100ms)),
-            Exception::none);
+            Exception::server_device_failure);
+  device_->next_exchange(at(1100ms), Turn::write);
+  EXPECT_TRUE(fake_->commands.empty());
   EXPECT_TRUE(device_->failsafe_latched());
+  EXPECT_EQ(device_->write_stats().refused_failsafe, 1u);
+  // Nor with a setpoint in the same request: refused whole, the setpoint not stored.
+  const std::vector<std::uint16_t> run_at = {1, 900};
+  EXPECT_EQ(device_->write(
+                mqtt, Table::holding, kCommand, run_at, [](Exception) {}, at(1150ms)),
+            Exception::server_device_failure);
+  EXPECT_EQ(fake_->setpoints.back(), 800);
+  // The PLC's own run clears it.
+  ASSERT_EQ(plc(kCommand, {1}, 1200ms), Exception::none);
+  EXPECT_FALSE(device_->failsafe_latched());
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
 }
 
 TEST_F(FailsafeTest, EachOfCommandSetpointAndHeartbeatFeedsIt) {
@@ -173,6 +191,26 @@ TEST_F(FailsafeTest, AdapterPointsAndInvalidWritesDoNotFeedIt) {
   ASSERT_EQ(plc(kCommand, {9}, 600ms), Exception::illegal_data_value);  // no such command
   tick(1000ms);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+  EXPECT_TRUE(device_->failsafe_latched());
+}
+
+// Only a write that succeeded proves the PLC is there: one the driver refuses at once (0x03), one
+// the drive answers with an exception (0x04) and one to a drive that stopped answering (0x0B)
+// feed nothing, so a client whose every write fails never keeps a running drive alive.
+TEST_F(FailsafeTest, AWriteRefusedForAnyReasonFeedsNothing) {
+  make(FailsafeAction::stop);
+  ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
+  fake_->check_answer = WriteCheck::invalid_value;
+  EXPECT_EQ(plc(kSetpoint, {700}, 300ms), Exception::illegal_data_value);
+  fake_->check_answer = WriteCheck::ok;
+  fake_->setpoint_answer = WriteStatus::pending;
+  answers_.clear();
+  ASSERT_EQ(plc(kSetpoint, {700}, 500ms), Exception::none);
+  confirm(600ms, WriteResult::refused);
+  EXPECT_EQ(answers_, std::vector<Exception>{Exception::server_device_failure});
+  ASSERT_EQ(plc(kSetpoint, {710}, 700ms), Exception::none);
+  confirm(800ms, WriteResult::no_response);
+  tick(1000ms);  // 1 s after the heartbeat, the last write that succeeded
   EXPECT_TRUE(device_->failsafe_latched());
 }
 
@@ -237,7 +275,7 @@ TEST_F(FailsafeTest, ADriveThatRunsAgainWhileLatchedIsStoppedAgain) {
   confirm(1000ms);
   // E.g. a driver that resumes the run in force after comm_lost.
   fake_->common_.command = Command::run_forward;
-  device_->next_exchange(at(1500ms));
+  device_->next_exchange(at(1500ms), Turn::poll);
   tick(1500ms);
   EXPECT_EQ(fake_->commands, (std::vector<Command>{Command::stop, Command::stop}));
 }

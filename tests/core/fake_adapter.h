@@ -32,6 +32,11 @@ class FakeDriver final : public Driver {
     pressure.table = Table::input;
     pressure.type = PointType::f32;
     points_.push_back(pressure);
+    PointSpec gain;  // a writable float: holding 18..19
+    gain.name = "gain";
+    gain.table = Table::holding;
+    gain.type = PointType::f32;
+    points_.push_back(gain);
     values_.resize(points_.size());
   }
   DriverTraits traits() const override { return traits_; }

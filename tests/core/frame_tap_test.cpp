@@ -35,9 +35,9 @@ class PollStation final : public Station {
               std::make_shared<spdlog::logger>("test")} {}
   const std::string& name() const override { return name_; }
   Link& link() override { return link_; }
-  bool has_pending_writes() const override { return false; }
+  PendingWrites pending_writes(TimePoint) const override { return PendingWrites::none; }
   void on_work(std::function<void()>) override {}
-  std::optional<Exchange> next_exchange(TimePoint) override {
+  std::optional<Exchange> next_exchange(TimePoint, Turn) override {
     if (!armed_) return std::nullopt;
     armed_ = false;
     Exchange ex;

@@ -70,6 +70,7 @@ TEST(PointValues, ATableAtATimeReadsWhatPointByPointReads) {
   fake.values_ = {std::int64_t{-123} /* x0.1 */,
                   std::int64_t{4242},
                   3.5,
+                  0.25,  // gain
                   std::int64_t{1},
                   std::int64_t{0},
                   std::string("AB12")};

@@ -128,7 +128,7 @@ class DriverRun {
       }
       const std::size_t used = std::clamp<std::size_t>(v.consumed, 1, rx_.size());
       rx_.erase(rx_.begin(), rx_.begin() + static_cast<std::ptrdiff_t>(used));
-      if (v.kind == RxKind::reply) awaiting_ = false;
+      if (v.kind == RxKind::reply || v.kind == RxKind::ack) awaiting_ = false;
     }
   }
 

@@ -72,11 +72,11 @@ TEST(Ed3100Driver, ASilentDriveIsResentToThenCommLostThenStartsUpAgain) {
   const TimePoint from = b.rig.now();
   EXPECT_EQ(b.write({cmd::stop}), Exception::gateway_target_failed);
   // attempts = 3, each waiting timeout_ms = 100 from the last byte written (8 bytes at 9600 8E1:
-  // 9.17 ms, counted in whole ms).
+  // 9.17 ms, counted in whole ms), then the engine's guard time (100 ms again).
   const auto stops = b.times_of(kStop, from);
   ASSERT_EQ(stops.size(), 3u);
-  EXPECT_EQ(stops[1] - stops[0], 109ms);
-  EXPECT_EQ(stops[2] - stops[1], 109ms);
+  EXPECT_EQ(stops[1] - stops[0], 209ms);
+  EXPECT_EQ(stops[2] - stops[1], 209ms);
 
   // comm_timeout_ms = 3000 without a good frame: comm_lost (the engine looks every 100 ms).
   const TimePoint last_good = b.rig.answers().back().at;

@@ -37,7 +37,7 @@ struct Hand : test::DriverByHand {
         speed = s->min_rpm;
       } else {
         const Bytes echo = encode_echo(std::get<Program>(m.frame));
-        EXPECT_EQ(d->on_receive(echo, now).kind, RxKind::reply);
+        EXPECT_EQ(d->on_receive(echo, now).kind, RxKind::ack);  // no status in an echo
       }
     }
   }

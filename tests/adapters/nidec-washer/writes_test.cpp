@@ -260,7 +260,7 @@ TEST(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
   b.control("silent on");
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::run_forward, 800}), Exception::gateway_target_failed);
-  EXPECT_LE(b.rig.now() - asked, 2600ms);
+  EXPECT_LT(b.rig.now() - asked, 3000ms);  // the driver's deadline, not the gateway's
   EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.read("setpoint_rpm"), 800u);  // stored while stopped, before the run was tried
   b.control("silent off");

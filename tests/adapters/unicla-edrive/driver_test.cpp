@@ -155,13 +155,15 @@ TEST(UniclaDriver, ASilentReadIsTriedThreeTimesEachAfterTheReplyTimeout) {
   ASSERT_GE(sent.size(), 4u);
   EXPECT_EQ(sent[0].bytes, sent[1].bytes);
   EXPECT_EQ(sent[1].bytes, sent[2].bytes);
-  // reply_timeout_ms (100) from the end of the 12-byte frame (6.25 ms, counted as 6).
-  EXPECT_EQ(sent[1].at - sent[0].at, 106ms);
-  EXPECT_EQ(sent[2].at - sent[1].at, 106ms);
-  // Then the next poll, a new frame, at the poll interval from the first.
+  // reply_timeout_ms (100) from the end of the 12-byte frame (6.25 ms, counted as 6), then the
+  // engine's guard time (the timeout again).
+  EXPECT_EQ(sent[1].at - sent[0].at, 206ms);
+  EXPECT_EQ(sent[2].at - sent[1].at, 206ms);
+  // Then the next poll, a new frame, overdue at the poll interval: once the last attempt's guard
+  // has passed.
   EXPECT_NE(sent[3].bytes, sent[2].bytes);
   EXPECT_EQ(sent[3].frame.sequence, static_cast<std::uint8_t>(sent[0].frame.sequence + 1));
-  EXPECT_EQ(sent[3].at - sent[0].at, 500ms);
+  EXPECT_EQ(sent[3].at - sent[0].at, 3 * 206ms);
 }
 
 TEST(UniclaDriver, RetriesAndReplyTimeoutFollowTheOptions) {
@@ -172,10 +174,11 @@ TEST(UniclaDriver, RetriesAndReplyTimeoutFollowTheOptions) {
   b.rig.run_for(1s);
   const auto sent = b.sent(from);
   ASSERT_GE(sent.size(), 2u);
-  // One attempt a turn: the next poll is a new frame (new sequence), at the poll interval.
+  // One attempt a turn: the next poll is a new frame (new sequence), at the poll interval, or
+  // once the attempt's 250 ms timeout and guard time have passed (6 + 2 x 250 ms).
   EXPECT_NE(sent[0].bytes, sent[1].bytes);
   EXPECT_EQ(sent[1].frame.sequence, static_cast<std::uint8_t>(sent[0].frame.sequence + 1));
-  EXPECT_EQ(sent[1].at - sent[0].at, 500ms);
+  EXPECT_EQ(sent[1].at - sent[0].at, 506ms);
   EXPECT_EQ(b.read("retries"), 0u);
 }
 
@@ -227,7 +230,7 @@ TEST(UniclaDriver, AShortStatusPayloadIsNotAReply) {
     return encode(f);
   };
   const std::uint32_t good = b.read("frames_good");
-  b.rig.run_for(600ms);
+  b.rig.run_for(800ms);
   EXPECT_EQ(b.read("timeouts"), 1u);
   EXPECT_EQ(b.read("retries"), 1u);
   EXPECT_EQ(b.read("foreign_frames"), 0u);

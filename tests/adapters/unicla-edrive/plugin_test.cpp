@@ -89,8 +89,8 @@ TEST(UniclaSettings, TraitsFollowTheOptions) {
   const DriverTraits t = d->traits();
   // The gateway's write deadline comes after the driver's own verdict.
   EXPECT_EQ(t.write_timeout, 2500ms);
-  // 4 polls + 3 attempts x 100 ms.
-  EXPECT_EQ(t.comm_timeout, 4300ms);
+  // 4 polls + 3 attempts x (100 ms and the engine's guard time after it).
+  EXPECT_EQ(t.comm_timeout, 4600ms);
   EXPECT_EQ(t.inter_frame_gap, kInterFrameGap);
 }
 
