@@ -231,6 +231,9 @@ void listener_metrics(Writer& w, const StatusView& view) {
   w.single("drivegate_modbus_frame_timeouts_total", "counter",
            "connections closed with a partial frame left unfinished",
            static_cast<double>(all.frame_timeouts));
+  w.single("drivegate_modbus_writes_unanswered_total", "counter",
+           "writes that settled after their client had gone, so it was never told the result",
+           static_cast<double>(all.writes_unanswered));
   char extra[32];
   w.family("drivegate_modbus_requests_total", "counter", "requests, by function code");
   for (std::size_t i = 0; i < s.listener_count(); ++i) {

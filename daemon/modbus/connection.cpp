@@ -151,7 +151,11 @@ void Connection::close() {
   tcp().shutdown(asio::ip::tcp::socket::shutdown_both, ec);
   tcp().close(ec);
   timer_.cancel();
-  for (auto& w : writes_) {  // late `done` calls find a stale generation and are dropped
+  // A write already settled but not yet answered cannot be told now; one still with its device
+  // is counted when it settles (on_write_done).
+  for (auto& w : writes_) {
+    if (!w.used || !w.done) continue;
+    unanswered(w, w.result, false);
     w.used = false;
     ++w.generation;
   }
@@ -163,7 +167,7 @@ void Connection::close() {
 }
 
 bool Connection::may_read() const {
-  return !closed_ && !handshaking_ && !reading_ && !close_after_flush_ &&
+  return !closed_ && !handshaking_ && !reading_ && !close_after_flush_ && !input_done_ &&
          outstanding_ < writes_.size() && tx_pending_.size() < kMaxReplyBacklog &&
          rx_len_ < rx_.size();
 }
@@ -181,10 +185,10 @@ void Connection::read() {
 void Connection::on_read(const boost::system::error_code& ec, std::size_t n) {
   reading_ = false;
   if (closed_) return;
-  // The client is done sending (a TLS client may close without close_notify: the same): answer
-  // what it asked, then close.
+  // The client is done sending (a TLS client may close without close_notify: the same): carry
+  // out and answer everything it asked, writes still with their devices included, then close.
   if (ec == asio::error::eof || ec == asio::ssl::error::stream_truncated) {
-    close_after_flush_ = true;
+    input_done_ = true;
     flush();
     return;
   }
@@ -320,14 +324,36 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
 // Never does any work itself: the backend may call it from inside Backend::write (of this or
 // another connection), while the shared dispatcher's scratch still holds that write's values.
 void Connection::on_write_done(std::size_t slot, std::uint32_t generation, Exception result) {
-  if (closed_ || slot >= writes_.size()) return;
+  if (slot >= writes_.size()) return;
   PendingWrite& w = writes_[slot];
   if (!w.used || w.generation != generation || w.done) return;
+  if (closed_) {
+    unanswered(w, result, true);
+    w.used = false;
+    ++w.generation;
+    return;
+  }
   w.done = true;
   w.result = result;
   if (completions_posted_) return;
   completions_posted_ = true;
   asio::post(state_->io, [self = shared_from_this()] { self->process_completions(); });
+}
+
+// The client that sent this write can no longer be told how it went: counted and logged, with
+// what became of it, so that a write applied for nobody is never silent.
+void Connection::unanswered(const PendingWrite& w, Exception result, bool settled_after) {
+  ++state_->stats.writes_unanswered;
+  if (const auto held = state_->unanswered_log.admit(Clock::now())) {
+    state_->log->warn(
+        "modbus: {}: write (function 0x{:02X}, unit {}) {} {} the client closed: it was not told"
+        "{}",
+        who(), w.request[0], w.unit,
+        result == Exception::none ? "took effect"
+                                  : fmt::format("failed (exception 0x{:02X})",
+                                                static_cast<unsigned>(result)),
+        settled_after ? "after" : "as", held_note(*held));
+  }
 }
 
 void Connection::process_completions() {
@@ -353,7 +379,9 @@ void Connection::process_completions() {
 void Connection::flush() {
   if (closed_ || writing_) return;
   if (tx_pending_.empty()) {
-    if (close_after_flush_) close();
+    // Half-closed: once no write is with its device, whatever is left in the buffer is a frame
+    // the client will never finish.
+    if (close_after_flush_ || (input_done_ && outstanding_ == 0)) close();
     return;
   }
   std::swap(tx_pending_, tx_inflight_);

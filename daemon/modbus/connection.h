@@ -3,7 +3,10 @@
 // even while earlier writes of the same connection wait for their device (Modbus TCP matches
 // replies by transaction id, so replies may leave out of order). Closes on a malformed MBAP
 // header (after sending the replies already queued), on a partial frame older than
-// frame_timeout, and after idle_timeout without a request. Both timeouts are read from the
+// frame_timeout, and after idle_timeout without a request. A client that half-closes (shutdown
+// SHUT_WR, or a TLS close_notify) has said all it will: every request it sent is still carried
+// out and answered, then the connection closes. A write whose client has gone before its result
+// is counted (writes_unanswered) and logged, never dropped silently. Both timeouts are read from the
 // shared ServerState when a deadline is computed, so new values (Server::set_limits) apply to an
 // open connection, measured from its last request or partial frame as before.
 //
@@ -73,6 +76,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void commit_reply(std::size_t at, std::uint16_t transaction, std::uint8_t unit,
                     std::size_t pdu_size);
   void on_write_done(std::size_t slot, std::uint32_t generation, Exception result);
+  void unanswered(const PendingWrite& w, Exception result, bool settled_after);
   void process_completions();
   void flush();
   void on_flushed(const boost::system::error_code& ec);
@@ -125,6 +129,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   bool writing_ = false;
   bool completions_posted_ = false;
   bool close_after_flush_ = false;  // a malformed header was seen
+  bool input_done_ = false;         // the client half-closed: answer what it sent, then close
   bool closed_ = false;
 };
 

@@ -88,6 +88,8 @@ struct ServerStats {
   std::uint64_t malformed = 0;       // connections closed on a malformed MBAP header
   std::uint64_t frame_timeouts = 0;  // connections closed with a stale partial frame
   std::uint64_t idle_timeouts = 0;   // connections closed for lack of requests
+  // Writes that settled (applied or not) after their client had gone: it was never told.
+  std::uint64_t writes_unanswered = 0;
   // exceptions[code]: exception responses sent, by code (Application Protocol section 7;
   // codes 0x01..0x0B, larger codes counted in [0]).
   std::array<std::uint64_t, 12> exceptions{};

@@ -70,6 +70,7 @@ struct ServerState {
   LogThrottle refused_log;        // connections past max_clients
   LogThrottle malformed_log;      // frames that are not Modbus TCP
   LogThrottle frame_timeout_log;  // partial frames left unfinished
+  LogThrottle unanswered_log;     // write results whose client had gone
 };
 
 }  // namespace drivegate::modbus

@@ -233,7 +233,10 @@ TEST(Connection, AtTheWriteCapItStopsReadingUntilAWriteCompletes) {
                          {0x00, 0x03, 0x00, 0x00, 0x00, 0x03, 0x01, 0x86, 0x0B}}));
 }
 
-TEST(Connection, AWriteCompletingAfterItsClientLeftIsDropped) {
+// A client that is gone (its connection reset) before its write settled cannot be told: the
+// write's result is counted (writes_unanswered) and logged, nothing is sent, and the next client
+// is served as usual.
+TEST(Connection, AWriteCompletingAfterItsClientWasResetIsCountedNotDropped) {
   Harness h;
   h.with_backend([](FakeBackend& b) {
     b.mode = Mode::deferred;
@@ -247,8 +250,10 @@ TEST(Connection, AWriteCompletingAfterItsClientLeftIsDropped) {
          ++i) {
       std::this_thread::sleep_for(5ms);
     }
+    c.reset();
   }
   ASSERT_TRUE(h.wait_clients(0));
+  EXPECT_EQ(h.stats().writes_unanswered, 0u);  // not settled yet
   h.with_backend([](FakeBackend& b) {
     b.complete();
     return 0;
@@ -257,6 +262,35 @@ TEST(Connection, AWriteCompletingAfterItsClientLeftIsDropped) {
   ASSERT_TRUE(d.send(request(9, 1, {0x03, 0x00, 0x01, 0x00, 0x01})));
   EXPECT_EQ(d.reply(), (Bytes{0x00, 0x09, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x01}));
   EXPECT_EQ(h.stats().responses, 1u);
+  EXPECT_EQ(h.stats().writes_unanswered, 1u);
+}
+
+// A client that half-closes (SHUT_WR) right after a write still with its device: the connection
+// waits for it, sends its reply, then closes. (The write is not dropped with the connection.)
+TEST(Connection, AHalfClosedClientGetsTheReplyToAWriteStillWithItsDevice) {
+  Harness h;
+  h.with_backend([](FakeBackend& b) {
+    b.mode = Mode::deferred;
+    return 0;
+  });
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(4, 1, {0x06, 0x00, 0x00, 0x00, 0x01})));
+  c.shutdown_write();
+  for (int i = 0; i < 100 && h.with_backend([](FakeBackend& b) { return b.pending.size(); }) == 0;
+       ++i) {
+    std::this_thread::sleep_for(5ms);
+  }
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(h.stats().connections_active, 1u);  // still open, waiting for the write
+  h.with_backend([](FakeBackend& b) {
+    b.complete();
+    return 0;
+  });
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x04, 0x00, 0x00, 0x00, 0x06, 0x01, 0x06, 0x00, 0x00, 0x00,
+                              0x01}));
+  EXPECT_TRUE(c.closed_by_peer(1000ms));
+  EXPECT_TRUE(h.wait_clients(0));
+  EXPECT_EQ(h.stats().writes_unanswered, 0u);
 }
 
 // --- MBAP outcomes over TCP (Implementation Guide V1.0b, 3.1.3) ----------------------------

@@ -114,6 +114,13 @@ class RawClient {
     fd_ = -1;
   }
   void shutdown_write() { ::shutdown(fd_, SHUT_WR); }
+  // Closes with a reset (SO_LINGER 0): the server's next read fails, as when a client crashes
+  // or its network goes away.
+  void reset() {
+    const linger l{1, 0};
+    ::setsockopt(fd_, SOL_SOCKET, SO_LINGER, &l, sizeof l);
+    close();
+  }
   bool send(const Bytes& b) {
     return ::send(fd_, b.data(), b.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(b.size());
   }
