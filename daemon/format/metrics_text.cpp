@@ -276,6 +276,12 @@ void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
            static_cast<double>(m.births));
   w.single("drivegate_mqtt_commands_total", "counter",
            "DCMD writes carried out, whatever the outcome", static_cast<double>(m.commands));
+  w.single("drivegate_mqtt_commands_retained_total", "counter",
+           "NCMD and DCMD messages never carried out: retained by the broker, not live",
+           static_cast<double>(m.commands_retained));
+  w.single("drivegate_mqtt_rebirths_coalesced_total", "counter",
+           "rebirth requests answered by one rebirth a few seconds later",
+           static_cast<double>(m.rebirths_coalesced));
 }
 
 // The HTTP side itself ([http]): the scrapers and status pages reading these documents.

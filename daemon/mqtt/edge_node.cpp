@@ -13,11 +13,11 @@ namespace {
 constexpr std::array<std::string_view, 3> kSessionNames = {"offline", "waiting_for_host", "online"};
 
 Metric bd_seq_metric(std::uint8_t bd_seq) {
-  return {std::string(kBdSeq), DataType::uint64, MetricValue{std::uint64_t{bd_seq}}, {}};
+  return {std::string(kBdSeq), DataType::uint64, MetricValue{std::uint64_t{bd_seq}}, {}, {}};
 }
 
 Metric string_metric(std::string_view name, std::string value) {
-  return {std::string(name), DataType::string, MetricValue{std::move(value)}, {}};
+  return {std::string(name), DataType::string, MetricValue{std::move(value)}, {}, {}};
 }
 
 // Whether `now` differs from `before` enough to be reported under `def`.
@@ -72,47 +72,90 @@ void EdgeNode::connected(const Now& now, Sink& sink) {
 
 void EdgeNode::connection_lost() {
   state_ = SessionState::offline;
+  rebirth_due_.reset();
   for (DeviceState& d : devices_) {
     d.born = false;
     d.due.reset();
   }
 }
 
-void EdgeNode::message(std::string_view t, std::string_view payload, const Now& now, Sink& sink) {
+void EdgeNode::message(std::string_view t, std::string_view payload, const Now& now, Sink& sink,
+                       bool retained) {
   if (!options_.primary_host.empty() && t == state_topic(options_.primary_host)) {
-    host_state(payload, now, sink);
+    host_state(payload, now, sink);  // STATE is retained by design (spec 4.2.1)
     return;
   }
   const auto parsed = parse_topic(t);
   if (!parsed || parsed->group != options_.group || parsed->edge_node != options_.edge_node) {
     return;  // not ours (a wildcard subscription elsewhere would bring such)
   }
+  const bool is_command = parsed->type == MessageType::dcmd || parsed->type == MessageType::ncmd;
+  if (!is_command) return;
+  // Spec 6.4 (NCMD, DCMD): "MUST be published with the MQTT retain flag set to false". One that
+  // was kept by the broker is an old command replayed at this subscription, not a host asking
+  // now: a retained run_forward would start a motor a PLC stopped at every reconnect.
+  if (retained) {
+    ++retained_ignored_;
+    sink.notice(Notice::retained,
+                std::string(to_string(parsed->type)) + " on " + std::string(t) +
+                    " ignored: it was retained by the broker (commands are carried out only when "
+                    "they are live; clear it with an empty retained message)");
+    return;
+  }
   if (parsed->type == MessageType::dcmd) {
     command(parsed->device, payload, now, sink);
     return;
   }
-  if (parsed->type != MessageType::ncmd) return;
   std::string why;
   const auto p = decode(payload, why);
   if (!p) {
-    sink.notice("NCMD ignored: " + why);
+    sink.notice(Notice::command, "NCMD ignored: " + why);
     return;
   }
   for (const Metric& m : p->metrics) {
     if (m.name == kRebirth && m.value == MetricValue{true}) {
-      if (state_ == SessionState::online) rebirth(now, sink);
+      if (state_ == SessionState::online) rebirth_requested(now, sink);
     } else {
-      sink.notice("NCMD metric '" + m.name + "' ignored: only " + std::string(kRebirth) +
-                  " = true is understood");
+      sink.notice(Notice::command, "NCMD metric '" + m.name + "' ignored: only " +
+                                       std::string(kRebirth) + " = true is understood");
     }
   }
+}
+
+// A host asked for a rebirth: at once unless one went out less than kRebirthInterval ago; then
+// once that has passed, for every request made meanwhile.
+void EdgeNode::rebirth_requested(const Now& now, Sink& sink) {
+  if (rebirth_due_) {
+    ++rebirths_coalesced_;
+    return;
+  }
+  if (!last_rebirth_ || now.mono >= *last_rebirth_ + kRebirthInterval) {
+    last_rebirth_ = now.mono;
+    rebirth(now, sink);
+    return;
+  }
+  ++rebirths_coalesced_;
+  rebirth_due_ = *last_rebirth_ + kRebirthInterval;
+  sink.notice(Notice::rebirth, "rebirth requested again within " +
+                                   std::to_string(kRebirthInterval.count()) +
+                                   " ms: one rebirth answers every request until then");
 }
 
 void EdgeNode::host_state(std::string_view payload, const Now& now, Sink& sink) {
   const auto s = parse_host_state(payload);
   if (!s) {
-    sink.notice("STATE of primary host '" + options_.primary_host +
-                "' ignored: not {\"online\": bool, \"timestamp\": ms}");
+    sink.notice(Notice::host_state, "STATE of primary host '" + options_.primary_host +
+                                        "' ignored: not {\"online\": bool, \"timestamp\": ms}");
+    return;
+  }
+  // A timestamp from the future would make every genuine STATE after it look stale (below).
+  if (s->timestamp > now.unix_ms + static_cast<std::uint64_t>(kStateClockTolerance.count())) {
+    sink.notice(Notice::host_state,
+                "STATE of primary host '" + options_.primary_host + "' ignored: its timestamp " +
+                    std::to_string(s->timestamp) + " is more than " +
+                    std::to_string(kStateClockTolerance.count() / 1000) +
+                    " s ahead of this gateway's clock (" + std::to_string(now.unix_ms) +
+                    "; check both clocks)");
     return;
   }
   // Spec 5.13: a STATE older than the newest one seen is stale (a late retained copy).
@@ -144,11 +187,12 @@ bool EdgeNode::set_devices(std::vector<DeviceDef> devices, const Now& now, Sink&
 }
 
 void EdgeNode::sample(std::size_t device, bool alive, std::vector<MetricValue> values,
-                      const Now& now, Sink& sink) {
+                      std::uint64_t data_ms, const Now& now, Sink& sink) {
   if (device >= devices_.size() || values.size() != defs_[device].metrics.size()) return;
   DeviceState& d = devices_[device];
   d.alive = alive;
   d.latest = std::move(values);
+  d.data_ms = data_ms;
   if (state_ != SessionState::online) return;
   if (!alive) {
     if (d.born) death(device, now, sink);
@@ -169,6 +213,10 @@ void EdgeNode::sample(std::size_t device, bool alive, std::vector<MetricValue> v
 
 void EdgeNode::tick(const Now& now, Sink& sink) {
   if (state_ != SessionState::online) return;
+  if (rebirth_due_ && now.mono >= *rebirth_due_) {
+    last_rebirth_ = now.mono;
+    rebirth(now, sink);
+  }
   for (std::size_t i = 0; i < devices_.size(); ++i) {
     DeviceState& d = devices_[i];
     if (!d.due || now.mono < *d.due) continue;
@@ -178,7 +226,7 @@ void EdgeNode::tick(const Now& now, Sink& sink) {
 }
 
 std::optional<TimePoint> EdgeNode::wake_at() const {
-  std::optional<TimePoint> at;
+  std::optional<TimePoint> at = rebirth_due_;
   for (const DeviceState& d : devices_) {
     if (d.due && (!at || *d.due < *at)) at = d.due;
   }
@@ -206,7 +254,7 @@ void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
   bool counters = false;
   for (const std::size_t j : changed) {
     const MetricDef& def = defs_[device].metrics[j];
-    p.metrics.push_back({def.name, def.type, d.latest[j], {}});
+    p.metrics.push_back(device_metric(device, j, false));
     d.published[j] = d.latest[j];
     counters = counters || def.counter;
   }
@@ -215,12 +263,24 @@ void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
   send(MessageType::ddata, defs_[device].name, std::move(p), sink);
 }
 
+// A device's metric as published: its value, stamped with when the drive reported it (spec
+// 6.4.4: a metric's timestamp is the time of its value), the properties in a birth only.
+Metric EdgeNode::device_metric(std::size_t device, std::size_t metric, bool birth) const {
+  const MetricDef& def = defs_[device].metrics[metric];
+  const DeviceState& d = devices_[device];
+  Metric m{def.name, def.type, d.latest[metric], birth ? def.properties : std::vector<Property>{},
+           std::nullopt};
+  if (d.data_ms != 0) m.timestamp = d.data_ms;
+  return m;
+}
+
 void EdgeNode::rebirth(const Now& now, Sink& sink) {
+  rebirth_due_.reset();
   seq_ = 0;  // the NBIRTH's seq is 0 (spec 6.4.1)
   Payload p;
   p.timestamp = now.unix_ms;
   p.metrics.push_back(bd_seq_metric(bd_seq_));
-  p.metrics.push_back({std::string(kRebirth), DataType::boolean, MetricValue{false}, {}});
+  p.metrics.push_back({std::string(kRebirth), DataType::boolean, MetricValue{false}, {}, {}});
   p.metrics.push_back(string_metric(kVersion, options_.version));
   send(MessageType::nbirth, {}, std::move(p), sink);
   for (std::size_t i = 0; i < devices_.size(); ++i) {
@@ -236,8 +296,7 @@ void EdgeNode::birth(std::size_t device, const Now& now, Sink& sink) {
   Payload p;
   p.timestamp = now.unix_ms;
   for (std::size_t j = 0; j < def.metrics.size(); ++j) {
-    const MetricDef& m = def.metrics[j];
-    p.metrics.push_back({m.name, m.type, d.latest[j], m.properties});
+    p.metrics.push_back(device_metric(device, j, true));
   }
   if (options_.commands) {
     p.metrics.push_back(string_metric(kCommandPoint, ""));
@@ -271,18 +330,27 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
   const auto it = std::find_if(defs_.begin(), defs_.end(),
                                [&](const DeviceDef& d) { return d.name == device; });
   if (it == defs_.end()) {
-    sink.notice("DCMD for unknown device '" + std::string(device) + "' ignored");
+    sink.notice(Notice::command, "DCMD for unknown device '" + std::string(device) + "' ignored");
     return;
   }
   const auto index = static_cast<std::size_t>(it - defs_.begin());
   if (!options_.commands) {
-    sink.notice("DCMD for " + std::string(device) + " ignored: [mqtt] commands = false");
+    sink.notice(Notice::command,
+                "DCMD for " + std::string(device) + " ignored: [mqtt] commands = false");
     return;
   }
   std::string why;
   const auto p = decode(payload, why);
   if (!p) {
-    sink.notice("DCMD for " + std::string(device) + " ignored: " + why);
+    sink.notice(Notice::command, "DCMD for " + std::string(device) + " ignored: " + why);
+    return;
+  }
+  if (p->metrics.size() > kMaxCommandMetrics) {
+    const std::string refused = std::to_string(p->metrics.size()) + " metrics, more than the " +
+                                std::to_string(kMaxCommandMetrics) + " one command may carry";
+    sink.notice(Notice::command, "DCMD for " + std::string(device) + " refused: " + refused);
+    command_done(index, "<" + std::to_string(p->metrics.size()) + " metrics>",
+                 "refused: " + refused, now, sink);
     return;
   }
   std::vector<PointCommand> points;
@@ -310,7 +378,7 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
   }
   if (points.empty() && refused.empty()) refused = "no metrics";
   if (!refused.empty()) {
-    sink.notice("DCMD for " + std::string(device) + " refused: " + refused);
+    sink.notice(Notice::command, "DCMD for " + std::string(device) + " refused: " + refused);
     command_done(index, names, "refused: " + refused, now, sink);
     return;
   }

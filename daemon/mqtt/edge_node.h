@@ -10,11 +10,18 @@
 //                min_interval, counters at most once per counter_interval; seq 0..255 across
 //                every message of the node
 //   deaths       DDEATH when a device goes comm_lost, DBIRTH when it is back
-//   rebirth      on NCMD Node Control/Rebirth = true, or when the device set changed
+//   rebirth      on NCMD Node Control/Rebirth = true (at most one per kRebirthInterval, the
+//                requests in between answered by one rebirth when it has passed), or when the
+//                device set changed
 //   primary host with primary_host set: births wait for its STATE online; STATE offline
-//                publishes NDEATH and drops the session (spec 5.13)
-//   commands     DCMD: metrics checked here (known, writable, a value), written by the Sink,
-//                the outcome published as the device's Command/Last Point and Command/Last Result
+//                publishes NDEATH and drops the session (spec 5.13); a STATE stamped more than
+//                kStateClockTolerance ahead of this clock is ignored
+//   commands     DCMD: metrics checked here (known, writable, a value, at most
+//                kMaxCommandMetrics), written by the Sink, the outcome published as the device's
+//                Command/Last Point and Command/Last Result; a retained NCMD or DCMD (a command
+//                replayed at every subscription) is never carried out
+//   timestamps   each device metric carries the time of the drive's state it shows (the last
+//                reply that carried it, never a write's echo); the payload's is when it was sent
 #pragma once
 
 #include <cstdint>
@@ -30,6 +37,14 @@
 namespace drivegate::sparkplug {
 
 // What one metric of a device is, fixed between births.
+// A command is carried out only when it is live: a DCMD published with retain would otherwise
+// run a motor again at every reconnect.
+inline constexpr std::size_t kMaxCommandMetrics = 64;  // more in one DCMD: refused whole
+inline constexpr Millis kRebirthInterval{5'000};       // between rebirths a host asks for
+// A primary host's STATE stamped further ahead of this node's clock than this is not believed:
+// it would make every later genuine STATE look stale.
+inline constexpr std::chrono::milliseconds kStateClockTolerance{5 * 60 * 1000};
+
 struct MetricDef {
   std::string name;
   DataType type = DataType::unknown;
@@ -58,6 +73,10 @@ struct PointCommand {
   MetricValue value;
 };
 
+// What a notice is about: the northbound throttles its log lines per kind.
+enum class Notice : std::uint8_t { command, retained, host_state, rebirth };
+inline constexpr std::size_t kNoticeKinds = 4;
+
 class Sink {
  public:
   virtual ~Sink() = default;
@@ -66,8 +85,9 @@ class Sink {
   virtual void drop_session() = 0;
   // Write `points` of device `device` in one request; answer with EdgeNode::command_done.
   virtual void write(std::size_t device, std::vector<PointCommand> points) = 0;
-  // Something the log should say (a command refused, a bad STATE payload).
-  virtual void notice(std::string message) = 0;
+  // Something the log should say (a command refused, a bad STATE payload), anyone on the broker
+  // can cause: throttled per kind.
+  virtual void notice(Notice kind, std::string message) = 0;
 };
 
 struct EdgeNodeOptions {
@@ -104,16 +124,18 @@ class EdgeNode {
 
   void connected(const Now& now, Sink& sink);
   void connection_lost();
-  // A message from the broker on one of subscriptions().
-  void message(std::string_view topic, std::string_view payload, const Now& now, Sink& sink);
+  // A message from the broker on one of subscriptions(); `retained`: delivered from the broker's
+  // store at subscription, not live (MQTT 3.1.1 section 3.3.1.3).
+  void message(std::string_view topic, std::string_view payload, const Now& now, Sink& sink,
+               bool retained = false);
 
   // The devices and their metrics. Unchanged: nothing happens. Changed while online: DDEATH for
   // each device gone, then a rebirth. Returns whether they changed.
   bool set_devices(std::vector<DeviceDef> devices, const Now& now, Sink& sink);
-  // A device's state now: `alive` (heard from and not comm_lost) and its values, in the order of
-  // its DeviceDef's metrics.
-  void sample(std::size_t device, bool alive, std::vector<MetricValue> values, const Now& now,
-              Sink& sink);
+  // A device's state now: `alive` (heard from and not comm_lost), its values in the order of its
+  // DeviceDef's metrics, and when the drive last reported its state (Unix ms; 0: never).
+  void sample(std::size_t device, bool alive, std::vector<MetricValue> values,
+              std::uint64_t data_ms, const Now& now, Sink& sink);
   // A written command settled: `result` is "ok" or why not.
   void command_done(std::size_t device, std::string points, std::string result, const Now& now,
                     Sink& sink);
@@ -130,6 +152,10 @@ class EdgeNode {
   [[nodiscard]] std::uint8_t bd_seq() const { return bd_seq_; }
   [[nodiscard]] const std::vector<DeviceDef>& devices() const { return defs_; }
   [[nodiscard]] std::uint64_t births() const { return births_; }
+  // Commands never carried out because they came retained (NCMD and DCMD).
+  [[nodiscard]] std::uint64_t retained_ignored() const { return retained_ignored_; }
+  // Rebirths asked for while one was too recent, answered together later.
+  [[nodiscard]] std::uint64_t rebirths_coalesced() const { return rebirths_coalesced_; }
 
  private:
   struct DeviceState {
@@ -137,12 +163,15 @@ class EdgeNode {
     bool born = false;  // its DBIRTH went out in this session
     std::vector<MetricValue> latest;
     std::vector<MetricValue> published;
+    std::uint64_t data_ms = 0;  // when the drive last reported its state (Unix ms)
     TimePoint last_data{};
     TimePoint last_counters{};
     std::optional<TimePoint> due;  // changes held back until then
   };
 
   void rebirth(const Now& now, Sink& sink);
+  void rebirth_requested(const Now& now, Sink& sink);
+  [[nodiscard]] Metric device_metric(std::size_t device, std::size_t metric, bool birth) const;
   void birth(std::size_t device, const Now& now, Sink& sink);
   void death(std::size_t device, const Now& now, Sink& sink);
   void report(std::size_t device, const Now& now, Sink& sink);
@@ -159,6 +188,10 @@ class EdgeNode {
   std::vector<DeviceDef> defs_;
   std::vector<DeviceState> devices_;
   std::uint64_t births_ = 0;
+  std::optional<TimePoint> last_rebirth_;  // the last rebirth a host asked for
+  std::optional<TimePoint> rebirth_due_;  // a host's rebirth request held back until then
+  std::uint64_t retained_ignored_ = 0;
+  std::uint64_t rebirths_coalesced_ = 0;
 };
 
 }  // namespace drivegate::sparkplug

@@ -292,7 +292,8 @@ void MosquittoClient::on_message(mosquitto* /*m*/, void* self, const mosquitto_m
   if (c->handlers_.message == nullptr || msg->topic == nullptr) return;
   c->handlers_.message(msg->topic,
                        std::string_view(static_cast<const char*>(msg->payload),
-                                        static_cast<std::size_t>(std::max(msg->payloadlen, 0))));
+                                        static_cast<std::size_t>(std::max(msg->payloadlen, 0))),
+                       msg->retain);
 }
 
 }  // namespace drivegate::mqtt

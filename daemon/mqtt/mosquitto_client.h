@@ -42,7 +42,8 @@ class MosquittoClient {
   struct Handlers {
     std::function<void()> connected;            // CONNACK accepted
     std::function<void(std::string why)> lost;  // an attempt failed or the session ended
-    std::function<void(std::string_view topic, std::string_view payload)> message;
+    // `retained`: from the broker's store at subscription, not published now.
+    std::function<void(std::string_view topic, std::string_view payload, bool retained)> message;
   };
 
   MosquittoClient(boost::asio::io_context& io, BrokerOptions options, Handlers handlers,

@@ -128,7 +128,9 @@ Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::stri
                             std::chrono::milliseconds(10'000)},
               MosquittoClient::Handlers{
                   [this] { connected(); }, [this](std::string why) { lost(why); },
-                  [this](std::string_view t, std::string_view p) { message(t, p); }},
+                  [this](std::string_view t, std::string_view p, bool retained) {
+                    message(t, p, retained);
+                  }},
               log),
       retry_timer_(io),
       tick_timer_(io) {
@@ -190,6 +192,8 @@ NorthboundStatus Northbound::status() const {
   s.connected = client_.connected();
   s.bd_seq = edge_.bd_seq();
   s.births = edge_.births();
+  s.commands_retained = edge_.retained_ignored();
+  s.rebirths_coalesced = edge_.rebirths_coalesced();
   return s;
 }
 
@@ -240,8 +244,8 @@ void Northbound::connect_after(Millis delay) {
   });
 }
 
-void Northbound::message(std::string_view topic, std::string_view payload) {
-  edge_.message(topic, payload, now(), *this);
+void Northbound::message(std::string_view topic, std::string_view payload, bool retained) {
+  edge_.message(topic, payload, now(), *this, retained);
   schedule_tick();
 }
 
@@ -269,7 +273,14 @@ void Northbound::flush() {
     dirty_[i] = false;
     const Device& d = *watched_[i].device;
     const bool alive = d.line().health.ever_good() && !d.comm_lost();
-    edge_.sample(i, alive, sample(watched_[i]), t, *this);
+    // When the drive's state last arrived, on the payload's clock: a write's echo never counts.
+    std::uint64_t data_ms = 0;
+    if (const auto at = d.line().health.last_data()) {
+      const auto age = std::chrono::duration_cast<Millis>(t.mono - *at).count();
+      data_ms = t.unix_ms - static_cast<std::uint64_t>(std::clamp<std::int64_t>(
+                                age, 0, static_cast<std::int64_t>(t.unix_ms)));
+    }
+    edge_.sample(i, alive, sample(watched_[i]), data_ms, t, *this);
   }
   schedule_tick();
 }
@@ -378,7 +389,7 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
     const auto it = std::find_if(defs.begin(), defs.end(),
                                  [&](const sparkplug::DeviceDef& d) { return d.name == name; });
     if (e != modbus::Exception::none) {
-      log_->warn("MQTT: DCMD {} {}: {}", name, names, outcome(e));
+      notice(sparkplug::Notice::command, fmt::format("DCMD {} {}: {}", name, names, outcome(e)));
     }
     if (it != defs.end()) {
       edge_.command_done(static_cast<std::size_t>(it - defs.begin()), names, outcome(e), now(),
@@ -389,8 +400,11 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
   if (e != modbus::Exception::none) report(e);  // refused before anything was applied
 }
 
-void Northbound::notice(std::string message) {
-  log_->warn("MQTT: {}", message);
+// Anyone who can publish to the broker can cause these: a burst, then one a second per kind.
+void Northbound::notice(sparkplug::Notice kind, std::string message) {
+  if (const auto held = notice_log_.at(static_cast<std::size_t>(kind)).admit(Clock::now())) {
+    log_->warn("MQTT: {}{}", message, modbus::held_note(*held));
+  }
 }
 
 }  // namespace drivegate::mqtt

@@ -9,6 +9,7 @@
 #include <spdlog/logger.h>
 
 #include <boost/asio/io_context.hpp>
+#include <array>
 #include <boost/asio/steady_timer.hpp>
 #include <memory>
 #include <string>
@@ -18,6 +19,7 @@
 #include "gateway/gateway.h"
 #include "gateway/point_values.h"
 #include "mqtt/edge_node.h"
+#include "modbus/log_throttle.h"
 #include "mqtt/mosquitto_client.h"
 #include "mqtt/northbound_status.h"
 
@@ -51,7 +53,7 @@ class Northbound final : private sparkplug::Sink {
   void connect_after(Millis delay);  // a new attempt, once `delay` has passed
   void connected();
   void lost(const std::string& why);
-  void message(std::string_view topic, std::string_view payload);
+  void message(std::string_view topic, std::string_view payload, bool retained);
   void changed(std::size_t index, std::uint64_t generation);
   void flush();
   void schedule_tick();
@@ -63,7 +65,7 @@ class Northbound final : private sparkplug::Sink {
   void publish(const std::string& topic, const sparkplug::Payload& payload) override;
   void drop_session() override;
   void write(std::size_t device, std::vector<sparkplug::PointCommand> points) override;
-  void notice(std::string message) override;
+  void notice(sparkplug::Notice kind, std::string message) override;
 
   boost::asio::io_context& io_;
   MqttConfig config_;
@@ -80,6 +82,7 @@ class Northbound final : private sparkplug::Sink {
   bool stopping_ = false;
   bool started_ = false;
   NorthboundStatus status_;
+  std::array<modbus::LogThrottle, sparkplug::kNoticeKinds> notice_log_;  // per kind
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // for writes settling later
 };
 

@@ -17,6 +17,8 @@ struct NorthboundStatus {
   std::uint64_t messages = 0;  // Sparkplug messages published
   std::uint64_t births = 0;    // DBIRTHs among them
   std::uint64_t commands = 0;  // DCMD writes carried out (any outcome)
+  std::uint64_t commands_retained = 0;   // NCMD / DCMD ignored: retained by the broker
+  std::uint64_t rebirths_coalesced = 0;  // rebirth requests answered by a later rebirth
   std::string last_error;      // why the last attempt or session failed; empty once connected
 };
 

@@ -54,6 +54,9 @@ struct Metric {
   DataType type = DataType::unknown;
   MetricValue value;  // std::monostate: is_null
   std::vector<Property> properties;
+  // When the value was true at its source (ms since the Unix epoch, spec 6.4.4); none: the
+  // payload's timestamp.
+  std::optional<std::uint64_t> timestamp;
 };
 
 struct Payload {

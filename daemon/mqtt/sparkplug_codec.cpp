@@ -111,6 +111,7 @@ std::string encode(const Payload& payload) {
     m->set_name(metric.name);
     m->set_datatype(static_cast<std::uint32_t>(metric.type));
     set_value(*m, metric.type, metric.value);
+    if (metric.timestamp) m->set_timestamp(*metric.timestamp);
     if (metric.properties.empty()) continue;
     pb::Payload::PropertySet* set = m->mutable_properties();
     for (const Property& p : metric.properties) {
@@ -143,6 +144,7 @@ std::optional<Payload> decode(std::string_view bytes, std::string& why) {
       return std::nullopt;
     }
     metric.value = std::move(*value);
+    if (m.has_timestamp()) metric.timestamp = m.timestamp();
     out.metrics.push_back(std::move(metric));
   }
   return out;

@@ -5,14 +5,15 @@
 // Invariants: nothing is published while offline; the first message of a session is an NBIRTH
 // with seq 0, and each message after it has the seq after the one before (mod 256) until the next
 // NBIRTH; NDEATHs carry no seq and the session's bdSeq; device messages name a configured device;
-// a write is asked only with commands on, for a writable metric of that device; every payload
-// encodes and decodes back to the same metrics.
+// a write is asked only with commands on, for a writable metric of that device, from a live
+// message (never a retained one), with at most kMaxCommandMetrics points; every payload encodes
+// and decodes back to the same metrics.
 //
 // Input: one option byte (bit 0 commands, bit 1 primary host), then steps until the input ends:
 //   u8 kind: 0 NCMD, 1 DCMD device a, 2 DCMD device b, 3 DCMD unknown device, 4 STATE,
 //            5 another node's NCMD, 6 sample (next byte: device, alive, a value), 7 tick,
 //            8 connection lost + reconnect
-//   u8 length, then that many payload bytes (kinds 0..5)
+//   u8 length (bit 7: delivered retained), then that many payload bytes (kinds 0..5)
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -58,17 +59,19 @@ class CheckingSink : public Sink {
   }
   void drop_session() override { last_seq_ = -1; }
   void write(std::size_t device, std::vector<PointCommand> points) override {
-    FUZZ_CHECK(commands && device < 2 && !points.empty());
+    FUZZ_CHECK(commands && !retained && device < 2 && !points.empty());
+    FUZZ_CHECK(points.size() <= kMaxCommandMetrics);
     for (const auto& pc : points) {
       FUZZ_CHECK(pc.index < node_.devices()[device].metrics.size());
       FUZZ_CHECK(node_.devices()[device].metrics[pc.index].writable);
     }
     pending.emplace_back(device, points.size());
   }
-  void notice(std::string) override {}
+  void notice(Notice, std::string) override {}
   void lost() { last_seq_ = -1; }
 
   bool commands = false;
+  bool retained = false;  // the message being delivered
   std::vector<std::pair<std::size_t, std::size_t>> pending;
 
  private:
@@ -113,8 +116,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (kind == 6) {
       const std::uint8_t b = in.u8();
       const auto v = static_cast<std::int64_t>(static_cast<std::int8_t>(in.u8()));
-      node.sample(b & 1, (b & 2) != 0, {MetricValue{v}, MetricValue{v * 2}, MetricValue{v}}, now(),
-                  sink);
+      node.sample(b & 1, (b & 2) != 0, {MetricValue{v}, MetricValue{v * 2}, MetricValue{v}}, 0,
+                  now(), sink);
       continue;
     }
     if (kind == 7) {
@@ -132,12 +135,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       node.connected(now(), sink);
       continue;
     }
-    const auto payload = in.bytes(in.u8());
+    const std::uint8_t length = in.u8();
+    const bool retained = (length & 0x80) != 0;  // delivered from the broker's store
+    const auto payload = in.bytes(length & 0x7F);
     const std::string_view bytes(reinterpret_cast<const char*>(payload.data()), payload.size());
     static constexpr const char* kTopics[] = {"spBv1.0/g/NCMD/e",   "spBv1.0/g/DCMD/e/a",
                                               "spBv1.0/g/DCMD/e/b", "spBv1.0/g/DCMD/e/z",
                                               "spBv1.0/STATE/h",    "spBv1.0/g/NCMD/other"};
-    node.message(kTopics[kind], bytes, now(), sink);
+    sink.retained = retained;
+    node.message(kTopics[kind], bytes, now(), sink, retained);
+    sink.retained = false;
     if (node.state() == SessionState::offline) {  // STATE offline dropped the session
       sink.lost();
       node.begin_connect(now());

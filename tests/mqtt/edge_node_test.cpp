@@ -14,6 +14,9 @@ using namespace std::chrono_literals;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
+// A sample whose drive state has no time of its own: its metrics carry no timestamp.
+constexpr std::uint64_t kNoData = 0;
+
 struct Sent {
   std::string topic;
   Payload payload;
@@ -39,7 +42,7 @@ class RecordingSink : public Sink {
   void write(std::size_t device, std::vector<PointCommand> points) override {
     writes.emplace_back(device, std::move(points));
   }
-  void notice(std::string message) override { notices.push_back(std::move(message)); }
+  void notice(Notice, std::string message) override { notices.push_back(std::move(message)); }
   std::vector<Sent> take() { return std::exchange(sent, {}); }
 
   std::vector<Sent> sent;
@@ -99,8 +102,8 @@ class EdgeNodeTest : public ::testing::Test {
   // Connected, both drives heard from: NBIRTH, two DBIRTHs taken.
   void online() {
     node_.begin_connect(at(0ms));
-    node_.sample(0, true, values(0), at(0ms), sink_);
-    node_.sample(1, true, values(0), at(0ms), sink_);
+    node_.sample(0, true, values(0), kNoData, at(0ms), sink_);
+    node_.sample(1, true, values(0), kNoData, at(0ms), sink_);
     node_.connected(at(0ms), sink_);
     ASSERT_EQ(sink_.take().size(), 3u);
   }
@@ -127,7 +130,7 @@ TEST_F(EdgeNodeTest, TheWillIsAnNdeathWithTheSessionsBdSeq) {
 
 TEST_F(EdgeNodeTest, BirthsCarryEveryMetricAndSeqStartsAtZero) {
   node_.begin_connect(at(0ms));
-  node_.sample(0, true, values(1500, 7, 1500), at(0ms), sink_);
+  node_.sample(0, true, values(1500, 7, 1500), kNoData, at(0ms), sink_);
   node_.connected(at(5ms), sink_);
   const auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 2u);  // washer-b never answered: no DBIRTH for it
@@ -143,7 +146,7 @@ TEST_F(EdgeNodeTest, BirthsCarryEveryMetricAndSeqStartsAtZero) {
   EXPECT_EQ(sent[1].metric("speed_rpm")->value, MetricValue{std::int64_t{1500}});
   EXPECT_EQ(sent[1].metric("setpoint_rpm")->properties.at(0).key, "engUnit");
   // washer-b answers later: its DBIRTH then.
-  node_.sample(1, true, values(0), at(50ms), sink_);
+  node_.sample(1, true, values(0), kNoData, at(50ms), sink_);
   const auto later = sink_.take();
   ASSERT_EQ(later.size(), 1u);
   EXPECT_EQ(later[0].topic, "spBv1.0/plant1/DBIRTH/gw01/washer-b");
@@ -152,17 +155,17 @@ TEST_F(EdgeNodeTest, BirthsCarryEveryMetricAndSeqStartsAtZero) {
 
 TEST_F(EdgeNodeTest, DataByExceptionOnlyTheChangedMetricsAtMostOncePerInterval) {
   online();
-  node_.sample(0, true, values(0), at(200ms), sink_);  // nothing changed
+  node_.sample(0, true, values(0), kNoData, at(200ms), sink_);  // nothing changed
   EXPECT_TRUE(sink_.take().empty());
-  node_.sample(0, true, values(100), at(210ms), sink_);
+  node_.sample(0, true, values(100), kNoData, at(210ms), sink_);
   auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
   EXPECT_EQ(sent[0].payload.seq, 3u);
   EXPECT_THAT(sent[0].names(), ElementsAre("speed_rpm"));
   // Within min_interval: held back, and the newest value goes when it has passed.
-  node_.sample(0, true, values(150), at(250ms), sink_);
-  node_.sample(0, true, values(180), at(280ms), sink_);
+  node_.sample(0, true, values(150), kNoData, at(250ms), sink_);
+  node_.sample(0, true, values(180), kNoData, at(280ms), sink_);
   EXPECT_TRUE(sink_.take().empty());
   EXPECT_EQ(node_.wake_at(), TimePoint{} + 310ms);
   node_.tick(at(309ms), sink_);
@@ -174,7 +177,7 @@ TEST_F(EdgeNodeTest, DataByExceptionOnlyTheChangedMetricsAtMostOncePerInterval) 
   EXPECT_EQ(sent[0].payload.seq, 4u);
   EXPECT_FALSE(node_.wake_at());
   // Another device is not held back by this one's interval.
-  node_.sample(1, true, values(5), at(311ms), sink_);
+  node_.sample(1, true, values(5), kNoData, at(311ms), sink_);
   EXPECT_EQ(sink_.take().size(), 1u);
 }
 
@@ -183,33 +186,33 @@ TEST_F(EdgeNodeTest, DeadbandAndCounterInterval) {
   defs[0].metrics[0].deadband = 5;
   node_.set_devices(defs, at(0ms), sink_);
   online();
-  node_.sample(0, true, values(4, 1), at(1s), sink_);  // moved 4 < 5; frames not due
+  node_.sample(0, true, values(4, 1), kNoData, at(1s), sink_);  // moved 4 < 5; frames not due
   EXPECT_TRUE(sink_.take().empty());
-  node_.sample(0, true, values(-1, 2), at(2s), sink_);  // -1 from 0: still within
+  node_.sample(0, true, values(-1, 2), kNoData, at(2s), sink_);  // -1 from 0: still within
   EXPECT_TRUE(sink_.take().empty());
-  node_.sample(0, true, values(5, 3), at(3s), sink_);  // 5 from the published 0
+  node_.sample(0, true, values(5, 3), kNoData, at(3s), sink_);  // 5 from the published 0
   auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_THAT(sent[0].names(), ElementsAre("speed_rpm"));
-  node_.sample(0, true, values(5, 40), at(10s), sink_);  // the counter's interval has passed
+  node_.sample(0, true, values(5, 40), kNoData, at(10s), sink_);  // the counter's interval has passed
   sent = sink_.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_THAT(sent[0].names(), ElementsAre("frames_good"));
-  node_.sample(0, true, values(5, 41), at(11s), sink_);  // and not again for 10 s
+  node_.sample(0, true, values(5, 41), kNoData, at(11s), sink_);  // and not again for 10 s
   EXPECT_TRUE(sink_.take().empty());
 }
 
 TEST_F(EdgeNodeTest, DeathOnCommLostBirthWhenBack) {
   online();
-  node_.sample(1, false, values(0), at(1s), sink_);
+  node_.sample(1, false, values(0), kNoData, at(1s), sink_);
   auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDEATH/gw01/washer-b");
   EXPECT_EQ(sent[0].payload.seq, 3u);
   EXPECT_TRUE(sent[0].payload.metrics.empty());
-  node_.sample(1, false, values(0), at(2s), sink_);  // still dead: said once
+  node_.sample(1, false, values(0), kNoData, at(2s), sink_);  // still dead: said once
   EXPECT_TRUE(sink_.take().empty());
-  node_.sample(1, true, values(7), at(3s), sink_);
+  node_.sample(1, true, values(7), kNoData, at(3s), sink_);
   sent = sink_.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DBIRTH/gw01/washer-b");
@@ -218,16 +221,16 @@ TEST_F(EdgeNodeTest, DeathOnCommLostBirthWhenBack) {
 
 TEST_F(EdgeNodeTest, SeqWrapsAfter255) {
   online();
-  for (int i = 1; i <= 253; ++i) node_.sample(0, true, values(i), at(Millis(1000 * i)), sink_);
+  for (int i = 1; i <= 253; ++i) node_.sample(0, true, values(i), kNoData, at(Millis(1000 * i)), sink_);
   auto sent = sink_.take();
   EXPECT_EQ(sent.back().payload.seq, 255u);
-  node_.sample(0, true, values(9999), at(300s), sink_);
+  node_.sample(0, true, values(9999), kNoData, at(300s), sink_);
   EXPECT_EQ(sink_.take().at(0).payload.seq, 0u);
 }
 
 TEST_F(EdgeNodeTest, RebirthOnRequestKeepsTheBdSeq) {
   online();
-  node_.sample(0, true, values(10), at(1s), sink_);
+  node_.sample(0, true, values(10), kNoData, at(1s), sink_);
   sink_.take();
   Payload ncmd;
   ncmd.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
@@ -247,11 +250,11 @@ TEST_F(EdgeNodeTest, RebirthOnRequestKeepsTheBdSeq) {
 }
 
 TEST_F(EdgeNodeTest, NothingIsPublishedOffline) {
-  node_.sample(0, true, values(1), at(0ms), sink_);
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
   EXPECT_TRUE(sink_.take().empty());
   online();
   node_.connection_lost();
-  node_.sample(0, true, values(50), at(1s), sink_);
+  node_.sample(0, true, values(50), kNoData, at(1s), sink_);
   node_.tick(at(2s), sink_);
   EXPECT_TRUE(sink_.take().empty());
   // The next session is born afresh, with the newest values.
@@ -273,7 +276,7 @@ TEST_F(EdgeNodeTest, ChangedDevicesAreARebirth) {
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDEATH/gw01/washer-b");
   EXPECT_EQ(sent[1].topic, "spBv1.0/plant1/NBIRTH/gw01");
   // Births of the devices follow as they are sampled.
-  node_.sample(0, true, values(3), at(1s), sink_);
+  node_.sample(0, true, values(3), kNoData, at(1s), sink_);
   EXPECT_EQ(sink_.take().at(0).topic, "spBv1.0/plant1/DBIRTH/gw01/washer-a");
   EXPECT_FALSE(node_.set_devices(defs, at(2s), sink_));
   EXPECT_TRUE(sink_.take().empty());
@@ -316,6 +319,90 @@ TEST_F(EdgeNodeTest, CommandsAreCheckedThenWrittenThenReported) {
   EXPECT_THAT(sink_.notices.back(), HasSubstr("unknown device"));
 }
 
+// Spec 6.4 (NCMD, DCMD): published with retain false. One the broker kept is an old command
+// replayed at every subscription: never carried out, counted, noticed.
+TEST_F(EdgeNodeTest, RetainedCommandsAreNeverCarriedOut) {
+  online();
+  Payload dcmd;
+  dcmd.metrics.push_back({"setpoint_rpm", DataType::int16, MetricValue{std::int64_t{800}}, {}});
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(1s), sink_, true);
+  Payload ncmd;
+  ncmd.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
+  node_.message("spBv1.0/plant1/NCMD/gw01", encode(ncmd), at(1s), sink_, true);
+  EXPECT_TRUE(sink_.writes.empty());
+  EXPECT_TRUE(sink_.take().empty());  // no rebirth, no command result
+  EXPECT_EQ(node_.retained_ignored(), 2u);
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("retained"));
+  // The same, live, is carried out.
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(2s), sink_, false);
+  EXPECT_EQ(sink_.writes.size(), 1u);
+}
+
+// A DCMD carries at most kMaxCommandMetrics: one with more is refused whole, nothing written.
+TEST_F(EdgeNodeTest, ACommandOfTooManyMetricsIsRefusedWhole) {
+  online();
+  Payload dcmd;
+  for (std::size_t i = 0; i <= kMaxCommandMetrics; ++i) {
+    dcmd.metrics.push_back({"setpoint_rpm", DataType::int16,
+                            MetricValue{static_cast<std::int64_t>(i)}, {}});
+  }
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(1s), sink_);
+  EXPECT_TRUE(sink_.writes.empty());
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_THAT(std::get<std::string>(sent[0].metric("Command/Last Result")->value),
+              HasSubstr("refused: 65 metrics"));
+  dcmd.metrics.pop_back();  // 64: within the bound
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(2s), sink_);
+  ASSERT_EQ(sink_.writes.size(), 1u);
+  EXPECT_EQ(sink_.writes[0].second.size(), kMaxCommandMetrics);
+}
+
+// 2000 rebirth requests in two seconds: the first answered at once, the rest by one rebirth
+// kRebirthInterval after it; none in between.
+TEST_F(EdgeNodeTest, ARebirthStormIsAnsweredByOneRebirthEveryFewSeconds) {
+  online();
+  Payload ncmd;
+  ncmd.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
+  const std::string bytes = encode(ncmd);
+  const auto births = [](const std::vector<Sent>& sent) {
+    return std::count_if(sent.begin(), sent.end(),
+                         [](const Sent& m) { return m.topic == "spBv1.0/plant1/NBIRTH/gw01"; });
+  };
+  node_.message("spBv1.0/plant1/NCMD/gw01", bytes, at(1s), sink_);
+  EXPECT_EQ(births(sink_.take()), 1);
+  for (int i = 0; i < 1999; ++i) {
+    node_.message("spBv1.0/plant1/NCMD/gw01", bytes, at(1s + Millis(i)), sink_);
+  }
+  EXPECT_EQ(births(sink_.take()), 0);
+  EXPECT_EQ(node_.rebirths_coalesced(), 1999u);
+  ASSERT_EQ(node_.wake_at(), TimePoint{} + 1s + kRebirthInterval);
+  node_.tick(at(1s + kRebirthInterval - 1ms), sink_);
+  EXPECT_EQ(births(sink_.take()), 0);
+  node_.tick(at(1s + kRebirthInterval), sink_);
+  const auto sent = sink_.take();
+  EXPECT_EQ(births(sent), 1);
+  EXPECT_EQ(sent.size(), 3u);  // NBIRTH and the two DBIRTHs
+  EXPECT_FALSE(node_.wake_at());
+}
+
+// A metric carries the time of the drive's state it shows (spec 6.4.4); the payload the time it
+// was sent.
+TEST_F(EdgeNodeTest, DeviceMetricsCarryTheTimeOfTheDrivesState) {
+  online();
+  const std::uint64_t data_ms = at(900ms).unix_ms;
+  node_.sample(0, true, values(55), data_ms, at(1s), sink_);
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].payload.timestamp, at(1s).unix_ms);
+  EXPECT_EQ(sent[0].metric("speed_rpm")->timestamp, data_ms);
+  // Through the codec too.
+  std::string why;
+  const auto decoded = decode(encode(sent[0].payload), why);
+  ASSERT_TRUE(decoded);
+  EXPECT_EQ(decoded->metrics.at(0).timestamp, data_ms);
+}
+
 class EdgeNodeNoCommands : public EdgeNodeTest {
  protected:
   EdgeNodeNoCommands()
@@ -328,7 +415,7 @@ class EdgeNodeNoCommands : public EdgeNodeTest {
 
 TEST_F(EdgeNodeNoCommands, DcmdIsIgnoredAndBirthsHaveNoCommandMetrics) {
   node_.begin_connect(at(0ms));
-  node_.sample(0, true, values(0), at(0ms), sink_);
+  node_.sample(0, true, values(0), kNoData, at(0ms), sink_);
   node_.connected(at(0ms), sink_);
   const auto sent = sink_.take();
   EXPECT_THAT(sent.at(1).names(), ElementsAre("speed_rpm", "frames_good", "setpoint_rpm"));
@@ -359,10 +446,10 @@ class EdgeNodePrimaryHost : public EdgeNodeTest {
 TEST_F(EdgeNodePrimaryHost, BirthsWaitForTheHostAndItsDeathEndsTheSession) {
   EXPECT_EQ(node_.subscriptions().back(), "spBv1.0/STATE/scada");
   node_.begin_connect(at(0ms));
-  node_.sample(0, true, values(1), at(0ms), sink_);
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
   node_.connected(at(0ms), sink_);
   EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
-  node_.sample(0, true, values(2), at(10ms), sink_);
+  node_.sample(0, true, values(2), kNoData, at(10ms), sink_);
   EXPECT_TRUE(sink_.take().empty());
   state(true, 100, 20ms);
   auto sent = sink_.take();
@@ -383,6 +470,22 @@ TEST_F(EdgeNodePrimaryHost, BirthsWaitForTheHostAndItsDeathEndsTheSession) {
   // Garbage in STATE: a notice, nothing else.
   node_.message("spBv1.0/STATE/scada", "ONLINE", at(50ms), sink_);
   EXPECT_THAT(sink_.notices.back(), HasSubstr("STATE"));
+}
+
+// A STATE stamped far ahead of this node's clock would make every genuine STATE after it look
+// stale: it is ignored, with a notice saying why.
+TEST_F(EdgeNodePrimaryHost, AStateFromTheFutureIsIgnored) {
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  state(false, 99'999'999'999'999, 10ms);
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("ahead of this gateway's clock"));
+  state(true, at(20ms).unix_ms, 20ms);  // the genuine one: believed
+  EXPECT_EQ(node_.state(), SessionState::online);
+  EXPECT_EQ(sink_.take().size(), 2u);
+  // Within the tolerance, a host clock a little ahead is fine.
+  state(false, at(30ms).unix_ms + 60'000, 30ms);
+  EXPECT_EQ(node_.state(), SessionState::offline);
 }
 
 }  // namespace
