@@ -120,6 +120,27 @@ void device_metrics(Writer& w, const StatusView& view) {
   for (const Row& r : rows) {
     w.sample("drivegate_device_failsafe_latched", r.labels, r.device->failsafe_latched());
   }
+  // The write queue (docs/safety.md, "Fair line time") and late replies.
+  const auto each = [&](std::string_view family, std::string_view type, std::string_view help,
+                        auto f) {
+    w.family(family, type, help);
+    for (const Row& r : rows) w.sample(family, r.labels, static_cast<double>(f(*r.device)));
+  };
+  each("drivegate_device_writes_in_flight", "gauge",
+       "writes waiting for the drive or being carried out (at most 4 queued, stops apart)",
+       [](const Device& d) { return d.writes_in_flight(); });
+  each("drivegate_device_writes_busy_total", "counter",
+       "writes refused with exception 06: the device's write queue was full",
+       [](const Device& d) { return d.write_stats().busy; });
+  each("drivegate_device_writes_coalesced_total", "counter",
+       "writes equal to the one queued before them, answered with it",
+       [](const Device& d) { return d.write_stats().coalesced; });
+  each("drivegate_device_runs_refused_failsafe_total", "counter",
+       "runs refused while the failsafe was latched, from a source that cannot clear it",
+       [](const Device& d) { return d.write_stats().refused_failsafe; });
+  each("drivegate_device_late_bytes_total", "counter",
+       "bytes of replies that came after their timeout, dropped",
+       [](const Device& d) { return d.line().counters.late_bytes; });
   // Every numeric common point (gateway/common_block.h): gauges, counters as _total.
   if (rows.empty()) return;
   std::string name;
@@ -133,7 +154,8 @@ void device_metrics(Writer& w, const StatusView& view) {
     name += age ? std::string_view("data_age_seconds") : std::string_view(p->spec.name);
     if (row->counter) name += "_total";
     w.family(name, row->counter ? "counter" : "gauge",
-             age ? "seconds since the last good frame (NaN: never heard)" : row->description);
+             age ? "seconds since the last reply carrying the drive's state (NaN: never)"
+                 : row->description);
     for (const Row& r : rows) {
       // Every device has the same common block, in the same order.
       const Value& v = r.values.at(i).second;
@@ -180,6 +202,9 @@ void bus_metrics(Writer& w, const StatusView& view) {
          [](const Bus& b) { return b.counters().noise_bytes; });
   family("drivegate_bus_reopens_total", "counter", "times the port was reopened",
          [](const Bus& b) { return b.counters().reopens; });
+  family("drivegate_bus_late_bytes_total", "counter",
+         "bytes of replies that came after their timeout, dropped in the guard time",
+         [](const Bus& b) { return b.counters().late_bytes; });
   w.family("drivegate_bus_bytes_total", "counter", "bytes written to and read from the line");
   for (std::size_t i = 0; i < buses.size(); ++i) {
     w.sample("drivegate_bus_bytes_total", labels[i],

@@ -53,6 +53,12 @@ void device_json(std::string& out, Device& d, std::vector<PointValue>& values) {
   out += boolean(d.comm_lost());
   out += ", \"failsafe_latched\": ";
   out += boolean(d.failsafe_latched());
+  const WriteStats& ws = d.write_stats();
+  fmt::format_to(std::back_inserter(out),
+                 ", \"writes\": {{\"in_flight\": {}, \"busy\": {}, \"coalesced\": {}, "
+                 "\"refused_failsafe\": {}}}, \"late_bytes\": {}",
+                 d.writes_in_flight(), ws.busy, ws.coalesced, ws.refused_failsafe,
+                 d.line().counters.late_bytes);
 
   out += ", \"status_bits\": [";
   bool first = true;
@@ -115,11 +121,12 @@ void bus_json(std::string& out, const Bus& b) {
   append_json_string(out, b.config().port);
   fmt::format_to(std::back_inserter(out),
                  ", \"open\": {}, \"baud\": {}, \"exchanges\": {}, \"timeouts\": {}, "
-                 "\"retries\": {}, \"echo_errors\": {}, \"noise_bytes\": {}, \"reopens\": {}, "
-                 "\"bytes_sent\": {}, \"bytes_received\": {}, \"line_busy_seconds\": {:.6f}}}",
+                 "\"retries\": {}, \"echo_errors\": {}, \"noise_bytes\": {}, \"late_bytes\": {}, "
+                 "\"reopens\": {}, \"bytes_sent\": {}, \"bytes_received\": {}, "
+                 "\"line_busy_seconds\": {:.6f}}}",
                  boolean(b.is_open()), b.config().baud, n.exchanges, n.timeouts, n.retries,
-                 n.echo_errors, n.noise_bytes, n.reopens, n.bytes_sent, n.bytes_received,
-                 line_busy_seconds(b));
+                 n.echo_errors, n.noise_bytes, n.late_bytes, n.reopens, n.bytes_sent,
+                 n.bytes_received, line_busy_seconds(b));
 }
 
 void listener_json(std::string& out, const modbus::Server& server, std::size_t i) {
