@@ -62,12 +62,6 @@ std::string server_section(const std::string& keys) {
   return "[server]\n" + keys + "\n\n";
 }
 
-std::string slurp(const std::filesystem::path& file) {
-  std::ostringstream text;
-  text << std::ifstream(file).rdbuf();
-  return text.str();
-}
-
 // A TCP client that connects and never sends a byte.
 class SilentClient {
  public:

@@ -26,12 +26,6 @@ const fs::path kSource = DRIVEGATE_SOURCE_DIR;
 // Debian's python3-pymodbus lives with the system interpreter (`python3` may be a pyenv shim).
 const std::string kPython = "/usr/bin/python3";
 
-std::string slurp(const fs::path& file) {
-  std::ostringstream text;
-  text << std::ifstream(file).rdbuf();
-  return text.str();
-}
-
 std::size_t count(const std::string& text, const std::string& what) {
   std::size_t n = 0;
   for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;

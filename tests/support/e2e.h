@@ -20,6 +20,7 @@
 #include <fstream>
 #include <functional>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -270,43 +271,68 @@ class Plc {
   modbus_t* ctx_;
 };
 
+// A TCP connection to 127.0.0.1:`port`, or -1.
+inline int connect_loopback(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) return fd;
+  ::close(fd);
+  return -1;
+}
+
+// A Modbus TCP request ADU: the MBAP header (transaction, protocol 0, length, unit) and `pdu`.
+inline std::vector<std::uint8_t> mbap_adu(std::uint16_t transaction, std::uint8_t unit,
+                                          const std::vector<std::uint8_t>& pdu) {
+  const auto length = static_cast<std::uint16_t>(pdu.size() + 1);
+  std::vector<std::uint8_t> adu = {static_cast<std::uint8_t>(transaction >> 8),
+                                   static_cast<std::uint8_t>(transaction & 0xFF),
+                                   0x00,
+                                   0x00,
+                                   static_cast<std::uint8_t>(length >> 8),
+                                   static_cast<std::uint8_t>(length & 0xFF),
+                                   unit};
+  adu.insert(adu.end(), pdu.begin(), pdu.end());
+  return adu;
+}
+
+// Reads one response from `fd` within 10 s: its PDU (empty on a transport failure), and whether
+// the server closed the connection right after it (`closed`, when asked for).
+inline std::vector<std::uint8_t> read_response_pdu(int fd, bool* closed = nullptr) {
+  std::vector<std::uint8_t> in;
+  std::vector<std::uint8_t> out;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (std::chrono::steady_clock::now() < deadline) {
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, 100) <= 0) continue;
+    std::uint8_t buf[300];
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n <= 0) {
+      if (closed != nullptr) *closed = n == 0;
+      break;
+    }
+    in.insert(in.end(), buf, buf + n);
+    if (out.empty() && in.size() >= 7 && in.size() >= 6u + ((in[4] << 8) | in[5])) {
+      out.assign(in.begin() + 7, in.begin() + 6 + ((in[4] << 8) | in[5]));
+      if (closed == nullptr) break;  // not waiting for the close
+    }
+  }
+  return out;
+}
+
 // One Modbus TCP request as raw bytes, the way any client puts it on the wire: the MBAP header
 // (transaction 1, protocol 0, length, unit) and `pdu`; returns the response PDU as received (empty
 // on a transport failure). Tests assert exact bytes with it, not a client library's reading.
 inline std::vector<std::uint8_t> raw_request(int port, std::uint8_t unit,
                                              const std::vector<std::uint8_t>& pdu) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  const int fd = connect_loopback(port);
+  if (fd < 0) return {};
   std::vector<std::uint8_t> out;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
-    const auto length = static_cast<std::uint16_t>(pdu.size() + 1);
-    std::vector<std::uint8_t> adu = {0x00,
-                                     0x01,
-                                     0x00,
-                                     0x00,
-                                     static_cast<std::uint8_t>(length >> 8),
-                                     static_cast<std::uint8_t>(length & 0xFF),
-                                     unit};
-    adu.insert(adu.end(), pdu.begin(), pdu.end());
-    if (::write(fd, adu.data(), adu.size()) == static_cast<ssize_t>(adu.size())) {
-      std::vector<std::uint8_t> in;
-      std::uint8_t buf[300];
-      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-      while (std::chrono::steady_clock::now() < deadline) {
-        pollfd p{fd, POLLIN, 0};
-        if (::poll(&p, 1, 100) <= 0) continue;
-        const ssize_t n = ::read(fd, buf, sizeof buf);
-        if (n <= 0) break;
-        in.insert(in.end(), buf, buf + n);
-        if (in.size() >= 7 && in.size() >= 6u + ((in[4] << 8) | in[5])) {
-          out.assign(in.begin() + 7, in.begin() + 6 + ((in[4] << 8) | in[5]));
-          break;
-        }
-      }
-    }
+  const auto adu = mbap_adu(1, unit, pdu);
+  if (::write(fd, adu.data(), adu.size()) == static_cast<ssize_t>(adu.size())) {
+    out = read_response_pdu(fd);
   }
   ::close(fd);
   return out;
@@ -351,6 +377,48 @@ class Daemon {
   std::filesystem::path config_;
   Child child_;
 };
+
+// A file's whole content (a log), "" if it cannot be read.
+inline std::string slurp(const std::filesystem::path& file) {
+  std::ostringstream text;
+  text << std::ifstream(file).rdbuf();
+  return text.str();
+}
+
+// One request sent on a new connection whose sending side is then shut down (SHUT_WR) at once:
+// the response PDU that came back, and whether the server closed the connection after it.
+struct HalfClosedAnswer {
+  std::vector<std::uint8_t> reply;
+  bool closed_after = false;
+};
+inline HalfClosedAnswer half_closed_request(int port, std::uint8_t unit,
+                                            const std::vector<std::uint8_t>& pdu) {
+  HalfClosedAnswer out;
+  const int fd = connect_loopback(port);
+  if (fd < 0) return out;
+  const auto adu = mbap_adu(7, unit, pdu);
+  if (::write(fd, adu.data(), adu.size()) == static_cast<ssize_t>(adu.size())) {
+    ::shutdown(fd, SHUT_WR);
+    out.reply = read_response_pdu(fd, &out.closed_after);
+  }
+  ::close(fd);
+  return out;
+}
+
+// One request sent on a new connection that is then reset (SO_LINGER 0) once the server has had
+// time to read it, as when a client crashes with a write in flight.
+inline void reset_after_request(int port, std::uint8_t unit,
+                                const std::vector<std::uint8_t>& pdu) {
+  const int fd = connect_loopback(port);
+  if (fd < 0) return;
+  const auto adu = mbap_adu(8, unit, pdu);
+  if (::write(fd, adu.data(), adu.size()) == static_cast<ssize_t>(adu.size())) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const linger l{1, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_LINGER, &l, sizeof l);
+  ::close(fd);
+}
 
 // Polls `condition` every 20 ms until it holds or `timeout` passes.
 inline bool eventually(const std::function<bool()>& condition,
