@@ -276,6 +276,14 @@ class SparkplugPeer {
   void publish(const std::string& topic, const std::string& json) {
     command("publish\t" + topic + "\t" + json, topic);
   }
+  // The same, retained by the broker (what a broken host might leave there).
+  void publish_retained(const std::string& topic, const std::string& json) {
+    command("publish_retained\t" + topic + "\t" + json, topic);
+  }
+  // `count` times back to back (a flood); returns once the last one is sent.
+  void publish_repeat(const std::string& topic, const std::string& json, int count) {
+    command("publish_repeat\t" + topic + "\t" + std::to_string(count) + "\t" + json, topic);
+  }
   // Publishes raw text (e.g. a STATE message).
   void publish_text(const std::string& topic, const std::string& text, bool retain = false,
                     int qos = 0) {

@@ -48,7 +48,13 @@
 // Commands on stdin (TAB separated, one per line):
 //   publish TOPIC JSON                      JSON as Tahu's encodePayload takes it; QoS 0, not
 //                                           retained. 64-bit values (timestamp, seq, Int64/UInt64/
-//                                           UInt32/DateTime values) may be given as decimal strings
+//                                           UInt32/DateTime values) may be given as decimal strings;
+//                                           a Float or Double value "NaN", "Infinity", "-Infinity"
+//                                           is that number
+//   publish_retained TOPIC JSON             as publish, but retained (a command a broken host
+//                                           left in the broker's store)
+//   publish_repeat TOPIC COUNT JSON         as publish, COUNT times back to back (one encoding);
+//                                           one "published" once the broker has them all
 //   publish_text TOPIC TEXT RETAIN QOS      raw UTF-8 text (TEXT unescaped as above)
 //   publish_hex TOPIC HEX RETAIN QOS        raw bytes, e.g. a garbage payload
 "use strict";
@@ -354,6 +360,10 @@ function longify(payload) {
     for (const m of metrics || []) {
       const unsigned = LONG_TYPES[String(m.type || "").toUpperCase()];
       if (unsigned !== undefined && typeof m.value === "string") m.value = Long.fromString(m.value, unsigned);
+      // JSON has no NaN or infinities: "NaN", "Infinity", "-Infinity" stand for them in a Float
+      // or Double metric.
+      const float = ["FLOAT", "DOUBLE"].includes(String(m.type || "").toUpperCase());
+      if (float && ["NaN", "Infinity", "-Infinity"].includes(m.value)) m.value = Number(m.value);
       if (typeof m.timestamp === "string") m.timestamp = Long.fromString(m.timestamp, true);
       if (typeof m.alias === "string") m.alias = Long.fromString(m.alias, true);
       for (const pv of Object.values(m.properties || {})) {
@@ -380,8 +390,16 @@ function onCommand(client, line) {
   const topic = f[1] ?? "";
   try {
     switch (f[0]) {
-      case "publish": {
+      case "publish":
+      case "publish_retained": {
         const body = Buffer.from(sparkplug.encodePayload(longify(JSON.parse(f.slice(2).join("\t")))));
+        publish(client, topic, body, { qos: 0, retain: f[0] === "publish_retained" });
+        break;
+      }
+      case "publish_repeat": {
+        const count = Number(f[2] ?? 0);
+        const body = Buffer.from(sparkplug.encodePayload(longify(JSON.parse(f.slice(3).join("\t")))));
+        for (let i = 1; i < count; ++i) client.publish(topic, body, { qos: 0, retain: false });
         publish(client, topic, body, { qos: 0, retain: false });
         break;
       }
