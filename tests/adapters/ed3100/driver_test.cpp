@@ -6,9 +6,17 @@
 #include <algorithm>
 
 #include "bench.h"
+#include "late_reply_contract.h"
 
 namespace drivegate::ed3100 {
 namespace {
+
+using test::LateReplyContract;
+
+// Late replies (late_reply_contract.h): timeout_ms 100 (the default), answering 130 ms late in the standard Modbus form, whose reads carry no
+// register echo (issue 23, item 3).
+const test::LateReplyFacts kLate{.id = "ed3100", .late = 130ms, .sim_commands = {"form standard"}};
+INSTANTIATE_TEST_SUITE_P(Ed3100, LateReplyContract, testing::Values(kLate));
 
 const TimePoint kStart = TimePoint{} + std::chrono::hours(1);  // the rig's clock at start()
 

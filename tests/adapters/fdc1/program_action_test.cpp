@@ -216,6 +216,24 @@ TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
   }
 }
 
+// Late replies (docs/safety.md): the FDC1 streams its status, so no poll can be answered late;
+// what is awaited is the echo of a programming frame. One that comes after its 2 s timeout is not
+// taken for the programming's confirmation: the action has failed (no_response) and stays so,
+// the late echo counted as a frame for nobody, and the status stream goes on.
+TEST(Fdc1ProgramAction, AnEchoAfterItsTimeoutIsNeverTakenForTheConfirmation) {
+  Maintenance m;  // budget_ms 1000: one attempt of 2 s
+  ASSERT_TRUE(m.heard());
+  m.rig.line().turnaround = kEchoTimeout + 500ms;
+  EXPECT_EQ(m.action(kStandard), Exception::gateway_target_failed);
+  EXPECT_EQ(m.program_status(), ProgStatus::no_response);
+  const std::uint32_t foreign = m.read("foreign_frames");
+  m.rig.run_for(2s);  // the echo arrives now, late
+  EXPECT_EQ(m.program_status(), ProgStatus::no_response);
+  EXPECT_EQ(m.message(), "the controller did not echo the programming frame");
+  EXPECT_EQ(m.read("foreign_frames"), foreign + 1);
+  EXPECT_NE(m.status() & kOnline, 0u);
+}
+
 TEST(Fdc1ProgramAction, ACorruptedEchoIsSentAgainWhenTheBudgetHoldsIt) {
   Maintenance m(5000ms);
   ASSERT_TRUE(m.heard());

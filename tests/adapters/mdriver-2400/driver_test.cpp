@@ -6,10 +6,17 @@
 #include <gtest/gtest.h>
 
 #include "bench.h"
+#include "late_reply_contract.h"
 #include "faults.h"
 
 namespace drivegate::mdriver {
 namespace {
+
+using test::LateReplyContract;
+
+// Late replies (late_reply_contract.h): the 200 ms reply timeout, answered 260 ms late.
+const test::LateReplyFacts kLate{.id = "mdriver-2400", .late = 260ms};
+INSTANTIATE_TEST_SUITE_P(Mdriver2400, LateReplyContract, testing::Values(kLate));
 
 TEST(MdriverDriver, StartsWithTheFixedCodeCheckThenPollsWithTheStopCode) {
   Bench b;

@@ -6,9 +6,16 @@
 #include <array>
 
 #include "bench.h"
+#include "late_reply_contract.h"
 
 namespace drivegate::nidec {
 namespace {
+
+using test::LateReplyContract;
+
+// Late replies (late_reply_contract.h): the reply timeout of section 6, 100 ms, answered 130 ms late.
+const test::LateReplyFacts kLate{.id = "nidec-washer", .late = 130ms};
+INSTANTIATE_TEST_SUITE_P(NidecWasher, LateReplyContract, testing::Values(kLate));
 
 TEST(NidecDriver, PingsFirstThenPollsEvery500ms_5_1_section6) {
   Bench b;

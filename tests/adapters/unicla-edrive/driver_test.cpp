@@ -4,10 +4,18 @@
 #include <gtest/gtest.h>
 
 #include "bench.h"
+#include "late_reply_contract.h"
 #include "points.h"
 
 namespace drivegate::unicla {
 namespace {
+
+using test::LateReplyContract;
+
+// Late replies (late_reply_contract.h): reply_timeout_ms 100 (the default), answered 130 ms late; the sequence numbers alone would
+// not catch a reply that comes in the next read's window with the next number.
+const test::LateReplyFacts kLate{.id = "unicla-edrive", .late = 130ms};
+INSTANTIATE_TEST_SUITE_P(UniclaEdrive, LateReplyContract, testing::Values(kLate));
 
 // README.md, "Frames": the driver's start-up reads and first poll, device 1.
 const Bytes kBuildRead1 = {0x7E, 0x00, 0x01, 0xC0, 0x02, 0x01, 0x00, 0x00, 0x00, 0x34, 0x66, 0x7E};
