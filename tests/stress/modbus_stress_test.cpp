@@ -87,6 +87,8 @@ TEST(StressModbus, AWriteStormLeavesEveryDriveOnTheLinePolledAndHonest) {
     flood.run(6s, [](std::uint64_t i) { return fc06(reg::setpoint, i % 2 ? 1000 : 1200); });
     storming = false;
   });
+  // Failures below are recorded, not returned from: the storm thread is joined first.
+  std::optional<std::chrono::steady_clock::duration> lost_at;
 
   const auto start = std::chrono::steady_clock::now();
   const auto since = [&] { return std::chrono::steady_clock::now() - start; };
@@ -98,11 +100,10 @@ TEST(StressModbus, AWriteStormLeavesEveryDriveOnTheLinePolledAndHonest) {
   while (storming) {
     const Common one = common(plc, 1);
     const Common two = common(plc, 2);
-    ASSERT_EQ(one.status & reg::comm_lost, 0) << "drive 1 comm_lost at " << since().count();
-    ASSERT_EQ(two.status & reg::comm_lost, 0) << "drive 2 comm_lost at " << since().count();
+    if (!lost_at && ((one.status | two.status) & reg::comm_lost) != 0) lost_at = since();
     worst_age = std::max(worst_age, one.data_age);
     if (!monitor_set && since() > 1500ms) {
-      ASSERT_THAT(sim.control("@1 monitor 0D00 4660 0x4148"), HasSubstr("ok"));
+      EXPECT_THAT(sim.control("@1 monitor 0D00 4660 0x4148"), HasSubstr("ok"));
       monitor_set = true;
       monitor_at = since();
     }
@@ -111,7 +112,7 @@ TEST(StressModbus, AWriteStormLeavesEveryDriveOnTheLinePolledAndHonest) {
       if (plc.input(ed::monitor_raw, 1).regs.at(0) == 4660) monitor_seen = since() - monitor_at;
     }
     if (!fault_raised && since() > 3000ms) {
-      ASSERT_THAT(sim.control("@1 fault 0x0002"), HasSubstr("ok"));
+      EXPECT_THAT(sim.control("@1 fault 0x0002"), HasSubstr("ok"));
       fault_raised = true;
       fault_at = since();
     }
@@ -127,6 +128,9 @@ TEST(StressModbus, AWriteStormLeavesEveryDriveOnTheLinePolledAndHonest) {
   std::cerr << "rest " << rest_rate << " frames/s, storm " << neighbour_rate << " frames/s; "
             << flood.answers().size() << " writes, slowest "
             << flood.slowest().count() / 1000 << " ms; worst data age " << worst_age << " ms\n";
+  EXPECT_FALSE(lost_at.has_value())
+      << "a drive went comm_lost " << std::chrono::duration<double>(*lost_at).count()
+      << " s into the storm";
   EXPECT_GE(neighbour_rate, 0.5 * rest_rate);
   EXPECT_GT(flood.answers().size(), 20u);  // it really stormed
   EXPECT_EQ(flood.count(0x0B), 0u);
@@ -167,12 +171,13 @@ TEST(StressModbus, FourClientsWithEightWritesInFlightGetAnswersNotTimeouts) {
       --running;
     });
   }
+  bool lost = false;
   while (running > 0) {
-    ASSERT_EQ(common(plc, 2).status & reg::comm_lost, 0);
-    ASSERT_EQ(common(plc, 1).status & reg::comm_lost, 0);
+    lost = lost || ((common(plc, 1).status | common(plc, 2).status) & reg::comm_lost) != 0;
     std::this_thread::sleep_for(100ms);
   }
   for (auto& t : threads) t.join();
+  EXPECT_FALSE(lost) << "a drive went comm_lost during the storm";
   std::size_t ok = 0, busy = 0, other = 0;
   for (const auto& f : floods) {
     ok += f->count(0);
