@@ -80,7 +80,7 @@ inline constexpr std::array kCommonBlock = {
     CommonRow{Table::input, "speed_rpm", PointType::i16, "rpm", "actual speed (negative: reverse)",
               [](const CommonSnapshot& s) -> std::int64_t { return s.drive.speed_rpm; }},
     CommonRow{Table::input, "data_age_ms", PointType::u32, "ms",
-              "time since the last good frame (4294967295: never)",
+              "time since the last reply carrying the drive's state (4294967295: never)",
               [](const CommonSnapshot& s) -> std::int64_t { return s.data_age_ms; }},
     counting(
         CommonRow{Table::input, "frames_good", PointType::u32, "", "good frames received",
