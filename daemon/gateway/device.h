@@ -108,6 +108,9 @@ class Device final : public Station {
   // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
   // the failsafe. `done` is called exactly once.
   void command(Command c, modbus::WriteDone done, TimePoint now);
+  // Shutdown has begun: from now on every client's write, from any northbound, is refused with
+  // 0x0B before it reaches the driver, so that nothing runs the motor after the shutdown stop.
+  void close_to_clients() { closed_to_clients_ = true; }
   // Fails every request in flight (shutdown, bus closed for good).
   void fail_pending(modbus::Exception why);
   // Writes waiting or being carried out (status bit command_pending).
@@ -175,6 +178,7 @@ class Device final : public Station {
   // In flight, oldest first: stops (urgent) are handed to the driver at once, the others one at
   // a time, oldest first, each part on a write turn the bus engine gives (release()).
   std::vector<std::unique_ptr<Request>> requests_;
+  bool closed_to_clients_ = false;
   bool urgent_unsent_ = false;  // a stop was handed to the driver since its last next_exchange
   bool handed_ = false;         // a queued write's part likewise
   bool last_exchange_wrote_ = false;  // the device's last exchange carried a write

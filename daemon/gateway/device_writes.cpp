@@ -218,6 +218,7 @@ Exception Device::refuse_run_while_latched(const char* source, TimePoint now) {
 Exception Device::enqueue(const modbus::Session& session, std::vector<Part> parts,
                           modbus::WriteDone done, TimePoint now, Origin origin) {
   const bool feeds = origin == Origin::plc && session.feeds_failsafe;
+  if (closed_to_clients_ && origin == Origin::plc) return Exception::gateway_target_failed;
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
   std::stable_partition(parts.begin(), parts.end(),

@@ -182,6 +182,9 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   auto waiter = std::make_shared<Waiter>(io_);
   waiter->done = std::move(done);
   const auto now = Clock::now();
+  // No client may start a drive once shutdown has begun (a run queued now would reach it after
+  // the stop); the stops below drop the runs already queued.
+  for (auto& d : devices_) d->close_to_clients();
   for (auto& d : devices_) {
     if (!d->state().running || d->comm_lost()) continue;
     if (d->config().on_shutdown == ShutdownAction::hold) {

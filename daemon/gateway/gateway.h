@@ -49,7 +49,8 @@ class Gateway : public modbus::Backend {
   void start();  // opens the buses and starts polling (kept buses poll on)
   void stop();   // closes the buses; pending writes fail with 0x0B
   // Puts every running drive whose on_shutdown is stop in its stop state (on_shutdown = hold
-  // leaves it) and calls `done` once they confirmed or `limit` passed.
+  // leaves it) and calls `done` once they confirmed or `limit` passed. From then on every
+  // client's write is refused (0x0B).
   void stop_drives(Millis limit, std::function<void()> done);
 
   modbus::Exception read(const modbus::Session& session, std::uint8_t unit,

@@ -365,6 +365,22 @@ TEST_F(DeviceTest, NaNAndInfinitiesAreRefusedOnEveryWritePath) {
   EXPECT_EQ(std::get<double>(fake_->writes[0].second), 1.5);
 }
 
+// Shutdown has begun: no client's write reaches the driver any more, from any northbound; the
+// gateway's own stop still does.
+TEST_F(DeviceTest, OnceShutdownBeganEveryClientWriteIsRefused) {
+  device_->close_to_clients();
+  std::optional<Exception> a;
+  EXPECT_EQ(write(Table::holding, 0, {1}, a), Exception::gateway_target_failed);
+  const std::vector<Device::PointWrite> run = {{device_->map().find("command"), std::int64_t{1}}};
+  EXPECT_EQ(device_->write_points(
+                session_, run, [](Exception) {}, t0_),
+            Exception::gateway_target_failed);
+  EXPECT_TRUE(fake_->commands.empty());
+  std::optional<Exception> stopped;
+  device_->command(Command::stop, [&](Exception e) { stopped = e; }, t0_);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+}
+
 TEST_F(DeviceTest, AReadSessionReachingTheDeviceIsRefusedEvenTheHeartbeat) {
   // The server refuses a read-only client's writes before the backend; the device holds the
   // same line in case another northbound forgets.
