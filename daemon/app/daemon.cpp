@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "app/logging.h"
+#include "config/config_diff.h"
 #include "config/config_loader.h"
 
 namespace drivegate {
@@ -52,6 +53,36 @@ std::vector<modbus::ListenerOptions> listener_options(const std::vector<Listener
   return out;
 }
 
+// What a reload did to the devices and buses, in the log: one line for each change, with why.
+void log_diff(const ConfigDiff& d, spdlog::logger& log) {
+  for (const auto& b : d.buses_reopened) {
+    log.info("reload: bus {} reopened: {}", b.name, fmt::join(b.what, ", "));
+  }
+  for (const auto& b : d.buses_added) log.info("reload: bus {} added", b);
+  for (const auto& b : d.buses_removed) log.info("reload: bus {} removed (port closed)", b);
+  for (const auto& c : d.devices_changed) {
+    log.info("reload: device {} changed ({}): started afresh", c.name, fmt::join(c.what, ", "));
+  }
+  for (const auto& n : d.devices_added) log.info("reload: device {} added", n);
+  for (const auto& n : d.devices_removed) log.info("reload: device {} removed", n);
+}
+
+// What the listeners' new policies change, listener by listener (applied as they run).
+void log_listener_changes(const std::vector<ListenerConfig>& running,
+                          const std::vector<ListenerConfig>& next, spdlog::logger& log) {
+  for (const auto& n : next) {
+    const auto r = std::find_if(running.begin(), running.end(), [&](const ListenerConfig& l) {
+      return l.options.name() == n.options.name();
+    });
+    if (r == running.end()) continue;
+    const auto what = changes(r->options.policy, n.options.policy);
+    if (!what.empty()) {
+      log.info("reload: listener {}: {} (open connections take it at once)", n.options.name(),
+               fmt::join(what, ", "));
+    }
+  }
+}
+
 }  // namespace
 
 Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
@@ -70,7 +101,7 @@ Daemon::~Daemon() {
 
 bool Daemon::start_http() {
   if (!config_.http.enabled) return true;
-  content_ = std::make_unique<StatusContent>(gateway_, *server_, mqtt_, http_);
+  content_ = std::make_unique<StatusContent>(gateway_, *server_, mqtt_, http_, restart_needed_);
   http::HttpOptions o;
   o.host = config_.http.listen.host;
   o.port = config_.http.listen.port;
@@ -171,6 +202,7 @@ void Daemon::reload() {
   if (config) next = Gateway::build(io_, *config, plugins_, log_, errors);
   for (const auto& e : errors) log_->error("{}", e);
   // The listeners' new policies, TLS files re-read; nothing changes if any of it fails.
+  std::vector<std::string> restart;
   if (next) {
     const auto listeners = server_->reload_listeners(listener_options(config->listeners));
     for (const auto& e : listeners.errors) log_->error("listener {}", e);
@@ -178,7 +210,9 @@ void Daemon::reload() {
     for (const auto& l : listeners.restart_needed) {
       log_->warn("listener {}: takes effect at the next restart (listening sockets are bound once)",
                  l);
+      restart.push_back("listener " + l);
     }
+    if (next) log_listener_changes(config_.listeners, config->listeners, *log_);
     if (!listeners.restart_needed.empty()) config->listeners = config_.listeners;
   }
   if (!next) {
@@ -192,14 +226,18 @@ void Daemon::reload() {
       config->http.listen.port != config_.http.listen.port ||
       config->http.allow != config_.http.allow || config->http.capture != config_.http.capture) {
     log_->warn("[http] changes take effect at the next restart");
+    restart.emplace_back("[http]");
     config->http = config_.http;
   }
   if (mqtt_changed(config_.mqtt, config->mqtt)) {
     log_->warn("[mqtt] changes take effect at the next restart");
+    restart.emplace_back("[mqtt]");
     config->mqtt = config_.mqtt;
   }
-  // Unchanged buses move over running; the others close before the new ones open their ports.
-  const auto kept = next->adopt_unchanged(*gateway_);
+  // Unchanged devices and buses move over running; the changed buses close before the new ones
+  // open their ports.
+  const ConfigDiff diff = diff_config(config_, *config);
+  next->adopt(*gateway_);
   gateway_->stop();
   next->start();
   backend_.set(next.get());
@@ -209,9 +247,14 @@ void Daemon::reload() {
   boost::asio::post(io_, [old = std::shared_ptr<Gateway>(std::move(gateway_))] {});
   gateway_ = std::move(next);
   config_ = std::move(*config);
-  log_->info("configuration reloaded: {} devices on {} buses; {} unchanged kept running{}{}",
-             gateway_->devices().size(), config_.buses.size(), kept.size(),
-             kept.empty() ? "" : ": ", fmt::join(kept, ", "));
+  restart_needed_ = std::move(restart);
+  log_diff(diff, *log_);
+  log_->info("configuration reloaded: {} devices on {} buses; {} kept as they run{}{}{}",
+             gateway_->devices().size(), config_.buses.size(), diff.devices_kept.size(),
+             diff.devices_kept.empty() ? "" : ": ", fmt::join(diff.devices_kept, ", "),
+             restart_needed_.empty()
+                 ? std::string()
+                 : fmt::format("; a restart is needed for {}", fmt::join(restart_needed_, ", ")));
   notifier_.ready(status_line());
 }
 

@@ -66,6 +66,9 @@ class Daemon {
   std::unique_ptr<http::HttpServer> http_;
   std::unique_ptr<mqtt::Northbound> mqtt_;  // after gateway_: goes first, unhooking its devices
   bool stopping_ = false;
+  // What the configuration file says and only a restart applies (listeners added, removed or
+  // moved, [http], [mqtt]): the status page and JSON show it.
+  std::vector<std::string> restart_needed_;
 };
 
 }  // namespace drivegate

@@ -47,11 +47,18 @@ class BusCapture final : public http::CaptureStream {
 
 StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
                              const std::unique_ptr<mqtt::Northbound>& mqtt,
-                             const std::unique_ptr<http::HttpServer>& http)
-    : gateway_(gateway), server_(server), mqtt_(mqtt), http_(http), started_unix_(unix_now()) {}
+                             const std::unique_ptr<http::HttpServer>& http,
+                             const std::vector<std::string>& restart_needed)
+    : gateway_(gateway),
+      server_(server),
+      mqtt_(mqtt),
+      http_(http),
+      restart_needed_(restart_needed),
+      started_unix_(unix_now()) {}
 
 StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
   StatusView v{*gateway_, server_, DRIVEGATE_VERSION, started_unix_, unix_now()};
+  v.restart_needed = &restart_needed_;
   if (mqtt_) {
     mqtt = mqtt_->status();
     v.mqtt = &mqtt;

@@ -16,11 +16,12 @@ namespace drivegate {
 
 class StatusContent final : public http::Content {
  public:
-  // `gateway`, `mqtt` and `http` are the daemon's own pointers, read at each request (`mqtt` is
-  // empty without [mqtt]; `http` is set once the HTTP server that asks is built).
+  // `gateway`, `mqtt`, `http` and `restart_needed` are the daemon's own, read at each request
+  // (`mqtt` is empty without [mqtt]; `http` is set once the HTTP server that asks is built).
   StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
                 const std::unique_ptr<mqtt::Northbound>& mqtt,
-                const std::unique_ptr<http::HttpServer>& http);
+                const std::unique_ptr<http::HttpServer>& http,
+                const std::vector<std::string>& restart_needed);
   std::string status_json() override;
   std::string metrics() override;
   std::string regmap_json() override;
@@ -35,6 +36,7 @@ class StatusContent final : public http::Content {
   const modbus::Server& server_;
   const std::unique_ptr<mqtt::Northbound>& mqtt_;
   const std::unique_ptr<http::HttpServer>& http_;
+  const std::vector<std::string>& restart_needed_;
   double started_unix_;
 };
 

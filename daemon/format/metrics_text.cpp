@@ -342,6 +342,9 @@ void metrics_text(const StatusView& view, std::string& out) {
   w.sample("drivegate_build_info", version, 1);
   w.single("process_start_time_seconds", "gauge", "start time of the process since the epoch",
            view.started_unix);
+  w.single("drivegate_restart_needed", "gauge",
+           "1 while the configuration file asks for what only a restart applies",
+           view.restart_needed != nullptr && !view.restart_needed->empty() ? 1 : 0);
   device_metrics(w, view);
   bus_metrics(w, view);
   listener_metrics(w, view);

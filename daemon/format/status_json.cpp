@@ -182,8 +182,16 @@ void http_json(std::string& out, const http::HttpStats& h, std::size_t clients) 
 void status_json(const StatusView& view, std::string& out) {
   out += "{\"version\": ";
   append_json_string(out, view.version);
-  fmt::format_to(std::back_inserter(out), ", \"started\": {:.3f}, \"now\": {:.3f},\n\"devices\": [",
+  fmt::format_to(std::back_inserter(out), ", \"started\": {:.3f}, \"now\": {:.3f}",
                  view.started_unix, view.now_unix);
+  out += ", \"restart_needed\": [";
+  if (view.restart_needed != nullptr) {
+    for (std::size_t i = 0; i < view.restart_needed->size(); ++i) {
+      if (i > 0) out += ", ";
+      append_json_string(out, (*view.restart_needed)[i]);
+    }
+  }
+  out += "],\n\"devices\": [";
   bool first = true;
   std::vector<PointValue> values;  // one device's at a time, its room kept for the next
   for (const auto& d : view.gateway.devices()) {

@@ -34,6 +34,8 @@ struct StatusView {
   const mqtt::NorthboundStatus* mqtt = nullptr;  // [mqtt] off: none
   const http::HttpStats* http = nullptr;         // the HTTP side serving these documents, if any
   std::size_t http_clients = 0;
+  // What the configuration file asks and only a restart applies; none: nothing.
+  const std::vector<std::string>* restart_needed = nullptr;
 };
 
 // The name of `value` in the point's labels, or "" (a value without a name, or a bit field).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <boost/asio/steady_timer.hpp>
 
+#include "config/config_diff.h"
 #include "gateway/log_context.h"
 
 namespace drivegate {
@@ -10,18 +11,6 @@ namespace drivegate {
 namespace asio = boost::asio;
 using modbus::Exception;
 
-namespace {
-
-// Equal but for where in the file they were declared.
-bool same_settings(BusConfig a, BusConfig b) {
-  a.line = b.line = 0;
-  return a == b;
-}
-bool same_settings(DeviceConfig a, DeviceConfig b) {
-  a.line = b.line = 0;
-  return a == b;
-}
-}  // namespace
 
 Table to_table(modbus::RegisterTable t) {
   switch (t) {
@@ -119,38 +108,33 @@ std::vector<Station*> Gateway::stations_on(const std::string& bus) const {
   return {devices.begin(), devices.end()};
 }
 
-std::unique_ptr<Device>& Gateway::owner(const Device* d) {
-  return *std::find_if(devices_.begin(), devices_.end(),
-                       [d](const auto& p) { return p.get() == d; });
-}
-
-std::vector<std::string> Gateway::adopt_unchanged(Gateway& old) {
-  std::vector<std::string> kept;
-  for (auto& fresh_bus : buses_) {
-    const auto old_bus = std::find_if(old.buses_.begin(), old.buses_.end(), [&](const auto& b) {
-      return same_settings(b->config(), fresh_bus->config());
+void Gateway::adopt(Gateway& old) {
+  // Devices: the running one in place of the fresh one wherever the settings are the same. The
+  // fresh ones it replaces go last, once no engine points to them.
+  std::vector<std::unique_ptr<Device>> replaced;
+  for (auto& fresh : devices_) {
+    const auto running = std::find_if(old.devices_.begin(), old.devices_.end(), [&](const auto& d) {
+      return d && d->config().name == fresh->config().name &&
+             same_settings(d->config(), fresh->config());
     });
-    if (old_bus == old.buses_.end()) continue;
-    const auto running = old.devices_on((*old_bus)->config().name);
-    const auto fresh = devices_on(fresh_bus->config().name);
-    if (running.size() != fresh.size() || !std::equal(running.begin(), running.end(), fresh.begin(),
-                                                      [](const Device* a, const Device* b) {
-                                                        return same_settings(a->config(),
-                                                                             b->config());
-                                                      })) {
-      continue;
-    }
-    fresh_bus = std::move(*old_bus);  // the fresh bus, never started, goes first
-    old.buses_.erase(old_bus);
-    for (std::size_t i = 0; i < fresh.size(); ++i) {
-      owner(fresh[i]) = std::move(old.owner(running[i]));  // the fresh device is dropped
-    }
-    std::erase(old.devices_, nullptr);
-    kept.push_back(fresh_bus->config().name);
+    if (running == old.devices_.end()) continue;
+    replaced.push_back(std::move(fresh));
+    fresh = std::move(*running);
   }
+  std::erase(old.devices_, nullptr);
+  // Buses: the running one, port open, wherever its own settings are the same.
+  for (auto& fresh_bus : buses_) {
+    const auto running = std::find_if(old.buses_.begin(), old.buses_.end(), [&](const auto& b) {
+      return b->config().name == fresh_bus->config().name &&
+             same_settings(b->config(), fresh_bus->config());
+    });
+    if (running == old.buses_.end()) continue;
+    fresh_bus = std::move(*running);  // the fresh bus, never started, goes first
+    old.buses_.erase(running);
+  }
+  for (auto& b : buses_) b->replace_stations(stations_on(b->config().name));
   units_.fill(nullptr);
   for (const auto& d : devices_) units_[d->config().unit_id] = d.get();
-  return kept;
 }
 
 void Gateway::start() {

@@ -39,12 +39,14 @@ class Gateway : public modbus::Backend {
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;
 
-  // For a reload, before start(): every bus of this (new, not started) gateway whose settings and
-  // devices are all unchanged in `old` is taken from `old` as it runs, devices and all (commands
-  // in force, failsafe timers, counters, writes in flight), in place of the fresh one. A drive on
-  // a kept bus sees no new start-up, so a reload that adds a drive elsewhere stops nothing.
-  // What stays in `old` is then stopped by the caller. Returns the names of the buses kept.
-  std::vector<std::string> adopt_unchanged(Gateway& old);
+  // For a reload, before start(): every device of this (new, not started) gateway whose settings
+  // are unchanged in `old` (config/config_diff.h) is taken from `old` as it runs, in place of the
+  // fresh one: driver, command in force, failsafe timer and latch, counters, writes in flight,
+  // whatever else changes on its line. Every bus whose own settings are unchanged is taken with
+  // its port open and gets this gateway's devices; the others start afresh when this gateway
+  // starts, once the caller has stopped `old` (and with it their ports and the devices left in
+  // it: removed or changed).
+  void adopt(Gateway& old);
 
   void start();  // opens the buses and starts polling (kept buses poll on)
   void stop();   // closes the buses; pending writes fail with 0x0B
@@ -70,7 +72,6 @@ class Gateway : public modbus::Backend {
   Gateway(boost::asio::io_context& io, std::shared_ptr<spdlog::logger> log);
   [[nodiscard]] std::vector<Device*> devices_on(const std::string& bus) const;
   [[nodiscard]] std::vector<Station*> stations_on(const std::string& bus) const;
-  std::unique_ptr<Device>& owner(const Device* d);
 
   boost::asio::io_context& io_;
   std::shared_ptr<spdlog::logger> log_;

@@ -45,6 +45,7 @@ body[data-link="unreachable"] .link .dot { background: #fff; animation: blink 1s
 .meta { margin-left: auto; color: #c3cbd2; font-size: 12px; }
 .meta b { color: #e8ecef; font-weight: 600; font-family: var(--mono); }
 .banner { margin: 0; padding: 10px 16px; background: var(--fault); color: #fff; font-weight: 600; }
+.notice { margin: 0; padding: 8px 16px; background: #fff3cd; color: #5c4400; font-weight: 600; }
 main { padding: 12px 16px 24px; max-width: 1600px; margin: 0 auto; }
 body[data-link="unreachable"] main { filter: grayscale(1); opacity: .55; }
 h2 { margin: 18px 0 8px; font-size: 13px; text-transform: uppercase; letter-spacing: .08em;
@@ -165,6 +166,7 @@ footer a { color: inherit; }
     &middot; last data <b id="age">-</b></div>
 </header>
 <p class="banner" id="banner" hidden></p>
+<p class="notice" id="restart" data-field="restart_needed" hidden></p>
 <main>
   <section class="summary" id="summary">
     <div class="tile" data-summary="devices"><div class="v">-</div><div class="k">drives</div></div>
@@ -536,6 +538,10 @@ footer a { color: inherit; }
       set(field("last_error"), q.last_error ? "\u00b7 last error: " + q.last_error : "");
     }
     set($("version"), s.version ? "v" + s.version : "");
+    const restart = $("restart"), needed = s.restart_needed || [];
+    restart.hidden = needed.length === 0;
+    set(restart, needed.length === 0 ? "" : "Restart needed: the configuration file changes " +
+        needed.join(", ") + ", which only a restart applies (systemctl restart drivegate)");
     set($("now"), clock(s.now));
     set($("uptime"), duration(s.now - s.started));
   }

@@ -31,6 +31,10 @@ class Bus final : public std::enable_shared_from_this<Bus>, private BusClock, pr
   void add_tap(FrameTap* tap) { engine_.add_tap(tap); }
   void remove_tap(FrameTap* tap) { engine_.remove_tap(tap); }
   [[nodiscard]] const std::vector<Station*>& stations() const { return engine_.stations(); }
+  // A reload changed the devices on this line, not its settings: the port stays open.
+  void replace_stations(std::vector<Station*> stations) {
+    engine_.replace_stations(std::move(stations));
+  }
 
   [[nodiscard]] const BusConfig& config() const { return config_; }
   [[nodiscard]] const BusCounters& counters() const { return engine_.counters(); }

@@ -65,6 +65,31 @@ void BusEngine::start() {
   clock_.set_alarm(next_tick_);
 }
 
+void BusEngine::replace_stations(std::vector<Station*> stations) {
+  const TimePoint now = clock_.now();
+  for (Station* st : stations_) {
+    if (std::find(stations.begin(), stations.end(), st) != stations.end()) continue;
+    if (started_) st->on_work(nullptr);
+    if (guard_owner_ == st) guard_owner_ = nullptr;  // its late bytes are only noise now
+    if (st != current_) continue;
+    // Its reply may still come: nothing is sent before it could have, and none of it is taken.
+    quiet_until_ = std::max(quiet_until_, now + exchange_->timeout + network_delay_);
+    exchange_.reset();
+    current_ = nullptr;
+    echo_.clear();
+    if (state_ != State::down) state_ = State::idle;
+  }
+  stations_ = std::move(stations);
+  streaming_ = nullptr;
+  for (Station* st : stations_) {
+    if (st->link().policy.streaming) streaming_ = st;
+    st->link().bus = &counters_;
+    if (started_) st->on_work([this] { kick(); });
+  }
+  next_station_ = 0;
+  if (started_) kick();
+}
+
 void BusEngine::stop() {
   if (!started_) return;
   started_ = false;

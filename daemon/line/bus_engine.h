@@ -90,6 +90,11 @@ class BusEngine {
   // Something new may be due (a write was queued): look as soon as the line is free.
   void kick();
 
+  // The devices on the line change (a reload): those that stay keep everything, those that go
+  // are forgotten (an exchange of theirs in flight is abandoned, the line kept quiet for its
+  // reply timeout), new ones are polled from the next turn.
+  void replace_stations(std::vector<Station*> stations);
+
   // Every frame sent and received goes to `tap` too, until remove_tap() (line/frame_tap.h).
   void add_tap(FrameTap* tap);
   void remove_tap(FrameTap* tap);

@@ -53,6 +53,10 @@ class Options {
     return get<OptionValue>(name);
   }
   [[nodiscard]] bool has(std::string_view name) const { return values_.contains(name); }
+  // Every option by name, in name order.
+  [[nodiscard]] const std::map<std::string, OptionValue, std::less<>>& all() const {
+    return values_;
+  }
   void set(std::string name, OptionValue value) { values_[std::move(name)] = std::move(value); }
   friend bool operator==(const Options&, const Options&) = default;
 

@@ -1,5 +1,5 @@
-// Reload: a bus whose settings and devices are all unchanged moves to the new gateway as it runs,
-// devices and all; any change on a bus (its settings, or any device on it) rebuilds that bus.
+// Reload (issue 24): a device whose settings are unchanged moves to the new gateway as it runs,
+// whatever changes beside it; a bus whose own settings are unchanged keeps its port open.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 
@@ -59,57 +59,84 @@ TEST_F(GatewayReload, AnUnchangedConfigKeepsEveryBusAndDevice) {
   auto old = build(config());
   const Device* a1 = old->find("a1");
   const Device* b1 = old->find("b1");
+  const Bus* bus_a = old->buses()[0].get();
   auto next = build(config());
-  EXPECT_EQ(next->adopt_unchanged(*old), (std::vector<std::string>{"a", "b"}));
+  next->adopt(*old);
   EXPECT_EQ(next->find("a1"), a1);  // the same objects, with their state
   EXPECT_EQ(next->find("b1"), b1);
+  EXPECT_EQ(next->buses()[0].get(), bus_a);  // the same line, port open
   EXPECT_TRUE(old->devices().empty());
+  EXPECT_TRUE(old->buses().empty());
   EXPECT_EQ(next->devices().size(), 3u);
 }
 
 TEST_F(GatewayReload, WhereItWasDeclaredDoesNotCount) {
   auto old = build(config());
+  const Device* a1 = old->find("a1");
   auto moved = config();
   for (auto& b : moved.buses) b.line += 40;
   for (auto& d : moved.devices) d.line += 40;
   auto next = build(moved);
-  EXPECT_EQ(next->adopt_unchanged(*old).size(), 2u);
+  next->adopt(*old);
+  EXPECT_EQ(next->find("a1"), a1);
+  EXPECT_TRUE(old->buses().empty());
 }
 
-TEST_F(GatewayReload, AChangedDeviceRebuildsOnlyItsBus) {
+// Issue 24: a neighbour's change on the line leaves a device as it runs, and the line open.
+TEST_F(GatewayReload, AChangedDeviceStartsAfreshAloneItsNeighboursAndLineKept) {
   auto old = build(config());
   const Device* a1 = old->find("a1");
-  const Device* b1 = old->find("b1");
+  const Device* a2 = old->find("a2");
+  const Bus* bus_a = old->buses()[0].get();
   auto changed = config();
   changed.devices[1].poll_interval = Millis(250);  // a2, on bus a
   auto next = build(changed);
-  EXPECT_EQ(next->adopt_unchanged(*old), (std::vector<std::string>{"b"}));
-  EXPECT_NE(next->find("a1"), a1);  // bus a starts afresh, a1 included
-  EXPECT_EQ(next->find("b1"), b1);
-  EXPECT_EQ(old->devices().size(), 2u);  // a1 and a2 stay behind, to be stopped
+  next->adopt(*old);
+  EXPECT_EQ(next->find("a1"), a1);  // kept, on the kept line
+  EXPECT_NE(next->find("a2"), a2);  // afresh
+  EXPECT_EQ(next->buses()[0].get(), bus_a);
+  EXPECT_EQ(old->devices().size(), 1u);  // the old a2 stays behind, to be stopped
+  // The kept line now polls the kept a1 and the new a2, not the old a2.
+  const auto& stations = bus_a->stations();
+  ASSERT_EQ(stations.size(), 2u);
+  EXPECT_EQ(stations[0], static_cast<const Station*>(a1));
+  EXPECT_EQ(stations[1], static_cast<const Station*>(next->find("a2")));
 }
 
-TEST_F(GatewayReload, ChangedLineSettingsOrAnAddedDeviceRebuildTheBus) {
+TEST_F(GatewayReload, ChangedLineSettingsReopenTheLineButKeepItsDevices) {
   auto old = build(config());
+  const Device* a1 = old->find("a1");
+  const Bus* bus_a = old->buses()[0].get();
   auto changed = config();
   changed.buses[0].baud = 9600;
   auto next = build(changed);
-  EXPECT_EQ(next->adopt_unchanged(*old), (std::vector<std::string>{"b"}));
+  next->adopt(*old);
+  EXPECT_NE(next->buses()[0].get(), bus_a);  // a new line (the old one is stopped first)
+  EXPECT_EQ(next->find("a1"), a1);           // the device, as it ran
+  EXPECT_EQ(next->buses()[0]->stations().front(), static_cast<const Station*>(a1));
+  EXPECT_EQ(old->buses().size(), 1u);
+}
 
-  old = build(config());
+TEST_F(GatewayReload, AnAddedDeviceJoinsAKeptLine) {
+  auto old = build(config());
+  const Device* b1 = old->find("b1");
+  const Bus* bus_b = old->buses()[1].get();
   auto added = config();
   added.devices.push_back(added.devices[2]);
   added.devices.back().name = "b2";
   added.devices.back().unit_id = 4;
   added.devices.back().address = 4;
-  next = build(added);
-  EXPECT_EQ(next->adopt_unchanged(*old), (std::vector<std::string>{"a"}));
+  auto next = build(added);
+  next->adopt(*old);
+  EXPECT_EQ(next->find("b1"), b1);
+  EXPECT_EQ(next->buses()[1].get(), bus_b);
+  EXPECT_EQ(bus_b->stations().size(), 2u);
 }
 
 TEST_F(GatewayReload, ReadsReachTheKeptDevicesByUnit) {
   auto old = build(config());
   auto next = build(config());
-  next->adopt_unchanged(*old);
+  next->adopt(*old);
   old.reset();  // the old gateway is gone; the kept devices live on in the new one
   std::array<std::uint16_t, 1> status{};
   for (const std::uint8_t unit : {std::uint8_t{1}, std::uint8_t{2}, std::uint8_t{3}}) {

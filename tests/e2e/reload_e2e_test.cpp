@@ -3,6 +3,7 @@
 // open connections; a listen change waits for a restart.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <sstream>
 
 #include "e2e.h"
@@ -54,6 +55,127 @@ TEST_F(ReloadE2E, BadConfigIsRefusedAndTheOldOneKeepsServing) {
   EXPECT_TRUE(daemon_.process().running());
   EXPECT_TRUE(online(plc_));
   EXPECT_EQ(plc_.write(reg::command, {1, 700}), 0);
+}
+
+// --- a reload is a diff, applied with the least disturbance (issue 24) ----------------------
+
+// Two devices on one line, `poll_b` the second one's poll_ms.
+std::string pair_on_one_line(const std::filesystem::path& port, const std::string& adapter,
+                             int poll_b, const std::string& first_extra = "") {
+  std::string toml = "[[bus]]\nname = \"line\"\nport = \"" + port.string() + "\"\n";
+  for (int unit = 1; unit <= 2; ++unit) {
+    toml += "\n[[device]]\nname = \"dev-" + std::to_string(unit) + "\"\nbus = \"line\"\nadapter = \"" +
+            adapter + "\"\nunit_id = " + std::to_string(unit) +
+            "\naddress = " + std::to_string(unit) +
+            (unit == 2 ? "\npoll_ms = " + std::to_string(poll_b) : std::string()) + "\n" +
+            (unit == 1 ? first_extra : std::string());
+  }
+  return toml;
+}
+
+bool online_unit(Plc& plc, int unit) {
+  plc.unit(unit);
+  return online(plc);
+}
+
+// Two eDrives on one line, the first running at 3000 rpm on the PLC's command; only the second's
+// poll_ms changes. The first keeps its command block (run, 3000), a new setpoint reaches it, and
+// the line is not reopened; the log says what changed and what was kept.
+TEST(ReloadDiffE2E, ANeighboursChangeLeavesARunningDriveAsItRuns) {
+  TempDir dir;
+  Sim sim("unicla-edrive", dir / "line", {"--address", "1", "--address", "2"});
+  Daemon daemon(dir, pair_on_one_line(dir / "line", "unicla-edrive", 500), {},
+                dir / "drivegated.log");
+  Plc plc(daemon.port());
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
+  plc.unit(1);
+  ASSERT_EQ(plc.write(reg::command, {1, 3000}), 0);
+  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=3000") != std::string::npos; },
+                         15s))
+      << sim.control("@1 state");
+
+  std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "unicla-edrive", 250);
+  daemon.process().signal(SIGHUP);
+  ASSERT_TRUE(eventually(
+      [&] { return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos; },
+      10s));
+  const std::string log = slurp(dir / "drivegated.log");
+  EXPECT_NE(log.find("reload: device dev-2 changed (poll_ms 500 -> 250): started afresh"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("1 kept as they run: dev-1"), std::string::npos) << log;
+  EXPECT_EQ(log.find("reopened"), std::string::npos) << log;
+  // The port was opened once, at start-up: the reload kept it open.
+  std::size_t opened = 0;
+  for (auto at = log.find("bus line: "); at != std::string::npos; at = log.find("bus line: ", at + 1)) {
+    if (log.compare(log.find('\n', at) - 5, 5, " open") == 0) ++opened;
+  }
+  EXPECT_EQ(opened, 1u) << log;
+  plc.unit(1);
+  const auto held = plc.holding(reg::command, 2);
+  ASSERT_TRUE(held.ok());
+  EXPECT_EQ(held.regs[0], 1);     // run_forward, as before the reload
+  EXPECT_EQ(held.regs[1], 3000);  // and its setpoint
+  EXPECT_EQ(plc.write(reg::setpoint, {4000}), 0);
+  EXPECT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=4000") != std::string::npos; },
+                         15s))
+      << sim.control("@1 state");
+  plc.unit(1);
+  EXPECT_EQ(plc.write(reg::command, {0}), 0);
+}
+
+// An ED3100 with a 2 s failsafe, run by a PLC that then goes away; half a second later a reload
+// changes only its neighbour. The failsafe still trips on time and stops the drive.
+TEST(ReloadDiffE2E, ANeighboursChangeDoesNotDisarmTheFailsafe) {
+  TempDir dir;
+  Sim sim("ed3100", dir / "line", {"--address", "1", "--address", "2"});
+  const std::string failsafe = "failsafe_timeout_ms = 2000\nfailsafe_action = \"stop\"\n";
+  Daemon daemon(dir, pair_on_one_line(dir / "line", "ed3100", 500, failsafe), {},
+                dir / "drivegated.log");
+  Plc plc(daemon.port());
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
+  plc.unit(1);
+  ASSERT_EQ(plc.write(reg::command, {1, 1500}), 0);
+  const auto last_write = std::chrono::steady_clock::now();
+  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("running=1") != std::string::npos; },
+                         5s));
+  std::this_thread::sleep_for(500ms);
+  std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "ed3100", 250, failsafe);
+  daemon.process().signal(SIGHUP);
+  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("running=0") != std::string::npos; },
+                         8s))
+      << "the failsafe never stopped the drive after the reload";
+  const auto stopped = std::chrono::steady_clock::now() - last_write;
+  EXPECT_LT(stopped, 4s);  // 2 s failsafe, a poll, and wide margins
+  plc.unit(1);
+  EXPECT_NE(plc.input(reg::status, 1).regs.at(0) & (1 << 5), 0);  // latched
+  EXPECT_NE(slurp(dir / "drivegated.log").find("failsafe stop"), std::string::npos);
+}
+
+// A listener's access changed from operate to read applies to the open connection, and the log
+// says so.
+TEST(ReloadDiffE2E, AnAccessChangeIsLogged) {
+  TempDir dir;
+  Sim sim("nidec-washer", dir / "washer");
+  const auto config = [&](const char* access) {
+    return "[[listener]]\naddress = \"127.0.0.1:0\"\naccess = \"" + std::string(access) + "\"\n\n" +
+           washer(dir / "washer", 1);
+  };
+  Daemon daemon(dir, config("operate"), {}, dir / "drivegated.log");
+  Plc plc(daemon.port(), 1);
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s));
+  EXPECT_EQ(plc.write(reg::heartbeat, {1}), 0);
+  std::ofstream(daemon.config()) << config("read");
+  daemon.process().signal(SIGHUP);
+  ASSERT_TRUE(eventually(
+      [&] { return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos; },
+      10s));
+  EXPECT_NE(slurp(dir / "drivegated.log").find("access operate -> read"), std::string::npos)
+      << slurp(dir / "drivegated.log");
+  EXPECT_EQ(plc.write(reg::heartbeat, {2}), 0x01);
 }
 
 // --- [server] on SIGHUP -------------------------------------------------------------------

@@ -1,0 +1,155 @@
+#include "config/config_diff.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+
+namespace drivegate {
+
+namespace {
+
+std::string_view parity_name(Parity p) {
+  switch (p) {
+    case Parity::none:
+      return "none";
+    case Parity::even:
+      return "even";
+    case Parity::odd:
+      return "odd";
+  }
+  return "?";
+}
+
+std::string text(const OptionValue& v) {
+  return std::visit(
+      [](const auto& x) -> std::string {
+        using T = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+          return fmt::format("[{}]", fmt::join(x, ", "));
+        } else {
+          return fmt::format("{}", x);
+        }
+      },
+      v);
+}
+
+// Appends "key old -> new" when the two differ.
+template <class T>
+void note(std::vector<std::string>& out, std::string_view key, const T& a, const T& b) {
+  if (a != b) out.push_back(fmt::format("{} {} -> {}", key, a, b));
+}
+
+template <class Named>
+const Named* by_name(const std::vector<Named>& list, const std::string& name) {
+  const auto it =
+      std::find_if(list.begin(), list.end(), [&](const Named& x) { return x.name == name; });
+  return it != list.end() ? &*it : nullptr;
+}
+
+}  // namespace
+
+bool same_settings(const BusConfig& a, const BusConfig& b) {
+  return changes(a, b).empty();
+}
+
+bool same_settings(const DeviceConfig& a, const DeviceConfig& b) {
+  return changes(a, b).empty();
+}
+
+std::vector<std::string> changes(const BusConfig& a, const BusConfig& b) {
+  std::vector<std::string> out;
+  note(out, "port", a.port, b.port);
+  note(out, "baud", a.baud, b.baud);
+  note(out, "parity", parity_name(a.parity), parity_name(b.parity));
+  note(out, "data_bits", int{a.data_bits}, int{b.data_bits});
+  note(out, "stop_bits", int{a.stop_bits}, int{b.stop_bits});
+  note(out, "echo", a.echo, b.echo);
+  note(out, "rs485", a.rs485, b.rs485);
+  note(out, "reopen_max_ms", a.reopen_max.count(), b.reopen_max.count());
+  note(out, "network_delay_ms", a.network_delay.count(), b.network_delay.count());
+  return out;
+}
+
+std::vector<std::string> changes(const DeviceConfig& a, const DeviceConfig& b) {
+  std::vector<std::string> out;
+  note(out, "bus", a.bus, b.bus);
+  note(out, "adapter", a.adapter, b.adapter);
+  note(out, "unit_id", int{a.unit_id}, int{b.unit_id});
+  note(out, "address", a.address, b.address);
+  note(out, "poll_ms", a.poll_interval.count(), b.poll_interval.count());
+  note(out, "budget_ms", a.budget.count(), b.budget.count());
+  note(out, "backoff_max_ms", a.backoff_max.count(), b.backoff_max.count());
+  note(out, "failsafe_timeout_ms", a.failsafe.timeout.count(), b.failsafe.timeout.count());
+  note(out, "failsafe_action", to_string(a.failsafe.action), to_string(b.failsafe.action));
+  note(out, "failsafe_rpm", a.failsafe.preset_rpm, b.failsafe.preset_rpm);
+  note(out, "on_shutdown", std::string_view(a.on_shutdown == ShutdownAction::stop ? "stop" : "hold"),
+       std::string_view(b.on_shutdown == ShutdownAction::stop ? "stop" : "hold"));
+  // Options, by name: those in either (a changed adapter has other names altogether).
+  const auto& oa = a.options.all();
+  const auto& ob = b.options.all();
+  for (const auto& [name, value] : oa) {
+    const auto it = ob.find(name);
+    if (it == ob.end()) {
+      out.push_back(fmt::format("option {} {} -> (none)", name, text(value)));
+    } else if (it->second != value) {
+      out.push_back(fmt::format("option {} {} -> {}", name, text(value), text(it->second)));
+    }
+  }
+  for (const auto& [name, value] : ob) {
+    if (!oa.contains(name)) out.push_back(fmt::format("option {} (none) -> {}", name, text(value)));
+  }
+  return out;
+}
+
+std::vector<std::string> changes(const modbus::ListenerPolicy& a, const modbus::ListenerPolicy& b) {
+  std::vector<std::string> out;
+  note(out, "access", modbus::to_string(a.access), modbus::to_string(b.access));
+  note(out, "word_order", modbus::to_string(a.word_order), modbus::to_string(b.word_order));
+  const auto allow = [](const modbus::AllowList& l) {
+    std::vector<std::string> s;
+    for (const auto& r : l) s.push_back(r.to_string());
+    return l.empty() ? std::string("[any]") : fmt::format("[{}]", fmt::join(s, ", "));
+  };
+  note(out, "allow", allow(a.allow), allow(b.allow));
+  if (a.tls && b.tls) {
+    if (a.tls->roles != b.tls->roles) out.emplace_back("TLS roles");
+    if (a.tls->cert != b.tls->cert || a.tls->key != b.tls->key || a.tls->ca != b.tls->ca) {
+      out.emplace_back("TLS files");
+    }
+  }
+  return out;
+}
+
+ConfigDiff diff_config(const Config& running, const Config& next) {
+  ConfigDiff d;
+  for (const DeviceConfig& n : next.devices) {
+    const DeviceConfig* r = by_name(running.devices, n.name);
+    if (r == nullptr) {
+      d.devices_added.push_back(n.name);
+    } else if (auto what = changes(*r, n); what.empty()) {
+      d.devices_kept.push_back(n.name);
+    } else {
+      d.devices_changed.push_back({n.name, std::move(what)});
+    }
+  }
+  for (const DeviceConfig& r : running.devices) {
+    if (by_name(next.devices, r.name) == nullptr) d.devices_removed.push_back(r.name);
+  }
+  for (const BusConfig& n : next.buses) {
+    const BusConfig* r = by_name(running.buses, n.name);
+    if (r == nullptr) {
+      d.buses_added.push_back(n.name);
+    } else if (auto what = changes(*r, n); what.empty()) {
+      d.buses_kept.push_back(n.name);
+    } else {
+      d.buses_reopened.push_back({n.name, std::move(what)});
+    }
+  }
+  for (const BusConfig& r : running.buses) {
+    if (by_name(next.buses, r.name) == nullptr) d.buses_removed.push_back(r.name);
+  }
+  return d;
+}
+
+}  // namespace drivegate
