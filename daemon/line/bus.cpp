@@ -78,7 +78,7 @@ void Bus::port_opened(std::error_code ec) {
     if (!open_failure_logged_) {
       open_failure_logged_ = true;
       log_->error("bus {}: cannot open {}: {} (retrying, at most every {} ms)", config_.name,
-                  transport_->describe(), ec.message(), config_.reopen_max.count());
+                  transport_->describe(), transport_->explain(ec), config_.reopen_max.count());
     }
     transport_->close();
     schedule_reopen();

@@ -51,16 +51,24 @@ std::error_code configure(asio::serial_port& port, const BusConfig& bus) {
 
 }  // namespace
 
-std::error_code open_serial(asio::serial_port& port, const BusConfig& bus) {
+std::error_code open_serial(asio::serial_port& port, const BusConfig& bus, PortLock& lock) {
+  if (const std::error_code ec = lock.acquire(bus.port)) return ec;
   boost::system::error_code opened;
   port.open(bus.port, opened);
-  if (opened) return from_asio(opened);
-  const std::error_code ec = configure(port, bus);
+  if (opened) {
+    lock.release();
+    // Another program's TIOCEXCL (one that keeps no lock file).
+    if (opened == boost::system::errc::device_or_resource_busy) return PortError::in_use;
+    return from_asio(opened);
+  }
+  std::error_code ec = make_exclusive(port.native_handle());
+  if (!ec) ec = configure(port, bus);
   if (ec) {
     // The error_code overload: this path reports, it never throws. The step's error is the one
     // worth reporting, not close()'s.
     boost::system::error_code ignored;
     port.close(ignored);
+    lock.release();
   }
   return ec;
 }

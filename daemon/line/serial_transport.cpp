@@ -27,7 +27,7 @@ SerialTransport::SerialTransport(asio::io_context& io, BusConfig bus)
     : io_(io), bus_(std::move(bus)), port_(io) {}
 
 void SerialTransport::open(Done done) {
-  const std::error_code ec = open_serial(port_, bus_);
+  const std::error_code ec = open_serial(port_, bus_, lock_);
   asio::post(io_, [done = std::move(done), ec] { done(ec); });
 }
 
@@ -50,6 +50,14 @@ void SerialTransport::write(ByteView data, Done done) {
 void SerialTransport::close() {
   boost::system::error_code ignored;
   port_.close(ignored);
+  lock_.release();
+}
+
+std::string SerialTransport::explain(std::error_code ec) const {
+  if (ec == PortError::in_use) {
+    return "in use by " + (lock_.owner().empty() ? std::string("another program") : lock_.owner());
+  }
+  return ec.message();
 }
 
 std::string SerialTransport::describe() const {

@@ -3,6 +3,7 @@
 
 #include <boost/asio/serial_port.hpp>
 
+#include "line/port_lock.h"
 #include "line/transport.h"
 
 namespace drivegate {
@@ -15,12 +16,14 @@ class SerialTransport final : public Transport {
   void write(ByteView data, Done done) override;
   void close() override;
   [[nodiscard]] std::string describe() const override;
+  [[nodiscard]] std::string explain(std::error_code ec) const override;
   [[nodiscard]] bool network() const override { return false; }
 
  private:
   boost::asio::io_context& io_;
   BusConfig bus_;
   boost::asio::serial_port port_;
+  PortLock lock_;  // held while the port is open
   std::array<std::uint8_t, 512> chunk_{};
   Bytes tx_;
 };

@@ -35,6 +35,9 @@ class Transport {
   virtual void close() = 0;
   // For the log: "/dev/ttyUSB0 (9600 baud, 8 data, even parity, 1 stop)", "tcp 10.1.5.20:4001".
   [[nodiscard]] virtual std::string describe() const = 0;
+  // Why `ec` happened, for the log: its message, or more where the transport knows more (the
+  // program that holds a serial port).
+  [[nodiscard]] virtual std::string explain(std::error_code ec) const { return ec.message(); }
   // A network transport's peer may hang while its TCP connection stays up: the bus reconnects
   // when every device on it went silent (Bus::check_silence).
   [[nodiscard]] virtual bool network() const = 0;

@@ -6,11 +6,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <boost/asio/io_context.hpp>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <string>
 
 namespace drivegate {
@@ -46,13 +48,23 @@ class Pty {
 
 class SerialLine : public ::testing::Test {
  protected:
+  SerialLine() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "drivegate-lock-XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) != nullptr) lock_dir_ = tmpl;
+  }
+  ~SerialLine() override {
+    std::error_code ec;
+    std::filesystem::remove_all(lock_dir_, ec);
+  }
+  std::filesystem::path lock_dir_;
   boost::asio::io_context io_;
   boost::asio::serial_port port_{io_};
+  PortLock lock_{lock_dir_};
 };
 
 TEST_F(SerialLine, AMissingDeviceIsAnErrorCode) {
   std::error_code ec;
-  EXPECT_NO_THROW(ec = open_serial(port_, bus_on("/nonexistent/ttyUSB9")));
+  EXPECT_NO_THROW(ec = open_serial(port_, bus_on("/nonexistent/ttyUSB9"), lock_));
   EXPECT_EQ(ec, std::errc::no_such_file_or_directory) << ec.message();
   EXPECT_EQ(ec.category(), std::generic_category());
   EXPECT_FALSE(port_.is_open());
@@ -64,7 +76,7 @@ TEST_F(SerialLine, ANonTtyIsAnErrorCodeNotAnException) {
   std::ofstream(file) << "not a tty\n";
   for (const std::string& path : {std::string("/dev/null"), file.string()}) {
     std::error_code ec;
-    EXPECT_NO_THROW(ec = open_serial(port_, bus_on(path))) << path;
+    EXPECT_NO_THROW(ec = open_serial(port_, bus_on(path), lock_)) << path;
     EXPECT_TRUE(ec) << path;
     EXPECT_FALSE(port_.is_open()) << path;
   }
@@ -74,12 +86,12 @@ TEST_F(SerialLine, ANonTtyIsAnErrorCodeNotAnException) {
 TEST_F(SerialLine, AFailedSettingClosesThePortAndReportsIt) {
   Pty pty;
   if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";
-  ASSERT_FALSE(open_serial(port_, bus_on(pty.path())));  // the pty itself is fine
+  ASSERT_FALSE(open_serial(port_, bus_on(pty.path()), lock_));  // the pty itself is fine
   port_.close();
   BusConfig bus = bus_on(pty.path());
   bus.baud = 12345;  // no such standard rate: asio refuses it in set_option
   std::error_code ec;
-  EXPECT_NO_THROW(ec = open_serial(port_, bus));
+  EXPECT_NO_THROW(ec = open_serial(port_, bus, lock_));
   EXPECT_EQ(ec, std::errc::invalid_argument) << ec.message();
   EXPECT_FALSE(port_.is_open());
 }
@@ -88,8 +100,8 @@ TEST_F(SerialLine, AFailedSettingClosesThePortAndReportsIt) {
 TEST_F(SerialLine, AsioErrorsKeepTheirMeaning) {
   Pty pty;
   if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";
-  ASSERT_FALSE(open_serial(port_, bus_on(pty.path())));
-  const std::error_code ec = open_serial(port_, bus_on(pty.path()));
+  ASSERT_FALSE(open_serial(port_, bus_on(pty.path()), lock_));
+  const std::error_code ec = open_serial(port_, bus_on(pty.path()), lock_);
   EXPECT_TRUE(ec);
   EXPECT_NE(ec, std::errc::operation_not_permitted);
   EXPECT_STREQ(ec.category().name(), "asio.misc");
@@ -102,9 +114,45 @@ TEST_F(SerialLine, AFailedRs485SwitchClosesThePortAndReportsIt) {
   BusConfig bus = bus_on(pty.path());
   bus.rs485 = true;  // a pty has no RS-485 mode
   std::error_code ec;
-  EXPECT_NO_THROW(ec = open_serial(port_, bus));
+  EXPECT_NO_THROW(ec = open_serial(port_, bus, lock_));
   EXPECT_TRUE(ec);
   EXPECT_FALSE(port_.is_open());
+}
+
+// Issue 24: a port has one owner. The lock file of a port another live program holds (here the
+// test's parent, started before the file was written) refuses the open at once, naming it; the
+// port itself is never opened.
+TEST_F(SerialLine, APortAnotherProgramHoldsIsRefusedNamingIt) {
+  Pty pty;
+  if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";
+  const auto file = lock_.lock_file(pty.path());
+  EXPECT_EQ(file.filename().string().rfind("LCK..pts_", 0), 0u) << file;
+  std::ofstream(file) << std::setw(10) << ::getppid() << "\n";
+  const std::error_code ec = open_serial(port_, bus_on(pty.path()), lock_);
+  EXPECT_EQ(ec, PortError::in_use) << ec.message();
+  EXPECT_THAT(lock_.owner(), ::testing::HasSubstr("(pid " + std::to_string(::getppid()) + ")"));
+  EXPECT_FALSE(port_.is_open());
+  EXPECT_TRUE(std::filesystem::exists(file));  // not ours to remove
+}
+
+// A lock left by a process that is gone is stale: taken over, then released with the port.
+TEST_F(SerialLine, AStaleLockIsTakenOverAndReleasedWithThePort) {
+  Pty pty;
+  if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  ASSERT_GT(gone, 0);
+  int status = 0;
+  ::waitpid(gone, &status, 0);  // reaped: no process has that PID now
+  const auto file = lock_.lock_file(pty.path());
+  std::ofstream(file) << std::setw(10) << gone << "\n";
+  ASSERT_FALSE(open_serial(port_, bus_on(pty.path()), lock_));
+  std::ifstream in(file);
+  long pid = 0;
+  in >> pid;
+  EXPECT_EQ(pid, ::getpid());  // ours now, in the HDB UUCP form
+  lock_.release();
+  EXPECT_FALSE(std::filesystem::exists(file));
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 namespace drivegate::test {
 namespace {
 
+using namespace std::chrono_literals;
 using ::testing::HasSubstr;
 
 struct Result {
@@ -121,6 +122,33 @@ TEST(Cli, RegmapPrintsTheServedMap) {
   const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
                        "md", "--plugin-dir", plugin_dir().string()});
   EXPECT_THAT(md.out, HasSubstr("## Unit 1: washer (nidec-washer)"));
+}
+
+// Issue 24: a port has one owner. `drivegate write` on a line the daemon runs says at once who
+// owns it, instead of sharing the line and timing out (0x0B); with the daemon stopped it works.
+TEST(Cli, WriteOnAPortTheDaemonOwnsNamesTheOwner) {
+  TempDir dir;
+  Sim sim("nidec-washer", dir / "washer");
+  const std::string toml = "[[bus]]\nname = \"line\"\nport = \"" + (dir / "washer").string() +
+                           "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
+                           "adapter = \"nidec-washer\"\nunit_id = 1\n";
+  Daemon daemon(dir, toml);
+  Plc plc(daemon.port());
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::online) != 0; },
+                         10s));
+  const std::vector<std::string> write = {drivegate(), "write", "--config",
+                                          daemon.config().string(), "--device", "washer",
+                                          "--plugin-dir", plugin_dir().string(), "accel_time=30"};
+  const auto asked = std::chrono::steady_clock::now();
+  const auto busy = run(write);
+  EXPECT_EQ(busy.status, 1) << busy.out;
+  EXPECT_THAT(busy.out, HasSubstr("is in use by drivegated (pid "));
+  EXPECT_LT(std::chrono::steady_clock::now() - asked, 5s);  // at once, not after a timeout
+  ASSERT_EQ(daemon.stop(), 0);
+  const auto free = run(write);
+  EXPECT_EQ(free.status, 0) << free.out;
+  EXPECT_THAT(free.out, HasSubstr("accel_time=30: ok"));
 }
 
 }  // namespace

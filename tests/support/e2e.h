@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -59,6 +60,31 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// The serial port lock files (daemon/line/port_lock.h) of the programs a test starts go to a
+// directory of the test process's own, not /run/lock: a daemon killed with SIGKILL leaves its
+// lock behind, and the next test must not meet it. Set once, before any child starts, and
+// removed when the test process ends.
+class LockDir {
+ public:
+  LockDir() {
+    if (std::getenv("DRIVEGATE_LOCK_DIR") != nullptr) return;  // the caller chose one
+    std::string tmpl = (std::filesystem::temp_directory_path() / "drivegate-locks-XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) == nullptr) return;
+    path_ = tmpl;
+    ::setenv("DRIVEGATE_LOCK_DIR", path_.c_str(), 1);
+  }
+  ~LockDir() {
+    std::error_code ec;
+    if (!path_.empty()) std::filesystem::remove_all(path_, ec);
+  }
+  LockDir(const LockDir&) = delete;
+  LockDir& operator=(const LockDir&) = delete;
+
+ private:
+  std::filesystem::path path_;
+};
+inline const LockDir kLockDir;
 
 // A child process with its stdin and stdout on pipes; stderr is inherited (test log).
 class Child {
@@ -146,6 +172,7 @@ class Child {
     return pid_ > 0 ? -1 : status_;
   }
   [[nodiscard]] bool running() { return pid_ > 0 && !reap(WNOHANG); }
+  [[nodiscard]] pid_t pid() const { return pid_; }
   void signal(int sig) {
     if (pid_ > 0) ::kill(pid_, sig);
   }

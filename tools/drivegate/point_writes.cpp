@@ -9,6 +9,8 @@
 #include "app/logging.h"
 #include "gateway/gateway.h"
 #include "gateway/value_codec.h"
+#include "config/port_address.h"
+#include "line/port_lock.h"
 
 namespace drivegate::cli {
 
@@ -93,6 +95,19 @@ int run_point_writes(const PointWriteJob& job) {
     return 1;
   }
   std::erase_if(cfg.buses, [&](const BusConfig& b) { return b.name != cfg.devices[0].bus; });
+  // The line is the daemon's while it runs: say so now, rather than time out on a shared line.
+  // Held until the writes are done; the bus below finds it ours.
+  PortLock lock;
+  std::string ignored;
+  const auto address = cfg.buses.empty() ? std::nullopt
+                                         : parse_port_address(cfg.buses[0].port, ignored);
+  if (address && !address->network()) {
+    if (lock.acquire(address->path) == PortError::in_use) {
+      std::cerr << "drivegate: " << cfg.buses[0].port << " is in use by " << lock.owner()
+                << ": stop it first (systemctl stop drivegate)\n";
+      return 1;
+    }
+  }
 
   asio::io_context io;
   auto log = make_logger("drivegate", spdlog::level::warn);

@@ -41,7 +41,8 @@ std::string SimHost::open() {
   }
   if (options_.port) {
     asio::serial_port port(io_);
-    if (const auto ec = open_serial(port, *options_.port)) {
+    if (const auto ec = open_serial(port, *options_.port, port_lock_)) {
+      if (ec == PortError::in_use) return options_.port->port + ": in use by " + port_lock_.owner();
       return options_.port->port + ": " + ec.message();
     }
     line_.assign(::dup(port.native_handle()));

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "config/config.h"
+#include "line/port_lock.h"
 #include "drivegate/adapter.h"
 #include "pty.h"
 
@@ -70,6 +71,7 @@ class SimHost {
   SimHostOptions options_;
   std::vector<std::pair<std::uint32_t, std::unique_ptr<Simulator>>> sims_;
   Pty pty_;
+  PortLock port_lock_;  // --port: the real line, held while simulating on it
   boost::asio::posix::stream_descriptor line_;
   boost::asio::steady_timer tick_;
   std::array<std::uint8_t, 512> chunk_{};
