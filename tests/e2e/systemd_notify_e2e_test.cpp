@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <fstream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -123,6 +124,59 @@ TEST(SystemdNotifyE2E, ReadyWatchdogReloadingAndStopping) {
   daemon->process().signal(SIGTERM);
   ASSERT_TRUE(systemd.await("STOPPING=1")) << systemd.dump();
   EXPECT_EQ(daemon->process().wait_exit(), 0);
+}
+
+// `systemctl reload` as the unit file runs it: its ExecReload= commands in order, the first that
+// fails failing the reload (systemd.service(5)), with the installed paths replaced by the
+// build's. A file that does not validate fails the reload (non-zero, the reasons on its output)
+// and never reaches the daemon; a good one reaches it, and it reloads.
+int exec_reload(const Daemon& daemon_config, pid_t pid, std::string& output) {
+  std::ifstream unit(std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "systemd" / "drivegate.service");
+  std::string line;
+  int commands = 0;
+  while (std::getline(unit, line)) {
+    if (!line.starts_with("ExecReload=")) continue;
+    std::string cmd = line.substr(std::string("ExecReload=").size());
+    const auto replace = [&](const std::string& from, const std::string& to) {
+      for (auto at = cmd.find(from); at != std::string::npos; at = cmd.find(from, at + to.size())) {
+        cmd.replace(at, from.size(), to);
+      }
+    };
+    replace("/usr/sbin/drivegated", (bin_dir() / "drivegated").string());
+    replace("/etc/drivegate/drivegate.toml",
+            daemon_config.config().string() + " --plugin-dir " + plugin_dir().string());
+    replace("$MAINPID", std::to_string(pid));
+    ++commands;
+    Child c({"/bin/sh", "-c", cmd + " 2>&1"});
+    while (auto out = c.read_line(10s)) output += *out + "\n";
+    if (const int status = c.wait_exit(); status != 0) return status;
+  }
+  return commands >= 2 ? 0 : -1;  // the unit validates, then signals
+}
+
+TEST(SystemdNotifyE2E, ReloadFailsForAFileThatDoesNotValidate) {
+  TempDir dir;
+  NotifySocket systemd(dir / "notify");
+  Sim sim("nidec-washer", dir / "washer");
+  std::optional<Daemon> daemon;
+  {
+    const SystemdEnvironment env(dir / "notify", 0us);
+    daemon.emplace(dir, washer(dir / "washer"));
+  }
+  ASSERT_TRUE(systemd.await("READY=1")) << systemd.dump();
+
+  std::ofstream(daemon->config()) << washer(dir / "washer") << "poll_ms = \"fast\"\n";
+  std::string out;
+  EXPECT_EQ(exec_reload(*daemon, daemon->process().pid(), out), 1) << out;
+  EXPECT_NE(out.find("drivegate.toml:"), std::string::npos) << out;  // names the line
+  EXPECT_FALSE(systemd.await("RELOADING=1", 1s)) << "the bad file reached the daemon";
+  EXPECT_TRUE(daemon->process().running());
+
+  std::ofstream(daemon->config()) << washer(dir / "washer");
+  out.clear();
+  EXPECT_EQ(exec_reload(*daemon, daemon->process().pid(), out), 0) << out;
+  EXPECT_TRUE(systemd.await("RELOADING=1")) << systemd.dump();
+  EXPECT_TRUE(systemd.await("READY=1")) << systemd.dump();
 }
 
 }  // namespace
