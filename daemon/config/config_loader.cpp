@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "adapter_options.h"
+#include "base/read_file.h"
 #include "port_address.h"
 #include "mqtt_config.h"
 #include "server_config.h"
@@ -18,6 +19,29 @@
 
 namespace drivegate {
 namespace {
+
+// A drivegate.toml of a few hundred drives is tens of KiB; anything past this is not one.
+constexpr std::size_t kMaxConfigFile = 4 * 1024 * 1024;
+constexpr std::size_t kMaxNameLength = 64;
+
+// Names of buses and devices go into the journal (as fields), the status page, the JSON, metric
+// labels and Sparkplug topics: letters, digits, '_', '-' and '.', starting with a letter or a
+// digit, at most kMaxNameLength, so that none of them can inject a line, a tag or a topic level.
+void check_name(const toml::node* at, const std::string& key, const std::string& name,
+                Diagnostics& diag) {
+  if (name.empty()) return;  // said elsewhere
+  const auto safe = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+           c == '_' || c == '-' || c == '.';
+  };
+  const bool alnum_first = safe(name[0]) && name[0] != '_' && name[0] != '-' && name[0] != '.';
+  if (name.size() > kMaxNameLength || !alnum_first ||
+      !std::all_of(name.begin(), name.end(), safe)) {
+    diag.error(at, key,
+               "names are 1 to " + std::to_string(kMaxNameLength) +
+                   " letters, digits, '_', '-' or '.', starting with a letter or a digit");
+  }
+}
 
 constexpr std::array<std::uint32_t, 12> kBauds = {300,   600,   1200,  2400,   4800,   9600,
                                                   19200, 38400, 57600, 115200, 230400, 460800};
@@ -146,6 +170,7 @@ std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnost
     BusConfig bus;
     bus.line = line_of(t);
     bus.name = r.string("name", true).value_or("");
+    check_name(r.node("name"), prefix + ".name", bus.name, diag);
     std::optional<PortAddress> address;
     if (auto port = r.string("port", true)) {
       bus.port = *port;
@@ -260,6 +285,7 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
     DeviceConfig dev;
     dev.line = line_of(t);
     dev.name = r.string("name", true).value_or("");
+    check_name(r.node("name"), prefix + ".name", dev.name, diag);
     dev.bus = r.string("bus", true).value_or("");
     dev.adapter = r.string("adapter", true).value_or("");
     dev.unit_id = static_cast<std::uint8_t>(r.integer("unit_id", 1, 247, true).value_or(0));
@@ -445,15 +471,14 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
 }
 
 ConfigResult load_config(const std::filesystem::path& path, const PluginRegistry& plugins) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  std::string error;
+  const auto text = read_regular_file(path, kMaxConfigFile, error);
+  if (!text) {
     ConfigResult r;
-    r.errors.push_back(path.string() + ": cannot open: " + std::strerror(errno));
+    r.errors.push_back(error);
     return r;
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  auto result = parse_config(text.str(), path.string(), plugins);
+  auto result = parse_config(*text, path.string(), plugins);
   if (result.config) result.config->path = path;
   return result;
 }

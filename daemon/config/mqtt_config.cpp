@@ -3,6 +3,7 @@
 #include <charconv>
 #include <fstream>
 
+#include "base/read_file.h"
 #include "modbus/tls.h"
 #include "mqtt/sparkplug.h"
 #include "server_config.h"
@@ -92,11 +93,12 @@ void read_password(const std::filesystem::path& file, const toml::node* at, Mqtt
     diag.error(at, "mqtt.password_file", error);
     return;
   }
-  std::ifstream in(file);
-  std::getline(in, mqtt.password);
-  if (!in && mqtt.password.empty()) {
-    diag.error(at, "mqtt.password_file", "cannot read " + file.string());
+  const auto text = read_regular_file(file, 64 * 1024, error);
+  if (!text) {
+    diag.error(at, "mqtt.password_file", error);
+    return;
   }
+  mqtt.password = text->substr(0, text->find_first_of("\r\n"));
 }
 
 void read_tls_files(TableReader& r, MqttConfig& mqtt, Diagnostics& diag) {
@@ -109,11 +111,14 @@ void read_tls_files(TableReader& r, MqttConfig& mqtt, Diagnostics& diag) {
     }
     return;
   }
+  std::string error;
   if (!ca) {
     diag.error_at(mqtt.line, "mqtt.ca",
                   "an mqtts:// broker needs `ca`: the CA its certificate must chain to");
   } else {
     mqtt.ca = *ca;
+    // libmosquitto reads it by path, at each connection, on the event loop: a FIFO would hang it.
+    if (!is_readable_regular_file(mqtt.ca, error)) diag.error(r.node("ca"), "mqtt.ca", error);
   }
   if (cert.has_value() != key.has_value()) {
     diag.error_at(mqtt.line, "mqtt", "cert and key go together (a client certificate)");
@@ -122,8 +127,13 @@ void read_tls_files(TableReader& r, MqttConfig& mqtt, Diagnostics& diag) {
   if (cert) {
     mqtt.cert = *cert;
     mqtt.key = *key;
-    std::string error;
-    if (!modbus::key_permissions_ok(mqtt.key, error)) diag.error(r.node("key"), "mqtt.key", error);
+    if (!is_readable_regular_file(mqtt.cert, error)) {
+      diag.error(r.node("cert"), "mqtt.cert", error);
+    }
+    if (!modbus::key_permissions_ok(mqtt.key, error) ||
+        !is_readable_regular_file(mqtt.key, error)) {
+      diag.error(r.node("key"), "mqtt.key", error);
+    }
   }
 }
 
@@ -182,13 +192,8 @@ void read_mqtt(const toml::table& root, Config& cfg, Diagnostics& diag) {
   if (m.feed_failsafe && !m.commands) {
     diag.warning_at(m.line, "mqtt.feed_failsafe", "has no effect while commands = false");
   }
-  for (const auto& d : cfg.devices) {
-    if (!sparkplug::valid_id(d.name)) {
-      diag.error_at(d.line, "device.name",
-                    "\"" + d.name + "\" is published as a Sparkplug device id ([mqtt]): it may " +
-                        "not contain '/', '+' or '#'");
-    }
-  }
+  // Device names are Sparkplug device ids as they are: the configuration's name rule keeps '/',
+  // '+' and '#' out of them (config_loader.cpp, check_name).
   if (m.commands && m.broker.starts_with("mqtt://")) {
     diag.warning_at(m.line, "mqtt.commands",
                     "commands over a plain mqtt:// broker: anyone who may publish there can move "

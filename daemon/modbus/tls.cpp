@@ -1,6 +1,8 @@
 #include "tls.h"
 
 #include <openssl/asn1.h>
+#include <openssl/err.h>
+#include <openssl/pem.h>
 #include <openssl/objects.h>
 #include <openssl/ssl.h>
 #include <openssl/x509.h>
@@ -12,10 +14,31 @@
 #include <cstring>
 #include <memory>
 
+#include "base/read_file.h"
+
 namespace drivegate::modbus {
 namespace {
 
 namespace ssl = boost::asio::ssl;
+
+// A PEM certificate chain, key or CA bundle is a few KiB; anything near this is not one.
+constexpr std::size_t kMaxPemFile = 1024 * 1024;
+
+// The CA names from a PEM bundle in memory, for the CertificateRequest.
+STACK_OF(X509_NAME) * client_ca_names(const std::string& pem) {
+  const std::unique_ptr<BIO, decltype(&BIO_free)> bio(
+      BIO_new_mem_buf(pem.data(), static_cast<int>(pem.size())), &BIO_free);
+  STACK_OF(X509_NAME)* names = sk_X509_NAME_new_null();
+  if (!bio || names == nullptr) return names;
+  while (X509* cert = PEM_read_bio_X509(bio.get(), nullptr, nullptr, nullptr)) {
+    if (X509_NAME* name = X509_NAME_dup(X509_get_subject_name(cert))) {
+      sk_X509_NAME_push(names, name);
+    }
+    X509_free(cert);
+  }
+  ERR_clear_error();  // the end of the bundle reads as an error
+  return names;
+}
 
 // Names the file and the step in every error.
 std::string failure(const std::filesystem::path& file, std::string_view what,
@@ -49,12 +72,22 @@ std::shared_ptr<ssl::context> make_tls_context(const TlsOptions& o, std::string&
   SSL_CTX_set_min_proto_version(native, TLS1_2_VERSION);
   ctx->set_options(ssl::context::default_workarounds | ssl::context::no_compression |
                    ssl::context::single_dh_use);
+  // Each file read here (regular files only, never a FIFO that would hang the loop at SIGHUP),
+  // then handed to OpenSSL from memory.
+  std::string why;
+  const auto cert = read_regular_file(o.cert, kMaxPemFile, why);
+  const auto key = cert ? read_regular_file(o.key, kMaxPemFile, why) : std::nullopt;
+  const auto ca = key ? read_regular_file(o.ca, kMaxPemFile, why) : std::nullopt;
+  if (!ca) {
+    error = "cannot read " + why;
+    return nullptr;
+  }
   boost::system::error_code ec;
-  if (ctx->use_certificate_chain_file(o.cert.string(), ec); ec) {
+  if (ctx->use_certificate_chain(boost::asio::buffer(*cert), ec); ec) {
     error = failure(o.cert, "cannot load certificate", ec);
     return nullptr;
   }
-  if (ctx->use_private_key_file(o.key.string(), ssl::context::pem, ec); ec) {
+  if (ctx->use_private_key(boost::asio::buffer(*key), ssl::context::pem, ec); ec) {
     error = failure(o.key, "cannot load key", ec);
     return nullptr;
   }
@@ -62,15 +95,13 @@ std::shared_ptr<ssl::context> make_tls_context(const TlsOptions& o, std::string&
     error = "key " + o.key.string() + " does not match certificate " + o.cert.string();
     return nullptr;
   }
-  if (ctx->load_verify_file(o.ca.string(), ec); ec) {
+  if (ctx->add_certificate_authority(boost::asio::buffer(*ca), ec); ec) {
     error = failure(o.ca, "cannot load CA", ec);
     return nullptr;
   }
   // The CA names go in the CertificateRequest, so a client holding several certificates picks
   // the right one.
-  if (STACK_OF(X509_NAME)* names = SSL_load_client_CA_file(o.ca.c_str())) {
-    SSL_CTX_set_client_CA_list(native, names);
-  }
+  SSL_CTX_set_client_CA_list(native, client_ca_names(*ca));
   // Mutual authentication: a client without a certificate the CA signed is refused in the
   // handshake (MB-TCP-Security R-44).
   ctx->set_verify_mode(ssl::verify_peer | ssl::verify_fail_if_no_peer_cert);

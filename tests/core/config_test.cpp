@@ -2,7 +2,11 @@
 // file is refused with the file, line and key named.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
+#include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 
 #include "config/adapter_options.h"
@@ -228,6 +232,50 @@ TEST_F(ConfigTest, MissingFileIsReported) {
   auto r = load_config("/nonexistent/drivegate.toml", plugins_);
   ASSERT_FALSE(r.config);
   EXPECT_THAT(r.errors.front(), HasSubstr("/nonexistent/drivegate.toml: cannot open"));
+}
+
+// Issue 24: the configuration file must be a regular file of a sane size; a FIFO, a device or a
+// directory is refused at once (never read, never waited on), with what it is.
+TEST_F(ConfigTest, TheFileMustBeARegularFile) {
+  char tmpl[] = "/tmp/drivegate-config-XXXXXX";
+  ASSERT_NE(::mkdtemp(tmpl), nullptr);
+  const std::filesystem::path dir = tmpl;
+  const auto fifo = dir / "drivegate.toml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const auto asked = std::chrono::steady_clock::now();
+  auto r = load_config(fifo, plugins_);
+  EXPECT_LT(std::chrono::steady_clock::now() - asked, std::chrono::seconds(2));
+  ASSERT_FALSE(r.config);
+  EXPECT_THAT(r.errors.front(), HasSubstr("drivegate.toml: a FIFO, not a regular file"));
+  r = load_config("/dev/zero", plugins_);
+  EXPECT_THAT(r.errors.front(), HasSubstr("/dev/zero: a character device, not a regular file"));
+  r = load_config(dir, plugins_);
+  EXPECT_THAT(r.errors.front(), HasSubstr("a directory, not a regular file"));
+  const auto huge = dir / "huge.toml";
+  std::ofstream(huge).put('#');
+  std::filesystem::resize_file(huge, 5 * 1024 * 1024);
+  r = load_config(huge, plugins_);
+  EXPECT_THAT(r.errors.front(), HasSubstr("more than the 4 MiB allowed"));
+  std::filesystem::remove_all(dir);
+}
+
+// Names go into the journal, the page, metric labels and Sparkplug topics: a newline, a quote or
+// a slash in one is refused with the file, line and key.
+TEST_F(ConfigTest, NamesAreLettersDigitsAndAFewMarks) {
+  for (const char* bad : {R"(line\nX)", R"(wa\"sher)", "-line", "a/b", "a b", "<b>"}) {
+    std::string text = kGood;
+    text.replace(text.find("name = \"washer\""), 15, std::string("name = \"") + bad + "\"");
+    EXPECT_THAT(only_error(text), AllOf(HasSubstr("gw.toml:"), HasSubstr("device[0].name"),
+                                        HasSubstr("letters, digits")))
+        << bad;
+  }
+  std::string text = kGood;
+  text.replace(text.find("name = \"washer\""), 15, "name = \"" + std::string(65, 'w') + "\"");
+  EXPECT_THAT(only_error(text), HasSubstr("1 to 64"));
+  text = kGood;
+  text.replace(text.find("name = \"line1\""), 14, "name = \"line_1.a-b\"");
+  text.replace(text.find("bus = \"line1\""), 13, "bus = \"line_1.a-b\"");
+  EXPECT_TRUE(parse(text).config.has_value()) << ::testing::PrintToString(parse(text).errors);
 }
 
 TEST_F(ConfigTest, AllErrorsAreReportedAtOnce) {

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <stdexcept>
 #include <string>
 
 namespace drivegate {
@@ -46,17 +47,20 @@ class Pty {
   std::string path_;
 };
 
+// A fresh directory for the test's port lock files.
+std::filesystem::path make_lock_dir() {
+  std::string tmpl = (std::filesystem::temp_directory_path() / "drivegate-lock-XXXXXX").string();
+  if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+  return tmpl;
+}
+
 class SerialLine : public ::testing::Test {
  protected:
-  SerialLine() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "drivegate-lock-XXXXXX").string();
-    if (::mkdtemp(tmpl.data()) != nullptr) lock_dir_ = tmpl;
-  }
   ~SerialLine() override {
     std::error_code ec;
     std::filesystem::remove_all(lock_dir_, ec);
   }
-  std::filesystem::path lock_dir_;
+  std::filesystem::path lock_dir_ = make_lock_dir();  // before lock_, which uses it
   boost::asio::io_context io_;
   boost::asio::serial_port port_{io_};
   PortLock lock_{lock_dir_};

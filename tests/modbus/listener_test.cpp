@@ -261,6 +261,24 @@ TEST_F(Tls, MissingOrMismatchedFilesAreNamed) {
   EXPECT_NE(error.find("mismatch"), std::string::npos) << error;
 }
 
+// Issue 24: a TLS file that is a FIFO would block OpenSSL's read forever (at start-up, or at
+// SIGHUP on the event loop): refused at once, saying what it is.
+TEST_F(Tls, AFileThatIsNotARegularFileIsRefusedWithoutWaiting) {
+  auto files = server_files();
+  const auto fifo = dir_ / "ca.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  files.ca = fifo;
+  std::string error;
+  const auto asked = std::chrono::steady_clock::now();
+  EXPECT_FALSE(make_tls_context(files, error));
+  EXPECT_LT(std::chrono::steady_clock::now() - asked, std::chrono::seconds(2));
+  EXPECT_NE(error.find("ca.fifo: a FIFO, not a regular file"), std::string::npos) << error;
+  files = server_files();
+  files.cert = "/dev/zero";
+  EXPECT_FALSE(make_tls_context(files, error));
+  EXPECT_NE(error.find("/dev/zero: a character device"), std::string::npos) << error;
+}
+
 TEST_F(Tls, TheRoleIsTheUtf8StringOfTheModbusSecurityExtension) {
   const auto role_of = [](const std::string& name) {
     std::FILE* f = std::fopen(file(name + ".pem").c_str(), "r");
