@@ -238,6 +238,21 @@ void Ed3100Driver::apply_fault(const std::vector<std::uint16_t>& w) {
     common_.command = Command::stop;
   }
   update_speed();
+  adopt();
+}
+
+// A drive found running, before anything was written to it, runs on as it is: its commanded
+// direction is the command in force, its output frequency the reference (and the setpoint), so
+// that the registers never say stop over a turning motor and the next write starts from what
+// the drive does. Once the status and the speed are known, or at the first write, adoption ends.
+void Ed3100Driver::adopt() {
+  if (!adopting_ || !fault_known_ || !speed_hz_) return;
+  adopting_ = false;
+  if (!common_.running || tripped(fault_word_)) return;
+  common_.command = bit(state_word_, kStCmdReverse) ? Command::run_reverse : Command::run_forward;
+  const long long centi = std::llround(*speed_hz_ * 100.0);
+  set_reference(static_cast<std::uint16_t>(std::clamp<long long>(centi, 0, 0xFFFF)),
+                rpm_from_hz(*speed_hz_));
 }
 
 void Ed3100Driver::apply_monitor(std::size_t slot, const std::vector<std::uint16_t>& w) {
@@ -252,6 +267,7 @@ void Ed3100Driver::apply_monitor(std::size_t slot, const std::vector<std::uint16
     speed_hz_ = value;
     speed_stopped_ = bit(format, kFmtStopped);
     update_speed();
+    adopt();
   }
 }
 

@@ -85,6 +85,7 @@ class Ed3100Driver final : public Driver {
   void apply_monitor(std::size_t slot, const std::vector<std::uint16_t>& w);
   void update_ready();
   void update_speed();
+  void adopt();
   [[nodiscard]] std::int32_t rpm_from_hz(double hz) const;
   [[nodiscard]] std::optional<std::uint16_t> centi_hz_from_rpm(std::int32_t rpm) const;
 
@@ -124,6 +125,10 @@ class Ed3100Driver final : public Driver {
   std::uint16_t reference_ = 0;     // 0x2001 in force, 0.01 Hz: what the next run carries
   std::optional<double> speed_hz_;  // the speed monitor's last value
   bool speed_stopped_ = true;       // its format word's "stopped" bit
+  // Until the first status and speed are in, or something is written: a drive found running
+  // (the gateway restarted, or this device was changed by a reload) is shown as it runs, its
+  // run and speed taken as the command and setpoint in force (README, "Choices").
+  bool adopting_ = true;
 };
 
 }  // namespace drivegate::ed3100

@@ -87,6 +87,7 @@ WriteCheck Ed3100Driver::check(std::span<const WriteOp> request) const {
 WriteStatus Ed3100Driver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   last_now_ = now;
   expire(now);
+  adopting_ = false;  // a client decides from now on
   switch (judge(op)) {
     case WriteCheck::ok:
       break;

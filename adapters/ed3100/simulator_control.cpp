@@ -17,7 +17,8 @@ std::string hex(std::uint16_t v) {
 }
 
 constexpr const char* kUsage =
-    "use state | fault <code> | clear | silent on|off | lock on|off | corrupt <n> | "
+    "use state | fault <code> | clear | run forward|reverse <0.01 Hz> | silent on|off | "
+    "lock on|off | corrupt <n> | "
     "form document|standard | "
     "param <GG-nn> <value> | monitor <0Dnn> <value> <format>|auto | help";
 
@@ -63,6 +64,16 @@ std::string Ed3100Simulator::control(std::string_view line, TimePoint /*now*/) {
   if (cmd == "clear") {
     fault_ = kNoFault;
     return "ok";
+  }
+  if (cmd == "run" && (a == "forward" || a == "reverse")) {
+    // Started at its own keypad (or by the gateway before a restart): running at the reference.
+    const auto centi = number(b);
+    if (!centi) return "error: run forward|reverse <reference in 0.01 Hz>";
+    commanded_reverse_ = rotating_reverse_ = a == "reverse";
+    command_ = a == "reverse" ? kCmdReverse : kCmdForward;
+    reference_ = output_ = *centi;
+    running_ = true;
+    return "ok running " + a;
   }
   if (cmd == "silent" && (a == "on" || a == "off")) {
     silent_ = a == "on";

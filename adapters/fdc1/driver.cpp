@@ -45,6 +45,7 @@ RxVerdict Fdc1Driver::on_receive(ByteView rx, TimePoint now) {
 void Fdc1Driver::on_status(const Status& s, TimePoint now) {
   if (!common_.ready) {
     common_.ready = true;
+    adopt(s);
     // Start-up (and after comm_lost): tell the controller at once what the gateway holds, or the
     // write under way, rather than leave it on whatever an earlier session sent it.
     if (settings_.slave_mode) send_soon(now);
@@ -64,6 +65,18 @@ void Fdc1Driver::on_status(const Status& s, TimePoint now) {
   if (alarm.fault != Fault::none) common_.faults.set(alarm.fault);
   confirm(s, now);
   publish_common();
+}
+
+// The first status since the driver began, before anything was written (the gateway restarted,
+// or this device was changed by a reload): in slave mode a compressor found turning is kept
+// turning at the speed it reports (the only speed the stream gives), rather than stopped by the
+// start-up frame, and shown so (README, "Choices"). After a comm_lost the gateway's own order
+// stands instead: that is what it last told the controller.
+void Fdc1Driver::adopt(const Status& s) {
+  if (!adopting_) return;
+  adopting_ = false;
+  if (!settings_.slave_mode || !s.motor_on || write_ || is_run(in_force_.command)) return;
+  in_force_ = {Command::run_forward, std::clamp<std::int32_t>(s.rpm, kMinRpm, kMaxRpm)};
 }
 
 void Fdc1Driver::publish_common() {

@@ -81,6 +81,7 @@ class Fdc1Driver final : public Driver {
 
   // driver.cpp
   void on_status(const Status& s, TimePoint now);
+  void adopt(const Status& s);
   void publish_common();
   void send_soon(TimePoint now);
   [[nodiscard]] Order on_line() const { return write_ ? write_->order : in_force_; }
@@ -118,6 +119,7 @@ class Fdc1Driver final : public Driver {
   // what common() shows. The frames carry the order of the write under way, if any, else this.
   Order in_force_;
   std::optional<SpeedWrite> write_;
+  bool adopting_ = true;   // until the first status, or a write: a turning compressor is kept so
   bool send_now_ = false;  // a speed frame is due at once (start-up, a write, an undo)
   TimePoint due_at_{};     // when the frame due at once became due (wake_at)
   TimePoint next_refresh_ = TimePoint::max();

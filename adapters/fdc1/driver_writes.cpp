@@ -61,6 +61,7 @@ WriteCheck Fdc1Driver::check(std::span<const WriteOp> request) const {
 
 WriteStatus Fdc1Driver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   if (op.target == WriteOp::Target::point) return apply_point(op, t, now);
+  adopting_ = false;  // a client decides from now on
   switch (judge(op, in_force())) {
     case WriteCheck::ok:
       break;

@@ -19,7 +19,7 @@ constexpr std::array<std::uint8_t, 8> kNoise = {0x00, 0x1B, 0xFF, 0x4D, 0x55, 0x
 constexpr std::string_view kCommands =
     "state, fault <battery|fan|start|overload|temperature|fan_eor|start_eor|overload_eor|"
     "temperature_eor|internal|raw>, clear, silent on|off, deaf on|off, corrupt N, noise N, "
-    "mangle N, delay S, thermostat on|off, window S, help";
+    "mangle N, delay S, thermostat on|off, window S, run RPM (slave mode), help";
 
 }  // namespace
 
@@ -207,6 +207,19 @@ std::string Fdc1Simulator::control(std::string_view line, TimePoint now) {
     if (cmd == "noise") noise_ = *number;
     if (cmd == "mangle") mangle_ = static_cast<int>(*number);
     if (cmd == "delay") restart_left_s_ = static_cast<double>(*number);
+    return "ok";
+  }
+  if (cmd == "run") {
+    // Slave mode: running at <rpm> on the speed frames of an earlier session (a gateway that
+    // restarted), as if they had just arrived.
+    if (!is_slave(mode_)) return "error: run is for slave mode";
+    if (!number || *number < kMinRpm || *number > kMaxRpm) return "error: run takes 1500..3500";
+    const auto rpm = static_cast<std::uint16_t>(*number);
+    speed_ = {rpm, rpm};
+    last_speed_ = now;
+    watchdog_tripped_ = false;
+    motor_on_ = true;
+    rpm_ = rpm;
     return "ok";
   }
   if (cmd == "window") {

@@ -151,6 +151,16 @@ void EDriveDriver::on_status(const Status& s, TimePoint now) {
   // Online once the status, the data a PLC reads, is in too.
   common_.ready = phase_ == Phase::polling;
   confirm(s, now);
+  // A compressor found running before anything was written to it (the gateway restarted, or
+  // this device was changed by a reload) is shown as it runs: a run in force at its speed, so
+  // that the registers never say stop over a turning compressor (README, "Choices").
+  if (adopting_ && common_.ready) {
+    adopting_ = false;
+    if (is_running_state(s.op_state) && s.rpm > 0) {
+      common_.command = Command::run_forward;
+      common_.setpoint_rpm = s.rpm;
+    }
+  }
 }
 
 bool EDriveDriver::drive_runs() const {

@@ -138,6 +138,7 @@ class EDriveDriver final : public Driver {
   TimePoint last_read_{};
   SpeedLimits build_speed_{};  // Build Information min / max, the fallback
   std::optional<SpeedLimits> limits_;
+  bool adopting_ = true;  // until the first status, or a write: a running drive is shown running
   std::optional<std::uint8_t> control_enabled_;
   std::optional<Status> status_;
 

@@ -67,6 +67,7 @@ WriteCheck EDriveDriver::check(std::span<const WriteOp> request) const {
 }
 
 WriteStatus EDriveDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
+  adopting_ = false;  // a client decides from now on
   switch (judge(op, in_force())) {
     case WriteCheck::ok:
       break;

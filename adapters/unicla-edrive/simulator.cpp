@@ -25,7 +25,8 @@ constexpr const char* kHelp =
     "commands: help | state | fault <motor|overcurrent|overvoltage|undervoltage|overtemp|startup|"
     "pressure|superheat|fmc|electrical|config|xc|<op state number>> | clear | "
     "flags <compressor_run|compressor_start|motor_run|motor_start|electrical> <value> | "
-    "sticky on|off | control on|off | limits <min> <max> | silent on|off | corrupt <n>";
+    "sticky on|off | control on|off | limits <min> <max> | run <rpm> | silent on|off | "
+    "corrupt <n>";
 
 bool is_fault(OpState s) {
   return is_fault_state(static_cast<std::uint8_t>(s));
@@ -324,6 +325,15 @@ std::string EDriveSimulator::control(std::string_view line, TimePoint /*now*/) {
     if (cmd == "sticky") sticky_ = *b;
     if (cmd == "control") limits_.control_enabled = *b ? 1 : 0;
     if (cmd == "silent") silent_ = *b;
+    return "ok " + state_line();
+  }
+  if (cmd == "run" && w.size() == 2) {
+    // Started by another master (or before the gateway restarted): running at `rpm` already.
+    const auto rpm = parse_unsigned(w[1], 0xFFFF);
+    if (!rpm || *rpm == 0) return std::string("error: expected a speed; ") + kHelp;
+    target_ = static_cast<std::uint16_t>(*rpm);
+    rpm_ = static_cast<double>(*rpm);
+    state_ = OpState::running;
     return "ok " + state_line();
   }
   if (cmd == "corrupt" && w.size() == 2) {

@@ -204,6 +204,9 @@ class Driver {
   [[nodiscard]] virtual const std::vector<PointSpec>& points() const = 0;
   // Current values of points(), same order and size.
   [[nodiscard]] virtual const std::vector<Value>& values() const = 0;
+  // A driver starts from what its drive reports, never from an assumed stop: once the drive
+  // reports it runs (before any write), `command` and `setpoint_rpm` show that run, so a PLC
+  // reads what the motor does and a write is judged against it (adapters/README.md, "Starting").
   [[nodiscard]] virtual const CommonState& common() const = 0;
 
   // The next transaction due at `now`, or nothing (then the engine asks again at wake_at()).

@@ -73,6 +73,26 @@ TEST(Ed3100Driver, StartupReadsTheParameterThenTheFaultWordAndTheMonitors) {
   EXPECT_EQ(b.count(kReadParam), 1u);
 }
 
+// Issue 24: a drive found running (the gateway restarted, or this device was changed by a
+// reload) is shown as it runs: the command in force is its commanded direction, the setpoint its
+// speed; nothing is sent to it, and a new setpoint goes to the running drive's 0x2001 at once.
+TEST(Ed3100Driver, ADriveFoundRunningIsShownAsItRunsNeverAsStopped) {
+  Bench b;
+  ASSERT_EQ(b.control("run reverse 2500").rfind("ok", 0), 0u);  // 25.00 Hz, started at its keypad
+  ASSERT_TRUE(b.ready());
+  EXPECT_EQ(b.read("command"), cmd::run_reverse);
+  EXPECT_EQ(b.read_i16("setpoint_rpm"), 750);  // 25 Hz on 4 poles
+  EXPECT_EQ(b.read_i16("speed_rpm"), -750);
+  EXPECT_NE(b.status() & kRunning, 0u);
+  EXPECT_TRUE(b.writes().empty());  // nothing was sent to the drive
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({900}, kSetpointRegister), Exception::none);
+  ASSERT_EQ(b.writes(asked).size(), 1u);
+  EXPECT_EQ(b.writes(asked)[0][2], 0x20);  // 0x2001: the running drive's reference
+  EXPECT_EQ(b.writes(asked)[0][3], 0x01);
+  EXPECT_TRUE(b.sim_has("running=1"));
+}
+
 TEST(Ed3100Driver, ASilentDriveIsResentToThenCommLostThenStartsUpAgain) {
   Bench b;
   ASSERT_TRUE(b.ready());

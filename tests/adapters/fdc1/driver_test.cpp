@@ -42,6 +42,41 @@ TEST(Fdc1Driver, StartUpWaitsForTheStreamThenAssertsStopAtOnce) {
   EXPECT_TRUE(b.sim_has("min=0"));
 }
 
+// Issue 24: a compressor found turning on an earlier session's speed frames (the gateway
+// restarted, or this device was changed by a reload) is kept turning at the speed it reports and
+// shown so: the first frame is a run at that speed, never the stop above.
+TEST(Fdc1Driver, ACompressorFoundTurningIsKeptTurningNeverStopped) {
+  Bench b;
+  ASSERT_EQ(b.control("run 2500"), "ok");
+  ASSERT_TRUE(b.heard());
+  ASSERT_EQ(b.rig.sent().size(), 1u);
+  EXPECT_EQ(b.rig.sent()[0].bytes, kRun2500);
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+  EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
+  EXPECT_NE(b.read("status") & kRunning, 0u);
+  b.rig.run_for(3s);
+  EXPECT_EQ(b.read("speed_rpm"), 2500u);
+  EXPECT_TRUE(b.sim_has("motor=on"));
+  // And a stop from the PLC stops it as any other run.
+  EXPECT_EQ(b.write({cmd::stop}), Exception::none);
+  EXPECT_TRUE(b.sim_has("motor=off"));
+}
+
+// After a comm_lost the gateway's own order stands: what it last told the controller.
+TEST(Fdc1Driver, AfterCommLostAStoppedOrderIsNotAdopted) {
+  Bench b;
+  ASSERT_TRUE(b.heard());
+  b.control("silent on");
+  ASSERT_TRUE(b.rig.run_until([&] { return (b.read("status") & kCommLost) != 0; }, 3s));
+  ASSERT_EQ(b.control("run 3000"), "ok");  // someone else ran it meanwhile
+  b.control("silent off");
+  const TimePoint back = b.rig.now();
+  ASSERT_TRUE(b.rig.run_until([&] { return b.drive->online(); }, 2s));
+  b.rig.run_for(100ms);
+  EXPECT_EQ(b.frames(back), std::vector<Bytes>{kStopFrame});
+  EXPECT_EQ(b.read("command"), cmd::stop);
+}
+
 TEST(Fdc1Driver, OutsideSlaveModeTheLineOnlyMonitors) {
   Bench b({.options = {}});
   ASSERT_TRUE(b.heard());

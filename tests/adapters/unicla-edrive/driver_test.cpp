@@ -151,6 +151,25 @@ TEST(UniclaDriver, ABadCrcIsResentIdenticallyAfterTheGap) {
   EXPECT_NE(b.read("status") & kOnline, 0u);
 }
 
+// Issue 24: a compressor found running (the gateway restarted, or this device was changed by a
+// reload) is shown as it runs, a run in force at its speed; nothing is sent to it, and a new
+// speed goes out as a speed change of a running compressor.
+TEST(UniclaDriver, ACompressorFoundRunningIsShownAsItRunsNeverAsStopped) {
+  Bench b;
+  ASSERT_EQ(b.control("run 3000").rfind("ok", 0), 0u);
+  ASSERT_TRUE(b.ready());
+  EXPECT_EQ(b.read("command"), cmd::run_forward);
+  EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
+  EXPECT_NE(b.status() & kRunning, 0u);
+  EXPECT_TRUE(b.sent({}, kRunState).empty());  // nothing was sent to it
+  const TimePoint asked = b.rig.now();
+  EXPECT_EQ(b.write({3500}, kSetpointRegister), Exception::none);
+  const auto runs = b.sent(asked, kRunState);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].frame.payload, (Bytes{0x0D, 0xAC}));  // 3500 rpm
+  EXPECT_TRUE(b.sim_has("target=3500"));
+}
+
 TEST(UniclaDriver, ASilentReadIsTriedThreeTimesEachAfterTheReplyTimeout) {
   Bench b;
   ASSERT_TRUE(b.ready());
