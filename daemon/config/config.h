@@ -105,6 +105,10 @@ constexpr std::string_view to_string(FailsafeAction a) {
 }
 // What the gateway does to a running drive when the daemon shuts down.
 enum class ShutdownAction : std::uint8_t { stop, hold };
+// What the gateway does with a drive it finds running when it first reaches it (daemon start, a
+// device added or changed by a reload): adopt shows the run the drive reports and leaves it be;
+// stop stops it and logs so (docs/safety.md, "Starting").
+enum class StartAction : std::uint8_t { adopt, stop };
 
 struct FailsafeConfig {
   Millis timeout{0};  // no valid write to command / setpoint / heartbeat for this long; 0 = off
@@ -124,6 +128,7 @@ struct DeviceConfig {
   Millis backoff_max{5'000};  // longest pause between probes of a silent device
   FailsafeConfig failsafe;
   ShutdownAction on_shutdown = ShutdownAction::stop;
+  StartAction on_start = StartAction::adopt;
   Options options;
   int line = 0;
   friend bool operator==(const DeviceConfig&, const DeviceConfig&) = default;

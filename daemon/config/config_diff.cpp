@@ -85,6 +85,8 @@ std::vector<std::string> changes(const DeviceConfig& a, const DeviceConfig& b) {
   note(out, "failsafe_rpm", a.failsafe.preset_rpm, b.failsafe.preset_rpm);
   note(out, "on_shutdown", std::string_view(a.on_shutdown == ShutdownAction::stop ? "stop" : "hold"),
        std::string_view(b.on_shutdown == ShutdownAction::stop ? "stop" : "hold"));
+  note(out, "on_start", std::string_view(a.on_start == StartAction::adopt ? "adopt" : "stop"),
+       std::string_view(b.on_start == StartAction::adopt ? "adopt" : "stop"));
   // Options, by name: those in either (a changed adapter has other names altogether).
   const auto& oa = a.options.all();
   const auto& ob = b.options.all();

@@ -232,7 +232,7 @@ std::optional<FailsafeAction> parse_failsafe_action(std::string_view s) {
   return static_cast<FailsafeAction>(it - kFailsafeActionNames.begin());
 }
 
-// failsafe_timeout_ms, failsafe_action, failsafe_rpm and on_shutdown (docs/safety.md).
+// failsafe_timeout_ms, failsafe_action, failsafe_rpm, on_shutdown and on_start (docs/safety.md).
 void read_failsafe(TableReader& r, const std::string& prefix, DeviceConfig& dev,
                    Diagnostics& diag) {
   // 0 is off. Below 100 ms (the housekeeping period) a timeout could not be kept to anyway.
@@ -269,6 +269,15 @@ void read_failsafe(TableReader& r, const std::string& prefix, DeviceConfig& dev,
       diag.error(r.node("on_shutdown"), prefix + ".on_shutdown", "must be stop or hold");
     }
   }
+  if (auto s = r.string("on_start", false)) {
+    if (*s == "adopt") {
+      dev.on_start = StartAction::adopt;
+    } else if (*s == "stop") {
+      dev.on_start = StartAction::stop;
+    } else {
+      diag.error(r.node("on_start"), prefix + ".on_start", "must be adopt or stop");
+    }
+  }
 }
 
 void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& plugins,
@@ -281,7 +290,7 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
     TableReader r(t, prefix, diag);
     r.expect({"name", "bus", "adapter", "unit_id", "address", "poll_ms", "budget_ms",
               "backoff_max_ms", "failsafe_timeout_ms", "failsafe_action", "failsafe_rpm",
-              "on_shutdown", "options"});
+              "on_shutdown", "on_start", "options"});
     DeviceConfig dev;
     dev.line = line_of(t);
     dev.name = r.string("name", true).value_or("");

@@ -78,6 +78,42 @@ void Device::on_tick(TimePoint now) {
   last_tick_ = now;
   expire_requests(now);
   failsafe_tick(now);
+  stop_on_start(now);
+}
+
+// The first time the drive answers (daemon start, or the device added or changed by a reload),
+// seen in the same call that brought it online, before any client's write: a drive found
+// running is shown as it runs (the driver's contract), or stopped if on_start says so, on the
+// next tick, unless a client has written to it meanwhile. A kept device never comes here again.
+void Device::first_contact() {
+  start_checked_ = true;
+  const CommonState& s = driver_->common();
+  if (!s.running) return;
+  if (config_.on_start == StartAction::adopt) {
+    log_->info("device {}: found running ({}, setpoint {} rpm, speed {} rpm), shown as it runs "
+               "(on_start = adopt)",
+               config_.name, to_string(s.command), s.setpoint_rpm, s.speed_rpm);
+    return;
+  }
+  log_->warn("device {}: found running (speed {} rpm): stopping it (on_start = stop)",
+             config_.name, s.speed_rpm);
+  stop_on_start_ = true;
+}
+
+void Device::stop_on_start(TimePoint now) {
+  if (!stop_on_start_) return;
+  stop_on_start_ = false;
+  command(
+      Command::stop,
+      [this](Exception e) {
+        if (e == Exception::none) {
+          log_->info("device {}: stop on start confirmed by the drive", config_.name);
+        } else {
+          log_->warn("device {}: stop on start not confirmed (exception 0x{:02X})", config_.name,
+                     static_cast<int>(e));
+        }
+      },
+      now);
 }
 
 // Settles the writes the driver completed (which may apply the next part of their request) and
@@ -101,6 +137,7 @@ void Device::log_changes() {
   if (on != logged_online_) {
     logged_online_ = on;
     if (on) log_->info("device {}: online", config_.name);
+    if (on && !start_checked_) first_contact();
   }
   const FaultSet faults = driver_->common().faults;
   if (faults != logged_faults_) {

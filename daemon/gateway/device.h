@@ -4,7 +4,8 @@
 // is published after each one without anyone having to remember to. The gateway reads and
 // writes its registers.
 //
-//   device.cpp           the Station side: driver calls, comm_lost, ticks, logging of changes
+//   device.cpp           the Station side: driver calls, comm_lost, ticks, logging of changes,
+//                        what is done with a drive first found running (on_start)
 //   device_image.cpp     the register image (common block and adapter points) and reads
 //   device_writes.cpp    Modbus write requests: validated, checked whole, queued (bounded, one
 //                        write turn of the line per part), applied part by part, confirmed
@@ -133,6 +134,8 @@ class Device final : public Station {
   // `always`: tell the watcher even when no write settled (the driver heard or missed a reply).
   void publish(TimePoint now, bool always = true);
   void log_changes();
+  void first_contact();
+  void stop_on_start(TimePoint now);
   // device_image.cpp
   void refresh_image(TimePoint now);
   void refresh_common(Table table, TimePoint now);
@@ -196,6 +199,9 @@ class Device final : public Station {
   bool failsafe_gave_up_ = false;  // the drive cannot take a stop at all (exception 0x03)
   TimePoint failsafe_retry_at_{};
   TimePoint last_tick_{};
+
+  bool start_checked_ = false;  // the drive was first reached and on_start applied
+  bool stop_on_start_ = false;  // found running with on_start = stop: the stop is due
 
   // What was last logged, to log changes only.
   bool logged_online_ = false;

@@ -219,6 +219,7 @@ Exception Device::enqueue(const modbus::Session& session, std::vector<Part> part
                           modbus::WriteDone done, TimePoint now, Origin origin) {
   const bool feeds = origin == Origin::plc && session.feeds_failsafe;
   if (closed_to_clients_ && origin == Origin::plc) return Exception::gateway_target_failed;
+  if (origin == Origin::plc) stop_on_start_ = false;  // a client decides from now on
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
   std::stable_partition(parts.begin(), parts.end(),

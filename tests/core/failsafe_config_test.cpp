@@ -39,18 +39,20 @@ TEST_F(FailsafeConfigTest, OffAndStopByDefault) {
   EXPECT_EQ(d.failsafe.timeout, Millis(0));
   EXPECT_EQ(d.failsafe.action, FailsafeAction::stop);
   EXPECT_EQ(d.on_shutdown, ShutdownAction::stop);
+  EXPECT_EQ(d.on_start, StartAction::adopt);
 }
 
 TEST_F(FailsafeConfigTest, ReadsEveryKey) {
   auto r = parse(
       "failsafe_timeout_ms = 1500\nfailsafe_action = \"preset\"\nfailsafe_rpm = 300\n"
-      "on_shutdown = \"hold\"\n");
+      "on_shutdown = \"hold\"\non_start = \"stop\"\n");
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   const auto& d = r.config->devices.at(0);
   EXPECT_EQ(d.failsafe.timeout, Millis(1500));
   EXPECT_EQ(d.failsafe.action, FailsafeAction::preset);
   EXPECT_EQ(d.failsafe.preset_rpm, 300);
   EXPECT_EQ(d.on_shutdown, ShutdownAction::hold);
+  EXPECT_EQ(d.on_start, StartAction::stop);
   for (const auto& [text, action] : {std::pair{"stop", FailsafeAction::stop},
                                      std::pair{"quick_stop", FailsafeAction::quick_stop},
                                      std::pair{"hold", FailsafeAction::hold}}) {
@@ -75,6 +77,9 @@ TEST_F(FailsafeConfigTest, RefusesBadValues) {
               AllOf(HasSubstr("gw.toml:9"), HasSubstr("only used with failsafe_action")));
   EXPECT_THAT(only_error("on_shutdown = \"coast\"\n"),
               AllOf(HasSubstr("device[0].on_shutdown"), HasSubstr("stop or hold")));
+  EXPECT_THAT(only_error("on_start = \"run\"\n"),
+              AllOf(HasSubstr("gw.toml:9"), HasSubstr("device[0].on_start"),
+                    HasSubstr("adopt or stop")));
 }
 
 }  // namespace

@@ -125,6 +125,92 @@ TEST(ReloadDiffE2E, ANeighboursChangeLeavesARunningDriveAsItRuns) {
   EXPECT_EQ(plc.write(reg::command, {0}), 0);
 }
 
+// The running eDrive itself is changed (its budget_ms): the new device starts from what the
+// compressor reports, run at 3000 rpm, never "stop" over a turning compressor; the log says
+// what it found, and a new setpoint reaches it.
+TEST(ReloadDiffE2E, AChangedRunningDriveStartsFromWhatItReports) {
+  TempDir dir;
+  Sim sim("unicla-edrive", dir / "line", {"--address", "1", "--address", "2"});
+  Daemon daemon(dir, pair_on_one_line(dir / "line", "unicla-edrive", 500), {},
+                dir / "drivegated.log");
+  Plc plc(daemon.port());
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
+  plc.unit(1);
+  ASSERT_EQ(plc.write(reg::command, {1, 3000}), 0);
+  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=3000") != std::string::npos; },
+                         15s))
+      << sim.control("@1 state");
+
+  EXPECT_EQ(slurp(dir / "drivegated.log").find("found running"), std::string::npos);  // stopped
+  std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "unicla-edrive", 500,
+                                                     "budget_ms = 900\n");
+  daemon.process().signal(SIGHUP);
+  // What the log says after the reload line (the daemon's start-up found nothing running).
+  const auto since_reload = [&] {
+    const std::string all = slurp(dir / "drivegated.log");
+    const auto at = all.find("SIGHUP");
+    return at == std::string::npos ? std::string() : all.substr(at);
+  };
+  ASSERT_TRUE(eventually(
+      [&] { return since_reload().find("device dev-1: found running") != std::string::npos; }, 10s))
+      << slurp(dir / "drivegated.log");
+  const std::string log = since_reload();
+  EXPECT_NE(log.find("reload: device dev-1 changed (budget_ms 1000 -> 900): started afresh"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("device dev-1: found running (run_forward, setpoint 3000 rpm"),
+            std::string::npos)
+      << log;
+  plc.unit(1);
+  const auto held = plc.holding(reg::command, 2);
+  ASSERT_TRUE(held.ok());
+  EXPECT_EQ(held.regs[0], 1);     // run_forward: what the compressor does
+  EXPECT_EQ(held.regs[1], 3000);  // at the speed it reports
+  EXPECT_NE(plc.input(reg::status, 1).regs.at(0) & reg::running, 0);
+  EXPECT_NE(sim.control("@1 state").find("rpm=3000"), std::string::npos);  // never stopped
+  EXPECT_EQ(plc.write(reg::setpoint, {4000}), 0) << slurp(dir / "drivegated.log");
+  EXPECT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=4000") != std::string::npos; },
+                         15s))
+      << sim.control("@1 state");
+  EXPECT_EQ(plc.write(reg::command, {0}), 0);
+}
+
+// The same change with on_start = "stop": the new device stops the compressor it finds
+// running, and the log says so.
+TEST(ReloadDiffE2E, OnStartStopStopsADriveFoundRunning) {
+  TempDir dir;
+  Sim sim("unicla-edrive", dir / "line", {"--address", "1", "--address", "2"});
+  Daemon daemon(dir, pair_on_one_line(dir / "line", "unicla-edrive", 500), {},
+                dir / "drivegated.log");
+  Plc plc(daemon.port());
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
+  plc.unit(1);
+  ASSERT_EQ(plc.write(reg::command, {1, 3000}), 0);
+  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=3000") != std::string::npos; },
+                         15s));
+  std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "unicla-edrive", 500,
+                                                     "on_start = \"stop\"\n");
+  daemon.process().signal(SIGHUP);
+  EXPECT_TRUE(eventually(
+      [&] {
+        return slurp(dir / "drivegated.log").find("device dev-1: stop on start confirmed") !=
+               std::string::npos;
+      },
+      15s))
+      << slurp(dir / "drivegated.log");
+  EXPECT_NE(slurp(dir / "drivegated.log")
+                .find("device dev-1: found running (speed 3000 rpm): stopping it (on_start = stop)"),
+            std::string::npos)
+      << slurp(dir / "drivegated.log");
+  plc.unit(1);
+  EXPECT_EQ(plc.holding(reg::command, 1).regs.at(0), 0);
+  EXPECT_TRUE(eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::running) == 0; },
+                         15s));
+  EXPECT_NE(sim.control("@1 state").find("rpm=0"), std::string::npos);
+}
+
 // An ED3100 with a 2 s failsafe, run by a PLC that then goes away; half a second later a reload
 // changes only its neighbour. The failsafe still trips on time and stops the drive.
 TEST(ReloadDiffE2E, ANeighboursChangeDoesNotDisarmTheFailsafe) {
