@@ -5,6 +5,9 @@
 # the directory removed) when the script exits.
 bench_workdir() {
   W=$(mktemp -d "/tmp/dg-$1-XXXXXX")
+  # The port locks of the benches' daemons and simulators stay in it, never in /run/lock: a
+  # killed bench must not leave stale locks a service's user cannot remove.
+  export DRIVEGATE_LOCK_DIR="$W"
   PIDS=()
   trap bench_cleanup EXIT
 }

@@ -17,6 +17,7 @@ back to back at the phase's start; Modbus p50 / p99 as above, and the NBIRTHs th
 Nothing here asserts: it prints medians over the rounds (docs/performance.md).
 """
 import os
+import shutil
 import socket
 import statistics
 import struct
@@ -46,6 +47,12 @@ def free_port():
 
 def pinned(cpu, argv, **kw):
     return subprocess.Popen(["taskset", "-c", cpu] + argv, **kw)
+
+
+# The daemons' and simulators' port locks in a directory of the bench's, never in /run/lock: a
+# killed bench must not leave stale locks a service's user cannot remove.
+LOCK_DIR = tempfile.mkdtemp(prefix="dg-stress-locks-")
+os.environ["DRIVEGATE_LOCK_DIR"] = LOCK_DIR
 
 
 class Modbus:
@@ -279,6 +286,9 @@ def rebirth_storm():
 
 
 if __name__ == "__main__":
-    write_storm()
-    if REBIRTH:
-        rebirth_storm()
+    try:
+        write_storm()
+        if REBIRTH:
+            rebirth_storm()
+    finally:
+        shutil.rmtree(LOCK_DIR, ignore_errors=True)

@@ -91,6 +91,9 @@ void Bus::port_opened(std::error_code ec) {
              config_.network_delay.count() > 0
                  ? fmt::format(" (network_delay {} ms)", config_.network_delay.count())
                  : std::string());
+  if (const std::string caveat = transport_->caveat(); !caveat.empty()) {
+    log_->warn("bus {}: {}", config_.name, caveat);
+  }
   open_ = true;
   last_heard_ = Clock::now();
   const bool reopened = ever_open_;
@@ -122,7 +125,7 @@ void Bus::read_more() {
     if (ec) {
       if (ec != std::errc::operation_canceled) {
         self->port_failed(closed_by_peer(ec) ? std::string("the server closed the connection")
-                                                 : "read: " + ec.message());
+                                             : "read: " + ec.message());
       }
       return;
     }
@@ -139,9 +142,8 @@ void Bus::check_silence() {
     if (ec || self->stopped_) return;
     const auto& stations = self->engine_.stations();
     const bool all_lost =
-        !stations.empty() && std::all_of(stations.begin(), stations.end(), [](Station* s) {
-          return s->link().health.comm_lost();
-        });
+        !stations.empty() && std::all_of(stations.begin(), stations.end(),
+                                         [](Station* s) { return s->link().health.comm_lost(); });
     Millis longest{0};
     for (Station* s : stations) longest = std::max(longest, s->link().policy.comm_timeout);
     if (self->open_ && all_lost && Clock::now() - self->last_heard_ >= longest) {

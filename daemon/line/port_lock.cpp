@@ -102,6 +102,7 @@ std::filesystem::path PortLock::lock_file(const std::string& device) const {
 std::error_code PortLock::acquire(const std::string& device) {
   release();
   owner_.clear();
+  note_.clear();
   const std::filesystem::path file = lock_file(device);
   char content[16];
   std::snprintf(content, sizeof content, "%10d\n", static_cast<int>(::getpid()));
@@ -126,8 +127,16 @@ std::error_code PortLock::acquire(const std::string& device) {
       return PortError::in_use;
     }
     // Stale: its process is gone. Taken over once; a second failure means someone else won.
-    std::error_code ignored;
-    std::filesystem::remove(file, ignored);
+    std::error_code removed;
+    std::filesystem::remove(file, removed);
+    if (removed) {
+      // Gone, but not ours to remove: another user's file in the sticky lock directory (a
+      // process of root's killed there). Its holder is provably gone, so the port is free; a
+      // program that honours lock files sees the stale one and judges it as this did.
+      note_ = "stale lock " + file.string() + " of pid " + std::to_string(pid) +
+              " kept (cannot remove it: " + removed.message() + "); TIOCEXCL alone guards the port";
+      return {};
+    }
   }
   owner_ = "another program";
   return PortError::in_use;

@@ -39,6 +39,9 @@ class PortLock {
   void release();
   // "drivegated (pid 1234)": the holder found by the last acquire() that failed.
   [[nodiscard]] const std::string& owner() const { return owner_; }
+  // What the last acquire() that succeeded without a lock file of its own has to say (a stale lock
+  // it could not remove), for the open's log line; empty otherwise.
+  [[nodiscard]] const std::string& note() const { return note_; }
   // The lock file for `device`: dir/LCK..ttyUSB0 (a device below /dev/pts: LCK..pts_3).
   [[nodiscard]] std::filesystem::path lock_file(const std::string& device) const;
 
@@ -46,6 +49,7 @@ class PortLock {
   std::filesystem::path dir_;
   std::filesystem::path held_;  // the lock file this holds, if any
   std::string owner_;
+  std::string note_;
 };
 
 // TIOCEXCL on an open tty: no further open(2) of it succeeds (but root's).

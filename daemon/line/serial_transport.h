@@ -17,6 +17,7 @@ class SerialTransport final : public Transport {
   void close() override;
   [[nodiscard]] std::string describe() const override;
   [[nodiscard]] std::string explain(std::error_code ec) const override;
+  [[nodiscard]] std::string caveat() const override { return lock_.note(); }
   [[nodiscard]] bool network() const override { return false; }
 
  private:

@@ -38,6 +38,8 @@ class Transport {
   // Why `ec` happened, for the log: its message, or more where the transport knows more (the
   // program that holds a serial port).
   [[nodiscard]] virtual std::string explain(std::error_code ec) const { return ec.message(); }
+  // What an open that succeeded should warn of (a stale port lock it could not remove), or empty.
+  [[nodiscard]] virtual std::string caveat() const { return {}; }
   // A network transport's peer may hang while its TCP connection stays up: the bus reconnects
   // when every device on it went silent (Bus::check_silence).
   [[nodiscard]] virtual bool network() const = 0;

@@ -159,5 +159,29 @@ TEST_F(SerialLine, AStaleLockIsTakenOverAndReleasedWithThePort) {
   EXPECT_FALSE(std::filesystem::exists(file));
 }
 
+// A stale lock this cannot remove (root's file in the sticky /run/lock, met by the service's
+// user: the lock a killed root process left) does not keep the port closed forever: its holder
+// is gone, so the port opens under TIOCEXCL alone, and the note says why there is no lock file.
+// (Root may remove any file, so a directory in the lock file's place stands in for it here.)
+TEST_F(SerialLine, AStaleLockThatCannotBeRemovedStillLetsThePortOpen) {
+  Pty pty;
+  if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";
+  const auto file = lock_.lock_file(pty.path());
+  std::filesystem::create_directories(file / "held");
+  const std::error_code ec = open_serial(port_, bus_on(pty.path()), lock_);
+  EXPECT_FALSE(ec) << ec.message();
+  EXPECT_TRUE(port_.is_open());
+  EXPECT_THAT(lock_.note(), ::testing::HasSubstr("stale lock " + file.string()));
+  EXPECT_THAT(lock_.note(), ::testing::HasSubstr("TIOCEXCL alone"));
+  // Exclusive all the same: a second opener of this process's kind is refused by the tty.
+  if (::geteuid() != 0) {
+    const int again = ::open(pty.path().c_str(), O_RDWR | O_NOCTTY);
+    EXPECT_LT(again, 0);
+    if (again >= 0) ::close(again);
+  }
+  lock_.release();
+  EXPECT_TRUE(std::filesystem::exists(file / "held"));  // never ours to remove
+}
+
 }  // namespace
 }  // namespace drivegate
