@@ -2,6 +2,7 @@
 
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <boost/asio/post.hpp>
 #include <csignal>
 #include <string>
@@ -107,6 +108,8 @@ bool Daemon::start_http() {
   o.port = config_.http.listen.port;
   o.allow = config_.http.allow;
   o.capture = config_.http.capture;
+  // Bursts of twice the rate: a page load's few requests at once are never paced.
+  o.requests = {config_.http.requests_per_s, std::max(1u, 2 * config_.http.requests_per_s)};
   http_ = std::make_unique<http::HttpServer>(io_, *content_, o, log_);
   if (const auto ec = http_->listen()) {
     log_->critical("cannot serve HTTP on {}:{}: {}", o.host, o.port, ec.message());
@@ -224,7 +227,8 @@ void Daemon::reload() {
   if (config->http.enabled != config_.http.enabled ||
       config->http.listen.host != config_.http.listen.host ||
       config->http.listen.port != config_.http.listen.port ||
-      config->http.allow != config_.http.allow || config->http.capture != config_.http.capture) {
+      config->http.allow != config_.http.allow || config->http.capture != config_.http.capture ||
+      config->http.requests_per_s != config_.http.requests_per_s) {
     log_->warn("[http] changes take effect at the next restart");
     restart.emplace_back("[http]");
     config->http = config_.http;

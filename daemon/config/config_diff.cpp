@@ -83,7 +83,8 @@ std::vector<std::string> changes(const DeviceConfig& a, const DeviceConfig& b) {
   note(out, "failsafe_timeout_ms", a.failsafe.timeout.count(), b.failsafe.timeout.count());
   note(out, "failsafe_action", to_string(a.failsafe.action), to_string(b.failsafe.action));
   note(out, "failsafe_rpm", a.failsafe.preset_rpm, b.failsafe.preset_rpm);
-  note(out, "on_shutdown", std::string_view(a.on_shutdown == ShutdownAction::stop ? "stop" : "hold"),
+  note(out, "on_shutdown",
+       std::string_view(a.on_shutdown == ShutdownAction::stop ? "stop" : "hold"),
        std::string_view(b.on_shutdown == ShutdownAction::stop ? "stop" : "hold"));
   note(out, "on_start", std::string_view(a.on_start == StartAction::adopt ? "adopt" : "stop"),
        std::string_view(b.on_start == StartAction::adopt ? "adopt" : "stop"));
@@ -114,6 +115,11 @@ std::vector<std::string> changes(const modbus::ListenerPolicy& a, const modbus::
     return l.empty() ? std::string("[any]") : fmt::format("[{}]", fmt::join(s, ", "));
   };
   note(out, "allow", allow(a.allow), allow(b.allow));
+  const auto slots = [](const std::optional<std::size_t>& n) {
+    return n ? std::to_string(*n) : std::string("[server]'s");
+  };
+  note(out, "max_clients", slots(a.max_clients), slots(b.max_clients));
+  note(out, "tls_handshakes_per_s", a.handshakes.per_second, b.handshakes.per_second);
   if (a.tls && b.tls) {
     if (a.tls->roles != b.tls->roles) out.emplace_back("TLS roles");
     if (a.tls->cert != b.tls->cert || a.tls->key != b.tls->key || a.tls->ca != b.tls->ca) {

@@ -133,7 +133,8 @@ modbus::RoleMap read_roles(const toml::node& n, const std::string& key, Diagnost
 ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostics& diag) {
   const std::string prefix = "listener[" + std::to_string(index) + "]";
   TableReader r(t, prefix, diag);
-  r.expect({"address", "allow", "access", "word_order", "tls", "roles"});
+  r.expect({"address", "allow", "access", "word_order", "tls", "roles", "max_clients",
+            "tls_handshakes_per_s"});
   ListenerConfig l;
   l.line = line_of(t);
   auto& policy = l.options.policy;
@@ -153,6 +154,9 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
     }
   }
   if (const auto* n = r.node("allow")) policy.allow = read_allow(*n, r.qualified("allow"), diag);
+  if (auto v = r.integer("max_clients", 1, 1024, false)) {
+    policy.max_clients = static_cast<std::size_t>(*v);
+  }
   if (const auto* n = r.node("access")) {
     policy.access = read_access(*n, r.qualified("access"), diag).value_or(policy.access);
   }
@@ -168,6 +172,15 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
     }
   }
   if (const auto* n = r.node("tls")) policy.tls = read_tls(*n, r.qualified("tls"), diag);
+  if (auto v = r.integer("tls_handshakes_per_s", 0, 1000, false)) {
+    if (!r.node("tls")) {
+      diag.error(r.node("tls_handshakes_per_s"), r.qualified("tls_handshakes_per_s"),
+                 "only a TLS listener does handshakes: add tls = { cert, key, ca }");
+    }
+    // Bursts of twice the rate: a PLC reconnecting a few times in a row is never refused.
+    const auto n = static_cast<unsigned>(*v);
+    policy.handshakes = {n, std::max(1u, 2 * n)};
+  }
   if (const auto* n = r.node("roles")) {
     auto roles = read_roles(*n, r.qualified("roles"), diag);
     if (!r.node("tls")) {
@@ -280,7 +293,7 @@ void read_http(const toml::table& root, Config& cfg, Diagnostics& diag) {
     return;
   }
   TableReader r(*t, "http", diag);
-  r.expect({"listen", "allow", "capture"});
+  r.expect({"listen", "allow", "capture", "requests_per_s"});
   cfg.http.enabled = true;
   cfg.http.line = line_of(*t);
   if (auto listen = r.string("listen", false)) {
@@ -293,6 +306,9 @@ void read_http(const toml::table& root, Config& cfg, Diagnostics& diag) {
   }
   if (const auto* a = r.node("allow")) cfg.http.allow = read_allow(*a, "http.allow", diag);
   cfg.http.capture = r.boolean("capture").value_or(false);
+  if (auto v = r.integer("requests_per_s", 0, 1000, false)) {
+    cfg.http.requests_per_s = static_cast<unsigned>(*v);
+  }
   for (const auto& l : cfg.listeners) {
     if (l.options.port == cfg.http.listen.port && l.options.port != 0 &&
         (l.options.host == cfg.http.listen.host || wildcard(l.options.host) ||

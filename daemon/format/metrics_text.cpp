@@ -237,19 +237,31 @@ void listener_metrics(Writer& w, const StatusView& view) {
          [](const auto& l) { return l.connections_active; });
   family("drivegate_modbus_connections_accepted_total", "counter", "connections served",
          [](const auto& l) { return l.connections_accepted; });
+  w.family("drivegate_modbus_max_clients", "gauge", "the listener's connection slots");
+  for (std::size_t i = 0; i < s.listener_count(); ++i) {
+    w.sample(
+        "drivegate_modbus_max_clients", labels[i],
+        static_cast<double>(s.listener(i).policy.max_clients.value_or(s.limits().max_clients)));
+  }
+  family("drivegate_modbus_connections_refused_total", "counter",
+         "connections closed at accept: the listener full, no idle read-only client to give way",
+         [](const auto& l) { return l.connections_refused; });
+  family("drivegate_modbus_connections_evicted_total", "counter",
+         "idle read-only connections closed to make room for a new client on a full listener",
+         [](const auto& l) { return l.connections_evicted; });
   family("drivegate_modbus_connections_not_allowed_total", "counter",
          "connections closed at accept: address not in the allow list",
          [](const auto& l) { return l.connections_not_allowed; });
   family("drivegate_modbus_tls_handshake_failures_total", "counter",
          "TLS handshakes that failed (certificate refused, not TLS, too slow)",
          [](const auto& l) { return l.tls_handshake_failures; });
+  family("drivegate_modbus_tls_handshakes_limited_total", "counter",
+         "TLS connections closed at accept: their address past tls_handshakes_per_s",
+         [](const auto& l) { return l.tls_handshakes_limited; });
   family("drivegate_modbus_writes_denied_total", "counter",
          "writes refused with exception 01: beyond the connection's access level",
          [](const auto& l) { return l.writes_denied; });
   const auto& all = s.stats();  // the server's, every listener's together
-  w.single("drivegate_modbus_connections_refused_total", "counter",
-           "connections closed at accept: max_clients reached",
-           static_cast<double>(all.connections_refused));
   w.single("drivegate_modbus_malformed_total", "counter",
            "connections closed on a frame that is not Modbus TCP",
            static_cast<double>(all.malformed));
@@ -329,6 +341,12 @@ void http_metrics(Writer& w, const http::HttpStats& h, std::size_t clients) {
            count(h.timeouts));
   w.single("drivegate_http_captures_total", "counter", "bus captures started (/api/v1/capture)",
            count(h.captures));
+  w.single("drivegate_http_captures_refused_total", "counter",
+           "bus captures refused (503): as many were streaming as may at once",
+           count(h.captures_refused));
+  w.single("drivegate_http_requests_paced_total", "counter",
+           "HTTP requests held back by the per-address rate limit before their answer",
+           count(h.requests_paced));
 }
 
 }  // namespace

@@ -147,10 +147,13 @@ void listener_json(std::string& out, const modbus::Server& server, std::size_t i
     append_json_string(out, r.to_string());
   }
   fmt::format_to(std::back_inserter(out),
-                 "], \"clients\": {}, \"accepted\": {}, \"not_allowed\": {}, "
-                 "\"tls_handshake_failures\": {}, \"writes_denied\": {}}}",
-                 s.connections_active, s.connections_accepted, s.connections_not_allowed,
-                 s.tls_handshake_failures, s.writes_denied);
+                 "], \"clients\": {}, \"max_clients\": {}, \"accepted\": {}, \"refused\": {}, "
+                 "\"evicted\": {}, \"not_allowed\": {}, \"tls_handshake_failures\": {}, "
+                 "\"tls_handshakes_limited\": {}, \"writes_denied\": {}}}",
+                 s.connections_active, o.policy.max_clients.value_or(server.limits().max_clients),
+                 s.connections_accepted, s.connections_refused, s.connections_evicted,
+                 s.connections_not_allowed, s.tls_handshake_failures, s.tls_handshakes_limited,
+                 s.writes_denied);
 }
 
 void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
@@ -172,9 +175,9 @@ void http_json(std::string& out, const http::HttpStats& h, std::size_t clients) 
   fmt::format_to(std::back_inserter(out),
                  ",\n\"http\": {{\"clients\": {}, \"accepted\": {}, \"not_allowed\": {}, "
                  "\"refused\": {}, \"requests\": {}, \"bad_requests\": {}, \"timeouts\": {}, "
-                 "\"captures\": {}}}",
+                 "\"captures\": {}, \"captures_refused\": {}, \"requests_paced\": {}}}",
                  clients, h.accepted, h.not_allowed, h.refused, h.requests, h.bad_requests,
-                 h.timeouts, h.captures);
+                 h.timeouts, h.captures, h.captures_refused, h.requests_paced);
 }
 
 }  // namespace

@@ -30,6 +30,7 @@ HttpConnection::HttpConnection(std::shared_ptr<HttpState> state,
     : state_(std::move(state)),
       stream_(std::move(socket)),
       buffer_(kHeaderLimit),
+      pace_timer_(stream_.get_executor()),
       capture_timer_(stream_.get_executor()) {}
 
 HttpConnection::~HttpConnection() {
@@ -39,7 +40,8 @@ HttpConnection::~HttpConnection() {
 void HttpConnection::start() {
   boost::system::error_code ec;
   const auto peer = stream_.socket().remote_endpoint(ec);
-  peer_ = peer.address().to_string() + ":" + std::to_string(peer.port());
+  address_ = peer.address();
+  peer_ = address_.to_string() + ":" + std::to_string(peer.port());
   // Without it, Nagle holds each write slice after the first until the client ACKs the one before,
   // and a client that delays its ACKs (Linux: 40 ms) gets a kept-alive document that late.
   stream_.socket().set_option(boost::asio::ip::tcp::no_delay(true), ec);
@@ -51,7 +53,12 @@ void HttpConnection::start() {
 void HttpConnection::close() {
   if (closed_) return;
   closed_ = true;
+  pace_timer_.cancel();
   capture_timer_.cancel();
+  if (capturing_) {
+    capturing_ = false;
+    --state_->capturing;
+  }
   capture_.reset();  // removes the tap from the bus
   boost::system::error_code ec;
   stream_.socket().shutdown(boost::asio::ip::tcp::socket::shutdown_both, ec);
@@ -104,6 +111,31 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
           too_large ? "request headers too large\n" : "bad request\n", false, false);
     return;
   }
+  serve();
+}
+
+void HttpConnection::serve() {
+  if (closed_) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (!state_->request_rate.admit(address_, now)) {
+    // Over its share: the request waits for the address's next token and nothing more is read
+    // from this connection meanwhile, so a hammering client slows itself down (TCP's window
+    // fills), never the loop. Another client's requests are not held up.
+    ++state_->stats.requests_paced;
+    if (const auto held = state_->paced_log.admit(now)) {
+      state_->log->info("http: client {}: over {} requests a second, answers paced{}", peer_,
+                        state_->options.requests.per_second, modbus::held_note(*held));
+    }
+    pace_timer_.expires_at(state_->request_rate.next_token(address_, now));
+    pace_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+      if (!ec) self->serve();
+    });
+    return;
+  }
+  answer();
+}
+
+void HttpConnection::answer() {
   ++state_->stats.requests;
   const auto& request = parser_->get();
   Response r =
@@ -119,7 +151,8 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
 }
 
 void HttpConnection::reply(unsigned status, const std::string& content_type, std::string body,
-                           bool keep_alive, bool head, const std::string& allow) {
+                           bool keep_alive, bool head, const std::string& allow,
+                           unsigned retry_after_s) {
   response_ = {};
   response_.version(11);
   response_.result(status);
@@ -132,6 +165,7 @@ void HttpConnection::reply(unsigned status, const std::string& content_type, std
                 "connect-src 'self'; img-src 'self' data:");
   response_.set("X-Content-Type-Options", "nosniff");
   if (!allow.empty()) response_.set(bhttp::field::allow, allow);
+  if (retry_after_s > 0) response_.set(bhttp::field::retry_after, std::to_string(retry_after_s));
   response_.keep_alive(keep_alive);
   const std::size_t size = body.size();
   if (!head) response_.body() = std::move(body);
@@ -158,6 +192,16 @@ void HttpConnection::on_written(const boost::system::error_code& ec, bool keep_a
 // --- the capture stream ---
 
 void HttpConnection::serve_capture(const CaptureRequest& request) {
+  if (state_->capturing >= state_->options.max_captures) {
+    ++state_->stats.captures_refused;
+    state_->log->info("http: client {}: capture of bus {} refused: {} running already", peer_,
+                      request.bus, state_->capturing);
+    reply(503, "text/plain; charset=utf-8",
+          std::to_string(state_->options.max_captures) +
+              " captures are running already; try again when one has ended\n",
+          false, false, {}, 10);
+    return;
+  }
   std::weak_ptr<HttpConnection> weak = weak_from_this();
   capture_ = state_->content.start_capture(request.bus, state_->options.capture_max_bytes, [weak] {
     if (auto self = weak.lock()) self->capture_data();
@@ -167,6 +211,10 @@ void HttpConnection::serve_capture(const CaptureRequest& request) {
     return;
   }
   ++state_->stats.captures;
+  // From here on its slot is a capture's (HttpOptions::max_captures), no longer one of
+  // max_clients.
+  capturing_ = true;
+  ++state_->capturing;
   capture_bus_ = request.bus;
   state_->log->info("http: client {}: capture of bus {} for {} s", peer_, request.bus,
                     request.duration.count());

@@ -32,8 +32,12 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
  private:
   void read();
   void on_read(const boost::system::error_code& ec);
+  // Answers the parsed request, or, when its address has used its share of requests for now,
+  // waits for its next one first (HttpOptions::requests).
+  void serve();
+  void answer();
   void reply(unsigned status, const std::string& content_type, std::string body, bool keep_alive,
-             bool head, const std::string& allow = {});
+             bool head, const std::string& allow = {}, unsigned retry_after_s = 0);
   void on_written(const boost::system::error_code& ec, bool keep_alive);
   // The capture stream: headers, then a chunk per batch of frames, then the last chunk.
   void serve_capture(const CaptureRequest& request);
@@ -51,7 +55,10 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   std::optional<boost::beast::http::response_serializer<boost::beast::http::string_body>>
       response_writer_;
   std::string peer_;
+  boost::asio::ip::address address_;      // the client's, for the request rate
+  boost::asio::steady_timer pace_timer_;  // a request waiting for its turn
   bool closed_ = false;
+  bool capturing_ = false;  // counted in HttpState::capturing
 
   std::unique_ptr<CaptureStream> capture_;
   std::string capture_bus_;

@@ -29,7 +29,7 @@ void on_accept(const std::shared_ptr<HttpState>& state, const boost::system::err
       state->log->debug("http: {} not in the allow list: closed at accept",
                         peer_ec ? peer_ec.message() : peer.address().to_string());
       socket.close(ignored);
-    } else if (state->live.size() >= state->options.max_clients) {
+    } else if (state->live.size() - state->capturing >= state->options.max_clients) {
       ++state->stats.refused;
       socket.close(ignored);
     } else {

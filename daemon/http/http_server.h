@@ -16,6 +16,7 @@
 
 #include "content.h"
 #include "http_stats.h"
+#include "modbus/address_rate.h"
 #include "modbus/allow_list.h"
 
 namespace drivegate::http {
@@ -24,13 +25,20 @@ struct HttpOptions {
   std::string host = "127.0.0.1";  // numeric, as for Modbus listeners
   std::uint16_t port = 8502;       // 0: ephemeral
   modbus::AllowList allow;         // empty: every address
-  std::size_t max_clients = 16;    // past it a client is closed at accept
+  std::size_t max_clients = 16;    // past it a client is closed at accept (captures aside)
+  // Requests one client address may have served a second, in bursts of `burst`; a request over
+  // it waits for its turn (its connection is not read meanwhile), so one client hammering the
+  // page slows itself, not the event loop that serves the PLCs. 0: no limit.
+  modbus::RateLimit requests{20, 40};
   // A request (its line and headers) must arrive whole within this; a keep-alive connection with
   // no new request for this long is closed.
   std::chrono::milliseconds request_timeout{10'000};
   // [http] capture: /api/v1/capture is served (else 403); a capture's pcap stops at this size.
   bool capture = false;
   std::size_t capture_max_bytes = 16 * 1024 * 1024;
+  // Captures streaming at once; one more is answered 503. A capture's connection has a slot of
+  // its own, outside max_clients: captures never keep the status page out.
+  std::size_t max_captures = 2;
 };
 
 struct HttpState;

@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "http_server.h"
+#include "modbus/address_rate.h"
 #include "modbus/log_throttle.h"
 
 namespace drivegate::http {
@@ -22,7 +23,8 @@ struct HttpState {
         options(std::move(options_)),
         log(std::move(log_)),
         acceptor(io_),
-        retry_timer(io_) {}
+        retry_timer(io_),
+        request_rate(options.requests) {}
   boost::asio::io_context& io;
   Content& content;
   const HttpOptions options;
@@ -30,9 +32,12 @@ struct HttpState {
   boost::asio::ip::tcp::acceptor acceptor;
   boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
   std::unordered_set<HttpConnection*> live;
+  std::size_t capturing = 0;         // of `live`, the connections streaming a capture
+  modbus::AddressRate request_rate;  // options.requests, per client address
   HttpStats stats;
   modbus::LogThrottle bad_request_log;   // any client can cause one: a burst, then one a second
   modbus::LogThrottle accept_error_log;  // accept() failing (out of descriptors and the like)
+  modbus::LogThrottle paced_log;         // requests held back by the rate limit
   bool closed = false;
 };
 

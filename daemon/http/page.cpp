@@ -191,8 +191,9 @@ footer a { color: inherit; }
     refused <b data-field="refused">-</b></p>
   <div class="tablewrap"><table id="listeners">
     <thead><tr><th>Address</th><th class="l">TLS</th><th class="l">Access</th>
-      <th class="l">Word order</th><th class="l">Allow</th><th>Clients</th><th>Accepted</th>
-      <th>Not allowed</th><th>TLS failures</th><th>Writes denied</th></tr></thead>
+      <th class="l">Word order</th><th class="l">Allow</th><th>Clients</th><th>Slots</th>
+      <th>Accepted</th><th>Refused</th><th>Evicted</th><th>Not allowed</th><th>TLS failures</th>
+      <th>TLS limited</th><th>Writes denied</th></tr></thead>
     <tbody></tbody></table></div>
   <section id="mqtt" hidden>
     <h2>MQTT Sparkplug B</h2>
@@ -504,8 +505,9 @@ footer a { color: inherit; }
     }
     if (!buses.length) document.querySelector("#buses tbody").replaceChildren();
 
-    const lisFields = ["address", "tls", "access", "word_order", "allow", "clients", "accepted",
-      "not_allowed", "tls_handshake_failures", "writes_denied"];
+    const lisFields = ["address", "tls", "access", "word_order", "allow", "clients", "max_clients",
+      "accepted", "refused", "evicted", "not_allowed", "tls_handshake_failures",
+      "tls_handshakes_limited", "writes_denied"];
     const listeners = s.listeners || [];
     syncRows(lisRows, document.querySelector("#listeners tbody"), listeners, (l) => l.address,
       (l) => makeRow("data-listener", l.address, lisFields));
@@ -516,9 +518,12 @@ footer a { color: inherit; }
       set(f.access, l.access);
       set(f.word_order, l.word_order);
       set(f.allow, (l.allow || []).length ? l.allow.join(", ") : "any");
-      for (const k of ["clients", "accepted", "not_allowed", "tls_handshake_failures", "writes_denied"]) {
+      for (const k of ["clients", "max_clients", "accepted", "refused", "evicted", "not_allowed",
+        "tls_handshake_failures", "tls_handshakes_limited", "writes_denied"]) {
         set(f[k], num(l[k]));
-        if (k !== "clients" && k !== "accepted") f[k].className = l[k] ? "nz" : "";
+        if (!["clients", "max_clients", "accepted", "evicted"].includes(k)) {
+          f[k].className = l[k] ? "nz" : "";
+        }
       }
     }
     const m = s.modbus || {};

@@ -144,6 +144,20 @@ void Connection::policy_changed() {
   }
 }
 
+std::optional<Connection::Clock::time_point> Connection::evictable_since() const {
+  if (closed_ || handshaking_ || session_.access != AccessLevel::read || outstanding_ != 0 ||
+      partial_since_) {
+    return std::nullopt;
+  }
+  return last_request_;
+}
+
+void Connection::evict() {
+  ++state_->stats.connections_evicted;
+  ++listener_->stats.connections_evicted;
+  close();
+}
+
 void Connection::close() {
   if (closed_) return;
   closed_ = true;
@@ -349,9 +363,9 @@ void Connection::unanswered(const PendingWrite& w, Exception result, bool settle
         "modbus: {}: write (function 0x{:02X}, unit {}) {} {} the client closed: it was not told"
         "{}",
         who(), w.request[0], w.unit,
-        result == Exception::none ? "took effect"
-                                  : fmt::format("failed (exception 0x{:02X})",
-                                                static_cast<unsigned>(result)),
+        result == Exception::none
+            ? "took effect"
+            : fmt::format("failed (exception 0x{:02X})", static_cast<unsigned>(result)),
         settled_after ? "after" : "as", held_note(*held));
   }
 }

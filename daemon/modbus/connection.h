@@ -6,9 +6,9 @@
 // frame_timeout, and after idle_timeout without a request. A client that half-closes (shutdown
 // SHUT_WR, or a TLS close_notify) has said all it will: every request it sent is still carried
 // out and answered, then the connection closes. A write whose client has gone before its result
-// is counted (writes_unanswered) and logged, never dropped silently. Both timeouts are read from the
-// shared ServerState when a deadline is computed, so new values (Server::set_limits) apply to an
-// open connection, measured from its last request or partial frame as before.
+// is counted (writes_unanswered) and logged, never dropped silently. Both timeouts are read from
+// the shared ServerState when a deadline is computed, so new values (Server::set_limits) apply to
+// an open connection, measured from its last request or partial frame as before.
 //
 // On a TLS listener the connection first completes the handshake (the client certificate is
 // verified by OpenSSL against the listener's CA), takes its access level from the certificate's
@@ -49,6 +49,13 @@ class Connection : public std::enable_shared_from_this<Connection> {
   // (for a TLS client, from the role its certificate carried); a client whose address is no
   // longer allowed is closed.
   void policy_changed();
+  // Whether this connection may be closed to make room on its full listener, and since when it
+  // has been idle: a read-only session (after any TLS handshake) with no write pending and no
+  // partial frame. Operate and maintain sessions never give way.
+  [[nodiscard]] std::optional<std::chrono::steady_clock::time_point> evictable_since() const;
+  [[nodiscard]] const ListenerState& listener() const { return *listener_; }
+  // Closes it for a newer client on its full listener (counted, and logged by the server).
+  void evict();
 
  private:
   using Clock = std::chrono::steady_clock;

@@ -31,6 +31,57 @@ std::string allow_text(const AllowList& allow) {
   return out;
 }
 
+std::size_t slots(const ServerState& state, const ListenerState& listener) {
+  return listener.options.policy.max_clients.value_or(state.options.max_clients);
+}
+
+// Whether a new client fits on `listener`: a free slot, or the listener's longest-idle read-only
+// client closed to make one (a read client that went quiet gives way to a PLC that wants in;
+// clients of other listeners are never touched).
+bool make_room(ServerState& state, ListenerState& listener) {
+  if (listener.stats.connections_active < slots(state, listener)) return true;
+  Connection* oldest = nullptr;
+  std::chrono::steady_clock::time_point since = std::chrono::steady_clock::time_point::max();
+  for (Connection* c : state.live) {
+    if (&c->listener() != &listener) continue;
+    if (const auto idle = c->evictable_since(); idle && *idle < since) {
+      since = *idle;
+      oldest = c;
+    }
+  }
+  if (oldest == nullptr) return false;
+  const auto now = std::chrono::steady_clock::now();
+  if (const auto held = listener.evicted_log.admit(now)) {
+    state.log->info(
+        "modbus: {}: full ({} clients): closed the read-only client idle longest "
+        "({} ms) for a new one{}",
+        listener.options.name(), listener.stats.connections_active,
+        std::chrono::duration_cast<std::chrono::milliseconds>(now - since).count(),
+        held_note(*held));
+  }
+  oldest->evict();
+  return listener.stats.connections_active < slots(state, listener);
+}
+
+// A TLS listener lets each client address start so many handshakes a second (address_rate.h):
+// a handshake costs a private-key signature on the event loop every other client waits on, so
+// a flood from one address is closed at accept instead. Plain listeners have no handshake.
+bool handshake_allowed(ServerState& state, ListenerState& listener, const asio::ip::address& peer) {
+  if (!listener.tls) return true;
+  const auto now = std::chrono::steady_clock::now();
+  if (listener.handshakes.admit(peer, now)) return true;
+  ++state.stats.tls_handshakes_limited;
+  ++listener.stats.tls_handshakes_limited;
+  if (const auto held = listener.limited_log.admit(now)) {
+    state.log->warn(
+        "modbus: {}: {} closed at accept: more than {} TLS handshakes a second from "
+        "it{}",
+        listener.options.name(), peer.to_string(), listener.options.policy.handshakes.per_second,
+        held_note(*held));
+  }
+  return false;
+}
+
 // Closes a just-accepted socket before a byte of it is read.
 void refuse(tcp::socket& socket) {
   boost::system::error_code ignored;
@@ -60,13 +111,19 @@ void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listen
           peer_ec ? peer_ec.message() : peer.address().to_string());
     }
     refuse(socket);
-  } else if (state->live.size() >= state->options.max_clients) {
-    // Past the cap: accepted and closed at once, so the client sees a clean close instead of a
-    // connect that hangs in the backlog.
+  } else if (!handshake_allowed(*state, *listener, peer.address())) {
+    refuse(socket);
+  } else if (!make_room(*state, *listener)) {
+    // Full, and every client on it reads and writes or is busy: accepted and closed at once, so
+    // the client sees a clean close instead of a connect that hangs in the backlog.
     ++state->stats.connections_refused;
-    if (const auto held = state->refused_log.admit(std::chrono::steady_clock::now())) {
-      state->log->warn("modbus: {} client(s) refused: {} clients connected, max_clients = {}",
-                       *held + 1, state->live.size(), state->options.max_clients);
+    ++listener->stats.connections_refused;
+    if (const auto held = listener->refused_log.admit(std::chrono::steady_clock::now())) {
+      state->log->warn(
+          "modbus: {}: {} client(s) refused: {} clients connected, max_clients = {}, none of them "
+          "an idle read-only one to give way",
+          listener->options.name(), *held + 1, listener->stats.connections_active,
+          slots(*state, *listener));
     }
     refuse(socket);
   } else {
@@ -160,8 +217,10 @@ std::error_code Server::listen() {
              allows_everyone(p.allow) ? std::string("every address") : allow_text(p.allow));
     accept(state_, l);
   }
-  log.info("modbus: max_clients {} over {} listener(s)", state_->options.max_clients,
-           state_->listeners.size());
+  for (const auto& l : state_->listeners) {
+    log.info("modbus: {}: max_clients {}{}", l->options.name(), slots(*state_, *l),
+             l->options.policy.max_clients ? "" : " ([server] max_clients)");
+  }
   return {};
 }
 
@@ -200,6 +259,7 @@ Server::ReloadResult Server::reload_listeners(const std::vector<ListenerOptions>
       return same_socket(listener.options, o);
     });
     listener.options.policy = n->policy;
+    listener.handshakes.set_limit(n->policy.handshakes);
     listener.tls = std::move(step.second);
   }
   const std::vector<Connection*> open(state_->live.begin(), state_->live.end());

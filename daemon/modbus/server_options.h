@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "address_rate.h"
 #include "allow_list.h"
 #include "pdu.h"
 #include "tls.h"
@@ -33,6 +34,12 @@ struct ListenerPolicy {
   AccessLevel access = AccessLevel::maintain;
   WordOrder word_order = WordOrder::big;
   std::optional<TlsOptions> tls;  // Modbus/TCP Security: TLS, client certificate required
+  // This listener's own connection slots; none: ServerOptions::max_clients. Clients of other
+  // listeners never take them.
+  std::optional<std::size_t> max_clients;
+  // TLS handshakes one client address may start (address_rate.h): past it a new connection from
+  // that address is closed at accept, before the handshake's signature costs the event loop.
+  RateLimit handshakes{5, 10};
   friend bool operator==(const ListenerPolicy&, const ListenerPolicy&) = default;
 };
 
@@ -54,7 +61,9 @@ struct ListenerOptions {
 // Fixed for the server's life, except the three of ServerLimits and the listeners' policies.
 struct ServerOptions {
   std::vector<ListenerOptions> listeners{ListenerOptions{}};  // at least one
-  std::size_t max_clients = 32;  // all listeners together; past it a new client is closed at once
+  // Each listener's connection slots unless its policy gives its own. A full listener closes
+  // its longest-idle read-only client for a new one; with none, the new one is closed at once.
+  std::size_t max_clients = 32;
   std::size_t max_pending_writes = 16;  // per connection; at the cap the connection stops reading
   std::chrono::milliseconds frame_timeout{2000};  // a partial frame older than this closes; 0 = off
   std::chrono::milliseconds idle_timeout{60000};  // no request for this long closes; 0 = off
@@ -69,7 +78,10 @@ struct ListenerStats {
   std::uint64_t connections_accepted = 0;
   std::uint64_t connections_active = 0;
   std::uint64_t connections_not_allowed = 0;
+  std::uint64_t connections_refused = 0;  // closed at accept: the listener full, none to evict
+  std::uint64_t connections_evicted = 0;  // read-only clients closed to make room for a new one
   std::uint64_t tls_handshake_failures = 0;
+  std::uint64_t tls_handshakes_limited = 0;  // closed at accept: the address's handshake rate
   std::uint64_t writes_denied = 0;
   // requests[function code] (0x2B is the largest served; others counted in [0]).
   std::array<std::uint64_t, 0x2C> requests{};
@@ -78,9 +90,11 @@ struct ListenerStats {
 
 struct ServerStats {
   std::uint64_t connections_accepted = 0;     // served connections (refused ones not included)
-  std::uint64_t connections_refused = 0;      // closed at once: client cap reached
+  std::uint64_t connections_refused = 0;      // closed at once: the listener full, none to evict
+  std::uint64_t connections_evicted = 0;      // idle read-only clients closed for a new client
   std::uint64_t connections_not_allowed = 0;  // closed at once: address not in the allow list
   std::uint64_t tls_handshake_failures = 0;   // closed: no valid client certificate, not TLS...
+  std::uint64_t tls_handshakes_limited = 0;   // closed at accept: the address's handshake rate
   std::uint64_t writes_denied = 0;  // writes answered 01: beyond the connection's access level
   std::uint64_t connections_active = 0;
   std::uint64_t requests = 0;        // well-formed requests dispatched

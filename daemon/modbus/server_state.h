@@ -29,7 +29,10 @@ class Connection;
 // on reload; a connection keeps the one it started with).
 struct ListenerState {
   ListenerState(boost::asio::io_context& io, ListenerOptions options_)
-      : options(std::move(options_)), acceptor(io), retry_timer(io) {}
+      : options(std::move(options_)),
+        acceptor(io),
+        retry_timer(io),
+        handshakes(options.policy.handshakes) {}
 
   ListenerOptions options;  // policy changed only by Server::reload_listeners
   std::shared_ptr<boost::asio::ssl::context> tls;  // set when options.policy.tls is
@@ -38,6 +41,10 @@ struct ListenerState {
   LogThrottle not_allowed_log;            // connections closed at accept: not in the allow list
   LogThrottle handshake_log;              // TLS handshakes that failed or took too long
   LogThrottle accept_error_log;           // accept() failing (out of descriptors and the like)
+  LogThrottle refused_log;                // clients refused: full, none to evict
+  LogThrottle evicted_log;                // idle read-only clients closed for a new one
+  LogThrottle limited_log;                // TLS clients closed at accept: handshake rate
+  AddressRate handshakes;                 // TLS handshakes per client address
   ListenerStats stats;
 };
 
@@ -67,7 +74,6 @@ struct ServerState {
   std::vector<std::shared_ptr<ListenerState>> listeners;
   std::unordered_set<Connection*> live;  // open connections, every listener's
   bool closed = false;
-  LogThrottle refused_log;        // connections past max_clients
   LogThrottle malformed_log;      // frames that are not Modbus TCP
   LogThrottle frame_timeout_log;  // partial frames left unfinished
   LogThrottle unanswered_log;     // write results whose client had gone

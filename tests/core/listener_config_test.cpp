@@ -151,6 +151,39 @@ TEST_F(ListenerConfig, MistakesAreNamedWithTheirLine) {
               ElementsAre(AllOf(HasSubstr("listener[0].port"), HasSubstr("unknown key"))));
 }
 
+// Issue 24: each listener's own slots, and the TLS handshake rate; the defaults, the bounds and
+// a handshake rate on a plain listener named with their line.
+TEST_F(ListenerConfig, SlotsAndTheHandshakeRateArePerListener) {
+  const auto r = parse(R"([server]
+max_clients = 12
+[[listener]]
+address = "127.0.0.1:1502"
+max_clients = 3
+[[listener]]
+address = "127.0.0.1:1802"
+tls = { cert = "c", key = "k", ca = "a" }
+tls_handshakes_per_s = 7
+[[listener]]
+address = "127.0.0.1:1803"
+tls = { cert = "c", key = "k", ca = "a" }
+)");
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  const auto& ls = r.config->listeners;
+  EXPECT_EQ(ls[0].options.policy.max_clients, std::optional<std::size_t>(3));
+  EXPECT_EQ(ls[1].options.policy.max_clients, std::nullopt);  // [server] max_clients, 12
+  EXPECT_EQ(ls[1].options.policy.handshakes, (modbus::RateLimit{7, 14}));
+  EXPECT_EQ(ls[2].options.policy.handshakes, (modbus::RateLimit{5, 10}));  // the default
+  EXPECT_THAT(
+      errors("[[listener]]\naddress = \":502\"\nmax_clients = 0\n"),
+      ElementsAre(AllOf(HasSubstr("gw.toml:3: listener[0].max_clients"), HasSubstr("1..1024"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\ntls_handshakes_per_s = 5\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:3: listener[0].tls_handshakes_per_s"),
+                                HasSubstr("only a TLS listener"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":802\"\ntls = { cert = \"c\", key = \"k\", "
+                     "ca = \"a\" }\ntls_handshakes_per_s = 1001\n"),
+              ElementsAre(HasSubstr("listener[0].tls_handshakes_per_s")));
+}
+
 TEST_F(ListenerConfig, HttpIsOffUnlessAskedForAndItsKeysAreRead) {
   auto r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n");
   ASSERT_TRUE(r.config);
@@ -163,7 +196,14 @@ TEST_F(ListenerConfig, HttpIsOffUnlessAskedForAndItsKeysAreRead) {
   EXPECT_EQ(r.config->http.listen.port, 8502);
   EXPECT_EQ(r.config->http.allow.size(), 1u);
   EXPECT_TRUE(r.config->http.capture);
+  EXPECT_EQ(r.config->http.requests_per_s, 20u);  // the default
   EXPECT_THAT(r.warnings, IsEmpty());
+  r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nrequests_per_s = 0\n");
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  EXPECT_EQ(r.config->http.requests_per_s, 0u);  // no limit
+  EXPECT_THAT(
+      errors("[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nrequests_per_s = -1\n"),
+      ElementsAre(AllOf(HasSubstr("gw.toml:4: http.requests_per_s"), HasSubstr("0..1000"))));
   // Reachable from anywhere, capture on: said.
   r = parse(
       "[[listener]]\naddress = \"127.0.0.1:1502\"\n[http]\nlisten = \"0.0.0.0:8502\"\n"

@@ -2,8 +2,11 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "http/content.h"
 
@@ -23,13 +26,32 @@ class FakeContent : public Content {
     ++regmap_calls;
     return R"({"regmap":true})";
   }
-  // One bus, "line" (for /api/v1/capture's routing; no capture is started here).
+  // One bus, "line", whose capture streams a pcap global header and then nothing (the line is
+  // quiet) until the client leaves or its time is up.
   bool has_bus(std::string_view name) override { return name == "line"; }
+  std::unique_ptr<CaptureStream> start_capture(std::string_view name, std::size_t /*max_bytes*/,
+                                               std::function<void()> on_data) override {
+    if (name != "line") return nullptr;
+    ++captures_started;
+    on_data();  // the global header is there to take
+    return std::make_unique<QuietCapture>();
+  }
   [[nodiscard]] int calls() const { return status_calls + metrics_calls + regmap_calls; }
   std::string status;  // the status document when set (before the server starts)
   std::atomic<int> status_calls{0};
   std::atomic<int> metrics_calls{0};
   std::atomic<int> regmap_calls{0};
+  std::atomic<int> captures_started{0};
+
+ private:
+  class QuietCapture : public CaptureStream {
+   public:
+    std::string take() override { return std::exchange(header_, {}); }
+    [[nodiscard]] bool full() const override { return false; }
+
+   private:
+    std::string header_ = std::string("\xd4\xc3\xb2\xa1", 4);  // the pcap magic, for a start
+  };
 };
 
 }  // namespace drivegate::http::test

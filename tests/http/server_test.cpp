@@ -1,10 +1,10 @@
 // HttpServer over loopback TCP, on its own io thread, with a fake Content and raw socket clients:
 // what a hostile or broken client gets (431, 400, a timeout, a close at accept) and that the
 // others are served all along.
-#include "http/http_server.h"
-
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <spdlog/sinks/null_sink.h>
@@ -12,10 +12,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
-#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <future>
@@ -25,11 +25,9 @@
 #include <thread>
 #include <vector>
 
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-
 #include "descriptor_limit.h"
 #include "fake_content.h"
+#include "http/http_server.h"
 
 namespace drivegate::http::test {
 namespace {
@@ -97,7 +95,15 @@ class Harness {
 // A raw TCP client.
 class Client {
  public:
-  explicit Client(std::uint16_t port) : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) {
+  // From `from` (another loopback address, 127.0.0.2, is another client address).
+  explicit Client(std::uint16_t port, const char* from = nullptr)
+      : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) {
+    if (from != nullptr) {
+      sockaddr_in s{};
+      s.sin_family = AF_INET;
+      ::inet_pton(AF_INET, from, &s.sin_addr);
+      if (::bind(fd_, reinterpret_cast<sockaddr*>(&s), sizeof s) != 0) return;
+    }
     sockaddr_in a{};
     a.sin_family = AF_INET;
     a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
@@ -109,6 +115,7 @@ class Client {
   Client& operator=(const Client&) = delete;
 
   [[nodiscard]] bool connected() const { return connected_; }
+  [[nodiscard]] int fd() const { return fd_; }
   bool send(const std::string& bytes) {
     std::size_t at = 0;
     while (at < bytes.size()) {
@@ -152,7 +159,8 @@ class Client {
       if (end != std::string::npos) {
         std::size_t length = 0;
         const auto cl = in.find("Content-Length: ");
-        if (cl != std::string::npos && cl < end) length = std::strtoul(in.c_str() + cl + 16, nullptr, 10);
+        if (cl != std::string::npos && cl < end)
+          length = std::strtoul(in.c_str() + cl + 16, nullptr, 10);
         const std::size_t total = end + 4 + (head ? 0 : length);
         if (in.size() >= total) {
           std::string one = in.substr(0, total);
@@ -280,7 +288,8 @@ TEST(HttpServer, AKeptAliveDocumentIsNotHeldBackForTheClientsDelayedAck) {
     took.push_back(Clock::now() - t0);
   }
   std::nth_element(took.begin(), took.begin() + 5, took.end());
-  EXPECT_LT(took[5], 30ms) << "median " << std::chrono::duration<double, std::milli>(took[5]).count()
+  EXPECT_LT(took[5], 30ms) << "median "
+                           << std::chrono::duration<double, std::milli>(took[5]).count()
                            << " ms: the slices waited for delayed ACKs";
 }
 
@@ -364,7 +373,8 @@ TEST(HttpServer, HeadersJustUnder8KiBAreServed) {
   Harness h;
   Client c(h.port());
   const std::string base = get("/metrics", "X-Padding: \r\n");
-  ASSERT_TRUE(c.send(get("/metrics", "X-Padding: " + std::string(8000 - base.size(), 'a') + "\r\n")));
+  ASSERT_TRUE(
+      c.send(get("/metrics", "X-Padding: " + std::string(8000 - base.size(), 'a') + "\r\n")));
   EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 200"));
 }
 
@@ -513,6 +523,83 @@ TEST(HttpServer, PastMaxClientsAClientIsClosedAtAccept) {
   EXPECT_EQ(h.stats().refused, 1u);
 }
 
+// Issue 24: captures are bounded. At most max_captures stream at once (the next is answered 503
+// with a Retry-After), and a capture's connection has a slot of its own: long captures never
+// keep the status page out, however many are asked for.
+TEST(HttpServer, AThirdCaptureGets503AndCapturesNeverTakeThePagesSlots) {
+  HttpOptions o;
+  o.max_clients = 2;
+  o.capture = true;
+  Harness h(o);
+  const std::string capture = get("/api/v1/capture?bus=line&seconds=60");
+  Client first(h.port());
+  Client second(h.port());
+  for (Client* c : {&first, &second}) {
+    ASSERT_TRUE(c->send(capture));
+    const std::string head = c->read_to_close(500ms);
+    EXPECT_THAT(head, StartsWith("HTTP/1.1 200"));
+    EXPECT_THAT(head, HasSubstr("application/vnd.tcpdump.pcap"));
+    EXPECT_FALSE(c->closed);  // streaming
+  }
+  Client third(h.port());
+  ASSERT_TRUE(third.send(capture));
+  const std::string refused = third.read_to_close();
+  EXPECT_THAT(refused, StartsWith("HTTP/1.1 503"));
+  EXPECT_THAT(refused, HasSubstr("Retry-After: 10"));
+  EXPECT_TRUE(third.closed);
+  EXPECT_EQ(h.stats().captures_refused, 1u);
+  EXPECT_EQ(h.content().captures_started, 2);
+  // Both of max_clients' slots are free for the page while the two captures stream.
+  ASSERT_TRUE(h.wait_clients(2));
+  Client page(h.port());
+  Client scraper(h.port());
+  ASSERT_TRUE(page.send(get("/api/v1/status", "Connection: close\r\n")));
+  ASSERT_TRUE(scraper.send(get("/metrics", "Connection: close\r\n")));
+  EXPECT_THAT(page.read_response(), StartsWith("HTTP/1.1 200"));
+  EXPECT_THAT(scraper.read_response(), StartsWith("HTTP/1.1 200"));
+  EXPECT_EQ(h.stats().refused, 0u);
+  ASSERT_TRUE(h.wait_clients(2));
+  // A capture that ends gives its place to the next.
+  ::shutdown(first.fd(), SHUT_RDWR);
+  ASSERT_TRUE(h.wait_clients(1));
+  Client fourth(h.port());
+  ASSERT_TRUE(fourth.send(capture));
+  EXPECT_THAT(fourth.read_to_close(500ms), StartsWith("HTTP/1.1 200"));
+}
+
+// Issue 24: HTTP requests are rate-limited per client address. A client hammering the server on
+// a kept-alive connection gets every answer (paced, never refused: a scraper sees no failed
+// scrape), at the rate it is given; a client from another address is answered at once meanwhile.
+TEST(HttpServer, AHammeringClientIsPacedWhileAnotherAddressIsAnsweredAtOnce) {
+  HttpOptions o;
+  o.requests = {5, 5};
+  Harness h(o);
+  Client hammer(h.port());
+  ASSERT_TRUE(hammer.connected());
+  std::string burst;
+  constexpr int kRequests = 20;
+  for (int i = 0; i < kRequests; ++i) burst += get("/metrics");
+  const auto sent = Clock::now();
+  ASSERT_TRUE(hammer.send(burst));
+  for (int i = 0; i < 300 && h.stats().requests_paced == 0; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_GT(h.stats().requests_paced, 0u);
+
+  Client other(h.port(), "127.0.0.2");
+  ASSERT_TRUE(other.connected());
+  ASSERT_TRUE(other.send(get("/api/v1/status")));
+  EXPECT_THAT(other.read_response(false, 2s), StartsWith("HTTP/1.1 200"));
+  // Answered while the hammering client still waits for most of its answers.
+  EXPECT_LT(h.content().metrics_calls.load(), kRequests);
+
+  for (int i = 0; i < kRequests; ++i) {
+    ASSERT_THAT(hammer.read_response(false, 10s), StartsWith("HTTP/1.1 200")) << "answer " << i;
+  }
+  EXPECT_FALSE(hammer.closed);
+  // 15 over the burst of 5, at 5 a second: three seconds (two, with a wide margin).
+  EXPECT_GE(Clock::now() - sent, 2s);
+  EXPECT_EQ(h.stats().requests, static_cast<std::uint64_t>(kRequests + 1));
+}
+
 TEST(HttpServer, AddressOutsideTheAllowListIsClosedAtAccept) {
   HttpOptions o;
   std::string error;
@@ -573,7 +660,6 @@ TEST(HttpServer, OtherClientsAreUnaffectedWhileOneMisbehaves) {
   // The slow one, and maybe `good` too by now: an idle keep-alive connection times out alike.
   EXPECT_GE(h.stats().timeouts, 1u);
 }
-
 
 // Out of descriptors, accept() fails at once for as long as the connection waits in the backlog.
 // The server backs off instead of accepting again straight away (which spun the event loop at

@@ -211,6 +211,26 @@ TEST_F(Tls, CertificatesFromAnotherCaOrExpiredAreRefusedInTheHandshake) {
   EXPECT_EQ(h.with_backend([](test::FakeBackend& b) { return b.reads; }), 1u);
 }
 
+// Issue 24: a handshake flood from one address is closed at accept, before the server signs
+// anything; a plaintext listener beside it, and the same address a moment later, are served.
+TEST_F(Tls, AHandshakeFloodFromOneAddressIsClosedAtAccept) {
+  Harness h(with({{.tls = server_files(), .handshakes = {1, 3}}, {}}));
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(exchange(h.port(0), "operator", kReadHolding).size(), 11u) << i;
+  }
+  for (int i = 0; i < 20; ++i) EXPECT_TRUE(exchange(h.port(0), "operator", kReadHolding).empty());
+  const auto s = h.stats();
+  EXPECT_GE(s.tls_handshakes_limited, 19u);  // a second may have passed: one more token
+  EXPECT_LE(s.tls_handshake_failures, 1u);   // closed at accept, never handshaken
+  EXPECT_EQ(h.on_io([&] { return h.server().listener_stats(0).tls_handshakes_limited; }),
+            s.tls_handshakes_limited);
+  RawClient plain(h.port(1));
+  plain.send(kReadHolding);
+  EXPECT_EQ(plain.reply().size(), 11u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  EXPECT_EQ(exchange(h.port(0), "operator", kReadHolding).size(), 11u);
+}
+
 TEST_F(Tls, PlainModbusOnATlsListenerIsNeverRead) {
   Harness h(with({{.tls = server_files()}}));
   RawClient c(h.port());
