@@ -20,15 +20,17 @@
 // sequential). Prints hs_per_s, hs_p50_us / hs_p99_us (connect -> client handshake done),
 // cycle_p50_us / cycle_p99_us (connect -> reply checked), cpu_us_per_hs (the server, as
 // above), resumed (handshakes that resumed a session: 0 unless --resume, which offers each new
-// connection the session (ticket) of the last one), handshakes, errors.
+// connection the session (ticket) of the last one), handshakes, errors. --flood: a handshake
+// flood, as a hostile client makes one: connections the server closes (a rate limit) are counted
+// in errors and the slot connects again at once, never giving up (bench/flood.sh).
 #include <arpa/inet.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <openssl/err.h>
 #include <openssl/ssl.h>
 #include <openssl/x509v3.h>
-#include <fcntl.h>
 #include <sys/epoll.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
@@ -72,14 +74,15 @@ struct Args {
   std::uint64_t max_requests = 0;  // 0: no bound but time
   std::uint8_t unit = 1;
   Read large{3, 0, 125};
-  Read small{4, 0, 19};  // the common block: input registers 0..18
-  int pid = 0;           // the server, for CPU per request
+  Read small{4, 0, 19};   // the common block: input registers 0..18
+  int pid = 0;            // the server, for CPU per request
   bool self_cpu = false;  // also report the load generator's own CPU per request
   // TLS: on when tls_ca is set.
   std::string tls_ca, tls_cert, tls_key;
-  std::string tls_max;    // "1.2": no TLS 1.3 (default: whatever both sides prefer)
+  std::string tls_max;  // "1.2": no TLS 1.3 (default: whatever both sides prefer)
   bool handshakes = false;
-  bool resume = false;    // handshake mode: offer the previous connection's session
+  bool resume = false;  // handshake mode: offer the previous connection's session
+  bool flood = false;   // handshake mode: a connection the server refuses is no reason to stop
 };
 
 struct Conn {
@@ -131,17 +134,17 @@ inline Request next_request(Conn& c, const Args& a) {
   c.large_next = !c.large_next;
   ++c.tid;
   const Request adu = {static_cast<std::uint8_t>(c.tid >> 8),
-                                            static_cast<std::uint8_t>(c.tid),
-                                            0,
-                                            0,
-                                            0,
-                                            6,
-                                            a.unit,
-                                            c.pending.function,
-                                            static_cast<std::uint8_t>(c.pending.start >> 8),
-                                            static_cast<std::uint8_t>(c.pending.start),
-                                            static_cast<std::uint8_t>(c.pending.count >> 8),
-                                            static_cast<std::uint8_t>(c.pending.count)};
+                       static_cast<std::uint8_t>(c.tid),
+                       0,
+                       0,
+                       0,
+                       6,
+                       a.unit,
+                       c.pending.function,
+                       static_cast<std::uint8_t>(c.pending.start >> 8),
+                       static_cast<std::uint8_t>(c.pending.start),
+                       static_cast<std::uint8_t>(c.pending.count >> 8),
+                       static_cast<std::uint8_t>(c.pending.count)};
   c.sent = Clock::now();
   c.have = 0;
   return adu;
@@ -199,7 +202,7 @@ int usage(const char* why) {
                "       [--warmup S] [--max-requests M] [--unit U] [--large FC:START:COUNT]\n"
                "       [--small FC:START:COUNT] [--pid SERVER_PID] [--self-cpu]\n"
                "       [--tls-ca CA.pem [--tls-cert CERT.pem --tls-key KEY.pem] [--tls-max 1.2]\n"
-               "        [--handshakes [--resume]]]\n";
+               "        [--handshakes [--resume] [--flood]]]\n";
   return 2;
 }
 
@@ -427,7 +430,8 @@ int run_tls(const Args& a, const sockaddr_in& addr) {
       // or the rest of a record) are never left waiting for an epoll event that will not come.
       bool more = true;
       while (more) {
-        const int got = SSL_read(t.ssl, c.buf.data() + c.have, static_cast<int>(c.buf.size() - c.have));
+        const int got =
+            SSL_read(t.ssl, c.buf.data() + c.have, static_cast<int>(c.buf.size() - c.have));
         if (got <= 0) {
           const int err = SSL_get_error(t.ssl, got);
           if (err == SSL_ERROR_WANT_READ) {
@@ -578,8 +582,8 @@ int run_handshakes(const Args& a, const sockaddr_in& addr) {
       s.step = HsSlot::Step::reply;
     }
     for (;;) {  // reply: as in run_tls, never waiting on epoll for bytes OpenSSL holds
-      const int got = SSL_read(s.ssl, s.c.buf.data() + s.c.have,
-                               static_cast<int>(s.c.buf.size() - s.c.have));
+      const int got =
+          SSL_read(s.ssl, s.c.buf.data() + s.c.have, static_cast<int>(s.c.buf.size() - s.c.have));
       if (got <= 0) {
         const int err = SSL_get_error(s.ssl, got);
         if (err == SSL_ERROR_WANT_READ || err == SSL_ERROR_WANT_WRITE) {
@@ -624,7 +628,7 @@ int run_handshakes(const Args& a, const sockaddr_in& addr) {
       now = Clock::now();
       if (r < 0) {
         ++errors;
-        if (++failures >= 20) {
+        if (++failures >= 20 && !a.flood) {
           std::cerr << "dg-loadgen: 20 failed connections, giving up\n";
           return false;
         }
@@ -644,7 +648,8 @@ int run_handshakes(const Args& a, const sockaddr_in& addr) {
         }
         if (measuring && !stop) {
           hs_lat.push_back(static_cast<std::uint32_t>(
-              std::chrono::duration_cast<std::chrono::nanoseconds>(s.handshaken - s.start).count()));
+              std::chrono::duration_cast<std::chrono::nanoseconds>(s.handshaken - s.start)
+                  .count()));
           cycle_lat.push_back(static_cast<std::uint32_t>(
               std::chrono::duration_cast<std::chrono::nanoseconds>(now - s.start).count()));
           ++total;
@@ -715,7 +720,7 @@ int run_handshakes(const Args& a, const sockaddr_in& addr) {
   for (auto& s : slots) close_slot(s);
   if (last_session != nullptr) SSL_SESSION_free(last_session);
   SSL_CTX_free(ctx);
-  return errors == 0 ? 0 : 1;
+  return errors == 0 || a.flood ? 0 : 1;
 }
 
 }  // namespace
@@ -724,8 +729,11 @@ int main(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string k = argv[i];
-    if (k == "--self-cpu" || k == "--handshakes" || k == "--resume") {  // flags, no value
-      (k == "--self-cpu" ? a.self_cpu : k == "--handshakes" ? a.handshakes : a.resume) = true;
+    if (k == "--self-cpu" || k == "--handshakes" || k == "--resume" || k == "--flood") {
+      (k == "--self-cpu"     ? a.self_cpu
+       : k == "--handshakes" ? a.handshakes
+       : k == "--flood"      ? a.flood
+                             : a.resume) = true;
       continue;
     }
     if (i + 1 >= argc) return usage(("missing value for " + k).c_str());
@@ -772,6 +780,7 @@ int main(int argc, char** argv) {
   if (!a.tls_max.empty() && a.tls_max != "1.2") return usage("--tls-max: only 1.2");
   if (a.handshakes && a.tls_ca.empty()) return usage("--handshakes needs --tls-ca");
   if (a.resume && !a.handshakes) return usage("--resume is for --handshakes");
+  if (a.flood && !a.handshakes) return usage("--flood is for --handshakes");
 
   sockaddr_in addr{};
   addr.sin_family = AF_INET;

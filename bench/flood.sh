@@ -1,0 +1,145 @@
+#!/usr/bin/env bash
+# bench/flood.sh [BUILD_DIR]: issue 24's "no class of client can starve another", measured. A
+# plaintext PLC's Modbus latency while another client floods the daemon, with the limits on and
+# with them off, side by side in one run.
+#
+# Starts TWO drivegated, both pinned to CPU $SERVER_CPU, each polling five simulated drives
+# (bench/lib.sh) and serving a plaintext listener, a TLS listener and [http]:
+#   limited    the defaults: tls_handshakes_per_s = 5 (bursts of 10), [http] requests_per_s = 20
+#   unlimited  tls_handshakes_per_s = 0, requests_per_s = 0: what the daemon did before issue 24
+# For ROUNDS rounds, for each daemon, three phases of DURATION s, each measured by dg-loadgen with
+# one connection on the plaintext listener (FC03 16..140 alternating with FC04 0..18, unit 2):
+#   quiet      nothing else
+#   tls-flood  dg-loadgen --handshakes --flood with $FLOOD_SLOTS slots, all from 127.0.0.1, on the
+#              TLS listener: connect, full handshake with a client certificate, one read, close,
+#              again at once (a refused connection: again at once)
+#   http       $HAMMERS dg-scraper clients from 127.0.0.1, each fetching /metrics and
+#              /api/v1/status $HAMMER_RATE times a second on kept-alive connections
+# The load generators and the simulators run on CPU $LOAD_CPU. Prints the medians and each
+# phase's p99 over its daemon's quiet p99.
+# Environment: ROUNDS (4), DURATION (4 s), FLOOD_SLOTS (8), HAMMERS (12), HAMMER_RATE (200),
+#   SERVER_CPU (0), LOAD_CPU (1).
+set -euo pipefail
+
+B=$(realpath "${1:-build-bench}")
+BIN=$B/bin
+ROUNDS=${ROUNDS:-4}
+DURATION=${DURATION:-4}
+FLOOD_SLOTS=${FLOOD_SLOTS:-8}
+HAMMERS=${HAMMERS:-12}
+HAMMER_RATE=${HAMMER_RATE:-200}
+SERVER_CPU=${SERVER_CPU:-0}
+LOAD_CPU=${LOAD_CPU:-1}
+HERE=$(dirname "$(realpath "$0")")
+for f in drivegated drivegate dg-loadgen dg-scraper; do
+  [[ -e $BIN/$f ]] || { echo "flood.sh: $BIN/$f missing (build with -DDRIVEGATE_BENCH=ON)" >&2; exit 2; }
+done
+
+# shellcheck source=bench/common.sh
+source "$HERE/common.sh"
+# shellcheck source=bench/lib.sh
+source "$HERE/lib.sh"
+bench_workdir flood
+
+C=$W/certs
+sh "$HERE/../tests/support/make_certs.sh" "$C" >/dev/null
+TLS_ARGS=(--tls-ca "$C/ca.pem" --tls-cert "$C/engineer.pem" --tls-key "$C/engineer.key")
+
+declare -A PLAIN TLS HTTP PID
+port=15300
+for tag in limited unlimited; do
+  PLAIN[$tag]=$port TLS[$tag]=$((port + 1)) HTTP[$tag]=$((port + 2))
+  port=$((port + 10))
+  hs="" rq=""
+  if [[ $tag == unlimited ]]; then
+    hs="tls_handshakes_per_s = 0"
+    rq="requests_per_s = 0"
+  fi
+  start_gateway "$BIN" "$tag" "[server]
+max_clients = 64
+
+[http]
+listen = \"127.0.0.1:${HTTP[$tag]}\"
+$rq
+
+[[listener]]
+address = \"127.0.0.1:${PLAIN[$tag]}\"
+access = \"maintain\"
+
+[[listener]]
+address = \"127.0.0.1:${TLS[$tag]}\"
+tls = { cert = \"$C/server.pem\", key = \"$C/server.key\", ca = \"$C/ca.pem\" }
+roles = { engineer = \"maintain\" }
+$hs"
+  PID[$tag]=$GATEWAY_PID
+done
+for tag in limited unlimited; do
+  wait_for_port "${PLAIN[$tag]}" || { cat "$W/$tag/drivegated.log" >&2; exit 1; }
+  python3 "$HERE/mbwrite.py" --wait-online "${PLAIN[$tag]}" "${START[@]}"
+done
+sleep 2
+
+measure() {  # measure TAG PHASE ROUND: the plaintext client's line, into results.txt
+  local out
+  out=$(taskset -c "$LOAD_CPU" "$BIN/dg-loadgen" --port "${PLAIN[$1]}" --pid "${PID[$1]}" \
+    --duration "$DURATION" --warmup 0.5 --unit 2 --small 4:0:19 --large 3:16:125 \
+    --connections 1 2>>"$W/loadgen.err") || {
+    echo "flood.sh: dg-loadgen failed ($1 $2)" >&2; tail -5 "$W/loadgen.err" >&2
+    tail -5 "$W/$1/drivegated.log" >&2; exit 1; }
+  echo "$1 $2 $3 $out" | tee -a "$W/results.txt" >&2
+}
+
+for round in $(seq "$ROUNDS"); do
+  for tag in limited unlimited; do
+    measure "$tag" quiet "$round"
+
+    taskset -c "$LOAD_CPU" "$BIN/dg-loadgen" --port "${TLS[$tag]}" "${TLS_ARGS[@]}" --handshakes \
+      --flood --connections "$FLOOD_SLOTS" --duration "$((DURATION + 2))" --warmup 0 \
+      >>"$W/flood.out" 2>>"$W/flood.err" &
+    flood=$!
+    sleep 0.5
+    measure "$tag" tls-flood "$round"
+    wait "$flood" || true
+
+    hammers=()
+    for _ in $(seq "$HAMMERS"); do
+      taskset -c "$LOAD_CPU" "$BIN/dg-scraper" "${HTTP[$tag]}" "$HAMMER_RATE" "$((DURATION + 2))" \
+        "$W/hammer.out" --keep-alive >/dev/null 2>>"$W/hammer.err" &
+      hammers+=($!)
+    done
+    sleep 0.5
+    measure "$tag" http "$round"
+    wait "${hammers[@]}" || true
+  done
+done
+
+echo
+echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) CPUs," \
+  "$(uname -sr); both daemons on CPU $SERVER_CPU, clients on CPU $LOAD_CPU; $ROUNDS rounds x" \
+  "${DURATION}s; flood: $FLOOD_SLOTS handshake slots; http: $HAMMERS clients x $HAMMER_RATE/s"
+python3 - "$W/results.txt" <<'EOF'
+import statistics, sys
+rows = {}
+for line in open(sys.argv[1]):
+    tag, phase, _round, *kv = line.split()
+    d = dict(x.split("=", 1) for x in kv)
+    rows.setdefault((tag, phase), []).append((float(d["p50_us"]), float(d["p99_us"]), float(d["rps"])))
+print("| daemon | phase | Modbus p50 | p99 | p99 / quiet p99 | requests/s |")
+print("|---|---|---|---|---|---|")
+for tag in ("limited", "unlimited"):
+    quiet = statistics.median(r[1] for r in rows[(tag, "quiet")])
+    for phase in ("quiet", "tls-flood", "http"):
+        r = rows[(tag, phase)]
+        p50 = statistics.median(x[0] for x in r)
+        p99 = statistics.median(x[1] for x in r)
+        rps = statistics.median(x[2] for x in r)
+        print(f"| {tag} | {phase} | {p50 / 1000:.3f} ms | {p99 / 1000:.3f} ms | {p99 / quiet:.2f}x | {rps:.0f} |")
+EOF
+echo "handshake flood (dg-loadgen --flood, per run): completed handshakes and refused connections"
+sed -n 's/.*handshakes=\([0-9]*\) errors=\([0-9]*\).*/  \1 completed, \2 refused/p' "$W/flood.out" | head -8
+echo "daemons' limit counters:"
+for tag in limited unlimited; do
+  curl -s "http://127.0.0.1:${HTTP[$tag]}/metrics" 2>/dev/null |
+    grep -E "^drivegate_(modbus_tls_handshakes_limited_total|http_requests_paced_total)" |
+    sed "s/^/  $tag: /" || true
+done
