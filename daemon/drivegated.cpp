@@ -4,28 +4,17 @@
 #include <iostream>
 #include <string>
 #include <string_view>
+#include <variant>
+#include <vector>
 
 #include "app/daemon.h"
+#include "app/daemon_args.h"
 #include "app/logging.h"
 #include "config/config_loader.h"
 #include "gateway/gateway.h"
 #include "modbus/tls.h"
 
 namespace {
-
-constexpr const char* kUsage =
-    "usage: drivegated --config FILE [--listen HOST:PORT] [--plugin-dir DIR] [--log-level LEVEL]\n"
-    "       drivegated --check-config FILE [--plugin-dir DIR]\n"
-    "       drivegated --version | --help\n"
-    "\n"
-    "Polls the drives configured in FILE on their serial lines and serves them as one Modbus\n"
-    "TCP server. --listen replaces the address of the first listener (its allow list and access\n"
-    "level stay). LEVEL: trace, debug, info (default), warn, error.\n";
-
-int usage_error(const std::string& what) {
-  std::cerr << "drivegated: " << what << "\n" << kUsage;
-  return 2;
-}
 
 // Validates the configuration as the daemon would, including the adapters' own checks.
 int check_config(const std::filesystem::path& file, const std::filesystem::path& plugin_dir) {
@@ -65,56 +54,28 @@ int check_config(const std::filesystem::path& file, const std::filesystem::path&
 }  // namespace
 
 int main(int argc, char** argv) {
-  drivegate::DaemonOptions options;
-  std::optional<std::filesystem::path> check;
-  auto level = spdlog::level::info;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view arg = argv[i];
-    const auto value = [&](std::string_view name) -> std::optional<std::string> {
-      if (i + 1 >= argc) return std::nullopt;
-      (void)name;
-      return std::string(argv[++i]);
-    };
-    if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  auto parsed = drivegate::parse_daemon_args(args);
+  if (const auto* error = std::get_if<std::string>(&parsed)) {
+    return drivegate::daemon_command_line().usage_error(*error);
+  }
+  auto& a = std::get<drivegate::DaemonArgs>(parsed);
+  switch (a.action) {
+    case drivegate::DaemonAction::help:
+      std::cout << drivegate::daemon_command_line().help();
       return 0;
-    }
-    if (arg == "--version") {
+    case drivegate::DaemonAction::version:
       std::cout << "drivegated " << DRIVEGATE_VERSION << "\n";
       return 0;
-    }
-    if (arg == "--config" || arg == "-c") {
-      auto v = value(arg);
-      if (!v) return usage_error("--config needs a file");
-      options.config = *v;
-    } else if (arg == "--check-config") {
-      auto v = value(arg);
-      if (!v) return usage_error("--check-config needs a file");
-      check = *v;
-    } else if (arg == "--plugin-dir") {
-      auto v = value(arg);
-      if (!v) return usage_error("--plugin-dir needs a directory");
-      options.plugin_dir = *v;
-    } else if (arg == "--listen") {
-      auto v = value(arg);
-      auto listen = v ? drivegate::parse_listen(*v) : std::nullopt;
-      if (!listen) return usage_error("--listen needs HOST:PORT (e.g. 127.0.0.1:1502)");
-      options.listen = std::move(*listen);
-    } else if (arg == "--log-level") {
-      auto v = value(arg);
-      auto parsed = v ? drivegate::parse_log_level(*v) : std::nullopt;
-      if (!parsed) return usage_error("--log-level needs trace, debug, info, warn or error");
-      level = *parsed;
-    } else {
-      return usage_error("unknown argument '" + std::string(arg) + "'");
-    }
+    case drivegate::DaemonAction::check_config:
+      return check_config(a.check, a.options.plugin_dir.empty() ? drivegate::default_plugin_dir()
+                                                                : a.options.plugin_dir);
+    case drivegate::DaemonAction::run:
+      break;
   }
-  const auto plugin_dir =
-      options.plugin_dir.empty() ? drivegate::default_plugin_dir() : options.plugin_dir;
-  if (check) return check_config(*check, plugin_dir);
-  if (options.config.empty()) return usage_error("--config FILE is required");
   try {
-    drivegate::Daemon daemon(std::move(options), drivegate::make_logger("drivegated", level));
+    drivegate::Daemon daemon(std::move(a.options),
+                             drivegate::make_logger("drivegated", a.log_level));
     return daemon.run();
   } catch (const std::exception& e) {
     std::cerr << "drivegated: fatal: " << e.what() << "\n";

@@ -2,12 +2,14 @@
 // each, `drivegate capture` fetching ~2 s of each bus over /api/v1/capture, and tshark decoding
 // the pcaps with tools/wireshark/ (the dissectors): every packet decoded by its adapter's
 // protocol, no malformed packet and no Lua error, every checksum good, both directions present.
-// Also the refusals of the route as a client sees them (400, 404, a capture that is not enabled).
+// Also the refusals of the route as a client sees them (400, 404, a capture that is not enabled),
+// and what `drivegate capture` shows while it runs and says when refused.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -98,6 +100,11 @@ std::vector<std::string> run_lines(std::vector<std::string> argv, int* status = 
   const int rc = c.wait_exit(5s);
   if (status != nullptr) *status = rc;
   return lines;
+}
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -263,11 +270,19 @@ TEST_F(Capture, RefusesUnknownBusBadDurationAndLeavesTheBusUntapped) {
   EXPECT_EQ(http_status(http_port_, "/api/v1/capture?bus=" + cases_[0].id + "&seconds=0"), 400);
   EXPECT_EQ(http_status(http_port_, "/api/v1/capture?bus=" + cases_[0].id + "&seconds=301"), 400);
   EXPECT_EQ(http_status(http_port_, "/api/v1/capture?seconds=1"), 400);
-  int rc = -1;
-  run_lines({(bin_dir() / "drivegate").string(), "capture", "--bus", "nope", "--http",
+  // The tool's refusal names the bus asked for and the buses the daemon has (issue 24).
+  {
+    Child c({(bin_dir() / "drivegate").string(), "capture", "--bus", "nope", "--http",
              "127.0.0.1:" + std::to_string(http_port_)},
-            &rc);
-  EXPECT_EQ(rc, 1);
+            dir_ / "nope.err");
+    EXPECT_EQ(c.wait_exit(30s), 1);
+    const std::string err = read_text(dir_ / "nope.err");
+    EXPECT_THAT(err, ::testing::HasSubstr("drivegate capture: the daemon answered 404 Not Found: "
+                                          "no such bus 'nope'; the daemon's buses: "))
+        << err;
+    for (const auto& a : cases_) EXPECT_THAT(err, ::testing::HasSubstr(a.id)) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << "one line: " << err;
+  }
   // A client that leaves early: the capture (and its tap) ends, the daemon serves on.
   {
     Child early(capture_args(cases_[0].id, 300, dir_ / "early.pcap"));
@@ -306,6 +321,38 @@ TEST_F(Capture, AThirdCaptureAtOnceIsRefusedAndThePageStaysServed) {
     run_lines(capture_args(cases_[0].id, 1, dir_ / "next.pcap"), &next);
     return next == 0;
   }));
+}
+
+// Progress on stderr (issue 24): frames, bytes and the seconds left, at most once a second; by
+// default only when stderr is a terminal (here it is a file), with --progress anywhere.
+TEST_F(Capture, ShowsProgressOnStderrAtMostOnceASecond) {
+  const auto& bus = cases_[0].id;
+  auto args = capture_args(bus, 3, dir_ / "progress.pcap");
+  args.push_back("--progress");
+  Child shown(args, dir_ / "progress.err");
+  ASSERT_EQ(shown.wait_exit(30s), 0);
+  const std::string err = read_text(dir_ / "progress.err");
+  std::vector<std::string> updates;
+  for (const auto& line : split(err, '\n')) {
+    if (line.find(" s left") != std::string::npos) updates.push_back(line);
+  }
+  // Drawn at the start, about once a second, and at the end: 3..6 for 3 seconds, never a flood.
+  EXPECT_GE(updates.size(), 3u) << err;
+  EXPECT_LE(updates.size(), 6u) << err;
+  ASSERT_FALSE(updates.empty()) << err;
+  EXPECT_THAT(updates.front(), ::testing::StartsWith("drivegate capture: bus " + bus + ": "));
+  EXPECT_THAT(updates.front(), ::testing::HasSubstr(", 3 s left")) << err;
+  EXPECT_THAT(updates.back(), ::testing::HasSubstr(" bytes, 0 s left")) << err;
+  EXPECT_THAT(updates.back(), ::testing::Not(::testing::HasSubstr(": 0 frames"))) << err;
+  // The summary counts what the file holds.
+  const auto size = std::filesystem::file_size(dir_ / "progress.pcap");
+  EXPECT_THAT(err, ::testing::HasSubstr(" frames, " + std::to_string(size) + " bytes of pcap in "))
+      << err;
+  EXPECT_THAT(updates.back(), ::testing::HasSubstr(", " + std::to_string(size) + " bytes, "));
+
+  Child quiet(capture_args(bus, 1, dir_ / "quiet.pcap"), dir_ / "quiet.err");
+  ASSERT_EQ(quiet.wait_exit(30s), 0);
+  EXPECT_THAT(read_text(dir_ / "quiet.err"), ::testing::Not(::testing::HasSubstr(" s left")));
 }
 
 TEST_F(Capture, IsRefusedWhenNotEnabled) {

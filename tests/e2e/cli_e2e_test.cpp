@@ -109,6 +109,155 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_THAT(sim.out, HasSubstr("no adapter 'no-such-adapter'"));
 }
 
+// Issue 24: GNU command lines. A value after '=' or as the next word, the short options the man
+// pages list, and a mistake named in one line followed by the usage, exit 2.
+TEST(Cli, OptionsTakeTheirValueAfterAnEqualsSignOrAsTheNextWordShortOrLong) {
+  TempDir dir;
+  std::ofstream(dir / "bad.toml") << "[[device]]\nname = 1\n";
+  const std::string bad = (dir / "bad.toml").string();
+  for (const auto& argv : std::vector<std::vector<std::string>>{
+           {drivegated(), "--config=" + bad, "--plugin-dir=" + plugin_dir().string()},
+           {drivegated(), "-c", bad, "-p", plugin_dir().string()},
+           {drivegated(), "-c" + bad, "-l", "warn", "--plugin-dir", plugin_dir().string()}}) {
+    const auto r = run(argv);
+    EXPECT_EQ(r.status, 1) << argv[1] << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr("bad.toml:2: device[0].name: must be a string")) << argv[1];
+  }
+  std::ofstream(dir / "gw.toml") << kConfig;
+  const std::string good = (dir / "gw.toml").string();
+  const auto check = run({drivegated(), "--check-config=" + good, "-p", plugin_dir().string()});
+  EXPECT_EQ(check.status, 0) << check.out;
+  EXPECT_THAT(check.out, HasSubstr("OK (1 devices on 1 buses, 1 listener)"));
+  for (const auto& argv : std::vector<std::vector<std::string>>{
+           {drivegate(), "regmap", "--config=" + good, "--format=md",
+            "--plugin-dir=" + plugin_dir().string()},
+           {drivegate(), "regmap", "-c", good, "-f", "md", "-p", plugin_dir().string()},
+           {drivegate(), "regmap", "-fmd", "-p", plugin_dir().string(), "-c", good}}) {
+    const auto r = run(argv);
+    EXPECT_EQ(r.status, 0) << argv[2] << ": " << r.out;
+    EXPECT_THAT(r.out, HasSubstr("## Unit 1: washer (nidec-washer)")) << argv[2];
+  }
+  const auto version = run({drivegated(), "-V"});
+  EXPECT_EQ(version.status, 0);
+  EXPECT_THAT(version.out, HasSubstr("drivegated "));
+  EXPECT_EQ(run({drivegate(), "-V"}).status, 0);
+}
+
+TEST(Cli, ABadOptionExitsTwoNamingItThenTheUsage) {
+  struct Case {
+    std::vector<std::string> argv;
+    std::string says;
+    std::string usage;
+  };
+  const std::vector<Case> cases = {
+      {{drivegated(), "--frobnicate"},
+       "drivegated: unknown option '--frobnicate'\n",
+       "usage: drivegated -c FILE"},
+      {{drivegated(), "-x"}, "drivegated: unknown option '-x'\n", "usage: drivegated"},
+      {{drivegated(), "--config"},
+       "drivegated: option '--config' needs a value (FILE)\n",
+       "usage: drivegated"},
+      {{drivegated(), "-c", "x", "--log-level", "loud"},
+       "drivegated: --log-level needs trace, debug, info, warn or error, not 'loud'\n",
+       "usage: drivegated"},
+      {{drivegate(), "--frobnicate"},
+       "drivegate: unknown option '--frobnicate'\n",
+       "usage: drivegate COMMAND"},
+      {{drivegate(), "regmap", "--frobnicate", "x"},
+       "drivegate regmap: unknown option '--frobnicate'\n",
+       "usage: drivegate regmap -c FILE"},
+      {{drivegate(), "capture", "-b", "x", "--seconds"},
+       "drivegate capture: option '--seconds' needs a value (N)\n",
+       "usage: drivegate capture"},
+      {{drivegate(), "write", "-c"},
+       "drivegate write: option '-c' needs a value (FILE)\n",
+       "usage: drivegate write"},
+      {{drivegate(), "sim", "ed3100", "--echo=yes"},
+       "drivegate sim: option '--echo' takes no value\n",
+       "usage: drivegate sim ADAPTER"},
+      {{drivegate(), "demo", "--listen"},
+       "drivegate demo: option '--listen' needs a value",
+       "usage: drivegate demo"},
+      {{drivegate(), "action", "--bogus"},
+       "drivegate action: unknown option '--bogus'\n",
+       "usage: drivegate action"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run(c.argv);
+    EXPECT_EQ(r.status, 2) << c.argv.back() << ": " << r.out;
+    EXPECT_EQ(r.out.rfind(c.says, 0), 0u) << "the first line names the option: " << r.out;
+    EXPECT_THAT(r.out, HasSubstr(c.usage));
+    EXPECT_THAT(r.out, HasSubstr("\noptions:\n"));
+  }
+}
+
+// Each program's --help is its table of options; drivegate(1) documents every one of them (and
+// the daemon's table is held to drivegated(8) by core_test's DaemonArgs tests).
+TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
+  struct Command {
+    std::vector<std::string> argv;
+    std::vector<std::string> options;  // "-c, --config" or "--listen": the table, as printed
+  };
+  const std::vector<Command> commands = {
+      {{drivegated(), "--help"},
+       {"-c, --config FILE", "--check-config FILE", "--listen HOST:PORT", "-p, --plugin-dir DIR",
+        "-l, --log-level LEVEL", "-V, --version", "-h, --help"}},
+      {{drivegate(), "--help"}, {"-V, --version", "-h, --help"}},
+      {{drivegate(), "regmap", "--help"},
+       {"-c, --config FILE", "-f, --format FORMAT", "-p, --plugin-dir DIR", "-h, --help"}},
+      {{drivegate(), "write", "-h"},
+       {"-c, --config FILE", "-d, --device NAME", "-t, --timeout-ms N", "-p, --plugin-dir DIR",
+        "-h, --help"}},
+      {{drivegate(), "action", "--help"},
+       {"-c, --config FILE", "-d, --device NAME", "-t, --timeout-ms N", "-p, --plugin-dir DIR",
+        "-h, --help"}},
+      {{drivegate(), "capture", "--help"},
+       {"-b, --bus NAME", "-s, --seconds N", "-w, --write FILE", "--http HOST:PORT", "--progress",
+        "--no-progress", "-h, --help"}},
+      {{drivegate(), "demo", "--help"},
+       {"-l, --listen HOST:PORT", "--no-start", "-p, --plugin-dir DIR", "-h, --help"}},
+      {{drivegate(), "sim", "--help"},
+       {"-a, --address N", "--set OPTION=VALUE", "--cmd LINE", "--link PATH", "--port DEVICE",
+        "--baud N", "--parity PARITY", "--echo", "--no-echo", "--turnaround-ms N",
+        "--turnaround-us N", "--wire-timing", "--wire-log FILE", "-p, --plugin-dir DIR",
+        "-h, --help"}},
+  };
+  std::ifstream in(std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "packaging/man/drivegate.1");
+  const std::string page((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(page.empty());
+  const auto troff = [](const std::string& option) {
+    std::string out;
+    for (const char c : option) out += c == '-' ? std::string("\\-") : std::string(1, c);
+    return out;
+  };
+  for (const auto& c : commands) {
+    const auto r = run(c.argv);
+    EXPECT_EQ(r.status, 0) << c.argv[1];
+    const auto options = r.out.find("\noptions:\n");
+    ASSERT_NE(options, std::string::npos) << r.out;
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);) {
+      EXPECT_LE(line.size(), 79u) << "wider than a terminal: " << line;
+    }
+    std::size_t listed = 0;
+    for (std::size_t at = options; (at = r.out.find("\n  ", at + 1)) != std::string::npos;) {
+      if (r.out.compare(at + 3, 1, "-") == 0 || r.out.compare(at + 3, 5, "    -") == 0) ++listed;
+    }
+    EXPECT_EQ(listed, c.options.size()) << "options beyond the test's list: " << r.out;
+    for (const auto& o : c.options) {
+      EXPECT_THAT(r.out.substr(options), HasSubstr(o)) << c.argv[1];
+      if (c.argv[0] == drivegated()) continue;
+      const std::string long_name =
+          o.substr(o.find("--"), o.find(' ', o.find("--")) - o.find("--"));
+      EXPECT_THAT(page, HasSubstr(troff(long_name))) << "drivegate(1) lacks " << long_name;
+      if (o[1] != '-') {
+        EXPECT_THAT(page, HasSubstr(troff(o.substr(0, 2)) + " \", \" " + troff(long_name)))
+            << "drivegate(1) lacks " << o.substr(0, 2) << " beside " << long_name;
+      }
+    }
+  }
+}
+
 TEST(Cli, RegmapPrintsTheServedMap) {
   TempDir dir;
   std::ofstream(dir / "gw.toml") << kConfig;
@@ -135,11 +284,12 @@ TEST(Cli, WriteOnAPortTheDaemonOwnsNamesTheOwner) {
   Daemon daemon(dir, toml);
   Plc plc(daemon.port());
   ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::online) != 0; },
-                         10s));
-  const std::vector<std::string> write = {drivegate(), "write", "--config",
-                                          daemon.config().string(), "--device", "washer",
-                                          "--plugin-dir", plugin_dir().string(), "accel_time=30"};
+  ASSERT_TRUE(
+      eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::online) != 0; }, 10s));
+  const std::vector<std::string> write = {
+      drivegate(),    "write",  "--config",     daemon.config().string(),
+      "--device",     "washer", "--plugin-dir", plugin_dir().string(),
+      "accel_time=30"};
   const auto asked = std::chrono::steady_clock::now();
   const auto busy = run(write);
   EXPECT_EQ(busy.status, 1) << busy.out;

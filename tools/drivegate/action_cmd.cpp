@@ -12,13 +12,9 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: drivegate action --config FILE --device NAME [--timeout-ms N] [ACTION KEY=VALUE...]\n"
-    "\n"
-    "Runs a maintenance action of the device's adapter (stop the daemon first if it owns the\n"
-    "port): each KEY=VALUE sets one of the action's parameters, then the adapter validates them\n"
-    "and carries the action out, confirmed by the device. Without ACTION, lists the actions of\n"
-    "the device's adapter and their parameters.\n";
+constexpr Option kOptions[] = {
+    kConfigOption, kDeviceOption, kTimeoutOption, kPluginDirOption, kHelpOption,
+};
 
 const MaintenanceAction* find_action(const AdapterDescriptor& a, std::string_view name) {
   for (std::size_t i = 0; i < a.action_count; ++i) {
@@ -68,41 +64,38 @@ int list_actions(const AdapterDescriptor& adapter, const DeviceConfig& dc) {
 
 }  // namespace
 
-int action(std::span<const std::string_view> args) {
-  ArgReader r("action", args);
-  DeviceArgs device;
+int action(std::span<const std::string> args) {
+  const CommandLine cli(
+      "drivegate action", kOptions, {"-c FILE -d NAME [-t N] [-p DIR] [ACTION KEY=VALUE...]"},
+      "Runs a maintenance action of the device's adapter (stop the daemon first if it owns the\n"
+      "port): each KEY=VALUE sets one of the action's parameters, then the adapter validates them\n"
+      "and carries the action out, confirmed by the device. Without ACTION, lists the actions of\n"
+      "the device's adapter and their parameters.");
+  int exit_status = 0;
+  const auto parsed = parse_command(cli, args, exit_status);
+  if (!parsed) return exit_status;
+  const auto device = device_args(cli, *parsed);
+  if (!device) return 2;
   std::string name;
   std::vector<Assignment> params;
-  while (!r.done()) {
-    const auto arg = r.next();
-    if (arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (!arg.starts_with("--")) {
-      if (name.empty()) {
-        name = arg;
-        continue;
-      }
-      auto a = parse_assignment(arg);
-      if (!a) return r.usage("'" + std::string(arg) + "' is not KEY=VALUE", kUsage);
-      params.push_back(std::move(*a));
+  for (const auto& arg : parsed->operands) {
+    if (name.empty()) {
+      name = arg;
       continue;
     }
-    if (const int rc = device.read(r, arg, kUsage); rc != 0) return rc;
+    auto a = parse_assignment(arg);
+    if (!a) return cli.usage_error("'" + arg + "' is not KEY=VALUE");
+    params.push_back(std::move(*a));
   }
-  if (device.config.empty() || device.name.empty()) {
-    return r.usage("--config and --device are required", kUsage);
-  }
-  const PluginRegistry plugins = load_plugins(device.plugin_dir);
-  auto result = load_config(device.config, plugins);
+  const PluginRegistry plugins = load_plugins(device->plugin_dir);
+  auto result = load_config(device->config, plugins);
   for (const auto& e : result.errors) std::cerr << e << "\n";
   if (!result.config) return 1;
   const auto dc = std::find_if(result.config->devices.begin(), result.config->devices.end(),
-                               [&](const DeviceConfig& d) { return d.name == device.name; });
+                               [&](const DeviceConfig& d) { return d.name == device->name; });
   if (dc == result.config->devices.end()) {
-    std::cerr << "drivegate action: no device '" << device.name << "' in " << device.config.string()
-              << "\n";
+    std::cerr << "drivegate action: no device '" << device->name << "' in "
+              << device->config.string() << "\n";
     return 1;
   }
   const AdapterDescriptor& adapter = *plugins.find(dc->adapter);
@@ -113,12 +106,12 @@ int action(std::span<const std::string_view> args) {
               << "' (`drivegate action --config FILE --device NAME` lists them)\n";
     return 1;
   }
-  if (params.empty()) return r.usage("no parameters given", kUsage);
+  if (params.empty()) return cli.usage_error("no parameters given for action '" + name + "'");
   std::vector<Assignment> writes;
   for (const auto& p : params) writes.push_back({a->parameter_prefix + p.point, p.value});
   writes.push_back({a->commit_point, "1"});
   return run_point_writes(
-      {&*result.config, &plugins, device.name, writes, device.timeout, a->message_point});
+      {&*result.config, &plugins, device->name, writes, device->timeout, a->message_point});
 }
 
 }  // namespace drivegate::cli

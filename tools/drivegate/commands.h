@@ -1,5 +1,6 @@
 // The `drivegate` subcommands. Each takes the arguments after its own name and returns the
-// process exit code: 0 success, 1 failure, 2 usage error.
+// process exit code: 0 success, 1 failure, 2 usage error. Each parses them with one table of
+// options (base/command_line.h) that is also its --help; drivegate(1) documents the same.
 #pragma once
 
 #include <filesystem>
@@ -8,44 +9,45 @@
 #include <string>
 #include <string_view>
 
+#include "base/command_line.h"
 #include "config/plugins.h"
 #include "point_writes.h"
 
 namespace drivegate::cli {
 
-int regmap(std::span<const std::string_view> args);
-int sim(std::span<const std::string_view> args);
-int demo(std::span<const std::string_view> args);
-int write(std::span<const std::string_view> args);
-int action(std::span<const std::string_view> args);
-int capture(std::span<const std::string_view> args);
+int regmap(std::span<const std::string> args);
+int sim(std::span<const std::string> args);
+int demo(std::span<const std::string> args);
+int write(std::span<const std::string> args);
+int action(std::span<const std::string> args);
+int capture(std::span<const std::string> args);
 
-// Reads "--name VALUE" pairs and positionals, for the subcommands' small grammars.
-class ArgReader {
- public:
-  ArgReader(std::string_view command, std::span<const std::string_view> args)
-      : command_(command), args_(args) {}
-  [[nodiscard]] bool done() const { return pos_ >= args_.size(); }
-  std::string_view next() { return args_[pos_++]; }
-  // The value after a flag; prints a usage error and returns nullopt when it is missing.
-  std::optional<std::string> value(std::string_view flag);
-  int usage(const std::string& what, const char* usage_text) const;
+// The options several subcommands share, with one wording wherever they appear.
+inline constexpr Option kHelpOption{"help", 'h', nullptr, "print this help and exit"};
+inline constexpr Option kPluginDirOption{
+    "plugin-dir", 'p', "DIR", "load the adapter plugins from DIR instead of the installed ones"};
+inline constexpr Option kConfigOption{"config", 'c', "FILE", "the configuration (drivegate.toml)"};
+inline constexpr Option kDeviceOption{"device", 'd', "NAME", "the device of FILE to work on"};
+inline constexpr Option kTimeoutOption{
+    "timeout-ms", 't', "N",
+    "how long to wait for the device to come online and for each write (1..3600000 ms, default "
+    "10000)"};
 
- private:
-  std::string_view command_;
-  std::span<const std::string_view> args_;
-  std::size_t pos_ = 0;
-};
+// Parses `args` with `cli`. nullopt when the command ends here: after printing its help
+// (--help; `exit_status` 0) or a usage error naming what is wrong (`exit_status` 2).
+std::optional<ParsedArgs> parse_command(const CommandLine& cli, std::span<const std::string> args,
+                                        int& exit_status);
 
-// The options `write` and `action` share: --config, --device, --plugin-dir, --timeout-ms.
+// What `write` and `action` share: --config, --device, --plugin-dir, --timeout-ms.
 struct DeviceArgs {
   std::filesystem::path config;
   std::filesystem::path plugin_dir;
   std::string name;
   Millis timeout{10'000};
-  // Reads the value of `flag`, one of the above; a usage error (2) otherwise.
-  int read(ArgReader& r, std::string_view flag, const char* usage_text);
 };
+// Reads them from `parsed` (a table with the four options above); nullopt after a usage error
+// (printed; the status to exit with is 2).
+std::optional<DeviceArgs> device_args(const CommandLine& cli, const ParsedArgs& parsed);
 
 // "POINT=VALUE" (or "KEY=VALUE"); nullopt when there is no '=' or nothing before it.
 std::optional<Assignment> parse_assignment(std::string_view arg);

@@ -29,12 +29,12 @@ namespace asio = boost::asio;
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: drivegate demo [--listen HOST:PORT] [--plugin-dir DIR] [--no-start]\n"
-    "\n"
-    "Starts a simulated drive for every installed adapter, the daemon on them (Modbus TCP on\n"
-    "127.0.0.1:1502 by default, the status page on the Modbus port + 7000, 8502 by default),\n"
-    "and each drive at a typical speed (--no-start: left stopped). Ctrl-C stops everything.\n";
+constexpr Option kOptions[] = {
+    {"listen", 'l', "HOST:PORT", "where the daemon serves Modbus TCP (default 127.0.0.1:1502)"},
+    {"no-start", 0, nullptr, "leave the drives stopped"},
+    kPluginDirOption,
+    kHelpOption,
+};
 
 // The adapter's demo options (AdapterDescriptor::demo) over its defaults, for the simulator and
 // the device alike; `error` names a bad one (a plugin bug: its own demo does not validate).
@@ -104,33 +104,27 @@ bool port_answers(const std::string& host, int port) {
 
 }  // namespace
 
-int demo(std::span<const std::string_view> args) {
-  ArgReader r("demo", args);
-  std::filesystem::path plugin_dir;
-  ListenAddress listen{"127.0.0.1", 1502};
-  bool start = true;
-  while (!r.done()) {
-    const auto arg = r.next();
-    if (arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (arg == "--no-start") {
-      start = false;
-      continue;
-    }
-    auto v = r.value(arg);
-    if (!v) return 2;
-    if (arg == "--listen") {
-      auto at = parse_listen(*v);
-      if (!at) return r.usage("--listen needs HOST:PORT", kUsage);
-      listen = std::move(*at);
-    } else if (arg == "--plugin-dir") {
-      plugin_dir = *v;
-    } else {
-      return r.usage("unknown argument '" + std::string(arg) + "'", kUsage);
-    }
+int demo(std::span<const std::string> args) {
+  const CommandLine cli(
+      "drivegate demo", kOptions, {"[-l HOST:PORT] [--no-start] [-p DIR]"},
+      "Starts a simulated drive for every installed adapter, the daemon on them (Modbus TCP on\n"
+      "127.0.0.1:1502 by default, the status page on the Modbus port + 7000, 8502 by default),\n"
+      "and each drive at a typical speed. Ctrl-C stops everything.");
+  int exit_status = 0;
+  const auto parsed = parse_command(cli, args, exit_status);
+  if (!parsed) return exit_status;
+  if (!parsed->operands.empty()) {
+    return cli.usage_error("unexpected argument '" + parsed->operands.front() + "'");
   }
+  const std::filesystem::path plugin_dir = parsed->value("plugin-dir").value_or("");
+  ListenAddress listen{"127.0.0.1", 1502};
+  if (const auto v = parsed->value("listen")) {
+    auto at = parse_listen(*v);
+    if (!at)
+      return cli.usage_error("--listen needs HOST:PORT (e.g. 127.0.0.1:1502), not '" + *v + "'");
+    listen = std::move(*at);
+  }
+  const bool start = !parsed->has("no-start");
   const PluginRegistry plugins = load_plugins(plugin_dir);
   if (plugins.all().empty()) {
     std::cerr << "drivegate demo: no adapters installed\n";
@@ -264,18 +258,21 @@ int demo(std::span<const std::string_view> args) {
           << "\n";
     }
     const std::string host = listen.host == "0.0.0.0" ? "127.0.0.1" : listen.host;
-    out << "\nRead unit 1's status, faults, speed and counters (input registers 0..18; mbpoll's\n"
-        << "-r is the 1-based PLC reference, and it shows 32-bit values as two 16-bit words):\n"
-        << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 3 -r 1 -c 19 -1 " << host << "\n"
+    out << "\nRead unit 1's common input block: status, faults, speed, data age and counters\n"
+        << "(input registers 0..30; mbpoll's -r is the 1-based reference, and -t 3 shows 32-bit\n"
+        << "values as two 16-bit words, high word first):\n"
+        << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 3 -r 1 -c 31 -1 " << host << "\n"
+        << "One 32-bit value as a number (data_age_ms, input register 7; -B: high word first,\n"
+        << "the listener's word order):\n"
+        << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 3:int -B -r 8 -c 1 -1 " << host << "\n"
         << "Stop it (holding register 0 is the command; 0 = stop, 1 = run_forward):\n"
         << "  mbpoll -m tcp -p " << listen.port << " -a 1 -t 4 -r 1 " << host << " 0\n"
         << "The status page (live, read-only) and Prometheus metrics:\n"
         << "  http://127.0.0.1:" << http_port << "/   and   http://127.0.0.1:" << http_port
         << "/metrics\n"
         << "A capture of a bus for Wireshark (dissectors in tools/wireshark/):\n"
-        << "  " << self_path().string() << " capture --http 127.0.0.1:" << http_port
-        << " --bus " << (units.empty() ? std::string("BUS") : units.front().id)
-        << " --seconds 5 -w bus.pcap\n"
+        << "  " << self_path().string() << " capture --http 127.0.0.1:" << http_port << " --bus "
+        << (units.empty() ? std::string("BUS") : units.front().id) << " --seconds 5 -w bus.pcap\n"
         << "The register map of every unit:\n"
         << "  " << self_path().string() << " regmap --config " << config_path.string()
         << " --format md\n"

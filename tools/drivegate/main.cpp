@@ -8,39 +8,40 @@
 
 namespace drivegate::cli {
 
-std::optional<std::string> ArgReader::value(std::string_view flag) {
-  if (done()) {
-    std::cerr << "drivegate " << command_ << ": " << flag << " needs a value\n";
+std::optional<ParsedArgs> parse_command(const CommandLine& cli, std::span<const std::string> args,
+                                        int& exit_status) {
+  ParsedArgs parsed = cli.parse(args);
+  if (parsed.error) {
+    exit_status = cli.usage_error(*parsed.error);
     return std::nullopt;
   }
-  return std::string(next());
+  if (parsed.has("help")) {
+    std::cout << cli.help();
+    exit_status = 0;
+    return std::nullopt;
+  }
+  return parsed;
 }
 
-int ArgReader::usage(const std::string& what, const char* usage_text) const {
-  std::cerr << "drivegate " << command_ << ": " << what << "\n" << usage_text;
-  return 2;
-}
-
-int DeviceArgs::read(ArgReader& r, std::string_view flag, const char* usage_text) {
-  auto v = r.value(flag);
-  if (!v) return 2;
-  if (flag == "--config") {
-    config = *v;
-  } else if (flag == "--device") {
-    name = *v;
-  } else if (flag == "--plugin-dir") {
-    plugin_dir = *v;
-  } else if (flag == "--timeout-ms") {
+std::optional<DeviceArgs> device_args(const CommandLine& cli, const ParsedArgs& parsed) {
+  DeviceArgs out;
+  out.config = parsed.value("config").value_or("");
+  out.name = parsed.value("device").value_or("");
+  out.plugin_dir = parsed.value("plugin-dir").value_or("");
+  if (const auto v = parsed.value("timeout-ms")) {
     unsigned long ms = 0;
     const auto [p, ec] = std::from_chars(v->data(), v->data() + v->size(), ms);
     if (ec != std::errc{} || p != v->data() + v->size() || ms < 1 || ms > 3'600'000) {
-      return r.usage("--timeout-ms needs a number of milliseconds (1..3600000)", usage_text);
+      cli.usage_error("--timeout-ms needs a number of milliseconds (1..3600000), not '" + *v + "'");
+      return std::nullopt;
     }
-    timeout = Millis(static_cast<long>(ms));
-  } else {
-    return r.usage("unknown argument '" + std::string(flag) + "'", usage_text);
+    out.timeout = Millis(static_cast<long>(ms));
   }
-  return 0;
+  if (out.config.empty() || out.name.empty()) {
+    cli.usage_error("--config and --device are required");
+    return std::nullopt;
+  }
+  return out;
 }
 
 std::optional<Assignment> parse_assignment(std::string_view arg) {
@@ -61,35 +62,49 @@ PluginRegistry load_plugins(const std::filesystem::path& dir) {
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: drivegate COMMAND [ARGS]\n"
-    "\n"
+constexpr drivegate::Option kOptions[] = {
+    {"version", 'V', nullptr, "print the version and exit"},
+    drivegate::cli::kHelpOption,
+};
+
+// The commands are operands, not options: listed by hand, each with its own --help.
+constexpr const char* kCommands =
     "commands:\n"
-    "  demo [--listen HOST:PORT]        simulators for every adapter and the daemon on them\n"
-    "  sim ADAPTER [options]            one adapter's simulated device on a new pty\n"
-    "  regmap --config FILE [--format json|csv|md]\n"
-    "                                   print the Modbus register map\n"
-    "  write --config FILE --device NAME POINT=VALUE...\n"
-    "                                   write points directly, without the Modbus server\n"
-    "  action --config FILE --device NAME [ACTION KEY=VALUE...]\n"
-    "                                   a maintenance action of the device's adapter\n"
-    "                                   (e.g. an FDC1's non-volatile programming)\n"
-    "  capture --bus NAME [--seconds N] [-w FILE] [--http HOST:PORT]\n"
-    "                                   a pcap of one bus from the running daemon\n"
-    "                                   (tools/wireshark/ decodes it)\n"
-    "  version\n"
+    "  demo       simulators for every adapter and the daemon on them\n"
+    "  sim        one adapter's simulated device on a new pty (or a real port)\n"
+    "  regmap     print the Modbus register map of a configuration\n"
+    "  write      write points directly, without the Modbus server (daemon stopped)\n"
+    "  action     a maintenance action of a device's adapter (e.g. an FDC1's\n"
+    "             non-volatile programming)\n"
+    "  capture    a pcap of one bus from the running daemon (tools/wireshark/ decodes it)\n"
+    "  version    print the version\n"
     "\n"
-    "Every command takes --plugin-dir DIR; `drivegate COMMAND --help` describes it.\n";
+    "`drivegate COMMAND --help` lists the command's options. See drivegate(1).";
+
+drivegate::CommandLine command_line() {
+  return drivegate::CommandLine("drivegate", kOptions, {"COMMAND [OPTION]... [ARG]...", "-V | -h"},
+                                kCommands);
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::cerr << kUsage;
-    return 2;
+  const auto cli = command_line();
+  const std::vector<std::string> all(argv + 1, argv + argc);
+  // Options before the command are drivegate's own; the command parses the rest.
+  const auto parsed = cli.parse(all, drivegate::OperandOrder::options_first);
+  if (parsed.error) return cli.usage_error(*parsed.error);
+  if (parsed.has("help")) {
+    std::cout << cli.help();
+    return 0;
   }
-  const std::string_view command = argv[1];
-  std::vector<std::string_view> args(argv + 2, argv + argc);
+  if (parsed.has("version")) {
+    std::cout << "drivegate " << DRIVEGATE_VERSION << "\n";
+    return 0;
+  }
+  if (parsed.operands.empty()) return cli.usage_error("which command?");
+  const std::string& command = parsed.operands.front();
+  const std::span<const std::string> args(parsed.operands.begin() + 1, parsed.operands.end());
   try {
     if (command == "regmap") return drivegate::cli::regmap(args);
     if (command == "sim") return drivegate::cli::sim(args);
@@ -97,18 +112,17 @@ int main(int argc, char** argv) {
     if (command == "write") return drivegate::cli::write(args);
     if (command == "action") return drivegate::cli::action(args);
     if (command == "capture") return drivegate::cli::capture(args);
-    if (command == "version" || command == "--version") {
+    if (command == "version") {
       std::cout << "drivegate " << DRIVEGATE_VERSION << "\n";
       return 0;
     }
-    if (command == "help" || command == "--help" || command == "-h") {
-      std::cout << kUsage;
+    if (command == "help") {
+      std::cout << cli.help();
       return 0;
     }
   } catch (const std::exception& e) {
     std::cerr << "drivegate " << command << ": " << e.what() << "\n";
     return 1;
   }
-  std::cerr << "drivegate: unknown command '" << command << "'\n" << kUsage;
-  return 2;
+  return cli.usage_error("unknown command '" + command + "'");
 }

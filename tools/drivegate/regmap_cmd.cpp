@@ -9,42 +9,41 @@
 namespace drivegate::cli {
 
 namespace {
-constexpr const char* kUsage =
-    "usage: drivegate regmap --config FILE [--format json|csv|md] [--plugin-dir DIR]\n";
-}
 
-int regmap(std::span<const std::string_view> args) {
-  ArgReader r("regmap", args);
-  std::filesystem::path config_path;
-  std::filesystem::path plugin_dir;
+constexpr Option kOptions[] = {
+    kConfigOption,
+    {"format", 'f', "FORMAT", "json (default), csv or md (Markdown)"},
+    kPluginDirOption,
+    kHelpOption,
+};
+
+}  // namespace
+
+int regmap(std::span<const std::string> args) {
+  const CommandLine cli("drivegate regmap", kOptions, {"-c FILE [-f json|csv|md] [-p DIR]"},
+                        "Prints the Modbus register map the daemon serves for FILE: every unit's "
+                        "points, table by\ntable, with their addresses and PLC references.");
+  int exit_status = 0;
+  const auto parsed = parse_command(cli, args, exit_status);
+  if (!parsed) return exit_status;
+  if (!parsed->operands.empty()) {
+    return cli.usage_error("unexpected argument '" + parsed->operands.front() + "'");
+  }
+  const std::filesystem::path config_path = parsed->value("config").value_or("");
+  const std::filesystem::path plugin_dir = parsed->value("plugin-dir").value_or("");
   RegmapFormat format = RegmapFormat::json;
-  while (!r.done()) {
-    const auto arg = r.next();
-    if (arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    auto v = r.value(arg);
-    if (!v) return 2;
-    if (arg == "--config") {
-      config_path = *v;
-    } else if (arg == "--plugin-dir") {
-      plugin_dir = *v;
-    } else if (arg == "--format") {
-      if (*v == "json") {
-        format = RegmapFormat::json;
-      } else if (*v == "csv") {
-        format = RegmapFormat::csv;
-      } else if (*v == "md" || *v == "markdown") {
-        format = RegmapFormat::markdown;
-      } else {
-        return r.usage("--format must be json, csv or md", kUsage);
-      }
+  if (const auto v = parsed->value("format")) {
+    if (*v == "json") {
+      format = RegmapFormat::json;
+    } else if (*v == "csv") {
+      format = RegmapFormat::csv;
+    } else if (*v == "md" || *v == "markdown") {
+      format = RegmapFormat::markdown;
     } else {
-      return r.usage("unknown argument '" + std::string(arg) + "'", kUsage);
+      return cli.usage_error("--format must be json, csv or md, not '" + *v + "'");
     }
   }
-  if (config_path.empty()) return r.usage("--config FILE is required", kUsage);
+  if (config_path.empty()) return cli.usage_error("--config FILE is required");
   const PluginRegistry plugins = load_plugins(plugin_dir);
   auto result = load_config(config_path, plugins);
   for (const auto& e : result.errors) std::cerr << e << "\n";
@@ -60,7 +59,11 @@ int regmap(std::span<const std::string_view> args) {
     }
     devices.push_back({&dc, RegisterMap(driver->points())});
   }
-  std::cout << format_regmap(devices, format);
+  std::vector<ServedOn> listeners;
+  for (const auto& l : result.config->listeners) {
+    listeners.push_back({l.options.name(), l.options.policy.word_order});
+  }
+  std::cout << format_regmap(devices, listeners, format);
   return 0;
 }
 

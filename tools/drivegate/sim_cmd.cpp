@@ -18,17 +18,41 @@ namespace asio = boost::asio;
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: drivegate sim ADAPTER [--address N]... [--set OPTION=VALUE]... [--cmd LINE]...\n"
-    "                 [--link PATH] [--port DEVICE --baud N --parity none|even|odd]\n"
-    "                 [--echo | --no-echo] [--turnaround-ms N | --turnaround-us N]\n"
-    "                 [--wire-timing [--wire-log FILE]] [--plugin-dir DIR]\n"
-    "\n"
-    "--wire-timing: each byte takes the character time of the line (--baud/--parity, else the\n"
-    "adapter's defaults) and replies start one turnaround after the request's last character.\n"
-    "--wire-log FILE records when each chunk arrived and each reply went out (nanoseconds).\n"
-    "Prints the line's path on the first line of stdout, then reads operator commands from\n"
-    "stdin (`help` lists them; `@ADDR CMD` sends to one address when there are several).\n";
+constexpr Option kOptions[] = {
+    {"address", 'a', "N",
+     "the simulated device's bus address; repeat for several devices on one line (default: the "
+     "adapter's default address)"},
+    {"set", 0, "OPTION=VALUE", "an adapter option, as in [device.options]"},
+    {"cmd", 0, "LINE", "an operator command to run at start (repeatable)"},
+    {"link", 0, "PATH", "also make PATH a symbolic link to the pseudo-terminal"},
+    {"port", 0, "DEVICE", "a real serial port instead of a pseudo-terminal"},
+    {"baud", 0, "N", "the real port's baud rate (default: the adapter's)"},
+    {"parity", 0, "PARITY", "the real port's parity: none, even or odd (default: the adapter's)"},
+    {"echo", 0, nullptr, "echo the bytes received, as a one-wire line does"},
+    {"no-echo", 0, nullptr, "do not echo them (default: what the adapter's line does)"},
+    {"turnaround-ms", 0, "N", "delay before each reply, in milliseconds"},
+    {"turnaround-us", 0, "N", "delay before each reply, in microseconds"},
+    {"wire-timing", 0, nullptr,
+     "each byte takes the character time of the line (--baud/--parity, else the adapter's "
+     "defaults) and replies start one turnaround after the request's last character"},
+    {"wire-log", 0, "FILE",
+     "with --wire-timing: record when each chunk arrived and each reply went out (nanoseconds)"},
+    kPluginDirOption,
+    kHelpOption,
+};
+
+// A number option's value, the way the C library reads it (0x.. for hexadecimal where `base` is
+// 0); nullopt unless the whole text is one.
+std::optional<unsigned long> number(const std::string& text, int base) {
+  try {
+    std::size_t used = 0;
+    const unsigned long n = std::stoul(text, &used, base);
+    if (used != text.size()) return std::nullopt;
+    return n;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
 
 // Reads stdin lines and answers them on stdout; stdin at end (or not pollable) is ignored.
 class ControlConsole {
@@ -59,74 +83,66 @@ class ControlConsole {
 
 }  // namespace
 
-int sim(std::span<const std::string_view> args) {
-  ArgReader r("sim", args);
-  std::string adapter_id;
-  std::filesystem::path plugin_dir;
+int sim(std::span<const std::string> args) {
+  const CommandLine cli(
+      "drivegate sim", kOptions,
+      {"ADAPTER [-a N]... [--set OPTION=VALUE]... [OPTION]...",
+       "ADAPTER --port DEVICE [--baud N] [--parity P] [OPTION]..."},
+      "Prints the line's path on the first line of stdout, then reads operator commands from\n"
+      "stdin (`help` lists them; `@ADDR CMD` sends to one address when there are several).");
+  int exit_status = 0;
+  const auto parsed = parse_command(cli, args, exit_status);
+  if (!parsed) return exit_status;
+  if (parsed->operands.empty()) return cli.usage_error("which adapter?");
+  if (parsed->operands.size() > 1) return cli.usage_error("one adapter only");
+  const std::string& adapter_id = parsed->operands.front();
+  const std::filesystem::path plugin_dir = parsed->value("plugin-dir").value_or("");
   SimHostOptions options;
+  // A number option: its value, or the usage error naming it.
+  std::optional<std::string> bad;
+  const auto numeric = [&](std::string_view name, const std::string& text,
+                           int base) -> unsigned long {
+    const auto n = number(text, base);
+    if (!n && !bad) bad = "--" + std::string(name) + ": '" + text + "' is not a number";
+    return n.value_or(0);
+  };
+  for (const auto& a : parsed->values("address")) {
+    options.addresses.push_back(static_cast<std::uint32_t>(numeric("address", a, 0)));
+  }
   std::vector<std::pair<std::string, std::string>> sets;
-  std::vector<std::string> commands;
-  std::optional<bool> echo;
-  bool wire_timing = false;
+  for (const auto& v : parsed->values("set")) {
+    const auto eq = v.find('=');
+    if (eq == std::string::npos)
+      return cli.usage_error("--set needs OPTION=VALUE, not '" + v + "'");
+    sets.emplace_back(v.substr(0, eq), v.substr(eq + 1));
+  }
+  const std::vector<std::string> commands = parsed->values("cmd");
+  if (const auto v = parsed->value("link")) options.link = *v;
   BusConfig port;
+  if (const auto v = parsed->value("port")) port.port = *v;
+  if (const auto v = parsed->value("baud"))
+    port.baud = static_cast<std::uint32_t>(numeric("baud", *v, 10));
   std::optional<Parity> parity;
-  while (!r.done()) {
-    const auto arg = r.next();
-    if (arg == "--help") {
-      std::cout << kUsage;
-      return 0;
+  if (const auto v = parsed->value("parity")) {
+    if (*v != "none" && *v != "even" && *v != "odd") {
+      return cli.usage_error("--parity must be none, even or odd, not '" + *v + "'");
     }
-    if (arg == "--wire-timing") {
-      wire_timing = true;
-      continue;
-    }
-    if (arg == "--echo" || arg == "--no-echo") {
-      echo = arg == "--echo";
-      continue;
-    }
-    if (!arg.starts_with("--")) {
-      if (!adapter_id.empty()) return r.usage("one adapter only", kUsage);
-      adapter_id = arg;
-      continue;
-    }
-    auto v = r.value(arg);
-    if (!v) return 2;
-    try {
-      if (arg == "--address") {
-        options.addresses.push_back(static_cast<std::uint32_t>(std::stoul(*v, nullptr, 0)));
-      } else if (arg == "--set") {
-        const auto eq = v->find('=');
-        if (eq == std::string::npos) return r.usage("--set needs OPTION=VALUE", kUsage);
-        sets.emplace_back(v->substr(0, eq), v->substr(eq + 1));
-      } else if (arg == "--cmd") {
-        commands.push_back(*v);
-      } else if (arg == "--link") {
-        options.link = *v;
-      } else if (arg == "--port") {
-        port.port = *v;
-      } else if (arg == "--baud") {
-        port.baud = static_cast<std::uint32_t>(std::stoul(*v));
-      } else if (arg == "--parity") {
-        if (*v != "none" && *v != "even" && *v != "odd") {
-          return r.usage("--parity must be none, even or odd", kUsage);
-        }
-        parity = *v == "none" ? Parity::none : *v == "even" ? Parity::even : Parity::odd;
-      } else if (arg == "--turnaround-ms") {
-        options.turnaround = Millis(std::stoul(*v));
-      } else if (arg == "--turnaround-us") {
-        options.turnaround = std::chrono::microseconds(std::stoul(*v));
-      } else if (arg == "--wire-log") {
-        options.wire_log = *v;
-      } else if (arg == "--plugin-dir") {
-        plugin_dir = *v;
-      } else {
-        return r.usage("unknown argument '" + std::string(arg) + "'", kUsage);
-      }
-    } catch (const std::exception&) {
-      return r.usage(std::string(arg) + ": '" + *v + "' is not a number", kUsage);
+    parity = *v == "none" ? Parity::none : *v == "even" ? Parity::even : Parity::odd;
+  }
+  std::optional<bool> echo;
+  if (const auto last = parsed->last_of({"echo", "no-echo"})) echo = *last == "echo";
+  if (const auto last = parsed->last_of({"turnaround-ms", "turnaround-us"})) {
+    const std::string name(*last);
+    const unsigned long n = numeric(name, *parsed->value(name), 10);
+    if (name == "turnaround-ms") {
+      options.turnaround = Millis(n);
+    } else {
+      options.turnaround = std::chrono::microseconds(n);
     }
   }
-  if (adapter_id.empty()) return r.usage("which adapter?", kUsage);
+  if (const auto v = parsed->value("wire-log")) options.wire_log = *v;
+  const bool wire_timing = parsed->has("wire-timing");
+  if (bad) return cli.usage_error(*bad);
   const PluginRegistry plugins = load_plugins(plugin_dir);
   const AdapterDescriptor* adapter = plugins.find(adapter_id);
   if (adapter == nullptr) {
@@ -138,7 +154,7 @@ int sim(std::span<const std::string_view> args) {
   for (const auto& [key, text] : sets) {
     std::string error;
     if (!set_option_text(*adapter, options.options, key, text, error)) {
-      return r.usage(error, kUsage);
+      return cli.usage_error(error);
     }
   }
   options.echo = echo.value_or(adapter->line.echo);
@@ -150,7 +166,7 @@ int sim(std::span<const std::string_view> args) {
   if (wire_timing) {
     options.char_time = character_time(port.baud, port.parity, port.data_bits, port.stop_bits);
   } else if (options.wire_log) {
-    return r.usage("--wire-log needs --wire-timing", kUsage);
+    return cli.usage_error("--wire-log needs --wire-timing");
   }
 
   asio::io_context io;

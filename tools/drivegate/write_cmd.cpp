@@ -10,42 +10,35 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: drivegate write --config FILE --device NAME [--timeout-ms N] POINT=VALUE...\n"
-    "\n"
-    "Opens only that device's bus (stop the daemon first if it owns the port), waits for the\n"
-    "device to come online, then writes each point in order and waits for the device to confirm\n"
-    "it. VALUE is a number or one of the point's labels (e.g. command=run_forward).\n";
+constexpr Option kOptions[] = {
+    kConfigOption, kDeviceOption, kTimeoutOption, kPluginDirOption, kHelpOption,
+};
 
 }  // namespace
 
-int write(std::span<const std::string_view> args) {
-  ArgReader r("write", args);
-  DeviceArgs device;
+int write(std::span<const std::string> args) {
+  const CommandLine cli(
+      "drivegate write", kOptions, {"-c FILE -d NAME [-t N] [-p DIR] POINT=VALUE..."},
+      "Opens only that device's bus (stop the daemon first if it owns the port), waits for the\n"
+      "device to come online, then writes each point in order and waits for the device to confirm\n"
+      "it. VALUE is a number or one of the point's labels (e.g. command=run_forward).");
+  int exit_status = 0;
+  const auto parsed = parse_command(cli, args, exit_status);
+  if (!parsed) return exit_status;
+  const auto device = device_args(cli, *parsed);
+  if (!device) return 2;
   std::vector<Assignment> writes;
-  while (!r.done()) {
-    const auto arg = r.next();
-    if (arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (!arg.starts_with("--")) {
-      auto a = parse_assignment(arg);
-      if (!a) return r.usage("'" + std::string(arg) + "' is not POINT=VALUE", kUsage);
-      writes.push_back(std::move(*a));
-      continue;
-    }
-    if (const int rc = device.read(r, arg, kUsage); rc != 0) return rc;
+  for (const auto& arg : parsed->operands) {
+    auto a = parse_assignment(arg);
+    if (!a) return cli.usage_error("'" + arg + "' is not POINT=VALUE");
+    writes.push_back(std::move(*a));
   }
-  if (device.config.empty() || device.name.empty()) {
-    return r.usage("--config and --device are required", kUsage);
-  }
-  if (writes.empty()) return r.usage("nothing to write", kUsage);
-  const PluginRegistry plugins = load_plugins(device.plugin_dir);
-  auto result = load_config(device.config, plugins);
+  if (writes.empty()) return cli.usage_error("nothing to write");
+  const PluginRegistry plugins = load_plugins(device->plugin_dir);
+  auto result = load_config(device->config, plugins);
   for (const auto& e : result.errors) std::cerr << e << "\n";
   if (!result.config) return 1;
-  return run_point_writes({&*result.config, &plugins, device.name, writes, device.timeout, ""});
+  return run_point_writes({&*result.config, &plugins, device->name, writes, device->timeout, ""});
 }
 
 }  // namespace drivegate::cli
