@@ -83,7 +83,15 @@ std::string StatusContent::metrics() {
 std::string StatusContent::regmap_json() {
   std::vector<DeviceRegisters> devices;
   for (const auto& d : gateway_->devices()) devices.push_back({&d->config(), d->map()});
-  return format_regmap(devices, RegmapFormat::json);
+  // The listeners as they run: the bound port (the configured one may be 0) and the word order
+  // in force since the last reload.
+  std::vector<ServedOn> listeners;
+  for (std::size_t i = 0; i < server_.listener_count(); ++i) {
+    modbus::ListenerOptions o = server_.listener(i);
+    o.port = server_.port(i);
+    listeners.push_back({o.name(), o.policy.word_order});
+  }
+  return format_regmap(devices, listeners, RegmapFormat::json);
 }
 
 bool StatusContent::has_bus(std::string_view name) {

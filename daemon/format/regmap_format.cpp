@@ -1,5 +1,6 @@
 #include "regmap_format.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -47,9 +48,58 @@ std::string number(double v) {
   return out.str();
 }
 
+bool is_bits(Table t) {
+  return t == Table::coil || t == Table::discrete;
+}
+
+// Coils and discrete inputs are single bits on the wire, whatever the point's value type.
 std::string type_of(const MappedPoint& p) {
-  const bool bits = p.spec.table == Table::coil || p.spec.table == Table::discrete;
-  return bits ? "u16" : type_name(p.spec.type);
+  return is_bits(p.spec.table) ? "bit" : type_name(p.spec.type);
+}
+
+// The Modicon order of the tables: their reference's leading digit.
+int table_rank(Table t) {
+  switch (t) {
+    case Table::coil:
+      return 0;
+    case Table::discrete:
+      return 1;
+    case Table::input:
+      return 3;
+    case Table::holding:
+      return 4;
+  }
+  return 5;
+}
+
+// A device's points in reference order: table by table, then by address.
+std::vector<const MappedPoint*> in_reference_order(const RegisterMap& map) {
+  std::vector<const MappedPoint*> out;
+  for (const auto& p : map.points()) out.push_back(&p);
+  std::stable_sort(out.begin(), out.end(), [](const MappedPoint* a, const MappedPoint* b) {
+    const int ra = table_rank(a->spec.table);
+    const int rb = table_rank(b->spec.table);
+    return ra != rb ? ra < rb : a->address < b->address;
+  });
+  return out;
+}
+
+// 5-digit references reach address 9998 (x9999); a point on any register past it, in any
+// device, makes the whole map 6-digit, so one printout never mixes the two.
+int reference_digits(const std::vector<DeviceRegisters>& devices) {
+  for (const auto& dev : devices) {
+    for (const auto& p : dev.map.points()) {
+      const unsigned span = is_bits(p.spec.table) ? 1u : p.spec.register_count();
+      if (p.address + std::max(span, 1u) - 1 > 9998) return 6;
+    }
+  }
+  return 5;
+}
+
+// What a listener's word order means for a reader of the map, and mbpoll's switch for it.
+std::string word_order_text(modbus::WordOrder w) {
+  return w == modbus::WordOrder::big ? "big: high word first (mbpoll -B)"
+                                     : "little: low word first (mbpoll without -B)";
 }
 
 std::string labels_text(const PointSpec& s) {
@@ -74,7 +124,9 @@ std::string md_field(std::string_view s) {
   return out;
 }
 
-std::string to_json(const std::vector<DeviceRegisters>& devices) {
+std::string to_json(const std::vector<DeviceRegisters>& devices,
+                    const std::vector<ServedOn>& listeners) {
+  const int digits = reference_digits(devices);
   std::ostringstream out;
   out << "{\"devices\": [";
   for (std::size_t d = 0; d < devices.size(); ++d) {
@@ -82,12 +134,13 @@ std::string to_json(const std::vector<DeviceRegisters>& devices) {
     out << (d ? ",\n" : "\n") << "  {\"unit_id\": " << int{dev.device->unit_id}
         << ", \"name\": " << json_string(dev.device->name)
         << ", \"adapter\": " << json_string(dev.device->adapter) << ", \"points\": [";
-    const auto& points = dev.map.points();
+    const auto points = in_reference_order(dev.map);
     for (std::size_t i = 0; i < points.size(); ++i) {
-      const auto& p = points[i];
+      const auto& p = *points[i];
       out << (i ? ",\n" : "\n") << "    {\"name\": " << json_string(p.spec.name)
           << ", \"table\": \"" << table_name(p.spec.table) << "\", \"address\": " << p.address
-          << ", \"type\": \"" << type_of(p) << "\", \"scale\": " << number(p.spec.scale)
+          << ", \"reference\": \"" << modicon_reference(p.spec.table, p.address, digits)
+          << "\", \"type\": \"" << type_of(p) << "\", \"scale\": " << number(p.spec.scale)
           << ", \"unit\": " << json_string(p.spec.unit) << ", \"access\": \""
           << (p.spec.access() == Access::read_write ? "rw" : "r")
           << "\", \"description\": " << json_string(p.spec.description);
@@ -103,19 +156,27 @@ std::string to_json(const std::vector<DeviceRegisters>& devices) {
     }
     out << "\n  ]}";
   }
+  out << "\n],\n\"listeners\": [";
+  for (std::size_t i = 0; i < listeners.size(); ++i) {
+    out << (i ? ",\n" : "\n") << "  {\"address\": " << json_string(listeners[i].listener)
+        << ", \"word_order\": \"" << modbus::to_string(listeners[i].word_order) << "\"}";
+  }
   out << "\n]}\n";
   return out.str();
 }
 
 std::string to_csv(const std::vector<DeviceRegisters>& devices) {
   std::ostringstream out;
-  out << "unit_id,device,adapter,name,table,address,type,registers,scale,unit,access,description,"
-         "labels\n";
+  const int digits = reference_digits(devices);
+  out << "unit_id,device,adapter,name,table,address,reference,type,registers,scale,unit,access,"
+         "description,labels\n";
   for (const auto& dev : devices) {
-    for (const auto& p : dev.map.points()) {
+    for (const MappedPoint* point : in_reference_order(dev.map)) {
+      const auto& p = *point;
       out << int{dev.device->unit_id} << "," << csv_field(dev.device->name) << ","
           << csv_field(dev.device->adapter) << "," << csv_field(p.spec.name) << ","
-          << table_name(p.spec.table) << "," << p.address << "," << type_of(p) << ","
+          << table_name(p.spec.table) << "," << p.address << ","
+          << modicon_reference(p.spec.table, p.address, digits) << "," << type_of(p) << ","
           << p.spec.register_count() << "," << number(p.spec.scale) << "," << csv_field(p.spec.unit)
           << "," << (p.spec.access() == Access::read_write ? "rw" : "r") << ","
           << csv_field(p.spec.description) << "," << csv_field(labels_text(p.spec)) << "\n";
@@ -124,22 +185,43 @@ std::string to_csv(const std::vector<DeviceRegisters>& devices) {
   return out.str();
 }
 
-std::string to_markdown(const std::vector<DeviceRegisters>& devices) {
+std::string to_markdown(const std::vector<DeviceRegisters>& devices,
+                        const std::vector<ServedOn>& listeners) {
+  const int digits = reference_digits(devices);
+  const std::string c0 = modicon_reference(Table::coil, 0, digits);
+  const std::string d0 = modicon_reference(Table::discrete, 0, digits);
+  const std::string i0 = modicon_reference(Table::input, 0, digits);
+  const std::string h0 = modicon_reference(Table::holding, 0, digits);
   std::ostringstream out;
   out << "# drivegate register map\n\n"
-         "Addresses are 0-based (PLC reference = address + 1). 32-bit values and floats take two "
-         "registers, high word first. Engineering value = register x scale.\n";
+         "Addresses are 0-based, as on the wire; beside each is its Modicon reference: coils "
+      << c0 << " + address, discrete inputs " << d0 << " + address, input registers " << i0
+      << " + address, holding registers " << h0
+      << " + address (mbpoll's `-r` is the reference without its table digit: address + 1). "
+         "Coils and discrete inputs are single bits. 32-bit values and floats take two registers; "
+         "engineering value = register x scale.\n\n";
+  if (listeners.empty()) {
+    out << "Word order of 32-bit values and floats: big, high word first (mbpoll -B), unless a "
+           "listener's `word_order` says otherwise.\n";
+  } else {
+    out << "Word order of 32-bit values and floats, per listener:\n\n";
+    for (const auto& l : listeners) {
+      out << "- " << md_field(l.listener) << ": " << word_order_text(l.word_order) << "\n";
+    }
+  }
   for (const auto& dev : devices) {
     out << "\n## Unit " << int{dev.device->unit_id} << ": " << dev.device->name << " ("
         << dev.device->adapter << ")\n\n"
-        << "| table | address | name | type | scale | unit | access | description | labels |\n"
-        << "|---|---|---|---|---|---|---|---|---|\n";
-    for (const auto& p : dev.map.points()) {
+        << "| table | address | reference | name | type | scale | unit | access | description | "
+           "labels |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const MappedPoint* point : in_reference_order(dev.map)) {
+      const auto& p = *point;
       out << "| " << table_name(p.spec.table) << " | " << p.address << " | "
-          << md_field(p.spec.name) << " | " << type_of(p) << " | " << number(p.spec.scale) << " | "
-          << md_field(p.spec.unit) << " | " << (p.spec.access() == Access::read_write ? "rw" : "r")
-          << " | " << md_field(p.spec.description) << " | " << md_field(labels_text(p.spec))
-          << " |\n";
+          << modicon_reference(p.spec.table, p.address, digits) << " | " << md_field(p.spec.name)
+          << " | " << type_of(p) << " | " << number(p.spec.scale) << " | " << md_field(p.spec.unit)
+          << " | " << (p.spec.access() == Access::read_write ? "rw" : "r") << " | "
+          << md_field(p.spec.description) << " | " << md_field(labels_text(p.spec)) << " |\n";
     }
   }
   return out.str();
@@ -147,16 +229,29 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices) {
 
 }  // namespace
 
-std::string format_regmap(const std::vector<DeviceRegisters>& devices, RegmapFormat format) {
+std::string format_regmap(const std::vector<DeviceRegisters>& devices,
+                          const std::vector<ServedOn>& listeners, RegmapFormat format) {
   switch (format) {
     case RegmapFormat::json:
-      return to_json(devices);
+      return to_json(devices, listeners);
     case RegmapFormat::csv:
       return to_csv(devices);
     case RegmapFormat::markdown:
-      return to_markdown(devices);
+      return to_markdown(devices, listeners);
   }
   return {};
+}
+
+std::string modicon_reference(Table table, std::uint16_t address, int digits) {
+  // The table's digit, then address + 1 filling the rest: 4 + 0006 + 1 -> "40007".
+  long scale = 1;
+  for (int i = 1; i < digits; ++i) scale *= 10;
+  const long reference = table_rank(table) * scale + address + 1;
+  std::string text = std::to_string(reference);
+  return std::string(
+             static_cast<std::size_t>(std::max<long>(0, digits - static_cast<long>(text.size()))),
+             '0') +
+         text;
 }
 
 }  // namespace drivegate

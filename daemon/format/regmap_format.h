@@ -1,4 +1,7 @@
-// The printed register map: JSON for tools, CSV for spreadsheets, Markdown for people.
+// The printed register map: JSON for tools, CSV for spreadsheets, Markdown for people. Each
+// device's points go table by table in the order of their Modicon references (coils 0xxxx,
+// discrete inputs 1xxxx, input registers 3xxxx, holding registers 4xxxx), each table in address
+// order, with the reference beside the 0-based address: PLC programmers think in references.
 #pragma once
 
 #include <string>
@@ -6,6 +9,7 @@
 
 #include "config/config.h"
 #include "gateway/register_map.h"
+#include "modbus/backend.h"
 
 namespace drivegate {
 
@@ -14,8 +18,22 @@ struct DeviceRegisters {
   RegisterMap map;
 };
 
-enum class RegmapFormat { json, csv, markdown };
+// A listener the map is served on, and the word order of the 32-bit values and floats there
+// (its word_order: high word first, or low word first).
+struct ServedOn {
+  std::string listener;  // as the log names it: "0.0.0.0:502", "[::]:802 (TLS)"
+  modbus::WordOrder word_order = modbus::WordOrder::big;
+};
 
-std::string format_regmap(const std::vector<DeviceRegisters>& devices, RegmapFormat format);
+enum class RegmapFormat : std::uint8_t { json, csv, markdown };
+
+// `listeners`: where the map is served (JSON and Markdown say each one's word order; empty:
+// nothing said beyond the default, high word first).
+std::string format_regmap(const std::vector<DeviceRegisters>& devices,
+                          const std::vector<ServedOn>& listeners, RegmapFormat format);
+
+// The Modicon reference of `address` in `table` ("30007" for input register 6), `digits` long:
+// 5, or 6 where some address of the map is past 9998 and five digits cannot name it.
+std::string modicon_reference(Table table, std::uint16_t address, int digits);
 
 }  // namespace drivegate

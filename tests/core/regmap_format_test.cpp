@@ -8,6 +8,7 @@ namespace drivegate {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 std::vector<DeviceRegisters> one_device(const DeviceConfig& cfg) {
   PointSpec f{.name = "suction_pressure",
@@ -18,28 +19,116 @@ std::vector<DeviceRegisters> one_device(const DeviceConfig& cfg) {
   return {{&cfg, RegisterMap({f})}};
 }
 
+const std::vector<ServedOn> kListeners = {{"0.0.0.0:502", modbus::WordOrder::big},
+                                          {"127.0.0.1:1503", modbus::WordOrder::little}};
+
 TEST(RegmapFormat, JsonHasEveryFieldOfTheSchema) {
   DeviceConfig cfg{.name = "c1", .adapter = "unicla-edrive", .unit_id = 4};
-  const auto json = format_regmap(one_device(cfg), RegmapFormat::json);
+  const auto json = format_regmap(one_device(cfg), kListeners, RegmapFormat::json);
   EXPECT_THAT(json, HasSubstr("{\"devices\": ["));
   EXPECT_THAT(json, HasSubstr("{\"unit_id\": 4, \"name\": \"c1\", \"adapter\": \"unicla-edrive\""));
-  EXPECT_THAT(json,
-              HasSubstr("{\"name\": \"suction_pressure\", \"table\": \"input\", "
-                        "\"address\": 32, \"type\": \"f32\", \"scale\": 1, \"unit\": "
-                        "\"bar\", \"access\": \"r\", \"description\": \"suction \\\"P\\\"\""));
-  EXPECT_THAT(json, HasSubstr("\"name\": \"command\", \"table\": \"holding\", \"address\": 0"));
+  EXPECT_THAT(json, HasSubstr("{\"name\": \"suction_pressure\", \"table\": \"input\", "
+                              "\"address\": 32, \"reference\": \"30033\", \"type\": \"f32\", "
+                              "\"scale\": 1, \"unit\": \"bar\", \"access\": \"r\", "
+                              "\"description\": \"suction \\\"P\\\"\""));
+  EXPECT_THAT(json, HasSubstr("\"name\": \"command\", \"table\": \"holding\", \"address\": 0, "
+                              "\"reference\": \"40001\""));
   EXPECT_THAT(json, HasSubstr("\"run_forward\": 1"));
   EXPECT_THAT(json, HasSubstr("\"stall\": 7"));
+  EXPECT_THAT(json, HasSubstr("\"listeners\": [\n  {\"address\": \"0.0.0.0:502\", \"word_order\": "
+                              "\"big\"},\n  {\"address\": \"127.0.0.1:1503\", \"word_order\": "
+                              "\"little\"}\n]}"));
 }
 
 TEST(RegmapFormat, CsvAndMarkdown) {
   DeviceConfig cfg{.name = "c1", .adapter = "x", .unit_id = 4};
-  const auto csv = format_regmap(one_device(cfg), RegmapFormat::csv);
-  EXPECT_THAT(csv,
-              HasSubstr("4,c1,x,suction_pressure,input,32,f32,2,1,bar,r,\"suction \"\"P\"\"\","));
-  const auto md = format_regmap(one_device(cfg), RegmapFormat::markdown);
+  const auto csv = format_regmap(one_device(cfg), kListeners, RegmapFormat::csv);
+  EXPECT_THAT(csv, HasSubstr("unit_id,device,adapter,name,table,address,reference,type,"));
+  EXPECT_THAT(csv, HasSubstr("4,c1,x,suction_pressure,input,32,30033,f32,2,1,bar,r,"
+                             "\"suction \"\"P\"\"\","));
+  const auto md = format_regmap(one_device(cfg), kListeners, RegmapFormat::markdown);
   EXPECT_THAT(md, HasSubstr("## Unit 4: c1 (x)"));
-  EXPECT_THAT(md, HasSubstr("| input | 32 | suction_pressure | f32 |"));
+  EXPECT_THAT(md, HasSubstr("| input | 32 | 30033 | suction_pressure | f32 |"));
+}
+
+// Modicon references: 0xxxx coils, 1xxxx discrete inputs, 3xxxx input registers, 4xxxx holding
+// registers, each 1 + the address.
+TEST(RegmapFormat, ModiconReferences) {
+  EXPECT_EQ(modicon_reference(Table::coil, 0, 5), "00001");
+  EXPECT_EQ(modicon_reference(Table::discrete, 6, 5), "10007");
+  EXPECT_EQ(modicon_reference(Table::input, 6, 5), "30007");
+  EXPECT_EQ(modicon_reference(Table::holding, 9998, 5), "49999");
+  EXPECT_EQ(modicon_reference(Table::holding, 9999, 6), "410000");
+  EXPECT_EQ(modicon_reference(Table::coil, 65535, 6), "065536");
+}
+
+// Tables in reference order (coils, discrete inputs, input, holding), each in address order; the
+// bit tables typed as bits.
+TEST(RegmapFormat, TablesInReferenceOrderAndBitsAsBits) {
+  DeviceConfig cfg{.name = "d", .adapter = "x", .unit_id = 1};
+  std::vector<PointSpec> points = {
+      {.name = "h_point", .table = Table::holding, .type = PointType::u16},
+      {.name = "a_coil", .table = Table::coil, .type = PointType::u16},
+      {.name = "a_discrete", .table = Table::discrete, .type = PointType::u16},
+  };
+  const std::vector<DeviceRegisters> devices = {{&cfg, RegisterMap(points)}};
+  const auto md = format_regmap(devices, kListeners, RegmapFormat::markdown);
+  const auto coil = md.find("| coil | 0 | 00001 | a_coil | bit |");
+  const auto status_bit = md.find("| discrete | 0 | 10001 | status_online | bit |");
+  const auto discrete = md.find("| discrete | 16 | 10017 | a_discrete | bit |");
+  const auto input = md.find("| input | 0 | 30001 | status | u16 |");
+  const auto last_input = md.find("| input | 29 | 30030 | foreign_frames | u32 |");
+  const auto holding = md.find("| holding | 0 | 40001 | command | u16 |");
+  const auto adapter_holding = md.find("| holding | 16 | 40017 | h_point | u16 |");
+  ASSERT_NE(coil, std::string::npos) << md;
+  ASSERT_NE(status_bit, std::string::npos) << md;
+  ASSERT_NE(discrete, std::string::npos) << md;
+  ASSERT_NE(input, std::string::npos) << md;
+  ASSERT_NE(last_input, std::string::npos) << md;
+  ASSERT_NE(holding, std::string::npos) << md;
+  ASSERT_NE(adapter_holding, std::string::npos) << md;
+  EXPECT_LT(coil, status_bit);
+  EXPECT_LT(status_bit, discrete);
+  EXPECT_LT(discrete, input);
+  EXPECT_LT(input, last_input);
+  EXPECT_LT(last_input, holding);
+  EXPECT_LT(holding, adapter_holding);
+  EXPECT_THAT(md, Not(HasSubstr("| discrete | 1 | 10002 | status_running | u16")));
+  const auto json = format_regmap(devices, kListeners, RegmapFormat::json);
+  EXPECT_THAT(json, HasSubstr("\"name\": \"status_online\", \"table\": \"discrete\", "
+                              "\"address\": 0, \"reference\": \"10001\", \"type\": \"bit\""));
+  EXPECT_LT(json.find("\"a_coil\""), json.find("\"status_online\""));
+  EXPECT_LT(json.find("\"status_online\""), json.find("\"status\""));
+}
+
+// Five digits name addresses up to 9998 (x9999); one register past it, in any point, makes every
+// reference of the printout six digits long. A long string point reaches there.
+TEST(RegmapFormat, SixDigitReferencesPastAddress9998) {
+  DeviceConfig cfg{.name = "d", .adapter = "x", .unit_id = 1};
+  const auto text = [&](std::uint16_t registers) {
+    // Holding adapter points start at 16: the string's last register is 15 + `registers`.
+    PointSpec s{.name = "text", .table = Table::holding, .type = PointType::string};
+    s.string_registers = registers;
+    const std::vector<DeviceRegisters> devices = {{&cfg, RegisterMap({s})}};
+    return format_regmap(devices, kListeners, RegmapFormat::markdown);
+  };
+  const auto up_to_9998 = text(9983);
+  EXPECT_THAT(up_to_9998, HasSubstr("| holding | 16 | 40017 | text |"));
+  EXPECT_THAT(up_to_9998, HasSubstr("| discrete | 0 | 10001 | status_online |"));
+  const auto to_9999 = text(9984);
+  EXPECT_THAT(to_9999, HasSubstr("| holding | 16 | 400017 | text |"));
+  EXPECT_THAT(to_9999, HasSubstr("| holding | 0 | 400001 | command |"));
+  EXPECT_THAT(to_9999, HasSubstr("| discrete | 0 | 100001 | status_online |"));
+  EXPECT_THAT(to_9999, HasSubstr("input registers 300001 + address"));
+}
+
+TEST(RegmapFormat, MarkdownSaysEachListenersWordOrder) {
+  DeviceConfig cfg{.name = "c1", .adapter = "x", .unit_id = 4};
+  const auto md = format_regmap(one_device(cfg), kListeners, RegmapFormat::markdown);
+  EXPECT_THAT(md, HasSubstr("- 0.0.0.0:502: big: high word first (mbpoll -B)\n"));
+  EXPECT_THAT(md, HasSubstr("- 127.0.0.1:1503: little: low word first (mbpoll without -B)\n"));
+  const auto unsaid = format_regmap(one_device(cfg), {}, RegmapFormat::markdown);
+  EXPECT_THAT(unsaid, HasSubstr("Word order of 32-bit values and floats: big, high word first"));
 }
 
 }  // namespace
