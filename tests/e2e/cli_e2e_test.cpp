@@ -267,7 +267,7 @@ TEST(Cli, RegmapPrintsTheServedMap) {
   EXPECT_THAT(r.out, HasSubstr("{\"unit_id\": 1, \"name\": \"washer\", \"adapter\": "
                                "\"nidec-washer\""));
   EXPECT_THAT(r.out, HasSubstr("{\"name\": \"speed_rpm\", \"table\": \"input\", \"address\": 6, "
-                               "\"type\": \"i16\""));
+                               "\"reference\": \"30007\", \"type\": \"i16\""));
   const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
                        "md", "--plugin-dir", plugin_dir().string()});
   EXPECT_THAT(md.out, HasSubstr("## Unit 1: washer (nidec-washer)"));

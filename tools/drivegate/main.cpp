@@ -76,7 +76,7 @@ constexpr const char* kCommands =
     "  write      write points directly, without the Modbus server (daemon stopped)\n"
     "  action     a maintenance action of a device's adapter (e.g. an FDC1's\n"
     "             non-volatile programming)\n"
-    "  capture    a pcap of one bus from the running daemon (tools/wireshark/ decodes it)\n"
+    "  capture    a pcap of one bus from the running daemon (for Wireshark)\n"
     "  version    print the version\n"
     "\n"
     "`drivegate COMMAND --help` lists the command's options. See drivegate(1).";
