@@ -5,7 +5,8 @@ Every brace-enclosed byte list of 3 or more 0xNN bytes in an adapter's codec tes
 a driver and a simulator seed (the adapter target's mode byte and script around it); every request
 PDU of tests/modbus/pdu_test.cpp (`run({...})`, the Application Protocol's own examples) becomes an
 MBAP frame for unit 1, alone and all together in one stream; configurations come from
-etc/drivegate.toml and the raw-string configs of tests/core/config_test.cpp. Re-run after the
+etc/drivegate.toml and the raw-string configs of tests/core/config_test.cpp; Telnet / RFC 2217
+streams from tests/core/telnet_codec_test.cpp. Re-run after the
 vectors change: python3 tests/fuzz/make_seeds.py
 """
 import hashlib
@@ -92,12 +93,32 @@ def config_seeds():
         write("config", m.group(1).encode())
 
 
+def telnet_seeds():
+    """The Telnet / RFC 2217 codec's golden vectors (tests/core/telnet_codec_test.cpp), each after
+    the target's option byte: whole (0) and in 1- and 3-byte segments."""
+    for stream in vectors(ROOT / "tests" / "core" / "telnet_codec_test.cpp"):
+        for option in (0, 1, 3):
+            write("telnet_stream", bytes([option]) + stream)
+    # A device server's greeting and its answers to drivegate's configure() (RFC 2217 section
+    # "Com Port Configuration Commands": the code + 100 and the value in use), then data with an
+    # escaped 0xFF, split one byte at a time.
+    iac, sb, se = 255, 250, 240
+    answers = bytes([iac, 251, 44, iac, 253, 0, iac, 251, 3])
+    for code, value in ((101, b"\x00\x00\x25\x80"), (102, b"\x08"), (103, b"\x03"), (104, b"\x01"),
+                        (105, b"\x01")):
+        answers += bytes([iac, sb, 44, code]) + value + bytes([iac, se])
+    answers += b"\x01\x03\xff\xff\x10"
+    for option in (0, 1):
+        write("telnet_stream", bytes([option]) + answers)
+
+
 def main():
     for adapter in sorted(p.name for p in (ROOT / "adapters").iterdir() if p.is_dir()):
         if (ROOT / "tests" / "adapters" / adapter / "codec_test.cpp").exists():
             adapter_seeds(adapter)
     modbus_seeds()
     config_seeds()
+    telnet_seeds()
 
 
 if __name__ == "__main__":
