@@ -37,7 +37,7 @@ struct ListenerState {
   ListenerOptions options;  // policy changed only by Server::reload_listeners
   std::shared_ptr<boost::asio::ssl::context> tls;  // set when options.policy.tls is
   boost::asio::ip::tcp::acceptor acceptor;
-  boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
+  boost::asio::steady_timer retry_timer;  // accept back-off: EMFILE and the like, a limited handshake
   LogThrottle not_allowed_log;            // connections closed at accept: not in the allow list
   LogThrottle handshake_log;              // TLS handshakes that failed or took too long
   LogThrottle accept_error_log;           // accept() failing (out of descriptors and the like)
