@@ -13,6 +13,8 @@
 #   tls-flood  dg-loadgen --handshakes --flood with $FLOOD_SLOTS slots, all from 127.0.0.1, on the
 #              TLS listener: connect, full handshake with a client certificate, one read, close,
 #              again at once (a refused connection: again at once)
+#   tls-decoy  (limited only) the same flood on a third daemon's TLS listener, that daemon on the
+#              clients' CPU: what the flood costs the machine, not the daemon under test
 #   http       $HAMMERS dg-scraper clients from 127.0.0.1, each fetching /metrics and
 #              /api/v1/status $HAMMER_RATE times a second on kept-alive connections
 # The load generators and the simulators run on CPU $LOAD_CPU, the flooding and hammering
@@ -20,7 +22,8 @@
 # the measuring client waiting for its own CPU. Prints the medians and each phase's p99 over its
 # daemon's quiet p99.
 # Environment: ROUNDS (4), DURATION (4 s), FLOOD_SLOTS (8), HAMMERS (12), HAMMER_RATE (200),
-#   SERVER_CPU (0), LOAD_CPU (1).
+#   HS_RATE (the limited daemon's tls_handshakes_per_s; its default when unset), SERVER_CPU (0),
+#   LOAD_CPU (1).
 set -euo pipefail
 
 B=$(realpath "${1:-build-bench}")
@@ -53,6 +56,7 @@ for tag in limited unlimited; do
   PLAIN[$tag]=$port TLS[$tag]=$((port + 1)) HTTP[$tag]=$((port + 2))
   port=$((port + 10))
   hs="" rq=""
+  [[ -n ${HS_RATE:-} ]] && hs="tls_handshakes_per_s = $HS_RATE"
   if [[ $tag == unlimited ]]; then
     hs="tls_handshakes_per_s = 0"
     rq="requests_per_s = 0"
@@ -75,7 +79,20 @@ roles = { engineer = \"maintain\" }
 $hs"
   PID[$tag]=$GATEWAY_PID
 done
-for tag in limited unlimited; do
+# The decoy: a third daemon, with the limits, on the clients' CPU. Flooding its TLS listener costs
+# the machine what a flood costs (the flooding client, the kernel's connects and closes on
+# loopback, a CPU busy beside the server's) without a byte of it reaching the daemon under test:
+# the "tls-decoy" phase, the share of a tls-flood figure that is not the daemon's doing.
+PLAIN[decoy]=$port TLS[decoy]=$((port + 1)) HTTP[decoy]=$((port + 2))
+SERVER_CPU=$LOAD_CPU start_gateway "$BIN" decoy "[[listener]]
+address = \"127.0.0.1:${PLAIN[decoy]}\"
+access = \"maintain\"
+
+[[listener]]
+address = \"127.0.0.1:${TLS[decoy]}\"
+tls = { cert = \"$C/server.pem\", key = \"$C/server.key\", ca = \"$C/ca.pem\" }
+roles = { engineer = \"maintain\" }"
+for tag in limited unlimited decoy; do
   wait_for_port "${PLAIN[$tag]}" || { cat "$W/$tag/drivegated.log" >&2; exit 1; }
   python3 "$HERE/mbwrite.py" --wait-online "${PLAIN[$tag]}" "${START[@]}"
 done
@@ -91,17 +108,27 @@ measure() {  # measure TAG PHASE ROUND: the plaintext client's line, into result
   echo "$1 $2 $3 $out" | tee -a "$W/results.txt" >&2
 }
 
+flood() {  # flood TARGET_TAG: a handshake flood on that daemon's TLS listener, in the background
+  taskset -c "$LOAD_CPU" nice -n 19 "$BIN/dg-loadgen" --port "${TLS[$1]}" "${TLS_ARGS[@]}" \
+    --handshakes --flood --connections "$FLOOD_SLOTS" --duration "$((DURATION + 2))" --warmup 0 \
+    >>"$W/flood.out" 2>>"$W/flood.err" &
+  FLOOD_PID=$!
+  sleep 0.5
+}
+
 for round in $(seq "$ROUNDS"); do
   for tag in limited unlimited; do
     measure "$tag" quiet "$round"
 
-    taskset -c "$LOAD_CPU" nice -n 19 "$BIN/dg-loadgen" --port "${TLS[$tag]}" "${TLS_ARGS[@]}" --handshakes \
-      --flood --connections "$FLOOD_SLOTS" --duration "$((DURATION + 2))" --warmup 0 \
-      >>"$W/flood.out" 2>>"$W/flood.err" &
-    flood=$!
-    sleep 0.5
+    flood "$tag"
     measure "$tag" tls-flood "$round"
-    wait "$flood" || true
+    wait "$FLOOD_PID" || true
+
+    if [[ $tag == limited ]]; then
+      flood decoy
+      measure "$tag" tls-decoy "$round"
+      wait "$FLOOD_PID" || true
+    fi
 
     hammers=()
     for _ in $(seq "$HAMMERS"); do
@@ -132,15 +159,17 @@ print("| daemon | phase | Modbus p50 | p99 | p99 / quiet p99 | requests/s |")
 print("|---|---|---|---|---|---|")
 for tag in ("limited", "unlimited"):
     quiet = statistics.median(r[1] for r in rows[(tag, "quiet")])
-    for phase in ("quiet", "tls-flood", "http"):
+    for phase in ("quiet", "tls-flood", "tls-decoy", "http"):
+        if (tag, phase) not in rows:
+            continue
         r = rows[(tag, phase)]
         p50 = statistics.median(x[0] for x in r)
         p99 = statistics.median(x[1] for x in r)
         rps = statistics.median(x[2] for x in r)
         print(f"| {tag} | {phase} | {p50 / 1000:.3f} ms | {p99 / 1000:.3f} ms | {p99 / quiet:.2f}x | {rps:.0f} |")
 EOF
-echo "handshake flood (dg-loadgen --flood, per run): completed handshakes and refused connections"
-sed -n 's/.*handshakes=\([0-9]*\) errors=\([0-9]*\).*/  \1 completed, \2 refused/p' "$W/flood.out" | head -8
+echo "handshake floods (dg-loadgen --flood, per run, in order: limited, decoy, unlimited):"
+sed -n 's/.*handshakes=\([0-9]*\) errors=\([0-9]*\).*/  \1 completed, \2 refused/p' "$W/flood.out" | head -6
 echo "daemons' limit counters:"
 for tag in limited unlimited; do
   curl -s "http://127.0.0.1:${HTTP[$tag]}/metrics" 2>/dev/null |
