@@ -42,7 +42,7 @@ struct ListenerConfig {
 struct HttpConfig {
   bool enabled = false;
   ListenAddress listen{"127.0.0.1", 8502};
-  modbus::AllowList allow;       // empty: every address
+  net::AllowList allow;       // empty: every address
   bool capture = false;          // whether /api/v1/capture is served
   unsigned requests_per_s = 20;  // per client address, bursts of twice that; 0: no limit
   int line = 0;

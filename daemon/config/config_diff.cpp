@@ -109,7 +109,7 @@ std::vector<std::string> changes(const modbus::ListenerPolicy& a, const modbus::
   std::vector<std::string> out;
   note(out, "access", modbus::to_string(a.access), modbus::to_string(b.access));
   note(out, "word_order", modbus::to_string(a.word_order), modbus::to_string(b.word_order));
-  const auto allow = [](const modbus::AllowList& l) {
+  const auto allow = [](const net::AllowList& l) {
     std::vector<std::string> s;
     for (const auto& r : l) s.push_back(r.to_string());
     return l.empty() ? std::string("[any]") : fmt::format("[{}]", fmt::join(s, ", "));

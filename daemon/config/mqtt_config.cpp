@@ -4,8 +4,8 @@
 #include <fstream>
 
 #include "base/read_file.h"
-#include "modbus/tls.h"
 #include "mqtt/sparkplug.h"
+#include "net/key_file.h"
 #include "server_config.h"
 
 namespace drivegate {
@@ -89,7 +89,7 @@ void read_deadband(const toml::node& n, const std::string& key, MqttConfig& mqtt
 void read_password(const std::filesystem::path& file, const toml::node* at, MqttConfig& mqtt,
                    Diagnostics& diag) {
   std::string error;
-  if (!modbus::key_permissions_ok(file, error)) {
+  if (!net::key_permissions_ok(file, error)) {
     diag.error(at, "mqtt.password_file", error);
     return;
   }
@@ -130,8 +130,7 @@ void read_tls_files(TableReader& r, MqttConfig& mqtt, Diagnostics& diag) {
     if (!is_readable_regular_file(mqtt.cert, error)) {
       diag.error(r.node("cert"), "mqtt.cert", error);
     }
-    if (!modbus::key_permissions_ok(mqtt.key, error) ||
-        !is_readable_regular_file(mqtt.key, error)) {
+    if (!net::key_permissions_ok(mqtt.key, error) || !is_readable_regular_file(mqtt.key, error)) {
       diag.error(r.node("key"), "mqtt.key", error);
     }
   }

@@ -4,7 +4,7 @@
 #include <charconv>
 
 #include "config_loader.h"
-#include "modbus/listen_host.h"
+#include "net/listen_host.h"
 
 namespace drivegate {
 
@@ -36,7 +36,7 @@ namespace {
 // A listener binds a numeric address: a name would need a DNS lookup at start-up, which can
 // block, and can change under a running daemon.
 bool bindable(const std::string& host) {
-  return modbus::parse_listen_host(host).has_value();
+  return net::parse_listen_host(host).has_value();
 }
 
 bool wildcard(const std::string& host) {
@@ -73,8 +73,8 @@ std::string one_of(std::span<const std::string_view> names) {
   return out;
 }
 
-modbus::AllowList read_allow(const toml::node& n, const std::string& key, Diagnostics& diag) {
-  modbus::AllowList allow;
+net::AllowList read_allow(const toml::node& n, const std::string& key, Diagnostics& diag) {
+  net::AllowList allow;
   const auto* a = n.as_array();
   if (a == nullptr) {
     diag.error(&n, key, "must be an array of addresses or CIDR ranges, e.g. [\"10.1.2.0/24\"]");
@@ -86,7 +86,7 @@ modbus::AllowList read_allow(const toml::node& n, const std::string& key, Diagno
   for (const auto& item : *a) {
     const auto* s = item.as_string();
     std::string error = "must be a string";
-    const auto range = s != nullptr ? modbus::parse_address_range(s->get(), error) : std::nullopt;
+    const auto range = s != nullptr ? net::parse_address_range(s->get(), error) : std::nullopt;
     if (range) {
       allow.push_back(*range);
     } else {
@@ -201,7 +201,7 @@ void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
       (p.tls && std::any_of(p.tls->roles.begin(), p.tls->roles.end(), [](const auto& role) {
          return role.second != modbus::AccessLevel::read;
        }));
-  if (!can_write || !modbus::allows_everyone(p.allow)) return;
+  if (!can_write || !net::allows_everyone(p.allow)) return;
   const std::string where = l.from_server_listen ? "server.listen" : "listener";
   const std::string what =
       p.tls ? " lets every address with a certificate from its CA and a writing role write"
@@ -317,7 +317,7 @@ void read_http(const toml::table& root, Config& cfg, Diagnostics& diag) {
                  "overlaps the Modbus listener on line " + std::to_string(l.line));
     }
   }
-  if (modbus::allows_everyone(cfg.http.allow) && cfg.http.listen.host != "127.0.0.1" &&
+  if (net::allows_everyone(cfg.http.allow) && cfg.http.listen.host != "127.0.0.1" &&
       cfg.http.listen.host != "::1" && cfg.http.listen.host != "localhost") {
     diag.warning_at(cfg.http.line, "http",
                     "every address that can reach " + cfg.http.listen.host + ":" +

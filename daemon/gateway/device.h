@@ -26,7 +26,7 @@
 #include "gateway/register_map.h"
 #include "line/station.h"
 #include "modbus/backend.h"
-#include "modbus/log_throttle.h"
+#include "net/log_throttle.h"
 
 namespace drivegate {
 
@@ -186,7 +186,7 @@ class Device final : public Station {
   bool handed_ = false;         // a queued write's part likewise
   bool last_exchange_wrote_ = false;  // the device's last exchange carried a write
   WriteStats write_stats_;
-  modbus::LogThrottle refusal_log_;  // refusals any client can cause, per device
+  net::LogThrottle refusal_log_;  // refusals any client can cause, per device
   std::function<void()> kick_;
   std::function<void()> watcher_;
 

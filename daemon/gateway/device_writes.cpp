@@ -210,7 +210,7 @@ Exception Device::refuse_run_while_latched(const char* source, TimePoint now) {
     log_->warn(
         "device {}: run from {} refused (0x04): the failsafe is latched, and only a run from the "
         "PLC clears it{}",
-        config_.name, source, modbus::held_note(*held));
+        config_.name, source, net::held_note(*held));
   }
   return Exception::server_device_failure;
 }

@@ -104,7 +104,7 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
     ++state_->stats.bad_requests;
     if (const auto held = state_->bad_request_log.admit(std::chrono::steady_clock::now())) {
       state_->log->info("http: client {}: bad request ({}), closing{}", peer_, ec.message(),
-                        modbus::held_note(*held));
+                        net::held_note(*held));
     }
     const bool too_large = ec == bhttp::error::header_limit || ec == bhttp::error::buffer_overflow;
     reply(too_large ? 431 : 400, "text/plain; charset=utf-8",
@@ -124,7 +124,7 @@ void HttpConnection::serve() {
     ++state_->stats.requests_paced;
     if (const auto held = state_->paced_log.admit(now)) {
       state_->log->info("http: client {}: over {} requests a second, answers paced{}", peer_,
-                        state_->options.requests.per_second, modbus::held_note(*held));
+                        state_->options.requests.per_second, net::held_note(*held));
     }
     pace_timer_.expires_at(state_->request_rate.next_token(address_, now));
     pace_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {

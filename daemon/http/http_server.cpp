@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "http_connection.h"
-#include "modbus/accept_errors.h"
-#include "modbus/listen_host.h"
+#include "net/accept_errors.h"
+#include "net/listen_host.h"
 
 namespace drivegate::http {
 
@@ -24,7 +24,7 @@ void on_accept(const std::shared_ptr<HttpState>& state, const boost::system::err
     boost::system::error_code peer_ec;
     const auto peer = socket.remote_endpoint(peer_ec);
     boost::system::error_code ignored;
-    if (peer_ec || !modbus::allowed(state->options.allow, peer.address())) {
+    if (peer_ec || !net::allowed(state->options.allow, peer.address())) {
       ++state->stats.not_allowed;
       state->log->debug("http: {} not in the allow list: closed at accept",
                         peer_ec ? peer_ec.message() : peer.address().to_string());
@@ -36,7 +36,7 @@ void on_accept(const std::shared_ptr<HttpState>& state, const boost::system::err
       std::make_shared<HttpConnection>(state, std::move(socket))->start();
     }
   } else {
-    modbus::after_accept_error(ec, "http", *state->log, state->accept_error_log, state->retry_timer,
+    net::after_accept_error(ec, "http", *state->log, state->accept_error_log, state->retry_timer,
                                [state] {
                                  if (!state->closed) accept(state);
                                });
@@ -62,7 +62,7 @@ HttpServer::~HttpServer() {
 }
 
 std::error_code HttpServer::listen() {
-  const auto host = modbus::parse_listen_host(state_->options.host);
+  const auto host = net::parse_listen_host(state_->options.host);
   if (!host) return std::make_error_code(std::errc::invalid_argument);
   // Every interface here is every IPv4 one (the status page is for the plant's network).
   const asio::ip::address address =

@@ -8,8 +8,8 @@
 #include <unordered_set>
 
 #include "http_server.h"
-#include "modbus/address_rate.h"
-#include "modbus/log_throttle.h"
+#include "net/address_rate.h"
+#include "net/log_throttle.h"
 
 namespace drivegate::http {
 
@@ -33,11 +33,11 @@ struct HttpState {
   boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
   std::unordered_set<HttpConnection*> live;
   std::size_t capturing = 0;         // of `live`, the connections streaming a capture
-  modbus::AddressRate request_rate;  // options.requests, per client address
+  net::AddressRate request_rate;  // options.requests, per client address
   HttpStats stats;
-  modbus::LogThrottle bad_request_log;   // any client can cause one: a burst, then one a second
-  modbus::LogThrottle accept_error_log;  // accept() failing (out of descriptors and the like)
-  modbus::LogThrottle paced_log;         // requests held back by the rate limit
+  net::LogThrottle bad_request_log;   // any client can cause one: a burst, then one a second
+  net::LogThrottle accept_error_log;  // accept() failing (out of descriptors and the like)
+  net::LogThrottle paced_log;         // requests held back by the rate limit
   bool closed = false;
 };
 

@@ -95,7 +95,7 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
           verify != X509_V_OK ? std::string(" (") + X509_verify_cert_error_string(verify) + ")"
                               : std::string(),
           cert != nullptr ? ", certificate \"" + certificate_subject(cert) + "\"" : std::string(),
-          held_note(*held));
+          net::held_note(*held));
     }
     close();
     return;
@@ -130,7 +130,7 @@ void Connection::apply_policy() {
 
 void Connection::policy_changed() {
   if (closed_) return;
-  if (!allowed(listener_->options.policy.allow, peer_.address())) {
+  if (!net::allowed(listener_->options.policy.allow, peer_.address())) {
     state_->log->info("modbus: {}: no longer in the listener's allow list; closing", who());
     close();
     return;
@@ -235,7 +235,7 @@ void Connection::process_input(Clock::time_point now) {
       ++state_->stats.malformed;
       if (const auto held = state_->malformed_log.admit(now)) {
         state_->log->warn("modbus: {}: {}, closing the connection{}", who(), parse.error.message(),
-                          held_note(*held));
+                          net::held_note(*held));
       }
       close_after_flush_ = true;
       rx_len_ = 0;
@@ -366,7 +366,7 @@ void Connection::unanswered(const PendingWrite& w, Exception result, bool settle
         result == Exception::none
             ? "took effect"
             : fmt::format("failed (exception 0x{:02X})", static_cast<unsigned>(result)),
-        settled_after ? "after" : "as", held_note(*held));
+        settled_after ? "after" : "as", net::held_note(*held));
   }
 }
 
@@ -460,7 +460,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
     ++listener_->stats.tls_handshake_failures;
     if (const auto held = listener_->handshake_log.admit(now)) {
       state_->log->warn("modbus: {}: TLS handshake not finished in {} ms; closing{}", who(),
-                        handshake_limit(o).count(), held_note(*held));
+                        handshake_limit(o).count(), net::held_note(*held));
     }
     close();
     return;
@@ -469,7 +469,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
     ++state_->stats.frame_timeouts;
     if (const auto held = state_->frame_timeout_log.admit(now)) {
       state_->log->info("modbus: {}: partial frame for {} ms, closing{}", who(),
-                        o.frame_timeout.count(), held_note(*held));
+                        o.frame_timeout.count(), net::held_note(*held));
     }
     close();
     return;

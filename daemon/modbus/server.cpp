@@ -6,9 +6,9 @@
 #include <boost/asio/ip/v6_only.hpp>
 #include <vector>
 
-#include "accept_errors.h"
 #include "connection.h"
-#include "listen_host.h"
+#include "net/accept_errors.h"
+#include "net/listen_host.h"
 #include "server_state.h"
 
 namespace drivegate::modbus {
@@ -25,7 +25,7 @@ using Listener = std::shared_ptr<ListenerState>;
 
 void accept(const std::shared_ptr<ServerState>& state, const Listener& listener);
 
-std::string allow_text(const AllowList& allow) {
+std::string allow_text(const net::AllowList& allow) {
   std::string out;
   for (const auto& r : allow) out += (out.empty() ? "" : ", ") + r.to_string();
   return out;
@@ -57,13 +57,13 @@ bool make_room(ServerState& state, ListenerState& listener) {
         "({} ms) for a new one{}",
         listener.options.name(), listener.stats.connections_active,
         std::chrono::duration_cast<std::chrono::milliseconds>(now - since).count(),
-        held_note(*held));
+        net::held_note(*held));
   }
   oldest->evict();
   return listener.stats.connections_active < slots(state, listener);
 }
 
-// A TLS listener lets each client address start so many handshakes a second (address_rate.h):
+// A TLS listener lets each client address start so many handshakes a second (net/address_rate.h):
 // a handshake costs a private-key signature on the event loop every other client waits on, so
 // a flood from one address is closed at accept instead. Plain listeners have no handshake.
 bool handshake_allowed(ServerState& state, ListenerState& listener, const asio::ip::address& peer) {
@@ -77,7 +77,7 @@ bool handshake_allowed(ServerState& state, ListenerState& listener, const asio::
         "modbus: {}: {} closed at accept: more than {} TLS handshakes a second from "
         "it{}",
         listener.options.name(), peer.to_string(), listener.options.policy.handshakes.per_second,
-        held_note(*held));
+        net::held_note(*held));
   }
   return false;
 }
@@ -96,15 +96,15 @@ void on_accept(const std::shared_ptr<ServerState>& state, const Listener& listen
                const boost::system::error_code& ec, tcp::socket socket) {
   if (state->closed || ec == asio::error::operation_aborted) return;
   if (ec) {
-    after_accept_error(ec, "modbus: " + listener->options.name(), *state->log,
-                       listener->accept_error_log, listener->retry_timer, [state, listener] {
-                         if (!state->closed) accept(state, listener);
-                       });
+    net::after_accept_error(ec, "modbus: " + listener->options.name(), *state->log,
+                            listener->accept_error_log, listener->retry_timer, [state, listener] {
+                              if (!state->closed) accept(state, listener);
+                            });
     return;
   }
   boost::system::error_code peer_ec;
   const auto peer = socket.remote_endpoint(peer_ec);
-  if (peer_ec || !allowed(listener->options.policy.allow, peer.address())) {
+  if (peer_ec || !net::allowed(listener->options.policy.allow, peer.address())) {
     // Not in the allow list: closed at accept, before anything it sent is read.
     ++state->stats.connections_not_allowed;
     ++listener->stats.connections_not_allowed;
@@ -156,7 +156,7 @@ void accept(const std::shared_ptr<ServerState>& state, const Listener& listener)
 
 std::error_code bind(ListenerState& l, int backlog) {
   auto& acceptor = l.acceptor;
-  const auto host = parse_listen_host(l.options.host);
+  const auto host = net::parse_listen_host(l.options.host);
   if (!host) return std::make_error_code(std::errc::invalid_argument);
   const auto& [address, any] = *host;
   boost::system::error_code ec;
@@ -229,7 +229,7 @@ std::error_code Server::listen() {
     log.info("modbus: listening on {}:{}{}: access {}{}, {} word order, allow {}",
              bound.address().to_string(), bound.port(), p.tls ? " (TLS, client certificates)" : "",
              to_string(p.access), p.tls ? " without a known role" : "", to_string(p.word_order),
-             allows_everyone(p.allow) ? std::string("every address") : allow_text(p.allow));
+             net::allows_everyone(p.allow) ? std::string("every address") : allow_text(p.allow));
     accept(state_, l);
   }
   for (const auto& l : state_->listeners) {

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "address_rate.h"
-#include "allow_list.h"
+#include "net/address_rate.h"
+#include "net/allow_list.h"
 #include "pdu.h"
 #include "tls.h"
 
@@ -28,7 +28,7 @@ struct ServerLimits {
 // Who a listener serves and what they may do. Everything but host, port and whether it speaks
 // TLS may change while it runs (Server::reload_listeners).
 struct ListenerPolicy {
-  AllowList allow;  // client addresses served; empty: every address
+  net::AllowList allow;  // client addresses served; empty: every address
   // Plain TCP: every client's level. TLS: the level of a client whose certificate carries no
   // role in tls->roles.
   AccessLevel access = AccessLevel::maintain;
@@ -37,9 +37,9 @@ struct ListenerPolicy {
   // This listener's own connection slots; none: ServerOptions::max_clients. Clients of other
   // listeners never take them.
   std::optional<std::size_t> max_clients;
-  // TLS handshakes one client address may start (address_rate.h): past it a new connection from
+  // TLS handshakes one client address may start (net/address_rate.h): past it a new connection from
   // that address is closed at accept, before the handshake's signature costs the event loop.
-  RateLimit handshakes{5, 10};
+  net::RateLimit handshakes{5, 10};
   friend bool operator==(const ListenerPolicy&, const ListenerPolicy&) = default;
 };
 

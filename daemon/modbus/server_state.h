@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "backend.h"
-#include "log_throttle.h"
+#include "net/log_throttle.h"
 #include "pdu.h"
 #include "server_options.h"
 
@@ -37,14 +37,15 @@ struct ListenerState {
   ListenerOptions options;  // policy changed only by Server::reload_listeners
   std::shared_ptr<boost::asio::ssl::context> tls;  // set when options.policy.tls is
   boost::asio::ip::tcp::acceptor acceptor;
-  boost::asio::steady_timer retry_timer;  // accept back-off: EMFILE and the like, a limited handshake
-  LogThrottle not_allowed_log;            // connections closed at accept: not in the allow list
-  LogThrottle handshake_log;              // TLS handshakes that failed or took too long
-  LogThrottle accept_error_log;           // accept() failing (out of descriptors and the like)
-  LogThrottle refused_log;                // clients refused: full, none to evict
-  LogThrottle evicted_log;                // idle read-only clients closed for a new one
-  LogThrottle limited_log;                // TLS clients closed at accept: handshake rate
-  AddressRate handshakes;                 // TLS handshakes per client address
+  boost::asio::steady_timer
+      retry_timer;                    // accept back-off: EMFILE and the like, a limited handshake
+  net::LogThrottle not_allowed_log;   // connections closed at accept: not in the allow list
+  net::LogThrottle handshake_log;     // TLS handshakes that failed or took too long
+  net::LogThrottle accept_error_log;  // accept() failing (out of descriptors and the like)
+  net::LogThrottle refused_log;       // clients refused: full, none to evict
+  net::LogThrottle evicted_log;       // idle read-only clients closed for a new one
+  net::LogThrottle limited_log;       // TLS clients closed at accept: handshake rate
+  net::AddressRate handshakes;        // TLS handshakes per client address
   ListenerStats stats;
 };
 
@@ -74,9 +75,9 @@ struct ServerState {
   std::vector<std::shared_ptr<ListenerState>> listeners;
   std::unordered_set<Connection*> live;  // open connections, every listener's
   bool closed = false;
-  LogThrottle malformed_log;      // frames that are not Modbus TCP
-  LogThrottle frame_timeout_log;  // partial frames left unfinished
-  LogThrottle unanswered_log;     // write results whose client had gone
+  net::LogThrottle malformed_log;      // frames that are not Modbus TCP
+  net::LogThrottle frame_timeout_log;  // partial frames left unfinished
+  net::LogThrottle unanswered_log;     // write results whose client had gone
 };
 
 }  // namespace drivegate::modbus

@@ -2,8 +2,8 @@
 
 #include <openssl/asn1.h>
 #include <openssl/err.h>
-#include <openssl/pem.h>
 #include <openssl/objects.h>
+#include <openssl/pem.h>
 #include <openssl/ssl.h>
 #include <openssl/x509.h>
 #include <openssl/x509v3.h>
@@ -15,6 +15,7 @@
 #include <memory>
 
 #include "base/read_file.h"
+#include "net/key_file.h"
 
 namespace drivegate::modbus {
 namespace {
@@ -48,24 +49,8 @@ std::string failure(const std::filesystem::path& file, std::string_view what,
 
 }  // namespace
 
-bool key_permissions_ok(const std::filesystem::path& key, std::string& error) {
-  struct stat st {};
-  if (::stat(key.c_str(), &st) != 0) {
-    error = "cannot read key " + key.string() + ": " + std::strerror(errno);
-    return false;
-  }
-  if ((st.st_mode & S_IRWXO) != 0) {
-    char mode[8];
-    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
-    error = "key " + key.string() + " is readable by others (mode " + mode +
-            "): refused; make it chmod 0600 (or 0640 for a group the service is in)";
-    return false;
-  }
-  return true;
-}
-
 std::shared_ptr<ssl::context> make_tls_context(const TlsOptions& o, std::string& error) {
-  if (!key_permissions_ok(o.key, error)) return nullptr;
+  if (!net::key_permissions_ok(o.key, error)) return nullptr;
   auto ctx = std::make_shared<ssl::context>(ssl::context::tls_server);
   SSL_CTX* native = ctx->native_handle();
   // TLS 1.2 at least (MB-TCP-Security R-01 and later); OpenSSL negotiates 1.3 when both have it.

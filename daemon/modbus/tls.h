@@ -32,10 +32,6 @@ struct TlsOptions {
 // ASN.1 UTF8String in the client certificate's X.509v3 extension with this object identifier.
 inline constexpr const char* kRoleOid = "1.3.6.1.4.1.50316.802.1";
 
-// A private key (or a password file) others may read is as good as published: false and `error`
-// (naming the file and the fix) when its mode lets others read it or it cannot be read at all.
-bool key_permissions_ok(const std::filesystem::path& key, std::string& error);
-
 // Reads the files and builds the context a listener handshakes with: TLS 1.2 minimum (1.3 is
 // preferred by OpenSSL when both sides have it), peer verification on, a client without a
 // certificate refused. nullptr and `error` (naming the file and what is wrong) when a file is

@@ -403,7 +403,7 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
 // Anyone who can publish to the broker can cause these: a burst, then one a second per kind.
 void Northbound::notice(sparkplug::Notice kind, std::string message) {
   if (const auto held = notice_log_.at(static_cast<std::size_t>(kind)).admit(Clock::now())) {
-    log_->warn("MQTT: {}{}", message, modbus::held_note(*held));
+    log_->warn("MQTT: {}{}", message, net::held_note(*held));
   }
 }
 

@@ -19,7 +19,7 @@
 #include "gateway/gateway.h"
 #include "gateway/point_values.h"
 #include "mqtt/edge_node.h"
-#include "modbus/log_throttle.h"
+#include "net/log_throttle.h"
 #include "mqtt/mosquitto_client.h"
 #include "mqtt/northbound_status.h"
 
@@ -82,7 +82,7 @@ class Northbound final : private sparkplug::Sink {
   bool stopping_ = false;
   bool started_ = false;
   NorthboundStatus status_;
-  std::array<modbus::LogThrottle, sparkplug::kNoticeKinds> notice_log_;  // per kind
+  std::array<net::LogThrottle, sparkplug::kNoticeKinds> notice_log_;  // per kind
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // for writes settling later
 };
 

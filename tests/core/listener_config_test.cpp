@@ -171,8 +171,8 @@ tls = { cert = "c", key = "k", ca = "a" }
   const auto& ls = r.config->listeners;
   EXPECT_EQ(ls[0].options.policy.max_clients, std::optional<std::size_t>(3));
   EXPECT_EQ(ls[1].options.policy.max_clients, std::nullopt);  // [server] max_clients, 12
-  EXPECT_EQ(ls[1].options.policy.handshakes, (modbus::RateLimit{7, 14}));
-  EXPECT_EQ(ls[2].options.policy.handshakes, (modbus::RateLimit{5, 10}));  // the default
+  EXPECT_EQ(ls[1].options.policy.handshakes, (net::RateLimit{7, 14}));
+  EXPECT_EQ(ls[2].options.policy.handshakes, (net::RateLimit{5, 10}));  // the default
   EXPECT_THAT(
       errors("[[listener]]\naddress = \":502\"\nmax_clients = 0\n"),
       ElementsAre(AllOf(HasSubstr("gw.toml:3: listener[0].max_clients"), HasSubstr("1..1024"))));

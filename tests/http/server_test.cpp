@@ -603,7 +603,7 @@ TEST(HttpServer, AHammeringClientIsPacedWhileAnotherAddressIsAnsweredAtOnce) {
 TEST(HttpServer, AddressOutsideTheAllowListIsClosedAtAccept) {
   HttpOptions o;
   std::string error;
-  const auto range = modbus::parse_address_range("192.0.2.1", error);
+  const auto range = net::parse_address_range("192.0.2.1", error);
   ASSERT_TRUE(range) << error;
   o.allow = {*range};
   Harness h(o);
@@ -622,8 +622,8 @@ TEST(HttpServer, AddressOutsideTheAllowListIsClosedAtAccept) {
 TEST(HttpServer, LoopbackInTheAllowListIsServed) {
   HttpOptions o;
   std::string error;
-  o.allow = {*modbus::parse_address_range("192.0.2.1", error),
-             *modbus::parse_address_range("127.0.0.0/8", error)};
+  o.allow = {*net::parse_address_range("192.0.2.1", error),
+             *net::parse_address_range("127.0.0.0/8", error)};
   Harness h(o);
   Client c(h.port());
   ASSERT_TRUE(c.send(get("/metrics")));

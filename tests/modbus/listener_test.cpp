@@ -28,9 +28,9 @@ using test::request;
 using test::operator+;
 namespace asio = boost::asio;
 
-AddressRange range(std::string_view text) {
+net::AddressRange range(std::string_view text) {
   std::string error;
-  return parse_address_range(text, error).value();
+  return net::parse_address_range(text, error).value();
 }
 
 ServerOptions with(std::vector<ListenerPolicy> policies) {

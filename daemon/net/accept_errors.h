@@ -16,9 +16,9 @@
 #include <string_view>
 #include <utility>
 
-#include "log_throttle.h"
+#include "net/log_throttle.h"
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 
 inline constexpr std::chrono::milliseconds kAcceptRetry{100};
 
@@ -49,4 +49,4 @@ void after_accept_error(const boost::system::error_code& ec, std::string_view wh
   });
 }
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

@@ -1,10 +1,10 @@
 // The throttle on lines any client can cause: a burst, then one per interval, and the count of
 // what was held back in the next line written. On made-up time.
-#include "log_throttle.h"
+#include "net/log_throttle.h"
 
 #include <gtest/gtest.h>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 namespace {
 
 using namespace std::chrono_literals;
@@ -59,4 +59,4 @@ TEST(LogThrottle, HeldNoteSaysHowManyOrNothing) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

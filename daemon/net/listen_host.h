@@ -8,7 +8,7 @@
 #include <optional>
 #include <string_view>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 
 struct ListenHost {
   boost::asio::ip::address address;  // for `any`: the IPv6 any address (dual stack)
@@ -17,4 +17,4 @@ struct ListenHost {
 
 std::optional<ListenHost> parse_listen_host(std::string_view host);
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

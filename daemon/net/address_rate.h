@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <map>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 
 struct RateLimit {
   unsigned per_second = 0;  // 0: unlimited
@@ -58,4 +58,4 @@ class AddressRate {
   bool overflow_used_ = false;
 };
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

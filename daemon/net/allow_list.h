@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 
 // One address ("10.1.3.7", "::1": the whole length) or range ("10.1.2.0/24", "fd00::/8").
 struct AddressRange {
@@ -32,4 +32,4 @@ using AllowList = std::vector<AddressRange>;
 // True when the list admits every address of a family (empty, or a /0 range in it).
 [[nodiscard]] bool allows_everyone(const AllowList& allow);
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

@@ -1,8 +1,8 @@
-#include "listen_host.h"
+#include "net/listen_host.h"
 
 #include <string>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 
 std::optional<ListenHost> parse_listen_host(std::string_view host) {
   if (host.empty() || host == "*") return ListenHost{boost::asio::ip::address_v6::any(), true};
@@ -16,4 +16,4 @@ std::optional<ListenHost> parse_listen_host(std::string_view host) {
   return ListenHost{address, false};
 }
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

@@ -1,10 +1,10 @@
 // Allow lists: parsing (addresses, CIDR ranges, what is refused and why) and matching, IPv4-mapped
 // IPv6 peers included.
-#include "allow_list.h"
+#include "net/allow_list.h"
 
 #include <gtest/gtest.h>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 namespace {
 
 namespace ip = boost::asio::ip;
@@ -78,4 +78,4 @@ TEST(AllowList, MistakesAreRefusedWithTheReason) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

@@ -13,7 +13,7 @@
 #include <string>
 #include <utility>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 
 class LogThrottle {
  public:
@@ -65,4 +65,4 @@ inline std::string held_note(std::uint64_t held) {
   return held == 0 ? std::string() : " (" + std::to_string(held) + " like it not logged)";
 }
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

@@ -1,9 +1,9 @@
-#include "address_rate.h"
+#include "net/address_rate.h"
 
 #include <algorithm>
 #include <iterator>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 
 AddressRate::Key AddressRate::key_of(const boost::asio::ip::address& who) {
   Key k{};
@@ -67,4 +67,4 @@ AddressRate::Clock::time_point AddressRate::next_token(const boost::asio::ip::ad
   return now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait_s));
 }
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

@@ -1,10 +1,10 @@
 // The per-address token bucket behind the TLS handshake and HTTP request limits (issue 24),
 // on a clock the test sets.
-#include "address_rate.h"
+#include "net/address_rate.h"
 
 #include <gtest/gtest.h>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 namespace {
 
 using namespace std::chrono_literals;
@@ -75,4 +75,4 @@ TEST(AddressRate, ANewLimitAppliesAtOnce) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net

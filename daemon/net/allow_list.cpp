@@ -1,10 +1,10 @@
-#include "allow_list.h"
+#include "net/allow_list.h"
 
 #include <algorithm>
 #include <array>
 #include <charconv>
 
-namespace drivegate::modbus {
+namespace drivegate::net {
 namespace {
 
 namespace ip = boost::asio::ip;
@@ -95,4 +95,4 @@ bool allows_everyone(const AllowList& allow) {
                                       [](const AddressRange& r) { return r.prefix == 0; });
 }
 
-}  // namespace drivegate::modbus
+}  // namespace drivegate::net
