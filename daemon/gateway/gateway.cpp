@@ -11,21 +11,6 @@ namespace drivegate {
 namespace asio = boost::asio;
 using modbus::Exception;
 
-
-Table to_table(modbus::RegisterTable t) {
-  switch (t) {
-    case modbus::RegisterTable::coils:
-      return Table::coil;
-    case modbus::RegisterTable::discrete_inputs:
-      return Table::discrete;
-    case modbus::RegisterTable::input_registers:
-      return Table::input;
-    case modbus::RegisterTable::holding_registers:
-      return Table::holding;
-  }
-  return Table::input;
-}
-
 std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescriptor& adapter,
                                     bool maintenance, std::string& error, const BusConfig* line) {
   DeviceEnv env;
@@ -198,21 +183,20 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   });
 }
 
-Exception Gateway::read(const modbus::Session& session, std::uint8_t unit,
-                        modbus::RegisterTable table, std::uint16_t address,
-                        std::span<std::uint16_t> out) {
+Exception Gateway::read(const modbus::Session& session, std::uint8_t unit, Table table,
+                        std::uint16_t address, std::span<std::uint16_t> out) {
   Device* d = units_[unit];
   if (d == nullptr) return Exception::gateway_path_unavailable;
-  return d->read(session, to_table(table), address, out, Clock::now());
+  return d->read(session, table, address, out, Clock::now());
 }
 
-Exception Gateway::write(const modbus::Session& session, std::uint8_t unit,
-                         modbus::RegisterTable table, std::uint16_t address,
-                         std::span<const std::uint16_t> values, modbus::WriteDone done) {
+Exception Gateway::write(const modbus::Session& session, std::uint8_t unit, Table table,
+                         std::uint16_t address, std::span<const std::uint16_t> values,
+                         modbus::WriteDone done) {
   Device* d = units_[unit];
   if (d == nullptr) return Exception::gateway_path_unavailable;
   if (!running_) return Exception::gateway_target_failed;
-  return d->write(session, to_table(table), address, values, std::move(done), Clock::now());
+  return d->write(session, table, address, values, std::move(done), Clock::now());
 }
 
 std::size_t Gateway::devices_online() const {

@@ -55,12 +55,11 @@ class Gateway : public modbus::Backend {
   // client's write is refused (0x0B).
   void stop_drives(Millis limit, std::function<void()> done);
 
-  modbus::Exception read(const modbus::Session& session, std::uint8_t unit,
-                         modbus::RegisterTable table, std::uint16_t address,
-                         std::span<std::uint16_t> out) override;
-  modbus::Exception write(const modbus::Session& session, std::uint8_t unit,
-                          modbus::RegisterTable table, std::uint16_t address,
-                          std::span<const std::uint16_t> values, modbus::WriteDone done) override;
+  modbus::Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
+                         std::uint16_t address, std::span<std::uint16_t> out) override;
+  modbus::Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
+                          std::uint16_t address, std::span<const std::uint16_t> values,
+                          modbus::WriteDone done) override;
 
   [[nodiscard]] std::size_t devices_online() const;
   [[nodiscard]] const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }
@@ -80,7 +79,5 @@ class Gateway : public modbus::Backend {
   std::array<Device*, 256> units_{};
   bool running_ = false;
 };
-
-Table to_table(modbus::RegisterTable t);
 
 }  // namespace drivegate

@@ -10,6 +10,8 @@
 #include <span>
 #include <string_view>
 
+#include "drivegate/point.h"  // Table: the four Modbus tables, one enum for every layer
+
 namespace drivegate::modbus {
 
 // Modbus exception codes (Modbus Application Protocol V1.1b3, section 7). `none` = success.
@@ -49,13 +51,6 @@ constexpr std::string_view to_string(Exception e) {
   }
   return "unknown";
 }
-
-enum class RegisterTable : std::uint8_t {
-  coils,
-  discrete_inputs,
-  input_registers,
-  holding_registers
-};
 
 // What a client may do (README, "Listeners and access"). Ordered: each level includes the ones
 // below it.
@@ -100,7 +95,7 @@ class Backend {
   // `out.size()` values from `address`. Unknown unit: gateway_path_unavailable; any address in
   // the range unmapped: illegal_data_address.
   // `session` gives the word order of 32-bit values.
-  virtual Exception read(const Session& session, std::uint8_t unit, RegisterTable table,
+  virtual Exception read(const Session& session, std::uint8_t unit, Table table,
                          std::uint16_t address, std::span<std::uint16_t> out) = 0;
   // Validates synchronously (unknown unit, unmapped address, read-only, range) and returns the
   // exception at once if it fails; otherwise returns none and calls `done` exactly once later,
@@ -110,7 +105,7 @@ class Backend {
   // `values` are in `session.word_order`.
   // `values` is valid only during the call (it points into the server's scratch): copy what is
   // kept. `done` may be called from inside write(); the server defers its work to the event loop.
-  virtual Exception write(const Session& session, std::uint8_t unit, RegisterTable table,
+  virtual Exception write(const Session& session, std::uint8_t unit, Table table,
                           std::uint16_t address, std::span<const std::uint16_t> values,
                           WriteDone done) = 0;
 };

@@ -84,13 +84,13 @@ Result Dispatcher::handle(const Session& session, std::uint8_t unit,
   }
   switch (static_cast<Function>(fc)) {
     case Function::read_coils:
-      return read_bits(unit, RegisterTable::coils, request, out);
+      return read_bits(unit, Table::coil, request, out);
     case Function::read_discrete_inputs:
-      return read_bits(unit, RegisterTable::discrete_inputs, request, out);
+      return read_bits(unit, Table::discrete, request, out);
     case Function::read_holding_registers:
-      return read_registers(unit, RegisterTable::holding_registers, request, out);
+      return read_registers(unit, Table::holding, request, out);
     case Function::read_input_registers:
-      return read_registers(unit, RegisterTable::input_registers, request, out);
+      return read_registers(unit, Table::input, request, out);
     case Function::write_single_coil:
       return write_single_coil(unit, request, out, std::move(done));
     case Function::write_single_register:
@@ -108,8 +108,8 @@ Result Dispatcher::handle(const Session& session, std::uint8_t unit,
 }
 
 // 6.1 / 6.2: fc | start (2) | quantity (2) -> fc | byte count | bits, LSB of byte 0 = start.
-Result Dispatcher::read_bits(std::uint8_t unit, RegisterTable table,
-                             std::span<const std::uint8_t> request, std::span<std::uint8_t> out) {
+Result Dispatcher::read_bits(std::uint8_t unit, Table table, std::span<const std::uint8_t> request,
+                             std::span<std::uint8_t> out) {
   const std::uint8_t fc = request[0];
   if (request.size() != 5) return fail(fc, Exception::illegal_data_value, out);
   const std::uint16_t address = get16(request, 1);
@@ -131,7 +131,7 @@ Result Dispatcher::read_bits(std::uint8_t unit, RegisterTable table,
 }
 
 // 6.3 / 6.4: fc | start (2) | quantity (2) -> fc | byte count | registers, high byte first.
-Result Dispatcher::read_registers(std::uint8_t unit, RegisterTable table,
+Result Dispatcher::read_registers(std::uint8_t unit, Table table,
                                   std::span<const std::uint8_t> request,
                                   std::span<std::uint8_t> out) {
   const std::uint8_t fc = request[0];
@@ -143,7 +143,7 @@ Result Dispatcher::read_registers(std::uint8_t unit, RegisterTable table,
   return reply(read_registers_response(unit, table, address, count, fc, out));
 }
 
-std::size_t Dispatcher::read_registers_response(std::uint8_t unit, RegisterTable table,
+std::size_t Dispatcher::read_registers_response(std::uint8_t unit, Table table,
                                                 std::uint16_t address, std::uint16_t count,
                                                 std::uint8_t function,
                                                 std::span<std::uint8_t> out) {
@@ -157,7 +157,7 @@ std::size_t Dispatcher::read_registers_response(std::uint8_t unit, RegisterTable
   return 2 + 2 * std::size_t{count};
 }
 
-Result Dispatcher::start_write(std::uint8_t unit, RegisterTable table, std::uint16_t address,
+Result Dispatcher::start_write(std::uint8_t unit, Table table, std::uint16_t address,
                                std::size_t count, std::span<std::uint8_t> out,
                                std::uint8_t function, WriteDone done) {
   const std::span<const std::uint16_t> values(scratch_.data(), count);
@@ -178,7 +178,7 @@ Result Dispatcher::write_single_coil(std::uint8_t unit, std::span<const std::uin
   const std::uint16_t value = get16(request, 3);
   if (value != kCoilOn && value != kCoilOff) return fail(fc, Exception::illegal_data_value, out);
   scratch_[0] = value == kCoilOn ? 1 : 0;
-  return start_write(unit, RegisterTable::coils, get16(request, 1), 1, out, fc, std::move(done));
+  return start_write(unit, Table::coil, get16(request, 1), 1, out, fc, std::move(done));
 }
 
 // 6.6: fc | address (2) | value (2) -> echo of the request.
@@ -187,8 +187,7 @@ Result Dispatcher::write_single_register(std::uint8_t unit, std::span<const std:
   const std::uint8_t fc = request[0];
   if (request.size() != 5) return fail(fc, Exception::illegal_data_value, out);
   scratch_[0] = get16(request, 3);
-  return start_write(unit, RegisterTable::holding_registers, get16(request, 1), 1, out, fc,
-                     std::move(done));
+  return start_write(unit, Table::holding, get16(request, 1), 1, out, fc, std::move(done));
 }
 
 // 6.11: fc | start (2) | quantity (2) | byte count = ceil(N / 8) | bits -> fc | start | quantity.
@@ -205,7 +204,7 @@ Result Dispatcher::write_multiple_coils(std::uint8_t unit, std::span<const std::
   }
   if (overflows(address, count)) return fail(fc, Exception::illegal_data_address, out);
   for (std::size_t i = 0; i < count; ++i) scratch_[i] = (request[6 + i / 8] >> (i % 8)) & 1u;
-  return start_write(unit, RegisterTable::coils, address, count, out, fc, std::move(done));
+  return start_write(unit, Table::coil, address, count, out, fc, std::move(done));
 }
 
 // 6.12: fc | start (2) | quantity (2) | byte count = 2N | registers -> fc | start | quantity.
@@ -223,8 +222,7 @@ Result Dispatcher::write_multiple_registers(std::uint8_t unit,
   }
   if (overflows(address, count)) return fail(fc, Exception::illegal_data_address, out);
   for (std::size_t i = 0; i < count; ++i) scratch_[i] = get16(request, 6 + 2 * i);
-  return start_write(unit, RegisterTable::holding_registers, address, count, out, fc,
-                     std::move(done));
+  return start_write(unit, Table::holding, address, count, out, fc, std::move(done));
 }
 
 // 6.17: fc | read start (2) | read quantity (2) | write start (2) | write quantity (2) |
@@ -254,14 +252,12 @@ Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::
   // reads again, after the write).
   static_assert(kMaxRwWrite + kMaxRwRead <= std::tuple_size_v<decltype(scratch_)>);
   const std::span<std::uint16_t> probe(scratch_.data() + kMaxRwWrite, read_count);
-  if (auto e =
-          backend_.read(*session_, unit, RegisterTable::holding_registers, read_address, probe);
+  if (auto e = backend_.read(*session_, unit, Table::holding, read_address, probe);
       e != Exception::none) {
     return fail(fc, e, out);
   }
   for (std::size_t i = 0; i < write_count; ++i) scratch_[i] = get16(request, 10 + 2 * i);
-  return start_write(unit, RegisterTable::holding_registers, write_address, write_count, out, fc,
-                     std::move(done));
+  return start_write(unit, Table::holding, write_address, write_count, out, fc, std::move(done));
 }
 
 std::size_t Dispatcher::complete(const Session& session, std::uint8_t unit,
@@ -280,8 +276,8 @@ std::size_t Dispatcher::complete(const Session& session, std::uint8_t unit,
       std::copy_n(request.begin(), 5, out.begin());  // 6.11 / 6.12: fc, start, quantity
       return 5;
     case Function::read_write_registers:
-      return read_registers_response(unit, RegisterTable::holding_registers, get16(request, 1),
-                                     get16(request, 3), fc, out);
+      return read_registers_response(unit, Table::holding, get16(request, 1), get16(request, 3), fc,
+                                     out);
     default:
       return exception_pdu(fc, Exception::server_device_failure, out);  // not a write: a bug
   }

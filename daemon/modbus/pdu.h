@@ -69,10 +69,10 @@ class Dispatcher {
                        std::span<std::uint8_t> out);
 
  private:
-  Result read_bits(std::uint8_t unit, RegisterTable table, std::span<const std::uint8_t> request,
+  Result read_bits(std::uint8_t unit, Table table, std::span<const std::uint8_t> request,
                    std::span<std::uint8_t> out);
-  Result read_registers(std::uint8_t unit, RegisterTable table,
-                        std::span<const std::uint8_t> request, std::span<std::uint8_t> out);
+  Result read_registers(std::uint8_t unit, Table table, std::span<const std::uint8_t> request,
+                        std::span<std::uint8_t> out);
   Result write_single_coil(std::uint8_t unit, std::span<const std::uint8_t> request,
                            std::span<std::uint8_t> out, WriteDone done);
   Result write_single_register(std::uint8_t unit, std::span<const std::uint8_t> request,
@@ -84,10 +84,9 @@ class Dispatcher {
   Result read_write_registers(std::uint8_t unit, std::span<const std::uint8_t> request,
                               std::span<std::uint8_t> out, WriteDone done);
   Result device_identification(std::span<const std::uint8_t> request, std::span<std::uint8_t> out);
-  Result start_write(std::uint8_t unit, RegisterTable table, std::uint16_t address,
-                     std::size_t count, std::span<std::uint8_t> out, std::uint8_t function,
-                     WriteDone done);
-  std::size_t read_registers_response(std::uint8_t unit, RegisterTable table, std::uint16_t address,
+  Result start_write(std::uint8_t unit, Table table, std::uint16_t address, std::size_t count,
+                     std::span<std::uint8_t> out, std::uint8_t function, WriteDone done);
+  std::size_t read_registers_response(std::uint8_t unit, Table table, std::uint16_t address,
                                       std::uint16_t count, std::uint8_t function,
                                       std::span<std::uint8_t> out);
 

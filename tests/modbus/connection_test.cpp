@@ -49,8 +49,8 @@ TEST(Connection, LibmodbusReadsAndWritesEveryFunction) {
   EXPECT_EQ(regs[3], 3);
 
   h.with_backend([](FakeBackend& b) {
-    b.table(RegisterTable::input_registers)[5] = 0xBEEF;
-    b.table(RegisterTable::discrete_inputs)[7] = 1;
+    b.table(Table::input)[5] = 0xBEEF;
+    b.table(Table::discrete)[7] = 1;
     return 0;
   });
   ASSERT_EQ(modbus_read_input_registers(*c, 5, 1, regs), 1);
@@ -111,7 +111,7 @@ TEST(Connection, LibmodbusSeesEveryException) {
 TEST(Connection, PipelinedRequestsInOneSegmentAreAllAnswered) {
   Harness h;
   h.with_backend([](FakeBackend& b) {
-    b.table(RegisterTable::holding_registers)[0] = 0x0102;
+    b.table(Table::holding)[0] = 0x0102;
     return 0;
   });
   RawClient c(h.port());
@@ -177,9 +177,7 @@ TEST(Connection, ReadWriteWithAnUnmappedReadRangeIsRefusedBeforeTheWrite) {
       request(7, 1, {0x17, 0x04, 0x00, 0x00, 0x01, 0x00, 0x10, 0x00, 0x01, 0x02, 0x12, 0x34})));
   EXPECT_EQ(c.reply(), (Bytes{0x00, 0x07, 0x00, 0x00, 0x00, 0x03, 0x01, 0x97, 0x02}));
   EXPECT_EQ(h.with_backend([](FakeBackend& b) { return b.writes.size(); }), 0u);
-  EXPECT_EQ(h.with_backend(
-                [](FakeBackend& b) { return b.table(RegisterTable::holding_registers)[0x10]; }),
-            0);
+  EXPECT_EQ(h.with_backend([](FakeBackend& b) { return b.table(Table::holding)[0x10]; }), 0);
 
   // The same write with a readable range goes to the device and is answered once it completed.
   ASSERT_TRUE(c.send(
@@ -286,8 +284,8 @@ TEST(Connection, AHalfClosedClientGetsTheReplyToAWriteStillWithItsDevice) {
     b.complete();
     return 0;
   });
-  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x04, 0x00, 0x00, 0x00, 0x06, 0x01, 0x06, 0x00, 0x00, 0x00,
-                              0x01}));
+  EXPECT_EQ(c.reply(),
+            (Bytes{0x00, 0x04, 0x00, 0x00, 0x00, 0x06, 0x01, 0x06, 0x00, 0x00, 0x00, 0x01}));
   EXPECT_TRUE(c.closed_by_peer(1000ms));
   EXPECT_TRUE(h.wait_clients(0));
   EXPECT_EQ(h.stats().writes_unanswered, 0u);

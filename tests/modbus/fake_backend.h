@@ -22,7 +22,7 @@ class FakeBackend : public Backend {
 
   struct Write {
     std::uint8_t unit;
-    RegisterTable table;
+    Table table;
     std::uint16_t address;
     std::vector<std::uint16_t> values;
   };
@@ -31,9 +31,9 @@ class FakeBackend : public Backend {
     for (auto& t : tables_) t.assign(kSize, 0);
   }
 
-  std::vector<std::uint16_t>& table(RegisterTable t) { return tables_[static_cast<int>(t)]; }
+  std::vector<std::uint16_t>& table(Table t) { return tables_[static_cast<int>(t)]; }
 
-  Exception read(const Session& session, std::uint8_t unit, RegisterTable t, std::uint16_t address,
+  Exception read(const Session& session, std::uint8_t unit, Table t, std::uint16_t address,
                  std::span<std::uint16_t> out) override {
     ++reads;
     last_session = session;
@@ -42,7 +42,7 @@ class FakeBackend : public Backend {
     return Exception::none;
   }
 
-  Exception write(const Session& session, std::uint8_t unit, RegisterTable t, std::uint16_t address,
+  Exception write(const Session& session, std::uint8_t unit, Table t, std::uint16_t address,
                   std::span<const std::uint16_t> values, WriteDone done) override {
     last_session = session;
     if (auto e = check(unit, address, values.size()); e != Exception::none) return e;
@@ -51,7 +51,7 @@ class FakeBackend : public Backend {
         session.access < AccessLevel::maintain) {
       return Exception::illegal_function;
     }
-    if (t == RegisterTable::input_registers || t == RegisterTable::discrete_inputs) {
+    if (t == Table::input || t == Table::discrete) {
       return Exception::illegal_data_address;
     }
     if (reject_value && !values.empty() && values[0] == *reject_value) {

@@ -37,11 +37,11 @@ class Pdu : public ::testing::Test {
  protected:
   Pdu() : dispatcher_(backend_, DeviceIdentity{"drivegate", "drivegate", "0.1.0"}) {
     // 6.1 example: coils 20..38 (addresses 0x13..0x25) read CD 6B 05.
-    set_bits(backend_.table(RegisterTable::coils), 0x13, {0xCD, 0x6B, 0x05}, 19);
+    set_bits(backend_.table(Table::coil), 0x13, {0xCD, 0x6B, 0x05}, 19);
     // 6.2 example: discrete inputs 197..218 (addresses 0xC4..0xD9) read AC DB 35.
-    set_bits(backend_.table(RegisterTable::discrete_inputs), 0xC4, {0xAC, 0xDB, 0x35}, 22);
+    set_bits(backend_.table(Table::discrete), 0xC4, {0xAC, 0xDB, 0x35}, 22);
     // 6.3 example: registers 108..110 (addresses 0x6B..0x6D) hold 0x022B, 0x0000, 0x0064.
-    auto& holding = backend_.table(RegisterTable::holding_registers);
+    auto& holding = backend_.table(Table::holding);
     holding[0x6B] = 0x022B;
     holding[0x6C] = 0x0000;
     holding[0x6D] = 0x0064;
@@ -49,7 +49,7 @@ class Pdu : public ::testing::Test {
     const std::uint16_t rw[] = {0x00FE, 0x0ACD, 0x0001, 0x0003, 0x000D, 0x00FF};
     for (std::size_t i = 0; i < 6; ++i) holding[3 + i] = rw[i];
     // 6.4 example: input register 9 (address 0x08) holds 0x000A.
-    backend_.table(RegisterTable::input_registers)[0x08] = 0x000A;
+    backend_.table(Table::input)[0x08] = 0x000A;
   }
 
   // Dispatches `request` for `unit`; a write that completes inside write() (immediate mode) is
@@ -103,19 +103,19 @@ TEST_F(Pdu, ReadInputRegisters_6_4) {
 }
 TEST_F(Pdu, WriteSingleCoil_6_5) {
   EXPECT_EQ(run({0x05, 0x00, 0xAC, 0xFF, 0x00}), (Bytes{0x05, 0x00, 0xAC, 0xFF, 0x00}));
-  EXPECT_EQ(backend_.table(RegisterTable::coils)[0xAC], 1);
+  EXPECT_EQ(backend_.table(Table::coil)[0xAC], 1);
   EXPECT_EQ(run({0x05, 0x00, 0xAC, 0x00, 0x00}), (Bytes{0x05, 0x00, 0xAC, 0x00, 0x00}));
-  EXPECT_EQ(backend_.table(RegisterTable::coils)[0xAC], 0);
+  EXPECT_EQ(backend_.table(Table::coil)[0xAC], 0);
 }
 TEST_F(Pdu, WriteSingleRegister_6_6) {
   EXPECT_EQ(run({0x06, 0x00, 0x01, 0x00, 0x03}), (Bytes{0x06, 0x00, 0x01, 0x00, 0x03}));
-  EXPECT_EQ(backend_.table(RegisterTable::holding_registers)[1], 3);
+  EXPECT_EQ(backend_.table(Table::holding)[1], 3);
 }
 TEST_F(Pdu, WriteMultipleCoils_6_11) {
   EXPECT_EQ(run({0x0F, 0x00, 0x13, 0x00, 0x0A, 0x02, 0xCD, 0x01}),
             (Bytes{0x0F, 0x00, 0x13, 0x00, 0x0A}));
   ASSERT_EQ(backend_.writes.size(), 1u);
-  EXPECT_EQ(backend_.writes[0].table, RegisterTable::coils);
+  EXPECT_EQ(backend_.writes[0].table, Table::coil);
   EXPECT_EQ(backend_.writes[0].address, 0x13);
   // CD 01: coils 20..29 = 1 0 1 1 0 0 1 1 1 0 (6.11)
   EXPECT_EQ(backend_.writes[0].values, (std::vector<std::uint16_t>{1, 0, 1, 1, 0, 0, 1, 1, 1, 0}));
@@ -368,13 +368,13 @@ TEST_F(Pdu, DeviceRefusalAndTimeoutBecomeExceptions) {
   run(cat({{0x17}, regs(3, 1), regs(0, 1), {0x02, 0, 0}}));
   backend_.complete(Exception::gateway_target_failed);
   EXPECT_EQ(finish(), (Bytes{0x97, 0x0B}));
-  EXPECT_EQ(backend_.table(RegisterTable::coils)[1], 0);
+  EXPECT_EQ(backend_.table(Table::coil)[1], 0);
 }
 
 // 6.17: a read range that cannot be served is refused before the write starts, so the write is
 // never applied (before the fix the setpoint changed and the client saw 0x97 0x02).
 TEST_F(Pdu, ReadWriteWithAnUnmappedReadRangeWritesNothing_6_17) {
-  auto& holding = backend_.table(RegisterTable::holding_registers);
+  auto& holding = backend_.table(Table::holding);
   // Read 0x03FF..0x0400 (0x0400 is in the hole), write 0x0010 = 0x1234.
   EXPECT_EQ(run(cat({{0x17}, regs(0x03FF, 2), regs(0x0010, 1), {0x02, 0x12, 0x34}})),
             (Bytes{0x97, 0x02}));
@@ -398,7 +398,7 @@ TEST_F(Pdu, ReadWriteWithAReadRangePastTheTableEndWritesNothing_6_17) {
   EXPECT_EQ(run(cat({{0x17}, regs(0x0FFF, 2), regs(0x0010, 1), {0x02, 0x12, 0x34}})),
             (Bytes{0x97, 0x02}));
   EXPECT_TRUE(backend_.writes.empty());
-  EXPECT_EQ(backend_.table(RegisterTable::holding_registers)[0x10], 0);
+  EXPECT_EQ(backend_.table(Table::holding)[0x10], 0);
 }
 
 TEST_F(Pdu, ReadWriteWithAnUnknownUnitWritesNothing_6_17) {

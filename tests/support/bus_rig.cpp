@@ -53,19 +53,18 @@ Options options_of(const AdapterDescriptor& adapter, const OptionText& set) {
 class BusRig::Units final : public modbus::Backend {
  public:
   explicit Units(BusRig& rig) : rig_(rig) {}
-  Exception read(const modbus::Session& session, std::uint8_t unit, modbus::RegisterTable table,
+  Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
                  std::uint16_t address, std::span<std::uint16_t> out) override {
     Device* d = find(unit);
     return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->read(session, to_table(table), address, out, rig_.now());
+                        : d->read(session, table, address, out, rig_.now());
   }
-  Exception write(const modbus::Session& session, std::uint8_t unit, modbus::RegisterTable table,
+  Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
                   std::uint16_t address, std::span<const std::uint16_t> values,
                   modbus::WriteDone done) override {
     Device* d = find(unit);
-    return d == nullptr
-               ? Exception::gateway_path_unavailable
-               : d->write(session, to_table(table), address, values, std::move(done), rig_.now());
+    return d == nullptr ? Exception::gateway_path_unavailable
+                        : d->write(session, table, address, values, std::move(done), rig_.now());
   }
 
  private:
