@@ -258,6 +258,29 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
   }
 }
 
+// docs/register-map.md is what `drivegate regmap` prints for docs/register-map.toml (one fact, one
+// place): a change to the map or its printing that leaves the printed map behind fails here.
+TEST(Cli, TheRegisterMapInTheDocsIsWhatRegmapPrints) {
+  const std::filesystem::path docs = std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "docs";
+  const auto r = run({drivegate(), "regmap", "--config", (docs / "register-map.toml").string(),
+                      "--format", "md", "--plugin-dir", plugin_dir().string()});
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::string doc = slurp(docs / "register-map.md");
+  // The file says where it comes from, after its title; the rest is the command's output.
+  const std::string provenance = "register-map.md`.\n";
+  const auto from = doc.find("\n\nThe demo's five drives");
+  const auto to = doc.find(provenance);
+  ASSERT_NE(from, std::string::npos);
+  ASSERT_NE(to, std::string::npos);
+  doc.erase(from + 1, to + provenance.size() - from - 1);
+  const auto trimmed = [](std::string t) {
+    while (!t.empty() && t.back() == '\n') t.pop_back();
+    return t;
+  };
+  EXPECT_EQ(trimmed(doc), trimmed(r.out))
+      << "regenerate: drivegate regmap --config docs/register-map.toml --format md";
+}
+
 TEST(Cli, RegmapPrintsTheServedMap) {
   TempDir dir;
   std::ofstream(dir / "gw.toml") << kConfig;
