@@ -301,15 +301,7 @@ TEST_F(Capture, AThirdCaptureAtOnceIsRefusedAndThePageStaysServed) {
     long_ones.push_back(std::make_unique<Child>(
         capture_args(cases_[0].id, 300, dir_ / ("long" + std::to_string(i) + ".pcap"))));
   }
-  const auto streaming = [&] {
-    const std::string log = slurp(dir_ / "drivegated.log");
-    std::size_t n = 0;
-    for (auto at = log.find(" for 300 s"); at != std::string::npos;
-         at = log.find(" for 300 s", at + 1)) {
-      ++n;
-    }
-    return n;
-  };
+  const auto streaming = [&] { return occurrences(slurp(dir_ / "drivegated.log"), " for 300 s"); };
   ASSERT_TRUE(eventually([&] { return streaming() == 2; }));
   Child third(capture_args(cases_[0].id, 1, dir_ / "third.pcap"), dir_ / "third.err");
   EXPECT_EQ(third.wait_exit(10s), 1);

@@ -64,8 +64,8 @@ std::string pair_on_one_line(const std::filesystem::path& port, const std::strin
                              int poll_b, const std::string& first_extra = "") {
   std::string toml = "[[bus]]\nname = \"line\"\nport = \"" + port.string() + "\"\n";
   for (int unit = 1; unit <= 2; ++unit) {
-    toml += "\n[[device]]\nname = \"dev-" + std::to_string(unit) + "\"\nbus = \"line\"\nadapter = \"" +
-            adapter + "\"\nunit_id = " + std::to_string(unit) +
+    toml += "\n[[device]]\nname = \"dev-" + std::to_string(unit) +
+            "\"\nbus = \"line\"\nadapter = \"" + adapter + "\"\nunit_id = " + std::to_string(unit) +
             "\naddress = " + std::to_string(unit) +
             (unit == 2 ? "\npoll_ms = " + std::to_string(poll_b) : std::string()) + "\n" +
             (unit == 1 ? first_extra : std::string());
@@ -78,27 +78,40 @@ bool online_unit(Plc& plc, int unit) {
   return online(plc);
 }
 
+// Two eDrives on one line (the second's poll_ms 500), both online, the first running at 3000 rpm
+// on the PLC's command: where every reload test of a running drive starts.
+struct RunningPair {
+  TempDir dir;
+  Sim sim{"unicla-edrive", dir / "line", {"--address", "1", "--address", "2"}};
+  Daemon daemon{
+      dir, pair_on_one_line(dir / "line", "unicla-edrive", 500), {}, dir / "drivegated.log"};
+  Plc plc{daemon.port()};
+
+  void start() {
+    ASSERT_TRUE(plc.connect());
+    ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
+    plc.unit(1);
+    ASSERT_EQ(plc.write(reg::command, {1, 3000}), 0);
+    ASSERT_TRUE(eventually(
+        [&] { return sim.control("@1 state").find("rpm=3000") != std::string::npos; }, 15s))
+        << sim.control("@1 state");
+  }
+};
+
 // Two eDrives on one line, the first running at 3000 rpm on the PLC's command; only the second's
 // poll_ms changes. The first keeps its command block (run, 3000), a new setpoint reaches it, and
 // the line is not reopened; the log says what changed and what was kept.
 TEST(ReloadDiffE2E, ANeighboursChangeLeavesARunningDriveAsItRuns) {
-  TempDir dir;
-  Sim sim("unicla-edrive", dir / "line", {"--address", "1", "--address", "2"});
-  Daemon daemon(dir, pair_on_one_line(dir / "line", "unicla-edrive", 500), {},
-                dir / "drivegated.log");
-  Plc plc(daemon.port());
-  ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
-  plc.unit(1);
-  ASSERT_EQ(plc.write(reg::command, {1, 3000}), 0);
-  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=3000") != std::string::npos; },
-                         15s))
-      << sim.control("@1 state");
+  RunningPair pair;
+  ASSERT_NO_FATAL_FAILURE(pair.start());
+  auto& [dir, sim, daemon, plc] = pair;
 
   std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "unicla-edrive", 250);
   daemon.process().signal(SIGHUP);
   ASSERT_TRUE(eventually(
-      [&] { return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos; },
+      [&] {
+        return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos;
+      },
       10s));
   const std::string log = slurp(dir / "drivegated.log");
   EXPECT_NE(log.find("reload: device dev-2 changed (poll_ms 500 -> 250): started afresh"),
@@ -108,7 +121,8 @@ TEST(ReloadDiffE2E, ANeighboursChangeLeavesARunningDriveAsItRuns) {
   EXPECT_EQ(log.find("reopened"), std::string::npos) << log;
   // The port was opened once, at start-up: the reload kept it open.
   std::size_t opened = 0;
-  for (auto at = log.find("bus line: "); at != std::string::npos; at = log.find("bus line: ", at + 1)) {
+  for (auto at = log.find("bus line: "); at != std::string::npos;
+       at = log.find("bus line: ", at + 1)) {
     if (log.compare(log.find('\n', at) - 5, 5, " open") == 0) ++opened;
   }
   EXPECT_EQ(opened, 1u) << log;
@@ -118,8 +132,8 @@ TEST(ReloadDiffE2E, ANeighboursChangeLeavesARunningDriveAsItRuns) {
   EXPECT_EQ(held.regs[0], 1);     // run_forward, as before the reload
   EXPECT_EQ(held.regs[1], 3000);  // and its setpoint
   EXPECT_EQ(plc.write(reg::setpoint, {4000}), 0);
-  EXPECT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=4000") != std::string::npos; },
-                         15s))
+  EXPECT_TRUE(eventually(
+      [&] { return sim.control("@1 state").find("rpm=4000") != std::string::npos; }, 15s))
       << sim.control("@1 state");
   plc.unit(1);
   EXPECT_EQ(plc.write(reg::command, {0}), 0);
@@ -129,18 +143,9 @@ TEST(ReloadDiffE2E, ANeighboursChangeLeavesARunningDriveAsItRuns) {
 // compressor reports, run at 3000 rpm, never "stop" over a turning compressor; the log says
 // what it found, and a new setpoint reaches it.
 TEST(ReloadDiffE2E, AChangedRunningDriveStartsFromWhatItReports) {
-  TempDir dir;
-  Sim sim("unicla-edrive", dir / "line", {"--address", "1", "--address", "2"});
-  Daemon daemon(dir, pair_on_one_line(dir / "line", "unicla-edrive", 500), {},
-                dir / "drivegated.log");
-  Plc plc(daemon.port());
-  ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
-  plc.unit(1);
-  ASSERT_EQ(plc.write(reg::command, {1, 3000}), 0);
-  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=3000") != std::string::npos; },
-                         15s))
-      << sim.control("@1 state");
+  RunningPair pair;
+  ASSERT_NO_FATAL_FAILURE(pair.start());
+  auto& [dir, sim, daemon, plc] = pair;
 
   EXPECT_EQ(slurp(dir / "drivegated.log").find("found running"), std::string::npos);  // stopped
   std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "unicla-edrive", 500,
@@ -170,8 +175,8 @@ TEST(ReloadDiffE2E, AChangedRunningDriveStartsFromWhatItReports) {
   EXPECT_NE(plc.input(reg::status, 1).regs.at(0) & reg::running, 0);
   EXPECT_NE(sim.control("@1 state").find("rpm=3000"), std::string::npos);  // never stopped
   EXPECT_EQ(plc.write(reg::setpoint, {4000}), 0) << slurp(dir / "drivegated.log");
-  EXPECT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=4000") != std::string::npos; },
-                         15s))
+  EXPECT_TRUE(eventually(
+      [&] { return sim.control("@1 state").find("rpm=4000") != std::string::npos; }, 15s))
       << sim.control("@1 state");
   EXPECT_EQ(plc.write(reg::command, {0}), 0);
 }
@@ -179,17 +184,9 @@ TEST(ReloadDiffE2E, AChangedRunningDriveStartsFromWhatItReports) {
 // The same change with on_start = "stop": the new device stops the compressor it finds
 // running, and the log says so.
 TEST(ReloadDiffE2E, OnStartStopStopsADriveFoundRunning) {
-  TempDir dir;
-  Sim sim("unicla-edrive", dir / "line", {"--address", "1", "--address", "2"});
-  Daemon daemon(dir, pair_on_one_line(dir / "line", "unicla-edrive", 500), {},
-                dir / "drivegated.log");
-  Plc plc(daemon.port());
-  ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return online_unit(plc, 1) && online_unit(plc, 2); }, 10s));
-  plc.unit(1);
-  ASSERT_EQ(plc.write(reg::command, {1, 3000}), 0);
-  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("rpm=3000") != std::string::npos; },
-                         15s));
+  RunningPair pair;
+  ASSERT_NO_FATAL_FAILURE(pair.start());
+  auto& [dir, sim, daemon, plc] = pair;
   std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "unicla-edrive", 500,
                                                      "on_start = \"stop\"\n");
   daemon.process().signal(SIGHUP);
@@ -200,14 +197,15 @@ TEST(ReloadDiffE2E, OnStartStopStopsADriveFoundRunning) {
       },
       15s))
       << slurp(dir / "drivegated.log");
-  EXPECT_NE(slurp(dir / "drivegated.log")
-                .find("device dev-1: found running (speed 3000 rpm): stopping it (on_start = stop)"),
-            std::string::npos)
+  EXPECT_NE(
+      slurp(dir / "drivegated.log")
+          .find("device dev-1: found running (speed 3000 rpm): stopping it (on_start = stop)"),
+      std::string::npos)
       << slurp(dir / "drivegated.log");
   plc.unit(1);
   EXPECT_EQ(plc.holding(reg::command, 1).regs.at(0), 0);
-  EXPECT_TRUE(eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::running) == 0; },
-                         15s));
+  EXPECT_TRUE(
+      eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::running) == 0; }, 15s));
   EXPECT_NE(sim.control("@1 state").find("rpm=0"), std::string::npos);
 }
 
@@ -225,13 +223,13 @@ TEST(ReloadDiffE2E, ANeighboursChangeDoesNotDisarmTheFailsafe) {
   plc.unit(1);
   ASSERT_EQ(plc.write(reg::command, {1, 1500}), 0);
   const auto last_write = std::chrono::steady_clock::now();
-  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("running=1") != std::string::npos; },
-                         5s));
+  ASSERT_TRUE(eventually(
+      [&] { return sim.control("@1 state").find("running=1") != std::string::npos; }, 5s));
   std::this_thread::sleep_for(500ms);
   std::ofstream(daemon.config()) << pair_on_one_line(dir / "line", "ed3100", 250, failsafe);
   daemon.process().signal(SIGHUP);
-  ASSERT_TRUE(eventually([&] { return sim.control("@1 state").find("running=0") != std::string::npos; },
-                         8s))
+  ASSERT_TRUE(eventually(
+      [&] { return sim.control("@1 state").find("running=0") != std::string::npos; }, 8s))
       << "the failsafe never stopped the drive after the reload";
   const auto stopped = std::chrono::steady_clock::now() - last_write;
   EXPECT_LT(stopped, 4s);  // 2 s failsafe, a poll, and wide margins
@@ -257,7 +255,9 @@ TEST(ReloadDiffE2E, AnAccessChangeIsLogged) {
   std::ofstream(daemon.config()) << config("read");
   daemon.process().signal(SIGHUP);
   ASSERT_TRUE(eventually(
-      [&] { return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos; },
+      [&] {
+        return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos;
+      },
       10s));
   EXPECT_NE(slurp(dir / "drivegated.log").find("access operate -> read"), std::string::npos)
       << slurp(dir / "drivegated.log");

@@ -26,12 +26,6 @@ const fs::path kSource = DRIVEGATE_SOURCE_DIR;
 // Debian's python3-pymodbus lives with the system interpreter (`python3` may be a pyenv shim).
 const std::string kPython = "/usr/bin/python3";
 
-std::size_t count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
 // `n` different free loopback ports.
 std::vector<int> free_ports(std::size_t n) {
   std::set<int> ports;
@@ -308,7 +302,7 @@ TEST_F(SecurityTls, EachCertificateRoleGetsItsAccessLevel) {
   EXPECT_THAT(text, HasSubstr("role \"engineer\": access maintain"));
   EXPECT_THAT(text, HasSubstr("CN = norole\", role (none): access read"));
   // Logged once per connection: viewer, operator and norole (twice refused, logged once).
-  EXPECT_EQ(count(text, "beyond its access level"), 3u) << text;
+  EXPECT_EQ(occurrences(text, "beyond its access level"), 3u) << text;
   EXPECT_THAT(text, Not(HasSubstr("TLS handshake failed")));
 }
 
@@ -333,7 +327,7 @@ TEST_F(SecurityTls, AnotherCaExpiredOrNoCertificateFailsTheHandshakeOnly) {
   EXPECT_EQ(engineer.ask("read_holding 1 1"), holding({800}));
   EXPECT_EQ(engineer.ask("write 1 900"), write_ok());
   EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs.at(0), 900);
-  EXPECT_TRUE(eventually([&] { return count(log(), "TLS handshake failed") == 3; })) << log();
+  EXPECT_TRUE(eventually([&] { return occurrences(log(), "TLS handshake failed") == 3; })) << log();
   EXPECT_TRUE(gateway_->process().running());
 }
 
@@ -345,7 +339,7 @@ TEST_F(SecurityTls, PlaintextModbusOnTheTlsPortGetsNoModbusReply) {
   EXPECT_TRUE(r.closed) << "still open 5 s after a plaintext request";
   // Nothing, or a TLS alert record (content type 21): never an MBAP reply to transaction 1.
   EXPECT_TRUE(r.bytes.empty() || r.bytes[0] == 0x15) << "got " << r.bytes.size() << " bytes";
-  EXPECT_TRUE(eventually([&] { return count(log(), "TLS handshake failed") == 1; })) << log();
+  EXPECT_TRUE(eventually([&] { return occurrences(log(), "TLS handshake failed") == 1; })) << log();
   // The same request on the plain listener is answered.
   EXPECT_EQ(raw_request(plain_, 1, {0x04, 0x00, 0x00, 0x00, 0x01}).size(), 4u);
 }
@@ -375,7 +369,7 @@ TEST_F(SecurityTlsUnlimited, AHandshakeFloodIsNotLoggedLineByLine) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_TRUE(eventually([&] { return log().find("like it not logged)") != std::string::npos; }))
       << log();
-  const std::size_t lines = count(log(), "TLS handshake failed");
+  const std::size_t lines = occurrences(log(), "TLS handshake failed");
   EXPECT_GE(lines, 11u) << log();
   EXPECT_LE(static_cast<double>(lines), 10 + std::ceil(seconds)) << log();
   EXPECT_EQ(raw_request(plain_, 1, {0x04, 0x00, 0x00, 0x00, 0x01}).size(), 4u);
@@ -395,12 +389,13 @@ TEST_F(SecurityTls, AHandshakeFloodFromOneAddressIsClosedAtAccept) {
       EXPECT_EQ(raw_request(plain_, 1, {0x04, 0x00, 0x00, 0x00, 0x01}).size(), 4u) << i;
     }
   }
-  ASSERT_TRUE(eventually([&] { return count(log(), "more than 5 TLS handshakes a second") > 0; }))
-      << log();
+  ASSERT_TRUE(eventually([&] {
+    return occurrences(log(), "more than 5 TLS handshakes a second") > 0;
+  })) << log();
   // A hundred connections in well under the 18 s the bucket would need to pass them all: most
   // never got to the handshake.
-  EXPECT_LE(count(log(), "TLS handshake failed"), 40u) << log();
-  EXPECT_LE(count(log(), "more than 5 TLS handshakes a second"), 25u) << log();
+  EXPECT_LE(occurrences(log(), "TLS handshake failed"), 40u) << log();
+  EXPECT_LE(occurrences(log(), "more than 5 TLS handshakes a second"), 25u) << log();
   EXPECT_EQ(raw_request(plain_, 1, {0x04, 0x00, 0x00, 0x00, 0x01}).size(), 4u);
 }
 

@@ -39,12 +39,6 @@ std::string read_file(const std::filesystem::path& p) {
   std::ifstream in(p);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
-std::size_t count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
 std::string bus(const std::string& name, const std::string& port, const std::string& extra = "") {
   return "[[bus]]\nname = \"" + name + "\"\nport = \"" + port + "\"\n" + extra + "\n";
 }
@@ -243,7 +237,7 @@ TEST_F(Ser2netEd3100, KilledServerIsCommLostAndTheBusReconnectsWhenItIsBack) {
   r = far_.input(reg::status, 31);
   EXPECT_EQ(r.regs[reg::fault_code], 0);
   EXPECT_GE(r.u32(bus_reopens), 1u);
-  EXPECT_EQ(count(log(), "bus far: tcp " + far_port() + " open"), 2u) << log();
+  EXPECT_EQ(occurrences(log(), "bus far: tcp " + far_port() + " open"), 2u) << log();
   // The drive ran on meanwhile; it reads so again, and orders reach it.
   EXPECT_TRUE(eventually([&] { return speed(far_) == 1270; }, 5s)) << far_sim_.control("state");
   ASSERT_EQ(far_.write(reg::command, {0 /*stop*/}), 0);

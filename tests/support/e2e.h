@@ -14,9 +14,9 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstdlib>
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -412,6 +412,13 @@ inline std::string slurp(const std::filesystem::path& file) {
   return text.str();
 }
 
+// How many times `what` stands in `text` (a log line's words, overlaps counted).
+inline std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 // One request sent on a new connection whose sending side is then shut down (SHUT_WR) at once:
 // the response PDU that came back, and whether the server closed the connection after it.
 struct HalfClosedAnswer {
@@ -434,8 +441,7 @@ inline HalfClosedAnswer half_closed_request(int port, std::uint8_t unit,
 
 // One request sent on a new connection that is then reset (SO_LINGER 0) once the server has had
 // time to read it, as when a client crashes with a write in flight.
-inline void reset_after_request(int port, std::uint8_t unit,
-                                const std::vector<std::uint8_t>& pdu) {
+inline void reset_after_request(int port, std::uint8_t unit, const std::vector<std::uint8_t>& pdu) {
   const int fd = connect_loopback(port);
   if (fd < 0) return;
   const auto adu = mbap_adu(8, unit, pdu);
