@@ -108,8 +108,7 @@ bool Daemon::start_http() {
   o.port = config_.http.listen.port;
   o.allow = config_.http.allow;
   o.capture = config_.http.capture;
-  // Bursts of twice the rate: a page load's few requests at once are never paced.
-  o.requests = {config_.http.requests_per_s, std::max(1u, 2 * config_.http.requests_per_s)};
+  o.requests = net::RateLimit::per_second_in_bursts_of_two(config_.http.requests_per_s);
   http_ = std::make_unique<http::HttpServer>(io_, *content_, o, log_);
   if (const auto ec = http_->listen()) {
     log_->critical("cannot serve HTTP on {}:{}: {}", o.host, o.port, ec.message());

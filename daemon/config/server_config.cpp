@@ -177,9 +177,7 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
       diag.error(r.node("tls_handshakes_per_s"), r.qualified("tls_handshakes_per_s"),
                  "only a TLS listener does handshakes: add tls = { cert, key, ca }");
     }
-    // Bursts of twice the rate: a PLC reconnecting a few times in a row is never refused.
-    const auto n = static_cast<unsigned>(*v);
-    policy.handshakes = {n, std::max(1u, 2 * n)};
+    policy.handshakes = net::RateLimit::per_second_in_bursts_of_two(static_cast<unsigned>(*v));
   }
   if (const auto* n = r.node("roles")) {
     auto roles = read_roles(*n, r.qualified("roles"), diag);

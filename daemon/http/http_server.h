@@ -24,12 +24,12 @@ namespace drivegate::http {
 struct HttpOptions {
   std::string host = "127.0.0.1";  // numeric, as for Modbus listeners
   std::uint16_t port = 8502;       // 0: ephemeral
-  net::AllowList allow;         // empty: every address
+  net::AllowList allow;            // empty: every address
   std::size_t max_clients = 16;    // past it a client is closed at accept (captures aside)
   // Requests one client address may have served a second, in bursts of `burst`; a request over
   // it waits for its turn (its connection is not read meanwhile), so one client hammering the
   // page slows itself, not the event loop that serves the PLCs. 0: no limit.
-  net::RateLimit requests{20, 40};
+  net::RateLimit requests = net::RateLimit::per_second_in_bursts_of_two(20);
   // A request (its line and headers) must arrive whole within this; a keep-alive connection with
   // no new request for this long is closed.
   std::chrono::milliseconds request_timeout{10'000};

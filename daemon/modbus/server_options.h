@@ -39,7 +39,7 @@ struct ListenerPolicy {
   std::optional<std::size_t> max_clients;
   // TLS handshakes one client address may start (net/address_rate.h): past it a new connection from
   // that address is closed at accept, before the handshake's signature costs the event loop.
-  net::RateLimit handshakes{5, 10};
+  net::RateLimit handshakes = net::RateLimit::per_second_in_bursts_of_two(5);
   friend bool operator==(const ListenerPolicy&, const ListenerPolicy&) = default;
 };
 

@@ -20,6 +20,13 @@ struct RateLimit {
   unsigned per_second = 0;  // 0: unlimited
   unsigned burst = 1;
   friend bool operator==(const RateLimit&, const RateLimit&) = default;
+
+  // What a configured "so many a second" means (tls_handshakes_per_s, [http] requests_per_s):
+  // bursts of twice the rate, so that a client's few at once (a PLC reconnecting, a page load's
+  // requests) are never held back.
+  static constexpr RateLimit per_second_in_bursts_of_two(unsigned n) {
+    return {n, n > 0 ? 2 * n : 1};
+  }
 };
 
 class AddressRate {
