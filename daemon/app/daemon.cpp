@@ -109,7 +109,7 @@ bool Daemon::start_http() {
   o.allow = config_.http.allow;
   o.capture = config_.http.capture;
   o.requests = net::RateLimit::per_second_in_bursts_of_two(config_.http.requests_per_s);
-  http_ = std::make_unique<http::HttpServer>(io_, *content_, o, log_);
+  http_ = std::make_unique<http::HttpServer>(io_, clock_, *content_, o, log_);
   if (const auto ec = http_->listen()) {
     log_->critical("cannot serve HTTP on {}:{}: {}", o.host, o.port, ec.message());
     return false;
@@ -158,7 +158,7 @@ int Daemon::run() {
   so.frame_timeout = config_.server.frame_timeout;
   so.identity.product = "drivegate Modbus TCP gateway";
   so.identity.version = DRIVEGATE_VERSION;
-  server_ = std::make_unique<modbus::Server>(io_, backend_, so, log_);
+  server_ = std::make_unique<modbus::Server>(io_, clock_, backend_, so, log_);
   if (const auto ec = server_->listen()) {  // the server logged which listener, and why
     log_->critical("Modbus TCP server not started: {}", ec.message());
     return 1;

@@ -22,6 +22,7 @@
 #include "http/http_server.h"
 #include "modbus/server.h"
 #include "mqtt/northbound.h"
+#include "net/clock.h"
 #include "status_content.h"
 #include "systemd_notifier.h"
 
@@ -53,6 +54,7 @@ class Daemon {
   DaemonOptions options_;
   std::shared_ptr<spdlog::logger> log_;
   boost::asio::io_context io_;
+  net::SteadyClock clock_;  // the network servers' time (net/clock.h)
   boost::asio::signal_set signals_;
   boost::asio::steady_timer status_timer_;
   boost::asio::steady_timer watchdog_timer_;

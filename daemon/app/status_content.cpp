@@ -64,7 +64,7 @@ StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
     v.mqtt = &mqtt;
   }
   if (http_) {
-    v.http = &http_->stats();
+    v.http = http_->stats();
     v.http_clients = http_->client_count();
   }
   return v;

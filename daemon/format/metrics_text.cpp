@@ -261,7 +261,10 @@ void listener_metrics(Writer& w, const StatusView& view) {
   family("drivegate_modbus_writes_denied_total", "counter",
          "writes refused with exception 01: beyond the connection's access level",
          [](const auto& l) { return l.writes_denied; });
-  const auto& all = s.stats();  // the server's, every listener's together
+  family("drivegate_modbus_received_bytes_total", "counter",
+         "bytes the listener's clients sent (TLS: after decryption)",
+         [](const auto& l) { return l.bytes_received; });
+  const auto all = s.stats();  // every listener's together
   w.single("drivegate_modbus_malformed_total", "counter",
            "connections closed on a frame that is not Modbus TCP",
            static_cast<double>(all.malformed));
@@ -274,7 +277,7 @@ void listener_metrics(Writer& w, const StatusView& view) {
   char extra[32];
   w.family("drivegate_modbus_requests_total", "counter", "requests, by function code");
   for (std::size_t i = 0; i < s.listener_count(); ++i) {
-    const auto& r = s.listener_stats(i).requests;
+    const auto r = s.listener_stats(i).by_function;
     for (std::size_t fc = 0; fc < r.size(); ++fc) {
       if (r[fc] == 0) continue;
       const auto end = fc == 0 ? fmt::format_to(extra, ",function=\"other\"")
@@ -285,7 +288,7 @@ void listener_metrics(Writer& w, const StatusView& view) {
   }
   w.family("drivegate_modbus_exceptions_total", "counter", "exception responses, by code");
   for (std::size_t i = 0; i < s.listener_count(); ++i) {
-    const auto& e = s.listener_stats(i).exceptions;
+    const auto e = s.listener_stats(i).exceptions;
     for (std::size_t code = 1; code < e.size(); ++code) {
       if (e[code] == 0) continue;
       const auto end = fmt::format_to(extra, ",code=\"0x{:02X}\"", code);
@@ -367,7 +370,7 @@ void metrics_text(const StatusView& view, std::string& out) {
   bus_metrics(w, view);
   listener_metrics(w, view);
   if (view.mqtt != nullptr) mqtt_metrics(w, *view.mqtt);
-  if (view.http != nullptr) http_metrics(w, *view.http, view.http_clients);
+  if (view.http) http_metrics(w, *view.http, view.http_clients);
 }
 
 std::string metrics_text(const StatusView& view) {

@@ -131,7 +131,7 @@ void bus_json(std::string& out, const Bus& b) {
 
 void listener_json(std::string& out, const modbus::Server& server, std::size_t i) {
   const auto& o = server.listener(i);
-  const auto& s = server.listener_stats(i);
+  const auto s = server.listener_stats(i);
   out += "{\"address\": ";
   append_json_string(out, fmt::format("{}:{}", o.host, server.port(i)));
   fmt::format_to(std::back_inserter(out),
@@ -214,13 +214,13 @@ void status_json(const StatusView& view, std::string& out) {
     out += i == 0 ? "\n" : ",\n";
     listener_json(out, view.server, i);
   }
-  const auto& s = view.server.stats();
+  const auto s = view.server.stats();
   fmt::format_to(std::back_inserter(out),
                  "],\n\"modbus\": {{\"clients\": {}, \"requests\": {}, \"malformed\": {}, "
                  "\"refused\": {}}}",
                  view.server.client_count(), s.requests, s.malformed, s.connections_refused);
   if (view.mqtt != nullptr) mqtt_json(out, *view.mqtt);
-  if (view.http != nullptr) http_json(out, *view.http, view.http_clients);
+  if (view.http) http_json(out, *view.http, view.http_clients);
   out += "}\n";
 }
 

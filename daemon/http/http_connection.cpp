@@ -13,7 +13,6 @@
 
 namespace drivegate::http {
 
-namespace beast = boost::beast;
 namespace bhttp = boost::beast::http;
 
 namespace {
@@ -30,8 +29,9 @@ HttpConnection::HttpConnection(std::shared_ptr<HttpState> state,
     : state_(std::move(state)),
       stream_(std::move(socket)),
       buffer_(kHeaderLimit),
-      pace_timer_(stream_.get_executor()),
-      capture_timer_(stream_.get_executor()) {}
+      deadline_(stream_.get_executor(), state_->clock),
+      pace_timer_(stream_.get_executor(), state_->clock),
+      capture_timer_(stream_.get_executor(), state_->clock) {}
 
 HttpConnection::~HttpConnection() {
   close();
@@ -45,14 +45,14 @@ void HttpConnection::start() {
   // Without it, Nagle holds each write slice after the first until the client ACKs the one before,
   // and a client that delays its ACKs (Linux: 40 ms) gets a kept-alive document that late.
   stream_.socket().set_option(boost::asio::ip::tcp::no_delay(true), ec);
-  state_->live.insert(this);
-  ++state_->stats.accepted;
+  state_->live.insert(this);  // the acceptor counted it in
   read();
 }
 
 void HttpConnection::close() {
   if (closed_) return;
   closed_ = true;
+  deadline_.cancel();
   pace_timer_.cancel();
   capture_timer_.cancel();
   if (capturing_) {
@@ -63,14 +63,31 @@ void HttpConnection::close() {
   boost::system::error_code ec;
   stream_.socket().shutdown(boost::asio::ip::tcp::socket::shutdown_both, ec);
   stream_.socket().close(ec);
-  state_->live.erase(this);
+  if (state_->live.erase(this) != 0) state_->acceptor->left();
+}
+
+// One deadline for the operation in flight: a whole request to arrive, or the client to take what
+// it is sent; past it the connection closes. Each completion cancels it: nothing is due while
+// the server itself holds the connection (a paced request, a capture waiting for frames).
+void HttpConnection::within_timeout(bool awaiting_request) {
+  awaiting_request_ = awaiting_request;
+  deadline_.expires_after(state_->options.request_timeout);
+  deadline_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+    if (ec || self->closed_) return;
+    if (self->awaiting_request_) {
+      ++self->state_->stats.timeouts;
+      self->state_->log->debug("http: client {}: no whole request in {} ms, closing", self->peer_,
+                               self->state_->options.request_timeout.count());
+    }
+    self->close();
+  });
 }
 
 void HttpConnection::read() {
   parser_.emplace();
   parser_->header_limit(kHeaderLimit);
   parser_->body_limit(0);  // GET and HEAD carry no body: one that does is refused
-  stream_.expires_after(state_->options.request_timeout);
+  within_timeout(true);
   // The header only: a request announcing a body (Content-Length or chunked) is refused before a
   // byte of the body is parsed. Beast 1.74's chunk parser asserts on a final chunk that arrives
   // a byte at a time (fatal where assertions are on: Debug builds, and Debian's
@@ -88,21 +105,15 @@ void HttpConnection::read() {
 
 void HttpConnection::on_read(const boost::system::error_code& ec) {
   if (closed_) return;
+  deadline_.cancel();  // a paced request waits without one: it is the server that holds it
   if (ec == bhttp::error::end_of_stream || ec == boost::asio::error::eof ||
       ec == boost::asio::error::connection_reset) {
     close();
     return;
   }
-  if (ec == beast::error::timeout) {
-    ++state_->stats.timeouts;
-    state_->log->debug("http: client {}: no whole request in {} ms, closing", peer_,
-                       state_->options.request_timeout.count());
-    close();
-    return;
-  }
   if (ec) {
     ++state_->stats.bad_requests;
-    if (const auto held = state_->bad_request_log.admit(std::chrono::steady_clock::now())) {
+    if (const auto held = state_->bad_request_log.admit(state_->clock.now())) {
       state_->log->info("http: client {}: bad request ({}), closing{}", peer_, ec.message(),
                         net::held_note(*held));
     }
@@ -116,7 +127,7 @@ void HttpConnection::on_read(const boost::system::error_code& ec) {
 
 void HttpConnection::serve() {
   if (closed_) return;
-  const auto now = std::chrono::steady_clock::now();
+  const auto now = state_->clock.now();
   if (!state_->request_rate.admit(address_, now)) {
     // Over its share: the request waits for the address's next token and nothing more is read
     // from this connection meanwhile, so a hammering client slows itself down (TCP's window
@@ -170,7 +181,7 @@ void HttpConnection::reply(unsigned status, const std::string& content_type, std
   const std::size_t size = body.size();
   if (!head) response_.body() = std::move(body);
   response_.content_length(size);
-  stream_.expires_after(state_->options.request_timeout);  // a client that does not read
+  within_timeout(false);  // a client that does not read
   response_writer_.emplace(response_);
   response_writer_->limit(kWriteSlice);
   bhttp::async_write(
@@ -182,6 +193,7 @@ void HttpConnection::reply(unsigned status, const std::string& content_type, std
 
 void HttpConnection::on_written(const boost::system::error_code& ec, bool keep_alive) {
   if (closed_) return;
+  deadline_.cancel();
   if (ec || !keep_alive) {
     close();
     return;
@@ -234,11 +246,12 @@ void HttpConnection::serve_capture(const CaptureRequest& request) {
   stream_head_.chunked(true);
   serializer_.emplace(stream_head_);
   capture_writing_ = true;
-  stream_.expires_after(state_->options.request_timeout);
+  within_timeout(false);
   bhttp::async_write_header(
       stream_, *serializer_,
       [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
         self->capture_writing_ = false;
+        self->deadline_.cancel();
         if (ec) {
           self->close();
           return;
@@ -271,11 +284,12 @@ void HttpConnection::pump_capture() {
   if (!data.empty()) {
     chunk_ = std::move(data);
     capture_writing_ = true;
-    stream_.expires_after(state_->options.request_timeout);  // a client that does not read
+    within_timeout(false);  // a client that does not read
     boost::asio::async_write(
         stream_, bhttp::make_chunk(boost::asio::buffer(chunk_)),
         [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
           self->capture_writing_ = false;
+          self->deadline_.cancel();  // between chunks the stream waits on the bus, not the client
           if (ec) {
             self->state_->log->debug("http: client {}: capture stream: {}", self->peer_,
                                      ec.message());
@@ -291,7 +305,7 @@ void HttpConnection::pump_capture() {
   capture_timer_.cancel();
   capture_.reset();  // the tap goes now; what it held has been written
   state_->log->info("http: client {}: capture of bus {} done", peer_, capture_bus_);
-  stream_.expires_after(state_->options.request_timeout);
+  within_timeout(false);
   boost::asio::async_write(stream_, bhttp::make_chunk_last(),
                            [self = shared_from_this()](const boost::system::error_code&,
                                                        std::size_t) { self->close(); });

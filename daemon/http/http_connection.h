@@ -7,7 +7,6 @@
 #pragma once
 
 #include <array>
-#include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
 #include <boost/beast/core/tcp_stream.hpp>
 #include <boost/beast/http/empty_body.hpp>
@@ -18,6 +17,7 @@
 #include <optional>
 
 #include "http_state.h"
+#include "net/clock.h"
 #include "routes.h"
 
 namespace drivegate::http {
@@ -30,6 +30,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   void close();
 
  private:
+  void within_timeout(bool awaiting_request);
   void read();
   void on_read(const boost::system::error_code& ec);
   // Answers the parsed request, or, when its address has used its share of requests for now,
@@ -55,8 +56,10 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   std::optional<boost::beast::http::response_serializer<boost::beast::http::string_body>>
       response_writer_;
   std::string peer_;
-  boost::asio::ip::address address_;      // the client's, for the request rate
-  boost::asio::steady_timer pace_timer_;  // a request waiting for its turn
+  boost::asio::ip::address address_;  // the client's, for the request rate
+  net::Timer deadline_;  // request_timeout: for a whole request, or for the client to read
+  bool awaiting_request_ = false;  // what deadline_ waits for is a request (counted `timeouts`)
+  net::Timer pace_timer_;          // a request waiting for its turn
   bool closed_ = false;
   bool capturing_ = false;  // counted in HttpState::capturing
 
@@ -65,7 +68,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   boost::beast::http::response<boost::beast::http::empty_body> stream_head_;
   std::optional<boost::beast::http::response_serializer<boost::beast::http::empty_body>>
       serializer_;
-  boost::asio::steady_timer capture_timer_;
+  net::Timer capture_timer_;
   std::string chunk_;              // being written
   bool capture_writing_ = false;   // a write is in flight
   bool capture_posted_ = false;    // pump_capture() is posted

@@ -5,7 +5,6 @@
 #include <vector>
 
 #include "http_connection.h"
-#include "net/accept_errors.h"
 #include "net/listen_host.h"
 
 namespace drivegate::http {
@@ -15,47 +14,18 @@ using asio::ip::tcp;
 
 namespace {
 
-void accept(const std::shared_ptr<HttpState>& state);
-
-void on_accept(const std::shared_ptr<HttpState>& state, const boost::system::error_code& ec,
-               tcp::socket socket) {
-  if (state->closed || ec == asio::error::operation_aborted) return;
-  if (!ec) {
-    boost::system::error_code peer_ec;
-    const auto peer = socket.remote_endpoint(peer_ec);
-    boost::system::error_code ignored;
-    if (peer_ec || !net::allowed(state->options.allow, peer.address())) {
-      ++state->stats.not_allowed;
-      state->log->debug("http: {} not in the allow list: closed at accept",
-                        peer_ec ? peer_ec.message() : peer.address().to_string());
-      socket.close(ignored);
-    } else if (state->live.size() - state->capturing >= state->options.max_clients) {
-      ++state->stats.refused;
-      socket.close(ignored);
-    } else {
-      std::make_shared<HttpConnection>(state, std::move(socket))->start();
-    }
-  } else {
-    net::after_accept_error(ec, "http", *state->log, state->accept_error_log, state->retry_timer,
-                               [state] {
-                                 if (!state->closed) accept(state);
-                               });
-    return;
-  }
-  accept(state);
-}
-
-void accept(const std::shared_ptr<HttpState>& state) {
-  state->acceptor.async_accept([state](const boost::system::error_code& ec, tcp::socket socket) {
-    on_accept(state, ec, std::move(socket));
-  });
+// The status page's rule for a client its allow list let through: a slot of max_clients
+// (captures have their own, HttpOptions::max_captures).
+net::Admission admit(const HttpState& state) {
+  return state.live.size() - state.capturing < state.options.max_clients ? net::Admission::take
+                                                                         : net::Admission::refuse;
 }
 
 }  // namespace
 
-HttpServer::HttpServer(asio::io_context& io, Content& content, HttpOptions options,
-                       std::shared_ptr<spdlog::logger> log)
-    : state_(std::make_shared<HttpState>(io, content, std::move(options), std::move(log))) {}
+HttpServer::HttpServer(asio::io_context& io, net::Clock& clock, Content& content,
+                       HttpOptions options, std::shared_ptr<spdlog::logger> log)
+    : state_(std::make_shared<HttpState>(io, clock, content, std::move(options), std::move(log))) {}
 
 HttpServer::~HttpServer() {
   close();
@@ -65,43 +35,40 @@ std::error_code HttpServer::listen() {
   const auto host = net::parse_listen_host(state_->options.host);
   if (!host) return std::make_error_code(std::errc::invalid_argument);
   // Every interface here is every IPv4 one (the status page is for the plant's network).
-  const asio::ip::address address =
-      host->any ? asio::ip::address(asio::ip::address_v4::any()) : host->address;
-  boost::system::error_code ec;
-  const tcp::endpoint endpoint(address, state_->options.port);
-  auto& a = state_->acceptor;
-  a.open(endpoint.protocol(), ec);
-  if (!ec) a.set_option(tcp::acceptor::reuse_address(true), ec);
-  if (!ec) a.bind(endpoint, ec);
-  if (!ec) a.listen(asio::socket_base::max_listen_connections, ec);
-  if (ec) {
-    boost::system::error_code ignored;
-    a.close(ignored);
+  if (const auto ec = state_->acceptor->bind(*host, state_->options.port,
+                                             asio::socket_base::max_listen_connections,
+                                             net::AnyAddress::ipv4)) {
     return ec;
   }
   state_->log->info("http: status page, /api/v1/status and /metrics on http://{}:{}/",
-                    address.to_string(), port());
-  accept(state_);
+                    state_->acceptor->local_endpoint().address().to_string(), port());
+  const std::shared_ptr<HttpState> state = state_;
+  state_->acceptor->start([state](const asio::ip::address&) { return admit(*state); },
+                          [state](tcp::socket socket) {
+                            std::make_shared<HttpConnection>(state, std::move(socket))->start();
+                          });
   return {};
 }
 
 std::uint16_t HttpServer::port() const {
-  boost::system::error_code ec;
-  return state_->acceptor.local_endpoint(ec).port();
+  return state_->acceptor->local_endpoint().port();
 }
 
 void HttpServer::close() {
   if (state_->closed) return;
   state_->closed = true;
-  boost::system::error_code ignored;
-  state_->acceptor.close(ignored);
-  state_->retry_timer.cancel();
+  state_->acceptor->close();
   const std::vector<HttpConnection*> open(state_->live.begin(), state_->live.end());
   for (HttpConnection* c : open) c->close();
 }
 
-const HttpStats& HttpServer::stats() const {
-  return state_->stats;
+HttpStats HttpServer::stats() const {
+  HttpStats out = state_->stats;
+  const net::AcceptStats& a = state_->acceptor->stats();
+  out.accepted = a.accepted;
+  out.not_allowed = a.not_allowed;
+  out.refused = a.refused;
+  return out;
 }
 
 std::size_t HttpServer::client_count() const {

@@ -18,6 +18,7 @@
 #include "http_stats.h"
 #include "net/address_rate.h"
 #include "net/allow_list.h"
+#include "net/clock.h"
 
 namespace drivegate::http {
 
@@ -45,7 +46,8 @@ struct HttpState;
 
 class HttpServer {
  public:
-  HttpServer(boost::asio::io_context& io, Content& content, HttpOptions options,
+  // Every timeout is measured on `clock` (net/clock.h), which must outlive the server.
+  HttpServer(boost::asio::io_context& io, net::Clock& clock, Content& content, HttpOptions options,
              std::shared_ptr<spdlog::logger> log);
   ~HttpServer();  // close()
   HttpServer(const HttpServer&) = delete;
@@ -55,7 +57,7 @@ class HttpServer {
   [[nodiscard]] std::uint16_t port() const;
   // Stops accepting and closes every connection.
   void close();
-  [[nodiscard]] const HttpStats& stats() const;
+  [[nodiscard]] HttpStats stats() const;
   [[nodiscard]] std::size_t client_count() const;
 
  private:

@@ -1,14 +1,15 @@
-// What the HTTP acceptor and its connections share; kept alive by every pending handler.
+// What the HTTP server's acceptor and connections share; kept alive by every pending handler.
 #pragma once
 
 #include <spdlog/logger.h>
 
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/asio/steady_timer.hpp>
+#include <memory>
 #include <unordered_set>
 
 #include "http_server.h"
+#include "net/acceptor.h"
 #include "net/address_rate.h"
+#include "net/clock.h"
 #include "net/log_throttle.h"
 
 namespace drivegate::http {
@@ -16,28 +17,27 @@ namespace drivegate::http {
 class HttpConnection;
 
 struct HttpState {
-  HttpState(boost::asio::io_context& io_, Content& content_, HttpOptions options_,
-            std::shared_ptr<spdlog::logger> log_)
+  HttpState(boost::asio::io_context& io_, net::Clock& clock_, Content& content_,
+            HttpOptions options_, std::shared_ptr<spdlog::logger> log_)
       : io(io_),
+        clock(clock_),
         content(content_),
         options(std::move(options_)),
         log(std::move(log_)),
-        acceptor(io_),
-        retry_timer(io_),
+        acceptor(std::make_shared<net::Acceptor>(io_, clock_, log, "http", options.allow)),
         request_rate(options.requests) {}
   boost::asio::io_context& io;
+  net::Clock& clock;  // every deadline of the server and its connections (net/clock.h)
   Content& content;
   const HttpOptions options;
   const std::shared_ptr<spdlog::logger> log;
-  boost::asio::ip::tcp::acceptor acceptor;
-  boost::asio::steady_timer retry_timer;  // accept back-off after EMFILE and the like
+  std::shared_ptr<net::Acceptor> acceptor;
   std::unordered_set<HttpConnection*> live;
-  std::size_t capturing = 0;         // of `live`, the connections streaming a capture
+  std::size_t capturing = 0;      // of `live`, the connections streaming a capture
   net::AddressRate request_rate;  // options.requests, per client address
-  HttpStats stats;
-  net::LogThrottle bad_request_log;   // any client can cause one: a burst, then one a second
-  net::LogThrottle accept_error_log;  // accept() failing (out of descriptors and the like)
-  net::LogThrottle paced_log;         // requests held back by the rate limit
+  HttpStats stats;  // its own counts; the acceptor's (accepted, not allowed, refused) are its
+  net::LogThrottle bad_request_log;  // any client can cause one: a burst, then one a second
+  net::LogThrottle paced_log;        // requests held back by the rate limit
   bool closed = false;
 };
 

@@ -33,7 +33,7 @@ Connection::Connection(std::shared_ptr<ServerState> state, std::shared_ptr<Liste
     : state_(std::move(state)),
       listener_(std::move(listener)),
       socket_(std::move(socket)),
-      timer_(state_->io),
+      timer_(state_->io.get_executor(), state_->clock),
       rx_(kReceiveBuffer),
       writes_(std::max<std::size_t>(1, state_->options.max_pending_writes)) {
   tx_pending_.reserve(kReceiveBuffer);
@@ -53,13 +53,9 @@ void Connection::start() {
   boost::system::error_code ec;
   socket_.set_option(asio::ip::tcp::no_delay(true), ec);  // replies leave at once (issue 9)
   peer_ = socket_.remote_endpoint(ec);
-  state_->live.insert(this);
-  ++state_->stats.connections_accepted;
-  ++state_->stats.connections_active;
-  ++listener_->stats.connections_accepted;
-  ++listener_->stats.connections_active;
+  state_->live.insert(this);  // its listener's acceptor counted it in
   state_->log->debug("modbus: {} connected", who());
-  started_ = last_request_ = Clock::now();
+  started_ = last_request_ = state_->clock.now();
   if (listener_->tls) {
     tls_context_ = listener_->tls;
     tls_.emplace(std::move(socket_), *tls_context_);
@@ -83,13 +79,12 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
   if (closed_) return;
   handshaking_ = false;
   if (ec) {
-    ++state_->stats.tls_handshake_failures;
     ++listener_->stats.tls_handshake_failures;
     // OpenSSL's reason ("certificate verify failed") says little; the verification result
     // says which check failed, and the subject whose certificate it was.
     const long verify = SSL_get_verify_result(tls_->native_handle());
     X509* cert = SSL_get0_peer_certificate(tls_->native_handle());
-    if (const auto held = listener_->handshake_log.admit(Clock::now())) {
+    if (const auto held = listener_->handshake_log.admit(state_->clock.now())) {
       state_->log->warn(
           "modbus: {}: TLS handshake failed: {}{}{}; closing{}", who(), ec.message(),
           verify != X509_V_OK ? std::string(" (") + X509_verify_cert_error_string(verify) + ")"
@@ -108,7 +103,7 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
                     SSL_get_version(tls_->native_handle()), subject_,
                     role_ ? "\"" + *role_ + "\"" : std::string("(none)"),
                     to_string(session_.access));
-  last_request_ = Clock::now();
+  last_request_ = state_->clock.now();
   if (auto deadline = next_deadline(); deadline && *deadline < timer_deadline_) {
     arm_timer(*deadline);
   }
@@ -144,7 +139,7 @@ void Connection::policy_changed() {
   }
 }
 
-std::optional<Connection::Clock::time_point> Connection::evictable_since() const {
+std::optional<net::TimePoint> Connection::evictable_since() const {
   if (closed_ || handshaking_ || session_.access != AccessLevel::read || outstanding_ != 0 ||
       partial_since_) {
     return std::nullopt;
@@ -153,7 +148,6 @@ std::optional<Connection::Clock::time_point> Connection::evictable_since() const
 }
 
 void Connection::evict() {
-  ++state_->stats.connections_evicted;
   ++listener_->stats.connections_evicted;
   close();
 }
@@ -174,10 +168,7 @@ void Connection::close() {
     ++w.generation;
   }
   outstanding_ = 0;
-  if (state_->live.erase(this) != 0) {
-    --state_->stats.connections_active;
-    --listener_->stats.connections_active;
-  }
+  if (state_->live.erase(this) != 0) listener_->acceptor->left();
 }
 
 bool Connection::may_read() const {
@@ -214,14 +205,15 @@ void Connection::on_read(const boost::system::error_code& ec, std::size_t n) {
     return;
   }
   rx_len_ += n;
-  process_input(Clock::now());
+  listener_->stats.bytes_received += n;
+  process_input(state_->clock.now());
   flush();
   read();
 }
 
 // Dispatches every complete request in the receive buffer, stopping at a partial frame, at a
 // malformed header, or at a write when the connection has as many writes outstanding as it may.
-void Connection::process_input(Clock::time_point now) {
+void Connection::process_input(net::TimePoint now) {
   std::size_t offset = 0;
   bool partial = false;
   while (offset < rx_len_) {
@@ -232,7 +224,7 @@ void Connection::process_input(Clock::time_point now) {
       break;
     }
     if (parse.status == MbapParse::Status::bad) {
-      ++state_->stats.malformed;
+      ++listener_->stats.malformed;
       if (const auto held = state_->malformed_log.admit(now)) {
         state_->log->warn("modbus: {}: {}, closing the connection{}", who(), parse.error.message(),
                           net::held_note(*held));
@@ -276,17 +268,16 @@ void Connection::commit_reply(std::size_t at, std::uint16_t transaction, std::ui
   put_mbap(std::span<std::uint8_t>(tx_pending_.data() + at, kMbapHeaderSize), transaction, unit,
            pdu_size);
   tx_pending_.resize(at + kMbapHeaderSize + pdu_size);
-  ++state_->stats.responses;
+  ++listener_->stats.responses;
   const std::uint8_t fc = tx_pending_[at + kMbapHeaderSize];
   if ((fc & 0x80) != 0) {
     const std::uint8_t code = tx_pending_[at + kMbapHeaderSize + 1];
-    state_->count_exception(code);
     ++listener_->stats.exceptions[code < listener_->stats.exceptions.size() ? code : 0];
   }
 }
 
 void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t> pdu) {
-  ++state_->stats.requests;
+  ++listener_->stats.requests;
   const std::size_t at = tx_pending_.size();
   const auto out = reserve_reply();
   Dispatcher::Result result;
@@ -316,9 +307,9 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
       --outstanding_;
     }
   }
-  ++listener_->stats.requests[pdu[0] < listener_->stats.requests.size() ? pdu[0] : 0];
+  auto& by_function = listener_->stats.by_function;
+  ++by_function[pdu[0] < by_function.size() ? pdu[0] : 0];
   if (result.denied) {
-    ++state_->stats.writes_denied;
     ++listener_->stats.writes_denied;
     if (!denial_logged_) {  // once per connection: a PLC retrying must not flood the journal
       denial_logged_ = true;
@@ -357,8 +348,8 @@ void Connection::on_write_done(std::size_t slot, std::uint32_t generation, Excep
 // The client that sent this write can no longer be told how it went: counted and logged, with
 // what became of it, so that a write applied for nobody is never silent.
 void Connection::unanswered(const PendingWrite& w, Exception result, bool settled_after) {
-  ++state_->stats.writes_unanswered;
-  if (const auto held = state_->unanswered_log.admit(Clock::now())) {
+  ++listener_->stats.writes_unanswered;
+  if (const auto held = state_->unanswered_log.admit(state_->clock.now())) {
     state_->log->warn(
         "modbus: {}: write (function 0x{:02X}, unit {}) {} {} the client closed: it was not told"
         "{}",
@@ -385,7 +376,7 @@ void Connection::process_completions() {
     --outstanding_;
   }
   // Requests held back at the cap may go now.
-  if (!close_after_flush_ && rx_len_ > 0) process_input(Clock::now());
+  if (!close_after_flush_ && rx_len_ > 0) process_input(state_->clock.now());
   flush();
   read();
 }
@@ -420,8 +411,8 @@ void Connection::on_flushed(const boost::system::error_code& ec) {
   read();
 }
 
-std::optional<Connection::Clock::time_point> Connection::next_deadline() const {
-  std::optional<Clock::time_point> deadline;
+std::optional<net::TimePoint> Connection::next_deadline() const {
+  std::optional<net::TimePoint> deadline;
   const auto& o = state_->options;
   if (handshaking_) return started_ + handshake_limit(o);
   if (o.idle_timeout.count() > 0) deadline = last_request_ + o.idle_timeout;
@@ -443,7 +434,7 @@ void Connection::limits_changed() {
 
 // One timer per connection, moved only when a deadline comes earlier than the armed one; when it
 // fires it checks what is really due (requests push the idle deadline without touching it).
-void Connection::arm_timer(Clock::time_point deadline) {
+void Connection::arm_timer(net::TimePoint deadline) {
   timer_deadline_ = deadline;
   timer_.expires_at(deadline);
   timer_.async_wait(
@@ -452,11 +443,10 @@ void Connection::arm_timer(Clock::time_point deadline) {
 
 void Connection::on_timer(const boost::system::error_code& ec) {
   if (ec == asio::error::operation_aborted || closed_) return;
-  timer_deadline_ = Clock::time_point::max();
-  const auto now = Clock::now();
+  timer_deadline_ = net::TimePoint::max();
+  const auto now = state_->clock.now();
   const auto& o = state_->options;
   if (handshaking_ && now - started_ >= handshake_limit(o)) {
-    ++state_->stats.tls_handshake_failures;
     ++listener_->stats.tls_handshake_failures;
     if (const auto held = listener_->handshake_log.admit(now)) {
       state_->log->warn("modbus: {}: TLS handshake not finished in {} ms; closing{}", who(),
@@ -466,7 +456,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
     return;
   }
   if (partial_since_ && o.frame_timeout.count() > 0 && now - *partial_since_ >= o.frame_timeout) {
-    ++state_->stats.frame_timeouts;
+    ++listener_->stats.frame_timeouts;
     if (const auto held = state_->frame_timeout_log.admit(now)) {
       state_->log->info("modbus: {}: partial frame for {} ms, closing{}", who(),
                         o.frame_timeout.count(), net::held_note(*held));
@@ -475,7 +465,7 @@ void Connection::on_timer(const boost::system::error_code& ec) {
     return;
   }
   if (o.idle_timeout.count() > 0 && outstanding_ == 0 && now - last_request_ >= o.idle_timeout) {
-    ++state_->stats.idle_timeouts;
+    ++listener_->stats.idle_timeouts;
     state_->log->info("modbus: {}: no request for {} ms, closing", who(), o.idle_timeout.count());
     close();
     return;

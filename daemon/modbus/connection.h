@@ -18,7 +18,6 @@
 #include <array>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/ssl/stream.hpp>
-#include <boost/asio/steady_timer.hpp>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -52,14 +51,12 @@ class Connection : public std::enable_shared_from_this<Connection> {
   // Whether this connection may be closed to make room on its full listener, and since when it
   // has been idle: a read-only session (after any TLS handshake) with no write pending and no
   // partial frame. Operate and maintain sessions never give way.
-  [[nodiscard]] std::optional<std::chrono::steady_clock::time_point> evictable_since() const;
+  [[nodiscard]] std::optional<net::TimePoint> evictable_since() const;
   [[nodiscard]] const ListenerState& listener() const { return *listener_; }
   // Closes it for a newer client on its full listener (counted, and logged by the server).
   void evict();
 
  private:
-  using Clock = std::chrono::steady_clock;
-
   // A write request waiting for its device. The request PDU is kept to build the response.
   struct PendingWrite {
     bool used = false;
@@ -77,7 +74,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void apply_policy();
   void read();
   void on_read(const boost::system::error_code& ec, std::size_t n);
-  void process_input(Clock::time_point now);
+  void process_input(net::TimePoint now);
   void dispatch(const MbapHeader& header, std::span<const std::uint8_t> pdu);
   std::span<std::uint8_t> reserve_reply();
   void commit_reply(std::size_t at, std::uint16_t transaction, std::uint8_t unit,
@@ -88,9 +85,9 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void flush();
   void on_flushed(const boost::system::error_code& ec);
   bool may_read() const;
-  void arm_timer(Clock::time_point deadline);
+  void arm_timer(net::TimePoint deadline);
   void on_timer(const boost::system::error_code& ec);
-  std::optional<Clock::time_point> next_deadline() const;
+  std::optional<net::TimePoint> next_deadline() const;
 
   // The byte stream: the TCP socket itself, or TLS over it (the socket then lives in tls_).
   template <typename F>
@@ -113,8 +110,8 @@ class Connection : public std::enable_shared_from_this<Connection> {
   Session session_;
   std::optional<std::string> role_;  // the TLS client certificate's role, if it has one
   std::string subject_;              // the TLS client certificate's subject
-  boost::asio::steady_timer timer_;
-  Clock::time_point timer_deadline_ = Clock::time_point::max();
+  net::Timer timer_;                 // on the server's clock
+  net::TimePoint timer_deadline_ = net::TimePoint::max();
 
   // Receive buffer: fixed, large reads (many pipelined requests per read), never reallocated.
   std::vector<std::uint8_t> rx_;
@@ -126,9 +123,9 @@ class Connection : public std::enable_shared_from_this<Connection> {
   std::vector<PendingWrite> writes_;
   std::size_t outstanding_ = 0;
 
-  Clock::time_point last_request_;
-  Clock::time_point started_;
-  std::optional<Clock::time_point> partial_since_;  // a partial frame is buffered since then
+  net::TimePoint last_request_;
+  net::TimePoint started_;
+  std::optional<net::TimePoint> partial_since_;  // a partial frame is buffered since then
 
   bool handshaking_ = false;    // TLS: no request is read before the handshake completed
   bool denial_logged_ = false;  // a write beyond the access level is logged once per connection

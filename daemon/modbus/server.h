@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "backend.h"
+#include "net/clock.h"
 #include "server_options.h"
 
 namespace spdlog {
@@ -24,7 +25,9 @@ struct ServerState;
 class Server {
  public:
   // `backend` must outlive the io_context's processing of this server's handlers.
-  Server(boost::asio::io_context& io, Backend& backend, ServerOptions options,
+  // Every timeout of the server and its connections is measured on `clock` (net/clock.h), which
+  // must outlive the server.
+  Server(boost::asio::io_context& io, net::Clock& clock, Backend& backend, ServerOptions options,
          std::shared_ptr<spdlog::logger> log);
   ~Server();  // close()
   Server(const Server&) = delete;
@@ -66,11 +69,12 @@ class Server {
   void set_limits(const ServerLimits& limits);
   ServerLimits limits() const;
 
-  const ServerStats& stats() const;
+  // Every listener's counters added up.
+  ServerStats stats() const;
   // Each listener, in ServerOptions order: its options (the policy in force) and counters.
   std::size_t listener_count() const;
   const ListenerOptions& listener(std::size_t i) const;
-  const ListenerStats& listener_stats(std::size_t i) const;
+  ListenerStats listener_stats(std::size_t i) const;
   std::size_t client_count() const;
 
   // Stops accepting and closes every connection. Replies to pending writes are dropped. Once the

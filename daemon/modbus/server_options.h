@@ -73,30 +73,20 @@ struct ServerOptions {
   ServerLimits limits() const { return {max_clients, frame_timeout, idle_timeout}; }
 };
 
-// One listener's share, for /metrics and the status page.
+// What a listener counts, for /metrics and the status page. The server's totals are the same
+// counters, every listener's added up (Server::stats()): nothing is counted twice.
 struct ListenerStats {
-  std::uint64_t connections_accepted = 0;
+  // Through the listener's acceptor (net/acceptor.h).
+  std::uint64_t connections_accepted = 0;  // served connections (refused ones not included)
   std::uint64_t connections_active = 0;
-  std::uint64_t connections_not_allowed = 0;
-  std::uint64_t connections_refused = 0;  // closed at accept: the listener full, none to evict
-  std::uint64_t connections_evicted = 0;  // read-only clients closed to make room for a new one
-  std::uint64_t tls_handshake_failures = 0;
-  std::uint64_t tls_handshakes_limited = 0;  // closed at accept: the address's handshake rate
-  std::uint64_t writes_denied = 0;
-  // requests[function code] (0x2B is the largest served; others counted in [0]).
-  std::array<std::uint64_t, 0x2C> requests{};
-  std::array<std::uint64_t, 12> exceptions{};  // as ServerStats::exceptions
-};
-
-struct ServerStats {
-  std::uint64_t connections_accepted = 0;     // served connections (refused ones not included)
-  std::uint64_t connections_refused = 0;      // closed at once: the listener full, none to evict
-  std::uint64_t connections_evicted = 0;      // idle read-only clients closed for a new client
   std::uint64_t connections_not_allowed = 0;  // closed at once: address not in the allow list
-  std::uint64_t tls_handshake_failures = 0;   // closed: no valid client certificate, not TLS...
-  std::uint64_t tls_handshakes_limited = 0;   // closed at accept: the address's handshake rate
-  std::uint64_t writes_denied = 0;  // writes answered 01: beyond the connection's access level
-  std::uint64_t connections_active = 0;
+  std::uint64_t connections_refused = 0;      // closed at once: the listener full, none to evict
+  // The server's own.
+  std::uint64_t connections_evicted = 0;     // idle read-only clients closed for a new client
+  std::uint64_t tls_handshake_failures = 0;  // closed: no valid client certificate, not TLS...
+  std::uint64_t tls_handshakes_limited = 0;  // closed at accept: the address's handshake rate
+  std::uint64_t writes_denied = 0;   // writes answered 01: beyond the connection's access level
+  std::uint64_t bytes_received = 0;  // what its clients sent (TLS: after decryption)
   std::uint64_t requests = 0;        // well-formed requests dispatched
   std::uint64_t responses = 0;       // responses and exceptions queued for sending
   std::uint64_t malformed = 0;       // connections closed on a malformed MBAP header
@@ -104,9 +94,16 @@ struct ServerStats {
   std::uint64_t idle_timeouts = 0;   // connections closed for lack of requests
   // Writes that settled (applied or not) after their client had gone: it was never told.
   std::uint64_t writes_unanswered = 0;
+  // by_function[function code]: requests (0x2B is the largest served; others counted in [0]).
+  std::array<std::uint64_t, 0x2C> by_function{};
   // exceptions[code]: exception responses sent, by code (Application Protocol section 7;
   // codes 0x01..0x0B, larger codes counted in [0]).
   std::array<std::uint64_t, 12> exceptions{};
+
+  ListenerStats& operator+=(const ListenerStats& o);
 };
+
+// Every listener's counters added up.
+using ServerStats = ListenerStats;
 
 }  // namespace drivegate::modbus

@@ -6,13 +6,15 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/ssl/context.hpp>
-#include <boost/asio/steady_timer.hpp>
 #include <chrono>
 #include <memory>
 #include <unordered_set>
 #include <vector>
 
 #include "backend.h"
+#include "net/acceptor.h"
+#include "net/address_rate.h"
+#include "net/clock.h"
 #include "net/log_throttle.h"
 #include "pdu.h"
 #include "server_options.h"
@@ -25,44 +27,43 @@ namespace drivegate::modbus {
 
 class Connection;
 
-// One listening socket: its address and policy, and the TLS context its handshakes use (replaced
-// on reload; a connection keeps the one it started with).
+// One listening socket: its policy, the acceptor that takes its clients (net/acceptor.h), and
+// the TLS context its handshakes use (replaced on reload; a connection keeps the one it started
+// with).
 struct ListenerState {
-  ListenerState(boost::asio::io_context& io, ListenerOptions options_)
+  ListenerState(boost::asio::io_context& io, net::Clock& clock,
+                const std::shared_ptr<spdlog::logger>& log, ListenerOptions options_)
       : options(std::move(options_)),
-        acceptor(io),
-        retry_timer(io),
+        acceptor(std::make_shared<net::Acceptor>(io, clock, log, "modbus: " + options.name(),
+                                                 options.policy.allow)),
         handshakes(options.policy.handshakes) {}
+
+  // What it has counted with what its acceptor has (accepted, connected, not allowed, refused).
+  [[nodiscard]] ListenerStats counters() const;
 
   ListenerOptions options;  // policy changed only by Server::reload_listeners
   std::shared_ptr<boost::asio::ssl::context> tls;  // set when options.policy.tls is
-  boost::asio::ip::tcp::acceptor acceptor;
-  boost::asio::steady_timer
-      retry_timer;                    // accept back-off: EMFILE and the like, a limited handshake
-  net::LogThrottle not_allowed_log;   // connections closed at accept: not in the allow list
-  net::LogThrottle handshake_log;     // TLS handshakes that failed or took too long
-  net::LogThrottle accept_error_log;  // accept() failing (out of descriptors and the like)
-  net::LogThrottle refused_log;       // clients refused: full, none to evict
-  net::LogThrottle evicted_log;       // idle read-only clients closed for a new one
-  net::LogThrottle limited_log;       // TLS clients closed at accept: handshake rate
-  net::AddressRate handshakes;        // TLS handshakes per client address
-  ListenerStats stats;
+  std::shared_ptr<net::Acceptor> acceptor;
+  net::LogThrottle handshake_log;  // TLS handshakes that failed or took too long
+  net::LogThrottle refused_log;    // clients refused: full, none to evict
+  net::LogThrottle evicted_log;    // idle read-only clients closed for a new one
+  net::LogThrottle limited_log;    // TLS clients closed at accept: handshake rate
+  net::AddressRate handshakes;     // TLS handshakes per client address
+  ListenerStats stats;             // its own counts; the acceptor's four are in `acceptor`
 };
 
 struct ServerState {
-  ServerState(boost::asio::io_context& io_context, Backend& backend_, ServerOptions options_,
-              std::shared_ptr<spdlog::logger> log_)
+  ServerState(boost::asio::io_context& io_context, net::Clock& clock_, Backend& backend_,
+              ServerOptions options_, std::shared_ptr<spdlog::logger> log_)
       : io(io_context),
+        clock(clock_),
         backend(backend_),
         options(std::move(options_)),
         log(std::move(log_)),
         dispatcher(backend_, options.identity) {}
 
-  void count_exception(std::uint8_t code) {
-    ++stats.exceptions[code < stats.exceptions.size() ? code : 0];
-  }
-
   boost::asio::io_context& io;
+  net::Clock& clock;  // every deadline of the server and its connections (net/clock.h)
   Backend& backend;
   // Changed only by Server::set_limits (max_clients, idle_timeout, frame_timeout); the rest is
   // fixed once the server is built (the write slots and the identity are sized and copied at
@@ -70,7 +71,6 @@ struct ServerState {
   // its ListenerState.
   ServerOptions options;
   const std::shared_ptr<spdlog::logger> log;
-  ServerStats stats;
   Dispatcher dispatcher;  // shared: single-threaded, and never re-entered (see Connection)
   std::vector<std::shared_ptr<ListenerState>> listeners;
   std::unordered_set<Connection*> live;  // open connections, every listener's

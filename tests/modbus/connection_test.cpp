@@ -131,8 +131,9 @@ TEST(Connection, RequestSplitAtEveryByteIsAnswered) {
   RawClient c(h.port());
   const Bytes req = request(0x0A0B, 2, {0x04, 0x00, 0x08, 0x00, 0x01});
   for (std::size_t split = 1; split < req.size(); ++split) {
+    const auto before = h.stats().bytes_received;
     ASSERT_TRUE(c.send(Bytes(req.begin(), req.begin() + static_cast<long>(split))));
-    std::this_thread::sleep_for(2ms);
+    ASSERT_TRUE(h.received(before + split));  // the server read the first part on its own
     ASSERT_TRUE(c.send(Bytes(req.begin() + static_cast<long>(split), req.end())));
     EXPECT_EQ(c.reply(), (Bytes{0x0A, 0x0B, 0x00, 0x00, 0x00, 0x05, 0x02, 0x04, 0x02, 0x00, 0x00}))
         << "split " << split;
@@ -182,10 +183,7 @@ TEST(Connection, ReadWriteWithAnUnmappedReadRangeIsRefusedBeforeTheWrite) {
   // The same write with a readable range goes to the device and is answered once it completed.
   ASSERT_TRUE(c.send(
       request(8, 1, {0x17, 0x00, 0x10, 0x00, 0x01, 0x00, 0x10, 0x00, 0x01, 0x02, 0x12, 0x34})));
-  for (int i = 0; i < 100 && h.with_backend([](FakeBackend& b) { return b.pending.size(); }) == 0;
-       ++i) {
-    std::this_thread::sleep_for(5ms);
-  }
+  ASSERT_TRUE(h.eventually([&h] { return !h.source().pending.empty(); }));
   ASSERT_EQ(h.with_backend([](FakeBackend& b) { return b.pending.size(); }), 1u);
   EXPECT_FALSE(c.readable(50ms));  // the read waits for the write
   h.with_backend([](FakeBackend& b) {
@@ -244,10 +242,7 @@ TEST(Connection, AWriteCompletingAfterItsClientWasResetIsCountedNotDropped) {
     RawClient c(h.port());
     ASSERT_TRUE(c.send(request(1, 1, {0x06, 0x00, 0x01, 0x00, 0x01})));
     ASSERT_TRUE(h.wait_clients(1));
-    for (int i = 0; i < 100 && h.with_backend([](FakeBackend& b) { return b.pending.size(); }) == 0;
-         ++i) {
-      std::this_thread::sleep_for(5ms);
-    }
+    ASSERT_TRUE(h.eventually([&h] { return !h.source().pending.empty(); }));
     c.reset();
   }
   ASSERT_TRUE(h.wait_clients(0));
@@ -274,12 +269,9 @@ TEST(Connection, AHalfClosedClientGetsTheReplyToAWriteStillWithItsDevice) {
   RawClient c(h.port());
   ASSERT_TRUE(c.send(request(4, 1, {0x06, 0x00, 0x00, 0x00, 0x01})));
   c.shutdown_write();
-  for (int i = 0; i < 100 && h.with_backend([](FakeBackend& b) { return b.pending.size(); }) == 0;
-       ++i) {
-    std::this_thread::sleep_for(5ms);
-  }
-  std::this_thread::sleep_for(50ms);
-  EXPECT_EQ(h.stats().connections_active, 1u);  // still open, waiting for the write
+  ASSERT_TRUE(h.eventually([&h] { return !h.source().pending.empty(); }));
+  EXPECT_FALSE(c.closed_by_peer(50ms));  // still open, waiting for the write
+  EXPECT_EQ(h.stats().connections_active, 1u);
   h.with_backend([](FakeBackend& b) {
     b.complete();
     return 0;
@@ -335,8 +327,9 @@ TEST_P(ConnectionMbap, SameOutcomeWhenSplitAtEveryByte) {
   for (std::size_t split = 1; split < wire.size(); ++split) {
     RawClient c(h.port());
     ASSERT_TRUE(c.connected());
+    const auto before = h.stats().bytes_received;
     ASSERT_TRUE(c.send(Bytes(wire.begin(), wire.begin() + static_cast<long>(split))));
-    std::this_thread::sleep_for(1ms);
+    ASSERT_TRUE(h.received(before + split)) << "split " << split;
     const bool sent = c.send(Bytes(wire.begin() + static_cast<long>(split), wire.end()));
     if (GetParam().closes) {
       EXPECT_TRUE(c.closed_by_peer(500ms)) << "split " << split;
@@ -412,6 +405,14 @@ TEST(Connection, SeveralRequestsThenAMalformedHeaderInOneSegment) {
   EXPECT_EQ(h.clients(), 1u);
 }
 
+// A request and, in the same send, the first `n` bytes of the next: once the answer is back the
+// server holds the partial frame, and its frame timeout runs from that moment of its clock.
+Bytes answered_then_partial(const Bytes& next, std::size_t n) {
+  Bytes out = request(9, 1, {0x03, 0x00, 0x00, 0x00, 0x01});
+  out.insert(out.end(), next.begin(), next.begin() + static_cast<long>(n));
+  return out;
+}
+
 TEST(Connection, HalfFrameThenStallIsClosedAfterFrameTimeoutWithoutDelayingOthers) {
   ServerOptions o;
   o.frame_timeout = 300ms;
@@ -419,19 +420,18 @@ TEST(Connection, HalfFrameThenStallIsClosedAfterFrameTimeoutWithoutDelayingOther
   RawClient stalled(h.port());
   Libmodbus other(h.port());
   ASSERT_TRUE(other.connected());
-  const auto start = std::chrono::steady_clock::now();
-  ASSERT_TRUE(stalled.send({0x00, 0x01, 0x00}));
-  auto worst = std::chrono::steady_clock::duration::zero();
-  while (std::chrono::steady_clock::now() - start < 600ms) {
-    const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_TRUE(stalled.send(answered_then_partial(request(1, 1, {0x03, 0, 0, 0, 1}), 3)));
+  ASSERT_EQ(stalled.reply().size(), 11u);
+  for (int i = 0; i < 3; ++i) {  // 299 ms of the server's time: the other client is served
     std::uint16_t v;
     ASSERT_EQ(modbus_read_registers(*other, 0, 1, &v), 1);
-    worst = std::max(worst, std::chrono::steady_clock::now() - t0);
+    h.advance(i < 2 ? 100ms : 99ms);
   }
-  EXPECT_LT(worst, 100ms);
-  EXPECT_TRUE(stalled.closed_by_peer(1000ms));
-  const auto closed_after = std::chrono::steady_clock::now() - start;
-  EXPECT_GE(closed_after, 290ms);
+  EXPECT_FALSE(stalled.closed_by_peer(100ms));
+  h.advance(1ms);
+  EXPECT_TRUE(stalled.closed_by_peer(2000ms));
+  std::uint16_t v;
+  EXPECT_EQ(modbus_read_registers(*other, 0, 1, &v), 1);
   EXPECT_EQ(h.stats().frame_timeouts, 1u);
 }
 
@@ -440,18 +440,19 @@ TEST(Connection, ATrickleOfBytesDoesNotExtendTheFrameTimeout) {
   o.frame_timeout = 300ms;
   Harness h(o);
   RawClient c(h.port());
-  const auto start = std::chrono::steady_clock::now();
   const Bytes req = request(1, 1, {0x10, 0x00, 0x00, 0x00, 0x02, 0x04, 0, 0, 0, 0});
-  bool closed = false;
-  for (std::size_t i = 0; i + 1 < req.size() && !closed; ++i) {  // never the last byte
-    c.send({req[i]});
-    closed = c.closed_by_peer(100ms);
+  ASSERT_TRUE(c.send(answered_then_partial(req, 1)));
+  ASSERT_EQ(c.reply().size(), 11u);
+  // A byte every 40 ms of the server's time, never the last: 280 ms after the first, still open.
+  for (std::size_t i = 1; i <= 7; ++i) {
+    ASSERT_TRUE(c.send({req[i]}));
+    h.advance(40ms);
   }
-  if (!closed) closed = c.closed_by_peer(1000ms);
-  EXPECT_TRUE(closed);
-  const auto elapsed = std::chrono::steady_clock::now() - start;
-  EXPECT_GE(elapsed, 290ms);
-  EXPECT_LT(elapsed, 900ms);
+  EXPECT_FALSE(c.closed_by_peer(100ms));
+  ASSERT_TRUE(c.send({req[8]}));
+  h.advance(20ms);  // 300 ms after the first byte, 20 ms after the last
+  EXPECT_TRUE(c.closed_by_peer(2000ms));
+  EXPECT_EQ(h.stats().frame_timeouts, 1u);
 }
 
 TEST(Connection, IdleClientIsClosedAfterIdleTimeout) {
@@ -460,16 +461,16 @@ TEST(Connection, IdleClientIsClosedAfterIdleTimeout) {
   Harness h(o);
   RawClient busy(h.port());
   RawClient idle(h.port());
-  const auto start = std::chrono::steady_clock::now();
-  // `busy` keeps asking and stays; `idle` asks once and is closed 300 ms after that.
+  // `busy` asks every 50 ms and stays; `idle` asks once and is closed 300 ms after that.
   ASSERT_TRUE(idle.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01})));
   EXPECT_EQ(idle.reply().size(), 11u);
-  while (std::chrono::steady_clock::now() - start < 500ms) {
+  for (int i = 1; i <= 10; ++i) {
     ASSERT_TRUE(busy.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01})));
     ASSERT_EQ(busy.reply().size(), 11u);
-    std::this_thread::sleep_for(50ms);
+    h.advance(50ms);
+    if (i == 5) EXPECT_FALSE(idle.closed_by_peer(100ms)) << "250 ms after its request";
+    if (i == 6) EXPECT_TRUE(idle.closed_by_peer(2000ms)) << "300 ms after its request";
   }
-  EXPECT_TRUE(idle.closed_by_peer(500ms));
   EXPECT_FALSE(busy.closed_by_peer(10ms));
   EXPECT_EQ(h.stats().idle_timeouts, 1u);
 }

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "harness.h"
+#include "net/acceptor.h"
 #include "tls.h"
 
 namespace drivegate::modbus {
@@ -203,9 +204,7 @@ TEST_F(Tls, CertificatesFromAnotherCaOrExpiredAreRefusedInTheHandshake) {
   EXPECT_TRUE(exchange(h.port(), "otherca", kReadHolding).empty());
   EXPECT_TRUE(exchange(h.port(), "expired", kReadHolding).empty());
   // The client can see the server's alert before the server's handshake handler has run.
-  for (int i = 0; i < 200 && h.stats().tls_handshake_failures < 2; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
+  h.eventually([&h] { return h.server().stats().tls_handshake_failures >= 2; });
   EXPECT_EQ(h.stats().tls_handshake_failures, 2u);
   EXPECT_EQ(exchange(h.port(), "operator", kReadHolding).size(), 11u);  // others unaffected
   EXPECT_EQ(h.with_backend([](test::FakeBackend& b) { return b.reads; }), 1u);
@@ -218,16 +217,19 @@ TEST_F(Tls, AHandshakeFloodFromOneAddressIsClosedAtAccept) {
   for (int i = 0; i < 3; ++i) {
     EXPECT_EQ(exchange(h.port(0), "operator", kReadHolding).size(), 11u) << i;
   }
-  for (int i = 0; i < 20; ++i) EXPECT_TRUE(exchange(h.port(0), "operator", kReadHolding).empty());
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_TRUE(exchange(h.port(0), "operator", kReadHolding).empty());
+    h.advance(net::kHoldOff);  // the listener takes its next client that much later
+  }
   const auto s = h.stats();
-  EXPECT_GE(s.tls_handshakes_limited, 19u);  // a second may have passed: one more token
-  EXPECT_LE(s.tls_handshake_failures, 1u);   // closed at accept, never handshaken
+  EXPECT_EQ(s.tls_handshakes_limited, 20u);  // 100 ms of the server's time: no token back
+  EXPECT_EQ(s.tls_handshake_failures, 0u);   // closed at accept, never handshaken
   EXPECT_EQ(h.on_io([&] { return h.server().listener_stats(0).tls_handshakes_limited; }),
             s.tls_handshakes_limited);
   RawClient plain(h.port(1));
   plain.send(kReadHolding);
   EXPECT_EQ(plain.reply().size(), 11u);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  h.advance(std::chrono::milliseconds(900));  // a second after the flood began: a token again
   EXPECT_EQ(exchange(h.port(0), "operator", kReadHolding).size(), 11u);
 }
 
@@ -246,6 +248,9 @@ TEST_F(Tls, AClientThatNeverFinishesTheHandshakeIsClosedAfterFrameTimeout) {
   Harness h(o);
   RawClient c(h.port());
   EXPECT_TRUE(h.wait_clients(1));
+  h.advance(std::chrono::milliseconds(199));
+  EXPECT_FALSE(c.closed_by_peer(std::chrono::milliseconds(100)));
+  h.advance(std::chrono::milliseconds(1));
   EXPECT_TRUE(c.closed_by_peer(std::chrono::milliseconds(3000)));
   EXPECT_EQ(h.stats().tls_handshake_failures, 1u);
 }

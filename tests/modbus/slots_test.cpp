@@ -42,6 +42,7 @@ TEST(ListenerSlots, IdleReadClientsNeitherLockOutThePlcNorEachOther) {
   for (int i = 0; i < 32; ++i) {
     idle.push_back(std::make_unique<RawClient>(h.port(0)));
     ASSERT_TRUE(served(*idle.back()));  // each asked once, then went quiet
+    h.advance(1ms);                     // the first the idlest, the last the most recent
   }
   ASSERT_TRUE(h.wait_clients(32));
   RawClient plc(h.port(1));
@@ -83,8 +84,9 @@ TEST(ListenerSlots, AReadClientMidRequestKeepsItsSlot) {
   Harness h(with({{.access = AccessLevel::read, .max_clients = 1}}));
   RawClient busy(h.port());
   ASSERT_TRUE(served(busy));
+  const auto before = h.stats().bytes_received;
   ASSERT_TRUE(busy.send({0x00, 0x02, 0x00}));  // half a header
-  std::this_thread::sleep_for(50ms);
+  ASSERT_TRUE(h.received(before + 3));
   RawClient extra(h.port());
   EXPECT_TRUE(extra.closed_by_peer(1000ms));
   ASSERT_TRUE(busy.send({0x00, 0x00, 0x06, 0x01, 0x03, 0x00, 0x00, 0x00, 0x01}));
