@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """serial_report.py ADAPTER WIRE_LOG WRITES_LOG TURNAROUND_US SIM_LINE FRAME_GAP_MS STREAMING
 
-From a wire-timing simulator log (see tools/drivegate/sim_host.h) and cmdlat.py's write log:
+From a wire-timing simulator log (see cli/sim_host.h) and cmdlat.py's write log:
   poll cycles: maximal runs of request/reply transactions with no idle time over SPLIT_MS
   wire limit of a cycle: sum over its transactions of (request + reply bytes) x character time
     + one turnaround per reply; measured: first request byte read -> last reply byte written;

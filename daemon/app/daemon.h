@@ -17,7 +17,7 @@
 
 #include "backend_switch.h"
 #include "config/config.h"
-#include "config/plugins.h"
+#include "plugin/plugins.h"
 #include "gateway/gateway.h"
 #include "http/http_server.h"
 #include "modbus/server.h"

@@ -8,7 +8,7 @@
 #include "format/regmap_format.h"
 #include "format/status_view.h"
 #include "gateway/device.h"
-#include "line/bus.h"
+#include "bus/bus.h"
 
 namespace drivegate {
 

@@ -23,7 +23,7 @@ inline constexpr std::size_t kRecordHeaderSize = 16;
 struct FrameRecord {
   std::int64_t unix_us = 0;    // wall-clock time, microseconds since the Unix epoch
   std::uint8_t direction = 0;  // 0 gateway -> drive, 1 drive -> gateway
-  std::uint8_t flags = 0;      // line/frame_tap.h frame_flags
+  std::uint8_t flags = 0;      // bus/frame_tap.h frame_flags
   std::uint8_t unit_id = 0;    // the device's Modbus unit id; 0: none
   std::string_view adapter;    // adapter id ("nidec-washer"); empty: no device
   std::string_view device;     // device name from the configuration

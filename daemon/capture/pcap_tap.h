@@ -1,4 +1,4 @@
-// A capture in progress on one line: a FrameTap (line/frame_tap.h) that turns each frame into a
+// A capture in progress on one line: a FrameTap (bus/frame_tap.h) that turns each frame into a
 // pcap record (capture/pcap_format.h) and keeps the bytes until the stream takes them. Bounded:
 // past `max_bytes` in all it records nothing more and says it is full. No I/O of its own.
 #pragma once
@@ -8,7 +8,7 @@
 #include <string>
 #include <unordered_map>
 
-#include "line/frame_tap.h"
+#include "bus/frame_tap.h"
 
 namespace drivegate::capture {
 

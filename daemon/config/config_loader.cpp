@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-#include "adapter_options.h"
+#include "plugin/adapter_options.h"
 #include "base/read_file.h"
 #include "port_address.h"
 #include "mqtt_config.h"

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "config.h"
-#include "plugins.h"
+#include "plugin/plugins.h"
 
 namespace drivegate {
 

@@ -11,7 +11,7 @@
 #include "drivegate/common.h"
 #include "drivegate/driver.h"
 #include "drivegate/point.h"
-#include "line/link.h"
+#include "bus/link.h"
 
 namespace drivegate {
 

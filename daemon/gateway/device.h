@@ -24,7 +24,7 @@
 #include "config/config.h"
 #include "gateway/failsafe.h"
 #include "gateway/register_map.h"
-#include "line/station.h"
+#include "bus/station.h"
 #include "modbus/backend.h"
 #include "net/log_throttle.h"
 

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "config/config.h"
-#include "config/plugins.h"
+#include "plugin/plugins.h"
 #include "device.h"
-#include "line/bus.h"
+#include "bus/bus.h"
 #include "modbus/backend.h"
 
 namespace drivegate {

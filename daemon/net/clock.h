@@ -1,4 +1,4 @@
-// The servers' time, injected as the bus engine's is (line/bus_engine.h's BusClock): every
+// The servers' time, injected as the bus engine's is (bus/bus_engine.h's BusClock): every
 // deadline of a network server (a client idle too long, a frame or a request left unfinished, a
 // TLS handshake that drags, an accept back-off, a paced request) is a time point of a Clock, and
 // waits on a Timer that follows that clock. The daemon runs them on SteadyClock; the tests on a

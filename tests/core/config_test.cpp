@@ -9,7 +9,7 @@
 #include <fstream>
 #include <limits>
 
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 #include "config/config_loader.h"
 #include "fake_adapter.h"
 

@@ -37,7 +37,7 @@ class FailsafeTest : public ::testing::Test {
     device_->link().health.frame_good(t0_);
   }
   TimePoint at(Millis ms) const { return t0_ + ms; }
-  // What the bus engine does at each tick (line/bus_engine.cpp): comm_lost when due, then the
+  // What the bus engine does at each tick (bus/bus_engine.cpp): comm_lost when due, then the
   // device's own tick.
   void engine_tick(Millis ms) {
     Link& link = device_->link();

@@ -1,4 +1,4 @@
-// The bus engine's frame tap (line/frame_tap.h): frames as the engine sees them, a sent frame
+// The bus engine's frame tap (bus/frame_tap.h): frames as the engine sees them, a sent frame
 // when sent, a received one once the station's verdict says where it ends, flagged by that
 // verdict; bytes nobody can place as noise; nothing once the tap is removed.
 #include <gtest/gtest.h>
@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "line/bus_engine.h"
+#include "bus/bus_engine.h"
 
 namespace drivegate {
 namespace {

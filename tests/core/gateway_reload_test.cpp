@@ -5,7 +5,7 @@
 
 #include <boost/asio/io_context.hpp>
 
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 #include "fake_adapter.h"
 #include "gateway/gateway.h"
 

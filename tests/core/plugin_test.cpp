@@ -5,8 +5,8 @@
 
 #include <stdexcept>
 
-#include "config/adapter_options.h"
-#include "config/plugins.h"
+#include "plugin/adapter_options.h"
+#include "plugin/plugins.h"
 
 namespace drivegate {
 namespace {

@@ -1,6 +1,6 @@
 // open_serial() reports every failure as an error code and leaves the port closed: the bus engine
 // retries on a timer, and an exception there would take the whole gateway down.
-#include "line/serial_line.h"
+#include "transport/serial_line.h"
 
 #include <fcntl.h>
 #include <gmock/gmock.h>

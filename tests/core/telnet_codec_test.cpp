@@ -1,6 +1,6 @@
 // Telnet framing and RFC 2217 COM-PORT-OPTION messages, as golden bytes. Sections cited are of
 // RFC 854 (Telnet), RFC 855 (options), RFC 2217 (Com Port Control Option).
-#include "line/telnet_codec.h"
+#include "transport/telnet_codec.h"
 
 #include <gtest/gtest.h>
 

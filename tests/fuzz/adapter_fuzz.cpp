@@ -1,7 +1,7 @@
 // Fuzz target body shared by every adapter. Input: a mode byte, then a script for that mode.
 //   mode % 3 == 0: the codec's incremental decoders over the rest (codec_<id>.cpp)
 //   mode % 3 == 1: a Driver, created through the plugin descriptor with its default options and
-//                  driven like the bus engine drives it (daemon/line/bus_engine.cpp): receive
+//                  driven like the bus engine drives it (daemon/bus/bus_engine.cpp): receive
 //                  chunks, the time, and commands, setpoints and point writes validated as the
 //                  device does (daemon/gateway/device_writes.cpp), judged by check() first
 //   mode % 3 == 2: a Simulator: master bytes in chunks, ticks, operator control lines
@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "check.h"
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 #include "drivegate/adapter.h"
 #include "gateway/value_codec.h"
 
@@ -24,7 +24,7 @@ extern "C" const drivegate::AdapterDescriptor drivegate_adapter;
 namespace drivegate::fuzz {
 namespace {
 
-// daemon/line/bus_engine.cpp: an incomplete reply longer than this is dropped as noise.
+// daemon/bus/bus_engine.cpp: an incomplete reply longer than this is dropped as noise.
 constexpr std::size_t kMaxRxBuffer = 4096;
 
 std::uint32_t pick_address(const AdapterDescriptor& a, std::uint8_t choice) {

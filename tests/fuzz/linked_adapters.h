@@ -4,7 +4,7 @@
 // (tests/core/fake_adapter.h: one option of every type, and a streamer) are added as well.
 #pragma once
 
-#include "config/plugins.h"
+#include "plugin/plugins.h"
 
 namespace drivegate::fuzz {
 

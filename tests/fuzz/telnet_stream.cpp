@@ -17,7 +17,7 @@
 
 #include "check.h"
 #include "fuzz_input.h"
-#include "line/telnet_codec.h"
+#include "transport/telnet_codec.h"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 #include "gateway/gateway.h"
 
 namespace drivegate::test {

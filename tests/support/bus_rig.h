@@ -24,7 +24,7 @@
 #include "config/config.h"
 #include "drivegate/adapter.h"
 #include "gateway/device.h"
-#include "line/bus_engine.h"
+#include "bus/bus_engine.h"
 #include "modbus/backend.h"
 #include "sim_clock.h"
 #include "sim_line.h"

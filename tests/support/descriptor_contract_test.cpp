@@ -12,7 +12,7 @@
 #include "adapter_bench.h"
 #include "adapter_factories.h"
 #include "adapter_under_test.h"
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 
 namespace drivegate::test {
 namespace {

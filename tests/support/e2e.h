@@ -61,7 +61,7 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-// The serial port lock files (daemon/line/port_lock.h) of the programs a test starts go to a
+// The serial port lock files (daemon/transport/port_lock.h) of the programs a test starts go to a
 // directory of the test process's own, not /run/lock: a daemon killed with SIGKILL leaves its
 // lock behind, and the next test must not meet it. Set once, before any child starts, and
 // removed when the test process ends.

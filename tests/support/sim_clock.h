@@ -1,4 +1,4 @@
-// Simulated time for the bus engine (line/bus_engine.h): a clock that moves only when the test
+// Simulated time for the bus engine (bus/bus_engine.h): a clock that moves only when the test
 // runs it, events fired in time order, and the engine's alarm. Deterministic: no thread, no sleep,
 // so the same test gives the same frames at the same simulated microsecond on every machine.
 #pragma once
@@ -9,7 +9,7 @@
 #include <optional>
 #include <utility>
 
-#include "line/bus_engine.h"
+#include "bus/bus_engine.h"
 
 namespace drivegate::test {
 

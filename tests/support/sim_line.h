@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "drivegate/simulator.h"
-#include "line/bus_engine.h"
+#include "bus/bus_engine.h"
 #include "sim_clock.h"
 
 namespace drivegate::test {

@@ -1,4 +1,4 @@
-#include "plugins.h"
+#include "plugin/plugins.h"
 
 #include <dlfcn.h>
 #include <unistd.h>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "adapter_options.h"
+#include "plugin/adapter_options.h"
 
 namespace drivegate {
 

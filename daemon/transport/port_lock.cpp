@@ -1,4 +1,4 @@
-#include "line/port_lock.h"
+#include "transport/port_lock.h"
 
 #include <fcntl.h>
 #include <signal.h>

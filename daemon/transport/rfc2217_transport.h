@@ -11,8 +11,8 @@
 #include <boost/asio/steady_timer.hpp>
 #include <deque>
 
-#include "line/tcp_transport.h"
-#include "line/telnet_codec.h"
+#include "transport/tcp_transport.h"
+#include "transport/telnet_codec.h"
 
 namespace drivegate {
 

@@ -9,7 +9,7 @@
 #include <iostream>
 
 #include "commands.h"
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 #include "sim_host.h"
 
 namespace drivegate::cli {

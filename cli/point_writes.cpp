@@ -10,7 +10,7 @@
 #include "gateway/gateway.h"
 #include "gateway/value_codec.h"
 #include "config/port_address.h"
-#include "line/port_lock.h"
+#include "transport/port_lock.h"
 
 namespace drivegate::cli {
 

@@ -17,7 +17,7 @@
 #include <thread>
 
 #include "commands.h"
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 #include "config/config_loader.h"
 #include "sim_host.h"
 

@@ -1,4 +1,4 @@
-#include "line/telnet_codec.h"
+#include "transport/telnet_codec.h"
 
 #include <string>
 

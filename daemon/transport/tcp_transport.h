@@ -7,7 +7,7 @@
 
 #include <boost/asio/ip/tcp.hpp>
 
-#include "line/transport.h"
+#include "transport/transport.h"
 
 namespace drivegate {
 

@@ -3,8 +3,8 @@
 
 #include <boost/asio/serial_port.hpp>
 
-#include "line/port_lock.h"
-#include "line/transport.h"
+#include "transport/port_lock.h"
+#include "transport/transport.h"
 
 namespace drivegate {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "config/config.h"
-#include "config/plugins.h"
+#include "plugin/plugins.h"
 
 namespace drivegate::cli {
 

@@ -6,7 +6,7 @@
 
 #include <cerrno>
 
-#include "line/transport.h"
+#include "transport/transport.h"
 
 namespace drivegate {
 

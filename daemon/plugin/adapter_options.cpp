@@ -1,4 +1,4 @@
-#include "config/adapter_options.h"
+#include "plugin/adapter_options.h"
 
 #include <charconv>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "line/tcp_transport.h"
+#include "transport/tcp_transport.h"
 
 #include <netinet/in.h>
 #include <netinet/tcp.h>

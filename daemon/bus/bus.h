@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "config/config.h"
-#include "line/bus_engine.h"
-#include "line/transport.h"
+#include "bus/bus_engine.h"
+#include "transport/transport.h"
 
 namespace drivegate {
 
@@ -27,7 +27,7 @@ class Bus final : public std::enable_shared_from_this<Bus>, private BusClock, pr
   void start();
   void stop();
 
-  // A capture's tap on this line (line/frame_tap.h); removed before it goes.
+  // A capture's tap on this line (bus/frame_tap.h); removed before it goes.
   void add_tap(FrameTap* tap) { engine_.add_tap(tap); }
   void remove_tap(FrameTap* tap) { engine_.remove_tap(tap); }
   [[nodiscard]] const std::vector<Station*>& stations() const { return engine_.stations(); }

@@ -7,7 +7,7 @@
 #include <boost/asio/write.hpp>
 #include <sstream>
 
-#include "line/serial_line.h"
+#include "transport/serial_line.h"
 
 namespace drivegate {
 

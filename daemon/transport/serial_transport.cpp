@@ -1,9 +1,9 @@
-#include "line/serial_transport.h"
+#include "transport/serial_transport.h"
 
 #include <boost/asio/post.hpp>
 #include <boost/asio/write.hpp>
 
-#include "line/serial_line.h"
+#include "transport/serial_line.h"
 
 namespace drivegate {
 

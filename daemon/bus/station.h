@@ -8,7 +8,7 @@
 #include <string>
 
 #include "drivegate/driver.h"
-#include "line/link.h"
+#include "bus/link.h"
 
 namespace drivegate {
 

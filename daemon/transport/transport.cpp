@@ -1,11 +1,11 @@
-#include "line/transport.h"
+#include "transport/transport.h"
 
 #include <boost/asio/error.hpp>
 
 #include "config/port_address.h"
-#include "line/rfc2217_transport.h"
-#include "line/serial_transport.h"
-#include "line/tcp_transport.h"
+#include "transport/rfc2217_transport.h"
+#include "transport/serial_transport.h"
+#include "transport/tcp_transport.h"
 
 namespace drivegate {
 

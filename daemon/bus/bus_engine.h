@@ -1,5 +1,5 @@
 // The bus engine: one serial line, the devices on it, one transaction at a time. It keeps the
-// contract of include/drivegate/driver.h with every driver (through the devices, line/station.h)
+// contract of include/drivegate/driver.h with every driver (through the devices, bus/station.h)
 // and owns everything about time on the line: the inter-frame gap, reply timeouts counting the
 // frame's own time on the wire, identical resends on timeout, bad checksum or NACK, one-wire echo
 // suppression that checks the echo equals what was sent, unsolicited frames for a streaming
@@ -21,7 +21,7 @@
 // reply is never taken for the answer to another request, and a drive that always answers late
 // goes comm_lost.
 //
-// Time and the line are injected: the daemon wires BusClock and BusLine to Asio (line/bus.h), the
+// Time and the line are injected: the daemon wires BusClock and BusLine to Asio (bus/bus.h), the
 // tests to a simulated clock and line (tests/support/sim_line.h), and both run this same code.
 // Nothing here blocks or sleeps; every event is a call in, every action a call out.
 #pragma once
@@ -35,9 +35,9 @@
 #include <vector>
 
 #include "config/config.h"
-#include "line/frame_tap.h"
-#include "line/link.h"
-#include "line/station.h"
+#include "bus/frame_tap.h"
+#include "bus/link.h"
+#include "bus/station.h"
 
 namespace drivegate {
 
@@ -95,7 +95,7 @@ class BusEngine {
   // reply timeout), new ones are polled from the next turn.
   void replace_stations(std::vector<Station*> stations);
 
-  // Every frame sent and received goes to `tap` too, until remove_tap() (line/frame_tap.h).
+  // Every frame sent and received goes to `tap` too, until remove_tap() (bus/frame_tap.h).
   void add_tap(FrameTap* tap);
   void remove_tap(FrameTap* tap);
 

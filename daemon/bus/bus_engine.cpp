@@ -1,4 +1,4 @@
-#include "line/bus_engine.h"
+#include "bus/bus_engine.h"
 
 #include <spdlog/fmt/bin_to_hex.h>
 

@@ -1,4 +1,4 @@
-#include "line/bus.h"
+#include "bus/bus.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "line/rfc2217_transport.h"
+#include "transport/rfc2217_transport.h"
 
 #include <spdlog/spdlog.h>
 

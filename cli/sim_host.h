@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "config/config.h"
-#include "line/port_lock.h"
+#include "transport/port_lock.h"
 #include "drivegate/adapter.h"
 #include "pty.h"
 

@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "base/command_line.h"
-#include "config/plugins.h"
+#include "plugin/plugins.h"
 #include "point_writes.h"
 
 namespace drivegate::cli {
