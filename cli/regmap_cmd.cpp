@@ -3,7 +3,7 @@
 
 #include "commands.h"
 #include "config/config_loader.h"
-#include "format/regmap_format.h"
+#include "regmap/regmap_format.h"
 #include "gateway/gateway.h"
 
 namespace drivegate::cli {

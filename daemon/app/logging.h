@@ -1,6 +1,6 @@
 // The daemon's logger. In a terminal: timestamped lines on stderr. Under systemd (JOURNAL_STREAM
 // names our stderr): entries sent to the journal directly, with the message's priority and, for
-// the loggers of one device or one bus (gateway/log_context.h), the fields DEVICE=, BUS= and
+// the loggers of one device or one bus (base/log_context.h), the fields DEVICE=, BUS= and
 // UNIT= (the Modbus unit id), so `journalctl -u drivegate DEVICE=washer-1` selects one drive.
 #pragma once
 
@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "gateway/log_context.h"
+#include "base/log_context.h"
 
 namespace drivegate {
 

@@ -5,8 +5,8 @@
 #include <unordered_map>
 
 #include "capture/pcap_tap.h"
-#include "format/regmap_format.h"
-#include "format/status_view.h"
+#include "regmap/regmap_format.h"
+#include "status/status_view.h"
 #include "gateway/device.h"
 #include "bus/bus.h"
 

@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "format/status_view.h"
+#include "status/status_view.h"
 #include "gateway/gateway.h"
 #include "http/content.h"
 #include "http/http_server.h"

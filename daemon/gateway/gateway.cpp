@@ -4,7 +4,7 @@
 #include <boost/asio/steady_timer.hpp>
 
 #include "config/config_diff.h"
-#include "gateway/log_context.h"
+#include "base/log_context.h"
 
 namespace drivegate {
 

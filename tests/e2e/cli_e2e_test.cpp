@@ -192,7 +192,7 @@ TEST(Cli, ABadOptionExitsTwoNamingItThenTheUsage) {
 }
 
 // Each program's --help is its table of options; drivegate(1) documents every one of them (and
-// the daemon's table is held to drivegated(8) by core_test's DaemonArgs tests).
+// the daemon's table is held to drivegated(8) by app_test's DaemonArgs tests).
 TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
   struct Command {
     std::vector<std::string> argv;

@@ -5,8 +5,8 @@ Every brace-enclosed byte list of 3 or more 0xNN bytes in an adapter's codec tes
 a driver and a simulator seed (the adapter target's mode byte and script around it); every request
 PDU of tests/modbus/pdu_test.cpp (`run({...})`, the Application Protocol's own examples) becomes an
 MBAP frame for unit 1, alone and all together in one stream; configurations come from
-etc/drivegate.toml and the raw-string configs of tests/core/config_test.cpp; Telnet / RFC 2217
-streams from tests/core/telnet_codec_test.cpp. Re-run after the
+etc/drivegate.toml and the raw-string configs of tests/config/config_test.cpp; Telnet / RFC 2217
+streams from tests/transport/telnet_codec_test.cpp. Re-run after the
 vectors change: python3 tests/fuzz/make_seeds.py
 """
 import hashlib
@@ -88,15 +88,15 @@ def modbus_seeds():
 
 def config_seeds():
     write("config", (ROOT / "etc" / "drivegate.toml").read_bytes())
-    text = (ROOT / "tests" / "core" / "config_test.cpp").read_text()
+    text = (ROOT / "tests" / "config" / "config_test.cpp").read_text()
     for m in re.finditer(r'R"\((.*?)\)"', text, re.S):
         write("config", m.group(1).encode())
 
 
 def telnet_seeds():
-    """The Telnet / RFC 2217 codec's golden vectors (tests/core/telnet_codec_test.cpp), each after
+    """The Telnet / RFC 2217 codec's golden vectors (tests/transport/telnet_codec_test.cpp), each after
     the target's option byte: whole (0) and in 1- and 3-byte segments."""
-    for stream in vectors(ROOT / "tests" / "core" / "telnet_codec_test.cpp"):
+    for stream in vectors(ROOT / "tests" / "transport" / "telnet_codec_test.cpp"):
         for option in (0, 1, 3):
             write("telnet_stream", bytes([option]) + stream)
     # A device server's greeting and its answers to drivegate's configure() (RFC 2217 section

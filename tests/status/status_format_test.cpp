@@ -4,8 +4,8 @@
 #include <spdlog/sinks/null_sink.h>
 
 #include "fake_adapter.h"
-#include "format/json.h"
-#include "format/status_view.h"
+#include "base/json.h"
+#include "status/status_view.h"
 #include "gateway/device.h"
 #include "gateway/value_codec.h"
 

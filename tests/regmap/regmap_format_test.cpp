@@ -1,5 +1,5 @@
 // The printed register map in its three forms.
-#include "format/regmap_format.h"
+#include "regmap/regmap_format.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

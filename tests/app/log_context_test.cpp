@@ -1,6 +1,6 @@
 // Per-device and per-bus loggers: the context travels as data to the sinks that record it (the
 // journal's DEVICE=, BUS=, UNIT= fields), whatever the message says.
-#include "gateway/log_context.h"
+#include "base/log_context.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include "format/status_view.h"
+#include "status/status_view.h"
 
 #include <algorithm>
 #include <array>

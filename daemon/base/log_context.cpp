@@ -1,4 +1,4 @@
-#include "gateway/log_context.h"
+#include "base/log_context.h"
 
 #include <vector>
 

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <iterator>
 
-#include "format/json.h"
-#include "format/status_view.h"
+#include "base/json.h"
+#include "status/status_view.h"
 
 namespace drivegate {
 

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <iterator>
 
-#include "format/status_view.h"
+#include "status/status_view.h"
 
 namespace drivegate {
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "format/json.h"
+#include "base/json.h"
 
 namespace drivegate {
 namespace {
