@@ -49,34 +49,6 @@ Options options_of(const AdapterDescriptor& adapter, const OptionText& set) {
   return options;
 }
 
-// Unit id -> device, as Gateway serves them.
-class BusRig::Units final : public modbus::Backend {
- public:
-  explicit Units(BusRig& rig) : rig_(rig) {}
-  Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
-                 std::uint16_t address, std::span<std::uint16_t> out) override {
-    Device* d = find(unit);
-    return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->read(session, table, address, out, rig_.now());
-  }
-  Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
-                  std::uint16_t address, std::span<const std::uint16_t> values,
-                  modbus::WriteDone done) override {
-    Device* d = find(unit);
-    return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->write(session, table, address, values, std::move(done), rig_.now());
-  }
-
- private:
-  Device* find(std::uint8_t unit) const {
-    for (const auto& d : rig_.devices()) {
-      if (d->config().unit_id == unit) return d.get();
-    }
-    return nullptr;
-  }
-  BusRig& rig_;
-};
-
 BusRig::BusRig(const AdapterDescriptor& adapter) : BusRig(adapter, native_line(adapter)) {}
 
 BusRig::BusRig(const AdapterDescriptor& adapter, BusConfig line)
@@ -205,11 +177,6 @@ std::string BusRig::text(Device& d, std::string_view point) {
     }
   }
   return out;
-}
-
-modbus::Backend& BusRig::backend() {
-  if (!units_) units_ = std::make_unique<Units>(*this);
-  return *units_;
 }
 
 }  // namespace drivegate::test

@@ -102,8 +102,6 @@ class BusRig {
   // A string point as a PLC reads it: two characters a register, the first in the high byte, cut
   // at the first NUL.
   std::string text(Device& d, std::string_view point);
-  // Unit id -> device, as the gateway serves them (for the Modbus dispatcher).
-  modbus::Backend& backend();
 
   [[nodiscard]] const std::vector<SimLine::Frame>& sent() const { return line_->sent; }
   [[nodiscard]] const std::vector<SimLine::Frame>& answers() const { return line_->answers; }
@@ -115,8 +113,6 @@ class BusRig {
   [[nodiscard]] const AdapterDescriptor& adapter() const { return adapter_; }
 
  private:
-  class Units;
-
   const AdapterDescriptor& adapter_;
   BusConfig line_config_;
   std::shared_ptr<spdlog::logger> log_;
@@ -125,7 +121,6 @@ class BusRig {
   std::vector<std::unique_ptr<Device>> devices_;
   std::vector<std::unique_ptr<Simulator>> sims_;
   std::unique_ptr<BusEngine> engine_;
-  std::unique_ptr<Units> units_;
 };
 
 }  // namespace drivegate::test
