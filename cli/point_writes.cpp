@@ -148,7 +148,7 @@ int run_point_writes(const PointWriteJob& job) {
     };
     // The operator at the console, with the configuration file in hand: every writable point, in
     // the register map's word order (the values were encoded in it).
-    const modbus::Session console{modbus::AccessLevel::maintain, modbus::WordOrder::big};
+    const Session console{AccessLevel::maintain, WordOrder::big};
     const auto e = device.write(console, r.point->spec.table, r.point->address, r.registers, done,
                                 Clock::now());
     if (e != modbus::Exception::none) done(e);

@@ -9,12 +9,12 @@ namespace drivegate {
 class BackendSwitch : public modbus::Backend {
  public:
   void set(modbus::Backend* target) { target_ = target; }
-  modbus::Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
+  modbus::Exception read(const Session& session, std::uint8_t unit, Table table,
                          std::uint16_t address, std::span<std::uint16_t> out) override {
     if (target_ == nullptr) return modbus::Exception::gateway_path_unavailable;
     return target_->read(session, unit, table, address, out);
   }
-  modbus::Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
+  modbus::Exception write(const Session& session, std::uint8_t unit, Table table,
                           std::uint16_t address, std::span<const std::uint16_t> values,
                           modbus::WriteDone done) override {
     if (target_ == nullptr) return modbus::Exception::gateway_path_unavailable;

@@ -33,7 +33,7 @@ namespace drivegate {
 // The access level a write to `point` needs (README, "Listeners and access"): the common
 // command block (command, setpoint_rpm, heartbeat) is operate's, every other writable point
 // maintain's. Device::write and write_points refuse less with 0x01.
-modbus::AccessLevel required_level(const MappedPoint& point);
+AccessLevel required_level(const MappedPoint& point);
 
 // Writes waiting at one device, the one being carried out included (docs/safety.md, "Fair line
 // time"): past it a write is refused at once with 0x06 (server device busy). Stops have as many
@@ -86,7 +86,7 @@ class Device final : public Station {
   // --- Modbus side, from the gateway ---
   // Fills `out` from the register image, 32-bit values in the session's word order; 0x02 when
   // any address of the range is unmapped.
-  modbus::Exception read(const modbus::Session& session, Table table, std::uint16_t address,
+  modbus::Exception read(const Session& session, Table table, std::uint16_t address,
                          std::span<std::uint16_t> out, TimePoint now);
   // A Modbus write request: validated against the map, checked whole by the driver, then applied
   // part by part; `done` gets the outcome once every part settled, or the first failure. An
@@ -94,7 +94,7 @@ class Device final : public Station {
   // A point beyond the session's access level is exception 01 (illegal function), checked with
   // the map before the values, so it never reaches the driver; 32-bit values are read in the
   // session's word order.
-  modbus::Exception write(const modbus::Session& session, Table table, std::uint16_t address,
+  modbus::Exception write(const Session& session, Table table, std::uint16_t address,
                           std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now);
   // One point of a write by name (an MQTT DCMD) and the engineering value it is to take.
   struct PointWrite {
@@ -104,7 +104,7 @@ class Device final : public Station {
   // Points written as one request: each value is encoded into its point's registers as a client
   // in the map's word order would write it (a value those registers cannot hold is 0x03), then
   // the registers are validated, judged whole, applied and confirmed exactly as write() does.
-  modbus::Exception write_points(const modbus::Session& session, std::span<const PointWrite> points,
+  modbus::Exception write_points(const Session& session, std::span<const PointWrite> points,
                                  modbus::WriteDone done, TimePoint now);
   // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
   // the failsafe. `done` is called exactly once.
@@ -121,8 +121,7 @@ class Device final : public Station {
  private:
   enum class Origin : std::uint8_t { plc, gateway };
   // The gateway's own writes (shutdown, failsafe) may write anything, in the map's word order.
-  static constexpr modbus::Session kGatewaySession{modbus::AccessLevel::maintain,
-                                                   modbus::WordOrder::big};
+  static constexpr Session kGatewaySession{AccessLevel::maintain, WordOrder::big};
   struct Part {
     const MappedPoint* point;
     Value value;
@@ -150,13 +149,13 @@ class Device final : public Station {
   [[nodiscard]] std::size_t queued(bool urgent) const;
   modbus::Exception refuse_run_while_latched(const char* source, TimePoint now);
   void supersede_runs(TimePoint now);
-  modbus::Exception submit(const modbus::Session& session, Table table, std::uint16_t address,
+  modbus::Exception submit(const Session& session, Table table, std::uint16_t address,
                            std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now,
                            Origin origin);
-  modbus::Exception validate(const modbus::Session& session, Table table, std::uint16_t address,
+  modbus::Exception validate(const Session& session, Table table, std::uint16_t address,
                              std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
-  modbus::Exception enqueue(const modbus::Session& session, std::vector<Part> parts,
-                            modbus::WriteDone done, TimePoint now, Origin origin);
+  modbus::Exception enqueue(const Session& session, std::vector<Part> parts, modbus::WriteDone done,
+                            TimePoint now, Origin origin);
   Progress advance(Request& r, TimePoint now, modbus::Exception& failure);
   void settle(const Completion& c, TimePoint now);
   void finish(const Request* r, modbus::Exception e, TimePoint now);

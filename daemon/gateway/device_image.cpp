@@ -81,7 +81,7 @@ void Device::refresh_common(Table table, TimePoint now) {
   }
 }
 
-Exception Device::read(const modbus::Session& session, Table table, std::uint16_t address,
+Exception Device::read(const Session& session, Table table, std::uint16_t address,
                        std::span<std::uint16_t> out, TimePoint now) {
   const auto regs = registers(table);
   if (std::size_t{address} + out.size() > regs.size() ||
@@ -91,7 +91,7 @@ Exception Device::read(const modbus::Session& session, Table table, std::uint16_
   if (image_stale_) refresh_image(now);
   if (table == Table::input || table == Table::discrete) refresh_common(table, now);
   std::copy_n(regs.begin() + address, out.size(), out.begin());
-  if (session.word_order == modbus::WordOrder::little) {
+  if (session.word_order == WordOrder::little) {
     // Each register of a 32-bit value shows its partner's word, so a read of half a value (or
     // of a range cutting one) gives what a little-endian client expects at that address.
     for (std::size_t i = 0; i < out.size(); ++i) {

@@ -92,12 +92,11 @@ bool finite(const Value& v) {
 
 }  // namespace
 
-modbus::AccessLevel required_level(const MappedPoint& p) {
-  return write_kind(p) != CommonWrite::none ? modbus::AccessLevel::operate
-                                            : modbus::AccessLevel::maintain;
+AccessLevel required_level(const MappedPoint& p) {
+  return write_kind(p) != CommonWrite::none ? AccessLevel::operate : AccessLevel::maintain;
 }
 
-Exception Device::write(const modbus::Session& session, Table table, std::uint16_t address,
+Exception Device::write(const Session& session, Table table, std::uint16_t address,
                         std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now) {
   return submit(session, table, address, in, std::move(done), now, Origin::plc);
 }
@@ -109,7 +108,7 @@ void Device::command(Command c, modbus::WriteDone done, TimePoint now) {
   if (e != Exception::none) done(e);
 }
 
-Exception Device::validate(const modbus::Session& session, Table table, std::uint16_t address,
+Exception Device::validate(const Session& session, Table table, std::uint16_t address,
                            std::span<const std::uint16_t> in, std::vector<Part>& parts) const {
   const bool bits = table == Table::coil;
   std::size_t i = 0;
@@ -129,7 +128,7 @@ Exception Device::validate(const modbus::Session& session, Table table, std::uin
     } else {
       std::array<std::uint16_t, 2> swapped{};
       auto words = in.subspan(i, count);
-      if (session.word_order == modbus::WordOrder::little && has_word_order(p->spec)) {
+      if (session.word_order == WordOrder::little && has_word_order(p->spec)) {
         swapped = {words[1], words[0]};
         words = swapped;
       }
@@ -148,7 +147,7 @@ Exception Device::validate(const modbus::Session& session, Table table, std::uin
   return Exception::none;
 }
 
-Exception Device::submit(const modbus::Session& session, Table table, std::uint16_t address,
+Exception Device::submit(const Session& session, Table table, std::uint16_t address,
                          std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now,
                          Origin origin) {
   std::vector<Part> parts;
@@ -158,10 +157,10 @@ Exception Device::submit(const modbus::Session& session, Table table, std::uint1
   return enqueue(session, std::move(parts), std::move(done), now, origin);
 }
 
-Exception Device::write_points(const modbus::Session& session, std::span<const PointWrite> points,
+Exception Device::write_points(const Session& session, std::span<const PointWrite> points,
                                modbus::WriteDone done, TimePoint now) {
-  modbus::Session in_map_order = session;
-  in_map_order.word_order = modbus::WordOrder::big;  // encode_value's order
+  Session in_map_order = session;
+  in_map_order.word_order = WordOrder::big;  // encode_value's order
   std::vector<Part> parts;
   for (const PointWrite& w : points) {
     const PointSpec& spec = w.point->spec;
@@ -215,8 +214,8 @@ Exception Device::refuse_run_while_latched(const char* source, TimePoint now) {
   return Exception::server_device_failure;
 }
 
-Exception Device::enqueue(const modbus::Session& session, std::vector<Part> parts,
-                          modbus::WriteDone done, TimePoint now, Origin origin) {
+Exception Device::enqueue(const Session& session, std::vector<Part> parts, modbus::WriteDone done,
+                          TimePoint now, Origin origin) {
   const bool feeds = origin == Origin::plc && session.feeds_failsafe;
   if (closed_to_clients_ && origin == Origin::plc) return Exception::gateway_target_failed;
   if (origin == Origin::plc) stop_on_start_ = false;  // a client decides from now on

@@ -183,14 +183,14 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   });
 }
 
-Exception Gateway::read(const modbus::Session& session, std::uint8_t unit, Table table,
+Exception Gateway::read(const Session& session, std::uint8_t unit, Table table,
                         std::uint16_t address, std::span<std::uint16_t> out) {
   Device* d = units_[unit];
   if (d == nullptr) return Exception::gateway_path_unavailable;
   return d->read(session, table, address, out, Clock::now());
 }
 
-Exception Gateway::write(const modbus::Session& session, std::uint8_t unit, Table table,
+Exception Gateway::write(const Session& session, std::uint8_t unit, Table table,
                          std::uint16_t address, std::span<const std::uint16_t> values,
                          modbus::WriteDone done) {
   Device* d = units_[unit];

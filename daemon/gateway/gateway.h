@@ -55,9 +55,9 @@ class Gateway : public modbus::Backend {
   // client's write is refused (0x0B).
   void stop_drives(Millis limit, std::function<void()> done);
 
-  modbus::Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
+  modbus::Exception read(const Session& session, std::uint8_t unit, Table table,
                          std::uint16_t address, std::span<std::uint16_t> out) override;
-  modbus::Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
+  modbus::Exception write(const Session& session, std::uint8_t unit, Table table,
                           std::uint16_t address, std::span<const std::uint16_t> values,
                           modbus::WriteDone done) override;
 

@@ -8,7 +8,7 @@
 namespace drivegate {
 
 void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
-  static constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
+  static constexpr Session kReader{AccessLevel::read, WordOrder::big};
   static constexpr std::array kTables{Table::coil, Table::discrete, Table::input, Table::holding};
   out.clear();
   const RegisterMap& map = device.map();

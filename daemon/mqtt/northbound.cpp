@@ -380,7 +380,7 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
     names += (names.empty() ? "" : ",") + p->spec.name;
   }
   ++status_.commands;
-  const modbus::Session session{config_.access, modbus::WordOrder::big, config_.feed_failsafe};
+  const Session session{config_.access, WordOrder::big, config_.feed_failsafe};
   const std::string name = w.device->name();
   log_->info("MQTT: DCMD {} {}", name, names);
   auto report = [this, token = std::weak_ptr<bool>(alive_), name, names](modbus::Exception e) {

@@ -31,7 +31,7 @@ class DeviceTest : public ::testing::Test {
         t0_);
   }
   // Every right, the map's word order, unless a test says otherwise.
-  modbus::Session session_{modbus::AccessLevel::maintain, modbus::WordOrder::big};
+  Session session_{AccessLevel::maintain, WordOrder::big};
   std::vector<std::uint16_t> input(std::uint16_t address, std::size_t n, TimePoint at) {
     std::vector<std::uint16_t> out(n);
     EXPECT_EQ(device_->read(session_, Table::input, address, out, at), Exception::none);
@@ -230,7 +230,7 @@ TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
 TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart) {
   fake_->values_[2] = 1.0;  // pressure, f32 at input 33..34: 0x3F80 0x0000 in the map's order
   device_->next_exchange(t0_, Turn::poll);
-  session_.word_order = modbus::WordOrder::little;
+  session_.word_order = WordOrder::little;
   auto r = input(32, 3, t0_);
   EXPECT_EQ(r[0], static_cast<std::uint16_t>(0));  // i16: never reordered
   EXPECT_EQ(r[1], 0x0000);
@@ -242,7 +242,7 @@ TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart
   fake_->common_.faults.set(Fault::over_current);
   device_->next_exchange(t0_, Turn::poll);
   const auto mask = input(2, 2, t0_);
-  session_.word_order = modbus::WordOrder::big;
+  session_.word_order = WordOrder::big;
   const auto big = input(2, 2, t0_);
   EXPECT_EQ(mask[0], big[1]);
   EXPECT_EQ(mask[1], big[0]);
@@ -251,7 +251,7 @@ TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart
 
 TEST_F(DeviceTest, ALittleEndianSessionWrites32BitValuesLowWordFirst) {
   fake_->answer = WriteStatus::done;
-  session_.word_order = modbus::WordOrder::little;
+  session_.word_order = WordOrder::little;
   std::optional<Exception> a;
   ASSERT_EQ(write(Table::holding, 16, {0x86A0, 0x0001}, a), Exception::none);
   ASSERT_EQ(fake_->writes.size(), 1u);
@@ -262,7 +262,7 @@ TEST_F(DeviceTest, ALittleEndianSessionWrites32BitValuesLowWordFirst) {
 
 TEST_F(DeviceTest, OperateMayWriteTheCommandBlockButNotAdapterPoints) {
   fake_->answer = WriteStatus::done;
-  session_.access = modbus::AccessLevel::operate;
+  session_.access = AccessLevel::operate;
   std::optional<Exception> a;
   EXPECT_EQ(write(Table::holding, 1, {1200}, a), Exception::none);  // setpoint_rpm
   EXPECT_EQ(write(Table::holding, 2, {7}, a), Exception::none);     // heartbeat
@@ -273,7 +273,7 @@ TEST_F(DeviceTest, OperateMayWriteTheCommandBlockButNotAdapterPoints) {
   EXPECT_EQ(write(Table::holding, 1, {900}, a), Exception::none);
   EXPECT_EQ(fake_->setpoints.size(), setpoints + 1);
   EXPECT_TRUE(fake_->writes.empty());
-  session_.access = modbus::AccessLevel::maintain;
+  session_.access = AccessLevel::maintain;
   EXPECT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Exception::none);
   EXPECT_EQ(fake_->writes.size(), 1u);
 }
@@ -324,7 +324,7 @@ TEST_F(DeviceTest, WritePointsRefusesValuesItsRegistersCannotHold) {
   ASSERT_EQ(fake_->writes.size(), 1u);
   EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
   // Access is the device's rule, as for Modbus: operate may not write an adapter point.
-  session_.access = modbus::AccessLevel::operate;
+  session_.access = AccessLevel::operate;
   EXPECT_EQ(write1(limit, std::int64_t{200}), Exception::illegal_function);
   EXPECT_EQ(fake_->writes.size(), 1u);
   // Read-only points are not written at all.
@@ -384,7 +384,7 @@ TEST_F(DeviceTest, OnceShutdownBeganEveryClientWriteIsRefused) {
 TEST_F(DeviceTest, AReadSessionReachingTheDeviceIsRefusedEvenTheHeartbeat) {
   // The server refuses a read-only client's writes before the backend; the device holds the
   // same line in case another northbound forgets.
-  session_.access = modbus::AccessLevel::read;
+  session_.access = AccessLevel::read;
   std::optional<Exception> a;
   EXPECT_EQ(write(Table::holding, 2, {7}, a), Exception::illegal_function);
   EXPECT_EQ(write(Table::holding, 0, {1}, a), Exception::illegal_function);

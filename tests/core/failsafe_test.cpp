@@ -50,8 +50,8 @@ class FailsafeTest : public ::testing::Test {
     engine_tick(ms);
   }
   Exception plc(std::uint16_t address, std::vector<std::uint16_t> v, Millis ms,
-                modbus::AccessLevel access = modbus::AccessLevel::operate) {
-    const modbus::Session session{access, modbus::WordOrder::big};
+                AccessLevel access = AccessLevel::operate) {
+    const Session session{access, WordOrder::big};
     const Exception result = device_->write(
         session, Table::holding, address, v, [this](Exception e) { answers_.push_back(e); },
         at(ms));
@@ -64,7 +64,7 @@ class FailsafeTest : public ::testing::Test {
     device_->next_exchange(at(ms), Turn::poll);
     device_->next_exchange(at(ms), Turn::write);
   }
-  static constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
+  static constexpr Session kReader{AccessLevel::read, WordOrder::big};
   std::uint16_t status(Millis ms) {
     std::uint16_t s = 0;
     EXPECT_EQ(device_->read(kReader, Table::input, 0, std::span<std::uint16_t>(&s, 1), at(ms)),
@@ -133,7 +133,7 @@ TEST_F(FailsafeTest, WritesFromANonFeedingSessionDoNotFeedIt) {
   ASSERT_EQ(plc(kCommand, {1 /*run_forward*/, 800}, 0ms), Exception::none);
   fake_->common_.command = Command::run_forward;
   confirm(0ms);
-  const modbus::Session mqtt{modbus::AccessLevel::operate, modbus::WordOrder::big, false};
+  const Session mqtt{AccessLevel::operate, WordOrder::big, false};
   const std::uint16_t beat = 9;
   ASSERT_EQ(device_->write(
                 mqtt, Table::holding, kHeartbeat, std::span(&beat, 1), [](Exception) {}, at(900ms)),
@@ -186,7 +186,7 @@ TEST_F(FailsafeTest, EachOfCommandSetpointAndHeartbeatFeedsIt) {
 TEST_F(FailsafeTest, AdapterPointsAndInvalidWritesDoNotFeedIt) {
   make(FailsafeAction::stop);
   ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
-  ASSERT_EQ(plc(kLimit, {0, 50}, 500ms, modbus::AccessLevel::maintain),  // adapter point
+  ASSERT_EQ(plc(kLimit, {0, 50}, 500ms, AccessLevel::maintain),  // adapter point
             Exception::none);
   ASSERT_EQ(plc(kCommand, {9}, 600ms), Exception::illegal_data_value);  // no such command
   tick(1000ms);
@@ -219,8 +219,8 @@ TEST_F(FailsafeTest, AWriteRefusedForAnyReasonFeedsNothing) {
 TEST_F(FailsafeTest, AClientThatMayOnlyReadDoesNotFeedIt) {
   make(FailsafeAction::stop);
   ASSERT_EQ(plc(kHeartbeat, {1}, 0ms), Exception::none);
-  EXPECT_EQ(plc(kHeartbeat, {2}, 600ms, modbus::AccessLevel::read), Exception::illegal_function);
-  EXPECT_EQ(plc(kCommand, {1}, 700ms, modbus::AccessLevel::read), Exception::illegal_function);
+  EXPECT_EQ(plc(kHeartbeat, {2}, 600ms, AccessLevel::read), Exception::illegal_function);
+  EXPECT_EQ(plc(kCommand, {1}, 700ms, AccessLevel::read), Exception::illegal_function);
   tick(1000ms);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
   EXPECT_TRUE(device_->failsafe_latched());

@@ -129,7 +129,7 @@ void BusRig::start() {
 
 std::shared_ptr<WriteOutcome> BusRig::write(Device& d, Table table, std::uint16_t address,
                                             std::vector<std::uint16_t> values,
-                                            const modbus::Session& session) {
+                                            const Session& session) {
   auto outcome = std::make_shared<WriteOutcome>();
   const Exception e = d.write(
       session, table, address, values, [outcome](Exception r) { outcome->result = r; }, now());
@@ -144,12 +144,12 @@ std::optional<Exception> BusRig::wait(const std::shared_ptr<WriteOutcome>& w, Mi
 
 std::optional<Exception> BusRig::write_and_wait(Device& d, Table table, std::uint16_t address,
                                                 std::vector<std::uint16_t> values, Millis limit,
-                                                const modbus::Session& session) {
+                                                const Session& session) {
   return wait(write(d, table, address, std::move(values), session), limit);
 }
 
 std::vector<std::uint16_t> BusRig::read(Device& d, Table table, std::uint16_t address,
-                                        std::size_t n, const modbus::Session& session) {
+                                        std::size_t n, const Session& session) {
   std::vector<std::uint16_t> out(n);
   if (d.read(session, table, address, out, now()) != Exception::none) out.clear();
   return out;

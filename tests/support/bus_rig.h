@@ -78,22 +78,22 @@ class BusRig {
   [[nodiscard]] TimePoint now() const { return clock_.now(); }
 
   // A client with every right, in the register map's word order (a `maintain` listener).
-  static constexpr modbus::Session kMaintain{modbus::AccessLevel::maintain, modbus::WordOrder::big};
+  static constexpr Session kMaintain{AccessLevel::maintain, WordOrder::big};
 
   // A Modbus write request, as the server makes it (registers, or 0 / 1 per coil).
   std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
                                       std::vector<std::uint16_t> values,
-                                      const modbus::Session& session = kMaintain);
+                                      const Session& session = kMaintain);
   // Runs until the write settled or `limit` passed; its exception, nullopt if still pending.
   std::optional<Exception> wait(const std::shared_ptr<WriteOutcome>& w,
                                 Millis limit = Millis(5000));
   std::optional<Exception> write_and_wait(Device& d, Table table, std::uint16_t address,
                                           std::vector<std::uint16_t> values,
                                           Millis limit = Millis(5000),
-                                          const modbus::Session& session = kMaintain);
+                                          const Session& session = kMaintain);
   // Registers (or bits) as a PLC reads them; empty when the read fails.
   std::vector<std::uint16_t> read(Device& d, Table table, std::uint16_t address, std::size_t n,
-                                  const modbus::Session& session = kMaintain);
+                                  const Session& session = kMaintain);
   // The named point's registers.
   std::vector<std::uint16_t> read(Device& d, std::string_view point);
   // The named point's value as a PLC reads it: a u16 point's register, a u32 one's two high word
