@@ -9,8 +9,6 @@
 
 namespace drivegate {
 
-using modbus::Exception;
-
 // What changes only when the driver is called or a write is applied (both mark the image
 // stale): the adapter's points and the common holding registers (command and setpoint in force,
 // heartbeat).
@@ -81,12 +79,12 @@ void Device::refresh_common(Table table, TimePoint now) {
   }
 }
 
-Exception Device::read(const Session& session, Table table, std::uint16_t address,
-                       std::span<std::uint16_t> out, TimePoint now) {
+Outcome Device::read(const Session& session, Table table, std::uint16_t address,
+                     std::span<std::uint16_t> out, TimePoint now) {
   const auto regs = registers(table);
   if (std::size_t{address} + out.size() > regs.size() ||
       map_.mapped_from(table, address) < out.size()) {
-    return Exception::illegal_data_address;
+    return Outcome::no_such_point;
   }
   if (image_stale_) refresh_image(now);
   if (table == Table::input || table == Table::discrete) refresh_common(table, now);
@@ -101,7 +99,7 @@ Exception Device::read(const Session& session, Table table, std::uint16_t addres
       out[i] = regs[at == p->address ? at + 1 : at - 1];
     }
   }
-  return Exception::none;
+  return Outcome::ok;
 }
 
 }  // namespace drivegate

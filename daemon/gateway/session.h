@@ -4,7 +4,7 @@
 //
 // Header-only, in the CMake target dg_gateway_api, which sits below dg_modbus: the Modbus
 // listeners carry a session for every connection and the configuration names access levels and
-// word orders, and neither links the gateway for it.
+// word orders, and neither links the gateway for it. What the gateway answers is outcome.h.
 #pragma once
 
 #include <array>

@@ -38,7 +38,7 @@ std::vector<PointValue> one_by_one(Device& device, TimePoint now) {
   for (const MappedPoint& p : device.map().points()) {
     const bool bits = p.spec.table == Table::coil || p.spec.table == Table::discrete;
     std::vector<std::uint16_t> regs(bits ? 1 : p.spec.register_count());
-    if (device.read(kReader, p.spec.table, p.address, regs, now) != modbus::Exception::none) {
+    if (device.read(kReader, p.spec.table, p.address, regs, now) != Outcome::ok) {
       continue;
     }
     if (bits) {

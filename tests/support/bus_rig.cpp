@@ -131,27 +131,27 @@ std::shared_ptr<WriteOutcome> BusRig::write(Device& d, Table table, std::uint16_
                                             std::vector<std::uint16_t> values,
                                             const Session& session) {
   auto outcome = std::make_shared<WriteOutcome>();
-  const Exception e = d.write(
-      session, table, address, values, [outcome](Exception r) { outcome->result = r; }, now());
-  if (e != Exception::none) outcome->result = e;
+  const Outcome at_once = d.write(
+      session, table, address, values, [outcome](Outcome r) { outcome->result = r; }, now());
+  if (at_once != Outcome::ok) outcome->result = at_once;
   return outcome;
 }
 
-std::optional<Exception> BusRig::wait(const std::shared_ptr<WriteOutcome>& w, Millis limit) {
+std::optional<Outcome> BusRig::wait(const std::shared_ptr<WriteOutcome>& w, Millis limit) {
   run_until([&] { return w->settled(); }, limit);
   return w->result;
 }
 
-std::optional<Exception> BusRig::write_and_wait(Device& d, Table table, std::uint16_t address,
-                                                std::vector<std::uint16_t> values, Millis limit,
-                                                const Session& session) {
+std::optional<Outcome> BusRig::write_and_wait(Device& d, Table table, std::uint16_t address,
+                                              std::vector<std::uint16_t> values, Millis limit,
+                                              const Session& session) {
   return wait(write(d, table, address, std::move(values), session), limit);
 }
 
 std::vector<std::uint16_t> BusRig::read(Device& d, Table table, std::uint16_t address,
                                         std::size_t n, const Session& session) {
   std::vector<std::uint16_t> out(n);
-  if (d.read(session, table, address, out, now()) != Exception::none) out.clear();
+  if (d.read(session, table, address, out, now()) != Outcome::ok) out.clear();
   return out;
 }
 

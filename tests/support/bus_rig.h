@@ -8,7 +8,7 @@
 //   rig.add_simulator(1);
 //   rig.start();
 //   ASSERT_TRUE(rig.run_until([&] { return drive.online(); }, 3s));
-//   EXPECT_EQ(rig.write_and_wait(drive, Table::holding, 0, {1, 3000}), Exception::none);
+//   EXPECT_EQ(rig.write_and_wait(drive, Table::holding, 0, {1, 3000}), Outcome::ok);
 //   EXPECT_EQ(rig.sent().back(), (Bytes{0x7E, ...}));
 #pragma once
 
@@ -25,21 +25,20 @@
 #include "drivegate/adapter.h"
 #include "gateway/device.h"
 #include "bus/bus_engine.h"
-#include "modbus/backend.h"
+#include "gateway/outcome.h"
+#include "gateway/session.h"
 #include "sim_clock.h"
 #include "sim_line.h"
 
 namespace drivegate::test {
 
-using modbus::Exception;
-
 // Adapter options as text, over the schema's defaults (parsed as `drivegate sim --set` does).
 using OptionText = std::vector<std::pair<std::string, std::string>>;
 Options options_of(const AdapterDescriptor& adapter, const OptionText& set = {});
 
-// The outcome of one Modbus write: the exception returned at once, or the one `done` reported.
+// The outcome of one write: the one returned at once, or the one `done` reported.
 struct WriteOutcome {
-  std::optional<Exception> result;
+  std::optional<Outcome> result;
   [[nodiscard]] bool settled() const { return result.has_value(); }
 };
 
@@ -84,13 +83,12 @@ class BusRig {
   std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
                                       std::vector<std::uint16_t> values,
                                       const Session& session = kMaintain);
-  // Runs until the write settled or `limit` passed; its exception, nullopt if still pending.
-  std::optional<Exception> wait(const std::shared_ptr<WriteOutcome>& w,
-                                Millis limit = Millis(5000));
-  std::optional<Exception> write_and_wait(Device& d, Table table, std::uint16_t address,
-                                          std::vector<std::uint16_t> values,
-                                          Millis limit = Millis(5000),
-                                          const Session& session = kMaintain);
+  // Runs until the write settled or `limit` passed; its outcome, nullopt if still pending.
+  std::optional<Outcome> wait(const std::shared_ptr<WriteOutcome>& w, Millis limit = Millis(5000));
+  std::optional<Outcome> write_and_wait(Device& d, Table table, std::uint16_t address,
+                                        std::vector<std::uint16_t> values,
+                                        Millis limit = Millis(5000),
+                                        const Session& session = kMaintain);
   // Registers (or bits) as a PLC reads them; empty when the read fails.
   std::vector<std::uint16_t> read(Device& d, Table table, std::uint16_t address, std::size_t n,
                                   const Session& session = kMaintain);
