@@ -1,5 +1,7 @@
 #include "point_writes.h"
 
+#include <fmt/format.h>
+
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
@@ -7,9 +9,10 @@
 #include <iostream>
 
 #include "app/logging.h"
+#include "app/modbus_exception.h"
+#include "config/port_address.h"
 #include "gateway/gateway.h"
 #include "gateway/value_codec.h"
-#include "config/port_address.h"
 #include "transport/port_lock.h"
 
 namespace drivegate::cli {
@@ -28,21 +31,34 @@ std::optional<double> parse_number(const std::string& s) {
   return std::nullopt;
 }
 
-const char* exception_text(modbus::Exception e) {
-  switch (e) {
-    case modbus::Exception::none:
+// What came of a write, for the operator.
+const char* what(Outcome o) {
+  switch (o) {
+    case Outcome::ok:
       return "ok";
-    case modbus::Exception::illegal_data_address:
-      return "not a writable point (0x02)";
-    case modbus::Exception::illegal_data_value:
-      return "value refused (0x03)";
-    case modbus::Exception::server_device_failure:
-      return "the device refused it (0x04)";
-    case modbus::Exception::gateway_target_failed:
-      return "the device did not confirm it in time (0x0B)";
-    default:
-      return "failed";
+    case Outcome::no_such_device:
+      return "no such device";
+    case Outcome::no_such_point:
+      return "not a writable point";
+    case Outcome::denied:
+      return "beyond the access level";
+    case Outcome::invalid_value:
+      return "value refused";
+    case Outcome::busy:
+      return "the device is busy";
+    case Outcome::refused:
+      return "the device refused it";
+    case Outcome::no_response:
+      return "the device did not confirm it in time";
   }
+  return "failed";
+}
+
+// A failure with the Modbus exception a PLC's same write gets, which the adapters' documents
+// speak of.
+std::string outcome_text(Outcome o) {
+  if (o == Outcome::ok) return what(o);
+  return fmt::format("{} (0x{:02X})", what(o), static_cast<unsigned>(modbus_exception(o)));
 }
 
 // The current text of a string point of the device, if it has it.
@@ -129,16 +145,16 @@ int run_point_writes(const PointWriteJob& job) {
       return;
     }
     const Resolved& r = (*resolved)[next];
-    const auto done = [&](modbus::Exception e) {
+    const auto done = [&](Outcome outcome) {
       const Assignment& w = job.writes[next];
-      std::cout << w.point << "=" << w.value << ": " << exception_text(e);
-      if (e != modbus::Exception::none && !job.message_point.empty()) {
+      std::cout << w.point << "=" << w.value << ": " << outcome_text(outcome);
+      if (outcome != Outcome::ok && !job.message_point.empty()) {
         if (const auto why = string_value(device, job.message_point); !why.empty()) {
           std::cout << ": " << why;
         }
       }
       std::cout << std::endl;
-      if (e != modbus::Exception::none) {
+      if (outcome != Outcome::ok) {
         exit_code = 1;
         gateway->stop();
         return;
@@ -148,10 +164,10 @@ int run_point_writes(const PointWriteJob& job) {
     };
     // The operator at the console, with the configuration file in hand: every writable point, in
     // the register map's word order (the values were encoded in it).
-    const modbus::Session console{modbus::AccessLevel::maintain, modbus::WordOrder::big};
-    const auto e = device.write(console, r.point->spec.table, r.point->address, r.registers, done,
-                                Clock::now());
-    if (e != modbus::Exception::none) done(e);
+    const Session console{AccessLevel::maintain, WordOrder::big};
+    const Outcome at_once = device.write(console, r.point->spec.table, r.point->address,
+                                         r.registers, done, Clock::now());
+    if (at_once != Outcome::ok) done(at_once);
   };
   std::function<void()> wait_online = [&] {
     if (device.online()) {

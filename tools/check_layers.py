@@ -3,9 +3,9 @@
 libraries that library links, directly or through others (the link graph in the CMakeLists.txt
 files under daemon/ is the one statement of the layers; this reads it, it does not repeat it).
 
-A header belongs to the library that compiles the source of the same name, else to the library
-of its folder (the first one defined there: the interface library dg_modbus_api is the exception,
-whose one header, modbus/backend.h, is named here). Run by ctest (Layers.IncludesFollowTheLinks);
+A header belongs to the library that lists it among its sources (how an interface library names
+its headers), else to the one that compiles the source of the same name, else to the first
+library defined in its folder. Run by ctest (Layers.IncludesFollowTheLinks);
 prints each include that goes up or sideways, and exits 1 if there is one.
 """
 import pathlib
@@ -14,8 +14,6 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 DAEMON = ROOT / "daemon"
-# Interface libraries and the headers they are (they compile nothing to name them by).
-INTERFACE_HEADERS = {"modbus/backend.h": "dg_modbus_api"}
 
 CALL = re.compile(r"\b(add_library|target_link_libraries)\s*\(([^)]*)\)", re.S)
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+/[A-Za-z0-9_./]+)"', re.M)
@@ -34,7 +32,7 @@ def read_graph():
             deps = links.setdefault(name, {})
             if kind == "add_library":
                 for src in rest:
-                    if src.endswith((".cpp", ".proto")) and "$" not in src:
+                    if src.endswith((".cpp", ".h", ".proto")) and "$" not in src:
                         sources[str((folder / src).as_posix()).lstrip("./")] = name
                 continue
             visibility = "PUBLIC"
@@ -61,14 +59,15 @@ def usable(links, lib):
 
 def owner(path, sources):
     """The library a file under daemon/ (relative path) belongs to, or None (daemon's main)."""
-    if path in INTERFACE_HEADERS:
-        return INTERFACE_HEADERS[path]
+    if path in sources:
+        return sources[path]
     stem = str(pathlib.PurePosixPath(path).with_suffix(""))
     for ext in (".cpp", ".proto"):
         if stem + ext in sources:
             return sources[stem + ext]
     folder = str(pathlib.PurePosixPath(path).parent)
-    in_folder = [lib for src, lib in sources.items() if str(pathlib.PurePosixPath(src).parent) == folder]
+    in_folder = [lib for src, lib in sources.items()
+                 if str(pathlib.PurePosixPath(src).parent) == folder and not src.endswith(".h")]
     return in_folder[0] if in_folder else None
 
 

@@ -1,28 +1,34 @@
-// The Modbus server's backend across reloads: it forwards to the current gateway, so a SIGHUP
+// The Modbus server's backend: the current gateway, whose outcomes it answers as Modbus exceptions
+// (modbus_exception.h). It forwards to whichever gateway is current across reloads, so a SIGHUP
 // swaps the devices without closing a single Modbus TCP connection.
 #pragma once
 
+#include "app/modbus_exception.h"
+#include "gateway/gateway.h"
 #include "modbus/backend.h"
 
 namespace drivegate {
 
 class BackendSwitch : public modbus::Backend {
  public:
-  void set(modbus::Backend* target) { target_ = target; }
-  modbus::Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
+  void set(Gateway* target) { target_ = target; }
+  modbus::Exception read(const Session& session, std::uint8_t unit, Table table,
                          std::uint16_t address, std::span<std::uint16_t> out) override {
-    if (target_ == nullptr) return modbus::Exception::gateway_path_unavailable;
-    return target_->read(session, unit, table, address, out);
+    // No gateway yet: no device at any unit id.
+    if (target_ == nullptr) return modbus_exception(Outcome::no_such_device);
+    return modbus_exception(target_->read(session, unit, table, address, out));
   }
-  modbus::Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
+  modbus::Exception write(const Session& session, std::uint8_t unit, Table table,
                           std::uint16_t address, std::span<const std::uint16_t> values,
                           modbus::WriteDone done) override {
-    if (target_ == nullptr) return modbus::Exception::gateway_path_unavailable;
-    return target_->write(session, unit, table, address, values, std::move(done));
+    if (target_ == nullptr) return modbus_exception(Outcome::no_such_device);
+    return modbus_exception(
+        target_->write(session, unit, table, address, values,
+                       [done = std::move(done)](Outcome o) { done(modbus_exception(o)); }));
   }
 
  private:
-  modbus::Backend* target_ = nullptr;
+  Gateway* target_ = nullptr;
 };
 
 }  // namespace drivegate

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "drivegate/adapter.h"
+#include "gateway/session.h"
 #include "modbus/server_options.h"
 
 namespace drivegate {
@@ -70,7 +71,7 @@ struct MqttConfig {
   Millis counter_interval{10'000};  // counters change with every frame: reported this often
   std::chrono::seconds keepalive{30};
   bool commands = false;                                      // DCMD writes
-  modbus::AccessLevel access = modbus::AccessLevel::operate;  // what a DCMD may write
+  AccessLevel access = AccessLevel::operate;                  // what a DCMD may write
   bool feed_failsafe = false;  // whether a DCMD proves the PLC is there
   int line = 0;
   friend bool operator==(const MqttConfig&, const MqttConfig&) = default;

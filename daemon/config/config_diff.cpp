@@ -107,8 +107,8 @@ std::vector<std::string> changes(const DeviceConfig& a, const DeviceConfig& b) {
 
 std::vector<std::string> changes(const modbus::ListenerPolicy& a, const modbus::ListenerPolicy& b) {
   std::vector<std::string> out;
-  note(out, "access", modbus::to_string(a.access), modbus::to_string(b.access));
-  note(out, "word_order", modbus::to_string(a.word_order), modbus::to_string(b.word_order));
+  note(out, "access", to_string(a.access), to_string(b.access));
+  note(out, "word_order", to_string(a.word_order), to_string(b.word_order));
   const auto allow = [](const net::AllowList& l) {
     std::vector<std::string> s;
     for (const auto& r : l) s.push_back(r.to_string());

@@ -50,7 +50,7 @@ ListenerConfig server_listener(ListenAddress at, int line) {
   ListenerConfig l;
   l.options.host = std::move(at.host);
   l.options.port = at.port;
-  l.options.policy.access = modbus::AccessLevel::maintain;
+  l.options.policy.access = AccessLevel::maintain;
   l.from_server_listen = true;
   l.line = line;
   return l;
@@ -138,7 +138,7 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
   ListenerConfig l;
   l.line = line_of(t);
   auto& policy = l.options.policy;
-  policy.access = modbus::AccessLevel::read;  // nothing may write unless the file says so
+  policy.access = AccessLevel::read;  // nothing may write unless the file says so
   if (auto address = r.string("address", true)) {
     if (auto at = parse_listen(*address); at && !bindable(at->host)) {
       diag.error(r.node("address"), r.qualified("address"),
@@ -162,12 +162,12 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
   }
   if (const auto* n = r.node("word_order")) {
     const auto* s = n->as_string();
-    const auto i = s != nullptr ? index_of(modbus::kWordOrderNames, s->get()) : std::nullopt;
+    const auto i = s != nullptr ? index_of(kWordOrderNames, s->get()) : std::nullopt;
     if (i) {
-      policy.word_order = static_cast<modbus::WordOrder>(*i);
+      policy.word_order = static_cast<WordOrder>(*i);
     } else {
       diag.error(n, r.qualified("word_order"),
-                 "must be " + one_of(modbus::kWordOrderNames) +
+                 "must be " + one_of(kWordOrderNames) +
                      " (32-bit values: high word first, or low word first)");
     }
   }
@@ -195,10 +195,9 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
 void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
   const auto& p = l.options.policy;
   const bool can_write =
-      p.access != modbus::AccessLevel::read ||
-      (p.tls && std::any_of(p.tls->roles.begin(), p.tls->roles.end(), [](const auto& role) {
-         return role.second != modbus::AccessLevel::read;
-       }));
+      p.access != AccessLevel::read ||
+      (p.tls && std::any_of(p.tls->roles.begin(), p.tls->roles.end(),
+                            [](const auto& role) { return role.second != AccessLevel::read; }));
   if (!can_write || !net::allows_everyone(p.allow)) return;
   const std::string where = l.from_server_listen ? "server.listen" : "listener";
   const std::string what =
@@ -212,15 +211,15 @@ void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
 
 }  // namespace
 
-std::optional<modbus::AccessLevel> read_access(const toml::node& n, const std::string& key,
-                                               Diagnostics& diag) {
+std::optional<AccessLevel> read_access(const toml::node& n, const std::string& key,
+                                       Diagnostics& diag) {
   const auto* s = n.as_string();
-  const auto i = s != nullptr ? index_of(modbus::kAccessLevelNames, s->get()) : std::nullopt;
+  const auto i = s != nullptr ? index_of(kAccessLevelNames, s->get()) : std::nullopt;
   if (!i) {
-    diag.error(&n, key, "must be " + one_of(modbus::kAccessLevelNames));
+    diag.error(&n, key, "must be " + one_of(kAccessLevelNames));
     return std::nullopt;
   }
-  return static_cast<modbus::AccessLevel>(*i);
+  return static_cast<AccessLevel>(*i);
 }
 
 void read_server(const toml::table& root, Config& cfg, Diagnostics& diag) {

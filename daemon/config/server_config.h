@@ -11,8 +11,8 @@
 namespace drivegate {
 
 // An access level's name ("read", "operate", "maintain"); nullopt with an error otherwise.
-std::optional<modbus::AccessLevel> read_access(const toml::node& n, const std::string& key,
-                                               Diagnostics& diag);
+std::optional<AccessLevel> read_access(const toml::node& n, const std::string& key,
+                                       Diagnostics& diag);
 
 void read_server(const toml::table& root, Config& cfg, Diagnostics& diag);
 // After read_server: [[listener]], or the single listener of [server] listen. Warns about a

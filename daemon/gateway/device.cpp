@@ -4,8 +4,6 @@
 
 namespace drivegate {
 
-using modbus::Exception;
-
 namespace {
 
 LinkPolicy policy_of(const DeviceConfig& c, const AdapterDescriptor& a, const DriverTraits& t) {
@@ -71,7 +69,7 @@ void Device::on_no_reply(TimePoint now) {
 void Device::on_comm_lost(TimePoint now) {
   driver_->on_comm_lost(now);
   publish(now);
-  fail_pending(Exception::gateway_target_failed);
+  fail_pending(Outcome::no_response);
 }
 
 void Device::on_tick(TimePoint now) {
@@ -105,12 +103,12 @@ void Device::stop_on_start(TimePoint now) {
   stop_on_start_ = false;
   command(
       Command::stop,
-      [this](Exception e) {
-        if (e == Exception::none) {
+      [this](Outcome outcome) {
+        if (outcome == Outcome::ok) {
           log_->info("device {}: stop on start confirmed by the drive", config_.name);
         } else {
-          log_->warn("device {}: stop on start not confirmed (exception 0x{:02X})", config_.name,
-                     static_cast<int>(e));
+          log_->warn("device {}: stop on start not confirmed ({})", config_.name,
+                     to_string(outcome));
         }
       },
       now);

@@ -23,26 +23,27 @@
 
 #include "config/config.h"
 #include "gateway/failsafe.h"
+#include "gateway/outcome.h"
 #include "gateway/register_map.h"
 #include "bus/station.h"
-#include "modbus/backend.h"
+#include "gateway/session.h"
 #include "net/log_throttle.h"
 
 namespace drivegate {
 
 // The access level a write to `point` needs (README, "Listeners and access"): the common
 // command block (command, setpoint_rpm, heartbeat) is operate's, every other writable point
-// maintain's. Device::write and write_points refuse less with 0x01.
-modbus::AccessLevel required_level(const MappedPoint& point);
+// maintain's. Device::write and write_points deny less.
+AccessLevel required_level(const MappedPoint& point);
 
 // Writes waiting at one device, the one being carried out included (docs/safety.md, "Fair line
-// time"): past it a write is refused at once with 0x06 (server device busy). Stops have as many
+// time"): past it a write is refused at once (busy). Stops have as many
 // places again of their own, so a full queue never holds one back.
 inline constexpr std::size_t kMaxQueuedWrites = 4;
 
 // What happened to the writes a device was asked for, beyond what the line counters say.
 struct WriteStats {
-  std::uint64_t busy = 0;       // refused with 0x06: the queue was full
+  std::uint64_t busy = 0;       // refused at once (busy): the queue was full
   std::uint64_t coalesced = 0;  // identical to the one waiting before it: answered with it
   std::uint64_t refused_failsafe = 0;  // a run from a source that cannot clear a latched failsafe
 };
@@ -83,37 +84,38 @@ class Device final : public Station {
   // the MQTT northbound samples the device then. One watcher; an empty function removes it.
   void watch(std::function<void()> on_change) { watcher_ = std::move(on_change); }
 
-  // --- Modbus side, from the gateway ---
-  // Fills `out` from the register image, 32-bit values in the session's word order; 0x02 when
-  // any address of the range is unmapped.
-  modbus::Exception read(const modbus::Session& session, Table table, std::uint16_t address,
-                         std::span<std::uint16_t> out, TimePoint now);
-  // A Modbus write request: validated against the map, checked whole by the driver, then applied
-  // part by part; `done` gets the outcome once every part settled, or the first failure. An
-  // exception returned here means nothing of the request was applied and `done` is not called.
-  // A point beyond the session's access level is exception 01 (illegal function), checked with
-  // the map before the values, so it never reaches the driver; 32-bit values are read in the
-  // session's word order.
-  modbus::Exception write(const modbus::Session& session, Table table, std::uint16_t address,
-                          std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now);
+  // --- The northbounds' side (Modbus through the gateway, MQTT) ---
+  // Fills `out` from the register image, 32-bit values in the session's word order; no_such_point
+  // when any address of the range is unmapped.
+  Outcome read(const Session& session, Table table, std::uint16_t address,
+               std::span<std::uint16_t> out, TimePoint now);
+  // A write request of registers (or bits) as a Modbus client sends it: validated against the
+  // map, checked whole by the driver, then applied part by part; `done` gets the outcome once
+  // every part settled, or the first failure. Any outcome but ok returned here means nothing of
+  // the request was applied and `done` is not called. A point beyond the session's access level
+  // is denied, checked with the map before the values, so it never reaches the driver; 32-bit
+  // values are read in the session's word order.
+  Outcome write(const Session& session, Table table, std::uint16_t address,
+                std::span<const std::uint16_t> in, WriteDone done, TimePoint now);
   // One point of a write by name (an MQTT DCMD) and the engineering value it is to take.
   struct PointWrite {
     const MappedPoint* point;
     Value value;
   };
   // Points written as one request: each value is encoded into its point's registers as a client
-  // in the map's word order would write it (a value those registers cannot hold is 0x03), then
+  // in the map's word order would write it (a value those registers cannot hold is invalid), then
   // the registers are validated, judged whole, applied and confirmed exactly as write() does.
-  modbus::Exception write_points(const modbus::Session& session, std::span<const PointWrite> points,
-                                 modbus::WriteDone done, TimePoint now);
+  Outcome write_points(const Session& session, std::span<const PointWrite> points, WriteDone done,
+                       TimePoint now);
   // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
   // the failsafe. `done` is called exactly once.
-  void command(Command c, modbus::WriteDone done, TimePoint now);
-  // Shutdown has begun: from now on every client's write, from any northbound, is refused with
-  // 0x0B before it reaches the driver, so that nothing runs the motor after the shutdown stop.
+  void command(Command c, WriteDone done, TimePoint now);
+  // Shutdown has begun: from now on every client's write, from any northbound, is refused
+  // (no_response) before it reaches the driver, so that nothing runs the motor after the shutdown
+  // stop.
   void close_to_clients() { closed_to_clients_ = true; }
   // Fails every request in flight (shutdown, bus closed for good).
-  void fail_pending(modbus::Exception why);
+  void fail_pending(Outcome why);
   // Writes waiting or being carried out (status bit command_pending).
   [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
   [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }
@@ -121,8 +123,7 @@ class Device final : public Station {
  private:
   enum class Origin : std::uint8_t { plc, gateway };
   // The gateway's own writes (shutdown, failsafe) may write anything, in the map's word order.
-  static constexpr modbus::Session kGatewaySession{modbus::AccessLevel::maintain,
-                                                   modbus::WordOrder::big};
+  static constexpr Session kGatewaySession{AccessLevel::maintain, WordOrder::big};
   struct Part {
     const MappedPoint* point;
     Value value;
@@ -148,23 +149,22 @@ class Device final : public Station {
   void next_request(TimePoint now);
   [[nodiscard]] Request* queue_head() const;
   [[nodiscard]] std::size_t queued(bool urgent) const;
-  modbus::Exception refuse_run_while_latched(const char* source, TimePoint now);
+  Outcome refuse_run_while_latched(const char* source, TimePoint now);
   void supersede_runs(TimePoint now);
-  modbus::Exception submit(const modbus::Session& session, Table table, std::uint16_t address,
-                           std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now,
-                           Origin origin);
-  modbus::Exception validate(const modbus::Session& session, Table table, std::uint16_t address,
-                             std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
-  modbus::Exception enqueue(const modbus::Session& session, std::vector<Part> parts,
-                            modbus::WriteDone done, TimePoint now, Origin origin);
-  Progress advance(Request& r, TimePoint now, modbus::Exception& failure);
+  Outcome submit(const Session& session, Table table, std::uint16_t address,
+                 std::span<const std::uint16_t> in, WriteDone done, TimePoint now, Origin origin);
+  Outcome validate(const Session& session, Table table, std::uint16_t address,
+                   std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
+  Outcome enqueue(const Session& session, std::vector<Part> parts, WriteDone done, TimePoint now,
+                  Origin origin);
+  Progress advance(Request& r, TimePoint now, Outcome& failure);
   void settle(const Completion& c, TimePoint now);
-  void finish(const Request* r, modbus::Exception e, TimePoint now);
+  void finish(const Request* r, Outcome outcome, TimePoint now);
   void expire_requests(TimePoint now);
   // device_failsafe.cpp
   void failsafe_tick(TimePoint now);
   void enforce_failsafe(TimePoint now);
-  void failsafe_settled(FailsafeAction action, modbus::Exception e);
+  void failsafe_settled(FailsafeAction action, Outcome outcome);
 
   DeviceConfig config_;
   const AdapterDescriptor& adapter_;
@@ -196,7 +196,7 @@ class Device final : public Station {
   FailsafeAction failsafe_now_ = FailsafeAction::stop;
   bool failsafe_busy_ = false;     // the action's write is in flight
   bool failsafe_done_ = false;     // the drive confirmed the action since the trip
-  bool failsafe_gave_up_ = false;  // the drive cannot take a stop at all (exception 0x03)
+  bool failsafe_gave_up_ = false;  // the drive cannot take a stop at all (invalid_value)
   TimePoint failsafe_retry_at_{};
   TimePoint last_tick_{};
 

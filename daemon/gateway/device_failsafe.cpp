@@ -4,8 +4,6 @@
 
 namespace drivegate {
 
-using modbus::Exception;
-
 namespace {
 // A failed failsafe write is tried again after this, not on every 100 ms tick.
 constexpr Millis kFailsafeRetry{1000};
@@ -44,43 +42,43 @@ void Device::enforce_failsafe(TimePoint now) {
   }
   failsafe_busy_ = true;
   const FailsafeAction action = failsafe_now_;
-  auto done = [this, action](Exception e) { failsafe_settled(action, e); };
-  Exception e = Exception::none;
+  auto done = [this, action](Outcome o) { failsafe_settled(action, o); };
+  Outcome outcome = Outcome::ok;
   if (action == FailsafeAction::preset) {
     const auto rpm = static_cast<std::uint16_t>(config_.failsafe.preset_rpm);
-    e = submit(kGatewaySession, Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1), done,
-               now, Origin::gateway);
+    outcome = submit(kGatewaySession, Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1),
+                     done, now, Origin::gateway);
   } else {
     const auto c = static_cast<std::uint16_t>(
         action == FailsafeAction::quick_stop ? Command::quick_stop : Command::stop);
-    e = submit(kGatewaySession, Table::holding, 0, std::span<const std::uint16_t>(&c, 1), done, now,
-               Origin::gateway);
+    outcome = submit(kGatewaySession, Table::holding, 0, std::span<const std::uint16_t>(&c, 1),
+                     done, now, Origin::gateway);
   }
-  if (e != Exception::none) failsafe_settled(action, e);
+  if (outcome != Outcome::ok) failsafe_settled(action, outcome);
 }
 
-void Device::failsafe_settled(FailsafeAction action, Exception e) {
+void Device::failsafe_settled(FailsafeAction action, Outcome outcome) {
   failsafe_busy_ = false;
   if (!failsafe_.latched()) return;  // a run command reset it meanwhile
-  if (e == Exception::none) {
+  if (outcome == Outcome::ok) {
     if (!failsafe_done_) {
       log_->info("device {}: failsafe {} confirmed by the drive", config_.name, to_string(action));
     }
     failsafe_done_ = true;
     return;
   }
-  log_->warn("device {}: failsafe {} not confirmed (exception 0x{:02X})", config_.name,
-             to_string(action), static_cast<int>(e));
+  log_->warn("device {}: failsafe {} not confirmed ({})", config_.name, to_string(action),
+             to_string(outcome));
   if (action == FailsafeAction::preset ||
-      (action == FailsafeAction::quick_stop && e == Exception::illegal_data_value)) {
+      (action == FailsafeAction::quick_stop && outcome == Outcome::invalid_value)) {
     failsafe_now_ = FailsafeAction::stop;  // next tick: a plain stop instead
     failsafe_done_ = false;
     return;
   }
-  if (e == Exception::illegal_data_value) {
+  if (outcome == Outcome::invalid_value) {
     failsafe_gave_up_ = true;
-    log_->error("device {}: refuses {} (0x03): the failsafe cannot act on it", config_.name,
-                to_string(action));
+    log_->error("device {}: refuses {} (invalid value): the failsafe cannot act on it",
+                config_.name, to_string(action));
     return;
   }
   failsafe_retry_at_ = last_tick_ + kFailsafeRetry;

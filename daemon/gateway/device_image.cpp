@@ -9,8 +9,6 @@
 
 namespace drivegate {
 
-using modbus::Exception;
-
 // What changes only when the driver is called or a write is applied (both mark the image
 // stale): the adapter's points and the common holding registers (command and setpoint in force,
 // heartbeat).
@@ -81,17 +79,17 @@ void Device::refresh_common(Table table, TimePoint now) {
   }
 }
 
-Exception Device::read(const modbus::Session& session, Table table, std::uint16_t address,
-                       std::span<std::uint16_t> out, TimePoint now) {
+Outcome Device::read(const Session& session, Table table, std::uint16_t address,
+                     std::span<std::uint16_t> out, TimePoint now) {
   const auto regs = registers(table);
   if (std::size_t{address} + out.size() > regs.size() ||
       map_.mapped_from(table, address) < out.size()) {
-    return Exception::illegal_data_address;
+    return Outcome::no_such_point;
   }
   if (image_stale_) refresh_image(now);
   if (table == Table::input || table == Table::discrete) refresh_common(table, now);
   std::copy_n(regs.begin() + address, out.size(), out.begin());
-  if (session.word_order == modbus::WordOrder::little) {
+  if (session.word_order == WordOrder::little) {
     // Each register of a 32-bit value shows its partner's word, so a read of half a value (or
     // of a range cutting one) gives what a little-endian client expects at that address.
     for (std::size_t i = 0; i < out.size(); ++i) {
@@ -101,7 +99,7 @@ Exception Device::read(const modbus::Session& session, Table table, std::uint16_
       out[i] = regs[at == p->address ? at + 1 : at - 1];
     }
   }
-  return Exception::none;
+  return Outcome::ok;
 }
 
 }  // namespace drivegate

@@ -1,6 +1,6 @@
 // A write request in flight at one device (device_writes.cpp): its parts in the order they are
 // applied, which part is next, the ticket of the part the driver is still carrying out, and when
-// the client is answered 0x0B if it has not settled by then.
+// the client is answered no_response if it has not settled by then.
 #pragma once
 
 #include <optional>
@@ -20,7 +20,7 @@ struct Device::Request {
   bool urgent = false;         // a stop, or the gateway's own: handed to the driver at once
   bool feeds_failsafe = true;  // from the PLC, and from a client whose writes prove it is there
   // Whom to answer: the client that asked, and any that asked the same while it waited.
-  std::vector<modbus::WriteDone> done;
+  std::vector<WriteDone> done;
 
   [[nodiscard]] bool started() const { return next > 0; }
 };

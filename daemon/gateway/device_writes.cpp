@@ -4,14 +4,14 @@
 // a later part after an earlier one took effect, the client gets the failure and the register
 // image shows what the drive really holds.
 //
-// Requests wait in a short queue (kMaxQueuedWrites; past it 0x06 at once) and are carried out
+// Requests wait in a short queue (kMaxQueuedWrites; past it busy at once) and are carried out
 // oldest first, one part at a time. A part goes to the driver at once when the device owes no
 // poll; after a write, if a poll of its own is due, the next part waits for a write turn, which
 // the bus engine alternates with the line's polls: however many clients write, every device, the
 // written one included, keeps being polled. A request equal
 // to the one still queued before it is answered with it. A stop (a client's, the failsafe's,
 // shutdown's) does not queue: it goes to the driver at once, and the queued requests that would
-// run the motor after it are dropped, never sent (0x0B).
+// run the motor after it are dropped, never sent (no_response).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -23,25 +23,22 @@
 
 namespace drivegate {
 
-using modbus::Exception;
-
 namespace {
 
-Exception to_exception(WriteCheck c) {
-  return c == WriteCheck::invalid_value ? Exception::illegal_data_value
-                                        : Exception::server_device_failure;
+Outcome to_outcome(WriteCheck c) {
+  return c == WriteCheck::invalid_value ? Outcome::invalid_value : Outcome::refused;
 }
 
-Exception to_exception(WriteResult r) {
+Outcome to_outcome(WriteResult r) {
   switch (r) {
     case WriteResult::ok:
-      return Exception::none;
+      return Outcome::ok;
     case WriteResult::refused:
-      return Exception::server_device_failure;
+      return Outcome::refused;
     case WriteResult::no_response:
-      return Exception::gateway_target_failed;
+      return Outcome::no_response;
   }
-  return Exception::server_device_failure;
+  return Outcome::refused;
 }
 
 CommonWrite write_kind(const MappedPoint& p) {
@@ -92,89 +89,89 @@ bool finite(const Value& v) {
 
 }  // namespace
 
-modbus::AccessLevel required_level(const MappedPoint& p) {
-  return write_kind(p) != CommonWrite::none ? modbus::AccessLevel::operate
-                                            : modbus::AccessLevel::maintain;
+AccessLevel required_level(const MappedPoint& p) {
+  return write_kind(p) != CommonWrite::none ? AccessLevel::operate : AccessLevel::maintain;
 }
 
-Exception Device::write(const modbus::Session& session, Table table, std::uint16_t address,
-                        std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now) {
+Outcome Device::write(const Session& session, Table table, std::uint16_t address,
+                      std::span<const std::uint16_t> in, WriteDone done, TimePoint now) {
   return submit(session, table, address, in, std::move(done), now, Origin::plc);
 }
 
-void Device::command(Command c, modbus::WriteDone done, TimePoint now) {
+void Device::command(Command c, WriteDone done, TimePoint now) {
   const auto value = static_cast<std::uint16_t>(c);
-  const Exception e = submit(kGatewaySession, Table::holding, 0,
-                             std::span<const std::uint16_t>(&value, 1), done, now, Origin::gateway);
-  if (e != Exception::none) done(e);
+  const Outcome at_once =
+      submit(kGatewaySession, Table::holding, 0, std::span<const std::uint16_t>(&value, 1), done,
+             now, Origin::gateway);
+  if (at_once != Outcome::ok) done(at_once);
 }
 
-Exception Device::validate(const modbus::Session& session, Table table, std::uint16_t address,
-                           std::span<const std::uint16_t> in, std::vector<Part>& parts) const {
+Outcome Device::validate(const Session& session, Table table, std::uint16_t address,
+                         std::span<const std::uint16_t> in, std::vector<Part>& parts) const {
   const bool bits = table == Table::coil;
   std::size_t i = 0;
   while (i < in.size()) {
     const auto at = static_cast<std::uint16_t>(address + i);
     const MappedPoint* p = map_.at(table, at);
     // A write must start at a point and cover all its registers.
-    if (p == nullptr || p->address != at) return Exception::illegal_data_address;
+    if (p == nullptr || p->address != at) return Outcome::no_such_point;
     const std::size_t count = bits ? 1 : p->spec.register_count();
-    if (i + count > in.size()) return Exception::illegal_data_address;
-    if (p->spec.access() != Access::read_write) return Exception::illegal_data_address;
-    // backend.h: beyond the session's level is exception 01, and the only reason for it.
-    if (required_level(*p) > session.access) return Exception::illegal_function;
+    if (i + count > in.size()) return Outcome::no_such_point;
+    if (p->spec.access() != Access::read_write) return Outcome::no_such_point;
+    // outcome.h: beyond the session's level is denied, and the only reason for it.
+    if (required_level(*p) > session.access) return Outcome::denied;
     Value v;
     if (bits) {
       v = std::int64_t{in[i] != 0 ? 1 : 0};
     } else {
       std::array<std::uint16_t, 2> swapped{};
       auto words = in.subspan(i, count);
-      if (session.word_order == modbus::WordOrder::little && has_word_order(p->spec)) {
+      if (session.word_order == WordOrder::little && has_word_order(p->spec)) {
         swapped = {words[1], words[0]};
         words = swapped;
       }
-      // A float register holding NaN or an infinity does not decode: 0x03.
+      // A float register holding NaN or an infinity does not decode: invalid.
       auto decoded = decode_value(p->spec, words);
-      if (!decoded || !finite(*decoded)) return Exception::illegal_data_value;
+      if (!decoded || !finite(*decoded)) return Outcome::invalid_value;
       v = std::move(*decoded);
       const double x = as_double(v);
       if ((p->spec.min != 0.0 || p->spec.max != 0.0) && (x < p->spec.min || x > p->spec.max)) {
-        return Exception::illegal_data_value;
+        return Outcome::invalid_value;
       }
     }
     parts.push_back({p, std::move(v)});
     i += count;
   }
-  return Exception::none;
+  return Outcome::ok;
 }
 
-Exception Device::submit(const modbus::Session& session, Table table, std::uint16_t address,
-                         std::span<const std::uint16_t> in, modbus::WriteDone done, TimePoint now,
-                         Origin origin) {
+Outcome Device::submit(const Session& session, Table table, std::uint16_t address,
+                       std::span<const std::uint16_t> in, WriteDone done, TimePoint now,
+                       Origin origin) {
   std::vector<Part> parts;
-  if (const Exception e = validate(session, table, address, in, parts); e != Exception::none) {
-    return e;
+  if (const Outcome o = validate(session, table, address, in, parts); o != Outcome::ok) {
+    return o;
   }
   return enqueue(session, std::move(parts), std::move(done), now, origin);
 }
 
-Exception Device::write_points(const modbus::Session& session, std::span<const PointWrite> points,
-                               modbus::WriteDone done, TimePoint now) {
-  modbus::Session in_map_order = session;
-  in_map_order.word_order = modbus::WordOrder::big;  // encode_value's order
+Outcome Device::write_points(const Session& session, std::span<const PointWrite> points,
+                             WriteDone done, TimePoint now) {
+  Session in_map_order = session;
+  in_map_order.word_order = WordOrder::big;  // encode_value's order
   std::vector<Part> parts;
   for (const PointWrite& w : points) {
     const PointSpec& spec = w.point->spec;
     const bool bits = spec.table == Table::coil;
     std::array<std::uint16_t, 2> regs{};
     const std::size_t count = bits ? 1 : spec.register_count();
-    if (count > regs.size()) return Exception::illegal_data_address;  // strings are not writable
+    if (count > regs.size()) return Outcome::no_such_point;  // strings are not writable
     // NaN would encode as 0 (and compare unequal to everything below): refused before that.
-    if (!finite(w.value)) return Exception::illegal_data_value;
+    if (!finite(w.value)) return Outcome::invalid_value;
     const auto words = std::span(regs).first(count);
     if (bits) {
       const double x = as_double(w.value);
-      if (x != 0.0 && x != 1.0) return Exception::illegal_data_value;
+      if (x != 0.0 && x != 1.0) return Outcome::invalid_value;
       regs[0] = x != 0.0 ? 1 : 0;
     } else {
       encode_value(spec, w.value, words);
@@ -188,37 +185,37 @@ Exception Device::write_points(const modbus::Session& session, std::span<const P
                                    ? std::max(1e-6 * std::fabs(asked), 1e-30)
                                    : 1e-6 * std::fabs(step);
       if (!held || !(std::fabs(as_double(*held) - asked) <= tolerance)) {
-        return Exception::illegal_data_value;
+        return Outcome::invalid_value;
       }
     }
     std::vector<Part> one;
-    if (const Exception e = validate(in_map_order, spec.table, w.point->address, words, one);
-        e != Exception::none) {
-      return e;
+    if (const Outcome o = validate(in_map_order, spec.table, w.point->address, words, one);
+        o != Outcome::ok) {
+      return o;
     }
     parts.insert(parts.end(), one.begin(), one.end());
   }
-  if (parts.empty()) return Exception::illegal_data_value;
+  if (parts.empty()) return Outcome::invalid_value;
   return enqueue(session, std::move(parts), std::move(done), now, Origin::plc);
 }
 
 // docs/safety.md, "Command authority": while the failsafe is latched, only a run from a source
 // that feeds it (the PLC) clears it; a run from anywhere else is refused before it is applied.
-Exception Device::refuse_run_while_latched(const char* source, TimePoint now) {
+Outcome Device::refuse_run_while_latched(const char* source, TimePoint now) {
   ++write_stats_.refused_failsafe;
   if (const auto held = refusal_log_.admit(now)) {
     log_->warn(
-        "device {}: run from {} refused (0x04): the failsafe is latched, and only a run from the "
+        "device {}: run from {} refused: the failsafe is latched, and only a run from the "
         "PLC clears it{}",
         config_.name, source, net::held_note(*held));
   }
-  return Exception::server_device_failure;
+  return Outcome::refused;
 }
 
-Exception Device::enqueue(const modbus::Session& session, std::vector<Part> parts,
-                          modbus::WriteDone done, TimePoint now, Origin origin) {
+Outcome Device::enqueue(const Session& session, std::vector<Part> parts, WriteDone done,
+                        TimePoint now, Origin origin) {
   const bool feeds = origin == Origin::plc && session.feeds_failsafe;
-  if (closed_to_clients_ && origin == Origin::plc) return Exception::gateway_target_failed;
+  if (closed_to_clients_ && origin == Origin::plc) return Outcome::no_response;
   if (origin == Origin::plc) stop_on_start_ = false;  // a client decides from now on
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
@@ -228,7 +225,7 @@ Exception Device::enqueue(const modbus::Session& session, std::vector<Part> part
   // timeout. The heartbeat alone is the gateway's and always succeeds.
   const bool heartbeat_only =
       parts.size() == 1 && write_kind(*parts[0].point) == CommonWrite::heartbeat;
-  if (comm_lost() && !heartbeat_only) return Exception::gateway_target_failed;
+  if (comm_lost() && !heartbeat_only) return Outcome::no_response;
   if (failsafe_.latched() && !feeds && commands(parts, &is_run)) {
     return refuse_run_while_latched(
         origin == Origin::plc ? "a client that does not feed it" : "the gateway", now);
@@ -240,7 +237,7 @@ Exception Device::enqueue(const modbus::Session& session, std::vector<Part> part
     if (auto op = op_of(*p.point, p.value)) ops.push_back(std::move(*op));
   }
   if (!ops.empty()) {
-    if (const WriteCheck c = driver_->check(ops); c != WriteCheck::ok) return to_exception(c);
+    if (const WriteCheck c = driver_->check(ops); c != WriteCheck::ok) return to_outcome(c);
   }
 
   const bool urgent = origin == Origin::gateway || commands(parts, &is_stop);
@@ -256,12 +253,12 @@ Exception Device::enqueue(const modbus::Session& session, std::vector<Part> part
                    })) {
       ++write_stats_.coalesced;
       (*last)->done.push_back(std::move(done));
-      return Exception::none;
+      return Outcome::ok;
     }
   }
   if (!heartbeat_only && queued(urgent) >= kMaxQueuedWrites) {
     ++write_stats_.busy;
-    return Exception::server_device_busy;
+    return Outcome::busy;
   }
   if (urgent) supersede_runs(now);
 
@@ -276,11 +273,11 @@ Exception Device::enqueue(const modbus::Session& session, std::vector<Part> part
   if (!urgent && !heartbeat_only) {
     if (queue_head() != r || !may_release(now)) {
       if (kick_) kick_();  // the engine gives it a write turn
-      return Exception::none;
+      return Outcome::ok;
     }
   }
   // A stop and the heartbeat go to the driver (or the image) at once.
-  Exception failure = Exception::none;
+  Outcome failure = Outcome::ok;
   const Progress progress = advance(*r, now, failure);
   if (progress == Progress::failed) r->done.clear();  // answered by the return value instead
   if (progress != Progress::waiting) finish(r, failure, now);
@@ -300,7 +297,7 @@ void Device::supersede_runs(TimePoint now) {
   for (const auto& r : requests_) {
     if (!r->urgent && !r->started() && commands(r->parts, &is_run)) dropped.push_back(r.get());
   }
-  for (const Request* r : dropped) finish(r, Exception::gateway_target_failed, now);
+  for (const Request* r : dropped) finish(r, Outcome::no_response, now);
 }
 
 // The oldest request that is not a stop: the only one of them the driver may be carrying out.
@@ -340,7 +337,7 @@ bool Device::release(TimePoint now, bool write_turn) {
   bool applied = false;
   while (Request* r = queue_head()) {
     if (r->waiting || (!write_turn && !may_release(now))) break;
-    Exception failure = Exception::none;
+    Outcome failure = Outcome::ok;
     const Progress progress = advance(*r, now, failure);
     applied = true;
     if (progress == Progress::waiting) break;
@@ -352,7 +349,7 @@ bool Device::release(TimePoint now, bool write_turn) {
 
 
 // Applies parts from r.next on until one is pending or fails.
-Device::Progress Device::advance(Request& r, TimePoint now, Exception& failure) {
+Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
   while (r.next < r.parts.size()) {
     const Part& part = r.parts[r.next++];
     const std::optional<WriteOp> maybe_op = op_of(*part.point, part.value);
@@ -388,10 +385,10 @@ Device::Progress Device::advance(Request& r, TimePoint now, Exception& failure) 
         (r.urgent ? urgent_unsent_ : handed_) = true;
         return Progress::waiting;
       case WriteStatus::invalid_value:
-        failure = Exception::illegal_data_value;
+        failure = Outcome::invalid_value;
         return Progress::failed;
       case WriteStatus::refused:
-        failure = Exception::server_device_failure;
+        failure = Outcome::refused;
         return Progress::failed;
     }
   }
@@ -406,7 +403,7 @@ void Device::settle(const Completion& c, TimePoint now) {
   r->waiting.reset();
   if (c.result != WriteResult::ok || r->next == r->parts.size()) {
     // Done, or failed: the parts after it are never applied. The next request may go.
-    finish(r, to_exception(c.result), now);
+    finish(r, to_outcome(c.result), now);
     next_request(now);
     return;
   }
@@ -417,13 +414,13 @@ void Device::settle(const Completion& c, TimePoint now) {
     if (kick_) kick_();
     return;
   }
-  Exception failure = Exception::none;
+  Outcome failure = Outcome::ok;
   const Progress progress = advance(*r, now, failure);
   if (progress != Progress::waiting) finish(r, failure, now);
   if (progress == Progress::waiting && kick_) kick_();
 }
 
-void Device::finish(const Request* r, Exception e, TimePoint now) {
+void Device::finish(const Request* r, Outcome outcome, TimePoint now) {
   const auto it = std::find_if(requests_.begin(), requests_.end(),
                                [r](const auto& owned) { return owned.get() == r; });
   if (it == requests_.end()) return;
@@ -431,23 +428,24 @@ void Device::finish(const Request* r, Exception e, TimePoint now) {
   requests_.erase(it);
   // Only a write that succeeded proves the PLC is there: one refused for any reason (by the
   // gateway or by the drive) or unanswered feeds nothing (docs/safety.md).
-  if (e == Exception::none && owned->feeds_failsafe &&
+  if (outcome == Outcome::ok && owned->feeds_failsafe &&
       std::any_of(owned->parts.begin(), owned->parts.end(),
                   [](const Part& p) { return write_kind(*p.point) != CommonWrite::none; })) {
     failsafe_.fed(now);
   }
   for (auto& done : owned->done) {
-    if (done) done(e);
+    if (done) done(outcome);
   }
 }
 
-// Requests not settled by their deadline: 0x0B. One still queued is never applied after it.
+// Requests not settled by their deadline: no_response. One still queued is never applied after
+// it.
 void Device::expire_requests(TimePoint now) {
   std::vector<const Request*> late;
   for (const auto& r : requests_) {
     if (now >= r->deadline) late.push_back(r.get());
   }
-  for (const Request* r : late) finish(r, Exception::gateway_target_failed, now);
+  for (const Request* r : late) finish(r, Outcome::no_response, now);
   if (!late.empty()) next_request(now);
 }
 
@@ -458,7 +456,7 @@ void Device::next_request(TimePoint now) {
   if (kick_) kick_();
 }
 
-void Device::fail_pending(Exception why) {
+void Device::fail_pending(Outcome why) {
   auto failing = std::move(requests_);
   requests_.clear();
   urgent_unsent_ = false;

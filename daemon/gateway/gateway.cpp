@@ -9,7 +9,6 @@
 namespace drivegate {
 
 namespace asio = boost::asio;
-using modbus::Exception;
 
 std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescriptor& adapter,
                                     bool maintenance, std::string& error, const BusConfig* line) {
@@ -131,7 +130,7 @@ void Gateway::stop() {
   if (!running_) return;
   running_ = false;
   for (auto& b : buses_) b->stop();
-  for (auto& d : devices_) d->fail_pending(Exception::gateway_target_failed);
+  for (auto& d : devices_) d->fail_pending(Outcome::no_response);
 }
 
 void Gateway::stop_drives(Millis limit, std::function<void()> done) {
@@ -164,10 +163,9 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
     log_->info("device {}: stopping for shutdown", d->config().name);
     d->command(
         Command::stop,
-        [waiter, name = d->config().name, log = log_](Exception e) {
-          if (e != Exception::none) {
-            log->warn("device {}: stop not confirmed (exception 0x{:02X})", name,
-                      static_cast<int>(e));
+        [waiter, name = d->config().name, log = log_](Outcome outcome) {
+          if (outcome != Outcome::ok) {
+            log->warn("device {}: stop not confirmed ({})", name, to_string(outcome));
           }
           if (--waiter->outstanding == 0) waiter->finish();
         },
@@ -183,19 +181,19 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   });
 }
 
-Exception Gateway::read(const modbus::Session& session, std::uint8_t unit, Table table,
-                        std::uint16_t address, std::span<std::uint16_t> out) {
+Outcome Gateway::read(const Session& session, std::uint8_t unit, Table table, std::uint16_t address,
+                      std::span<std::uint16_t> out) {
   Device* d = units_[unit];
-  if (d == nullptr) return Exception::gateway_path_unavailable;
+  if (d == nullptr) return Outcome::no_such_device;
   return d->read(session, table, address, out, Clock::now());
 }
 
-Exception Gateway::write(const modbus::Session& session, std::uint8_t unit, Table table,
-                         std::uint16_t address, std::span<const std::uint16_t> values,
-                         modbus::WriteDone done) {
+Outcome Gateway::write(const Session& session, std::uint8_t unit, Table table,
+                       std::uint16_t address, std::span<const std::uint16_t> values,
+                       WriteDone done) {
   Device* d = units_[unit];
-  if (d == nullptr) return Exception::gateway_path_unavailable;
-  if (!running_) return Exception::gateway_target_failed;
+  if (d == nullptr) return Outcome::no_such_device;
+  if (!running_) return Outcome::no_response;
   return d->write(session, table, address, values, std::move(done), Clock::now());
 }
 

@@ -1,6 +1,7 @@
-// The gateway: every configured device and bus, and the Modbus backend that serves them. Each
-// Modbus unit id is one device. Reads come from the register image; writes go to the device's
-// driver and are answered when the drive confirmed them.
+// The gateway: every configured device and bus, served to the northbounds by unit id. Each Modbus
+// unit id is one device. Reads come from the register image; writes go to the device's driver and
+// are answered when the drive confirmed them. The Modbus server reaches it through
+// app/backend_switch.h, which says its outcomes as Modbus exceptions.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -16,7 +17,8 @@
 #include "plugin/plugins.h"
 #include "device.h"
 #include "bus/bus.h"
-#include "modbus/backend.h"
+#include "gateway/outcome.h"
+#include "gateway/session.h"
 
 namespace drivegate {
 
@@ -27,7 +29,7 @@ std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescri
                                     bool maintenance, std::string& error,
                                     const BusConfig* line = nullptr);
 
-class Gateway : public modbus::Backend {
+class Gateway {
  public:
   // Builds every device (drivers created, nothing opened yet). Returns nullptr and fills
   // `errors` when an adapter refuses its device.
@@ -35,7 +37,7 @@ class Gateway : public modbus::Backend {
                                         const PluginRegistry& plugins,
                                         std::shared_ptr<spdlog::logger> log,
                                         std::vector<std::string>& errors, bool maintenance = false);
-  ~Gateway() override;
+  ~Gateway();
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;
 
@@ -49,17 +51,18 @@ class Gateway : public modbus::Backend {
   void adopt(Gateway& old);
 
   void start();  // opens the buses and starts polling (kept buses poll on)
-  void stop();   // closes the buses; pending writes fail with 0x0B
+  void stop();   // closes the buses; pending writes fail (no_response)
   // Puts every running drive whose on_shutdown is stop in its stop state (on_shutdown = hold
   // leaves it) and calls `done` once they confirmed or `limit` passed. From then on every
-  // client's write is refused (0x0B).
+  // client's write is refused (no_response).
   void stop_drives(Millis limit, std::function<void()> done);
 
-  modbus::Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
-                         std::uint16_t address, std::span<std::uint16_t> out) override;
-  modbus::Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
-                          std::uint16_t address, std::span<const std::uint16_t> values,
-                          modbus::WriteDone done) override;
+  // A read (Device::read) or a write (Device::write) at the device whose unit id is `unit`:
+  // no_such_device where there is none. A write before start() or after stop() is no_response.
+  Outcome read(const Session& session, std::uint8_t unit, Table table, std::uint16_t address,
+               std::span<std::uint16_t> out);
+  Outcome write(const Session& session, std::uint8_t unit, Table table, std::uint16_t address,
+                std::span<const std::uint16_t> values, WriteDone done);
 
   [[nodiscard]] std::size_t devices_online() const;
   [[nodiscard]] const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }

@@ -8,7 +8,7 @@
 namespace drivegate {
 
 void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
-  static constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
+  static constexpr Session kReader{AccessLevel::read, WordOrder::big};
   static constexpr std::array kTables{Table::coil, Table::discrete, Table::input, Table::holding};
   out.clear();
   const RegisterMap& map = device.map();
@@ -29,8 +29,7 @@ void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
         continue;
       }
       const std::span<std::uint16_t> regs = std::span(image[i]).subspan(a, n);
-      if (device.read(kReader, t, static_cast<std::uint16_t>(a), regs, now) ==
-          modbus::Exception::none) {
+      if (device.read(kReader, t, static_cast<std::uint16_t>(a), regs, now) == Outcome::ok) {
         std::fill_n(readable[i].begin() + static_cast<std::ptrdiff_t>(a), n, true);
       }
       a += n;

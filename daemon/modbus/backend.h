@@ -1,16 +1,17 @@
 // What the Modbus TCP server asks of the gateway. The server owns framing, dispatch and
 // connections; the backend owns the register image and the devices. Reads are synchronous (they
 // are served from memory and never wait on a serial bus); writes complete later, when the device
-// confirmed them or failed to.
+// confirmed them or failed to. The daemon's backend is app/backend_switch.h: the gateway, its
+// outcomes (gateway/outcome.h) answered as these exceptions.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <functional>
 #include <span>
 #include <string_view>
 
 #include "drivegate/point.h"  // Table: the four Modbus tables, one enum for every layer
+#include "gateway/session.h"  // Session: who asks (dg_gateway_api, below this layer)
 
 namespace drivegate::modbus {
 
@@ -51,40 +52,6 @@ constexpr std::string_view to_string(Exception e) {
   }
   return "unknown";
 }
-
-// What a client may do (README, "Listeners and access"). Ordered: each level includes the ones
-// below it.
-enum class AccessLevel : std::uint8_t {
-  read,      // reads only: every write function is answered 0x01
-  operate,   // also the common command block: command, setpoint_rpm, heartbeat
-  maintain,  // every writable point
-};
-
-// Their names in drivegate.toml and in the log, in enum order.
-inline constexpr std::array<std::string_view, 3> kAccessLevelNames = {"read", "operate",
-                                                                      "maintain"};
-constexpr std::string_view to_string(AccessLevel a) {
-  return kAccessLevelNames.at(static_cast<std::size_t>(a));
-}
-
-// How 32-bit values are laid over two registers for a client: big = high word first (the register
-// map's order), little = low word first. Registers of 16 bits and bits are never reordered.
-enum class WordOrder : std::uint8_t { big, little };
-inline constexpr std::array<std::string_view, 2> kWordOrderNames = {"big", "little"};
-constexpr std::string_view to_string(WordOrder w) {
-  return kWordOrderNames.at(static_cast<std::size_t>(w));
-}
-
-// Who is asking: the connection's access level and word order (its listener's, or the role of its
-// TLS client certificate). Passed with every read and write.
-// The default may only read: a session gets more only from its listener or its certificate.
-struct Session {
-  AccessLevel access = AccessLevel::read;
-  WordOrder word_order = WordOrder::big;
-  // Whether this client's valid writes to the command block prove the PLC is there (feed the
-  // PLC-loss failsafe, docs/safety.md). Every Modbus client's do; MQTT's only when configured.
-  bool feeds_failsafe = true;
-};
 
 using WriteDone = std::function<void(Exception)>;
 

@@ -11,6 +11,7 @@
 
 #include "gateway/point_values.h"
 #include "gateway/value_codec.h"
+#include "mqtt/command_result.h"
 #include "mqtt/sparkplug_codec.h"
 
 namespace drivegate::mqtt {
@@ -97,11 +98,6 @@ Value in_steps(const PointSpec& spec, Value v) {
   const double per_unit = std::round(1.0 / spec.scale);
   if (std::fabs(per_unit * spec.scale - 1.0) > 1e-9) return v;  // not 1/n: leave it
   return std::round(*d * per_unit) / per_unit;
-}
-
-std::string outcome(modbus::Exception e) {
-  if (e == modbus::Exception::none) return "ok";
-  return fmt::format("exception 0x{:02X} ({})", static_cast<unsigned>(e), modbus::to_string(e));
 }
 
 sparkplug::Property property(std::string key, MetricValue value) {
@@ -380,24 +376,24 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
     names += (names.empty() ? "" : ",") + p->spec.name;
   }
   ++status_.commands;
-  const modbus::Session session{config_.access, modbus::WordOrder::big, config_.feed_failsafe};
+  const Session session{config_.access, WordOrder::big, config_.feed_failsafe};
   const std::string name = w.device->name();
   log_->info("MQTT: DCMD {} {}", name, names);
-  auto report = [this, token = std::weak_ptr<bool>(alive_), name, names](modbus::Exception e) {
+  auto report = [this, token = std::weak_ptr<bool>(alive_), name, names](Outcome outcome) {
     if (token.expired()) return;
     const auto& defs = edge_.devices();
     const auto it = std::find_if(defs.begin(), defs.end(),
                                  [&](const sparkplug::DeviceDef& d) { return d.name == name; });
-    if (e != modbus::Exception::none) {
-      notice(sparkplug::Notice::command, fmt::format("DCMD {} {}: {}", name, names, outcome(e)));
+    const std::string result(command_result(outcome));
+    if (outcome != Outcome::ok) {
+      notice(sparkplug::Notice::command, fmt::format("DCMD {} {}: {}", name, names, result));
     }
     if (it != defs.end()) {
-      edge_.command_done(static_cast<std::size_t>(it - defs.begin()), names, outcome(e), now(),
-                         *this);
+      edge_.command_done(static_cast<std::size_t>(it - defs.begin()), names, result, now(), *this);
     }
   };
-  const modbus::Exception e = w.device->write_points(session, writes, report, Clock::now());
-  if (e != modbus::Exception::none) report(e);  // refused before anything was applied
+  const Outcome at_once = w.device->write_points(session, writes, report, Clock::now());
+  if (at_once != Outcome::ok) report(at_once);  // refused before anything was applied
 }
 
 // Anyone who can publish to the broker can cause these: a burst, then one a second per kind.

@@ -97,9 +97,9 @@ int reference_digits(const std::vector<DeviceRegisters>& devices) {
 }
 
 // What a listener's word order means for a reader of the map, and mbpoll's switch for it.
-std::string word_order_text(modbus::WordOrder w) {
-  return w == modbus::WordOrder::big ? "big: high word first (mbpoll -B)"
-                                     : "little: low word first (mbpoll without -B)";
+std::string word_order_text(WordOrder w) {
+  return w == WordOrder::big ? "big: high word first (mbpoll -B)"
+                             : "little: low word first (mbpoll without -B)";
 }
 
 std::string labels_text(const PointSpec& s) {
@@ -159,7 +159,7 @@ std::string to_json(const std::vector<DeviceRegisters>& devices,
   out << "\n],\n\"listeners\": [";
   for (std::size_t i = 0; i < listeners.size(); ++i) {
     out << (i ? ",\n" : "\n") << "  {\"address\": " << json_string(listeners[i].listener)
-        << ", \"word_order\": \"" << modbus::to_string(listeners[i].word_order) << "\"}";
+        << ", \"word_order\": \"" << to_string(listeners[i].word_order) << "\"}";
   }
   out << "\n]}\n";
   return out.str();

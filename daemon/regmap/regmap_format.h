@@ -9,7 +9,7 @@
 
 #include "config/config.h"
 #include "gateway/register_map.h"
-#include "modbus/backend.h"
+#include "gateway/session.h"  // WordOrder
 
 namespace drivegate {
 
@@ -22,7 +22,7 @@ struct DeviceRegisters {
 // (its word_order: high word first, or low word first).
 struct ServedOn {
   std::string listener;  // as the log names it: "0.0.0.0:502", "[::]:802 (TLS)"
-  modbus::WordOrder word_order = modbus::WordOrder::big;
+  WordOrder word_order = WordOrder::big;
 };
 
 enum class RegmapFormat : std::uint8_t { json, csv, markdown };

@@ -82,11 +82,11 @@ TEST(ConfigDiff, SortsDevicesAndBusesByWhatHappensToThem) {
 
 TEST(ConfigDiff, ListenerPolicyChangesAreNamed) {
   modbus::ListenerPolicy a;
-  a.access = modbus::AccessLevel::operate;
+  a.access = AccessLevel::operate;
   modbus::ListenerPolicy b = a;
   EXPECT_THAT(changes(a, b), IsEmpty());
-  b.access = modbus::AccessLevel::read;
-  b.word_order = modbus::WordOrder::little;
+  b.access = AccessLevel::read;
+  b.word_order = WordOrder::little;
   EXPECT_THAT(changes(a, b), ElementsAre("access operate -> read", "word_order big -> little"));
 }
 

@@ -80,7 +80,7 @@ TEST_F(ConfigTest, GoodFileLoadsWithAdapterDefaults) {
   ASSERT_EQ(c.listeners.size(), 1u);  // [server] listen: one plain listener, as always
   EXPECT_EQ(c.listeners[0].options.host, "127.0.0.1");
   EXPECT_EQ(c.listeners[0].options.port, 1502);
-  EXPECT_EQ(c.listeners[0].options.policy.access, modbus::AccessLevel::maintain);
+  EXPECT_EQ(c.listeners[0].options.policy.access, AccessLevel::maintain);
   EXPECT_TRUE(c.listeners[0].options.policy.allow.empty());
   EXPECT_TRUE(c.listeners[0].from_server_listen);
   EXPECT_EQ(c.server.max_clients, 8u);

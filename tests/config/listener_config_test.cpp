@@ -69,16 +69,16 @@ roles = { viewer = "read", operator = "operate", engineer = "maintain" }
   ASSERT_EQ(plc.policy.allow.size(), 3u);
   EXPECT_EQ(plc.policy.allow[0].to_string(), "10.1.2.0/24");
   EXPECT_EQ(plc.policy.allow[2].to_string(), "fd00::/8");
-  EXPECT_EQ(plc.policy.access, modbus::AccessLevel::operate);
-  EXPECT_EQ(plc.policy.word_order, modbus::WordOrder::little);
+  EXPECT_EQ(plc.policy.access, AccessLevel::operate);
+  EXPECT_EQ(plc.policy.word_order, WordOrder::little);
   EXPECT_FALSE(plc.policy.tls);
   const auto& secure = ls[1].options;
   EXPECT_EQ(secure.host, "::");
   EXPECT_EQ(secure.port, 802);
-  EXPECT_EQ(secure.policy.access, modbus::AccessLevel::read);  // the default
+  EXPECT_EQ(secure.policy.access, AccessLevel::read);  // the default
   ASSERT_TRUE(secure.policy.tls);
   EXPECT_EQ(secure.policy.tls->key, "/etc/drivegate/tls/server.key");
-  EXPECT_EQ(secure.policy.tls->roles.at("engineer"), modbus::AccessLevel::maintain);
+  EXPECT_EQ(secure.policy.tls->roles.at("engineer"), AccessLevel::maintain);
   EXPECT_EQ(secure.policy.tls->roles.size(), 3u);
   // The plant listener has an allow list: no warning. The TLS one lets any address with a
   // certificate and a writing role write: said once.
@@ -90,7 +90,7 @@ roles = { viewer = "read", operator = "operate", engineer = "maintain" }
 TEST_F(ListenerConfig, AListenerThatSaysNothingElseIsReadOnlyAndUnwarned) {
   const auto r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n");
   ASSERT_TRUE(r.config);
-  EXPECT_EQ(r.config->listeners[0].options.policy.access, modbus::AccessLevel::read);
+  EXPECT_EQ(r.config->listeners[0].options.policy.access, AccessLevel::read);
   EXPECT_TRUE(r.config->listeners[0].options.policy.allow.empty());
   EXPECT_THAT(r.warnings, IsEmpty());
 }
@@ -102,7 +102,7 @@ TEST_F(ListenerConfig, ServerListenAndNothingAtAllKeepTheirOldMeaningWithAWarnin
     ASSERT_EQ(r.config->listeners.size(), 1u);
     const auto& l = r.config->listeners[0];
     EXPECT_TRUE(l.from_server_listen);
-    EXPECT_EQ(l.options.policy.access, modbus::AccessLevel::maintain);
+    EXPECT_EQ(l.options.policy.access, AccessLevel::maintain);
     EXPECT_EQ(l.options.port, text.empty() ? 502 : 1502);
     ASSERT_EQ(r.warnings.size(), 1u);
     EXPECT_THAT(r.warnings[0], HasSubstr("lets every address that can reach it write (access "

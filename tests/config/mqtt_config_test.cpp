@@ -75,7 +75,7 @@ commands = false
   EXPECT_EQ(m.min_interval, Millis(100));
   EXPECT_EQ(m.counter_interval, Millis(10'000));
   EXPECT_FALSE(m.commands);
-  EXPECT_EQ(m.access, modbus::AccessLevel::operate);
+  EXPECT_EQ(m.access, AccessLevel::operate);
   EXPECT_FALSE(m.feed_failsafe);
   EXPECT_THAT(::testing::PrintToString(r.warnings), Not(HasSubstr("mqtt")));
 }
@@ -136,7 +136,7 @@ TEST_F(MqttConfigTest, LimitsAndPolicyAreChecked) {
   const auto r = parse(head + "commands = true\naccess = \"maintain\"\nfeed_failsafe = true\n");
   ASSERT_TRUE(r.config);
   EXPECT_TRUE(r.config->mqtt.commands);
-  EXPECT_EQ(r.config->mqtt.access, modbus::AccessLevel::maintain);
+  EXPECT_EQ(r.config->mqtt.access, AccessLevel::maintain);
   EXPECT_TRUE(r.config->mqtt.feed_failsafe);
   // Commands over plain MQTT: valid, and warned about.
   EXPECT_THAT(::testing::PrintToString(r.warnings), HasSubstr("mqtts://"));

@@ -1,8 +1,9 @@
 // Fuzz target: a Modbus TCP byte stream through the MBAP parser and the Dispatcher against the
-// real Gateway, built from a configuration with one device of every linked adapter (unit 1..n in
-// registry order, each alone on its bus) plus the core's fake adapter, so Device::read / write
-// validate every request and drivers receive every command, setpoint and point write a client
-// can make. Buses are never opened: writes stay pending (their replies are not built).
+// real Gateway behind the daemon's Modbus backend (app/backend_switch.h). The Gateway is built
+// from a configuration with one device of every linked adapter (unit 1..n in registry order, each
+// alone on its bus) plus the core's fake adapter, so Device::read / write validate every request
+// and drivers receive every command, setpoint and point write a client can make. Buses are never
+// opened: writes stay pending (their replies are not built).
 //
 // Input: one option byte (bits 3-7: segment size as in modbus_fake_fuzz.cpp), then the stream.
 #include <spdlog/sinks/null_sink.h>
@@ -12,10 +13,11 @@
 #include <cstdint>
 #include <string>
 
+#include "app/backend_switch.h"
 #include "check.h"
 #include "config/config_loader.h"
-#include "gateway/gateway.h"
 #include "fuzz_input.h"
+#include "gateway/gateway.h"
 #include "linked_adapters.h"
 #include "modbus_stream.h"
 
@@ -54,7 +56,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   auto gateway = drivegate::Gateway::build(io, config, plugins, log, errors);
   FUZZ_CHECK(gateway != nullptr);
   {
-    drivegate::fuzz::ModbusStream stream(*gateway, [] { return false; });
+    drivegate::BackendSwitch backend;
+    backend.set(gateway.get());
+    drivegate::fuzz::ModbusStream stream(backend, [] { return false; });
     const std::size_t segment = options >> 3;
     while (!in.empty()) {
       const auto bytes = segment == 0 ? in.rest() : in.bytes(segment);

@@ -49,7 +49,7 @@ class ModbusStream {
   std::function<bool()> settle_;
   modbus::Dispatcher dispatcher_;
   // Every right: the backend's checks are what is fuzzed.
-  const modbus::Session session_{modbus::AccessLevel::maintain, modbus::WordOrder::big};
+  const Session session_{AccessLevel::maintain, WordOrder::big};
   std::vector<std::uint8_t> rx_;
   // Shared with the `done` closures, which may outlive the stream (the backend owns them).
   std::shared_ptr<std::vector<Slot>> slots_;

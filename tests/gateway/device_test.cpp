@@ -13,8 +13,6 @@
 namespace drivegate {
 namespace {
 
-using modbus::Exception;
-
 class DeviceTest : public ::testing::Test {
  protected:
   DeviceTest() {
@@ -31,22 +29,22 @@ class DeviceTest : public ::testing::Test {
         t0_);
   }
   // Every right, the map's word order, unless a test says otherwise.
-  modbus::Session session_{modbus::AccessLevel::maintain, modbus::WordOrder::big};
+  Session session_{AccessLevel::maintain, WordOrder::big};
   std::vector<std::uint16_t> input(std::uint16_t address, std::size_t n, TimePoint at) {
     std::vector<std::uint16_t> out(n);
-    EXPECT_EQ(device_->read(session_, Table::input, address, out, at), Exception::none);
+    EXPECT_EQ(device_->read(session_, Table::input, address, out, at), Outcome::ok);
     return out;
   }
   std::vector<std::uint16_t> holding(std::uint16_t address, std::size_t n) {
     std::vector<std::uint16_t> out(n);
-    EXPECT_EQ(device_->read(session_, Table::holding, address, out, t0_), Exception::none);
+    EXPECT_EQ(device_->read(session_, Table::holding, address, out, t0_), Outcome::ok);
     return out;
   }
   // A write as the Modbus server makes it, then the write turn the engine gives the device.
-  Exception write(Table t, std::uint16_t address, std::vector<std::uint16_t> v,
-                  std::optional<Exception>& answer) {
-    const Exception result = device_->write(
-        session_, t, address, v, [&answer](Exception e) { answer = e; }, t0_);
+  Outcome write(Table t, std::uint16_t address, std::vector<std::uint16_t> v,
+                std::optional<Outcome>& answer) {
+    const Outcome result = device_->write(
+        session_, t, address, v, [&answer](Outcome e) { answer = e; }, t0_);
     device_->next_exchange(t0_, Turn::write);
     return result;
   }
@@ -120,43 +118,43 @@ TEST_F(DeviceTest, AdapterPointsAreScaledIntoTheImage) {
 
 TEST_F(DeviceTest, ReadsOfUnmappedAddressesAreRefused) {
   std::vector<std::uint16_t> out(2);
-  EXPECT_EQ(device_->read(session_, Table::input, 30, out, t0_), Exception::illegal_data_address);
-  EXPECT_EQ(device_->read(session_, Table::holding, 3, out, t0_), Exception::illegal_data_address);
-  EXPECT_EQ(device_->read(session_, Table::coil, 0, out, t0_), Exception::illegal_data_address);
+  EXPECT_EQ(device_->read(session_, Table::input, 30, out, t0_), Outcome::no_such_point);
+  EXPECT_EQ(device_->read(session_, Table::holding, 3, out, t0_), Outcome::no_such_point);
+  EXPECT_EQ(device_->read(session_, Table::coil, 0, out, t0_), Outcome::no_such_point);
 }
 
 TEST_F(DeviceTest, WriteIsAnsweredWhenTheDriverConfirms) {
-  std::optional<Exception> answer;
-  ASSERT_EQ(write(Table::holding, 0, {1}, answer), Exception::none);
+  std::optional<Outcome> answer;
+  ASSERT_EQ(write(Table::holding, 0, {1}, answer), Outcome::ok);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
   EXPECT_FALSE(answer);
   EXPECT_TRUE(input(0, 1, t0_)[0] & (1u << 6));  // command_pending
   EXPECT_EQ(device_->writes_in_flight(), 1u);
   complete(WriteResult::ok, t0_);
-  EXPECT_EQ(answer, Exception::none);
+  EXPECT_EQ(answer, Outcome::ok);
   EXPECT_FALSE(input(0, 1, t0_)[0] & (1u << 6));
 }
 
 TEST_F(DeviceTest, RefusalAndSilenceBecomeExceptions) {
-  std::optional<Exception> a1, a2;
+  std::optional<Outcome> a1, a2;
   write(Table::holding, 0, {0}, a1);
   complete(WriteResult::refused, t0_);
-  EXPECT_EQ(a1, Exception::server_device_failure);
+  EXPECT_EQ(a1, Outcome::refused);
   write(Table::holding, 0, {0}, a2);
   device_->on_tick(t0_ + Millis(400));
   EXPECT_FALSE(a2);
   device_->on_tick(t0_ + Millis(501));  // write_timeout passed
-  EXPECT_EQ(a2, Exception::gateway_target_failed);
+  EXPECT_EQ(a2, Outcome::no_response);
 }
 
 TEST_F(DeviceTest, ValidationComesFirst) {
-  std::optional<Exception> a;
-  EXPECT_EQ(write(Table::holding, 3, {1}, a), Exception::illegal_data_address);  // unmapped
-  EXPECT_EQ(write(Table::holding, 0, {9}, a), Exception::illegal_data_value);    // no such command
-  EXPECT_EQ(write(Table::holding, 16, {0, 5}, a), Exception::illegal_data_value);  // limit < 10
-  EXPECT_EQ(write(Table::holding, 17, {5}, a), Exception::illegal_data_address);   // mid-point
-  EXPECT_EQ(write(Table::holding, 16, {0}, a), Exception::illegal_data_address);   // half a u32
-  EXPECT_EQ(write(Table::input, 0, {0}, a), Exception::illegal_data_address);      // read-only
+  std::optional<Outcome> a;
+  EXPECT_EQ(write(Table::holding, 3, {1}, a), Outcome::no_such_point);      // unmapped
+  EXPECT_EQ(write(Table::holding, 0, {9}, a), Outcome::invalid_value);      // no such command
+  EXPECT_EQ(write(Table::holding, 16, {0, 5}, a), Outcome::invalid_value);  // limit < 10
+  EXPECT_EQ(write(Table::holding, 17, {5}, a), Outcome::no_such_point);     // mid-point
+  EXPECT_EQ(write(Table::holding, 16, {0}, a), Outcome::no_such_point);     // half a u32
+  EXPECT_EQ(write(Table::input, 0, {0}, a), Outcome::no_such_point);        // read-only
   EXPECT_EQ(fake_->checks, 0);
   EXPECT_TRUE(fake_->commands.empty());
   EXPECT_TRUE(fake_->writes.empty());
@@ -165,17 +163,17 @@ TEST_F(DeviceTest, ValidationComesFirst) {
 
 TEST_F(DeviceTest, DriverRefusalIsAnsweredAtOnce) {
   fake_->check_answer = WriteCheck::invalid_value;
-  std::optional<Exception> a;
-  EXPECT_EQ(write(Table::holding, 0, {2}, a), Exception::illegal_data_value);
+  std::optional<Outcome> a;
+  EXPECT_EQ(write(Table::holding, 0, {2}, a), Outcome::invalid_value);
   fake_->check_answer = WriteCheck::refused;
-  EXPECT_EQ(write(Table::holding, 0, {2}, a), Exception::server_device_failure);
+  EXPECT_EQ(write(Table::holding, 0, {2}, a), Outcome::refused);
   EXPECT_TRUE(fake_->commands.empty());  // judged, never applied
   EXPECT_FALSE(a);
 }
 
 TEST_F(DeviceTest, SetpointAppliesBeforeTheCommandInOneRequest) {
-  std::optional<Exception> a;
-  ASSERT_EQ(write(Table::holding, 0, {1, 1200}, a), Exception::none);
+  std::optional<Outcome> a;
+  ASSERT_EQ(write(Table::holding, 0, {1, 1200}, a), Outcome::ok);
   EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{1200});
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
   EXPECT_EQ(holding(0, 2)[1], 1200);
@@ -185,8 +183,8 @@ TEST_F(DeviceTest, SetpointAppliesBeforeTheCommandInOneRequest) {
 // the whole request is refused and the setpoint is not touched.
 TEST_F(DeviceTest, ARequestTheDriverRefusesChangesNothing) {
   fake_->refuse_command = Command::run_reverse;
-  std::optional<Exception> a;
-  EXPECT_EQ(write(Table::holding, 0, {2, 1500}, a), Exception::server_device_failure);
+  std::optional<Outcome> a;
+  EXPECT_EQ(write(Table::holding, 0, {2, 1500}, a), Outcome::refused);
   EXPECT_TRUE(fake_->setpoints.empty());
   EXPECT_TRUE(fake_->commands.empty());
   EXPECT_EQ(holding(0, 2)[1], 0);
@@ -197,29 +195,29 @@ TEST_F(DeviceTest, ARequestTheDriverRefusesChangesNothing) {
 // did not take ends the request: the run is never sent.
 TEST_F(DeviceTest, PartsApplyOneAfterTheOtherAndAFailureStopsTheRest) {
   fake_->setpoint_answer = WriteStatus::pending;
-  std::optional<Exception> a;
-  ASSERT_EQ(write(Table::holding, 0, {1, 1200}, a), Exception::none);
+  std::optional<Outcome> a;
+  ASSERT_EQ(write(Table::holding, 0, {1, 1200}, a), Outcome::ok);
   EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{1200});
   EXPECT_TRUE(fake_->commands.empty());  // waits for the setpoint
   complete(WriteResult::no_response, t0_);
-  EXPECT_EQ(a, Exception::gateway_target_failed);
+  EXPECT_EQ(a, Outcome::no_response);
   EXPECT_TRUE(fake_->commands.empty());
 
-  std::optional<Exception> b;
-  ASSERT_EQ(write(Table::holding, 0, {1, 900}, b), Exception::none);
+  std::optional<Outcome> b;
+  ASSERT_EQ(write(Table::holding, 0, {1, 900}, b), Outcome::ok);
   complete(WriteResult::ok, t0_);  // the setpoint
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
   EXPECT_FALSE(b);
   complete(WriteResult::refused, t0_);  // the run, after the setpoint took effect
-  EXPECT_EQ(b, Exception::server_device_failure);
+  EXPECT_EQ(b, Outcome::refused);
   EXPECT_EQ(holding(0, 2)[1], 900);  // what the drive holds
 }
 
 TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
   fake_->answer = WriteStatus::done;
-  std::optional<Exception> a;
-  ASSERT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Exception::none);
-  EXPECT_EQ(a, Exception::none);
+  std::optional<Outcome> a;
+  ASSERT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Outcome::ok);
+  EXPECT_EQ(a, Outcome::ok);
   ASSERT_EQ(fake_->writes.size(), 1u);
   EXPECT_EQ(fake_->writes[0].first, 1u);
   EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
@@ -230,7 +228,7 @@ TEST_F(DeviceTest, AdapterHoldingPointGoesToTheDriverDecoded) {
 TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart) {
   fake_->values_[2] = 1.0;  // pressure, f32 at input 33..34: 0x3F80 0x0000 in the map's order
   device_->next_exchange(t0_, Turn::poll);
-  session_.word_order = modbus::WordOrder::little;
+  session_.word_order = WordOrder::little;
   auto r = input(32, 3, t0_);
   EXPECT_EQ(r[0], static_cast<std::uint16_t>(0));  // i16: never reordered
   EXPECT_EQ(r[1], 0x0000);
@@ -242,7 +240,7 @@ TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart
   fake_->common_.faults.set(Fault::over_current);
   device_->next_exchange(t0_, Turn::poll);
   const auto mask = input(2, 2, t0_);
-  session_.word_order = modbus::WordOrder::big;
+  session_.word_order = WordOrder::big;
   const auto big = input(2, 2, t0_);
   EXPECT_EQ(mask[0], big[1]);
   EXPECT_EQ(mask[1], big[0]);
@@ -251,30 +249,30 @@ TEST_F(DeviceTest, ALittleEndianSessionReadsEach32BitValueLowWordFirstEvenInPart
 
 TEST_F(DeviceTest, ALittleEndianSessionWrites32BitValuesLowWordFirst) {
   fake_->answer = WriteStatus::done;
-  session_.word_order = modbus::WordOrder::little;
-  std::optional<Exception> a;
-  ASSERT_EQ(write(Table::holding, 16, {0x86A0, 0x0001}, a), Exception::none);
+  session_.word_order = WordOrder::little;
+  std::optional<Outcome> a;
+  ASSERT_EQ(write(Table::holding, 16, {0x86A0, 0x0001}, a), Outcome::ok);
   ASSERT_EQ(fake_->writes.size(), 1u);
   EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
   // Range checks see the value, not the words: 0x0005'0000 little = 5, below the minimum of 10.
-  EXPECT_EQ(write(Table::holding, 16, {0x0005, 0x0000}, a), Exception::illegal_data_value);
+  EXPECT_EQ(write(Table::holding, 16, {0x0005, 0x0000}, a), Outcome::invalid_value);
 }
 
 TEST_F(DeviceTest, OperateMayWriteTheCommandBlockButNotAdapterPoints) {
   fake_->answer = WriteStatus::done;
-  session_.access = modbus::AccessLevel::operate;
-  std::optional<Exception> a;
-  EXPECT_EQ(write(Table::holding, 1, {1200}, a), Exception::none);  // setpoint_rpm
-  EXPECT_EQ(write(Table::holding, 2, {7}, a), Exception::none);     // heartbeat
-  EXPECT_EQ(write(Table::holding, 0, {1}, a), Exception::none);     // command run_forward
-  EXPECT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Exception::illegal_function);
+  session_.access = AccessLevel::operate;
+  std::optional<Outcome> a;
+  EXPECT_EQ(write(Table::holding, 1, {1200}, a), Outcome::ok);  // setpoint_rpm
+  EXPECT_EQ(write(Table::holding, 2, {7}, a), Outcome::ok);     // heartbeat
+  EXPECT_EQ(write(Table::holding, 0, {1}, a), Outcome::ok);     // command run_forward
+  EXPECT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Outcome::denied);
   // A request reaching one maintain point is refused whole: the setpoint before it stays.
   const auto setpoints = fake_->setpoints.size();
-  EXPECT_EQ(write(Table::holding, 1, {900}, a), Exception::none);
+  EXPECT_EQ(write(Table::holding, 1, {900}, a), Outcome::ok);
   EXPECT_EQ(fake_->setpoints.size(), setpoints + 1);
   EXPECT_TRUE(fake_->writes.empty());
-  session_.access = modbus::AccessLevel::maintain;
-  EXPECT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Exception::none);
+  session_.access = AccessLevel::maintain;
+  EXPECT_EQ(write(Table::holding, 16, {0x0001, 0x86A0}, a), Outcome::ok);
   EXPECT_EQ(fake_->writes.size(), 1u);
 }
 
@@ -286,10 +284,10 @@ TEST_F(DeviceTest, WritePointsTakesTheSamePathAsAModbusWrite) {
   ASSERT_TRUE(command && setpoint);
   const std::vector<Device::PointWrite> run = {{command, std::int64_t{1}},
                                                {setpoint, std::int64_t{900}}};
-  std::optional<Exception> answer;
+  std::optional<Outcome> answer;
   ASSERT_EQ(device_->write_points(
-                session_, run, [&answer](Exception e) { answer = e; }, t0_),
-            Exception::none);
+                session_, run, [&answer](Outcome e) { answer = e; }, t0_),
+            Outcome::ok);
   device_->next_exchange(t0_, Turn::write);
   // The setpoint first, whatever the order given; answered once the driver settled both.
   EXPECT_EQ(fake_->setpoints, std::vector<std::int32_t>{900});
@@ -298,7 +296,7 @@ TEST_F(DeviceTest, WritePointsTakesTheSamePathAsAModbusWrite) {
   fake_->common_.command = Command::run_forward;
   complete(WriteResult::ok, t0_);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
-  EXPECT_EQ(answer, Exception::none);
+  EXPECT_EQ(answer, Outcome::ok);
   EXPECT_EQ(holding(0, 2), (std::vector<std::uint16_t>{1, 900}));
 }
 
@@ -306,52 +304,51 @@ TEST_F(DeviceTest, WritePointsRefusesValuesItsRegistersCannotHold) {
   fake_->answer = WriteStatus::done;
   const auto* setpoint = device_->map().find("setpoint_rpm");  // i16
   const auto* limit = device_->map().find("limit");            // u32, 10..100000
-  std::optional<Exception> a;
+  std::optional<Outcome> a;
   const auto write1 = [&](const MappedPoint* p, Value v) {
     const std::vector<Device::PointWrite> w = {{p, std::move(v)}};
-    const Exception result = device_->write_points(
-        session_, w, [&a](Exception e) { a = e; }, t0_);
+    const Outcome result = device_->write_points(
+        session_, w, [&a](Outcome e) { a = e; }, t0_);
     device_->next_exchange(t0_, Turn::write);
     return result;
   };
   // A Modbus client cannot send 40000 in an i16; nor may a DCMD have it saturate to 32767.
-  EXPECT_EQ(write1(setpoint, std::int64_t{40000}), Exception::illegal_data_value);
-  EXPECT_EQ(write1(setpoint, 1.7), Exception::illegal_data_value);  // not a whole rpm
-  EXPECT_EQ(write1(device_->map().find("heartbeat"), -1.0), Exception::illegal_data_value);
+  EXPECT_EQ(write1(setpoint, std::int64_t{40000}), Outcome::invalid_value);
+  EXPECT_EQ(write1(setpoint, 1.7), Outcome::invalid_value);  // not a whole rpm
+  EXPECT_EQ(write1(device_->map().find("heartbeat"), -1.0), Outcome::invalid_value);
   EXPECT_TRUE(fake_->setpoints.empty());
-  EXPECT_EQ(write1(limit, std::int64_t{5}), Exception::illegal_data_value);  // below its range
-  EXPECT_EQ(write1(limit, std::int64_t{100000}), Exception::none);
+  EXPECT_EQ(write1(limit, std::int64_t{5}), Outcome::invalid_value);  // below its range
+  EXPECT_EQ(write1(limit, std::int64_t{100000}), Outcome::ok);
   ASSERT_EQ(fake_->writes.size(), 1u);
   EXPECT_EQ(std::get<std::int64_t>(fake_->writes[0].second), 100000);
   // Access is the device's rule, as for Modbus: operate may not write an adapter point.
-  session_.access = modbus::AccessLevel::operate;
-  EXPECT_EQ(write1(limit, std::int64_t{200}), Exception::illegal_function);
+  session_.access = AccessLevel::operate;
+  EXPECT_EQ(write1(limit, std::int64_t{200}), Outcome::denied);
   EXPECT_EQ(fake_->writes.size(), 1u);
   // Read-only points are not written at all.
-  EXPECT_EQ(write1(device_->map().find("speed_rpm"), std::int64_t{1}),
-            Exception::illegal_data_address);
+  EXPECT_EQ(write1(device_->map().find("speed_rpm"), std::int64_t{1}), Outcome::no_such_point);
 }
 
 // NaN and the infinities never reach a drive, whatever the path: a DCMD's setpoint or heartbeat,
 // or a Modbus float register holding their bit patterns (docs/safety.md, "Command authority").
 TEST_F(DeviceTest, NaNAndInfinitiesAreRefusedOnEveryWritePath) {
   fake_->answer = WriteStatus::done;
-  std::optional<Exception> a;
+  std::optional<Outcome> a;
   const auto write1 = [&](std::string_view point, Value v) {
     const std::vector<Device::PointWrite> w = {{device_->map().find(point), std::move(v)}};
     return device_->write_points(
-        session_, w, [&a](Exception e) { a = e; }, t0_);
+        session_, w, [&a](Outcome e) { a = e; }, t0_);
   };
   for (const double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
-    EXPECT_EQ(write1("setpoint_rpm", bad), Exception::illegal_data_value);
-    EXPECT_EQ(write1("heartbeat", bad), Exception::illegal_data_value);
-    EXPECT_EQ(write1("command", bad), Exception::illegal_data_value);
-    EXPECT_EQ(write1("gain", bad), Exception::illegal_data_value);
+    EXPECT_EQ(write1("setpoint_rpm", bad), Outcome::invalid_value);
+    EXPECT_EQ(write1("heartbeat", bad), Outcome::invalid_value);
+    EXPECT_EQ(write1("command", bad), Outcome::invalid_value);
+    EXPECT_EQ(write1("gain", bad), Outcome::invalid_value);
   }
   // Modbus: 0x7FC00000 is a quiet NaN, 0x7F800000 +infinity, 0xFF800000 -infinity.
   for (const int high : {0x7FC0, 0x7F80, 0xFF80}) {
     EXPECT_EQ(write(Table::holding, 18, {static_cast<std::uint16_t>(high), 0x0000}, a),
-              Exception::illegal_data_value);
+              Outcome::invalid_value);
   }
   device_->next_exchange(t0_, Turn::write);
   EXPECT_TRUE(fake_->setpoints.empty());
@@ -360,7 +357,7 @@ TEST_F(DeviceTest, NaNAndInfinitiesAreRefusedOnEveryWritePath) {
   EXPECT_EQ(holding(2, 1)[0], 0);  // the heartbeat untouched
   EXPECT_FALSE(a);
   // A finite float goes through.
-  EXPECT_EQ(write(Table::holding, 18, {0x3FC0, 0x0000}, a), Exception::none);
+  EXPECT_EQ(write(Table::holding, 18, {0x3FC0, 0x0000}, a), Outcome::ok);
   ASSERT_EQ(fake_->writes.size(), 1u);
   EXPECT_EQ(std::get<double>(fake_->writes[0].second), 1.5);
 }
@@ -369,44 +366,45 @@ TEST_F(DeviceTest, NaNAndInfinitiesAreRefusedOnEveryWritePath) {
 // gateway's own stop still does.
 TEST_F(DeviceTest, OnceShutdownBeganEveryClientWriteIsRefused) {
   device_->close_to_clients();
-  std::optional<Exception> a;
-  EXPECT_EQ(write(Table::holding, 0, {1}, a), Exception::gateway_target_failed);
+  std::optional<Outcome> a;
+  EXPECT_EQ(write(Table::holding, 0, {1}, a), Outcome::no_response);
   const std::vector<Device::PointWrite> run = {{device_->map().find("command"), std::int64_t{1}}};
   EXPECT_EQ(device_->write_points(
-                session_, run, [](Exception) {}, t0_),
-            Exception::gateway_target_failed);
+                session_, run, [](Outcome) {}, t0_),
+            Outcome::no_response);
   EXPECT_TRUE(fake_->commands.empty());
-  std::optional<Exception> stopped;
-  device_->command(Command::stop, [&](Exception e) { stopped = e; }, t0_);
+  std::optional<Outcome> stopped;
+  device_->command(
+      Command::stop, [&](Outcome e) { stopped = e; }, t0_);
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
 }
 
 TEST_F(DeviceTest, AReadSessionReachingTheDeviceIsRefusedEvenTheHeartbeat) {
   // The server refuses a read-only client's writes before the backend; the device holds the
   // same line in case another northbound forgets.
-  session_.access = modbus::AccessLevel::read;
-  std::optional<Exception> a;
-  EXPECT_EQ(write(Table::holding, 2, {7}, a), Exception::illegal_function);
-  EXPECT_EQ(write(Table::holding, 0, {1}, a), Exception::illegal_function);
+  session_.access = AccessLevel::read;
+  std::optional<Outcome> a;
+  EXPECT_EQ(write(Table::holding, 2, {7}, a), Outcome::denied);
+  EXPECT_EQ(write(Table::holding, 0, {1}, a), Outcome::denied);
   EXPECT_TRUE(fake_->commands.empty());
   // Unmapped and read-only addresses still answer 02 (nothing to authorise there).
-  EXPECT_EQ(write(Table::holding, 3, {1}, a), Exception::illegal_data_address);
+  EXPECT_EQ(write(Table::holding, 3, {1}, a), Outcome::no_such_point);
 }
 
 TEST_F(DeviceTest, CommLostFailsPendingWritesAndRefusesNewOnes) {
-  std::optional<Exception> a, b;
+  std::optional<Outcome> a, b;
   write(Table::holding, 0, {1}, a);
   ASSERT_TRUE(device_->link().health.lost_by(t0_ + Millis(1001), Millis(1000)));
   device_->on_comm_lost(t0_ + Millis(1001));
-  EXPECT_EQ(a, Exception::gateway_target_failed);
+  EXPECT_EQ(a, Outcome::no_response);
   EXPECT_EQ(fake_->comm_losts, 1);
   EXPECT_TRUE(device_->comm_lost());
   EXPECT_EQ(input(0, 2, t0_ + Millis(1001))[0] & (1u << 4), 1u << 4);
   EXPECT_EQ(input(0, 2, t0_ + Millis(1001))[1], static_cast<std::uint16_t>(Fault::comm_lost));
-  EXPECT_EQ(write(Table::holding, 0, {1}, b), Exception::gateway_target_failed);
+  EXPECT_EQ(write(Table::holding, 0, {1}, b), Outcome::no_response);
   // The heartbeat is the gateway's own register and always takes.
-  EXPECT_EQ(write(Table::holding, 2, {7}, b), Exception::none);
-  EXPECT_EQ(b, Exception::none);
+  EXPECT_EQ(write(Table::holding, 2, {7}, b), Outcome::ok);
+  EXPECT_EQ(b, Outcome::ok);
   heard(t0_ + Millis(1100));
   EXPECT_FALSE(device_->comm_lost());
 }

@@ -19,8 +19,8 @@ std::vector<DeviceRegisters> one_device(const DeviceConfig& cfg) {
   return {{&cfg, RegisterMap({f})}};
 }
 
-const std::vector<ServedOn> kListeners = {{"0.0.0.0:502", modbus::WordOrder::big},
-                                          {"127.0.0.1:1503", modbus::WordOrder::little}};
+const std::vector<ServedOn> kListeners = {{"0.0.0.0:502", WordOrder::big},
+                                          {"127.0.0.1:1503", WordOrder::little}};
 
 TEST(RegmapFormat, JsonHasEveryFieldOfTheSchema) {
   DeviceConfig cfg{.name = "c1", .adapter = "unicla-edrive", .unit_id = 4};

@@ -33,12 +33,12 @@ TEST(JsonString, EscapesQuotesBackslashesAndControlCharacters) {
 
 // The per-point reads point_values() made before it read whole tables: each point on its own.
 std::vector<PointValue> one_by_one(Device& device, TimePoint now) {
-  static constexpr modbus::Session kReader{modbus::AccessLevel::read, modbus::WordOrder::big};
+  static constexpr Session kReader{AccessLevel::read, WordOrder::big};
   std::vector<PointValue> out;
   for (const MappedPoint& p : device.map().points()) {
     const bool bits = p.spec.table == Table::coil || p.spec.table == Table::discrete;
     std::vector<std::uint16_t> regs(bits ? 1 : p.spec.register_count());
-    if (device.read(kReader, p.spec.table, p.address, regs, now) != modbus::Exception::none) {
+    if (device.read(kReader, p.spec.table, p.address, regs, now) != Outcome::ok) {
       continue;
     }
     if (bits) {

@@ -30,13 +30,13 @@ bool AdapterBench::until_reads(std::string_view point, std::uint32_t value, Mill
 }
 
 bool AdapterBench::run_forward_at(std::uint16_t rpm) {
-  return write({common_block::cmd::run_forward, rpm}) == Exception::none;
+  return write({common_block::cmd::run_forward, rpm}) == Outcome::ok;
 }
 
 testing::AssertionResult AdapterBench::stores_without_traffic(std::uint16_t rpm) {
   const std::size_t before = rig.sent().size();
   const auto w = start_write({rpm}, common_block::kSetpointRegister);
-  if (w->result != Exception::none) {
+  if (w->result != Outcome::ok) {
     return testing::AssertionFailure()
            << "the setpoint was not taken at once: "
            << (w->result ? static_cast<int>(*w->result) : -1) << " (-1: still pending)";
@@ -50,8 +50,8 @@ testing::AssertionResult AdapterBench::stores_without_traffic(std::uint16_t rpm)
   return testing::AssertionSuccess();
 }
 
-std::optional<Exception> AdapterBench::write(std::vector<std::uint16_t> values,
-                                             std::uint16_t address) {
+std::optional<Outcome> AdapterBench::write(std::vector<std::uint16_t> values,
+                                           std::uint16_t address) {
   return rig.write_and_wait(*drive, Table::holding, address, std::move(values));
 }
 
@@ -60,8 +60,8 @@ std::shared_ptr<WriteOutcome> AdapterBench::start_write(std::vector<std::uint16_
   return rig.write(*drive, Table::holding, address, std::move(values));
 }
 
-std::optional<Exception> AdapterBench::write(std::string_view point,
-                                             std::vector<std::uint16_t> values) {
+std::optional<Outcome> AdapterBench::write(std::string_view point,
+                                           std::vector<std::uint16_t> values) {
   return write(std::move(values), address_of(point));
 }
 
@@ -87,7 +87,7 @@ std::shared_ptr<WriteOutcome> AdapterBench::start_point_write(std::string_view f
   return start_write(std::move(regs), start);
 }
 
-std::optional<Exception> AdapterBench::write_point(std::string_view point, double value) {
+std::optional<Outcome> AdapterBench::write_point(std::string_view point, double value) {
   return rig.wait(start_point_write(point, {value}));
 }
 

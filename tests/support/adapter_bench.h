@@ -8,7 +8,7 @@
 //   test::AdapterBench b(drivegate_adapter, {.options = {{"slave_mode", "true"}}});
 //   ASSERT_TRUE(b.until_online(100ms));
 //   const TimePoint asked = b.rig.now();
-//   EXPECT_EQ(b.write({cmd::run_forward, 2000}), Exception::none);
+//   EXPECT_EQ(b.write({cmd::run_forward, 2000}), Outcome::ok);
 //   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2000});
 #pragma once
 
@@ -53,19 +53,19 @@ struct AdapterBench {
 
   // Writes as the Modbus server makes them: holding registers from `address` on (the common
   // block's command unless told), waited for or left running.
-  std::optional<Exception> write(std::vector<std::uint16_t> values,
-                                 std::uint16_t address = common_block::kCommandRegister);
+  std::optional<Outcome> write(std::vector<std::uint16_t> values,
+                               std::uint16_t address = common_block::kCommandRegister);
   std::shared_ptr<WriteOutcome> start_write(std::vector<std::uint16_t> values,
                                             std::uint16_t address = common_block::kCommandRegister);
   // The registers of the adapter's holding point `point`, as the PLC writes them.
-  std::optional<Exception> write(std::string_view point, std::vector<std::uint16_t> values);
+  std::optional<Outcome> write(std::string_view point, std::vector<std::uint16_t> values);
   std::shared_ptr<WriteOutcome> start_write(std::string_view point,
                                             std::vector<std::uint16_t> values);
   // Engineering values to consecutive holding points from `first` on, in one request, encoded as
   // the Modbus server (or `drivegate action`) encodes them.
   std::shared_ptr<WriteOutcome> start_point_write(std::string_view first,
                                                   const std::vector<double>& values);
-  std::optional<Exception> write_point(std::string_view point, double value);
+  std::optional<Outcome> write_point(std::string_view point, double value);
   // Where the named point starts in its table.
   [[nodiscard]] std::uint16_t address_of(std::string_view point) const;
 

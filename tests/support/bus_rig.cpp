@@ -49,34 +49,6 @@ Options options_of(const AdapterDescriptor& adapter, const OptionText& set) {
   return options;
 }
 
-// Unit id -> device, as Gateway serves them.
-class BusRig::Units final : public modbus::Backend {
- public:
-  explicit Units(BusRig& rig) : rig_(rig) {}
-  Exception read(const modbus::Session& session, std::uint8_t unit, Table table,
-                 std::uint16_t address, std::span<std::uint16_t> out) override {
-    Device* d = find(unit);
-    return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->read(session, table, address, out, rig_.now());
-  }
-  Exception write(const modbus::Session& session, std::uint8_t unit, Table table,
-                  std::uint16_t address, std::span<const std::uint16_t> values,
-                  modbus::WriteDone done) override {
-    Device* d = find(unit);
-    return d == nullptr ? Exception::gateway_path_unavailable
-                        : d->write(session, table, address, values, std::move(done), rig_.now());
-  }
-
- private:
-  Device* find(std::uint8_t unit) const {
-    for (const auto& d : rig_.devices()) {
-      if (d->config().unit_id == unit) return d.get();
-    }
-    return nullptr;
-  }
-  BusRig& rig_;
-};
-
 BusRig::BusRig(const AdapterDescriptor& adapter) : BusRig(adapter, native_line(adapter)) {}
 
 BusRig::BusRig(const AdapterDescriptor& adapter, BusConfig line)
@@ -157,29 +129,29 @@ void BusRig::start() {
 
 std::shared_ptr<WriteOutcome> BusRig::write(Device& d, Table table, std::uint16_t address,
                                             std::vector<std::uint16_t> values,
-                                            const modbus::Session& session) {
+                                            const Session& session) {
   auto outcome = std::make_shared<WriteOutcome>();
-  const Exception e = d.write(
-      session, table, address, values, [outcome](Exception r) { outcome->result = r; }, now());
-  if (e != Exception::none) outcome->result = e;
+  const Outcome at_once = d.write(
+      session, table, address, values, [outcome](Outcome r) { outcome->result = r; }, now());
+  if (at_once != Outcome::ok) outcome->result = at_once;
   return outcome;
 }
 
-std::optional<Exception> BusRig::wait(const std::shared_ptr<WriteOutcome>& w, Millis limit) {
+std::optional<Outcome> BusRig::wait(const std::shared_ptr<WriteOutcome>& w, Millis limit) {
   run_until([&] { return w->settled(); }, limit);
   return w->result;
 }
 
-std::optional<Exception> BusRig::write_and_wait(Device& d, Table table, std::uint16_t address,
-                                                std::vector<std::uint16_t> values, Millis limit,
-                                                const modbus::Session& session) {
+std::optional<Outcome> BusRig::write_and_wait(Device& d, Table table, std::uint16_t address,
+                                              std::vector<std::uint16_t> values, Millis limit,
+                                              const Session& session) {
   return wait(write(d, table, address, std::move(values), session), limit);
 }
 
 std::vector<std::uint16_t> BusRig::read(Device& d, Table table, std::uint16_t address,
-                                        std::size_t n, const modbus::Session& session) {
+                                        std::size_t n, const Session& session) {
   std::vector<std::uint16_t> out(n);
-  if (d.read(session, table, address, out, now()) != Exception::none) out.clear();
+  if (d.read(session, table, address, out, now()) != Outcome::ok) out.clear();
   return out;
 }
 
@@ -205,11 +177,6 @@ std::string BusRig::text(Device& d, std::string_view point) {
     }
   }
   return out;
-}
-
-modbus::Backend& BusRig::backend() {
-  if (!units_) units_ = std::make_unique<Units>(*this);
-  return *units_;
 }
 
 }  // namespace drivegate::test

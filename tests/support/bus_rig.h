@@ -8,7 +8,7 @@
 //   rig.add_simulator(1);
 //   rig.start();
 //   ASSERT_TRUE(rig.run_until([&] { return drive.online(); }, 3s));
-//   EXPECT_EQ(rig.write_and_wait(drive, Table::holding, 0, {1, 3000}), Exception::none);
+//   EXPECT_EQ(rig.write_and_wait(drive, Table::holding, 0, {1, 3000}), Outcome::ok);
 //   EXPECT_EQ(rig.sent().back(), (Bytes{0x7E, ...}));
 #pragma once
 
@@ -25,21 +25,20 @@
 #include "drivegate/adapter.h"
 #include "gateway/device.h"
 #include "bus/bus_engine.h"
-#include "modbus/backend.h"
+#include "gateway/outcome.h"
+#include "gateway/session.h"
 #include "sim_clock.h"
 #include "sim_line.h"
 
 namespace drivegate::test {
 
-using modbus::Exception;
-
 // Adapter options as text, over the schema's defaults (parsed as `drivegate sim --set` does).
 using OptionText = std::vector<std::pair<std::string, std::string>>;
 Options options_of(const AdapterDescriptor& adapter, const OptionText& set = {});
 
-// The outcome of one Modbus write: the exception returned at once, or the one `done` reported.
+// The outcome of one write: the one returned at once, or the one `done` reported.
 struct WriteOutcome {
-  std::optional<Exception> result;
+  std::optional<Outcome> result;
   [[nodiscard]] bool settled() const { return result.has_value(); }
 };
 
@@ -78,22 +77,21 @@ class BusRig {
   [[nodiscard]] TimePoint now() const { return clock_.now(); }
 
   // A client with every right, in the register map's word order (a `maintain` listener).
-  static constexpr modbus::Session kMaintain{modbus::AccessLevel::maintain, modbus::WordOrder::big};
+  static constexpr Session kMaintain{AccessLevel::maintain, WordOrder::big};
 
   // A Modbus write request, as the server makes it (registers, or 0 / 1 per coil).
   std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
                                       std::vector<std::uint16_t> values,
-                                      const modbus::Session& session = kMaintain);
-  // Runs until the write settled or `limit` passed; its exception, nullopt if still pending.
-  std::optional<Exception> wait(const std::shared_ptr<WriteOutcome>& w,
-                                Millis limit = Millis(5000));
-  std::optional<Exception> write_and_wait(Device& d, Table table, std::uint16_t address,
-                                          std::vector<std::uint16_t> values,
-                                          Millis limit = Millis(5000),
-                                          const modbus::Session& session = kMaintain);
+                                      const Session& session = kMaintain);
+  // Runs until the write settled or `limit` passed; its outcome, nullopt if still pending.
+  std::optional<Outcome> wait(const std::shared_ptr<WriteOutcome>& w, Millis limit = Millis(5000));
+  std::optional<Outcome> write_and_wait(Device& d, Table table, std::uint16_t address,
+                                        std::vector<std::uint16_t> values,
+                                        Millis limit = Millis(5000),
+                                        const Session& session = kMaintain);
   // Registers (or bits) as a PLC reads them; empty when the read fails.
   std::vector<std::uint16_t> read(Device& d, Table table, std::uint16_t address, std::size_t n,
-                                  const modbus::Session& session = kMaintain);
+                                  const Session& session = kMaintain);
   // The named point's registers.
   std::vector<std::uint16_t> read(Device& d, std::string_view point);
   // The named point's value as a PLC reads it: a u16 point's register, a u32 one's two high word
@@ -102,8 +100,6 @@ class BusRig {
   // A string point as a PLC reads it: two characters a register, the first in the high byte, cut
   // at the first NUL.
   std::string text(Device& d, std::string_view point);
-  // Unit id -> device, as the gateway serves them (for the Modbus dispatcher).
-  modbus::Backend& backend();
 
   [[nodiscard]] const std::vector<SimLine::Frame>& sent() const { return line_->sent; }
   [[nodiscard]] const std::vector<SimLine::Frame>& answers() const { return line_->answers; }
@@ -115,8 +111,6 @@ class BusRig {
   [[nodiscard]] const AdapterDescriptor& adapter() const { return adapter_; }
 
  private:
-  class Units;
-
   const AdapterDescriptor& adapter_;
   BusConfig line_config_;
   std::shared_ptr<spdlog::logger> log_;
@@ -125,7 +119,6 @@ class BusRig {
   std::vector<std::unique_ptr<Device>> devices_;
   std::vector<std::unique_ptr<Simulator>> sims_;
   std::unique_ptr<BusEngine> engine_;
-  std::unique_ptr<Units> units_;
 };
 
 }  // namespace drivegate::test

@@ -4,7 +4,7 @@
 // take them from the gateway's code, so that a change to the documented map fails the tests.
 //
 //   using namespace test::common_block;
-//   EXPECT_EQ(b.write({cmd::run_forward, 1500}), Exception::none);  // holding 0..1
+//   EXPECT_EQ(b.write({cmd::run_forward, 1500}), Outcome::ok);  // holding 0..1
 //   EXPECT_NE(b.read("status") & kRunning, 0u);
 #pragma once
 

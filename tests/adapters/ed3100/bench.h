@@ -16,7 +16,6 @@ namespace drivegate::ed3100 {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
-using modbus::Exception;
 
 // Document frames at address 0x1F (codec_test.cpp cites their sections).
 inline const Bytes kReadParam{0x1F, 0x03, 0x00, 0x06, 0x00, 0x01, 0x67, 0xB5};

@@ -15,7 +15,6 @@ namespace drivegate::fdc1 {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
-using modbus::Exception;
 
 // INPUT, Programming speed (decimal 72 115 min max 85 x), slave mode: stop is minimum 0 (with
 // the in-range maximum 3500), a run minimum = maximum = the setpoint.

@@ -58,7 +58,7 @@ TEST(Fdc1Driver, ACompressorFoundTurningIsKeptTurningNeverStopped) {
   EXPECT_EQ(b.read("speed_rpm"), 2500u);
   EXPECT_TRUE(b.sim_has("motor=on"));
   // And a stop from the PLC stops it as any other run.
-  EXPECT_EQ(b.write({cmd::stop}), Exception::none);
+  EXPECT_EQ(b.write({cmd::stop}), Outcome::ok);
   EXPECT_TRUE(b.sim_has("motor=off"));
 }
 
@@ -84,9 +84,9 @@ TEST(Fdc1Driver, OutsideSlaveModeTheLineOnlyMonitors) {
   EXPECT_TRUE(b.rig.sent().empty());
   EXPECT_NE(b.read("status") & kOnline, 0u);
   // IN1 / IN2 and the thermostat set the speed: the line cannot run, stop or set it (0x03).
-  EXPECT_EQ(b.write({cmd::run_forward}), Exception::illegal_data_value);
-  EXPECT_EQ(b.write({cmd::stop}), Exception::illegal_data_value);
-  EXPECT_EQ(b.write({2000}, kSetpointRegister), Exception::illegal_data_value);
+  EXPECT_EQ(b.write({cmd::run_forward}), Outcome::invalid_value);
+  EXPECT_EQ(b.write({cmd::stop}), Outcome::invalid_value);
+  EXPECT_EQ(b.write({2000}, kSetpointRegister), Outcome::invalid_value);
   EXPECT_TRUE(b.rig.sent().empty());
   // What the controller does on its own is still monitored.
   EXPECT_EQ(b.control("thermostat on"), "ok");
@@ -133,7 +133,7 @@ TEST(Fdc1Driver, TheStreamAsAPlcReadsIt) {
   EXPECT_EQ(b.read("sent_speed_rpm"), 2000u);
   EXPECT_EQ(b.read("alarm_code"), 0u);
   EXPECT_NE(b.read("status") & kRunning, 0u);
-  ASSERT_EQ(b.write({cmd::stop}), Exception::none);
+  ASSERT_EQ(b.write({cmd::stop}), Outcome::ok);
   ASSERT_EQ(b.control("delay 100"), "ok");  // 100 s until the next start, no alarm
   b.rig.run_for(1s);
   EXPECT_EQ(b.read("motor_on"), 0u);

@@ -34,11 +34,11 @@ struct Maintenance : Bench {
       : Bench({.options = {}, .budget = budget, .maintenance = true}) {}
 
   // `drivegate action`: each parameter, then the commit; the first failure ends it.
-  std::optional<Exception> action(const std::vector<std::pair<std::string, double>>& params) {
+  std::optional<Outcome> action(const std::vector<std::pair<std::string, double>>& params) {
     const MaintenanceAction& a = program_action();
     for (const auto& [key, value] : params) {
       const auto e = write_point(a.parameter_prefix + key, value);
-      if (e != Exception::none) return e;
+      if (e != Outcome::ok) return e;
     }
     return write_point(a.commit_point, 1);
   }
@@ -89,7 +89,7 @@ TEST(Fdc1ProgramAction, AValidProgramIsSentAndConfirmedByTheEcho) {
   EXPECT_EQ(m.program_status(), ProgStatus::invalid);
   EXPECT_EQ(m.message(), "prog_min_rpm is not set");
   for (const auto& [key, value] : kStandard) {
-    ASSERT_EQ(m.write_point("prog_" + key, value), Exception::none) << key;
+    ASSERT_EQ(m.write_point("prog_" + key, value), Outcome::ok) << key;
   }
   EXPECT_TRUE(m.rig.sent().empty());  // the fields are only stored
   EXPECT_EQ(m.program_status(), ProgStatus::idle);
@@ -98,7 +98,7 @@ TEST(Fdc1ProgramAction, AValidProgramIsSentAndConfirmedByTheEcho) {
   const auto commit = m.start_point_write("prog_commit", {1});
   m.rig.run_for(1ms);
   EXPECT_EQ(m.program_status(), ProgStatus::pending);
-  EXPECT_EQ(m.rig.wait(commit), Exception::none);
+  EXPECT_EQ(m.rig.wait(commit), Outcome::ok);
   ASSERT_EQ(m.rig.sent().size(), 1u);
   EXPECT_EQ(m.rig.sent()[0].bytes, kProgramStandard);
   EXPECT_EQ(m.rig.sent()[0].at, asked);
@@ -115,7 +115,7 @@ TEST(Fdc1ProgramAction, AValidProgramIsSentAndConfirmedByTheEcho) {
 TEST(Fdc1ProgramAction, TheActionAsTheToolRunsIt) {
   Maintenance m;
   ASSERT_TRUE(m.heard());
-  EXPECT_EQ(m.action(kStandard), Exception::none);
+  EXPECT_EQ(m.action(kStandard), Outcome::ok);
   EXPECT_EQ(m.rig.sent().back().bytes, kProgramStandard);
   EXPECT_TRUE(m.sim_has("programs=1"));
 }
@@ -125,7 +125,7 @@ TEST(Fdc1ProgramAction, AViolatedLimitIsInvalidNamedAndNothingIsSent) {
   ASSERT_TRUE(m.heard());
   auto params = kStandard;
   params[3].second = 13;  // cut_out_12v 13 V, not below cut_in_12v 12.5 V
-  EXPECT_EQ(m.action(params), Exception::illegal_data_value);
+  EXPECT_EQ(m.action(params), Outcome::invalid_value);
   // What `drivegate action` prints after "value refused (0x03)".
   EXPECT_EQ(m.message(), "cut_out_12v 13.00 V must be below cut_in_12v 12.50 V");
   EXPECT_EQ(m.program_status(), ProgStatus::invalid);
@@ -133,20 +133,20 @@ TEST(Fdc1ProgramAction, AViolatedLimitIsInvalidNamedAndNothingIsSent) {
   EXPECT_TRUE(m.rig.sent().empty());
   EXPECT_TRUE(m.sim_has("programs=0"));
   // One field written again, and it goes.
-  EXPECT_EQ(m.write_point("prog_cut_out_12v", 10.5), Exception::none);
+  EXPECT_EQ(m.write_point("prog_cut_out_12v", 10.5), Outcome::ok);
   EXPECT_EQ(m.message(), "");
-  EXPECT_EQ(m.write_point("prog_commit", 1), Exception::none);
+  EXPECT_EQ(m.write_point("prog_commit", 1), Outcome::ok);
   EXPECT_TRUE(m.sim_has("programs=1"));
 }
 
 TEST(Fdc1ProgramAction, AFieldNeverWrittenIsInvalidAndNamed) {
   Maintenance m;
   ASSERT_TRUE(m.heard());
-  EXPECT_EQ(m.write_point("prog_commit", 1), Exception::illegal_data_value);
+  EXPECT_EQ(m.write_point("prog_commit", 1), Outcome::invalid_value);
   EXPECT_EQ(m.message(), "prog_min_rpm is not set");
   auto special = kStandard;
   special[2].second = 34;  // slave + special battery system: other fields
-  EXPECT_EQ(m.action(special), Exception::illegal_data_value);
+  EXPECT_EQ(m.action(special), Outcome::invalid_value);
   EXPECT_EQ(m.message(), "prog_cut_out_special is not set (special battery system)");
   EXPECT_TRUE(m.rig.sent().empty());
 }
@@ -154,9 +154,9 @@ TEST(Fdc1ProgramAction, AFieldNeverWrittenIsInvalidAndNamed) {
 TEST(Fdc1ProgramAction, AValueOutsideThePointsLimitsIsRefusedByTheGateway) {
   Maintenance m;
   ASSERT_TRUE(m.heard());
-  EXPECT_EQ(m.write_point("prog_min_rpm", 1499), Exception::illegal_data_value);
-  EXPECT_EQ(m.write_point("prog_mode", 256), Exception::illegal_data_value);
-  EXPECT_EQ(m.write_point("prog_commit", 0), Exception::illegal_data_value);
+  EXPECT_EQ(m.write_point("prog_min_rpm", 1499), Outcome::invalid_value);
+  EXPECT_EQ(m.write_point("prog_mode", 256), Outcome::invalid_value);
+  EXPECT_EQ(m.write_point("prog_commit", 0), Outcome::invalid_value);
   EXPECT_EQ(m.read("prog_min_rpm"), 0u);  // never stored
 }
 
@@ -168,12 +168,12 @@ TEST(Fdc1ProgramAction, OneRequestOfFieldsAndCommitIsAllOrNothing) {
   // prog_min_rpm .. prog_commit: the standard fields, the (unused) special ones, the commit.
   std::vector<double> all = {2000, 3000, 2, 10.5, 12.5, 21, 25, 36, 44, 0, 0, 0, 1};
   all[8] = 46;  // cut_in_42v must be below 46 V
-  EXPECT_EQ(m.rig.wait(m.start_point_write("prog_min_rpm", all)), Exception::illegal_data_value);
+  EXPECT_EQ(m.rig.wait(m.start_point_write("prog_min_rpm", all)), Outcome::invalid_value);
   EXPECT_EQ(m.read("prog_min_rpm"), 0u);
   EXPECT_EQ(m.read("prog_cut_in_42v"), 0u);
   EXPECT_TRUE(m.rig.sent().empty());
   all[8] = 44;
-  EXPECT_EQ(m.rig.wait(m.start_point_write("prog_min_rpm", all)), Exception::none);
+  EXPECT_EQ(m.rig.wait(m.start_point_write("prog_min_rpm", all)), Outcome::ok);
   EXPECT_EQ(m.frames(), std::vector<Bytes>{kProgramStandard});
 }
 
@@ -181,11 +181,11 @@ TEST(Fdc1ProgramAction, AMismatchedEchoIsRefused) {
   Maintenance m;
   ASSERT_TRUE(m.heard());
   m.control("mangle 1");
-  EXPECT_EQ(m.action(kStandard), Exception::server_device_failure);
+  EXPECT_EQ(m.action(kStandard), Outcome::refused);
   EXPECT_EQ(m.program_status(), ProgStatus::refused);
   EXPECT_EQ(m.message(), "the controller's echo differs from the frame sent");
   // Committed again as it is, it goes again.
-  EXPECT_EQ(m.write_point("prog_commit", 1), Exception::none);
+  EXPECT_EQ(m.write_point("prog_commit", 1), Outcome::ok);
   EXPECT_EQ(m.program_status(), ProgStatus::ok);
 }
 
@@ -196,7 +196,7 @@ TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
     ASSERT_TRUE(m.heard());
     m.control("deaf on");
     const TimePoint asked = m.rig.now();
-    EXPECT_EQ(m.action(kStandard), Exception::gateway_target_failed);
+    EXPECT_EQ(m.action(kStandard), Outcome::no_response);
     EXPECT_EQ(m.times_of(kProgramStandard), std::vector<TimePoint>{asked});
     EXPECT_EQ(m.rig.now() - asked, kEchoTimeout + std::chrono::floor<Millis>(m.on_wire(22)));
     EXPECT_EQ(m.program_status(), ProgStatus::no_response);
@@ -207,7 +207,7 @@ TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
     ASSERT_TRUE(m.heard());
     m.control("deaf on");
     const TimePoint asked = m.rig.now();
-    EXPECT_EQ(m.action(kStandard), Exception::gateway_target_failed);
+    EXPECT_EQ(m.action(kStandard), Outcome::no_response);
     const auto sends = m.times_of(kProgramStandard);
     ASSERT_EQ(sends.size(), kEchoAttempts);
     EXPECT_EQ(sends[0], asked);
@@ -224,7 +224,7 @@ TEST(Fdc1ProgramAction, AnEchoAfterItsTimeoutIsNeverTakenForTheConfirmation) {
   Maintenance m;  // budget_ms 1000: one attempt of 2 s
   ASSERT_TRUE(m.heard());
   m.rig.line().turnaround = kEchoTimeout + 500ms;
-  EXPECT_EQ(m.action(kStandard), Exception::gateway_target_failed);
+  EXPECT_EQ(m.action(kStandard), Outcome::no_response);
   EXPECT_EQ(m.program_status(), ProgStatus::no_response);
   const std::uint32_t foreign = m.read("foreign_frames");
   m.rig.run_for(2s);  // the echo arrives now, late
@@ -238,12 +238,12 @@ TEST(Fdc1ProgramAction, ACorruptedEchoIsSentAgainWhenTheBudgetHoldsIt) {
   Maintenance m(5000ms);
   ASSERT_TRUE(m.heard());
   for (const auto& [key, value] : kStandard) {
-    ASSERT_EQ(m.write_point("prog_" + key, value), Exception::none);
+    ASSERT_EQ(m.write_point("prog_" + key, value), Outcome::ok);
   }
   // Right after a status, so that the next frame the controller sends is the echo.
   ASSERT_TRUE(m.next_status());
   m.control("corrupt 1");
-  EXPECT_EQ(m.write_point("prog_commit", 1), Exception::none);
+  EXPECT_EQ(m.write_point("prog_commit", 1), Outcome::ok);
   EXPECT_EQ(m.read("bad_checksum"), 1u);
   EXPECT_EQ(m.times_of(kProgramStandard).size(), 2u);
   EXPECT_TRUE(m.sim_has("programs=2"));  // rewriting identical parameters is harmless
@@ -252,17 +252,17 @@ TEST(Fdc1ProgramAction, ACorruptedEchoIsSentAgainWhenTheBudgetHoldsIt) {
 TEST(Fdc1ProgramAction, RefusedWhileTheControllerIsNotStreamingOrBusy) {
   Maintenance m;
   for (const auto& [key, value] : kStandard) {
-    ASSERT_EQ(m.write_point("prog_" + key, value), Exception::none);  // stored before heard
+    ASSERT_EQ(m.write_point("prog_" + key, value), Outcome::ok);  // stored before heard
   }
   EXPECT_EQ(m.message(), "the controller is not streaming");
-  EXPECT_EQ(m.write_point("prog_commit", 1), Exception::server_device_failure);
+  EXPECT_EQ(m.write_point("prog_commit", 1), Outcome::refused);
   ASSERT_TRUE(m.heard());
   EXPECT_EQ(m.message(), "");
   const auto first = m.start_point_write("prog_commit", {1});
   const auto second = m.start_point_write("prog_commit", {1});  // one at a time
-  EXPECT_EQ(second->result, Exception::server_device_failure);
+  EXPECT_EQ(second->result, Outcome::refused);
   EXPECT_EQ(m.message(), "a programming frame is on its way already");
-  EXPECT_EQ(m.rig.wait(first), Exception::none);
+  EXPECT_EQ(m.rig.wait(first), Outcome::ok);
   EXPECT_EQ(m.frames(), std::vector<Bytes>{kProgramStandard});
 }
 

@@ -23,7 +23,7 @@ TEST(Fdc1Writes, ASetpointWhileStoppedIsStoredThenTheRunIsInForceOnceTheMotorRun
   EXPECT_EQ(b.rig.sent().back().bytes, kRun2000);
   EXPECT_EQ(b.rig.sent().back().at, asked);  // at once: the line was free
   EXPECT_EQ(b.read("command"), cmd::stop);   // on the wire, never acknowledged: not yet
-  EXPECT_EQ(b.rig.wait(run), Exception::none);
+  EXPECT_EQ(b.rig.wait(run), Outcome::ok);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_EQ(b.read("motor_on"), 1u);  // the status that confirmed it
   EXPECT_NE(b.read("status") & kRunning, 0u);
@@ -39,7 +39,7 @@ TEST(Fdc1Writes, SetpointAndRunInOneRequestRunAtThatSpeed) {
   Bench b;
   ASSERT_TRUE(b.heard());
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::run_forward, 2500}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward, 2500}), Outcome::ok);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2500});
   EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
@@ -57,7 +57,7 @@ TEST(Fdc1Writes, ASetpointWhileRunningIsInForceOnceTheStreamShowsTheSpeed) {
   ASSERT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") > 2000; }, 2s));
   EXPECT_EQ(b.times_of(kRun3000), std::vector<TimePoint>{asked});
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
-  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.rig.wait(w), Outcome::ok);
   EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
   EXPECT_GE(b.read("speed_rpm"), 2900u);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
@@ -72,7 +72,7 @@ TEST(Fdc1Writes, StopAndQuickStopSendSpeedZero) {
     const auto w = b.start_write({c});
     b.rig.run_for(1ms);
     EXPECT_EQ(b.read("command"), cmd::run_forward);  // the motor still turns
-    EXPECT_EQ(b.rig.wait(w), Exception::none);
+    EXPECT_EQ(b.rig.wait(w), Outcome::ok);
     EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});  // one stop: speed 0
     EXPECT_EQ(b.read("command"), c);
     EXPECT_EQ(b.read("status") & kRunning, 0u);
@@ -86,15 +86,14 @@ TEST(Fdc1Writes, WritesTheControllerCannotDoChangeNothing) {
   ASSERT_TRUE(b.heard());
   const auto before = b.rig.sent().size();
   // One direction, and no fault reset in the protocol.
-  EXPECT_EQ(b.start_write({cmd::run_reverse})->result, Exception::illegal_data_value);
-  EXPECT_EQ(b.start_write({cmd::reset_fault})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::run_reverse})->result, Outcome::invalid_value);
+  EXPECT_EQ(b.start_write({cmd::reset_fault})->result, Outcome::invalid_value);
   // INPUT, Programming speed: 1500..3500 rpm.
   for (const std::uint16_t rpm : {std::uint16_t{1499}, std::uint16_t{3501}, std::uint16_t{0}}) {
-    EXPECT_EQ(b.start_write({rpm}, kSetpointRegister)->result, Exception::illegal_data_value)
-        << rpm;
+    EXPECT_EQ(b.start_write({rpm}, kSetpointRegister)->result, Outcome::invalid_value) << rpm;
   }
   // No setpoint yet: nothing to run at.
-  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Outcome::refused);
   b.rig.run_for(1s);
   EXPECT_EQ(b.rig.sent().size(), before);
   EXPECT_EQ(b.read("setpoint_rpm"), 0u);
@@ -109,7 +108,7 @@ TEST(Fdc1Writes, ARunBeforeTheControllerIsHeardWaitsForTheStream) {
   EXPECT_FALSE(w->settled());
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // stored: nothing was running
   EXPECT_EQ(b.read("command"), cmd::stop);
-  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.rig.wait(w), Outcome::ok);
   EXPECT_EQ(b.frames(), std::vector<Bytes>{kRun2000});  // the start-up frame is the run
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
@@ -121,7 +120,7 @@ TEST(Fdc1Writes, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
   Bench b;
   b.control("silent on");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Outcome::no_response);
   EXPECT_GE(b.rig.now() - asked, 2000ms);  // stale_ms
   EXPECT_TRUE(b.rig.sent().empty());
   EXPECT_EQ(b.read("command"), cmd::stop);
@@ -137,12 +136,12 @@ TEST(Fdc1Writes, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
 TEST(Fdc1Writes, ANewCommandSupersedesOneNotYetSent) {
   Bench b;
   ASSERT_TRUE(b.heard());
-  ASSERT_EQ(b.write({2000}, kSetpointRegister), Exception::none);
+  ASSERT_EQ(b.write({2000}, kSetpointRegister), Outcome::ok);
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});  // from one client...
   const auto stop = b.start_write({cmd::stop});        // ...and before it reached the wire, another
-  EXPECT_EQ(b.rig.wait(run), Exception::gateway_target_failed);
-  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.rig.wait(run), Outcome::no_response);
+  EXPECT_EQ(b.rig.wait(stop), Outcome::ok);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});  // the compressor never started
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
@@ -154,8 +153,8 @@ TEST(Fdc1Writes, ASpeedChangeAndARunFromAnotherClientWaitTogether) {
   const TimePoint asked = b.rig.now();
   const auto faster = b.start_write({3000}, kSetpointRegister);
   const auto run = b.start_write({cmd::run_forward});
-  EXPECT_EQ(b.rig.wait(run), Exception::none);
-  EXPECT_EQ(b.rig.wait(faster), Exception::none);
+  EXPECT_EQ(b.rig.wait(run), Outcome::ok);
+  EXPECT_EQ(b.rig.wait(faster), Outcome::ok);
   EXPECT_GE(b.read("speed_rpm"), 2900u);  // both confirmed at the new speed
   EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun3000});
@@ -169,8 +168,8 @@ TEST(Fdc1Writes, TwoSpeedsFromTwoClientsGoOutInTheOrderAsked) {
   const TimePoint asked = b.rig.now();
   const auto first = b.start_write({2500}, kSetpointRegister);
   const auto second = b.start_write({3000}, kSetpointRegister);
-  EXPECT_EQ(b.rig.wait(first), Exception::none);
-  EXPECT_EQ(b.rig.wait(second), Exception::none);
+  EXPECT_EQ(b.rig.wait(first), Outcome::ok);
+  EXPECT_EQ(b.rig.wait(second), Outcome::ok);
   EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
   EXPECT_EQ(b.frames(asked), (std::vector<Bytes>{kRun2500, kRun3000}));
 }
@@ -184,13 +183,13 @@ TEST(Fdc1Writes, ASetpointWhileAStopIsOnItsWayIsStoredWithIt) {
   const auto setpoint = b.start_write({2500}, kSetpointRegister);
   EXPECT_FALSE(setpoint->settled());
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // the motor still runs at 2000
-  EXPECT_EQ(b.rig.wait(setpoint), Exception::none);
-  EXPECT_EQ(b.rig.wait(stop), Exception::none);
+  EXPECT_EQ(b.rig.wait(setpoint), Outcome::ok);
+  EXPECT_EQ(b.rig.wait(stop), Outcome::ok);
   EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
   EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kStopFrame});
   // The next run uses it.
-  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward}), Outcome::ok);
   EXPECT_EQ(b.last(), kRun2500);
 }
 
@@ -200,14 +199,14 @@ TEST(Fdc1Writes, SetpointAndRunTogetherWhileRunningTakeOneFrame) {
   Bench b;
   ASSERT_TRUE(b.run_at(2000));
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::run_forward, 2500}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward, 2500}), Outcome::ok);
   EXPECT_NEAR(b.read("speed_rpm"), 2500, 100);  // confirmed at the new speed, not before
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2500});
   EXPECT_EQ(b.read("setpoint_rpm"), 2500u);
   // Rewritten every 100 ms for a second, it costs the line nothing more.
   const TimePoint cyclic = b.rig.now();
   for (int i = 0; i < 10; ++i) {
-    EXPECT_EQ(b.write({cmd::run_forward, 2500}), Exception::none);
+    EXPECT_EQ(b.write({cmd::run_forward, 2500}), Outcome::ok);
     b.rig.run_for(100ms);
   }
   EXPECT_TRUE(b.frames(cyclic).empty());
@@ -220,9 +219,9 @@ TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
   ASSERT_TRUE(b.run_at(2000));
   const TimePoint asked = b.rig.now();
   // Setpoint 3000 rpm with run_reverse: the setpoint alone would go on the line.
-  EXPECT_EQ(b.start_write({cmd::run_reverse, 3000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::run_reverse, 3000})->result, Outcome::invalid_value);
   // A valid run with a setpoint outside 1500..3500.
-  EXPECT_EQ(b.start_write({cmd::run_forward, 1000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(b.start_write({cmd::run_forward, 1000})->result, Outcome::invalid_value);
   EXPECT_EQ(b.read("status") & kCommandPending, 0u);
   b.rig.run_for(1s);
   EXPECT_TRUE(b.frames(asked).empty());  // no frame at all
@@ -235,7 +234,7 @@ TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
   Bench fresh;
   ASSERT_TRUE(fresh.heard());
   const auto before = fresh.rig.sent().size();
-  EXPECT_EQ(fresh.start_write({cmd::run_reverse, 2000})->result, Exception::illegal_data_value);
+  EXPECT_EQ(fresh.start_write({cmd::run_reverse, 2000})->result, Outcome::invalid_value);
   EXPECT_EQ(fresh.read("setpoint_rpm"), 0u);
   EXPECT_EQ(fresh.rig.sent().size(), before);
 }
@@ -249,7 +248,7 @@ TEST(Fdc1Writes, ASetpointWhileRunningThatTheControllerDoesNotTakeLeavesTheOldOn
   const auto w = b.start_write({3000}, kSetpointRegister);
   b.rig.run_for(4s);
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);  // never the one merely asked for
-  EXPECT_EQ(b.rig.wait(w), Exception::gateway_target_failed);
+  EXPECT_EQ(b.rig.wait(w), Outcome::no_response);
   EXPECT_EQ(b.rig.now() - asked, 5000ms);  // confirm_ms, the driver's own deadline
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
@@ -272,7 +271,7 @@ TEST(Fdc1Writes, ASpeedChangeDuringAnAlarmIsRefusedAndTheOldOneStays) {
   ASSERT_EQ(b.control("fault overload"), "ok");
   ASSERT_TRUE(b.next_status());
   EXPECT_EQ(b.read("motor_on"), 0u);
-  EXPECT_EQ(b.write({3000}, kSetpointRegister), Exception::server_device_failure);
+  EXPECT_EQ(b.write({3000}, kSetpointRegister), Outcome::refused);
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
   // The run stays in force: the controller retries by itself once the alarm clears.
   EXPECT_EQ(b.read("command"), cmd::run_forward);
@@ -289,7 +288,7 @@ TEST(Fdc1Writes, ARunTheControllerRefusesIsTheExceptionAndStopStaysInForce) {
   ASSERT_EQ(b.control("fault battery"), "ok");
   ASSERT_TRUE(b.next_status());
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Exception::server_device_failure);
+  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Outcome::refused);
   EXPECT_EQ(b.read("command"), cmd::stop);
   EXPECT_EQ(b.read("status") & kRunning, 0u);
   EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::supply_fault));
@@ -307,7 +306,7 @@ TEST(Fdc1Writes, AStopTheStreamNeverShowsIsNoResponseAndTheRunStaysInForce) {
   ASSERT_TRUE(b.run_at(2000));
   ASSERT_EQ(b.control("deaf on"), "ok");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::stop}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({cmd::stop}), Outcome::no_response);
   EXPECT_EQ(b.read("command"), cmd::run_forward);  // what the controller does, and is told again
   EXPECT_NE(b.read("status") & kRunning, 0u);
   b.rig.run_for(10ms);
@@ -320,7 +319,7 @@ TEST(Fdc1Writes, ARunNotShownWithinConfirmMsIsNoResponseAndIsUndone) {
   ASSERT_TRUE(b.heard());
   ASSERT_EQ(b.control("delay 10"), "ok");  // 10 s until the next start, no alarm
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({cmd::run_forward, 2000}), Outcome::no_response);
   EXPECT_EQ(b.rig.now() - asked, 5000ms);
   EXPECT_EQ(b.read("command"), cmd::stop);
   b.rig.run_for(10ms);
@@ -337,7 +336,7 @@ TEST(Fdc1Writes, CommLostFailsTheWriteAndTheStartUpRestoresWhatIsInForce) {
   Bench b;
   ASSERT_TRUE(b.run_at(2000));
   b.control("silent on");
-  EXPECT_EQ(b.write({2500}, kSetpointRegister), Exception::gateway_target_failed);
+  EXPECT_EQ(b.write({2500}, kSetpointRegister), Outcome::no_response);
   EXPECT_NE(b.read("status") & kCommLost, 0u);
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
   EXPECT_EQ(b.read("command"), cmd::run_forward);

@@ -15,7 +15,6 @@ namespace drivegate::mdriver {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
-using modbus::Exception;
 
 // Section 3 No.1: the fixed-code check.
 inline const Bytes kCheck{0x00, 0x01, 0x00, 0x03, 0x01, 0x12, 0x00, 0x06, 0x38};

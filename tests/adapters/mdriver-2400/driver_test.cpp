@@ -99,7 +99,7 @@ TEST(MdriverDriver, EveryErrorCodeMapsIntoFaultsAndNativeFault) {
     EXPECT_EQ(b.read("native_fault"), e.code);
     EXPECT_EQ(b.read("error_code"), e.code);
     EXPECT_NE(b.read("status") & kFaulted, 0u);
-    EXPECT_EQ(b.write({cmd::reset_fault}), Exception::none);
+    EXPECT_EQ(b.write({cmd::reset_fault}), Outcome::ok);
     EXPECT_EQ(b.read("fault_mask"), 0u);
     EXPECT_EQ(b.read("native_fault"), 0u);
   }
@@ -118,11 +118,11 @@ TEST(MdriverDriver, OverTemperatureTripsAndResetFaultClearsIt) {
   EXPECT_EQ(b.read("speed_rpm"), 0u);
   // Latched: a run command would not run. Refused at once, without a frame.
   const auto before = b.rig.sent().size();
-  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Outcome::refused);
   EXPECT_EQ(b.rig.sent().size(), before);
 
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::reset_fault}), Exception::none);
+  EXPECT_EQ(b.write({cmd::reset_fault}), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0), kRunReset);
   EXPECT_EQ(b.read("fault_code"), 0u);
   EXPECT_EQ(b.read("native_fault"), 0u);
@@ -131,7 +131,7 @@ TEST(MdriverDriver, OverTemperatureTripsAndResetFaultClearsIt) {
   EXPECT_EQ(b.last(), kRunStop);  // reset once, then the plain stop code
   EXPECT_EQ(b.count(kRunReset), 1u);
   const TimePoint again = b.rig.now();
-  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward}), Outcome::ok);
   EXPECT_EQ(b.frames(again).at(0), kRun1149);
 }
 
@@ -145,7 +145,7 @@ TEST(MdriverDriver, AFailedFixedCodeCheckIsAHardwareFaultAndNotReady) {
   EXPECT_EQ(b.read("fixed_code_state"), 2u);
   for (const auto& f : b.frames()) EXPECT_EQ(f, kCheck);  // no run data while the code fails
   // It answers, so not 0x0B: a driver that is not ready refuses.
-  EXPECT_EQ(b.write({cmd::stop}), Exception::server_device_failure);
+  EXPECT_EQ(b.write({cmd::stop}), Outcome::refused);
   b.control("eeprom ok");
   ASSERT_TRUE(b.rig.run_until([&] { return b.drive->online(); }, 3s));
   b.rig.run_for(200ms);
@@ -157,10 +157,10 @@ TEST(MdriverDriver, AFailedFixedCodeCheckIsAHardwareFaultAndNotReady) {
 TEST(MdriverDriver, ABadChecksumIsResentIdenticallyAtOnce) {
   Bench b;
   ASSERT_TRUE(b.ready());
-  ASSERT_EQ(b.write({1149}, kSetpointRegister), Exception::none);
+  ASSERT_EQ(b.write({1149}, kSetpointRegister), Outcome::ok);
   b.control("corrupt 1");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward}), Outcome::ok);
   const auto runs = b.times_of(kRun1149, asked);
   ASSERT_EQ(runs.size(), 2u);
   // The damaged reply is complete (13 bytes) before the same frame goes again, after the gap.
@@ -222,7 +222,7 @@ TEST(MdriverDriver, NoiseAndOtherDriversFramesAreSkipped) {
     return answer;
   };
   ASSERT_TRUE(b.ready());
-  EXPECT_EQ(b.write({cmd::run_forward, 1149}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward, 1149}), Outcome::ok);
   EXPECT_GE(b.read("foreign_frames"), 2u);
   EXPECT_EQ(b.read("bad_checksum"), 0u);  // the garbage is noise, not a damaged reply
   EXPECT_EQ(b.read("retries"), 0u);

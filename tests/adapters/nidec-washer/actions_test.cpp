@@ -22,7 +22,7 @@ TEST(NidecActions, VoltageDetection_5_9) {
   const TimePoint asked = b.rig.now();
   const auto w = b.start_write("action", {value_of(Action::voltage_detection)});
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::pending));
-  EXPECT_EQ(b.rig.wait(w), Exception::none);
+  EXPECT_EQ(b.rig.wait(w), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0),
             (Bytes{0xA5, 0x2B, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x8E}));
   EXPECT_EQ(b.read("dc_bus_voltage"), 311u);
@@ -33,12 +33,12 @@ TEST(NidecActions, VoltageDetection_5_9) {
 TEST(NidecActions, WeightDetectionTakes35s_5_10) {
   Bench b;
   ASSERT_TRUE(b.ready());
-  EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Exception::none);
+  EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Outcome::ok);
   EXPECT_EQ(b.read("raw_weight"), 0u);  // 5.10: 0 until detected
   EXPECT_EQ(b.read("weight"), 0u);
   b.rig.run_for(36s);
   EXPECT_EQ(b.read("weight"), 35u);  // 3.5 kg: the Request ACK (5.2) reports it too
-  EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Exception::none);
+  EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Outcome::ok);
   EXPECT_EQ(b.read("raw_weight"), 1700u);
 }
 
@@ -47,7 +47,7 @@ TEST(NidecActions, FabricDetectionIsKeptRaw_5_11) {
   ASSERT_TRUE(b.ready());
   b.control("fabric 3");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::fabric_detection)}), Exception::none);
+  EXPECT_EQ(b.write("action", {value_of(Action::fabric_detection)}), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0),
             (Bytes{0xA5, 0x2D, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x88}));
   EXPECT_EQ(b.read("fabric_raw"), 0x00030000u);
@@ -57,21 +57,21 @@ TEST(NidecActions, ForcedBrakeBlocksAndStopsMotion_5_13) {
   Bench b;
   ASSERT_TRUE(b.running_at(800));
   TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_enable)}), Exception::none);
+  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_enable)}), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0),
             (Bytes{0xA5, 0x1B, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBF}));
   EXPECT_EQ(b.read("forced_brake"), 1u);
   // 5.13: the motor is held stopped: no run is in force, and none is taken.
   EXPECT_EQ(b.read("command"), cmd::stop);
   const std::size_t before = b.rig.sent().size();
-  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Exception::server_device_failure);
+  EXPECT_EQ(b.start_write({cmd::run_forward})->result, Outcome::refused);
   EXPECT_EQ(b.rig.sent().size(), before);
   asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_disable)}), Exception::none);
+  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_disable)}), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0),
             (Bytes{0xA5, 0x1B, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBE}));
   EXPECT_EQ(b.read("forced_brake"), 0u);
-  EXPECT_EQ(b.write({cmd::run_forward}), Exception::none);
+  EXPECT_EQ(b.write({cmd::run_forward}), Outcome::ok);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
@@ -80,7 +80,7 @@ TEST(NidecActions, FctTest_5_15) {
   ASSERT_TRUE(b.ready());
   b.control("fault stall");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::fct_test)}), Exception::none);
+  EXPECT_EQ(b.write("action", {value_of(Action::fct_test)}), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0), kFct);
   EXPECT_EQ(b.read("fct_error"), 0x0008u);
   EXPECT_EQ(b.read("fct_speed_rpm"), 0u);
@@ -97,15 +97,15 @@ TEST(NidecActions, PingAgainOnRequest_5_1) {
   ASSERT_TRUE(b.ready());
   b.control("version 0x0203");
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::ping)}), Exception::none);
+  EXPECT_EQ(b.write("action", {value_of(Action::ping)}), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0), kPing7);
   EXPECT_EQ(b.read("inverter_version"), 0x0203u);
   // `none` is taken without traffic; the gateway keeps values the table does not name.
   const std::size_t before = b.rig.sent().size();
-  EXPECT_EQ(b.start_write("action", {value_of(Action::none)})->result, Exception::none);
+  EXPECT_EQ(b.start_write("action", {value_of(Action::none)})->result, Outcome::ok);
   EXPECT_EQ(b.rig.sent().size(), before);
   EXPECT_EQ(b.read("action"), value_of(Action::none));
-  EXPECT_EQ(b.write("action", {8}), Exception::illegal_data_value);
+  EXPECT_EQ(b.write("action", {8}), Outcome::invalid_value);
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::done));
 }
 
@@ -113,8 +113,7 @@ TEST(NidecActions, AnUnansweredActionIsNoResponse) {
   Bench b;
   ASSERT_TRUE(b.ready());
   b.control("silent on");
-  EXPECT_EQ(b.write("action", {value_of(Action::voltage_detection)}),
-            Exception::gateway_target_failed);
+  EXPECT_EQ(b.write("action", {value_of(Action::voltage_detection)}), Outcome::no_response);
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::no_response));
   EXPECT_EQ(b.read("dc_bus_voltage"), 0u);
 }

@@ -15,7 +15,6 @@ namespace drivegate::nidec {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
-using modbus::Exception;
 
 // Master frames (4.1), each laid out per the section cited.
 inline const Bytes kPing7{0xA5, 0x02, 0x07, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xA0};  // 5.1
@@ -36,7 +35,7 @@ struct Bench : test::AdapterBench {
   // "Run forward at `rpm`" in one request, as a PLC writes it, confirmed, then the 3.0 s ramp.
   [[nodiscard]] bool running_at(std::uint16_t rpm, std::uint16_t command = cmd::run_forward) {
     if (!drive->online() && !ready()) return false;
-    if (write({command, rpm}) != Exception::none) return false;
+    if (write({command, rpm}) != Outcome::ok) return false;
     rig.run_for(4s);
     return read("speed_rpm") == rpm;
   }

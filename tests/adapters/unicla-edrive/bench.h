@@ -19,7 +19,6 @@ namespace drivegate::unicla {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
-using modbus::Exception;
 
 // "Message IDs".
 inline constexpr std::uint8_t kStatus = 0x01, kBuild = 0x02, kLimits = 0x03, kRunState = 0xC0,

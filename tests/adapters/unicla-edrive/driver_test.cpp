@@ -163,7 +163,7 @@ TEST(UniclaDriver, ACompressorFoundRunningIsShownAsItRunsNeverAsStopped) {
   EXPECT_NE(b.status() & kRunning, 0u);
   EXPECT_TRUE(b.sent({}, kRunState).empty());  // nothing was sent to it
   const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write({3500}, kSetpointRegister), Exception::none);
+  EXPECT_EQ(b.write({3500}, kSetpointRegister), Outcome::ok);
   const auto runs = b.sent(asked, kRunState);
   ASSERT_EQ(runs.size(), 1u);
   EXPECT_EQ(runs[0].frame.payload, (Bytes{0x0D, 0xAC}));  // 3500 rpm

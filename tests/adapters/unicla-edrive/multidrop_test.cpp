@@ -70,7 +70,7 @@ TEST(UniclaMultidrop, TwoDrivesOnOneLineKeepTheirOwnState) {
   // Right runs, left stays stopped.
   const TimePoint asked = p.rig.now();
   EXPECT_EQ(p.rig.write_and_wait(*p.d2, Table::holding, kCommandRegister, {cmd::run_forward, 3000}),
-            Exception::none);
+            Outcome::ok);
   const auto runs = p.rig.sent();
   for (const auto& f : runs) {
     if (f.at < asked) continue;
@@ -127,7 +127,7 @@ TEST(UniclaMultidrop, ASilentDriveCostsTheOtherAtMostItsTimeBudget) {
 
   // Left still takes writes while its neighbour is silent.
   EXPECT_EQ(p.rig.write_and_wait(*p.d1, Table::holding, kCommandRegister, {cmd::run_forward, 3000}),
-            Exception::none);
+            Outcome::ok);
   EXPECT_EQ(p.read(*p.d1, "command"), cmd::run_forward);
 }
 
