@@ -124,10 +124,8 @@ int sim(std::span<const std::string> args) {
     port.baud = static_cast<std::uint32_t>(numeric("baud", *v, 10));
   std::optional<Parity> parity;
   if (const auto v = parsed->value("parity")) {
-    if (*v != "none" && *v != "even" && *v != "odd") {
-      return cli.usage_error("--parity must be none, even or odd, not '" + *v + "'");
-    }
-    parity = *v == "none" ? Parity::none : *v == "even" ? Parity::even : Parity::odd;
+    parity = parse_parity(*v);
+    if (!parity) return cli.usage_error("--parity must be none, even or odd, not '" + *v + "'");
   }
   std::optional<bool> echo;
   if (const auto last = parsed->last_of({"echo", "no-echo"})) echo = *last == "echo";

@@ -278,8 +278,7 @@ void BusEngine::begin(Station& st, Exchange ex, TimePoint now) {
   const auto wire = on_wire(exchange_->frame.size()) * (echo_line_ ? 2 : 1);
   const Millis wait = exchange_->timeout + network_delay_;
   const Millis guard = streaming_ == nullptr ? guard_for(st.link(), wait) : Millis(0);
-  const auto per_attempt =
-      std::chrono::duration_cast<Millis>(wait + guard + wire) + Millis(1);
+  const auto per_attempt = std::chrono::duration_cast<Millis>(wait + guard + wire) + Millis(1);
   const auto fit = static_cast<int>(st.link().policy.budget / per_attempt);
   max_attempts_ = std::clamp(fit, 1, std::max<int>(1, exchange_->attempts));
   answered_ = false;
@@ -351,22 +350,28 @@ void BusEngine::attempt_failed(TimePoint now) {
     send_attempt(now);
     return;
   }
+  // A device that NACKs or answers garbled is there: keep its poll rate, back off only silence.
+  unanswered(now, !answered_);
+}
+
+Station* BusEngine::release() {
   Station* st = current_;
   exchange_.reset();
   current_ = nullptr;
   state_ = State::idle;
   echo_.clear();
-  st->on_no_reply(now);
-  // A device that NACKs or answers garbled is there: keep its poll rate, back off only silence.
-  if (!answered_) st->link().health.turn_failed(now, st->link().policy);
-  pump(now);
+  return st;
 }
 
 void BusEngine::finish(TimePoint now) {
-  exchange_.reset();
-  current_ = nullptr;
-  state_ = State::idle;
-  echo_.clear();
+  release();
+  pump(now);
+}
+
+void BusEngine::unanswered(TimePoint now, bool silent) {
+  Station* st = release();
+  st->on_no_reply(now);
+  if (silent) st->link().health.turn_failed(now, st->link().policy);
   pump(now);
 }
 
@@ -412,7 +417,8 @@ void BusEngine::start_guard(Station& owner, TimePoint now) {
   guard_spread_ = last_sent_ - first_sent_;
   guard_started_ = now;
   // A device known to answer late may still answer every attempt of this exchange.
-  const auto spread = link.health.lateness().count() > 0 ? guard_spread_ : decltype(guard_spread_){};
+  const auto spread =
+      link.health.lateness().count() > 0 ? guard_spread_ : decltype(guard_spread_){};
   quiet_until_ = now + guard_ + spread;
 }
 
@@ -450,14 +456,7 @@ void BusEngine::late_bytes(ByteView bytes, TimePoint now) {
 // The device in the exchange waiting to be resent answers, but late: no more attempts; it counts
 // as a turn without an answer (backed off like a silent device).
 void BusEngine::give_up(TimePoint now) {
-  Station* st = current_;
-  exchange_.reset();
-  current_ = nullptr;
-  state_ = State::idle;
-  echo_.clear();
-  st->on_no_reply(now);
-  st->link().health.turn_failed(now, st->link().policy);
-  pump(now);
+  unanswered(now, true);
 }
 
 // Moves an exchange forward with what rx_ holds: the echo first, then the reply.

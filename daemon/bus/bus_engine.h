@@ -34,10 +34,10 @@
 #include <optional>
 #include <vector>
 
-#include "config/config.h"
 #include "bus/frame_tap.h"
 #include "bus/link.h"
 #include "bus/station.h"
+#include "config/config.h"
 
 namespace drivegate {
 
@@ -128,6 +128,10 @@ class BusEngine {
   }
   void start_guard(Station& owner, TimePoint now);
   void give_up(TimePoint now);
+  // The exchange in flight is over: the line is idle again. Returns its station.
+  Station* release();
+  // It ended without its reply: the station hears so and, `silent`, is backed off.
+  void unanswered(TimePoint now, bool silent);
   [[nodiscard]] static Millis guard_for(const Link& link, Millis wait);
   void late_bytes(ByteView bytes, TimePoint now);
   void tap(FrameDirection dir, std::uint8_t flags, const Station* st, ByteView bytes,
@@ -172,11 +176,11 @@ class BusEngine {
   TimePoint guard_started_{};
   std::chrono::nanoseconds guard_{0};
   Station* guard_owner_ = nullptr;
-  TimePoint guard_last_sent_{};                // the guarded exchange's last frame went then
-  std::chrono::nanoseconds guard_spread_{0};   // from its first frame to its last
-  TimePoint first_sent_{};  // when the exchange in progress sent its first frame
-  TimePoint last_sent_{};   // and its latest
-  bool timed_out_ = false;  // an attempt of the exchange in progress timed out
+  TimePoint guard_last_sent_{};               // the guarded exchange's last frame went then
+  std::chrono::nanoseconds guard_spread_{0};  // from its first frame to its last
+  TimePoint first_sent_{};                    // when the exchange in progress sent its first frame
+  TimePoint last_sent_{};                     // and its latest
+  bool timed_out_ = false;                    // an attempt of the exchange in progress timed out
   BusCounters counters_;
   std::vector<FrameTap*> taps_;  // captures in progress; usually none
 };

@@ -9,18 +9,6 @@ namespace drivegate {
 
 namespace {
 
-std::string_view parity_name(Parity p) {
-  switch (p) {
-    case Parity::none:
-      return "none";
-    case Parity::even:
-      return "even";
-    case Parity::odd:
-      return "odd";
-  }
-  return "?";
-}
-
 std::string text(const OptionValue& v) {
   return std::visit(
       [](const auto& x) -> std::string {
@@ -61,7 +49,7 @@ std::vector<std::string> changes(const BusConfig& a, const BusConfig& b) {
   std::vector<std::string> out;
   note(out, "port", a.port, b.port);
   note(out, "baud", a.baud, b.baud);
-  note(out, "parity", parity_name(a.parity), parity_name(b.parity));
+  note(out, "parity", to_string(a.parity), to_string(b.parity));
   note(out, "data_bits", int{a.data_bits}, int{b.data_bits});
   note(out, "stop_bits", int{a.stop_bits}, int{b.stop_bits});
   note(out, "echo", a.echo, b.echo);

@@ -10,10 +10,10 @@
 #include <set>
 #include <sstream>
 
-#include "plugin/adapter_options.h"
 #include "base/read_file.h"
-#include "port_address.h"
 #include "mqtt_config.h"
+#include "plugin/adapter_options.h"
+#include "port_address.h"
 #include "server_config.h"
 #include "toml_reader.h"
 
@@ -31,8 +31,8 @@ void check_name(const toml::node* at, const std::string& key, const std::string&
                 Diagnostics& diag) {
   if (name.empty()) return;  // said elsewhere
   const auto safe = [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '-' || c == '.';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '-' || c == '.';
   };
   const bool alnum_first = safe(name[0]) && name[0] != '_' && name[0] != '-' && name[0] != '.';
   if (name.size() > kMaxNameLength || !alnum_first ||
@@ -45,13 +45,6 @@ void check_name(const toml::node* at, const std::string& key, const std::string&
 
 constexpr std::array<std::uint32_t, 12> kBauds = {300,   600,   1200,  2400,   4800,   9600,
                                                   19200, 38400, 57600, 115200, 230400, 460800};
-
-std::optional<Parity> parse_parity(std::string_view s) {
-  if (s == "none") return Parity::none;
-  if (s == "even") return Parity::even;
-  if (s == "odd") return Parity::odd;
-  return std::nullopt;
-}
 
 }  // namespace
 

@@ -5,6 +5,7 @@
 // outcomes (gateway/outcome.h) answered as these exceptions.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -28,29 +29,25 @@ enum class Exception : std::uint8_t {
   gateway_target_failed = 0x0B,
 };
 
-// The exception's name as the specification gives it (section 7), for logs and MQTT results.
+// Their names as the specification gives them (section 7), by code, for logs and MQTT results;
+// "" for the codes it leaves unused or this server never sends.
+inline constexpr std::array<std::string_view, 12> kExceptionNames = {
+    "none",
+    "illegal function",
+    "illegal data address",
+    "illegal data value",
+    "server device failure",
+    "acknowledge",
+    "server device busy",
+    "",
+    "",
+    "",
+    "gateway path unavailable",
+    "gateway target device failed to respond"};
 constexpr std::string_view to_string(Exception e) {
-  switch (e) {
-    case Exception::none:
-      return "none";
-    case Exception::illegal_function:
-      return "illegal function";
-    case Exception::illegal_data_address:
-      return "illegal data address";
-    case Exception::illegal_data_value:
-      return "illegal data value";
-    case Exception::server_device_failure:
-      return "server device failure";
-    case Exception::acknowledge:
-      return "acknowledge";
-    case Exception::server_device_busy:
-      return "server device busy";
-    case Exception::gateway_path_unavailable:
-      return "gateway path unavailable";
-    case Exception::gateway_target_failed:
-      return "gateway target device failed to respond";
-  }
-  return "unknown";
+  const auto code = static_cast<std::size_t>(e);
+  return code < kExceptionNames.size() && !kExceptionNames[code].empty() ? kExceptionNames[code]
+                                                                         : "unknown";
 }
 
 using WriteDone = std::function<void(Exception)>;

@@ -1,6 +1,8 @@
 #include "mbap.h"
 
+#include <array>
 #include <string>
+#include <string_view>
 
 namespace drivegate::modbus {
 namespace {
@@ -13,17 +15,12 @@ class MbapCategory final : public std::error_category {
  public:
   const char* name() const noexcept override { return "mbap"; }
   std::string message(int code) const override {
-    switch (static_cast<MbapError>(code)) {
-      case MbapError::bad_protocol_id:
-        return "MBAP protocol id is not 0";
-      case MbapError::length_zero:
-        return "MBAP length is 0";
-      case MbapError::empty_pdu:
-        return "MBAP length is 1 (no function code)";
-      case MbapError::length_too_long:
-        return "MBAP length is over 254";
-    }
-    return "unknown MBAP error";
+    // By MbapError, from 1.
+    static constexpr std::array<std::string_view, 4> kMessages = {
+        "MBAP protocol id is not 0", "MBAP length is 0", "MBAP length is 1 (no function code)",
+        "MBAP length is over 254"};
+    const auto i = static_cast<std::size_t>(code) - 1;
+    return std::string(code >= 1 && i < kMessages.size() ? kMessages[i] : "unknown MBAP error");
   }
 };
 

@@ -9,38 +9,6 @@
 namespace drivegate {
 namespace {
 
-const char* table_name(Table t) {
-  switch (t) {
-    case Table::coil:
-      return "coil";
-    case Table::discrete:
-      return "discrete";
-    case Table::input:
-      return "input";
-    case Table::holding:
-      return "holding";
-  }
-  return "input";
-}
-
-const char* type_name(PointType t) {
-  switch (t) {
-    case PointType::u16:
-      return "u16";
-    case PointType::i16:
-      return "i16";
-    case PointType::u32:
-      return "u32";
-    case PointType::i32:
-      return "i32";
-    case PointType::f32:
-      return "f32";
-    case PointType::string:
-      return "string";
-  }
-  return "u16";
-}
-
 std::string number(double v) {
   std::ostringstream out;
   out.precision(10);
@@ -54,7 +22,7 @@ bool is_bits(Table t) {
 
 // Coils and discrete inputs are single bits on the wire, whatever the point's value type.
 std::string type_of(const MappedPoint& p) {
-  return is_bits(p.spec.table) ? "bit" : type_name(p.spec.type);
+  return is_bits(p.spec.table) ? std::string("bit") : std::string(to_string(p.spec.type));
 }
 
 // The Modicon order of the tables: their reference's leading digit.
@@ -138,7 +106,7 @@ std::string to_json(const std::vector<DeviceRegisters>& devices,
     for (std::size_t i = 0; i < points.size(); ++i) {
       const auto& p = *points[i];
       out << (i ? ",\n" : "\n") << "    {\"name\": " << json_string(p.spec.name)
-          << ", \"table\": \"" << table_name(p.spec.table) << "\", \"address\": " << p.address
+          << ", \"table\": \"" << to_string(p.spec.table) << "\", \"address\": " << p.address
           << ", \"reference\": \"" << modicon_reference(p.spec.table, p.address, digits)
           << "\", \"type\": \"" << type_of(p) << "\", \"scale\": " << number(p.spec.scale)
           << ", \"unit\": " << json_string(p.spec.unit) << ", \"access\": \""
@@ -175,7 +143,7 @@ std::string to_csv(const std::vector<DeviceRegisters>& devices) {
       const auto& p = *point;
       out << int{dev.device->unit_id} << "," << csv_field(dev.device->name) << ","
           << csv_field(dev.device->adapter) << "," << csv_field(p.spec.name) << ","
-          << table_name(p.spec.table) << "," << p.address << ","
+          << to_string(p.spec.table) << "," << p.address << ","
           << modicon_reference(p.spec.table, p.address, digits) << "," << type_of(p) << ","
           << p.spec.register_count() << "," << number(p.spec.scale) << "," << csv_field(p.spec.unit)
           << "," << (p.spec.access() == Access::read_write ? "rw" : "r") << ","
@@ -217,7 +185,7 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices,
         << "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const MappedPoint* point : in_reference_order(dev.map)) {
       const auto& p = *point;
-      out << "| " << table_name(p.spec.table) << " | " << p.address << " | "
+      out << "| " << to_string(p.spec.table) << " | " << p.address << " | "
           << modicon_reference(p.spec.table, p.address, digits) << " | " << md_field(p.spec.name)
           << " | " << type_of(p) << " | " << number(p.spec.scale) << " | " << md_field(p.spec.unit)
           << " | " << (p.spec.access() == Access::read_write ? "rw" : "r") << " | "

@@ -9,20 +9,6 @@ namespace drivegate {
 
 namespace asio = boost::asio;
 
-namespace {
-const char* parity_name(Parity p) {
-  switch (p) {
-    case Parity::none:
-      return "no";
-    case Parity::even:
-      return "even";
-    case Parity::odd:
-      return "odd";
-  }
-  return "?";
-}
-}  // namespace
-
 SerialTransport::SerialTransport(asio::io_context& io, BusConfig bus)
     : io_(io), bus_(std::move(bus)), port_(io) {}
 
@@ -62,8 +48,9 @@ std::string SerialTransport::explain(std::error_code ec) const {
 
 std::string SerialTransport::describe() const {
   return bus_.port + " (" + std::to_string(bus_.baud) + " baud, " + std::to_string(bus_.data_bits) +
-         " data, " + parity_name(bus_.parity) + " parity, " + std::to_string(bus_.stop_bits) +
-         " stop" + (bus_.echo ? ", echo" : "") + (bus_.rs485 ? ", RS-485" : "") + ")";
+         " data, parity " + std::string(to_string(bus_.parity)) + ", " +
+         std::to_string(bus_.stop_bits) + " stop" + (bus_.echo ? ", echo" : "") +
+         (bus_.rs485 ? ", RS-485" : "") + ")";
 }
 
 }  // namespace drivegate

@@ -33,7 +33,7 @@ class Transport {
   virtual void write(ByteView data, Done done) = 0;
   // Closes; operations outstanding complete with operation_aborted.
   virtual void close() = 0;
-  // For the log: "/dev/ttyUSB0 (9600 baud, 8 data, even parity, 1 stop)", "tcp 10.1.5.20:4001".
+  // For the log: "/dev/ttyUSB0 (9600 baud, 8 data, parity even, 1 stop)", "tcp 10.1.5.20:4001".
   [[nodiscard]] virtual std::string describe() const = 0;
   // Why `ec` happened, for the log: its message, or more where the transport knows more (the
   // program that holds a serial port).

@@ -3,12 +3,26 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 namespace drivegate {
 
 enum class Parity : std::uint8_t { none, even, odd };
+// Their names in drivegate.toml, on the command line and in the log, in enum order.
+inline constexpr std::array<std::string_view, 3> kParityNames = {"none", "even", "odd"};
+constexpr std::string_view to_string(Parity p) {
+  return kParityNames.at(static_cast<std::size_t>(p));
+}
+constexpr std::optional<Parity> parse_parity(std::string_view name) {
+  for (std::size_t i = 0; i < kParityNames.size(); ++i) {
+    if (kParityNames[i] == name) return static_cast<Parity>(i);
+  }
+  return std::nullopt;
+}
 
 // The device's native line settings, used for a [[bus]] that does not set its own.
 struct LineDefaults {

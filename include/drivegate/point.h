@@ -3,8 +3,10 @@
 // block (see docs/register-map.md) and encodes values into registers.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -12,6 +14,17 @@ namespace drivegate {
 
 enum class Table : std::uint8_t { coil, discrete, input, holding };
 enum class PointType : std::uint8_t { u16, i16, u32, i32, f32, string };
+// Their names in the printed register map, in enum order.
+inline constexpr std::array<std::string_view, 4> kTableNames = {"coil", "discrete", "input",
+                                                                "holding"};
+inline constexpr std::array<std::string_view, 6> kPointTypeNames = {"u16", "i16", "u32",
+                                                                    "i32", "f32", "string"};
+constexpr std::string_view to_string(Table t) {
+  return kTableNames.at(static_cast<std::size_t>(t));
+}
+constexpr std::string_view to_string(PointType t) {
+  return kPointTypeNames.at(static_cast<std::size_t>(t));
+}
 enum class Access : std::uint8_t { read, read_write };
 
 // Registers a value of `type` takes: 32-bit values and floats two, a string its own count.
