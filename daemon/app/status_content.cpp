@@ -4,11 +4,11 @@
 #include <chrono>
 #include <unordered_map>
 
+#include "bus/bus.h"
 #include "capture/pcap_tap.h"
+#include "gateway/device.h"
 #include "regmap/regmap_format.h"
 #include "status/status_view.h"
-#include "gateway/device.h"
-#include "bus/bus.h"
 
 namespace drivegate {
 
@@ -57,7 +57,11 @@ StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modb
       started_unix_(unix_now()) {}
 
 StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
-  StatusView v{*gateway_, server_, DRIVEGATE_VERSION, started_unix_, unix_now()};
+  StatusView v{.gateway = *gateway_,
+               .server = server_,
+               .version = DRIVEGATE_VERSION,
+               .started_unix = started_unix_,
+               .now_unix = unix_now()};
   v.restart_needed = &restart_needed_;
   if (mqtt_) {
     mqtt = mqtt_->status();

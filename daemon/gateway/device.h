@@ -21,11 +21,11 @@
 #include <span>
 #include <vector>
 
+#include "bus/station.h"
 #include "config/config.h"
 #include "gateway/failsafe.h"
 #include "gateway/outcome.h"
 #include "gateway/register_map.h"
-#include "bus/station.h"
 #include "gateway/session.h"
 #include "net/log_throttle.h"
 
@@ -43,8 +43,8 @@ inline constexpr std::size_t kMaxQueuedWrites = 4;
 
 // What happened to the writes a device was asked for, beyond what the line counters say.
 struct WriteStats {
-  std::uint64_t busy = 0;       // refused at once (busy): the queue was full
-  std::uint64_t coalesced = 0;  // identical to the one waiting before it: answered with it
+  std::uint64_t busy = 0;              // refused at once (busy): the queue was full
+  std::uint64_t coalesced = 0;         // identical to the one waiting before it: answered with it
   std::uint64_t refused_failsafe = 0;  // a run from a source that cannot clear a latched failsafe
 };
 

@@ -13,12 +13,12 @@
 #include <string>
 #include <vector>
 
-#include "config/config.h"
-#include "plugin/plugins.h"
-#include "device.h"
 #include "bus/bus.h"
+#include "config/config.h"
+#include "device.h"
 #include "gateway/outcome.h"
 #include "gateway/session.h"
+#include "plugin/plugins.h"
 
 namespace drivegate {
 

@@ -151,7 +151,8 @@ void Northbound::use(Gateway& gateway) {
       if (!token.expired()) changed(index, generation);
     });
   }
-  for (const auto& [name, amount] : config_.deadband) {
+  for (const auto& deadband : config_.deadband) {
+    const std::string& name = deadband.first;  // clang 14 cannot capture a structured binding
     const bool known = std::any_of(defs.begin(), defs.end(), [&](const auto& def) {
       return std::any_of(def.metrics.begin(), def.metrics.end(),
                          [&](const auto& m) { return m.name == name; });

@@ -33,7 +33,7 @@ struct StatusView {
   double started_unix = 0;  // process start, seconds since the epoch
   double now_unix = 0;
   const mqtt::NorthboundStatus* mqtt = nullptr;  // [mqtt] off: none
-  std::optional<http::HttpStats> http;           // the HTTP side serving these documents, if any
+  std::optional<http::HttpStats> http{};         // the HTTP side serving these documents, if any
   std::size_t http_clients = 0;
   // What the configuration file asks and only a restart applies; none: nothing.
   const std::vector<std::string>* restart_needed = nullptr;

@@ -14,11 +14,11 @@
 
 #include "app/backend_switch.h"
 #include "app/modbus_exception.h"
-#include "plugin/adapter_options.h"
 #include "fake_adapter.h"
 #include "gateway/gateway.h"
 #include "modbus/pdu.h"
 #include "mqtt/command_result.h"
+#include "plugin/adapter_options.h"
 
 namespace drivegate {
 namespace {

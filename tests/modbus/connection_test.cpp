@@ -468,8 +468,12 @@ TEST(Connection, IdleClientIsClosedAfterIdleTimeout) {
     ASSERT_TRUE(busy.send(request(1, 1, {0x03, 0x00, 0x00, 0x00, 0x01})));
     ASSERT_EQ(busy.reply().size(), 11u);
     h.advance(50ms);
-    if (i == 5) EXPECT_FALSE(idle.closed_by_peer(100ms)) << "250 ms after its request";
-    if (i == 6) EXPECT_TRUE(idle.closed_by_peer(2000ms)) << "300 ms after its request";
+    if (i == 5) {
+      EXPECT_FALSE(idle.closed_by_peer(100ms)) << "250 ms after its request";
+    }
+    if (i == 6) {
+      EXPECT_TRUE(idle.closed_by_peer(2000ms)) << "300 ms after its request";
+    }
   }
   EXPECT_FALSE(busy.closed_by_peer(10ms));
   EXPECT_EQ(h.stats().idle_timeouts, 1u);

@@ -21,10 +21,10 @@
 #include <utility>
 #include <vector>
 
+#include "bus/bus_engine.h"
 #include "config/config.h"
 #include "drivegate/adapter.h"
 #include "gateway/device.h"
-#include "bus/bus_engine.h"
 #include "gateway/outcome.h"
 #include "gateway/session.h"
 #include "sim_clock.h"
