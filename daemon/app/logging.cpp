@@ -60,7 +60,7 @@ class JournalSink final : public spdlog::sinks::base_sink<std::mutex>, public Co
   void flush_() override { std::fflush(stderr); }
 
  private:
-  const LogContext context_;
+  const LogContext context_{};
 };
 
 }  // namespace
