@@ -5,7 +5,6 @@
 #include <vector>
 
 #include "http_connection.h"
-#include "net/listen_host.h"
 
 namespace drivegate::http {
 
@@ -32,10 +31,8 @@ HttpServer::~HttpServer() {
 }
 
 std::error_code HttpServer::listen() {
-  const auto host = net::parse_listen_host(state_->options.host);
-  if (!host) return std::make_error_code(std::errc::invalid_argument);
   // Every interface here is every IPv4 one (the status page is for the plant's network).
-  if (const auto ec = state_->acceptor->bind(*host, state_->options.port,
+  if (const auto ec = state_->acceptor->bind(state_->options.host, state_->options.port,
                                              asio::socket_base::max_listen_connections,
                                              net::AnyAddress::ipv4)) {
     return ec;

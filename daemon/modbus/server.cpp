@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "connection.h"
-#include "net/listen_host.h"
 #include "server_state.h"
 
 namespace drivegate::modbus {
@@ -163,10 +162,8 @@ std::error_code Server::listen() {
     }
   }
   for (const auto& l : state_->listeners) {
-    const auto host = net::parse_listen_host(l->options.host);
-    const auto ec = host ? l->acceptor->bind(*host, l->options.port, state_->options.listen_backlog,
-                                             net::AnyAddress::dual_stack)
-                         : std::make_error_code(std::errc::invalid_argument);
+    const auto ec = l->acceptor->bind(l->options.host, l->options.port,
+                                      state_->options.listen_backlog, net::AnyAddress::dual_stack);
     if (ec) {
       log.error("modbus: cannot listen on {}: {}", l->options.name(), ec.message());
       for (const auto& other : state_->listeners) other->acceptor->close();

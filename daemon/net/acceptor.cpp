@@ -24,11 +24,13 @@ Acceptor::Acceptor(asio::io_context& io, Clock& clock, std::shared_ptr<spdlog::l
       acceptor_(io),
       retry_(io.get_executor(), clock) {}
 
-std::error_code Acceptor::bind(const ListenHost& host, std::uint16_t port, int backlog,
+std::error_code Acceptor::bind(std::string_view host_text, std::uint16_t port, int backlog,
                                AnyAddress any) {
-  const bool every = host.any;
+  const auto host = parse_listen_host(host_text);
+  if (!host) return std::make_error_code(std::errc::invalid_argument);
+  const bool every = host->any;
   tcp::endpoint endpoint(
-      every && any == AnyAddress::ipv4 ? asio::ip::address_v4::any() : host.address, port);
+      every && any == AnyAddress::ipv4 ? asio::ip::address_v4::any() : host->address, port);
   boost::system::error_code ec;
   acceptor_.open(endpoint.protocol(), ec);
   if (ec && every && any == AnyAddress::dual_stack) {  // no IPv6 here: every IPv4 interface

@@ -18,6 +18,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <system_error>
 
 #include "net/allow_list.h"
@@ -69,8 +70,9 @@ class Acceptor : public std::enable_shared_from_this<Acceptor> {
   Acceptor(const Acceptor&) = delete;
   Acceptor& operator=(const Acceptor&) = delete;
 
-  // Opens, binds and listens; on an error nothing is left open.
-  std::error_code bind(const ListenHost& host, std::uint16_t port, int backlog, AnyAddress any);
+  // Opens, binds and listens on `host` (net/listen_host.h: a host that does not parse is
+  // invalid_argument); on an error nothing is left open.
+  std::error_code bind(std::string_view host, std::uint16_t port, int backlog, AnyAddress any);
   // Accepts until close(). The callbacks are dropped at close().
   void start(Admit admit, Take take);
   // Stops accepting; clients already taken are the server's to close.

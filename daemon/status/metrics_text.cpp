@@ -226,11 +226,15 @@ void listener_metrics(Writer& w, const StatusView& view) {
     append_escaped(l, s.listener(i).host);
     fmt::format_to(std::back_inserter(l), ":{}\"", s.port(i));
   }
+  // Each listener's counters, composed once for every family below.
+  std::vector<modbus::ListenerStats> counted;
+  counted.reserve(s.listener_count());
+  for (std::size_t i = 0; i < s.listener_count(); ++i) counted.push_back(s.listener_stats(i));
   const auto family = [&](std::string_view name, std::string_view type, std::string_view help,
                           auto f) {
     w.family(name, type, help);
-    for (std::size_t i = 0; i < s.listener_count(); ++i) {
-      w.sample(name, labels[i], static_cast<double>(f(s.listener_stats(i))));
+    for (std::size_t i = 0; i < counted.size(); ++i) {
+      w.sample(name, labels[i], static_cast<double>(f(counted[i])));
     }
   };
   family("drivegate_modbus_connections", "gauge", "Modbus TCP clients connected",
@@ -277,7 +281,7 @@ void listener_metrics(Writer& w, const StatusView& view) {
   char extra[32];
   w.family("drivegate_modbus_requests_total", "counter", "requests, by function code");
   for (std::size_t i = 0; i < s.listener_count(); ++i) {
-    const auto r = s.listener_stats(i).by_function;
+    const auto& r = counted[i].by_function;
     for (std::size_t fc = 0; fc < r.size(); ++fc) {
       if (r[fc] == 0) continue;
       const auto end = fc == 0 ? fmt::format_to(extra, ",function=\"other\"")
@@ -288,7 +292,7 @@ void listener_metrics(Writer& w, const StatusView& view) {
   }
   w.family("drivegate_modbus_exceptions_total", "counter", "exception responses, by code");
   for (std::size_t i = 0; i < s.listener_count(); ++i) {
-    const auto e = s.listener_stats(i).exceptions;
+    const auto& e = counted[i].exceptions;
     for (std::size_t code = 1; code < e.size(); ++code) {
       if (e[code] == 0) continue;
       const auto end = fmt::format_to(extra, ",code=\"0x{:02X}\"", code);

@@ -35,7 +35,7 @@ class AcceptOnly {
         acceptor_(std::make_shared<Acceptor>(io, clock, std::move(log), "test", std::move(allow))) {
   }
   std::error_code listen() {
-    const auto ec = acceptor_->bind(*parse_listen_host("127.0.0.1"), 0, 16, AnyAddress::ipv4);
+    const auto ec = acceptor_->bind("127.0.0.1", 0, 16, AnyAddress::ipv4);
     if (ec) return ec;
     acceptor_->start([this](const boost::asio::ip::address&) { return admissions_.next; },
                      [this](tcp::socket s) {
