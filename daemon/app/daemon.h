@@ -53,8 +53,11 @@ class Daemon {
 
   DaemonOptions options_;
   std::shared_ptr<spdlog::logger> log_;
+  // The network servers' time (net/clock.h). Declared before io_, so it outlives it: destroying
+  // the io_context destroys the handlers it still holds, and with them acceptors and connections
+  // whose timers detach from the clock as they go.
+  net::SteadyClock clock_;
   boost::asio::io_context io_;
-  net::SteadyClock clock_;  // the network servers' time (net/clock.h)
   boost::asio::signal_set signals_;
   boost::asio::steady_timer status_timer_;
   boost::asio::steady_timer watchdog_timer_;

@@ -102,6 +102,7 @@ TEST(Server, TenThousandConnectDisconnectCyclesLeakNoDescriptor) {
 }
 
 TEST(Server, CloseDisconnectsEveryClientAndLeavesNothingRunning) {
+  drivegate::test::ManualClock clock;  // outlives io (support/server_thread.h)
   boost::asio::io_context io;
   FakeBackend backend;
   backend.mode = FakeBackend::Mode::deferred;
@@ -109,7 +110,6 @@ TEST(Server, CloseDisconnectsEveryClientAndLeavesNothingRunning) {
   ServerOptions o;
   o.listeners[0].host = "127.0.0.1";
   o.listeners[0].port = 0;
-  drivegate::test::ManualClock clock;
   auto server = std::make_unique<Server>(io, clock, backend, o, log);
   ASSERT_FALSE(server->listen());
   const auto port = server->port();

@@ -16,8 +16,8 @@ using namespace std::chrono_literals;
 using Outcome = std::optional<boost::system::error_code>;
 
 struct Rig {
+  test::ManualClock clock;  // outlives io (support/server_thread.h)
   boost::asio::io_context io;
-  test::ManualClock clock;
   // Runs what is ready, and what real time brings within `real`.
   void run(std::chrono::milliseconds real = 20ms) {
     io.restart();

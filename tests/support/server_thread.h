@@ -85,10 +85,12 @@ class ServerThread {
   Source& source() { return source_; }
 
  private:
+  // Before io_: handlers the io_context still holds when it is destroyed may own timers, which
+  // detach from their clock as they go (daemon/app/daemon.h says the same).
+  ManualClock clock_;
   boost::asio::io_context io_;
   boost::asio::executor_work_guard<boost::asio::io_context::executor_type> guard_{
       io_.get_executor()};
-  ManualClock clock_;
   Source source_;
   std::unique_ptr<Server> server_;
   std::error_code error_;
