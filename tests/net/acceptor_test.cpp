@@ -136,6 +136,7 @@ TEST(Acceptor, AfterAHoldOffTheNextClientWaitsItsTurn) {
 // 100 % CPU, starving everything else on it), and takes the client once descriptors are back and
 // the back-off has passed. Both servers (Modbus and HTTP) accept through it.
 TEST(Acceptor, OutOfDescriptorsItBacksOffAndRecovers) {
+  if (test::kDescriptorsNeededBySanitizer) GTEST_SKIP() << "the sanitizer needs descriptors too";
   Harness h;
   const std::uint16_t port = h.port();
   auto s = test::connect_out_of_descriptors([port] { return std::make_unique<TcpClient>(port); });
