@@ -132,7 +132,7 @@ int capture(std::span<const std::string> args) {
     if (show_progress) progress.tick(now);
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now);
     if (left.count() <= 0) {
-      if (show_progress) progress.finish(now);
+      if (show_progress) progress.finish(now, false);
       std::cerr << "drivegate capture: the daemon did not end the capture in time\n";
       break;
     }
@@ -205,12 +205,12 @@ int capture(std::span<const std::string> args) {
     progress.feed(body);
   }
   ::close(fd);
-  if (show_progress) progress.finish(std::chrono::steady_clock::now());
+  const bool complete = h && (!h->chunked || dechunk.done());
+  if (show_progress) progress.finish(std::chrono::steady_clock::now(), complete);
   if (!out) {
     std::cerr << "drivegate capture: write failed\n";
     return 1;
   }
-  const bool complete = h && (!h->chunked || dechunk.done());
   if (!file.empty()) {
     std::cerr << "drivegate capture: " << progress.counter().frames() << " frames, " << written
               << " bytes of pcap in " << file << (complete ? "" : " (cut short)") << "\n";

@@ -46,17 +46,17 @@ void CaptureProgress::tick(Clock::time_point now) {
   if (running_ && now - drawn_ >= std::chrono::seconds(1)) draw(now);
 }
 
-void CaptureProgress::finish(Clock::time_point now) {
+void CaptureProgress::finish(Clock::time_point now, bool ended) {
   if (!running_) return;
-  draw(now);
+  draw(now, ended);
   running_ = false;
   if (in_place_) out_ << "\n" << std::flush;
 }
 
-void CaptureProgress::draw(Clock::time_point now) {
+void CaptureProgress::draw(Clock::time_point now, bool ended) {
   // Whole seconds left, rounded up: "1 s left" until the very end.
   const auto elapsed = std::chrono::duration_cast<std::chrono::milliseconds>(now - started_);
-  const auto left_ms = std::max<std::int64_t>(0, (length_ - elapsed).count());
+  const auto left_ms = ended ? 0 : std::max<std::int64_t>(0, (length_ - elapsed).count());
   const auto left_s = (left_ms + 999) / 1000;
   const std::uint64_t frames = counter_.frames();
   out_ << (in_place_ ? "\r" : "") << "drivegate capture: bus " << bus_ << ": " << frames

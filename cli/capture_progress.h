@@ -40,12 +40,14 @@ class CaptureProgress {
   // Redraws the line if a second has passed since the last time.
   void tick(Clock::time_point now);
   // Draws the final counts and ends the line, so what follows starts on a line of its own.
-  void finish(Clock::time_point now);
+  // `ended`: the daemon ended the capture, so nothing is left whatever this side's clock says
+  // (the daemon's countdown began before the answer reached here).
+  void finish(Clock::time_point now, bool ended);
 
   [[nodiscard]] const PcapCounter& counter() const { return counter_; }
 
  private:
-  void draw(Clock::time_point now);
+  void draw(Clock::time_point now, bool ended = false);
 
   std::ostream& out_;
   bool in_place_;
