@@ -15,7 +15,7 @@
 #include "plugin/adapter_options.h"
 #include "port_address.h"
 #include "server_config.h"
-#include "toml_reader.h"
+#include "drivegate/toml_reader.h"
 
 namespace drivegate {
 namespace {

@@ -5,7 +5,7 @@
 #include <toml++/toml.h>
 
 #include "config.h"
-#include "toml_reader.h"
+#include "drivegate/toml_reader.h"
 
 namespace drivegate {
 

@@ -1,5 +1,6 @@
-// Reading the configuration's TOML tables: every error names the file, the line and the key, and
-// all errors are collected, so a user fixes a file in one pass. Used by config_loader.cpp only.
+// Reading TOML tables (the configuration, an adapter's own files such as the modbus adapter's
+// profiles): every error names the file, the line and the key, and all errors are collected, so a
+// user fixes a file in one pass. Header-only; a user links toml++ (tomlplusplus::tomlplusplus).
 #pragma once
 
 #include <toml++/toml.h>
@@ -100,6 +101,29 @@ class TableReader {
     return i->get();
   }
 
+  // A number, integer or floating, within [min, max].
+  std::optional<double> number(std::string_view key, double min, double max, bool required) {
+    const toml::node* n = node(key);
+    if (n == nullptr) {
+      if (required) missing(key);
+      return std::nullopt;
+    }
+    std::optional<double> v;
+    if (const auto* i = n->as_integer()) v = static_cast<double>(i->get());
+    if (const auto* f = n->as_floating_point()) v = f->get();
+    if (!v) {
+      diag_.error(n, qualified(key), "must be a number");
+      return std::nullopt;
+    }
+    if (!(*v >= min && *v <= max)) {
+      diag_.error(n, qualified(key),
+                  "must be in " + number_text(min) + ".." + number_text(max) + " (got " +
+                      number_text(*v) + ")");
+      return std::nullopt;
+    }
+    return v;
+  }
+
   std::optional<bool> boolean(std::string_view key) {
     const toml::node* n = node(key);
     if (n == nullptr) return std::nullopt;
@@ -125,6 +149,16 @@ class TableReader {
     for (const auto& k : known_) out += (out.empty() ? "" : ", ") + k;
     return out;
   }
+  static std::string number_text(double v) {
+    std::string s = std::to_string(v);
+    while (s.find('.') != std::string::npos && (s.back() == '0' || s.back() == '.')) {
+      const bool dot = s.back() == '.';
+      s.pop_back();
+      if (dot) break;
+    }
+    return s;
+  }
+
   const toml::table& table_;
   std::string prefix_;
   Diagnostics& diag_;
