@@ -1,5 +1,7 @@
 #include "codec.h"
 
+#include "drivegate/crc.h"
+
 namespace drivegate::ed3100 {
 namespace {
 
@@ -14,13 +16,6 @@ constexpr std::size_t kExceptionSize = 5;
 // 06 echo and 10 reply: addr fn reg(2) value-or-count(2) CRC(2) (document, "Response frame").
 constexpr std::size_t kWriteReplySize = 8;
 
-bool crc_ok(ByteView frame) {
-  if (frame.size() < kCrcSize + 1) return false;
-  const std::size_t n = frame.size() - kCrcSize;
-  const std::uint16_t want = crc16(frame.first(n));
-  return frame[n] == lo8(want) && frame[n + 1] == hi8(want);
-}
-
 std::vector<std::uint16_t> words_at(ByteView rx, std::size_t offset, std::size_t count) {
   std::vector<std::uint16_t> out;
   out.reserve(count);
@@ -32,30 +27,11 @@ std::vector<std::uint16_t> words_at(ByteView rx, std::size_t offset, std::size_t
 
 }  // namespace
 
-std::uint16_t crc16(ByteView data) {
-  // Document, "RTU mode check code", steps 1-6 and its C example.
-  std::uint16_t reg = 0xFFFF;
-  for (const std::uint8_t b : data) {
-    reg ^= b;
-    for (int bit = 0; bit < 8; ++bit) {
-      reg = (reg & 0x0001) != 0 ? static_cast<std::uint16_t>((reg >> 1) ^ 0xA001)
-                                : static_cast<std::uint16_t>(reg >> 1);
-    }
-  }
-  return reg;
-}
-
-void append_crc(Bytes& frame) {
-  const std::uint16_t c = crc16(frame);
-  frame.push_back(lo8(c));  // low byte first (document, "CRC CHK Low")
-  frame.push_back(hi8(c));
-}
-
 Bytes encode_read(std::uint8_t address, std::uint16_t reg, std::uint16_t count) {
   Bytes out{address, kFnRead};
   put_be16(out, reg);
   put_be16(out, count);
-  append_crc(out);
+  append_crc16_modbus(out);
   return out;
 }
 
@@ -63,7 +39,7 @@ Bytes encode_write_single(std::uint8_t address, std::uint16_t reg, std::uint16_t
   Bytes out{address, kFnWriteSingle};
   put_be16(out, reg);
   put_be16(out, value);
-  append_crc(out);
+  append_crc16_modbus(out);
   return out;
 }
 
@@ -75,7 +51,7 @@ Bytes encode_write_multiple(std::uint8_t address, std::uint16_t reg,
   put_be16(out, static_cast<std::uint16_t>(values.size()));
   out.push_back(static_cast<std::uint8_t>(2 * values.size()));
   for (const std::uint16_t v : values) put_be16(out, v);
-  append_crc(out);
+  append_crc16_modbus(out);
   return out;
 }
 
@@ -88,7 +64,7 @@ Bytes encode_read_reply(std::uint8_t address, std::uint16_t reg,
     out.push_back(static_cast<std::uint8_t>(2 * words.size()));
   }
   for (const std::uint16_t w : words) put_be16(out, w);
-  append_crc(out);
+  append_crc16_modbus(out);
   return out;
 }
 
@@ -97,13 +73,13 @@ Bytes encode_write_multiple_reply(std::uint8_t address, std::uint16_t reg, std::
   Bytes out{address, kFnWriteMultiple};
   put_be16(out, reg);
   put_be16(out, count);
-  append_crc(out);
+  append_crc16_modbus(out);
   return out;
 }
 
 Bytes encode_exception(std::uint8_t address, std::uint8_t function, std::uint8_t code) {
   Bytes out{address, static_cast<std::uint8_t>(function | kExceptionBit), code};
-  append_crc(out);
+  append_crc16_modbus(out);
   return out;
 }
 
@@ -124,7 +100,7 @@ Decoded<Request> decode_request(ByteView rx) {
   }
   if (rx.size() < size) return {};
   const auto frame = rx.first(size);
-  if (!crc_ok(frame)) return decoded_bad<Request>(size, FrameError::bad_checksum);
+  if (!crc16_modbus_holds(frame)) return decoded_bad<Request>(size, FrameError::bad_checksum);
   Request r;
   r.address = rx[0];
   r.function = rx[1];
@@ -148,7 +124,7 @@ Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
   if (rx.size() < 2) return {};
   if (rx[1] == (shape.function | kExceptionBit)) {
     if (rx.size() < kExceptionSize) return {};
-    if (!crc_ok(rx.first(kExceptionSize))) {
+    if (!crc16_modbus_holds(rx.first(kExceptionSize))) {
       return decoded_bad<Reply>(kExceptionSize, FrameError::bad_checksum);
     }
     Reply r;
@@ -162,7 +138,7 @@ Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
 
   if (shape.function != kFnRead) {
     if (rx.size() < kWriteReplySize) return {};
-    if (!crc_ok(rx.first(kWriteReplySize))) {
+    if (!crc16_modbus_holds(rx.first(kWriteReplySize))) {
       return decoded_bad<Reply>(kWriteReplySize, FrameError::bad_checksum);
     }
     Reply r;
@@ -181,7 +157,7 @@ Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
   const std::size_t document = 4 + data + kCrcSize;
   if (rx.size() < 3) return {};
   const bool standard_possible = rx[2] == data;
-  if (standard_possible && rx.size() >= standard && crc_ok(rx.first(standard))) {
+  if (standard_possible && rx.size() >= standard && crc16_modbus_holds(rx.first(standard))) {
     Reply r;
     r.address = rx[0];
     r.function = kFnRead;
@@ -190,7 +166,7 @@ Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
     return decoded_frame(standard, std::move(r));
   }
   if (rx.size() < document) return {};
-  if (!crc_ok(rx.first(document))) return decoded_bad<Reply>(document, FrameError::bad_checksum);
+  if (!crc16_modbus_holds(rx.first(document))) return decoded_bad<Reply>(document, FrameError::bad_checksum);
   Reply r;
   r.address = rx[0];
   r.function = kFnRead;

@@ -29,9 +29,8 @@ inline constexpr std::size_t kMaxWriteWords = 2;
 // Address 0 is the broadcast; 1..31 are drives (document, "Address").
 inline constexpr std::uint8_t kBroadcast = 0x00;
 
-// CRC-16, init FFFF, polynomial A001, sent low byte first (document, "RTU mode check code").
-std::uint16_t crc16(ByteView data);
-void append_crc(Bytes& frame);
+// The CRC is Modbus RTU's: init FFFF, polynomial A001, sent low byte first (document, "RTU mode
+// check code"; drivegate/crc.h).
 
 // Master requests.
 Bytes encode_read(std::uint8_t address, std::uint16_t reg, std::uint16_t count);

@@ -13,6 +13,7 @@
 #include <mutex>
 #include <random>
 
+#include "drivegate/crc.h"
 #include "e2e.h"
 
 namespace drivegate::test {
@@ -50,19 +51,8 @@ bool online(Plc& plc) {
   return (snapshot(plc).status & reg::online) != 0;
 }
 
-// CRC-16/MODBUS (init FFFF, reflected polynomial A001), low byte first on the wire.
-std::uint16_t crc16(const std::uint8_t* p, std::size_t n) {
-  std::uint16_t crc = 0xFFFF;
-  for (std::size_t i = 0; i < n; ++i) {
-    crc ^= p[i];
-    for (int b = 0; b < 8; ++b) crc = (crc & 1) ? (crc >> 1) ^ 0xA001 : crc >> 1;
-  }
-  return crc;
-}
 bool whole_rtu_frame(const std::vector<std::uint8_t>& f) {
-  if (f.size() < 5) return false;
-  const std::uint16_t crc = crc16(f.data(), f.size() - 2);
-  return f[f.size() - 2] == (crc & 0xFF) && f[f.size() - 1] == (crc >> 8);
+  return f.size() >= 5 && crc16_modbus_holds(f);
 }
 
 int open_raw(const std::string& path) {
@@ -147,9 +137,8 @@ class LineTap {
         } else {
           std::vector<std::uint8_t> other = reply;
           other[0] = static_cast<std::uint8_t>(other[0] + 1);
-          const std::uint16_t crc = crc16(other.data(), other.size() - 2);
-          other[other.size() - 2] = static_cast<std::uint8_t>(crc & 0xFF);
-          other[other.size() - 1] = static_cast<std::uint8_t>(crc >> 8);
+          other.resize(other.size() - 2);
+          append_crc16_modbus(other);
           out = other;
           out.insert(out.end(), reply.begin(), reply.end());
         }

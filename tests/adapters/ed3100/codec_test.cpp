@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "drivegate/crc.h"
+
 #include "feed.h"
 
 namespace drivegate::ed3100 {
@@ -86,7 +88,7 @@ TEST(Ed3100Crc, MatchesEveryDocumentFrame) {
        {&kReadParam, &kReadParamReply, &kWriteParam, &kWriteTwoParams, &kWriteTwoParamsReply,
         &kForward, &kForwardOnce, &kReverse, &kRunReply, &kStop, &kReadMonitor, &kMonitorReply,
         &kReadFault, &kFaultReply, &kStandardReply}) {
-    const std::uint16_t crc = crc16(std::span(*f).first(f->size() - 2));
+    const std::uint16_t crc = crc16_modbus(std::span(*f).first(f->size() - 2));
     EXPECT_EQ(crc & 0xFF, (*f)[f->size() - 2]);  // low byte first
     EXPECT_EQ(crc >> 8, (*f)[f->size() - 1]);
   }
@@ -162,7 +164,7 @@ TEST(Ed3100DecodeRequest, BadFrames) {
 
   // Byte count and quantity disagree (CRC recomputed so only the length is wrong).
   Buffer mismatch = {0x1F, 0x10, 0x00, 0x06, 0x00, 0x01, 0x04, 0x13, 0x88, 0x00, 0x01};
-  append_crc(mismatch);
+  append_crc16_modbus(mismatch);
   d = decode_request(mismatch);
   EXPECT_EQ(d.error, FrameError::bad_length);
 

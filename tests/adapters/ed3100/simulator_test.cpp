@@ -2,6 +2,8 @@
 // its operator commands. Made by the plugin's own factory, as `drivegate sim` makes it.
 #include <gtest/gtest.h>
 
+#include "drivegate/crc.h"
+
 #include <memory>
 
 #include "adapter_factories.h"
@@ -126,7 +128,7 @@ TEST_F(SimTest, Exceptions) {
   EXPECT_EQ(send(encode_read(0x1F, 0x0D29, 0)), encode_exception(0x1F, 0x03, 0x02));
   // Function 10 writes at most two registers (document, "10H").
   Bytes three = {0x1F, 0x10, 0x00, 0x06, 0x00, 0x03, 0x06, 0, 1, 0, 2, 0, 3};
-  append_crc(three);
+  append_crc16_modbus(three);
   EXPECT_EQ(send(three), encode_exception(0x1F, 0x10, 0x03));
   EXPECT_EQ(send(encode_write_single(0x1F, 0x2000, 0x0005)), encode_exception(0x1F, 0x06, 0x03));
   EXPECT_EQ(send(encode_write_single(0x1F, 0x0E01, 0x0005)), encode_exception(0x1F, 0x06, 0x02));
