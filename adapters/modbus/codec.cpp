@@ -1,0 +1,290 @@
+#include "codec.h"
+
+#include <algorithm>
+
+#include "drivegate/crc.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+// RTU: address(1) + PDU + CRC(2); at most 256 bytes (Serial Line 2.5.1.1).
+constexpr std::size_t kRtuOverhead = 3;
+constexpr std::size_t kRtuMaxFrame = 256;
+// The least RTU frame: address, function, CRC (an exception adds its code: 5).
+constexpr std::size_t kRtuMinFrame = 4;
+// ASCII: ':' + 2 x (address + PDU + LRC) + CR LF; at most 513 characters (Serial Line 2.5.2.1).
+constexpr std::size_t kAsciiMaxFrame = 513;
+constexpr std::uint8_t kAsciiStart = ':';
+constexpr std::uint8_t kCr = '\r';
+constexpr std::uint8_t kLf = '\n';
+
+// How the length of an RTU frame is found from its first bytes.
+enum class Length : std::uint8_t {
+  fixed,        // `size` bytes in all
+  count_at_2,   // a byte count at offset 2, then that many bytes: `size` + count
+  count_at_6,   // a byte count at offset 6 (0x0F / 0x10 requests): `size` + count
+  count_at_10,  // a byte count at offset 10 (0x17 request): `size` + count
+  count16_at_2, // a 2-byte count at offset 2 (0x18 reply): `size` + count
+  device_id,    // 0x2B / 0x0E reply: objects follow (Application Protocol 6.21)
+  by_crc,       // unknown: where the CRC first holds
+};
+struct Rule {
+  Length how = Length::by_crc;
+  std::size_t size = 0;
+};
+
+// Reply lengths, address and CRC included (Application Protocol 6.x, the "Response" tables).
+Rule reply_rule(std::uint8_t function) {
+  if ((function & kExceptionBit) != 0) return {Length::fixed, 5};  // 7: function | 0x80, code
+  switch (function) {
+    case fc::read_coils:
+    case fc::read_discrete_inputs:
+    case fc::read_holding_registers:
+    case fc::read_input_registers:
+    case fc::get_comm_event_log:
+    case fc::report_server_id:
+    case fc::read_file_record:
+    case fc::write_file_record:
+    case fc::read_write_registers:
+      return {Length::count_at_2, 5};  // function, byte count, data
+    case fc::write_single_coil:
+    case fc::write_single_register:
+    case fc::get_comm_event_counter:
+    case fc::write_multiple_coils:
+    case fc::write_multiple_registers:
+      return {Length::fixed, 8};  // function, two 2-byte fields
+    case fc::read_exception_status:
+      return {Length::fixed, 5};  // function, output data
+    case fc::mask_write_register:
+      return {Length::fixed, 10};  // function, address, AND mask, OR mask
+    case fc::read_fifo_queue:
+      return {Length::count16_at_2, 6};  // function, 2-byte byte count, data
+    case fc::encapsulated_interface:
+      return {Length::device_id, 0};
+    default:
+      // 0x08 among them: its echo's length depends on the sub-function (6.8).
+      return {Length::by_crc, 0};
+  }
+}
+
+// Request lengths, address and CRC included (Application Protocol 6.x, the "Request" tables).
+Rule request_rule(std::uint8_t function) {
+  switch (function) {
+    case fc::read_coils:
+    case fc::read_discrete_inputs:
+    case fc::read_holding_registers:
+    case fc::read_input_registers:
+    case fc::write_single_coil:
+    case fc::write_single_register:
+      return {Length::fixed, 8};  // function, address, quantity or value
+    case fc::read_exception_status:
+    case fc::get_comm_event_counter:
+    case fc::get_comm_event_log:
+    case fc::report_server_id:
+      return {Length::fixed, 4};  // the function alone
+    case fc::write_multiple_coils:
+    case fc::write_multiple_registers:
+      return {Length::count_at_6, 9};  // function, address, quantity, byte count, data
+    case fc::read_file_record:
+    case fc::write_file_record:
+      return {Length::count_at_2, 5};
+    case fc::mask_write_register:
+      return {Length::fixed, 10};
+    case fc::read_write_registers:
+      return {Length::count_at_10, 13};  // function, 4 x 2-byte fields, byte count, data
+    case fc::read_fifo_queue:
+      return {Length::fixed, 6};  // function, FIFO pointer address
+    case fc::encapsulated_interface:
+      return {Length::fixed, 7};  // function, MEI type, read device id code, object id
+    default:
+      return {Length::by_crc, 0};
+  }
+}
+
+Decoded<Adu> rtu_frame(ByteView rx, std::size_t size) {
+  const ByteView frame = rx.first(size);
+  if (!crc16_modbus_holds(frame)) return decoded_bad<Adu>(size, FrameError::bad_checksum);
+  Adu adu;
+  adu.address = frame[0];
+  adu.pdu.assign(frame.begin() + 1, frame.end() - 2);
+  return decoded_frame(size, std::move(adu));
+}
+
+// The whole length of the 0x2B / 0x0E reply at the start of `rx`, or nothing while it is not all
+// in (Application Protocol 6.21: function, MEI type, read device id code, conformity level, more
+// follows, next object id, number of objects, then id, length, value for each object).
+std::optional<std::size_t> device_id_size(ByteView rx, bool& other_mei) {
+  constexpr std::uint8_t kReadDeviceId = 0x0E;
+  constexpr std::size_t kObjectsAt = 8;  // address + the 7 bytes before the first object
+  other_mei = false;
+  if (rx.size() < 3) return std::nullopt;
+  if (rx[2] != kReadDeviceId) {
+    other_mei = true;
+    return std::nullopt;
+  }
+  if (rx.size() < kObjectsAt) return std::nullopt;
+  const std::size_t objects = rx[7];
+  std::size_t at = kObjectsAt;
+  for (std::size_t i = 0; i < objects; ++i) {
+    if (rx.size() < at + 2) return std::nullopt;
+    at += 2 + rx[at + 1];
+    if (at + 2 > kRtuMaxFrame) return at + 2;  // too long: the caller says so
+  }
+  return at + 2;
+}
+
+// A frame of a function whose length the codec does not know: it ends where the bytes so far
+// first carry a good CRC. A buffer of a whole frame's length without one is a bad frame.
+Decoded<Adu> decode_rtu_by_crc(ByteView rx) {
+  const std::size_t most = std::min(rx.size(), kRtuMaxFrame);
+  for (std::size_t n = kRtuMinFrame; n <= most; ++n) {
+    if (crc16_modbus_holds(rx.first(n))) return rtu_frame(rx, n);
+  }
+  if (rx.size() >= kRtuMaxFrame) return decoded_bad<Adu>(kRtuMaxFrame, FrameError::bad_checksum);
+  return {};
+}
+
+Decoded<Adu> decode_rtu(ByteView rx, bool reply) {
+  if (rx.empty()) return {};
+  if (rx[0] > kMaxSlave) return decoded_bad<Adu>(1, FrameError::bad_header);
+  if (rx.size() < 2) return {};
+  const Rule rule = reply ? reply_rule(rx[1]) : request_rule(rx[1]);
+  std::size_t size = 0;
+  switch (rule.how) {
+    case Length::fixed:
+      size = rule.size;
+      break;
+    case Length::count_at_2:
+    case Length::count_at_6:
+    case Length::count_at_10: {
+      const std::size_t at = rule.how == Length::count_at_2 ? 2
+                             : rule.how == Length::count_at_6 ? 6
+                                                             : 10;
+      if (rx.size() <= at) return {};
+      size = rule.size + rx[at];
+      break;
+    }
+    case Length::count16_at_2:
+      if (rx.size() < 4) return {};
+      size = rule.size + be16(rx[2], rx[3]);
+      break;
+    case Length::device_id: {
+      bool other_mei = false;
+      const auto s = device_id_size(rx, other_mei);
+      if (other_mei) return decode_rtu_by_crc(rx);
+      if (!s) return {};
+      size = *s;
+      break;
+    }
+    case Length::by_crc:
+      return decode_rtu_by_crc(rx);
+  }
+  if (size > kRtuMaxFrame) return decoded_bad<Adu>(1, FrameError::bad_length);
+  if (rx.size() < size) return {};
+  return rtu_frame(rx, size);
+}
+
+int hex_value(std::uint8_t c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  return -1;
+}
+
+Decoded<Adu> decode_ascii(ByteView rx) {
+  if (rx.empty()) return {};
+  if (rx[0] != kAsciiStart) {
+    // Noise up to the next ':' (a frame may start there).
+    const auto next = std::find(rx.begin() + 1, rx.end(), kAsciiStart);
+    return decoded_bad<Adu>(static_cast<std::size_t>(next - rx.begin()), FrameError::bad_header);
+  }
+  const std::size_t most = std::min(rx.size(), kAsciiMaxFrame);
+  std::size_t end = 0;  // index of the LF
+  for (std::size_t i = 1; i < most; ++i) {
+    if (rx[i] == kAsciiStart) {
+      // A new ':' before CR LF: the frame so far was cut short (Serial Line 2.5.2.1: a ':'
+      // always starts a new message).
+      return decoded_bad<Adu>(i, FrameError::bad_length);
+    }
+    if (rx[i] == kLf) {
+      end = i;
+      break;
+    }
+  }
+  if (end == 0) {
+    if (rx.size() >= kAsciiMaxFrame) return decoded_bad<Adu>(kAsciiMaxFrame, FrameError::bad_length);
+    return {};
+  }
+  const std::size_t size = end + 1;
+  if (rx[end - 1] != kCr) return decoded_bad<Adu>(size, FrameError::bad_field);
+  const ByteView hex = rx.subspan(1, end - 2);
+  // Address, function and LRC at least, two characters each.
+  if (hex.size() % 2 != 0 || hex.size() < 6) return decoded_bad<Adu>(size, FrameError::bad_length);
+  Bytes bytes;
+  bytes.reserve(hex.size() / 2);
+  for (std::size_t i = 0; i < hex.size(); i += 2) {
+    const int hi = hex_value(hex[i]);
+    const int lo = hex_value(hex[i + 1]);
+    if (hi < 0 || lo < 0) return decoded_bad<Adu>(size, FrameError::bad_field);
+    bytes.push_back(static_cast<std::uint8_t>(hi * 16 + lo));
+  }
+  const ByteView body = ByteView(bytes).first(bytes.size() - 1);
+  if (lrc(body) != bytes.back()) return decoded_bad<Adu>(size, FrameError::bad_checksum);
+  if (body[0] > kMaxSlave) return decoded_bad<Adu>(size, FrameError::bad_header);
+  Adu adu;
+  adu.address = body[0];
+  adu.pdu.assign(body.begin() + 1, body.end());
+  return decoded_frame(size, std::move(adu));
+}
+
+}  // namespace
+
+std::uint8_t lrc(ByteView data) {
+  // Serial Line 6.2.1: add the bytes, discarding carries, then take the two's complement.
+  std::uint8_t sum = 0;
+  for (const std::uint8_t b : data) sum = static_cast<std::uint8_t>(sum + b);
+  return static_cast<std::uint8_t>(-sum);
+}
+
+Bytes encode(Framing framing, std::uint8_t address, ByteView pdu) {
+  if (pdu.empty() || pdu.size() > kMaxPdu) return {};
+  Bytes body;
+  body.reserve(pdu.size() + kRtuOverhead);
+  body.push_back(address);
+  body.insert(body.end(), pdu.begin(), pdu.end());
+  if (framing == Framing::rtu) {
+    append_crc16_modbus(body);  // low byte first (Serial Line 6.2.2)
+    return body;
+  }
+  body.push_back(lrc(body));
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  Bytes out;
+  out.reserve(2 * body.size() + 3);
+  out.push_back(kAsciiStart);
+  for (const std::uint8_t b : body) {
+    out.push_back(static_cast<std::uint8_t>(kHex[b >> 4]));
+    out.push_back(static_cast<std::uint8_t>(kHex[b & 0x0F]));
+  }
+  out.push_back(kCr);
+  out.push_back(kLf);
+  return out;
+}
+
+Decoded<Adu> decode_reply(Framing framing, ByteView rx) {
+  return framing == Framing::rtu ? decode_rtu(rx, true) : decode_ascii(rx);
+}
+
+Decoded<Adu> decode_request(Framing framing, ByteView rx) {
+  return framing == Framing::rtu ? decode_rtu(rx, false) : decode_ascii(rx);
+}
+
+Bytes exception_pdu(std::uint8_t function, std::uint8_t code) {
+  return {static_cast<std::uint8_t>(function | kExceptionBit), code};
+}
+
+std::optional<std::uint8_t> exception_code(ByteView pdu) {
+  if (pdu.size() != 2 || (pdu[0] & kExceptionBit) == 0) return std::nullopt;
+  return pdu[1];
+}
+
+}  // namespace drivegate::modbus_device

@@ -1,0 +1,473 @@
+#include "profile.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "drivegate/toml_reader.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+template <std::size_t N>
+std::string names_list(const std::array<std::string_view, N>& names) {
+  std::string out;
+  for (const auto n : names) out += (out.empty() ? "" : ", ") + std::string(n);
+  return out;
+}
+
+// One of `names` at `key`; its index.
+template <std::size_t N>
+std::optional<std::size_t> choice(TableReader& r, Diagnostics& diag, std::string_view key,
+                                  const std::array<std::string_view, N>& names, bool required) {
+  const auto text = r.string(key, required);
+  if (!text) return std::nullopt;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (names[i] == *text) return i;
+  }
+  diag.error(r.node(key), r.qualified(key),
+             "must be one of " + names_list(names) + " (got '" + *text + "')");
+  return std::nullopt;
+}
+
+// Point names are register-map names: snake_case, as every adapter's points.
+bool valid_point_name(std::string_view name) {
+  if (name.empty() || name.size() > 48 || !(name[0] >= 'a' && name[0] <= 'z')) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+  });
+}
+
+std::optional<Fault> fault_named(std::string_view name) {
+  for (std::size_t i = 0; i < kFaultNames.size(); ++i) {
+    if (kFaultNames[i] == name) return static_cast<Fault>(i);
+  }
+  return std::nullopt;
+}
+
+std::string fault_list() {
+  std::string out;
+  for (const auto n : kFaultNames) out += (out.empty() ? "" : ", ") + std::string(n);
+  return out;
+}
+
+class Parser {
+ public:
+  explicit Parser(const std::string& source) : diag_(source) {}
+
+  std::variant<Profile, std::vector<std::string>> run(std::string_view text,
+                                                      const std::string& source) {
+    toml::table root;
+    try {
+      root = toml::parse(text, source);
+    } catch (const toml::parse_error& e) {
+      diag_.error_at(static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+      return std::move(diag_.errors);
+    }
+    {
+      TableReader top(root, "", diag_);
+      top.expect({"profile", "line", "modbus", "point", "common"});
+      read_identity(top);
+      read_line(top);
+      read_modbus(top);
+      read_points(root, top);
+      check_overlaps();
+      read_common(top);
+    }
+    if (!diag_.errors.empty()) return std::move(diag_.errors);
+    return std::move(profile_);
+  }
+
+ private:
+  const toml::table* table_at(TableReader& r, std::string_view key, bool required) {
+    const toml::node* n = r.node(key);
+    if (n == nullptr) {
+      if (required) r.missing(key);
+      return nullptr;
+    }
+    const auto* t = n->as_table();
+    if (t == nullptr) diag_.error(n, key, "must be a table");
+    return t;
+  }
+
+  void read_identity(TableReader& top) {
+    const toml::table* t = table_at(top, "profile", true);
+    if (t == nullptr) return;
+    TableReader r(*t, "profile", diag_);
+    r.expect({"name", "description", "source"});
+    if (auto name = r.string("name", true)) {
+      // Found by name in the profile folders: a file name's safe set ("example-vfd").
+      const bool ok = !name->empty() && name->size() <= 64 &&
+                      std::all_of(name->begin(), name->end(), [](char c) {
+                        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' ||
+                               c == '_';
+                      });
+      if (!ok) {
+        diag_.error(r.node("name"), "profile.name",
+                    "must be 1..64 characters of a-z, 0-9, '-' and '_' (got '" + *name + "')");
+      }
+      profile_.name = *name;
+    }
+    profile_.description = r.string("description", false).value_or("");
+    // Where every address comes from: a profile without it cannot be checked against anything.
+    profile_.source = r.string("source", true).value_or("");
+  }
+
+  void read_line(TableReader& top) {
+    const toml::table* t = table_at(top, "line", false);
+    if (t == nullptr) return;
+    TableReader r(*t, "line", diag_);
+    r.expect({"baud", "parity", "stop_bits", "framing"});
+    LineSpec& line = profile_.line;
+    if (auto b = r.integer("baud", 300, 921600, false)) line.baud = static_cast<std::uint32_t>(*b);
+    if (auto p = choice(r, diag_, "parity", kParityNames, false)) line.parity = static_cast<Parity>(*p);
+    if (auto s = r.integer("stop_bits", 1, 2, false)) line.stop_bits = static_cast<std::uint8_t>(*s);
+    if (auto f = choice(r, diag_, "framing", kFramingNames, false)) {
+      line.framing = static_cast<Framing>(*f);
+    }
+  }
+
+  void read_modbus(TableReader& top) {
+    const toml::table* t = table_at(top, "modbus", false);
+    if (t == nullptr) return;
+    TableReader r(*t, "modbus", diag_);
+    r.expect({"max_registers", "max_bits", "max_gap", "write", "timeout_ms"});
+    ModbusSpec& m = profile_.modbus;
+    // Application Protocol 6.3 / 6.4: 1..125 registers per read; 6.1 / 6.2: 1..2000 bits.
+    if (auto v = r.integer("max_registers", 1, 125, false)) {
+      m.max_registers = static_cast<std::uint16_t>(*v);
+    }
+    if (auto v = r.integer("max_bits", 1, 2000, false)) m.max_bits = static_cast<std::uint16_t>(*v);
+    if (auto v = r.integer("max_gap", 0, 124, false)) m.max_gap = static_cast<std::uint16_t>(*v);
+    if (auto w = choice(r, diag_, "write", kWriteFunctionNames, false)) {
+      m.write = static_cast<WriteFunction>(*w);
+    }
+    if (auto v = r.integer("timeout_ms", 10, 10000, false)) {
+      m.timeout_ms = static_cast<std::uint32_t>(*v);
+    }
+  }
+
+  void read_points(const toml::table& root, TableReader& top) {
+    top.node("point");
+    const toml::array* points = array_of_tables(root, "point", diag_);
+    if (points == nullptr) {
+      diag_.error_at(0, "point", "a profile needs at least one [[point]]");
+      return;
+    }
+    for (const toml::node& n : *points) read_point(*n.as_table());
+  }
+
+  void read_point(const toml::table& t) {
+    TableReader r(t, "point", diag_);
+    r.expect({"name", "table", "address", "type", "word_order", "scale", "unit", "description",
+              "min", "max", "access", "poll_ms"});
+    ProfilePoint p;
+    p.line = static_cast<std::uint32_t>(t.source().begin.line);
+    bool ok = true;
+    if (auto name = r.string("name", true)) {
+      p.name = *name;
+      if (!valid_point_name(p.name)) {
+        diag_.error(r.node("name"), "point.name",
+                    "must be snake_case: a-z first, then a-z, 0-9, '_' (got '" + p.name + "')");
+        ok = false;
+      } else if (const auto other = profile_.find(p.name)) {
+        diag_.error(r.node("name"), "point.name",
+                    "'" + p.name + "' is defined twice (first on line " +
+                        std::to_string(profile_.points[*other].line) + ")");
+        ok = false;
+      }
+    } else {
+      ok = false;
+    }
+    const auto table = choice(r, diag_, "table", kProfileTableNames, true);
+    if (table) p.table = static_cast<Table>(*table);
+    const auto address = r.integer("address", 0, 65535, true);
+    if (address) p.address = static_cast<std::uint16_t>(*address);
+    const auto type = choice(r, diag_, "type", kValueTypeNames, true);
+    if (type) p.type = static_cast<ValueType>(*type);
+    ok = ok && table && address && type;
+    if (ok) ok = check_shape(r, p);
+    if (auto w = choice(r, diag_, "word_order", kWordOrderNames, false)) {
+      p.word_order = static_cast<WordOrder>(*w);
+      if (ok && p.width() != 2) {
+        diag_.error(r.node("word_order"), "point.word_order",
+                    "applies to the two-register types u32, s32 and f32 only");
+        ok = false;
+      }
+    }
+    if (auto s = r.number("scale", -1e9, 1e9, false)) {
+      p.scale = *s;
+      if (*s == 0.0) {
+        diag_.error(r.node("scale"), "point.scale", "must not be 0");
+        ok = false;
+      }
+    }
+    p.unit = r.string("unit", false).value_or("");
+    p.description = r.string("description", false).value_or("");
+    ok = read_access_and_limits(r, p) && ok;
+    if (auto v = r.integer("poll_ms", 10, 3600000, false)) p.poll_ms = static_cast<std::uint32_t>(*v);
+    if (ok) profile_.points.push_back(std::move(p));
+    else had_bad_point_ = true;
+  }
+
+  // The type fits the table and the point fits the address space and the device's reads.
+  bool check_shape(TableReader& r, const ProfilePoint& p) {
+    const bool bit_table = p.table == Table::coil || p.table == Table::discrete;
+    if (bit_table != (p.type == ValueType::bit)) {
+      diag_.error(r.node("type"), "point.type",
+                  bit_table ? "a coil or discrete input is of type bit"
+                            : "type bit is for coils and discrete inputs; registers are u16, s16, "
+                              "u32, s32 or f32");
+      return false;
+    }
+    if (std::uint32_t{p.address} + p.width() - 1 > 65535) {
+      diag_.error(r.node("address"), "point.address",
+                  "a two-register point at 65535 runs past the last register");
+      return false;
+    }
+    if (!bit_table && p.width() > profile_.modbus.max_registers) {
+      diag_.error(r.node("type"), "point.type",
+                  "takes " + std::to_string(p.width()) + " registers, more than the device reads "
+                  "at once ([modbus] max_registers = " +
+                      std::to_string(profile_.modbus.max_registers) + ")");
+      return false;
+    }
+    return true;
+  }
+
+  bool read_access_and_limits(TableReader& r, ProfilePoint& p) {
+    bool ok = true;
+    p.access = p.writable() ? PointAccess::maintain : PointAccess::read;
+    if (auto a = choice(r, diag_, "access", kPointAccessNames, false)) {
+      p.access = static_cast<PointAccess>(*a);
+      if (!p.writable() && p.access != PointAccess::read) {
+        diag_.error(r.node("access"), "point.access",
+                    "an input register or discrete input cannot be written: access is read");
+        ok = false;
+      }
+    }
+    p.min = r.number("min", -1e12, 1e12, false);
+    p.max = r.number("max", -1e12, 1e12, false);
+    if ((p.min || p.max) && !p.writable()) {
+      diag_.error(r.node(p.min ? "min" : "max"), p.min ? "point.min" : "point.max",
+                  "limits a write: only holding registers and coils are written");
+      ok = false;
+    }
+    if (p.min && p.max && *p.min > *p.max) {
+      diag_.error(r.node("min"), "point.min", "is above point.max");
+      ok = false;
+    }
+    return ok;
+  }
+
+  // Two points in one table may not share a register (or a bit).
+  void check_overlaps() {
+    std::vector<const ProfilePoint*> sorted;
+    for (const auto& p : profile_.points) sorted.push_back(&p);
+    std::sort(sorted.begin(), sorted.end(), [](const ProfilePoint* a, const ProfilePoint* b) {
+      return std::tie(a->table, a->address) < std::tie(b->table, b->address);
+    });
+    for (std::size_t i = 1; i < sorted.size(); ++i) {
+      const ProfilePoint& a = *sorted[i - 1];
+      const ProfilePoint& b = *sorted[i];
+      if (a.table == b.table && std::uint32_t{a.address} + a.width() > b.address) {
+        const ProfilePoint& later = a.line > b.line ? a : b;
+        const ProfilePoint& earlier = a.line > b.line ? b : a;
+        diag_.error_at(static_cast<int>(later.line), "point",
+                       "'" + later.name + "' overlaps '" + earlier.name + "' (line " +
+                           std::to_string(earlier.line) + ") in the " +
+                           std::string(kProfileTableNames[static_cast<std::size_t>(a.table)]) +
+                           " table");
+      }
+    }
+  }
+
+  // A point named at `key` of `r`, which must exist (and, if `writable`, be written to).
+  std::optional<std::size_t> point_at(TableReader& r, std::string_view key, bool required,
+                                      bool writable) {
+    const auto name = r.string(key, required);
+    if (!name) return std::nullopt;
+    const auto index = profile_.find(*name);
+    if (!index) {
+      // A point left out for its own error was reported already.
+      if (!had_bad_point_) {
+        diag_.error(r.node(key), r.qualified(key), "no point is called '" + *name + "'");
+      }
+      return std::nullopt;
+    }
+    const ProfilePoint& p = profile_.points[*index];
+    if (writable && !(p.table == Table::holding && p.width() == 1)) {
+      diag_.error(r.node(key), r.qualified(key),
+                  "'" + *name + "' must be a one-register holding point: it is written");
+      return std::nullopt;
+    }
+    return index;
+  }
+
+  // speed_rpm = "speed_actual": a point of a register table.
+  std::optional<std::size_t> register_point(TableReader& r, std::string_view key, bool writable) {
+    const auto index = point_at(r, key, false, writable);
+    if (index && profile_.points[*index].type == ValueType::bit) {
+      diag_.error(r.node(key), r.qualified(key), "must name a register point, not a bit");
+      return std::nullopt;
+    }
+    return index;
+  }
+
+  const toml::table* inline_table(TableReader& r, std::string_view key) {
+    const toml::node* n = r.node(key);
+    if (n == nullptr) return nullptr;
+    const auto* t = n->as_table();
+    if (t == nullptr) {
+      diag_.error(n, r.qualified(key), "must be an inline table such as { point = \"...\", ... }");
+    }
+    return t;
+  }
+
+  std::optional<BitBinding> bit_binding(TableReader& common, std::string_view key) {
+    const toml::table* t = inline_table(common, key);
+    if (t == nullptr) return std::nullopt;
+    TableReader r(*t, "common." + std::string(key), diag_);
+    r.expect({"point", "bit"});
+    const auto index = point_at(r, "point", true, false);
+    const ProfilePoint* p = index ? &profile_.points[*index] : nullptr;
+    const bool is_bit = p != nullptr && p->type == ValueType::bit;
+    const auto bit = r.integer("bit", 0, 15, p != nullptr && !is_bit);
+    if (p == nullptr || (!is_bit && !bit)) return std::nullopt;
+    if (is_bit && bit) {
+      diag_.error(r.node("bit"), r.qualified("bit"), "a bit point has no bits but its own: omit bit");
+      return std::nullopt;
+    }
+    if (!is_bit && p->width() != 1) {
+      diag_.error(r.node("point"), r.qualified("point"),
+                  "'" + p->name + "' must be a one-register point (u16, s16) or a bit point");
+      return std::nullopt;
+    }
+    return BitBinding{*index, static_cast<std::uint8_t>(bit.value_or(0))};
+  }
+
+  std::optional<ValueBinding> value_binding(TableReader& common, std::string_view key) {
+    const toml::table* t = inline_table(common, key);
+    if (t == nullptr) return std::nullopt;
+    TableReader r(*t, "common." + std::string(key), diag_);
+    r.expect({"point", "value"});
+    const auto index = point_at(r, "point", true, true);
+    const auto value = r.integer("value", 0, 65535, true);
+    if (!index || !value) return std::nullopt;
+    return ValueBinding{*index, static_cast<std::uint16_t>(*value)};
+  }
+
+  std::optional<Fault> fault_label(TableReader& r, const toml::node& n, std::string_view key) {
+    const auto* s = n.as_string();
+    const auto fault = s != nullptr ? fault_named(s->get()) : std::nullopt;
+    if (fault == Fault::comm_lost) {
+      // The gateway's own: the drive answered, so it is not what a native code can mean.
+      diag_.error(&n, r.qualified(key), "comm_lost is the gateway's own fault, not a drive's");
+      return std::nullopt;
+    }
+    if (!fault) {
+      diag_.error(&n, r.qualified(key),
+                  (s != nullptr ? "unknown fault label '" + s->get() + "'" : "must be a label") +
+                      " (known: " + fault_list() + ")");
+    }
+    return fault;
+  }
+
+  std::optional<FaultBinding> fault_binding(TableReader& common) {
+    const toml::table* t = inline_table(common, "fault_code");
+    if (t == nullptr) return std::nullopt;
+    TableReader r(*t, "common.fault_code", diag_);
+    r.expect({"point", "map", "other"});
+    FaultBinding b;
+    const auto index = register_point(r, "point", false);
+    if (!index) {
+      if (r.node("point") == nullptr) r.missing("point");
+      r.node("map");
+      r.node("other");
+      return std::nullopt;
+    }
+    b.point = *index;
+    bool ok = true;
+    if (const toml::node* m = r.node("map")) {
+      const auto* map = m->as_table();
+      if (map == nullptr) {
+        diag_.error(m, "common.fault_code.map", "must be a table of value = \"label\"");
+        ok = false;
+      } else {
+        for (const auto& [k, v] : *map) {
+          const std::string key(k.str());
+          std::int64_t value = -1;
+          try {
+            std::size_t used = 0;
+            value = std::stoll(key, &used, 0);
+            if (used != key.size()) value = -1;
+          } catch (const std::exception&) {
+            value = -1;
+          }
+          if (value < 0 || value > 0xFFFFFFFFLL) {
+            diag_.error(&v, "common.fault_code.map",
+                        "key '" + key + "' must be a native fault value (0, 17, 0x11, ...)");
+            ok = false;
+            continue;
+          }
+          if (const auto f = fault_label(r, v, "map." + key)) {
+            b.map[static_cast<std::uint32_t>(value)] = *f;
+          } else {
+            ok = false;
+          }
+        }
+      }
+    }
+    if (const toml::node* o = r.node("other")) {
+      if (const auto f = fault_label(r, *o, "other")) b.other = *f;
+      else ok = false;
+    }
+    if (!ok) return std::nullopt;
+    return b;
+  }
+
+  void read_common(TableReader& top) {
+    const toml::table* t = table_at(top, "common", false);
+    if (t == nullptr) return;
+    TableReader r(*t, "common", diag_);
+    r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop",
+              "run_forward", "run_reverse", "reset_fault"});
+    CommonBindings& c = profile_.common;
+    c.speed_rpm = register_point(r, "speed_rpm", false);
+    c.setpoint_rpm = register_point(r, "setpoint_rpm", true);
+    c.running = bit_binding(r, "running");
+    c.fault = bit_binding(r, "fault");
+    c.fault_code = fault_binding(r);
+    c.stop = value_binding(r, "stop");
+    c.run_forward = value_binding(r, "run_forward");
+    c.run_reverse = value_binding(r, "run_reverse");
+    c.reset_fault = value_binding(r, "reset_fault");
+    // A drive that can be started must be stoppable through the same profile.
+    if ((c.run_forward || c.run_reverse) && !c.stop && r.node("stop") == nullptr) {
+      diag_.error(t, "common", "run_forward or run_reverse without stop: a profile that can start "
+                               "the drive must say how to stop it");
+    }
+  }
+
+  Diagnostics diag_;
+  Profile profile_;
+  bool had_bad_point_ = false;
+};
+
+}  // namespace
+
+std::optional<std::size_t> Profile::find(std::string_view point) const {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (points[i].name == point) return i;
+  }
+  return std::nullopt;
+}
+
+std::variant<Profile, std::vector<std::string>> parse_profile(std::string_view text,
+                                                              const std::string& source) {
+  return Parser(source).run(text, source);
+}
+
+}  // namespace drivegate::modbus_device

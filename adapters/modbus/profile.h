@@ -1,0 +1,138 @@
+// A device profile: what a Modbus RTU / ASCII slave is, how to talk to it, which registers hold
+// what, and how they map onto drivegate's common block (docs/profiles.md describes the file).
+// parse_profile() reads the TOML text and validates it whole; it is pure (the caller reads the
+// file), and every error names the file and line it is about.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "codec.h"
+#include "drivegate/common.h"
+#include "drivegate/line.h"
+#include "drivegate/point.h"
+
+namespace drivegate::modbus_device {
+
+// A point's value type on the wire: one register (u16, s16), two (u32, s32, f32, in the point's
+// word order) or one coil / discrete input (bit).
+enum class ValueType : std::uint8_t { u16, s16, u32, s32, f32, bit };
+inline constexpr std::array<std::string_view, 6> kValueTypeNames = {"u16", "s16", "u32",
+                                                                    "s32", "f32", "bit"};
+// Registers (or bits) a value of `type` occupies.
+constexpr std::uint16_t width_of(ValueType type) {
+  return type == ValueType::u32 || type == ValueType::s32 || type == ValueType::f32 ? 2 : 1;
+}
+
+// Two-register values: "big" puts the high word first (the Modbus convention for 32-bit values
+// is none; most drives do this), "little" the low word first.
+enum class WordOrder : std::uint8_t { big, little };
+inline constexpr std::array<std::string_view, 2> kWordOrderNames = {"big", "little"};
+
+// Who may write a point through a Modbus listener: nobody (read), an operate or a maintain
+// listener (operate), a maintain listener only (maintain; the default for a writable point).
+enum class PointAccess : std::uint8_t { read, operate, maintain };
+inline constexpr std::array<std::string_view, 3> kPointAccessNames = {"read", "operate",
+                                                                      "maintain"};
+
+// The device's request to write one register: FC 06 or FC 16 (Application Protocol 6.6, 6.12).
+enum class WriteFunction : std::uint8_t { single, multiple };
+inline constexpr std::array<std::string_view, 2> kWriteFunctionNames = {"single", "multiple"};
+
+inline constexpr std::array<std::string_view, 2> kFramingNames = {"rtu", "ascii"};
+// The tables a point may be in, by their profile names.
+inline constexpr std::array<std::string_view, 4> kProfileTableNames = {"coil", "discrete", "input",
+                                                                       "holding"};
+
+struct ProfilePoint {
+  std::string name;
+  Table table = Table::holding;
+  std::uint16_t address = 0;  // the protocol address (0-based), as on the wire
+  ValueType type = ValueType::u16;
+  WordOrder word_order = WordOrder::big;
+  double scale = 1.0;  // engineering value = raw x scale
+  std::string unit;
+  std::string description;
+  std::optional<double> min;  // engineering limits of a write
+  std::optional<double> max;
+  PointAccess access = PointAccess::read;
+  std::uint32_t poll_ms = 0;  // 0: the device's poll interval
+  std::uint32_t line = 0;     // where the point is in the file, for messages
+
+  [[nodiscard]] std::uint16_t width() const { return width_of(type); }
+  [[nodiscard]] bool writable() const { return table == Table::holding || table == Table::coil; }
+};
+
+// A bit of a register point: running = { point = "status_word", bit = 2 }.
+struct BitBinding {
+  std::size_t point = 0;  // index into Profile::points
+  std::uint8_t bit = 0;   // 0..15
+};
+// A value written to a point: stop = { point = "control_word", value = 0x0006 }.
+struct ValueBinding {
+  std::size_t point = 0;
+  std::uint16_t value = 0;
+};
+// A point's native values named as unified faults; values not in the map are `other`.
+struct FaultBinding {
+  std::size_t point = 0;
+  std::map<std::uint32_t, Fault> map;
+  Fault other = Fault::other;
+};
+
+// How the common block maps onto the points. Every binding is optional: what a profile leaves
+// out, the common block shows as unknown (and a command it cannot send is refused with 0x03).
+struct CommonBindings {
+  std::optional<std::size_t> speed_rpm;     // actual speed, scaled to rpm
+  std::optional<std::size_t> setpoint_rpm;  // the speed reference, written in rpm
+  std::optional<BitBinding> running;
+  std::optional<BitBinding> fault;
+  std::optional<FaultBinding> fault_code;
+  std::optional<ValueBinding> stop;
+  std::optional<ValueBinding> run_forward;
+  std::optional<ValueBinding> run_reverse;
+  std::optional<ValueBinding> reset_fault;
+};
+
+struct LineSpec {
+  std::uint32_t baud = 19200;       // Serial Line 2.5.1: 19200 is the required default
+  Parity parity = Parity::even;     // Serial Line 2.5.1: even parity is the default
+  std::uint8_t stop_bits = 1;
+  Framing framing = Framing::rtu;
+};
+
+struct ModbusSpec {
+  // Registers per read: 125 is the protocol's limit (Application Protocol 6.3); coils and
+  // discrete inputs per read: 2000 (6.1).
+  std::uint16_t max_registers = 125;
+  std::uint16_t max_bits = 2000;
+  std::uint16_t max_gap = 0;  // unused registers read through to join two blocks
+  WriteFunction write = WriteFunction::single;
+  std::uint32_t timeout_ms = 100;
+};
+
+struct Profile {
+  std::string name;
+  std::string description;
+  std::string source;  // where the addresses come from: document, section, table
+  LineSpec line;
+  ModbusSpec modbus;
+  std::vector<ProfilePoint> points;
+  CommonBindings common;
+
+  // The index of the point called `name`, if any.
+  [[nodiscard]] std::optional<std::size_t> find(std::string_view point) const;
+};
+
+// The profile in `text`, or every error found in it, each "SOURCE:LINE: key: what is wrong" as
+// the daemon's own configuration errors read (drivegate/toml_reader.h). `source` names the file.
+std::variant<Profile, std::vector<std::string>> parse_profile(std::string_view text,
+                                                              const std::string& source);
+
+}  // namespace drivegate::modbus_device
