@@ -32,6 +32,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
  private:
   void within_timeout(bool awaiting_request);
   void read();
+  void read_header();
   void on_read(const boost::system::error_code& ec);
   // Answers the parsed request, or, when its address has used its share of requests for now,
   // waits for its next one first (HttpOptions::requests).
@@ -50,6 +51,7 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   boost::beast::tcp_stream stream_;
   boost::beast::flat_buffer buffer_;
   std::optional<boost::beast::http::request_parser<boost::beast::http::empty_body>> parser_;
+  std::size_t header_bytes_ = 0;  // of the request being read, as the parser consumed them
   boost::beast::http::response<boost::beast::http::string_body> response_;
   // Writes response_ a slice at a time (kWriteSlice): between slices the event loop runs what
   // else is ready, Modbus requests first among them, instead of waiting for one long send.
