@@ -1,0 +1,363 @@
+#include "driver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "values.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+// Serial Line 2.5.1.1: frames are separated by at least 3.5 character times; above 19200 baud,
+// where that is less, by a fixed 1.75 ms.
+constexpr std::chrono::nanoseconds kFixedSilence = std::chrono::microseconds(1750);
+// The longest frame: 256 bytes in RTU, 513 characters in ASCII (Serial Line 2.5.1.1, 2.5.2.1).
+constexpr std::size_t kLongestRtu = 256;
+constexpr std::size_t kLongestAscii = 513;
+
+Millis ceil_ms(std::chrono::nanoseconds d) {
+  return std::chrono::ceil<Millis>(d);
+}
+
+bool is_bit_table(Table t) {
+  return t == Table::coil || t == Table::discrete;
+}
+
+// The register-map face of a profile point.
+PointSpec spec_of(const ProfilePoint& p) {
+  PointSpec s;
+  s.name = p.name;
+  s.table = p.table;
+  s.type = served_type(p);
+  s.scale = p.type == ValueType::f32 ? 1.0 : p.scale;  // a float register holds the value
+  s.unit = p.unit;
+  s.description = p.description;
+  if (p.writable() && (p.min || p.max)) {
+    s.min = p.min.value_or(-1e12);
+    s.max = p.max.value_or(1e12);
+  }
+  return s;
+}
+
+}  // namespace
+
+ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
+                           Millis poll_interval)
+    : profile_(std::move(profile)),
+      address_(address),
+      timing_(timing),
+      poll_interval_(poll_interval),
+      exposed_index_(profile_.points.size()),
+      raw_(profile_.points.size()),
+      unreadable_(profile_.points.size(), false),
+      alone_(profile_.points.size(), false) {
+  // Every point not bound to the common block is one of the device's own (issue 26).
+  std::vector<bool> bound(profile_.points.size(), false);
+  const CommonBindings& c = profile_.common;
+  for (const auto& p : {c.speed_rpm, c.setpoint_rpm}) {
+    if (p) bound[*p] = true;
+  }
+  for (const auto& b : {c.running, c.fault}) {
+    if (b) bound[b->point] = true;
+  }
+  if (c.fault_code) bound[c.fault_code->point] = true;
+  for (const auto& v : {c.stop, c.run_forward, c.run_reverse, c.reset_fault}) {
+    if (v) bound[v->point] = true;
+  }
+  for (std::size_t i = 0; i < profile_.points.size(); ++i) {
+    if (bound[i]) continue;
+    exposed_index_[i] = points_.size();
+    exposed_.push_back(i);
+    points_.push_back(spec_of(profile_.points[i]));
+  }
+  values_.resize(points_.size());
+  // One group per poll interval; the device's own for points that name none.
+  std::map<Millis, std::vector<std::size_t>> by_interval;
+  for (std::size_t i = 0; i < profile_.points.size(); ++i) {
+    const auto own = profile_.points[i].poll_ms;
+    by_interval[own != 0 ? Millis(own) : poll_interval_].push_back(i);
+  }
+  for (auto& [interval, points] : by_interval) {
+    Group g;
+    g.interval = interval;
+    g.points = std::move(points);
+    plan(g);
+    groups_.push_back(std::move(g));
+  }
+}
+
+// The group's blocks: its readable points joined by the planner, those read alone after a
+// refused block one request each.
+void ModbusDriver::plan(Group& g) const {
+  std::vector<std::size_t> joined;
+  g.blocks.clear();
+  for (const std::size_t p : g.points) {
+    if (unreadable_[p]) continue;
+    if (alone_[p]) {
+      const std::size_t one[] = {p};
+      const auto b = plan_reads(profile_, one);
+      g.blocks.insert(g.blocks.end(), b.begin(), b.end());
+    } else {
+      joined.push_back(p);
+    }
+  }
+  const auto b = plan_reads(profile_, joined);
+  g.blocks.insert(g.blocks.end(), b.begin(), b.end());
+}
+
+// The longest one exchange of this device takes: every attempt's wait and the engine's guard
+// after it, the gap and the longest frames there and back.
+Millis ModbusDriver::turn() const {
+  const std::size_t longest = profile_.line.framing == Framing::rtu ? kLongestRtu : kLongestAscii;
+  const Millis wire = ceil_ms(timing_.char_time * static_cast<long>(2 * longest));
+  return timing_.attempts * (unanswered_attempt(Millis(profile_.modbus.timeout_ms)) +
+                             traits().inter_frame_gap + wire);
+}
+
+Millis ModbusDriver::send_limit() const {
+  return turn() + kOtherTurnAllowance;
+}
+
+DriverTraits ModbusDriver::traits() const {
+  DriverTraits t;
+  t.comm_timeout = timing_.comm_timeout;
+  if (profile_.line.framing == Framing::rtu) {
+    t.inter_frame_gap = ceil_ms(std::max<std::chrono::nanoseconds>(timing_.char_time * 7 / 2,
+                                                                    kFixedSilence));
+  }
+  // A write settles within send_limit() and one turn of its own; a request holds at most two
+  // that need the line (a setpoint, then a command).
+  const Millis one = timing_.attempts * (unanswered_attempt(Millis(profile_.modbus.timeout_ms)) +
+                                         t.inter_frame_gap +
+                                         ceil_ms(timing_.char_time * 2 * kLongestAscii));
+  t.write_timeout = std::max(kWriteTimeoutFloor, 2 * (2 * one + kOtherTurnAllowance) +
+                                                     kDeadlineMargin);
+  return t;
+}
+
+ModbusDriver::Job ModbusDriver::read_job(const Block& b) const {
+  Job j;
+  j.read = b;
+  j.function = read_function(b.table);
+  j.pdu = {j.function};
+  put_be16(j.pdu, b.start);
+  put_be16(j.pdu, b.count);
+  return j;
+}
+
+Exchange ModbusDriver::exchange(const Job& j) const {
+  Exchange ex;
+  ex.frame = encode(profile_.line.framing, address_, j.pdu);
+  ex.reply = ReplyMode::expected;
+  // The profile's timeout, and the time the longest reply to this request takes on the wire.
+  std::size_t reply_bytes = 8;
+  if (j.read) {
+    const std::size_t data = is_bit_table(j.read->table) ? (j.read->count + 7u) / 8u
+                                                         : 2u * j.read->count;
+    reply_bytes = 5 + data;
+  }
+  if (profile_.line.framing == Framing::ascii) reply_bytes = 2 * reply_bytes + 3;
+  ex.timeout = Millis(profile_.modbus.timeout_ms) +
+               ceil_ms(timing_.char_time * static_cast<long>(reply_bytes));
+  ex.attempts = timing_.attempts;
+  return ex;
+}
+
+std::optional<Exchange> ModbusDriver::next_exchange(TimePoint now) {
+  last_now_ = now;
+  expire(now);
+  // The engine asks only once the exchange before ended; one it abandoned without a word still
+  // owes its write an answer.
+  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
+  inflight_.reset();
+  if (!writes_.empty()) {
+    Write w = std::move(writes_.front());
+    writes_.pop_front();
+    inflight_ = write_job(w);
+    return exchange(*inflight_);
+  }
+  if (reads_.empty()) {
+    for (Group& g : groups_) {
+      if (now < g.due) continue;
+      reads_.insert(reads_.end(), g.blocks.begin(), g.blocks.end());
+      g.due = now + g.interval;
+    }
+  }
+  if (reads_.empty()) return std::nullopt;
+  inflight_ = read_job(reads_.front());
+  reads_.pop_front();
+  return exchange(*inflight_);
+}
+
+TimePoint ModbusDriver::wake_at() const {
+  if (!writes_.empty() || !reads_.empty()) return last_now_;
+  TimePoint next = TimePoint::max();
+  for (const Group& g : groups_) {
+    if (!g.blocks.empty()) next = std::min(next, g.due);
+  }
+  return next;
+}
+
+RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
+  last_now_ = now;
+  if (rx.empty()) return {};
+  if (!inflight_) return {RxKind::noise, rx.size()};
+  const Decoded<Adu> d = decode_reply(profile_.line.framing, rx);
+  switch (d.status) {
+    case DecodeStatus::incomplete:
+      return {};
+    case DecodeStatus::bad:
+      // RTU has no start marker: a CRC failure whose first byte is not this slave's address is a
+      // window on noise rather than its damaged reply, so skip one byte and look again.
+      if (profile_.line.framing == Framing::rtu && d.error == FrameError::bad_checksum &&
+          rx[0] != address_) {
+        return {RxKind::noise, 1};
+      }
+      return damaged(d);
+    case DecodeStatus::frame:
+      break;
+  }
+  const Adu& a = d.frame;
+  const std::uint8_t fn = inflight_->function;
+  const bool exception = a.pdu[0] == (fn | kExceptionBit) && a.pdu.size() == 2;
+  if (a.address != address_ || (a.pdu[0] != fn && !exception)) return {RxKind::foreign, d.consumed};
+  if (inflight_->read && !exception) {
+    // A read reply carries exactly the bytes asked for (Application Protocol 6.1 - 6.4).
+    const Block& b = *inflight_->read;
+    const std::size_t data = is_bit_table(b.table) ? (b.count + 7u) / 8u : 2u * b.count;
+    if (a.pdu.size() != 2 + data || a.pdu[1] != data) return {RxKind::foreign, d.consumed};
+  }
+  const Job job = std::move(*inflight_);
+  inflight_.reset();
+  if (job.write) {
+    if (exception) {
+      complete(*job.write, WriteResult::refused);
+    } else {
+      confirm(job, a.pdu);
+    }
+    return {RxKind::ack, d.consumed};  // an echo says nothing of the drive's state
+  }
+  if (exception) {
+    on_read_refused(*job.read);
+    return {RxKind::ack, d.consumed};
+  }
+  on_read(*job.read, a.pdu);
+  return {RxKind::reply, d.consumed};
+}
+
+void ModbusDriver::on_read(const Block& b, ByteView pdu) {
+  const ByteView data = pdu.subspan(2);
+  for (const std::size_t i : b.points) {
+    const ProfilePoint& p = profile_.points[i];
+    std::vector<std::uint16_t> words;
+    const std::size_t offset = p.address - b.start;
+    if (is_bit_table(b.table)) {
+      words.push_back(static_cast<std::uint16_t>((data[offset / 8] >> (offset % 8)) & 1u));
+    } else {
+      for (std::size_t w = 0; w < p.width(); ++w) {
+        words.push_back(be16(data[2 * (offset + w)], data[2 * (offset + w) + 1]));
+      }
+    }
+    if (const auto e = exposed_index_[i]) values_[*e] = value_of(p, words);
+    raw_[i] = std::move(words);
+  }
+  ++blocks_read_;
+  update_common();
+  adopt();
+}
+
+// A slave that refuses a block (exception 02, illegal data address, most often) may lack one of
+// its points: the block's points are read one by one from now on, and a point refused alone is
+// left unknown, so one missing register never costs the device its other points.
+void ModbusDriver::on_read_refused(const Block& b) {
+  if (b.points.size() == 1) {
+    unreadable_[b.points[0]] = true;
+  } else {
+    for (const std::size_t p : b.points) alone_[p] = true;
+  }
+  for (Group& g : groups_) plan(g);
+}
+
+void ModbusDriver::on_no_reply(TimePoint now) {
+  last_now_ = now;
+  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
+  inflight_.reset();
+}
+
+void ModbusDriver::on_comm_lost(TimePoint now) {
+  last_now_ = now;
+  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
+  inflight_.reset();
+  // Nothing waiting is sent once the slave answers again: the PLC was told these failed.
+  fail_all();
+  reads_.clear();
+  blocks_read_ = 0;
+  common_.ready = false;
+  // A slave that comes back may be another one (replaced, reconfigured): ask it everything again.
+  std::fill(unreadable_.begin(), unreadable_.end(), false);
+  std::fill(alone_.begin(), alone_.end(), false);
+  for (Group& g : groups_) {
+    plan(g);
+    g.due = now;
+  }
+}
+
+std::optional<double> ModbusDriver::engineering(std::optional<std::size_t> point) const {
+  if (!point || !raw_[*point]) return std::nullopt;
+  const ProfilePoint& p = profile_.points[*point];
+  return raw_of(p, *raw_[*point]) * p.scale;
+}
+
+std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) const {
+  if (!b || !raw_[b->point]) return std::nullopt;
+  return (((*raw_[b->point])[0] >> b->bit) & 1u) != 0;
+}
+
+void ModbusDriver::update_common() {
+  const CommonBindings& c = profile_.common;
+  if (const auto speed = engineering(c.speed_rpm)) {
+    common_.speed_rpm = static_cast<std::int32_t>(std::lround(*speed));
+  }
+  if (const auto running = bit_of(c.running)) {
+    common_.running = *running;
+  } else if (!c.running && c.speed_rpm && raw_[*c.speed_rpm]) {
+    common_.running = common_.speed_rpm != 0;  // no run bit: a turning motor runs
+  }
+  // The fault bit, where there is one, says whether a fault is active; the fault code which.
+  FaultSet faults;
+  std::optional<Fault> coded;
+  if (c.fault_code && raw_[c.fault_code->point]) {
+    const ProfilePoint& p = profile_.points[c.fault_code->point];
+    const auto native = static_cast<std::int64_t>(raw_of(p, *raw_[c.fault_code->point]));
+    common_.native_fault = static_cast<std::uint32_t>(native);
+    const auto it = c.fault_code->map.find(static_cast<std::uint32_t>(native));
+    coded = it != c.fault_code->map.end() ? it->second : c.fault_code->other;
+  }
+  const auto fault_bit = bit_of(c.fault);
+  const bool active = fault_bit ? *fault_bit : (coded && *coded != Fault::none);
+  if (active) faults.set(coded && *coded != Fault::none ? *coded : Fault::other);
+  common_.faults = faults;
+  // A trip stops the output: the run in force is over.
+  if (active && !common_.running && is_run(common_.command)) common_.command = Command::stop;
+  const std::size_t blocks =
+      std::accumulate(groups_.begin(), groups_.end(), std::size_t{0},
+                      [](std::size_t n, const Group& g) { return n + g.blocks.size(); });
+  common_.ready = blocks_read_ >= blocks;
+}
+
+// A drive found running, before anything was written to it, runs on as it is: its run is the
+// command in force (reverse where its speed is negative), its reference the setpoint, so that the
+// registers never say stop over a turning motor. Adoption ends once every block was read once,
+// or at the first write.
+void ModbusDriver::adopt() {
+  if (!adopting_ || !common_.ready) return;
+  adopting_ = false;
+  if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
+    common_.setpoint_rpm = static_cast<std::int32_t>(std::lround(*reference));
+  }
+  if (!common_.running || !common_.faults.empty()) return;
+  common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;
+}
+
+}  // namespace drivegate::modbus_device

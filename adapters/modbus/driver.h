@@ -1,0 +1,137 @@
+// The modbus driver: a Modbus RTU / ASCII master that polls a slave as its profile describes.
+// The profile's points are read in the planner's blocks, each group of points at its own poll
+// interval; the common block follows the profile's bindings; writes go out as FC 05 / 06 / 16 and
+// are in force once the slave's echo confirmed them.
+//
+//   driver.cpp         the poll plan, the line side, replies into points and the common state
+//   driver_writes.cpp  check() and apply(), the writes waiting for the line, their confirmation
+#pragma once
+
+#include <deque>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "codec.h"
+#include "drivegate/driver.h"
+#include "planner.h"
+#include "profile.h"
+
+namespace drivegate::modbus_device {
+
+// How the driver uses the line, beside what the profile says.
+struct Timing {
+  std::uint8_t attempts = 3;
+  Millis comm_timeout{3000};
+  // One character on the line as the bus runs it: the RTU silence between frames (3.5
+  // characters, 1.75 ms above 19200 baud: Serial Line 2.5.1.1) and the time replies take.
+  std::chrono::nanoseconds char_time{0};
+};
+
+// The gateway looks at its write deadlines every 100 ms: room so that a driver's own answer
+// never races the gateway's.
+inline constexpr Millis kDeadlineMargin{200};
+// Another device's turn the line may be busy with before a write (DeviceConfig::budget).
+inline constexpr Millis kOtherTurnAllowance{1000};
+inline constexpr Millis kWriteTimeoutFloor{3000};
+
+class ModbusDriver final : public Driver {
+ public:
+  // `address`: 1..247 (Serial Line 2.2).
+  ModbusDriver(std::uint8_t address, Profile profile, Timing timing, Millis poll_interval);
+
+  [[nodiscard]] DriverTraits traits() const override;
+  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
+  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
+  [[nodiscard]] const CommonState& common() const override { return common_; }
+
+  std::optional<Exchange> next_exchange(TimePoint now) override;
+  [[nodiscard]] TimePoint wake_at() const override;
+  RxVerdict on_receive(ByteView rx, TimePoint now) override;
+  void on_no_reply(TimePoint now) override;
+  void on_comm_lost(TimePoint now) override;
+
+  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
+  void take_completions(std::vector<Completion>& out) override;
+
+  // Which profile point each of points() is.
+  [[nodiscard]] std::size_t profile_point(std::size_t point) const { return exposed_.at(point); }
+  // Profile points a slave refused to read (exception 02 for the point alone): left unknown
+  // until the next reconnect.
+  [[nodiscard]] const std::vector<bool>& unreadable() const { return unreadable_; }
+
+ private:
+  // A write, in the slave's terms: the words for a profile point, and what it puts in force.
+  enum class Change : std::uint8_t { command, setpoint, point };
+  struct Write {
+    Ticket ticket = 0;
+    Change change = Change::point;
+    std::size_t point = 0;  // profile point written
+    std::vector<std::uint16_t> words;  // registers (or, for a coil, {0 or 1})
+    Command command = Command::stop;   // Change::command
+    std::int32_t rpm = 0;              // Change::setpoint
+    TimePoint send_by{};               // not on the line by then: failed, and never sent
+  };
+  // Points polled at one interval, and the blocks that read them.
+  struct Group {
+    Millis interval{0};
+    std::vector<std::size_t> points;
+    std::vector<Block> blocks;
+    TimePoint due{};
+  };
+  struct Job {
+    std::optional<Block> read;
+    std::optional<Write> write;
+    std::uint8_t function = 0;
+    Bytes pdu;
+  };
+
+  // driver.cpp
+  void plan(Group& g) const;
+  [[nodiscard]] Exchange exchange(const Job& j) const;
+  [[nodiscard]] Millis turn() const;
+  [[nodiscard]] Millis send_limit() const;
+  [[nodiscard]] Job read_job(const Block& b) const;
+  void on_read(const Block& b, ByteView pdu);
+  void on_read_refused(const Block& b);
+  void update_common();
+  void adopt();
+  [[nodiscard]] std::optional<double> engineering(std::optional<std::size_t> point) const;
+  [[nodiscard]] std::optional<bool> bit_of(const std::optional<BitBinding>& b) const;
+
+  // driver_writes.cpp
+  [[nodiscard]] std::optional<Write> write_of(const WriteOp& op) const;
+  [[nodiscard]] WriteCheck judge(const WriteOp& op) const;
+  [[nodiscard]] Job write_job(const Write& w) const;
+  void confirm(const Job& j, ByteView pdu);
+  void put_in_force(const Write& w);
+  void complete(const Write& w, WriteResult r);
+  void supersede(std::size_t point);
+  void expire(TimePoint now);
+  void fail_all();
+
+  Profile profile_;
+  std::uint8_t address_;
+  Timing timing_;
+  Millis poll_interval_;
+  std::vector<PointSpec> points_;
+  std::vector<std::size_t> exposed_;  // points_[i] is profile point exposed_[i]
+  std::vector<std::optional<std::size_t>> exposed_index_;  // and back; nothing when bound
+  std::vector<Value> values_;
+  CommonState common_;
+
+  std::vector<std::optional<std::vector<std::uint16_t>>> raw_;  // per profile point, last read
+  std::vector<bool> unreadable_;  // per profile point
+  std::vector<bool> alone_;       // per profile point: read on its own after a refused block
+  std::vector<Group> groups_;
+  std::deque<Block> reads_;
+  std::deque<Write> writes_;
+  std::optional<Job> inflight_;
+  std::vector<Completion> completions_;
+  TimePoint last_now_{};
+  std::size_t blocks_read_ = 0;  // since the last (re)connect
+  bool adopting_ = true;
+};
+
+}  // namespace drivegate::modbus_device

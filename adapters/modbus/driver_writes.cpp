@@ -1,0 +1,194 @@
+// Writes. A Modbus slave answers every write it takes with an echo (FC 05 and 06: the request
+// itself; FC 16: its address and quantity; Application Protocol 6.5, 6.6, 6.12) and one it will
+// not take with an exception. So a write is in force once its echo came back; until then, and
+// when it fails (an exception, no answer, superseded, never sent in time), what was in force
+// stays.
+#include <algorithm>
+
+#include "driver.h"
+#include "values.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+// FC 05 writes a coil ON as 0xFF00 and OFF as 0x0000 (Application Protocol 6.5).
+constexpr std::uint16_t kCoilOn = 0xFF00;
+
+}  // namespace
+
+// What a part asks of the slave; nothing when the profile gives no way to ask it, or the value
+// is not one the point can carry.
+std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) const {
+  const CommonBindings& c = profile_.common;
+  Write w;
+  switch (op.target) {
+    case WriteOp::Target::command: {
+      std::optional<ValueBinding> b;
+      switch (op.command) {
+        case Command::stop:
+        case Command::quick_stop:  // a profile has no faster stop than its stop
+          b = c.stop;
+          w.command = Command::stop;
+          break;
+        case Command::run_forward:
+          b = c.run_forward;
+          w.command = op.command;
+          break;
+        case Command::run_reverse:
+          b = c.run_reverse;
+          w.command = op.command;
+          break;
+        case Command::reset_fault:
+          b = c.reset_fault;
+          w.command = op.command;
+          break;
+      }
+      if (!b) return std::nullopt;
+      w.change = Change::command;
+      w.point = b->point;
+      w.words = {b->value};
+      return w;
+    }
+    case WriteOp::Target::setpoint: {
+      if (!c.setpoint_rpm) return std::nullopt;
+      const ProfilePoint& p = profile_.points[*c.setpoint_rpm];
+      const double v = op.rpm;
+      if ((p.min && v < *p.min) || (p.max && v > *p.max)) return std::nullopt;
+      auto words = words_for(p, v);
+      if (!words) return std::nullopt;
+      w.change = Change::setpoint;
+      w.point = *c.setpoint_rpm;
+      w.words = std::move(*words);
+      w.rpm = op.rpm;
+      return w;
+    }
+    case WriteOp::Target::point:
+      break;
+  }
+  if (op.point >= exposed_.size()) return std::nullopt;
+  if (!std::holds_alternative<std::int64_t>(op.value) &&
+      !std::holds_alternative<double>(op.value)) {
+    return std::nullopt;
+  }
+  const ProfilePoint& p = profile_.points[exposed_[op.point]];
+  if (!p.writable()) return std::nullopt;
+  auto words = words_for(p, as_double(op.value));
+  if (!words) return std::nullopt;
+  w.change = Change::point;
+  w.point = exposed_[op.point];
+  w.words = std::move(*words);
+  return w;
+}
+
+WriteCheck ModbusDriver::judge(const WriteOp& op) const {
+  return write_of(op) ? WriteCheck::ok : WriteCheck::invalid_value;
+}
+
+WriteCheck ModbusDriver::check(std::span<const WriteOp> request) const {
+  return check_in_order(request, Proposed{common_.command, common_.setpoint_rpm},
+                        [this](const WriteOp& op, const Proposed&) { return judge(op); });
+}
+
+WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
+  last_now_ = now;
+  expire(now);
+  adopting_ = false;  // a client decides from now on
+  auto w = write_of(op);
+  if (!w) return WriteStatus::invalid_value;
+  w->ticket = t;
+  w->send_by = now + send_limit();
+  // A newer write to the same point wins: the older one, still waiting for the line, never
+  // reaches the slave (a run then a stop in quick succession never starts the motor).
+  supersede(w->point);
+  writes_.push_back(std::move(*w));
+  return WriteStatus::pending;
+}
+
+void ModbusDriver::take_completions(std::vector<Completion>& out) {
+  out.insert(out.end(), completions_.begin(), completions_.end());
+  completions_.clear();
+}
+
+// FC 05 for a coil, FC 06 for one register where the profile says "single", FC 16 otherwise.
+ModbusDriver::Job ModbusDriver::write_job(const Write& w) const {
+  const ProfilePoint& p = profile_.points[w.point];
+  Job j;
+  j.write = w;
+  if (p.table == Table::coil) {
+    j.function = fc::write_single_coil;
+    j.pdu = {j.function};
+    put_be16(j.pdu, p.address);
+    put_be16(j.pdu, w.words.at(0) != 0 ? kCoilOn : 0);
+  } else if (w.words.size() == 1 && profile_.modbus.write == WriteFunction::single) {
+    j.function = fc::write_single_register;
+    j.pdu = {j.function};
+    put_be16(j.pdu, p.address);
+    put_be16(j.pdu, w.words[0]);
+  } else {
+    j.function = fc::write_multiple_registers;
+    j.pdu = {j.function};
+    put_be16(j.pdu, p.address);
+    put_be16(j.pdu, static_cast<std::uint16_t>(w.words.size()));
+    j.pdu.push_back(static_cast<std::uint8_t>(2 * w.words.size()));
+    for (const std::uint16_t word : w.words) put_be16(j.pdu, word);
+  }
+  return j;
+}
+
+// The slave's echo: FC 05 and 06 repeat the request, FC 16 its address and quantity.
+void ModbusDriver::confirm(const Job& j, ByteView pdu) {
+  const bool took =
+      pdu.size() == 5 && j.pdu.size() >= 5 && std::equal(pdu.begin(), pdu.end(), j.pdu.begin());
+  if (!took) {
+    complete(*j.write, WriteResult::refused);
+    return;
+  }
+  put_in_force(*j.write);
+  complete(*j.write, WriteResult::ok);
+}
+
+void ModbusDriver::put_in_force(const Write& w) {
+  raw_[w.point] = w.words;
+  if (const auto e = exposed_index_[w.point]) {
+    values_[*e] = value_of(profile_.points[w.point], w.words);
+  }
+  switch (w.change) {
+    case Change::command:
+      // A reset clears a fault the next status read shows; it puts no command in force.
+      if (w.command != Command::reset_fault) common_.command = w.command;
+      break;
+    case Change::setpoint:
+      common_.setpoint_rpm = w.rpm;
+      break;
+    case Change::point:
+      break;
+  }
+}
+
+void ModbusDriver::complete(const Write& w, WriteResult r) {
+  completions_.push_back({w.ticket, r});
+}
+
+void ModbusDriver::supersede(std::size_t point) {
+  const auto older = std::stable_partition(writes_.begin(), writes_.end(),
+                                           [&](const Write& w) { return w.point != point; });
+  for (auto it = older; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
+  writes_.erase(older, writes_.end());
+}
+
+// A write not on the line by its send_by is failed and never sent: by then the gateway could
+// not have its answer before its own deadline, and a run the PLC was told failed must not start
+// the motor later.
+void ModbusDriver::expire(TimePoint now) {
+  const auto late = std::stable_partition(writes_.begin(), writes_.end(),
+                                          [now](const Write& w) { return now <= w.send_by; });
+  for (auto it = late; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
+  writes_.erase(late, writes_.end());
+}
+
+void ModbusDriver::fail_all() {
+  for (const Write& w : writes_) complete(w, WriteResult::no_response);
+  writes_.clear();
+}
+
+}  // namespace drivegate::modbus_device

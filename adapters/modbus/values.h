@@ -1,0 +1,31 @@
+// A profile point's registers (or bit) <-> its engineering value: the type, the word order of
+// two-register values and the scale (engineering value = raw x scale). Pure.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "drivegate/point.h"
+#include "profile.h"
+
+namespace drivegate::modbus_device {
+
+// The raw number `words` hold for `p` (width() words; a bit point's one word is 0 or 1).
+double raw_of(const ProfilePoint& p, std::span<const std::uint16_t> words);
+
+// The engineering value of `words`: an integer when the point is an integer type with scale 1,
+// a double otherwise.
+Value value_of(const ProfilePoint& p, std::span<const std::uint16_t> words);
+
+// The words that carry engineering value `v` to `p` (width() words, in the point's word order),
+// or nothing when it is not a value of the point (out of its type's range once scaled, not a
+// whole number for an integer type, a bit that is not 0 or 1, NaN or infinite).
+std::optional<std::vector<std::uint16_t>> words_for(const ProfilePoint& p, double v);
+
+// The register-map type a point is served as: the width and signedness of its raw value (the
+// register map carries the profile's scale beside it, so a PLC reads the device's own registers).
+PointType served_type(const ProfilePoint& p);
+
+}  // namespace drivegate::modbus_device

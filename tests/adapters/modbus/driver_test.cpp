@@ -1,0 +1,246 @@
+// The modbus driver played by hand against the example profile (adapters/modbus/profiles/
+// example-vfd.toml), slave address 7: the exact frames it sends, and what the replies make of its
+// points and of the common block.
+#include "driver.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace drivegate::modbus_device {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr std::uint8_t kSlave = 7;
+
+Profile example() {
+  std::ifstream in(std::string(DRIVEGATE_PROFILE_DIR) + "/example-vfd.toml");
+  std::stringstream s;
+  s << in.rdbuf();
+  auto r = parse_profile(s.str(), "example-vfd.toml");
+  return std::get<Profile>(std::move(r));
+}
+
+Bytes frame(std::vector<std::uint8_t> pdu, std::uint8_t address = kSlave) {
+  return encode(Framing::rtu, address, pdu);
+}
+
+// A read reply PDU carrying `words`.
+std::vector<std::uint8_t> words_pdu(std::uint8_t function, std::vector<std::uint16_t> words) {
+  std::vector<std::uint8_t> pdu = {function, static_cast<std::uint8_t>(2 * words.size())};
+  for (const std::uint16_t w : words) put_be16(pdu, w);
+  return pdu;
+}
+
+// A read request PDU.
+std::vector<std::uint8_t> read_pdu(std::uint8_t function, std::uint16_t start,
+                                   std::uint16_t count) {
+  std::vector<std::uint8_t> pdu = {function};
+  put_be16(pdu, start);
+  put_be16(pdu, count);
+  return pdu;
+}
+
+class ModbusDriverTest : public ::testing::Test {
+ protected:
+  // 19200 baud, 8E1: 11 bits a character.
+  ModbusDriver d{kSlave, example(), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms};
+  TimePoint now = TimePoint{} + 10s;
+
+  // The next frame the driver sends.
+  Bytes sent() {
+    const auto ex = d.next_exchange(now);
+    if (!ex) return {};
+    return ex->frame;
+  }
+  RxVerdict answer(const Bytes& wire) { return d.on_receive(wire, now); }
+
+  // One poll cycle of the example's four blocks, with these registers.
+  void cycle(std::uint16_t status, std::uint16_t speed_raw, std::uint16_t fault,
+             std::uint16_t control = 0x0006, std::uint16_t reference = 0) {
+    ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
+    // 200: speed_actual; 201: unused; 202..203: motor_current 12.5 A, low word first.
+    EXPECT_EQ(answer(frame(words_pdu(0x04, {speed_raw, 0xDEAD, 0x0000, 0x4148}))).kind,
+              RxKind::reply);
+    ASSERT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
+    EXPECT_EQ(answer(frame(words_pdu(0x04, {fault}))).kind, RxKind::reply);
+    ASSERT_EQ(sent(), frame(read_pdu(0x03, 0, 2)));
+    EXPECT_EQ(answer(frame(words_pdu(0x03, {control, reference}))).kind, RxKind::reply);
+    ASSERT_EQ(sent(), frame(read_pdu(0x03, 100, 1)));
+    EXPECT_EQ(answer(frame(words_pdu(0x03, {status}))).kind, RxKind::reply);
+  }
+
+  std::vector<Completion> completions() {
+    std::vector<Completion> out;
+    d.take_completions(out);
+    return out;
+  }
+};
+
+TEST_F(ModbusDriverTest, ReadsTheExampleInFourRequestsAndFillsTheCommonBlock) {
+  EXPECT_FALSE(d.common().ready);
+  cycle(/*status*/ 0x0000, /*speed*/ 0, /*fault*/ 0);
+  EXPECT_TRUE(d.common().ready);
+  EXPECT_FALSE(d.common().running);
+  EXPECT_EQ(d.common().command, Command::stop);
+  EXPECT_TRUE(d.common().faults.empty());
+  // Only motor_current is the device's own: every other point is bound to the common block.
+  ASSERT_EQ(d.points().size(), 1u);
+  EXPECT_EQ(d.points()[0].name, "motor_current");
+  EXPECT_EQ(d.points()[0].type, PointType::f32);
+  EXPECT_EQ(d.points()[0].unit, "A");
+  EXPECT_DOUBLE_EQ(as_double(d.values()[0]), 12.5);
+  // Nothing more until the poll interval has passed.
+  EXPECT_FALSE(d.next_exchange(now).has_value());
+  EXPECT_EQ(d.wake_at(), now + 500ms);
+  now += 500ms;
+  EXPECT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
+}
+
+TEST_F(ModbusDriverTest, ADriveFoundRunningIsShownRunning) {
+  // status bit 2: running; 15000 x 0.1 = 1500 rpm; the reference holds 1500.
+  cycle(0x0004, 15000, 0, 0x000F, 1500);
+  EXPECT_TRUE(d.common().running);
+  EXPECT_EQ(d.common().speed_rpm, 1500);
+  EXPECT_EQ(d.common().command, Command::run_forward);
+  EXPECT_EQ(d.common().setpoint_rpm, 1500);
+}
+
+TEST_F(ModbusDriverTest, FaultsFollowTheFaultBitAndTheMap) {
+  cycle(0x0008, 0, 2);  // bit 3: fault; 2 = over_current
+  EXPECT_TRUE(d.common().faults.has(Fault::over_current));
+  EXPECT_EQ(d.common().native_fault, 2u);
+  now += 500ms;
+  cycle(0x0008, 0, 7);  // not in the map: other
+  EXPECT_TRUE(d.common().faults.has(Fault::other));
+  now += 500ms;
+  cycle(0x0000, 0, 2);  // the bit says no fault is active, whatever code is left
+  EXPECT_TRUE(d.common().faults.empty());
+}
+
+TEST_F(ModbusDriverTest, ARunIsInForceOnlyOnceTheSlaveEchoedIt) {
+  cycle(0, 0, 0);
+  const WriteOp run = WriteOp::of_command(Command::run_forward);
+  ASSERT_EQ(d.check(std::span(&run, 1)), WriteCheck::ok);
+  ASSERT_EQ(d.apply(run, 1, now), WriteStatus::pending);
+  EXPECT_EQ(d.common().command, Command::stop);
+  // FC 06 to the control word (holding 0): 0x000F.
+  const Bytes request = frame({0x06, 0x00, 0x00, 0x00, 0x0F});
+  ASSERT_EQ(sent(), request);
+  EXPECT_EQ(answer(request).kind, RxKind::ack);  // the echo: no state in it
+  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(1u, WriteResult::ok)));
+  EXPECT_EQ(d.common().command, Command::run_forward);
+}
+
+TEST_F(ModbusDriverTest, AnEchoOfAnotherValueIsNoConfirmation) {
+  cycle(0, 0, 0);
+  const WriteOp run = WriteOp::of_command(Command::run_forward);
+  ASSERT_EQ(d.apply(run, 3, now), WriteStatus::pending);
+  ASSERT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x00, 0x0F}));
+  // The slave says it holds 0x0006 in the control word: it did not take the run.
+  EXPECT_EQ(answer(frame({0x06, 0x00, 0x00, 0x00, 0x06})).kind, RxKind::ack);
+  EXPECT_THAT(completions(),
+              ::testing::ElementsAre(::testing::FieldsAre(3u, WriteResult::refused)));
+  EXPECT_EQ(d.common().command, Command::stop);
+}
+
+TEST_F(ModbusDriverTest, AnExceptionRefusesTheWriteAndChangesNothing) {
+  cycle(0, 0, 0);
+  const WriteOp run = WriteOp::of_command(Command::run_reverse);
+  ASSERT_EQ(d.apply(run, 4, now), WriteStatus::pending);
+  ASSERT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x08, 0x0F}));
+  EXPECT_EQ(answer(frame({0x86, 0x04})).kind, RxKind::ack);
+  EXPECT_THAT(completions(),
+              ::testing::ElementsAre(::testing::FieldsAre(4u, WriteResult::refused)));
+  EXPECT_EQ(d.common().command, Command::stop);
+}
+
+TEST_F(ModbusDriverTest, SetpointsAreWrittenInTheReferencesUnitsWithinItsLimits) {
+  cycle(0, 0, 0);
+  const WriteOp too_fast = WriteOp::of_setpoint(3001);  // speed_reference max = 3000
+  EXPECT_EQ(d.check(std::span(&too_fast, 1)), WriteCheck::invalid_value);
+  const WriteOp backwards = WriteOp::of_setpoint(-1);  // min = 0
+  EXPECT_EQ(d.check(std::span(&backwards, 1)), WriteCheck::invalid_value);
+  const WriteOp ok = WriteOp::of_setpoint(1200);
+  ASSERT_EQ(d.apply(ok, 2, now), WriteStatus::pending);
+  const Bytes request = frame({0x06, 0x00, 0x01, 0x04, 0xB0});
+  ASSERT_EQ(sent(), request);
+  answer(request);
+  EXPECT_EQ(d.common().setpoint_rpm, 1200);
+}
+
+TEST_F(ModbusDriverTest, AStopOvertakesARunStillWaitingForTheLine) {
+  cycle(0, 0, 0);
+  const WriteOp run = WriteOp::of_command(Command::run_forward);
+  const WriteOp stop = WriteOp::of_command(Command::stop);
+  ASSERT_EQ(d.apply(run, 1, now), WriteStatus::pending);
+  ASSERT_EQ(d.apply(stop, 2, now), WriteStatus::pending);
+  EXPECT_THAT(completions(),
+              ::testing::ElementsAre(::testing::FieldsAre(1u, WriteResult::no_response)));
+  EXPECT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x00, 0x06}));  // the run never goes out
+}
+
+TEST_F(ModbusDriverTest, ARefusedBlockIsReadPointByPointAndAMissingPointLeftOut) {
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
+  EXPECT_EQ(answer(frame({0x84, 0x02})).kind, RxKind::ack);  // illegal data address
+  // The rest of the cycle goes on.
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
+  answer(frame(words_pdu(0x04, {0})));
+  ASSERT_EQ(sent(), frame(read_pdu(0x03, 0, 2)));
+  answer(frame(words_pdu(0x03, {6, 0})));
+  ASSERT_EQ(sent(), frame(read_pdu(0x03, 100, 1)));
+  answer(frame(words_pdu(0x03, {0})));
+  now += 500ms;
+  // Next cycle: 200 and 202 alone; the slave lacks 202.
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 1)));
+  EXPECT_EQ(answer(frame(words_pdu(0x04, {15000}))).kind, RxKind::reply);
+  EXPECT_EQ(d.common().speed_rpm, 1500);
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 202, 2)));
+  answer(frame({0x84, 0x02}));
+  EXPECT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
+  EXPECT_TRUE(d.unreadable()[*example().find("motor_current")]);
+}
+
+TEST_F(ModbusDriverTest, OnlyTheAwaitedReplyIsTaken) {
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
+  // Another slave's reply, and one of the wrong length, are not the reply.
+  EXPECT_EQ(answer(frame(words_pdu(0x04, {1, 2, 3, 4}), 8)).kind, RxKind::foreign);
+  EXPECT_EQ(answer(frame(words_pdu(0x04, {1, 2}))).kind, RxKind::foreign);
+  EXPECT_EQ(answer(frame(words_pdu(0x03, {1, 2, 3, 4}))).kind, RxKind::foreign);
+  // A damaged reply from this slave costs an attempt; bytes from elsewhere are skipped.
+  Bytes damaged = frame(words_pdu(0x04, {1, 2, 3, 4}));
+  damaged[4] ^= 0xFF;
+  EXPECT_EQ(answer(damaged).kind, RxKind::bad_checksum);
+  damaged[0] = 9;
+  EXPECT_EQ(answer(damaged).kind, RxKind::noise);
+  EXPECT_EQ(answer(frame(words_pdu(0x04, {1, 2, 3, 4}))).kind, RxKind::reply);
+}
+
+TEST_F(ModbusDriverTest, CommLostFailsEveryWriteStillWaiting) {
+  cycle(0, 0, 0);
+  const WriteOp run = WriteOp::of_command(Command::run_forward);
+  ASSERT_EQ(d.apply(run, 9, now), WriteStatus::pending);
+  d.on_comm_lost(now);
+  EXPECT_THAT(completions(),
+              ::testing::ElementsAre(::testing::FieldsAre(9u, WriteResult::no_response)));
+  EXPECT_FALSE(d.common().ready);
+  EXPECT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));  // everything is asked again
+}
+
+TEST_F(ModbusDriverTest, TimingFollowsTheLine) {
+  // At 19200 baud 3.5 characters of 0.573 ms (2.005 ms; the fixed 1.75 ms is for faster lines),
+  // rounded up to whole milliseconds.
+  EXPECT_EQ(d.traits().inter_frame_gap, 3ms);
+  EXPECT_GE(d.traits().write_timeout, 3000ms);
+  const auto ex = d.next_exchange(now);
+  ASSERT_TRUE(ex);
+  EXPECT_EQ(ex->attempts, 3);
+  // 100 ms of the profile, and the 13-byte reply on the wire (7.4 ms): 108 ms.
+  EXPECT_EQ(ex->timeout, 108ms);
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device
