@@ -85,8 +85,14 @@ pass "apt-get install ./$(basename "$deb")"
 plugins="/usr/lib/$multiarch/drivegate/adapters"
 unit=/lib/systemd/system/drivegate.service
 for f in /usr/sbin/drivegated /usr/bin/drivegate; do check "$f is executable" test -x "$f"; done
-for id in nidec-washer ed3100 mdriver-2400 unicla-edrive fdc1; do
+# Every adapter of the source tree (a folder with a plugin.cpp), none listed by hand.
+for src in "$here"/../adapters/*/plugin.cpp; do
+    id="$(basename "$(dirname "$src")")"
     check "plugin $plugins/drivegate-$id.so" test -f "$plugins/drivegate-$id.so"
+done
+for src in "$here"/../adapters/modbus/profiles/*.toml; do
+    check "profile /usr/share/drivegate/profiles/$(basename "$src")" \
+        test -f "/usr/share/drivegate/profiles/$(basename "$src")"
 done
 check "unit $unit" test -f "$unit"
 check "/etc/drivegate/drivegate.toml is a conffile" \

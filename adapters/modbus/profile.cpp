@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "drivegate/toml_reader.h"
@@ -53,6 +54,12 @@ std::string fault_list() {
   return out;
 }
 
+// The line an error names ("SOURCE:LINE: ..."), 0 when it names none.
+unsigned long line_in(const std::string& error, const std::string& source) {
+  if (error.compare(0, source.size() + 1, source + ":") != 0) return 0;
+  return std::strtoul(error.c_str() + source.size() + 1, nullptr, 10);
+}
+
 class Parser {
  public:
   explicit Parser(const std::string& source) : diag_(source) {}
@@ -76,7 +83,14 @@ class Parser {
       check_overlaps();
       read_common(top);
     }
-    if (!diag_.errors.empty()) return std::move(diag_.errors);
+    if (!diag_.errors.empty()) {
+      // In file order, as a reader fixes them; the file-wide ones (line 0) first.
+      std::stable_sort(diag_.errors.begin(), diag_.errors.end(),
+                       [&](const std::string& a, const std::string& b) {
+                         return line_in(a, source) < line_in(b, source);
+                       });
+      return std::move(diag_.errors);
+    }
     return std::move(profile_);
   }
 

@@ -55,6 +55,9 @@ def adapter_seeds(adapter):
         # Simulator: hear the vector, tick 100 ms, ask for its state.
         write(target, bytes([2, 0x00]) + chunk(0, v) + b"\x02\x00\x64" + b"\x03\x05state")
     write(target, bytes([1, 0x00, 45, 0]) + b"\x00\x02\x10\x00\x00\x06\x07\x08")
+    # The modbus adapter's codec mode also reads its input as a profile: the shipped ones.
+    for profile in sorted((ROOT / "adapters" / adapter / "profiles").glob("*.toml")):
+        write(target, b"\x00" + profile.read_bytes())
 
 
 def mbap(transaction, unit, pdu):

@@ -105,8 +105,8 @@ TEST(Profile, SyntaxErrorsNameTheLine) {
 
 TEST(Profile, WhatIsMissingOrUnknownIsNamed) {
   EXPECT_THAT(errors_of("[profile]\nname = \"t\"\n"),
-              ElementsAre(HasSubstr("profile.source: required key is missing"),
-                          HasSubstr("a profile needs at least one [[point]]")));
+              ElementsAre(HasSubstr("p.toml: point: a profile needs at least one [[point]]"),
+                          HasSubstr("p.toml:1: profile.source: required key is missing")));
   EXPECT_THAT(errors_of(kHead + "colour = \"red\"\n"),
               ElementsAre(HasSubstr("p.toml:9: point.colour: unknown key")));
   EXPECT_THAT(errors_of(kHead + "[line]\nparity = \"mark\"\n"),

@@ -1,0 +1,61 @@
+// The modbus plugin descriptor: option schema, line defaults, the two factories and how
+// `drivegate demo` shows the device (the example VFD of issue 26).
+#include <memory>
+#include <string>
+
+#include "drivegate/adapter.h"
+#include "driver.h"
+#include "settings.h"
+#include "simulator.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
+  auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  const auto address = device_address(env.address, error);
+  if (!address) return nullptr;
+  return std::make_unique<ModbusDriver>(
+      *address, std::move(settings->profile),
+      Timing{settings->attempts, settings->comm_timeout, env.char_time}, env.poll_interval);
+}
+
+std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
+  auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
+  const auto address = device_address(env.address, error);
+  if (!address) return nullptr;
+  return std::make_unique<ModbusSimulator>(*address, std::move(settings->profile));
+}
+
+constexpr OptionSetting kDemoOptions[] = {{"profile", "example-vfd"}};
+
+}  // namespace
+}  // namespace drivegate::modbus_device
+
+extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
+    .api_version = drivegate::kAdapterApiVersion,
+    .id = "modbus",
+    .summary = "any Modbus RTU / ASCII slave, described by a profile (docs/profiles.md)",
+    .options = drivegate::modbus_device::kOptionSchema.data(),
+    .option_count = drivegate::modbus_device::kOptionSchema.size(),
+    // Serial Line 2.5.1: 19200 baud and even parity are the defaults every device must offer.
+    .line = {.baud = 19200,
+             .parity = drivegate::Parity::even,
+             .data_bits = 8,
+             .stop_bits = 1,
+             .echo = false},
+    // Serial Line 2.2: 1..247 are slaves (0, the broadcast, is never polled).
+    .address_min = 1,
+    .address_max = 247,
+    .default_address = 1,
+    .streaming = false,  // a slave only ever answers
+    .create_driver = &drivegate::modbus_device::create_driver,
+    .create_simulator = &drivegate::modbus_device::create_simulator,
+    .demo = {.options = drivegate::modbus_device::kDemoOptions,
+             .option_count = std::size(drivegate::modbus_device::kDemoOptions),
+             .running_rpm = 1500},
+    .actions = nullptr,  // no maintenance actions
+    .action_count = 0,
+};

@@ -1,0 +1,113 @@
+#include "settings.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <string_view>
+
+namespace drivegate::modbus_device {
+namespace {
+
+struct ShippedProfile {
+  std::string_view name;
+  std::string_view text;
+};
+#include "shipped_profiles.inc"
+
+// A profile's name is a file name without a path: the safe set of the configuration's names.
+bool valid_name(std::string_view name) {
+  return !name.empty() && name.size() <= 64 &&
+         std::all_of(name.begin(), name.end(), [](char c) {
+           return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
+         });
+}
+
+// The file's text; nullopt when there is none. A file that is there but cannot be used is an
+// error (not a reason to look further), so a broken override never silently falls back.
+std::optional<std::string> read_file(const std::string& path, std::string& error) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return std::nullopt;
+  if (!S_ISREG(st.st_mode)) {
+    error = path + " is not a regular file";
+    return std::nullopt;
+  }
+  if (static_cast<std::size_t>(st.st_size) > kMaxProfileBytes) {
+    error = path + " is larger than " + std::to_string(kMaxProfileBytes) + " bytes";
+    return std::nullopt;
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  if (!in) {
+    error = "cannot read " + path;
+    return std::nullopt;
+  }
+  return s.str();
+}
+
+}  // namespace
+
+std::optional<ProfileText> find_profile(const std::string& name, std::string& error) {
+  error.clear();
+  if (name.find('/') != std::string::npos) {
+    auto text = read_file(name, error);
+    if (!text) {
+      if (error.empty()) error = "no profile file " + name;
+      return std::nullopt;
+    }
+    return ProfileText{std::move(*text), name};
+  }
+  if (!valid_name(name)) {
+    error = "'" + name + "' is neither a profile name (a-z, 0-9, '-', '_') nor a path";
+    return std::nullopt;
+  }
+  for (const char* dir : kProfileDirs) {
+    const std::string path = std::string(dir) + "/" + name + ".toml";
+    auto text = read_file(path, error);
+    if (text) return ProfileText{std::move(*text), path};
+    if (!error.empty()) return std::nullopt;
+  }
+  for (const ShippedProfile& p : kShippedProfiles) {
+    if (p.name == name) return ProfileText{std::string(p.text), "shipped " + name};
+  }
+  std::string known;
+  for (const ShippedProfile& p : kShippedProfiles) {
+    known += (known.empty() ? "" : ", ") + std::string(p.name);
+  }
+  error = "no profile '" + name + "' in " + kProfileDirs[0] + " or " + kProfileDirs[1] +
+          " (shipped: " + known + ")";
+  return std::nullopt;
+}
+
+std::optional<Settings> parse_settings(const Options& options, std::string& error) {
+  Settings s;
+  auto text = find_profile(options.string("profile"), error);
+  if (!text) {
+    error = "option profile: " + error;
+    return std::nullopt;
+  }
+  auto parsed = parse_profile(text->text, text->source);
+  if (auto* errors = std::get_if<std::vector<std::string>>(&parsed)) {
+    // Every error, so the profile is fixed in one pass; one line, as a factory's error is.
+    error = "option profile:";
+    for (const auto& e : *errors) error += (&e == &errors->front() ? " " : "; ") + e;
+    return std::nullopt;
+  }
+  s.profile = std::get<Profile>(std::move(parsed));
+  s.profile_source = std::move(text->source);
+  s.attempts = static_cast<std::uint8_t>(options.integer("attempts"));
+  s.comm_timeout = Millis(options.integer("comm_timeout_ms"));
+  return s;
+}
+
+std::optional<std::uint8_t> device_address(std::uint32_t address, std::string& error) {
+  if (address < 1 || address > kMaxSlave) {
+    error = "address " + std::to_string(address) + ": a Modbus slave is 1..247";
+    return std::nullopt;
+  }
+  return static_cast<std::uint8_t>(address);
+}
+
+}  // namespace drivegate::modbus_device

@@ -1,0 +1,284 @@
+#include "simulator.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "drivegate/sim_text.h"
+#include "values.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+// Exception codes (Application Protocol 7).
+constexpr std::uint8_t kIllegalFunction = 0x01;
+constexpr std::uint8_t kIllegalAddress = 0x02;
+constexpr std::uint8_t kIllegalValue = 0x03;
+// Quantities a read may ask (Application Protocol 6.1 - 6.4).
+constexpr std::uint16_t kMaxReadBits = 2000;
+constexpr std::uint16_t kMaxReadRegisters = 125;
+constexpr std::uint16_t kMaxWriteRegisters = 123;  // 6.12
+// A partial request older than this is stale: an RTU frame ends in silence, and a pty delivers
+// in bursts.
+constexpr Millis kStaleRx{100};
+
+bool is_bits(Table t) {
+  return t == Table::coil || t == Table::discrete;
+}
+
+}  // namespace
+
+ModbusSimulator::ModbusSimulator(std::uint8_t address, Profile profile)
+    : address_(address), profile_(std::move(profile)) {
+  for (const ProfilePoint& p : profile_.points) {
+    for (std::uint16_t w = 0; w < p.width(); ++w) {
+      memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}] = 0;
+    }
+    auto& span = span_[p.table];
+    if (span.second == 0 || p.address < span.first) span.first = p.address;
+    span.second = std::max<std::uint32_t>(span.second, std::uint32_t{p.address} + p.width());
+  }
+  drive();
+}
+
+// A read may cover the gaps between a table's points (a profile's max_gap reads through them, as
+// a real slave's register file allows), not beyond its first and last, nor an address the
+// operator made missing.
+bool ModbusSimulator::holds(Table table, std::uint32_t start, std::uint32_t count) const {
+  const auto it = span_.find(table);
+  if (it == span_.end() || start < it->second.first || start + count > it->second.second) {
+    return false;
+  }
+  for (std::uint32_t a = start; a < start + count; ++a) {
+    if (missing_.contains({table, static_cast<std::uint16_t>(a)})) return false;
+  }
+  return true;
+}
+
+Bytes ModbusSimulator::on_receive(ByteView rx, TimePoint now) {
+  if (last_rx_ && now - *last_rx_ > kStaleRx) rx_.clear();
+  last_rx_ = now;
+  rx_.insert(rx_.end(), rx.begin(), rx.end());
+  Bytes out;
+  while (!rx_.empty()) {
+    const Decoded<Adu> d = decode_request(profile_.line.framing, rx_);
+    if (d.status == DecodeStatus::incomplete) break;
+    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(d.consumed));
+    if (d.status == DecodeStatus::bad) continue;  // a slave ignores a frame it cannot check
+    if (d.frame.address != address_ && d.frame.address != kBroadcast) continue;
+    if (silent_) continue;
+    const Bytes reply = handle(d.frame.pdu);
+    if (d.frame.address == kBroadcast) continue;  // Serial Line 2.2: no reply to a broadcast
+    const Bytes frame = encode(profile_.line.framing, address_, reply);
+    out.insert(out.end(), frame.begin(), frame.end());
+  }
+  return out;
+}
+
+Bytes ModbusSimulator::on_tick(TimePoint) {
+  return {};
+}
+
+Bytes ModbusSimulator::handle(ByteView pdu) {
+  switch (pdu[0]) {
+    case fc::read_coils:
+      return read(Table::coil, pdu);
+    case fc::read_discrete_inputs:
+      return read(Table::discrete, pdu);
+    case fc::read_holding_registers:
+      return read(Table::holding, pdu);
+    case fc::read_input_registers:
+      return read(Table::input, pdu);
+    case fc::write_single_coil:
+    case fc::write_single_register:
+    case fc::write_multiple_registers:
+      return write(pdu);
+    default:
+      return exception_pdu(pdu[0], kIllegalFunction);
+  }
+}
+
+Bytes ModbusSimulator::read(Table table, ByteView pdu) {
+  if (pdu.size() != 5) return exception_pdu(pdu[0], kIllegalValue);
+  const std::uint16_t start = be16(pdu[1], pdu[2]);
+  const std::uint16_t count = be16(pdu[3], pdu[4]);
+  if (count == 0 || count > (is_bits(table) ? kMaxReadBits : kMaxReadRegisters)) {
+    return exception_pdu(pdu[0], kIllegalValue);
+  }
+  if (!holds(table, start, count)) return exception_pdu(pdu[0], kIllegalAddress);
+  Bytes out = {pdu[0]};
+  const auto at = [&](std::uint32_t a) {
+    const auto it = memory_.find({table, static_cast<std::uint16_t>(a)});
+    return it == memory_.end() ? std::uint16_t{0} : it->second;
+  };
+  if (is_bits(table)) {
+    out.push_back(static_cast<std::uint8_t>((count + 7) / 8));
+    for (std::uint32_t i = 0; i < count; i += 8) {
+      std::uint8_t byte = 0;
+      for (std::uint32_t b = 0; b < 8 && i + b < count; ++b) {
+        if (at(start + i + b) != 0) byte = static_cast<std::uint8_t>(byte | (1u << b));
+      }
+      out.push_back(byte);
+    }
+  } else {
+    out.push_back(static_cast<std::uint8_t>(2 * count));
+    for (std::uint32_t i = 0; i < count; ++i) put_be16(out, at(start + i));
+  }
+  return out;
+}
+
+Bytes ModbusSimulator::write(ByteView pdu) {
+  const std::uint8_t fn = pdu[0];
+  if (fn == fc::write_single_coil || fn == fc::write_single_register) {
+    if (pdu.size() != 5) return exception_pdu(fn, kIllegalValue);
+    const std::uint16_t address = be16(pdu[1], pdu[2]);
+    const std::uint16_t value = be16(pdu[3], pdu[4]);
+    const Table table = fn == fc::write_single_coil ? Table::coil : Table::holding;
+    // 6.5: a coil is written ON with 0xFF00, OFF with 0x0000; anything else is illegal.
+    if (table == Table::coil && value != 0xFF00 && value != 0x0000) {
+      return exception_pdu(fn, kIllegalValue);
+    }
+    if (!holds(table, address, 1)) return exception_pdu(fn, kIllegalAddress);
+    store(table, address, table == Table::coil ? (value != 0 ? 1 : 0) : value);
+    return Bytes(pdu.begin(), pdu.end());  // the echo
+  }
+  // FC 16: address, quantity, byte count, values (6.12).
+  if (pdu.size() < 6) return exception_pdu(fn, kIllegalValue);
+  const std::uint16_t address = be16(pdu[1], pdu[2]);
+  const std::uint16_t count = be16(pdu[3], pdu[4]);
+  if (count == 0 || count > kMaxWriteRegisters || pdu[5] != 2 * count ||
+      pdu.size() != 6u + 2u * count) {
+    return exception_pdu(fn, kIllegalValue);
+  }
+  if (!holds(Table::holding, address, count)) return exception_pdu(fn, kIllegalAddress);
+  for (std::uint16_t i = 0; i < count; ++i) {
+    store(Table::holding, static_cast<std::uint16_t>(address + i),
+          be16(pdu[6 + 2 * i], pdu[7 + 2 * i]));
+  }
+  return Bytes(pdu.begin(), pdu.begin() + 5);
+}
+
+void ModbusSimulator::store(Table table, std::uint16_t address, std::uint16_t word) {
+  memory_[{table, address}] = word;
+  const CommonBindings& c = profile_.common;
+  const ValueBinding* control = c.stop ? &*c.stop : c.run_forward ? &*c.run_forward : nullptr;
+  if (control != nullptr) {
+    const ProfilePoint& p = profile_.points[control->point];
+    if (table == p.table && address == p.address) command(word);
+  }
+  drive();
+}
+
+// The control word as the profile's drive takes it: its stop, run and reset values.
+void ModbusSimulator::command(std::uint16_t word) {
+  const CommonBindings& c = profile_.common;
+  if (c.reset_fault && word == c.reset_fault->value) {
+    fault_ = 0;
+  } else if (c.stop && word == c.stop->value) {
+    running_ = false;
+  } else if (c.run_forward && word == c.run_forward->value && fault_ == 0) {
+    running_ = true;
+    reverse_ = false;
+  } else if (c.run_reverse && word == c.run_reverse->value && fault_ == 0) {
+    running_ = true;
+    reverse_ = true;
+  }
+}
+
+std::optional<double> ModbusSimulator::point_value(std::size_t point) const {
+  const ProfilePoint& p = profile_.points[point];
+  std::vector<std::uint16_t> words;
+  for (std::uint16_t w = 0; w < p.width(); ++w) {
+    words.push_back(memory_.at({p.table, static_cast<std::uint16_t>(p.address + w)}));
+  }
+  return raw_of(p, words) * p.scale;
+}
+
+void ModbusSimulator::set_point(std::size_t point, double engineering) {
+  const ProfilePoint& p = profile_.points[point];
+  const auto words = words_for(p, engineering);
+  if (!words) return;
+  for (std::uint16_t w = 0; w < p.width(); ++w) {
+    memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}] = (*words)[w];
+  }
+}
+
+// The drive behind the registers: the run and fault bits, the fault code, and the actual speed,
+// which is the reference while running (in the reverse direction negative) and 0 otherwise.
+void ModbusSimulator::drive() {
+  const CommonBindings& c = profile_.common;
+  const auto set_bit = [&](const std::optional<BitBinding>& b, bool on) {
+    if (!b) return;
+    const ProfilePoint& p = profile_.points[b->point];
+    auto& word = memory_[{p.table, p.address}];
+    if (p.type == ValueType::bit) {
+      word = on ? 1 : 0;
+    } else {
+      const auto mask = static_cast<std::uint16_t>(1u << b->bit);
+      word = static_cast<std::uint16_t>(on ? (word | mask) : (word & ~mask));
+    }
+  };
+  if (fault_ != 0) running_ = false;  // a trip stops the output
+  set_bit(c.running, running_);
+  set_bit(c.fault, fault_ != 0);
+  if (c.fault_code) set_point(c.fault_code->point, fault_ * profile_.points[c.fault_code->point].scale);
+  if (c.speed_rpm) {
+    double speed = 0;
+    if (running_ && c.setpoint_rpm) speed = point_value(*c.setpoint_rpm).value_or(0);
+    set_point(*c.speed_rpm, reverse_ ? -speed : speed);
+  }
+}
+
+std::string ModbusSimulator::state() const {
+  std::ostringstream s;
+  s << "ok " << profile_.name << (running_ ? (reverse_ ? " running reverse" : " running forward")
+                                           : " stopped")
+    << ", fault " << fault_ << (silent_ ? ", silent" : "");
+  for (std::size_t i = 0; i < profile_.points.size(); ++i) {
+    s << "\n  " << profile_.points[i].name << " = " << point_value(i).value_or(0);
+  }
+  return s.str();
+}
+
+std::string ModbusSimulator::control(std::string_view line, TimePoint) {
+  const auto w = split_words(line);
+  const std::string usage =
+      "commands: state | fault N (a native fault code; 0 clears) | set POINT VALUE | "
+      "missing TABLE ADDRESS | silent on|off | help";
+  if (w.empty() || w[0] == "help") return "ok " + usage;
+  if (w[0] == "state") return state();
+  if (w[0] == "fault" && w.size() == 2) {
+    const auto code = parse_unsigned(w[1], 0xFFFF);
+    if (!code) return "error: fault takes a number 0..65535";
+    fault_ = *code;
+    drive();
+    return "ok fault " + std::to_string(fault_);
+  }
+  if (w[0] == "set" && w.size() == 3) {
+    const auto point = profile_.find(w[1]);
+    if (!point) return "error: no point " + w[1];
+    char* end = nullptr;
+    const double v = std::strtod(w[2].c_str(), &end);
+    if (end == w[2].c_str() || *end != '\0' || !words_for(profile_.points[*point], v)) {
+      return "error: " + w[2] + " is not a value of " + w[1];
+    }
+    set_point(*point, v);
+    return "ok " + w[1] + " = " + w[2];
+  }
+  if (w[0] == "missing" && w.size() == 3) {
+    std::optional<Table> table;
+    for (std::size_t i = 0; i < kProfileTableNames.size(); ++i) {
+      if (kProfileTableNames[i] == w[1]) table = static_cast<Table>(i);
+    }
+    const auto address = parse_unsigned(w[2], 0xFFFF);
+    if (!table || !address) return "error: missing TABLE ADDRESS (holding 202, input 7, ...)";
+    missing_.insert({*table, static_cast<std::uint16_t>(*address)});
+    return "ok " + w[1] + " " + w[2] + " answers illegal data address from now on";
+  }
+  if (w[0] == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
+    silent_ = w[1] == "on";
+    return "ok silent " + w[1];
+  }
+  return "error: unknown command '" + std::string(line) + "'; " + usage;
+}
+
+}  // namespace drivegate::modbus_device

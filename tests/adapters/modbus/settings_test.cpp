@@ -1,0 +1,71 @@
+// Finding a profile by name or path, and what the options make of it.
+#include "settings.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+TEST(ModbusSettings, TheShippedExampleIsFoundByName) {
+  std::string error;
+  const auto found = find_profile("example-vfd", error);
+  ASSERT_TRUE(found) << error;
+  // /etc/drivegate/profiles or /usr/share/drivegate/profiles first, where installed.
+  if (found->source == "shipped example-vfd") {
+    EXPECT_NE(found->text.find("name = \"example-vfd\""), std::string::npos);
+  }
+}
+
+TEST(ModbusSettings, APathIsReadAndItsErrorsNameItsLines) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("dg-profile-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "bad.toml";
+  std::ofstream(file) << "[profile]\nname = \"bad\"\nsource = \"m\"\n[[point]]\nname = \"a\"\n"
+                         "table = \"input\"\naddress = 1\ntype = \"u16\"\n[common]\n"
+                         "running = { point = \"a\", bit = 16 }\nspeed_rpm = \"b\"\n";
+  std::string error;
+  const auto s = parse_settings(
+      test::options_of(drivegate_adapter, {{"profile", file.string()}}), error);
+  EXPECT_FALSE(s);
+  // Every error, each with the file and its line, in file order, in one line.
+  EXPECT_NE(error.find("option profile: " + file.string() + ":10: common.running.bit: must be in "
+                       "0..15 (got 16); " + file.string() + ":11: common.speed_rpm: no point is "
+                       "called 'b'"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(error.find('\n'), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ModbusSettings, NamesThatAreNotNamesAndFilesThatAreNotFilesAreRefused) {
+  std::string error;
+  EXPECT_FALSE(find_profile("../etc/passwd", error));  // a path: read as one, if it is there
+  EXPECT_FALSE(find_profile("Example VFD", error));
+  EXPECT_NE(error.find("neither a profile name"), std::string::npos) << error;
+  EXPECT_FALSE(find_profile("/dev", error));
+  EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
+  EXPECT_FALSE(find_profile("/no/such/file.toml", error));
+  EXPECT_NE(error.find("no profile file"), std::string::npos) << error;
+}
+
+TEST(ModbusSettings, TheOptionsReachTheSettings) {
+  std::string error;
+  const auto s = parse_settings(
+      test::options_of(drivegate_adapter, {{"attempts", "5"}, {"comm_timeout_ms", "9000"}}),
+      error);
+  ASSERT_TRUE(s) << error;
+  EXPECT_EQ(s->attempts, 5);
+  EXPECT_EQ(s->comm_timeout, Millis(9000));
+  EXPECT_EQ(s->profile.name, "example-vfd");
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device
