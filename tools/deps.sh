@@ -19,7 +19,7 @@ build_packages="build-essential cmake pkg-config ccache libboost-dev libmodbus-d
 libtomlplusplus-dev libspdlog-dev libsystemd-dev libssl-dev libmosquitto-dev protobuf-compiler
 libprotobuf-dev mbpoll"
 # The tests' own: GoogleTest, and the programs the end-to-end tests run beside the daemon.
-test_packages="libgtest-dev libgmock-dev openssl python3-pymodbus python3-serial-asyncio ser2net
+test_packages="libgtest-dev libgmock-dev openssl python3-pymodbus python3-serial-asyncio ser2net socat
 chromium prometheus tshark mosquitto mosquitto-clients"
 
 profile="test"

@@ -1,0 +1,65 @@
+#!/usr/bin/python3
+"""A Modbus RTU / ASCII slave nobody here wrote: pymodbus's serial server (Debian's
+python3-pymodbus) holding the registers of the example-vfd profile
+(adapters/modbus/profiles/example-vfd.toml), for tests/e2e/modbus_profile_e2e_test.cpp.
+
+Every write it takes is printed on stdout as `write TABLE ADDRESS VALUE...`, so the test sees what
+reached the slave. Units other than --unit get no answer at all, as from a slave that is not there.
+"""
+import argparse
+import struct
+import sys
+
+from pymodbus.datastore import ModbusServerContext, ModbusSlaveContext, ModbusSparseDataBlock
+from pymodbus.server import StartSerialServer
+from pymodbus.transaction import ModbusAsciiFramer, ModbusRtuFramer
+
+
+class Logged(ModbusSparseDataBlock):
+    """A sparse block (only the addresses given exist; others answer exception 02) that prints
+    every write."""
+
+    def __init__(self, table, values):
+        super().__init__(values)
+        self.table = table
+
+    def setValues(self, address, values, *args, **kwargs):  # noqa: N802 (pymodbus's name)
+        super().setValues(address, values, *args, **kwargs)
+        values = values if isinstance(values, list) else [values]
+        print(f"write {self.table} {address} " + " ".join(str(int(v)) for v in values),
+              flush=True)
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--port", required=True)
+    p.add_argument("--unit", type=int, default=7)
+    p.add_argument("--framing", choices=["rtu", "ascii"], default="rtu")
+    p.add_argument("--status", type=int, default=0, help="holding 100: bit 2 run, bit 3 fault")
+    p.add_argument("--speed", type=int, default=0, help="input 200, 0.1 rpm")
+    p.add_argument("--current", type=float, default=12.5, help="input 202..203, f32, low word first")
+    p.add_argument("--fault", type=int, default=0, help="input 210: the native fault number")
+    p.add_argument("--no-control", action="store_true", help="no holding 0: writes to it fail")
+    a = p.parse_args()
+
+    high, low = struct.unpack(">HH", struct.pack(">f", a.current))
+    holding = {1: 0, 100: a.status}
+    if not a.no_control:
+        holding[0] = 0x0006
+    # 201 is not a point of the profile but a register of the slave: the profile's max_gap reads
+    # through it.
+    inputs = {200: a.speed & 0xFFFF, 201: 0, 202: low, 203: high, 210: a.fault}
+    slave = ModbusSlaveContext(hr=Logged("holding", holding), ir=Logged("input", inputs),
+                               zero_mode=True)
+    context = ModbusServerContext(slaves={a.unit: slave}, single=False)
+    framer = ModbusRtuFramer if a.framing == "rtu" else ModbusAsciiFramer
+    print("ready", flush=True)
+    # A pseudo-terminal carries bytes, not bits on a wire, and Linux refuses a parity setting on
+    # some (tcsetattr: EINVAL): this end is opened 8N1; the daemon's end is set as the bus says.
+    StartSerialServer(context=context, framer=framer, port=a.port, baudrate=19200, parity="N",
+                      stopbits=1, bytesize=8, ignore_missing_slaves=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
