@@ -29,6 +29,11 @@ inline constexpr std::uint8_t kMaxSlave = 247;
 inline constexpr std::size_t kMaxPdu = 253;
 // An exception reply's function code has its top bit set (Application Protocol 7).
 inline constexpr std::uint8_t kExceptionBit = 0x80;
+// Quantities one request may carry: 1..2000 coils or discrete inputs read (6.1, 6.2), 1..125
+// registers read (6.3, 6.4), 1..123 registers written (6.12).
+inline constexpr std::uint16_t kMaxReadBits = 2000;
+inline constexpr std::uint16_t kMaxReadRegisters = 125;
+inline constexpr std::uint16_t kMaxWriteRegisters = 123;
 
 // Function codes the codec knows the reply length of (Application Protocol 6.x). Any other is
 // still forwarded in pass-through; its RTU reply is delimited by its CRC (see decode_reply).

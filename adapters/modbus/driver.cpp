@@ -20,10 +20,6 @@ Millis ceil_ms(std::chrono::nanoseconds d) {
   return std::chrono::ceil<Millis>(d);
 }
 
-bool is_bit_table(Table t) {
-  return t == Table::coil || t == Table::discrete;
-}
-
 // The register-map face of a profile point.
 PointSpec spec_of(const ProfilePoint& p) {
   PointSpec s;
@@ -106,13 +102,24 @@ void ModbusDriver::plan(Group& g) const {
   g.blocks.insert(g.blocks.end(), b.begin(), b.end());
 }
 
-// The longest one exchange of this device takes: every attempt's wait and the engine's guard
-// after it, the gap and the longest frames there and back.
-Millis ModbusDriver::turn() const {
-  const std::size_t longest = profile_.line.framing == Framing::rtu ? kLongestRtu : kLongestAscii;
+// RTU frames are preceded by 3.5 characters of silence, at least the fixed 1.75 ms; ASCII frames
+// start with ':' and need none.
+Millis ModbusDriver::inter_frame_gap() const {
+  if (profile_.line.framing != Framing::rtu) return Millis(0);
+  return ceil_ms(std::max<std::chrono::nanoseconds>(timing_.char_time * 7 / 2, kFixedSilence));
+}
+
+// One exchange whose frames there and back are at most `longest` bytes each: every attempt's
+// wait and the engine's guard after it, the gap and the frames on the wire.
+Millis ModbusDriver::exchange_time(std::size_t longest) const {
   const Millis wire = ceil_ms(timing_.char_time * static_cast<long>(2 * longest));
-  return timing_.attempts * (unanswered_attempt(Millis(profile_.modbus.timeout_ms)) +
-                             traits().inter_frame_gap + wire);
+  return timing_.attempts *
+         (unanswered_attempt(Millis(profile_.modbus.timeout_ms)) + inter_frame_gap() + wire);
+}
+
+// The longest one exchange of this device takes.
+Millis ModbusDriver::turn() const {
+  return exchange_time(profile_.line.framing == Framing::rtu ? kLongestRtu : kLongestAscii);
 }
 
 Millis ModbusDriver::send_limit() const {
@@ -122,15 +129,11 @@ Millis ModbusDriver::send_limit() const {
 DriverTraits ModbusDriver::traits() const {
   DriverTraits t;
   t.comm_timeout = timing_.comm_timeout;
-  if (profile_.line.framing == Framing::rtu) {
-    t.inter_frame_gap = ceil_ms(std::max<std::chrono::nanoseconds>(timing_.char_time * 7 / 2,
-                                                                    kFixedSilence));
-  }
+  t.inter_frame_gap = inter_frame_gap();
   // A write settles within send_limit() and one turn of its own; a request holds at most two
-  // that need the line (a setpoint, then a command).
-  const Millis one = timing_.attempts * (unanswered_attempt(Millis(profile_.modbus.timeout_ms)) +
-                                         t.inter_frame_gap +
-                                         ceil_ms(timing_.char_time * 2 * kLongestAscii));
+  // that need the line (a setpoint, then a command). Counted with ASCII's longest frames
+  // whatever the framing: the backstop is never shorter than the driver's own deadlines.
+  const Millis one = exchange_time(kLongestAscii);
   t.write_timeout = std::max(kWriteTimeoutFloor, 2 * (2 * one + kOtherTurnAllowance) +
                                                      kDeadlineMargin);
   return t;
@@ -152,11 +155,7 @@ Exchange ModbusDriver::exchange(const Job& j) const {
   ex.reply = ReplyMode::expected;
   // The profile's timeout, and the time the longest reply to this request takes on the wire.
   std::size_t reply_bytes = 8;
-  if (j.read) {
-    const std::size_t data = is_bit_table(j.read->table) ? (j.read->count + 7u) / 8u
-                                                         : 2u * j.read->count;
-    reply_bytes = 5 + data;
-  }
+  if (j.read) reply_bytes = 5 + data_bytes(*j.read);
   if (profile_.line.framing == Framing::ascii) reply_bytes = 2 * reply_bytes + 3;
   ex.timeout = Millis(profile_.modbus.timeout_ms) +
                ceil_ms(timing_.char_time * static_cast<long>(reply_bytes));
@@ -225,7 +224,7 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
   if (inflight_->read && !exception) {
     // A read reply carries exactly the bytes asked for (Application Protocol 6.1 - 6.4).
     const Block& b = *inflight_->read;
-    const std::size_t data = is_bit_table(b.table) ? (b.count + 7u) / 8u : 2u * b.count;
+    const std::size_t data = data_bytes(b);
     if (a.pdu.size() != 2 + data || a.pdu[1] != data) return {RxKind::foreign, d.consumed};
   }
   const Job job = std::move(*inflight_);

@@ -90,6 +90,8 @@ class ModbusDriver final : public Driver {
   // driver.cpp
   void plan(Group& g) const;
   [[nodiscard]] Exchange exchange(const Job& j) const;
+  [[nodiscard]] Millis inter_frame_gap() const;
+  [[nodiscard]] Millis exchange_time(std::size_t longest) const;
   [[nodiscard]] Millis turn() const;
   [[nodiscard]] Millis send_limit() const;
   [[nodiscard]] Job read_job(const Block& b) const;

@@ -33,7 +33,7 @@ std::vector<Block> plan_reads(const Profile& profile, std::span<const std::size_
   std::vector<Block> blocks;
   for (const std::size_t i : order) {
     const ProfilePoint& p = profile.points[i];
-    const bool bits = p.table == Table::coil || p.table == Table::discrete;
+    const bool bits = is_bit_table(p.table);
     const std::uint32_t limit = bits ? profile.modbus.max_bits : profile.modbus.max_registers;
     const std::uint32_t end = std::uint32_t{p.address} + p.width();  // one past the point
     if (!blocks.empty()) {

@@ -25,6 +25,12 @@ struct Block {
 // The function code that reads `table`.
 std::uint8_t read_function(Table table);
 
+// The data bytes a read reply to `b` carries: its bits packed eight a byte, or two a register
+// (Application Protocol 6.1 - 6.4).
+constexpr std::size_t data_bytes(const Block& b) {
+  return is_bit_table(b.table) ? (b.count + 7u) / 8u : 2u * b.count;
+}
+
 // Blocks reading `points` (indices into profile.points), table by table (coils, discrete inputs,
 // input registers, holding registers) and by address. Greedy from the lowest address, which
 // gives the fewest blocks: a point joins the block before it when the registers (or bits) between

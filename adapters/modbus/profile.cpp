@@ -48,11 +48,6 @@ std::optional<Fault> fault_named(std::string_view name) {
   return std::nullopt;
 }
 
-std::string fault_list() {
-  std::string out;
-  for (const auto n : kFaultNames) out += (out.empty() ? "" : ", ") + std::string(n);
-  return out;
-}
 
 // The line an error names ("SOURCE:LINE: ..."), 0 when it names none.
 unsigned long line_in(const std::string& error, const std::string& source) {
@@ -113,12 +108,7 @@ class Parser {
     r.expect({"name", "description", "source"});
     if (auto name = r.string("name", true)) {
       // Found by name in the profile folders: a file name's safe set ("example-vfd").
-      const bool ok = !name->empty() && name->size() <= 64 &&
-                      std::all_of(name->begin(), name->end(), [](char c) {
-                        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' ||
-                               c == '_';
-                      });
-      if (!ok) {
+      if (!valid_profile_name(*name)) {
         diag_.error(r.node("name"), "profile.name",
                     "must be 1..64 characters of a-z, 0-9, '-' and '_' (got '" + *name + "')");
       }
@@ -149,12 +139,13 @@ class Parser {
     TableReader r(*t, "modbus", diag_);
     r.expect({"max_registers", "max_bits", "max_gap", "write", "timeout_ms"});
     ModbusSpec& m = profile_.modbus;
-    // Application Protocol 6.3 / 6.4: 1..125 registers per read; 6.1 / 6.2: 1..2000 bits.
-    if (auto v = r.integer("max_registers", 1, 125, false)) {
+    if (auto v = r.integer("max_registers", 1, kMaxReadRegisters, false)) {
       m.max_registers = static_cast<std::uint16_t>(*v);
     }
-    if (auto v = r.integer("max_bits", 1, 2000, false)) m.max_bits = static_cast<std::uint16_t>(*v);
-    if (auto v = r.integer("max_gap", 0, 124, false)) m.max_gap = static_cast<std::uint16_t>(*v);
+    if (auto v = r.integer("max_bits", 1, kMaxReadBits, false)) {
+      m.max_bits = static_cast<std::uint16_t>(*v);
+    }
+    if (auto v = r.integer("max_gap", 0, kMaxReadRegisters - 1, false)) m.max_gap = static_cast<std::uint16_t>(*v);
     if (auto w = choice(r, diag_, "write", kWriteFunctionNames, false)) {
       m.write = static_cast<WriteFunction>(*w);
     }
@@ -228,7 +219,7 @@ class Parser {
 
   // The type fits the table and the point fits the address space and the device's reads.
   bool check_shape(TableReader& r, const ProfilePoint& p) {
-    const bool bit_table = p.table == Table::coil || p.table == Table::discrete;
+    const bool bit_table = is_bit_table(p.table);
     if (bit_table != (p.type == ValueType::bit)) {
       diag_.error(r.node("type"), "point.type",
                   bit_table ? "a coil or discrete input is of type bit"
@@ -384,7 +375,7 @@ class Parser {
     if (!fault) {
       diag_.error(&n, r.qualified(key),
                   (s != nullptr ? "unknown fault label '" + s->get() + "'" : "must be a label") +
-                      " (known: " + fault_list() + ")");
+                      " (known: " + names_list(kFaultNames) + ")");
     }
     return fault;
   }
@@ -471,6 +462,12 @@ class Parser {
 };
 
 }  // namespace
+
+bool valid_profile_name(std::string_view name) {
+  return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
+           return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
+         });
+}
 
 std::optional<std::size_t> Profile::find(std::string_view point) const {
   for (std::size_t i = 0; i < points.size(); ++i) {

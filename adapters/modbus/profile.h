@@ -50,6 +50,14 @@ inline constexpr std::array<std::string_view, 2> kFramingNames = {"rtu", "ascii"
 inline constexpr std::array<std::string_view, 4> kProfileTableNames = {"coil", "discrete", "input",
                                                                        "holding"};
 
+// Coils and discrete inputs hold bits; input and holding registers 16-bit words.
+constexpr bool is_bit_table(Table t) {
+  return t == Table::coil || t == Table::discrete;
+}
+
+// A profile's name, found as a file name: 1..64 characters of a-z, 0-9, '-' and '_'.
+bool valid_profile_name(std::string_view name);
+
 struct ProfilePoint {
   std::string name;
   Table table = Table::holding;
@@ -108,10 +116,9 @@ struct LineSpec {
 };
 
 struct ModbusSpec {
-  // Registers per read: 125 is the protocol's limit (Application Protocol 6.3); coils and
-  // discrete inputs per read: 2000 (6.1).
-  std::uint16_t max_registers = 125;
-  std::uint16_t max_bits = 2000;
+  // Per read, the protocol's limits unless the device has lower ones (codec.h).
+  std::uint16_t max_registers = kMaxReadRegisters;
+  std::uint16_t max_bits = kMaxReadBits;
   std::uint16_t max_gap = 0;  // unused registers read through to join two blocks
   WriteFunction write = WriteFunction::single;
   std::uint32_t timeout_ms = 100;

@@ -16,14 +16,6 @@ struct ShippedProfile {
 };
 #include "shipped_profiles.inc"
 
-// A profile's name is a file name without a path: the safe set of the configuration's names.
-bool valid_name(std::string_view name) {
-  return !name.empty() && name.size() <= 64 &&
-         std::all_of(name.begin(), name.end(), [](char c) {
-           return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
-         });
-}
-
 // The file's text; nullopt when there is none. A file that is there but cannot be used is an
 // error (not a reason to look further), so a broken override never silently falls back.
 std::optional<std::string> read_file(const std::string& path, std::string& error) {
@@ -59,7 +51,7 @@ std::optional<ProfileText> find_profile(const std::string& name, std::string& er
     }
     return ProfileText{std::move(*text), name};
   }
-  if (!valid_name(name)) {
+  if (!valid_profile_name(name)) {
     error = "'" + name + "' is neither a profile name (a-z, 0-9, '-', '_') nor a path";
     return std::nullopt;
   }

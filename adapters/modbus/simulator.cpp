@@ -13,17 +13,9 @@ namespace {
 constexpr std::uint8_t kIllegalFunction = 0x01;
 constexpr std::uint8_t kIllegalAddress = 0x02;
 constexpr std::uint8_t kIllegalValue = 0x03;
-// Quantities a read may ask (Application Protocol 6.1 - 6.4).
-constexpr std::uint16_t kMaxReadBits = 2000;
-constexpr std::uint16_t kMaxReadRegisters = 125;
-constexpr std::uint16_t kMaxWriteRegisters = 123;  // 6.12
 // A partial request older than this is stale: an RTU frame ends in silence, and a pty delivers
 // in bursts.
 constexpr Millis kStaleRx{100};
-
-bool is_bits(Table t) {
-  return t == Table::coil || t == Table::discrete;
-}
 
 }  // namespace
 
@@ -101,7 +93,7 @@ Bytes ModbusSimulator::read(Table table, ByteView pdu) {
   if (pdu.size() != 5) return exception_pdu(pdu[0], kIllegalValue);
   const std::uint16_t start = be16(pdu[1], pdu[2]);
   const std::uint16_t count = be16(pdu[3], pdu[4]);
-  if (count == 0 || count > (is_bits(table) ? kMaxReadBits : kMaxReadRegisters)) {
+  if (count == 0 || count > (is_bit_table(table) ? kMaxReadBits : kMaxReadRegisters)) {
     return exception_pdu(pdu[0], kIllegalValue);
   }
   if (!holds(table, start, count)) return exception_pdu(pdu[0], kIllegalAddress);
@@ -110,7 +102,7 @@ Bytes ModbusSimulator::read(Table table, ByteView pdu) {
     const auto it = memory_.find({table, static_cast<std::uint16_t>(a)});
     return it == memory_.end() ? std::uint16_t{0} : it->second;
   };
-  if (is_bits(table)) {
+  if (is_bit_table(table)) {
     out.push_back(static_cast<std::uint8_t>((count + 7) / 8));
     for (std::uint32_t i = 0; i < count; i += 8) {
       std::uint8_t byte = 0;

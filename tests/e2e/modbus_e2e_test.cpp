@@ -17,15 +17,12 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// Debian's python3-pymodbus lives with the system interpreter (`python3` may be a pyenv shim).
-const std::string kPython = "/usr/bin/python3";
-
 std::filesystem::path slave_script() {
   return std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "tests/e2e/pymodbus_serial_slave.py";
 }
 
 bool have_tools() {
-  return std::filesystem::exists("/usr/bin/socat") && std::filesystem::exists(kPython) &&
+  return std::filesystem::exists("/usr/bin/socat") && std::filesystem::exists(kSystemPython) &&
          std::filesystem::exists("/usr/lib/python3/dist-packages/pymodbus");
 }
 
@@ -42,7 +39,7 @@ class PymodbusSlave {
       std::this_thread::sleep_for(20ms);
     }
     std::vector<std::string> argv = {"/bin/sh", "-c",
-                                     "exec " + kPython + " " + slave_script().string() +
+                                     "exec " + kSystemPython + " " + slave_script().string() +
                                          " --port " + (dir / "b").string()};
     for (const auto& x : args) argv[2] += " " + x;
     argv[2] += " > " + out_.string();

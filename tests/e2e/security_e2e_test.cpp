@@ -23,8 +23,6 @@ using ::testing::Not;
 namespace fs = std::filesystem;
 
 const fs::path kSource = DRIVEGATE_SOURCE_DIR;
-// Debian's python3-pymodbus lives with the system interpreter (`python3` may be a pyenv shim).
-const std::string kPython = "/usr/bin/python3";
 
 // `n` different free loopback ports.
 std::vector<int> free_ports(std::size_t n) {
@@ -172,7 +170,7 @@ class TlsClient {
  public:
   TlsClient(int port, const fs::path& certs, const std::string& name)
       : name_(name),
-        child_({kPython, (kSource / "tests/e2e/pymodbus_tls.py").string(), "127.0.0.1",
+        child_({kSystemPython, (kSource / "tests/e2e/pymodbus_tls.py").string(), "127.0.0.1",
                 std::to_string(port), (certs / "ca.pem").string(), file(certs, name, ".pem"),
                 file(certs, name, ".key")}) {}
   // Its first line: {"connect": "ok", ...} or {"connect": "failed", "error": ..., "ssl": ...}.

@@ -34,6 +34,9 @@ namespace drivegate::test {
 inline std::filesystem::path bin_dir() {
   return DRIVEGATE_TEST_BIN_DIR;
 }
+// Debian's python3-pymodbus lives with the system interpreter (`python3` may be a pyenv shim).
+inline const std::string kSystemPython = "/usr/bin/python3";
+
 inline std::filesystem::path plugin_dir() {
   return DRIVEGATE_TEST_PLUGIN_DIR;
 }

@@ -6,8 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
+#include "example_profile.h"
+
 
 namespace drivegate::modbus_device {
 namespace {
@@ -16,13 +16,7 @@ using namespace std::chrono_literals;
 
 constexpr std::uint8_t kSlave = 7;
 
-Profile example() {
-  std::ifstream in(std::string(DRIVEGATE_PROFILE_DIR) + "/example-vfd.toml");
-  std::stringstream s;
-  s << in.rdbuf();
-  auto r = parse_profile(s.str(), "example-vfd.toml");
-  return std::get<Profile>(std::move(r));
-}
+using shipped::example;
 
 Bytes frame(std::vector<std::uint8_t> pdu, std::uint8_t address = kSlave) {
   return encode(Framing::rtu, address, pdu);

@@ -5,21 +5,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
+#include "example_profile.h"
+
 
 namespace drivegate::modbus_device {
 namespace {
 
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
-
-std::string shipped(const std::string& name) {
-  std::ifstream in(std::string(DRIVEGATE_PROFILE_DIR) + "/" + name + ".toml");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 Profile parsed(const std::string& text) {
   auto r = parse_profile(text, "p.toml");
@@ -43,7 +36,7 @@ const std::string kHead =
     "[[point]]\nname = \"status\"\ntable = \"holding\"\naddress = 10\ntype = \"u16\"\n";  // 4-8
 
 TEST(Profile, TheExampleOfTheIssueReadsAsWritten) {
-  const Profile p = parsed(shipped("example-vfd"));
+  const Profile p = parsed(shipped::text("example-vfd"));
   EXPECT_EQ(p.name, "example-vfd");
   EXPECT_EQ(p.line.baud, 19200u);
   EXPECT_EQ(p.line.parity, Parity::even);

@@ -1,0 +1,28 @@
+// The shipped profiles as the tests read them: adapters/modbus/profiles/ (DRIVEGATE_PROFILE_DIR).
+#pragma once
+
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <variant>
+
+#include "profile.h"
+
+namespace drivegate::modbus_device::shipped {
+
+// The text of profiles/<name>.toml.
+inline std::string text(const std::string& name) {
+  std::ifstream in(std::string(DRIVEGATE_PROFILE_DIR) + "/" + name + ".toml");
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The example, parsed (its tests in profile_test.cpp say it parses).
+inline Profile example() {
+  auto r = parse_profile(text("example-vfd"), "example-vfd.toml");
+  return std::get<Profile>(std::move(r));
+}
+
+}  // namespace drivegate::modbus_device::shipped
