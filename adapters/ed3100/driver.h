@@ -21,14 +21,6 @@ namespace drivegate::ed3100 {
 // a request and its reply. The longest pair, a 13-byte 10 write and its 8-byte reply, takes
 // 96 ms at 2400 baud 8E1 (11 bits a character).
 inline constexpr Millis kWireAllowance{100};
-// Another device's turn the line may be busy with before a write: its time budget, 1 s unless
-// its configuration says otherwise (DeviceConfig::budget).
-inline constexpr Millis kOtherTurnAllowance{1000};
-// The API's default write_timeout, kept as the floor.
-inline constexpr Millis kWriteTimeoutFloor{3000};
-// The gateway looks at its write deadlines every 100 ms: room so that a driver's own answer
-// never races the gateway's.
-inline constexpr Millis kDeadlineMargin{200};
 
 class Ed3100Driver final : public Driver {
  public:

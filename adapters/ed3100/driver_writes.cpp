@@ -41,6 +41,8 @@ std::optional<Ed3100Driver::Write> Ed3100Driver::write_of(const WriteOp& op) con
       w.rpm = op.rpm;
       return w;
     }
+    case WriteOp::Target::forward:  // only ever handed to a driver that forwards()
+      return std::nullopt;
     case WriteOp::Target::point:
       break;
   }

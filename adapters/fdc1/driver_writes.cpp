@@ -27,6 +27,7 @@ Proposed Fdc1Driver::in_force() const {
 // say whether it takes a run, so such a run is sent and refused from the stream.
 WriteCheck Fdc1Driver::judge(const WriteOp& op, const Proposed& p) const {
   switch (op.target) {
+    case WriteOp::Target::forward:  // only ever handed to a driver that forwards()
     case WriteOp::Target::point:
       return WriteCheck::invalid_value;  // judge_point() judges those
     case WriteOp::Target::setpoint:

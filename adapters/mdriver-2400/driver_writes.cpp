@@ -21,6 +21,7 @@ Proposed Mdriver2400Driver::in_force() const {
 // with a part of a request, so it is judged as it is now.
 WriteCheck Mdriver2400Driver::judge(const WriteOp& op, const Proposed& p) const {
   switch (op.target) {
+    case WriteOp::Target::forward:  // only ever handed to a driver that forwards()
     case WriteOp::Target::point:
       return WriteCheck::invalid_value;  // no writable points of its own
     case WriteOp::Target::setpoint:

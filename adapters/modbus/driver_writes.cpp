@@ -62,6 +62,8 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       w.rpm = op.rpm;
       return w;
     }
+    case WriteOp::Target::forward:  // the pass-through driver's (passthrough.h)
+      return std::nullopt;
     case WriteOp::Target::point:
       break;
   }

@@ -70,6 +70,8 @@ WriteCheck NidecWasherDriver::judge(const WriteOp& op, Judged& state) {
     case WriteOp::Target::setpoint:
       // 5.3 - 5.6, 5.14: the speed is 16 bits, unsigned.
       return op.rpm < 0 || op.rpm > 0xFFFF ? WriteCheck::invalid_value : WriteCheck::ok;
+    case WriteOp::Target::forward:  // only ever handed to a driver that forwards()
+      return WriteCheck::invalid_value;
     case WriteOp::Target::point:
       break;
   }
@@ -120,6 +122,8 @@ WriteStatus NidecWasherDriver::apply(const WriteOp& op, Ticket t, TimePoint now)
       return apply_setpoint(static_cast<std::uint16_t>(op.rpm), t, deadline);
     case WriteOp::Target::point:
       return apply_point(op.point, op.value, t, deadline);
+    case WriteOp::Target::forward:  // judge() refused it
+      break;
   }
   return WriteStatus::invalid_value;
 }

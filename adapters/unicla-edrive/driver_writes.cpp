@@ -27,6 +27,7 @@ bool EDriveDriver::control_disabled() const {
 // after it), never with a part of a request, so they are judged as they are now.
 WriteCheck EDriveDriver::judge(const WriteOp& op, const Proposed& p) const {
   switch (op.target) {
+    case WriteOp::Target::forward:  // only ever handed to a driver that forwards()
     case WriteOp::Target::point:
       return WriteCheck::invalid_value;  // every point of its own is read-only
     case WriteOp::Target::setpoint:

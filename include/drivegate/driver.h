@@ -112,19 +112,24 @@ using Ticket = std::uint64_t;
 // table, access and the point's min / max already, and orders a request's setpoint before its
 // command ("run at this speed").
 struct WriteOp {
-  enum class Target : std::uint8_t { command, setpoint, point };
+  // forward: a Modbus request PDU for a driver that forwards() (pass-through), sent as it is.
+  enum class Target : std::uint8_t { command, setpoint, point, forward };
   Target target = Target::command;
   Command command = Command::stop;  // Target::command
   std::int32_t rpm = 0;             // Target::setpoint
   std::size_t point = 0;            // Target::point: index into points()
   Value value;                      // Target::point: the engineering value
+  Bytes pdu;                        // Target::forward: function code and data, 1..253 bytes
 
-  static WriteOp of_command(Command c) { return {Target::command, c, 0, 0, {}}; }
+  static WriteOp of_command(Command c) { return {Target::command, c, 0, 0, {}, {}}; }
   static WriteOp of_setpoint(std::int32_t rpm) {
-    return {Target::setpoint, Command::stop, rpm, 0, {}};
+    return {Target::setpoint, Command::stop, rpm, 0, {}, {}};
   }
   static WriteOp of_point(std::size_t index, Value v) {
-    return {Target::point, Command::stop, 0, index, std::move(v)};
+    return {Target::point, Command::stop, 0, index, std::move(v), {}};
+  }
+  static WriteOp of_forward(Bytes pdu) {
+    return {Target::forward, Command::stop, 0, 0, {}, std::move(pdu)};
   }
 };
 
@@ -152,6 +157,9 @@ enum class WriteResult : std::uint8_t {
 struct Completion {
   Ticket ticket;
   WriteResult result;
+  // A forwarded request's answer (WriteOp::Target::forward, result ok): the device's reply PDU
+  // exactly as it came, an exception reply included. Empty for every other write.
+  Bytes reply = {};
 };
 
 // What a request would leave in force, part by part: a driver's check() judges each part against
@@ -173,6 +181,17 @@ WriteCheck check_in_order(std::span<const WriteOp> request, Proposed proposed, J
   }
   return WriteCheck::ok;
 }
+
+// For a driver's own write deadlines, which must end before the gateway's backstop
+// (DriverTraits::write_timeout) so that nothing the PLC was told failed is still on its way.
+// Another device's turn the line may be busy with before a write: its time budget, 1 s unless its
+// configuration says otherwise (DeviceConfig::budget).
+inline constexpr Millis kOtherTurnAllowance{1000};
+// The default write_timeout below, kept as the floor of a driver's own.
+inline constexpr Millis kWriteTimeoutFloor{3000};
+// The gateway looks at its write deadlines every 100 ms (kTickPeriod): room so that a driver's
+// own answer never races the gateway's.
+inline constexpr Millis kDeadlineMargin{200};
 
 struct DriverTraits {
   Millis comm_timeout{6000};  // no good frame for this long: comm_lost
@@ -228,6 +247,14 @@ class Driver {
   virtual WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) = 0;
   // Outcomes of pending parts since the last call, appended to `out`.
   virtual void take_completions(std::vector<Completion>& out) = 0;
+
+  // Pass-through (adapters whose devices speak Modbus themselves: adapters/modbus). True when
+  // every Modbus request for this device's unit id is to be forwarded to it as it is, rather than
+  // served from the register map: the gateway then hands the driver each request's PDU as a
+  // WriteOp::Target::forward part (apply() -> pending; check() is not asked), on the device's
+  // write turns like any write, and answers the client with the Completion's reply. The gateway
+  // has judged the client's access to the function already.
+  [[nodiscard]] virtual bool forwards() const { return false; }
 };
 
 }  // namespace drivegate

@@ -75,6 +75,8 @@ class FakeDriver final : public Driver {
       case WriteOp::Target::point:
         writes.emplace_back(op.point, op.value);
         return answer;
+      case WriteOp::Target::forward:  // a fake driver does not forward
+        break;
     }
     return WriteStatus::invalid_value;
   }

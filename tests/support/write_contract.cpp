@@ -101,6 +101,9 @@ std::string describe(const Request& request) {
       case WriteOp::Target::point:
         out += "point " + std::to_string(op.point) + " = " + std::to_string(as_double(op.value));
         break;
+      case WriteOp::Target::forward:
+        out += "forward of " + std::to_string(op.pdu.size()) + " bytes";
+        break;
     }
   }
   return out;

@@ -8,7 +8,6 @@
 
 #include "example_profile.h"
 
-
 namespace drivegate::modbus_device {
 namespace {
 
@@ -125,7 +124,8 @@ TEST_F(ModbusDriverTest, ARunIsInForceOnlyOnceTheSlaveEchoedIt) {
   const Bytes request = frame({0x06, 0x00, 0x00, 0x00, 0x0F});
   ASSERT_EQ(sent(), request);
   EXPECT_EQ(answer(request).kind, RxKind::ack);  // the echo: no state in it
-  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(1u, WriteResult::ok)));
+  EXPECT_THAT(completions(), ::testing::ElementsAre(
+                                 ::testing::FieldsAre(1u, WriteResult::ok, ::testing::IsEmpty())));
   EXPECT_EQ(d.common().command, Command::run_forward);
 }
 
@@ -136,8 +136,8 @@ TEST_F(ModbusDriverTest, AnEchoOfAnotherValueIsNoConfirmation) {
   ASSERT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x00, 0x0F}));
   // The slave says it holds 0x0006 in the control word: it did not take the run.
   EXPECT_EQ(answer(frame({0x06, 0x00, 0x00, 0x00, 0x06})).kind, RxKind::ack);
-  EXPECT_THAT(completions(),
-              ::testing::ElementsAre(::testing::FieldsAre(3u, WriteResult::refused)));
+  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(3u, WriteResult::refused,
+                                                                         ::testing::IsEmpty())));
   EXPECT_EQ(d.common().command, Command::stop);
 }
 
@@ -147,8 +147,8 @@ TEST_F(ModbusDriverTest, AnExceptionRefusesTheWriteAndChangesNothing) {
   ASSERT_EQ(d.apply(run, 4, now), WriteStatus::pending);
   ASSERT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x08, 0x0F}));
   EXPECT_EQ(answer(frame({0x86, 0x04})).kind, RxKind::ack);
-  EXPECT_THAT(completions(),
-              ::testing::ElementsAre(::testing::FieldsAre(4u, WriteResult::refused)));
+  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(4u, WriteResult::refused,
+                                                                         ::testing::IsEmpty())));
   EXPECT_EQ(d.common().command, Command::stop);
 }
 
@@ -172,8 +172,8 @@ TEST_F(ModbusDriverTest, AStopOvertakesARunStillWaitingForTheLine) {
   const WriteOp stop = WriteOp::of_command(Command::stop);
   ASSERT_EQ(d.apply(run, 1, now), WriteStatus::pending);
   ASSERT_EQ(d.apply(stop, 2, now), WriteStatus::pending);
-  EXPECT_THAT(completions(),
-              ::testing::ElementsAre(::testing::FieldsAre(1u, WriteResult::no_response)));
+  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(
+                                 1u, WriteResult::no_response, ::testing::IsEmpty())));
   EXPECT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x00, 0x06}));  // the run never goes out
 }
 
@@ -218,8 +218,8 @@ TEST_F(ModbusDriverTest, CommLostFailsEveryWriteStillWaiting) {
   const WriteOp run = WriteOp::of_command(Command::run_forward);
   ASSERT_EQ(d.apply(run, 9, now), WriteStatus::pending);
   d.on_comm_lost(now);
-  EXPECT_THAT(completions(),
-              ::testing::ElementsAre(::testing::FieldsAre(9u, WriteResult::no_response)));
+  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(
+                                 9u, WriteResult::no_response, ::testing::IsEmpty())));
   EXPECT_FALSE(d.common().ready);
   EXPECT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));  // everything is asked again
 }
