@@ -1,6 +1,7 @@
-# cmake -DPROFILES="a.toml;b.toml" -DOUT=... -P embed_profiles.cmake: the shipped profiles as C++
+# cmake -DPROFILES="a.toml|b.toml" -DOUT=... -P embed_profiles.cmake: the shipped profiles as C++
 # raw string literals, so that the plugin finds them wherever it runs (the build tree, a test, a
 # fuzzer), after the copies in /etc/drivegate/profiles and /usr/share/drivegate/profiles.
+string(REPLACE "|" ";" PROFILES "${PROFILES}")
 set(body "")
 foreach(file IN LISTS PROFILES)
   get_filename_component(name "${file}" NAME_WE)

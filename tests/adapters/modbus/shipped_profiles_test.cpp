@@ -1,0 +1,325 @@
+// The shipped profiles of real drives against their documents (adapters/modbus/profiles/): each
+// loads and is found by name; its read plan is what its document's addresses make; and the
+// frames its document prints are the ones its driver sends and its simulator answers.
+//
+// Eaton M-Max: "M-Max Series Adjustable Frequency Drive, User Manual", MN04020003E, October 2013,
+// "Serial Interface (Modbus RTU)", p.140 - 141 ("Explanation of Function Code"): its example
+// frames, every CRC of which was checked (the FC 06 request prints its CRC as C2 C8, the bytes
+// of its response's C8 C2 swapped; C8 C2 is the CRC of those bytes).
+// ED3100 in the standard form: shared/specs/001_72ee6bb390071927.txt and shared/specs/README.md
+// "ed3100 (001)"; the ED3100's own adapter is compared with it in ed3100_standard_test.cpp.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "driver.h"
+#include "example_profile.h"
+#include "planner.h"
+#include "profile.h"
+#include "settings.h"
+#include "simulator.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::ElementsAre;
+
+Profile shipped_profile(const std::string& name) {
+  auto r = parse_profile(shipped::text(name), name + ".toml");
+  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) {
+    ADD_FAILURE() << ::testing::PrintToString(*errors);
+    return {};
+  }
+  return std::get<Profile>(std::move(r));
+}
+
+Bytes hex(std::initializer_list<std::uint8_t> bytes) {
+  return Bytes(bytes);
+}
+
+std::vector<std::uint8_t> read_pdu(std::uint8_t function, std::uint16_t start,
+                                   std::uint16_t count) {
+  std::vector<std::uint8_t> pdu = {function};
+  put_be16(pdu, start);
+  put_be16(pdu, count);
+  return pdu;
+}
+
+std::vector<std::uint8_t> words_pdu(std::uint8_t function, std::vector<std::uint16_t> words) {
+  std::vector<std::uint8_t> pdu = {function, static_cast<std::uint8_t>(2 * words.size())};
+  for (const std::uint16_t w : words) put_be16(pdu, w);
+  return pdu;
+}
+
+// The write results the driver reports, by ticket.
+std::vector<std::pair<Ticket, WriteResult>> completions(Driver& d) {
+  std::vector<Completion> done;
+  d.take_completions(done);
+  std::vector<std::pair<Ticket, WriteResult>> out;
+  for (const Completion& c : done) out.emplace_back(c.ticket, c.result);
+  return out;
+}
+
+// --- every shipped profile ---
+
+TEST(ShippedProfiles, EachLoadsIsNamedAfterItsFileAndIsFoundByName) {
+  std::size_t count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(DRIVEGATE_PROFILE_DIR)) {
+    if (entry.path().extension() != ".toml") continue;
+    ++count;
+    const std::string name = entry.path().stem().string();
+    SCOPED_TRACE(name);
+    const Profile p = shipped_profile(name);
+    EXPECT_EQ(p.name, name);
+    EXPECT_FALSE(p.source.empty());
+    std::string error;
+    const auto found = find_profile(name, error);
+    ASSERT_TRUE(found) << error;
+    // Built into the plugin (embed_profiles.cmake), unless an installed copy comes first.
+    if (found->source == "shipped " + name) {
+      EXPECT_EQ(found->text, shipped::text(name));
+    }
+  }
+  EXPECT_GE(count, 3u);  // example-vfd, ed3100-standard, eaton-m-max
+}
+
+// --- Eaton M-Max (MN04020003E) ---
+
+constexpr std::uint8_t kMmxSlave = 5;  // the address of every example on p.140 - 141
+
+// 9600 baud, no parity, 2 stop bits: 11 bits a character.
+ModbusDriver mmx_driver() {
+  return ModbusDriver(kMmxSlave, shipped_profile("eaton-m-max"),
+                      Timing{3, 3000ms, character_time(9600, Parity::none, 8, 2)}, 500ms);
+}
+
+TEST(EatonMMax, TheLineAndTheReadPlanFollowTheManual) {
+  const Profile p = shipped_profile("eaton-m-max");
+  // p.132: S2.4 factory setting 9600 baud, S2.6 factory setting none with 2 stop bits.
+  EXPECT_EQ(p.line.baud, 9600u);
+  EXPECT_EQ(p.line.parity, Parity::none);
+  EXPECT_EQ(p.line.stop_bits, 2);
+  // Two reads: the input process data ID 2001 - 2003 (ID 2002 read through), the output process
+  // data ID 2101 - 2111, each at its ID - 1 (p.136, p.140).
+  const auto plan = plan_reads(p);
+  ASSERT_EQ(plan.size(), 2u);
+  EXPECT_EQ(plan[0].table, Table::input);
+  EXPECT_EQ(plan[0].start, 2100);
+  EXPECT_EQ(plan[0].count, 11);
+  EXPECT_EQ(plan[1].table, Table::holding);
+  EXPECT_EQ(plan[1].start, 2000);
+  EXPECT_EQ(plan[1].count, 3);
+  // The control word's values (p.137), one of them the p.141 example's 0003 "anticlockwise, RUN".
+  const CommonBindings& c = p.common;
+  ASSERT_TRUE(c.stop && c.run_forward && c.run_reverse && c.reset_fault);
+  EXPECT_EQ(c.stop->value, 0x0000);
+  EXPECT_EQ(c.run_forward->value, 0x0001);
+  EXPECT_EQ(c.run_reverse->value, 0x0003);
+  EXPECT_EQ(c.reset_fault->value, 0x0004);
+  EXPECT_EQ(p.points[c.stop->point].address, 0x07D0);
+  EXPECT_FALSE(c.setpoint_rpm);  // ID 2003 is a % of the drive's own frequency range
+}
+
+TEST(EatonMMax, TheManualsReadsAddressTheProfilesSpeedAndCurrent) {
+  const Profile p = shipped_profile("eaton-m-max");
+  const ProfilePoint& speed = p.points[*p.find("motor_speed")];
+  const ProfilePoint& current = p.points[*p.find("motor_current")];
+  EXPECT_EQ(current.address, speed.address + 1);
+  // p.140, "Function Code 03": master request 05 03 0838 0002 4622; "Function Code 04": the
+  // same registers as input registers, 05 04 0838 0002 F3E2.
+  EXPECT_EQ(encode(Framing::rtu, kMmxSlave, read_pdu(0x03, speed.address, 2)),
+            hex({0x05, 0x03, 0x08, 0x38, 0x00, 0x02, 0x46, 0x22}));
+  EXPECT_EQ(encode(Framing::rtu, kMmxSlave, read_pdu(0x04, speed.address, 2)),
+            hex({0x05, 0x04, 0x08, 0x38, 0x00, 0x02, 0xF3, 0xE2}));
+}
+
+TEST(EatonMMax, ItsSimulatorAnswersTheManualsFunction04ExampleWithTheManualsReply) {
+  ModbusSimulator sim(kMmxSlave, shipped_profile("eaton-m-max"));
+  // p.140: motor speed 1495 rpm (05D7), motor current 0.24 A (0018).
+  ASSERT_EQ(sim.control("set motor_speed 1495", TimePoint{}).rfind("ok", 0), 0u);
+  ASSERT_EQ(sim.control("set motor_current 0.24", TimePoint{}).rfind("ok", 0), 0u);
+  EXPECT_EQ(sim.on_receive(hex({0x05, 0x04, 0x08, 0x38, 0x00, 0x02, 0xF3, 0xE2}), TimePoint{}),
+            hex({0x05, 0x04, 0x04, 0x05, 0xD7, 0x00, 0x18, 0x0E, 0xBA}));
+}
+
+TEST(EatonMMax, ItsSimulatorTakesTheManualsFunction10Example) {
+  ModbusSimulator sim(kMmxSlave, shipped_profile("eaton-m-max"));
+  // p.141: control word 0001 (run, FWD), general control word 0000, speed setpoint 2710 hex
+  // (10000 = 100.00 %), and the reply 05 10 07D0 0003 8101.
+  EXPECT_EQ(sim.on_receive(hex({0x05, 0x10, 0x07, 0xD0, 0x00, 0x03, 0x06, 0x00, 0x01, 0x00, 0x00,
+                                0x27, 0x10, 0xD1, 0x25}),
+                           TimePoint{}),
+            hex({0x05, 0x10, 0x07, 0xD0, 0x00, 0x03, 0x81, 0x01}));
+  const std::string state = sim.control("state", TimePoint{});
+  EXPECT_NE(state.find("running forward"), std::string::npos) << state;
+  EXPECT_NE(state.find("speed_setpoint = 100"), std::string::npos) << state;
+}
+
+TEST(EatonMMax, ItsDriverReadsTheOutputProcessDataIntoTheCommonBlock) {
+  ModbusDriver d = mmx_driver();
+  TimePoint now = TimePoint{} + 10s;
+  auto sent = [&] {
+    const auto ex = d.next_exchange(now);
+    return ex ? ex->frame : Bytes{};
+  };
+  // ID 2101 - 2111: READY and RUN, FWD; 49.83 Hz; 1495 rpm; 0.24 A (p.140's values); no error.
+  ASSERT_EQ(sent(), encode(Framing::rtu, kMmxSlave, read_pdu(0x04, 2100, 11)));
+  EXPECT_EQ(
+      d.on_receive(
+           encode(Framing::rtu, kMmxSlave,
+                  words_pdu(0x04, {0x0003, 0x0003, 9966, 4983, 1495, 24, 512, 498, 2300, 540, 0})),
+           now)
+          .kind,
+      RxKind::reply);
+  ASSERT_EQ(sent(), encode(Framing::rtu, kMmxSlave, read_pdu(0x03, 2000, 3)));
+  EXPECT_EQ(
+      d.on_receive(encode(Framing::rtu, kMmxSlave, words_pdu(0x03, {0x0001, 0, 10000})), now).kind,
+      RxKind::reply);
+  EXPECT_TRUE(d.common().ready);
+  EXPECT_TRUE(d.common().running);
+  EXPECT_EQ(d.common().speed_rpm, 1495);
+  EXPECT_TRUE(d.common().faults.empty());
+  const auto value = [&](std::string_view name) {
+    for (std::size_t i = 0; i < d.points().size(); ++i) {
+      if (d.points()[i].name == name) return as_double(d.values()[i]);
+    }
+    ADD_FAILURE() << "no point " << name;
+    return 0.0;
+  };
+  EXPECT_DOUBLE_EQ(value("motor_current"), 0.24);
+  EXPECT_DOUBLE_EQ(value("motor_frequency"), 49.83);
+  EXPECT_DOUBLE_EQ(value("speed_setpoint"), 100.0);
+  // A trip: status bit 3 (FAULT), RUN clear; the error code stays raw (the list is not mapped).
+  now += 500ms;
+  ASSERT_EQ(sent(), encode(Framing::rtu, kMmxSlave, read_pdu(0x04, 2100, 11)));
+  d.on_receive(encode(Framing::rtu, kMmxSlave,
+                      words_pdu(0x04, {0x0009, 0x0003, 0, 0, 0, 0, 0, 0, 0, 540, 9})),
+               now);
+  EXPECT_FALSE(d.common().running);
+  EXPECT_TRUE(d.common().faults.has(Fault::other));
+  EXPECT_EQ(d.common().native_fault, 9u);
+}
+
+TEST(EatonMMax, RunReverseIsTheManualsFunction06Example) {
+  ModbusDriver d = mmx_driver();
+  const TimePoint now = TimePoint{} + 10s;
+  const WriteOp reverse = WriteOp::of_command(Command::run_reverse);
+  ASSERT_EQ(d.check(std::span(&reverse, 1)), WriteCheck::ok);
+  ASSERT_EQ(d.apply(reverse, 1, now), WriteStatus::pending);
+  // p.141: 05 06 07D0 0003, "anticlockwise, RUN". The CRC is C8 C2 (printed so for the
+  // response; the request's C2 C8 has its bytes swapped).
+  const Bytes manual = hex({0x05, 0x06, 0x07, 0xD0, 0x00, 0x03, 0xC8, 0xC2});
+  const auto ex = d.next_exchange(now);
+  ASSERT_TRUE(ex);
+  EXPECT_EQ(ex->frame, manual);
+  // "The slave response is a copy of the master request if it is a normal response."
+  EXPECT_EQ(d.on_receive(manual, now).kind, RxKind::ack);
+  EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::ok)));
+  EXPECT_EQ(d.common().command, Command::run_reverse);
+  // The simulator of the profile answers it with the same copy.
+  ModbusSimulator sim(kMmxSlave, shipped_profile("eaton-m-max"));
+  EXPECT_EQ(sim.on_receive(manual, TimePoint{}), manual);
+}
+
+TEST(EatonMMax, StopAndResetAreTheControlWordsBits) {
+  ModbusDriver d = mmx_driver();
+  const TimePoint now = TimePoint{} + 10s;
+  const WriteOp stop = WriteOp::of_command(Command::stop);
+  ASSERT_EQ(d.apply(stop, 1, now), WriteStatus::pending);
+  EXPECT_EQ(
+      d.next_exchange(now)->frame,
+      encode(Framing::rtu, kMmxSlave, std::vector<std::uint8_t>{0x06, 0x07, 0xD0, 0x00, 0x00}));
+  d.on_no_reply(now);
+  const WriteOp reset = WriteOp::of_command(Command::reset_fault);
+  ASSERT_EQ(d.apply(reset, 2, now), WriteStatus::pending);
+  EXPECT_EQ(
+      d.next_exchange(now)->frame,
+      encode(Framing::rtu, kMmxSlave, std::vector<std::uint8_t>{0x06, 0x07, 0xD0, 0x00, 0x04}));
+  // No rpm setpoint: ID 2003 is a percentage, written as the point speed_setpoint.
+  const WriteOp setpoint = WriteOp::of_setpoint(1500);
+  EXPECT_EQ(d.check(std::span(&setpoint, 1)), WriteCheck::invalid_value);
+}
+
+// --- ED3100 answering in the standard form ---
+
+constexpr std::uint8_t kEd3100 = 0x1F;  // the document's examples' address
+
+TEST(Ed3100Standard, TheProfileReadsThreeTwoWordBlocks) {
+  const Profile p = shipped_profile("ed3100-standard");
+  // The dedicated adapter's line (adapters/ed3100/README.md, "Choices" 1): 9600 8E1.
+  EXPECT_EQ(p.line.baud, 9600u);
+  EXPECT_EQ(p.line.parity, Parity::even);
+  EXPECT_EQ(p.line.stop_bits, 1);
+  // Document "communication material structure": two data words at most a frame.
+  EXPECT_EQ(p.modbus.max_registers, 2);
+  const auto plan = plan_reads(p);
+  ASSERT_EQ(plan.size(), 3u);
+  EXPECT_EQ(plan[0], (Block{Table::holding,
+                            0x0D00,
+                            2,
+                            {*p.find("output_frequency"), *p.find("output_frequency_format")}}));
+  EXPECT_EQ(
+      plan[1],
+      (Block{Table::holding, 0x0E01, 2, {*p.find("drive_fault_code"), *p.find("state_word")}}));
+  EXPECT_EQ(
+      plan[2],
+      (Block{Table::holding, 0x2000, 2, {*p.find("command"), *p.find("frequency_reference")}}));
+  // specs README: 0x2000 = 0x001E forward continuous, 0x002E reverse continuous, 0x0001 stop;
+  // the document has no fault reset.
+  const CommonBindings& c = p.common;
+  EXPECT_EQ(c.run_forward->value, 0x001E);
+  EXPECT_EQ(c.run_reverse->value, 0x002E);
+  EXPECT_EQ(c.stop->value, 0x0001);
+  EXPECT_FALSE(c.reset_fault);
+}
+
+TEST(Ed3100Standard, TheDocumentsMonitorExampleInTheStandardFormIs42_28Hz) {
+  ModbusDriver d(kEd3100, shipped_profile("ed3100-standard"),
+                 Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_EQ(d.next_exchange(now)->frame, encode(Framing::rtu, kEd3100, read_pdu(0x03, 0x0D00, 2)));
+  // The document's monitor reply 1F 03 0D 00 10 84 41 48 47 D5, in the standard form
+  // (adapters/ed3100/README.md, "Golden vectors": 1F 03 04 10 84 41 48 70 BD): 42.28 Hz with
+  // format 0x4148 (two decimals, Hz, normal, stopped) = 1268 rpm at 4 poles. Stopped, this is
+  // the reference on display: the profile cannot tell (ed3100-standard.toml).
+  EXPECT_EQ(d.on_receive(hex({0x1F, 0x03, 0x04, 0x10, 0x84, 0x41, 0x48, 0x70, 0xBD}), now).kind,
+            RxKind::reply);
+  EXPECT_EQ(d.common().speed_rpm, 1268);
+  ASSERT_EQ(d.points()[0].name, "output_frequency_format");
+  EXPECT_EQ(std::get<std::int64_t>(d.values()[0]), 0x4148);
+}
+
+TEST(Ed3100Standard, TheDocumentsOwnFormIsNoReplyToTheProfile) {
+  ModbusDriver d(kEd3100, shipped_profile("ed3100-standard"),
+                 Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_TRUE(d.next_exchange(now));
+  // The document's own reply (register echoed where the byte count belongs): a standard master
+  // reads 0D as a byte count and waits for bytes that never come, so the drive must be set to
+  // answer in the standard form.
+  EXPECT_NE(
+      d.on_receive(hex({0x1F, 0x03, 0x0D, 0x00, 0x10, 0x84, 0x41, 0x48, 0x47, 0xD5}), now).kind,
+      RxKind::reply);
+  EXPECT_FALSE(d.common().ready);
+}
+
+TEST(Ed3100Standard, AStopIsTheDocumentsStopFrame) {
+  ModbusDriver d(kEd3100, shipped_profile("ed3100-standard"),
+                 Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+  const TimePoint now = TimePoint{} + 10s;
+  const WriteOp stop = WriteOp::of_command(Command::stop);
+  ASSERT_EQ(d.apply(stop, 1, now), WriteStatus::pending);
+  // Document, "Written stop order": 1F 06 20 00 00 01 40 74, answered with itself.
+  const Bytes document = hex({0x1F, 0x06, 0x20, 0x00, 0x00, 0x01, 0x40, 0x74});
+  EXPECT_EQ(d.next_exchange(now)->frame, document);
+  EXPECT_EQ(d.on_receive(document, now).kind, RxKind::ack);
+  EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::ok)));
+  // No fault reset in the document: refused before the line (0x03 at the PLC).
+  const WriteOp reset = WriteOp::of_command(Command::reset_fault);
+  EXPECT_EQ(d.check(std::span(&reset, 1)), WriteCheck::invalid_value);
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device
