@@ -57,7 +57,7 @@ int regmap(std::span<const std::string> args) {
       std::cerr << config_path.string() << ":" << dc.line << ": device " << error << "\n";
       return 1;
     }
-    devices.push_back({&dc, RegisterMap(driver->points())});
+    devices.push_back({&dc, RegisterMap(driver->points()), driver->forwards()});
   }
   std::vector<ServedOn> listeners;
   for (const auto& l : result.config->listeners) {

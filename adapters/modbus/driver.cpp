@@ -4,21 +4,11 @@
 #include <cmath>
 #include <numeric>
 
+#include "line_timing.h"
 #include "values.h"
 
 namespace drivegate::modbus_device {
 namespace {
-
-// Serial Line 2.5.1.1: frames are separated by at least 3.5 character times; above 19200 baud,
-// where that is less, by a fixed 1.75 ms.
-constexpr std::chrono::nanoseconds kFixedSilence = std::chrono::microseconds(1750);
-// The longest frame: 256 bytes in RTU, 513 characters in ASCII (Serial Line 2.5.1.1, 2.5.2.1).
-constexpr std::size_t kLongestRtu = 256;
-constexpr std::size_t kLongestAscii = 513;
-
-Millis ceil_ms(std::chrono::nanoseconds d) {
-  return std::chrono::ceil<Millis>(d);
-}
 
 // The register-map face of a profile point.
 PointSpec spec_of(const ProfilePoint& p) {
@@ -102,24 +92,15 @@ void ModbusDriver::plan(Group& g) const {
   g.blocks.insert(g.blocks.end(), b.begin(), b.end());
 }
 
-// RTU frames are preceded by 3.5 characters of silence, at least the fixed 1.75 ms; ASCII frames
-// start with ':' and need none.
 Millis ModbusDriver::inter_frame_gap() const {
-  if (profile_.line.framing != Framing::rtu) return Millis(0);
-  return ceil_ms(std::max<std::chrono::nanoseconds>(timing_.char_time * 7 / 2, kFixedSilence));
-}
-
-// One exchange whose frames there and back are at most `longest` bytes each: every attempt's
-// wait and the engine's guard after it, the gap and the frames on the wire.
-Millis ModbusDriver::exchange_time(std::size_t longest) const {
-  const Millis wire = ceil_ms(timing_.char_time * static_cast<long>(2 * longest));
-  return timing_.attempts *
-         (unanswered_attempt(Millis(profile_.modbus.timeout_ms)) + inter_frame_gap() + wire);
+  return modbus_device::inter_frame_gap(profile_.line.framing, timing_.char_time);
 }
 
 // The longest one exchange of this device takes.
 Millis ModbusDriver::turn() const {
-  return exchange_time(profile_.line.framing == Framing::rtu ? kLongestRtu : kLongestAscii);
+  return exchange_time(profile_.line.framing, timing_.char_time,
+                       Millis(profile_.modbus.timeout_ms), timing_.attempts,
+                       longest_frame(profile_.line.framing));
 }
 
 Millis ModbusDriver::send_limit() const {
@@ -131,11 +112,8 @@ DriverTraits ModbusDriver::traits() const {
   t.comm_timeout = timing_.comm_timeout;
   t.inter_frame_gap = inter_frame_gap();
   // A write settles within send_limit() and one turn of its own; a request holds at most two
-  // that need the line (a setpoint, then a command). Counted with ASCII's longest frames
-  // whatever the framing: the backstop is never shorter than the driver's own deadlines.
-  const Millis one = exchange_time(kLongestAscii);
-  t.write_timeout = std::max(kWriteTimeoutFloor, 2 * (2 * one + kOtherTurnAllowance) +
-                                                     kDeadlineMargin);
+  // that need the line (a setpoint, then a command).
+  t.write_timeout = write_backstop(turn(), 2);
   return t;
 }
 
@@ -157,8 +135,7 @@ Exchange ModbusDriver::exchange(const Job& j) const {
   std::size_t reply_bytes = 8;
   if (j.read) reply_bytes = 5 + data_bytes(*j.read);
   if (profile_.line.framing == Framing::ascii) reply_bytes = 2 * reply_bytes + 3;
-  ex.timeout = Millis(profile_.modbus.timeout_ms) +
-               ceil_ms(timing_.char_time * static_cast<long>(reply_bytes));
+  ex.timeout = Millis(profile_.modbus.timeout_ms) + wire_time(timing_.char_time, reply_bytes);
   ex.attempts = timing_.attempts;
   return ex;
 }

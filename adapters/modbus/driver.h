@@ -28,13 +28,6 @@ struct Timing {
   std::chrono::nanoseconds char_time{0};
 };
 
-// The gateway looks at its write deadlines every 100 ms: room so that a driver's own answer
-// never races the gateway's.
-inline constexpr Millis kDeadlineMargin{200};
-// Another device's turn the line may be busy with before a write (DeviceConfig::budget).
-inline constexpr Millis kOtherTurnAllowance{1000};
-inline constexpr Millis kWriteTimeoutFloor{3000};
-
 class ModbusDriver final : public Driver {
  public:
   // `address`: 1..247 (Serial Line 2.2).
@@ -91,7 +84,6 @@ class ModbusDriver final : public Driver {
   void plan(Group& g) const;
   [[nodiscard]] Exchange exchange(const Job& j) const;
   [[nodiscard]] Millis inter_frame_gap() const;
-  [[nodiscard]] Millis exchange_time(std::size_t longest) const;
   [[nodiscard]] Millis turn() const;
   [[nodiscard]] Millis send_limit() const;
   [[nodiscard]] Job read_job(const Block& b) const;

@@ -5,6 +5,7 @@
 
 #include "drivegate/adapter.h"
 #include "driver.h"
+#include "passthrough.h"
 #include "settings.h"
 #include "simulator.h"
 
@@ -12,15 +13,22 @@ namespace drivegate::modbus_device {
 namespace {
 
 std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
-  auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
   const auto address = device_address(env.address, error);
   if (!address) return nullptr;
+  if (env.options.boolean("passthrough")) {
+    auto pass = parse_passthrough(env.options, error);
+    if (!pass) return nullptr;
+    return std::make_unique<PassthroughDriver>(*address, *pass, env.char_time, env.poll_interval);
+  }
+  auto settings = parse_settings(env.options, error);
+  if (!settings) return nullptr;
   return std::make_unique<ModbusDriver>(
       *address, std::move(settings->profile),
       Timing{settings->attempts, settings->comm_timeout, env.char_time}, env.poll_interval);
 }
 
+// A pass-through device's simulator is a slave like any other: it serves the profile its options
+// name (the default one unless --set profile=NAME).
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
   auto settings = parse_settings(env.options, error);
   if (!settings) return nullptr;

@@ -73,6 +73,12 @@ std::optional<ProfileText> find_profile(const std::string& name, std::string& er
   return std::nullopt;
 }
 
+std::vector<std::string_view> shipped_profile_names() {
+  std::vector<std::string_view> names;
+  for (const ShippedProfile& p : kShippedProfiles) names.push_back(p.name);
+  return names;
+}
+
 std::optional<Settings> parse_settings(const Options& options, std::string& error) {
   Settings s;
   auto text = find_profile(options.string("profile"), error);
@@ -89,6 +95,26 @@ std::optional<Settings> parse_settings(const Options& options, std::string& erro
   }
   s.profile = std::get<Profile>(std::move(parsed));
   s.profile_source = std::move(text->source);
+  s.attempts = static_cast<std::uint8_t>(options.integer("attempts"));
+  s.comm_timeout = Millis(options.integer("comm_timeout_ms"));
+  return s;
+}
+
+std::optional<PassthroughSettings> parse_passthrough(const Options& options, std::string& error) {
+  if (!options.boolean("passthrough")) {
+    error = "option passthrough: false";
+    return std::nullopt;
+  }
+  // The schema's default is the only profile a pass-through device may carry: one named beside
+  // passthrough would be silently unused.
+  if (options.string("profile") != kDefaultProfile) {
+    error = "option profile: a pass-through device reads no profile (it forwards every request "
+            "as it is): remove profile or passthrough";
+    return std::nullopt;
+  }
+  PassthroughSettings s;
+  s.framing = options.string("framing") == "ascii" ? Framing::ascii : Framing::rtu;
+  s.reply_timeout = Millis(options.integer("timeout_ms"));
   s.attempts = static_cast<std::uint8_t>(options.integer("attempts"));
   s.comm_timeout = Millis(options.integer("comm_timeout_ms"));
   return s;

@@ -6,6 +6,8 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "drivegate/driver.h"
 #include "drivegate/options.h"
@@ -13,13 +15,27 @@
 
 namespace drivegate::modbus_device {
 
-inline constexpr std::array<OptionSpec, 3> kOptionSchema = {{
-    {"profile", OptionType::string, "example-vfd",
+// The profile a device gets when its options name none.
+inline constexpr const char* kDefaultProfile = "example-vfd";
+
+inline constexpr std::array<OptionSpec, 6> kOptionSchema = {{
+    {"profile", OptionType::string, kDefaultProfile,
      "the device's profile: a name (found in /etc/drivegate/profiles, then "
      "/usr/share/drivegate/profiles, then the profiles shipped in the plugin) or a file's path"},
-    {"attempts", OptionType::integer, "3", "sends of a request before giving up on it", 1, 10},
+    {"attempts", OptionType::integer, "3",
+     "sends of a request before giving up on it (a forwarded request is sent once)", 1, 10},
     {"comm_timeout_ms", OptionType::integer, "3000", "no good reply for this long: comm_lost", 500,
      600000},
+    {"passthrough", OptionType::boolean, "false",
+     "no profile: every Modbus request for the device's unit id is forwarded to the slave as it "
+     "is, and its reply is the answer (docs/profiles.md, \"Pass-through\")"},
+    {"framing", OptionType::string, "rtu",
+     "with passthrough: the slave's framing (a profile's [line] says it otherwise)", 0, 0,
+     "rtu|ascii"},
+    {"timeout_ms", OptionType::integer, "100",
+     "with passthrough: how long the slave may take to start its reply (a profile's [modbus] "
+     "says it otherwise)",
+     10, 10000},
 }};
 
 // Where a profile named by name is looked for, in this order, before the shipped copies.
@@ -39,6 +55,16 @@ struct Settings {
 // `error` naming the option (and the profile's file and line) when they do not make a device.
 std::optional<Settings> parse_settings(const Options& options, std::string& error);
 
+// A pass-through device's options (passthrough = true): no profile, the line as they say.
+struct PassthroughSettings {
+  Framing framing = Framing::rtu;
+  Millis reply_timeout{100};
+  std::uint8_t attempts = 3;  // for the presence probe; a forwarded request goes once
+  Millis comm_timeout{3000};
+};
+// nullopt with `error` when passthrough is false or a profile is named beside it.
+std::optional<PassthroughSettings> parse_passthrough(const Options& options, std::string& error);
+
 // The profile called `name` (or at the path `name`): its text and where it came from, or nullopt
 // with `error`.
 struct ProfileText {
@@ -46,6 +72,9 @@ struct ProfileText {
   std::string source;
 };
 std::optional<ProfileText> find_profile(const std::string& name, std::string& error);
+// The names of the profiles built into the plugin (`drivegate scan` looks through every profile
+// findable by name: these and the files in kProfileDirs).
+std::vector<std::string_view> shipped_profile_names();
 
 // The slave's address, 1..247 (Serial Line 2.2; the broadcast 0 is never polled).
 std::optional<std::uint8_t> device_address(std::uint32_t address, std::string& error);

@@ -26,6 +26,19 @@ class BackendSwitch : public modbus::Backend {
         target_->write(session, unit, table, address, values,
                        [done = std::move(done)](Outcome o) { done(modbus_exception(o)); }));
   }
+  bool forwards(std::uint8_t unit) const override {
+    return target_ != nullptr && target_->forwards(unit);
+  }
+  modbus::Exception forward(const Session& session, std::uint8_t unit,
+                            std::span<const std::uint8_t> request,
+                            modbus::ForwardDone done) override {
+    if (target_ == nullptr) return modbus_exception(Outcome::no_such_device);
+    return modbus_exception(target_->forward(
+        session, unit, request,
+        [done = std::move(done)](Outcome o, std::span<const std::uint8_t> reply) {
+          done(modbus_exception(o), reply);
+        }));
+  }
 
  private:
   Gateway* target_ = nullptr;

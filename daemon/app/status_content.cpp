@@ -86,7 +86,9 @@ std::string StatusContent::metrics() {
 
 std::string StatusContent::regmap_json() {
   std::vector<DeviceRegisters> devices;
-  for (const auto& d : gateway_->devices()) devices.push_back({&d->config(), d->map()});
+  for (const auto& d : gateway_->devices()) {
+    devices.push_back({&d->config(), d->map(), d->forwards()});
+  }
   // The listeners as they run: the bound port (the configured one may be 0) and the word order
   // in force since the last reload.
   std::vector<ServedOn> listeners;

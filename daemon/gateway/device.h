@@ -107,6 +107,16 @@ class Device final : public Station {
   // the registers are validated, judged whole, applied and confirmed exactly as write() does.
   Outcome write_points(const Session& session, std::span<const PointWrite> points, WriteDone done,
                        TimePoint now);
+  // Whether every Modbus request for this device is forwarded to it as it is (pass-through,
+  // Driver::forwards) rather than served from the register map.
+  [[nodiscard]] bool forwards() const { return driver_->forwards(); }
+  // A Modbus request PDU for a pass-through device: refused at once (denied) when its function
+  // needs more than the session's access (forward_access.h), then queued and carried out like a
+  // write (the same bounded queue, write turns alternating with the line's polls, the same
+  // deadline), sent as it is, and answered with the slave's reply. Nothing but ok returned here
+  // calls `done`. It never feeds the failsafe: a pass-through device has no command block.
+  Outcome forward(const Session& session, std::span<const std::uint8_t> pdu, ForwardDone done,
+                  TimePoint now);
   // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
   // the failsafe. `done` is called exactly once.
   void command(Command c, WriteDone done, TimePoint now);
@@ -158,6 +168,7 @@ class Device final : public Station {
   Outcome enqueue(const Session& session, std::vector<Part> parts, WriteDone done, TimePoint now,
                   Origin origin);
   Progress advance(Request& r, TimePoint now, Outcome& failure);
+  Progress advance_forward(Request& r, TimePoint now, Outcome& failure);
   void settle(const Completion& c, TimePoint now);
   void finish(const Request* r, Outcome outcome, TimePoint now);
   void expire_requests(TimePoint now);

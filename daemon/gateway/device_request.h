@@ -21,8 +21,15 @@ struct Device::Request {
   bool feeds_failsafe = true;  // from the PLC, and from a client whose writes prove it is there
   // Whom to answer: the client that asked, and any that asked the same while it waited.
   std::vector<WriteDone> done;
+  // A forwarded request (Device::forward) instead of parts: its PDU, whom to answer, and the
+  // slave's reply once it came.
+  std::optional<Bytes> forward;
+  ForwardDone forward_done;
+  Bytes reply;
 
   [[nodiscard]] bool started() const { return next > 0; }
+  // Every part (or the forwarded request) has been handed to the driver.
+  [[nodiscard]] bool all_applied() const { return forward ? next > 0 : next == parts.size(); }
 };
 
 }  // namespace drivegate

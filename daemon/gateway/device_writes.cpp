@@ -19,6 +19,7 @@
 
 #include "gateway/device.h"
 #include "gateway/device_request.h"
+#include "gateway/forward_access.h"
 #include "gateway/value_codec.h"
 
 namespace drivegate {
@@ -350,6 +351,7 @@ bool Device::release(TimePoint now, bool write_turn) {
 
 // Applies parts from r.next on until one is pending or fails.
 Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
+  if (r.forward) return advance_forward(r, now, failure);
   while (r.next < r.parts.size()) {
     const Part& part = r.parts[r.next++];
     const std::optional<WriteOp> maybe_op = op_of(*part.point, part.value);
@@ -395,13 +397,67 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
   return Progress::done;
 }
 
+// A forwarded request is one part: handed to the driver once, then waiting for the slave.
+Device::Progress Device::advance_forward(Request& r, TimePoint now, Outcome& failure) {
+  if (r.started()) return Progress::done;
+  ++r.next;
+  const Ticket t = next_ticket_++;
+  switch (driver_->apply(WriteOp::of_forward(*r.forward), t, now)) {
+    case WriteStatus::pending:
+      r.waiting = t;
+      r.deadline = now + traits_.write_timeout;
+      handed_ = true;
+      return Progress::waiting;
+    case WriteStatus::done:  // a forward always needs the line: nothing came back to answer
+    case WriteStatus::refused:
+      failure = Outcome::refused;
+      return Progress::failed;
+    case WriteStatus::invalid_value:
+      failure = Outcome::invalid_value;
+      return Progress::failed;
+  }
+  failure = Outcome::refused;
+  return Progress::failed;
+}
+
+Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pdu,
+                        ForwardDone done, TimePoint now) {
+  if (!driver_->forwards()) return Outcome::no_such_point;
+  // outcome.h: beyond the session's level is denied, checked before anything else.
+  if (forward_level(pdu) > session.access) return Outcome::denied;
+  if (closed_to_clients_ || comm_lost()) return Outcome::no_response;
+  if (queued(false) >= kMaxQueuedWrites) {
+    ++write_stats_.busy;
+    return Outcome::busy;
+  }
+  auto owned = std::make_unique<Request>();
+  Request* r = owned.get();
+  r->forward = Bytes(pdu.begin(), pdu.end());
+  r->forward_done = std::move(done);
+  r->feeds_failsafe = false;
+  r->deadline = now + traits_.write_timeout;
+  requests_.push_back(std::move(owned));
+  if (queue_head() != r || !may_release(now)) {
+    if (kick_) kick_();  // the engine gives it a write turn
+    return Outcome::ok;
+  }
+  Outcome failure = Outcome::ok;
+  const Progress progress = advance(*r, now, failure);
+  if (progress == Progress::failed) r->forward_done = nullptr;  // answered by the return value
+  if (progress != Progress::waiting) finish(r, failure, now);
+  publish(now);
+  if (progress == Progress::waiting && kick_) kick_();
+  return failure;
+}
+
 void Device::settle(const Completion& c, TimePoint now) {
   const auto it = std::find_if(requests_.begin(), requests_.end(),
                                [&](const auto& r) { return r->waiting == c.ticket; });
   if (it == requests_.end()) return;  // its request timed out already
   Request* r = it->get();
   r->waiting.reset();
-  if (c.result != WriteResult::ok || r->next == r->parts.size()) {
+  if (r->forward) r->reply = c.reply;
+  if (c.result != WriteResult::ok || r->all_applied()) {
     // Done, or failed: the parts after it are never applied. The next request may go.
     finish(r, to_outcome(c.result), now);
     next_request(now);
@@ -436,6 +492,7 @@ void Device::finish(const Request* r, Outcome outcome, TimePoint now) {
   for (auto& done : owned->done) {
     if (done) done(outcome);
   }
+  if (owned->forward_done) owned->forward_done(outcome, owned->reply);
 }
 
 // Requests not settled by their deadline: no_response. One still queued is never applied after
@@ -464,6 +521,7 @@ void Device::fail_pending(Outcome why) {
     for (auto& done : r->done) {
       if (done) done(why);
     }
+    if (r->forward_done) r->forward_done(why, {});
   }
 }
 

@@ -197,6 +197,19 @@ Outcome Gateway::write(const Session& session, std::uint8_t unit, Table table,
   return d->write(session, table, address, values, std::move(done), Clock::now());
 }
 
+bool Gateway::forwards(std::uint8_t unit) const {
+  const Device* d = units_[unit];
+  return d != nullptr && d->forwards();
+}
+
+Outcome Gateway::forward(const Session& session, std::uint8_t unit,
+                         std::span<const std::uint8_t> pdu, ForwardDone done) {
+  Device* d = units_[unit];
+  if (d == nullptr) return Outcome::no_such_device;
+  if (!running_) return Outcome::no_response;
+  return d->forward(session, pdu, std::move(done), Clock::now());
+}
+
 std::size_t Gateway::devices_online() const {
   return static_cast<std::size_t>(
       std::count_if(devices_.begin(), devices_.end(), [](const auto& d) { return d->online(); }));

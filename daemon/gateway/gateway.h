@@ -63,6 +63,11 @@ class Gateway {
                std::span<std::uint16_t> out);
   Outcome write(const Session& session, std::uint8_t unit, Table table, std::uint16_t address,
                 std::span<const std::uint16_t> values, WriteDone done);
+  // Whether the device at `unit` is a pass-through one (Device::forwards); then every request
+  // for it goes to forward() (Device::forward) instead of read() and write().
+  [[nodiscard]] bool forwards(std::uint8_t unit) const;
+  Outcome forward(const Session& session, std::uint8_t unit, std::span<const std::uint8_t> pdu,
+                  ForwardDone done);
 
   [[nodiscard]] std::size_t devices_online() const;
   [[nodiscard]] const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }

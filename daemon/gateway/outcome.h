@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string_view>
 
 namespace drivegate {
@@ -44,5 +45,8 @@ constexpr std::string_view to_string(Outcome o) {
 
 // How an accepted write tells its outcome later, exactly once (gateway/device.h says when).
 using WriteDone = std::function<void(Outcome)>;
+// Likewise for a request forwarded to a pass-through device (Device::forward): with ok, the
+// slave's reply PDU as it came (valid during the call only), an exception reply included.
+using ForwardDone = std::function<void(Outcome, std::span<const std::uint8_t> reply)>;
 
 }  // namespace drivegate

@@ -51,6 +51,9 @@ constexpr std::string_view to_string(Exception e) {
 }
 
 using WriteDone = std::function<void(Exception)>;
+// A forwarded request's outcome (Backend::forward): none and the device's reply PDU as it came
+// (valid during the call only), or the exception to answer instead.
+using ForwardDone = std::function<void(Exception, std::span<const std::uint8_t> reply)>;
 
 class Backend {
  public:
@@ -72,6 +75,18 @@ class Backend {
   virtual Exception write(const Session& session, std::uint8_t unit, Table table,
                           std::uint16_t address, std::span<const std::uint16_t> values,
                           WriteDone done) = 0;
+
+  // Pass-through: whether every request for `unit` is to be forwarded to its device as it is (a
+  // modbus adapter device with passthrough = true) instead of served by read() and write().
+  [[nodiscard]] virtual bool forwards(std::uint8_t /*unit*/) const { return false; }
+  // Forwards `request` (a whole PDU, valid only during the call) to the device at `unit`. As
+  // write(): an exception returned at once means nothing was sent, illegal_function for one
+  // reason only (the function needs more than `session.access`); none means `done` is called
+  // exactly once later.
+  virtual Exception forward(const Session& /*session*/, std::uint8_t /*unit*/,
+                            std::span<const std::uint8_t> /*request*/, ForwardDone /*done*/) {
+    return Exception::gateway_path_unavailable;
+  }
 };
 
 }  // namespace drivegate::modbus

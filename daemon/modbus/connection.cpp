@@ -281,7 +281,9 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
   const std::size_t at = tx_pending_.size();
   const auto out = reserve_reply();
   Dispatcher::Result result;
-  if (!may_write(pdu[0])) {
+  // A pass-through unit answers every request later, with its device's reply.
+  const bool forwarded = state_->dispatcher.forwards(header.unit);
+  if (!forwarded && !may_write(pdu[0])) {
     result = state_->dispatcher.handle(session_, header.unit, pdu, out, {});
   } else {
     // A free slot exists: process_input stops at the cap. It is filled before the backend sees
@@ -295,12 +297,24 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
     w.transaction = header.transaction;
     w.unit = header.unit;
     w.size = static_cast<std::uint8_t>(pdu.size());
+    w.forwarded = forwarded;
+    w.reply_size = 0;
     std::copy(pdu.begin(), pdu.end(), w.request.begin());
     ++outstanding_;
-    result =
-        state_->dispatcher.handle(session_, header.unit, pdu, out,
-                                  [self = shared_from_this(), slot, generation = w.generation](
-                                      Exception e) { self->on_write_done(slot, generation, e); });
+    if (forwarded) {
+      result = state_->dispatcher.forward(
+          session_, header.unit, pdu, out,
+          [self = shared_from_this(), slot, generation = w.generation](
+              Exception e, std::span<const std::uint8_t> reply) {
+            self->on_forward_done(slot, generation, e, reply);
+          });
+    } else {
+      result = state_->dispatcher.handle(
+          session_, header.unit, pdu, out,
+          [self = shared_from_this(), slot, generation = w.generation](Exception e) {
+            self->on_write_done(slot, generation, e);
+          });
+    }
     if (result.status == Dispatcher::Result::Status::reply) {  // refused before it started
       w.used = false;
       ++w.generation;
@@ -345,6 +359,23 @@ void Connection::on_write_done(std::size_t slot, std::uint32_t generation, Excep
   asio::post(state_->io, [self = shared_from_this()] { self->process_completions(); });
 }
 
+// The device's reply is kept in the slot until process_completions() answers with it.
+void Connection::on_forward_done(std::size_t slot, std::uint32_t generation, Exception result,
+                                 std::span<const std::uint8_t> reply) {
+  if (slot >= writes_.size()) return;
+  PendingWrite& w = writes_[slot];
+  if (!w.used || w.generation != generation || w.done) return;
+  // A reply PDU is 1..253 bytes (the adapter's codec holds it to that); anything else is no reply.
+  if (result == Exception::none && (reply.empty() || reply.size() > w.reply.size())) {
+    result = Exception::gateway_target_failed;
+  }
+  if (result == Exception::none) {
+    std::copy(reply.begin(), reply.end(), w.reply.begin());
+    w.reply_size = static_cast<std::uint8_t>(reply.size());
+  }
+  on_write_done(slot, generation, result);
+}
+
 // The client that sent this write can no longer be told how it went: counted and logged, with
 // what became of it, so that a write applied for nobody is never silent.
 void Connection::unanswered(const PendingWrite& w, Exception result, bool settled_after) {
@@ -368,8 +399,16 @@ void Connection::process_completions() {
     if (!w.used || !w.done) continue;
     const std::size_t at = tx_pending_.size();
     const auto out = reserve_reply();
-    const std::size_t size = state_->dispatcher.complete(
-        session_, w.unit, std::span<const std::uint8_t>(w.request.data(), w.size), w.result, out);
+    std::size_t size = 0;
+    if (!w.forwarded) {
+      size = state_->dispatcher.complete(
+          session_, w.unit, std::span<const std::uint8_t>(w.request.data(), w.size), w.result, out);
+    } else if (w.result == Exception::none) {
+      size = w.reply_size;
+      std::copy_n(w.reply.begin(), size, out.begin());
+    } else {
+      size = exception_pdu(w.request[0], w.result, out);
+    }
     commit_reply(at, w.transaction, w.unit, size);
     w.used = false;
     ++w.generation;

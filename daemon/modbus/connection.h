@@ -67,6 +67,10 @@ class Connection : public std::enable_shared_from_this<Connection> {
     std::uint8_t unit = 0;
     std::uint8_t size = 0;
     std::array<std::uint8_t, kMaxPduSize> request{};
+    // Forwarded to a pass-through device (Dispatcher::forward): answered with its reply.
+    bool forwarded = false;
+    std::uint8_t reply_size = 0;
+    std::array<std::uint8_t, kMaxPduSize> reply{};
   };
 
   void handshake();
@@ -80,6 +84,8 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void commit_reply(std::size_t at, std::uint16_t transaction, std::uint8_t unit,
                     std::size_t pdu_size);
   void on_write_done(std::size_t slot, std::uint32_t generation, Exception result);
+  void on_forward_done(std::size_t slot, std::uint32_t generation, Exception result,
+                       std::span<const std::uint8_t> reply);
   void unanswered(const PendingWrite& w, Exception result, bool settled_after);
   void process_completions();
   void flush();

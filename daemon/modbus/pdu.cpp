@@ -107,6 +107,16 @@ Result Dispatcher::handle(const Session& session, std::uint8_t unit,
   return fail(fc, Exception::illegal_function, out);  // 7: code 01, function not supported
 }
 
+Result Dispatcher::forward(const Session& session, std::uint8_t unit,
+                           std::span<const std::uint8_t> request, std::span<std::uint8_t> out,
+                           ForwardDone done) {
+  const Exception e = backend_.forward(session, unit, request, std::move(done));
+  if (e == Exception::none) return {Result::Status::pending, 0};
+  Result r = fail(request[0], e, out);
+  r.denied = e == Exception::illegal_function;  // Backend::forward: only for the access level
+  return r;
+}
+
 // 6.1 / 6.2: fc | start (2) | quantity (2) -> fc | byte count | bits, LSB of byte 0 = start.
 Result Dispatcher::read_bits(std::uint8_t unit, Table table, std::span<const std::uint8_t> request,
                              std::span<std::uint8_t> out) {

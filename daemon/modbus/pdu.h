@@ -61,6 +61,14 @@ class Dispatcher {
   Result handle(const Session& session, std::uint8_t unit, std::span<const std::uint8_t> request,
                 std::span<std::uint8_t> out, WriteDone done);
 
+  // Pass-through (Backend::forwards): every request for such a unit goes to forward() instead of
+  // handle(), whatever its function, and is answered with the device's own reply, later.
+  [[nodiscard]] bool forwards(std::uint8_t unit) const { return backend_.forwards(unit); }
+  // Starts forwarding `request`: `pending` (then `done` fires, maybe already has), or the
+  // exception reply when it was refused at once (`denied` when beyond the session's access).
+  Result forward(const Session& session, std::uint8_t unit, std::span<const std::uint8_t> request,
+                 std::span<std::uint8_t> out, ForwardDone done);
+
   // The response to a write request that handle() left pending, once its `done` reported
   // `result`: the exception, or the function's normal response (for 0x17, the read that follows
   // the write). Returns the PDU size written to `out`.

@@ -92,6 +92,11 @@ std::string md_field(std::string_view s) {
   return out;
 }
 
+// The points a PLC reads at the device's unit: none through a pass-through window.
+std::vector<const MappedPoint*> served(const DeviceRegisters& dev) {
+  return dev.forwards ? std::vector<const MappedPoint*>{} : in_reference_order(dev.map);
+}
+
 std::string to_json(const std::vector<DeviceRegisters>& devices,
                     const std::vector<ServedOn>& listeners) {
   const int digits = reference_digits(devices);
@@ -101,8 +106,9 @@ std::string to_json(const std::vector<DeviceRegisters>& devices,
     const auto& dev = devices[d];
     out << (d ? ",\n" : "\n") << "  {\"unit_id\": " << int{dev.device->unit_id}
         << ", \"name\": " << json_string(dev.device->name)
-        << ", \"adapter\": " << json_string(dev.device->adapter) << ", \"points\": [";
-    const auto points = in_reference_order(dev.map);
+        << ", \"adapter\": " << json_string(dev.device->adapter)
+        << (dev.forwards ? ", \"passthrough\": true" : "") << ", \"points\": [";
+    const auto points = served(dev);
     for (std::size_t i = 0; i < points.size(); ++i) {
       const auto& p = *points[i];
       out << (i ? ",\n" : "\n") << "    {\"name\": " << json_string(p.spec.name)
@@ -139,7 +145,7 @@ std::string to_csv(const std::vector<DeviceRegisters>& devices) {
   out << "unit_id,device,adapter,name,table,address,reference,type,registers,scale,unit,access,"
          "description,labels\n";
   for (const auto& dev : devices) {
-    for (const MappedPoint* point : in_reference_order(dev.map)) {
+    for (const MappedPoint* point : served(dev)) {
       const auto& p = *point;
       out << int{dev.device->unit_id} << "," << csv_field(dev.device->name) << ","
           << csv_field(dev.device->adapter) << "," << csv_field(p.spec.name) << ","
@@ -183,7 +189,11 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices,
         << "| table | address | reference | name | type | scale | unit | access | description | "
            "labels |\n"
         << "|---|---|---|---|---|---|---|---|---|---|\n";
-    for (const MappedPoint* point : in_reference_order(dev.map)) {
+    if (dev.forwards) {
+      out << "| | | | pass-through: every request for this unit is forwarded to the slave as it "
+             "is (docs/profiles.md, \"Pass-through\") | | | | | | |\n";
+    }
+    for (const MappedPoint* point : served(dev)) {
       const auto& p = *point;
       out << "| " << to_string(p.spec.table) << " | " << p.address << " | "
           << modicon_reference(p.spec.table, p.address, digits) << " | " << md_field(p.spec.name)

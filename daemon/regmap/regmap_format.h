@@ -16,6 +16,9 @@ namespace drivegate {
 struct DeviceRegisters {
   const DeviceConfig* device;
   RegisterMap map;
+  // A pass-through device (Driver::forwards): every request for its unit goes to the slave as it
+  // is, so none of `map` is served: it is printed as such, without points.
+  bool forwards = false;
 };
 
 // A listener the map is served on, and the word order of the 32-bit values and floats there

@@ -11,54 +11,12 @@
 #include <string>
 
 #include "e2e.h"
+#include "pymodbus_slave.h"
 
 namespace drivegate::test {
 namespace {
 
 using namespace std::chrono_literals;
-
-std::filesystem::path slave_script() {
-  return std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "tests/e2e/pymodbus_serial_slave.py";
-}
-
-bool have_tools() {
-  return std::filesystem::exists("/usr/bin/socat") && std::filesystem::exists(kSystemPython) &&
-         std::filesystem::exists("/usr/lib/python3/dist-packages/pymodbus");
-}
-
-// socat's two linked pseudo-terminals, `a` (the daemon's) and `b` (the slave's), and the slave.
-class PymodbusSlave {
- public:
-  PymodbusSlave(const TempDir& dir, std::vector<std::string> args)
-      : a_(dir / "a"),
-        out_(dir / "slave.out"),
-        socat_({"/usr/bin/socat", "pty,raw,echo=0,link=" + (dir / "a").string(),
-                "pty,raw,echo=0,link=" + (dir / "b").string()},
-               dir / "socat.err") {
-    for (int i = 0; i < 100 && !std::filesystem::exists(dir / "b"); ++i) {
-      std::this_thread::sleep_for(20ms);
-    }
-    std::vector<std::string> argv = {"/bin/sh", "-c",
-                                     "exec " + kSystemPython + " " + slave_script().string() +
-                                         " --port " + (dir / "b").string()};
-    for (const auto& x : args) argv[2] += " " + x;
-    argv[2] += " > " + out_.string();
-    slave_ = std::make_unique<Child>(argv, dir / "slave.err");
-    for (int i = 0; i < 200 && slurp(out_).find("ready") == std::string::npos; ++i) {
-      std::this_thread::sleep_for(20ms);
-    }
-  }
-  [[nodiscard]] const std::filesystem::path& port() const { return a_; }
-  // What reached the slave: its `write TABLE ADDRESS VALUE...` lines.
-  [[nodiscard]] std::string writes() const { return slurp(out_); }
-  void kill() { slave_.reset(); }
-
- private:
-  std::filesystem::path a_;
-  std::filesystem::path out_;
-  Child socat_;
-  std::unique_ptr<Child> slave_;
-};
 
 // Unit 1: the slave at address 7; unit 2: address 8, where nobody answers.
 std::string config(const std::filesystem::path& port) {
@@ -82,15 +40,16 @@ float f32_of(const Plc::Read& r) {
 }
 
 TEST(ModbusProfileE2E, APlcReadsThePymodbusSlavesRegistersAndItsWritesReachThem) {
-  if (!have_tools()) GTEST_SKIP() << "needs socat and python3-pymodbus (tools/deps.sh test)";
+  if (!have_pymodbus_tools())
+    GTEST_SKIP() << "needs socat and python3-pymodbus (tools/deps.sh test)";
   TempDir dir;
   // Running (status bit 2) and faulted (bit 3) with native fault 2; 1500.0 rpm; 12.5 A.
   PymodbusSlave slave(dir, {"--unit 7", "--status 12", "--speed 15000", "--fault 2"});
   Daemon daemon(dir, config(slave.port()), {}, dir / "drivegated.log");
   Plc plc(daemon.port(), 1);
   ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; },
-                         10s))
+  ASSERT_TRUE(
+      eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
       << slurp(dir / "drivegated.log") << slurp(dir / "slave.err");
 
   // The map: speed 15000 x 0.1; the run and fault bits; native 2 = over_current (4) by the map.
@@ -121,8 +80,8 @@ TEST(ModbusProfileE2E, APlcReadsThePymodbusSlavesRegistersAndItsWritesReachThem)
   // Unit 2's slave is not there: comm_lost, writes 0x0B, and unit 1 is polled all along.
   Plc other(daemon.port(), 2);
   ASSERT_TRUE(other.connect());
-  EXPECT_TRUE(eventually(
-      [&] { return (other.input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 10s));
+  EXPECT_TRUE(
+      eventually([&] { return (other.input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 10s));
   EXPECT_EQ(other.write(reg::command, {1, 1000}), 0x0B);
   const auto fresh = plc.input(reg::data_age, 2);
   ASSERT_TRUE(fresh.ok());
@@ -130,14 +89,15 @@ TEST(ModbusProfileE2E, APlcReadsThePymodbusSlavesRegistersAndItsWritesReachThem)
 
   // The slave dies: unit 1 goes comm_lost too, and a write is 0x0B.
   slave.kill();
-  EXPECT_TRUE(eventually(
-      [&] { return (plc.input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 10s));
+  EXPECT_TRUE(
+      eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 10s));
   EXPECT_EQ(plc.write(reg::command, {1, 1000}), 0x0B);
   EXPECT_EQ(daemon.stop(), 0);
 }
 
 TEST(ModbusProfileE2E, AnExceptionFromTheSlaveIs0x04AtThePlc) {
-  if (!have_tools()) GTEST_SKIP() << "needs socat and python3-pymodbus (tools/deps.sh test)";
+  if (!have_pymodbus_tools())
+    GTEST_SKIP() << "needs socat and python3-pymodbus (tools/deps.sh test)";
   TempDir dir;
   // The slave has no holding 0, the profile's control word: it answers every write there with
   // exception 02, and reads of it too (the rest of the device is read point by point).
@@ -145,14 +105,91 @@ TEST(ModbusProfileE2E, AnExceptionFromTheSlaveIs0x04AtThePlc) {
   Daemon daemon(dir, config(slave.port()), {}, dir / "drivegated.log");
   Plc plc(daemon.port(), 1);
   ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; },
-                         10s))
+  ASSERT_TRUE(
+      eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
       << slurp(dir / "drivegated.log");
   EXPECT_TRUE(eventually(
       [&] { return static_cast<std::int16_t>(plc.input(reg::speed, 1).regs[0]) == 30; }, 5s));
   EXPECT_EQ(plc.write(reg::command, {1}), 4);
   EXPECT_EQ(plc.holding(reg::command, 1).regs[0], 0);  // still stop: the run was not taken
   EXPECT_EQ(slave.writes().find("write holding 0"), std::string::npos);
+}
+
+// Pass-through: unit 3 is a window onto the slave at 7, unit 4 onto 9 where nobody answers;
+// a second listener may only read.
+std::string passthrough_config(const std::filesystem::path& port, int read_port) {
+  return "[[listener]]\naddress = \"127.0.0.1:1\"\naccess = \"maintain\"\n\n"
+         "[[listener]]\naddress = \"127.0.0.1:" +
+         std::to_string(read_port) +
+         "\"\naccess = \"read\"\n\n"
+         "[[bus]]\nname = \"line-a\"\nport = \"" +
+         port.string() +
+         "\"\nbaud = 19200\nparity = \"even\"\n\n"
+         "[[device]]\nname = \"window\"\nbus = \"line-a\"\nadapter = \"modbus\"\nunit_id = 3\n"
+         "address = 7\n[device.options]\npassthrough = true\n\n"
+         "[[device]]\nname = \"nobody\"\nbus = \"line-a\"\nadapter = \"modbus\"\nunit_id = 4\n"
+         "address = 9\n[device.options]\npassthrough = true\ncomm_timeout_ms = 1500\n";
+}
+
+using Pdu = std::vector<std::uint8_t>;
+
+TEST(ModbusPassthroughE2E, EveryFunctionIsTheSlavesOwnAnswerAndReadListenersOnlyRead) {
+  if (!have_pymodbus_tools())
+    GTEST_SKIP() << "needs socat and python3-pymodbus (tools/deps.sh test)";
+  TempDir dir;
+  // Holding 0 = 0x0006, 1 = 0, 100 = 12; its identification as a vendor's would be.
+  PymodbusSlave slave(
+      dir, {"--unit 7", "--status 12", "--vendor Acme", "--product-code VF-9", "--revision 2.1"});
+  const int read_port = free_port();
+  Daemon daemon(dir, passthrough_config(slave.port(), read_port), {}, dir / "drivegated.log");
+  const int rw = daemon.port();  // --listen: the first listener's address, access maintain
+
+  // FC 03 (Application Protocol 6.3): holding 0..1 as the slave holds them.
+  ASSERT_TRUE(eventually(
+      [&] {
+        return raw_request(rw, 3, {0x03, 0x00, 0x00, 0x00, 0x02}) ==
+               Pdu{0x03, 0x04, 0x00, 0x06, 0x00, 0x00};
+      },
+      10s))
+      << slurp(dir / "drivegated.log") << slurp(dir / "slave.err");
+  // FC 06 (6.6): the echo, and the write reached the slave.
+  EXPECT_EQ(raw_request(rw, 3, {0x06, 0x00, 0x01, 0x04, 0xD2}),
+            (Pdu{0x06, 0x00, 0x01, 0x04, 0xD2}));
+  EXPECT_NE(slave.writes().find("write holding 1 1234\n"), std::string::npos) << slave.writes();
+  // FC 16 (6.12): address and quantity.
+  EXPECT_EQ(raw_request(rw, 3, {0x10, 0x00, 0x00, 0x00, 0x02, 0x04, 0x00, 0x0F, 0x05, 0xDC}),
+            (Pdu{0x10, 0x00, 0x00, 0x00, 0x02}));
+  EXPECT_NE(slave.writes().find("write holding 0 15 1500\n"), std::string::npos) << slave.writes();
+  // FC 17 (6.17): write holding 1 := 900, then read holding 100 (12).
+  EXPECT_EQ(
+      raw_request(rw, 3, {0x17, 0x00, 0x64, 0x00, 0x01, 0x00, 0x01, 0x00, 0x01, 0x02, 0x03, 0x84}),
+      (Pdu{0x17, 0x02, 0x00, 0x0C}));
+  EXPECT_NE(slave.writes().find("write holding 1 900\n"), std::string::npos) << slave.writes();
+  // FC 2B / 0E (6.21), basic identification: the slave's objects, not the gateway's.
+  const Pdu id = raw_request(rw, 3, {0x2B, 0x0E, 0x01, 0x00});
+  ASSERT_GE(id.size(), 8u);
+  EXPECT_EQ(Pdu(id.begin(), id.begin() + 3), (Pdu{0x2B, 0x0E, 0x01}));
+  const std::string objects(id.begin(), id.end());
+  EXPECT_NE(objects.find("Acme"), std::string::npos);
+  EXPECT_NE(objects.find("VF-9"), std::string::npos);
+  EXPECT_EQ(objects.find("drivegate"), std::string::npos);
+  // A register the slave lacks: its exception 02, as it came.
+  EXPECT_EQ(raw_request(rw, 3, {0x03, 0x13, 0x88, 0x00, 0x01}), (Pdu{0x83, 0x02}));
+
+  // The read listener forwards reads, and refuses every write with 01 before the line.
+  const std::string before = slave.writes();
+  EXPECT_EQ(raw_request(read_port, 3, {0x03, 0x00, 0x01, 0x00, 0x01}),
+            (Pdu{0x03, 0x02, 0x03, 0x84}));
+  EXPECT_EQ(raw_request(read_port, 3, {0x06, 0x00, 0x01, 0x00, 0x07}), (Pdu{0x86, 0x01}));
+  EXPECT_EQ(raw_request(read_port, 3,
+                        {0x17, 0x00, 0x64, 0x00, 0x01, 0x00, 0x01, 0x00, 0x01, 0x02, 0x00, 0x07}),
+            (Pdu{0x97, 0x01}));
+  EXPECT_EQ(slave.writes(), before);
+
+  // Nobody at 9: 0x0B, and the window at 7 answers all along.
+  EXPECT_EQ(raw_request(rw, 4, {0x03, 0x00, 0x00, 0x00, 0x01}), (Pdu{0x83, 0x0B}));
+  EXPECT_EQ(raw_request(rw, 3, {0x03, 0x00, 0x64, 0x00, 0x01}), (Pdu{0x03, 0x02, 0x00, 0x0C}));
+  EXPECT_EQ(daemon.stop(), 0);
 }
 
 }  // namespace

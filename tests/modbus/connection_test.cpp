@@ -164,6 +164,49 @@ TEST(Connection, ALateWriteDoesNotHoldBackLaterReads) {
   EXPECT_EQ(c.reply(), (Bytes{0x00, 0x04, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x2A}));
 }
 
+// Pass-through (Backend::forwards): a unit's every request, a function the server does not know
+// included, is handed on as it is and answered later with the device's reply PDU, in its own
+// transaction, while the other units' reads go on.
+TEST(Connection, APassThroughUnitIsAnsweredWithTheDevicesOwnReply) {
+  Harness h;
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(0x0101, 9, {0x03, 0x00, 0x6B, 0x00, 0x03}) +
+                     request(0x0102, 9, {0x41, 0x12}) +
+                     request(0x0103, 1, {0x03, 0x00, 0x00, 0x00, 0x01})));
+  // Unit 1's read is not held back by the two forwarded requests.
+  EXPECT_EQ(c.reply(), (Bytes{0x01, 0x03, 0x00, 0x00, 0x00, 0x05, 0x01, 0x03, 0x02, 0x00, 0x00}));
+  ASSERT_TRUE(h.eventually([&h] { return h.source().forwarded.size() == 2; }));
+  EXPECT_EQ(h.with_backend([](FakeBackend& b) { return b.forwarded; }),
+            (std::vector<Bytes>{{0x03, 0x00, 0x6B, 0x00, 0x03}, {0x41, 0x12}}));
+  EXPECT_FALSE(c.readable(50ms));
+  h.with_backend([](FakeBackend& b) {
+    // Application Protocol 6.3's example reply; then the device's own exception to 0x41.
+    b.complete_forward({0x03, 0x06, 0x02, 0x2B, 0x00, 0x00, 0x00, 0x64});
+    b.complete_forward({0xC1, 0x01});
+    return 0;
+  });
+  EXPECT_EQ(c.reply(), (Bytes{0x01, 0x01, 0x00, 0x00, 0x00, 0x09, 0x09, 0x03, 0x06, 0x02, 0x2B,
+                              0x00, 0x00, 0x00, 0x64}));
+  EXPECT_EQ(c.reply(), (Bytes{0x01, 0x02, 0x00, 0x00, 0x00, 0x03, 0x09, 0xC1, 0x01}));
+}
+
+TEST(Connection, APassThroughRequestTheDeviceMissedIs0x0BAndOneBeyondTheAccessIs01) {
+  ServerOptions options;
+  options.listeners.front().policy.access = AccessLevel::read;
+  Harness h(options);
+  RawClient c(h.port());
+  ASSERT_TRUE(c.send(request(1, 9, {0x06, 0x00, 0x01, 0x00, 0x02})));
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x01, 0x00, 0x00, 0x00, 0x03, 0x09, 0x86, 0x01}));
+  EXPECT_EQ(h.stats().writes_denied, 1u);
+  ASSERT_TRUE(c.send(request(2, 9, {0x03, 0x00, 0x01, 0x00, 0x01})));
+  ASSERT_TRUE(h.eventually([&h] { return h.source().forwards_pending.size() == 1; }));
+  h.with_backend([](FakeBackend& b) {
+    b.complete_forward({}, Exception::gateway_target_failed);
+    return 0;
+  });
+  EXPECT_EQ(c.reply(), (Bytes{0x00, 0x02, 0x00, 0x00, 0x00, 0x03, 0x09, 0x83, 0x0B}));
+}
+
 // Application Protocol 6.17 over TCP: an unmapped read range is answered 0x97 0x02 at once and
 // the write never reaches the backend; a good one is written, then read.
 TEST(Connection, ReadWriteWithAnUnmappedReadRangeIsRefusedBeforeTheWrite) {

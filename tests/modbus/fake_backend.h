@@ -67,6 +67,29 @@ class FakeBackend : public Backend {
     return Exception::none;
   }
 
+  // Unit 9 is a pass-through one: every request for it is kept until complete_forward().
+  static constexpr std::uint8_t kForwardingUnit = 9;
+  [[nodiscard]] bool forwards(std::uint8_t unit) const override { return unit == kForwardingUnit; }
+  Exception forward(const Session& session, std::uint8_t, std::span<const std::uint8_t> request,
+                    ForwardDone done) override {
+    last_session = session;
+    // As the gateway does (gateway/forward_access.h): a read session forwards 03 only here.
+    if (session.access == AccessLevel::read && request[0] != 0x03) {
+      return Exception::illegal_function;
+    }
+    forwarded.emplace_back(request.begin(), request.end());
+    forwards_pending.push_back(std::move(done));
+    return Exception::none;
+  }
+  // Answers the oldest forwarded request with `reply` (or `result`, when not none).
+  void complete_forward(std::vector<std::uint8_t> reply, Exception result = Exception::none) {
+    auto done = std::move(forwards_pending.front());
+    forwards_pending.pop_front();
+    done(result, reply);
+  }
+  std::vector<std::vector<std::uint8_t>> forwarded;
+  std::deque<ForwardDone> forwards_pending;
+
   // Completes the oldest deferred write: applies it when `result` is none.
   void complete(Exception result = Exception::none) {
     auto p = std::move(pending.front());

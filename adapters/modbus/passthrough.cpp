@@ -1,0 +1,153 @@
+#include "passthrough.h"
+
+#include "line_timing.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+// The presence probe: read one holding register at 0 (Application Protocol 6.3). A slave that
+// has no register there answers exception 02, which proves it is there just as well.
+constexpr std::uint8_t kProbe[] = {fc::read_holding_registers, 0x00, 0x00, 0x00, 0x01};
+
+}  // namespace
+
+PassthroughDriver::PassthroughDriver(std::uint8_t address, PassthroughSettings settings,
+                                     std::chrono::nanoseconds char_time, Millis poll_interval)
+    : address_(address),
+      settings_(settings),
+      char_time_(char_time),
+      poll_interval_(poll_interval) {}
+
+// A forwarded request's reply may be of any length: its exchange is counted with the longest.
+Millis PassthroughDriver::send_limit() const {
+  const Millis probe = exchange_time(settings_.framing, char_time_, settings_.reply_timeout,
+                                     settings_.attempts, longest_frame(settings_.framing));
+  return probe + kOtherTurnAllowance;
+}
+
+DriverTraits PassthroughDriver::traits() const {
+  DriverTraits t;
+  t.comm_timeout = settings_.comm_timeout;
+  t.inter_frame_gap = inter_frame_gap(settings_.framing, char_time_);
+  // One part: on the line within send_limit(), then one exchange of its own.
+  t.write_timeout = write_backstop(send_limit(), 1);
+  return t;
+}
+
+std::optional<Exchange> PassthroughDriver::next_exchange(TimePoint now) {
+  last_now_ = now;
+  expire(now);
+  // The engine asks only once the exchange before ended: one it abandoned without a word still
+  // owes its client an answer.
+  abandon();
+  Exchange ex;
+  ex.reply = ReplyMode::expected;
+  if (!queued_.empty()) {
+    Forward f = std::move(queued_.front());
+    queued_.pop_front();
+    ex.frame = encode(settings_.framing, address_, f.pdu);
+    // Any reply, up to the longest frame, must have time to arrive.
+    ex.timeout = settings_.reply_timeout + wire_time(char_time_, longest_frame(settings_.framing));
+    ex.attempts = 1;
+    inflight_ = InFlight{f.pdu[0], std::move(f)};
+    return ex;
+  }
+  if (now < probe_due_) return std::nullopt;
+  probe_due_ = now + poll_interval_;
+  ex.frame = encode(settings_.framing, address_, kProbe);
+  // The probe's reply is at most 7 bytes (exception: 5), 15 characters in ASCII.
+  ex.timeout = settings_.reply_timeout + wire_time(char_time_, 15);
+  ex.attempts = settings_.attempts;
+  inflight_ = InFlight{kProbe[0], std::nullopt};
+  return ex;
+}
+
+TimePoint PassthroughDriver::wake_at() const {
+  return queued_.empty() ? probe_due_ : last_now_;
+}
+
+RxVerdict PassthroughDriver::on_receive(ByteView rx, TimePoint now) {
+  last_now_ = now;
+  if (rx.empty()) return {};
+  if (!inflight_) return {RxKind::noise, rx.size()};
+  const Decoded<Adu> d = decode_reply(settings_.framing, rx);
+  switch (d.status) {
+    case DecodeStatus::incomplete:
+      return {};
+    case DecodeStatus::bad:
+      // As ModbusDriver: an RTU CRC failure not starting with this slave's address is noise.
+      if (settings_.framing == Framing::rtu && d.error == FrameError::bad_checksum &&
+          rx[0] != address_) {
+        return {RxKind::noise, 1};
+      }
+      return damaged(d);
+    case DecodeStatus::frame:
+      break;
+  }
+  const Adu& a = d.frame;
+  const std::uint8_t fn = inflight_->function;
+  // The reply to this request: the same function, or its exception (Application Protocol 7).
+  if (a.address != address_ || (a.pdu[0] != fn && a.pdu[0] != (fn | kExceptionBit))) {
+    return {RxKind::foreign, d.consumed};
+  }
+  InFlight done = std::move(*inflight_);
+  inflight_.reset();
+  common_.ready = true;
+  if (done.forward) complete(*done.forward, WriteResult::ok, a.pdu);
+  // Neither a forwarded reply nor the probe's is state the gateway keeps.
+  return {RxKind::ack, d.consumed};
+}
+
+void PassthroughDriver::on_no_reply(TimePoint now) {
+  last_now_ = now;
+  abandon();
+}
+
+void PassthroughDriver::on_comm_lost(TimePoint now) {
+  last_now_ = now;
+  abandon();
+  for (const Forward& f : queued_) complete(f, WriteResult::no_response);
+  queued_.clear();
+  common_.ready = false;
+  probe_due_ = now;
+}
+
+WriteCheck PassthroughDriver::check(std::span<const WriteOp> request) const {
+  for (const WriteOp& op : request) {
+    if (op.target != WriteOp::Target::forward) return WriteCheck::invalid_value;
+    if (op.pdu.empty() || op.pdu.size() > kMaxPdu) return WriteCheck::invalid_value;
+  }
+  return WriteCheck::ok;
+}
+
+WriteStatus PassthroughDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
+  last_now_ = now;
+  const WriteOp one[] = {op};
+  if (check(one) != WriteCheck::ok) return WriteStatus::invalid_value;
+  queued_.push_back({t, op.pdu, now + send_limit()});
+  return WriteStatus::pending;
+}
+
+void PassthroughDriver::take_completions(std::vector<Completion>& out) {
+  for (Completion& c : completions_) out.push_back(std::move(c));
+  completions_.clear();
+}
+
+void PassthroughDriver::complete(const Forward& f, WriteResult r, Bytes reply) {
+  completions_.push_back({f.ticket, r, std::move(reply)});
+}
+
+void PassthroughDriver::abandon() {
+  if (inflight_ && inflight_->forward) complete(*inflight_->forward, WriteResult::no_response);
+  inflight_.reset();
+}
+
+// Not on the line by its send_by: failed, and never sent (as ModbusDriver::expire).
+void PassthroughDriver::expire(TimePoint now) {
+  while (!queued_.empty() && now > queued_.front().send_by) {
+    complete(queued_.front(), WriteResult::no_response);
+    queued_.pop_front();
+  }
+}
+
+}  // namespace drivegate::modbus_device

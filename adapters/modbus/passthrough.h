@@ -1,0 +1,81 @@
+// The pass-through driver (passthrough = true): the device's unit id is a transparent window
+// onto a Modbus slave. Every request a client sends for it reaches this driver as a forward part
+// (Driver::forwards), goes on the line as it is, address and CRC or LRC around it, and the
+// slave's reply PDU, exception replies included, goes back to the client as it came. Nothing is
+// polled but a presence probe, so the device's common block says only whether the slave answers.
+//
+// Choices (docs/profiles.md, "Pass-through"):
+//   - A forwarded request is sent once: the client's own retries decide, and a write is never
+//     put on the line twice for one request.
+//   - The probe is a read of one holding register at 0 (FC 03) every poll interval: any reply
+//     from the slave's address, an exception included, proves it is there. It carries no data,
+//     so the device's data age never starts: the gateway holds nothing of a pass-through slave.
+//   - A forwarded request not on the line within its send limit fails (no_response) and is never
+//     sent, like any write, so nothing the client was told failed reaches the slave later.
+#pragma once
+
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include "codec.h"
+#include "drivegate/driver.h"
+#include "settings.h"
+
+namespace drivegate::modbus_device {
+
+class PassthroughDriver final : public Driver {
+ public:
+  // `address`: 1..247 (Serial Line 2.2). `char_time`: one character as the bus runs it.
+  PassthroughDriver(std::uint8_t address, PassthroughSettings settings,
+                    std::chrono::nanoseconds char_time, Millis poll_interval);
+
+  [[nodiscard]] DriverTraits traits() const override;
+  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
+  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
+  [[nodiscard]] const CommonState& common() const override { return common_; }
+  [[nodiscard]] bool forwards() const override { return true; }
+
+  std::optional<Exchange> next_exchange(TimePoint now) override;
+  [[nodiscard]] TimePoint wake_at() const override;
+  RxVerdict on_receive(ByteView rx, TimePoint now) override;
+  void on_no_reply(TimePoint now) override;
+  void on_comm_lost(TimePoint now) override;
+
+  // Only forward parts are taken: the device has no command, setpoint or points of its own.
+  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
+  void take_completions(std::vector<Completion>& out) override;
+
+ private:
+  struct Forward {
+    Ticket ticket = 0;
+    Bytes pdu;
+    TimePoint send_by{};
+  };
+  struct InFlight {
+    std::uint8_t function = 0;
+    std::optional<Forward> forward;  // nothing: the presence probe
+  };
+
+  [[nodiscard]] Millis send_limit() const;
+  void complete(const Forward& f, WriteResult r, Bytes reply = {});
+  void abandon();
+  void expire(TimePoint now);
+
+  std::uint8_t address_;
+  PassthroughSettings settings_;
+  std::chrono::nanoseconds char_time_;
+  Millis poll_interval_;
+  std::vector<PointSpec> points_;
+  std::vector<Value> values_;
+  CommonState common_;
+
+  std::deque<Forward> queued_;
+  std::optional<InFlight> inflight_;
+  std::vector<Completion> completions_;
+  TimePoint probe_due_{};
+  TimePoint last_now_{};
+};
+
+}  // namespace drivegate::modbus_device
