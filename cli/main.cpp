@@ -77,6 +77,9 @@ constexpr const char* kCommands =
     "  action     a maintenance action of a device's adapter (e.g. an FDC1's\n"
     "             non-volatile programming)\n"
     "  capture    a pcap of one bus from the running daemon (for Wireshark)\n"
+#ifdef DRIVEGATE_SCAN
+    "  scan       the Modbus slaves on a serial line, and the configuration for them\n"
+#endif
     "  version    print the version\n"
     "\n"
     "`drivegate COMMAND --help` lists the command's options. See drivegate(1).";
@@ -112,6 +115,9 @@ int main(int argc, char** argv) {
     if (command == "write") return drivegate::cli::write(args);
     if (command == "action") return drivegate::cli::action(args);
     if (command == "capture") return drivegate::cli::capture(args);
+#ifdef DRIVEGATE_SCAN
+    if (command == "scan") return drivegate::cli::scan(args);
+#endif
     if (command == "version") {
       std::cout << "drivegate " << DRIVEGATE_VERSION << "\n";
       return 0;

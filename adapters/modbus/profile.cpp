@@ -105,7 +105,7 @@ class Parser {
     const toml::table* t = table_at(top, "profile", true);
     if (t == nullptr) return;
     TableReader r(*t, "profile", diag_);
-    r.expect({"name", "description", "source"});
+    r.expect({"name", "description", "source", "identification"});
     if (auto name = r.string("name", true)) {
       // Found by name in the profile folders: a file name's safe set ("example-vfd").
       if (!valid_profile_name(*name)) {
@@ -117,6 +117,32 @@ class Parser {
     profile_.description = r.string("description", false).value_or("");
     // Where every address comes from: a profile without it cannot be checked against anything.
     profile_.source = r.string("source", true).value_or("");
+    if (const toml::node* n = r.node("identification")) read_identification(*n);
+  }
+
+  // identification = { vendor_name = "...", product_code = "..." }: both, so that a scan never
+  // suggests a profile for every product of a vendor (each has its own register map).
+  void read_identification(const toml::node& n) {
+    const auto* t = n.as_table();
+    if (t == nullptr) {
+      diag_.error(&n, "profile.identification",
+                  "must be a table such as { vendor_name = \"...\", product_code = \"...\" }");
+      return;
+    }
+    TableReader r(*t, "profile.identification", diag_);
+    r.expect({"vendor_name", "product_code"});
+    const auto vendor = r.string("vendor_name", true);
+    const auto product = r.string("product_code", true);
+    if (vendor && vendor->empty()) {
+      diag_.error(r.node("vendor_name"), r.qualified("vendor_name"), "must not be empty");
+      return;
+    }
+    if (product && (product->empty() || *product == "*")) {
+      diag_.error(r.node("product_code"), r.qualified("product_code"),
+                  "must name a product (a trailing '*' may stand for the rest of it)");
+      return;
+    }
+    if (vendor && product) profile_.identification = ProfileIdentification{*vendor, *product};
   }
 
   void read_line(TableReader& top) {

@@ -124,10 +124,19 @@ struct ModbusSpec {
   std::uint32_t timeout_ms = 100;
 };
 
+// What the device answers to Read Device Identification (FC 0x2B / 0x0E, basic category,
+// Application Protocol 6.21) when it is the device the profile describes: `drivegate scan`
+// suggests the profile for a slave whose identification matches ([profile] identification).
+struct ProfileIdentification {
+  std::string vendor_name;   // object 0x00 VendorName, whole
+  std::string product_code;  // object 0x01 ProductCode; a trailing '*' matches any rest
+};
+
 struct Profile {
   std::string name;
   std::string description;
   std::string source;  // where the addresses come from: document, section, table
+  std::optional<ProfileIdentification> identification;
   LineSpec line;
   ModbusSpec modbus;
   std::vector<ProfilePoint> points;

@@ -181,6 +181,9 @@ TEST(Cli, ABadOptionExitsTwoNamingItThenTheUsage) {
       {{drivegate(), "action", "--bogus"},
        "drivegate action: unknown option '--bogus'\n",
        "usage: drivegate action"},
+      {{drivegate(), "scan", "--port", "/dev/ttyUSB0", "--baud", "fast"},
+       "drivegate scan: --baud must be 300..921600, not 'fast'\n",
+       "usage: drivegate scan --port DEVICE"},
   };
   for (const auto& c : cases) {
     const auto r = run(c.argv);
@@ -221,6 +224,10 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
         "--baud N", "--parity PARITY", "--echo", "--no-echo", "--turnaround-ms N",
         "--turnaround-us N", "--wire-timing", "--wire-log FILE", "-p, --plugin-dir DIR",
         "-h, --help"}},
+      {{drivegate(), "scan", "--help"},
+       {"--port DEVICE", "--baud N", "--parity PARITY", "--data-bits N", "--stop-bits N",
+        "--framing FRAMING", "--rs485", "-a, --addresses LIST", "-t, --timeout-ms N",
+        "--profiles DIR", "--progress", "--no-progress", "-h, --help"}},
   };
   std::ifstream in(std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "packaging/man/drivegate.1");
   const std::string page((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
