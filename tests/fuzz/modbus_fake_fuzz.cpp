@@ -1,5 +1,6 @@
 // Fuzz target: a Modbus TCP byte stream through the MBAP parser and the Dispatcher against the
-// server tests' fake register image (four 4096-entry tables with an unmapped hole, units 1 and 2).
+// server tests' fake register image (four 4096-entry tables with an unmapped hole, units 1 and 2;
+// unit 5 a pass-through one).
 //
 // Input: one option byte, then the stream.
 //   bit 0     writes complete inside Backend::write (0) or after the segment they arrived in (1)
@@ -28,6 +29,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   backend.device_result = kResults[(options >> 1) & 3];
   backend.reject_value = 0xDEAD;
   auto settle = [&backend] {
+    // A pass-through unit's device answers with the request itself (a write's echo), or fails.
+    if (!backend.forwards_pending.empty()) {
+      const auto& asked =
+          backend.forwarded[backend.forwarded.size() - backend.forwards_pending.size()];
+      backend.complete_forward(asked, backend.device_result);
+      return true;
+    }
     if (backend.pending.empty()) return false;
     backend.complete(backend.device_result);
     return true;

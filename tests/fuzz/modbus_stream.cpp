@@ -63,7 +63,8 @@ bool ModbusStream::receive(std::span<const std::uint8_t> segment) {
 void ModbusStream::dispatch(const modbus::MbapHeader& header, std::span<const std::uint8_t> pdu) {
   out_.fill(0xA5);
   modbus::Dispatcher::Result result;
-  if (!modbus::may_write(pdu[0])) {
+  const bool forwarded = dispatcher_.forwards(header.unit);
+  if (!forwarded && !modbus::may_write(pdu[0])) {
     result = dispatcher_.handle(session_, header.unit, pdu, out_, {});
     FUZZ_CHECK(result.status == modbus::Dispatcher::Result::Status::reply);
   } else {
@@ -77,19 +78,35 @@ void ModbusStream::dispatch(const modbus::MbapHeader& header, std::span<const st
     s.transaction = header.transaction;
     s.unit = header.unit;
     s.request.assign(pdu.begin(), pdu.end());
+    s.forwarded = forwarded;
+    s.reply.clear();
     ++outstanding_;
     std::weak_ptr<std::vector<Slot>> weak = slots_;
-    result = dispatcher_.handle(session_, header.unit, pdu, out_,
-                                [weak, index, generation = s.generation](Exception e) {
-                                  const auto alive = weak.lock();
-                                  if (!alive)
-                                    return;  // the connection is gone: the reply is dropped
-                                  Slot& w = (*alive)[index];
-                                  // Backend contract (backend.h): `done` is called exactly once.
-                                  FUZZ_CHECK(w.used && w.generation == generation && !w.done);
-                                  w.done = true;
-                                  w.result = e;
-                                });
+    if (forwarded) {
+      result = dispatcher_.forward(session_, header.unit, pdu, out_,
+                                   [weak, index, generation = s.generation](
+                                       Exception e, std::span<const std::uint8_t> reply) {
+                                     const auto alive = weak.lock();
+                                     if (!alive) return;
+                                     Slot& w = (*alive)[index];
+                                     FUZZ_CHECK(w.used && w.generation == generation && !w.done);
+                                     w.done = true;
+                                     w.result = e;
+                                     w.reply.assign(reply.begin(), reply.end());
+                                   });
+    } else {
+      result = dispatcher_.handle(session_, header.unit, pdu, out_,
+                                  [weak, index, generation = s.generation](Exception e) {
+                                    const auto alive = weak.lock();
+                                    if (!alive)
+                                      return;  // the connection is gone: the reply is dropped
+                                    Slot& w = (*alive)[index];
+                                    // Backend contract (backend.h): `done` is called exactly once.
+                                    FUZZ_CHECK(w.used && w.generation == generation && !w.done);
+                                    w.done = true;
+                                    w.result = e;
+                                  });
+    }
     if (result.status == modbus::Dispatcher::Result::Status::reply) {
       // Refused before it started: `done` must never fire for it.
       s.used = false;
@@ -107,9 +124,23 @@ void ModbusStream::complete_writes() {
   for (Slot& s : *slots_) {
     if (!s.used || !s.done) continue;
     out_.fill(0xA5);
-    const std::size_t size = dispatcher_.complete(session_, s.unit, s.request, s.result, out_);
-    FUZZ_CHECK(size >= 2 && size <= modbus::kMaxPduSize);
-    check_reply(s.request, std::span<const std::uint8_t>(out_.data(), size));
+    std::size_t size = 0;
+    if (!s.forwarded) {
+      size = dispatcher_.complete(session_, s.unit, s.request, s.result, out_);
+    } else if (s.result == Exception::none) {
+      // The device's reply as it came (the connection answers with it unchanged).
+      FUZZ_CHECK(!s.reply.empty() && s.reply.size() <= modbus::kMaxPduSize);
+      size = s.reply.size();
+      std::copy(s.reply.begin(), s.reply.end(), out_.begin());
+    } else {
+      size = modbus::exception_pdu(s.request[0], s.result, out_);
+    }
+    if (s.forwarded && s.result == Exception::none) {
+      ++replies_;  // the device's own PDU: whatever shape it has is what the client gets
+    } else {
+      FUZZ_CHECK(size >= 2 && size <= modbus::kMaxPduSize);
+      check_reply(s.request, std::span<const std::uint8_t>(out_.data(), size));
+    }
     s.used = false;
     ++s.generation;
     --outstanding_;

@@ -1,7 +1,8 @@
 // One Modbus TCP connection's request path without the socket: bytes arrive in segments, every
 // complete MBAP frame is parsed and dispatched in order exactly as daemon/modbus/connection.cpp
 // does (a malformed header closes the connection, a write past the pending cap waits, a pending
-// write's reply is built by Dispatcher::complete once its `done` fired), and every reply is
+// write's reply is built by Dispatcher::complete once its `done` fired; every request for a
+// pass-through unit goes to Dispatcher::forward and is answered with its reply), and every reply is
 // checked against the Application Protocol's shape rules.
 #pragma once
 
@@ -42,6 +43,8 @@ class ModbusStream {
     std::uint16_t transaction = 0;
     std::uint8_t unit = 0;
     std::vector<std::uint8_t> request;
+    bool forwarded = false;               // to a pass-through unit (Dispatcher::forward)
+    std::vector<std::uint8_t> reply;      // its device's reply PDU
   };
   void dispatch(const modbus::MbapHeader& header, std::span<const std::uint8_t> pdu);
   void check_reply(std::span<const std::uint8_t> request, std::span<const std::uint8_t> reply);

@@ -67,8 +67,8 @@ class FakeBackend : public Backend {
     return Exception::none;
   }
 
-  // Unit 9 is a pass-through one: every request for it is kept until complete_forward().
-  static constexpr std::uint8_t kForwardingUnit = 9;
+  // Unit 5 is a pass-through one: every request for it is kept until complete_forward().
+  static constexpr std::uint8_t kForwardingUnit = 5;
   [[nodiscard]] bool forwards(std::uint8_t unit) const override { return unit == kForwardingUnit; }
   Exception forward(const Session& session, std::uint8_t, std::span<const std::uint8_t> request,
                     ForwardDone done) override {
