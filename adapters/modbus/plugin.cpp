@@ -22,6 +22,10 @@ std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) 
   }
   auto settings = parse_settings(env.options, error);
   if (!settings) return nullptr;
+  if (env.bus_line &&
+      !line_agrees(settings->profile, settings->profile_source, *env.bus_line, error)) {
+    return nullptr;
+  }
   return std::make_unique<ModbusDriver>(
       *address, std::move(settings->profile),
       Timing{settings->attempts, settings->comm_timeout, env.char_time}, env.poll_interval);

@@ -100,6 +100,33 @@ std::optional<Settings> parse_settings(const Options& options, std::string& erro
   return s;
 }
 
+namespace {
+
+std::string describe(std::uint32_t baud, Parity parity, unsigned data_bits, unsigned stop_bits) {
+  return std::to_string(baud) + " baud, " + std::to_string(data_bits) + " data bits, " +
+         std::string(to_string(parity)) + " parity, " + std::to_string(stop_bits) + " stop bit" +
+         (stop_bits == 1 ? "" : "s");
+}
+
+}  // namespace
+
+bool line_agrees(const Profile& profile, const std::string& source, const LineDefaults& bus,
+                 std::string& error) {
+  const LineSpec& want = profile.line;
+  // RTU carries 8 data bits (Serial Line 2.5.1); ASCII 7 by the specification, 8 by many devices.
+  const bool bits_ok = want.framing == Framing::rtu ? bus.data_bits == 8 : true;
+  if (bus.baud == want.baud && bus.parity == want.parity && bus.stop_bits == want.stop_bits &&
+      bits_ok) {
+    return true;
+  }
+  error = "option profile: " + source + " says [line] " +
+          describe(want.baud, want.parity, want.framing == Framing::rtu ? 8 : bus.data_bits,
+                   want.stop_bits) +
+          ", but the bus runs " + describe(bus.baud, bus.parity, bus.data_bits, bus.stop_bits) +
+          ": set the [[bus]] to the device's line (or correct the profile)";
+  return false;
+}
+
 std::optional<PassthroughSettings> parse_passthrough(const Options& options, std::string& error) {
   if (!options.boolean("passthrough")) {
     error = "option passthrough: false";
@@ -108,8 +135,9 @@ std::optional<PassthroughSettings> parse_passthrough(const Options& options, std
   // The schema's default is the only profile a pass-through device may carry: one named beside
   // passthrough would be silently unused.
   if (options.string("profile") != kDefaultProfile) {
-    error = "option profile: a pass-through device reads no profile (it forwards every request "
-            "as it is): remove profile or passthrough";
+    error =
+        "option profile: a pass-through device reads no profile (it forwards every request "
+        "as it is): remove profile or passthrough";
     return std::nullopt;
   }
   PassthroughSettings s;

@@ -55,6 +55,12 @@ struct Settings {
 // `error` naming the option (and the profile's file and line) when they do not make a device.
 std::optional<Settings> parse_settings(const Options& options, std::string& error);
 
+// Whether the bus runs the line the profile's [line] says (baud, parity, stop bits; RTU's 8 data
+// bits, Serial Line 2.5.1): false with `error` saying both, so that a device on the wrong line is
+// a configuration error rather than a slave that never answers.
+bool line_agrees(const Profile& profile, const std::string& source, const LineDefaults& bus,
+                 std::string& error);
+
 // A pass-through device's options (passthrough = true): no profile, the line as they say.
 struct PassthroughSettings {
   Framing framing = Framing::rtu;

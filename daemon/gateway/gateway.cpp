@@ -20,6 +20,8 @@ std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescri
   env.maintenance = maintenance;
   if (line != nullptr) {
     env.char_time = character_time(line->baud, line->parity, line->data_bits, line->stop_bits);
+    env.bus_line =
+        LineDefaults{line->baud, line->parity, line->data_bits, line->stop_bits, line->echo};
   }
   std::string why;
   auto driver = adapter.create_driver(env, why);

@@ -36,6 +36,7 @@
 #include "drivegate/bytes.h"
 #include "drivegate/codec.h"
 #include "drivegate/common.h"
+#include "drivegate/line.h"
 #include "drivegate/options.h"
 #include "drivegate/point.h"
 
@@ -212,6 +213,10 @@ struct DeviceEnv {
   // One character on the line as the [[bus]] really runs it (its baud may not be the adapter's
   // native one): for a driver's own deadlines that must cover frames on the wire.
   std::chrono::nanoseconds char_time{0};
+  // That [[bus]]'s settings, where there is a line (not when the register map is printed): for
+  // an adapter whose devices each have their own line (a modbus profile's [line]) to refuse a bus
+  // that does not run it.
+  std::optional<LineDefaults> bus_line;
 };
 
 class Driver {

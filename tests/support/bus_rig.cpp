@@ -76,17 +76,10 @@ DeviceConfig BusRig::device_config(std::string name, std::uint32_t address,
 }
 
 Device& BusRig::add_device(const DeviceConfig& config, bool maintenance) {
-  DeviceEnv env;
-  env.name = config.name;
-  env.address = config.address;
-  env.poll_interval = config.poll_interval;
-  env.options = config.options;
-  env.maintenance = maintenance;
-  env.char_time = character_time(line_config_.baud, line_config_.parity, line_config_.data_bits,
-                                 line_config_.stop_bits);
+  // The daemon's own factory call (gateway.h), on this rig's line.
   std::string error;
-  std::unique_ptr<Driver> driver = adapter_.create_driver(env, error);
-  if (!driver) throw std::invalid_argument("the adapter refused the device: " + error);
+  std::unique_ptr<Driver> driver = make_driver(config, adapter_, maintenance, error, &line_config_);
+  if (!driver) throw std::invalid_argument(error);
   return add_device(config, std::move(driver));
 }
 
