@@ -19,6 +19,16 @@ PointSpec spec_of(const ProfilePoint& p) {
   s.scale = p.type == ValueType::f32 ? 1.0 : p.scale;  // a float register holds the value
   s.unit = p.unit;
   s.description = p.description;
+  switch (p.access) {
+    case PointAccess::read:  // a holding register or coil the profile keeps read-only
+      s.write_level = PointSpec::WriteLevel::none;
+      break;
+    case PointAccess::operate:
+      s.write_level = PointSpec::WriteLevel::operate;
+      break;
+    case PointAccess::maintain:
+      break;
+  }
   if (p.writable() && (p.min || p.max)) {
     s.min = p.min.value_or(-1e12);
     s.max = p.max.value_or(1e12);

@@ -73,7 +73,7 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
     return std::nullopt;
   }
   const ProfilePoint& p = profile_.points[exposed_[op.point]];
-  if (!p.writable()) return std::nullopt;
+  if (!p.writable() || p.access == PointAccess::read) return std::nullopt;
   auto words = words_for(p, as_double(op.value));
   if (!words) return std::nullopt;
   w.change = Change::point;

@@ -32,8 +32,9 @@
 namespace drivegate {
 
 // The access level a write to `point` needs (README, "Listeners and access"): the common
-// command block (command, setpoint_rpm, heartbeat) is operate's, every other writable point
-// maintain's. Device::write and write_points deny less.
+// command block (command, setpoint_rpm, heartbeat) and a point its adapter opened to operate
+// (PointSpec::write_level) are operate's, every other writable point maintain's. Device::write
+// and write_points deny less.
 AccessLevel required_level(const MappedPoint& point);
 
 // Writes waiting at one device, the one being carried out included (docs/safety.md, "Fair line

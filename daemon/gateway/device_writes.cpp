@@ -91,7 +91,9 @@ bool finite(const Value& v) {
 }  // namespace
 
 AccessLevel required_level(const MappedPoint& p) {
-  return write_kind(p) != CommonWrite::none ? AccessLevel::operate : AccessLevel::maintain;
+  const bool operates =
+      write_kind(p) != CommonWrite::none || p.spec.write_level == PointSpec::WriteLevel::operate;
+  return operates ? AccessLevel::operate : AccessLevel::maintain;
 }
 
 Outcome Device::write(const Session& session, Table table, std::uint16_t address,

@@ -64,6 +64,11 @@ struct PointSpec {
   // outside is refused with exception 0x03 before the driver sees it.
   double min = 0.0;
   double max = 0.0;
+  // Holding points and coils only: who may write it (README, "Listeners and access"). An
+  // adapter's own points are maintain's; one may open a point to operate clients (a profile's
+  // access = "operate") or close it to writes altogether (access = "read": served read-only).
+  enum class WriteLevel : std::uint8_t { maintain, operate, none };
+  WriteLevel write_level = WriteLevel::maintain;
 
   // Modifiers for building point lists: input_point("speed", ...).scaled(0.1).
   PointSpec& scaled(double s) {
@@ -87,7 +92,8 @@ struct PointSpec {
   }
 
   [[nodiscard]] Access access() const {
-    return table == Table::holding || table == Table::coil ? Access::read_write : Access::read;
+    const bool writable_table = table == Table::holding || table == Table::coil;
+    return writable_table && write_level != WriteLevel::none ? Access::read_write : Access::read;
   }
   [[nodiscard]] std::uint16_t register_count() const;
 };
