@@ -145,9 +145,34 @@ cleanup() {
 }
 trap cleanup EXIT
 
-# The example configuration's ports, in order: the adapter and address simulated on each.
-sims=("nidec-washer" "ed3100 --address 1" "mdriver-2400 --address 1" "unicla-edrive --address 1"
-    "fdc1")
+# What the installed example configuration has, none listed here: on each of its buses'
+# /dev/ttyUSB<i> ports (in order), the adapter and address of the device on it, simulated with
+# the installed `drivegate sim`; and its devices' unit ids.
+example_sims() { # one line per bus, by port: "<adapter> [--address N]"
+    awk '
+        /^\[/ { section = $0 }
+        /^(name|port|bus|adapter|address) *=/ {
+            key = $1; value = $0; sub(/^[^=]*= */, "", value); gsub(/"/, "", value)
+            if (section == "[[bus]]" && key == "name") bus = value
+            if (section == "[[bus]]" && key == "port") port[bus] = value
+            if (section == "[[device]]" && key == "bus") dbus = value
+            if (section == "[[device]]" && key == "adapter") adapter[dbus] = value
+            if (section == "[[device]]" && key == "address") address[dbus] = value
+        }
+        END {
+            for (b in port) {
+                n = port[b]; sub(/^\/dev\/ttyUSB/, "", n)
+                line[n + 0] = adapter[b] (address[b] != "" ? " --address " address[b] : "")
+            }
+            for (i = 0; i in line; i++) print line[i]
+        }' /etc/drivegate/drivegate.toml
+}
+mapfile -t sims < <(example_sims)
+mapfile -t units < <(sed -n 's/^unit_id = \([0-9]*\)$/\1/p' /etc/drivegate/drivegate.toml)
+echo "ci-check: the example's buses: ${sims[*]/%/,} units ${units[*]}"
+check "the example configuration names a simulated device on every port" \
+    test "${#sims[@]}" -gt 0 -a "${#sims[@]}" -eq "$(grep -c '^port = "/dev/ttyUSB' \
+    /etc/drivegate/drivegate.toml)"
 for i in "${!sims[@]}"; do
     # shellcheck disable=SC2086 # the adapter and its arguments
     "${as_drivegate[@]}" /usr/bin/drivegate sim ${sims[$i]} --link "$run_dir/ttyUSB$i" \
@@ -179,7 +204,7 @@ check "the adapted example's PLC listener is on loopback" \
     grep -q "^address = \"127.0.0.1:$port\"" "$config"
 chown drivegate:drivegate "$config"
 check "the adapted example names the simulators' ports" \
-    test "$(grep -c "^port = \"$run_dir/ttyUSB" "$config")" -eq 5
+    test "$(grep -c "^port = \"$run_dir/ttyUSB" "$config")" -eq "${#sims[@]}"
 check "drivegated --check-config on the adapted example" \
     "${as_drivegate[@]}" /usr/sbin/drivegated --check-config "$config"
 
@@ -196,7 +221,7 @@ online() { # online UNIT: the unit's status word has bit 0 set
     s="$(read_reg 3 "$1" 0)"
     [ -n "$s" ] && [ $((s & 1)) -eq 1 ]
 }
-for unit in 1 2 3 4 5; do
+for unit in "${units[@]}"; do
     for _ in $(seq 60); do online "$unit" && break; sleep 0.5; done
     check "unit $unit online (mbpoll: input register 0 = $(read_reg 3 "$unit" 0))" online "$unit"
 done
@@ -209,7 +234,8 @@ wait "$daemon_pid"
 rc=$?
 daemon_pid=""
 check "drivegated exits 0 on SIGTERM (got $rc)" test "$rc" -eq 0
-for line in "serving 5 devices on 5 buses" "signal SIGTERM: shutting down" "stopped" \
+for line in "serving ${#units[@]} devices on ${#sims[@]} buses" "signal SIGTERM: shutting down" \
+    "stopped" \
     ${stale_lock:+"stale lock $stale_lock of pid 4194303 kept"}; do
     check "the daemon logged '$line'" grep -q "$line" "$run_dir/daemon.log"
 done

@@ -5,9 +5,13 @@
 #   tools/fuzz.sh [SECONDS_PER_TARGET]     default 60; CI: tools/fuzz.sh 60
 #
 # Exits non-zero when a build fails or a target crashes, leaks or times out; the crashing input is
-# left in build-fuzz/fuzz/artifacts/<target>/. To keep it as a regression test, copy it to
-# tests/fuzz/regressions/<target>/ (the replay tests feed every file there).
-# Environment: FUZZ_JOBS (build parallelism, default 2), FUZZ_BUILD_DIR (default build-fuzz).
+# left in build-fuzz/fuzz/artifacts/<target>/. To keep it as a regression test, copy it to the
+# target's regressions folder (the replay tests feed every file there): tests/fuzz/regressions/
+# <target>/ for the core's targets, adapters/<id>/fuzz/regressions/ for adapter_<id>; the seed
+# corpora are beside them (tests/fuzz/corpus/<target>/, adapters/<id>/fuzz/corpus/), and
+# build-fuzz/fuzz/targets.txt (written by tests/fuzz/CMakeLists.txt) says which is whose.
+# Environment: FUZZ_JOBS (build parallelism, default 2), FUZZ_BUILD_DIR (default build-fuzz),
+# FUZZ_TARGETS (only these targets, by name, space-separated: FUZZ_TARGETS=adapter_ed3100).
 set -eu
 
 seconds=${1:-60}
@@ -34,7 +38,16 @@ cmake -S "$root" -B "$build" \
   exit 2
 }
 
-targets=$(cat "$build/fuzz/targets.txt")
+# targets.txt: one target a line, tab-separated: name, seed corpus, regressions, dictionary.
+list="$build/fuzz/targets.txt"
+targets=""
+while IFS="$(printf '\t')" read -r t _; do
+  case " ${FUZZ_TARGETS:-$t} " in *" $t "*) targets="$targets $t" ;; esac
+done <"$list"
+[ -n "$targets" ] || {
+  echo "fuzz.sh: no target (FUZZ_TARGETS=${FUZZ_TARGETS:-}; $list)" >&2
+  exit 2
+}
 build_targets=""
 for t in $targets; do build_targets="$build_targets fuzz_$t"; done
 # shellcheck disable=SC2086
@@ -44,16 +57,15 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 
 failed=""
-for t in $targets; do
+tab="$(printf '\t')"
+while IFS="$tab" read -r t seeds regressions dict; do
+  case " $targets " in *" $t "*) ;; *) continue ;; esac
   work="$build/fuzz/corpus/$t"        # grows between runs; the checked-in seeds stay as they are
   artifacts="$build/fuzz/artifacts/$t/"
   mkdir -p "$work" "$artifacts"
-  seeds="$root/tests/fuzz/corpus/$t"
-  regressions="$root/tests/fuzz/regressions/$t"
   dirs="$work"
   [ -d "$seeds" ] && dirs="$dirs $seeds"
   [ -d "$regressions" ] && dirs="$dirs $regressions"
-  dict="$root/tests/fuzz/dict/$t.dict"
   dict_opt=""
   [ -f "$dict" ] && dict_opt="-dict=$dict"
   echo "fuzz.sh: $t for ${seconds}s"
@@ -61,14 +73,14 @@ for t in $targets; do
   # shellcheck disable=SC2086
   if ! "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
       -max_len=4096 -print_final_stats=1 -artifact_prefix="$artifacts" $dict_opt $dirs \
-      >"$build/fuzz/$t.log" 2>&1; then
+      </dev/null >"$build/fuzz/$t.log" 2>&1; then
     echo "fuzz.sh: $t FAILED (log: $build/fuzz/$t.log, input in $artifacts)" >&2
     tail -n 60 "$build/fuzz/$t.log" >&2
     failed="$failed $t"
   else
     grep -E "stat::number_of_executed_units|cov:" "$build/fuzz/$t.log" | tail -n 2
   fi
-done
+done <"$list"
 
 if [ -n "$failed" ]; then
   echo "fuzz.sh: crashed:$failed" >&2

@@ -1,7 +1,9 @@
 // Captures end to end (docs/capture.md): drivegated on every built adapter's simulator, one bus
 // each, `drivegate capture` fetching ~2 s of each bus over /api/v1/capture, and tshark decoding
-// the pcaps with tools/wireshark/ (the dissectors): every packet decoded by its adapter's
-// protocol, no malformed packet and no Lua error, every checksum good, both directions present.
+// the pcaps with tools/wireshark/drivegate.lua, which loads every adapters/<id>/dissector.lua:
+// every packet decoded by its adapter's protocol, no malformed packet and no Lua error, every
+// checksum good, both directions present. The adapters and what to expect of their captures come
+// from their own scenarios (adapters/<id>/tests/e2e_test.cpp, tests/support/e2e_adapters.h).
 // Also the refusals of the route as a client sees them (400, 404, a capture that is not enabled),
 // and what `drivegate capture` shows while it runs and says when refused.
 #include <gmock/gmock.h>
@@ -15,56 +17,20 @@
 #include <sstream>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 
 namespace drivegate::test {
 namespace {
 
 using namespace std::chrono_literals;
 
-// What each adapter's capture is checked for: its configuration, its simulator's options, the
-// protocol column its dissector sets, its checksum status field(s), and a speed to run at.
-struct AdapterCase {
-  std::string id;
-  std::string bus_extra;     // [[bus]] lines past name and port
-  std::string device_extra;  // [[device]] lines past name, bus, adapter, unit_id
-  std::vector<std::string> sim_args;
-  std::string protocol;  // tshark's Protocol column
-  std::string checksum_field;
-  int rpm;
-};
+using AdapterCase = E2eAdapter;
 
-std::vector<AdapterCase> all_cases() {
-  return {
-      {"nidec-washer",
-       "",
-       "[device.options]\nplatform = 8\n",
-       {},
-       "NIDEC-WASHER",
-       "nidec_washer.checksum.status",
-       800},
-      {"ed3100",
-       "baud = 9600\nparity = \"even\"\ndata_bits = 8\nstop_bits = 1\n",
-       "address = 31\n[device.options]\nparameters = [\"00-06\"]\n",
-       {"--address", "31"},
-       "ED3100",
-       "ed3100.crc.status",
-       1500},
-      {"mdriver-2400", "", "", {}, "MDRIVER-2400", "mdriver2400.checksum.status", 1149},
-      {"fdc1",
-       "",
-       "[device.options]\nslave_mode = true\nrefresh_s = 1\n",
-       {"--set", "slave_mode=true"},
-       "FDC1",
-       "fdc1.checksum.status",
-       2000},
-      {"unicla-edrive", "", "", {}, "UNICLA-EDRIVE", "unicla_edrive.crc.status", 3000},
-  };
-}
-
-// The adapters built into this tree (their plugin is in the build's plugin directory).
+// Every adapter whose scenario registered itself (tests/support/e2e_adapters.h) and whose plugin
+// is in the build's plugin directory.
 std::vector<AdapterCase> built_cases() {
   std::vector<AdapterCase> out;
-  for (auto& c : all_cases()) {
+  for (const auto& c : e2e_adapters()) {
     if (std::filesystem::exists(plugin_dir() / ("drivegate-" + c.id + ".so"))) out.push_back(c);
   }
   return out;

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """A Modbus RTU / ASCII slave nobody here wrote: pymodbus's serial server (Debian's
 python3-pymodbus) holding the registers of the example-vfd profile
-(adapters/modbus/profiles/example-vfd.toml), for tests/e2e/modbus_profile_e2e_test.cpp.
+(adapters/modbus/profiles/example-vfd.toml), for adapters/modbus/tests/e2e_test.cpp.
 
 Every write it takes is printed on stdout as `write TABLE ADDRESS VALUE...`, so the test sees what
 reached the slave. Units other than --unit get no answer at all, as from a slave that is not there.

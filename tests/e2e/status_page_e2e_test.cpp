@@ -1,5 +1,5 @@
-// The status page end to end (issue: "Status page"): drivegated on the five simulated drives with
-// [http] on, each drive started from Modbus TCP as a PLC would, and the page rendered by Debian's
+// The status page end to end (issue: "Status page"): drivegated on every adapter's simulated
+// drive with [http] on, each drive started from Modbus TCP as a PLC would, and the page rendered by Debian's
 // headless chromium (tools/deps.sh chromium). The assertions read the DOM chromium dumps after
 // the page's own script has fetched /api/v1/status and rendered it.
 //
@@ -20,6 +20,7 @@
 #include <map>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 #include "http_get.h"
 
 namespace drivegate::test {
@@ -33,22 +34,24 @@ using ::testing::Not;
 constexpr const char* kChromium = "/usr/bin/chromium";
 constexpr auto kFaultToJson = 1000ms;  // each drive is polled every few hundred ms
 
+// Every drive whose adapter's scenario registered itself (support/e2e_adapters.h), unit 1, 2...
+// by adapter id; each runs at its registered speed. The fault is shown on unicla-edrive beside
+// ed3100 (tests/e2e/CMakeLists.txt builds this scenario when both are enabled).
 struct Drive {
   std::string adapter;
   int unit;
-  int rpm;                     // the demo's running speed (AdapterDescriptor::demo)
-  std::string sim_set;         // the demo's options, for the simulator...
-  std::string device_options;  // ...and for the device
+  int rpm;
+  E2eAdapter setup;
 };
 
 const std::vector<Drive>& drives() {
-  static const std::vector<Drive> d = {
-      {"ed3100", 1, 1500, "", ""},
-      {"fdc1", 2, 2000, "slave_mode=true", "slave_mode = true\n"},
-      {"mdriver-2400", 3, 1149, "", ""},
-      {"nidec-washer", 4, 800, "platform=7", "platform = 7\n"},
-      {"unicla-edrive", 5, 3000, "", ""},
-  };
+  static const std::vector<Drive> d = [] {
+    std::vector<Drive> out;
+    for (const auto& a : e2e_adapters()) {
+      out.push_back({a.id, static_cast<int>(out.size()) + 1, a.rpm, a});
+    }
+    return out;
+  }();
   return d;
 }
 
@@ -157,13 +160,11 @@ class StatusPage : public ::testing::Test {
     std::string toml = "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port_) +
                        "\"\nallow = [\"127.0.0.1\"]\n";
     for (const auto& d : drives()) {
-      std::vector<std::string> extra;
-      if (!d.sim_set.empty()) extra = {"--set", d.sim_set};
-      sims_[d.adapter] = std::make_unique<Sim>(d.adapter, dir_ / d.adapter, extra);
+      sims_[d.adapter] = std::make_unique<Sim>(d.adapter, dir_ / d.adapter, d.setup.sim_args);
       toml += "\n[[bus]]\nname = \"" + d.adapter + "\"\nport = \"" + (dir_ / d.adapter).string() +
-              "\"\n\n[[device]]\nname = \"" + d.adapter + "\"\nbus = \"" + d.adapter +
-              "\"\nadapter = \"" + d.adapter + "\"\nunit_id = " + std::to_string(d.unit) + "\n" +
-              (d.device_options.empty() ? "" : "[device.options]\n" + d.device_options);
+              "\"\n" + d.setup.bus_extra + "\n[[device]]\nname = \"" + d.adapter +
+              "\"\nbus = \"" + d.adapter + "\"\nadapter = \"" + d.adapter +
+              "\"\nunit_id = " + std::to_string(d.unit) + "\n" + d.setup.device_extra;
     }
     daemon_ =
         std::make_unique<Daemon>(dir_, toml, std::vector<std::string>{}, dir_ / "drivegated.log");

@@ -1,5 +1,5 @@
 // Fuzz target body shared by every adapter. Input: a mode byte, then a script for that mode.
-//   mode % 3 == 0: the codec's incremental decoders over the rest (codec_<id>.cpp)
+//   mode % 3 == 0: the codec's incremental decoders over the rest (adapters/<id>/fuzz/codec_fuzz.cpp)
 //   mode % 3 == 1: a Driver, created through the plugin descriptor with its default options and
 //                  driven like the bus engine drives it (daemon/bus/bus_engine.cpp): receive
 //                  chunks, the time, and commands, setpoints and point writes validated as the

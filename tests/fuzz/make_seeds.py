@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""Writes the seed corpora (tests/fuzz/corpus/<target>/) from the project's golden vectors.
+"""Writes the seed corpora from the project's golden vectors: tests/fuzz/corpus/<target>/ for the
+core's targets, adapters/<id>/fuzz/corpus/ for adapter_<id> (every adapter with a fuzz/ folder).
 
-Every brace-enclosed byte list of 3 or more 0xNN bytes in an adapter's codec test becomes a codec,
+Every brace-enclosed byte list of 3 or more 0xNN bytes in an adapter's codec test
+(adapters/<id>/tests/codec_test.cpp) becomes a codec,
 a driver and a simulator seed (the adapter target's mode byte and script around it); every request
 PDU of tests/modbus/pdu_test.cpp (`run({...})`, the Application Protocol's own examples) becomes an
 MBAP frame for unit 1, alone and all together in one stream; configurations come from
@@ -25,7 +27,7 @@ def vectors(path):
 
 
 def write(target, data):
-    d = OUT / target
+    d = target if isinstance(target, pathlib.Path) else OUT / target
     d.mkdir(parents=True, exist_ok=True)
     (d / ("seed-" + hashlib.sha1(data).hexdigest()[:16])).write_bytes(data)
 
@@ -40,8 +42,8 @@ def chunk(op, data):
 
 
 def adapter_seeds(adapter):
-    target = "adapter_" + adapter.replace("-", "_")
-    test = ROOT / "tests" / "adapters" / adapter / "codec_test.cpp"
+    target = ROOT / "adapters" / adapter / "fuzz" / "corpus"
+    test = ROOT / "adapters" / adapter / "tests" / "codec_test.cpp"
     vecs = sorted(set(vectors(test)))
     # Codec prefix: ed3100 first reads a reply shape (function index, register, words).
     shape = bytes([0, 0x00, 0x06, 1]) if adapter == "ed3100" else b""
@@ -117,7 +119,8 @@ def telnet_seeds():
 
 def main():
     for adapter in sorted(p.name for p in (ROOT / "adapters").iterdir() if p.is_dir()):
-        if (ROOT / "tests" / "adapters" / adapter / "codec_test.cpp").exists():
+        folder = ROOT / "adapters" / adapter
+        if (folder / "fuzz").is_dir() and (folder / "tests" / "codec_test.cpp").exists():
             adapter_seeds(adapter)
     modbus_seeds()
     config_seeds()

@@ -1,5 +1,6 @@
-// A fuzz target as an ordinary test: feeds it every file of its seed corpus
-// (tests/fuzz/corpus/<target>/) and of its crash regressions (tests/fuzz/regressions/<target>/).
+// A fuzz target as an ordinary test: feeds it every file of its seed corpus and of its crash
+// regressions (DG_FUZZ_CORPUS_DIR, DG_FUZZ_REGRESSION_DIR: tests/fuzz/corpus/<target>/ and
+// tests/fuzz/regressions/<target>/, or an adapter's adapters/<id>/fuzz/corpus/ and regressions/).
 // A regression input that crashes again aborts the test binary, which ctest reports as a failure.
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // and a simulated line (bus_rig.h), both made by the adapter's own factories from options as
 // text, and started: what a PLC sees of one drive. Registers are read as a PLC reads them and
 // written as the Modbus server writes them; the frames the master sent are kept with their times.
-// Each adapter's tests add a thin layer of their own (tests/adapters/<id>/bench.h): the frames of
+// Each adapter's tests add a thin layer of their own (adapters/<id>/tests/bench.h): the frames of
 // its document, and what "ready" and "running" take on its protocol.
 //
 //   test::AdapterBench b(drivegate_adapter, {.options = {{"slave_mode", "true"}}});

@@ -1,7 +1,7 @@
 // A Modbus RTU / ASCII slave nobody here wrote, for end-to-end tests: pymodbus's serial server
 // (Debian's python3-pymodbus, tests/e2e/pymodbus_serial_slave.py) on one end of a pseudo-terminal
-// pair made by socat; the program under test opens the other. (modbus_e2e_test.cpp has its own
-// copy of this class from before it was shared.)
+// pair made by socat; the program under test opens the other. (adapters/modbus/tests/e2e_test.cpp
+// has its own copy of this class from before it was shared.)
 #pragma once
 
 #include <filesystem>

@@ -3,7 +3,8 @@
 --
 --   tshark -X lua_script:tools/wireshark/drivegate.lua -r bus.pcap
 --
--- This file loads the five protocol dissectors beside it (drivegate_*.lua); see README.md.
+-- This file loads every adapter's dissector (adapters/<id>/dissector.lua, or drivegate_<id>.lua
+-- beside it once installed); see README.md.
 
 local bxor = (bit32 and bit32.bxor) or bit.bxor
 local band = (bit32 and bit32.band) or bit.band
@@ -151,15 +152,32 @@ end
 
 DissectorTable.get("wtap_encap"):add(wtap.USER0, p)
 
--- The protocol dissectors beside this file, unless Wireshark loads them itself (plugin folder).
+-- The adapters' dissectors, found by a rule, never listed: in the source tree (this file is
+-- tools/wireshark/drivegate.lua) every adapters/<id>/dissector.lua; installed, every
+-- drivegate_<id>.lua beside this file (unless Wireshark loads them itself from its plugin
+-- folder). Each loads once, however it is found.
 local here = (debug and debug.getinfo(1, "S").source or ""):match("^@(.*[/\\])") or ""
-for _, name in ipairs({ "drivegate_nidec_washer.lua", "drivegate_ed3100.lua",
-                        "drivegate_mdriver_2400.lua", "drivegate_fdc1.lua",
-                        "drivegate_unicla_edrive.lua" }) do
-  local path = here .. name
+local function load(path)
   local fh = io.open(path, "r")
   if fh then
     fh:close()
     dofile(path)
+  end
+end
+local function entries(dir, ext)
+  local names = {}
+  if Dir and Dir.exists(dir) then
+    for name in Dir.open(dir, ext) do names[#names + 1] = name end
+  end
+  table.sort(names)
+  return names
+end
+if here ~= "" then
+  local adapters_dir = here .. "../../adapters"
+  for _, id in ipairs(entries(adapters_dir)) do
+    load(adapters_dir .. "/" .. id .. "/dissector.lua")
+  end
+  for _, name in ipairs(entries(here, ".lua")) do
+    if name:match("^drivegate_.+%.lua$") then load(here .. name) end
   end
 end

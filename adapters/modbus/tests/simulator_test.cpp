@@ -1,6 +1,10 @@
 // The example VFD's device and its simulator on the real bus engine with a simulated clock and
 // line (tests/support/adapter_bench.h): what a PLC reads and what its writes do to the drive.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include "adapter_bench.h"
 #include "adapter_under_test.h"
@@ -64,6 +68,36 @@ TEST(ModbusOnTheBus, AnExceptionFromTheSlaveIs0x04AtThePlc) {
   ASSERT_EQ(b.control("missing holding 0").rfind("ok", 0), 0u);
   EXPECT_EQ(b.write({cmd::run_forward, 1000}), Outcome::refused);
   EXPECT_EQ(b.read("command"), cmd::stop);
+}
+
+// A profile's access per point reaches the register map: operate opens a holding register to an
+// operate client, read keeps one read-only for everyone, and the default is maintain's.
+TEST(ModbusOnTheBus, APointsAccessInTheProfileIsTheAccessAtThePlc) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("dg-access-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "access.toml";
+  std::ofstream(file) << "[profile]\nname = \"access\"\nsource = \"a test\"\n"
+                         "[[point]]\nname = \"trim\"\ntable = \"holding\"\naddress = 10\n"
+                         "type = \"u16\"\naccess = \"operate\"\n"
+                         "[[point]]\nname = \"limit\"\ntable = \"holding\"\naddress = 11\n"
+                         "type = \"u16\"\n"
+                         "[[point]]\nname = \"serial\"\ntable = \"holding\"\naddress = 12\n"
+                         "type = \"u16\"\naccess = \"read\"\n";
+  test::BusRig rig(drivegate_adapter);
+  Device& d = rig.add_device("d", 7, {{"profile", file.string()}});
+  rig.add_simulator(7, {{"profile", file.string()}});
+  rig.start();
+  ASSERT_TRUE(rig.run_until([&] { return d.online(); }, 3s));
+  const auto at = [&](std::string_view name) { return d.map().find(name)->address; };
+  const Session operate{AccessLevel::operate, drivegate::WordOrder::big};
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, at("trim"), {5}, 3s, operate), Outcome::ok);
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, at("limit"), {5}, 3s, operate), Outcome::denied);
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, at("limit"), {5}, 3s), Outcome::ok);  // maintain
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, at("serial"), {5}, 3s),
+            Outcome::no_such_point);  // read-only even for maintain: exception 02
+  EXPECT_EQ(rig.read(d, Table::holding, at("serial"), 1).size(), 1u);  // and still read
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -11,10 +11,21 @@
 #include <string>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 #include "pymodbus_slave.h"
 
 namespace drivegate::test {
 namespace {
+
+// How the core's scenarios on every drive (tests/e2e: capture, status page) run this one:
+// its demo profile, example-vfd, in the simulator and the device alike.
+const RegisterE2eAdapter kE2eAdapter(
+    {.id = "modbus",
+     .device_extra = "[device.options]\nprofile = \"example-vfd\"\n",
+     .sim_args = {"--set", "profile=example-vfd"},
+     .rpm = 1500,
+     .protocol = "MODBUS",
+     .checksum_field = "drivegate_modbus.crc.status"});
 
 using namespace std::chrono_literals;
 

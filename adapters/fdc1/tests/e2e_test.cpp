@@ -7,9 +7,20 @@
 #include <algorithm>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 
 namespace drivegate::test {
 namespace {
+
+// How the core's scenarios on every drive (tests/e2e: capture, status page) run this one:
+// in slave mode (it answers each speed frame; refreshed every second).
+const RegisterE2eAdapter kE2eAdapter(
+    {.id = "fdc1",
+     .device_extra = "[device.options]\nslave_mode = true\nrefresh_s = 1\n",
+     .sim_args = {"--set", "slave_mode=true"},
+     .rpm = 2000,
+     .protocol = "FDC1",
+     .checksum_field = "fdc1.checksum.status"});
 
 using namespace std::chrono_literals;
 using ::testing::HasSubstr;

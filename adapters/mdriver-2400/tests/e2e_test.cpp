@@ -8,10 +8,17 @@
 #include <sstream>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 #include "trace_log.h"
 
 namespace drivegate::test {
 namespace {
+
+// How the core's scenarios on every drive (tests/e2e: capture, status page) run this one.
+const RegisterE2eAdapter kE2eAdapter({.id = "mdriver-2400",
+                                      .rpm = 1149,
+                                      .protocol = "MDRIVER-2400",
+                                      .checksum_field = "mdriver2400.checksum.status"});
 
 using namespace std::chrono_literals;
 using ::testing::Contains;

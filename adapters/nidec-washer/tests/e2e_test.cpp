@@ -4,9 +4,17 @@
 #include <gtest/gtest.h>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 
 namespace drivegate::test {
 namespace {
+
+// How the core's scenarios on every drive (tests/e2e: capture, status page) run this one.
+const RegisterE2eAdapter kE2eAdapter({.id = "nidec-washer",
+                                      .device_extra = "[device.options]\nplatform = 8\n",
+                                      .rpm = 800,
+                                      .protocol = "NIDEC-WASHER",
+                                      .checksum_field = "nidec_washer.checksum.status"});
 
 using namespace std::chrono_literals;
 

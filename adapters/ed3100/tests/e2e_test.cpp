@@ -10,10 +10,22 @@
 #include <sstream>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 #include "trace_log.h"
 
 namespace drivegate::test {
 namespace {
+
+// How the core's scenarios on every drive (tests/e2e: capture, status page) run this one:
+// 9600 8E1 at address 31, reading parameter block 00-06 as well.
+const RegisterE2eAdapter kE2eAdapter(
+    {.id = "ed3100",
+     .bus_extra = "baud = 9600\nparity = \"even\"\ndata_bits = 8\nstop_bits = 1\n",
+     .device_extra = "address = 31\n[device.options]\nparameters = [\"00-06\"]\n",
+     .sim_args = {"--address", "31"},
+     .rpm = 1500,
+     .protocol = "ED3100",
+     .checksum_field = "ed3100.crc.status"});
 
 using namespace std::chrono_literals;
 using ::testing::Contains;

@@ -24,11 +24,11 @@
 #include <stdexcept>
 #include <string>
 
-#include "../../../adapters/ed3100/driver.h"
-#include "../../../adapters/ed3100/settings.h"
-#include "../../../adapters/ed3100/simulator.h"
-#include "../../../adapters/modbus/driver.h"
-#include "../../../adapters/modbus/profile.h"
+#include "../../ed3100/driver.h"
+#include "../../ed3100/settings.h"
+#include "../../ed3100/simulator.h"
+#include "../driver.h"
+#include "../profile.h"
 #include "bus_rig.h"
 #include "common_block.h"
 #include "example_profile.h"

@@ -67,7 +67,8 @@ TEST(ScanE2E, FindsThePymodbusSlaveAtItsAddressWithItsIdentificationAndProfile) 
   // the first is suggested. Both are the example profile's shape with an identification.
   const auto profile = [&](const std::string& name, const std::string& product) {
     std::ofstream(dir / "profiles" / (name + ".toml"))
-        << "[profile]\nname = \"" << name << "\"\nsource = \"tests/e2e/scan_e2e_test.cpp\"\n"
+        << "[profile]\nname = \"" << name
+        << "\"\nsource = \"adapters/modbus/tests/scan_e2e_test.cpp\"\n"
         << "identification = { vendor_name = \"drivegate-test\", product_code = \"" << product
         << "\" }\n[[point]]\nname = \"control\"\ntable = \"holding\"\naddress = 0\ntype = "
            "\"u16\"\n";

@@ -8,9 +8,16 @@
 #include <iostream>
 
 #include "e2e.h"
+#include "e2e_adapters.h"
 
 namespace drivegate::test {
 namespace {
+
+// How the core's scenarios on every drive (tests/e2e: capture, status page) run this one.
+const RegisterE2eAdapter kE2eAdapter({.id = "unicla-edrive",
+                                      .rpm = 3000,
+                                      .protocol = "UNICLA-EDRIVE",
+                                      .checksum_field = "unicla_edrive.crc.status"});
 
 using namespace std::chrono_literals;
 using ::testing::HasSubstr;
