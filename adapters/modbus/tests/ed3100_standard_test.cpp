@@ -15,6 +15,9 @@
 //  - a setpoint that is not a whole 0.01 Hz at 4 poles (not a multiple of 3 rpm): the dedicated
 //    adapter rounds it, the profile refuses it (0x03).
 //
+// The same line also carries the last test: a dead pass-through slave beside the ED3100's own
+// adapter, which must never be stalled by it.
+//
 // Each adapter's plugin.cpp exports `drivegate_adapter`, so this test links the two adapters'
 // libraries and builds their drivers itself, as their factories do.
 #include <gtest/gtest.h>
@@ -28,6 +31,7 @@
 #include "../../ed3100/settings.h"
 #include "../../ed3100/simulator.h"
 #include "../driver.h"
+#include "../passthrough.h"
 #include "../profile.h"
 #include "bus_rig.h"
 #include "common_block.h"
@@ -250,6 +254,61 @@ TEST(Ed3100StandardProfile, NeedsTheDriveToAnswerInTheStandardForm) {
   EXPECT_TRUE(b.until([&] { return b.dedicated->online(); }));
   b.rig.run_for(3000ms);
   EXPECT_FALSE(b.standard->online());
+}
+
+// Issue 26: "a dead slave is 0x0B and comm_lost without stalling another device on the same
+// line (a native adapter's drive on it too)". A pass-through window onto address 20, where nobody
+// answers, shares the ED3100's line with its dedicated adapter; a client keeps forwarding to the
+// window for 10 s. Every request is answered 0x0B (or busy, its queue being full), the window goes
+// comm_lost, and the ED3100 is polled all along: never comm_lost, its data never older than 2 s.
+TEST(Ed3100StandardProfile, ADeadPassThroughSlaveNeverStallsTheNativeDriveBesideIt) {
+  test::BusRig rig(kLine);
+  const auto char_time = character_time(9600, Parity::even, 8, 1);
+  DeviceConfig w = rig.device_config("window", 20);
+  w.adapter = "modbus";
+  w.options = {};
+  modbus_device::PassthroughSettings pass;
+  Device& window = rig.add_device(
+      w, std::make_unique<modbus_device::PassthroughDriver>(20, pass, char_time, w.poll_interval));
+  DeviceConfig d = rig.device_config("dedicated", kAddress);
+  d.adapter = "ed3100";
+  std::string error;
+  auto settings = ed3100::parse_settings(d.options, error);
+  ASSERT_TRUE(settings) << error;
+  Device& drive = rig.add_device(
+      d, std::make_unique<ed3100::Ed3100Driver>(kAddress, std::move(*settings), d.poll_interval));
+  rig.add_simulator(
+      std::make_unique<ed3100::Ed3100Simulator>(kAddress, ed3100::ReadForm::document));
+  rig.start();
+  ASSERT_TRUE(rig.run_until([&] { return drive.online(); }, 4s));
+
+  std::size_t no_response = 0;
+  std::size_t other = 0;
+  std::vector<std::shared_ptr<std::optional<Outcome>>> asked;
+  const TimePoint end = rig.now() + 10s;
+  while (rig.now() < end) {
+    auto o = std::make_shared<std::optional<Outcome>>();
+    const Outcome at_once = window.forward(
+        test::BusRig::kMaintain, Bytes{0x03, 0x00, 0x00, 0x00, 0x01},
+        [o](Outcome r, std::span<const std::uint8_t>) { *o = r; }, rig.now());
+    if (at_once != Outcome::ok) *o = at_once;
+    asked.push_back(o);
+    rig.run_for(20ms);
+    ASSERT_FALSE(drive.comm_lost());
+    ASSERT_LT(rig.value(drive, "data_age_ms"), 2000u) << "the ED3100 was starved";
+  }
+  rig.run_for(3s);  // the last ones settle
+  for (const auto& o : asked) {
+    ASSERT_TRUE(o->has_value());
+    if (**o == Outcome::no_response) {
+      ++no_response;
+    } else if (**o != Outcome::busy) {
+      ++other;
+    }
+  }
+  EXPECT_GT(no_response, 0u);
+  EXPECT_EQ(other, 0u) << "a request to a dead slave was answered as if it took it";
+  EXPECT_TRUE(window.comm_lost());
 }
 
 }  // namespace
