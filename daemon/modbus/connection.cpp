@@ -234,9 +234,12 @@ void Connection::process_input(net::TimePoint now) {
       partial_since_.reset();
       return;
     }
-    // At the cap a write waits in the buffer (and so does everything after it, to keep the
-    // order in which requests reach the backend).
-    if (outstanding_ >= writes_.size() && may_write(parse.pdu[0])) break;
+    // At the cap a write (or a forwarded request) waits in the buffer, and so does everything
+    // after it, to keep the order in which requests reach the backend.
+    if (outstanding_ >= writes_.size() &&
+        state_->dispatcher.answers_later(parse.header.unit, parse.pdu[0])) {
+      break;
+    }
     last_request_ = now;
     dispatch(parse.header, parse.pdu);
     offset += parse.consumed;
@@ -283,7 +286,7 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
   Dispatcher::Result result;
   // A pass-through unit answers every request later, with its device's reply.
   const bool forwarded = state_->dispatcher.forwards(header.unit);
-  if (!forwarded && !may_write(pdu[0])) {
+  if (!state_->dispatcher.answers_later(header.unit, pdu[0])) {
     result = state_->dispatcher.handle(session_, header.unit, pdu, out, {});
   } else {
     // A free slot exists: process_input stops at the cap. It is filled before the backend sees
@@ -302,18 +305,17 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
     std::copy(pdu.begin(), pdu.end(), w.request.begin());
     ++outstanding_;
     if (forwarded) {
-      result = state_->dispatcher.forward(
-          session_, header.unit, pdu, out,
-          [self = shared_from_this(), slot, generation = w.generation](
-              Exception e, std::span<const std::uint8_t> reply) {
-            self->on_forward_done(slot, generation, e, reply);
-          });
+      result =
+          state_->dispatcher.forward(session_, header.unit, pdu, out,
+                                     [self = shared_from_this(), slot, generation = w.generation](
+                                         Exception e, std::span<const std::uint8_t> reply) {
+                                       self->on_forward_done(slot, generation, e, reply);
+                                     });
     } else {
-      result = state_->dispatcher.handle(
-          session_, header.unit, pdu, out,
-          [self = shared_from_this(), slot, generation = w.generation](Exception e) {
-            self->on_write_done(slot, generation, e);
-          });
+      result =
+          state_->dispatcher.handle(session_, header.unit, pdu, out,
+                                    [self = shared_from_this(), slot, generation = w.generation](
+                                        Exception e) { self->on_write_done(slot, generation, e); });
     }
     if (result.status == Dispatcher::Result::Status::reply) {  // refused before it started
       w.used = false;

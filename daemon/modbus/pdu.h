@@ -64,6 +64,11 @@ class Dispatcher {
   // Pass-through (Backend::forwards): every request for such a unit goes to forward() instead of
   // handle(), whatever its function, and is answered with the device's own reply, later.
   [[nodiscard]] bool forwards(std::uint8_t unit) const { return backend_.forwards(unit); }
+  // Whether a request is answered later (a write, or anything for a pass-through unit): such a
+  // request needs one of its host's pending slots, and waits at their cap.
+  [[nodiscard]] bool answers_later(std::uint8_t unit, std::uint8_t function) const {
+    return may_write(function) || forwards(unit);
+  }
   // Starts forwarding `request`: `pending` (then `done` fires, maybe already has), or the
   // exception reply when it was refused at once (`denied` when beyond the session's access).
   Result forward(const Session& session, std::uint8_t unit, std::span<const std::uint8_t> request,

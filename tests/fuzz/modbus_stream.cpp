@@ -45,7 +45,8 @@ bool ModbusStream::receive(std::span<const std::uint8_t> segment) {
     FUZZ_CHECK(!parse.pdu.empty() && parse.pdu.size() <= modbus::kMaxPduSize);
     FUZZ_CHECK(parse.pdu.data() == rest.data() + modbus::kMbapHeaderSize);
     FUZZ_CHECK(parse.header.unit == rest[6]);
-    if (modbus::may_write(parse.pdu[0]) && outstanding_ >= kMaxPendingWrites) {
+    if (dispatcher_.answers_later(parse.header.unit, parse.pdu[0]) &&
+        outstanding_ >= kMaxPendingWrites) {
       complete_writes();
       if (outstanding_ >= kMaxPendingWrites && !(settle_ && settle_())) break;
       complete_writes();
@@ -64,7 +65,7 @@ void ModbusStream::dispatch(const modbus::MbapHeader& header, std::span<const st
   out_.fill(0xA5);
   modbus::Dispatcher::Result result;
   const bool forwarded = dispatcher_.forwards(header.unit);
-  if (!forwarded && !modbus::may_write(pdu[0])) {
+  if (!dispatcher_.answers_later(header.unit, pdu[0])) {
     result = dispatcher_.handle(session_, header.unit, pdu, out_, {});
     FUZZ_CHECK(result.status == modbus::Dispatcher::Result::Status::reply);
   } else {

@@ -190,6 +190,31 @@ TEST(Connection, APassThroughUnitIsAnsweredWithTheDevicesOwnReply) {
   EXPECT_EQ(c.reply(), (Bytes{0x01, 0x02, 0x00, 0x00, 0x00, 0x03, 0x05, 0xC1, 0x01}));
 }
 
+// A client pipelining more forwarded reads than the connection's pending slots: the ones past the
+// cap wait in the buffer, as writes do, and every one is answered in turn once the device's
+// replies come; nothing is dropped, and the server never takes a slot it does not have.
+TEST(Connection, PipelinedForwardsPastTheSlotCapWaitAndAreAllAnswered) {
+  ServerOptions o;
+  o.max_pending_writes = 2;
+  Harness h(o);
+  RawClient c(h.port());
+  Bytes wire;
+  for (std::uint16_t t = 1; t <= 6; ++t)
+    wire = wire + request(t, 5, {0x03, 0x00, 0x00, 0x00, 0x01});
+  ASSERT_TRUE(c.send(wire));
+  for (std::uint16_t t = 1; t <= 6; ++t) {
+    ASSERT_TRUE(h.eventually([&h] { return !h.source().forwards_pending.empty(); })) << t;
+    EXPECT_LE(h.with_backend([](FakeBackend& b) { return b.forwards_pending.size(); }), 2u);
+    h.with_backend([](FakeBackend& b) {
+      b.complete_forward({0x03, 0x02, 0x12, 0x34});
+      return 0;
+    });
+    EXPECT_EQ(c.reply(), (Bytes{0x00, static_cast<std::uint8_t>(t), 0x00, 0x00, 0x00, 0x05, 0x05,
+                                0x03, 0x02, 0x12, 0x34}))
+        << t;
+  }
+}
+
 TEST(Connection, APassThroughRequestTheDeviceMissedIs0x0BAndOneBeyondTheAccessIs01) {
   ServerOptions options;
   options.listeners.front().policy.access = AccessLevel::read;
