@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "line_timing.h"
+#include "rejected.h"
 #include "values.h"
 
 namespace drivegate::modbus_device {
@@ -194,13 +195,7 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
     case DecodeStatus::incomplete:
       return {};
     case DecodeStatus::bad:
-      // RTU has no start marker: a CRC failure whose first byte is not this slave's address is a
-      // window on noise rather than its damaged reply, so skip one byte and look again.
-      if (profile_.line.framing == Framing::rtu && d.error == FrameError::bad_checksum &&
-          rx[0] != address_) {
-        return {RxKind::noise, 1};
-      }
-      return damaged(d);
+      return rejected(profile_.line.framing, d, rx, address_);
     case DecodeStatus::frame:
       break;
   }

@@ -1,6 +1,7 @@
 #include "passthrough.h"
 
 #include "line_timing.h"
+#include "rejected.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -75,12 +76,7 @@ RxVerdict PassthroughDriver::on_receive(ByteView rx, TimePoint now) {
     case DecodeStatus::incomplete:
       return {};
     case DecodeStatus::bad:
-      // As ModbusDriver: an RTU CRC failure not starting with this slave's address is noise.
-      if (settings_.framing == Framing::rtu && d.error == FrameError::bad_checksum &&
-          rx[0] != address_) {
-        return {RxKind::noise, 1};
-      }
-      return damaged(d);
+      return rejected(settings_.framing, d, rx, address_);
     case DecodeStatus::frame:
       break;
   }
