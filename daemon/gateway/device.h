@@ -168,6 +168,7 @@ class Device final : public Station {
                    std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
   Outcome enqueue(const Session& session, std::vector<Part> parts, WriteDone done, TimePoint now,
                   Origin origin);
+  Outcome begin(Request& r, bool at_once, TimePoint now);
   Progress advance(Request& r, TimePoint now, Outcome& failure);
   Progress advance_forward(Request& r, TimePoint now, Outcome& failure);
   void settle(const Completion& c, TimePoint now);

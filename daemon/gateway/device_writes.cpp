@@ -273,17 +273,24 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, WriteDo
   r->done.push_back(std::move(done));
   r->deadline = now + traits_.write_timeout;
   requests_.push_back(std::move(owned));
-  if (!urgent && !heartbeat_only) {
-    if (queue_head() != r || !may_release(now)) {
-      if (kick_) kick_();  // the engine gives it a write turn
-      return Outcome::ok;
-    }
-  }
   // A stop and the heartbeat go to the driver (or the image) at once.
+  return begin(*r, urgent || heartbeat_only, now);
+}
+
+// A request just queued: started now when it must be (`at_once`) or may be (it heads the queue
+// and no poll of the device's own is due), else left for a write turn.
+Outcome Device::begin(Request& r, bool at_once, TimePoint now) {
+  if (!at_once && (queue_head() != &r || !may_release(now))) {
+    if (kick_) kick_();  // the engine gives it a write turn
+    return Outcome::ok;
+  }
   Outcome failure = Outcome::ok;
-  const Progress progress = advance(*r, now, failure);
-  if (progress == Progress::failed) r->done.clear();  // answered by the return value instead
-  if (progress != Progress::waiting) finish(r, failure, now);
+  const Progress progress = advance(r, now, failure);
+  if (progress == Progress::failed) {  // answered by the return value instead
+    r.done.clear();
+    r.forward_done = nullptr;
+  }
+  if (progress != Progress::waiting) finish(&r, failure, now);
   publish(now);
   if (progress == Progress::waiting && kick_) kick_();
   return failure;
@@ -439,17 +446,7 @@ Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pd
   r->feeds_failsafe = false;
   r->deadline = now + traits_.write_timeout;
   requests_.push_back(std::move(owned));
-  if (queue_head() != r || !may_release(now)) {
-    if (kick_) kick_();  // the engine gives it a write turn
-    return Outcome::ok;
-  }
-  Outcome failure = Outcome::ok;
-  const Progress progress = advance(*r, now, failure);
-  if (progress == Progress::failed) r->forward_done = nullptr;  // answered by the return value
-  if (progress != Progress::waiting) finish(r, failure, now);
-  publish(now);
-  if (progress == Progress::waiting && kick_) kick_();
-  return failure;
+  return begin(*r, false, now);
 }
 
 void Device::settle(const Completion& c, TimePoint now) {
