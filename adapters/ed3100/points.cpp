@@ -76,7 +76,8 @@ std::vector<PointSpec> make_points(const Settings& s) {
   for (const MonitorSel& m : s.monitors) {
     const std::string id = "monitor_" + hex4(m.reg, false);
     const std::string reg = "monitor 0x" + hex4(m.reg, true);
-    pts.push_back(input_point(id, PointType::f32, m.unit, reg + " scaled by its format word"));
+    pts.push_back(
+        input_point(id, PointType::f32, m.unit, reg + " scaled by its format word").trended());
     pts.push_back(input_point(id + "_raw", PointType::u16, "", reg + " word 1, unscaled"));
     pts.push_back(
         input_point(id + "_format", PointType::u16, "", reg + " word 2: decimals, unit, stopped")

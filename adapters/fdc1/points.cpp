@@ -32,7 +32,8 @@ std::vector<PointSpec> make_points(bool programming) {
   // OUTPUT: current = INT / 3160 A; 65535 / 3160 = 20.7 A fits a u16 in mA.
   v[pt::current_a] = input_point("current_a", PointType::u16, "A",
                                  "measured motor current (0 while the motor is off)")
-                         .scaled(0.001);
+                         .scaled(0.001)
+                         .trended();
   // OUTPUT: time = TR / 122 s; 65535 / 122 = 537 s fits a u16 in 0.1 s.
   v[pt::restart_s] = input_point("restart_s", PointType::u16, "s",
                                  "seconds until the next motor start (motor off)")

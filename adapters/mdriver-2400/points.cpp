@@ -20,7 +20,8 @@ std::vector<PointSpec> make_points() {
       input_point("error_code", PointType::u16, "", "R7: driver error code (0 = no error)")
           .named_values(error_code_labels());
   v[pt::ipm_temperature] =
-      input_point("ipm_temperature", PointType::u16, "degC", "R8: IPM sensor temperature");
+      input_point("ipm_temperature", PointType::u16, "degC", "R8: IPM sensor temperature")
+          .trended();
   v[pt::info_1] =
       input_point("info_1", PointType::u16, "", "R9: information 1 (raw, 00 in the document)");
   v[pt::info_2] =

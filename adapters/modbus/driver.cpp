@@ -20,6 +20,7 @@ PointSpec spec_of(const ProfilePoint& p) {
   s.scale = p.type == ValueType::f32 ? 1.0 : p.scale;  // a float register holds the value
   s.unit = p.unit;
   s.description = p.description;
+  s.trend = p.trend;
   switch (p.access) {
     case PointAccess::read:  // a holding register or coil the profile keeps read-only
       s.write_level = PointSpec::WriteLevel::none;

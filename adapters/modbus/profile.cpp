@@ -193,7 +193,7 @@ class Parser {
   void read_point(const toml::table& t) {
     TableReader r(t, "point", diag_);
     r.expect({"name", "table", "address", "type", "word_order", "scale", "unit", "description",
-              "min", "max", "access", "poll_ms"});
+              "min", "max", "access", "poll_ms", "trend"});
     ProfilePoint p;
     p.line = static_cast<std::uint32_t>(t.source().begin.line);
     bool ok = true;
@@ -270,6 +270,7 @@ class Parser {
 
   bool read_access_and_limits(TableReader& r, ProfilePoint& p) {
     bool ok = true;
+    p.trend = r.boolean("trend").value_or(false);
     p.access = p.writable() ? PointAccess::maintain : PointAccess::read;
     if (auto a = choice(r, diag_, "access", kPointAccessNames, false)) {
       p.access = static_cast<PointAccess>(*a);

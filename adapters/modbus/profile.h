@@ -71,6 +71,7 @@ struct ProfilePoint {
   std::optional<double> max;
   PointAccess access = PointAccess::read;
   std::uint32_t poll_ms = 0;  // 0: the device's poll interval
+  bool trend = false;         // kept in the daemon's trends (PointSpec::trend)
   std::uint32_t line = 0;     // where the point is in the file, for messages
 
   [[nodiscard]] std::uint16_t width() const { return width_of(type); }

@@ -55,7 +55,8 @@ std::vector<PointSpec> make_points() {
                   .scaled(0.1));
   p.push_back(raw("raw_weight", "raw weight data from weight detection (5.10)"));
   p.push_back(input_point("dc_bus_voltage", PointType::u16, "V",
-                          "DC bus voltage from voltage detection (5.9)"));
+                          "DC bus voltage from voltage detection (5.9)")
+                  .trended());
   p.push_back(raw("forced_brake", "forced brake state from its ACK (5.13)")
                   .named_values({{"disabled", 0}, {"enabled", 1}}));
   p.push_back(input_point("fabric_raw", PointType::u32, "",

@@ -37,15 +37,15 @@ double d(float v) {
 std::vector<PointSpec> make_points() {
   std::vector<PointSpec> p(pt::count);
   // "Status" table.
-  p[pt::suction_pressure] = real("suction_pressure", "bar", "suction pressure (absolute)");
-  p[pt::discharge_pressure] = real("discharge_pressure", "bar", "discharge pressure (absolute)");
-  p[pt::suction_temperature] = real("suction_temperature", "degC", "suction temperature");
-  p[pt::discharge_temperature] = real("discharge_temperature", "degC", "discharge temperature");
+  p[pt::suction_pressure] = real("suction_pressure", "bar", "suction pressure (absolute)").trended();
+  p[pt::discharge_pressure] = real("discharge_pressure", "bar", "discharge pressure (absolute)").trended();
+  p[pt::suction_temperature] = real("suction_temperature", "degC", "suction temperature").trended();
+  p[pt::discharge_temperature] = real("discharge_temperature", "degC", "discharge temperature").trended();
   p[pt::suction_superheat] = real("suction_superheat", "K", "suction superheat");
   p[pt::discharge_superheat] = real("discharge_superheat", "K", "discharge superheat");
   p[pt::compressor_rpm] = word("compressor_rpm", "rpm", "compressor speed as reported");
   p[pt::motor_voltage] = word("motor_voltage", "V", "motor voltage");
-  p[pt::motor_power] = word("motor_power", "W", "motor power");
+  p[pt::motor_power] = word("motor_power", "W", "motor power").trended();
   p[pt::motor_torque] = word("motor_torque", "Nm", "motor torque");
   p[pt::op_state] = word("op_state", "", "operating state (ED_OP_STATE)")
                         .named_values(labels_in_order(kOpStateNames));
@@ -55,7 +55,7 @@ std::vector<PointSpec> make_points() {
   p[pt::remote_enable] = word("remote_enable", "", "remote enable input as reported (0 = off)");
   p[pt::anti_short] =
       word("anti_short", "", "anti-short-cycle byte as reported (no unit in the document)");
-  p[pt::motor_temperature] = real("motor_temperature", "degC", "motor temperature");
+  p[pt::motor_temperature] = real("motor_temperature", "degC", "motor temperature").trended();
   p[pt::switch_temperature] = real("switch_temperature", "degC", "power switch temperature");
   p[pt::compressor_safety_run] = word("compressor_safety_run", "", "compressor safety flags - run")
                                      .named_bits(compressor_flag_labels());

@@ -69,6 +69,10 @@ struct PointSpec {
   // access = "operate") or close it to writes altogether (access = "read": served read-only).
   enum class WriteLevel : std::uint8_t { maintain, operate, none };
   WriteLevel write_level = WriteLevel::maintain;
+  // Worth a trend (history/trend_store.h: /api/v1/trends, the page's charts): a measurement
+  // that tells what the machine did before a trip (currents, voltages, pressures, temperatures,
+  // power), not a code or a counter.
+  bool trend = false;
 
   // Modifiers for building point lists: input_point("speed", ...).scaled(0.1).
   PointSpec& scaled(double s) {
@@ -78,6 +82,10 @@ struct PointSpec {
   PointSpec& limited(double lo, double hi) {
     min = lo;
     max = hi;
+    return *this;
+  }
+  PointSpec& trended() {
+    trend = true;
     return *this;
   }
   PointSpec& named_values(std::vector<Label> l) {
