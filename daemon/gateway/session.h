@@ -1,5 +1,6 @@
 // Who asks the gateway for a read or a write: the access level and word order of a Modbus
-// connection (its listener's, or its TLS client certificate's role) or of the MQTT commands.
+// connection (its listener's, or its TLS client certificate's role) or of the MQTT commands, and
+// who the client is (source.h).
 // Every northbound makes one; the gateway judges each request by it.
 //
 // Header-only, in the CMake target dg_gateway_api, which sits below dg_modbus: the Modbus
@@ -10,6 +11,8 @@
 #include <array>
 #include <cstdint>
 #include <string_view>
+
+#include "gateway/source.h"
 
 namespace drivegate {
 
@@ -44,6 +47,8 @@ struct Session {
   // Whether this client's valid writes to the command block prove the PLC is there (feed the
   // PLC-loss failsafe, docs/safety.md). Every Modbus client's do; MQTT's only when configured.
   bool feeds_failsafe = true;
+  // Who it is, for the audit trail (source.h).
+  Source source{};
 };
 
 }  // namespace drivegate

@@ -19,7 +19,8 @@ class LogThrottle {
  public:
   using Clock = std::chrono::steady_clock;
 
-  explicit LogThrottle(unsigned burst = 10, Clock::duration interval = std::chrono::seconds(1))
+  LogThrottle() : LogThrottle(10) {}
+  explicit LogThrottle(unsigned burst, Clock::duration interval = std::chrono::seconds(1))
       : burst_(burst > 0 ? burst : 1),
         interval_(interval > Clock::duration::zero() ? interval : Clock::duration(1)),
         tokens_(burst_) {}

@@ -1,0 +1,84 @@
+// The audit trail (IEC 62443-3-3 SR 2.8, auditable events): one record of every write that
+// reaches the gateway, from any northbound or the gateway itself, accepted or refused: when, from
+// whom (source.h), to which device, which points and values, the result and how long the drive
+// took. Each goes to the journal at info level with structured fields and into the history
+// (event_log.h). Devices record here (gateway/device.h); the daemon owns it across reloads.
+//
+// What is not recorded one by one, and why (each is still counted, in counts() and /metrics):
+// - refusals past a burst per cause (net::LogThrottle: 10, then one a second): anyone who can
+//   reach a port can cause them, and a flood must not push the plant's events out; the next one
+//   recorded says how many were held;
+// - a repeat of the device's newest entry (the same points, values, source and result), which
+//   that entry counts (event_log.h): a PLC writing its command word every scan;
+// - a write of the heartbeat alone: the gateway's own register, written to prove the PLC is
+//   there, not a command to the drive (docs/safety.md).
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "drivegate/driver.h"
+#include "drivegate/point.h"
+#include "gateway/outcome.h"
+#include "gateway/source.h"
+#include "history/event_log.h"
+#include "history/journal_writer.h"
+#include "net/log_throttle.h"
+
+namespace drivegate {
+
+struct CommandRecord {
+  Source source;
+  std::string device;
+  std::uint8_t unit = 0;
+  // What was asked: "command=run_forward setpoint_rpm=1500" once validated, else the registers
+  // as they came ("holding 0..1 = 1 1500").
+  std::string points;
+  Outcome result = Outcome::ok;
+  std::string why;  // more than the result says, if anything ("needs operate, has read")
+  // From accepted to answered; none: answered at once, before the drive was involved.
+  std::optional<std::chrono::milliseconds> took;
+};
+
+// Writes by source and result, every one counted (drivegate_writes_total in /metrics).
+struct CommandCounts {
+  std::array<std::array<std::uint64_t, kOutcomeNames.size()>, kSourceKindNames.size()> n{};
+  [[nodiscard]] std::uint64_t at(SourceKind s, Outcome o) const {
+    return n[static_cast<std::size_t>(s)][static_cast<std::size_t>(o)];
+  }
+};
+
+// The registers a client asked to write, as they came: "holding 0..1 = 1 1500".
+std::string describe_registers(Table table, std::uint16_t address,
+                               std::span<const std::uint16_t> values);
+
+// The record as a history entry: message and fields (source, listener, client, subject, role,
+// points, result, why, took_ms; those without a value left out).
+Event command_event(const CommandRecord& r);
+// The journal fields of a history entry: each field upper-cased (SOURCE=, CLIENT=, ...), with
+// EVENT=, DEVICE= and UNIT=.
+std::vector<std::string> journal_fields(const Event& e);
+
+class CommandAudit {
+ public:
+  // `journal` may be null (nothing but the history).
+  CommandAudit(EventLog& history, JournalWriter* journal);
+
+  // One write's record; `now` paces the refusals.
+  void record(const CommandRecord& r, TimePoint now);
+  // A write counted but not recorded (the heartbeat alone).
+  void count(SourceKind source, Outcome result);
+  [[nodiscard]] const CommandCounts& counts() const { return counts_; }
+
+ private:
+  EventLog& history_;
+  JournalWriter* journal_;
+  CommandCounts counts_;
+  std::array<net::LogThrottle, kOutcomeNames.size()> refusals_{};
+};
+
+}  // namespace drivegate

@@ -1,0 +1,72 @@
+// The daemon's history: the last events and commands (event.h), oldest dropped first, in bounded
+// memory. Each entry's strings are cut at kMaxText bytes, so `capacity` entries take at most
+// about capacity x (kMaxFields + 1) x kMaxText bytes, whatever a client sends; a typical entry
+// takes about 400 (memory_bytes() counts them). Pure: the wall clock is injected.
+//
+// A repeat (the same command from the same client with the same result as the device's newest
+// entry) updates that entry in place (its "repeats" and "last_ms" fields) instead of pushing the
+// plant's other events out: a PLC that writes its command word every scan leaves one entry, and
+// anything else that happens to the device in between still shows in its order.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "history/event.h"
+
+namespace drivegate {
+
+inline constexpr std::size_t kDefaultHistory = 2000;  // entries kept by default
+inline constexpr std::size_t kMaxText = 256;          // bytes of one message or field value
+inline constexpr std::size_t kMaxFields = 12;         // fields of one entry
+inline constexpr std::size_t kMaxQuery = 1000;        // entries one query returns at most
+
+// Which entries a query wants: all that match every criterion given, the newest `limit` of them.
+struct EventFilter {
+  std::string device;              // empty: any
+  std::optional<EventKind> kind;   // none: any
+  std::int64_t since_ms = 0;       // recorded at or after (ms since the epoch)
+  std::uint64_t after_seq = 0;     // with a sequence number above (`drivegate events --follow`)
+  std::size_t limit = 100;         // at most kMaxQuery
+};
+
+class EventLog {
+ public:
+  using WallClock = std::function<std::int64_t()>;  // milliseconds since the epoch
+  static std::int64_t system_ms();
+
+  // `capacity` 0: nothing is kept (the audit trail still reaches the journal).
+  explicit EventLog(std::size_t capacity = kDefaultHistory, WallClock wall = &system_ms);
+
+  // Records `e` now (its seq and time are set here; text cut to kMaxText) and returns its seq.
+  std::uint64_t add(Event e);
+  // Whether the newest entry of `e`'s device is a command that `e` repeats (every field equal
+  // but "took_ms"); if so one more repeat is counted there, and `e` is not to be added.
+  bool repeat(const Event& e);
+
+  // Matching entries, oldest first.
+  [[nodiscard]] std::vector<Event> query(const EventFilter& filter) const;
+  [[nodiscard]] std::size_t size() const { return entries_.size(); }
+  [[nodiscard]] std::size_t capacity() const { return capacity_; }
+  [[nodiscard]] std::uint64_t last_seq() const { return next_seq_ - 1; }
+  [[nodiscard]] std::uint64_t dropped() const { return dropped_; }  // pushed out, oldest first
+  [[nodiscard]] std::size_t memory_bytes() const { return bytes_; }
+  [[nodiscard]] std::int64_t now_ms() const { return wall_(); }
+
+ private:
+  static std::size_t footprint(const Event& e);
+
+  std::size_t capacity_;
+  WallClock wall_;
+  std::deque<Event> entries_;
+  std::uint64_t next_seq_ = 1;
+  std::uint64_t dropped_ = 0;
+  std::size_t bytes_ = 0;
+};
+
+}  // namespace drivegate

@@ -1,0 +1,29 @@
+// The history as JSON documents (docs/http.md): GET /api/v1/events and GET /api/v1/trends.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "history/event_log.h"
+#include "history/trend_store.h"
+
+namespace drivegate {
+
+// {"last_seq": N, "dropped": N, "events": [{"seq", "unix_ms", "kind", "device", "unit",
+// "message", "fields": {...}}, ...]}, oldest first; last_seq is the log's, whatever matched.
+std::string events_json(const EventLog& log, const EventFilter& filter);
+
+// Which trends: `name` empty for all, else the one key ("device:NAME", "bus:NAME"); rows at or
+// after `since_ms`.
+struct TrendFilter {
+  std::string name;
+  std::int64_t since_ms = 0;
+};
+
+// {"samples": N, "trends": [{"name", "series": [{"name", "unit"}], "t": [ms, ...],
+// "values": [[series 0 ...], [series 1 ...]]}]}; an unknown value is null.
+std::string trends_json(const TrendStore& store, const TrendFilter& filter);
+
+}  // namespace drivegate
