@@ -26,6 +26,10 @@ class BackendSwitch : public modbus::Backend {
         target_->write(session, unit, table, address, values,
                        [done = std::move(done)](Outcome o) { done(modbus_exception(o)); }));
   }
+  void refused_write(const Session& session, std::uint8_t unit,
+                     std::span<const std::uint8_t> request) override {
+    if (target_ != nullptr) target_->refused_write(session, unit, request);
+  }
   bool forwards(std::uint8_t unit) const override {
     return target_ != nullptr && target_->forwards(unit);
   }

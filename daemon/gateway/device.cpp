@@ -20,7 +20,8 @@ LinkPolicy policy_of(const DeviceConfig& c, const AdapterDescriptor& a, const Dr
 }  // namespace
 
 Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
-               std::unique_ptr<Driver> driver, std::shared_ptr<spdlog::logger> log, TimePoint now)
+               std::unique_ptr<Driver> driver, std::shared_ptr<spdlog::logger> log, TimePoint now,
+               History* history)
     : config_(std::move(config)),
       adapter_(adapter),
       driver_(std::move(driver)),
@@ -29,7 +30,8 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
       log_(std::move(log)),
       link_{policy_of(config_, adapter_, traits_), LinkHealth(now), {}, nullptr, log_},
       failsafe_(config_.failsafe.timeout),
-      last_tick_(now) {
+      last_tick_(now),
+      history_(history) {
   for (int t = 0; t < 4; ++t) image_[t].assign(map_.size(static_cast<Table>(t)), 0);
   refresh_image(now);
   refresh_common(Table::input, now);
@@ -69,7 +71,7 @@ void Device::on_no_reply(TimePoint now) {
 void Device::on_comm_lost(TimePoint now) {
   driver_->on_comm_lost(now);
   publish(now);
-  fail_pending(Outcome::no_response);
+  fail_pending(Outcome::no_response, now);
 }
 
 void Device::on_tick(TimePoint now) {
@@ -77,6 +79,7 @@ void Device::on_tick(TimePoint now) {
   expire_requests(now);
   failsafe_tick(now);
   stop_on_start(now);
+  record_changes();
 }
 
 // The first time the drive answers (daemon start, or the device added or changed by a reload),
@@ -111,7 +114,7 @@ void Device::stop_on_start(TimePoint now) {
                      to_string(outcome));
         }
       },
-      now);
+      now, SourceKind::gateway);
 }
 
 // Settles the writes the driver completed (which may apply the next part of their request) and
@@ -127,6 +130,7 @@ void Device::publish(TimePoint now, bool always) {
     driver_->take_completions(completions);  // applying a next part may settle at once
   }
   log_changes();
+  record_changes();
   if (watcher_ && (always || settled)) watcher_();
 }
 

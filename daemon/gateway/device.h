@@ -10,6 +10,7 @@
 //   device_writes.cpp    Modbus write requests: validated, checked whole, queued (bounded, one
 //                        write turn of the line per part), applied part by part, confirmed
 //   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
+//   device_history.cpp   what it records in the history: each write's audit record, its events
 #pragma once
 
 #include <spdlog/logger.h>
@@ -27,6 +28,7 @@
 #include "gateway/outcome.h"
 #include "gateway/register_map.h"
 #include "gateway/session.h"
+#include "history/history.h"
 #include "net/log_throttle.h"
 
 namespace drivegate {
@@ -51,8 +53,10 @@ struct WriteStats {
 
 class Device final : public Station {
  public:
+  // `history` (may be null: nothing recorded) gets each write's audit record and the device's
+  // events; it outlives the device.
   Device(DeviceConfig config, const AdapterDescriptor& adapter, std::unique_ptr<Driver> driver,
-         std::shared_ptr<spdlog::logger> log, TimePoint now);
+         std::shared_ptr<spdlog::logger> log, TimePoint now, History* history = nullptr);
   ~Device() override;
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
@@ -118,28 +122,37 @@ class Device final : public Station {
   // calls `done`. It never feeds the failsafe: a pass-through device has no command block.
   Outcome forward(const Session& session, std::span<const std::uint8_t> pdu, ForwardDone done,
                   TimePoint now);
-  // A command from the gateway itself (shutdown), outside Modbus: it neither feeds nor resets
-  // the failsafe. `done` is called exactly once.
-  void command(Command c, WriteDone done, TimePoint now);
+  // A command from the gateway itself (shutdown, or on_start = stop: `source` says which),
+  // outside Modbus: it neither feeds nor resets the failsafe. `done` is called exactly once.
+  void command(Command c, WriteDone done, TimePoint now,
+               SourceKind source = SourceKind::shutdown);
   // Shutdown has begun: from now on every client's write, from any northbound, is refused
   // (no_response) before it reaches the driver, so that nothing runs the motor after the shutdown
   // stop.
   void close_to_clients() { closed_to_clients_ = true; }
   // Fails every request in flight (shutdown, bus closed for good).
-  void fail_pending(Outcome why);
+  void fail_pending(Outcome why, TimePoint now);
   // Writes waiting or being carried out (status bit command_pending).
   [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
   [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }
+  // A request PDU as the audit trail says it: "pdu 10 00 01 ..." (at most 32 bytes shown).
+  [[nodiscard]] static std::string describe_pdu(std::span<const std::uint8_t> pdu);
 
  private:
   enum class Origin : std::uint8_t { plc, gateway };
   // The gateway's own writes (shutdown, failsafe) may write anything, in the map's word order.
-  static constexpr Session kGatewaySession{AccessLevel::maintain, WordOrder::big};
+  static Session gateway_session(SourceKind source) {
+    Session s{AccessLevel::maintain, WordOrder::big, false};
+    s.source.kind = source;
+    return s;
+  }
   struct Part {
     const MappedPoint* point;
     Value value;
   };
   struct Request;
+  // Whom a request answers and what it records (device_request.h).
+  struct Answer;
   enum class Progress : std::uint8_t { done, waiting, failed };
 
   // device.cpp
@@ -163,10 +176,12 @@ class Device final : public Station {
   Outcome refuse_run_while_latched(const char* source, TimePoint now);
   void supersede_runs(TimePoint now);
   Outcome submit(const Session& session, Table table, std::uint16_t address,
-                 std::span<const std::uint16_t> in, WriteDone done, TimePoint now, Origin origin);
+                 std::span<const std::uint16_t> in, Answer& answer, TimePoint now, Origin origin);
+  Outcome write_points_checked(const Session& session, std::span<const PointWrite> points,
+                               Answer& answer, TimePoint now);
   Outcome validate(const Session& session, Table table, std::uint16_t address,
                    std::span<const std::uint16_t> in, std::vector<Part>& parts) const;
-  Outcome enqueue(const Session& session, std::vector<Part> parts, WriteDone done, TimePoint now,
+  Outcome enqueue(const Session& session, std::vector<Part> parts, Answer& answer, TimePoint now,
                   Origin origin);
   Outcome begin(Request& r, bool at_once, TimePoint now);
   Progress advance(Request& r, TimePoint now, Outcome& failure);
@@ -174,6 +189,17 @@ class Device final : public Station {
   void settle(const Completion& c, TimePoint now);
   void finish(const Request* r, Outcome outcome, TimePoint now);
   void expire_requests(TimePoint now);
+  // device_history.cpp
+  [[nodiscard]] Answer answer_to(const Session& session, WriteDone done, std::string asked,
+                                 TimePoint now) const;
+  // The outcome a write entry returns: recorded here unless the request took the answer.
+  Outcome answered(Answer& answer, Outcome outcome, TimePoint now);
+  void record(Answer& answer, Outcome outcome, TimePoint now);
+  [[nodiscard]] static std::string describe(std::span<const Part> parts);
+  [[nodiscard]] static std::string value_text(const PointSpec& spec, const Value& value);
+  void record_event(EventKind kind, std::string message,
+                    std::vector<std::pair<std::string, std::string>> fields = {});
+  void record_changes();
   // device_failsafe.cpp
   void failsafe_tick(TimePoint now);
   void enforce_failsafe(TimePoint now);
@@ -219,6 +245,12 @@ class Device final : public Station {
   // What was last logged, to log changes only.
   bool logged_online_ = false;
   FaultSet logged_faults_;
+  // What was last recorded in the history, likewise.
+  History* history_;
+  bool recorded_comm_lost_ = false;
+  bool recorded_running_ = false;
+  bool recorded_latched_ = false;
+  Fault recorded_fault_ = Fault::none;
 };
 
 }  // namespace drivegate

@@ -1,6 +1,7 @@
 // The device's PLC-loss failsafe (docs/safety.md): what it does when the PLC stops writing, and
 // how it retries a failsafe write the drive did not take. The timer itself is failsafe.h.
 #include "gateway/device.h"
+#include "gateway/device_request.h"
 
 namespace drivegate {
 
@@ -43,17 +44,18 @@ void Device::enforce_failsafe(TimePoint now) {
   failsafe_busy_ = true;
   const FailsafeAction action = failsafe_now_;
   auto done = [this, action](Outcome o) { failsafe_settled(action, o); };
-  Outcome outcome = Outcome::ok;
-  if (action == FailsafeAction::preset) {
-    const auto rpm = static_cast<std::uint16_t>(config_.failsafe.preset_rpm);
-    outcome = submit(kGatewaySession, Table::holding, 1, std::span<const std::uint16_t>(&rpm, 1),
-                     done, now, Origin::gateway);
-  } else {
-    const auto c = static_cast<std::uint16_t>(
-        action == FailsafeAction::quick_stop ? Command::quick_stop : Command::stop);
-    outcome = submit(kGatewaySession, Table::holding, 0, std::span<const std::uint16_t>(&c, 1),
-                     done, now, Origin::gateway);
-  }
+  const Session session = gateway_session(SourceKind::failsafe);
+  // The preset speed goes to setpoint_rpm (register 1), a stop to command (register 0).
+  const bool preset = action == FailsafeAction::preset;
+  const auto value = static_cast<std::uint16_t>(
+      preset ? config_.failsafe.preset_rpm
+             : static_cast<int>(action == FailsafeAction::quick_stop ? Command::quick_stop
+                                                                     : Command::stop));
+  const auto address = static_cast<std::uint16_t>(preset ? 1 : 0);
+  const std::span<const std::uint16_t> in(&value, 1);
+  Answer a = answer_to(session, done, describe_registers(Table::holding, address, in), now);
+  const Outcome outcome =
+      answered(a, submit(session, Table::holding, address, in, a, now, Origin::gateway), now);
   if (outcome != Outcome::ok) failsafe_settled(action, outcome);
 }
 

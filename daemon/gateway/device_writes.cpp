@@ -98,14 +98,19 @@ AccessLevel required_level(const MappedPoint& p) {
 
 Outcome Device::write(const Session& session, Table table, std::uint16_t address,
                       std::span<const std::uint16_t> in, WriteDone done, TimePoint now) {
-  return submit(session, table, address, in, std::move(done), now, Origin::plc);
+  Answer a = answer_to(session, std::move(done), describe_registers(table, address, in), now);
+  return answered(a, submit(session, table, address, in, a, now, Origin::plc), now);
 }
 
-void Device::command(Command c, WriteDone done, TimePoint now) {
+void Device::command(Command c, WriteDone done, TimePoint now, SourceKind source) {
   const auto value = static_cast<std::uint16_t>(c);
-  const Outcome at_once =
-      submit(kGatewaySession, Table::holding, 0, std::span<const std::uint16_t>(&value, 1), done,
-             now, Origin::gateway);
+  const Session session = gateway_session(source);
+  Answer a = answer_to(session, done, "command=" + std::string(to_string(c)), now);
+  const Outcome at_once = answered(
+      a,
+      submit(session, Table::holding, 0, std::span<const std::uint16_t>(&value, 1), a, now,
+             Origin::gateway),
+      now);
   if (at_once != Outcome::ok) done(at_once);
 }
 
@@ -149,17 +154,28 @@ Outcome Device::validate(const Session& session, Table table, std::uint16_t addr
 }
 
 Outcome Device::submit(const Session& session, Table table, std::uint16_t address,
-                       std::span<const std::uint16_t> in, WriteDone done, TimePoint now,
+                       std::span<const std::uint16_t> in, Answer& answer, TimePoint now,
                        Origin origin) {
   std::vector<Part> parts;
   if (const Outcome o = validate(session, table, address, in, parts); o != Outcome::ok) {
     return o;
   }
-  return enqueue(session, std::move(parts), std::move(done), now, origin);
+  return enqueue(session, std::move(parts), answer, now, origin);
 }
 
 Outcome Device::write_points(const Session& session, std::span<const PointWrite> points,
                              WriteDone done, TimePoint now) {
+  std::string asked;
+  for (const PointWrite& w : points) {
+    if (!asked.empty()) asked += ' ';
+    asked += w.point->spec.name + "=" + value_text(w.point->spec, w.value);
+  }
+  Answer a = answer_to(session, std::move(done), std::move(asked), now);
+  return answered(a, write_points_checked(session, points, a, now), now);
+}
+
+Outcome Device::write_points_checked(const Session& session, std::span<const PointWrite> points,
+                                     Answer& answer, TimePoint now) {
   Session in_map_order = session;
   in_map_order.word_order = WordOrder::big;  // encode_value's order
   std::vector<Part> parts;
@@ -199,7 +215,7 @@ Outcome Device::write_points(const Session& session, std::span<const PointWrite>
     parts.insert(parts.end(), one.begin(), one.end());
   }
   if (parts.empty()) return Outcome::invalid_value;
-  return enqueue(session, std::move(parts), std::move(done), now, Origin::plc);
+  return enqueue(session, std::move(parts), answer, now, Origin::plc);
 }
 
 // docs/safety.md, "Command authority": while the failsafe is latched, only a run from a source
@@ -215,7 +231,7 @@ Outcome Device::refuse_run_while_latched(const char* source, TimePoint now) {
   return Outcome::refused;
 }
 
-Outcome Device::enqueue(const Session& session, std::vector<Part> parts, WriteDone done,
+Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer& answer,
                         TimePoint now, Origin origin) {
   const bool feeds = origin == Origin::plc && session.feeds_failsafe;
   if (closed_to_clients_ && origin == Origin::plc) return Outcome::no_response;
@@ -224,12 +240,15 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, WriteDo
   // applies first, whatever the address order.
   std::stable_partition(parts.begin(), parts.end(),
                         [](const Part& p) { return write_kind(*p.point) != CommonWrite::command; });
+  answer.record.points = describe(parts);  // in the order they are applied
   // A drive that stopped answering cannot take anything: say so now rather than after a
   // timeout. The heartbeat alone is the gateway's and always succeeds.
   const bool heartbeat_only =
       parts.size() == 1 && write_kind(*parts[0].point) == CommonWrite::heartbeat;
+  if (heartbeat_only) answer.audit = Answer::Audit::count;
   if (comm_lost() && !heartbeat_only) return Outcome::no_response;
   if (failsafe_.latched() && !feeds && commands(parts, &is_run)) {
+    answer.record.why = "the failsafe is latched";
     return refuse_run_while_latched(
         origin == Origin::plc ? "a client that does not feed it" : "the gateway", now);
   }
@@ -255,7 +274,8 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, WriteDo
                      return a.point == b.point && a.value == b.value;
                    })) {
       ++write_stats_.coalesced;
-      (*last)->done.push_back(std::move(done));
+      answer.taken = true;
+      (*last)->answers.push_back(std::move(answer));
       return Outcome::ok;
     }
   }
@@ -270,7 +290,8 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, WriteDo
   r->parts = std::move(parts);
   r->urgent = urgent;
   r->feeds_failsafe = feeds;
-  r->done.push_back(std::move(done));
+  answer.taken = true;
+  r->answers.push_back(std::move(answer));
   r->deadline = now + traits_.write_timeout;
   requests_.push_back(std::move(owned));
   // A stop and the heartbeat go to the driver (or the image) at once.
@@ -286,8 +307,8 @@ Outcome Device::begin(Request& r, bool at_once, TimePoint now) {
   }
   Outcome failure = Outcome::ok;
   const Progress progress = advance(r, now, failure);
-  if (progress == Progress::failed) {  // answered by the return value instead
-    r.done.clear();
+  if (progress == Progress::failed) {  // answered by the return value instead (yet recorded)
+    for (Answer& a : r.answers) a.done = nullptr;
     r.forward_done = nullptr;
   }
   if (progress != Progress::waiting) finish(&r, failure, now);
@@ -431,22 +452,31 @@ Device::Progress Device::advance_forward(Request& r, TimePoint now, Outcome& fai
 
 Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pdu,
                         ForwardDone done, TimePoint now) {
-  if (!driver_->forwards()) return Outcome::no_such_point;
-  // outcome.h: beyond the session's level is denied, checked before anything else.
-  if (forward_level(pdu) > session.access) return Outcome::denied;
-  if (closed_to_clients_ || comm_lost()) return Outcome::no_response;
-  if (queued(false) >= kMaxQueuedWrites) {
-    ++write_stats_.busy;
-    return Outcome::busy;
-  }
-  auto owned = std::make_unique<Request>();
-  Request* r = owned.get();
-  r->forward = Bytes(pdu.begin(), pdu.end());
-  r->forward_done = std::move(done);
-  r->feeds_failsafe = false;
-  r->deadline = now + traits_.write_timeout;
-  requests_.push_back(std::move(owned));
-  return begin(*r, false, now);
+  // A forwarded write is audited like any other; a forwarded read is not a write.
+  const AccessLevel needs = forward_level(pdu);
+  Answer a = answer_to(session, nullptr, describe_pdu(pdu), now);
+  if (needs == AccessLevel::read) a.audit = Answer::Audit::none;
+  const Outcome o = [&] {
+    if (!driver_->forwards()) return Outcome::no_such_point;
+    // outcome.h: beyond the session's level is denied, checked before anything else.
+    if (needs > session.access) return Outcome::denied;
+    if (closed_to_clients_ || comm_lost()) return Outcome::no_response;
+    if (queued(false) >= kMaxQueuedWrites) {
+      ++write_stats_.busy;
+      return Outcome::busy;
+    }
+    auto owned = std::make_unique<Request>();
+    Request* r = owned.get();
+    r->forward = Bytes(pdu.begin(), pdu.end());
+    r->forward_done = std::move(done);
+    r->feeds_failsafe = false;
+    r->deadline = now + traits_.write_timeout;
+    a.taken = true;
+    r->answers.push_back(std::move(a));
+    requests_.push_back(std::move(owned));
+    return begin(*r, false, now);
+  }();
+  return answered(a, o, now);
 }
 
 void Device::settle(const Completion& c, TimePoint now) {
@@ -488,8 +518,9 @@ void Device::finish(const Request* r, Outcome outcome, TimePoint now) {
                   [](const Part& p) { return write_kind(*p.point) != CommonWrite::none; })) {
     failsafe_.fed(now);
   }
-  for (auto& done : owned->done) {
-    if (done) done(outcome);
+  for (Answer& a : owned->answers) {
+    record(a, outcome, now);
+    if (a.done) a.done(outcome);
   }
   if (owned->forward_done) owned->forward_done(outcome, owned->reply);
 }
@@ -512,13 +543,14 @@ void Device::next_request(TimePoint now) {
   if (kick_) kick_();
 }
 
-void Device::fail_pending(Outcome why) {
+void Device::fail_pending(Outcome why, TimePoint now) {
   auto failing = std::move(requests_);
   requests_.clear();
   urgent_unsent_ = false;
   for (auto& r : failing) {
-    for (auto& done : r->done) {
-      if (done) done(why);
+    for (Answer& a : r->answers) {
+      record(a, why, now);
+      if (a.done) a.done(why);
     }
     if (r->forward_done) r->forward_done(why, {});
   }

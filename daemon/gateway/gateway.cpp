@@ -32,8 +32,8 @@ std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescri
   return driver;
 }
 
-Gateway::Gateway(asio::io_context& io, std::shared_ptr<spdlog::logger> log)
-    : io_(io), log_(std::move(log)) {}
+Gateway::Gateway(asio::io_context& io, std::shared_ptr<spdlog::logger> log, History* history)
+    : io_(io), log_(std::move(log)), history_(history) {}
 
 Gateway::~Gateway() {
   stop();
@@ -42,8 +42,9 @@ Gateway::~Gateway() {
 std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& config,
                                         const PluginRegistry& plugins,
                                         std::shared_ptr<spdlog::logger> log,
-                                        std::vector<std::string>& errors, bool maintenance) {
-  std::unique_ptr<Gateway> gw(new Gateway(io, log));
+                                        std::vector<std::string>& errors, bool maintenance,
+                                        History* history) {
+  std::unique_ptr<Gateway> gw(new Gateway(io, log, history));
   const auto now = Clock::now();
   for (const auto& dc : config.devices) {
     const AdapterDescriptor* adapter = plugins.find(dc.adapter);
@@ -64,7 +65,8 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
     try {
       gw->devices_.push_back(std::make_unique<Device>(
           dc, *adapter, std::move(driver),
-          context_logger(*log, {.device = dc.name, .bus = dc.bus, .unit = dc.unit_id}), now));
+          context_logger(*log, {.device = dc.name, .bus = dc.bus, .unit = dc.unit_id}), now,
+          history));
     } catch (const std::exception& e) {
       errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
                        dc.name + "': " + e.what());
@@ -132,7 +134,8 @@ void Gateway::stop() {
   if (!running_) return;
   running_ = false;
   for (auto& b : buses_) b->stop();
-  for (auto& d : devices_) d->fail_pending(Outcome::no_response);
+  const auto now = Clock::now();
+  for (auto& d : devices_) d->fail_pending(Outcome::no_response, now);
 }
 
 void Gateway::stop_drives(Millis limit, std::function<void()> done) {
@@ -194,9 +197,32 @@ Outcome Gateway::write(const Session& session, std::uint8_t unit, Table table,
                        std::uint16_t address, std::span<const std::uint16_t> values,
                        WriteDone done) {
   Device* d = units_[unit];
-  if (d == nullptr) return Outcome::no_such_device;
-  if (!running_) return Outcome::no_response;
+  if (d == nullptr || !running_) {
+    return refuse(session, unit, describe_registers(table, address, values),
+                  d == nullptr ? Outcome::no_such_device : Outcome::no_response);
+  }
   return d->write(session, table, address, values, std::move(done), Clock::now());
+}
+
+void Gateway::refused_write(const Session& session, std::uint8_t unit,
+                            std::span<const std::uint8_t> request) {
+  refuse(session, unit, Device::describe_pdu(request), Outcome::denied);
+}
+
+Outcome Gateway::refuse(const Session& session, std::uint8_t unit, std::string asked,
+                        Outcome why) {
+  if (history_ != nullptr) {
+    CommandRecord r;
+    r.source = session.source;
+    r.unit = unit;
+    if (const Device* d = units_[unit]) r.device = d->config().name;
+    r.points = std::move(asked);
+    r.result = why;
+    if (why == Outcome::no_response) r.why = "the gateway is not running";
+    if (why == Outcome::denied) r.why = "beyond access " + std::string(to_string(session.access));
+    history_->audit().record(r, Clock::now());
+  }
+  return why;
 }
 
 bool Gateway::forwards(std::uint8_t unit) const {
@@ -207,7 +233,7 @@ bool Gateway::forwards(std::uint8_t unit) const {
 Outcome Gateway::forward(const Session& session, std::uint8_t unit,
                          std::span<const std::uint8_t> pdu, ForwardDone done) {
   Device* d = units_[unit];
-  if (d == nullptr) return Outcome::no_such_device;
+  if (d == nullptr) return Outcome::no_such_device;  // a Modbus gateway's 0x0B, never a write
   if (!running_) return Outcome::no_response;
   return d->forward(session, pdu, std::move(done), Clock::now());
 }

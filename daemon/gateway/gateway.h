@@ -32,11 +32,13 @@ std::unique_ptr<Driver> make_driver(const DeviceConfig& cfg, const AdapterDescri
 class Gateway {
  public:
   // Builds every device (drivers created, nothing opened yet). Returns nullptr and fills
-  // `errors` when an adapter refuses its device.
+  // `errors` when an adapter refuses its device. `history` (may be null: nothing recorded) gets
+  // every write's audit record and the devices' events; it outlives the gateway.
   static std::unique_ptr<Gateway> build(boost::asio::io_context& io, const Config& config,
                                         const PluginRegistry& plugins,
                                         std::shared_ptr<spdlog::logger> log,
-                                        std::vector<std::string>& errors, bool maintenance = false);
+                                        std::vector<std::string>& errors, bool maintenance = false,
+                                        History* history = nullptr);
   ~Gateway();
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;
@@ -63,6 +65,10 @@ class Gateway {
                std::span<std::uint16_t> out);
   Outcome write(const Session& session, std::uint8_t unit, Table table, std::uint16_t address,
                 std::span<const std::uint16_t> values, WriteDone done);
+  // A write a northbound refused itself before asking (a read-only Modbus session's): recorded in
+  // the audit trail as denied, with its PDU.
+  void refused_write(const Session& session, std::uint8_t unit,
+                     std::span<const std::uint8_t> request);
   // Whether the device at `unit` is a pass-through one (Device::forwards); then every request
   // for it goes to forward() (Device::forward) instead of read() and write().
   [[nodiscard]] bool forwards(std::uint8_t unit) const;
@@ -76,12 +82,16 @@ class Gateway {
   [[nodiscard]] const std::vector<std::shared_ptr<Bus>>& buses() const { return buses_; }
 
  private:
-  Gateway(boost::asio::io_context& io, std::shared_ptr<spdlog::logger> log);
+  Gateway(boost::asio::io_context& io, std::shared_ptr<spdlog::logger> log, History* history);
+  // A write refused before it reached a device (none at that unit, the gateway not running):
+  // recorded, and returned.
+  Outcome refuse(const Session& session, std::uint8_t unit, std::string asked, Outcome why);
   [[nodiscard]] std::vector<Device*> devices_on(const std::string& bus) const;
   [[nodiscard]] std::vector<Station*> stations_on(const std::string& bus) const;
 
   boost::asio::io_context& io_;
   std::shared_ptr<spdlog::logger> log_;
+  History* history_;
   std::vector<std::unique_ptr<Device>> devices_;
   std::vector<std::shared_ptr<Bus>> buses_;
   std::array<Device*, 256> units_{};

@@ -7,6 +7,15 @@
 
 namespace drivegate {
 
+std::string_view label_of(const PointSpec& spec, const Value& value) {
+  if (spec.bit_labels || spec.labels.empty()) return {};
+  const auto* i = std::get_if<std::int64_t>(&value);
+  if (i == nullptr) return {};
+  const auto it = std::find_if(spec.labels.begin(), spec.labels.end(),
+                               [&](const Label& l) { return l.value == *i; });
+  return it != spec.labels.end() ? std::string_view(it->name) : std::string_view();
+}
+
 void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
   static constexpr Session kReader{AccessLevel::read, WordOrder::big};
   static constexpr std::array kTables{Table::coil, Table::discrete, Table::input, Table::holding};

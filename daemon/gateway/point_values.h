@@ -4,6 +4,7 @@
 // bits are computed once per table, not once per point.
 #pragma once
 
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -14,6 +15,9 @@
 namespace drivegate {
 
 using PointValue = std::pair<const MappedPoint*, Value>;
+
+// The name of `value` in the point's labels, or "" (a value without a name, or a bit field).
+std::string_view label_of(const PointSpec& spec, const Value& value);
 
 // The common block, then the adapter's points, in the map's order; a point that cannot be read
 // is left out. `out` is replaced (its capacity kept, for the next device).

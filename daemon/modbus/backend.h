@@ -75,6 +75,11 @@ class Backend {
   virtual Exception write(const Session& session, std::uint8_t unit, Table table,
                           std::uint16_t address, std::span<const std::uint16_t> values,
                           WriteDone done) = 0;
+  // A write the server refused itself, before any check the backend makes: a read-only
+  // session's (MB-TCP-Security "Authorization": exception 01 at once). Told for the audit trail
+  // (docs/history.md), which records every write refused or not; `request` is the PDU.
+  virtual void refused_write(const Session& /*session*/, std::uint8_t /*unit*/,
+                             std::span<const std::uint8_t> /*request*/) {}
 
   // Pass-through: whether every request for `unit` is to be forwarded to its device as it is (a
   // modbus adapter device with passthrough = true) instead of served by read() and write().

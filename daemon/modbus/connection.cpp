@@ -111,11 +111,19 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
 }
 
 // The session from the listener's policy: its word order, and its access level, or on TLS the
-// level of the certificate's role when the roles table names it.
+// level of the certificate's role when the roles table names it; and who the client is, for the
+// audit trail.
 void Connection::apply_policy() {
   const ListenerPolicy& p = listener_->options.policy;
   session_.word_order = p.word_order;
   session_.access = p.access;
+  session_.source = Source{
+      .kind = p.tls ? SourceKind::modbus_tls : SourceKind::modbus,
+      .listener = listener_->options.name(),
+      .client = peer_.address().to_string() + ":" + std::to_string(peer_.port()),
+      .subject = subject_,
+      .role = role_.value_or(""),
+  };
   if (p.tls && role_) {
     if (const auto it = p.tls->roles.find(*role_); it != p.tls->roles.end()) {
       session_.access = it->second;

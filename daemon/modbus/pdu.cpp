@@ -78,6 +78,7 @@ Result Dispatcher::handle(const Session& session, std::uint8_t unit,
   // not allow is answered with exception 01. A read-only client may not write at all, so its
   // writes are refused before any other check and never reach the backend.
   if (session.access == AccessLevel::read && may_write(fc)) {
+    backend_.refused_write(session, unit, request);
     Result r = fail(fc, Exception::illegal_function, out);
     r.denied = true;
     return r;

@@ -377,7 +377,15 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
     names += (names.empty() ? "" : ",") + p->spec.name;
   }
   ++status_.commands;
-  const Session session{config_.access, WordOrder::big, config_.feed_failsafe};
+  // A DCMD does not say who published it: the audit trail names the broker, our session's
+  // client id, and the primary host the commands are expected from (if one is configured).
+  Session session{config_.access, WordOrder::big, config_.feed_failsafe};
+  session.source.kind = SourceKind::mqtt;
+  session.source.listener = config_.broker;
+  session.source.client = config_.primary_host_id.empty()
+                              ? config_.client_id
+                              : config_.client_id + " (primary host " + config_.primary_host_id +
+                                    ")";
   const std::string name = w.device->name();
   log_->info("MQTT: DCMD {} {}", name, names);
   auto report = [this, token = std::weak_ptr<bool>(alive_), name, names](Outcome outcome) {
