@@ -21,6 +21,7 @@ int demo(std::span<const std::string> args);
 int write(std::span<const std::string> args);
 int action(std::span<const std::string> args);
 int capture(std::span<const std::string> args);
+int events(std::span<const std::string> args);
 int scan(std::span<const std::string> args);  // built with the modbus adapter (DRIVEGATE_SCAN)
 
 // The options several subcommands share, with one wording wherever they appear.

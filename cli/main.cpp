@@ -77,6 +77,7 @@ constexpr const char* kCommands =
     "  action     a maintenance action of a device's adapter (e.g. an FDC1's\n"
     "             non-volatile programming)\n"
     "  capture    a pcap of one bus from the running daemon (for Wireshark)\n"
+    "  events     the running daemon's history: commands, faults, trips, reloads\n"
 #ifdef DRIVEGATE_SCAN
     "  scan       the Modbus slaves on a serial line, and the configuration for them\n"
 #endif
@@ -115,6 +116,7 @@ int main(int argc, char** argv) {
     if (command == "write") return drivegate::cli::write(args);
     if (command == "action") return drivegate::cli::action(args);
     if (command == "capture") return drivegate::cli::capture(args);
+    if (command == "events") return drivegate::cli::events(args);
 #ifdef DRIVEGATE_SCAN
     if (command == "scan") return drivegate::cli::scan(args);
 #endif

@@ -1,5 +1,8 @@
 #include "point_writes.h"
 
+#include <pwd.h>
+#include <unistd.h>
+
 #include <fmt/format.h>
 
 #include <boost/asio/io_context.hpp>
@@ -101,6 +104,12 @@ std::optional<std::vector<Resolved>> resolve(const Device& device,
   return out;
 }
 
+// Who runs the tool, for the audit trail: the login name, else the user id.
+std::string console_user() {
+  if (const struct passwd* pw = ::getpwuid(::getuid())) return pw->pw_name;
+  return "uid " + std::to_string(::getuid());
+}
+
 }  // namespace
 
 int run_point_writes(const PointWriteJob& job) {
@@ -128,7 +137,12 @@ int run_point_writes(const PointWriteJob& job) {
   asio::io_context io;
   auto log = make_logger("drivegate", spdlog::level::warn);
   std::vector<std::string> errors;
-  auto gateway = Gateway::build(io, cfg, *job.plugins, log, errors, /*maintenance=*/true);
+  // Each write is audited like the daemon's (history/command_audit.h), into the journal: the
+  // daemon, whose history would keep it, is stopped.
+  const auto journal = make_journal_writer(log, /*always_journal=*/true);
+  History history(kDefaultHistory, &EventLog::system_ms, journal.get());
+  auto gateway =
+      Gateway::build(io, cfg, *job.plugins, log, errors, /*maintenance=*/true, &history);
   for (const auto& e : errors) std::cerr << e << "\n";
   if (!gateway) return 1;
   Device& device = *gateway->devices().front();
@@ -164,7 +178,9 @@ int run_point_writes(const PointWriteJob& job) {
     };
     // The operator at the console, with the configuration file in hand: every writable point, in
     // the register map's word order (the values were encoded in it).
-    const Session console{AccessLevel::maintain, WordOrder::big};
+    Session console{AccessLevel::maintain, WordOrder::big, true};
+    console.source.kind = SourceKind::cli;
+    console.source.client = console_user();
     const Outcome at_once = device.write(console, r.point->spec.table, r.point->address,
                                          r.registers, done, Clock::now());
     if (at_once != Outcome::ok) done(at_once);

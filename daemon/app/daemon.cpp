@@ -54,18 +54,22 @@ std::vector<modbus::ListenerOptions> listener_options(const std::vector<Listener
   return out;
 }
 
-// What a reload did to the devices and buses, in the log: one line for each change, with why.
-void log_diff(const ConfigDiff& d, spdlog::logger& log) {
+// What a reload did to the devices and buses: one line for each change, with why (the log has
+// each, the history all of them in one entry).
+std::vector<std::string> diff_lines(const ConfigDiff& d) {
+  std::vector<std::string> out;
   for (const auto& b : d.buses_reopened) {
-    log.info("reload: bus {} reopened: {}", b.name, fmt::join(b.what, ", "));
+    out.push_back(fmt::format("bus {} reopened: {}", b.name, fmt::join(b.what, ", ")));
   }
-  for (const auto& b : d.buses_added) log.info("reload: bus {} added", b);
-  for (const auto& b : d.buses_removed) log.info("reload: bus {} removed (port closed)", b);
+  for (const auto& b : d.buses_added) out.push_back(fmt::format("bus {} added", b));
+  for (const auto& b : d.buses_removed) out.push_back(fmt::format("bus {} removed (port closed)", b));
   for (const auto& c : d.devices_changed) {
-    log.info("reload: device {} changed ({}): started afresh", c.name, fmt::join(c.what, ", "));
+    out.push_back(
+        fmt::format("device {} changed ({}): started afresh", c.name, fmt::join(c.what, ", ")));
   }
-  for (const auto& n : d.devices_added) log.info("reload: device {} added", n);
-  for (const auto& n : d.devices_removed) log.info("reload: device {} removed", n);
+  for (const auto& n : d.devices_added) out.push_back(fmt::format("device {} added", n));
+  for (const auto& n : d.devices_removed) out.push_back(fmt::format("device {} removed", n));
+  return out;
 }
 
 // What the listeners' new policies change, listener by listener (applied as they run).
@@ -91,7 +95,9 @@ Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
       log_(std::move(log)),
       signals_(io_, SIGINT, SIGTERM, SIGHUP),
       status_timer_(io_),
-      watchdog_timer_(io_) {}
+      watchdog_timer_(io_),
+      trend_timer_(io_),
+      journal_(make_journal_writer(log_)) {}
 
 Daemon::~Daemon() {
   mqtt_.reset();
@@ -102,7 +108,8 @@ Daemon::~Daemon() {
 
 bool Daemon::start_http() {
   if (!config_.http.enabled) return true;
-  content_ = std::make_unique<StatusContent>(gateway_, *server_, mqtt_, http_, restart_needed_);
+  content_ = std::make_unique<StatusContent>(gateway_, *server_, mqtt_, http_, restart_needed_,
+                                             *history_);
   http::HttpOptions o;
   o.host = config_.http.listen.host;
   o.port = config_.http.listen.port;
@@ -146,8 +153,13 @@ int Daemon::run() {
     return 1;
   }
   config_ = std::move(*config);
+  history_ = std::make_unique<History>(config_.history.events, &EventLog::system_ms,
+                                       journal_.get(), config_.history.trend_seconds);
+  if (config_.history.trend_seconds > 0) {
+    sampler_ = std::make_unique<TrendSampler>(history_->trends());
+  }
   std::vector<std::string> errors;
-  gateway_ = Gateway::build(io_, config_, plugins_, log_, errors);
+  gateway_ = Gateway::build(io_, config_, plugins_, log_, errors, false, history_.get());
   for (const auto& e : errors) log_->error("{}", e);
   if (!gateway_) return 1;
 
@@ -173,10 +185,17 @@ int Daemon::run() {
   log_->info("serving {} devices on {} buses, Modbus TCP on {} listener(s), the first on port {}",
              gateway_->devices().size(), config_.buses.size(), config_.listeners.size(),
              server_->port());
+  for (std::size_t i = 0; i < server_->listener_count(); ++i) {
+    history_->record(EventKind::listener, "", 0,
+                    fmt::format("Modbus listener {} open on port {}",
+                                server_->listener(i).name(), server_->port(i)),
+                    {{"listener", server_->listener(i).name()}, {"state", "open"}});
+  }
   wait_signal();
   notifier_.ready(status_line());
   tick_status();
   tick_watchdog();
+  tick_trends();
   io_.run();
   log_->info("stopped");
   return 0;
@@ -201,7 +220,7 @@ void Daemon::reload() {
   auto config = load_config();
   std::vector<std::string> errors;
   std::unique_ptr<Gateway> next;
-  if (config) next = Gateway::build(io_, *config, plugins_, log_, errors);
+  if (config) next = Gateway::build(io_, *config, plugins_, log_, errors, false, history_.get());
   for (const auto& e : errors) log_->error("{}", e);
   // The listeners' new policies, TLS files re-read; nothing changes if any of it fails.
   std::vector<std::string> restart;
@@ -213,12 +232,19 @@ void Daemon::reload() {
       log_->warn("listener {}: takes effect at the next restart (listening sockets are bound once)",
                  l);
       restart.push_back("listener " + l);
+      history_->record(EventKind::listener, "", 0,
+                      "listener " + l + ": takes effect at the next restart",
+                      {{"listener", l}, {"state", "restart needed"}});
     }
     if (next) log_listener_changes(config_.listeners, config->listeners, *log_);
     if (!listeners.restart_needed.empty()) config->listeners = config_.listeners;
   }
   if (!next) {
     log_->error("new configuration refused: still running the previous one");
+    std::string why = errors.empty() ? std::string("see the journal") : errors.front();
+    history_->record(EventKind::reload, "", 0,
+                    "reload refused, still running the previous configuration: " + why,
+                    {{"result", "refused"}, {"why", why}});
     notifier_.ready(status_line());
     return;
   }
@@ -232,6 +258,12 @@ void Daemon::reload() {
     restart.emplace_back("[http]");
     config->http = config_.http;
   }
+  if (config->history.events != config_.history.events ||
+      config->history.trend_seconds != config_.history.trend_seconds) {
+    log_->warn("[history] changes take effect at the next restart");
+    restart.emplace_back("[history]");
+  }
+  config->history = config_.history;
   if (mqtt_changed(config_.mqtt, config->mqtt)) {
     log_->warn("[mqtt] changes take effect at the next restart");
     restart.emplace_back("[mqtt]");
@@ -251,7 +283,15 @@ void Daemon::reload() {
   gateway_ = std::move(next);
   config_ = std::move(*config);
   restart_needed_ = std::move(restart);
-  log_diff(diff, *log_);
+  const std::vector<std::string> changed = diff_lines(diff);
+  for (const auto& line : changed) log_->info("reload: {}", line);
+  history_->record(
+      EventKind::reload, "", 0,
+      changed.empty() ? std::string("configuration reloaded: no device or bus changed")
+                      : fmt::format("configuration reloaded: {}", fmt::join(changed, "; ")),
+      {{"result", "ok"},
+       {"kept", std::to_string(diff.devices_kept.size())},
+       {"restart_needed", fmt::format("{}", fmt::join(restart_needed_, ", "))}});
   log_->info("configuration reloaded: {} devices on {} buses; {} kept as they run{}{}{}",
              gateway_->devices().size(), config_.buses.size(), diff.devices_kept.size(),
              diff.devices_kept.empty() ? "" : ": ", fmt::join(diff.devices_kept, ", "),
@@ -273,6 +313,7 @@ void Daemon::shutdown() {
     gateway_->stop();
     status_timer_.cancel();
     watchdog_timer_.cancel();
+    trend_timer_.cancel();
     io_.stop();
   });
 }
@@ -290,6 +331,25 @@ void Daemon::tick_status() {
   status_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (!ec && !stopping_) tick_status();
   });
+}
+
+void Daemon::tick_trends() {
+  if (sampler_) sampler_->sample(*gateway_, EventLog::system_ms(), Clock::now());
+  record_mqtt_state();
+  trend_timer_.expires_after(kTrendPeriod);
+  trend_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (!ec && !stopping_) tick_trends();
+  });
+}
+
+void Daemon::record_mqtt_state() {
+  if (!mqtt_) return;
+  const mqtt::NorthboundStatus s = mqtt_->status();
+  std::string state = s.session + (s.connected ? "" : " (broker not connected)");
+  if (state == mqtt_state_) return;
+  history_->record(EventKind::mqtt, "", 0, "MQTT session: " + state,
+                  {{"session", s.session}, {"connected", s.connected ? "true" : "false"}});
+  mqtt_state_ = std::move(state);
 }
 
 // Pinged from the event loop itself: if the loop stalls, systemd's watchdog restarts us.

@@ -19,6 +19,8 @@
 #include "config/config.h"
 #include "plugin/plugins.h"
 #include "gateway/gateway.h"
+#include "history/history.h"
+#include "trend_sampler.h"
 #include "http/http_server.h"
 #include "modbus/server.h"
 #include "mqtt/northbound.h"
@@ -47,6 +49,9 @@ class Daemon {
   void reload();
   void shutdown();
   void tick_status();
+  void tick_trends();
+  // The MQTT session's state, recorded in the history when it changes.
+  void record_mqtt_state();
   void tick_watchdog();
   bool start_http();
   std::string status_line() const;
@@ -61,7 +66,14 @@ class Daemon {
   boost::asio::signal_set signals_;
   boost::asio::steady_timer status_timer_;
   boost::asio::steady_timer watchdog_timer_;
+  boost::asio::steady_timer trend_timer_;
   SystemdNotifier notifier_;
+  // What happened and when (history/history.h): before the gateway, whose devices record in it,
+  // and kept across reloads.
+  std::unique_ptr<JournalWriter> journal_;
+  std::unique_ptr<History> history_;  // made as [history] says, once
+  std::unique_ptr<TrendSampler> sampler_;  // none with [history] trend_seconds = 0
+  std::string mqtt_state_;
   PluginRegistry plugins_;
   Config config_;
   std::unique_ptr<Gateway> gateway_;

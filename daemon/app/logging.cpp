@@ -63,7 +63,40 @@ class JournalSink final : public spdlog::sinks::base_sink<std::mutex>, public Co
   const LogContext context_{};
 };
 
+// The audit trail's entries, over the journal's native protocol; on failure, the logger's line.
+class NativeJournal final : public JournalWriter {
+ public:
+  NativeJournal(std::shared_ptr<spdlog::logger> fallback, bool native)
+      : fallback_(std::move(fallback)), native_(native) {}
+
+  void info(std::string_view message, std::span<const std::string> fields) override {
+    if (native_) {
+      std::vector<std::string> all;
+      all.reserve(fields.size() + 3);
+      all.push_back("MESSAGE=" + std::string(message));
+      all.push_back("PRIORITY=" + std::to_string(syslog_priority(spdlog::level::info)));
+      all.push_back("SYSLOG_IDENTIFIER=" + fallback_->name());
+      all.insert(all.end(), fields.begin(), fields.end());
+      std::vector<iovec> iov;
+      iov.reserve(all.size());
+      for (auto& f : all) iov.push_back({f.data(), f.size()});
+      if (sd_journal_sendv(iov.data(), static_cast<int>(iov.size())) >= 0) return;
+    }
+    fallback_->info("{}", message);
+  }
+
+ private:
+  std::shared_ptr<spdlog::logger> fallback_;
+  bool native_;
+};
+
 }  // namespace
+
+std::unique_ptr<JournalWriter> make_journal_writer(std::shared_ptr<spdlog::logger> fallback,
+                                                   bool always_journal) {
+  return std::make_unique<NativeJournal>(std::move(fallback),
+                                         always_journal || stderr_is_journal());
+}
 
 int syslog_priority(spdlog::level::level_enum level) {
   // syslog(3): 2 LOG_CRIT, 3 LOG_ERR, 4 LOG_WARNING, 6 LOG_INFO, 7 LOG_DEBUG.

@@ -13,11 +13,19 @@
 #include <vector>
 
 #include "base/log_context.h"
+#include "history/journal_writer.h"
 
 namespace drivegate {
 
 std::shared_ptr<spdlog::logger> make_logger(std::string_view name, spdlog::level::level_enum level);
 std::optional<spdlog::level::level_enum> parse_log_level(std::string_view s);
+
+// Where the audit trail's records go (history/journal_writer.h): journal entries with their
+// structured fields (SYSLOG_IDENTIFIER= the logger's name) when the daemon runs under systemd,
+// or always (`always_journal`: the command-line tool, whose terminal is not the journal); else,
+// or when the journal cannot be reached, the message, logged at info by `fallback`.
+std::unique_ptr<JournalWriter> make_journal_writer(std::shared_ptr<spdlog::logger> fallback,
+                                                   bool always_journal = false);
 
 // The syslog priority (sd-daemon(3), syslog(3)) a message of `level` is logged with.
 int syslog_priority(spdlog::level::level_enum level);

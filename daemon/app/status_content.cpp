@@ -7,6 +7,7 @@
 #include "bus/bus.h"
 #include "capture/pcap_tap.h"
 #include "gateway/device.h"
+#include "history/history_json.h"
 #include "regmap/regmap_format.h"
 #include "status/status_view.h"
 
@@ -48,12 +49,14 @@ class BusCapture final : public http::CaptureStream {
 StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
                              const std::unique_ptr<mqtt::Northbound>& mqtt,
                              const std::unique_ptr<http::HttpServer>& http,
-                             const std::vector<std::string>& restart_needed)
+                             const std::vector<std::string>& restart_needed,
+                             const History& history)
     : gateway_(gateway),
       server_(server),
       mqtt_(mqtt),
       http_(http),
       restart_needed_(restart_needed),
+      history_(history),
       started_unix_(unix_now()) {}
 
 StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
@@ -63,6 +66,8 @@ StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
                .started_unix = started_unix_,
                .now_unix = unix_now()};
   v.restart_needed = &restart_needed_;
+  v.commands = &history_.audit().counts();
+  v.history = &history_.events();
   if (mqtt_) {
     mqtt = mqtt_->status();
     v.mqtt = &mqtt;
@@ -82,6 +87,24 @@ std::string StatusContent::status_json() {
 std::string StatusContent::metrics() {
   mqtt::NorthboundStatus mqtt;
   return metrics_text(view(mqtt));
+}
+
+std::optional<std::string> StatusContent::events_json(const http::EventsQuery& query) {
+  EventFilter f;
+  if (!query.kind.empty()) {
+    EventKind kind{};
+    if (!parse_event_kind(query.kind, kind)) return std::nullopt;
+    f.kind = kind;
+  }
+  f.device = query.device;
+  f.since_ms = query.since_ms;
+  f.after_seq = query.after;
+  f.limit = query.limit;
+  return drivegate::events_json(history_.events(), f);
+}
+
+std::string StatusContent::trends_json(const http::TrendsQuery& query) {
+  return drivegate::trends_json(history_.trends(), {query.name, query.since_ms});
 }
 
 std::string StatusContent::regmap_json() {

@@ -1,12 +1,13 @@
 // The daemon's answer to the HTTP side (http/content.h): each document rendered, when asked, from
 // the gateway running now (reloads swap it) and the Modbus server; and captures, a frame tap
-// (capture/pcap_tap.h) on one of its buses.
+// (capture/pcap_tap.h) on one of its buses; and the history (history/history.h).
 #pragma once
 
 #include <memory>
 
 #include "status/status_view.h"
 #include "gateway/gateway.h"
+#include "history/history.h"
 #include "http/content.h"
 #include "http/http_server.h"
 #include "modbus/server.h"
@@ -21,8 +22,10 @@ class StatusContent final : public http::Content {
   StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
                 const std::unique_ptr<mqtt::Northbound>& mqtt,
                 const std::unique_ptr<http::HttpServer>& http,
-                const std::vector<std::string>& restart_needed);
+                const std::vector<std::string>& restart_needed, const History& history);
   std::string status_json() override;
+  std::optional<std::string> events_json(const http::EventsQuery& query) override;
+  std::string trends_json(const http::TrendsQuery& query) override;
   std::string metrics() override;
   std::string regmap_json() override;
   bool has_bus(std::string_view name) override;
@@ -37,6 +40,7 @@ class StatusContent final : public http::Content {
   const std::unique_ptr<mqtt::Northbound>& mqtt_;
   const std::unique_ptr<http::HttpServer>& http_;
   const std::vector<std::string>& restart_needed_;
+  const History& history_;
   double started_unix_;
 };
 

@@ -49,6 +49,15 @@ struct HttpConfig {
   int line = 0;
 };
 
+// [history]: what the daemon keeps of what happened (docs/history.md). The audit trail goes to
+// the journal whatever this says; these bound what is kept in memory besides.
+struct HistoryConfig {
+  std::size_t events = 2000;         // entries of the event history; 0: none kept
+  std::size_t trend_seconds = 600;   // seconds of trends at one sample a second; 0: none
+  int line = 0;
+  bool operator==(const HistoryConfig&) const = default;
+};
+
 // [mqtt]: the Sparkplug B northbound (docs/mqtt.md). Off unless the file has [mqtt].
 struct MqttConfig {
   bool enabled = false;
@@ -142,6 +151,7 @@ struct Config {
   ServerConfig server;
   std::vector<ListenerConfig> listeners;  // at least one
   HttpConfig http;
+  HistoryConfig history;
   MqttConfig mqtt;
   std::vector<BusConfig> buses;
   std::vector<DeviceConfig> devices;

@@ -445,10 +445,11 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   cfg.path = source_name;
   {
     TableReader top(root, "", diag);
-    top.expect({"server", "listener", "http", "mqtt", "bus", "device"});
+    top.expect({"server", "listener", "http", "history", "mqtt", "bus", "device"});
     top.node("server");
     top.node("listener");
     top.node("http");
+    top.node("history");
     top.node("mqtt");
     top.node("bus");
     top.node("device");
@@ -456,6 +457,7 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   read_server(root, cfg, diag);
   read_listeners(root, cfg, diag);
   read_http(root, cfg, diag);
+  read_history(root, cfg, diag);
   const auto given = read_buses(root, cfg, diag);
   read_devices(root, cfg, plugins, diag);
   read_mqtt(root, cfg, diag);

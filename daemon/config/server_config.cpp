@@ -281,6 +281,25 @@ void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
   }
 }
 
+void read_history(const toml::table& root, Config& cfg, Diagnostics& diag) {
+  const toml::node* n = root.get("history");
+  if (n == nullptr) return;
+  const auto* t = n->as_table();
+  if (t == nullptr) {
+    diag.error(n, "history", "must be a table ([history])");
+    return;
+  }
+  TableReader r(*t, "history", diag);
+  r.expect({"events", "trend_seconds"});
+  cfg.history.line = line_of(*t);
+  if (auto v = r.integer("events", 0, 100'000, false)) {
+    cfg.history.events = static_cast<std::size_t>(*v);
+  }
+  if (auto v = r.integer("trend_seconds", 0, 3600, false)) {
+    cfg.history.trend_seconds = static_cast<std::size_t>(*v);
+  }
+}
+
 void read_http(const toml::table& root, Config& cfg, Diagnostics& diag) {
   const toml::node* n = root.get("http");
   if (n == nullptr) return;

@@ -20,5 +20,7 @@ void read_server(const toml::table& root, Config& cfg, Diagnostics& diag);
 void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag);
 // [http]: address, allow list, capture. Warns when every address may reach it.
 void read_http(const toml::table& root, Config& cfg, Diagnostics& diag);
+// [history]: events (0..100000) and trend_seconds (0..3600).
+void read_history(const toml::table& root, Config& cfg, Diagnostics& diag);
 
 }  // namespace drivegate

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <optional>
 #include <functional>
 #include <memory>
 #include <string>
@@ -22,6 +24,22 @@ class CaptureStream {
   [[nodiscard]] virtual bool full() const = 0;
 };
 
+// GET /api/v1/events: which entries of the history (docs/http.md); the route parses the query,
+// the daemon judges the names.
+struct EventsQuery {
+  std::string device;          // ?device=NAME; empty: any
+  std::string kind;            // ?kind=fault_raised; empty: any
+  std::int64_t since_ms = 0;   // ?since=UNIX_SECONDS (a fraction allowed)
+  std::uint64_t after = 0;     // ?after=SEQ: only entries newer than that one
+  std::size_t limit = 100;     // ?limit=N (the history returns at most its maximum)
+};
+
+// GET /api/v1/trends: ?device=NAME or ?bus=NAME (else all) and ?since=UNIX_SECONDS.
+struct TrendsQuery {
+  std::string name;  // "device:NAME", "bus:NAME" or empty
+  std::int64_t since_ms = 0;
+};
+
 class Content {
  public:
   virtual ~Content() = default;
@@ -31,6 +49,12 @@ class Content {
   virtual std::string metrics() = 0;
   // GET /api/v1/regmap: the register map, as `drivegate regmap --format json` prints it.
   virtual std::string regmap_json() = 0;
+  // GET /api/v1/events (JSON), or nullopt for a kind that is not one (400).
+  virtual std::optional<std::string> events_json(const EventsQuery& /*query*/) {
+    return std::nullopt;
+  }
+  // GET /api/v1/trends (JSON).
+  virtual std::string trends_json(const TrendsQuery& /*query*/) { return "{\"trends\":[]}"; }
   // Whether a bus of that name runs now.
   virtual bool has_bus(std::string_view /*name*/) { return false; }
   // Starts capturing bus `name`, at most `max_bytes` of pcap in all; `on_data` is called (on the

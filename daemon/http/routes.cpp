@@ -1,5 +1,8 @@
 #include "routes.h"
 
+#include <algorithm>
+#include <cstdint>
+
 namespace drivegate::http {
 
 namespace {
@@ -59,6 +62,64 @@ std::optional<std::string> query_value(std::string_view target, std::string_view
   return std::nullopt;
 }
 
+// ?since=UNIX_SECONDS (a fraction allowed) as milliseconds; nullopt if it is not a number.
+std::optional<std::int64_t> since_ms(std::string_view target) {
+  const auto v = query_value(target, "since");
+  if (!v) return 0;
+  if (v->empty() || v->size() > 20 ||
+      v->find_first_not_of("0123456789.") != std::string::npos ||
+      std::count(v->begin(), v->end(), '.') > 1 || v->front() == '.') {
+    return std::nullopt;
+  }
+  return static_cast<std::int64_t>(std::stod(*v) * 1000.0);
+}
+
+// A whole number 0..max, nullopt if it is not one.
+std::optional<std::uint64_t> whole(const std::string& v, std::uint64_t max) {
+  if (v.empty() || v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos) {
+    return std::nullopt;
+  }
+  const std::uint64_t n = std::stoull(v);
+  if (n > max) return std::nullopt;
+  return n;
+}
+
+Response events_route(std::string_view target, Content& content) {
+  EventsQuery q;
+  q.device = query_value(target, "device").value_or("");
+  q.kind = query_value(target, "kind").value_or("");
+  const auto since = since_ms(target);
+  if (!since) return {400, kText, "since must be seconds since the epoch\n", {}, {}};
+  q.since_ms = *since;
+  if (const auto after = query_value(target, "after")) {
+    const auto n = whole(*after, UINT64_MAX / 2);
+    if (!n) return {400, kText, "after must be a sequence number\n", {}, {}};
+    q.after = *n;
+  }
+  if (const auto limit = query_value(target, "limit")) {
+    // The history returns at most its own maximum however many are asked for.
+    const auto n = whole(*limit, UINT32_MAX);
+    if (!n || *n == 0) return {400, kText, "limit must be a whole number above 0\n", {}, {}};
+    q.limit = *n;
+  }
+  auto body = content.events_json(q);
+  if (!body) return {400, kText, "no such kind of event\n", {}, {}};
+  return {200, kJson, std::move(*body), {}, {}};
+}
+
+Response trends_route(std::string_view target, Content& content) {
+  TrendsQuery q;
+  const auto device = query_value(target, "device");
+  const auto bus = query_value(target, "bus");
+  if (device && bus) return {400, kText, "device or bus, not both\n", {}, {}};
+  if (device) q.name = "device:" + *device;
+  if (bus) q.name = "bus:" + *bus;
+  const auto since = since_ms(target);
+  if (!since) return {400, kText, "since must be seconds since the epoch\n", {}, {}};
+  q.since_ms = *since;
+  return {200, kJson, content.trends_json(q), {}, {}};
+}
+
 Response capture_route(std::string_view target, Content& content, const RouteOptions& options) {
   if (!options.capture) {
     return {403, kText, "capture is not enabled ([http] capture = true)\n", {}, {}};
@@ -100,6 +161,8 @@ Response route(std::string_view method, std::string_view target, Content& conten
   if (path == "/api/v1/regmap") return {200, kJson, content.regmap_json(), {}, {}};
   if (path == "/metrics") return {200, kPrometheus, content.metrics(), {}, {}};
   if (path == "/api/v1/capture") return capture_route(target, content, options);
+  if (path == "/api/v1/events") return events_route(target, content);
+  if (path == "/api/v1/trends") return trends_route(target, content);
   return {404, "text/plain; charset=utf-8", "not found\n", {}, {}};
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -38,6 +39,8 @@ struct RouteOptions {
 // /api/v1/capture?bus=NAME&seconds=N (N 1..300, default 10): 403 unless options.capture, 400 for a
 // missing bus or a bad N, 404 for an unknown bus; else a Response whose `capture` says what to
 // stream (application/vnd.tcpdump.pcap).
+// /api/v1/events?device=&kind=&since=&after=&limit= and /api/v1/trends?device=|bus=&since=:
+// 400 for a value that is not a number or out of range, or an unknown kind (content.h).
 Response route(std::string_view method, std::string_view target, Content& content,
                const RouteOptions& options = {});
 
