@@ -94,6 +94,8 @@ for src in "$here"/../adapters/modbus/profiles/*.toml; do
     check "profile /usr/share/drivegate/profiles/$(basename "$src")" \
         test -f "/usr/share/drivegate/profiles/$(basename "$src")"
 done
+check "Grafana dashboard /usr/share/drivegate/grafana/drivegate.json" \
+    test -f /usr/share/drivegate/grafana/drivegate.json
 check "unit $unit" test -f "$unit"
 check "/etc/drivegate/drivegate.toml is a conffile" \
     sh -c "dpkg-query -W -f='\${Conffiles}' drivegate | grep -q '^ /etc/drivegate/drivegate.toml '"

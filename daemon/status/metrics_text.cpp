@@ -2,42 +2,58 @@
 // samples; counters end in _total; label values escape backslash, double quote and newline.
 // Written straight into one string (the event loop waits while it is written): fmt for the
 // numbers, each device's labels written once, no stream and no temporary string per sample.
+//
+// Named as Prometheus asks (https://prometheus.io/docs/practices/naming/): a measurement's name
+// ends in its base unit (status/metric_units.h), and what is a name rather than a quantity (a
+// fault, a command, an adapter's enumerated or bit-field point) is a label of a state set, one
+// series per state, 1 for those in force, never a number to graph or average (OpenMetrics 1.0,
+// https://github.com/prometheus/OpenMetrics/blob/v1.0.0/specification/OpenMetrics.md#stateset;
+// 0.0.4 has no such type, so they are gauges). docs/metrics.md lists every family.
 #include <fmt/compile.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iterator>
 
+#include "status/metric_units.h"
+#include "status/process_metrics.h"
 #include "status/status_view.h"
 
 namespace drivegate {
 
 namespace {
 
-// A typical document (five drives) is 16 KB.
-constexpr std::size_t kReserve = 32 * 1024;
+// A typical document (six drives, one of each adapter) is about 105 KB: most of it the state
+// sets, a line per state with the device's labels.
+constexpr std::size_t kReserve = 128 * 1024;
 
 void append_escaped(std::string& out, std::string_view v) {
-  for (const char c : v) {
-    if (c == '\\' || c == '"') out += '\\';
-    if (c == '\n') {
-      out += "\\n";
-      continue;
-    }
-    out += c;
+  // The runs between the characters to escape are appended whole (nearly always: all of it).
+  std::size_t run = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const char c = v[i];
+    if (c != '\\' && c != '"' && c != '\n') continue;
+    out.append(v.data() + run, i - run);
+    out += c == '\n' ? std::string_view("\\n") : c == '"' ? std::string_view("\\\"") : "\\\\";
+    run = i + 1;
   }
+  out.append(v.data() + run, v.size() - run);
 }
 
-// As printf's %.17g (a double read back as itself). Counters and most gauges are whole numbers:
-// those are written as integers, the same digits %.17g gives, without its cost.
+// The shortest digits that read back as the same double (fmt's default: 21.4, where printf's
+// %.17g says 21.399999999999999). Counters and most gauges are whole numbers: those are written
+// as integers, the same digits, without the float formatting's cost.
 void append_number(std::string& out, double v) {
   if (std::isnan(v)) {
     out += "NaN";
+  } else if (std::isinf(v)) {
+    out += v > 0 ? "+Inf" : "-Inf";  // as the format spells them (a float point may say so)
   } else if (v == std::trunc(v) && std::fabs(v) < 1e15) {
     out += fmt::format_int(static_cast<long long>(v)).c_str();
-    if (v == 0 && std::signbit(v)) out.insert(out.size() - 1, 1, '-');  // %.17g: "-0"
+    if (v == 0 && std::signbit(v)) out.insert(out.size() - 1, 1, '-');  // "-0", as it is
   } else {
-    fmt::format_to(std::back_inserter(out), FMT_COMPILE("{:.17g}"), v);
+    fmt::format_to(std::back_inserter(out), FMT_COMPILE("{}"), v);
   }
 }
 
@@ -96,35 +112,232 @@ bool per_bus(const std::string& name) {
   return name.starts_with("bus_");
 }
 
-void device_metrics(Writer& w, const StatusView& view) {
-  struct Row {
-    std::string labels;
-    std::vector<PointValue> values;
-    Device* device;
+// A device's labels and its points' values, read once per document.
+struct DeviceRow {
+  std::string labels;
+  std::vector<PointValue> values;
+  Device* device;
+};
+
+// `,name="value"`, escaped, appended to `out`.
+void append_label(std::string& out, std::string_view name, std::string_view value) {
+  out += ',';
+  out += name;
+  out += "=\"";
+  append_escaped(out, value);
+  out += '"';
+}
+
+// Whether a point's value is the one its label `l` names: for a bit field, bit l.value is set.
+bool in_force(const PointSpec& spec, const Label& l, const Value& v) {
+  std::int64_t n = 0;
+  if (const auto* i = std::get_if<std::int64_t>(&v)) {
+    n = *i;
+  } else {
+    const double d = as_double(v);  // a float point with names: only a whole number is one
+    if (!std::isfinite(d) || d != std::trunc(d) || std::fabs(d) > 9.2e18) return false;
+    n = static_cast<std::int64_t>(d);
+  }
+  if (!spec.bit_labels) return n == static_cast<std::int64_t>(l.value);
+  return l.value < 64 && ((static_cast<std::uint64_t>(n) >> l.value) & 1U) != 0;
+}
+
+// One series per state of the point (its labels), each 1 when in force. Two labels of one name
+// (a vendor table naming two codes alike) are one state, in force when either is: the same series
+// twice would make Prometheus refuse the whole scrape.
+void state_samples(Writer& w, std::string_view family, std::string_view labels, std::string& extra,
+                   std::size_t prefix, std::string_view state_label, const PointSpec& spec,
+                   const Value& v, bool skip_zero_bit = false) {
+  const auto& all = spec.labels;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const Label& l = all[i];
+    if (skip_zero_bit && spec.bit_labels && l.value == 0) continue;
+    const auto same = [&](const Label& o) { return o.name == l.name; };
+    if (std::any_of(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(i), same)) continue;
+    bool on = false;
+    for (std::size_t j = i; j < all.size() && !on; ++j) {
+      on = same(all[j]) && in_force(spec, all[j], v);
+    }
+    extra.resize(prefix);
+    append_label(extra, state_label, l.name);
+    w.sample(family, labels, on ? 1 : 0, extra);
+  }
+}
+
+// The HELP of a common row's state set (the rows' descriptions speak of registers).
+std::string_view state_help(CommonLabels vocabulary) {
+  switch (vocabulary) {
+    case CommonLabels::status_bits:
+      return "the status register's bits: 1 for each that is set";
+    case CommonLabels::faults:
+      return "the most severe active fault, unified (fault_code): 1 for the one in force";
+    case CommonLabels::fault_bits:
+      return "every active fault, unified (fault_mask): 1 for each";
+    case CommonLabels::commands:
+      return "the command in force: 1 for the one in force";
+    case CommonLabels::none:
+      break;
+  }
+  return "";
+}
+
+// The state label of a common row's state set: the word its vocabulary names.
+std::string_view state_label(CommonLabels vocabulary) {
+  switch (vocabulary) {
+    case CommonLabels::status_bits:
+      return "status";
+    case CommonLabels::faults:
+    case CommonLabels::fault_bits:
+      return "fault";
+    case CommonLabels::commands:
+      return "command";
+    case CommonLabels::none:
+      break;
+  }
+  return "state";
+}
+
+// Every common point (gateway/common_block.h), from the rows of the register map: a number is a
+// gauge (counters as _total), a named value or bit field a state set, the native fault a label.
+void common_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
+  std::string name;
+  std::string extra;
+  for (std::size_t i = 0; i < rows.front().values.size(); ++i) {
+    const MappedPoint* p = rows.front().values[i].first;
+    if (!p->common() || p->source == PointSource::status_bit || per_bus(p->spec.name)) continue;
+    const CommonRow* row = p->row();
+    if (row == nullptr) continue;
+    name = "drivegate_device_";
+    if (row->labels != CommonLabels::none) {
+      // status, fault_code, fault_mask, command. fault_mask's bit 0 is `none`, never set.
+      name += p->spec.name;
+      w.family(name, "gauge", state_help(row->labels));
+      for (const DeviceRow& r : rows) {
+        // Every device has the same common block, in the same order.
+        extra.clear();
+        state_samples(w, name, r.labels, extra, 0, state_label(row->labels), p->spec,
+                      r.values.at(i).second, row->labels == CommonLabels::fault_bits);
+      }
+      continue;
+    }
+    if (p->spec.name == "native_fault") {
+      // A code of the drive's own, with no names drivegate knows: a label, as the page shows it.
+      name += "native_fault_info";
+      w.family(name, "gauge", "the protocol's raw fault code or bits, in label native_fault");
+      char code[16];
+      for (const DeviceRow& r : rows) {
+        const auto v = static_cast<std::uint32_t>(as_double(r.values.at(i).second));
+        const auto end = fmt::format_to(code, FMT_COMPILE("0x{:04X}"), v);
+        extra.clear();
+        append_label(extra, "native_fault",
+                     std::string_view(code, static_cast<std::size_t>(end - code)));
+        w.sample(name, r.labels, 1, extra);
+      }
+      continue;
+    }
+    const bool age = p->spec.name == "data_age_ms";
+    name += age ? std::string_view("data_age_seconds") : std::string_view(p->spec.name);
+    if (row->counter) name += "_total";
+    w.family(name, row->counter ? "counter" : "gauge",
+             age ? "seconds since the last reply carrying the drive's state (NaN: never)"
+                 : row->description);
+    for (const DeviceRow& r : rows) {
+      const Value& v = r.values.at(i).second;
+      double x = as_double(v);
+      if (age) x = x >= 4294967295.0 ? NAN : x / 1000.0;  // never heard: NaN
+      w.sample(name, r.labels, x);
+    }
+  }
+}
+
+// The adapters' own points: each with a unit drivegate_device_point_<base unit> (metric_units.h),
+// each with named values drivegate_device_point_state, each bit field drivegate_device_point_flag;
+// a number without a unit (a raw code, a counter of the protocol's) is left to the status JSON.
+// Every family gathers every device's points, as the format wants a family's samples together.
+void point_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
+  constexpr std::size_t kState = kBaseUnits.size();
+  constexpr std::size_t kFlag = kState + 1;
+  struct Sample {
+    std::size_t family;
+    std::size_t row;
+    std::size_t value;
+    MetricUnit unit;
   };
-  std::vector<Row> rows;
+  std::vector<Sample> samples;
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const auto& values = rows[r].values;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      const PointSpec& spec = values[i].first->spec;
+      if (values[i].first->common() || spec.type == PointType::string) continue;
+      if (!spec.labels.empty()) {
+        samples.push_back({spec.bit_labels ? kFlag : kState, r, i, {}});
+      } else if (const auto unit = metric_unit(spec.unit)) {
+        samples.push_back({unit->base, r, i, *unit});
+      }
+    }
+  }
+  std::stable_sort(samples.begin(), samples.end(),
+                   [](const Sample& a, const Sample& b) { return a.family < b.family; });
+  std::string name;
+  std::string help;
+  std::string extra;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const Sample& s = samples[k];
+    const DeviceRow& row = rows[s.row];
+    const auto& [point, value] = row.values[s.value];
+    if (k == 0 || samples[k - 1].family != s.family) {
+      name = "drivegate_device_point_";
+      if (s.family == kState) {
+        name += "state";
+        help = "adapter points with named values: 1 for the name of the value in force";
+      } else if (s.family == kFlag) {
+        name += "flag";
+        help = "adapter points that are bit fields: 1 for each named bit that is set";
+      } else {
+        name += s.unit.unit().suffix;
+        help = "adapter points measured in ";
+        help += s.unit.unit().words;
+        help += ", converted from the point's unit (docs/metrics.md)";
+      }
+      w.family(name, "gauge", help);
+    }
+    extra.clear();
+    append_label(extra, "point", point->spec.name);
+    if (s.family == kState || s.family == kFlag) {
+      state_samples(w, name, row.labels, extra, extra.size(), s.family == kState ? "state" : "flag",
+                    point->spec, value);
+      continue;
+    }
+    // A float carries about 7 significant digits, a register times its scale at most 12.
+    const int digits = point->spec.type == PointType::f32 ? 7 : 12;
+    w.sample(name, row.labels, round_significant(s.unit.to_base(as_double(value)), digits), extra);
+  }
+}
+
+void device_metrics(Writer& w, const StatusView& view) {
+  std::vector<DeviceRow> rows;
   rows.reserve(view.gateway.devices().size());
   for (const auto& d : view.gateway.devices()) {
-    Row& r = rows.emplace_back(Row{device_labels(*d), {}, d.get()});
+    DeviceRow& r = rows.emplace_back(DeviceRow{device_labels(*d), {}, d.get()});
     point_values(*d, Clock::now(), r.values);
   }
   w.family("drivegate_device_online", "gauge",
            "1 when the drive answers and its protocol is up (status bit online)");
-  for (const Row& r : rows) w.sample("drivegate_device_online", r.labels, r.device->online());
+  for (const DeviceRow& r : rows) w.sample("drivegate_device_online", r.labels, r.device->online());
   w.family("drivegate_device_comm_lost", "gauge", "1 when the drive stopped answering");
-  for (const Row& r : rows) {
+  for (const DeviceRow& r : rows) {
     w.sample("drivegate_device_comm_lost", r.labels, r.device->comm_lost());
   }
   w.family("drivegate_device_failsafe_latched", "gauge",
            "1 while the PLC-loss failsafe holds the drive stopped");
-  for (const Row& r : rows) {
+  for (const DeviceRow& r : rows) {
     w.sample("drivegate_device_failsafe_latched", r.labels, r.device->failsafe_latched());
   }
   // The write queue (docs/safety.md, "Fair line time") and late replies.
   const auto each = [&](std::string_view family, std::string_view type, std::string_view help,
                         auto f) {
     w.family(family, type, help);
-    for (const Row& r : rows) w.sample(family, r.labels, static_cast<double>(f(*r.device)));
+    for (const DeviceRow& r : rows) w.sample(family, r.labels, static_cast<double>(f(*r.device)));
   };
   each("drivegate_device_writes_in_flight", "gauge",
        "writes waiting for the drive or being carried out (at most 4 queued, stops apart)",
@@ -141,29 +354,9 @@ void device_metrics(Writer& w, const StatusView& view) {
   each("drivegate_device_late_bytes_total", "counter",
        "bytes of replies that came after their timeout, dropped",
        [](const Device& d) { return d.line().counters.late_bytes; });
-  // Every numeric common point (gateway/common_block.h): gauges, counters as _total.
   if (rows.empty()) return;
-  std::string name;
-  for (std::size_t i = 0; i < rows.front().values.size(); ++i) {
-    const MappedPoint* p = rows.front().values[i].first;
-    if (!p->common() || p->source == PointSource::status_bit || per_bus(p->spec.name)) continue;
-    const CommonRow* row = p->row();
-    if (row == nullptr || p->spec.name == "status") continue;  // the bits are the gauges above
-    const bool age = p->spec.name == "data_age_ms";
-    name = "drivegate_device_";
-    name += age ? std::string_view("data_age_seconds") : std::string_view(p->spec.name);
-    if (row->counter) name += "_total";
-    w.family(name, row->counter ? "counter" : "gauge",
-             age ? "seconds since the last reply carrying the drive's state (NaN: never)"
-                 : row->description);
-    for (const Row& r : rows) {
-      // Every device has the same common block, in the same order.
-      const Value& v = r.values.at(i).second;
-      double x = as_double(v);
-      if (age) x = x >= 4294967295.0 ? NAN : x / 1000.0;  // never heard: NaN
-      w.sample(name, r.labels, x);
-    }
-  }
+  common_metrics(w, rows);
+  point_metrics(w, rows);
 }
 
 template <typename F>
@@ -356,6 +549,63 @@ void http_metrics(Writer& w, const http::HttpStats& h, std::size_t clients) {
            count(h.requests_paced));
 }
 
+// Every write by who asked and what came of it (history/command_audit.h): every pair, those
+// that never happened as 0, so that a rate or an alert on one has a series from the start.
+void write_metrics(Writer& w, const CommandCounts& counts) {
+  w.family("drivegate_writes_total", "counter",
+           "writes to the drives, from any northbound or the gateway itself, by source and result");
+  std::string labels;
+  for (std::size_t s = 0; s < kSourceKindNames.size(); ++s) {
+    for (std::size_t o = 0; o < kOutcomeNames.size(); ++o) {
+      labels = "source=\"";
+      labels += kSourceKindNames[s];
+      labels += "\",result=\"";
+      // The log's words ("no such device") as a label value a query can type: no_such_device.
+      for (const char c : kOutcomeNames[o]) labels += c == ' ' ? '_' : c;
+      labels += '"';
+      w.sample("drivegate_writes_total", labels,
+               static_cast<double>(counts.at(static_cast<SourceKind>(s), static_cast<Outcome>(o))));
+    }
+  }
+}
+
+// The event history (history/event_log.h): how full it is, and what it had to let go.
+void history_metrics(Writer& w, const EventLog& log) {
+  w.single("drivegate_history_events", "gauge", "entries the event history holds now",
+           static_cast<double>(log.size()));
+  w.single("drivegate_history_dropped_total", "counter",
+           "history entries pushed out, oldest first, to make room for newer ones",
+           static_cast<double>(log.dropped()));
+  w.single("drivegate_history_bytes", "gauge", "memory the event history's entries take",
+           static_cast<double>(log.memory_bytes()));
+}
+
+// The standard process metrics (status/process_metrics.h); one whose file could not be read is
+// left out, but the start time falls back to the daemon's own clock.
+void process_families(Writer& w, const ProcessMetrics& m, double started_unix) {
+  if (m.cpu_seconds) {
+    w.single("process_cpu_seconds_total", "counter", "user and system CPU time spent, seconds",
+             *m.cpu_seconds);
+  }
+  if (m.open_fds) {
+    w.single("process_open_fds", "gauge", "open file descriptors", *m.open_fds);
+  }
+  if (m.max_fds) {
+    w.single("process_max_fds", "gauge", "the limit on open file descriptors (RLIMIT_NOFILE)",
+             *m.max_fds);
+  }
+  if (m.virtual_memory_bytes) {
+    w.single("process_virtual_memory_bytes", "gauge", "virtual memory size, bytes",
+             *m.virtual_memory_bytes);
+  }
+  if (m.resident_memory_bytes) {
+    w.single("process_resident_memory_bytes", "gauge", "resident memory size, bytes",
+             *m.resident_memory_bytes);
+  }
+  w.single("process_start_time_seconds", "gauge", "start time of the process since the epoch",
+           m.start_time_seconds.value_or(started_unix));
+}
+
 }  // namespace
 
 void metrics_text(const StatusView& view, std::string& out) {
@@ -365,12 +615,13 @@ void metrics_text(const StatusView& view, std::string& out) {
   append_escaped(version, view.version);
   version += '"';
   w.sample("drivegate_build_info", version, 1);
-  w.single("process_start_time_seconds", "gauge", "start time of the process since the epoch",
-           view.started_unix);
+  process_families(w, read_process_metrics(), view.started_unix);
   w.single("drivegate_restart_needed", "gauge",
            "1 while the configuration file asks for what only a restart applies",
            view.restart_needed != nullptr && !view.restart_needed->empty() ? 1 : 0);
   device_metrics(w, view);
+  if (view.commands != nullptr) write_metrics(w, *view.commands);
+  if (view.history != nullptr) history_metrics(w, *view.history);
   bus_metrics(w, view);
   listener_metrics(w, view);
   if (view.mqtt != nullptr) mqtt_metrics(w, *view.mqtt);

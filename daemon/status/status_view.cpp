@@ -5,15 +5,6 @@
 
 namespace drivegate {
 
-std::string_view label_of(const PointSpec& spec, const Value& value) {
-  if (spec.bit_labels || spec.labels.empty()) return {};
-  const auto* i = std::get_if<std::int64_t>(&value);
-  if (i == nullptr) return {};
-  const auto it = std::find_if(spec.labels.begin(), spec.labels.end(),
-                               [&](const Label& l) { return l.value == *i; });
-  return it != spec.labels.end() ? std::string_view(it->name) : std::string_view();
-}
-
 double line_busy_seconds(const Bus& bus) {
   const auto& c = bus.config();
   const auto& n = bus.counters();

@@ -20,6 +20,8 @@
 #include "drivegate/point.h"
 #include "gateway/gateway.h"
 #include "gateway/point_values.h"
+#include "history/command_audit.h"
+#include "history/event_log.h"
 #include "http/http_stats.h"
 #include "modbus/server.h"
 #include "mqtt/northbound_status.h"
@@ -37,10 +39,11 @@ struct StatusView {
   std::size_t http_clients = 0;
   // What the configuration file asks and only a restart applies; none: nothing.
   const std::vector<std::string>* restart_needed = nullptr;
+  // Every write by source and result (history/command_audit.h), and the event history; none in
+  // a document rendered without them.
+  const CommandCounts* commands = nullptr;
+  const EventLog* history = nullptr;
 };
-
-// The name of `value` in the point's labels, or "" (a value without a name, or a bit field).
-std::string_view label_of(const PointSpec& spec, const Value& value);
 
 // Seconds of line time the bus's bytes took (sent and received, an echo once): its rate is the
 // line's utilisation.
