@@ -4,6 +4,16 @@
   const TIMEOUT_MS = 2500;      // a request that hangs longer counts as unreachable
   const STALE_MS = 3000;        // drive data older than this is greyed out
   const NEVER = 4294967295;     // data_age_ms of a drive never heard from
+  // Trends (/api/v1/trends): the daemon samples once a second and keeps 10 minutes.
+  const TREND_KEEP_MS = 600000;
+  const SPARK_MIN_SPAN_MS = 60000;  // a young trend is drawn over a minute, not stretched thin
+  const GAP_MS = 3500;          // rows further apart than this: the daemon was away; lift the pen
+  // Events (/api/v1/events): rows kept on the page, newest first.
+  const MAX_EVENT_ROWS = 200;
+  const REPEAT_LOOKBACK = 64;   // entries the daemon's history looks back over for a repeat
+  const REPEATS_EVERY = 5;      // polls between two looks back for repeat counts
+  const ALARM_KINDS = ["fault_raised", "comm_lost", "failsafe_tripped"];
+  const CLEAR_KINDS = ["fault_cleared", "comm_restored", "failsafe_cleared"];
   const COUNTERS = [["frames_good", "frames good"], ["bad_checksum", "bad checksum"],
     ["timeouts", "timeouts"], ["retries", "retries"], ["nacks", "nacks"],
     ["foreign_frames", "foreign"]];
@@ -15,6 +25,12 @@
   let lastGood = null;          // daemon's `now` and local time of the last good answer
   let failingSince = null;     // {at: local ms, reason} while the daemon does not answer
   let updates = 0;
+  // Trends by key ("device:NAME", "bus:NAME"), oldest row first:
+  // {series: [{name, unit}], sig, t: [unix ms], values: [[per series, null: unknown]]}.
+  const trends = new Map();
+  // The events panel: the newest sequence number shown and its rows by sequence number.
+  const events = {lastSeq: 0, rows: new Map(), polls: 0};
+  let chart = null;             // the open chart: {key, byLink}; null when closed
 
   function el(tag, attrs, text) {
     const e = document.createElement(tag);
@@ -98,7 +114,8 @@
       c.append(el("span", null, label), field("b", key));
       counters.append(c);
     }
-    values.append(speed, bar, kv, counters);
+    const spark = makeSpark("device:" + d.name, "speed (setpoint dashed)");
+    values.append(speed, bar, spark.box, kv, counters);
     const det = el("details");
     f.points_summary = el("summary", null, "drive points");
     f.points = field("tbody", "points");
@@ -106,7 +123,7 @@
     pt.append(f.points);
     det.append(f.points_summary, pt);
     card.append(head, sub, comm, badges, values, det);
-    return {el: card, f: f, pointNames: ""};
+    return {el: card, f: f, pointNames: "", spark: spark};
   }
 
   function deviceState(d) {
@@ -205,7 +222,8 @@
     for (const name of fields) {
       const td = el("td", {"data-field": name});
       if (name === "name" || name === "address") td.className = "name";
-      if (["port", "open", "tls", "access", "word_order", "allow"].includes(name)) td.classList.add("l");
+      if (["port", "open", "tls", "access", "word_order", "allow", "trend"].includes(name)) td.classList.add("l");
+      if (["name", "port", "allow"].includes(name)) td.classList.add("clip");
       f[name] = td;
       tr.append(td);
     }
@@ -253,14 +271,20 @@
       b.bad += Number(c.bad_checksum) || 0;
     }
     const busFields = ["name", "port", "open", "exchanges", "frames_good", "bad_frames",
-      "timeouts", "retries", "echo_errors", "noise_bytes", "reopens", "bytes", "utilisation"];
+      "timeouts", "retries", "echo_errors", "noise_bytes", "reopens", "bytes", "utilisation", "trend"];
     const buses = s.buses || [];
     syncRows(busRows, document.querySelector("#buses tbody"), buses, (b) => b.name,
       (b) => makeRow("data-bus", b.name, busFields));
     for (const b of buses) {
-      const f = busRows.get(b.name).f, agg = perBus[b.name] || {good: 0, bad: 0};
+      const row = busRows.get(b.name), f = row.f, agg = perBus[b.name] || {good: 0, bad: 0};
+      if (!row.spark) {
+        row.spark = makeSpark("bus:" + b.name, "utilisation");
+        f.trend.append(row.spark.box);
+      }
       set(f.name, b.name);
+      f.name.title = b.name;
       set(f.port, b.port + " @ " + b.baud);
+      f.port.title = f.port.textContent;  // ellipsized when long: the whole path on hover
       if (f.open.dataset.open !== String(b.open)) {
         f.open.dataset.open = String(b.open);
         f.open.replaceChildren(el("span", {"class": "pill " + (b.open ? "open" : "reopen")}, b.open ? "open" : "reopening"));
@@ -308,6 +332,7 @@
       set(f.access, l.access);
       set(f.word_order, l.word_order);
       set(f.allow, (l.allow || []).length ? l.allow.join(", ") : "any");
+      f.allow.title = f.allow.textContent;
       for (const k of ["clients", "max_clients", "accepted", "refused", "evicted", "not_allowed",
         "tls_handshake_failures", "tls_handshakes_limited", "writes_denied"]) {
         set(f[k], num(l[k]));
@@ -341,6 +366,390 @@
     set($("uptime"), duration(s.now - s.started));
   }
 
+  // ---- Trends: /api/v1/trends, merged into `trends` a few rows at a time ------------------
+
+  // Rows at or after this daemon time (Unix seconds) are the ones not held yet for some trend:
+  // after the oldest "newest row" among them, so a trend sampled a little apart from the others
+  // loses nothing (rows already held are skipped by mergeTrends), but never more than a few
+  // samples back, so that one trend that stopped growing does not have every answer carry all
+  // ten minutes again. null: ask for everything.
+  function trendsSince() {
+    let oldest = Infinity, newest = -Infinity;
+    for (const tr of trends.values()) {
+      if (!tr.t.length) continue;
+      oldest = Math.min(oldest, tr.t[tr.t.length - 1]);
+      newest = Math.max(newest, tr.t[tr.t.length - 1]);
+    }
+    if (oldest === Infinity) return null;
+    return ((Math.max(oldest, newest - 10000) + 1) / 1000).toFixed(3);
+  }
+
+  function mergeTrends(doc) {
+    const seen = new Set();
+    for (const tr of doc.trends || []) {
+      if (typeof tr.name !== "string" || !Array.isArray(tr.t) || !Array.isArray(tr.series)) continue;
+      seen.add(tr.name);
+      const sig = tr.series.map((x) => x.name + "\u0000" + x.unit).join("\u0001");
+      let mine = trends.get(tr.name);
+      if (!mine || mine.sig !== sig) {
+        // New, or its series changed (a reload changed the drive): the daemon started it anew.
+        mine = {series: tr.series, sig: sig, t: [], values: tr.series.map(() => [])};
+        trends.set(tr.name, mine);
+      }
+      const values = Array.isArray(tr.values) ? tr.values : [];
+      tr.t.forEach((t, i) => {
+        if (typeof t !== "number" || (mine.t.length && t <= mine.t[mine.t.length - 1])) return;
+        mine.t.push(t);
+        mine.values.forEach((col, k) => {
+          const v = (values[k] || [])[i];
+          col.push(typeof v === "number" && isFinite(v) ? v : null);
+        });
+      });
+      // What the daemon no longer keeps, neither does the page.
+      const from = mine.t.length ? mine.t[mine.t.length - 1] - TREND_KEEP_MS : 0;
+      let drop = 0;
+      while (drop < mine.t.length && mine.t[drop] < from) drop++;
+      if (drop) {
+        mine.t.splice(0, drop);
+        for (const col of mine.values) col.splice(0, drop);
+      }
+    }
+    // A drive or bus a reload removed is gone from every answer.
+    for (const k of [...trends.keys()]) if (!seen.has(k)) trends.delete(k);
+  }
+
+  function column(trend, name) {
+    const i = trend ? trend.series.findIndex((x) => x.name === name) : -1;
+    return i < 0 ? null : {values: trend.values[i], unit: trend.series[i].unit};
+  }
+
+  // ---- SVG line drawing, shared by the sparklines and the chart ----------------------------
+
+  const SVG_NS = "http://www.w3.org/2000/svg";
+  function svg(tag, attrs) {
+    const e = document.createElementNS(SVG_NS, tag);
+    for (const k in attrs || {}) e.setAttribute(k, attrs[k]);
+    return e;
+  }
+  // The time window to draw: the trend's own span up to its newest row, at least `minSpan`.
+  function timeSpan(t, minSpan) {
+    const t1 = t.length ? t[t.length - 1] : 0;
+    return {t0: t1 - Math.max(minSpan, t.length ? t1 - t[0] : 0), t1: t1};
+  }
+  // Lowest and highest known value of the columns over the rows from `t0` on; null if none.
+  function extent(t, cols, t0) {
+    let lo = Infinity, hi = -Infinity;
+    for (const col of cols) {
+      col.forEach((v, i) => {
+        if (v === null || t[i] < t0) return;
+        lo = Math.min(lo, v);
+        hi = Math.max(hi, v);
+      });
+    }
+    return lo === Infinity ? null : {lo: lo, hi: hi};
+  }
+  // An SVG path of `v` over times `t`, in a w x h box mapping [t0, t1] x [lo, hi]. The pen
+  // lifts over unknown values (null: the drive's link was lost) and over gaps in the sampling,
+  // so nothing is drawn that was not measured.
+  function linePath(t, v, box) {
+    const sx = box.w / Math.max(1, box.t1 - box.t0), sy = box.h / (box.hi - box.lo || 1);
+    let d = "", pen = false;
+    for (let i = 0; i < t.length; i++) {
+      if (i > 0 && t[i] - t[i - 1] > GAP_MS) pen = false;
+      if (v[i] === null || t[i] < box.t0) { pen = false; continue; }
+      const x = ((t[i] - box.t0) * sx).toFixed(1), y = (box.h - (v[i] - box.lo) * sy).toFixed(1);
+      // A lone sample still shows, as a short dash.
+      d += pen ? "L" + x + " " + y : "M" + x + " " + y + "h0.5";
+      pen = true;
+    }
+    return d;
+  }
+  function spanText(ms) {
+    return ms >= 60000 ? Math.round(ms / 60000) + " min" : Math.round(ms / 1000) + " s";
+  }
+  function fmt(v) {
+    if (v === null || v === undefined) return "-";
+    const a = Math.abs(v);
+    return v.toLocaleString("en-US", {maximumFractionDigits: a >= 100 ? 0 : a >= 10 ? 1 : 2});
+  }
+
+  // ---- Sparklines: one per drive (speed, setpoint dashed) and one per bus (utilisation) ----
+
+  const SPARK_W = 300, SPARK_H = 34;
+  // A link that opens the chart of trend `key`, holding an SVG stretched to its box
+  // (preserveAspectRatio none; vector-effect keeps the strokes thin), and a caption.
+  function makeSpark(key, what) {
+    const box = el("a", {"class": "spark", "href": "#chart=" + encodeURIComponent(key)});
+    const s = svg("svg", {"viewBox": "0 0 " + SPARK_W + " " + SPARK_H, "preserveAspectRatio": "none",
+      "data-spark": key, "data-last": "", "data-samples": "0", "aria-hidden": "true"});
+    const zero = svg("path", {"class": "zero"});
+    const dashed = svg("path", {"class": "sp"});
+    const line = svg("path", {"class": "pv"});
+    s.append(zero, dashed, line);
+    const cap = el("span", {"class": "cap"});
+    const span = el("span", null, "no trend yet");
+    cap.append(span, el("span", {"class": "more"}, "chart \u203a"));
+    box.append(s, cap);
+    return {key: key, what: what, box: box, svg: s, zero: zero, dashed: dashed, line: line, span: span};
+  }
+
+  // Draws series `name` (and `dashedName` dashed, on the same scale) of the spark's trend.
+  function drawSpark(sp, name, dashedName, floorHi) {
+    const trend = trends.get(sp.key);
+    const pv = column(trend, name), sv = dashedName ? column(trend, dashedName) : null;
+    const t = trend ? trend.t : [];
+    if (!pv || !t.length) {
+      for (const p of [sp.zero, sp.dashed, sp.line]) p.setAttribute("d", "");
+      sp.svg.dataset.last = "";
+      sp.svg.dataset.samples = "0";
+      set(sp.span, trend ? "no " + name + " trend" : "no trend yet");
+      sp.box.title = sp.what + ": no trend yet";
+      return;
+    }
+    const w = timeSpan(t, SPARK_MIN_SPAN_MS);
+    const cols = sv ? [pv.values, sv.values] : [pv.values];
+    const ext = extent(t, cols, w.t0) || {lo: 0, hi: 0};
+    // Speeds and utilisations are drawn from 0 (or below, reversing): a flat line at the top
+    // would hide how fast the drive goes.
+    const lo = Math.min(0, ext.lo), hi = Math.max(ext.hi, floorHi || 0, lo + 1);
+    const box = {t0: w.t0, t1: w.t1, lo: lo - (hi - lo) * 0.06, hi: hi + (hi - lo) * 0.1,
+      w: SPARK_W, h: SPARK_H};
+    sp.line.setAttribute("d", linePath(t, pv.values, box));
+    sp.dashed.setAttribute("d", sv ? linePath(t, sv.values, box) : "");
+    const y0 = (SPARK_H - (0 - box.lo) * SPARK_H / (box.hi - box.lo)).toFixed(1);
+    sp.zero.setAttribute("d", "M0 " + y0 + "H" + SPARK_W);
+    // For tests and scrapers: what the line ends on (the newest row; "" when unknown).
+    const last = pv.values[pv.values.length - 1];
+    sp.svg.dataset.last = last === null ? "" : String(last);
+    sp.svg.dataset.lastT = String(t[t.length - 1]);
+    sp.svg.dataset.samples = String(t.length);
+    if (sv) {
+      const lastSp = sv.values[sv.values.length - 1];
+      sp.svg.dataset.setpoint = lastSp === null ? "" : String(lastSp);
+    }
+    const unit = pv.unit ? " " + pv.unit : "";
+    const own = extent(t, [pv.values], w.t0);  // the peak of the line itself, not the setpoint's
+    set(sp.span, "last " + spanText(w.t1 - w.t0) + (own ? " \u00b7 peak " + fmt(own.hi) + unit : ""));
+    sp.box.title = sp.what + " over the last " + spanText(w.t1 - w.t0) + " (now " + fmt(last) + unit +
+      "); click for the chart";
+  }
+
+  function drawTrends() {
+    for (const card of cards.values()) drawSpark(card.spark, "speed_rpm", "setpoint_rpm");
+    for (const row of busRows.values()) if (row.spark) drawSpark(row.spark, "utilisation", null, 5);
+    if (chart) renderChart();
+  }
+
+  // ---- The chart: every series of one trend, on demand (#chart=KEY), one panel each -------
+
+  const CHART_W = 800, CHART_H = 64;
+  function chartKeyOf(hash) {
+    const m = /^#chart=(.+)$/.exec(hash || "");
+    if (!m) return null;
+    try { return decodeURIComponent(m[1]); } catch (e) { return null; }
+  }
+  function openChart(key, byLink) {
+    // Focus goes back to what opened it (the sparkline's link) when it closes.
+    chart = {key: key, byLink: byLink, opener: document.activeElement};
+    $("chart").hidden = false;
+    renderChart();
+    $("chart-close").focus();
+  }
+  function hideChart() {
+    const opener = chart.opener;
+    chart = null;
+    $("chart").hidden = true;
+    if (opener && opener.focus && document.contains(opener)) opener.focus();
+  }
+  function closeChart() {
+    if (!chart) return;
+    const byLink = chart.byLink;
+    hideChart();
+    // Opened by a link on this page: going back closes it (and the back button does the same).
+    // Opened from an address with #chart=: dropping the fragment keeps the visitor on the page.
+    if (byLink && chartKeyOf(location.hash) !== null) history.back();
+    else if (location.hash) history.replaceState(null, "", location.pathname + location.search);
+  }
+  // The chart follows the address: #chart=KEY opens it (a sparkline's link, the back and forward
+  // buttons, an address typed or shared), anything else closes it.
+  function followHash(byLink) {
+    const key = chartKeyOf(location.hash);
+    if (key !== null) openChart(key, byLink);
+    else if (chart) hideChart();
+  }
+
+  // Panels: the speed with its setpoint dashed on the same scale, then every other series.
+  function chartPanels(trend) {
+    const names = trend.series.map((x) => x.name);
+    const panels = [];
+    for (const name of names) {
+      if (name === "setpoint_rpm" && names.includes("speed_rpm")) continue;
+      panels.push({name: name, dashed: name === "speed_rpm" && names.includes("setpoint_rpm") ? "setpoint_rpm" : null});
+    }
+    return panels;
+  }
+
+  function renderChart() {
+    const key = chart.key, trend = trends.get(key);
+    const colon = key.indexOf(":");
+    const kind = key.slice(0, colon), name = key.slice(colon + 1);
+    set($("chart-title"), (kind === "bus" ? "Bus " : "") + name);
+    $("chart").dataset.chart = key;
+    const body = $("chart-body");
+    if (!trend || !trend.t.length) {
+      set($("chart-meta"), "");
+      body.replaceChildren(el("p", {"class": "empty"}, trends.size ? "no trend of that name" : "waiting for the trends\u2026"));
+      return;
+    }
+    const t = trend.t, w = timeSpan(t, SPARK_MIN_SPAN_MS);
+    set($("chart-meta"), t.length + " samples, one a second \u00b7 last " + spanText(w.t1 - w.t0) +
+      " \u00b7 gaps: unknown (link lost)");
+    const out = [];
+    for (const p of chartPanels(trend)) {
+      const pv = column(trend, p.name), sv = p.dashed ? column(trend, p.dashed) : null;
+      const cols = sv ? [pv.values, sv.values] : [pv.values];
+      const ext = extent(t, cols, w.t0);
+      const unit = pv.unit || "";
+      const panel = el("div", {"class": "panel", "data-series": p.name});
+      const info = el("div", {"class": "info"});
+      const last = pv.values[pv.values.length - 1];
+      info.append(el("b", null, p.name + (sv ? " \u00b7 " + p.dashed + " (dashed)" : "")),
+        el("span", {"class": "now"}, fmt(last) + (unit ? " " + unit : "")),
+        el("span", {"class": "mm"}, ext ? "min " + fmt(ext.lo) + " \u00b7 max " + fmt(ext.hi) : "no values"));
+      // Its own scale: the series' range, padded; a flat line sits mid-height.
+      let lo = ext ? ext.lo : 0, hi = ext ? ext.hi : 1;
+      if (hi - lo < 1e-9) { lo -= 1; hi += 1; }
+      const pad = (hi - lo) * 0.08;
+      const box = {t0: w.t0, t1: w.t1, lo: lo - pad, hi: hi + pad, w: CHART_W, h: CHART_H};
+      const axis = el("div", {"class": "yaxis"});
+      axis.append(el("span", null, fmt(hi)), el("span", {"class": "u"}, unit), el("span", null, fmt(lo)));
+      const s = svg("svg", {"viewBox": "0 0 " + CHART_W + " " + CHART_H, "preserveAspectRatio": "none"});
+      // A faint line each whole minute: the time axis below labels them.
+      let grid = "";
+      for (let m = Math.ceil(w.t0 / 60000) * 60000; m <= w.t1; m += 60000) {
+        grid += "M" + ((m - w.t0) * CHART_W / (w.t1 - w.t0)).toFixed(1) + " 0V" + CHART_H;
+      }
+      s.append(svg("path", {"class": "grid", "d": grid}));
+      if (sv) s.append(svg("path", {"class": "sp", "d": linePath(t, sv.values, box)}));
+      s.append(svg("path", {"class": "pv", "d": linePath(t, pv.values, box)}));
+      panel.append(info, axis, s);
+      out.push(panel);
+    }
+    const taxis = el("div", {"class": "panel taxis"});
+    const ticks = el("div", {"class": "ticks"});
+    ticks.append(el("span", null, clock(w.t0 / 1000)), el("span", null, clock((w.t0 + w.t1) / 2000)),
+      el("span", null, clock(w.t1 / 1000)));
+    taxis.append(el("div"), el("div"), ticks);
+    out.push(taxis);
+    body.replaceChildren(...out);
+  }
+
+  // ---- Events: /api/v1/events, newest first, MAX_EVENT_ROWS at most ----------------------
+
+  function eventsUrl() {
+    if (!events.lastSeq) return "/api/v1/events?limit=" + MAX_EVENT_ROWS;
+    // New entries only, after the newest shown. Every few polls the request also goes back
+    // over the daemon's repeat look-back: a command repeated (a PLC writing every scan) updates
+    // its entry in place, "repeats" and "last_ms", without a new sequence number.
+    const back = events.polls % REPEATS_EVERY === 0 ? REPEAT_LOOKBACK : 0;
+    return "/api/v1/events?after=" + Math.max(0, events.lastSeq - back) + "&limit=" + MAX_EVENT_ROWS;
+  }
+
+  function eventTime(ms) {
+    const d = new Date(ms);
+    return clock(ms / 1000) + "." + String(d.getMilliseconds()).padStart(3, "0");
+  }
+
+  function repeatText(f) {
+    const n = Number(f.repeats);
+    if (!n) return "";
+    return "\u00d7" + (n + 1) + (f.last_ms ? ", last " + eventTime(Number(f.last_ms)) : "");
+  }
+
+  // What a command did, in parts: who (source, client, listener, certificate, role), what
+  // (the points written), and what came of it; a refusal stands out.
+  function commandWhat(e, f) {
+    const what = el("td", {"class": "what"});
+    const who = el("span", {"class": "who"});
+    who.append(el("span", {"class": "src"}, f.source || "?"));
+    if (f.client) who.append(" ", el("span", {"class": "client"}, f.client));
+    if (f.listener) who.append(el("span", {"class": "dim"}, " on " + f.listener));
+    if (f.subject) who.append(el("span", {"class": "dim"}, ", certificate " + f.subject));
+    if (f.role) who.append(el("span", {"class": "dim"}, ", role " + f.role));
+    const ok = f.result === "ok";
+    const res = el("span", {"class": "res " + (ok ? "ok" : "refused")}, (f.result || "?").replace(/_/g, " "));
+    what.append(who, " ", el("span", {"class": "pts"}, f.points || "(nothing)"), " \u2192 ", res);
+    if (f.why) what.append(el("span", {"class": "why"}, " " + f.why));
+    if (f.took_ms) what.append(el("span", {"class": "dim"}, " " + f.took_ms + " ms"));
+    if (f.held) what.append(el("span", {"class": "dim"}, " (" + f.held + " more like it not recorded)"));
+    what.append(el("span", {"class": "rep"}, repeatText(f)));
+    return what;
+  }
+
+  function eventRow(e) {
+    const f = e.fields && typeof e.fields === "object" ? e.fields : {};
+    const kind = String(e.kind || "");
+    const cls = ALARM_KINDS.includes(kind) ? "alarm" : CLEAR_KINDS.includes(kind) ? "clear"
+      : kind === "command" && f.result !== "ok" ? "refused" : "";
+    // data-drive, not data-device: that one names the drives' cards.
+    const tr = el("tr", {"data-seq": String(e.seq), "data-kind": kind, "data-drive": String(e.device || "")});
+    if (cls) tr.className = cls;
+    if (kind === "command") {
+      tr.dataset.source = f.source || "";
+      tr.dataset.client = f.client || "";
+      tr.dataset.result = f.result || "";
+    }
+    const when = el("td", {"class": "time", "title": new Date(e.unix_ms).toString()}, eventTime(e.unix_ms));
+    const kindTd = el("td");
+    kindTd.append(el("span", {"class": "kind"}, kind.replace(/_/g, " ")));
+    const dev = el("td", {"class": "dev"}, e.device || "gateway");
+    if (e.unit) dev.append(el("small", null, " unit " + e.unit));
+    dev.title = dev.textContent;
+    let what;
+    if (kind === "command") {
+      what = commandWhat(e, f);
+    } else {
+      what = el("td", {"class": "what"}, String(e.message || ""));
+      what.append(el("span", {"class": "rep"}, repeatText(f)));
+    }
+    tr.append(when, kindTd, dev, what);
+    return tr;
+  }
+
+  function mergeEvents(doc) {
+    if (typeof doc.last_seq !== "number") return;
+    const tbody = document.querySelector("#events tbody");
+    if (doc.last_seq < events.lastSeq) {
+      // The daemon restarted: its numbering starts again; the next poll asks for everything.
+      tbody.replaceChildren();
+      events.rows.clear();
+      events.lastSeq = 0;
+      return;
+    }
+    for (const e of doc.events || []) {
+      if (typeof e.seq !== "number") continue;
+      const shown = events.rows.get(e.seq);
+      if (shown) {  // asked again for its repeat count
+        const rep = shown.querySelector(".rep");
+        if (rep) set(rep, repeatText(e.fields || {}));
+        continue;
+      }
+      if (e.seq <= events.lastSeq) continue;  // older than the rows kept: let it go
+      const tr = eventRow(e);
+      events.rows.set(e.seq, tr);
+      tbody.insertBefore(tr, tbody.firstChild);  // they come oldest first: newest ends on top
+      events.lastSeq = e.seq;
+    }
+    while (tbody.children.length > MAX_EVENT_ROWS) {
+      const tr = tbody.lastElementChild;
+      events.rows.delete(Number(tr.dataset.seq));
+      tr.remove();
+    }
+    $("events-empty").hidden = tbody.children.length > 0;
+    set($("events-meta"), "newest first \u00b7 " + tbody.children.length + " shown of the daemon's " +
+      num(doc.capacity) + " kept" + (doc.dropped ? " \u00b7 " + num(doc.dropped) + " older dropped" : ""));
+  }
+
   function showLink() {
     const body = document.body, banner = $("banner");
     if (failingSince === null) {
@@ -366,27 +775,68 @@
     set($("age"), lastGood ? age(Date.now() - lastGood.local) + " ago" : "-");
   }
 
-  async function poll() {
-    const started = performance.now();
+  // GET `url` as JSON, given up on after TIMEOUT_MS.
+  async function getJson(url) {
     const abort = new AbortController();
     const timer = setTimeout(() => abort.abort(), TIMEOUT_MS);
     try {
-      const r = await fetch("/api/v1/status", {cache: "no-store", signal: abort.signal});
+      const r = await fetch(url, {cache: "no-store", signal: abort.signal});
       if (!r.ok) throw new Error("HTTP " + r.status);
-      const s = await r.json();
+      return await r.json();
+    } catch (e) {
+      throw e && e.name === "AbortError" ? new Error("no answer in " + TIMEOUT_MS / 1000 + " s") : e;
+    } finally {
+      clearTimeout(timer);
+    }
+  }
+
+  // One round: the status, the trends since the newest row held and the events after the
+  // newest shown, asked at once and rendered in that order (the cards the sparklines go in
+  // first). Only the status decides whether the daemon is reachable: a daemon without the
+  // history routes still gets its live page.
+  async function poll() {
+    const started = performance.now();
+    const since = trendsSince();
+    const asks = [getJson("/api/v1/status"),
+      getJson("/api/v1/trends" + (since === null ? "" : "?since=" + since)),
+      getJson(eventsUrl())];
+    for (const a of asks) a.catch(() => {});  // each is awaited below; none left unhandled
+    try {
+      await round(asks);
+    } finally {
+      setTimeout(poll, Math.max(0, REFRESH_MS - (performance.now() - started)));
+    }
+  }
+  async function round(asks) {
+    try {
+      const s = await asks[0];
       render(s);
       lastGood = {now: s.now, local: Date.now()};
       failingSince = null;
       document.body.dataset.updates = String(++updates);
     } catch (e) {
       if (failingSince === null) failingSince = {at: Date.now(), reason: ""};
-      failingSince.reason = e && e.name === "AbortError" ? "no answer in " + TIMEOUT_MS / 1000 + " s"
-        : (e && e.message ? e.message : "request failed");
-    } finally {
-      clearTimeout(timer);
-      showLink();
-      setTimeout(poll, Math.max(0, REFRESH_MS - (performance.now() - started)));
+      failingSince.reason = e && e.message ? e.message : "request failed";
+    }
+    showLink();
+    try {
+      mergeTrends(await asks[1]);
+    } catch (e) {
+      // Kept as they were: the sparklines show the last trends received.
+    }
+    drawTrends();
+    try {
+      mergeEvents(await asks[2]);
+      events.polls++;
+    } catch (e) {
+      if (failingSince === null) set($("events-meta"), "not available (" + (e && e.message ? e.message : "request failed") + ")");
     }
   }
+
+  window.addEventListener("hashchange", () => followHash(true));
+  $("chart-close").addEventListener("click", (e) => { e.preventDefault(); closeChart(); });
+  $("chart").addEventListener("click", (e) => { if (e.target === $("chart")) closeChart(); });
+  document.addEventListener("keydown", (e) => { if (e.key === "Escape" && chart) closeChart(); });
+  followHash(false);
   poll();
 })();
