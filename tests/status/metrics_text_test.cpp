@@ -152,11 +152,13 @@ class MetricsText : public ::testing::Test {
 
   const AdapterDescriptor descriptor_ = meter_adapter();
   PluginRegistry plugins_;
+  // Before io_, so it outlives it: destroying the io_context destroys the handlers that still
+  // hold the server's acceptor, whose timer detaches from the clock as it goes.
+  net::SteadyClock clock_;
   boost::asio::io_context io_;
   std::shared_ptr<spdlog::logger> log_ =
       std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>());
   std::unique_ptr<Gateway> gateway_;
-  net::SteadyClock clock_;
   NoBackend backend_;
   modbus::Server server_{io_, clock_, backend_, loopback(), log_};
   CommandCounts counts_;
