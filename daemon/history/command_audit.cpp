@@ -1,5 +1,6 @@
 #include "history/command_audit.h"
 
+#include <algorithm>
 #include <cctype>
 
 namespace drivegate {
@@ -16,6 +17,12 @@ std::string describe(const Source& s) {
 }
 
 }  // namespace
+
+std::string result_name(Outcome o) {
+  std::string name(to_string(o));
+  std::replace(name.begin(), name.end(), ' ', '_');
+  return name;
+}
 
 std::string describe_registers(Table table, std::uint16_t address,
                                std::span<const std::uint16_t> values) {
@@ -51,7 +58,7 @@ Event command_event(const CommandRecord& r) {
   add("subject", r.source.subject);
   add("role", r.source.role);
   add("points", r.points);
-  add("result", std::string(to_string(r.result)));
+  add("result", result_name(r.result));
   add("why", r.why);
   if (r.took) add("took_ms", std::to_string(r.took->count()));
   return e;
@@ -84,15 +91,24 @@ void CommandAudit::count(SourceKind source, Outcome result) {
 void CommandAudit::record(const CommandRecord& r, TimePoint now) {
   count(r.source.kind, r.result);
   Event e = command_event(r);
-  if (r.result != Outcome::ok) {
-    const auto held = refusals_[static_cast<std::size_t>(r.result)].admit(now);
+  // A repeat costs nothing: counted in the entry it repeats, whatever its result.
+  if (history_.repeat(e)) return;
+  // The gateway's own writes (the failsafe's, shutdown's) are never held back: no client can
+  // cause them in a flood, and they are the ones an engineer looks for after a trip.
+  const bool clients = r.source.kind != SourceKind::failsafe &&
+                       r.source.kind != SourceKind::shutdown &&
+                       r.source.kind != SourceKind::gateway;
+  if (r.result != Outcome::ok && clients) {
+    const auto held = refusals_[static_cast<std::size_t>(r.source.kind)]
+                               [static_cast<std::size_t>(r.result)]
+                                   .admit(now);
     if (!held) return;
     if (*held > 0) {
-      e.message += " (" + std::to_string(*held) + " more like it not recorded)";
+      e.message += " (" + std::to_string(*held) + " more " + std::string(to_string(r.result)) +
+                   " from " + std::string(to_string(r.source.kind)) + " clients not recorded)";
       e.fields.emplace_back("held", std::to_string(*held));
     }
   }
-  if (history_.repeat(e)) return;
   const std::vector<std::string> fields = journal_fields(e);
   if (journal_ != nullptr) journal_->info(e.message, fields);
   history_.add(std::move(e));

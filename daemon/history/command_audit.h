@@ -5,9 +5,10 @@
 // (event_log.h). Devices record here (gateway/device.h); the daemon owns it across reloads.
 //
 // What is not recorded one by one, and why (each is still counted, in counts() and /metrics):
-// - refusals past a burst per cause (net::LogThrottle: 10, then one a second): anyone who can
-//   reach a port can cause them, and a flood must not push the plant's events out; the next one
-//   recorded says how many were held;
+// - a client's refusals past a burst per source kind and result (net::LogThrottle: 10, then one
+//   a second): anyone who can reach a port can cause them, and a flood must not push the plant's
+//   events out; the next one recorded says how many were held. The gateway's own (failsafe,
+//   shutdown) are never held;
 // - a repeat of the device's newest entry (the same points, values, source and result), which
 //   that entry counts (event_log.h): a PLC writing its command word every scan;
 // - a write of the heartbeat alone: the gateway's own register, written to prove the PLC is
@@ -52,6 +53,10 @@ struct CommandCounts {
   }
 };
 
+// An outcome as the journal's RESULT= and the history's "result" say it: "no_such_point" (the
+// metrics' `result` label likewise).
+std::string result_name(Outcome o);
+
 // The registers a client asked to write, as they came: "holding 0..1 = 1 1500".
 std::string describe_registers(Table table, std::uint16_t address,
                                std::span<const std::uint16_t> values);
@@ -78,7 +83,8 @@ class CommandAudit {
   EventLog& history_;
   JournalWriter* journal_;
   CommandCounts counts_;
-  std::array<net::LogThrottle, kOutcomeNames.size()> refusals_{};
+  std::array<std::array<net::LogThrottle, kOutcomeNames.size()>, kSourceKindNames.size()>
+      refusals_{};
 };
 
 }  // namespace drivegate

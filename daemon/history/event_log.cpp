@@ -7,9 +7,6 @@ namespace drivegate {
 
 namespace {
 
-// How far back repeat() looks for the device's newest entry: past it, the entry is added anew.
-constexpr std::size_t kRepeatLookback = 64;
-
 // At most kMaxText bytes, and no more memory than that: a string cut (or built with room to
 // spare) gives the rest back.
 void cut(std::string& s) {
@@ -23,16 +20,30 @@ void cut(std::string& s) {
   s.shrink_to_fit();
 }
 
+// The fields a repeat may differ in: how long the drive took, and the count of refusals held
+// before it (command_audit.h), besides the repeat's own bookkeeping.
+bool compared(const std::pair<std::string, std::string>& f) {
+  return f.first != "took_ms" && f.first != "held" && f.first != "repeats" &&
+         f.first != "last_ms";
+}
+
 bool same_but_time(const Event& a, const Event& b) {
-  if (a.kind != b.kind || a.device != b.device || a.unit != b.unit) return false;
-  const auto kept = [](const auto& f) {
-    return f.first != "took_ms" && f.first != "repeats" && f.first != "last_ms";
-  };
-  std::vector<std::pair<std::string, std::string>> x;
-  std::vector<std::pair<std::string, std::string>> y;
-  std::copy_if(a.fields.begin(), a.fields.end(), std::back_inserter(x), kept);
-  std::copy_if(b.fields.begin(), b.fields.end(), std::back_inserter(y), kept);
-  return x == y;
+  if (a.kind != EventKind::command || b.kind != EventKind::command || a.device != b.device ||
+      a.unit != b.unit) {
+    return false;
+  }
+  auto x = a.fields.begin();
+  auto y = b.fields.begin();
+  for (;;) {
+    while (x != a.fields.end() && !compared(*x)) ++x;
+    while (y != b.fields.end() && !compared(*y)) ++y;
+    if (x == a.fields.end() || y == b.fields.end()) {
+      return x == a.fields.end() && y == b.fields.end();
+    }
+    if (*x != *y) return false;
+    ++x;
+    ++y;
+  }
 }
 
 void set_field(Event& e, const std::string& name, std::string value) {
@@ -45,6 +56,13 @@ void set_field(Event& e, const std::string& name, std::string value) {
   e.fields.emplace_back(name, std::move(value));
 }
 
+void count_repeat(Event& e, std::int64_t now_ms) {
+  std::uint64_t n = 0;
+  for (const char c : e.field("repeats")) n = n * 10 + static_cast<std::uint64_t>(c - '0');
+  set_field(e, "repeats", std::to_string(n + 1));
+  set_field(e, "last_ms", std::to_string(now_ms));
+}
+
 }  // namespace
 
 std::int64_t EventLog::system_ms() {
@@ -54,7 +72,7 @@ std::int64_t EventLog::system_ms() {
 }
 
 EventLog::EventLog(std::size_t capacity, WallClock wall)
-    : capacity_(capacity), wall_(std::move(wall)) {}
+    : capacity_(capacity), wall_(std::move(wall)), started_ms_(wall_()) {}
 
 std::size_t EventLog::footprint(const Event& e) {
   std::size_t n = sizeof(Event) + e.device.capacity() + e.message.capacity() +
@@ -63,10 +81,7 @@ std::size_t EventLog::footprint(const Event& e) {
   return n;
 }
 
-std::uint64_t EventLog::add(Event e) {
-  e.seq = next_seq_++;
-  if (capacity_ == 0) return e.seq;  // [history] events = 0: nothing kept
-  e.unix_ms = wall_();
+void EventLog::fit(Event& e) {
   cut(e.device);
   cut(e.message);
   if (e.fields.size() > kMaxFields) e.fields.resize(kMaxFields);
@@ -75,6 +90,26 @@ std::uint64_t EventLog::add(Event e) {
     cut(v);
   }
   e.fields.shrink_to_fit();
+}
+
+Event* EventLog::entry(std::uint64_t seq) {
+  if (entries_.empty() || seq < entries_.front().seq || seq > entries_.back().seq) return nullptr;
+  return &entries_[seq - entries_.front().seq];
+}
+
+std::uint64_t EventLog::add(Event e) {
+  e.seq = next_seq_++;
+  e.unix_ms = wall_();
+  fit(e);
+  // The device's newest, kept aside for repeat() (its size is bounded like an entry's, and there
+  // is one per configured device).
+  auto it = newest_.find(e.device);
+  if (it == newest_.end()) {
+    newest_.emplace(e.device, e);
+  } else {
+    it->second = e;
+  }
+  if (capacity_ == 0) return e.seq;  // [history] events = 0: nothing kept
   if (entries_.size() == capacity_) {
     bytes_ -= footprint(entries_.front());
     entries_.pop_front();
@@ -86,35 +121,40 @@ std::uint64_t EventLog::add(Event e) {
 }
 
 bool EventLog::repeat(const Event& e) {
-  std::size_t looked = 0;
-  for (auto it = entries_.rbegin(); it != entries_.rend() && looked < kRepeatLookback;
-       ++it, ++looked) {
-    if (it->device != e.device) continue;
-    if (!same_but_time(*it, e)) return false;
-    bytes_ -= footprint(*it);
-    const std::string_view was = it->field("repeats");
-    std::uint64_t n = 0;
-    for (const char c : was) n = n * 10 + static_cast<std::uint64_t>(c - '0');
-    set_field(*it, "repeats", std::to_string(n + 1));
-    set_field(*it, "last_ms", std::to_string(wall_()));
-    bytes_ += footprint(*it);
-    return true;
+  Event fitted = e;
+  fit(fitted);
+  const auto it = newest_.find(fitted.device);
+  if (it == newest_.end() || !same_but_time(it->second, fitted)) return false;
+  const std::int64_t now = wall_();
+  count_repeat(it->second, now);
+  if (Event* kept = entry(it->second.seq)) {
+    bytes_ -= footprint(*kept);
+    count_repeat(*kept, now);
+    bytes_ += footprint(*kept);
   }
-  return false;
+  return true;
 }
 
 std::vector<Event> EventLog::query(const EventFilter& filter) const {
   const std::size_t limit = std::min(filter.limit, kMaxQuery);
   std::vector<Event> out;
   if (limit == 0) return out;
+  const auto matches = [&](const Event& e) {
+    return (filter.device.empty() || e.device == filter.device) &&
+           (!filter.kind || e.kind == *filter.kind) && e.unix_ms >= filter.since_ms;
+  };
+  if (filter.after_seq > 0) {
+    // A follower: the oldest entries after the one it has, so that it misses none.
+    auto it = std::find_if(entries_.begin(), entries_.end(),
+                           [&](const Event& e) { return e.seq > filter.after_seq; });
+    for (; it != entries_.end() && out.size() < limit; ++it) {
+      if (matches(*it)) out.push_back(*it);
+    }
+    return out;
+  }
   // Newest first until the limit, then turned oldest first.
   for (auto it = entries_.rbegin(); it != entries_.rend() && out.size() < limit; ++it) {
-    const Event& e = *it;
-    if (e.seq <= filter.after_seq) break;  // seq only grows towards the back
-    if (!filter.device.empty() && e.device != filter.device) continue;
-    if (filter.kind && e.kind != *filter.kind) continue;
-    if (e.unix_ms < filter.since_ms) continue;
-    out.push_back(e);
+    if (matches(*it)) out.push_back(*it);
   }
   std::reverse(out.begin(), out.end());
   return out;

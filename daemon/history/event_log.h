@@ -1,18 +1,23 @@
 // The daemon's history: the last events and commands (event.h), oldest dropped first, in bounded
-// memory. Each entry's strings are cut at kMaxText bytes, so `capacity` entries take at most
-// about capacity x (kMaxFields + 1) x kMaxText bytes, whatever a client sends; a typical entry
-// takes about 400 (memory_bytes() counts them). Pure: the wall clock is injected.
+// memory. Each entry's strings are cut at kMaxText bytes and it has at most kMaxFields fields
+// (two more once it counts repeats), so `capacity` entries take at most about
+// capacity x 2 x (kMaxFields + 3) x kMaxText bytes (7.7 KB each) whatever a client sends; a
+// typical command entry takes about 0.8 KB (memory_bytes() counts them). Pure: the wall clock is
+// injected.
 //
 // A repeat (the same command from the same client with the same result as the device's newest
 // entry) updates that entry in place (its "repeats" and "last_ms" fields) instead of pushing the
 // plant's other events out: a PLC that writes its command word every scan leaves one entry, and
-// anything else that happens to the device in between still shows in its order.
+// anything else that happens to the device in between still shows in its order. The device's
+// newest entry is kept aside (one per device), so a repeat is known as such however many other
+// devices wrote since, and with a capacity of 0 too.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,10 +28,11 @@ namespace drivegate {
 
 inline constexpr std::size_t kDefaultHistory = 2000;  // entries kept by default
 inline constexpr std::size_t kMaxText = 256;          // bytes of one message or field value
-inline constexpr std::size_t kMaxFields = 12;         // fields of one entry
+inline constexpr std::size_t kMaxFields = 12;         // fields of one entry as recorded
 inline constexpr std::size_t kMaxQuery = 1000;        // entries one query returns at most
 
-// Which entries a query wants: all that match every criterion given, the newest `limit` of them.
+// Which entries a query wants: all that match every criterion given; without `after_seq` the
+// newest `limit` of them, with it the oldest `limit` after that one (a follower catching up).
 struct EventFilter {
   std::string device;              // empty: any
   std::optional<EventKind> kind;   // none: any
@@ -43,10 +49,13 @@ class EventLog {
   // `capacity` 0: nothing is kept (the audit trail still reaches the journal).
   explicit EventLog(std::size_t capacity = kDefaultHistory, WallClock wall = &system_ms);
 
-  // Records `e` now (its seq and time are set here; text cut to kMaxText) and returns its seq.
+  // Cuts `e` as the log keeps it (text at kMaxText on a character, fields at kMaxFields); add()
+  // and repeat() do, so a caller may compare first.
+  static void fit(Event& e);
+  // Records `e` now (its seq and time are set here) and returns its seq.
   std::uint64_t add(Event e);
-  // Whether the newest entry of `e`'s device is a command that `e` repeats (every field equal
-  // but "took_ms"); if so one more repeat is counted there, and `e` is not to be added.
+  // Whether `e` (fitted) repeats its device's newest entry: a command whose fields are all equal
+  // but "took_ms" and "held". If so one more repeat is counted there, and `e` is not to be added.
   bool repeat(const Event& e);
 
   // Matching entries, oldest first.
@@ -57,16 +66,23 @@ class EventLog {
   [[nodiscard]] std::uint64_t dropped() const { return dropped_; }  // pushed out, oldest first
   [[nodiscard]] std::size_t memory_bytes() const { return bytes_; }
   [[nodiscard]] std::int64_t now_ms() const { return wall_(); }
+  // When this log began: a follower seeing it change knows the daemon restarted and its
+  // sequence numbers began again.
+  [[nodiscard]] std::int64_t started_ms() const { return started_ms_; }
 
  private:
   static std::size_t footprint(const Event& e);
+  Event* entry(std::uint64_t seq);
 
   std::size_t capacity_;
   WallClock wall_;
-  std::deque<Event> entries_;
+  std::int64_t started_ms_;
+  std::deque<Event> entries_;  // consecutive seqs, oldest first
   std::uint64_t next_seq_ = 1;
   std::uint64_t dropped_ = 0;
   std::size_t bytes_ = 0;
+  // Each device's newest entry ("" for the gateway's own), whether or not the log still holds it.
+  std::map<std::string, Event, std::less<>> newest_;
 };
 
 }  // namespace drivegate

@@ -31,6 +31,8 @@ std::string events_json(const EventLog& log, const EventFilter& filter) {
   append_number(out, static_cast<std::int64_t>(log.last_seq()));
   out += ",\"dropped\":";
   append_number(out, static_cast<std::int64_t>(log.dropped()));
+  out += ",\"started_ms\":";
+  append_number(out, log.started_ms());
   out += ",\"capacity\":";
   append_number(out, static_cast<std::int64_t>(log.capacity()));
   out += ",\"events\":[";

@@ -560,8 +560,7 @@ void write_metrics(Writer& w, const CommandCounts& counts) {
       labels = "source=\"";
       labels += kSourceKindNames[s];
       labels += "\",result=\"";
-      // The log's words ("no such device") as a label value a query can type: no_such_device.
-      for (const char c : kOutcomeNames[o]) labels += c == ' ' ? '_' : c;
+      labels += result_name(static_cast<Outcome>(o));  // as the journal's RESULT= says it
       labels += '"';
       w.sample("drivegate_writes_total", labels,
                static_cast<double>(counts.at(static_cast<SourceKind>(s), static_cast<Outcome>(o))));

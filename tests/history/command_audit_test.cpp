@@ -109,7 +109,8 @@ TEST_F(CommandAuditTest, AFloodOfRefusalsIsPacedPerCauseAndCounted) {
   denied.points = "holding 0 = last";
   audit_.record(denied, t0_ + std::chrono::seconds(1));
   ASSERT_EQ(journal_.entries.size(), 12u);
-  EXPECT_THAT(journal_.entries.back().message, HasSubstr("(4990 more like it not recorded)"));
+  EXPECT_THAT(journal_.entries.back().message,
+              HasSubstr("(4990 more denied from modbus_tls clients not recorded)"));
   EXPECT_THAT(journal_.entries.back().fields, Contains("HELD=4990"));
   // Writes that succeed are never paced.
   for (int i = 0; i < 50; ++i) {
@@ -118,6 +119,45 @@ TEST_F(CommandAuditTest, AFloodOfRefusalsIsPacedPerCauseAndCounted) {
     audit_.record(ok, t0_ + std::chrono::seconds(1));
   }
   EXPECT_EQ(journal_.entries.size(), 62u);
+}
+
+// The failsafe's refused stops are what an engineer looks for after a trip: never held back,
+// however many clients were refused before.
+TEST_F(CommandAuditTest, TheGatewaysOwnRefusalsAreNeverHeld) {
+  CommandRecord denied = tls_run();
+  denied.result = Outcome::denied;
+  for (int i = 0; i < 100; ++i) {
+    denied.points = "holding 0 = " + std::to_string(i);
+    audit_.record(denied, t0_);
+  }
+  const std::size_t before = journal_.entries.size();
+  CommandRecord stop;
+  stop.source.kind = SourceKind::failsafe;
+  stop.device = "washer-1";
+  stop.result = Outcome::no_response;
+  for (int i = 0; i < 30; ++i) {
+    stop.points = "command=stop #" + std::to_string(i);
+    audit_.record(stop, t0_);
+  }
+  EXPECT_EQ(journal_.entries.size(), before + 30);
+  // A plain Modbus client's refusals have a bucket of their own.
+  CommandRecord plain = denied;
+  plain.source.kind = SourceKind::modbus;
+  audit_.record(plain, t0_);
+  EXPECT_EQ(journal_.entries.size(), before + 31);
+}
+
+// A stuck refused write (a PLC writing a bad value every scan) is one entry counting its
+// repeats, not one entry a second.
+TEST_F(CommandAuditTest, ARepeatedRefusalIsARepeatNotAFlood) {
+  CommandRecord bad = tls_run();
+  bad.result = Outcome::invalid_value;
+  bad.took.reset();
+  for (int i = 0; i < 600; ++i) audit_.record(bad, t0_ + std::chrono::milliseconds(100 * i));
+  EXPECT_EQ(journal_.entries.size(), 1u);
+  ASSERT_EQ(history_.size(), 1u);
+  EXPECT_EQ(history_.query({})[0].field("repeats"), "599");
+  EXPECT_EQ(history_.query({})[0].field("result"), "invalid_value");
 }
 
 TEST_F(CommandAuditTest, ARepeatIsOneEntryAndOneJournalLine) {

@@ -137,5 +137,34 @@ TEST_F(EventLogTest, ARepeatedCommandIsCountedInItsEntry) {
   EXPECT_FALSE(log_.repeat(refused));
 }
 
+// 128 drives written in turn: each one's command is a repeat of its own newest entry however
+// many others were written since; and with nothing kept (capacity 0) a repeat is still known, so
+// the journal does not get a line per scan.
+TEST(EventLogRepeats, AreKnownPerDeviceWhateverTheOthersAndTheCapacity) {
+  for (const std::size_t capacity : {std::size_t{2000}, std::size_t{0}}) {
+    EventLog log(capacity, [] { return std::int64_t{0}; });
+    const auto command = [](int d) {
+      return Event{.kind = EventKind::command,
+                   .device = "d" + std::to_string(d),
+                   .fields = {{"points", "command=run_forward"}, {"result", "ok"}}};
+    };
+    for (int d = 0; d < 128; ++d) log.add(command(d));
+    for (int round = 0; round < 3; ++round) {
+      for (int d = 0; d < 128; ++d) EXPECT_TRUE(log.repeat(command(d))) << capacity << " " << d;
+    }
+    EXPECT_EQ(log.size(), capacity == 0 ? 0u : 128u);
+  }
+}
+
+// A field longer than the log keeps is compared as kept.
+TEST(EventLogRepeats, ALongFieldStillRepeats) {
+  EventLog log(10, [] { return std::int64_t{0}; });
+  const Event e{.kind = EventKind::command,
+                .device = "a",
+                .fields = {{"points", std::string(3 * kMaxText, '7')}, {"result", "ok"}}};
+  log.add(e);
+  EXPECT_TRUE(log.repeat(e));
+}
+
 }  // namespace
 }  // namespace drivegate
