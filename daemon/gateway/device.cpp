@@ -71,7 +71,7 @@ void Device::on_no_reply(TimePoint now) {
 void Device::on_comm_lost(TimePoint now) {
   driver_->on_comm_lost(now);
   publish(now);
-  fail_pending(Outcome::no_response, now);
+  fail_pending(Outcome::no_response, now, "comm lost");
 }
 
 void Device::on_tick(TimePoint now) {

@@ -20,6 +20,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "bus/station.h"
@@ -130,8 +131,8 @@ class Device final : public Station {
   // (no_response) before it reaches the driver, so that nothing runs the motor after the shutdown
   // stop.
   void close_to_clients() { closed_to_clients_ = true; }
-  // Fails every request in flight (shutdown, bus closed for good).
-  void fail_pending(Outcome why, TimePoint now);
+  // Fails every request in flight (shutdown, bus closed for good); `reason` for the audit trail.
+  void fail_pending(Outcome why, TimePoint now, std::string_view reason = {});
   // Writes waiting or being carried out (status bit command_pending).
   [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
   [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }
@@ -187,7 +188,8 @@ class Device final : public Station {
   Progress advance(Request& r, TimePoint now, Outcome& failure);
   Progress advance_forward(Request& r, TimePoint now, Outcome& failure);
   void settle(const Completion& c, TimePoint now);
-  void finish(const Request* r, Outcome outcome, TimePoint now);
+  // `why`: what the audit record says beyond the outcome, if anything.
+  void finish(const Request* r, Outcome outcome, TimePoint now, std::string_view why = {});
   void expire_requests(TimePoint now);
   // device_history.cpp
   [[nodiscard]] Answer answer_to(const Session& session, WriteDone done, std::string asked,
@@ -200,6 +202,7 @@ class Device final : public Station {
   void record_event(EventKind kind, std::string message,
                     std::vector<std::pair<std::string, std::string>> fields = {});
   void record_changes();
+  void record_faults(const CommonState& s, bool found);
   // device_failsafe.cpp
   void failsafe_tick(TimePoint now);
   void enforce_failsafe(TimePoint now);
@@ -248,9 +251,11 @@ class Device final : public Station {
   // What was last recorded in the history, likewise.
   History* history_;
   bool recorded_comm_lost_ = false;
+  bool recorded_contact_ = false;  // the drive's own state was heard and recorded once
   bool recorded_running_ = false;
   bool recorded_latched_ = false;
-  Fault recorded_fault_ = Fault::none;
+  FaultSet recorded_faults_;
+  std::uint32_t recorded_native_ = 0;
 };
 
 }  // namespace drivegate

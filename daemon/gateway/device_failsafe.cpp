@@ -20,6 +20,7 @@ void Device::failsafe_tick(TimePoint now) {
         "device {}: no Modbus write to command, setpoint or heartbeat for {} ms: "
         "failsafe {} (latched until a run command is written)",
         config_.name, failsafe_.timeout().count(), to_string(failsafe_now_));
+    record_changes();  // the trip before the failsafe's own write, in the history too
   }
   if (failsafe_.latched()) enforce_failsafe(now);
 }

@@ -67,9 +67,13 @@ std::string Device::value_text(const PointSpec& spec, const Value& value) {
   return "?";
 }
 
+// The heartbeat is left out: a PLC that writes it with its command word each scan still repeats
+// the same command (event_log.h), and it is the gateway's own register, not the drive's.
 std::string Device::describe(std::span<const Part> parts) {
   std::string out;
   for (const Part& p : parts) {
+    const CommonRow* row = p.point->row();
+    if (row != nullptr && row->write == CommonWrite::heartbeat) continue;
     if (!out.empty()) out += ' ';
     out += p.point->spec.name + "=" + value_text(p.point->spec, p.value);
   }
@@ -103,34 +107,6 @@ void Device::record_changes() {
       record_event(EventKind::comm_restored, config_.name + ": answers again");
     }
   }
-  const CommonState& s = driver_->common();
-  if (const Fault f = most_severe(s.faults); f != recorded_fault_) {
-    recorded_fault_ = f;
-    char native[16];
-    std::snprintf(native, sizeof native, "0x%X", static_cast<unsigned>(s.native_fault));
-    if (f == Fault::none) {
-      record_event(EventKind::fault_cleared, config_.name + ": faults cleared");
-    } else {
-      record_event(EventKind::fault_raised,
-                   config_.name + ": fault " + std::string(to_string(f)) + " (native " + native +
-                       ")",
-                   {{"fault", std::string(to_string(f))},
-                    {"code", std::to_string(static_cast<unsigned>(f))},
-                    {"native", native}});
-    }
-  }
-  if (const bool running = s.running && !comm_lost(); running != recorded_running_) {
-    recorded_running_ = running;
-    if (running) {
-      record_event(EventKind::drive_started,
-                   config_.name + ": running (" + std::string(to_string(s.command)) +
-                       ", setpoint " + std::to_string(s.setpoint_rpm) + " rpm)",
-                   {{"command", std::string(to_string(s.command))},
-                    {"setpoint_rpm", std::to_string(s.setpoint_rpm)}});
-    } else {
-      record_event(EventKind::drive_stopped, config_.name + ": stopped");
-    }
-  }
   if (const bool latched = failsafe_.latched(); latched != recorded_latched_) {
     recorded_latched_ = latched;
     if (latched) {
@@ -144,6 +120,57 @@ void Device::record_changes() {
                    config_.name + ": failsafe reset by a run command from the PLC");
     }
   }
+  // What the drive says of itself counts only while it answers: a drive that stopped answering
+  // has not stopped running, nor cleared its faults. The first state heard (daemon start, the
+  // device added or changed by a reload) is said as found, not as a change.
+  if (comm_lost() || !link_.health.ever_good()) return;
+  const bool found = !recorded_contact_;
+  recorded_contact_ = true;
+  const CommonState& s = driver_->common();
+  record_faults(s, found);
+  if (s.running != recorded_running_) {
+    recorded_running_ = s.running;
+    const std::string how = std::string(found ? "found running" : "running") + " (" +
+                            std::string(to_string(s.command)) + ", setpoint " +
+                            std::to_string(s.setpoint_rpm) + " rpm)";
+    if (s.running) {
+      record_event(EventKind::drive_started, config_.name + ": " + how,
+                   {{"command", std::string(to_string(s.command))},
+                    {"setpoint_rpm", std::to_string(s.setpoint_rpm)},
+                    {"found", found ? "true" : "false"}});
+    } else {
+      record_event(EventKind::drive_stopped, config_.name + ": stopped");
+    }
+  }
+}
+
+// One entry per unified fault raised or cleared (comm_lost is comm's own event), each with the
+// native code in force; a native code that changes under the same faults is a fault raised anew.
+void Device::record_faults(const CommonState& s, bool found) {
+  char native[16];
+  std::snprintf(native, sizeof native, "0x%X", static_cast<unsigned>(s.native_fault));
+  const bool native_changed = s.native_fault != recorded_native_ && s.native_fault != 0;
+  for (std::size_t i = 1; i < kFaultCount; ++i) {
+    const auto f = static_cast<Fault>(i);
+    if (f == Fault::comm_lost) continue;
+    const bool now = s.faults.has(f);
+    const bool was = recorded_faults_.has(f);
+    if (now && (!was || native_changed)) {
+      record_event(EventKind::fault_raised,
+                   config_.name + ": " + (found ? "found with fault " : "fault ") +
+                       std::string(to_string(f)) + " (native " + native + ")",
+                   {{"fault", std::string(to_string(f))},
+                    {"code", std::to_string(i)},
+                    {"native", native},
+                    {"found", found ? "true" : "false"}});
+    } else if (!now && was) {
+      record_event(EventKind::fault_cleared,
+                   config_.name + ": fault " + std::string(to_string(f)) + " cleared",
+                   {{"fault", std::string(to_string(f))}, {"code", std::to_string(i)}});
+    }
+  }
+  recorded_faults_ = s.faults;
+  recorded_native_ = s.native_fault;
 }
 
 }  // namespace drivegate

@@ -234,7 +234,10 @@ Outcome Device::refuse_run_while_latched(const char* source, TimePoint now) {
 Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer& answer,
                         TimePoint now, Origin origin) {
   const bool feeds = origin == Origin::plc && session.feeds_failsafe;
-  if (closed_to_clients_ && origin == Origin::plc) return Outcome::no_response;
+  if (closed_to_clients_ && origin == Origin::plc) {
+    answer.record.why = "shutting down";
+    return Outcome::no_response;
+  }
   if (origin == Origin::plc) stop_on_start_ = false;  // a client decides from now on
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
@@ -328,7 +331,7 @@ void Device::supersede_runs(TimePoint now) {
   for (const auto& r : requests_) {
     if (!r->urgent && !r->started() && commands(r->parts, &is_run)) dropped.push_back(r.get());
   }
-  for (const Request* r : dropped) finish(r, Outcome::no_response, now);
+  for (const Request* r : dropped) finish(r, Outcome::no_response, now, "a stop went before it");
 }
 
 // The oldest request that is not a stop: the only one of them the driver may be carrying out.
@@ -394,6 +397,7 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
     const bool run = op.target == WriteOp::Target::command && is_run(op.command);
     // The failsafe may have latched while the request waited.
     if (run && failsafe_.latched() && !r.feeds_failsafe) {
+      for (Answer& a : r.answers) a.record.why = "the failsafe is latched";
       failure = refuse_run_while_latched("a client that does not feed it", now);
       return Progress::failed;
     }
@@ -505,7 +509,7 @@ void Device::settle(const Completion& c, TimePoint now) {
   if (progress == Progress::waiting && kick_) kick_();
 }
 
-void Device::finish(const Request* r, Outcome outcome, TimePoint now) {
+void Device::finish(const Request* r, Outcome outcome, TimePoint now, std::string_view why) {
   const auto it = std::find_if(requests_.begin(), requests_.end(),
                                [r](const auto& owned) { return owned.get() == r; });
   if (it == requests_.end()) return;
@@ -518,8 +522,18 @@ void Device::finish(const Request* r, Outcome outcome, TimePoint now) {
                   [](const Part& p) { return write_kind(*p.point) != CommonWrite::none; })) {
     failsafe_.fed(now);
   }
+  // A forwarded request the slave answered with an exception is relayed as it came (ok to the
+  // client, which reads the exception), but the audit trail says the slave refused it.
+  Outcome recorded = outcome;
+  std::string reason(why);
+  if (owned->forward && outcome == Outcome::ok && owned->reply.size() >= 2 &&
+      (owned->reply[0] & 0x80) != 0) {
+    recorded = Outcome::refused;
+    reason = "exception " + std::to_string(owned->reply[1]) + " from the slave";
+  }
   for (Answer& a : owned->answers) {
-    record(a, outcome, now);
+    if (!reason.empty()) a.record.why = reason;
+    record(a, recorded, now);
     if (a.done) a.done(outcome);
   }
   if (owned->forward_done) owned->forward_done(outcome, owned->reply);
@@ -532,7 +546,10 @@ void Device::expire_requests(TimePoint now) {
   for (const auto& r : requests_) {
     if (now >= r->deadline) late.push_back(r.get());
   }
-  for (const Request* r : late) finish(r, Outcome::no_response, now);
+  for (const Request* r : late) {
+    finish(r, Outcome::no_response, now,
+           r->started() ? "the drive did not confirm it in time" : "not sent before its deadline");
+  }
   if (!late.empty()) next_request(now);
 }
 
@@ -543,12 +560,13 @@ void Device::next_request(TimePoint now) {
   if (kick_) kick_();
 }
 
-void Device::fail_pending(Outcome why, TimePoint now) {
+void Device::fail_pending(Outcome why, TimePoint now, std::string_view reason) {
   auto failing = std::move(requests_);
   requests_.clear();
   urgent_unsent_ = false;
   for (auto& r : failing) {
     for (Answer& a : r->answers) {
+      if (!reason.empty()) a.record.why = reason;
       record(a, why, now);
       if (a.done) a.done(why);
     }

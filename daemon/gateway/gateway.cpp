@@ -4,6 +4,7 @@
 #include <boost/asio/steady_timer.hpp>
 
 #include "config/config_diff.h"
+#include "gateway/forward_access.h"
 #include "base/log_context.h"
 
 namespace drivegate {
@@ -135,7 +136,7 @@ void Gateway::stop() {
   running_ = false;
   for (auto& b : buses_) b->stop();
   const auto now = Clock::now();
-  for (auto& d : devices_) d->fail_pending(Outcome::no_response, now);
+  for (auto& d : devices_) d->fail_pending(Outcome::no_response, now, "the gateway stopped");
 }
 
 void Gateway::stop_drives(Millis limit, std::function<void()> done) {
@@ -233,8 +234,12 @@ bool Gateway::forwards(std::uint8_t unit) const {
 Outcome Gateway::forward(const Session& session, std::uint8_t unit,
                          std::span<const std::uint8_t> pdu, ForwardDone done) {
   Device* d = units_[unit];
-  if (d == nullptr) return Outcome::no_such_device;  // a Modbus gateway's 0x0B, never a write
-  if (!running_) return Outcome::no_response;
+  if (d == nullptr) return Outcome::no_such_device;  // forwards(unit) said there is one
+  if (!running_) {
+    // A forwarded write is audited like any other; a forwarded read is not a write.
+    if (forward_level(pdu) == AccessLevel::read) return Outcome::no_response;
+    return refuse(session, unit, Device::describe_pdu(pdu), Outcome::no_response);
+  }
   return d->forward(session, pdu, std::move(done), Clock::now());
 }
 

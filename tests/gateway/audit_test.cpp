@@ -130,9 +130,9 @@ TEST_F(AuditTest, WritesRefusedAtOnceAreEachOneRecordWithWhy) {
   EXPECT_EQ(c[0].field("result"), "denied");
   EXPECT_EQ(c[0].field("why"), "beyond access read");
   EXPECT_EQ(c[0].field("points"), "holding 0 = 1");
-  EXPECT_EQ(c[1].field("result"), "no such point");
+  EXPECT_EQ(c[1].field("result"), "no_such_point");
   EXPECT_EQ(c[1].field("points"), "holding 900 = 1");
-  EXPECT_EQ(c[2].field("result"), "invalid value");
+  EXPECT_EQ(c[2].field("result"), "invalid_value");
   EXPECT_EQ(c[3].field("result"), "refused");
   EXPECT_EQ(c[3].field("points"), "command=run_reverse");
   for (const Event& e : c) {
@@ -228,7 +228,7 @@ TEST_F(AuditTest, AWriteTheDriveNeverAnsweredIsRecordedAsSuch) {
   ASSERT_THAT(answers_, ElementsAre(Outcome::no_response));
   const auto c = commands();
   ASSERT_EQ(c.size(), 1u);
-  EXPECT_EQ(c[0].field("result"), "no response");
+  EXPECT_EQ(c[0].field("result"), "no_response");
   EXPECT_EQ(c[0].field("why"), "comm lost");
   EXPECT_EQ(c[0].field("took_ms"), "2500");
   EXPECT_EQ(history_.events().query({.kind = EventKind::comm_lost}).size(), 1u);
@@ -260,6 +260,48 @@ TEST_F(AuditTest, FaultsRaisedAndClearedAreEventsWithTheNativeCode) {
   EXPECT_EQ(all[0].field("fault"), "over_current");
   EXPECT_EQ(all[0].field("native"), "0x21");
   EXPECT_EQ(all[1].kind, EventKind::fault_cleared);
+}
+
+// A PLC writing command, setpoint and a counting heartbeat every scan: the same command each
+// time, one entry counting its repeats (the heartbeat is the gateway's, not part of the record).
+TEST_F(AuditTest, ACommandWordWrittenEveryScanWithItsHeartbeatIsOneEntry) {
+  for (int scan = 0; scan < 20; ++scan) {
+    ASSERT_EQ(write(modbus_client(AccessLevel::operate), kCommand,
+                    {1, 800, static_cast<std::uint16_t>(scan)}, Millis(100 * scan)),
+              Outcome::ok);
+    confirm(Millis(100 * scan + 5));
+  }
+  const auto c = commands();
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].field("points"), "setpoint_rpm=800 command=run_forward");
+  EXPECT_EQ(c[0].field("repeats"), "19");
+  EXPECT_EQ(journal_.entries.size(), 1u);
+}
+
+// A drive that stopped answering has not stopped running nor cleared its faults as far as anyone
+// knows: nothing of its own is recorded until it answers again. The first state heard is "found".
+TEST_F(AuditTest, NothingTheDriveSaysCountsWhileItDoesNotAnswer) {
+  fake_->common_.running = true;
+  fake_->common_.command = Command::run_forward;
+  device_->on_receive({}, at(10ms));
+  auto started = history_.events().query({.kind = EventKind::drive_started});
+  ASSERT_EQ(started.size(), 1u);
+  EXPECT_EQ(started[0].field("found"), "true");
+  EXPECT_EQ(started[0].message, "dev: found running (run_forward, setpoint 0 rpm)");
+  tick(2500ms);  // comm lost; the driver's stale state says stopped and faulted meanwhile
+  fake_->common_.running = false;
+  fake_->common_.faults.set(Fault::over_current);
+  device_->on_no_reply(at(2600ms));
+  EXPECT_TRUE(history_.events().query({.kind = EventKind::drive_stopped}).empty());
+  EXPECT_TRUE(history_.events().query({.kind = EventKind::fault_raised}).empty());
+  // Answering again: now what it says is news.
+  device_->link().health.frame_good(at(2700ms));
+  device_->on_receive({}, at(2700ms));
+  EXPECT_THAT(kinds(), ElementsAre(EventKind::drive_started, EventKind::comm_lost,
+                                   EventKind::comm_restored, EventKind::fault_raised,
+                                   EventKind::drive_stopped));
+  EXPECT_EQ(history_.events().query({.kind = EventKind::fault_raised})[0].field("found"),
+            "false");
 }
 
 }  // namespace
