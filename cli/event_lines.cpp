@@ -48,6 +48,9 @@ bool entry(Reader& r, std::uint64_t& seq, std::string& line) {
   line = utc_time(unix_ms) + "  " + kind;
   line.resize(std::max<std::size_t>(line.size(), 24 + 2 + 16), ' ');
   line += "  " + (device.empty() ? std::string("-") : device) + "  " + message;
+  for (char& c : line) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = '?';
+  }
   return true;
 }
 
@@ -57,7 +60,7 @@ std::string utc_time(std::int64_t unix_ms) {
   const std::time_t secs = static_cast<std::time_t>(unix_ms / 1000);
   std::tm tm{};
   gmtime_r(&secs, &tm);
-  char buf[40];
+  char buf[64];  // room for any int the format may be given
   std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
                 tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
                 static_cast<int>(unix_ms % 1000));
@@ -74,6 +77,8 @@ std::optional<EventPage> event_lines(std::string_view json) {
     if (!key || !r.at(':')) return std::nullopt;
     if (*key == "last_seq") {
       if (!number(r, page.last_seq)) return std::nullopt;
+    } else if (*key == "started_ms") {
+      if (!number(r, page.started_ms)) return std::nullopt;
     } else if (*key == "dropped") {
       if (!number(r, page.dropped)) return std::nullopt;
     } else if (*key == "events") {

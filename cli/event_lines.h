@@ -1,6 +1,7 @@
 // `drivegate events` reads the daemon's history (GET /api/v1/events, docs/http.md) and prints one
 // line per entry, as the journal would: time (UTC, ISO 8601, milliseconds), kind, device, what
-// happened. Pure: a JSON document in, lines out.
+// happened. Control characters a client put in a name (a certificate's role, an MQTT id) are
+// shown as '?', never sent to the terminal. Pure: a JSON document in, lines out.
 #pragma once
 
 #include <cstdint>
@@ -14,6 +15,7 @@ namespace drivegate::cli {
 struct EventPage {
   std::uint64_t last_seq = 0;  // the daemon's newest entry: where --follow asks from next
   std::uint64_t dropped = 0;   // entries the history has pushed out since the daemon started
+  std::int64_t started_ms = 0;  // when the daemon's history began: another value, a restart
   std::vector<std::string> lines;
   std::uint64_t newest_seq = 0;  // the newest entry printed (0: none)
 };

@@ -9,6 +9,7 @@
 #include "commands.h"
 #include "config/config_loader.h"
 #include "event_lines.h"
+#include "history/event_log.h"
 #include "http_client.h"
 
 namespace drivegate::cli {
@@ -60,14 +61,16 @@ int events(std::span<const std::string> args) {
   const bool follow = parsed->has("follow");
 
   std::uint64_t after = 0;
+  std::int64_t started = 0;  // the daemon's history's start: another value, a restart
   bool first = true;
   bool lost = false;
   for (;;) {
-    const std::string target = "/api/v1/events?limit=" +
-                               std::to_string(first ? lines : 1000) +
-                               (first ? std::string() : "&after=" + std::to_string(after)) + filter;
+    const std::string target =
+        "/api/v1/events?limit=" + std::to_string(first ? lines : kMaxQuery) +
+        (first ? std::string() : "&after=" + std::to_string(after)) + filter;
     std::string error;
     const auto got = http_get(http.host, http.port, target, kTimeout, kMaxBytes, error);
+    bool more = false;  // a full page: ask again at once
     if (!got || got->head.status != 200) {
       const std::string why = !got ? error
                                    : std::to_string(got->head.status) + " " + got->head.reason +
@@ -87,16 +90,23 @@ int events(std::span<const std::string> args) {
       }
       if (lost) std::cerr << "drivegate events: the daemon answers again\n";
       lost = false;
-      // A daemon restarted meanwhile numbers its entries afresh: everything it has is new.
-      if (!first && page->last_seq < after) after = 0;
+      if (!first && page->started_ms != started) {
+        // Restarted: it numbers its entries afresh, and everything it has is new.
+        std::cerr << "drivegate events: the daemon restarted\n";
+        started = page->started_ms;
+        after = 0;
+        continue;
+      }
+      started = page->started_ms;
       for (const auto& l : page->lines) std::cout << l << "\n";
       std::cout.flush();
       after = std::max(after, page->newest_seq);
       if (first) after = std::max(after, page->last_seq);
+      more = !first && page->lines.size() == kMaxQuery;
       first = false;
     }
     if (!follow) return 0;
-    std::this_thread::sleep_for(kFollowPeriod);
+    if (!more) std::this_thread::sleep_for(kFollowPeriod);
   }
 }
 

@@ -139,7 +139,9 @@ int run_point_writes(const PointWriteJob& job) {
   std::vector<std::string> errors;
   // Each write is audited like the daemon's (history/command_audit.h), into the journal: the
   // daemon, whose history would keep it, is stopped.
-  const auto journal = make_journal_writer(log, /*always_journal=*/true);
+  // Where journald cannot be reached, the record goes to stderr: never lost in silence.
+  const auto journal =
+      make_journal_writer(make_logger("drivegate", spdlog::level::info), /*always_journal=*/true);
   History history(kDefaultHistory, &EventLog::system_ms, journal.get());
   auto gateway =
       Gateway::build(io, cfg, *job.plugins, log, errors, /*maintenance=*/true, &history);

@@ -93,11 +93,11 @@ void log_listener_changes(const std::vector<ListenerConfig>& running,
 Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
     : options_(std::move(options)),
       log_(std::move(log)),
+      journal_(make_journal_writer(log_)),
       signals_(io_, SIGINT, SIGTERM, SIGHUP),
       status_timer_(io_),
       watchdog_timer_(io_),
-      trend_timer_(io_),
-      journal_(make_journal_writer(log_)) {}
+      trend_timer_(io_) {}
 
 Daemon::~Daemon() {
   mqtt_.reset();

@@ -62,17 +62,18 @@ class Daemon {
   // the io_context destroys the handlers it still holds, and with them acceptors and connections
   // whose timers detach from the clock as they go.
   net::SteadyClock clock_;
+  // What happened and when (history/history.h), made as [history] says once and kept across
+  // reloads. Declared before io_ and the gateway, so it outlives both: an old gateway a reload
+  // left to a queued handler goes with io_, and its devices record here.
+  std::unique_ptr<JournalWriter> journal_;
+  std::unique_ptr<History> history_;
+  std::unique_ptr<TrendSampler> sampler_;  // none with [history] trend_seconds = 0
   boost::asio::io_context io_;
   boost::asio::signal_set signals_;
   boost::asio::steady_timer status_timer_;
   boost::asio::steady_timer watchdog_timer_;
   boost::asio::steady_timer trend_timer_;
   SystemdNotifier notifier_;
-  // What happened and when (history/history.h): before the gateway, whose devices record in it,
-  // and kept across reloads.
-  std::unique_ptr<JournalWriter> journal_;
-  std::unique_ptr<History> history_;  // made as [history] says, once
-  std::unique_ptr<TrendSampler> sampler_;  // none with [history] trend_seconds = 0
   std::string mqtt_state_;
   PluginRegistry plugins_;
   Config config_;

@@ -1,6 +1,7 @@
 #include "routes.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdint>
 
 namespace drivegate::http {
@@ -62,16 +63,19 @@ std::optional<std::string> query_value(std::string_view target, std::string_view
   return std::nullopt;
 }
 
-// ?since=UNIX_SECONDS (a fraction allowed) as milliseconds; nullopt if it is not a number.
+// ?since=UNIX_SECONDS (a fraction allowed) as milliseconds; nullopt if it is not a number of
+// seconds between the epoch and the year 5000 (anything later would overflow the milliseconds).
 std::optional<std::int64_t> since_ms(std::string_view target) {
   const auto v = query_value(target, "since");
   if (!v) return 0;
-  if (v->empty() || v->size() > 20 ||
-      v->find_first_not_of("0123456789.") != std::string::npos ||
-      std::count(v->begin(), v->end(), '.') > 1 || v->front() == '.') {
+  double seconds = 0;
+  const auto [end, ec] = std::from_chars(v->data(), v->data() + v->size(), seconds,
+                                         std::chars_format::fixed);
+  if (v->empty() || ec != std::errc{} || end != v->data() + v->size() || !(seconds >= 0) ||
+      seconds > 1e11) {
     return std::nullopt;
   }
-  return static_cast<std::int64_t>(std::stod(*v) * 1000.0);
+  return static_cast<std::int64_t>(seconds * 1000.0);
 }
 
 // A whole number 0..max, nullopt if it is not one.

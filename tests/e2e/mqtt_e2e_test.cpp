@@ -361,6 +361,14 @@ TEST_F(MqttE2E, DcmdSetpointReachesTheDriveThroughTheModbusWritePath) {
   EXPECT_EQ(r->second, "ok");
   EXPECT_TRUE(eventually([&] { return speed(1) == 0; }, 10s)) << speed(1);
   expect_seq_consecutive(peer_->history());
+
+  // Each DCMD that reached the drive's write path is one audit record, as MQTT's (the daemon's
+  // stderr is its journal's stand-in here: docs/history.md).
+  const std::string log = daemon_log();
+  EXPECT_EQ(occurrences(log, "from mqtt "), 3u) << log;
+  EXPECT_THAT(log, HasSubstr(": setpoint_rpm=800 command=run_forward: ok, "));
+  EXPECT_THAT(log, HasSubstr(": accel_time=5.5: denied (beyond access operate)"));
+  EXPECT_THAT(log, HasSubstr(": command=stop: ok, "));
 }
 
 TEST_F(MqttE2E, DcmdChangesNothingWhileCommandsAreOff) {

@@ -299,6 +299,13 @@ TEST_F(SecurityTls, EachCertificateRoleGetsItsAccessLevel) {
   EXPECT_THAT(text, HasSubstr("role \"operator\": access operate"));
   EXPECT_THAT(text, HasSubstr("role \"engineer\": access maintain"));
   EXPECT_THAT(text, HasSubstr("CN = norole\", role (none): access read"));
+  // Each write is one audit record with the certificate's subject and role (docs/history.md):
+  // accepted, refused by the session's level at the gateway, and refused by the server itself.
+  EXPECT_THAT(text, HasSubstr("\", role operator: setpoint_rpm=1200: ok, "));
+  EXPECT_THAT(text, HasSubstr("\", role operator: holding 17 = 66: denied (beyond access operate)"));
+  EXPECT_THAT(text, HasSubstr("\", role engineer: accel_time=5.5: ok, "));
+  EXPECT_THAT(text, HasSubstr("\", role viewer: pdu 06 00 01 03 e7: denied (beyond access read)"));
+  EXPECT_THAT(text, HasSubstr("from modbus_tls 127.0.0.1:"));
   // Logged once per connection: viewer, operator and norole (twice refused, logged once).
   EXPECT_EQ(occurrences(text, "beyond its access level"), 3u) << text;
   EXPECT_THAT(text, Not(HasSubstr("TLS handshake failed")));

@@ -36,6 +36,18 @@ class FakeContent : public Content {
     on_data();  // the global header is there to take
     return std::make_unique<QuietCapture>();
   }
+  // The history's documents: what the route parsed is kept; only "command" is a known kind.
+  std::optional<std::string> events_json(const EventsQuery& q) override {
+    events_query = q;
+    if (!q.kind.empty() && q.kind != "command") return std::nullopt;
+    return R"({"events":[]})";
+  }
+  std::string trends_json(const TrendsQuery& q) override {
+    trends_query = q;
+    return R"({"trends":[]})";
+  }
+  EventsQuery events_query;
+  TrendsQuery trends_query;
   [[nodiscard]] int calls() const { return status_calls + metrics_calls + regmap_calls; }
   std::string status;  // the status document when set (before the server starts)
   std::atomic<int> status_calls{0};

@@ -149,5 +149,34 @@ TEST_F(Routes, CaptureNeedsAKnownBusAndSane1To300Seconds) {
   EXPECT_EQ(route("POST", "/api/v1/capture?bus=line", content, on).status, 405u);
 }
 
+// /api/v1/events and /api/v1/trends: each parameter parsed as the history reads it, anything that
+// is not a number in range a 400 before the daemon is asked.
+TEST_F(Routes, EventsParsesItsFiltersAndRefusesNonsense) {
+  auto r = route("GET", "/api/v1/events?device=washer%2D1&kind=command&since=1700000000.5&after=41"
+                        "&limit=7", content);
+  EXPECT_EQ(r.status, 200u);
+  EXPECT_EQ(r.content_type, "application/json");
+  EXPECT_EQ(content.events_query.device, "washer-1");
+  EXPECT_EQ(content.events_query.kind, "command");
+  EXPECT_EQ(content.events_query.since_ms, 1'700'000'000'500);
+  EXPECT_EQ(content.events_query.after, 41u);
+  EXPECT_EQ(content.events_query.limit, 7u);
+  for (const char* bad : {"?kind=nonsense", "?since=abc", "?since=-1", "?since=1e99",
+                          "?since=99999999999999999999", "?since=", "?after=x", "?after=-3",
+                          "?limit=0", "?limit=12x", "?limit=99999999999"}) {
+    EXPECT_EQ(route("GET", std::string("/api/v1/events") + bad, content).status, 400u) << bad;
+  }
+}
+
+TEST_F(Routes, TrendsOfADeviceOrABusNotBoth) {
+  EXPECT_EQ(route("GET", "/api/v1/trends?device=a&since=5", content).status, 200u);
+  EXPECT_EQ(content.trends_query.name, "device:a");
+  EXPECT_EQ(content.trends_query.since_ms, 5000);
+  EXPECT_EQ(route("GET", "/api/v1/trends?bus=l", content).status, 200u);
+  EXPECT_EQ(content.trends_query.name, "bus:l");
+  EXPECT_EQ(route("GET", "/api/v1/trends?device=a&bus=l", content).status, 400u);
+  EXPECT_EQ(route("GET", "/api/v1/trends?since=x", content).status, 400u);
+}
+
 }  // namespace
 }  // namespace drivegate::http::test

@@ -10,7 +10,7 @@
   const GAP_MS = 3500;          // rows further apart than this: the daemon was away; lift the pen
   // Events (/api/v1/events): rows kept on the page, newest first.
   const MAX_EVENT_ROWS = 200;
-  const REPEAT_LOOKBACK = 64;   // entries the daemon's history looks back over for a repeat
+  const REPEAT_LOOKBACK = 64;   // newest entries asked for again now and then (repeat counts)
   const REPEATS_EVERY = 5;      // polls between two looks back for repeat counts
   const ALARM_KINDS = ["fault_raised", "comm_lost", "failsafe_tripped"];
   const CLEAR_KINDS = ["fault_cleared", "comm_restored", "failsafe_cleared"];
@@ -648,9 +648,9 @@
 
   function eventsUrl() {
     if (!events.lastSeq) return "/api/v1/events?limit=" + MAX_EVENT_ROWS;
-    // New entries only, after the newest shown. Every few polls the request also goes back
-    // over the daemon's repeat look-back: a command repeated (a PLC writing every scan) updates
-    // its entry in place, "repeats" and "last_ms", without a new sequence number.
+    // New entries only, after the newest shown. Every few polls the request also goes back over
+    // the newest few: a command repeated (a PLC writing every scan) updates its entry in place,
+    // "repeats" and "last_ms", without a new sequence number.
     const back = events.polls % REPEATS_EVERY === 0 ? REPEAT_LOOKBACK : 0;
     return "/api/v1/events?after=" + Math.max(0, events.lastSeq - back) + "&limit=" + MAX_EVENT_ROWS;
   }
