@@ -17,7 +17,7 @@ std::string_view label_of(const PointSpec& spec, const Value& value) {
 }
 
 void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
-  static constexpr Session kReader{AccessLevel::read, WordOrder::big};
+  static const Session kReader{AccessLevel::read, WordOrder::big};
   static constexpr std::array kTables{Table::coil, Table::discrete, Table::input, Table::holding};
   out.clear();
   const RegisterMap& map = device.map();

@@ -62,7 +62,7 @@ class FailsafeTest : public ::testing::Test {
     device_->next_exchange(at(ms), Turn::poll);
     device_->next_exchange(at(ms), Turn::write);
   }
-  static constexpr Session kReader{AccessLevel::read, WordOrder::big};
+  static inline const Session kReader{AccessLevel::read, WordOrder::big};
   std::uint16_t status(Millis ms) {
     std::uint16_t s = 0;
     EXPECT_EQ(device_->read(kReader, Table::input, 0, std::span<std::uint16_t>(&s, 1), at(ms)),

@@ -33,7 +33,7 @@ TEST(JsonString, EscapesQuotesBackslashesAndControlCharacters) {
 
 // The per-point reads point_values() made before it read whole tables: each point on its own.
 std::vector<PointValue> one_by_one(Device& device, TimePoint now) {
-  static constexpr Session kReader{AccessLevel::read, WordOrder::big};
+  static const Session kReader{AccessLevel::read, WordOrder::big};
   std::vector<PointValue> out;
   for (const MappedPoint& p : device.map().points()) {
     const bool bits = p.spec.table == Table::coil || p.spec.table == Table::discrete;

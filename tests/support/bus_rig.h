@@ -77,7 +77,7 @@ class BusRig {
   [[nodiscard]] TimePoint now() const { return clock_.now(); }
 
   // A client with every right, in the register map's word order (a `maintain` listener).
-  static constexpr Session kMaintain{AccessLevel::maintain, WordOrder::big};
+  static inline const Session kMaintain{AccessLevel::maintain, WordOrder::big};
 
   // A Modbus write request, as the server makes it (registers, or 0 / 1 per coil).
   std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
