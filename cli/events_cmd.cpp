@@ -1,4 +1,4 @@
-// drivegate events: the running daemon's history (docs/history.md), from its HTTP side's
+// drivegate events: the running daemon's history (docs/audit.md), from its HTTP side's
 // /api/v1/events: commands with their source and result, faults, comm lost and back, failsafe
 // trips, reloads. --follow keeps asking for what is newer, once a second, until interrupted.
 #include <charconv>

@@ -49,7 +49,7 @@ struct HttpConfig {
   int line = 0;
 };
 
-// [history]: what the daemon keeps of what happened (docs/history.md). The audit trail goes to
+// [history]: what the daemon keeps of what happened (docs/audit.md). The audit trail goes to
 // the journal whatever this says; these bound what is kept in memory besides.
 struct HistoryConfig {
   std::size_t events = 2000;         // entries of the event history; 0: none kept

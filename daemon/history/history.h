@@ -1,4 +1,4 @@
-// What happened and when, in one place the daemon owns across reloads (docs/history.md): the
+// What happened and when, in one place the daemon owns across reloads (docs/audit.md): the
 // event history (event_log.h), the audit trail that records every command into it
 // (command_audit.h), and the drives' trends (trend_store.h). Devices, the gateway and the
 // daemon record here; the HTTP side and `drivegate events` read it.

@@ -77,7 +77,7 @@ class Backend {
                           WriteDone done) = 0;
   // A write the server refused itself, before any check the backend makes: a read-only
   // session's (MB-TCP-Security "Authorization": exception 01 at once). Told for the audit trail
-  // (docs/history.md), which records every write refused or not; `request` is the PDU.
+  // (docs/audit.md), which records every write refused or not; `request` is the PDU.
   virtual void refused_write(const Session& /*session*/, std::uint8_t /*unit*/,
                              std::span<const std::uint8_t> /*request*/) {}
 

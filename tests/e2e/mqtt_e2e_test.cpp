@@ -363,7 +363,7 @@ TEST_F(MqttE2E, DcmdSetpointReachesTheDriveThroughTheModbusWritePath) {
   expect_seq_consecutive(peer_->history());
 
   // Each DCMD that reached the drive's write path is one audit record, as MQTT's (the daemon's
-  // stderr is its journal's stand-in here: docs/history.md).
+  // stderr is its journal's stand-in here: docs/audit.md).
   const std::string log = daemon_log();
   EXPECT_EQ(occurrences(log, "from mqtt "), 3u) << log;
   EXPECT_THAT(log, HasSubstr(": setpoint_rpm=800 command=run_forward: ok, "));

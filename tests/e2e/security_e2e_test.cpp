@@ -299,7 +299,7 @@ TEST_F(SecurityTls, EachCertificateRoleGetsItsAccessLevel) {
   EXPECT_THAT(text, HasSubstr("role \"operator\": access operate"));
   EXPECT_THAT(text, HasSubstr("role \"engineer\": access maintain"));
   EXPECT_THAT(text, HasSubstr("CN = norole\", role (none): access read"));
-  // Each write is one audit record with the certificate's subject and role (docs/history.md):
+  // Each write is one audit record with the certificate's subject and role (docs/audit.md):
   // accepted, refused by the session's level at the gateway, and refused by the server itself.
   EXPECT_THAT(text, HasSubstr("\", role operator: setpoint_rpm=1200: ok, "));
   EXPECT_THAT(text, HasSubstr("\", role operator: holding 17 = 66: denied (beyond access operate)"));
