@@ -1,10 +1,10 @@
-#include "codec.h"
+#include "serial_codec.h"
 
 #include <algorithm>
 
 #include "drivegate/crc.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_serial {
 namespace {
 
 // RTU: address(1) + PDU + CRC(2); at most 256 bytes (Serial Line 2.5.1.1).
@@ -287,4 +287,4 @@ std::optional<std::uint8_t> exception_code(ByteView pdu) {
   return pdu[1];
 }
 
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_serial
