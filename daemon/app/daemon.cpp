@@ -50,7 +50,9 @@ bool mqtt_changed(const MqttConfig& running, MqttConfig next) {
 
 std::vector<modbus::ListenerOptions> listener_options(const std::vector<ListenerConfig>& ls) {
   std::vector<modbus::ListenerOptions> out;
-  for (const auto& l : ls) out.push_back(l.options);
+  for (const auto& l : ls) {
+    if (l.framing == ListenerFraming::mbap) out.push_back(l.options);  // the rest: RTU / ASCII
+  }
   return out;
 }
 
@@ -109,7 +111,7 @@ Daemon::~Daemon() {
 bool Daemon::start_http() {
   if (!config_.http.enabled) return true;
   content_ = std::make_unique<StatusContent>(gateway_, *server_, mqtt_, http_, restart_needed_,
-                                             *history_);
+                                             *history_, slaves_);
   http::HttpOptions o;
   o.host = config_.http.listen.host;
   o.port = config_.http.listen.port;
@@ -128,13 +130,19 @@ std::optional<Config> Daemon::load_config() {
   auto result = drivegate::load_config(options_.config, plugins_);
   for (const auto& e : result.errors) log_->error("{}", e);
   if (result.config && options_.listen) {
-    auto& first = result.config->listeners.front().options;
-    // The file's warning about that listener's address no longer applies: --listen moved it.
-    const std::string moved = first.name() + " lets";
-    std::erase_if(result.warnings,
-                  [&](const std::string& w) { return w.find(moved) != std::string::npos; });
-    first.host = options_.listen->host;
-    first.port = options_.listen->port;
+    // --listen moves the first listener on a network address (a serial one has none).
+    auto& ls = result.config->listeners;
+    const auto network =
+        std::find_if(ls.begin(), ls.end(), [](const ListenerConfig& l) { return !l.serial; });
+    if (network != ls.end()) {
+      auto& first = network->options;
+      // The file's warning about that listener's address no longer applies: --listen moved it.
+      const std::string moved = first.name() + " lets";
+      std::erase_if(result.warnings,
+                    [&](const std::string& w) { return w.find(moved) != std::string::npos; });
+      first.host = options_.listen->host;
+      first.port = options_.listen->port;
+    }
   }
   if (result.config) {
     for (const auto& w : result.warnings) log_->warn("{}", w);
@@ -178,13 +186,35 @@ int Daemon::run() {
   if (!start_http()) return 1;
   gateway_->start();
   backend_.set(gateway_.get());
+  modbus::DeviceIdentity serial_identity = so.identity;
+  serial_identity.product = "drivegate Modbus gateway";
+  slaves_ = std::make_unique<SlaveListeners>(io_, clock_, backend_, serial_identity,
+                                             config_.server, log_);
+  if (!slaves_->start(config_.listeners)) {  // it logged which listener, and why
+    log_->critical("Modbus RTU / ASCII listener not started");
+    return 1;
+  }
   if (config_.mqtt.enabled) {
     mqtt_ = std::make_unique<mqtt::Northbound>(io_, config_.mqtt, DRIVEGATE_VERSION, log_);
     mqtt_->use(*gateway_);
   }
-  log_->info("serving {} devices on {} buses, Modbus TCP on {} listener(s), the first on port {}",
-             gateway_->devices().size(), config_.buses.size(), config_.listeners.size(),
-             server_->port());
+  if (server_->listener_count() > 0) {
+    log_->info("serving {} devices on {} buses, Modbus TCP on {} listener(s), the first on port {}",
+               gateway_->devices().size(), config_.buses.size(), server_->listener_count(),
+               server_->port());
+  } else {
+    log_->info("serving {} devices on {} buses, no Modbus TCP listener",
+               gateway_->devices().size(), config_.buses.size());
+  }
+  for (const auto& s : slaves_->serial()) {
+    history_->record(EventKind::listener, "", 0, fmt::format("Modbus listener {} started", s->name()),
+                     {{"listener", s->name()}, {"state", "open"}});
+  }
+  for (const auto& t : slaves_->tcp()) {
+    history_->record(EventKind::listener, "", 0,
+                     fmt::format("Modbus listener {} open on port {}", t->name(), t->port()),
+                     {{"listener", t->name()}, {"state", "open"}});
+  }
   for (std::size_t i = 0; i < server_->listener_count(); ++i) {
     history_->record(EventKind::listener, "", 0,
                     fmt::format("Modbus listener {} open on port {}",
@@ -228,7 +258,13 @@ void Daemon::reload() {
     const auto listeners = server_->reload_listeners(listener_options(config->listeners));
     for (const auto& e : listeners.errors) log_->error("listener {}", e);
     if (!listeners.errors.empty()) next.reset();
-    for (const auto& l : listeners.restart_needed) {
+    auto restart_listeners = listeners.restart_needed;
+    if (!listeners.errors.empty() || !next) {
+      // nothing changes
+    } else {
+      for (auto& s : slaves_->reload(config->listeners)) restart_listeners.push_back(std::move(s));
+    }
+    for (const auto& l : restart_listeners) {
       log_->warn("listener {}: takes effect at the next restart (listening sockets are bound once)",
                  l);
       restart.push_back("listener " + l);
@@ -237,7 +273,7 @@ void Daemon::reload() {
                       {{"listener", l}, {"state", "restart needed"}});
     }
     if (next) log_listener_changes(config_.listeners, config->listeners, *log_);
-    if (!listeners.restart_needed.empty()) config->listeners = config_.listeners;
+    if (!restart_listeners.empty()) config->listeners = config_.listeners;
   }
   if (!next) {
     log_->error("new configuration refused: still running the previous one");
@@ -310,6 +346,7 @@ void Daemon::shutdown() {
     if (mqtt_) mqtt_->stop();
     if (http_) http_->close();
     server_->close();
+    slaves_->close();
     gateway_->stop();
     status_timer_.cancel();
     watchdog_timer_.cancel();

@@ -25,6 +25,7 @@
 #include "modbus/server.h"
 #include "mqtt/northbound.h"
 #include "net/clock.h"
+#include "slave_listeners.h"
 #include "status_content.h"
 #include "systemd_notifier.h"
 
@@ -80,6 +81,7 @@ class Daemon {
   std::unique_ptr<Gateway> gateway_;
   BackendSwitch backend_;
   std::unique_ptr<modbus::Server> server_;
+  std::unique_ptr<SlaveListeners> slaves_;  // the RTU / ASCII listeners (serial and TCP)
   std::unique_ptr<StatusContent> content_;
   std::unique_ptr<http::HttpServer> http_;
   std::unique_ptr<mqtt::Northbound> mqtt_;  // after gateway_: goes first, unhooking its devices

@@ -50,13 +50,15 @@ StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modb
                              const std::unique_ptr<mqtt::Northbound>& mqtt,
                              const std::unique_ptr<http::HttpServer>& http,
                              const std::vector<std::string>& restart_needed,
-                             const History& history)
+                             const History& history,
+                             const std::unique_ptr<SlaveListeners>& serial)
     : gateway_(gateway),
       server_(server),
       mqtt_(mqtt),
       http_(http),
       restart_needed_(restart_needed),
       history_(history),
+      slaves_(serial),
       started_unix_(unix_now()) {}
 
 StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
@@ -75,6 +77,28 @@ StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
   if (http_) {
     v.http = http_->stats();
     v.http_clients = http_->client_count();
+  }
+  if (slaves_) {
+    for (const auto& l : slaves_->tcp()) {
+      v.serial.push_back({.port = l->name(),
+                          .framing = l->options().framing == modbus_serial::Framing::rtu ? "rtu"
+                                                                                         : "ascii",
+                          .access = l->policy().session.access,
+                          .open = true,
+                          .bytes_received = l->bytes_received(),
+                          .reopens = 0,
+                          .counters = l->counters()});
+    }
+    for (const auto& l : slaves_->serial()) {
+      v.serial.push_back({.port = l->options().line.port,
+                          .framing = l->options().framing == modbus_serial::Framing::rtu ? "rtu"
+                                                                                         : "ascii",
+                          .access = l->policy().session.access,
+                          .open = l->open(),
+                          .bytes_received = l->bytes_received(),
+                          .reopens = l->reopens(),
+                          .counters = l->counters()});
+    }
   }
   return v;
 }

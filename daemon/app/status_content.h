@@ -12,6 +12,7 @@
 #include "http/http_server.h"
 #include "modbus/server.h"
 #include "mqtt/northbound.h"
+#include "slave_listeners.h"
 
 namespace drivegate {
 
@@ -22,7 +23,8 @@ class StatusContent final : public http::Content {
   StatusContent(const std::unique_ptr<Gateway>& gateway, const modbus::Server& server,
                 const std::unique_ptr<mqtt::Northbound>& mqtt,
                 const std::unique_ptr<http::HttpServer>& http,
-                const std::vector<std::string>& restart_needed, const History& history);
+                const std::vector<std::string>& restart_needed, const History& history,
+                const std::unique_ptr<SlaveListeners>& serial);
   std::string status_json() override;
   std::optional<std::string> events_json(const http::EventsQuery& query) override;
   std::string trends_json(const http::TrendsQuery& query) override;
@@ -41,6 +43,7 @@ class StatusContent final : public http::Content {
   const std::unique_ptr<http::HttpServer>& http_;
   const std::vector<std::string>& restart_needed_;
   const History& history_;
+  const std::unique_ptr<SlaveListeners>& slaves_;  // empty until the daemon made them
   double started_unix_;
 };
 

@@ -31,13 +31,6 @@ struct ListenAddress {
 };
 
 // One [[listener]], or the one listener [server] listen declares.
-struct ListenerConfig {
-  modbus::ListenerOptions options;
-  // Declared by [server] listen (or by nothing: the default 0.0.0.0:502): plain TCP, every
-  // address, access maintain, as before listeners existed.
-  bool from_server_listen = false;
-  int line = 0;
-};
 
 // [http]: the status page, its JSON and /metrics. Off unless the file has [http].
 struct HttpConfig {
@@ -99,6 +92,38 @@ struct BusConfig {
   Millis network_delay{0};  // added to every reply timeout (a serial device server's latency)
   int line = 0;             // where it was declared, for messages
   friend bool operator==(const BusConfig&, const BusConfig&) = default;
+};
+
+// What a listener's frames are (docs/serial-listeners.md): Modbus TCP's MBAP, or the serial
+// line's RTU or ASCII, on a serial port or on TCP.
+enum class ListenerFraming : std::uint8_t { mbap, rtu, ascii };
+inline constexpr std::array<std::string_view, 3> kListenerFramingNames = {"mbap", "rtu", "ascii"};
+constexpr std::string_view to_string(ListenerFraming f) {
+  return kListenerFramingNames.at(static_cast<std::size_t>(f));
+}
+// When a serial master's write is answered (write_reply).
+enum class WriteReply : std::uint8_t {
+  confirmed,  // when the drive took it (or the exception when it did not), as on TCP
+  accepted,   // as soon as it is validated and queued; the register image then shows the truth
+};
+inline constexpr std::array<std::string_view, 2> kWriteReplyNames = {"confirmed", "accepted"};
+constexpr std::string_view to_string(WriteReply w) {
+  return kWriteReplyNames.at(static_cast<std::size_t>(w));
+}
+
+struct ListenerConfig {
+  modbus::ListenerOptions options;  // a TCP listener's (address, policy); a serial one's policy
+  ListenerFraming framing = ListenerFraming::mbap;
+  // A serial listener (`port` instead of `address`): the master's line, with a bus's settings.
+  std::optional<BusConfig> serial;
+  // RTU / ASCII listeners only.
+  WriteReply write_reply = WriteReply::confirmed;
+  bool broadcast = false;              // apply writes sent to address 0
+  Millis ascii_timeout{1000};          // Serial Line 2.5.2.1: between two characters of a frame
+  // Declared by [server] listen (or by nothing: the default 0.0.0.0:502): plain TCP, every
+  // address, access maintain, as before listeners existed.
+  bool from_server_listen = false;
+  int line = 0;
 };
 
 // What the gateway does to a drive whose PLC stopped writing (docs/safety.md).

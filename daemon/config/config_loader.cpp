@@ -13,6 +13,7 @@
 #include "base/read_file.h"
 #include "mqtt_config.h"
 #include "plugin/adapter_options.h"
+#include "line_config.h"
 #include "port_address.h"
 #include "server_config.h"
 #include "drivegate/toml_reader.h"
@@ -42,9 +43,6 @@ void check_name(const toml::node* at, const std::string& key, const std::string&
                    " letters, digits, '_', '-' or '.', starting with a letter or a digit");
   }
 }
-
-constexpr std::array<std::uint32_t, 12> kBauds = {300,   600,   1200,  2400,   4800,   9600,
-                                                  19200, 38400, 57600, 115200, 230400, 460800};
 
 }  // namespace
 
@@ -140,16 +138,6 @@ Options read_options(const AdapterDescriptor& adapter, const toml::table* table,
   return options;
 }
 
-// Which line settings a [[bus]] set itself; the rest come from its devices' adapter.
-struct LineGiven {
-  bool baud = false;
-  bool parity = false;
-  bool data_bits = false;
-  bool stop_bits = false;
-  bool echo = false;
-  [[nodiscard]] bool framing() const { return baud && parity && data_bits && stop_bits; }
-};
-
 std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnostics& diag) {
   std::vector<LineGiven> given;
   const auto* buses = array_of_tables(root, "bus", diag);
@@ -164,50 +152,7 @@ std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnost
     bus.line = line_of(t);
     bus.name = r.string("name", true).value_or("");
     check_name(r.node("name"), prefix + ".name", bus.name, diag);
-    std::optional<PortAddress> address;
-    if (auto port = r.string("port", true)) {
-      bus.port = *port;
-      std::string error;
-      address = parse_port_address(*port, error);
-      if (!address) diag.error(r.node("port"), prefix + ".port", error);
-    }
-    if (auto v = r.integer("network_delay_ms", 0, 10'000, false)) {
-      bus.network_delay = Millis(*v);
-    }
-    if (auto v = r.integer("baud", 1, 4'000'000, false)) {
-      if (std::find(kBauds.begin(), kBauds.end(), *v) == kBauds.end()) {
-        diag.error(r.node("baud"), prefix + ".baud",
-                   "not a standard rate (300, 600, 1200, 2400, 4800, 9600, 19200, 38400, "
-                   "57600, 115200, 230400, 460800)");
-      } else {
-        bus.baud = static_cast<std::uint32_t>(*v);
-      }
-    }
-    if (auto p = r.string("parity", false)) {
-      if (auto parity = parse_parity(*p)) {
-        bus.parity = *parity;
-      } else {
-        diag.error(r.node("parity"), prefix + ".parity", "must be none, even or odd");
-      }
-    }
-    LineGiven g;
-    g.baud = r.node("baud") != nullptr;
-    g.parity = r.node("parity") != nullptr;
-    if (auto v = r.integer("data_bits", 5, 8, false)) bus.data_bits = static_cast<std::uint8_t>(*v);
-    if (auto v = r.integer("stop_bits", 1, 2, false)) bus.stop_bits = static_cast<std::uint8_t>(*v);
-    g.data_bits = r.node("data_bits") != nullptr;
-    g.stop_bits = r.node("stop_bits") != nullptr;
-    const auto echo = r.boolean("echo");
-    bus.echo = echo.value_or(false);
-    g.echo = echo.has_value();
-    given.push_back(g);
-    bus.rs485 = r.boolean("rs485").value_or(false);
-    if (bus.rs485 && address && address->network()) {
-      diag.error(r.node("rs485"), prefix + ".rs485",
-                 "applies to a local serial port only (a device server drives its own RS-485 "
-                 "transceiver)");
-    }
-    if (auto v = r.integer("reopen_max_ms", 100, 600'000, false)) bus.reopen_max = Millis(*v);
+    given.push_back(read_line(r, prefix, bus, diag));
     if (bus.name.empty() && t.get("name") != nullptr) diag.error(&t, prefix + ".name", "empty");
     for (const auto& other : cfg.buses) {
       if (!bus.name.empty() && other.name == bus.name) {
@@ -459,6 +404,7 @@ ConfigResult parse_config(std::string_view text, const std::string& source_name,
   read_http(root, cfg, diag);
   read_history(root, cfg, diag);
   const auto given = read_buses(root, cfg, diag);
+  check_serial_listeners(cfg, diag);
   read_devices(root, cfg, plugins, diag);
   read_mqtt(root, cfg, diag);
   if (cfg.devices.empty() && diag.errors.empty()) {

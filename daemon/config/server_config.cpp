@@ -4,6 +4,7 @@
 #include <charconv>
 
 #include "config_loader.h"
+#include "line_config.h"
 #include "net/listen_host.h"
 
 namespace drivegate {
@@ -130,16 +131,99 @@ modbus::RoleMap read_roles(const toml::node& n, const std::string& key, Diagnost
   return roles;
 }
 
+// framing, and the keys only an RTU / ASCII listener has.
+void read_framing(TableReader& r, ListenerConfig& l, Diagnostics& diag) {
+  const bool serial = r.node("port") != nullptr;
+  if (const auto* n = r.node("framing")) {
+    const auto* s = n->as_string();
+    const auto i = s != nullptr ? index_of(kListenerFramingNames, s->get()) : std::nullopt;
+    if (!i) {
+      diag.error(n, r.qualified("framing"), "must be " + one_of(kListenerFramingNames));
+    } else {
+      l.framing = static_cast<ListenerFraming>(*i);
+      if (serial && l.framing == ListenerFraming::mbap) {
+        diag.error(n, r.qualified("framing"),
+                   "a serial line carries \"rtu\" or \"ascii\" frames (\"mbap\" is Modbus TCP's)");
+      }
+    }
+  } else if (serial) {
+    l.framing = ListenerFraming::rtu;
+  }
+  const bool slave = l.framing != ListenerFraming::mbap;
+  for (const char* key : {"write_reply", "broadcast", "ascii_timeout_ms"}) {
+    if (!slave && r.node(key) != nullptr) {
+      diag.error(r.node(key), r.qualified(key),
+                 "only for a listener with framing = \"rtu\" or \"ascii\" (Modbus TCP answers "
+                 "every write when the drive took it, and has no broadcast)");
+    }
+  }
+  if (const auto* n = r.node("write_reply")) {
+    const auto* s = n->as_string();
+    const auto i = s != nullptr ? index_of(kWriteReplyNames, s->get()) : std::nullopt;
+    if (i) {
+      l.write_reply = static_cast<WriteReply>(*i);
+    } else {
+      diag.error(n, r.qualified("write_reply"),
+                 "must be " + one_of(kWriteReplyNames) +
+                     " (answer a write when the drive took it, or once it is validated and queued)");
+    }
+  }
+  l.broadcast = r.boolean("broadcast").value_or(false);
+  if (auto v = r.integer("ascii_timeout_ms", 10, 60'000, false)) {
+    l.ascii_timeout = Millis(*v);
+    if (l.framing != ListenerFraming::ascii) {
+      diag.error(r.node("ascii_timeout_ms"), r.qualified("ascii_timeout_ms"),
+                 "only for framing = \"ascii\" (RTU frames end at 3.5 characters of silence)");
+    }
+  }
+}
+
+// A serial listener: `port` and the line's settings, as a bus's (config/line_config.h). Modbus
+// serial lines default to even parity (Serial Line 2.5.1), and ASCII to 7 data bits (2.5.2).
+void read_serial(TableReader& r, const std::string& prefix, ListenerConfig& l,
+                 Diagnostics& diag) {
+  if (r.node("address") != nullptr) {
+    diag.error(r.node("address"), r.qualified("address"),
+               "give address (a TCP listener) or port (a serial one), not both");
+  }
+  for (const char* key : {"allow", "max_clients", "tls", "roles", "tls_handshakes_per_s"}) {
+    if (r.node(key) != nullptr) {
+      diag.error(r.node(key), r.qualified(key),
+                 "a serial listener has no network clients: whoever is on its line is its master");
+    }
+  }
+  BusConfig line;
+  line.parity = Parity::even;
+  if (l.framing == ListenerFraming::ascii) line.data_bits = 7;
+  read_line(r, prefix, line, diag);
+  line.line = l.line;
+  if (line.baud == 0 && line.port.find("://") == std::string::npos) {
+    diag.error(r.node("port"), r.qualified("baud"), "a serial listener's port needs its baud rate");
+  }
+  if (l.framing == ListenerFraming::rtu && line.data_bits != 8) {
+    diag.error(r.node("data_bits"), r.qualified("data_bits"),
+               "RTU frames are 8 data bits (Serial Line 2.5.1)");
+  }
+  line.name = "listener " + line.port;
+  l.options.port = 0;
+  l.options.host = "";
+  l.serial = std::move(line);
+}
+
 ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostics& diag) {
   const std::string prefix = "listener[" + std::to_string(index) + "]";
   TableReader r(t, prefix, diag);
   r.expect({"address", "allow", "access", "word_order", "tls", "roles", "max_clients",
-            "tls_handshakes_per_s"});
+            "tls_handshakes_per_s", "framing", "write_reply", "broadcast", "ascii_timeout_ms",
+            "port", "baud", "parity", "data_bits", "stop_bits", "rs485", "reopen_max_ms"});
   ListenerConfig l;
   l.line = line_of(t);
   auto& policy = l.options.policy;
   policy.access = AccessLevel::read;  // nothing may write unless the file says so
-  if (auto address = r.string("address", true)) {
+  read_framing(r, l, diag);
+  if (r.node("port") != nullptr) {
+    read_serial(r, prefix, l, diag);
+  } else if (auto address = r.string("address", true)) {
     if (auto at = parse_listen(*address); at && !bindable(at->host)) {
       diag.error(r.node("address"), r.qualified("address"),
                  "\"" + at->host +
@@ -179,6 +263,11 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
     }
     policy.handshakes = net::RateLimit::per_second_in_bursts_of_two(static_cast<unsigned>(*v));
   }
+  if (l.framing != ListenerFraming::mbap && policy.tls) {
+    diag.error(r.node("tls"), r.qualified("tls"),
+               "Modbus/TCP Security carries Modbus TCP (MBAP) frames: a TLS listener's framing is "
+               "\"mbap\"");
+  }
   if (const auto* n = r.node("roles")) {
     auto roles = read_roles(*n, r.qualified("roles"), diag);
     if (!r.node("tls")) {
@@ -193,6 +282,7 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
 
 // Whoever can reach this listener may write: worth a line in --check-config and the journal.
 void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
+  if (l.serial) return;  // its line's master is whoever the wiring says
   const auto& p = l.options.policy;
   const bool can_write =
       p.access != AccessLevel::read ||
@@ -265,7 +355,8 @@ void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
   if (cfg.listeners.empty()) cfg.listeners.push_back(server_listener({"0.0.0.0", 502}, 0));
   for (std::size_t i = 0; i < cfg.listeners.size(); ++i) {
     const auto& a = cfg.listeners[i].options;
-    for (std::size_t j = 0; j < i; ++j) {
+    for (std::size_t j = 0; j < i && !cfg.listeners[i].serial; ++j) {
+      if (cfg.listeners[j].serial) continue;
       const auto& b = cfg.listeners[j].options;
       // Two listeners on one port clash when they name the same address, or when either is
       // every address ([::] is dual stack: it takes the IPv4 port too).
@@ -278,6 +369,28 @@ void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
       }
     }
     warn_open_writes(cfg.listeners[i], diag);
+  }
+}
+
+void check_serial_listeners(const Config& cfg, Diagnostics& diag) {
+  for (std::size_t i = 0; i < cfg.listeners.size(); ++i) {
+    const auto& l = cfg.listeners[i];
+    if (!l.serial) continue;
+    for (const auto& bus : cfg.buses) {
+      if (bus.port == l.serial->port) {
+        diag.error_at(l.line, "listener",
+                      "port " + l.serial->port + " is bus '" + bus.name + "''s (line " +
+                          std::to_string(bus.line) +
+                          "): a line is either drives' (polled by drivegate) or a master's");
+      }
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (cfg.listeners[j].serial && cfg.listeners[j].serial->port == l.serial->port) {
+        diag.error_at(l.line, "listener",
+                      "port " + l.serial->port + " is already the listener's on line " +
+                          std::to_string(cfg.listeners[j].line));
+      }
+    }
   }
 }
 
@@ -326,6 +439,7 @@ void read_http(const toml::table& root, Config& cfg, Diagnostics& diag) {
     cfg.http.requests_per_s = static_cast<unsigned>(*v);
   }
   for (const auto& l : cfg.listeners) {
+    if (l.serial) continue;
     if (l.options.port == cfg.http.listen.port && l.options.port != 0 &&
         (l.options.host == cfg.http.listen.host || wildcard(l.options.host) ||
          wildcard(cfg.http.listen.host))) {

@@ -72,6 +72,8 @@ class Gateway {
   // Whether the device at `unit` is a pass-through one (Device::forwards); then every request
   // for it goes to forward() (Device::forward) instead of read() and write().
   [[nodiscard]] bool forwards(std::uint8_t unit) const;
+  // Whether a device has `unit` as its unit id.
+  [[nodiscard]] bool serves(std::uint8_t unit) const { return units_[unit] != nullptr; }
   Outcome forward(const Session& session, std::uint8_t unit, std::span<const std::uint8_t> pdu,
                   ForwardDone done);
 

@@ -16,6 +16,8 @@ namespace drivegate {
 enum class SourceKind : std::uint8_t {
   modbus,      // a Modbus TCP client on a plain listener
   modbus_tls,  // a Modbus/TCP Security client (its certificate's subject and role)
+  modbus_serial,   // a Modbus RTU / ASCII master on a serial listener's line
+  modbus_rtu_tcp,  // a client sending Modbus RTU frames over TCP
   mqtt,        // a Sparkplug DCMD through the broker
   cli,         // `drivegate write` on the line, daemon stopped
   failsafe,    // the PLC-loss failsafe's own stop (docs/safety.md)
@@ -24,8 +26,9 @@ enum class SourceKind : std::uint8_t {
 };
 
 // Their names in the journal (SOURCE=), the event history and the metrics' `source` label.
-inline constexpr std::array<std::string_view, 7> kSourceKindNames = {
-    "modbus", "modbus_tls", "mqtt", "cli", "failsafe", "shutdown", "gateway"};
+inline constexpr std::array<std::string_view, 9> kSourceKindNames = {
+    "modbus", "modbus_tls", "modbus_serial", "modbus_rtu_tcp", "mqtt", "cli",
+    "failsafe",   "shutdown",   "gateway"};
 constexpr std::string_view to_string(SourceKind k) {
   return kSourceKindNames.at(static_cast<std::size_t>(k));
 }

@@ -81,6 +81,11 @@ class Backend {
   virtual void refused_write(const Session& /*session*/, std::uint8_t /*unit*/,
                              std::span<const std::uint8_t> /*request*/) {}
 
+  // Whether a device answers at `unit`. A serial line is shared with other slaves, so a serial
+  // listener stays silent for a unit nobody here serves (MODBUS over Serial Line 2.2), where TCP
+  // answers 0x0A.
+  [[nodiscard]] virtual bool serves(std::uint8_t /*unit*/) const { return true; }
+
   // Pass-through: whether every request for `unit` is to be forwarded to its device as it is (a
   // modbus adapter device with passthrough = true) instead of served by read() and write().
   [[nodiscard]] virtual bool forwards(std::uint8_t /*unit*/) const { return false; }

@@ -495,6 +495,61 @@ void listener_metrics(Writer& w, const StatusView& view) {
   }
 }
 
+// The RTU / ASCII listeners on serial lines (docs/serial-listeners.md), when there are any.
+void serial_metrics(Writer& w, const StatusView& view) {
+  if (view.serial.empty()) return;
+  std::vector<std::string> labels;
+  labels.reserve(view.serial.size());
+  for (const auto& l : view.serial) {
+    std::string& label = labels.emplace_back("port=\"");
+    append_escaped(label, l.port);
+    label += '"';
+  }
+  const auto family = [&](std::string_view name, std::string_view type, std::string_view help,
+                          auto f) {
+    w.family(name, type, help);
+    for (std::size_t i = 0; i < view.serial.size(); ++i) {
+      w.sample(name, labels[i], static_cast<double>(f(view.serial[i])));
+    }
+  };
+  using L = SerialListenerView;
+  family("drivegate_serial_listener_open", "gauge", "1 while the listener's port is open",
+         [](const L& l) { return l.open ? 1 : 0; });
+  family("drivegate_serial_listener_reopens_total", "counter", "times the port was lost",
+         [](const L& l) { return l.reopens; });
+  family("drivegate_serial_listener_received_bytes_total", "counter", "bytes the line carried in",
+         [](const L& l) { return l.bytes_received; });
+  family("drivegate_serial_listener_frames_total", "counter",
+         "frames seen on the line, any address, CRC good or not (FC 08 0x0B)",
+         [](const L& l) { return l.counters.bus_messages; });
+  family("drivegate_serial_listener_crc_errors_total", "counter",
+         "frames whose CRC or LRC did not check (FC 08 0x0C)",
+         [](const L& l) { return l.counters.bus_comm_errors; });
+  family("drivegate_serial_listener_requests_total", "counter",
+         "requests for our units or broadcast, processed (FC 08 0x0E)",
+         [](const L& l) { return l.counters.server_messages; });
+  family("drivegate_serial_listener_exceptions_total", "counter",
+         "exception responses sent (FC 08 0x0D)",
+         [](const L& l) { return l.counters.bus_exception_errors; });
+  family("drivegate_serial_listener_not_answered_total", "counter",
+         "requests for us not answered: broadcasts, and replies the master gave up on (FC 08 0x0F)",
+         [](const L& l) { return l.counters.server_no_response; });
+  family("drivegate_serial_listener_broken_frames_total", "counter",
+         "frames cut by a gap, and noise: discarded",
+         [](const L& l) { return l.counters.broken_frames; });
+  family("drivegate_serial_listener_overruns_total", "counter",
+         "runs longer than the longest frame (FC 08 0x12)",
+         [](const L& l) { return l.counters.bus_char_overruns; });
+  family("drivegate_serial_listener_other_units_total", "counter",
+         "good requests for a unit nobody here serves (other slaves on the line)",
+         [](const L& l) { return l.counters.other_units; });
+  family("drivegate_serial_listener_broadcasts_total", "counter", "requests to address 0",
+         [](const L& l) { return l.counters.broadcasts; });
+  family("drivegate_serial_listener_broadcasts_refused_total", "counter",
+         "broadcast writes not applied (broadcast = false)",
+         [](const L& l) { return l.counters.broadcasts_refused; });
+}
+
 // The Sparkplug B northbound ([mqtt], docs/mqtt.md).
 void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
   w.single("drivegate_mqtt_connected", "gauge", "1 while the session with the broker is up",
@@ -623,6 +678,7 @@ void metrics_text(const StatusView& view, std::string& out) {
   if (view.history != nullptr) history_metrics(w, *view.history);
   bus_metrics(w, view);
   listener_metrics(w, view);
+  serial_metrics(w, view);
   if (view.mqtt != nullptr) mqtt_metrics(w, *view.mqtt);
   if (view.http) http_metrics(w, *view.http, view.http_clients);
 }

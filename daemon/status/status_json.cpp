@@ -156,6 +156,26 @@ void listener_json(std::string& out, const modbus::Server& server, std::size_t i
                  s.writes_denied);
 }
 
+void serial_json(std::string& out, const SerialListenerView& l) {
+  const auto& c = l.counters;
+  out += "{\"port\": ";
+  append_json_string(out, l.port);
+  out += ", \"framing\": ";
+  append_json_string(out, l.framing);
+  out += ", \"access\": ";
+  append_json_string(out, to_string(l.access));
+  fmt::format_to(std::back_inserter(out),
+                 ", \"open\": {}, \"reopens\": {}, \"bytes_received\": {}, \"frames\": {}, "
+                 "\"crc_errors\": {}, \"exceptions\": {}, \"requests\": {}, "
+                 "\"not_answered\": {}, \"busy\": {}, \"overruns\": {}, \"broken_frames\": {}, "
+                 "\"other_units\": {}, \"broadcasts\": {}, \"broadcasts_refused\": {}, "
+                 "\"accepted_then_failed\": {}}}",
+                 boolean(l.open), l.reopens, l.bytes_received, c.bus_messages, c.bus_comm_errors,
+                 c.bus_exception_errors, c.server_messages, c.server_no_response, c.server_busy,
+                 c.bus_char_overruns, c.broken_frames, c.other_units, c.broadcasts,
+                 c.broadcasts_refused, c.write_timeouts);
+}
+
 void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
   out += ",\n\"mqtt\": {\"broker\": ";
   append_json_string(out, m.broker);
@@ -213,6 +233,11 @@ void status_json(const StatusView& view, std::string& out) {
   for (std::size_t i = 0; i < view.server.listener_count(); ++i) {
     out += i == 0 ? "\n" : ",\n";
     listener_json(out, view.server, i);
+  }
+  out += "],\n\"serial_listeners\": [";
+  for (std::size_t i = 0; i < view.serial.size(); ++i) {
+    out += i == 0 ? "\n" : ",\n";
+    serial_json(out, view.serial[i]);
   }
   const auto s = view.server.stats();
   fmt::format_to(std::back_inserter(out),

@@ -23,10 +23,22 @@
 #include "history/command_audit.h"
 #include "history/event_log.h"
 #include "http/http_stats.h"
+#include "modbus/diagnostics.h"
 #include "modbus/server.h"
 #include "mqtt/northbound_status.h"
 
 namespace drivegate {
+
+// A serial listener as the documents show it (docs/serial-listeners.md).
+struct SerialListenerView {
+  std::string port;     // its line: a device, or tcp:// / rfc2217://
+  std::string framing;  // "rtu" or "ascii"
+  AccessLevel access = AccessLevel::read;
+  bool open = false;
+  std::uint64_t bytes_received = 0;
+  std::uint64_t reopens = 0;
+  modbus::SerialCounters counters;
+};
 
 struct StatusView {
   Gateway& gateway;
@@ -43,6 +55,7 @@ struct StatusView {
   // a document rendered without them.
   const CommandCounts* commands = nullptr;
   const EventLog* history = nullptr;
+  std::vector<SerialListenerView> serial{};  // the RTU / ASCII listeners on serial lines
 };
 
 // Seconds of line time the bus's bytes took (sent and received, an echo once): its rate is the

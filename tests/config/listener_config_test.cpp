@@ -147,8 +147,12 @@ TEST_F(ListenerConfig, MistakesAreNamedWithTheirLine) {
   EXPECT_THAT(errors("[[listener]]\naddress = \"plc.example:502\"\n"),
               ElementsAre(AllOf(HasSubstr("listener[0].address"),
                                 HasSubstr("not a numeric IPv4 or IPv6 address"))));
-  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nport = 5\n"),
-              ElementsAre(AllOf(HasSubstr("listener[0].port"), HasSubstr("unknown key"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nport = \"/dev/ttyS1\"\nbaud = 9600\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].address"),
+                                HasSubstr("give address (a TCP listener) or port (a serial one), "
+                                          "not both"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nbaudrate = 5\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].baudrate"), HasSubstr("unknown key"))));
 }
 
 // Issue 24: each listener's own slots, and the TLS handshake rate; the defaults, the bounds and

@@ -21,6 +21,7 @@
   const cards = new Map();      // device name -> {el, f: {field: element}, pointNames}
   const busRows = new Map();
   const lisRows = new Map();
+  const serRows = new Map();
   const prevBusy = new Map();   // bus name -> {busy, now}: line utilisation between two polls
   let lastGood = null;          // daemon's `now` and local time of the last good answer
   let failingSince = null;     // {at: local ms, reason} while the daemon does not answer
@@ -222,7 +223,7 @@
     for (const name of fields) {
       const td = el("td", {"data-field": name});
       if (name === "name" || name === "address") td.className = "name";
-      if (["port", "open", "tls", "access", "word_order", "allow", "trend"].includes(name)) td.classList.add("l");
+      if (["port", "open", "tls", "access", "word_order", "allow", "trend", "framing"].includes(name)) td.classList.add("l");
       if (["name", "port", "allow"].includes(name)) td.classList.add("clip");
       f[name] = td;
       tr.append(td);
@@ -337,6 +338,27 @@
         "tls_handshake_failures", "tls_handshakes_limited", "writes_denied"]) {
         set(f[k], num(l[k]));
         if (!["clients", "max_clients", "accepted", "evicted"].includes(k)) {
+          f[k].className = l[k] ? "nz" : "";
+        }
+      }
+    }
+    // The RTU / ASCII listeners (docs/serial-listeners.md): each <tr data-serial="PORT">.
+    const serial = s.serial_listeners || [];
+    $("serial").hidden = !serial.length;
+    const serCounts = ["frames", "requests", "crc_errors", "exceptions", "not_answered",
+      "broken_frames", "other_units", "broadcasts", "broadcasts_refused"];
+    syncRows(serRows, document.querySelector("#serial-listeners tbody"), serial, (l) => l.port,
+      (l) => makeRow("data-serial", l.port, ["port", "framing", "access", "open"].concat(serCounts)));
+    for (const l of serial) {
+      const f = serRows.get(l.port).f;
+      set(f.port, l.port);
+      set(f.framing, l.framing);
+      set(f.access, l.access);
+      set(f.open, l.open ? "yes" : "no");
+      f.open.classList.toggle("nz", !l.open);
+      for (const k of serCounts) {
+        set(f[k], num(l[k]));
+        if (["crc_errors", "not_answered", "broken_frames", "broadcasts_refused"].includes(k)) {
           f[k].className = l[k] ? "nz" : "";
         }
       }

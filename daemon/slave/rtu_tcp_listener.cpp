@@ -1,0 +1,215 @@
+#include "rtu_tcp_listener.h"
+
+#include <boost/asio/write.hpp>
+
+namespace drivegate::slave {
+
+namespace asio = boost::asio;
+using asio::ip::tcp;
+
+// One client: its socket, its host, what it has yet to be sent.
+class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
+ public:
+  Client(RtuTcpListener& listener, tcp::socket socket, asio::ip::address address,
+         std::string peer)
+      : listener_(listener.weak_from_this()),
+        socket_(std::move(socket)),
+        address_(std::move(address)),
+        peer_(std::move(peer)),
+        idle_(socket_.get_executor(), listener.clock_),
+        idle_timeout_(listener.options_.idle_timeout),
+        clock_(listener.clock_) {
+    host_ = std::make_shared<SlaveHost>(
+        listener.io_, listener.clock_, listener.backend_, listener.options_.identity,
+        listener.options_.framing, modbus::Delimit::length, modbus::LineTiming{},
+        listener.client_policy(peer_), listener.counters_, listener.log_,
+        listener.name_ + " client " + peer_, [this](Bytes frame) { send(std::move(frame)); });
+  }
+
+  void start() {
+    last_request_ = clock_.now();
+    arm_idle();
+    read();
+  }
+  void close() {
+    if (closed_) return;
+    closed_ = true;
+    host_->stop();
+    idle_.cancel();
+    boost::system::error_code ignored;
+    socket_.shutdown(tcp::socket::shutdown_both, ignored);
+    socket_.close(ignored);
+  }
+  void set_policy(std::shared_ptr<const SlavePolicy> p) { host_->set_policy(std::move(p)); }
+  [[nodiscard]] const std::string& peer() const { return peer_; }
+  [[nodiscard]] const asio::ip::address& address() const { return address_; }
+  // Closed by the listener (a reload took its address off the allow list).
+  void drop() { gone(); }
+
+ private:
+  void read() {
+    socket_.async_read_some(asio::buffer(rx_),
+                            [self = shared_from_this()](const boost::system::error_code& ec,
+                                                        std::size_t n) { self->on_read(ec, n); });
+  }
+  void on_read(const boost::system::error_code& ec, std::size_t n) {
+    if (closed_) return;
+    if (ec) {  // the client closed (or reset): a write in progress settles unanswered
+      gone();
+      return;
+    }
+    last_request_ = clock_.now();
+    if (auto l = listener_.lock()) l->bytes_received_ += n;
+    host_->receive(ByteView(rx_.data(), n));
+    if (!closed_) read();
+  }
+  void send(Bytes frame) {
+    if (closed_) return;
+    tx_.insert(tx_.end(), frame.begin(), frame.end());
+    flush();
+  }
+  void flush() {
+    if (writing_ || tx_.empty() || closed_) return;
+    writing_ = true;
+    inflight_ = std::move(tx_);
+    tx_.clear();
+    asio::async_write(socket_, asio::buffer(inflight_),
+                      [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+                        self->writing_ = false;
+                        if (ec) {
+                          self->gone();
+                          return;
+                        }
+                        self->flush();
+                      });
+  }
+  void arm_idle() {
+    if (idle_timeout_.count() == 0) return;
+    idle_.expires_at(last_request_ + idle_timeout_);
+    idle_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+      if (ec || self->closed_) return;
+      if (self->clock_.now() >= self->last_request_ + self->idle_timeout_ && !self->host_->busy()) {
+        self->gone();
+        return;
+      }
+      self->arm_idle();
+    });
+  }
+  void gone() {
+    if (closed_) return;
+    close();
+    if (auto l = listener_.lock()) {
+      l->acceptor_->left();
+      l->clients_.erase(shared_from_this());
+    }
+  }
+
+  std::weak_ptr<RtuTcpListener> listener_;
+  tcp::socket socket_;
+  asio::ip::address address_;
+  std::string peer_;
+  net::Timer idle_;
+  std::chrono::milliseconds idle_timeout_;
+  net::Clock& clock_;
+  std::shared_ptr<SlaveHost> host_;
+  std::array<std::uint8_t, 512> rx_{};
+  Bytes tx_;
+  Bytes inflight_;
+  net::TimePoint last_request_{};
+  bool writing_ = false;
+  bool closed_ = false;
+};
+
+RtuTcpListener::RtuTcpListener(asio::io_context& io, net::Clock& clock, modbus::Backend& backend,
+                               RtuTcpOptions options, std::shared_ptr<const SlavePolicy> policy,
+                               std::shared_ptr<spdlog::logger> log)
+    : io_(io),
+      clock_(clock),
+      backend_(backend),
+      options_(std::move(options)),
+      policy_(std::move(policy)),
+      log_(std::move(log)),
+      name_((options_.host.find(':') != std::string::npos ? "[" + options_.host + "]"
+                                                          : options_.host) +
+            ":" + std::to_string(options_.port) +
+            (options_.framing == modbus_serial::Framing::rtu ? " (rtu over tcp)"
+                                                             : " (ascii over tcp)")),
+      acceptor_(std::make_shared<net::Acceptor>(io, clock, log_, "modbus: " + name_,
+                                                options_.allow)) {}
+
+RtuTcpListener::~RtuTcpListener() { close(); }
+
+std::shared_ptr<const SlavePolicy> RtuTcpListener::client_policy(const std::string& peer) const {
+  auto p = std::make_shared<SlavePolicy>(*policy_);
+  p->session.source.client = peer;
+  return p;
+}
+
+std::error_code RtuTcpListener::listen() {
+  if (auto ec = acceptor_->bind(options_.host, options_.port, 128, net::AnyAddress::dual_stack)) {
+    log_->error("modbus: cannot listen on {}: {}", name_, ec.message());
+    return ec;
+  }
+  const auto session = policy_->session;
+  log_->info("modbus: listening on {}: access {}, {} word order, writes answered when {}{}",
+             name_, to_string(session.access), to_string(session.word_order),
+             policy_->write_reply == WriteReply::confirmed ? "the drive took them"
+                                                           : "validated and queued",
+             policy_->broadcast ? ", broadcast writes applied" : "");
+  acceptor_->start(
+      [weak = weak_from_this()](const asio::ip::address&) {
+        auto self = weak.lock();
+        if (!self || self->clients_.size() >= self->options_.max_clients) {
+          return net::Admission::refuse;
+        }
+        return net::Admission::take;
+      },
+      [weak = weak_from_this()](tcp::socket socket) {
+        auto self = weak.lock();
+        if (!self) return;
+        boost::system::error_code ec;
+        const auto ep = socket.remote_endpoint(ec);
+        std::string peer = ec ? std::string("?")
+                              : (ep.address().is_v6() ? "[" + ep.address().to_string() + "]"
+                                                      : ep.address().to_string()) +
+                                    ":" + std::to_string(ep.port());
+        socket.set_option(tcp::no_delay(true), ec);
+        auto c = std::make_shared<Client>(*self, std::move(socket), ep.address(), std::move(peer));
+        self->clients_.insert(c);
+        c->start();
+      });
+  return {};
+}
+
+void RtuTcpListener::close() {
+  if (closed_) return;
+  closed_ = true;
+  acceptor_->close();
+  const auto open = clients_;
+  clients_.clear();
+  for (const auto& c : open) c->close();
+}
+
+void RtuTcpListener::set_policy(std::shared_ptr<const SlavePolicy> policy, net::AllowList allow,
+                                std::size_t max_clients) {
+  policy_ = std::move(policy);
+  options_.max_clients = max_clients;
+  options_.allow = allow;
+  acceptor_->set_allow(std::move(allow));
+  const auto open = clients_;
+  for (const auto& c : open) {
+    if (!net::allowed(options_.allow, c->address())) {
+      log_->warn("modbus: {}: client {} closed: its address is no longer allowed", name_,
+                 c->peer());
+      c->drop();
+      continue;
+    }
+    c->set_policy(client_policy(c->peer()));
+  }
+}
+
+std::uint16_t RtuTcpListener::port() const {
+  return acceptor_->local_endpoint().port();
+}
+
+}  // namespace drivegate::slave

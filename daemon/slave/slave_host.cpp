@@ -1,0 +1,284 @@
+#include "slave_host.h"
+
+#include <boost/asio/post.hpp>
+
+namespace drivegate::slave {
+
+namespace asio = boost::asio;
+using modbus::Exception;
+using modbus::FramerEvent;
+
+namespace {
+
+constexpr std::uint8_t kDiagnostics = 0x08;  // Application Protocol 6.8: serial line only
+constexpr std::uint8_t kExceptionBit = 0x80;
+
+}  // namespace
+
+SlaveHost::SlaveHost(asio::io_context& io, net::Clock& clock, modbus::Backend& backend,
+                     modbus::DeviceIdentity identity, modbus_serial::Framing framing,
+                     modbus::Delimit delimit, modbus::LineTiming timing,
+                     std::shared_ptr<const SlavePolicy> policy, LineCounters& counters,
+                     std::shared_ptr<spdlog::logger> log, std::string name, Send send)
+    : io_(io),
+      clock_(clock),
+      backend_(backend),
+      dispatcher_(backend, std::move(identity)),
+      framing_(framing),
+      framer_(framing, delimit, timing),
+      policy_(std::move(policy)),
+      line_(counters),
+      counters_(counters.counts),
+      log_(std::move(log)),
+      name_(std::move(name)),
+      send_(std::move(send)),
+      timer_(io.get_executor(), clock) {}
+
+SlaveHost::~SlaveHost() = default;
+
+void SlaveHost::stop() {
+  stopped_ = true;
+  reset();
+}
+
+void SlaveHost::reset() {
+  framer_.reset();
+  due_.reset();
+  timer_.cancel();
+  timer_armed_ = false;
+  if (pending_ && !pending_->answered) ++counters_.server_no_response;
+  pending_.reset();  // its result, when it comes, finds no one (the audit trail has it)
+}
+
+void SlaveHost::receive(ByteView bytes) {
+  if (stopped_ || bytes.empty()) return;
+  // Anything the master sends after a request means it stopped waiting for that reply.
+  if (pending_ && !pending_->answered) superseded();
+  if (due_) {  // the line was to stay silent until our reply: the master did not wait for it
+    due_.reset();
+    ++counters_.server_no_response;
+  }
+  framer_.feed(bytes, clock_.now());
+  drain();
+}
+
+void SlaveHost::superseded() {
+  ++counters_.server_no_response;
+  if (auto held = late_log_.admit(clock_.now())) {
+    log_->warn("modbus: {}: the master sent again before unit {} answered (function 0x{:02X}); "
+               "that reply is dropped, never sent late (raise the master's response timeout, or "
+               "write_reply = \"accepted\"){}",
+               name_, pending_->unit, pending_->request.at(0), net::held_note(*held));
+  }
+  pending_.reset();
+}
+
+void SlaveHost::drain() {
+  while (auto e = framer_.next()) serve(*e);
+  arm();
+}
+
+void SlaveHost::serve(FramerEvent& e) {
+  switch (e.kind) {
+    case FramerEvent::Kind::bad_checksum:
+      ++counters_.bus_messages;
+      ++counters_.bus_comm_errors;
+      return;
+    case FramerEvent::Kind::overrun:
+      ++counters_.bus_char_overruns;
+      return;
+    case FramerEvent::Kind::broken:
+      ++counters_.broken_frames;
+      return;
+    case FramerEvent::Kind::request:
+      break;
+  }
+  ++counters_.bus_messages;
+  const auto& adu = e.adu;
+  if (adu.address == modbus_serial::kBroadcast) {
+    serve_broadcast(adu);
+    return;
+  }
+  const std::uint8_t unit = adu.address;
+  // Several slaves may share the line: only our own unit ids are answered (Serial Line 2.2).
+  if (!backend_.serves(unit)) {
+    ++counters_.other_units;
+    return;
+  }
+  ++counters_.server_messages;
+  if (pending_) {  // a request while one is in progress: receive() already gave that one up
+    pending_.reset();
+  }
+  const std::span<const std::uint8_t> pdu = adu.pdu;
+  const Session& session = policy_->session;
+  if (pdu[0] == kDiagnostics && !dispatcher_.forwards(unit)) {
+    const std::size_t n = modbus::diagnostics(pdu, line_.counts, line_.cleared, out_);
+    reply(unit, std::span(out_).first(n), e.reply_at);
+    return;
+  }
+  if (!dispatcher_.answers_later(unit, pdu[0])) {
+    const auto r = dispatcher_.handle(session, unit, pdu, out_, {});
+    reply(unit, std::span(out_).first(r.size), e.reply_at);
+    return;
+  }
+  Pending p;
+  p.generation = ++generation_;
+  p.unit = unit;
+  p.request.assign(pdu.begin(), pdu.end());
+  p.forwarded = dispatcher_.forwards(unit);
+  p.reply_at = e.reply_at;
+  pending_ = std::move(p);
+  const auto generation = generation_;
+  // `done` may fire inside handle(): on_done defers to the event loop.
+  std::weak_ptr<SlaveHost> weak = weak_from_this();
+  modbus::Dispatcher::Result r;
+  if (pending_->forwarded) {
+    r = dispatcher_.forward(session, unit, pdu, out_,
+                            [weak, generation](Exception x, std::span<const std::uint8_t> reply) {
+                              if (auto self = weak.lock()) self->on_done(generation, x, reply);
+                            });
+  } else {
+    r = dispatcher_.handle(session, unit, pdu, out_, [weak, generation](Exception x) {
+      if (auto self = weak.lock()) self->on_done(generation, x, {});
+    });
+  }
+  if (r.denied) {
+    if (auto held = denied_log_.admit(clock_.now())) {
+      log_->warn("modbus: {}: write (function 0x{:02X}, unit {}) beyond its access level \"{}\": "
+                 "refused with exception 01{}",
+                 name_, pdu[0], unit, to_string(session.access), net::held_note(*held));
+    }
+  }
+  if (r.status == modbus::Dispatcher::Result::Status::reply) {  // refused before it started
+    pending_.reset();
+    reply(unit, std::span(out_).first(r.size), e.reply_at);
+    return;
+  }
+  if (policy_->write_reply == WriteReply::accepted && !pending_->forwarded) {
+    // Validated and queued: the normal response now (for 0x17, the registers as they are).
+    const std::size_t n = dispatcher_.complete(session, unit, pdu, Exception::none, out_);
+    pending_->answered = true;
+    reply(unit, std::span(out_).first(n), e.reply_at);
+  }
+}
+
+// Address 0 (Serial Line 2.1): a write to every slave, never answered. Reads make no sense there
+// and are ignored. A write moves motors on every drive at once, so it is applied only where the
+// listener says broadcast = true; otherwise it is refused, counted, logged and told to the audit
+// trail.
+void SlaveHost::serve_broadcast(const modbus_serial::Adu& adu) {
+  ++counters_.broadcasts;
+  ++counters_.server_messages;
+  ++counters_.server_no_response;
+  const std::span<const std::uint8_t> pdu = adu.pdu;
+  if (!modbus::may_write(pdu[0])) return;
+  const Session& session = policy_->session;
+  if (!policy_->broadcast) {
+    ++counters_.broadcasts_refused;
+    backend_.refused_write(session, modbus_serial::kBroadcast, pdu);
+    if (auto held = broadcast_log_.admit(clock_.now())) {
+      log_->warn("modbus: {}: broadcast write (function 0x{:02X}) refused: not applied to any "
+                 "drive (the listener has broadcast = false){}",
+                 name_, pdu[0], net::held_note(*held));
+    }
+    return;
+  }
+  // Every unit here that is not a pass-through window (whose slave hears its own line's
+  // broadcasts, not ours) gets the write through the one validated path; what each says is in
+  // the audit trail, since nobody is answered.
+  for (unsigned u = 1; u <= modbus_serial::kMaxSlave; ++u) {
+    const auto unit = static_cast<std::uint8_t>(u);
+    if (!backend_.serves(unit) || dispatcher_.forwards(unit)) continue;
+    dispatcher_.handle(session, unit, pdu, broadcast_out_, [](Exception) {});
+  }
+}
+
+void SlaveHost::on_done(std::uint32_t generation, Exception result,
+                        std::span<const std::uint8_t> forwarded_reply) {
+  // Deferred: the dispatcher's scratch may still hold the write that called this.
+  Bytes reply_copy(forwarded_reply.begin(), forwarded_reply.end());
+  asio::post(io_, [weak = weak_from_this(), generation, result,
+                   reply_copy = std::move(reply_copy)] {
+    auto self = weak.lock();
+    if (!self || self->stopped_) return;
+    auto& p = self->pending_;
+    if (!p || p->generation != generation) return;  // given up on: never answered late
+    if (p->answered) {                                // write_reply = accepted
+      if (result != Exception::none) {
+        ++self->counters_.write_timeouts;
+        self->log_->warn("modbus: {}: write to unit {} (function 0x{:02X}) answered as accepted, "
+                         "then not applied: {}",
+                         self->name_, p->unit, p->request.at(0), modbus::to_string(result));
+      }
+      self->pending_.reset();
+      return;
+    }
+    std::size_t n = 0;
+    if (p->forwarded && result == Exception::none) {
+      n = std::min(reply_copy.size(), self->out_.size());
+      std::copy_n(reply_copy.begin(), n, self->out_.begin());
+    } else if (p->forwarded) {
+      n = modbus::exception_pdu(p->request.at(0), result, self->out_);
+    } else {
+      n = self->dispatcher_.complete(self->policy_->session, p->unit, p->request, result,
+                                     self->out_);
+    }
+    const auto unit = p->unit;
+    const auto at = p->reply_at;
+    self->pending_.reset();
+    self->reply(unit, std::span(self->out_).first(n), at);
+  });
+}
+
+void SlaveHost::count_reply(std::span<const std::uint8_t> pdu) {
+  if (pdu.size() < 2 || (pdu[0] & kExceptionBit) == 0) return;
+  ++counters_.bus_exception_errors;
+  if (pdu[1] == static_cast<std::uint8_t>(Exception::server_device_busy)) ++counters_.server_busy;
+}
+
+void SlaveHost::reply(std::uint8_t unit, std::span<const std::uint8_t> pdu, net::TimePoint at) {
+  if (pdu.empty()) return;
+  count_reply(pdu);
+  Bytes frame = modbus_serial::encode(framing_, unit, pdu);
+  if (clock_.now() >= at) {
+    framer_.replied();
+    send_(std::move(frame));
+    return;
+  }
+  due_.emplace(at, std::move(frame));
+  arm();
+}
+
+void SlaveHost::arm() {
+  std::optional<net::TimePoint> at = framer_.deadline();
+  if (due_ && (!at || due_->first < *at)) at = due_->first;
+  if (!at) {
+    if (timer_armed_) timer_.cancel();
+    timer_armed_ = false;
+    return;
+  }
+  if (timer_armed_ && timer_at_ == *at) return;
+  timer_at_ = *at;
+  timer_armed_ = true;
+  timer_.expires_at(*at);
+  timer_.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
+    if (auto self = weak.lock()) self->on_timer(ec);
+  });
+}
+
+void SlaveHost::on_timer(const boost::system::error_code& ec) {
+  if (ec || stopped_) return;
+  timer_armed_ = false;
+  timer_at_ = net::TimePoint::max();
+  const auto now = clock_.now();
+  if (due_ && now >= due_->first) {
+    Bytes frame = std::move(due_->second);
+    due_.reset();
+    framer_.replied();
+    send_(std::move(frame));
+  }
+  framer_.expire(now);
+  drain();
+}
+
+}  // namespace drivegate::slave

@@ -1,0 +1,123 @@
+// One Modbus master's line into drivegate's register map, in RTU or ASCII frames: a serial
+// listener's port, or one RTU-over-TCP connection. It owns no descriptor: its owner hands it the
+// bytes received (receive) and sends what it emits (Send). It finds requests (SlaveFramer),
+// answers them through its own Dispatcher with the listener's session, as the Modbus TCP server
+// does (the same access rules, validation and confirmed writes: no second way into a drive), and
+// adds what only a serial line has: silence for units nobody here serves, broadcasts, FC 08.
+//
+// One request at a time, as a serial master asks. A write is answered when its drive took it
+// (write_reply = confirmed) or as soon as it is validated and queued (accepted). A reply is never
+// sent late: a master that sent anything since the request (a retry, the next request) has given
+// up on it, so its reply is dropped and counted (no response), and the new request is served.
+// RTU on a line: a reply starts 3.5 characters after the request's last byte (reply_at).
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+
+#include "config/config.h"  // WriteReply
+#include "modbus/diagnostics.h"
+#include "modbus/pdu.h"
+#include "modbus/slave_framer.h"
+#include "net/clock.h"
+#include "net/log_throttle.h"
+
+namespace drivegate::slave {
+
+// What a listener's hosts share and may change on reload.
+struct SlavePolicy {
+  Session session;  // access, word order, source (kind, listener; client per host)
+  WriteReply write_reply = WriteReply::confirmed;
+  bool broadcast = false;  // apply writes sent to address 0 (to every unit that takes them)
+  friend bool operator==(const SlavePolicy& a, const SlavePolicy& b) {
+    return a.session.access == b.session.access && a.session.word_order == b.session.word_order &&
+           a.write_reply == b.write_reply && a.broadcast == b.broadcast;
+  }
+};
+
+// A listener's counters (every host of an RTU-over-TCP listener adds to the same), and where a
+// master's FC 08 0x0A last cleared them (modbus/diagnostics.h).
+struct LineCounters {
+  modbus::SerialCounters counts;
+  modbus::SerialCounters cleared;
+};
+
+class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
+ public:
+  // A whole frame to put on the line, now.
+  using Send = std::function<void(Bytes frame)>;
+
+  SlaveHost(boost::asio::io_context& io, net::Clock& clock, modbus::Backend& backend,
+            modbus::DeviceIdentity identity, modbus_serial::Framing framing,
+            modbus::Delimit delimit, modbus::LineTiming timing,
+            std::shared_ptr<const SlavePolicy> policy, LineCounters& counters,
+            std::shared_ptr<spdlog::logger> log, std::string name, Send send);
+  ~SlaveHost();
+  SlaveHost(const SlaveHost&) = delete;
+  SlaveHost& operator=(const SlaveHost&) = delete;
+
+  void receive(ByteView bytes);
+  // The line went and will come back (a port reopened): what is buffered is dropped, a write in
+  // progress is left to settle unanswered.
+  void reset();
+  // The line is gone for good (listener closed, connection closed): reset, and nothing more is
+  // sent.
+  void stop();
+  void set_policy(std::shared_ptr<const SlavePolicy> policy) { policy_ = std::move(policy); }
+  [[nodiscard]] bool busy() const { return pending_.has_value(); }
+
+ private:
+  struct Pending {
+    std::uint32_t generation = 0;
+    std::uint8_t unit = 0;
+    Bytes request;                  // the PDU
+    bool forwarded = false;
+    bool answered = false;          // write_reply = accepted: the master has its reply
+    net::TimePoint reply_at{};
+  };
+
+  void drain();
+  void serve(modbus::FramerEvent& e);
+  void serve_broadcast(const modbus_serial::Adu& adu);
+  void reply(std::uint8_t unit, std::span<const std::uint8_t> pdu, net::TimePoint at);
+  void on_done(std::uint32_t generation, modbus::Exception result,
+               std::span<const std::uint8_t> forwarded_reply);
+  void superseded();
+  void arm();
+  void on_timer(const boost::system::error_code& ec);
+  void count_reply(std::span<const std::uint8_t> pdu);
+
+  boost::asio::io_context& io_;
+  net::Clock& clock_;
+  modbus::Backend& backend_;
+  modbus::Dispatcher dispatcher_;
+  modbus_serial::Framing framing_;
+  modbus::SlaveFramer framer_;
+  std::shared_ptr<const SlavePolicy> policy_;
+  LineCounters& line_;
+  modbus::SerialCounters& counters_;  // line_.counts
+  std::shared_ptr<spdlog::logger> log_;
+  std::string name_;
+  Send send_;
+  net::Timer timer_;
+  bool timer_armed_ = false;
+  net::TimePoint timer_at_ = net::TimePoint::max();
+
+  std::optional<Pending> pending_;
+  std::uint32_t generation_ = 0;
+  // A reply waiting for its 3.5-character silence.
+  std::optional<std::pair<net::TimePoint, Bytes>> due_;
+  std::array<std::uint8_t, modbus::kMaxPduSize> out_{};
+  std::array<std::uint8_t, modbus::kMaxPduSize> broadcast_out_{};
+  net::LogThrottle denied_log_;
+  net::LogThrottle broadcast_log_;
+  net::LogThrottle late_log_;
+  bool stopped_ = false;
+};
+
+}  // namespace drivegate::slave
