@@ -228,3 +228,94 @@ TEST_F(ListenerConfig, HttpIsOffUnlessAskedForAndItsKeysAreRead) {
 
 }  // namespace
 }  // namespace drivegate
+
+namespace drivegate {
+namespace {
+
+// Issue 28: serial listeners and RTU / ASCII over TCP (docs/serial-listeners.md).
+TEST_F(ListenerConfig, ASerialListenerTakesALinesKeysWithTheSerialLinesDefaults) {
+  const auto r = parse(R"(
+[[listener]]
+address = "0.0.0.0:502"
+allow = ["10.1.2.0/24"]
+access = "operate"
+
+[[listener]]
+port = "/dev/ttyS1"
+baud = 19200
+rs485 = true
+access = "operate"
+write_reply = "accepted"
+
+[[listener]]
+port = "/dev/ttyS2"
+baud = 9600
+framing = "ascii"
+ascii_timeout_ms = 500
+broadcast = true
+
+[[listener]]
+address = "127.0.0.1:4001"
+framing = "rtu"
+allow = ["127.0.0.1"]
+)");
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  const auto& ls = r.config->listeners;
+  ASSERT_EQ(ls.size(), 4U);
+  EXPECT_FALSE(ls[0].serial);
+  EXPECT_EQ(ls[0].framing, ListenerFraming::mbap);
+  ASSERT_TRUE(ls[1].serial);
+  EXPECT_EQ(ls[1].serial->port, "/dev/ttyS1");
+  EXPECT_EQ(ls[1].serial->baud, 19200U);
+  EXPECT_EQ(ls[1].serial->parity, Parity::even);  // Serial Line 2.5.1's default
+  EXPECT_EQ(ls[1].serial->data_bits, 8);
+  EXPECT_TRUE(ls[1].serial->rs485);
+  EXPECT_EQ(ls[1].framing, ListenerFraming::rtu);
+  EXPECT_EQ(ls[1].write_reply, WriteReply::accepted);
+  EXPECT_FALSE(ls[1].broadcast);
+  EXPECT_EQ(ls[1].options.policy.access, AccessLevel::operate);
+  ASSERT_TRUE(ls[2].serial);
+  EXPECT_EQ(ls[2].framing, ListenerFraming::ascii);
+  EXPECT_EQ(ls[2].serial->data_bits, 7);  // Serial Line 2.5.2's default for ASCII
+  EXPECT_EQ(ls[2].ascii_timeout, Millis(500));
+  EXPECT_TRUE(ls[2].broadcast);
+  EXPECT_EQ(ls[2].options.policy.access, AccessLevel::read);
+  EXPECT_EQ(ls[2].write_reply, WriteReply::confirmed);
+  EXPECT_FALSE(ls[3].serial);
+  EXPECT_EQ(ls[3].framing, ListenerFraming::rtu);
+  EXPECT_EQ(ls[3].options.port, 4001);
+  // A serial listener lets no network address write: no warning about it.
+  EXPECT_THAT(r.warnings, IsEmpty());
+}
+
+TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:2: listener[0].baud"),
+                                HasSubstr("needs its baud rate"))));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nframing = \"mbap\"\n"),
+              ElementsAre(HasSubstr("a serial line carries \"rtu\" or \"ascii\" frames")));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\ndata_bits = 7\n"),
+              ElementsAre(HasSubstr("RTU frames are 8 data bits")));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nallow = [\"10.0.0.1\"]\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].allow"), HasSubstr("no network clients"))));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nascii_timeout_ms = 50\n"),
+              ElementsAre(HasSubstr("only for framing = \"ascii\"")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nwrite_reply = \"accepted\"\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].write_reply"),
+                                HasSubstr("only for a listener with framing"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nframing = \"rtu\"\ntls = { cert = "
+                     "\"/c\", key = \"/k\", ca = \"/a\" }\n"),
+              ::testing::Contains(HasSubstr("a TLS listener's framing is \"mbap\"")));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nwrite_reply = \"later\"\n"),
+              ElementsAre(HasSubstr("must be \"confirmed\" or \"accepted\"")));
+  // The drives' line is not a master's: the bus in kDevice is on /dev/ttyUSB0.
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyUSB0\"\nbaud = 9600\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:1: listener"),
+                                HasSubstr("is bus 'line1''s"))));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\n\n[[listener]]\nport = "
+                     "\"/dev/ttyS1\"\nbaud = 19200\n"),
+              ElementsAre(HasSubstr("is already the listener's on line 1")));
+}
+
+}  // namespace
+}  // namespace drivegate

@@ -147,6 +147,20 @@ class MetricsText : public ::testing::Test {
       v.commands = &counts_;
       v.history = &history_;
     }
+    // A serial listener with a quote in its port's name, as label values must survive.
+    SerialListenerView s{.port = "/dev/ttyS\"1", .framing = "rtu", .access = AccessLevel::operate,
+                         .open = true, .bytes_received = 800, .reopens = 2};
+    s.counters.bus_messages = 100;
+    s.counters.bus_comm_errors = 3;
+    s.counters.bus_exception_errors = 4;
+    s.counters.server_messages = 90;
+    s.counters.server_no_response = 5;
+    s.counters.bus_char_overruns = 1;
+    s.counters.broken_frames = 6;
+    s.counters.other_units = 7;
+    s.counters.broadcasts = 2;
+    s.counters.broadcasts_refused = 2;
+    v.serial.push_back(s);
     return v;
   }
 
@@ -381,6 +395,37 @@ TEST_F(MetricsText, TheStandardProcessMetrics) {
 
 // Each family's HELP and TYPE once, its samples right after them, no series twice: what
 // Prometheus needs to take the scrape at all.
+// Issue 28: each serial listener's counters, by port; the status JSON's serial_listeners entry.
+TEST_F(MetricsText, SerialListenersCountersByPort) {
+  const std::string text = metrics_text(view());
+  const std::string port = R"({port="/dev/ttyS\"1"})";
+  EXPECT_THAT(family(text, "drivegate_serial_listener_open"),
+              ElementsAre(HasSubstr("# HELP"), "# TYPE drivegate_serial_listener_open gauge",
+                          "drivegate_serial_listener_open" + port + " 1"));
+  EXPECT_THAT(family(text, "drivegate_serial_listener_frames_total"),
+              Contains("drivegate_serial_listener_frames_total" + port + " 100"));
+  EXPECT_THAT(family(text, "drivegate_serial_listener_crc_errors_total"),
+              Contains("drivegate_serial_listener_crc_errors_total" + port + " 3"));
+  EXPECT_THAT(family(text, "drivegate_serial_listener_not_answered_total"),
+              Contains("drivegate_serial_listener_not_answered_total" + port + " 5"));
+  EXPECT_THAT(family(text, "drivegate_serial_listener_broadcasts_refused_total"),
+              Contains("drivegate_serial_listener_broadcasts_refused_total" + port + " 2"));
+  EXPECT_THAT(family(text, "drivegate_serial_listener_reopens_total"),
+              Contains("drivegate_serial_listener_reopens_total" + port + " 2"));
+  const std::string json = status_json(view());
+  EXPECT_THAT(json, HasSubstr(R"({"port": "/dev/ttyS\"1", "framing": "rtu", "access": "operate", )"
+                              R"("open": true, "reopens": 2, "bytes_received": 800, "frames": 100, )"
+                              R"("crc_errors": 3, "exceptions": 4, "requests": 90, )"
+                              R"("not_answered": 5, "busy": 0, "overruns": 1, "broken_frames": 6, )"
+                              R"("other_units": 7, "broadcasts": 2, "broadcasts_refused": 2, )"
+                              R"("accepted_then_failed": 0})"));
+  // None without a serial listener.
+  StatusView plain = view();
+  plain.serial.clear();
+  EXPECT_THAT(metrics_text(plain), Not(HasSubstr("drivegate_serial_listener")));
+  EXPECT_THAT(status_json(plain), HasSubstr("\"serial_listeners\": []"));
+}
+
 TEST_F(MetricsText, EveryFamilyOnceWithItsSamplesTogetherAndNoSeriesTwice) {
   const std::string text = metrics_text(view());
   std::set<std::string> families;

@@ -1,0 +1,261 @@
+// drivegate as a Modbus RTU / ASCII slave (issue 28, docs/serial-listeners.md), end to end: the
+// real daemon with a simulated nidec-washer behind it, and on a serial listener's line a master
+// nobody here wrote, pymodbus's serial client (tests/e2e/pymodbus_serial_master.py), across a
+// socat pseudo-terminal pair. What it reads is held to what a Modbus TCP client reads of the same
+// drive, what it writes to what the simulated drive shows.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "e2e.h"
+#include "pymodbus_slave.h"  // have_pymodbus_tools
+
+namespace drivegate::test {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+std::filesystem::path master_script() {
+  return std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "tests/e2e/pymodbus_serial_master.py";
+}
+
+class SerialListenerE2E : public ::testing::Test {
+ protected:
+  // `listener`: the serial [[listener]]'s keys after its port.
+  void start(const std::string& listener, const std::string& device_options = "") {
+    if (!have_pymodbus_tools()) GTEST_SKIP() << "socat and python3-pymodbus: tools/deps.sh test";
+    socat_ = std::make_unique<Child>(
+        std::vector<std::string>{"/usr/bin/socat", "pty,raw,echo=0,link=" + (dir_ / "m").string(),
+                                 "pty,raw,echo=0,link=" + (dir_ / "s").string()},
+        dir_ / "socat.err");
+    for (int i = 0; i < 100 && !std::filesystem::exists(dir_ / "s"); ++i) {
+      std::this_thread::sleep_for(20ms);
+    }
+    sim_ = std::make_unique<Sim>("nidec-washer", dir_ / "line");
+    // The first listener is the TCP one the harness moves to a free port (--listen).
+    const std::string toml = "[[listener]]\naddress = \"127.0.0.1:502\"\naccess = \"operate\"\n"
+                             "allow = [\"127.0.0.1\"]\n\n"
+                             "[[listener]]\nport = \"" +
+                             (dir_ / "s").string() + "\"\nbaud = 19200\n" + listener +
+                             "\n[[bus]]\nname = \"line\"\nport = \"" + (dir_ / "line").string() +
+                             "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
+                             "adapter = \"nidec-washer\"\nunit_id = 1\n" + device_options;
+    daemon_ = std::make_unique<Daemon>(dir_, toml, std::vector<std::string>{}, dir_ / "daemon.log");
+    plc_ = std::make_unique<Plc>(daemon_->port());
+    ASSERT_TRUE(plc_->connect());
+    ASSERT_TRUE(
+        eventually([&] { return (plc_->input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
+        << "never online; sim says " << sim_->control("state");
+    ASSERT_TRUE(eventually(
+        [&] { return slurp(dir_ / "daemon.log").find("(rtu): ") != std::string::npos ||
+                     slurp(dir_ / "daemon.log").find("(ascii): ") != std::string::npos; },
+        5s));
+  }
+  // Runs the master with `steps`; one line of output a step.
+  std::vector<std::string> master(const std::vector<std::string>& steps,
+                                  const std::string& framing = "rtu") {
+    std::vector<std::string> argv = {kSystemPython, master_script().string(), "--port",
+                                     (dir_ / "m").string(), "--framing", framing};
+    argv.insert(argv.end(), steps.begin(), steps.end());
+    Child c(argv, dir_ / "master.err");
+    std::vector<std::string> lines;
+    while (auto line = c.read_line(20s)) lines.push_back(*line);
+    c.wait_exit(5s);
+    return lines;
+  }
+  std::string log() { return slurp(dir_ / "daemon.log"); }
+  // The same master over TCP, RTU frames on the socket ("RTU over TCP").
+  std::vector<std::string> tcp_master(int port, const std::vector<std::string>& steps) {
+    std::vector<std::string> argv = {kSystemPython, master_script().string(), "--tcp",
+                                     "127.0.0.1:" + std::to_string(port)};
+    argv.insert(argv.end(), steps.begin(), steps.end());
+    Child c(argv, dir_ / "master.err");
+    std::vector<std::string> lines;
+    while (auto line = c.read_line(20s)) lines.push_back(*line);
+    c.wait_exit(5s);
+    return lines;
+  }
+
+  TempDir dir_;
+  std::unique_ptr<Child> socat_;
+  std::unique_ptr<Sim> sim_;
+  std::unique_ptr<Daemon> daemon_;
+  std::unique_ptr<Plc> plc_;
+};
+
+// The common block as a TCP client reads it, through RTU: status, fault code, the setpoint
+// written over the serial line reaching the drive, and the exceptions a TCP client gets: 0x02
+// for an unmapped address, 0x03 for a setpoint the drive cannot run. A unit nobody serves is
+// silence, not 0x0B: other slaves may share the line.
+TEST_F(SerialListenerE2E, AnRtuMasterReadsWritesAndGetsTheExceptionsATcpClientGets) {
+  start("access = \"operate\"\n");
+  const auto tcp = plc_->input(reg::status, 2);
+  const auto out = master({"read", "1", "input", "0", "2",                  // status, fault_code
+                           "write", "1", std::to_string(reg::setpoint), "600",  // FC 06
+                           "read", "1", "holding", std::to_string(reg::setpoint), "1",
+                           "read", "1", "holding", "9000", "1",             // unmapped
+                           "write", "1", std::to_string(reg::setpoint), "60000",  // out of range
+                           "read", "9", "input", "0", "1"});                // nobody at 9
+  ASSERT_EQ(out.size(), 6U) << ::testing::PrintToString(out) << slurp(dir_ / "master.err");
+  EXPECT_EQ(out[0], "ok " + std::to_string(tcp.regs[0]) + " " + std::to_string(tcp.regs[1]));
+  EXPECT_EQ(out[1], "ok");
+  EXPECT_EQ(out[2], "ok 600");
+  EXPECT_EQ(out[3], "exception 2");
+  EXPECT_EQ(out[4], "exception 3");
+  EXPECT_EQ(out[5], "none");
+  // What the serial master wrote is what a TCP client reads, and what the drive holds.
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 600);
+  // Run forward at 600 and stop, FC 16 over the line; the drive runs and stops.
+  EXPECT_THAT(master({"writes", "1", "0", "1,600"}), ElementsAre("ok"));
+  EXPECT_TRUE(eventually(
+      [&] {
+        const auto state = sim_->control("state");
+        return state.find(" target_rpm=600 ") != std::string::npos &&
+               state.find(" motion=stopped ") == std::string::npos;
+      },
+      5s))
+      << sim_->control("state");
+  EXPECT_THAT(master({"write", "1", "0", "0"}), ElementsAre("ok"));
+  EXPECT_TRUE(eventually(
+      [&] { return sim_->control("state").find(" motion=stopped ") != std::string::npos; }, 10s))
+      << sim_->control("state");
+  // The audit trail names the serial line as the source.
+  EXPECT_THAT(log(), HasSubstr("from modbus_serial"));
+}
+
+// Noise, a frame cut in half and a frame with a bad CRC on the line between good requests: none
+// is answered, and the good request after each gets its own right answer.
+TEST_F(SerialListenerE2E, NoiseAndHalfFramesNeverProduceAWrongAnswer) {
+  start("access = \"operate\"\n");
+  const auto setpoint = std::to_string(reg::setpoint);
+  const auto out = master({"raw", "ff00ff13",              // noise
+                           "sleep", "20",
+                           "read", "1", "holding", setpoint, "1",
+                           "raw", "010600",                // half a write request
+                           "sleep", "20",
+                           "read", "1", "holding", setpoint, "1",
+                           "raw", "0106000104b00000",      // a whole write, its CRC wrong
+                           "sleep", "20",
+                           "read", "1", "holding", setpoint, "1"});
+  ASSERT_EQ(out.size(), 6U) << ::testing::PrintToString(out);
+  EXPECT_EQ(out[0], "reply ");
+  EXPECT_EQ(out[1], "ok 0");
+  EXPECT_EQ(out[2], "reply ");
+  EXPECT_EQ(out[3], "ok 0");
+  EXPECT_EQ(out[4], "reply ");
+  EXPECT_EQ(out[5], "ok 0");  // the write with the bad CRC was not applied
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 0);
+}
+
+// Address 0 is a broadcast: never answered, and with broadcast = false (the default) a write
+// there reaches no drive. FC 08 says what the line saw: 0x0E counts it with the other requests
+// for us, 0x0F counts it as not answered, 0x0C counts the bad CRC.
+TEST_F(SerialListenerE2E, ABroadcastWriteIsNotAppliedAndFc08CountsTheLine) {
+  start("access = \"operate\"\n");
+  static_assert(reg::setpoint == 1);
+  const auto out = master({"rtu", "0", "06000104b0",     // broadcast: setpoint_rpm = 1200
+                           "sleep", "50",
+                           "raw", "0103000000010000",    // bad CRC
+                           "sleep", "20",
+                           "rtu", "1", "0800001234",     // return query data
+                           "rtu", "1", "08000e0000",     // server message count
+                           "rtu", "1", "08000f0000",     // server no response count
+                           "rtu", "1", "08000c0000",     // bus communication error count
+                           "rtu", "1", "0800990000",     // not a sub-function
+                           "rtu", "1", "08000a0000",     // clear counters
+                           "rtu", "1", "08000e0000"});
+  ASSERT_EQ(out.size(), 9U) << ::testing::PrintToString(out);
+  EXPECT_EQ(out[0], "reply ");
+  EXPECT_EQ(out[1], "reply ");
+  // 01 08 0000 1234, its CRC: the request itself (Application Protocol 6.8.1, 00).
+  EXPECT_THAT(out[2], ::testing::StartsWith("reply 010800001234"));
+  // Broadcast and this one: 2 processed; the broadcast not answered: 1; the bad CRC: 1.
+  EXPECT_THAT(out[3], ::testing::StartsWith("reply 0108000e0003"));  // + this request: 3
+  EXPECT_THAT(out[4], ::testing::StartsWith("reply 0108000f0001"));
+  EXPECT_THAT(out[5], ::testing::StartsWith("reply 0108000c0001"));
+  EXPECT_THAT(out[6], ::testing::StartsWith("reply 018801"));
+  EXPECT_THAT(out[7], ::testing::StartsWith("reply 0108000a0000"));
+  EXPECT_THAT(out[8], ::testing::StartsWith("reply 0108000e0001"));  // counted from the clear
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 0);  // the broadcast moved nothing
+  EXPECT_THAT(log(), HasSubstr("broadcast write (function 0x06) refused"));
+}
+
+// Another master nobody here wrote: mbpoll (libmodbus's RTU client), as a commissioning engineer
+// would use it on the PLC's port: it writes the setpoint and reads the command block back.
+TEST_F(SerialListenerE2E, MbpollWritesAndReadsTheCommandBlockOverRtu) {
+  start("access = \"operate\"\n");
+  if (!std::filesystem::exists("/usr/bin/mbpoll")) GTEST_SKIP() << "mbpoll: tools/deps.sh";
+  const auto run = [&](const std::vector<std::string>& args) {
+    std::vector<std::string> argv = {"/usr/bin/mbpoll", "-m", "rtu", "-a", "1", "-b", "19200",
+                                     "-P", "none", "-t", "4", "-1", "-o", "1"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    Child c(argv, dir_ / "mbpoll.err");
+    std::string out;
+    while (auto line = c.read_line(10s)) out += *line + "\n";
+    c.wait_exit(5s);
+    return out;
+  };
+  // mbpoll counts registers from 1: -r 2 is holding 1, setpoint_rpm.
+  EXPECT_THAT(run({"-r", "2", (dir_ / "m").string(), "750"}), HasSubstr("Written 1 references"));
+  const auto read = run({"-r", "1", "-c", "3", (dir_ / "m").string()});
+  EXPECT_THAT(read, HasSubstr("[1]: \t0\n"));    // command: stop
+  EXPECT_THAT(read, HasSubstr("[2]: \t750\n"));  // setpoint_rpm
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 750);
+}
+
+// RTU over TCP, as SCADA drivers send to serial device servers: pymodbus's TCP client with its
+// RTU framer on a read listener (the issue's example). Reads are served with the serial line's
+// frames; a write is exception 01; a unit nobody serves is silence, as on the line.
+TEST_F(SerialListenerE2E, RtuOverTcpServesReadsAndRefusesWritesOnAReadListener) {
+  const int port = free_port();
+  start("access = \"operate\"\n\n[[listener]]\naddress = \"127.0.0.1:" + std::to_string(port) +
+        "\"\nframing = \"rtu\"\nallow = [\"127.0.0.1\"]\naccess = \"read\"\n");
+  ASSERT_EQ(plc_->write(reg::setpoint, {900}), 0);
+  const auto setpoint = std::to_string(reg::setpoint);
+  const auto out = tcp_master(port, {"read", "1", "holding", setpoint, "1",
+                                     "write", "1", setpoint, "300",
+                                     "read", "9", "holding", setpoint, "1",
+                                     "rtu", "1", "0300010001"});  // the same read, raw
+  ASSERT_EQ(out.size(), 4U) << ::testing::PrintToString(out) << slurp(dir_ / "master.err");
+  EXPECT_EQ(out[0], "ok 900");
+  EXPECT_EQ(out[1], "exception 1");
+  EXPECT_EQ(out[2], "none");
+  // 01 03 02 0384 (900) and its CRC, low byte first.
+  EXPECT_THAT(out[3], ::testing::StartsWith("reply 0103020384"));
+  EXPECT_EQ(out[3].size(), std::string("reply ").size() + 14);
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 900);
+  EXPECT_THAT(log(), HasSubstr("(rtu over tcp)"));
+}
+
+// A read listener on the line: a write is exception 01 and reaches no drive, reads are served.
+TEST_F(SerialListenerE2E, AReadListenersMasterGetsException01ForAWrite) {
+  start("access = \"read\"\n");
+  const auto setpoint = std::to_string(reg::setpoint);
+  const auto out =
+      master({"write", "1", setpoint, "600", "read", "1", "holding", setpoint, "1"});
+  ASSERT_EQ(out.size(), 2U) << ::testing::PrintToString(out);
+  EXPECT_EQ(out[0], "exception 1");
+  EXPECT_EQ(out[1], "ok 0");
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 0);
+}
+
+// ASCII framing (':', hex, LRC, CR LF) with pymodbus's ASCII framer. The line is 8 data bits
+// here: Linux refuses 7 on a pseudo-terminal (EINVAL), where a real port takes the specification's
+// default of 7 (Serial Line 2.5.2).
+TEST_F(SerialListenerE2E, AnAsciiMasterReadsAndWrites) {
+  start("framing = \"ascii\"\ndata_bits = 8\naccess = \"operate\"\n");
+  const auto setpoint = std::to_string(reg::setpoint);
+  const auto out = master(
+      {"write", "1", setpoint, "450", "read", "1", "holding", setpoint, "1", "read", "1",
+       "holding", "9000", "1"},
+      "ascii");
+  ASSERT_EQ(out.size(), 3U) << ::testing::PrintToString(out) << slurp(dir_ / "master.err");
+  EXPECT_EQ(out[0], "ok");
+  EXPECT_EQ(out[1], "ok 450");
+  EXPECT_EQ(out[2], "exception 2");
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 450);
+}
+
+}  // namespace
+}  // namespace drivegate::test
