@@ -15,6 +15,7 @@ namespace {
 using namespace std::chrono_literals;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 std::filesystem::path master_script() {
   return std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "tests/e2e/pymodbus_serial_master.py";
@@ -226,6 +227,34 @@ TEST_F(SerialListenerE2E, RtuOverTcpServesReadsAndRefusesWritesOnAReadListener) 
   EXPECT_EQ(out[3].size(), std::string("reply ").size() + 14);
   EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 900);
   EXPECT_THAT(log(), HasSubstr("(rtu over tcp)"));
+}
+
+// The PLC-loss failsafe (docs/safety.md) sees a serial master as it sees a TCP client: its
+// heartbeats over the line keep a running drive running past the timeout, and when it falls
+// silent the drive is stopped and the failsafe bit latches. Only reads (the TCP observer) do not
+// feed it.
+TEST_F(SerialListenerE2E, ASerialMastersWritesFeedTheFailsafeAndItsSilenceTripsIt) {
+  start("access = \"operate\"\n", "poll_ms = 200\nfailsafe_timeout_ms = 1000\n");
+  constexpr std::uint16_t kFailsafe = 1 << 5;
+  // Run forward at 600, then a heartbeat every 300 ms for 2.4 s: more than twice the timeout.
+  std::vector<std::string> steps = {"writes", "1", "0", "1,600"};
+  for (int i = 1; i <= 8; ++i) {
+    steps.insert(steps.end(), {"sleep", "300", "write", "1", std::to_string(reg::heartbeat),
+                               std::to_string(i)});
+  }
+  const auto out = master(steps);
+  ASSERT_EQ(out.size(), 9U) << ::testing::PrintToString(out);
+  for (const auto& line : out) EXPECT_EQ(line, "ok");
+  const auto state = sim_->control("state");
+  EXPECT_THAT(state, HasSubstr(" target_rpm=600 "));
+  EXPECT_THAT(state, Not(HasSubstr(" motion=stopped "))) << "the failsafe fired while fed";
+  EXPECT_EQ(plc_->input(reg::status, 1).regs[0] & kFailsafe, 0);
+  // The master goes quiet: stopped within the timeout and a few polls, the bit latched.
+  ASSERT_TRUE(eventually(
+      [&] { return sim_->control("state").find(" motion=stopped ") != std::string::npos; }, 5s))
+      << sim_->control("state");
+  EXPECT_TRUE(eventually(
+      [&] { return (plc_->input(reg::status, 1).regs[0] & kFailsafe) != 0; }, 3s));
 }
 
 // A read listener on the line: a write is exception 01 and reaches no drive, reads are served.
