@@ -1,0 +1,238 @@
+// SlaveHost (daemon/slave/slave_host.h) on a manual clock, with a backend whose writes complete
+// when the test says: what goes onto the master's line, and when, for every kind of request the
+// issue names (issue 28, docs/serial-listeners.md). The frames are the serial line codec's.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
+
+#include <boost/asio/io_context.hpp>
+#include <optional>
+
+#include "manual_clock.h"
+#include "slave/slave_host.h"
+
+namespace drivegate::slave {
+namespace {
+
+using namespace std::chrono_literals;
+using modbus::Exception;
+using modbus_serial::Framing;
+
+// Units 1 and 2 exist; holding registers read as 100 + address; writes wait for complete().
+class HandBackend final : public modbus::Backend {
+ public:
+  Exception read(const Session&, std::uint8_t unit, Table, std::uint16_t address,
+                 std::span<std::uint16_t> out) override {
+    if (!serves(unit)) return Exception::gateway_path_unavailable;
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = static_cast<std::uint16_t>(100 + address + i);
+    return Exception::none;
+  }
+  Exception write(const Session&, std::uint8_t unit, Table, std::uint16_t address,
+                  std::span<const std::uint16_t> values, modbus::WriteDone done) override {
+    if (!serves(unit)) return Exception::gateway_path_unavailable;
+    writes.push_back({unit, address, std::vector<std::uint16_t>(values.begin(), values.end())});
+    pending.push_back(std::move(done));
+    return Exception::none;
+  }
+  void refused_write(const Session&, std::uint8_t unit, std::span<const std::uint8_t>) override {
+    refused.push_back(unit);
+  }
+  bool serves(std::uint8_t unit) const override { return unit == 1 || unit == 2; }
+
+  struct Write {
+    std::uint8_t unit;
+    std::uint16_t address;
+    std::vector<std::uint16_t> values;
+  };
+  std::vector<Write> writes;
+  std::vector<modbus::WriteDone> pending;
+  std::vector<std::uint8_t> refused;
+};
+
+class SlaveHostTest : public ::testing::Test {
+ protected:
+  void make(WriteReply reply = WriteReply::confirmed, bool broadcast = false,
+            AccessLevel access = AccessLevel::operate) {
+    auto p = std::make_shared<SlavePolicy>();
+    p->session.access = access;
+    p->session.source.kind = SourceKind::modbus_serial;
+    p->write_reply = reply;
+    p->broadcast = broadcast;
+    host_ = std::make_shared<SlaveHost>(
+        io_, clock_, backend_, modbus::DeviceIdentity{}, Framing::rtu, modbus::Delimit::silence,
+        timing_, p, counters_, log_, "test", [this](Bytes frame) { sent_.push_back(frame); });
+  }
+  void receive(std::uint8_t unit, const Bytes& pdu) {
+    host_->receive(modbus_serial::encode(Framing::rtu, unit, pdu));
+    io_.poll();
+    io_.restart();
+  }
+  void advance(std::chrono::microseconds d) {
+    clock_.advance(d);
+    io_.poll();
+    io_.restart();
+  }
+  Bytes frame(std::uint8_t unit, const Bytes& pdu) {
+    return modbus_serial::encode(Framing::rtu, unit, pdu);
+  }
+
+  // Before io_: the host's timer detaches from it as the io_context goes.
+  test::ManualClock clock_;
+  boost::asio::io_context io_;
+  HandBackend backend_;
+  const modbus::LineTiming timing_ = modbus::line_timing(19200, 11);  // t3.5 = 2006 us
+  LineCounters counters_;
+  std::shared_ptr<spdlog::logger> log_ =
+      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>());
+  std::vector<Bytes> sent_;
+  std::shared_ptr<SlaveHost> host_;
+};
+
+const Bytes kRead = {0x03, 0x00, 0x10, 0x00, 0x02};           // FC 03, holding 16, 2 registers
+const Bytes kReadReply = {0x03, 0x04, 0x00, 116, 0x00, 117};  // 100 + address
+const Bytes kWrite = {0x06, 0x00, 0x01, 0x02, 0x58};          // FC 06, holding 1 = 600
+
+// Serial Line 2.5.1.1: the reply starts no earlier than 3.5 characters after the request, and
+// as soon as possible after that.
+TEST_F(SlaveHostTest, AReadIsAnsweredOnceTheSilenceHasPassedNotBefore) {
+  make();
+  receive(1, kRead);
+  EXPECT_TRUE(sent_.empty());
+  advance(timing_.t35 - 1us);
+  EXPECT_TRUE(sent_.empty());
+  advance(1us);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kReadReply)));
+  EXPECT_EQ(counters_.counts.server_messages, 1U);
+  EXPECT_EQ(counters_.counts.bus_messages, 1U);
+}
+
+TEST_F(SlaveHostTest, AUnitNobodyServesGetsSilence) {
+  make();
+  receive(9, kRead);
+  advance(1s);
+  EXPECT_TRUE(sent_.empty());
+  EXPECT_EQ(counters_.counts.other_units, 1U);
+  EXPECT_EQ(counters_.counts.server_messages, 0U);
+}
+
+TEST_F(SlaveHostTest, AConfirmedWriteIsAnsweredWhenTheDriveTookIt) {
+  make();
+  receive(1, kWrite);
+  advance(100ms);
+  EXPECT_TRUE(sent_.empty());
+  ASSERT_EQ(backend_.pending.size(), 1U);
+  EXPECT_EQ(backend_.writes[0].values, (std::vector<std::uint16_t>{600}));
+  backend_.pending[0](Exception::none);
+  advance(0us);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kWrite)));  // the echo (6.6)
+}
+
+TEST_F(SlaveHostTest, ADriveThatDidNotAnswerIs0x0B) {
+  make();
+  receive(1, kWrite);
+  backend_.pending[0](Exception::gateway_target_failed);
+  advance(timing_.t35);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, {0x86, 0x0B})));
+  EXPECT_EQ(counters_.counts.bus_exception_errors, 1U);
+}
+
+// The master gave up on the write (its timeout) and sent its next request: that one is answered,
+// and the write's result, when it comes, is never put on the line, where the master would take
+// it for the answer to something else.
+TEST_F(SlaveHostTest, AReplyIsNeverSentLate) {
+  make();
+  receive(1, kWrite);
+  advance(300ms);
+  receive(1, kRead);
+  advance(timing_.t35);
+  ASSERT_THAT(sent_, ::testing::ElementsAre(frame(1, kReadReply)));
+  backend_.pending[0](Exception::none);  // the drive took it after all
+  advance(1s);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kReadReply)));
+  EXPECT_EQ(counters_.counts.server_no_response, 1U);
+}
+
+// Even a retry of the very same write: answered once, for the retry.
+TEST_F(SlaveHostTest, ARetriedWriteIsAnsweredOnce) {
+  make();
+  receive(1, kWrite);
+  advance(300ms);
+  receive(1, kWrite);
+  ASSERT_EQ(backend_.pending.size(), 2U);
+  backend_.pending[0](Exception::none);
+  advance(1s);
+  EXPECT_TRUE(sent_.empty());  // the first one's answer is not the retry's
+  backend_.pending[1](Exception::none);
+  advance(0us);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kWrite)));
+}
+
+TEST_F(SlaveHostTest, AnAcceptedWriteIsAnsweredAtOnceAndAFailureLaterCounted) {
+  make(WriteReply::accepted);
+  receive(1, kWrite);
+  advance(timing_.t35);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kWrite)));
+  ASSERT_EQ(backend_.pending.size(), 1U);
+  backend_.pending[0](Exception::gateway_target_failed);
+  advance(1s);
+  EXPECT_EQ(sent_.size(), 1U);  // nothing more on the line
+  EXPECT_EQ(counters_.counts.write_timeouts, 1U);
+}
+
+TEST_F(SlaveHostTest, ABroadcastWriteIsRefusedUnlessAllowedAndNeverAnswered) {
+  make();
+  receive(0, kWrite);
+  advance(1s);
+  EXPECT_TRUE(sent_.empty());
+  EXPECT_TRUE(backend_.writes.empty());
+  EXPECT_THAT(backend_.refused, ::testing::ElementsAre(0));
+  EXPECT_EQ(counters_.counts.broadcasts_refused, 1U);
+  EXPECT_EQ(counters_.counts.server_no_response, 1U);
+  // A read to address 0 is no request at all.
+  receive(0, kRead);
+  advance(1s);
+  EXPECT_TRUE(sent_.empty());
+}
+
+TEST_F(SlaveHostTest, ABroadcastWriteAllowedReachesEveryUnitAndIsNeverAnswered) {
+  make(WriteReply::confirmed, true);
+  receive(0, kWrite);
+  for (auto& done : backend_.pending) done(Exception::none);
+  advance(1s);
+  EXPECT_TRUE(sent_.empty());
+  ASSERT_EQ(backend_.writes.size(), 2U);
+  EXPECT_EQ(backend_.writes[0].unit, 1);
+  EXPECT_EQ(backend_.writes[1].unit, 2);
+}
+
+TEST_F(SlaveHostTest, AReadListenersWriteIs01AndReachesNoDrive) {
+  make(WriteReply::confirmed, false, AccessLevel::read);
+  receive(1, kWrite);
+  advance(timing_.t35);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, {0x86, 0x01})));
+  EXPECT_TRUE(backend_.writes.empty());
+}
+
+// FC 08 00: the request back (Application Protocol 6.8.1), after the silence.
+TEST_F(SlaveHostTest, Fc08ReturnsTheQueryData) {
+  make();
+  receive(2, {0x08, 0x00, 0x00, 0xA5, 0x37});
+  advance(timing_.t35);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(2, {0x08, 0x00, 0x00, 0xA5, 0x37})));
+}
+
+// The port closed while a reply waited for its silence: it is not sent, on this line or the
+// next one opened.
+TEST_F(SlaveHostTest, AReplyDueWhenTheLineWentIsDropped) {
+  make();
+  receive(1, kRead);
+  host_->reset();
+  advance(1s);
+  EXPECT_TRUE(sent_.empty());
+  receive(1, kRead);
+  advance(timing_.t35);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kReadReply)));
+}
+
+}  // namespace
+}  // namespace drivegate::slave
