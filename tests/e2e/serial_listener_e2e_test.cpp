@@ -26,23 +26,17 @@ class SerialListenerE2E : public ::testing::Test {
   // `listener`: the serial [[listener]]'s keys after its port.
   void start(const std::string& listener, const std::string& device_options = "") {
     if (!have_pymodbus_tools()) GTEST_SKIP() << "socat and python3-pymodbus: tools/deps.sh test";
-    socat_ = std::make_unique<Child>(
-        std::vector<std::string>{"/usr/bin/socat", "pty,raw,echo=0,link=" + (dir_ / "m").string(),
-                                 "pty,raw,echo=0,link=" + (dir_ / "s").string()},
-        dir_ / "socat.err");
-    for (int i = 0; i < 100 && !std::filesystem::exists(dir_ / "s"); ++i) {
-      std::this_thread::sleep_for(20ms);
-    }
+    make_line();
     sim_ = std::make_unique<Sim>("nidec-washer", dir_ / "line");
     // The first listener is the TCP one the harness moves to a free port (--listen).
-    const std::string toml = "[[listener]]\naddress = \"127.0.0.1:502\"\naccess = \"operate\"\n"
+    toml_ = "[[listener]]\naddress = \"127.0.0.1:502\"\naccess = \"operate\"\n"
                              "allow = [\"127.0.0.1\"]\n\n"
                              "[[listener]]\nport = \"" +
                              (dir_ / "s").string() + "\"\nbaud = 19200\n" + listener +
                              "\n[[bus]]\nname = \"line\"\nport = \"" + (dir_ / "line").string() +
                              "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
                              "adapter = \"nidec-washer\"\nunit_id = 1\n" + device_options;
-    daemon_ = std::make_unique<Daemon>(dir_, toml, std::vector<std::string>{}, dir_ / "daemon.log");
+    daemon_ = std::make_unique<Daemon>(dir_, toml_, std::vector<std::string>{}, dir_ / "daemon.log");
     plc_ = std::make_unique<Plc>(daemon_->port());
     ASSERT_TRUE(plc_->connect());
     ASSERT_TRUE(
@@ -78,7 +72,19 @@ class SerialListenerE2E : public ::testing::Test {
     return lines;
   }
 
+  // The pseudo-terminal pair, made again after `socat_` was stopped (an adapter plugged back).
+  void make_line() {
+    socat_ = std::make_unique<Child>(
+        std::vector<std::string>{"/usr/bin/socat", "pty,raw,echo=0,link=" + (dir_ / "m").string(),
+                                 "pty,raw,echo=0,link=" + (dir_ / "s").string()},
+        dir_ / "socat.err");
+    for (int i = 0; i < 100 && !std::filesystem::exists(dir_ / "s"); ++i) {
+      std::this_thread::sleep_for(20ms);
+    }
+  }
+
   TempDir dir_;
+  std::string toml_;
   std::unique_ptr<Child> socat_;
   std::unique_ptr<Sim> sim_;
   std::unique_ptr<Daemon> daemon_;
@@ -255,6 +261,45 @@ TEST_F(SerialListenerE2E, ASerialMastersWritesFeedTheFailsafeAndItsSilenceTripsI
       << sim_->control("state");
   EXPECT_TRUE(eventually(
       [&] { return (plc_->input(reg::status, 1).regs[0] & kFailsafe) != 0; }, 3s));
+}
+
+// The master's adapter unplugged and plugged back: the listener says so once, reopens the line
+// with back-off, and serves the master again; the drive and the TCP side never noticed.
+TEST_F(SerialListenerE2E, ALineUnpluggedAndBackIsReopenedAndLoggedOnce) {
+  start("access = \"operate\"\n");
+  ASSERT_THAT(master({"read", "1", "input", "0", "1"}), ElementsAre(::testing::StartsWith("ok ")));
+  socat_->stop();  // both ends of the pair go away
+  ASSERT_TRUE(eventually([&] { return log().find("reopening (logged once") != std::string::npos; },
+                         5s))
+      << log();
+  std::this_thread::sleep_for(1500ms);  // several reopen attempts fail meanwhile
+  EXPECT_EQ(occurrences(log(), "(logged once"), 1U) << log();
+  EXPECT_NE(plc_->input(reg::status, 1).regs[0] & reg::online, 0);  // the drive never noticed
+  make_line();
+  ASSERT_TRUE(eventually([&] { return log().find("open again") != std::string::npos; }, 15s))
+      << log();
+  EXPECT_THAT(master({"read", "1", "input", "0", "1"}), ElementsAre(::testing::StartsWith("ok ")));
+}
+
+// SIGHUP with the listener's access changed to read: the next write over the line is 01, with the
+// line left open (a policy, not a place: no restart needed).
+TEST_F(SerialListenerE2E, AReloadAppliesTheNewAccessLevelAtOnce) {
+  start("access = \"operate\"\n");
+  const auto setpoint = std::to_string(reg::setpoint);
+  ASSERT_THAT(master({"write", "1", setpoint, "300"}), ElementsAre("ok"));
+  const auto at = toml_.find("access = \"operate\"\n", toml_.find("port = "));
+  ASSERT_NE(at, std::string::npos);
+  std::string next = toml_;
+  next.replace(at, std::string("access = \"operate\"").size(), "access = \"read\"");
+  std::ofstream(daemon_->config()) << next;
+  daemon_->process().signal(SIGHUP);
+  ASSERT_TRUE(eventually([&] { return log().find("configuration reloaded") != std::string::npos; },
+                         10s))
+      << log();
+  EXPECT_THAT(log(), Not(HasSubstr("takes effect at the next restart")));
+  EXPECT_THAT(master({"write", "1", setpoint, "400", "read", "1", "holding", setpoint, "1"}),
+              ElementsAre("exception 1", "ok 300"));
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 300);
 }
 
 // A read listener on the line: a write is exception 01 and reaches no drive, reads are served.
