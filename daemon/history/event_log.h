@@ -65,7 +65,6 @@ class EventLog {
   [[nodiscard]] std::uint64_t last_seq() const { return next_seq_ - 1; }
   [[nodiscard]] std::uint64_t dropped() const { return dropped_; }  // pushed out, oldest first
   [[nodiscard]] std::size_t memory_bytes() const { return bytes_; }
-  [[nodiscard]] std::int64_t now_ms() const { return wall_(); }
   // When this log began: a follower seeing it change knows the daemon restarted and its
   // sequence numbers began again.
   [[nodiscard]] std::int64_t started_ms() const { return started_ms_; }

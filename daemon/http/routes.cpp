@@ -63,6 +63,24 @@ std::optional<std::string> query_value(std::string_view target, std::string_view
   return std::nullopt;
 }
 
+// Whether every value in the query decodes: a broken %-escape is a 400, never a value read as
+// empty (?device=%zz meant a device, not "any device").
+bool query_decodes(std::string_view target) {
+  const auto q = target.find('?');
+  if (q == std::string_view::npos) return true;
+  std::string_view rest = target.substr(q + 1);
+  while (!rest.empty()) {
+    const auto amp = rest.find('&');
+    const std::string_view pair = rest.substr(0, amp);
+    rest = amp == std::string_view::npos ? std::string_view{} : rest.substr(amp + 1);
+    const auto eq = pair.find('=');
+    if (eq != std::string_view::npos && !unescape(pair.substr(eq + 1))) return false;
+  }
+  return true;
+}
+
+const char* const kBadEscape = "a query value has a broken %-escape\n";
+
 // ?since=UNIX_SECONDS (a fraction allowed) as milliseconds; nullopt if it is not a number of
 // seconds between the epoch and the year 5000 (anything later would overflow the milliseconds).
 std::optional<std::int64_t> since_ms(std::string_view target) {
@@ -89,6 +107,7 @@ std::optional<std::uint64_t> whole(const std::string& v, std::uint64_t max) {
 }
 
 Response events_route(std::string_view target, Content& content) {
+  if (!query_decodes(target)) return {400, kText, kBadEscape, {}, {}};
   EventsQuery q;
   q.device = query_value(target, "device").value_or("");
   q.kind = query_value(target, "kind").value_or("");
@@ -112,6 +131,7 @@ Response events_route(std::string_view target, Content& content) {
 }
 
 Response trends_route(std::string_view target, Content& content) {
+  if (!query_decodes(target)) return {400, kText, kBadEscape, {}, {}};
   TrendsQuery q;
   const auto device = query_value(target, "device");
   const auto bus = query_value(target, "bus");

@@ -163,7 +163,9 @@ TEST_F(Routes, EventsParsesItsFiltersAndRefusesNonsense) {
   EXPECT_EQ(content.events_query.limit, 7u);
   for (const char* bad : {"?kind=nonsense", "?since=abc", "?since=-1", "?since=1e99",
                           "?since=99999999999999999999", "?since=", "?after=x", "?after=-3",
-                          "?limit=0", "?limit=12x", "?limit=99999999999"}) {
+                          "?limit=0", "?limit=12x", "?limit=99999999999",
+                          // A broken escape is not "any device" (it was, before).
+                          "?device=%zz", "?device=washer%2", "?kind=%"}) {
     EXPECT_EQ(route("GET", std::string("/api/v1/events") + bad, content).status, 400u) << bad;
   }
 }
@@ -176,6 +178,7 @@ TEST_F(Routes, TrendsOfADeviceOrABusNotBoth) {
   EXPECT_EQ(content.trends_query.name, "bus:l");
   EXPECT_EQ(route("GET", "/api/v1/trends?device=a&bus=l", content).status, 400u);
   EXPECT_EQ(route("GET", "/api/v1/trends?since=x", content).status, 400u);
+  EXPECT_EQ(route("GET", "/api/v1/trends?device=%zz", content).status, 400u);
 }
 
 }  // namespace
