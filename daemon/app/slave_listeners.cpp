@@ -33,8 +33,16 @@ std::shared_ptr<const slave::SlavePolicy> policy_of(const ListenerConfig& l) {
 
 // What only a restart changes.
 bool same_place(const ListenerConfig& a, const ListenerConfig& b) {
-  if (a.framing != b.framing || a.ascii_timeout != b.ascii_timeout) return false;
-  if (a.serial || b.serial) return a.serial && b.serial && *a.serial == *b.serial;
+  if (a.framing != b.framing || a.ascii_timeout != b.ascii_timeout ||
+      a.rx_latency != b.rx_latency) {
+    return false;
+  }
+  if (a.serial || b.serial) {
+    if (!a.serial || !b.serial) return false;
+    BusConfig x = *a.serial;
+    x.line = b.serial->line;  // where it is written in the file is no change
+    return x == *b.serial;
+  }
   return a.options.host == b.options.host && a.options.port == b.options.port;
 }
 
@@ -64,6 +72,7 @@ bool SlaveListeners::start(const std::vector<ListenerConfig>& listeners) {
       o.line = *l.serial;
       o.framing = framing_of(l);
       o.ascii_timeout = l.ascii_timeout;
+      o.latency = l.rx_latency;
       o.identity = identity_;
       auto s = std::make_shared<slave::SerialListener>(io_, clock_, backend_, std::move(o),
                                                        policy_of(l), log_);
@@ -78,6 +87,7 @@ bool SlaveListeners::start(const std::vector<ListenerConfig>& listeners) {
     o.allow = l.options.policy.allow;
     o.max_clients = l.options.policy.max_clients.value_or(server_.max_clients);
     o.idle_timeout = server_.idle_timeout;
+    o.frame_timeout = server_.frame_timeout;
     o.framing = framing_of(l);
     o.identity = identity_;
     auto t = std::make_shared<slave::RtuTcpListener>(io_, clock_, backend_, std::move(o),

@@ -120,6 +120,9 @@ struct ListenerConfig {
   WriteReply write_reply = WriteReply::confirmed;
   bool broadcast = false;              // apply writes sent to address 0
   Millis ascii_timeout{1000};          // Serial Line 2.5.2.1: between two characters of a frame
+  // A serial listener's port may hand over received bytes this late (a UART's FIFO, a USB
+  // adapter's latency timer): pauses inside an RTU frame up to this are the port's.
+  Millis rx_latency{20};
   // Declared by [server] listen (or by nothing: the default 0.0.0.0:502): plain TCP, every
   // address, access maintain, as before listeners existed.
   bool from_server_listen = false;

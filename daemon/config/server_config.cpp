@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <filesystem>
 
 #include "config_loader.h"
 #include "line_config.h"
@@ -171,11 +172,28 @@ void read_framing(TableReader& r, ListenerConfig& l, Diagnostics& diag) {
   l.broadcast = r.boolean("broadcast").value_or(false);
   if (auto v = r.integer("ascii_timeout_ms", 10, 60'000, false)) {
     l.ascii_timeout = Millis(*v);
-    if (l.framing != ListenerFraming::ascii) {
+    if (l.framing != ListenerFraming::ascii || !serial) {
       diag.error(r.node("ascii_timeout_ms"), r.qualified("ascii_timeout_ms"),
-                 "only for framing = \"ascii\" (RTU frames end at 3.5 characters of silence)");
+                 "only for framing = \"ascii\" on a serial port (RTU frames end at 3.5 "
+                 "characters of silence; on TCP a frame ends at its CR LF)");
     }
   }
+  if (auto v = r.integer("rx_latency_ms", 0, 1000, false)) {
+    l.rx_latency = Millis(*v);
+    if (l.framing != ListenerFraming::rtu || !serial) {
+      diag.error(r.node("rx_latency_ms"), r.qualified("rx_latency_ms"),
+                 "only for framing = \"rtu\" on a serial port");
+    }
+  }
+}
+
+// The first line setting (a serial listener's) that a table gives, if any.
+std::optional<std::string> first_line_key(TableReader& r) {
+  for (const char* key : {"baud", "parity", "data_bits", "stop_bits", "rs485", "reopen_max_ms",
+                          "echo", "network_delay_ms"}) {
+    if (r.node(key) != nullptr) return std::string(key);
+  }
+  return std::nullopt;
 }
 
 // A serial listener: `port` and the line's settings, as a bus's (config/line_config.h). Modbus
@@ -197,8 +215,11 @@ void read_serial(TableReader& r, const std::string& prefix, ListenerConfig& l,
   if (l.framing == ListenerFraming::ascii) line.data_bits = 7;
   read_line(r, prefix, line, diag);
   line.line = l.line;
-  if (line.baud == 0 && line.port.find("://") == std::string::npos) {
-    diag.error(r.node("port"), r.qualified("baud"), "a serial listener's port needs its baud rate");
+  // A local port and RFC 2217 set the line; raw tcp:// leaves it to the device server, but its
+  // character time is still what the frames are timed by.
+  if (line.baud == 0) {
+    diag.error(r.node("port"), r.qualified("baud"),
+               "a serial listener needs its line's baud rate (its character times)");
   }
   if (l.framing == ListenerFraming::rtu && line.data_bits != 8) {
     diag.error(r.node("data_bits"), r.qualified("data_bits"),
@@ -215,13 +236,19 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
   TableReader r(t, prefix, diag);
   r.expect({"address", "allow", "access", "word_order", "tls", "roles", "max_clients",
             "tls_handshakes_per_s", "framing", "write_reply", "broadcast", "ascii_timeout_ms",
-            "port", "baud", "parity", "data_bits", "stop_bits", "rs485", "reopen_max_ms"});
+            "port", "baud", "parity", "data_bits", "stop_bits", "rs485", "reopen_max_ms", "echo",
+            "rx_latency_ms"});
   ListenerConfig l;
   l.line = line_of(t);
   auto& policy = l.options.policy;
   policy.access = AccessLevel::read;  // nothing may write unless the file says so
   read_framing(r, l, diag);
-  if (r.node("port") != nullptr) {
+  const bool serial = r.node("port") != nullptr;
+  if (const auto line_key = first_line_key(r); line_key && !serial) {
+    diag.error(r.node(*line_key), r.qualified(*line_key),
+               "a line setting: only for a serial listener (port = \"/dev/...\")");
+  }
+  if (serial) {
     read_serial(r, prefix, l, diag);
   } else if (auto address = r.string("address", true)) {
     if (auto at = parse_listen(*address); at && !bindable(at->host)) {
@@ -372,12 +399,28 @@ void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
   }
 }
 
+namespace {
+
+// Whether two ports are one: local paths as the file system resolves them (/dev/serial/by-id/...
+// is a symbolic link to /dev/ttyUSB0), device servers by what is written.
+bool same_port(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  if (a.find("://") != std::string::npos || b.find("://") != std::string::npos) return false;
+  std::error_code ea;
+  std::error_code eb;
+  const auto ca = std::filesystem::weakly_canonical(a, ea);
+  const auto cb = std::filesystem::weakly_canonical(b, eb);
+  return !ea && !eb && ca == cb;
+}
+
+}  // namespace
+
 void check_serial_listeners(const Config& cfg, Diagnostics& diag) {
   for (std::size_t i = 0; i < cfg.listeners.size(); ++i) {
     const auto& l = cfg.listeners[i];
     if (!l.serial) continue;
     for (const auto& bus : cfg.buses) {
-      if (bus.port == l.serial->port) {
+      if (same_port(bus.port, l.serial->port)) {
         diag.error_at(l.line, "listener",
                       "port " + l.serial->port + " is bus '" + bus.name + "''s (line " +
                           std::to_string(bus.line) +
@@ -385,7 +428,7 @@ void check_serial_listeners(const Config& cfg, Diagnostics& diag) {
       }
     }
     for (std::size_t j = 0; j < i; ++j) {
-      if (cfg.listeners[j].serial && cfg.listeners[j].serial->port == l.serial->port) {
+      if (cfg.listeners[j].serial && same_port(cfg.listeners[j].serial->port, l.serial->port)) {
         diag.error_at(l.line, "listener",
                       "port " + l.serial->port + " is already the listener's on line " +
                           std::to_string(cfg.listeners[j].line));

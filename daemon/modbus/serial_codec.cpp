@@ -135,10 +135,16 @@ std::optional<std::size_t> device_id_size(ByteView rx, bool& other_mei) {
 
 // A frame of a function whose length the codec does not know: it ends where the bytes so far
 // first carry a good CRC. A buffer of a whole frame's length without one is a bad frame.
+// One running CRC over the bytes: each prefix's is the one before it and a byte more, so a noisy
+// line costs a pass over the buffer per read, not a CRC per prefix.
 Decoded<Adu> decode_rtu_by_crc(ByteView rx) {
   const std::size_t most = std::min(rx.size(), kRtuMaxFrame);
-  for (std::size_t n = kRtuMinFrame; n <= most; ++n) {
-    if (crc16_modbus_holds(rx.first(n))) return rtu_frame(rx, n);
+  std::uint16_t crc = 0xFFFF;  // of rx[0, k)
+  for (std::size_t k = 0; k + 2 <= most; ++k) {
+    if (k + 2 >= kRtuMinFrame && rx[k] == lo8(crc) && rx[k + 1] == hi8(crc)) {
+      return rtu_frame(rx, k + 2);
+    }
+    crc = crc16_modbus_update(crc, rx[k]);
   }
   if (rx.size() >= kRtuMaxFrame) return decoded_bad<Adu>(kRtuMaxFrame, FrameError::bad_checksum);
   return {};

@@ -87,7 +87,11 @@ void SlaveFramer::settle(SerialClock::time_point now) {
     skipping_ = false;
     skipped_ = 0;
   }
-  // A frame that its length says is not all in, ended by the silence: cut short.
+  // A frame that its length says is not all in, ended by the silence: cut short. Unless the port
+  // may still be holding the rest back (LineTiming::latency).
+  if (!rx_.empty() && quiet < std::max<SerialClock::duration>(timing_.t35, timing_.latency)) {
+    return;
+  }
   push(FramerEvent::Kind::broken, rx_.size());
   rx_.clear();
   broken_ = false;
@@ -103,7 +107,9 @@ void SlaveFramer::feed(ByteView bytes, SerialClock::time_point now) {
   const bool rtu_line = framing_ == Framing::rtu && delimit_ == Delimit::silence;
   if (rtu_line && last_ && !skipping_) {
     const auto gap = began - *last_;
-    if (!rx_.empty() && gap > timing_.t15) broken_ = true;
+    if (!rx_.empty() && gap > std::max<SerialClock::duration>(timing_.t15, timing_.latency)) {
+      broken_ = true;
+    }
     // settle() has seen no 3.5-character silence since a request, and no reply has gone out:
     // these come while the line should be silent. They are skipped when they come in the
     // request's own read, and so in a read of their own too. Once the host has replied
@@ -198,8 +204,9 @@ std::optional<SerialClock::time_point> SlaveFramer::deadline() const {
     if (rx_.empty()) return std::nullopt;
     return *last_ + timing_.ascii_timeout + std::chrono::microseconds(1);
   }
-  if (rx_.empty() && !skipping_) return std::nullopt;
-  return *last_ + timing_.t35;
+  if (skipping_) return *last_ + timing_.t35;
+  if (rx_.empty()) return std::nullopt;
+  return *last_ + std::max<SerialClock::duration>(timing_.t35, timing_.latency);
 }
 
 void SlaveFramer::expire(SerialClock::time_point now) {

@@ -4,7 +4,8 @@
 //
 // RTU on a serial line (MODBUS over Serial Line V1.02, "Serial Line", 2.5.1.1): a frame is
 // preceded and followed by a silence of at least 3.5 character times; a silence of more than 1.5
-// character times inside it makes it incomplete, and it is discarded. Above 19200 baud the two
+// character times inside it makes it incomplete, and it is discarded (gaps up to
+// LineTiming::latency excepted: the port's delivery, not the master's pauses). Above 19200 baud the two
 // times are fixed at 750 us and 1.75 ms (2.5.1.1, note). A request is taken as soon as its length
 // (known from its function code) and CRC are in, and the reply may start 3.5 characters after its
 // last byte: `reply_at`. Bytes that arrive while the line should be silent, or a frame that does
@@ -46,6 +47,12 @@ struct LineTiming {
   std::chrono::microseconds t15{750};
   std::chrono::microseconds t35{1750};
   std::chrono::milliseconds ascii_timeout{1000};
+  // How late the port may hand over bytes it received: a UART's FIFO hands a frame's tail over
+  // only after 4 characters of silence, a USB adapter holds bytes for its latency timer (16 ms by
+  // default on FTDI's). Inside an RTU frame the framer takes a pause up to this long for the
+  // port's, not the master's: no gap, no end of a frame that is not all in yet. 0: the
+  // specification's 1.5 and 3.5 characters alone (a port that delivers each byte as it comes).
+  std::chrono::microseconds latency{0};
 };
 // The times for `baud` and bits per character (start + data + parity + stop): one character,
 // 1.5 and 3.5 of them, or the fixed 750 us / 1.75 ms above 19200 baud.
@@ -84,6 +91,8 @@ class SlaveFramer {
   // The host has put its reply to the last request on the line (or decided on none): the
   // silence that request asked for is over, and what comes next may start a frame at once.
   void replied() { after_request_ = false; }
+  // Bytes held that may still become a frame (or are being skipped): a partial frame.
+  [[nodiscard]] bool partial() const { return !rx_.empty() || skipping_; }
   // Drops everything buffered (the port was closed).
   void reset();
 

@@ -7,6 +7,15 @@ namespace drivegate::slave {
 namespace asio = boost::asio;
 using asio::ip::tcp;
 
+namespace {
+
+// Replies not yet taken by a client that does not read them: past this much, the connection
+// stops reading its requests until it does (as the Modbus TCP connection does), so a client that
+// never reads cannot make the daemon hold its answers without bound.
+constexpr std::size_t kMaxReplyBacklog = 64 * 1024;
+
+}  // namespace
+
 // One client: its socket, its host, what it has yet to be sent.
 class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
  public:
@@ -18,6 +27,7 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
         peer_(std::move(peer)),
         idle_(socket_.get_executor(), listener.clock_),
         idle_timeout_(listener.options_.idle_timeout),
+        frame_timeout_(listener.options_.frame_timeout),
         clock_(listener.clock_) {
     host_ = std::make_shared<SlaveHost>(
         listener.io_, listener.clock_, listener.backend_, listener.options_.identity,
@@ -58,10 +68,22 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
       gone();
       return;
     }
-    last_request_ = clock_.now();
+    const auto now = clock_.now();
+    last_request_ = now;
     if (auto l = listener_.lock()) l->bytes_received_ += n;
     host_->receive(ByteView(rx_.data(), n));
-    if (!closed_) read();
+    if (!host_->partial()) {
+      partial_since_.reset();
+    } else if (!partial_since_) {
+      partial_since_ = now;
+      arm_idle();
+    }
+    if (closed_) return;
+    if (tx_.size() + inflight_.size() > kMaxReplyBacklog) {
+      paused_ = true;  // flush() reads again once the client has taken its replies
+      return;
+    }
+    read();
   }
   void send(Bytes frame) {
     if (closed_) return;
@@ -81,14 +103,36 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
                           return;
                         }
                         self->flush();
+                        if (self->paused_ && !self->closed_ &&
+                            self->tx_.size() + self->inflight_.size() <= kMaxReplyBacklog / 2) {
+                          self->paused_ = false;
+                          self->read();
+                        }
                       });
   }
+  // The next deadline: idle (no request for idle_timeout), or a partial frame left unfinished
+  // for frame_timeout (a client holding a slot with one byte a minute).
+  [[nodiscard]] std::optional<net::TimePoint> deadline() const {
+    std::optional<net::TimePoint> at;
+    if (idle_timeout_.count() > 0) at = last_request_ + idle_timeout_;
+    if (partial_since_ && frame_timeout_.count() > 0) {
+      const auto f = *partial_since_ + frame_timeout_;
+      if (!at || f < *at) at = f;
+    }
+    return at;
+  }
   void arm_idle() {
-    if (idle_timeout_.count() == 0) return;
-    idle_.expires_at(last_request_ + idle_timeout_);
+    const auto at = deadline();
+    if (!at) return;
+    idle_.expires_at(*at);
     idle_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
       if (ec || self->closed_) return;
-      if (self->clock_.now() >= self->last_request_ + self->idle_timeout_ && !self->host_->busy()) {
+      const auto now = self->clock_.now();
+      const bool stale = self->partial_since_ && self->frame_timeout_.count() > 0 &&
+                         now >= *self->partial_since_ + self->frame_timeout_;
+      const bool idle = self->idle_timeout_.count() > 0 &&
+                        now >= self->last_request_ + self->idle_timeout_ && !self->host_->busy();
+      if (stale || idle) {
         self->gone();
         return;
       }
@@ -110,6 +154,9 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
   std::string peer_;
   net::Timer idle_;
   std::chrono::milliseconds idle_timeout_;
+  std::chrono::milliseconds frame_timeout_;
+  std::optional<net::TimePoint> partial_since_;
+  bool paused_ = false;  // not reading: too many replies the client has not taken
   net::Clock& clock_;
   std::shared_ptr<SlaveHost> host_;
   std::array<std::uint8_t, 512> rx_{};

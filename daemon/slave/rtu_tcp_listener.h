@@ -26,6 +26,7 @@ struct RtuTcpOptions {
   net::AllowList allow;
   std::size_t max_clients = 32;
   std::chrono::milliseconds idle_timeout{60'000};  // no request for this long closes; 0 = off
+  std::chrono::milliseconds frame_timeout{2'000};  // a partial frame older than this closes
   modbus_serial::Framing framing = modbus_serial::Framing::rtu;
   modbus::DeviceIdentity identity;
 };

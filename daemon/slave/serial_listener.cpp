@@ -18,6 +18,7 @@ modbus::LineTiming timing_of(const SerialListenerOptions& o) {
                         o.line.stop_bits;
   auto t = modbus::line_timing(o.line.baud, bits);
   t.ascii_timeout = o.ascii_timeout;
+  t.latency = o.latency;
   return t;
 }
 
@@ -116,12 +117,20 @@ void SerialListener::on_read(std::error_code ec, ByteView data) {
     return;
   }
   bytes_received_ += data.size();
-  host_->receive(data);
+  // Our own reply coming back on an echoing line is not the master speaking.
+  std::size_t own = 0;
+  while (own < data.size() && !echo_.empty() && data[own] == echo_.front()) {
+    echo_.erase(echo_.begin());
+    ++own;
+  }
+  if (own < data.size()) echo_.clear();  // anything else: the echo is over, or was garbled
+  host_->receive(data.subspan(own));
   if (!closed_ && open_) read();
 }
 
 void SerialListener::send(Bytes frame) {
   if (!open_) return;
+  if (options_.line.echo) echo_.insert(echo_.end(), frame.begin(), frame.end());
   if (writing_) {
     tx_queue_.insert(tx_queue_.end(), frame.begin(), frame.end());
     return;
@@ -150,6 +159,7 @@ void SerialListener::lost(std::error_code ec, const char* what) {
   open_ = false;
   writing_ = false;
   tx_queue_.clear();
+  echo_.clear();
   host_->reset();
   transport_->close();
   // Callbacks of the closed port (operation_aborted) must not reach the reopened one.

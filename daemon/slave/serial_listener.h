@@ -22,6 +22,7 @@ struct SerialListenerOptions {
   BusConfig line;  // port, baud, parity, data / stop bits, rs485, reopen_max; name for the log
   modbus_serial::Framing framing = modbus_serial::Framing::rtu;
   std::chrono::milliseconds ascii_timeout{1000};  // Serial Line 2.5.2.1
+  std::chrono::milliseconds latency{20};          // modbus::LineTiming::latency
   modbus::DeviceIdentity identity;
 };
 
@@ -71,6 +72,9 @@ class SerialListener : public std::enable_shared_from_this<SerialListener> {
   bool closed_ = false;
   bool writing_ = false;
   Bytes tx_queue_;  // frames waiting while one is written (at most a reply or two)
+  // A line that echoes what we send (`echo`, a one-wire or an RS-485 adapter that hears itself):
+  // the bytes of our replies still to come back, dropped as they do.
+  Bytes echo_;
   std::uint64_t bytes_received_ = 0;
   std::uint64_t reopens_ = 0;
   // Every pending transport callback holds this; close() clears it so they find nothing.

@@ -11,6 +11,8 @@ using modbus::FramerEvent;
 namespace {
 
 constexpr std::uint8_t kDiagnostics = 0x08;  // Application Protocol 6.8: serial line only
+constexpr std::uint8_t kReadWrite = 0x17;    // Application Protocol 6.17
+constexpr std::size_t kMaxAccepted = 64;     // accepted writes whose result is still awaited
 constexpr std::uint8_t kExceptionBit = 0x80;
 
 }  // namespace
@@ -43,17 +45,18 @@ void SlaveHost::stop() {
 
 void SlaveHost::reset() {
   framer_.reset();
+  if (due_) ++counters_.server_no_response;  // the line went before it could be sent
   due_.reset();
   timer_.cancel();
   timer_armed_ = false;
-  if (pending_ && !pending_->answered) ++counters_.server_no_response;
+  if (pending_) ++counters_.server_no_response;
   pending_.reset();  // its result, when it comes, finds no one (the audit trail has it)
 }
 
 void SlaveHost::receive(ByteView bytes) {
   if (stopped_ || bytes.empty()) return;
   // Anything the master sends after a request means it stopped waiting for that reply.
-  if (pending_ && !pending_->answered) superseded();
+  if (pending_) superseded();
   if (due_) {  // the line was to stay silent until our reply: the master did not wait for it
     due_.reset();
     ++counters_.server_no_response;
@@ -155,9 +158,12 @@ void SlaveHost::serve(FramerEvent& e) {
     return;
   }
   if (policy_->write_reply == WriteReply::accepted && !pending_->forwarded) {
-    // Validated and queued: the normal response now (for 0x17, the registers as they are).
+    // Validated and queued: the normal response now (for 0x17, the registers as they are). The
+    // write's own result, when it comes, is only checked for a failure to tell of.
     const std::size_t n = dispatcher_.complete(session, unit, pdu, Exception::none, out_);
-    pending_->answered = true;
+    if (accepted_.size() >= kMaxAccepted) accepted_.erase(accepted_.begin());  // oldest
+    accepted_.emplace(pending_->generation, Accepted{unit, pdu[0]});
+    pending_.reset();
     reply(unit, std::span(out_).first(n), e.reply_at);
   }
 }
@@ -171,7 +177,8 @@ void SlaveHost::serve_broadcast(const modbus_serial::Adu& adu) {
   ++counters_.server_messages;
   ++counters_.server_no_response;
   const std::span<const std::uint8_t> pdu = adu.pdu;
-  if (!modbus::may_write(pdu[0])) return;
+  // Writes only: 0x17 reads too, and a broadcast has nobody to answer (Serial Line 2.1).
+  if (!modbus::may_write(pdu[0]) || pdu[0] == kReadWrite) return;
   const Session& session = policy_->session;
   if (!policy_->broadcast) {
     ++counters_.broadcasts_refused;
@@ -201,18 +208,22 @@ void SlaveHost::on_done(std::uint32_t generation, Exception result,
                    reply_copy = std::move(reply_copy)] {
     auto self = weak.lock();
     if (!self || self->stopped_) return;
-    auto& p = self->pending_;
-    if (!p || p->generation != generation) return;  // given up on: never answered late
-    if (p->answered) {                                // write_reply = accepted
-      if (result != Exception::none) {
+    if (const auto a = self->accepted_.find(generation); a != self->accepted_.end()) {
+      const Accepted w = a->second;
+      self->accepted_.erase(a);
+      if (result != Exception::none) {  // write_reply = accepted: the master was told ok
         ++self->counters_.write_timeouts;
-        self->log_->warn("modbus: {}: write to unit {} (function 0x{:02X}) answered as accepted, "
-                         "then not applied: {}",
-                         self->name_, p->unit, p->request.at(0), modbus::to_string(result));
+        if (auto held = self->accepted_log_.admit(self->clock_.now())) {
+          self->log_->warn("modbus: {}: write to unit {} (function 0x{:02X}) answered as "
+                           "accepted, then not applied: {}{}",
+                           self->name_, w.unit, w.function, modbus::to_string(result),
+                           net::held_note(*held));
+        }
       }
-      self->pending_.reset();
       return;
     }
+    auto& p = self->pending_;
+    if (!p || p->generation != generation) return;  // given up on: never answered late
     std::size_t n = 0;
     if (p->forwarded && result == Exception::none) {
       n = std::min(reply_copy.size(), self->out_.size());
@@ -238,15 +249,26 @@ void SlaveHost::count_reply(std::span<const std::uint8_t> pdu) {
 
 void SlaveHost::reply(std::uint8_t unit, std::span<const std::uint8_t> pdu, net::TimePoint at) {
   if (pdu.empty()) return;
-  count_reply(pdu);
   Bytes frame = modbus_serial::encode(framing_, unit, pdu);
   if (clock_.now() >= at) {
-    framer_.replied();
-    send_(std::move(frame));
+    put(std::move(frame));
     return;
   }
   due_.emplace(at, std::move(frame));
   arm();
+}
+
+// Onto the line, counted as what it is (an exception reply: FC 08 0x0D, 0x11) when it goes.
+void SlaveHost::put(Bytes frame) {
+  const std::size_t head = framing_ == modbus_serial::Framing::rtu ? 1 : 0;
+  if (framing_ == modbus_serial::Framing::rtu && frame.size() >= 3) {
+    count_reply(std::span(frame).subspan(head, 2));
+  } else if (auto d = modbus_serial::decode_reply(framing_, frame);
+             d.status == DecodeStatus::frame && d.frame.pdu.size() >= 2) {
+    count_reply(std::span(d.frame.pdu).first(2));
+  }
+  framer_.replied();
+  send_(std::move(frame));
 }
 
 void SlaveHost::arm() {
@@ -274,8 +296,7 @@ void SlaveHost::on_timer(const boost::system::error_code& ec) {
   if (due_ && now >= due_->first) {
     Bytes frame = std::move(due_->second);
     due_.reset();
-    framer_.replied();
-    send_(std::move(frame));
+    put(std::move(frame));
   }
   framer_.expire(now);
   drain();

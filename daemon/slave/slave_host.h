@@ -17,6 +17,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -70,6 +71,8 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   void stop();
   void set_policy(std::shared_ptr<const SlavePolicy> policy) { policy_ = std::move(policy); }
   [[nodiscard]] bool busy() const { return pending_.has_value(); }
+  // Part of a frame is held, waiting for the rest.
+  [[nodiscard]] bool partial() const { return framer_.partial(); }
 
  private:
   struct Pending {
@@ -77,8 +80,12 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
     std::uint8_t unit = 0;
     Bytes request;                  // the PDU
     bool forwarded = false;
-    bool answered = false;          // write_reply = accepted: the master has its reply
     net::TimePoint reply_at{};
+  };
+  // A write answered as accepted whose result is still to come (to tell of a failure).
+  struct Accepted {
+    std::uint8_t unit = 0;
+    std::uint8_t function = 0;
   };
 
   void drain();
@@ -91,6 +98,7 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   void arm();
   void on_timer(const boost::system::error_code& ec);
   void count_reply(std::span<const std::uint8_t> pdu);
+  void put(Bytes frame);
 
   boost::asio::io_context& io_;
   net::Clock& clock_;
@@ -109,6 +117,7 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   net::TimePoint timer_at_ = net::TimePoint::max();
 
   std::optional<Pending> pending_;
+  std::map<std::uint32_t, Accepted> accepted_;  // by generation, the oldest dropped past 64
   std::uint32_t generation_ = 0;
   // A reply waiting for its 3.5-character silence.
   std::optional<std::pair<net::TimePoint, Bytes>> due_;
@@ -117,6 +126,7 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   net::LogThrottle denied_log_;
   net::LogThrottle broadcast_log_;
   net::LogThrottle late_log_;
+  net::LogThrottle accepted_log_;
   bool stopped_ = false;
 };
 

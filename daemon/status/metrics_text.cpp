@@ -548,6 +548,12 @@ void serial_metrics(Writer& w, const StatusView& view) {
   family("drivegate_serial_listener_broadcasts_refused_total", "counter",
          "broadcast writes not applied (broadcast = false)",
          [](const L& l) { return l.counters.broadcasts_refused; });
+  family("drivegate_serial_listener_busy_total", "counter",
+         "exception 06 replies: the drive's write queue full (FC 08 0x11)",
+         [](const L& l) { return l.counters.server_busy; });
+  family("drivegate_serial_listener_accepted_then_failed_total", "counter",
+         "writes answered as accepted (write_reply) that the drive then did not take",
+         [](const L& l) { return l.counters.write_timeouts; });
 }
 
 // The Sparkplug B northbound ([mqtt], docs/mqtt.md).

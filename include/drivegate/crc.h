@@ -10,15 +10,18 @@ namespace drivegate {
 
 // Register preset to 0xFFFF; for each byte XOR it in, then eight times shift right, XOR-ing 0xA001
 // (0x8005 reflected) whenever the bit shifted out was 1 ("MODBUS over Serial Line V1.02", 6.2.2).
+// One byte into the register (a running CRC: start from 0xFFFF).
+constexpr std::uint16_t crc16_modbus_update(std::uint16_t reg, std::uint8_t b) {
+  reg ^= b;
+  for (int bit = 0; bit < 8; ++bit) {
+    reg = (reg & 0x0001) != 0 ? static_cast<std::uint16_t>((reg >> 1) ^ 0xA001)
+                              : static_cast<std::uint16_t>(reg >> 1);
+  }
+  return reg;
+}
 constexpr std::uint16_t crc16_modbus(ByteView data) {
   std::uint16_t reg = 0xFFFF;
-  for (const std::uint8_t b : data) {
-    reg ^= b;
-    for (int bit = 0; bit < 8; ++bit) {
-      reg = (reg & 0x0001) != 0 ? static_cast<std::uint16_t>((reg >> 1) ^ 0xA001)
-                                : static_cast<std::uint16_t>(reg >> 1);
-    }
-  }
+  for (const std::uint8_t b : data) reg = crc16_modbus_update(reg, b);
   return reg;
 }
 

@@ -1,6 +1,11 @@
 // [[listener]] in drivegate.toml: what is read, the defaults (read-only unless the file says
 // otherwise), every mistake named with its line, and the warning for a listener anyone may write
 // through.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -11,6 +16,7 @@ namespace drivegate {
 namespace {
 
 using ::testing::AllOf;
+using ::testing::Contains;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
@@ -291,7 +297,16 @@ allow = ["127.0.0.1"]
 TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\n"),
               ElementsAre(AllOf(HasSubstr("gw.toml:2: listener[0].baud"),
-                                HasSubstr("needs its baud rate"))));
+                                HasSubstr("needs its line's baud rate"))));
+  EXPECT_THAT(errors("[[listener]]\nport = \"rfc2217://10.0.0.5:4001\"\n"),
+              ElementsAre(HasSubstr("needs its line's baud rate")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nbaud = 9600\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].baud"),
+                                HasSubstr("only for a serial listener"))));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":4001\"\nframing = \"rtu\"\nrx_latency_ms = 5\n"),
+              ElementsAre(HasSubstr("only for framing = \"rtu\" on a serial port")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":4001\"\nframing = \"ascii\"\nascii_timeout_ms = 50\n"),
+              ElementsAre(HasSubstr("on a serial port")));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nframing = \"mbap\"\n"),
               ElementsAre(HasSubstr("a serial line carries \"rtu\" or \"ascii\" frames")));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\ndata_bits = 7\n"),
@@ -312,6 +327,18 @@ TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyUSB0\"\nbaud = 9600\n"),
               ElementsAre(AllOf(HasSubstr("gw.toml:1: listener"),
                                 HasSubstr("is bus 'line1''s"))));
+  // The same port by another name: a symbolic link to it (as /dev/serial/by-id/... are).
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("drivegate-ports-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "ttyUSB7") << "";
+  std::filesystem::create_symlink(dir / "ttyUSB7", dir / "by-id-adapter");
+  const auto r = parse_config("[[listener]]\nport = \"" + (dir / "by-id-adapter").string() +
+                                  "\"\nbaud = 9600\n\n[[bus]]\nname = \"drives\"\nport = \"" +
+                                  (dir / "ttyUSB7").string() + "\"\n" + std::string(kDevice),
+                              "gw.toml", plugins_);
+  std::filesystem::remove_all(dir);
+  EXPECT_THAT(r.errors, Contains(HasSubstr("is bus 'drives''s")));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\n\n[[listener]]\nport = "
                      "\"/dev/ttyS1\"\nbaud = 19200\n"),
               ElementsAre(HasSubstr("is already the listener's on line 1")));

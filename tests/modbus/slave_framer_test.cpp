@@ -360,6 +360,29 @@ TEST(SlaveFramerRtu, TheNextRequestRightAfterOurReplyIsTaken) {
   }
 }
 
+// A port that hands bytes over late (LineTiming::latency: a UART's FIFO, a USB latency timer): a
+// frame whose tail comes 10 ms after its head is one request when the port may be 20 ms late,
+// and is cut (discarded) when the framer goes by the specification's 1.5 / 3.5 characters alone.
+TEST(SlaveFramerRtu, APortsLatencyIsNoGapInsideAFrame) {
+  for (const auto latency : {0ms, 20ms}) {
+    SCOPED_TRACE(latency.count());
+    LineTiming t = k9600;
+    t.latency = latency;
+    Line line(Framing::rtu, Delimit::silence, t);
+    line.feed(Bytes(kRead.begin(), kRead.begin() + 5), 10ms);
+    if (latency > 0ms) EXPECT_EQ(line.framer().deadline(), line.now() + 20ms);
+    line.feed(Bytes(kRead.begin() + 5, kRead.end()), 10ms);
+    line.settle();
+    if (latency > 0ms) {
+      EXPECT_EQ(line.shown(), std::vector<std::string>{request(8, kReadAdu)});
+    } else {
+      EXPECT_EQ(line.shown(), (std::vector<std::string>{event(Kind::broken, 5),
+                                                        event(Kind::broken, 3)}));
+    }
+    EXPECT_ALL_BYTES_ACCOUNTED(line);
+  }
+}
+
 TEST(SlaveFramerRtu, AReadIsTakenToHaveBegunItsBytesEarlier) {
   EXPECT_EQ(k9600Wire.char_time, 1145us);  // 11 / 9600 s, rounded down
   for (const auto silence : {0us, 2 * kChar9600}) {

@@ -179,6 +179,45 @@ TEST_F(SlaveHostTest, AnAcceptedWriteIsAnsweredAtOnceAndAFailureLaterCounted) {
   EXPECT_EQ(counters_.counts.write_timeouts, 1U);
 }
 
+// The master polls on before the drive has settled the write it was told was accepted: the
+// failure that comes later is still counted (and logged).
+TEST_F(SlaveHostTest, AnAcceptedWritesFailureIsCountedAfterTheNextRequestsToo) {
+  make(WriteReply::accepted);
+  receive(1, kWrite);
+  advance(timing_.t35);
+  receive(1, kRead);
+  advance(timing_.t35);
+  ASSERT_EQ(sent_.size(), 2U);
+  backend_.pending[0](Exception::gateway_target_failed);
+  advance(0us);
+  EXPECT_EQ(counters_.counts.write_timeouts, 1U);
+  EXPECT_EQ(sent_.size(), 2U);
+}
+
+// The master talks again before the 3.5-character silence its request asked for: the exception
+// reply that was due is not put over it (counted as not answered, FC 08 0x0F, not as an
+// exception sent, 0x0D), and what it sent into the silence is no request either.
+TEST_F(SlaveHostTest, AReplyNotSentIsNotCountedAsSent) {
+  make();
+  receive(1, {0x03, 0x00, 0x10, 0x00, 0x00});  // quantity 0: exception 03, due after t3.5
+  advance(timing_.t35 / 2);
+  receive(1, kRead);
+  advance(1s);
+  EXPECT_TRUE(sent_.empty());
+  EXPECT_EQ(counters_.counts.bus_exception_errors, 0U);
+  EXPECT_EQ(counters_.counts.server_no_response, 1U);
+  EXPECT_EQ(counters_.counts.broken_frames, 1U);
+}
+
+TEST_F(SlaveHostTest, ABroadcastReadWriteIsNoWrite) {
+  make(WriteReply::confirmed, true);
+  // 0x17: read holding 0 x1, write holding 1 x1 = 600 (Application Protocol 6.17).
+  receive(0, {0x17, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01, 0x00, 0x01, 0x02, 0x02, 0x58});
+  advance(1s);
+  EXPECT_TRUE(backend_.writes.empty());
+  EXPECT_TRUE(sent_.empty());
+}
+
 TEST_F(SlaveHostTest, ABroadcastWriteIsRefusedUnlessAllowedAndNeverAnswered) {
   make();
   receive(0, kWrite);
