@@ -302,6 +302,22 @@ TEST_F(SerialListenerE2E, AReloadAppliesTheNewAccessLevelAtOnce) {
   EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 300);
 }
 
+// A drive that went silent: over the line as over TCP, its status says comm_lost and a write to
+// it is exception 0x0B (gateway target failed to respond), never an echo.
+TEST_F(SerialListenerE2E, ASilentDrivesWriteIs0x0BOverTheLineToo) {
+  start("access = \"operate\"\n");
+  sim_->control("silent on");
+  ASSERT_TRUE(eventually(
+      [&] { return (plc_->input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 10s));
+  const auto setpoint = std::to_string(reg::setpoint);
+  const auto out = master({"write", "1", setpoint, "500", "read", "1", "input",
+                           std::to_string(reg::status), "1"});
+  ASSERT_EQ(out.size(), 2U) << ::testing::PrintToString(out);
+  EXPECT_EQ(out[0], "exception 11");
+  const std::string tcp_status = std::to_string(plc_->input(reg::status, 1).regs[0]);
+  EXPECT_EQ(out[1], "ok " + tcp_status);
+}
+
 // A read listener on the line: a write is exception 01 and reaches no drive, reads are served.
 TEST_F(SerialListenerE2E, AReadListenersMasterGetsException01ForAWrite) {
   start("access = \"read\"\n");
