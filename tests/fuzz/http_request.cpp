@@ -5,22 +5,23 @@
 // a fake Content.
 //
 // Invariants: a parse error (malformed, too large, a body, a partial message at EOF) never reaches
-// route(); a routed request had no body and at most 2 x 8 KiB of headers (see below); route() answers 200, 404 or
-// 405 (and for GET/HEAD /api/v1/capture also 400 or 403, 403 exactly when capture is off);
-// 405 exactly for methods other than GET and HEAD, with "Allow: GET, HEAD"; HEAD answers as GET
-// does; 200 only for the documents the server has, each with its content type, or a capture of a
-// bus that exists for 1..300 s.
+// route(); a routed request had no body and at most 2 x 8 KiB of headers (see below); route()
+// answers 200, 404 or 405 (and for GET/HEAD /api/v1/capture also 400 or 403, 403 exactly when
+// capture is off; for GET/HEAD /api/v1/events and /api/v1/trends also 400, a query the history
+// cannot answer); 405 exactly for methods other than GET and HEAD, with "Allow: GET, HEAD"; HEAD
+// answers as GET does; 200 only for the documents the server has, each with its content type, or a
+// capture of a bus that exists for 1..300 s.
 //
 // Input: one option byte, then the stream.
 //   bits 0-5  segment size: 0 = as much as the buffer takes, n = n bytes at a time
 //   bit 6     expand: u16 prefix length, the prefix, u16 count, a filler byte repeated count times,
 //             then the rest (reaches the 8 KiB limit from libFuzzer's 4 KiB inputs)
 //   bit 7     [http] capture = true (RouteOptions::capture)
+#include <algorithm>
 #include <boost/beast/core/flat_buffer.hpp>
 #include <boost/beast/http/empty_body.hpp>
 #include <boost/beast/http/error.hpp>
 #include <boost/beast/http/parser.hpp>
-#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -60,11 +61,13 @@ std::string stream_of(drivegate::fuzz::FuzzInput& in, bool expand) {
 void check_route(std::string_view method, std::string_view target,
                  drivegate::http::test::FakeContent& content, bool capture) {
   const int before = content.calls();
+  const int history_before = content.history_calls;
   const drivegate::http::RouteOptions options{capture};
   const Response r = drivegate::http::route(method, target, content, options);
   const bool readable = method == "GET" || method == "HEAD";
   const std::string_view path = target.substr(0, target.find('?'));
   const bool capture_path = readable && path == "/api/v1/capture";
+  const bool history_path = readable && (path == "/api/v1/events" || path == "/api/v1/trends");
   if (capture_path) {
     // A stream, not a document: refused (403 unless enabled), or a bad request (400: no bus, bad
     // seconds), or an unknown bus (404), or what to stream.
@@ -73,13 +76,23 @@ void check_route(std::string_view method, std::string_view target,
     FUZZ_CHECK((r.status == 200) == r.capture.has_value());
     if (r.capture) {
       FUZZ_CHECK(r.capture->bus == "line");
-      FUZZ_CHECK(r.capture->duration.count() >= 1 && r.capture->duration <= drivegate::http::kCaptureMax);
+      FUZZ_CHECK(r.capture->duration.count() >= 1 &&
+                 r.capture->duration <= drivegate::http::kCaptureMax);
       FUZZ_CHECK(r.content_type == "application/vnd.tcpdump.pcap");
     }
+  } else if (history_path) {
+    // A document, or a 400 naming what of the query is wrong; never a 404 (the route exists).
+    FUZZ_CHECK(r.status == 200 || r.status == 400);
+    FUZZ_CHECK(!r.capture);
+    FUZZ_CHECK(!r.body.empty());
+    // Asked of the history at most once; a 200 always was (a refused kind was asked too).
+    FUZZ_CHECK(content.history_calls - history_before <= 1);
+    if (r.status == 200) FUZZ_CHECK(content.history_calls == history_before + 1);
   } else {
     FUZZ_CHECK(r.status == 200 || r.status == 404 || r.status == 405);
     FUZZ_CHECK(!r.capture);
     FUZZ_CHECK(!r.body.empty());
+    FUZZ_CHECK(content.history_calls == history_before);
   }
   FUZZ_CHECK((r.status == 405) == !readable);
   FUZZ_CHECK((r.status == 405) == (r.allow == "GET, HEAD"));
@@ -90,8 +103,9 @@ void check_route(std::string_view method, std::string_view target,
     FUZZ_CHECK(r.content_type == "text/plain; charset=utf-8");
   } else if (!capture_path) {
     FUZZ_CHECK(path == "/" || path == "/index.html" || path == "/api/v1/status" ||
-               path == "/api/v1/regmap" || path == "/metrics");
-    FUZZ_CHECK(content.calls() == before + (path == "/" || path == "/index.html" ? 0 : 1));
+               path == "/api/v1/regmap" || path == "/metrics" || history_path);
+    FUZZ_CHECK(content.calls() ==
+               before + (path == "/" || path == "/index.html" || history_path ? 0 : 1));
     if (path == "/metrics") FUZZ_CHECK(r.content_type.starts_with("text/plain; version=0.0.4"));
     if (path.starts_with("/api/")) FUZZ_CHECK(r.content_type == "application/json");
   }

@@ -38,11 +38,13 @@ class FakeContent : public Content {
   }
   // The history's documents: what the route parsed is kept; only "command" is a known kind.
   std::optional<std::string> events_json(const EventsQuery& q) override {
+    ++history_calls;
     events_query = q;
     if (!q.kind.empty() && q.kind != "command") return std::nullopt;
     return R"({"events":[]})";
   }
   std::string trends_json(const TrendsQuery& q) override {
+    ++history_calls;
     trends_query = q;
     return R"({"trends":[]})";
   }
@@ -54,6 +56,7 @@ class FakeContent : public Content {
   std::atomic<int> metrics_calls{0};
   std::atomic<int> regmap_calls{0};
   std::atomic<int> captures_started{0};
+  std::atomic<int> history_calls{0};  // events_json and trends_json, refused or not
 
  private:
   class QuietCapture : public CaptureStream {
