@@ -1,6 +1,7 @@
 #include "diagnostics.h"
 
 #include <algorithm>
+#include <array>
 
 #include "pdu.h"
 
@@ -21,6 +22,16 @@ std::size_t echo_with(std::span<const std::uint8_t> request, std::uint64_t value
   return 5;
 }
 
+// The counter each of sub-functions 0x0B..0x12 returns, in order (6.8.1).
+using Counter = std::uint64_t SerialCounters::*;
+constexpr std::array<Counter, diag::bus_char_overrun_count - diag::bus_message_count + 1>
+    kCounterOf = {
+        &SerialCounters::bus_messages,         &SerialCounters::bus_comm_errors,
+        &SerialCounters::bus_exception_errors, &SerialCounters::server_messages,
+        &SerialCounters::server_no_response,   &SerialCounters::server_nak,
+        &SerialCounters::server_busy,          &SerialCounters::bus_char_overruns,
+};
+
 }  // namespace
 
 std::size_t diagnostics(std::span<const std::uint8_t> request, const SerialCounters& counters,
@@ -40,28 +51,16 @@ std::size_t diagnostics(std::span<const std::uint8_t> request, const SerialCount
   if (request.size() != 5 || request[3] != 0 || request[4] != 0) {
     return exception_pdu(kFunction, Exception::illegal_data_value, out);
   }
+  if (sub >= diag::bus_message_count && sub <= diag::bus_char_overrun_count) {
+    const auto counter = kCounterOf[sub - diag::bus_message_count];
+    return echo_with(request, counters.*counter - cleared.*counter, out);
+  }
   switch (sub) {
     case diag::return_diagnostic_register:
       return echo_with(request, 0, out);  // no diagnostic bits are defined here
     case diag::clear_counters:
       cleared = counters;
       return echo_with(request, 0, out);
-    case diag::bus_message_count:
-      return echo_with(request, counters.bus_messages - cleared.bus_messages, out);
-    case diag::bus_comm_error_count:
-      return echo_with(request, counters.bus_comm_errors - cleared.bus_comm_errors, out);
-    case diag::bus_exception_error_count:
-      return echo_with(request, counters.bus_exception_errors - cleared.bus_exception_errors, out);
-    case diag::server_message_count:
-      return echo_with(request, counters.server_messages - cleared.server_messages, out);
-    case diag::server_no_response_count:
-      return echo_with(request, counters.server_no_response - cleared.server_no_response, out);
-    case diag::server_nak_count:
-      return echo_with(request, counters.server_nak - cleared.server_nak, out);
-    case diag::server_busy_count:
-      return echo_with(request, counters.server_busy - cleared.server_busy, out);
-    case diag::bus_char_overrun_count:
-      return echo_with(request, counters.bus_char_overruns - cleared.bus_char_overruns, out);
     case diag::clear_overrun_counter:
       cleared.bus_char_overruns = counters.bus_char_overruns;
       return echo_with(request, 0, out);
