@@ -150,7 +150,8 @@ void SlaveFramer::take_frames(SerialClock::time_point now) {
     auto d = modbus_serial::decode_request(framing_, rx_);
     if (d.status == DecodeStatus::incomplete) {
       if (rx_.size() < most) return;
-      d = decoded_bad<modbus_serial::Adu>(rx_.size(), FrameError::bad_length);
+      // A guard: the codec answers a frame this long `bad_length` (below) before it could be
+      // incomplete, but a frame that cannot end must never hold the buffer.
       if (rtu_line) {
         skip_rest(FramerEvent::Kind::overrun);
         return;
