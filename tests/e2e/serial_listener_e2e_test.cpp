@@ -47,11 +47,19 @@ class SerialListenerE2E : public ::testing::Test {
                      slurp(dir_ / "daemon.log").find("(ascii): ") != std::string::npos; },
         5s));
   }
-  // Runs the master with `steps`; one line of output a step.
+  // Runs the master on the line with `steps`; one line of output a step.
   std::vector<std::string> master(const std::vector<std::string>& steps,
                                   const std::string& framing = "rtu") {
-    std::vector<std::string> argv = {kSystemPython, master_script().string(), "--port",
-                                     (dir_ / "m").string(), "--framing", framing};
+    return run_master({"--port", (dir_ / "m").string(), "--framing", framing}, steps);
+  }
+  // The same master over TCP, RTU frames on the socket ("RTU over TCP").
+  std::vector<std::string> tcp_master(int port, const std::vector<std::string>& steps) {
+    return run_master({"--tcp", "127.0.0.1:" + std::to_string(port)}, steps);
+  }
+  std::vector<std::string> run_master(const std::vector<std::string>& where,
+                                      const std::vector<std::string>& steps) {
+    std::vector<std::string> argv = {kSystemPython, master_script().string()};
+    argv.insert(argv.end(), where.begin(), where.end());
     argv.insert(argv.end(), steps.begin(), steps.end());
     Child c(argv, dir_ / "master.err");
     std::vector<std::string> lines;
@@ -60,17 +68,6 @@ class SerialListenerE2E : public ::testing::Test {
     return lines;
   }
   std::string log() { return slurp(dir_ / "daemon.log"); }
-  // The same master over TCP, RTU frames on the socket ("RTU over TCP").
-  std::vector<std::string> tcp_master(int port, const std::vector<std::string>& steps) {
-    std::vector<std::string> argv = {kSystemPython, master_script().string(), "--tcp",
-                                     "127.0.0.1:" + std::to_string(port)};
-    argv.insert(argv.end(), steps.begin(), steps.end());
-    Child c(argv, dir_ / "master.err");
-    std::vector<std::string> lines;
-    while (auto line = c.read_line(20s)) lines.push_back(*line);
-    c.wait_exit(5s);
-    return lines;
-  }
 
   // The pseudo-terminal pair, made again after `socat_` was stopped (an adapter plugged back).
   void make_line() {
