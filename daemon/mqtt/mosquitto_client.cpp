@@ -1,15 +1,20 @@
 #include "mqtt/mosquitto_client.h"
 
 #include <mosquitto.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <openssl/ssl.h>
 #include <sys/ioctl.h>
+#include <sys/socket.h>
 
 #include <boost/asio/ip/address.hpp>
 #include <boost/asio/post.hpp>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 namespace drivegate::mqtt {
 
@@ -19,6 +24,9 @@ namespace {
 
 constexpr std::chrono::seconds kMiscPeriod{1};  // keep-alive pings and their timeouts
 constexpr int kPacketsPerTurn = 64;             // read at most this many before letting others run
+// How a broker's refusal of the client certificate shows (MosquittoClient::lost_reason).
+constexpr const char* kEndedBeforeConnack =
+    "the broker ended the TLS session before its CONNACK (is the client certificate refused?): ";
 
 // libmosquitto's process-wide set-up, done once before the first client (its documented
 // requirement); never undone, as other clients may still be alive at exit.
@@ -38,6 +46,33 @@ bool is_address(const std::string& host) {
   return !ec;
 }
 
+// The attempt's TLS handshake while it is not over, else nullptr. libmosquitto 2.0.11 (Debian 12)
+// goes on with it only in mosquitto_loop_read, whichever way OpenSSL waits: its loop_write does
+// nothing until the handshake is over, while mosquitto_want_write says yes (the CONNECT is queued
+// behind it). Over any network but loopback, the handshake's first write finds the TCP connection
+// still being set up (EAGAIN): waiting to write and calling loop_write would spin until the
+// attempt's timeout (tests/e2e/mqtt_tls_e2e_test.cpp, TlsHandshakeGoesOnAfterASlowTcpConnect).
+const SSL* handshaking(mosquitto* m) {
+  const auto* ssl = static_cast<const SSL*>(mosquitto_ssl_get(m));
+  return ssl != nullptr && SSL_is_init_finished(ssl) == 0 ? ssl : nullptr;
+}
+
+// Why the TLS handshake cannot go on, or nullopt. libmosquitto 2.0.11 takes OpenSSL's
+// SSL_ERROR_SYSCALL in the handshake (the connection refused, or closed by the broker) for "try
+// again" (its issue 2594): the socket then stays ready, and the attempt would spin until its
+// timeout, for a broker that is down too. The TCP state tells.
+std::optional<std::string> handshake_ended(mosquitto* m) {
+  if (handshaking(m) == nullptr) return std::nullopt;
+  tcp_info info{};
+  socklen_t size = sizeof info;
+  if (::getsockopt(mosquitto_socket(m), IPPROTO_TCP, TCP_INFO, &info, &size) != 0) {
+    return std::nullopt;
+  }
+  if (info.tcpi_state == TCP_CLOSE) return "the connection was refused or reset";
+  if (info.tcpi_state == TCP_CLOSE_WAIT) return "the broker closed the connection in TLS set-up";
+  return std::nullopt;
+}
+
 }  // namespace
 
 MosquittoClient::MosquittoClient(asio::io_context& io, BrokerOptions options, Handlers handlers,
@@ -53,23 +88,45 @@ MosquittoClient::MosquittoClient(asio::io_context& io, BrokerOptions options, Ha
   init_library();
   mosq_ = mosquitto_new(options_.client_id.c_str(), true, this);
   if (mosq_ == nullptr) throw std::runtime_error("mosquitto_new failed");
+  setup_error_ = configure();
+  if (!setup_error_.empty()) throw std::runtime_error(setup_error_);
+}
+
+void MosquittoClient::use_broker(BrokerOptions options) {
+  state_ = State::idle;
+  connect_timer_.cancel();
+  close_socket();
+  options_ = std::move(options);
+  // Back to a new client's settings (TLS off included), the socket closed, then this broker's.
+  const int rc = mosquitto_reinitialise(mosq_, options_.client_id.c_str(), true, this);
+  setup_error_ = rc == MOSQ_ERR_SUCCESS ? configure() : "MQTT client: " + error_text(rc);
+}
+
+std::string MosquittoClient::configure() {
   mosquitto_connect_callback_set(mosq_, &MosquittoClient::on_connect);
   mosquitto_disconnect_callback_set(mosq_, &MosquittoClient::on_disconnect);
   mosquitto_message_callback_set(mosq_, &MosquittoClient::on_message);
+  mosquitto_log_callback_set(mosq_, &MosquittoClient::on_log);
   mosquitto_int_option(mosq_, MOSQ_OPT_TCP_NODELAY, 1);  // a DDATA leaves at once, not batched
+  const auto failed = [](int rc, const char* what) {
+    return rc == MOSQ_ERR_SUCCESS ? std::string()
+                                  : std::string("MQTT ") + what + ": " + error_text(rc);
+  };
   if (!options_.username.empty()) {
-    check(
+    const int rc =
         mosquitto_username_pw_set(mosq_, options_.username.c_str(),
-                                  options_.password.empty() ? nullptr : options_.password.c_str()),
-        "username");
+                                  options_.password.empty() ? nullptr : options_.password.c_str());
+    if (rc != MOSQ_ERR_SUCCESS) return failed(rc, "username");
   }
   if (options_.tls) {
-    check(mosquitto_tls_set(mosq_, options_.ca.c_str(), nullptr,
-                            options_.cert.empty() ? nullptr : options_.cert.c_str(),
-                            options_.key.empty() ? nullptr : options_.key.c_str(), nullptr),
-          "TLS files");
-    check(mosquitto_tls_opts_set(mosq_, SSL_VERIFY_PEER, "tlsv1.2", nullptr), "TLS options");
+    int rc = mosquitto_tls_set(mosq_, options_.ca.c_str(), nullptr,
+                               options_.cert.empty() ? nullptr : options_.cert.c_str(),
+                               options_.key.empty() ? nullptr : options_.key.c_str(), nullptr);
+    if (rc != MOSQ_ERR_SUCCESS) return failed(rc, "TLS files");
+    rc = mosquitto_tls_opts_set(mosq_, SSL_VERIFY_PEER, "tlsv1.2", nullptr);
+    if (rc != MOSQ_ERR_SUCCESS) return failed(rc, "TLS options");
   }
+  return {};
 }
 
 MosquittoClient::~MosquittoClient() {
@@ -78,17 +135,17 @@ MosquittoClient::~MosquittoClient() {
   mosquitto_destroy(mosq_);
 }
 
-void MosquittoClient::check(int rc, const char* what) {
-  if (rc != MOSQ_ERR_SUCCESS) {
-    throw std::runtime_error(std::string("MQTT ") + what + ": " + error_text(rc));
-  }
-}
-
 void MosquittoClient::connect(const std::string& will_topic, const std::string& will_payload) {
   state_ = State::idle;
   close_socket();
   will_topic_ = will_topic;
   will_payload_ = will_payload;
+  lib_error_.clear();
+  if (!setup_error_.empty()) {  // this broker's settings were refused (a TLS file gone)
+    state_ = State::connecting;
+    fail(setup_error_);
+    return;
+  }
   connect_timer_.expires_after(options_.connect_timeout);
   const std::uint64_t generation = generation_;
   connect_timer_.async_wait([this, generation](const boost::system::error_code& ec) {
@@ -126,7 +183,7 @@ void MosquittoClient::start(const std::string& address) {
                                  static_cast<int>(options_.keepalive.count()));
   }
   if (rc != MOSQ_ERR_SUCCESS) {
-    fail(error_text(rc));
+    fail(lost_reason(rc));
     return;
   }
   const int fd = mosquitto_socket(mosq_);
@@ -156,7 +213,8 @@ void MosquittoClient::watch() {
                          if (!ec) on_readable(generation);
                        });
   }
-  if (!writing_ && mosquitto_want_write(mosq_)) {
+  const SSL* tls = handshaking(mosq_);
+  if (!writing_ && (tls != nullptr ? SSL_want_write(tls) != 0 : mosquitto_want_write(mosq_))) {
     writing_ = true;
     socket_.async_wait(asio::posix::stream_descriptor::wait_write,
                        [this, generation](const boost::system::error_code& ec) {
@@ -174,7 +232,11 @@ void MosquittoClient::on_readable(std::uint64_t generation) {
     const int rc = mosquitto_loop_read(mosq_, 1);
     if (generation != generation_) return;  // a callback ended or replaced the session
     if (rc != MOSQ_ERR_SUCCESS) {
-      fail(error_text(rc));
+      fail(lost_reason(rc));
+      return;
+    }
+    if (auto ended = handshake_ended(mosq_)) {
+      fail(std::move(*ended));
       return;
     }
     int pending = 0;
@@ -195,10 +257,15 @@ void MosquittoClient::on_readable(std::uint64_t generation) {
 }
 
 void MosquittoClient::on_writable(std::uint64_t generation) {
-  const int rc = mosquitto_loop_write(mosq_, 1);
+  const int rc = handshaking(mosq_) != nullptr ? mosquitto_loop_read(mosq_, 1)  // its next step
+                                               : mosquitto_loop_write(mosq_, 1);
   if (generation != generation_) return;
   if (rc != MOSQ_ERR_SUCCESS) {
-    fail(error_text(rc));
+    fail(lost_reason(rc));
+    return;
+  }
+  if (auto ended = handshake_ended(mosq_)) {
+    fail(std::move(*ended));
     return;
   }
   watch();
@@ -244,6 +311,10 @@ bool MosquittoClient::subscribe(const std::string& topic, int qos) {
   return true;
 }
 
+bool MosquittoClient::busy() const {
+  return state_ == State::connected && mosquitto_want_write(mosq_);
+}
+
 void MosquittoClient::disconnect() {
   const bool was_connected = state_ == State::connected;
   state_ = State::idle;
@@ -253,8 +324,24 @@ void MosquittoClient::disconnect() {
   close_socket();
 }
 
+std::string MosquittoClient::lost_reason(int rc) const {
+  const int err = errno;  // for MOSQ_ERR_ERRNO, as libmosquitto left it
+  std::string why = rc == MOSQ_ERR_ERRNO ? std::strerror(err) : mosquitto_strerror(rc);
+  // With TLS 1.3 the client's side of the handshake is over before the broker has checked the
+  // client certificate: a broker that does not accept it ends the session before CONNACK, which
+  // libmosquitto reports as a lost connection (or EPROTO, EPIPE, ECONNRESET: its TLS read or the
+  // CONNECT's write failed). Its own certificate check failing is MOSQ_ERR_TLS.
+  const bool ended = rc == MOSQ_ERR_CONN_LOST ||
+                     (rc == MOSQ_ERR_ERRNO && (err == EPROTO || err == EPIPE || err == ECONNRESET));
+  if (options_.tls && state_ == State::connecting && ended) {
+    why = kEndedBeforeConnack + why;
+  }
+  return why;
+}
+
 void MosquittoClient::fail(std::string why) {
   if (state_ == State::idle) return;
+  if (!lib_error_.empty()) why += " (" + std::exchange(lib_error_, {}) + ")";
   state_ = State::idle;
   connect_timer_.cancel();
   close_socket();
@@ -279,12 +366,20 @@ void MosquittoClient::on_connect(mosquitto* /*m*/, void* self, int rc) {
   }
   c->state_ = State::connected;
   c->connect_timer_.cancel();
+  c->lib_error_.clear();
   if (c->handlers_.connected) c->handlers_.connected();
 }
 
 void MosquittoClient::on_disconnect(mosquitto* /*m*/, void* self, int rc) {
   auto* c = static_cast<MosquittoClient*>(self);
-  c->fail(rc == 0 ? std::string("disconnected by the broker") : error_text(rc));
+  c->fail(rc == 0 ? std::string("disconnected by the broker") : c->lost_reason(rc));
+}
+
+// libmosquitto only logs OpenSSL's reasons ("certificate verify failed", ...): the attempt's first
+// error is kept for lost.
+void MosquittoClient::on_log(mosquitto* /*m*/, void* self, int level, const char* text) {
+  auto* c = static_cast<MosquittoClient*>(self);
+  if (level == MOSQ_LOG_ERR && text != nullptr && c->lib_error_.empty()) c->lib_error_ = text;
 }
 
 void MosquittoClient::on_message(mosquitto* /*m*/, void* self, const mosquitto_message* msg) {

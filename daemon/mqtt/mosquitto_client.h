@@ -52,6 +52,9 @@ class MosquittoClient {
   MosquittoClient(const MosquittoClient&) = delete;
   MosquittoClient& operator=(const MosquittoClient&) = delete;
 
+  // From the next connect() on, this broker (another of [mqtt] brokers): an attempt or session
+  // in progress is abandoned (without calling lost), and the client set up afresh for it.
+  void use_broker(BrokerOptions options);
   // Starts an attempt with this will (QoS 1, not retained); connected or lost follows. An attempt
   // or session in progress is abandoned first (without calling lost).
   void connect(const std::string& will_topic, const std::string& will_payload);
@@ -62,6 +65,8 @@ class MosquittoClient {
   void disconnect();
 
   [[nodiscard]] bool connected() const { return state_ == State::connected; }
+  // Bytes queued for the broker and not yet written: it is slower than what is published.
+  [[nodiscard]] bool busy() const;
   [[nodiscard]] const BrokerOptions& options() const { return options_; }
 
  private:
@@ -73,11 +78,15 @@ class MosquittoClient {
   void on_writable(std::uint64_t generation);
   void tick();
   void fail(std::string why);
+  // libmosquitto's `rc` (and errno) as the reason an attempt or session ended.
+  [[nodiscard]] std::string lost_reason(int rc) const;
   void close_socket();
-  void check(int rc, const char* what);
+  // Callbacks, options, credentials and TLS on a new or reinitialised client; why not, or "".
+  std::string configure();
   static void on_connect(mosquitto* m, void* self, int rc);
   static void on_disconnect(mosquitto* m, void* self, int rc);
   static void on_message(mosquitto* m, void* self, const mosquitto_message* msg);
+  static void on_log(mosquitto* m, void* self, int level, const char* text);
 
   boost::asio::io_context& io_;
   BrokerOptions options_;
@@ -92,8 +101,10 @@ class MosquittoClient {
   std::uint64_t generation_ = 0;  // bumped whenever the socket changes: older waits are stale
   bool reading_ = false;
   bool writing_ = false;
+  std::string setup_error_;  // configure()'s refusal: every attempt fails with it
   std::string will_topic_;
   std::string will_payload_;
+  std::string lib_error_;  // libmosquitto's first error message in this attempt (OpenSSL's)
 };
 
 }  // namespace drivegate::mqtt

@@ -36,12 +36,14 @@ class Broker {
   inline static const std::filesystem::path kMosquitto = "/usr/sbin/mosquitto";
 
   // An mqtts listener beside the plain one; the client certificate is asked for only with
-  // `require_certificate` (then it must chain to `cafile`).
+  // `require_certificate` (then it must chain to `cafile`). `use_identity_as_username`: the
+  // certificate's CN is the client's username (the log's "u'NAME'"), as a broker's ACLs use it.
   struct Tls {
     std::filesystem::path cafile;
     std::filesystem::path certfile;
     std::filesystem::path keyfile;
     bool require_certificate = false;
+    bool use_identity_as_username = false;
   };
 
   // Writes dir/"mosquitto.conf" and starts the broker; throws if it does not accept TCP on its
@@ -160,7 +162,9 @@ class Broker {
         << "cafile " << tls_->cafile.string() << "\n"
         << "certfile " << tls_->certfile.string() << "\n"
         << "keyfile " << tls_->keyfile.string() << "\n"
-        << "require_certificate " << (tls_->require_certificate ? "true" : "false") << "\n";
+        << "require_certificate " << (tls_->require_certificate ? "true" : "false") << "\n"
+        << "use_identity_as_username " << (tls_->use_identity_as_username ? "true" : "false")
+        << "\n";
     }
     if (!c) throw std::runtime_error("cannot write " + config().string());
   }
