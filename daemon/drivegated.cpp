@@ -1,5 +1,6 @@
 // drivegated: the gateway daemon. See drivegated(8).
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -73,6 +74,8 @@ int main(int argc, char** argv) {
     case drivegate::DaemonAction::run:
       break;
   }
+  a.options.state_dir = drivegate::resolve_state_dir(a.options.state_dir,
+                                                      std::getenv("STATE_DIRECTORY"));
   try {
     drivegate::Daemon daemon(std::move(a.options),
                              drivegate::make_logger("drivegated", a.log_level));

@@ -195,7 +195,8 @@ int Daemon::run() {
     return 1;
   }
   if (config_.mqtt.enabled) {
-    mqtt_ = std::make_unique<mqtt::Northbound>(io_, config_.mqtt, DRIVEGATE_VERSION, log_);
+    mqtt_ = std::make_unique<mqtt::Northbound>(io_, config_.mqtt, DRIVEGATE_VERSION, log_,
+                                               options_.state_dir);
     mqtt_->use(*gateway_);
   }
   if (server_->listener_count() > 0) {
@@ -300,11 +301,7 @@ void Daemon::reload() {
     restart.emplace_back("[history]");
   }
   config->history = config_.history;
-  if (mqtt_changed(config_.mqtt, config->mqtt)) {
-    log_->warn("[mqtt] changes take effect at the next restart");
-    restart.emplace_back("[mqtt]");
-    config->mqtt = config_.mqtt;
-  }
+  const bool mqtt_reconfigured = mqtt_changed(config_.mqtt, config->mqtt);
   // Unchanged devices and buses move over running; the changed buses close before the new ones
   // open their ports.
   const ConfigDiff diff = diff_config(config_, *config);
@@ -312,7 +309,11 @@ void Daemon::reload() {
   gateway_->stop();
   next->start();
   backend_.set(next.get());
-  if (mqtt_) mqtt_->use(*next);  // a changed device set is a Sparkplug rebirth
+  if (mqtt_reconfigured) {
+    restart_mqtt(config->mqtt, *next);
+  } else if (mqtt_) {
+    mqtt_->use(*next);  // a changed device set is a Sparkplug rebirth
+  }
   // The old gateway goes only after the handlers already queued for it (a housekeeping tick
   // that expired in this turn of the loop cannot be cancelled, and would find it freed).
   boost::asio::post(io_, [old = std::shared_ptr<Gateway>(std::move(gateway_))] {});
@@ -335,6 +336,29 @@ void Daemon::reload() {
                  ? std::string()
                  : fmt::format("; a restart is needed for {}", fmt::join(restart_needed_, ", ")));
   notifier_.ready(status_line());
+}
+
+// [mqtt] changed at a reload: the session ends as a clean one does (NDEATH, then DISCONNECT) and
+// the new configuration's begins with its own births. The same edge node goes on from its bdSeq.
+void Daemon::restart_mqtt(const MqttConfig& next, Gateway& gateway) {
+  std::optional<std::uint8_t> previous;
+  if (mqtt_) {
+    if (config_.mqtt.group_id == next.group_id && config_.mqtt.edge_node_id == next.edge_node_id) {
+      previous = mqtt_->status().bd_seq;
+    }
+    mqtt_->stop();
+    // Freed after the handlers its client's closed socket and timers have already queued.
+    boost::asio::post(io_, [old = std::shared_ptr<mqtt::Northbound>(std::move(mqtt_))] {});
+  }
+  if (next.enabled) {
+    mqtt_ = std::make_unique<mqtt::Northbound>(io_, next, DRIVEGATE_VERSION, log_,
+                                               options_.state_dir, previous);
+    mqtt_->use(gateway);
+    log_->info("[mqtt] applied: a new session with {} as {}/{}", next.brokers.at(0).url,
+               next.group_id, next.edge_node_id);
+  } else {
+    log_->info("[mqtt] removed: the Sparkplug session ended");
+  }
 }
 
 void Daemon::shutdown() {

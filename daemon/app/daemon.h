@@ -35,6 +35,7 @@ struct DaemonOptions {
   std::filesystem::path config;
   std::filesystem::path plugin_dir;     // empty: default_plugin_dir()
   std::optional<ListenAddress> listen;  // replaces the first listener's address
+  std::filesystem::path state_dir;      // what survives a restart (the bdSeq); empty: nothing
 };
 
 class Daemon {
@@ -49,6 +50,7 @@ class Daemon {
   void wait_signal();
   void reload();
   void shutdown();
+  void restart_mqtt(const MqttConfig& next, Gateway& gateway);
   void tick_status();
   void tick_trends();
   // The MQTT session's state, recorded in the history when it changes.

@@ -15,6 +15,9 @@ constexpr Option kOptions[] = {
      "listen there instead of at the first listener's address (its allow list, access level "
      "and TLS settings stay); [::]:502 for IPv6"},
     {"plugin-dir", 'p', "DIR", "load the adapter plugins from DIR instead of the installed ones"},
+    {"state-dir", 0, "DIR",
+     "keep what must survive a restart (the Sparkplug bdSeq) in DIR; default: $STATE_DIRECTORY, "
+     "which systemd sets from the unit's StateDirectory= (/var/lib/drivegate)"},
     {"log-level", 'l', "LEVEL", "trace (every frame in hex), debug, info (default), warn or error"},
     {"version", 'V', nullptr, "print the version and exit"},
     {"help", 'h', nullptr, "print this help and exit"},
@@ -29,8 +32,8 @@ std::span<const Option> daemon_option_table() {
 CommandLine daemon_command_line() {
   return CommandLine(
       "drivegated", kOptions,
-      {"-c FILE [--listen HOST:PORT] [-p DIR] [-l LEVEL]", "--check-config FILE [-p DIR]",
-       "-V | -h"},
+      {"-c FILE [--listen HOST:PORT] [-p DIR] [-l LEVEL]",
+       "--check-config FILE [-p DIR]", "-V | -h"},
       "Polls the drives configured in FILE on their serial lines and serves them as one Modbus\n"
       "TCP server. SIGTERM or SIGINT stops every drive and exits 0; SIGHUP re-reads FILE.\n"
       "See drivegated(8) and drivegate.toml(5).");
@@ -60,6 +63,10 @@ std::variant<DaemonArgs, std::string> parse_daemon_args(std::span<const std::str
     out.log_level = *level;
   }
   if (const auto v = parsed.value("plugin-dir")) out.options.plugin_dir = *v;
+  if (const auto v = parsed.value("state-dir")) {
+    if (v->empty()) return std::string("--state-dir needs a directory, not ''");
+    out.options.state_dir = *v;
+  }
   if (const auto v = parsed.value("check-config")) {
     out.action = DaemonAction::check_config;
     out.check = *v;
@@ -69,6 +76,14 @@ std::variant<DaemonArgs, std::string> parse_daemon_args(std::span<const std::str
   if (!config) return std::string("--config FILE is required");
   out.options.config = *config;
   return out;
+}
+
+std::filesystem::path resolve_state_dir(const std::filesystem::path& option,
+                                        const char* state_directory) {
+  if (!option.empty()) return option;
+  if (state_directory == nullptr) return {};
+  const std::string_view v(state_directory);
+  return std::filesystem::path(std::string(v.substr(0, v.find(':'))));
 }
 
 }  // namespace drivegate

@@ -15,6 +15,7 @@
 #include "drivegate/adapter.h"
 #include "gateway/session.h"
 #include "modbus/server_options.h"
+#include "mqtt/sparkplug.h"
 
 namespace drivegate {
 
@@ -36,7 +37,7 @@ struct ListenAddress {
 struct HttpConfig {
   bool enabled = false;
   ListenAddress listen{"127.0.0.1", 8502};
-  net::AllowList allow;       // empty: every address
+  net::AllowList allow;          // empty: every address
   bool capture = false;          // whether /api/v1/capture is served
   unsigned requests_per_s = 20;  // per client address, bursts of twice that; 0: no limit
   int line = 0;
@@ -45,26 +46,36 @@ struct HttpConfig {
 // [history]: what the daemon keeps of what happened (docs/audit.md). The audit trail goes to
 // the journal whatever this says; these bound what is kept in memory besides.
 struct HistoryConfig {
-  std::size_t events = 2000;         // entries of the event history; 0: none kept
-  std::size_t trend_seconds = 600;   // seconds of trends at one sample a second; 0: none
+  std::size_t events = 2000;        // entries of the event history; 0: none kept
+  std::size_t trend_seconds = 600;  // seconds of trends at one sample a second; 0: none
   int line = 0;
   bool operator==(const HistoryConfig&) const = default;
 };
 
 // [mqtt]: the Sparkplug B northbound (docs/mqtt.md). Off unless the file has [mqtt].
-struct MqttConfig {
-  bool enabled = false;
-  std::string broker;  // as written, for messages: mqtt://host[:port] or mqtts://host[:port]
+// One broker of [mqtt]: `broker`, or each of `brokers`.
+struct MqttBroker {
+  std::string url;  // as written, for messages: mqtt://host[:port] or mqtts://host[:port]
   std::string host;
   std::uint16_t port = 1883;
   bool tls = false;
   std::filesystem::path ca;  // mqtts: the CA the broker's certificate chains to
   std::filesystem::path cert;
   std::filesystem::path key;  // mqtts: a client certificate, both or neither
-  std::string client_id;      // default "drivegate-" + edge_node_id
+  friend bool operator==(const MqttBroker&, const MqttBroker&) = default;
+};
+
+inline constexpr std::size_t kMaxBrokers = 8;
+
+struct MqttConfig {
+  bool enabled = false;
+  // In the order they are tried: the edge node walks to the next when one fails (docs/mqtt.md).
+  std::vector<MqttBroker> brokers;
+  std::string client_id;  // default "drivegate-" + edge_node_id
   std::string group_id;
   std::string edge_node_id;
   std::string primary_host_id;  // empty: publish without waiting for a primary host
+  sparkplug::HostStateForm primary_host_state = sparkplug::HostStateForm::v3_0;  // its STATE's
   std::string username;
   std::filesystem::path password_file;                   // its first line is the password
   std::string password;                                  // read from password_file at load
@@ -72,9 +83,15 @@ struct MqttConfig {
   Millis min_interval{100};                              // per device, between two DDATA
   Millis counter_interval{10'000};  // counters change with every frame: reported this often
   std::chrono::seconds keepalive{30};
-  bool commands = false;                                      // DCMD writes
-  AccessLevel access = AccessLevel::operate;                  // what a DCMD may write
-  bool feed_failsafe = false;  // whether a DCMD proves the PLC is there
+  bool commands = false;                      // DCMD writes
+  AccessLevel access = AccessLevel::operate;  // what a DCMD may write
+  bool feed_failsafe = false;                 // whether a DCMD proves the PLC is there
+  // Store and forward (docs/mqtt.md): changes kept on disk while there is no session, in the
+  // state directory (drivegated --state-dir; without one, nothing is kept).
+  bool store_forward = true;
+  std::uint64_t store_max_bytes = 64ULL * 1024 * 1024;
+  std::chrono::seconds store_max_age{24 * 3600};
+  unsigned replay_per_s = 500;  // historical DDATA a second once a session is back
   int line = 0;
   friend bool operator==(const MqttConfig&, const MqttConfig&) = default;
 };
@@ -118,8 +135,8 @@ struct ListenerConfig {
   std::optional<BusConfig> serial;
   // RTU / ASCII listeners only.
   WriteReply write_reply = WriteReply::confirmed;
-  bool broadcast = false;              // apply writes sent to address 0
-  Millis ascii_timeout{1000};          // Serial Line 2.5.2.1: between two characters of a frame
+  bool broadcast = false;      // apply writes sent to address 0
+  Millis ascii_timeout{1000};  // Serial Line 2.5.2.1: between two characters of a frame
   // A serial listener's port may hand over received bytes this late (a UART's FIFO, a USB
   // adapter's latency timer): pauses inside an RTU frame up to this are the port's.
   Millis rx_latency{20};

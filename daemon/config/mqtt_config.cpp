@@ -1,7 +1,9 @@
 #include "mqtt_config.h"
 
+#include <algorithm>
 #include <charconv>
 #include <fstream>
+#include <optional>
 
 #include "base/read_file.h"
 #include "mqtt/sparkplug.h"
@@ -16,7 +18,7 @@ constexpr const char* kBrokerForm =
     "must be \"mqtt://host[:port]\" or \"mqtts://host[:port]\" (e.g. \"mqtt://10.1.2.3:1883\")";
 
 // "mqtt://host[:port]" / "mqtts://host[:port]", IPv6 in brackets; false when it is not.
-bool parse_broker(std::string_view url, MqttConfig& out) {
+bool parse_broker(std::string_view url, MqttBroker& out) {
   std::string_view rest;
   if (url.starts_with("mqtt://")) {
     rest = url.substr(7);
@@ -101,38 +103,122 @@ void read_password(const std::filesystem::path& file, const toml::node* at, Mqtt
   mqtt.password = text->substr(0, text->find_first_of("\r\n"));
 }
 
-void read_tls_files(TableReader& r, MqttConfig& mqtt, Diagnostics& diag) {
-  const auto ca = r.string("ca", false);
+// ca, cert and key as one table has them ([mqtt]'s, the defaults; or one broker's), each file
+// checked where it is written.
+struct TlsFiles {
+  std::optional<std::filesystem::path> ca;
+  std::optional<std::filesystem::path> cert;
+  std::optional<std::filesystem::path> key;
+  [[nodiscard]] bool any() const { return ca || cert || key; }
+};
+
+TlsFiles read_tls_files(TableReader& r, Diagnostics& diag) {
+  TlsFiles f;
+  std::string error;
+  if (const auto ca = r.string("ca", false)) {
+    f.ca = *ca;
+    // libmosquitto reads it by path, at each connection, on the event loop: a FIFO would hang it.
+    if (!is_readable_regular_file(*f.ca, error)) diag.error(r.node("ca"), r.qualified("ca"), error);
+  }
   const auto cert = r.string("cert", false);
   const auto key = r.string("key", false);
-  if (!mqtt.tls) {
-    if (ca || cert || key) {
-      diag.error_at(mqtt.line, "mqtt", "ca, cert and key are for an mqtts:// broker");
-    }
-    return;
-  }
-  std::string error;
-  if (!ca) {
-    diag.error_at(mqtt.line, "mqtt.ca",
-                  "an mqtts:// broker needs `ca`: the CA its certificate must chain to");
-  } else {
-    mqtt.ca = *ca;
-    // libmosquitto reads it by path, at each connection, on the event loop: a FIFO would hang it.
-    if (!is_readable_regular_file(mqtt.ca, error)) diag.error(r.node("ca"), "mqtt.ca", error);
-  }
   if (cert.has_value() != key.has_value()) {
-    diag.error_at(mqtt.line, "mqtt", "cert and key go together (a client certificate)");
-    return;
+    diag.error(r.node(cert ? "cert" : "key"), r.qualified(cert ? "cert" : "key"),
+               "cert and key go together (a client certificate)");
+    return f;
   }
   if (cert) {
-    mqtt.cert = *cert;
-    mqtt.key = *key;
-    if (!is_readable_regular_file(mqtt.cert, error)) {
-      diag.error(r.node("cert"), "mqtt.cert", error);
+    f.cert = *cert;
+    f.key = *key;
+    if (!is_readable_regular_file(*f.cert, error)) {
+      diag.error(r.node("cert"), r.qualified("cert"), error);
     }
-    if (!net::key_permissions_ok(mqtt.key, error) || !is_readable_regular_file(mqtt.key, error)) {
-      diag.error(r.node("key"), "mqtt.key", error);
+    if (!net::key_permissions_ok(*f.key, error) || !is_readable_regular_file(*f.key, error)) {
+      diag.error(r.node("key"), r.qualified("key"), error);
     }
+  }
+  return f;
+}
+
+// One broker: its URL and, for mqtts://, its TLS files (its own, else [mqtt]'s). `at` is where it
+// is written, `key` its name in messages ("mqtt.broker", "mqtt.brokers[1]").
+std::optional<MqttBroker> make_broker(const std::string& url, const TlsFiles& own,
+                                      const TlsFiles& shared, const toml::node* at,
+                                      const std::string& key, Diagnostics& diag) {
+  MqttBroker b;
+  b.url = url;
+  if (!parse_broker(url, b)) {
+    diag.error(at, key, kBrokerForm);
+    return std::nullopt;
+  }
+  if (!b.tls) {
+    if (own.any()) diag.error(at, key, "ca, cert and key are for an mqtts:// broker");
+    return b;
+  }
+  const TlsFiles& files = own.ca ? own : shared;  // a broker's own CA brings its own client pair
+  if (!files.ca) {
+    diag.error(at, key + (own.any() ? ".ca" : ""),
+               "an mqtts:// broker needs `ca`: the CA its certificate must chain to (mqtt.ca)");
+    return std::nullopt;
+  }
+  b.ca = *files.ca;
+  const TlsFiles& pair = own.cert ? own : files;
+  if (pair.cert) {
+    b.cert = *pair.cert;
+    b.key = *pair.key;
+  }
+  return b;
+}
+
+// `broker = "..."` or `brokers = ["...", { url = "...", ca = "..." }, ...]`.
+void read_brokers(TableReader& r, MqttConfig& m, Diagnostics& diag) {
+  const TlsFiles shared = read_tls_files(r, diag);
+  const toml::node* one = r.node("broker");
+  const toml::node* many = r.node("brokers");
+  if ((one == nullptr) == (many == nullptr)) {
+    diag.error_at(m.line, "mqtt.broker",
+                  one == nullptr ? "required key is missing (or `brokers`, a list of them)"
+                                 : "broker or brokers, not both");
+    return;
+  }
+  if (one != nullptr) {
+    if (const auto url = r.string("broker", true)) {
+      if (auto b = make_broker(*url, {}, shared, one, "mqtt.broker", diag)) {
+        m.brokers.push_back(std::move(*b));
+      }
+    }
+  } else {
+    const auto* list = many->as_array();
+    if (list == nullptr || list->empty() || list->size() > kMaxBrokers) {
+      diag.error(many, "mqtt.brokers",
+                 "must be a list of 1.." + std::to_string(kMaxBrokers) +
+                     " brokers, each \"mqtt[s]://host[:port]\" or { url = \"...\", ca = ..., "
+                     "cert = ..., key = ... }");
+      return;
+    }
+    for (std::size_t i = 0; i < list->size(); ++i) {
+      const toml::node& item = *list->get(i);
+      const std::string key = "mqtt.brokers[" + std::to_string(i) + "]";
+      std::optional<MqttBroker> b;
+      if (const auto* text = item.as_string()) {
+        b = make_broker(text->get(), {}, shared, &item, key, diag);
+      } else if (const auto* t = item.as_table()) {
+        TableReader br(*t, key, diag);
+        br.expect({"url", "ca", "cert", "key"});
+        const TlsFiles own = read_tls_files(br, diag);
+        if (const auto url = br.string("url", true)) {
+          b = make_broker(*url, own, shared, &item, key, diag);
+        }
+      } else {
+        diag.error(&item, key, "must be a broker URL or a table { url = \"...\", ... }");
+      }
+      if (b) m.brokers.push_back(std::move(*b));
+    }
+  }
+  const bool any_tls =
+      std::any_of(m.brokers.begin(), m.brokers.end(), [](const MqttBroker& b) { return b.tls; });
+  if (shared.any() && !any_tls && !m.brokers.empty()) {
+    diag.error_at(m.line, "mqtt", "ca, cert and key are for an mqtts:// broker");
   }
 }
 
@@ -147,20 +233,50 @@ void read_mqtt(const toml::table& root, Config& cfg, Diagnostics& diag) {
     return;
   }
   TableReader r(*t, "mqtt", diag);
-  r.expect({"broker", "ca", "cert", "key", "client_id", "group_id", "edge_node_id",
-            "primary_host_id", "username", "password_file", "deadband", "min_interval_ms",
-            "counter_interval_ms", "keepalive_s", "commands", "access", "feed_failsafe"});
+  r.expect({"broker",
+            "brokers",
+            "ca",
+            "cert",
+            "key",
+            "client_id",
+            "group_id",
+            "edge_node_id",
+            "primary_host_id",
+            "username",
+            "password_file",
+            "deadband",
+            "min_interval_ms",
+            "counter_interval_ms",
+            "keepalive_s",
+            "commands",
+            "access",
+            "feed_failsafe",
+            "primary_host_version",
+            "store_forward",
+            "store_max_mb",
+            "store_max_age_h",
+            "replay_per_s"});
   MqttConfig& m = cfg.mqtt;
   m.enabled = true;
   m.line = line_of(*t);
-  if (const auto broker = r.string("broker", true)) {
-    m.broker = *broker;
-    if (!parse_broker(*broker, m)) diag.error(r.node("broker"), "mqtt.broker", kBrokerForm);
-  }
-  read_tls_files(r, m, diag);
+  read_brokers(r, m, diag);
   read_id(r, "group_id", true, m.group_id, diag);
   read_id(r, "edge_node_id", true, m.edge_node_id, diag);
   read_id(r, "primary_host_id", false, m.primary_host_id, diag);
+  if (const auto v = r.string("primary_host_version", false)) {
+    // Which STATE the primary host publishes: 3.0's JSON (the default) or 2.2's text.
+    if (*v == "2.2") {
+      m.primary_host_state = sparkplug::HostStateForm::v2_2;
+    } else if (*v != "3.0") {
+      diag.error(r.node("primary_host_version"), "mqtt.primary_host_version",
+                 "must be \"3.0\" (spBv1.0/STATE/<id>, JSON) or \"2.2\" (STATE/<id>, ONLINE / "
+                 "OFFLINE), not \"" +
+                     *v + "\"");
+    }
+    if (m.primary_host_id.empty()) {
+      diag.warning_at(m.line, "mqtt.primary_host_version", "has no effect without primary_host_id");
+    }
+  }
   if (const auto id = r.string("client_id", false)) {
     if (id->empty() || id->size() > 65535) {
       diag.error(r.node("client_id"), "mqtt.client_id", "must be 1..65535 characters");
@@ -188,12 +304,22 @@ void read_mqtt(const toml::table& root, Config& cfg, Diagnostics& diag) {
     m.access = read_access(*a, "mqtt.access", diag).value_or(m.access);
   }
   m.feed_failsafe = r.boolean("feed_failsafe").value_or(false);
+  m.store_forward = r.boolean("store_forward").value_or(true);
+  m.store_max_bytes =
+      static_cast<std::uint64_t>(r.integer("store_max_mb", 1, 65536, false).value_or(64)) * 1024 *
+      1024;
+  m.store_max_age =
+      std::chrono::hours(r.integer("store_max_age_h", 1, 24 * 90, false).value_or(24));
+  m.replay_per_s =
+      static_cast<unsigned>(r.integer("replay_per_s", 10, 100'000, false).value_or(500));
   if (m.feed_failsafe && !m.commands) {
     diag.warning_at(m.line, "mqtt.feed_failsafe", "has no effect while commands = false");
   }
   // Device names are Sparkplug device ids as they are: the configuration's name rule keeps '/',
   // '+' and '#' out of them (config_loader.cpp, check_name).
-  if (m.commands && m.broker.starts_with("mqtt://")) {
+  const bool plain =
+      std::any_of(m.brokers.begin(), m.brokers.end(), [](const MqttBroker& b) { return !b.tls; });
+  if (m.commands && plain) {
     diag.warning_at(m.line, "mqtt.commands",
                     "commands over a plain mqtt:// broker: anyone who may publish there can move "
                     "the drives; use mqtts:// with broker ACLs (docs/mqtt.md)");

@@ -13,11 +13,11 @@ namespace {
 constexpr std::array<std::string_view, 3> kSessionNames = {"offline", "waiting_for_host", "online"};
 
 Metric bd_seq_metric(std::uint8_t bd_seq) {
-  return {std::string(kBdSeq), DataType::uint64, MetricValue{std::uint64_t{bd_seq}}, {}, {}};
+  return {std::string(kBdSeq), DataType::uint64, MetricValue{std::uint64_t{bd_seq}}, {}, {}, false};
 }
 
 Metric string_metric(std::string_view name, std::string value) {
-  return {std::string(name), DataType::string, MetricValue{std::move(value)}, {}, {}};
+  return {std::string(name), DataType::string, MetricValue{std::move(value)}, {}, {}, false};
 }
 
 // Whether `now` differs from `before` enough to be reported under `def`.
@@ -36,7 +36,8 @@ std::string_view to_string(SessionState s) {
   return kSessionNames.at(static_cast<std::size_t>(s));
 }
 
-EdgeNode::EdgeNode(EdgeNodeOptions options) : options_(std::move(options)) {}
+EdgeNode::EdgeNode(EdgeNodeOptions options)
+    : options_(std::move(options)), bd_seq_(options_.last_bd_seq.value_or(255)) {}
 
 Payload EdgeNode::begin_connect(const Now& now) {
   ++bd_seq_;  // wraps 255 -> 0 (spec 6.4.19)
@@ -57,7 +58,9 @@ std::string EdgeNode::will_topic() const {
 std::vector<std::string> EdgeNode::subscriptions() const {
   std::vector<std::string> s = {topic(options_.group, MessageType::ncmd, options_.edge_node),
                                 topic(options_.group, MessageType::dcmd, options_.edge_node, "+")};
-  if (!options_.primary_host.empty()) s.push_back(state_topic(options_.primary_host));
+  if (!options_.primary_host.empty()) {
+    s.push_back(state_topic(options_.primary_host, options_.host_state));
+  }
   return s;
 }
 
@@ -81,7 +84,8 @@ void EdgeNode::connection_lost() {
 
 void EdgeNode::message(std::string_view t, std::string_view payload, const Now& now, Sink& sink,
                        bool retained) {
-  if (!options_.primary_host.empty() && t == state_topic(options_.primary_host)) {
+  if (!options_.primary_host.empty() &&
+      t == state_topic(options_.primary_host, options_.host_state)) {
     host_state(payload, now, sink);  // STATE is retained by design (spec 4.2.1)
     return;
   }
@@ -142,20 +146,23 @@ void EdgeNode::rebirth_requested(const Now& now, Sink& sink) {
 }
 
 void EdgeNode::host_state(std::string_view payload, const Now& now, Sink& sink) {
-  const auto s = parse_host_state(payload);
+  const auto s = parse_host_state(payload, options_.host_state);
   if (!s) {
-    sink.notice(Notice::host_state, "STATE of primary host '" + options_.primary_host +
-                                        "' ignored: not {\"online\": bool, \"timestamp\": ms}");
+    sink.notice(
+        Notice::host_state,
+        "STATE of primary host '" + options_.primary_host + "' ignored: not " +
+            (options_.host_state == HostStateForm::v2_2 ? "ONLINE or OFFLINE (Sparkplug 2.2)"
+                                                        : "{\"online\": bool, \"timestamp\": ms}"));
     return;
   }
   // A timestamp from the future would make every genuine STATE after it look stale (below).
   if (s->timestamp > now.unix_ms + static_cast<std::uint64_t>(kStateClockTolerance.count())) {
-    sink.notice(Notice::host_state,
-                "STATE of primary host '" + options_.primary_host + "' ignored: its timestamp " +
-                    std::to_string(s->timestamp) + " is more than " +
-                    std::to_string(kStateClockTolerance.count() / 1000) +
-                    " s ahead of this gateway's clock (" + std::to_string(now.unix_ms) +
-                    "; check both clocks)");
+    sink.notice(Notice::host_state, "STATE of primary host '" + options_.primary_host +
+                                        "' ignored: its timestamp " + std::to_string(s->timestamp) +
+                                        " is more than " +
+                                        std::to_string(kStateClockTolerance.count() / 1000) +
+                                        " s ahead of this gateway's clock (" +
+                                        std::to_string(now.unix_ms) + "; check both clocks)");
     return;
   }
   // Spec 5.13: a STATE older than the newest one seen is stale (a late retained copy).
@@ -168,6 +175,8 @@ void EdgeNode::host_state(std::string_view payload, const Now& now, Sink& sink) 
     sink.publish(will_topic(), node_death(now));
     connection_lost();
     sink.drop_session();
+  } else if (!s->online && state_ == SessionState::waiting_for_host) {
+    sink.host_offline_before_births();
   }
 }
 
@@ -193,7 +202,10 @@ void EdgeNode::sample(std::size_t device, bool alive, std::vector<MetricValue> v
   d.alive = alive;
   d.latest = std::move(values);
   d.data_ms = data_ms;
-  if (state_ != SessionState::online) return;
+  if (state_ != SessionState::online) {
+    keep(device, now, sink);
+    return;
+  }
   if (!alive) {
     if (d.born) death(device, now, sink);
     return;
@@ -202,6 +214,12 @@ void EdgeNode::sample(std::size_t device, bool alive, std::vector<MetricValue> v
     birth(device, now, sink);
     return;
   }
+  report_or_hold(device, now, sink);
+}
+
+// What changed goes now (report()), or once min_interval has passed since the last (tick()).
+void EdgeNode::report_or_hold(std::size_t device, const Now& now, Sink& sink) {
+  DeviceState& d = devices_[device];
   if (d.due) return;  // held back already: tick() reports the newest values then
   if (changes(device, now).empty()) return;
   if (now.mono >= d.last_data + options_.min_interval) {
@@ -212,7 +230,15 @@ void EdgeNode::sample(std::size_t device, bool alive, std::vector<MetricValue> v
 }
 
 void EdgeNode::tick(const Now& now, Sink& sink) {
-  if (state_ != SessionState::online) return;
+  if (state_ != SessionState::online) {
+    for (std::size_t i = 0; i < devices_.size(); ++i) {
+      DeviceState& d = devices_[i];
+      if (!d.due || now.mono < *d.due) continue;
+      d.due.reset();
+      if (d.alive && !changes(i, now).empty()) report(i, now, sink);
+    }
+    return;
+  }
   if (rebirth_due_ && now.mono >= *rebirth_due_) {
     last_rebirth_ = now.mono;
     rebirth(now, sink);
@@ -245,22 +271,66 @@ std::vector<std::size_t> EdgeNode::changes(std::size_t device, const Now& now) c
   return out;
 }
 
+// Online: the DDATA of what changed. Otherwise, with store_forward, the same kept for later.
 void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
   DeviceState& d = devices_[device];
   const auto changed = changes(device, now);
   if (changed.empty()) return;
+  const bool online = state_ == SessionState::online;
   Payload p;
   p.timestamp = now.unix_ms;
   bool counters = false;
   for (const std::size_t j : changed) {
     const MetricDef& def = defs_[device].metrics[j];
     p.metrics.push_back(device_metric(device, j, false));
+    p.metrics.back().historical = !online;
     d.published[j] = d.latest[j];
     counters = counters || def.counter;
   }
   d.last_data = now.mono;
   if (counters) d.last_counters = now.mono;
-  send(MessageType::ddata, defs_[device].name, std::move(p), sink);
+  if (online) {
+    send(MessageType::ddata, defs_[device].name, std::move(p), sink);
+  } else {
+    sink.store(defs_[device].name, p);
+  }
+}
+
+// A sample while not online, with store_forward: the device's first is kept whole (what it was
+// when the record begins), later ones by the DDATA rules.
+void EdgeNode::keep(std::size_t device, const Now& now, Sink& sink) {
+  DeviceState& d = devices_[device];
+  if (!options_.store_forward || !d.alive) return;
+  if (d.published.size() != d.latest.size()) {
+    d.published.assign(d.latest.size(), MetricValue{});  // every metric differs from null
+    d.last_counters = now.mono - options_.counter_interval;
+    d.last_data = now.mono - options_.min_interval;
+  }
+  report_or_hold(device, now, sink);
+}
+
+bool EdgeNode::replay(std::string_view device, Payload historical, Sink& sink) {
+  if (state_ != SessionState::online) return false;
+  const auto it = std::find_if(defs_.begin(), defs_.end(),
+                               [&](const DeviceDef& d) { return d.name == device; });
+  const auto index = static_cast<std::size_t>(it - defs_.begin());
+  if (it == defs_.end() || !devices_[index].born) {
+    ++replay_dropped_;  // a DDATA before its DBIRTH would be a protocol error (spec 6.4.x)
+    return true;
+  }
+  // Only the metrics the device has now, with the datatype its DBIRTH gave them.
+  std::erase_if(historical.metrics, [&](const Metric& m) {
+    return std::none_of(it->metrics.begin(), it->metrics.end(), [&](const MetricDef& def) {
+      return def.name == m.name && def.type == m.type;
+    });
+  });
+  if (historical.metrics.empty()) {
+    ++replay_dropped_;
+    return true;
+  }
+  for (Metric& m : historical.metrics) m.historical = true;
+  send(MessageType::ddata, it->name, std::move(historical), sink);
+  return true;
 }
 
 // A device's metric as published: its value, stamped with when the drive reported it (spec
@@ -268,8 +338,9 @@ void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
 Metric EdgeNode::device_metric(std::size_t device, std::size_t metric, bool birth) const {
   const MetricDef& def = defs_[device].metrics[metric];
   const DeviceState& d = devices_[device];
-  Metric m{def.name, def.type, d.latest[metric], birth ? def.properties : std::vector<Property>{},
-           std::nullopt};
+  Metric m{def.name,         def.type,
+           d.latest[metric], birth ? def.properties : std::vector<Property>{},
+           std::nullopt,     false};
   if (d.data_ms != 0) m.timestamp = d.data_ms;
   return m;
 }
@@ -280,7 +351,8 @@ void EdgeNode::rebirth(const Now& now, Sink& sink) {
   Payload p;
   p.timestamp = now.unix_ms;
   p.metrics.push_back(bd_seq_metric(bd_seq_));
-  p.metrics.push_back({std::string(kRebirth), DataType::boolean, MetricValue{false}, {}, {}});
+  p.metrics.push_back(
+      {std::string(kRebirth), DataType::boolean, MetricValue{false}, {}, {}, false});
   p.metrics.push_back(string_metric(kVersion, options_.version));
   send(MessageType::nbirth, {}, std::move(p), sink);
   for (std::size_t i = 0; i < devices_.size(); ++i) {

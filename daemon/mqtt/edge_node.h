@@ -15,13 +15,16 @@
 //                device set changed
 //   primary host with primary_host set: births wait for its STATE online; STATE offline
 //                publishes NDEATH and drops the session (spec 5.13); a STATE stamped more than
-//                kStateClockTolerance ahead of this clock is ignored
+//                kStateClockTolerance ahead of this clock is ignored; the 3.0 JSON form, or
+//                the 2.2 ONLINE / OFFLINE text where configured (sparkplug.h)
 //   commands     DCMD: metrics checked here (known, writable, a value, at most
 //                kMaxCommandMetrics), written by the Sink, the outcome published as the device's
 //                Command/Last Point and Command/Last Result; a retained NCMD or DCMD (a command
 //                replayed at every subscription) is never carried out
 //   timestamps   each device metric carries the time of the drive's state it shows (the last
 //                reply that carried it, never a write's echo); the payload's is when it was sent
+//   store and    with store_forward, changes while not online go to Sink::store by the DDATA
+//   forward      rules; replay() publishes them later as historical DDATA (spec 6.4.x)
 #pragma once
 
 #include <cstdint>
@@ -83,6 +86,13 @@ class Sink {
   virtual void publish(const std::string& topic, const Payload& payload) = 0;  // QoS 0
   // STATE offline: NDEATH was published; the session must end (and be made again later).
   virtual void drop_session() = 0;
+  // Store and forward (EdgeNodeOptions::store_forward): a device's changes while there is no
+  // session, as the DDATA they would have been (metrics historical, stamped with their time);
+  // replayed later through EdgeNode::replay().
+  virtual void store(std::string_view device, const Payload& historical) = 0;
+  // STATE offline while the births wait for the host: nothing was published in this session.
+  // Where there is another broker, the host may be online there (docs/mqtt.md).
+  virtual void host_offline_before_births() = 0;
   // Write `points` of device `device` in one request; answer with EdgeNode::command_done.
   virtual void write(std::size_t device, std::vector<PointCommand> points) = 0;
   // Something the log should say (a command refused, a bad STATE payload), anyone on the broker
@@ -94,10 +104,17 @@ struct EdgeNodeOptions {
   std::string group;
   std::string edge_node;
   std::string primary_host;  // empty: do not wait for a primary host application
+  HostStateForm host_state = HostStateForm::v3_0;  // the STATE the primary host publishes
   Millis min_interval{100};
   Millis counter_interval{10'000};
   bool commands = false;
   std::string version;  // Node Info/Version
+  // The bdSeq of this node's previous session (kept across restarts, mqtt/bd_seq_file.h, or
+  // across a reload): the first begin_connect() goes one on from it. Nothing: the first is 0.
+  std::optional<std::uint8_t> last_bd_seq;
+  // Keep the changes seen while not online (Sink::store), by the same rules as DDATA (deadband,
+  // min_interval, counter_interval), from each device's first sample on.
+  bool store_forward = false;
 };
 
 enum class SessionState : std::uint8_t { offline, waiting_for_host, online };
@@ -114,8 +131,9 @@ class EdgeNode {
  public:
   explicit EdgeNode(EdgeNodeOptions options);
 
-  // Before each MQTT CONNECT: the next bdSeq (0 first, then +1 mod 256, spec 6.4.19) and the
-  // NDEATH to register as the will (QoS 1, not retained) under will_topic().
+  // Before each MQTT CONNECT: the next bdSeq (0 first, or one on from options.last_bd_seq; +1
+  // mod 256 each time, spec 6.4.19) and the NDEATH to register as the will (QoS 1, not
+  // retained) under will_topic().
   Payload begin_connect(const Now& now);
   [[nodiscard]] std::string will_topic() const;
   // What to subscribe to once connected (QoS 1): NCMD, DCMD for every device, STATE if waiting
@@ -139,6 +157,11 @@ class EdgeNode {
   // A written command settled: `result` is "ok" or why not.
   void command_done(std::size_t device, std::string points, std::string result, const Now& now,
                     Sink& sink);
+  // A change kept while there was no session (Sink::store), published now as historical DDATA
+  // after this session's births. false: not now (no session online; keep it). true: done, or
+  // dropped (counted in replay_dropped()) because the device is unknown now or not born in this
+  // session, or none of its metrics is one of the device's now.
+  bool replay(std::string_view device, Payload historical, Sink& sink);
   // Publishes the changes held back by min_interval whose time has come.
   void tick(const Now& now, Sink& sink);
   // When tick() has something to do; nullopt: nothing held back.
@@ -154,6 +177,7 @@ class EdgeNode {
   [[nodiscard]] std::uint64_t births() const { return births_; }
   // Commands never carried out because they came retained (NCMD and DCMD).
   [[nodiscard]] std::uint64_t retained_ignored() const { return retained_ignored_; }
+  [[nodiscard]] std::uint64_t replay_dropped() const { return replay_dropped_; }
   // Rebirths asked for while one was too recent, answered together later.
   [[nodiscard]] std::uint64_t rebirths_coalesced() const { return rebirths_coalesced_; }
 
@@ -175,6 +199,8 @@ class EdgeNode {
   void birth(std::size_t device, const Now& now, Sink& sink);
   void death(std::size_t device, const Now& now, Sink& sink);
   void report(std::size_t device, const Now& now, Sink& sink);
+  void keep(std::size_t device, const Now& now, Sink& sink);
+  void report_or_hold(std::size_t device, const Now& now, Sink& sink);
   std::vector<std::size_t> changes(std::size_t device, const Now& now) const;
   void command(std::string_view device, std::string_view payload, const Now& now, Sink& sink);
   void host_state(std::string_view payload, const Now& now, Sink& sink);
@@ -182,16 +208,17 @@ class EdgeNode {
 
   EdgeNodeOptions options_;
   SessionState state_ = SessionState::offline;
-  std::uint8_t bd_seq_ = 255;  // begin_connect() makes the first 0
+  std::uint8_t bd_seq_;  // begin_connect() makes the next
   std::uint8_t seq_ = 0;
   std::uint64_t host_timestamp_ = 0;  // of the newest STATE accepted
   std::vector<DeviceDef> defs_;
   std::vector<DeviceState> devices_;
   std::uint64_t births_ = 0;
   std::optional<TimePoint> last_rebirth_;  // the last rebirth a host asked for
-  std::optional<TimePoint> rebirth_due_;  // a host's rebirth request held back until then
+  std::optional<TimePoint> rebirth_due_;   // a host's rebirth request held back until then
   std::uint64_t retained_ignored_ = 0;
   std::uint64_t rebirths_coalesced_ = 0;
+  std::uint64_t replay_dropped_ = 0;
 };
 
 }  // namespace drivegate::sparkplug

@@ -107,35 +107,100 @@ sparkplug::Property property(std::string key, MetricValue value) {
   return {std::move(key), type, std::move(value)};
 }
 
+// [mqtt] store_forward's store, in the state directory; none without one (said once), or when
+// it cannot be opened (said why).
+std::unique_ptr<StoreForward> make_store(const MqttConfig& config,
+                                         const std::filesystem::path& state_dir,
+                                         const std::shared_ptr<spdlog::logger>& log) {
+  if (!config.store_forward) return nullptr;
+  if (state_dir.empty()) {
+    log->info(
+        "MQTT: changes while the broker is away are not kept: no state directory "
+        "(drivegated --state-dir, or StateDirectory= in the unit)");
+    return nullptr;
+  }
+  SpoolLimits limits;
+  limits.max_bytes = config.store_max_bytes;
+  limits.max_age = config.store_max_age;
+  auto store = std::make_unique<StoreForward>(
+      state_dir / ("sparkplug-" + config.group_id + "-" + config.edge_node_id + ".store"), limits,
+      config.replay_per_s, log);
+  if (!store->open()) return nullptr;
+  return store;
+}
+
+// What the client needs for broker `index` of [mqtt].
+BrokerOptions broker_options(const MqttConfig& config, std::size_t index) {
+  const MqttBroker& b = config.brokers.at(index);
+  return {b.host,
+          b.port,
+          b.tls,
+          b.ca.string(),
+          b.cert.string(),
+          b.key.string(),
+          config.client_id,
+          config.username,
+          config.password,
+          config.keepalive,
+          std::chrono::milliseconds(10'000)};
+}
+
 }  // namespace
 
 Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::string version,
-                       std::shared_ptr<spdlog::logger> log)
+                       std::shared_ptr<spdlog::logger> log, const std::filesystem::path& state_dir,
+                       std::optional<std::uint8_t> previous_bd_seq)
     : io_(io),
       config_(config),
       log_(log),
-      edge_(sparkplug::EdgeNodeOptions{config.group_id, config.edge_node_id, config.primary_host_id,
-                                       config.min_interval, config.counter_interval,
-                                       config.commands, std::move(version)}),
-      client_(io,
-              BrokerOptions{config.host, config.port, config.tls, config.ca.string(),
-                            config.cert.string(), config.key.string(), config.client_id,
-                            config.username, config.password, config.keepalive,
-                            std::chrono::milliseconds(10'000)},
-              MosquittoClient::Handlers{
-                  [this] { connected(); }, [this](std::string why) { lost(why); },
-                  [this](std::string_view t, std::string_view p, bool retained) {
-                    message(t, p, retained);
-                  }},
-              log),
+      bd_seq_file_(state_dir, config.group_id, config.edge_node_id),
+      store_(make_store(config, state_dir, log)),
+      edge_(sparkplug::EdgeNodeOptions{.group = config.group_id,
+                                       .edge_node = config.edge_node_id,
+                                       .primary_host = config.primary_host_id,
+                                       .host_state = config.primary_host_state,
+                                       .min_interval = config.min_interval,
+                                       .counter_interval = config.counter_interval,
+                                       .commands = config.commands,
+                                       .version = std::move(version),
+                                       .last_bd_seq = last_bd_seq(previous_bd_seq),
+                                       .store_forward = store_ != nullptr}),
+      client_(
+          io, broker_options(config, 0),
+          MosquittoClient::Handlers{[this] { connected(); }, [this](std::string why) { lost(why); },
+                                    [this](std::string_view t, std::string_view p, bool retained) {
+                                      message(t, p, retained);
+                                    }},
+          log),
       retry_timer_(io),
-      tick_timer_(io) {
-  status_.broker = config.broker;
+      tick_timer_(io),
+      pace_timer_(io) {
+  status_.broker = config.brokers.at(0).url;
+  status_.brokers = config.brokers.size();
+  if (store_) pace();
 }
 
 Northbound::~Northbound() {
   alive_.reset();
   for (const Watched& w : watched_) w.device->watch({});
+}
+
+std::optional<std::uint8_t> Northbound::last_bd_seq(std::optional<std::uint8_t> previous) const {
+  if (previous) return previous;
+  if (!bd_seq_file_.enabled()) {
+    log_->info(
+        "MQTT: the bdSeq starts at 0: no state directory to keep it in across restarts "
+        "(drivegated --state-dir, or StateDirectory= in the unit)");
+    return std::nullopt;
+  }
+  std::string error;
+  const auto saved = bd_seq_file_.load(error);
+  if (!error.empty()) {
+    log_->warn("MQTT: {}; the bdSeq starts at 0", error);
+  } else if (saved) {
+    log_->info("MQTT: the last session's bdSeq was {} ({})", *saved, bd_seq_file_.path().string());
+  }
+  return saved;
 }
 
 void Northbound::use(Gateway& gateway) {
@@ -174,6 +239,11 @@ void Northbound::stop() {
   stopping_ = true;
   retry_timer_.cancel();
   tick_timer_.cancel();
+  pace_timer_.cancel();
+  if (store_) store_->sync();
+  for (const Watched& w : watched_) w.device->watch({});
+  watched_.clear();
+  dirty_.clear();
   if (client_.connected()) {
     // A clean DISCONNECT makes the broker drop the will: the NDEATH goes out by hand (spec 5.6).
     client_.publish(edge_.will_topic(), sparkplug::encode(edge_.node_death(now())), 1, false);
@@ -191,19 +261,36 @@ NorthboundStatus Northbound::status() const {
   s.births = edge_.births();
   s.commands_retained = edge_.retained_ignored();
   s.rebirths_coalesced = edge_.rebirths_coalesced();
+  if (store_) s.store = store_->stats(edge_);
   return s;
 }
 
 void Northbound::connect() {
   if (stopping_) return;
+  // Here, never in lost(): that runs inside libmosquitto's callback, whose client it would reset.
+  if (client_broker_ != broker_) {
+    client_.use_broker(broker_options(config_, broker_));
+    client_broker_ = broker_;
+  }
   const auto will = edge_.begin_connect(now());
+  // Kept before the will can reach the broker: whatever happens next, the next start goes on
+  // from this one. A state directory that cannot be written does not stop the session.
+  if (const auto ec = bd_seq_file_.save(edge_.bd_seq())) {
+    if (!bd_seq_save_failed_) {
+      log_->warn("MQTT: cannot keep the bdSeq in {}: {}; a restart may reuse it",
+                 bd_seq_file_.path().string(), ec.message());
+    }
+    bd_seq_save_failed_ = true;
+  } else {
+    bd_seq_save_failed_ = false;
+  }
   client_.connect(edge_.will_topic(), sparkplug::encode(will));
 }
 
 void Northbound::connected() {
   ++status_.connects;
   status_.last_error.clear();
-  log_->info("MQTT: connected to {} as {} (bdSeq {}){}", config_.broker, config_.client_id,
+  log_->info("MQTT: connected to {} as {} (bdSeq {}){}", broker_url(), config_.client_id,
              edge_.bd_seq(),
              config_.primary_host_id.empty()
                  ? ""
@@ -225,11 +312,15 @@ void Northbound::lost(const std::string& why) {
   status_.last_error = why;
   backoff_ = backoff_.count() == 0 ? kFirstRetry : std::min(backoff_ * 2, kLongestRetry);
   // One warning per outage; the retries after it only at debug level.
+  const std::string failed = broker_url();
+  const bool walk = next_broker();
   if (first) {
-    log_->warn("MQTT: {}: {}; retrying every {} s at most (Modbus is not affected)", config_.broker,
-               why, kLongestRetry.count() / 1000);
+    log_->warn("MQTT: {}: {}; {} (Modbus is not affected)", failed, why,
+               walk ? fmt::format("trying {} next", broker_url())
+                    : fmt::format("retrying every {} s at most", kLongestRetry.count() / 1000));
   } else {
-    log_->debug("MQTT: {}: {}; next attempt in {} ms", config_.broker, why, backoff_.count());
+    log_->debug("MQTT: {}: {}; next attempt{} in {} ms", failed, why,
+                walk ? " on " + broker_url() : std::string(), backoff_.count());
   }
   connect_after(backoff_);
 }
@@ -243,6 +334,7 @@ void Northbound::connect_after(Millis delay) {
 
 void Northbound::message(std::string_view topic, std::string_view payload, bool retained) {
   edge_.message(topic, payload, now(), *this, retained);
+  if (edge_.state() == sparkplug::SessionState::online) walk_backoff_ = Millis{0};
   schedule_tick();
 }
 
@@ -260,8 +352,8 @@ void Northbound::changed(std::size_t index, std::uint64_t generation) {
 }
 
 void Northbound::flush() {
-  if (edge_.state() == sparkplug::SessionState::offline && client_.connected() == false) {
-    // Nobody to tell: the next session's births sample every device afresh.
+  if (!store_ && edge_.state() == sparkplug::SessionState::offline && !client_.connected()) {
+    // Nobody to tell and nothing kept: the next session's births sample every device afresh.
     return;
   }
   const auto t = now();
@@ -351,6 +443,23 @@ void Northbound::publish(const std::string& topic, const sparkplug::Payload& pay
   if (client_.publish(topic, sparkplug::encode(payload), 0, false)) ++status_.messages;
 }
 
+void Northbound::store(std::string_view device, const sparkplug::Payload& historical) {
+  if (store_) store_->keep(device, historical, now().unix_ms);
+}
+
+void Northbound::pace() {
+  pace_timer_.expires_after(StoreForward::kReplayPeriod);
+  pace_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (ec || stopping_) return;
+    // A broker slower than the replay: wait for what is queued to go before adding more.
+    if (edge_.state() == sparkplug::SessionState::online && store_->waiting() && !client_.busy()) {
+      store_->replay(edge_, *this, now().unix_ms);
+    }
+    if (++paces_ % 10 == 0) store_->sync();
+    pace();
+  });
+}
+
 void Northbound::drop_session() {
   log_->warn(
       "MQTT: primary host '{}' is offline: NDEATH published, session ended; "
@@ -361,9 +470,42 @@ void Northbound::drop_session() {
   asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
     if (token.expired() || stopping_) return;
     client_.disconnect();
+    // Spec 5.x (multiple MQTT servers): the host may be online on another server.
+    if (next_broker()) log_->info("MQTT: trying {} next", broker_url());
     backoff_ = kFirstRetry;
     connect_after(backoff_);
   });
+}
+
+void Northbound::host_offline_before_births() {
+  if (config_.brokers.size() < 2) return;  // nowhere else to look: wait here for the host
+  log_->warn("MQTT: primary host '{}' is offline on {}: trying the next broker",
+             config_.primary_host_id, broker_url());
+  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
+    // Once: a second STATE in the same turn finds the session already ended.
+    if (token.expired() || stopping_ || !client_.connected()) return;
+    client_.disconnect();
+    edge_.connection_lost();
+    next_broker();
+    // Growing while no broker has the host online, so a plant whose host is down is not
+    // reconnected to every second: 1 s, 2 s, 4 s... 30 s, back to 1 s once born somewhere.
+    walk_backoff_ =
+        walk_backoff_.count() == 0 ? kFirstRetry : std::min(walk_backoff_ * 2, kLongestRetry);
+    connect_after(walk_backoff_);
+  });
+}
+
+bool Northbound::next_broker() {
+  if (config_.brokers.size() < 2) return false;
+  broker_ = (broker_ + 1) % config_.brokers.size();  // the client moves at the next connect()
+  status_.broker = broker_url();
+  status_.broker_index = broker_;
+  ++status_.broker_switches;
+  return true;
+}
+
+const std::string& Northbound::broker_url() const {
+  return config_.brokers.at(broker_).url;
 }
 
 void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> points) {
@@ -381,11 +523,10 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
   // client id, and the primary host the commands are expected from (if one is configured).
   Session session{config_.access, WordOrder::big, config_.feed_failsafe};
   session.source.kind = SourceKind::mqtt;
-  session.source.listener = config_.broker;
-  session.source.client = config_.primary_host_id.empty()
-                              ? config_.client_id
-                              : config_.client_id + " (primary host " + config_.primary_host_id +
-                                    ")";
+  session.source.listener = broker_url();
+  session.source.client = config_.primary_host_id.empty() ? config_.client_id
+                                                          : config_.client_id + " (primary host " +
+                                                                config_.primary_host_id + ")";
   const std::string name = w.device->name();
   log_->info("MQTT: DCMD {} {}", name, names);
   auto report = [this, token = std::weak_ptr<bool>(alive_), name, names](Outcome outcome) {

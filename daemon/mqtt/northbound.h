@@ -8,27 +8,36 @@
 
 #include <spdlog/logger.h>
 
-#include <boost/asio/io_context.hpp>
 #include <array>
+#include <boost/asio/io_context.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <cstdint>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "config/config.h"
 #include "gateway/gateway.h"
 #include "gateway/point_values.h"
+#include "mqtt/bd_seq_file.h"
 #include "mqtt/edge_node.h"
-#include "net/log_throttle.h"
 #include "mqtt/mosquitto_client.h"
 #include "mqtt/northbound_status.h"
+#include "mqtt/store_forward.h"
+#include "net/log_throttle.h"
 
 namespace drivegate::mqtt {
 
 class Northbound final : private sparkplug::Sink {
  public:
+  // `state_dir`: where the bdSeq is kept across restarts (mqtt/bd_seq_file.h; empty: it is not).
+  // `previous_bd_seq`: the bdSeq of the northbound this one replaces at a reload, which goes
+  // before the file's.
   Northbound(boost::asio::io_context& io, const MqttConfig& config, std::string version,
-             std::shared_ptr<spdlog::logger> log);
+             std::shared_ptr<spdlog::logger> log, const std::filesystem::path& state_dir = {},
+             std::optional<std::uint8_t> previous_bd_seq = std::nullopt);
   ~Northbound() override;
   Northbound(const Northbound&) = delete;
   Northbound& operator=(const Northbound&) = delete;
@@ -36,7 +45,7 @@ class Northbound final : private sparkplug::Sink {
   // Publishes `gateway`'s devices (the first call connects). After a reload, the new gateway: a
   // changed device set is a rebirth.
   void use(Gateway& gateway);
-  // A clean end: NDEATH published, then DISCONNECT.
+  // A clean end: NDEATH published, then DISCONNECT; the devices are no longer watched.
   void stop();
 
   [[nodiscard]] NorthboundStatus status() const;
@@ -49,7 +58,11 @@ class Northbound final : private sparkplug::Sink {
     std::vector<PointValue> scratch;         // point_values() of the last sample
   };
 
+  [[nodiscard]] std::optional<std::uint8_t> last_bd_seq(std::optional<std::uint8_t> previous) const;
   void connect();
+  // To the next of [mqtt] brokers, when there is more than one: whether it moved.
+  bool next_broker();
+  [[nodiscard]] const std::string& broker_url() const;
   void connect_after(Millis delay);  // a new attempt, once `delay` has passed
   void connected();
   void lost(const std::string& why);
@@ -64,26 +77,37 @@ class Northbound final : private sparkplug::Sink {
   // Sink
   void publish(const std::string& topic, const sparkplug::Payload& payload) override;
   void drop_session() override;
+  void host_offline_before_births() override;
   void write(std::size_t device, std::vector<sparkplug::PointCommand> points) override;
   void notice(sparkplug::Notice kind, std::string message) override;
+  void store(std::string_view device, const sparkplug::Payload& historical) override;
+  void pace();  // every StoreForward::kReplayPeriod while there is a store
 
   boost::asio::io_context& io_;
   MqttConfig config_;
   std::shared_ptr<spdlog::logger> log_;
+  BdSeqFile bd_seq_file_;
+  std::unique_ptr<StoreForward> store_;  // [mqtt] store_forward with a state directory
   sparkplug::EdgeNode edge_;
   MosquittoClient client_;
   boost::asio::steady_timer retry_timer_;
   boost::asio::steady_timer tick_timer_;
+  boost::asio::steady_timer pace_timer_;
+  unsigned paces_ = 0;  // of pace_timer_, for the once-a-second sync
   std::vector<Watched> watched_;
   std::vector<bool> dirty_;
   bool flush_posted_ = false;
   std::uint64_t generation_ = 0;  // of watched_: a watcher from before a reload is ignored
   Millis backoff_{0};
+  Millis walk_backoff_{0};         // between brokers while the primary host is offline on each
+  std::size_t broker_ = 0;         // which of config_.brokers the next attempt uses
+  std::size_t client_broker_ = 0;  // which one client_ is set up for
   bool stopping_ = false;
   bool started_ = false;
+  bool bd_seq_save_failed_ = false;  // warned once until a save succeeds again
   NorthboundStatus status_;
   std::array<net::LogThrottle, sparkplug::kNoticeKinds> notice_log_;  // per kind
-  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);  // for writes settling later
+  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);        // for writes settling later
 };
 
 }  // namespace drivegate::mqtt

@@ -160,11 +160,22 @@ bool valid_id(std::string_view id) {
   return !id.empty() && id.find_first_of("/+#") == std::string_view::npos;
 }
 
-std::string state_topic(std::string_view host_id) {
+std::string_view to_string(HostStateForm form) {
+  return form == HostStateForm::v2_2 ? "2.2" : "3.0";
+}
+
+std::string state_topic(std::string_view host_id, HostStateForm form) {
+  if (form == HostStateForm::v2_2) return "STATE/" + std::string(host_id);
   return std::string(kNamespace) + "/STATE/" + std::string(host_id);
 }
 
-std::optional<HostState> parse_host_state(std::string_view json) {
+std::optional<HostState> parse_host_state(std::string_view payload, HostStateForm form) {
+  if (form == HostStateForm::v2_2) {
+    if (payload == "ONLINE") return HostState{true, 0};
+    if (payload == "OFFLINE") return HostState{false, 0};
+    return std::nullopt;
+  }
+  const std::string_view json = payload;
   std::optional<bool> online;
   std::optional<std::uint64_t> timestamp;
   bool bad = false;

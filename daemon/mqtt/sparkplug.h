@@ -57,6 +57,8 @@ struct Metric {
   // When the value was true at its source (ms since the Unix epoch, spec 6.4.4); none: the
   // payload's timestamp.
   std::optional<std::uint64_t> timestamp;
+  // Spec 6.4.x is_historical: a value from the past (store and forward), not the current one.
+  bool historical = false;
 };
 
 struct Payload {
@@ -90,17 +92,26 @@ std::optional<Topic> parse_topic(std::string_view topic);
 // Whether `id` may be a group, edge node or device id: not empty, no '/', '+' or '#' (spec 4.1).
 bool valid_id(std::string_view id);
 
-// --- The primary host application's state (spec 4.2.1, 3.0 form) ---
-// spBv1.0/STATE/<host_id>, retained, UTF-8 JSON {"online": true|false, "timestamp": <ms>}.
+// --- The primary host application's state ---
+// 3.0 (spec 4.2.1): spBv1.0/STATE/<host_id>, retained, UTF-8 JSON {"online": true|false,
+//   "timestamp": <ms>}; a STATE older than the newest seen is stale.
+// 2.2 (Sparkplug B 2.2, "Primary Application State", which deployed hosts still publish):
+//   STATE/<host_id>, outside the namespace, retained, the UTF-8 text ONLINE or OFFLINE; no
+//   timestamp, so the broker's order is the only order.
 
-std::string state_topic(std::string_view host_id);
+enum class HostStateForm : std::uint8_t { v3_0, v2_2 };
+std::string_view to_string(HostStateForm form);  // "3.0", "2.2"
+
+std::string state_topic(std::string_view host_id, HostStateForm form = HostStateForm::v3_0);
 
 struct HostState {
   bool online = false;
-  std::uint64_t timestamp = 0;
+  std::uint64_t timestamp = 0;  // 2.2: always 0
 };
 
-// nullopt when `json` is not an object with a boolean "online" and an integer "timestamp".
-std::optional<HostState> parse_host_state(std::string_view json);
+// nullopt when `payload` is not the form's: 3.0 an object with a boolean "online" and an integer
+// "timestamp"; 2.2 exactly ONLINE or OFFLINE.
+std::optional<HostState> parse_host_state(std::string_view payload,
+                                          HostStateForm form = HostStateForm::v3_0);
 
 }  // namespace drivegate::sparkplug

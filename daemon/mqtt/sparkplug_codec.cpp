@@ -112,6 +112,7 @@ std::string encode(const Payload& payload) {
     m->set_datatype(static_cast<std::uint32_t>(metric.type));
     set_value(*m, metric.type, metric.value);
     if (metric.timestamp) m->set_timestamp(*metric.timestamp);
+    if (metric.historical) m->set_is_historical(true);
     if (metric.properties.empty()) continue;
     pb::Payload::PropertySet* set = m->mutable_properties();
     for (const Property& p : metric.properties) {
@@ -145,6 +146,7 @@ std::optional<Payload> decode(std::string_view bytes, std::string& why) {
     }
     metric.value = std::move(*value);
     if (m.has_timestamp()) metric.timestamp = m.timestamp();
+    metric.historical = m.has_is_historical() && m.is_historical();
     out.metrics.push_back(std::move(metric));
   }
   return out;

@@ -564,6 +564,12 @@ void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
            "1 once the births are out (and the primary host, if any, is online)",
            m.session == "online" ? 1 : 0);
   w.single("drivegate_mqtt_bdseq", "gauge", "the session's Sparkplug bdSeq", m.bd_seq);
+  w.single("drivegate_mqtt_broker_index", "gauge",
+           "which of [mqtt] brokers is in use, from 0 (the URL: /api/v1/status)",
+           static_cast<double>(m.broker_index));
+  w.single("drivegate_mqtt_broker_switches_total", "counter",
+           "moves to the next of [mqtt] brokers after a failure or an offline primary host",
+           static_cast<double>(m.broker_switches));
   w.single("drivegate_mqtt_connects_total", "counter", "sessions begun with the broker",
            static_cast<double>(m.connects));
   w.single("drivegate_mqtt_connection_losses_total", "counter",
@@ -580,6 +586,24 @@ void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
   w.single("drivegate_mqtt_rebirths_coalesced_total", "counter",
            "rebirth requests answered by one rebirth a few seconds later",
            static_cast<double>(m.rebirths_coalesced));
+  if (!m.store.enabled) return;
+  const mqtt::StoreStats& st = m.store;
+  const auto count = [](std::uint64_t n) { return static_cast<double>(n); };
+  w.single("drivegate_mqtt_store_records", "gauge",
+           "changes kept on disk while there was no session, not yet sent", count(st.records));
+  w.single("drivegate_mqtt_store_bytes", "gauge", "the store's size on disk", count(st.bytes));
+  w.single("drivegate_mqtt_store_oldest_timestamp_seconds", "gauge",
+           "when the oldest change waiting was kept (Unix time; 0: none waits)",
+           st.oldest_ms ? static_cast<double>(*st.oldest_ms) / 1000.0 : 0.0);
+  w.single("drivegate_mqtt_store_kept_total", "counter", "changes kept for later", count(st.kept));
+  w.single("drivegate_mqtt_store_replayed_total", "counter",
+           "kept changes sent as historical DDATA", count(st.replayed));
+  w.single("drivegate_mqtt_store_dropped_total", "counter",
+           "kept changes never sent: beyond store_max_mb (oldest first) or store_max_age_h, or "
+           "for a device not born in the session",
+           count(st.dropped_size + st.dropped_age + st.replay_dropped));
+  w.single("drivegate_mqtt_store_refused_total", "counter",
+           "changes the disk refused to keep (see the journal)", count(st.refused));
 }
 
 // The HTTP side itself ([http]): the scrapers and status pages reading these documents.

@@ -179,6 +179,9 @@ void serial_json(std::string& out, const SerialListenerView& l) {
 void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
   out += ",\n\"mqtt\": {\"broker\": ";
   append_json_string(out, m.broker);
+  fmt::format_to(std::back_inserter(out),
+                 ", \"broker_index\": {}, \"brokers\": {}, \"broker_switches\": {}", m.broker_index,
+                 m.brokers, m.broker_switches);
   out += ", \"session\": ";
   append_json_string(out, m.session);
   fmt::format_to(std::back_inserter(out),
@@ -188,6 +191,16 @@ void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
                  m.connected, m.bd_seq, m.connects, m.losses, m.messages, m.births, m.commands,
                  m.commands_retained, m.rebirths_coalesced);
   append_json_string(out, m.last_error);
+  const mqtt::StoreStats& st = m.store;
+  fmt::format_to(std::back_inserter(out),
+                 ", \"store\": {{\"enabled\": {}, \"records\": {}, \"bytes\": {}, "
+                 "\"oldest_ms\": {}, \"kept\": {}, \"replayed\": {}, \"dropped_size\": {}, "
+                 "\"dropped_age\": {}, \"dropped_corrupt_bytes\": {}, \"refused\": {}, "
+                 "\"replay_dropped\": {}}}",
+                 st.enabled, st.records, st.bytes,
+                 st.oldest_ms ? std::to_string(*st.oldest_ms) : std::string("null"), st.kept,
+                 st.replayed, st.dropped_size, st.dropped_age, st.dropped_corrupt, st.refused,
+                 st.replay_dropped);
   out += '}';
 }
 

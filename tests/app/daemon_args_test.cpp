@@ -49,6 +49,20 @@ TEST(DaemonArgs, CheckHelpVersion) {
   EXPECT_EQ(std::get<DaemonArgs>(parse({"--version"})).action, DaemonAction::version);
 }
 
+TEST(DaemonArgs, StateDirFromTheOptionElseSystemdsStateDirectory) {
+  const auto r = parse({"-c", "x.toml", "--state-dir", "/var/lib/dg"});
+  ASSERT_TRUE(std::holds_alternative<DaemonArgs>(r)) << std::get<std::string>(r);
+  EXPECT_EQ(std::get<DaemonArgs>(r).options.state_dir, "/var/lib/dg");
+  EXPECT_EQ(std::get<DaemonArgs>(parse({"-c", "x.toml"})).options.state_dir, "");
+  EXPECT_THAT(std::get<std::string>(parse({"-c", "x", "--state-dir="})),
+              HasSubstr("--state-dir needs a directory"));
+  // The option wins; else $STATE_DIRECTORY, the first of its list (StateDirectory= a b).
+  EXPECT_EQ(resolve_state_dir("/opt/s", "/var/lib/drivegate"), "/opt/s");
+  EXPECT_EQ(resolve_state_dir({}, "/var/lib/drivegate"), "/var/lib/drivegate");
+  EXPECT_EQ(resolve_state_dir({}, "/var/lib/a:/var/lib/b"), "/var/lib/a");
+  EXPECT_EQ(resolve_state_dir({}, nullptr), "");
+}
+
 TEST(DaemonArgs, MistakesNameWhatIsWrong) {
   EXPECT_EQ(std::get<std::string>(parse({"--frobnicate"})), "unknown option '--frobnicate'");
   EXPECT_EQ(std::get<std::string>(parse({"-c"})), "option '-c' needs a value (FILE)");

@@ -64,9 +64,11 @@ commands = false
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   const MqttConfig& m = r.config->mqtt;
   EXPECT_TRUE(m.enabled);
-  EXPECT_EQ(m.host, "127.0.0.1");
-  EXPECT_EQ(m.port, 1883);
-  EXPECT_FALSE(m.tls);
+  ASSERT_EQ(m.brokers.size(), 1u);
+  EXPECT_EQ(m.brokers[0].url, "mqtt://127.0.0.1:1883");
+  EXPECT_EQ(m.brokers[0].host, "127.0.0.1");
+  EXPECT_EQ(m.brokers[0].port, 1883);
+  EXPECT_FALSE(m.brokers[0].tls);
   EXPECT_EQ(m.group_id, "plant1");
   EXPECT_EQ(m.edge_node_id, "gw01");
   EXPECT_EQ(m.client_id, "drivegate-gw01");
@@ -84,13 +86,13 @@ TEST_F(MqttConfigTest, BrokerForms) {
   auto r =
       parse("[mqtt]\nbroker = \"mqtt://broker.plant\"\ngroup_id = \"g\"\nedge_node_id = \"e\"\n");
   ASSERT_TRUE(r.config);
-  EXPECT_EQ(r.config->mqtt.host, "broker.plant");
-  EXPECT_EQ(r.config->mqtt.port, 1883);
+  EXPECT_EQ(r.config->mqtt.brokers.at(0).host, "broker.plant");
+  EXPECT_EQ(r.config->mqtt.brokers.at(0).port, 1883);
   EXPECT_EQ(r.config->mqtt.client_id, "drivegate-e");
   r = parse("[mqtt]\nbroker = \"mqtt://[::1]:2883\"\ngroup_id = \"g\"\nedge_node_id = \"e\"\n");
   ASSERT_TRUE(r.config);
-  EXPECT_EQ(r.config->mqtt.host, "::1");
-  EXPECT_EQ(r.config->mqtt.port, 2883);
+  EXPECT_EQ(r.config->mqtt.brokers.at(0).host, "::1");
+  EXPECT_EQ(r.config->mqtt.brokers.at(0).port, 2883);
   for (const char* bad : {"tcp://h:1883", "mqtt://", "mqtt://h:0", "mqtt://h:65536",
                           "mqtt://h:", "mqtt://h:x", "mqtt://[::1", "mqtt://h/path", "h:1883"}) {
     EXPECT_THAT(only_error(std::string("[mqtt]\nbroker = \"") + bad +
@@ -144,6 +146,26 @@ TEST_F(MqttConfigTest, LimitsAndPolicyAreChecked) {
               HasSubstr("no effect"));
 }
 
+// The primary host's STATE: 3.0's JSON unless the host is a Sparkplug 2.2 one.
+TEST_F(MqttConfigTest, PrimaryHostVersionIs30Or22) {
+  const std::string head =
+      "[mqtt]\nbroker = \"mqtt://h\"\ngroup_id = \"g\"\nedge_node_id = \"e\"\n";
+  auto r = parse(head + "primary_host_id = \"scada\"\n");
+  ASSERT_TRUE(r.config);
+  EXPECT_EQ(r.config->mqtt.primary_host_state, sparkplug::HostStateForm::v3_0);
+  r = parse(head + "primary_host_id = \"scada\"\nprimary_host_version = \"2.2\"\n");
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  EXPECT_EQ(r.config->mqtt.primary_host_state, sparkplug::HostStateForm::v2_2);
+  EXPECT_THAT(::testing::PrintToString(r.warnings), Not(HasSubstr("mqtt")));
+  EXPECT_THAT(only_error(head + "primary_host_id = \"scada\"\nprimary_host_version = \"2\"\n"),
+              AllOf(HasSubstr("gw.toml:17"), HasSubstr("mqtt.primary_host_version"),
+                    HasSubstr("\"3.0\""), HasSubstr("\"2.2\"")));
+  r = parse(head + "primary_host_version = \"2.2\"\n");
+  ASSERT_TRUE(r.config);
+  EXPECT_THAT(::testing::PrintToString(r.warnings),
+              AllOf(HasSubstr("mqtt.primary_host_version"), HasSubstr("primary_host_id")));
+}
+
 TEST_F(MqttConfigTest, TlsNeedsACaAndClientCertificatesComeInPairs) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("dg-mqtt-tls-" + std::to_string(::getpid()));
@@ -159,14 +181,84 @@ TEST_F(MqttConfigTest, TlsNeedsACaAndClientCertificatesComeInPairs) {
       HasSubstr("cert and key"));
   const auto r = parse("[mqtt]\nbroker = \"mqtts://h\"\nca = \"" + ca + "\"\n" + ids);
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
-  EXPECT_TRUE(r.config->mqtt.tls);
-  EXPECT_EQ(r.config->mqtt.port, 8883);
+  EXPECT_TRUE(r.config->mqtt.brokers.at(0).tls);
+  EXPECT_EQ(r.config->mqtt.brokers.at(0).port, 8883);
   // libmosquitto reads the files by path on the event loop: a FIFO is refused here, saying so.
   const auto fifo = dir / "ca.fifo";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  EXPECT_THAT(
-      only_error("[mqtt]\nbroker = \"mqtts://h\"\nca = \"" + fifo.string() + "\"\n" + ids),
-      AllOf(HasSubstr("mqtt.ca"), HasSubstr("a FIFO, not a regular file")));
+  EXPECT_THAT(only_error("[mqtt]\nbroker = \"mqtts://h\"\nca = \"" + fifo.string() + "\"\n" + ids),
+              AllOf(HasSubstr("mqtt.ca"), HasSubstr("a FIFO, not a regular file")));
+  std::filesystem::remove_all(dir);
+}
+
+// brokers = [...]: tried in order; each mqtts:// one with [mqtt]'s TLS files unless it names its
+// own (its own CA brings its own client pair, or none).
+TEST_F(MqttConfigTest, SeveralBrokersInOrderEachWithItsTls) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("dg-mqtt-brokers-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = [&](const char* name) {
+    const auto p = dir / name;
+    std::ofstream(p) << "-----BEGIN-----\n";
+    std::filesystem::permissions(
+        p, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+    return p.string();
+  };
+  const std::string ca = file("ca.pem"), ca2 = file("ca2.pem"), cert = file("c.pem"),
+                    key = file("k.pem"), cert2 = file("c2.pem"), key2 = file("k2.pem");
+  const std::string ids = "group_id = \"g\"\nedge_node_id = \"e\"\n";
+  auto r = parse(
+      "[mqtt]\nbrokers = [\"mqtts://a\", \"mqtt://b:1884\", { url = \"mqtts://c:9000\", ca "
+      "= \"" +
+      ca2 + "\" }, { url = \"mqtts://d\", cert = \"" + cert2 + "\", key = \"" + key2 +
+      "\" }]\nca = \"" + ca + "\"\ncert = \"" + cert + "\"\nkey = \"" + key + "\"\n" + ids);
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  const auto& b = r.config->mqtt.brokers;
+  ASSERT_EQ(b.size(), 4u);
+  EXPECT_EQ(b[0].url, "mqtts://a");
+  EXPECT_EQ(b[0].port, 8883);
+  EXPECT_EQ(b[0].ca, ca);
+  EXPECT_EQ(b[0].cert, cert);
+  EXPECT_EQ(b[1].host, "b");
+  EXPECT_EQ(b[1].port, 1884);
+  EXPECT_FALSE(b[1].tls);
+  EXPECT_EQ(b[1].ca, "");
+  EXPECT_EQ(b[2].ca, ca2);
+  EXPECT_EQ(b[2].cert, "") << "its own CA, no client pair of its own: none";
+  EXPECT_EQ(b[3].ca, ca);
+  EXPECT_EQ(b[3].cert, cert2);
+  EXPECT_EQ(b[3].key, key2);
+
+  // Mistakes, each named where it is.
+  EXPECT_THAT(only_error("[mqtt]\nbroker = \"mqtt://a\"\nbrokers = [\"mqtt://b\"]\n" + ids),
+              HasSubstr("broker or brokers, not both"));
+  EXPECT_THAT(only_error("[mqtt]\n" + ids), AllOf(HasSubstr("mqtt.broker"), HasSubstr("missing")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = []\n" + ids),
+              AllOf(HasSubstr("mqtt.brokers"), HasSubstr("1..8")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = [\"mqtt://a\", \"tcp://b\"]\n" + ids),
+              AllOf(HasSubstr("gw.toml:13"), HasSubstr("mqtt.brokers[1]"), HasSubstr("mqtt://")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = [\"mqtt://a\", \"mqtts://b\"]\n" + ids),
+              AllOf(HasSubstr("mqtt.brokers[1]"), HasSubstr("needs `ca`")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = [{ url = \"mqtt://a\", ca = \"" + ca + "\" }]\n" + ids),
+              AllOf(HasSubstr("mqtt.brokers[0]"), HasSubstr("for an mqtts:// broker")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = [{ url = \"mqtt://a\", port = 1 }]\n" + ids),
+              AllOf(HasSubstr("mqtt.brokers[0].port"), HasSubstr("unknown key")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = [{ ca = \"" + ca + "\" }]\n" + ids),
+              AllOf(HasSubstr("mqtt.brokers[0].url"), HasSubstr("missing")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = [1]\n" + ids),
+              AllOf(HasSubstr("mqtt.brokers[0]"), HasSubstr("broker URL or a table")));
+  EXPECT_THAT(only_error("[mqtt]\nbrokers = [{ url = \"mqtts://a\", ca = \"" + dir.string() +
+                         "/none.pem\" }]\n" + ids),
+              HasSubstr("mqtt.brokers[0].ca"));
+  std::string nine = "[mqtt]\nbrokers = [";
+  for (int i = 0; i < 9; ++i)
+    nine += std::string(i ? ", " : "") + "\"mqtt://h" + std::to_string(i) + "\"";
+  EXPECT_THAT(only_error(nine + "]\n" + ids), HasSubstr("1..8"));
+  // Commands over any plain broker are warned about.
+  r = parse("[mqtt]\nbrokers = [\"mqtts://a\", \"mqtt://b\"]\nca = \"" + ca +
+            "\"\ncommands = true\n" + ids);
+  ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
+  EXPECT_THAT(::testing::PrintToString(r.warnings), HasSubstr("mqtts://"));
   std::filesystem::remove_all(dir);
 }
 

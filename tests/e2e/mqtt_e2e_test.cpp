@@ -5,6 +5,8 @@
 // here decodes a payload with drivegate's own code.
 //
 // Each test starts its own broker, peer, simulators and daemon (tests/support/mqtt_e2e.h).
+#include "mqtt_e2e.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -16,8 +18,6 @@
 #include <set>
 #include <sstream>
 #include <thread>
-
-#include "mqtt_e2e.h"
 
 namespace drivegate::test {
 namespace {
@@ -270,6 +270,60 @@ TEST_F(MqttE2E, KilledDaemonLeavesTheWillNdeathWithTheBirthBdSeq) {
       },
       2s))
       << broker_log();
+}
+
+// --- 3b. the bdSeq across restarts (issue 29) -----------------------------------------------
+
+// The bdSeq kept in the state directory: a killed gateway's will and its next birth, a clean
+// stop's NDEATH and the next birth, a file that holds no bdSeq.
+TEST_F(MqttE2E, RestartsGoOnFromTheBdSeqKeptInTheStateDirectory) {
+  const fs::path state = dir_ / "state";
+  fs::create_directories(state);
+  daemon_args_ = {"--state-dir", state.string()};
+  const fs::path file = state / "sparkplug-plant1-gw01.bdseq";
+  const auto bd_seq_of = [](const Message& m) {
+    return m.metric("bdSeq") != nullptr ? m.metric("bdSeq")->value : "none";
+  };
+
+  start_daemon();
+  Births b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(bd_seq_of(b.node), "0") << "the first start of this edge node";
+  EXPECT_EQ(slurp(file), "0\n");
+
+  // kill -9: the broker's will carries the birth's bdSeq; the next start the one after it.
+  daemon_->process().stop(SIGKILL);
+  auto death = wait("NDEATH", {}, 10s);
+  ASSERT_TRUE(death.has_value()) << "no will";
+  EXPECT_EQ(bd_seq_of(*death), "0");
+  start_daemon();
+  b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(bd_seq_of(b.node), "1");
+  EXPECT_EQ(slurp(file), "1\n");
+  EXPECT_THAT(daemon_log(), HasSubstr("the last session's bdSeq was 0"));
+
+  // A clean stop: its own NDEATH with the session's bdSeq, then the next.
+  EXPECT_EQ(daemon_->stop(), 0);
+  death = wait("NDEATH", {}, 10s);
+  ASSERT_TRUE(death.has_value()) << "no NDEATH at SIGTERM";
+  EXPECT_EQ(bd_seq_of(*death), "1");
+  start_daemon();
+  b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(bd_seq_of(b.node), "2");
+
+  // A file that holds no bdSeq: said in the log, and the session starts at 0.
+  EXPECT_EQ(daemon_->stop(), 0);
+  ASSERT_TRUE(wait("NDEATH", {}, 10s).has_value());
+  std::ofstream(file) << "garbage\n";
+  start_daemon();
+  b = wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(bd_seq_of(b.node), "0");
+  EXPECT_THAT(daemon_log(), HasSubstr(file.string() + ": not a bdSeq"));
+  EXPECT_EQ(slurp(file), "0\n");
+  expect_seq_consecutive(peer_->history());
 }
 
 // --- 4. rebirth on request ---------------------------------------------------------------------
@@ -624,6 +678,35 @@ TEST_F(MqttE2E, BirthsWaitForThePrimaryHostAndEndWhenItGoesOffline) {
   expect_seq_consecutive(peer_->history());
 }
 
+// A Sparkplug 2.2 host (issue 29): STATE/<id>, the text ONLINE / OFFLINE, retained; the same
+// session rules as 3.0's.
+TEST_F(MqttE2E, A22PrimaryHostsOnlineAndOfflineTextRuleTheSession) {
+  start_daemon("primary_host_id = \"scada\"\nprimary_host_version = \"2.2\"\n");
+  // 3.0's STATE for the same host id is not the one this node listens to.
+  peer_->publish_text("spBv1.0/STATE/scada", R"({"online":true,"timestamp":1})", false, 1);
+  pump(1500ms);
+  EXPECT_EQ(count("NBIRTH"), 0u) << "born on a 3.0 STATE while configured for 2.2";
+
+  peer_->publish_text("STATE/scada", "ONLINE", true, 1);
+  const Births first = wait_births(5s);
+  ASSERT_FALSE(HasFailure());
+  const auto bd1 = first.node.metric("bdSeq")->as_uint();
+
+  peer_->publish_text("STATE/scada", "OFFLINE", true, 1);
+  const auto death = wait("NDEATH", {}, 5s);
+  ASSERT_TRUE(death.has_value()) << "no NDEATH when the 2.2 host went OFFLINE";
+  EXPECT_EQ(death->metric("bdSeq")->as_uint(), bd1);
+  pump(2500ms);  // reconnected, and the retained OFFLINE holds the births back
+  EXPECT_EQ(count("NBIRTH"), 1u);
+
+  peer_->publish_text("STATE/scada", "ONLINE", true, 1);
+  const Births second = wait_births(5s);
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(second.node.metric("bdSeq")->as_uint(), (bd1 + 1) % 256);
+  expect_seq_consecutive(peer_->history());
+  peer_->publish_text("STATE/scada", "", true, 1);  // the retained STATE cleared
+}
+
 // --- 9. SIGHUP changing the devices -------------------------------------------------------------
 
 TEST_F(MqttE2E, SighupAddingADeviceRebirthsWithIt) {
@@ -696,6 +779,326 @@ TEST_F(MqttE2E, SeqWrapsFrom255To0) {
   std::size_t n = 0;
   for (const auto& m : peer_->history()) n += is(m, "DDATA") ? 1 : 0;
   EXPECT_GE(n, 254u);
+}
+
+// --- 10. SIGHUP changing [mqtt] (issue 29) ------------------------------------------------------
+
+// A changed [mqtt] ends the session cleanly and begins the next without a restart: the NDEATH
+// of the old session, then the births of the new with the next bdSeq; another edge node id is
+// another node, with its own bdSeq; [mqtt] removed ends the session. Modbus never notices.
+TEST_F(MqttE2E, SighupChangingMqttEndsTheSessionAndBeginsTheNext) {
+  start_daemon();
+  const Births first = wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(first.node.metric("bdSeq")->value, "0");
+  const auto history_size = [&] { return peer_->history().size(); };
+
+  // min_interval and counter_interval changed: same node, a new session.
+  std::size_t from = history_size();
+  std::ofstream(daemon_->config()) << config("min_interval_ms = 0\ncounter_interval_ms = 0\n");
+  daemon_->process().signal(SIGHUP);
+  const auto death = wait("NDEATH", {}, 10s);
+  ASSERT_TRUE(death.has_value()) << "no NDEATH for the session the reload ended";
+  EXPECT_EQ(death->topic, node_topic("NDEATH"));
+  EXPECT_EQ(death->metric("bdSeq")->value, "0");
+  const Births second = wait_births(10s);
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(second.node.metric("bdSeq")->value, "1") << "the same node goes on from its bdSeq";
+  EXPECT_EQ(second.node.seq, 0u);
+  // In that order, and the broker saw a DISCONNECT (a clean end: no will of its own).
+  std::vector<std::string> order;
+  for (std::size_t i = from; i < peer_->history().size(); ++i) {
+    const Message& m = peer_->history()[i];
+    if (is(m, "NDEATH") || is(m, "NBIRTH")) order.push_back(m.message_type());
+  }
+  EXPECT_THAT(order, ::testing::ElementsAre("NDEATH", "NBIRTH"));
+  EXPECT_THAT(broker_log(), HasSubstr("Client drivegate-gw01 disconnected"));
+  EXPECT_THAT(daemon_log(), Not(HasSubstr("take effect at the next restart")));
+  EXPECT_THAT(daemon_log(), HasSubstr("[mqtt] applied"));
+  // The new settings hold: with counter_interval 0 every poll's counters go out.
+  pump(1s);
+  std::size_t ddata = 0;
+  for (std::size_t i = from; i < peer_->history().size(); ++i) {
+    ddata += is(peer_->history()[i], "DDATA", "washer-a") ? 1 : 0;
+  }
+  EXPECT_GE(ddata, 3u) << "counter_interval_ms = 0 not applied";
+
+  // Another edge node id: the old node dies, the new one is born with its own first bdSeq.
+  std::string toml = config("");
+  const std::string id = "edge_node_id = \"gw01\"";
+  ASSERT_NE(toml.find(id), std::string::npos);
+  toml.replace(toml.find(id), id.size(), "edge_node_id = \"gw02\"");
+  from = history_size();
+  std::ofstream(daemon_->config()) << toml;
+  daemon_->process().signal(SIGHUP);
+  const auto old_death = wait("NDEATH", {}, 10s);
+  ASSERT_TRUE(old_death.has_value());
+  EXPECT_EQ(old_death->topic, node_topic("NDEATH"));
+  EXPECT_EQ(old_death->metric("bdSeq")->value, "1");
+  const auto born = wait("NBIRTH", {}, 10s);
+  ASSERT_TRUE(born.has_value());
+  EXPECT_EQ(born->topic, std::string("spBv1.0/") + kGroup + "/NBIRTH/gw02");
+  EXPECT_EQ(born->metric("bdSeq")->value, "0");
+
+  // [mqtt] removed: the session ends, the gateway serves on.
+  std::string without = config("");
+  without.erase(without.find("[mqtt]"));
+  std::ofstream(daemon_->config()) << without;
+  daemon_->process().signal(SIGHUP);
+  const auto last = wait("NDEATH", {}, 10s);
+  ASSERT_TRUE(last.has_value()) << "no NDEATH when [mqtt] was removed";
+  EXPECT_EQ(last->topic, std::string("spBv1.0/") + kGroup + "/NDEATH/gw02");
+  EXPECT_TRUE(
+      eventually([&] { return daemon_log().find("[mqtt] removed") != std::string::npos; }, 5s));
+  pump(1s);
+  EXPECT_EQ(count("NBIRTH"), 3u) << "a session after [mqtt] was removed";
+  for (int unit : {1, 2}) {
+    plc_->unit(unit);
+    const auto r = plc_->input(reg::status, 1);
+    ASSERT_TRUE(r.ok());
+    EXPECT_NE(r.regs[0] & reg::online, 0) << "unit " << unit;
+  }
+  EXPECT_TRUE(daemon_->process().running());
+  expect_seq_consecutive(peer_->history());
+}
+
+// --- 11. several brokers (issue 29) --------------------------------------------------------------
+
+// A second broker and a peer on it, for the tests of brokers = [...].
+struct OtherBroker {
+  explicit OtherBroker(const fs::path& peer_log)
+      : broker(dir), peer(broker.port(), [&] {
+          SparkplugPeer::Options o;
+          o.stderr_file = peer_log;
+          return o;
+        }()) {}
+  TempDir dir;
+  Broker broker;
+  SparkplugPeer peer;
+};
+
+// brokers = [A, B]: the session is on A; A stops, and the next attempt goes to B, with the next
+// bdSeq and a full rebirth there; A back changes nothing. Modbus is served throughout.
+TEST_F(MqttE2E, SeveralBrokersTheNodeWalksToTheNextWhenOneFails) {
+  OtherBroker b(dir_ / "peer-b.log");
+  brokers_ = {broker_->url(), b.broker.url()};
+  const int http_port = free_port();
+  start_daemon("\n[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) + "\"\n");
+  const Births first = wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(first.node.metric("bdSeq")->value, "0");
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_broker_index"), 0);
+  EXPECT_THAT(
+      http_get(http_port, "/api/v1/status").body,
+      HasSubstr("\"broker\": \"" + broker_->url() + "\", \"broker_index\": 0, \"brokers\": 2"));
+
+  broker_->stop();
+  const auto born = b.peer.wait_for([](const Message& m) { return is(m, "NBIRTH"); }, 15s);
+  ASSERT_TRUE(born.has_value()) << "no NBIRTH on the second broker";
+  EXPECT_EQ(born->metric("bdSeq")->value, "1");
+  EXPECT_EQ(born->seq, 0u);
+  // Both drives born there too (the peer's history fills as it is read).
+  std::set<std::string> born_there;
+  while (born_there.size() < drives_.size()) {
+    const auto d = b.peer.wait_for([](const Message& m) { return is(m, "DBIRTH"); }, 5s);
+    if (!d) break;
+    born_there.insert(d->device());
+  }
+  EXPECT_EQ(born_there.size(), drives_.size());
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_broker_index"), 1);
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_broker_switches_total"), 1);
+  EXPECT_THAT(http_get(http_port, "/api/v1/status").body,
+              HasSubstr("\"broker\": \"" + b.broker.url() + "\", \"broker_index\": 1"));
+  EXPECT_THAT(daemon_log(), HasSubstr("trying " + b.broker.url() + " next"));
+
+  // Data flows on B: a PLC's run shows there.
+  plc_->unit(1);
+  ASSERT_EQ(plc_->write(reg::command, {1, 650}), 0);
+  EXPECT_TRUE(b.peer
+                  .wait_for(
+                      [](const Message& m) {
+                        return is(m, "DDATA", "washer-a") && m.metric("speed_rpm") != nullptr &&
+                               m.metric("speed_rpm")->as_int() == 650;
+                      },
+                      10s)
+                  .has_value());
+  // A back: the node stays where it has a session.
+  const std::size_t births_on_a = count("NBIRTH");
+  broker_->start();
+  pump(2s);
+  EXPECT_EQ(count("NBIRTH"), births_on_a) << "moved back to A while the session on B was fine";
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_broker_switches_total"), 1);
+  expect_seq_consecutive(b.peer.history());
+}
+
+// brokers = [A, B] with a primary host: offline on A (its retained STATE), online on B. The node
+// connects to A, reads that the host is offline there, leaves without a birth and is born on B.
+// Then the host goes offline on B: NDEATH there, and the node walks on to A (where it waits).
+TEST_F(MqttE2E, SeveralBrokersThePrimaryHostOfflineOnOneSendsTheNodeToTheNext) {
+  OtherBroker b(dir_ / "peer-b.log");
+  const auto now_ms = [] {
+    return std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(
+                              std::chrono::system_clock::now().time_since_epoch())
+                              .count());
+  };
+  const std::string state = "spBv1.0/STATE/scada";
+  peer_->publish_text(state, R"({"online":false,"timestamp":)" + now_ms() + "}", true, 1);
+  b.peer.publish_text(state, R"({"online":true,"timestamp":)" + now_ms() + "}", true, 1);
+  brokers_ = {broker_->url(), b.broker.url()};
+  start_daemon("primary_host_id = \"scada\"\n");
+  const auto born = b.peer.wait_for([](const Message& m) { return is(m, "NBIRTH"); }, 15s);
+  ASSERT_TRUE(born.has_value()) << "not born on the broker where the host is online";
+  pump(300ms);  // what A's peer has seen by now
+  EXPECT_EQ(count("NBIRTH"), 0u) << "born where the host is offline";
+  EXPECT_EQ(count("NDEATH"), 0u) << "an NDEATH for a session that had no birth";
+  EXPECT_THAT(daemon_log(), HasSubstr("offline on " + broker_->url()));
+  EXPECT_EQ(born->metric("bdSeq")->value, "1");
+
+  b.peer.publish_text(state, R"({"online":false,"timestamp":)" + now_ms() + "}", true, 1);
+  const auto death = b.peer.wait_for([](const Message& m) { return is(m, "NDEATH"); }, 10s);
+  ASSERT_TRUE(death.has_value()) << "no NDEATH on B when the host went offline there";
+  EXPECT_EQ(death->metric("bdSeq")->value, "1");
+  // Back on A, where the host is still offline: it waits there, and then walks on again.
+  EXPECT_TRUE(eventually(
+      [&] {
+        const std::string log = daemon_log();
+        std::size_t n = 0;
+        for (auto at = log.find("trying "); at != std::string::npos;
+             at = log.find("trying ", at + 1)) {
+          ++n;
+        }
+        return n >= 2;
+      },
+      10s))
+      << daemon_log();
+  pump(300ms);
+  EXPECT_EQ(count("NBIRTH"), 0u);
+  // Both STATEs cleared for the brokers' next users.
+  peer_->publish_text(state, "", true, 1);
+  b.peer.publish_text(state, "", true, 1);
+}
+
+// --- 12. store and forward (issue 29) ---------------------------------------------------------
+
+// A broker outage while a drive ramps: every change the edge node saw while the broker was away
+// is kept on disk and, once a session is back, published after the births as historical DDATA
+// with its original time, in order, none twice; live data after it is not historical.
+TEST_F(MqttE2E, ABrokerOutageLosesNoChangeTheyComeBackHistoricalInOrder) {
+  const fs::path state = dir_ / "state";
+  fs::create_directories(state);
+  daemon_args_ = {"--state-dir", state.string()};
+  const int http_port = free_port();
+  start_daemon("\n[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) + "\"\n");
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_store_records"), 0);
+
+  const auto unix_ms = [] {
+    return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                          std::chrono::system_clock::now().time_since_epoch())
+                                          .count());
+  };
+  broker_->stop();
+  ASSERT_TRUE(eventually([&] { return metric(http_port, "drivegate_mqtt_connected") == 0; }, 5s));
+  const std::uint64_t outage_start = unix_ms();
+  // The PLC runs washer-a up to 900 rpm while nobody hears MQTT.
+  plc_->unit(1);
+  ASSERT_EQ(plc_->write(reg::command, {1 /*run_forward*/, 900}), 0);
+  ASSERT_TRUE(eventually([&] { return speed(1) == 900; }, 15s)) << speed(1);
+  std::this_thread::sleep_for(300ms);
+  const double kept = metric(http_port, "drivegate_mqtt_store_records");
+  EXPECT_GE(kept, 3) << "the ramp was not kept";
+  EXPECT_GT(metric(http_port, "drivegate_mqtt_store_bytes"), 0);
+  const std::uint64_t outage_end = unix_ms();
+
+  broker_->start();
+  ASSERT_TRUE(peer_->wait_for([](const Message& m) { return m.kind == "reconnected"; }, 5s));
+  const Births again = wait_births(15s);
+  ASSERT_FALSE(HasFailure());
+  // The historical DDATA of washer-a, as the host saw them.
+  ASSERT_TRUE(
+      eventually([&] { return metric(http_port, "drivegate_mqtt_store_records") == 0; }, 10s))
+      << "not all replayed";
+  pump(500ms);
+  std::vector<std::int64_t> speeds;
+  std::vector<std::uint64_t> times;
+  bool after_birth = false;
+  bool live_after = false;
+  for (const auto& m : peer_->history()) {
+    if (is(m, "NBIRTH") && m.seq == 0u && m.metric("bdSeq") != nullptr &&
+        m.metric("bdSeq")->value == again.node.metric("bdSeq")->value) {
+      after_birth = true;
+    }
+    if (!is(m, "DDATA", "washer-a") || m.metric("speed_rpm") == nullptr) continue;
+    const Metric& sp = *m.metric("speed_rpm");
+    if (!sp.has_flag("historical")) {
+      live_after = live_after || !speeds.empty();
+      continue;
+    }
+    EXPECT_TRUE(after_birth) << "a historical DDATA before the new session's births";
+    speeds.push_back(sp.as_int());
+    ASSERT_TRUE(sp.timestamp.has_value());
+    times.push_back(*sp.timestamp);
+  }
+  std::cerr << "kept " << kept
+            << " changes; historical speeds: " << ::testing::PrintToString(speeds) << "\n";
+  ASSERT_GE(speeds.size(), 3u) << describe(peer_->history());
+  EXPECT_TRUE(std::is_sorted(speeds.begin(), speeds.end())) << "out of order";
+  EXPECT_EQ(std::set<std::int64_t>(speeds.begin(), speeds.end()).size(), speeds.size())
+      << "a change sent twice";
+  EXPECT_EQ(speeds.back(), 900) << "the last change of the outage";
+  EXPECT_TRUE(std::is_sorted(times.begin(), times.end()));
+  EXPECT_GE(times.front() + 1000, outage_start) << "stamped with when the drive had the value";
+  EXPECT_LE(times.back(), outage_end);
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_store_replayed_total"),
+            metric(http_port, "drivegate_mqtt_store_kept_total"));
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_store_dropped_total"), 0);
+  expect_seq_consecutive(peer_->history());
+  // And live again: a new setpoint is a plain DDATA.
+  ASSERT_EQ(plc_->write(reg::setpoint, {700}), 0);
+  const auto live = peer_->wait_for(
+      [](const Message& m) {
+        return is(m, "DDATA", "washer-a") && m.metric("speed_rpm") != nullptr &&
+               m.metric("speed_rpm")->as_int() == 700;
+      },
+      15s);
+  ASSERT_TRUE(live.has_value());
+  EXPECT_FALSE(live->metric("speed_rpm")->has_flag("historical"));
+}
+
+// What was kept survives a restart of the daemon: kept during an outage, the daemon stopped, the
+// broker back, the daemon started: the changes come out after its births.
+TEST_F(MqttE2E, KeptChangesSurviveARestartOfTheDaemon) {
+  const fs::path state = dir_ / "state";
+  fs::create_directories(state);
+  daemon_args_ = {"--state-dir", state.string()};
+  start_daemon();
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  broker_->stop();
+  std::this_thread::sleep_for(1500ms);
+  plc_->unit(2);
+  ASSERT_EQ(plc_->write(reg::command, {1, 600}), 0);
+  ASSERT_TRUE(eventually([&] { return speed(2) == 600; }, 15s)) << speed(2);
+  std::this_thread::sleep_for(1500ms);  // past a sync
+  // The stop puts the drives in their stop state: those changes are kept too.
+  EXPECT_EQ(daemon_->stop(), 0);
+  EXPECT_TRUE(fs::exists(state / "sparkplug-plant1-gw01.store"));
+  broker_->start();
+  ASSERT_TRUE(peer_->wait_for([](const Message& m) { return m.kind == "reconnected"; }, 5s));
+  start_daemon();
+  wait_births(15s);
+  ASSERT_FALSE(HasFailure());
+  EXPECT_THAT(daemon_log(), HasSubstr("changes kept from before"));
+  const auto reached = peer_->wait_for(
+      [](const Message& m) {
+        return is(m, "DDATA", "washer-b") && m.metric("speed_rpm") != nullptr &&
+               m.metric("speed_rpm")->has_flag("historical") &&
+               m.metric("speed_rpm")->as_int() == 600;
+      },
+      10s);
+  EXPECT_TRUE(reached.has_value()) << "the ramp kept before the restart was not sent";
+  expect_seq_consecutive(peer_->history());
 }
 
 }  // namespace

@@ -58,6 +58,8 @@ class CheckingSink : public Sink {
     }
   }
   void drop_session() override { last_seq_ = -1; }
+  void host_offline_before_births() override {}
+  void store(std::string_view /*device*/, const Payload& /*historical*/) override {}
   void write(std::size_t device, std::vector<PointCommand> points) override {
     FUZZ_CHECK(commands && !retained && device < 2 && !points.empty());
     FUZZ_CHECK(points.size() <= kMaxCommandMetrics);

@@ -39,6 +39,10 @@ class RecordingSink : public Sink {
     sent.push_back({topic, payload});
   }
   void drop_session() override { ++drops; }
+  void host_offline_before_births() override { ++offline_waiting; }
+  void store(std::string_view device, const Payload& historical) override {
+    stored.push_back({std::string(device), historical});
+  }
   void write(std::size_t device, std::vector<PointCommand> points) override {
     writes.emplace_back(device, std::move(points));
   }
@@ -47,6 +51,8 @@ class RecordingSink : public Sink {
 
   std::vector<Sent> sent;
   int drops = 0;
+  int offline_waiting = 0;
+  std::vector<Sent> stored;  // topic: the device's name
   std::vector<std::pair<std::size_t, std::vector<PointCommand>>> writes;
   std::vector<std::string> notices;
 };
@@ -110,6 +116,27 @@ class EdgeNodeTest : public ::testing::Test {
   EdgeNode node_;
   RecordingSink sink_;
 };
+
+TEST_F(EdgeNodeTest, TheFirstConnectGoesOnFromThePreviousSessionsBdSeq) {
+  // Kept across a restart (mqtt/bd_seq_file.h) or a reload: one on from it, 255 wrapping to 0.
+  for (const auto& [last, first] : std::vector<std::pair<int, int>>{{0, 1}, {41, 42}, {255, 0}}) {
+    auto o = options();
+    o.last_bd_seq = static_cast<std::uint8_t>(last);
+    EdgeNode node(o);
+    node.set_devices(drives(), at(0ms), sink_);
+    EXPECT_EQ(node.bd_seq(), last) << "before any connect, the last session's";
+    const auto will = node.begin_connect(at(0ms));
+    EXPECT_EQ(will.metrics.at(0).value, MetricValue{std::uint64_t(first)}) << last;
+    EXPECT_EQ(node.bd_seq(), first);
+    node.sample(0, true, values(0), kNoData, at(0ms), sink_);
+    node.connected(at(0ms), sink_);
+    const auto sent = sink_.take();
+    ASSERT_FALSE(sent.empty());
+    ASSERT_NE(sent[0].metric("bdSeq"), nullptr);
+    EXPECT_EQ(sent[0].metric("bdSeq")->value, MetricValue{std::uint64_t(first)})
+        << "the NBIRTH carries the will's bdSeq";
+  }
+}
 
 TEST_F(EdgeNodeTest, TheWillIsAnNdeathWithTheSessionsBdSeq) {
   auto will = node_.begin_connect(at(0ms));
@@ -194,7 +221,8 @@ TEST_F(EdgeNodeTest, DeadbandAndCounterInterval) {
   auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_THAT(sent[0].names(), ElementsAre("speed_rpm"));
-  node_.sample(0, true, values(5, 40), kNoData, at(10s), sink_);  // the counter's interval has passed
+  node_.sample(0, true, values(5, 40), kNoData, at(10s),
+               sink_);  // the counter's interval has passed
   sent = sink_.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_THAT(sent[0].names(), ElementsAre("frames_good"));
@@ -221,7 +249,8 @@ TEST_F(EdgeNodeTest, DeathOnCommLostBirthWhenBack) {
 
 TEST_F(EdgeNodeTest, SeqWrapsAfter255) {
   online();
-  for (int i = 1; i <= 253; ++i) node_.sample(0, true, values(i), kNoData, at(Millis(1000 * i)), sink_);
+  for (int i = 1; i <= 253; ++i)
+    node_.sample(0, true, values(i), kNoData, at(Millis(1000 * i)), sink_);
   auto sent = sink_.take();
   EXPECT_EQ(sent.back().payload.seq, 255u);
   node_.sample(0, true, values(9999), kNoData, at(300s), sink_);
@@ -343,8 +372,8 @@ TEST_F(EdgeNodeTest, ACommandOfTooManyMetricsIsRefusedWhole) {
   online();
   Payload dcmd;
   for (std::size_t i = 0; i <= kMaxCommandMetrics; ++i) {
-    dcmd.metrics.push_back({"setpoint_rpm", DataType::int16,
-                            MetricValue{static_cast<std::int64_t>(i)}, {}});
+    dcmd.metrics.push_back(
+        {"setpoint_rpm", DataType::int16, MetricValue{static_cast<std::int64_t>(i)}, {}});
   }
   node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(1s), sink_);
   EXPECT_TRUE(sink_.writes.empty());
@@ -451,6 +480,12 @@ TEST_F(EdgeNodePrimaryHost, BirthsWaitForTheHostAndItsDeathEndsTheSession) {
   EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
   node_.sample(0, true, values(2), kNoData, at(10ms), sink_);
   EXPECT_TRUE(sink_.take().empty());
+  // Offline while waiting: said to the sink (another broker may have the host), nothing sent.
+  state(false, 50, 15ms);
+  EXPECT_EQ(sink_.offline_waiting, 1);
+  EXPECT_EQ(sink_.drops, 0);
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
   state(true, 100, 20ms);
   auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 2u);
@@ -486,6 +521,134 @@ TEST_F(EdgeNodePrimaryHost, AStateFromTheFutureIsIgnored) {
   // Within the tolerance, a host clock a little ahead is fine.
   state(false, at(30ms).unix_ms + 60'000, 30ms);
   EXPECT_EQ(node_.state(), SessionState::offline);
+}
+
+// A Sparkplug 2.2 host (primary_host_version = "2.2"): STATE/<id> outside the namespace, the text
+// ONLINE or OFFLINE, no timestamp; the 3.0 topic and JSON mean nothing to this node then.
+class EdgeNodeLegacyHost : public EdgeNodeTest {
+ protected:
+  EdgeNodeLegacyHost()
+      : EdgeNodeTest([] {
+          auto o = options();
+          o.primary_host = "scada";
+          o.host_state = HostStateForm::v2_2;
+          return o;
+        }()) {}
+};
+
+TEST_F(EdgeNodeLegacyHost, BirthsWaitForOnlineAndOfflineEndsTheSession) {
+  EXPECT_EQ(node_.subscriptions().back(), "STATE/scada");
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  // The 3.0 form on the 3.0 topic is not this host's: nothing happens.
+  node_.message("spBv1.0/STATE/scada", R"({"online":true,"timestamp":1})", at(5ms), sink_);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  // Anything but ONLINE / OFFLINE on its topic: a notice naming the form.
+  node_.message("STATE/scada", "online", at(8ms), sink_);
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("ONLINE or OFFLINE (Sparkplug 2.2)"));
+  EXPECT_TRUE(sink_.take().empty());
+  node_.message("STATE/scada", "ONLINE", at(10ms), sink_, /*retained=*/true);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/NBIRTH/gw01");
+  EXPECT_EQ(node_.state(), SessionState::online);
+  node_.message("STATE/scada", "OFFLINE", at(20ms), sink_);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/NDEATH/gw01");
+  EXPECT_EQ(sink_.drops, 1);
+  EXPECT_EQ(node_.state(), SessionState::offline);
+  // The next session waits again, and ONLINE (no timestamp to compare) is believed.
+  node_.begin_connect(at(30ms));
+  node_.connected(at(30ms), sink_);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  node_.message("STATE/scada", "ONLINE", at(40ms), sink_);
+  EXPECT_EQ(node_.state(), SessionState::online);
+}
+
+// Store and forward (issue 29): while not online, changes are kept by the DDATA rules, each
+// metric historical and stamped; replay() publishes them after the births, in this session's seq.
+class EdgeNodeStoreForward : public EdgeNodeTest {
+ protected:
+  EdgeNodeStoreForward()
+      : EdgeNodeTest([] {
+          auto o = options();
+          o.store_forward = true;
+          o.counter_interval = 0ms;
+          return o;
+        }()) {}
+};
+
+TEST_F(EdgeNodeStoreForward, ChangesWhileOfflineAreKeptByTheDdataRules) {
+  // Never connected: the first sample of each device is kept whole, the next as changes.
+  node_.sample(0, true, values(100, 1, 0), 1'000, at(0ms), sink_);
+  ASSERT_EQ(sink_.stored.size(), 1u);
+  EXPECT_EQ(sink_.stored[0].topic, "washer-a");
+  EXPECT_THAT(sink_.stored[0].names(), ElementsAre("speed_rpm", "frames_good", "setpoint_rpm"));
+  for (const Metric& m : sink_.stored[0].payload.metrics) {
+    EXPECT_TRUE(m.historical) << m.name;
+    EXPECT_EQ(m.timestamp, 1'000u) << "the drive's time of the value";
+  }
+  EXPECT_FALSE(sink_.stored[0].payload.seq) << "seq is the session's, given at replay";
+  EXPECT_TRUE(sink_.take().empty()) << "nothing published without a session";
+  // Within min_interval (100 ms): held back, then kept by tick() with the newest value.
+  node_.sample(0, true, values(200, 1, 0), 1'050, at(50ms), sink_);
+  node_.sample(0, true, values(300, 1, 0), 1'080, at(80ms), sink_);
+  EXPECT_EQ(sink_.stored.size(), 1u);
+  ASSERT_TRUE(node_.wake_at());
+  node_.tick(at(100ms), sink_);
+  ASSERT_EQ(sink_.stored.size(), 2u);
+  EXPECT_THAT(sink_.stored[1].names(), ElementsAre("speed_rpm"));
+  EXPECT_EQ(sink_.stored[1].metric("speed_rpm")->value, MetricValue{std::int64_t{300}});
+  EXPECT_EQ(sink_.stored[1].metric("speed_rpm")->timestamp, 1'080u);
+  // Unchanged: nothing kept. A dead device: nothing kept.
+  node_.sample(0, true, values(300, 1, 0), 1'300, at(300ms), sink_);
+  node_.sample(1, false, values(5), 1'300, at(300ms), sink_);
+  EXPECT_EQ(sink_.stored.size(), 2u);
+}
+
+TEST_F(EdgeNodeStoreForward, KeptChangesReplayAfterTheBirthsAsHistoricalDdata) {
+  online();
+  // The samples before the first session were kept too (each device's first, whole).
+  ASSERT_EQ(sink_.stored.size(), 2u);
+  sink_.stored.clear();
+  node_.connection_lost();
+  node_.sample(0, true, values(10), 2'000, at(200ms), sink_);
+  node_.sample(0, true, values(20), 2'300, at(500ms), sink_);
+  ASSERT_EQ(sink_.stored.size(), 2u);
+  EXPECT_THAT(sink_.stored[0].names(), ElementsAre("speed_rpm")) << "relative to the last DDATA";
+  // No session: replay() keeps the record.
+  EXPECT_FALSE(node_.replay("washer-a", sink_.stored[0].payload, sink_));
+  node_.begin_connect(at(1s));
+  node_.connected(at(1s), sink_);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 3u);  // NBIRTH, DBIRTH x2
+  EXPECT_TRUE(node_.replay("washer-a", sink_.stored[0].payload, sink_));
+  EXPECT_TRUE(node_.replay("washer-a", sink_.stored[1].payload, sink_));
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
+  EXPECT_EQ(sent[0].payload.seq, 3u) << "this session's seq, after the births";
+  EXPECT_EQ(sent[1].payload.seq, 4u);
+  EXPECT_TRUE(sent[0].metric("speed_rpm")->historical);
+  EXPECT_EQ(sent[0].metric("speed_rpm")->value, MetricValue{std::int64_t{10}});
+  EXPECT_EQ(sent[0].metric("speed_rpm")->timestamp, 2'000u);
+  EXPECT_EQ(sent[1].metric("speed_rpm")->timestamp, 2'300u);
+  // A device unknown now, or a metric it no longer has: dropped, counted, nothing sent.
+  EXPECT_TRUE(node_.replay("washer-z", sink_.stored[0].payload, sink_));
+  Payload other = sink_.stored[0].payload;
+  other.metrics[0].name = "gone";
+  EXPECT_TRUE(node_.replay("washer-a", other, sink_));
+  EXPECT_EQ(node_.replay_dropped(), 2u);
+  EXPECT_TRUE(sink_.take().empty());
+}
+
+TEST_F(EdgeNodeTest, WithoutStoreForwardNothingIsKept) {
+  node_.sample(0, true, values(100), 1'000, at(0ms), sink_);
+  node_.sample(0, true, values(200), 1'000, at(500ms), sink_);
+  EXPECT_TRUE(sink_.stored.empty());
 }
 
 }  // namespace

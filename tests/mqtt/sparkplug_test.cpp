@@ -66,6 +66,22 @@ TEST(SparkplugState, RefusesAnythingElse) {
   }
 }
 
+TEST(SparkplugState, ReadsTheTextOf22WhereConfigured) {
+  EXPECT_EQ(state_topic("scada", HostStateForm::v2_2), "STATE/scada");
+  EXPECT_EQ(state_topic("scada", HostStateForm::v3_0), "spBv1.0/STATE/scada");
+  auto s = parse_host_state("ONLINE", HostStateForm::v2_2);
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->online);
+  EXPECT_EQ(s->timestamp, 0u);
+  s = parse_host_state("OFFLINE", HostStateForm::v2_2);
+  ASSERT_TRUE(s);
+  EXPECT_FALSE(s->online);
+  for (const char* bad : {"", "online", "ONLINE\n", " ONLINE", "OFF", "ONLINEX",
+                          R"({"online":true,"timestamp":1})"}) {
+    EXPECT_FALSE(parse_host_state(bad, HostStateForm::v2_2)) << bad;
+  }
+}
+
 TEST(SparkplugValue, FitsOnlyItsType) {
   EXPECT_TRUE(value_fits(DataType::int16, MetricValue{std::int64_t{-5}}));
   EXPECT_FALSE(value_fits(DataType::int16, MetricValue{std::uint64_t{5}}));

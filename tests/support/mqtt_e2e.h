@@ -183,13 +183,21 @@ class MqttE2E : public ::testing::Test {
               "\"\nadapter = \"nidec-washer\"\nunit_id = " + std::to_string(d.unit) +
               "\npoll_ms = " + std::to_string(poll_ms_) + "\n" + d.device_extra + "\n";
     }
-    return toml + "[mqtt]\nbroker = \"" + broker_->url() + "\"\ngroup_id = \"" + kGroup +
-           "\"\nedge_node_id = \"" + kEdge + "\"\n" + mqtt_extra;
+    std::string broker = "broker = \"" + broker_->url() + "\"";
+    if (!brokers_.empty()) {
+      broker = "brokers = [";
+      for (std::size_t i = 0; i < brokers_.size(); ++i) {
+        broker += (i == 0 ? "\"" : ", \"") + brokers_[i] + "\"";
+      }
+      broker += "]";
+    }
+    return toml + "[mqtt]\n" + broker + "\ngroup_id = \"" + kGroup + "\"\nedge_node_id = \"" +
+           kEdge + "\"\n" + mqtt_extra;
   }
 
   void start_daemon(const std::string& mqtt_extra = "") {
-    daemon_ = std::make_unique<Daemon>(dir_, config(mqtt_extra), std::vector<std::string>{},
-                                       dir_ / "drivegated.log");
+    daemon_ =
+        std::make_unique<Daemon>(dir_, config(mqtt_extra), daemon_args_, dir_ / "drivegated.log");
     plc_ = std::make_unique<Plc>(daemon_->port());
     ASSERT_TRUE(plc_->connect());
     for (const auto& d : drives_) wait_online(d.unit);
@@ -290,6 +298,8 @@ class MqttE2E : public ::testing::Test {
 
   TempDir dir_;
   int poll_ms_ = 100;
+  std::vector<std::string> daemon_args_;  // drivegated's, after --config, --listen, --plugin-dir
+  std::vector<std::string> brokers_;      // [mqtt] brokers = [...]; empty: broker = broker_'s URL
   std::optional<std::chrono::steady_clock::time_point> started_;
   std::unique_ptr<Broker> broker_;
   std::unique_ptr<SparkplugPeer> peer_;

@@ -371,13 +371,18 @@
     mq.hidden = !q;
     if (q) {
       const field = (k) => mq.querySelector('[data-field="' + k + '"]');
-      set(field("broker"), q.broker);
+      set(field("broker"), q.brokers > 1
+        ? q.broker + " (" + (q.broker_index + 1) + " of " + q.brokers + ")" : q.broker);
       set(field("session"), q.session);
       field("session").className = q.session === "online" ? "" : "nz";
       for (const k of ["bd_seq", "connects", "losses", "messages", "births", "commands"]) {
         set(field(k), num(q[k]));
       }
       set(field("last_error"), q.last_error ? "\u00b7 last error: " + q.last_error : "");
+      const st = q.store || {};
+      set(field("store"), !st.enabled ? "" : "\u00b7 kept for later " + num(st.records) +
+        " (" + num(Math.round(st.bytes / 1024)) + " KiB), sent " + num(st.replayed) +
+        ", dropped " + num(st.dropped_size + st.dropped_age + st.replay_dropped));
     }
     set($("version"), s.version ? "v" + s.version : "");
     const restart = $("restart"), needed = s.restart_needed || [];

@@ -1,0 +1,50 @@
+#include "mqtt/bd_seq_file.h"
+
+#include <cerrno>
+#include <charconv>
+
+#include "base/read_file.h"
+#include "base/state_file.h"
+
+namespace drivegate::mqtt {
+
+namespace {
+constexpr std::size_t kMaxFile = 64;  // "255\n" and then some: anything longer is not ours
+}
+
+BdSeqFile::BdSeqFile(const std::filesystem::path& state_dir, std::string_view group,
+                     std::string_view edge_node) {
+  if (state_dir.empty()) return;
+  path_ = state_dir / ("sparkplug-" + std::string(group) + "-" + std::string(edge_node) + ".bdseq");
+}
+
+std::optional<std::uint8_t> BdSeqFile::load(std::string& error) const {
+  error.clear();
+  if (path_.empty()) return std::nullopt;
+  std::error_code ec;
+  if (!std::filesystem::exists(path_, ec)) {
+    if (ec) error = path_.string() + ": " + ec.message();
+    return std::nullopt;  // the first start with this edge node id
+  }
+  const auto text = read_regular_file(path_, kMaxFile, error);
+  if (!text) return std::nullopt;
+  const auto n = parse_bd_seq(*text);
+  if (!n) error = path_.string() + ": not a bdSeq (a number 0..255)";
+  return n;
+}
+
+std::error_code BdSeqFile::save(std::uint8_t bd_seq) const {
+  if (path_.empty()) return {};
+  return replace_file(path_, std::to_string(bd_seq) + "\n");
+}
+
+std::optional<std::uint8_t> parse_bd_seq(std::string_view text) {
+  if (text.ends_with('\n')) text.remove_suffix(1);
+  if (text.empty() || text.size() > 3) return std::nullopt;
+  unsigned n = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+  if (ec != std::errc{} || end != text.data() + text.size() || n > 255) return std::nullopt;
+  return static_cast<std::uint8_t>(n);
+}
+
+}  // namespace drivegate::mqtt

@@ -1,0 +1,115 @@
+// A bounded, disk-backed queue of records, oldest first: what the Sparkplug edge node keeps while
+// it has no session, to send later (store and forward, docs/mqtt.md). The records are opaque
+// bytes with the Unix time they were stored at; what they hold is the caller's.
+//
+// On disk, under one directory: segment files "<16 hex digits>.seg" in the order of their names,
+// each a run of records
+//
+//   u32 length   of what follows the header (little-endian)
+//   u32 crc32    IEEE 802.3, of the stored time and the bytes
+//   u64 time     Unix ms when the record was stored
+//   length bytes
+//
+// and "cursor", the first record not yet taken ("<segment> <offset>\n"). Appends go to the last
+// segment (a new one once it holds segment_bytes); segments wholly taken are deleted; beyond
+// max_bytes the oldest segment goes, its records counted as dropped. Nothing is synced by append
+// or take: sync() (the owner calls it once a second) syncs the segment written and replaces the
+// cursor file, so a power cut loses at most what came after the last sync() and replays at most
+// what was taken after it. Opening scans every segment: a record cut short or damaged ends its
+// segment there (the file is truncated, the bytes counted); a cursor that is not on a record of a
+// segment that exists is ignored and everything kept is replayed.
+//
+// Errors are std::error_code; a spool whose directory cannot be written keeps what it had taken
+// in and refuses the rest (counted), and the owner goes on without it.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <system_error>
+
+namespace drivegate::mqtt {
+
+struct SpoolLimits {
+  std::uint64_t max_bytes = 64ULL * 1024 * 1024;  // on disk, headers included
+  std::chrono::milliseconds max_age{std::chrono::hours(24)};
+  std::uint64_t segment_bytes = 0;  // 0: max_bytes / 16, at least 4 KiB
+};
+
+struct SpoolStats {
+  std::uint64_t bytes = 0;    // on disk, not yet taken or dropped
+  std::uint64_t records = 0;  // waiting
+  std::uint64_t appended = 0;
+  std::uint64_t taken = 0;
+  std::uint64_t dropped_size = 0;          // records lost to max_bytes (oldest first)
+  std::uint64_t dropped_age = 0;           // records older than max_age when their turn came
+  std::uint64_t dropped_corrupt = 0;       // bytes found cut short or damaged at open()
+  std::uint64_t refused = 0;               // appends the disk refused
+  std::optional<std::uint64_t> oldest_ms;  // the stored time of the oldest waiting record
+};
+
+struct SpoolRecord {
+  std::uint64_t stored_ms = 0;
+  std::string bytes;
+};
+
+class Spool {
+ public:
+  Spool(std::filesystem::path dir, SpoolLimits limits);
+  ~Spool();
+  Spool(const Spool&) = delete;
+  Spool& operator=(const Spool&) = delete;
+
+  // Creates the directory if need be and reads what an earlier run left (above).
+  std::error_code open();
+  std::error_code append(std::uint64_t stored_ms, std::string_view bytes);
+  // The oldest record not yet taken; those older than max_age at `now_ms` are dropped on the way
+  // (counted). nullopt: nothing waits (or it cannot be read: `error` says why).
+  std::optional<SpoolRecord> front(std::uint64_t now_ms, std::error_code& error);
+  // Takes front()'s record: it is not returned again.
+  void pop();
+  std::error_code sync();
+
+  [[nodiscard]] bool empty() const { return stats_.records == 0; }
+  [[nodiscard]] const SpoolStats& stats() const { return stats_; }
+  [[nodiscard]] const std::filesystem::path& dir() const { return dir_; }
+
+  static constexpr std::size_t kHeader = 16;
+  static constexpr std::uint32_t kMaxRecord = 16 * 1024 * 1024;  // a length beyond: damage
+
+ private:
+  struct Segment {
+    std::uint64_t id = 0;
+    std::uint64_t bytes = 0;    // its file's size
+    std::uint64_t records = 0;  // in it, taken ones included
+  };
+  [[nodiscard]] std::filesystem::path path_of(std::uint64_t id) const;
+  std::error_code scan(Segment& s);
+  void read_cursor();
+  std::error_code start_segment();
+  void drop_front_segment();
+  void close_reader();
+  void trim_to_size();
+
+  std::filesystem::path dir_;
+  SpoolLimits limits_;
+  std::deque<Segment> segments_;
+  std::uint64_t cursor_offset_ = 0;   // in the front segment
+  std::uint64_t cursor_records_ = 0;  // taken there
+  std::uint64_t front_bytes_ = 0;     // front()'s record's size on disk, 0: none read
+  int writer_ = -1;                   // the back segment, appended to
+  int reader_ = -1;                   // the front segment
+  std::uint64_t reader_id_ = 0;
+  bool dirty_ = false;         // appended since the last sync()
+  bool cursor_moved_ = false;  // taken since the last sync()
+  SpoolStats stats_;
+};
+
+// IEEE 802.3 CRC-32 (the zlib / PNG one), continued from `crc` (0 to start).
+std::uint32_t crc32_ieee(std::string_view bytes, std::uint32_t crc = 0);
+
+}  // namespace drivegate::mqtt

@@ -1,0 +1,112 @@
+#include "mqtt/store_forward.h"
+
+#include <algorithm>
+
+#include "mqtt/sparkplug_codec.h"
+
+namespace drivegate::mqtt {
+
+std::string encode_record(std::string_view device, const sparkplug::Payload& payload) {
+  std::string out;
+  const auto n = static_cast<std::uint16_t>(std::min<std::size_t>(device.size(), 0xFFFF));
+  out.push_back(static_cast<char>(n & 0xFF));
+  out.push_back(static_cast<char>(n >> 8));
+  out.append(device.substr(0, n));
+  out += sparkplug::encode(payload);
+  return out;
+}
+
+std::optional<StoredChange> decode_record(std::string_view bytes) {
+  if (bytes.size() < 2) return std::nullopt;
+  const std::size_t n = static_cast<std::uint8_t>(bytes[0]) |
+                        static_cast<std::size_t>(static_cast<std::uint8_t>(bytes[1])) << 8;
+  if (bytes.size() < 2 + n || n == 0) return std::nullopt;
+  std::string why;
+  auto payload = sparkplug::decode(bytes.substr(2 + n), why);
+  if (!payload) return std::nullopt;
+  return StoredChange{std::string(bytes.substr(2, n)), std::move(*payload)};
+}
+
+StoreForward::StoreForward(std::filesystem::path dir, SpoolLimits limits, unsigned per_second,
+                           std::shared_ptr<spdlog::logger> log)
+    : spool_(std::move(dir), limits), batch_(std::max(1U, per_second / 10)), log_(std::move(log)) {}
+
+bool StoreForward::open() {
+  if (const auto ec = spool_.open()) {
+    log_->error("MQTT: store and forward off: {}: {}", spool_.dir().string(), ec.message());
+    return false;
+  }
+  const SpoolStats& s = spool_.stats();
+  if (s.dropped_corrupt != 0) {
+    log_->warn("MQTT: {}: {} bytes cut short or damaged (a power cut while writing) left out",
+               spool_.dir().string(), s.dropped_corrupt);
+  }
+  if (s.records != 0) {
+    log_->info("MQTT: {} changes kept from before ({} bytes) will be sent once a session is online",
+               s.records, s.bytes);
+  }
+  return true;
+}
+
+void StoreForward::keep(std::string_view device, const sparkplug::Payload& historical,
+                        std::uint64_t now_ms) {
+  if (const auto ec = spool_.append(now_ms, encode_record(device, historical))) {
+    if (!failing_) {
+      log_->error("MQTT: cannot keep a change for later in {}: {}; changes are lost until it can",
+                  spool_.dir().string(), ec.message());
+    }
+    failing_ = true;
+    return;
+  }
+  if (failing_) log_->info("MQTT: {}: changes are kept again", spool_.dir().string());
+  failing_ = false;
+}
+
+bool StoreForward::replay(sparkplug::EdgeNode& edge, sparkplug::Sink& sink, std::uint64_t now_ms) {
+  for (unsigned i = 0; i < batch_; ++i) {
+    std::error_code ec;
+    const auto r = spool_.front(now_ms, ec);
+    if (!r) {
+      if (ec) log_->error("MQTT: {}: {}", spool_.dir().string(), ec.message());
+      break;
+    }
+    auto change = decode_record(r->bytes);
+    if (!change) {  // the CRC held, so only a bug could get here: never stop the queue on it
+      ++unreadable_;
+      spool_.pop();
+      continue;
+    }
+    const auto dropped_before = edge.replay_dropped();
+    if (!edge.replay(change->device, std::move(change->payload), sink)) break;  // offline again
+    spool_.pop();
+    if (edge.replay_dropped() == dropped_before) ++replayed_;
+  }
+  std::error_code ignored;
+  spool_.front(now_ms, ignored);  // the oldest's time, for the stats
+  return waiting();
+}
+
+void StoreForward::sync() {
+  if (const auto ec = spool_.sync()) {
+    log_->warn("MQTT: {}: cannot sync: {}", spool_.dir().string(), ec.message());
+  }
+}
+
+StoreStats StoreForward::stats(const sparkplug::EdgeNode& edge) const {
+  const SpoolStats& s = spool_.stats();
+  StoreStats out;
+  out.enabled = true;
+  out.records = s.records;
+  out.bytes = s.bytes;
+  out.oldest_ms = s.oldest_ms;
+  out.kept = s.appended;
+  out.replayed = replayed_;
+  out.dropped_size = s.dropped_size;
+  out.dropped_age = s.dropped_age;
+  out.dropped_corrupt = s.dropped_corrupt;
+  out.refused = s.refused;
+  out.replay_dropped = unreadable_ + edge.replay_dropped();
+  return out;
+}
+
+}  // namespace drivegate::mqtt
