@@ -370,7 +370,9 @@ TEST(SlaveFramerRtu, APortsLatencyIsNoGapInsideAFrame) {
     t.latency = latency;
     Line line(Framing::rtu, Delimit::silence, t);
     line.feed(Bytes(kRead.begin(), kRead.begin() + 5), 10ms);
-    if (latency > 0ms) EXPECT_EQ(line.framer().deadline(), line.now() + 20ms);
+    if (latency > 0ms) {
+      EXPECT_EQ(line.framer().deadline(), line.now() + 20ms);
+    }
     line.feed(Bytes(kRead.begin() + 5, kRead.end()), 10ms);
     line.settle();
     if (latency > 0ms) {
