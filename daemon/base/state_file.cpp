@@ -33,18 +33,6 @@ class Fd {
   int fd_;
 };
 
-std::error_code write_all(int fd, std::string_view content) {
-  while (!content.empty()) {
-    const ssize_t n = ::write(fd, content.data(), content.size());
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return last_error();
-    }
-    content.remove_prefix(static_cast<std::size_t>(n));
-  }
-  return {};
-}
-
 std::error_code write_synced(const std::filesystem::path& file, std::string_view content) {
   Fd fd(::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0600));
   if (fd.get() < 0) return last_error();
@@ -54,6 +42,18 @@ std::error_code write_synced(const std::filesystem::path& file, std::string_view
 }
 
 }  // namespace
+
+std::error_code write_all(int fd, std::string_view bytes) {
+  while (!bytes.empty()) {
+    const ssize_t n = ::write(fd, bytes.data(), bytes.size());
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return last_error();
+    }
+    bytes.remove_prefix(static_cast<std::size_t>(n));
+  }
+  return {};
+}
 
 std::error_code replace_file(const std::filesystem::path& file, std::string_view content) {
   const std::filesystem::path tmp = file.string() + ".tmp";

@@ -15,4 +15,7 @@ namespace drivegate {
 // the temporary file is gone.
 std::error_code replace_file(const std::filesystem::path& file, std::string_view content);
 
+// Writes all of `bytes` to `fd`, again after a short write or EINTR.
+std::error_code write_all(int fd, std::string_view bytes);
+
 }  // namespace drivegate

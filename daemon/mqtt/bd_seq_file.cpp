@@ -15,7 +15,13 @@ constexpr std::size_t kMaxFile = 64;  // "255\n" and then some: anything longer 
 BdSeqFile::BdSeqFile(const std::filesystem::path& state_dir, std::string_view group,
                      std::string_view edge_node) {
   if (state_dir.empty()) return;
-  path_ = state_dir / ("sparkplug-" + std::string(group) + "-" + std::string(edge_node) + ".bdseq");
+  path_ = edge_node_state_path(state_dir, group, edge_node, ".bdseq");
+}
+
+std::filesystem::path edge_node_state_path(const std::filesystem::path& dir, std::string_view group,
+                                           std::string_view edge_node, std::string_view extension) {
+  return dir / ("sparkplug-" + std::string(group) + "-" + std::string(edge_node) +
+                std::string(extension));
 }
 
 std::optional<std::uint8_t> BdSeqFile::load(std::string& error) const {

@@ -35,6 +35,11 @@ class BdSeqFile {
   std::filesystem::path path_;
 };
 
+// What an edge node keeps in the state directory is named for it:
+// "<dir>/sparkplug-<group>-<edge node><extension>" (".bdseq" here, ".store" for store_forward.h).
+std::filesystem::path edge_node_state_path(const std::filesystem::path& dir, std::string_view group,
+                                           std::string_view edge_node, std::string_view extension);
+
 // "17\n" -> 17; anything but a number 0..255 and at most one trailing newline: nothing.
 std::optional<std::uint8_t> parse_bd_seq(std::string_view text);
 

@@ -309,14 +309,14 @@ void EdgeNode::keep(std::size_t device, const Now& now, Sink& sink) {
   report_or_hold(device, now, sink);
 }
 
-bool EdgeNode::replay(std::string_view device, Payload historical, Sink& sink) {
-  if (state_ != SessionState::online) return false;
+EdgeNode::Replay EdgeNode::replay(std::string_view device, Payload historical, Sink& sink) {
+  if (state_ != SessionState::online) return Replay::not_now;
   const auto it = std::find_if(defs_.begin(), defs_.end(),
                                [&](const DeviceDef& d) { return d.name == device; });
   const auto index = static_cast<std::size_t>(it - defs_.begin());
   if (it == defs_.end() || !devices_[index].born) {
     ++replay_dropped_;  // a DDATA before its DBIRTH would be a protocol error (spec 6.4.x)
-    return true;
+    return Replay::dropped;
   }
   // Only the metrics the device has now, with the datatype its DBIRTH gave them.
   std::erase_if(historical.metrics, [&](const Metric& m) {
@@ -326,11 +326,11 @@ bool EdgeNode::replay(std::string_view device, Payload historical, Sink& sink) {
   });
   if (historical.metrics.empty()) {
     ++replay_dropped_;
-    return true;
+    return Replay::dropped;
   }
   for (Metric& m : historical.metrics) m.historical = true;
   send(MessageType::ddata, it->name, std::move(historical), sink);
-  return true;
+  return Replay::sent;
 }
 
 // A device's metric as published: its value, stamped with when the drive reported it (spec

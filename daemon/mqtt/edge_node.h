@@ -158,10 +158,11 @@ class EdgeNode {
   void command_done(std::size_t device, std::string points, std::string result, const Now& now,
                     Sink& sink);
   // A change kept while there was no session (Sink::store), published now as historical DDATA
-  // after this session's births. false: not now (no session online; keep it). true: done, or
-  // dropped (counted in replay_dropped()) because the device is unknown now or not born in this
-  // session, or none of its metrics is one of the device's now.
-  bool replay(std::string_view device, Payload historical, Sink& sink);
+  // after this session's births: sent; not_now (no session online: keep it); or dropped (counted
+  // in replay_dropped()) because the device is unknown now or not born in this session, or none
+  // of its metrics is one of the device's now.
+  enum class Replay : std::uint8_t { sent, not_now, dropped };
+  Replay replay(std::string_view device, Payload historical, Sink& sink);
   // Publishes the changes held back by min_interval whose time has come.
   void tick(const Now& now, Sink& sink);
   // When tick() has something to do; nullopt: nothing held back.

@@ -123,7 +123,7 @@ std::unique_ptr<StoreForward> make_store(const MqttConfig& config,
   limits.max_bytes = config.store_max_bytes;
   limits.max_age = config.store_max_age;
   auto store = std::make_unique<StoreForward>(
-      state_dir / ("sparkplug-" + config.group_id + "-" + config.edge_node_id + ".store"), limits,
+      edge_node_state_path(state_dir, config.group_id, config.edge_node_id, ".store"), limits,
       config.replay_per_s, log);
   if (!store->open()) return nullptr;
   return store;

@@ -160,10 +160,6 @@ bool valid_id(std::string_view id) {
   return !id.empty() && id.find_first_of("/+#") == std::string_view::npos;
 }
 
-std::string_view to_string(HostStateForm form) {
-  return form == HostStateForm::v2_2 ? "2.2" : "3.0";
-}
-
 std::string state_topic(std::string_view host_id, HostStateForm form) {
   if (form == HostStateForm::v2_2) return "STATE/" + std::string(host_id);
   return std::string(kNamespace) + "/STATE/" + std::string(host_id);

@@ -100,7 +100,6 @@ bool valid_id(std::string_view id);
 //   timestamp, so the broker's order is the only order.
 
 enum class HostStateForm : std::uint8_t { v3_0, v2_2 };
-std::string_view to_string(HostStateForm form);  // "3.0", "2.2"
 
 std::string state_topic(std::string_view host_id, HostStateForm form = HostStateForm::v3_0);
 

@@ -63,18 +63,6 @@ bool read_exact(int fd, void* buf, std::size_t n, std::uint64_t at) {
   return true;
 }
 
-bool write_all(int fd, const void* buf, std::size_t n) {
-  const auto* p = static_cast<const std::uint8_t*>(buf);
-  while (n > 0) {
-    const ssize_t r = ::write(fd, p, n);
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) return false;
-    p += r;
-    n -= static_cast<std::size_t>(r);
-  }
-  return true;
-}
-
 std::optional<std::uint64_t> segment_id(const fs::path& p) {
   const std::string name = p.filename().string();
   if (p.extension() != ".seg" || name.size() != 20) return std::nullopt;
@@ -246,8 +234,10 @@ std::error_code Spool::append(std::uint64_t stored_ms, std::string_view bytes) {
   put_le(h.data() + 8, stored_ms, 8);
   put_le(h.data() + 4, record_crc(h.data() + 8, bytes), 4);
   Segment& back = segments_.back();
-  if (!write_all(writer_, h.data(), h.size()) || !write_all(writer_, bytes.data(), bytes.size())) {
-    const auto ec = last_error();
+  const std::string_view header(reinterpret_cast<const char*>(h.data()), h.size());
+  std::error_code ec = write_all(writer_, header);
+  if (!ec) ec = write_all(writer_, bytes);
+  if (ec) {
     // What was written of it is cut off again, so the next record starts on a boundary.
     if (::ftruncate(writer_, static_cast<off_t>(back.bytes)) != 0) {
       ::close(writer_);

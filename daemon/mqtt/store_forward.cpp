@@ -76,10 +76,10 @@ bool StoreForward::replay(sparkplug::EdgeNode& edge, sparkplug::Sink& sink, std:
       spool_.pop();
       continue;
     }
-    const auto dropped_before = edge.replay_dropped();
-    if (!edge.replay(change->device, std::move(change->payload), sink)) break;  // offline again
+    const auto outcome = edge.replay(change->device, std::move(change->payload), sink);
+    if (outcome == sparkplug::EdgeNode::Replay::not_now) break;  // offline again: kept
     spool_.pop();
-    if (edge.replay_dropped() == dropped_before) ++replayed_;
+    if (outcome == sparkplug::EdgeNode::Replay::sent) ++replayed_;
   }
   std::error_code ignored;
   spool_.front(now_ms, ignored);  // the oldest's time, for the stats

@@ -620,13 +620,13 @@ TEST_F(EdgeNodeStoreForward, KeptChangesReplayAfterTheBirthsAsHistoricalDdata) {
   ASSERT_EQ(sink_.stored.size(), 2u);
   EXPECT_THAT(sink_.stored[0].names(), ElementsAre("speed_rpm")) << "relative to the last DDATA";
   // No session: replay() keeps the record.
-  EXPECT_FALSE(node_.replay("washer-a", sink_.stored[0].payload, sink_));
+  EXPECT_EQ(node_.replay("washer-a", sink_.stored[0].payload, sink_), EdgeNode::Replay::not_now);
   node_.begin_connect(at(1s));
   node_.connected(at(1s), sink_);
   auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 3u);  // NBIRTH, DBIRTH x2
-  EXPECT_TRUE(node_.replay("washer-a", sink_.stored[0].payload, sink_));
-  EXPECT_TRUE(node_.replay("washer-a", sink_.stored[1].payload, sink_));
+  EXPECT_EQ(node_.replay("washer-a", sink_.stored[0].payload, sink_), EdgeNode::Replay::sent);
+  EXPECT_EQ(node_.replay("washer-a", sink_.stored[1].payload, sink_), EdgeNode::Replay::sent);
   sent = sink_.take();
   ASSERT_EQ(sent.size(), 2u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
@@ -637,10 +637,10 @@ TEST_F(EdgeNodeStoreForward, KeptChangesReplayAfterTheBirthsAsHistoricalDdata) {
   EXPECT_EQ(sent[0].metric("speed_rpm")->timestamp, 2'000u);
   EXPECT_EQ(sent[1].metric("speed_rpm")->timestamp, 2'300u);
   // A device unknown now, or a metric it no longer has: dropped, counted, nothing sent.
-  EXPECT_TRUE(node_.replay("washer-z", sink_.stored[0].payload, sink_));
+  EXPECT_EQ(node_.replay("washer-z", sink_.stored[0].payload, sink_), EdgeNode::Replay::dropped);
   Payload other = sink_.stored[0].payload;
   other.metrics[0].name = "gone";
-  EXPECT_TRUE(node_.replay("washer-a", other, sink_));
+  EXPECT_EQ(node_.replay("washer-a", other, sink_), EdgeNode::Replay::dropped);
   EXPECT_EQ(node_.replay_dropped(), 2u);
   EXPECT_TRUE(sink_.take().empty());
 }
