@@ -465,33 +465,32 @@ void Northbound::drop_session() {
       "MQTT: primary host '{}' is offline: NDEATH published, session ended; "
       "reconnecting to wait for it",
       config_.primary_host_id);
-  // Out of libmosquitto's callback first: inside it, packets are only queued, and the NDEATH
-  // just published must reach the broker before the DISCONNECT that makes it drop the will.
-  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
-    if (token.expired() || stopping_) return;
-    client_.disconnect();
-    // Spec 5.x (multiple MQTT servers): the host may be online on another server.
-    if (next_broker()) log_->info("MQTT: trying {} next", broker_url());
-    backoff_ = kFirstRetry;
-    connect_after(backoff_);
-  });
+  backoff_ = kFirstRetry;
+  leave_broker(backoff_);
 }
 
 void Northbound::host_offline_before_births() {
   if (config_.brokers.size() < 2) return;  // nowhere else to look: wait here for the host
   log_->warn("MQTT: primary host '{}' is offline on {}: trying the next broker",
              config_.primary_host_id, broker_url());
-  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
-    // Once: a second STATE in the same turn finds the session already ended.
+  // Growing while no broker has the host online, so a plant whose host is down is not
+  // reconnected to every second: 1 s, 2 s, 4 s... 30 s, back to 1 s once born somewhere.
+  walk_backoff_ =
+      walk_backoff_.count() == 0 ? kFirstRetry : std::min(walk_backoff_ * 2, kLongestRetry);
+  leave_broker(walk_backoff_);
+}
+
+void Northbound::leave_broker(Millis delay) {
+  // Out of libmosquitto's callback first: inside it, packets are only queued, and an NDEATH just
+  // published must reach the broker before the DISCONNECT that makes it drop the will.
+  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_), delay] {
+    // Once: a second STATE in the same turn, or a lost session, finds it already ended.
     if (token.expired() || stopping_ || !client_.connected()) return;
     client_.disconnect();
     edge_.connection_lost();
-    next_broker();
-    // Growing while no broker has the host online, so a plant whose host is down is not
-    // reconnected to every second: 1 s, 2 s, 4 s... 30 s, back to 1 s once born somewhere.
-    walk_backoff_ =
-        walk_backoff_.count() == 0 ? kFirstRetry : std::min(walk_backoff_ * 2, kLongestRetry);
-    connect_after(walk_backoff_);
+    // Spec 5.x (multiple MQTT servers): the host may be online on another server.
+    if (next_broker()) log_->info("MQTT: trying {} next", broker_url());
+    connect_after(delay);
   });
 }
 

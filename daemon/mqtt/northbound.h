@@ -62,6 +62,9 @@ class Northbound final : private sparkplug::Sink {
   void connect();
   // To the next of [mqtt] brokers, when there is more than one: whether it moved.
   bool next_broker();
+  // The primary host is offline here: end the session, try again `delay` later (on the next
+  // broker, if there is one).
+  void leave_broker(Millis delay);
   [[nodiscard]] const std::string& broker_url() const;
   void connect_after(Millis delay);  // a new attempt, once `delay` has passed
   void connected();
