@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "base/state_file.h"
+#include "temp_dir.h"
 
 namespace drivegate::mqtt {
 namespace {
@@ -19,21 +20,14 @@ namespace fs = std::filesystem;
 
 class BdSeqFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dg-bdseq-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   static std::string read(const fs::path& p) {
     std::ifstream in(p);
     std::stringstream s;
     s << in.rdbuf();
     return s.str();
   }
-  fs::path dir_;
+  test::TempDir tmp_;
+  const fs::path& dir_ = tmp_.path();
 };
 
 TEST(ParseBdSeq, ANumber0To255AndAtMostOneNewline) {

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "mqtt/store_forward.h"
+#include "temp_dir.h"
 
 namespace drivegate::mqtt {
 namespace {
@@ -18,13 +19,6 @@ using namespace std::chrono_literals;
 
 class SpoolTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("dg-spool-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   // Everything waiting, in order, taken.
   static std::vector<std::string> drain(Spool& s, std::uint64_t now_ms = 0) {
     std::vector<std::string> out;
@@ -41,7 +35,8 @@ class SpoolTest : public ::testing::Test {
     for (const auto& e : fs::directory_iterator(dir_)) n += e.path().extension() == ".seg";
     return n;
   }
-  fs::path dir_;
+  test::TempDir tmp_;
+  const fs::path dir_ = tmp_ / "spool";  // made by Spool::open()
 };
 
 TEST(Crc32, TheCheckValueOfIeee8023) {

@@ -27,6 +27,8 @@
 #include <thread>
 #include <vector>
 
+#include "temp_dir.h"
+
 extern char** environ;
 
 namespace drivegate::test {
@@ -40,29 +42,6 @@ inline const std::string kSystemPython = "/usr/bin/python3";
 inline std::filesystem::path plugin_dir() {
   return DRIVEGATE_TEST_PLUGIN_DIR;
 }
-
-// A temporary directory removed with its contents at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "drivegate-test-XXXXXX").string();
-    if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = tmpl;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
-  [[nodiscard]] std::filesystem::path operator/(const std::string& name) const {
-    return path_ / name;
-  }
-
- private:
-  std::filesystem::path path_;
-};
 
 // The serial port lock files (daemon/transport/port_lock.h) of the programs a test starts go to a
 // directory of the test process's own, not /run/lock: a daemon killed with SIGKILL leaves its
