@@ -79,6 +79,8 @@ class Broker {
     return s.str();
   }
   [[nodiscard]] bool running() const { return child_ && child_->running(); }
+  // The running broker's process id (its CPU and memory in /proc), -1 when stopped.
+  [[nodiscard]] pid_t pid() const { return child_ ? child_->pid() : -1; }
 
   // Starts the broker again on the same port(s), if it is not running.
   void start() {

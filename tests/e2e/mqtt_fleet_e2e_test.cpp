@@ -1,0 +1,509 @@
+// A fleet on one broker (issue 29): N real drivegated processes (20 unless
+// DRIVEGATE_FLEET_GATEWAYS says otherwise), each with its own simulated nidec-washer on a pty, its
+// own edge node id and its own state directory, one mosquitto, and one Sparkplug host: Eclipse
+// Tahu's codec over MQTT.js (tests/mqtt/peer/sparkplug_peer.js), whose checks are this file's,
+// written from the specification, not from daemon/mqtt.
+//
+// What a SCADA host must see of the whole fleet, and is asserted here:
+//   - every node's NBIRTH and its drive's DBIRTH, with the metrics a faceplate binds to;
+//   - every change, once and in order: per node, seq consecutive in each session, and the speed
+//     ramp's timestamps without a hole, across live data, a broker outage and the replay;
+//   - a broker outage (DRIVEGATE_FLEET_OUTAGE_S, 30 s) during which every drive's speed climbs:
+//     afterwards the births first, then every kept change as historical DDATA in order, each
+//     node's count what its store kept, nothing dropped, nothing twice;
+//   - a gateway killed with -9: its will NDEATH carries the bdSeq of its last NBIRTH, and its
+//     restart is born with the next.
+// The same run measures what bench/fleet.sh reports (docs/performance.md): births per second at
+// start-up, frame-to-host latency (the metric timestamp is when the drive's reply frame arrived,
+// daemon/mqtt/northbound.cpp; the host stamps its receipt on the same clock), the replay rate and
+// the live latency meanwhile, CPU and memory of the broker, the host and each gateway. The
+// figures go to stderr, and as `key value` lines to DRIVEGATE_FLEET_REPORT when it is set.
+// DRIVEGATE_FLEET_LIVE_S (10) is how long the live figures are taken over, and
+// DRIVEGATE_FLEET_REPLAY_PER_S, when set, every gateway's [mqtt] replay_per_s.
+//
+// The fixture is MqttE2EFleet: .ci/run's sanitizer passes leave it out with the other MqttE2E
+// tests, as a timing run on a real broker.
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <future>
+#include <map>
+#include <numeric>
+#include <set>
+
+#include "mqtt_e2e.h"
+
+namespace drivegate::test {
+namespace {
+
+constexpr const char* kFleetGroup = "fleet";
+constexpr const char* kHost = "fleet-host";
+constexpr const char* kDrive = "washer";
+// The ramp every drive runs: 0 to kTarget rpm in kAccelMs, about one rpm per 100 ms poll, so
+// every poll reads a new speed and every change is a DDATA (min_interval_ms = 0) for as long as
+// the test runs.
+constexpr int kTarget = 1200;
+constexpr int kAccelMs = 120'000;
+constexpr int kPollMs = 100;
+
+int env_int(const char* name, int fallback) {
+  const char* v = std::getenv(name);
+  return v != nullptr && *v != '\0' ? std::atoi(v) : fallback;
+}
+
+double unix_now() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+// CPU seconds (user + system) a process has used, from /proc/<pid>/stat (fields 14 and 15).
+double cpu_seconds(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto close = stat.rfind(')');
+  if (close == std::string::npos) return 0;
+  std::istringstream rest(stat.substr(close + 2));  // from field 3, the state
+  std::string field;
+  std::uint64_t utime = 0;
+  std::uint64_t stime = 0;
+  for (int i = 3; i <= 15 && rest >> field; ++i) {
+    if (i == 14) utime = std::stoull(field);
+    if (i == 15) stime = std::stoull(field);
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+// A /proc/<pid>/status field in kB (VmRSS, VmHWM), 0 when absent.
+long status_kb(pid_t pid, const std::string& key) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(key + ":", 0) == 0) return std::atol(line.c_str() + key.size() + 1);
+  }
+  return 0;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return -1;
+  std::sort(v.begin(), v.end());
+  const auto at = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(v.size())));
+  return v[std::min(v.size() - 1, at == 0 ? 0 : at - 1)];
+}
+
+std::string bd_seq(const Message& m) {
+  return m.metric("bdSeq") != nullptr ? m.metric("bdSeq")->value : "none";
+}
+
+struct Gateway {
+  std::string id;  // the edge node id
+  std::unique_ptr<TempDir> dir;
+  std::unique_ptr<Sim> sim;
+  int http_port = 0;
+  std::unique_ptr<Daemon> daemon;
+  std::string mqtt_extra;  // more [mqtt] keys
+
+  [[nodiscard]] std::string toml(const std::string& broker_url) const {
+    return "[[bus]]\nname = \"line\"\nport = \"" + (*dir / "washer").string() +
+           "\"\n\n[[device]]\nname = \"" + kDrive +
+           "\"\nbus = \"line\"\nadapter = \"nidec-washer\"\nunit_id = 1\npoll_ms = " +
+           std::to_string(kPollMs) +
+           "\n[device.options]\naccel_time_ms = " + std::to_string(kAccelMs) +
+           "\n\n[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) +
+           "\"\n\n[mqtt]\nbroker = \"" + broker_url + "\"\ngroup_id = \"" + kFleetGroup +
+           "\"\nedge_node_id = \"" + id + "\"\nprimary_host_id = \"" + kHost +
+           "\"\nmin_interval_ms = 0\n" + mqtt_extra;
+  }
+  void start(const std::string& broker_url) {
+    daemon = std::make_unique<Daemon>(
+        *dir, toml(broker_url), std::vector<std::string>{"--state-dir", (*dir / "state").string()},
+        *dir / "drivegated.log");
+  }
+  [[nodiscard]] double metric(const std::string& name) const {
+    const auto r = http_get(http_port, "/metrics");
+    const auto at = r.body.find("\n" + name + " ");
+    if (r.status != 200 || at == std::string::npos) return -1;
+    return std::atof(r.body.c_str() + at + name.size() + 2);
+  }
+};
+
+class MqttE2EFleet : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (const auto why = missing_dependency()) GTEST_SKIP() << *why;
+    size_ = env_int("DRIVEGATE_FLEET_GATEWAYS", 20);
+    outage_ = std::chrono::seconds(env_int("DRIVEGATE_FLEET_OUTAGE_S", 30));
+    live_ = std::chrono::seconds(env_int("DRIVEGATE_FLEET_LIVE_S", 10));
+    const int replay_per_s = env_int("DRIVEGATE_FLEET_REPLAY_PER_S", 0);
+    broker_ = std::make_unique<Broker>(dir_);
+    SparkplugPeer::Options o;
+    o.stderr_file = dir_ / "host.log";
+    o.client_id = kHost;
+    o.subscriptions = {std::string("spBv1.0/") + kFleetGroup + "/#"};
+    host_ = std::make_unique<SparkplugPeer>(broker_->port(), o);
+    announce_host();
+    for (int i = 1; i <= size_; ++i) {
+      Gateway g;
+      g.id = (i < 10 ? "gw0" : "gw") + std::to_string(i);
+      g.dir = std::make_unique<TempDir>();
+      fs::create_directories(*g.dir / "state");
+      g.sim = std::make_unique<Sim>("nidec-washer", *g.dir / "washer");
+      g.http_port = free_port();
+      if (replay_per_s > 0) g.mqtt_extra = "replay_per_s = " + std::to_string(replay_per_s) + "\n";
+      fleet_.push_back(std::move(g));
+    }
+    if (const char* path = std::getenv("DRIVEGATE_FLEET_REPORT")) report_.open(path);
+  }
+  void TearDown() override {
+    if (!HasFailure()) return;
+    for (const auto& g : fleet_) {
+      std::cerr << "--- " << g.id << " drivegated.log (tail):\n"
+                << tail(slurp(*g.dir / "drivegated.log"));
+    }
+    std::cerr << "--- host.log:\n"
+              << slurp(dir_ / "host.log") << "--- mosquitto.log (tail):\n"
+              << tail(broker_->log() + slurp(dir_ / "mosquitto.log.part")) << "\n";
+  }
+  static std::string tail(const std::string& s) {
+    return s.size() > 3000 ? "..." + s.substr(s.size() - 3000) : s;
+  }
+
+  // Sparkplug 3.0 primary host STATE (spec 7.x): retained, QoS 1, as a host publishes it on every
+  // connect. The nodes wait for it before their births.
+  void announce_host() {
+    const auto ms = static_cast<std::uint64_t>(unix_now() * 1000);
+    host_->publish_text(std::string("spBv1.0/STATE/") + kHost,
+                        R"({"online":true,"timestamp":)" + std::to_string(ms) + "}", true, 1);
+  }
+  // Reads what the host prints for `d` (into history()); says the host is online again when its
+  // broker comes back.
+  void pump(std::chrono::milliseconds d) {
+    const auto deadline = std::chrono::steady_clock::now() + d;
+    while (true) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return;
+      const auto m = host_->next(left);
+      if (m && m->kind == "reconnected") announce_host();
+    }
+  }
+  bool pump_until(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (!done()) {
+      if (std::chrono::steady_clock::now() >= deadline) return false;
+      pump(100ms);
+    }
+    return true;
+  }
+  std::vector<Message> node_history(const std::string& id) const {
+    std::vector<Message> out;
+    for (const auto& m : host_->history()) {
+      if (m.kind == "msg" && m.node() == id) out.push_back(m);
+    }
+    return out;
+  }
+  // How many `type` messages of node `id` the host received since `since` (unix s).
+  std::size_t count(const std::string& id, std::string_view type, double since) const {
+    std::size_t n = 0;
+    for (const auto& m : host_->history()) {
+      n += m.node() == id && is(m, type) && m.received_unix >= since;
+    }
+    return n;
+  }
+  bool every_node_has(std::string_view type, std::size_t n) const {
+    std::map<std::string, std::size_t> seen;
+    for (const auto& m : host_->history()) {
+      if (is(m, type)) ++seen[m.node()];
+    }
+    return std::all_of(fleet_.begin(), fleet_.end(),
+                       [&](const Gateway& g) { return seen[g.id] >= n; });
+  }
+
+  void figure(const std::string& key, double value) {
+    std::cerr << "fleet: " << key << " " << value << "\n";
+    if (report_) report_ << key << " " << value << "\n";
+  }
+  // CPU seconds of every process of the fleet, by role.
+  struct Cpu {
+    std::vector<double> gateways;
+    double broker = 0;
+    double host = 0;
+  };
+  Cpu cpu() {
+    Cpu c;
+    for (const auto& g : fleet_) c.gateways.push_back(cpu_seconds(g.daemon->process().pid()));
+    c.broker = cpu_seconds(broker_->pid());
+    c.host = cpu_seconds(host_->process().pid());
+    return c;
+  }
+  void cpu_figures(const std::string& phase, const Cpu& a, const Cpu& b, double seconds) {
+    std::vector<double> share;
+    for (std::size_t i = 0; i < a.gateways.size(); ++i) {
+      share.push_back((b.gateways[i] - a.gateways[i]) / seconds);
+    }
+    figure(phase + "_gateway_cpu_mean",
+           std::accumulate(share.begin(), share.end(), 0.0) / static_cast<double>(share.size()));
+    figure(phase + "_gateway_cpu_max", *std::max_element(share.begin(), share.end()));
+    figure(phase + "_broker_cpu", (b.broker - a.broker) / seconds);
+    figure(phase + "_host_cpu", (b.host - a.host) / seconds);
+  }
+  // Frame-to-host latency of the live speed DDATA the host received in [from, to) (unix s), ms.
+  std::vector<double> live_latencies(double from, double to) const {
+    std::vector<double> out;
+    for (const auto& m : host_->history()) {
+      if (!is(m, "DDATA") || m.received_unix < from || m.received_unix >= to) continue;
+      const Metric* s = m.metric("speed_rpm");
+      if (s == nullptr || s->has_flag("historical") || !s->timestamp) continue;
+      out.push_back(m.received_unix * 1000.0 - static_cast<double>(*s->timestamp));
+    }
+    return out;
+  }
+  void latency_figures(const std::string& phase, const std::vector<double>& ms) {
+    figure(phase + "_latency_samples", static_cast<double>(ms.size()));
+    figure(phase + "_latency_p50_ms", percentile(ms, 50));
+    figure(phase + "_latency_p99_ms", percentile(ms, 99));
+    figure(phase + "_latency_max_ms", percentile(ms, 100));
+  }
+
+  TempDir dir_;
+  int size_ = 20;
+  std::chrono::seconds outage_{30};
+  std::chrono::seconds live_{10};
+  std::unique_ptr<Broker> broker_;
+  std::unique_ptr<SparkplugPeer> host_;
+  std::vector<Gateway> fleet_;
+  std::ofstream report_;
+};
+
+TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAKill) {
+  figure("gateways", size_);
+  // --- Start-up: every gateway at once; every node and drive born.
+  const double t_start = unix_now();
+  {
+    std::vector<std::future<void>> starting;
+    for (auto& g : fleet_) {
+      starting.push_back(std::async(std::launch::async, [&] { g.start(broker_->url()); }));
+    }
+    for (auto& f : starting) f.get();  // rethrows a gateway that did not start
+  }
+  ASSERT_TRUE(pump_until([&] { return every_node_has("DBIRTH", 1); }, 60s))
+      << "not every gateway was born";
+  double last_birth = 0;
+  for (const auto& g : fleet_) {
+    SCOPED_TRACE(g.id);
+    const auto h = node_history(g.id);
+    const auto nb =
+        std::find_if(h.begin(), h.end(), [](const Message& m) { return is(m, "NBIRTH"); });
+    const auto db =
+        std::find_if(h.begin(), h.end(), [](const Message& m) { return is(m, "DBIRTH"); });
+    ASSERT_TRUE(nb != h.end() && db != h.end());
+    EXPECT_EQ(bd_seq(*nb), "0") << "a fresh state directory";
+    EXPECT_NE(nb->metric("Node Control/Rebirth"), nullptr);
+    EXPECT_EQ(db->device(), kDrive);
+    for (const char* name : {"speed_rpm", "status", "fault_code", "setpoint_rpm", "command",
+                             "status_online", "status_running"}) {
+      EXPECT_NE(db->metric(name), nullptr) << name << " missing: " << describe(*db);
+    }
+    if (db->metric("status_online") != nullptr) {
+      EXPECT_EQ(db->metric("status_online")->value, "true");
+    }
+    last_birth = std::max(last_birth, db->received_unix);
+  }
+  ASSERT_FALSE(HasFailure());
+  figure("startup_all_births_s", last_birth - t_start);
+  figure("startup_births_per_s", 2.0 * size_ / (last_birth - t_start));
+
+  // --- Live: every drive ramps up; the host sees each new speed.
+  for (auto& g : fleet_) {
+    Plc plc(g.daemon->port());
+    ASSERT_TRUE(plc.connect()) << g.id;
+    ASSERT_EQ(plc.write(reg::command, {1 /*run_forward*/, kTarget}), 0) << g.id;
+  }
+  pump(2s);  // the ramps under way
+  const double live_from = unix_now();
+  Cpu cpu_a = cpu();
+  pump(live_);
+  const double live_to = unix_now();
+  Cpu cpu_b = cpu();
+  const auto live_ms = live_latencies(live_from, live_to);
+  latency_figures("live", live_ms);
+  // Wide margins: a property (nothing queues up), not a figure; the figures are bench/fleet.sh's.
+  EXPECT_LT(percentile(live_ms, 99), 1000) << "live data late";
+  cpu_figures("live", cpu_a, cpu_b, live_to - live_from);
+  figure("live_ddata_per_s",
+         static_cast<double>(std::count_if(host_->history().begin(), host_->history().end(),
+                                           [&](const Message& m) {
+                                             return is(m, "DDATA") &&
+                                                    m.received_unix >= live_from &&
+                                                    m.received_unix < live_to;
+                                           })) /
+             (live_to - live_from));
+
+  // --- The broker goes away for the outage; the ramps go on and every gateway keeps them.
+  ASSERT_EQ(broker_->stop(), 0);
+  const double outage_from = unix_now();
+  pump(outage_);
+  for (const auto& g : fleet_) {
+    EXPECT_EQ(g.metric("drivegate_mqtt_connected"), 0) << g.id;
+    EXPECT_GE(g.metric("drivegate_mqtt_store_records"), static_cast<double>(outage_.count()) * 5.0)
+        << g.id << ": the ramp was not kept";
+  }
+  broker_->start();
+  const double outage_to = unix_now();
+  figure("outage_s", outage_to - outage_from);
+  cpu_a = cpu();
+  // Every node reborn, and every store replayed to the end.
+  ASSERT_TRUE(pump_until(
+      [&] {
+        return every_node_has("NBIRTH", 2) &&
+               std::all_of(fleet_.begin(), fleet_.end(), [](const Gateway& g) {
+                 return g.metric("drivegate_mqtt_store_records") == 0;
+               });
+      },
+      90s))
+      << "not every gateway came back and replayed what it kept";
+  pump(1s);
+  cpu_b = cpu();
+  const double replay_done = unix_now();
+
+  double first_historical = 0;
+  double last_historical = 0;
+  double last_reconnect = 0;
+  std::size_t historical_total = 0;
+  std::size_t replayed_after_outage = 0;
+  std::vector<double> replay_rates;  // records per second, per gateway
+  double worst_hole_ms = 0;
+  for (const auto& g : fleet_) {
+    SCOPED_TRACE(g.id);
+    const auto h = node_history(g.id);
+    expect_seq_consecutive(h);
+    // What was kept comes after the births of the session it is sent in (expect_seq_consecutive:
+    // no DDATA of a device not born), in order, each once. Kept are the outage's changes and the
+    // few from the start, before the host's STATE let the first births go.
+    std::vector<std::pair<std::uint64_t, std::int64_t>> ramp;  // (metric timestamp, speed)
+    std::vector<std::int64_t> historical;
+    std::vector<std::string> bd_seqs;
+    double replay_from = 0;
+    double replay_to = 0;
+    std::size_t replayed = 0;
+    for (const auto& m : h) {
+      if (is(m, "NBIRTH")) {
+        bd_seqs.push_back(bd_seq(m));
+        if (bd_seqs.size() == 2) last_reconnect = std::max(last_reconnect, m.received_unix);
+      }
+      if (!is(m, "DDATA") && !is(m, "DBIRTH")) continue;
+      const Metric* s = m.metric("speed_rpm");
+      if (s == nullptr || !s->timestamp) continue;
+      ramp.emplace_back(*s->timestamp, s->as_int());
+      if (!s->has_flag("historical")) continue;
+      historical.push_back(s->as_int());
+      if (m.received_unix < outage_to) continue;
+      replay_from = replayed == 0 ? m.received_unix : replay_from;
+      replay_to = m.received_unix;
+      ++replayed;
+    }
+    if (replayed > 0) {
+      first_historical =
+          first_historical == 0 ? replay_from : std::min(first_historical, replay_from);
+      last_historical = std::max(last_historical, replay_to);
+      replayed_after_outage += replayed;
+      // Batches go every 100 ms (StoreForward::kReplayPeriod): the last one's period counts.
+      replay_rates.push_back(static_cast<double>(replayed) / (replay_to - replay_from + 0.1));
+    }
+    // A new session, a new bdSeq (one per connection attempt, failed ones too: docs/mqtt.md).
+    ASSERT_EQ(bd_seqs.size(), 2u);
+    EXPECT_NE(bd_seqs[0], bd_seqs[1]);
+    EXPECT_GE(historical.size(), static_cast<std::size_t>(outage_.count() * 5));
+    EXPECT_TRUE(std::is_sorted(historical.begin(), historical.end())) << "out of order";
+    EXPECT_EQ(std::set<std::int64_t>(historical.begin(), historical.end()).size(),
+              historical.size())
+        << "a change sent twice";
+    // Each node sent what its store kept, and the host got every one of them.
+    const double kept = g.metric("drivegate_mqtt_store_kept_total");
+    EXPECT_EQ(g.metric("drivegate_mqtt_store_replayed_total"), kept);
+    EXPECT_EQ(g.metric("drivegate_mqtt_store_dropped_total"), 0);
+    std::size_t historical_ddata = 0;
+    for (const auto& m : h) {
+      historical_ddata +=
+          is(m, "DDATA") && !m.metrics.empty() && m.metrics.front().has_flag("historical");
+    }
+    EXPECT_EQ(static_cast<double>(historical_ddata), kept) << "kept, but not at the host";
+    historical_total += historical_ddata;
+    // No hole in the ramp as the host can put it together by the metrics' timestamps: live, then
+    // kept, then live again. A poll is every 100 ms; a lost change leaves a hole of 200 ms or
+    // more, a lost stretch of the outage seconds.
+    std::sort(ramp.begin(), ramp.end());
+    ramp.erase(std::unique(ramp.begin(), ramp.end()), ramp.end());
+    double hole = 0;
+    for (std::size_t i = 1; i < ramp.size(); ++i) {
+      if (ramp[i - 1].second >= kTarget) break;
+      EXPECT_GE(ramp[i].second, ramp[i - 1].second) << "the speed went back at " << ramp[i].first;
+      hole = std::max(hole, static_cast<double>(ramp[i].first - ramp[i - 1].first));
+    }
+    EXPECT_LT(hole, 1000) << "changes missing";
+    worst_hole_ms = std::max(worst_hole_ms, hole);
+  }
+  figure("ramp_worst_hole_ms", worst_hole_ms);
+  figure("reconnect_last_s", last_reconnect - outage_to);
+  figure("kept_records", static_cast<double>(historical_total));
+  figure("replayed_after_outage", static_cast<double>(replayed_after_outage));
+  ASSERT_EQ(replay_rates.size(), fleet_.size()) << "a gateway replayed nothing";
+  figure("replay_fleet_span_s", last_historical - first_historical);
+  figure("replay_gateway_records_per_s_min",
+         *std::min_element(replay_rates.begin(), replay_rates.end()));
+  figure("replay_gateway_records_per_s_median", percentile(replay_rates, 50));
+  // Live data while the stores replay: paced replay batches do not hold it back.
+  const auto during_replay_ms = live_latencies(first_historical, last_historical + 0.001);
+  latency_figures("replay", during_replay_ms);
+  EXPECT_LT(percentile(during_replay_ms, 99), 1000) << "live data held back by the replay";
+  cpu_figures("reconnect_replay", cpu_a, cpu_b, replay_done - outage_to);
+  ASSERT_FALSE(HasFailure());
+
+  // --- kill -9: the broker's will says which session died; the restart is the next.
+  Gateway& victim = fleet_[fleet_.size() / 2];
+  std::string last_bd_seq;
+  for (const auto& m : node_history(victim.id)) {
+    if (is(m, "NBIRTH")) last_bd_seq = bd_seq(m);
+  }
+  const double killed_at = unix_now();
+  victim.daemon->process().stop(SIGKILL);
+  ASSERT_TRUE(pump_until([&] { return count(victim.id, "NDEATH", killed_at) == 1; }, 10s))
+      << "no will NDEATH for " << victim.id;
+  for (const auto& m : node_history(victim.id)) {
+    if (is(m, "NDEATH") && m.received_unix >= killed_at) {
+      EXPECT_EQ(bd_seq(m), last_bd_seq) << "the will of another session";
+    }
+  }
+  victim.start(broker_->url());
+  ASSERT_TRUE(pump_until([&] { return count(victim.id, "NBIRTH", killed_at) == 1; }, 20s));
+  const auto h = node_history(victim.id);
+  const auto reborn =
+      std::find_if(h.rbegin(), h.rend(), [](const Message& m) { return is(m, "NBIRTH"); });
+  EXPECT_EQ(bd_seq(*reborn), std::to_string((std::stoi(last_bd_seq) + 1) % 256));
+  // Nobody else noticed: no other node died or was born again.
+  pump(1s);
+  for (const auto& g : fleet_) {
+    if (&g == &victim) continue;
+    EXPECT_EQ(count(g.id, "NDEATH", killed_at), 0u) << g.id;
+    EXPECT_EQ(count(g.id, "NBIRTH", killed_at), 0u) << g.id;
+  }
+
+  // Memory of each gateway at the end (the broker's too).
+  std::vector<double> rss;
+  std::vector<double> hwm;
+  for (const auto& g : fleet_) {
+    rss.push_back(static_cast<double>(status_kb(g.daemon->process().pid(), "VmRSS")));
+    hwm.push_back(static_cast<double>(status_kb(g.daemon->process().pid(), "VmHWM")));
+  }
+  figure("gateway_rss_kb_max", *std::max_element(rss.begin(), rss.end()));
+  figure("gateway_hwm_kb_max", *std::max_element(hwm.begin(), hwm.end()));
+  figure("broker_rss_kb", static_cast<double>(status_kb(broker_->pid(), "VmRSS")));
+  figure("broker_hwm_kb", static_cast<double>(status_kb(broker_->pid(), "VmHWM")));
+  figure("host_rss_kb", static_cast<double>(status_kb(host_->process().pid(), "VmRSS")));
+  figure("test_s", unix_now() - t_start);
+}
+
+}  // namespace
+}  // namespace drivegate::test
