@@ -271,7 +271,9 @@ std::vector<std::size_t> EdgeNode::changes(std::size_t device, const Now& now) c
   return out;
 }
 
-// Online: the DDATA of what changed. Otherwise, with store_forward, the same kept for later.
+// Online: the DDATA of what changed. Otherwise, with store_forward, the same kept for later, as
+// is a DDATA the client refused (its session just ended): from here on the values count as
+// reported, and the change would be in no DDATA at all.
 void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
   DeviceState& d = devices_[device];
   const auto changed = changes(device, now);
@@ -290,10 +292,11 @@ void EdgeNode::report(std::size_t device, const Now& now, Sink& sink) {
   d.last_data = now.mono;
   if (counters) d.last_counters = now.mono;
   if (online) {
-    send(MessageType::ddata, defs_[device].name, std::move(p), sink);
-  } else {
-    sink.store(defs_[device].name, p);
+    if (send(MessageType::ddata, defs_[device].name, p, sink) || !options_.store_forward) return;
+    p.seq.reset();  // the session's, given again at replay
+    for (Metric& m : p.metrics) m.historical = true;
   }
+  sink.store(defs_[device].name, p);
 }
 
 // A sample while not online, with store_forward: the device's first is kept whole (what it was
@@ -329,8 +332,8 @@ EdgeNode::Replay EdgeNode::replay(std::string_view device, Payload historical, S
     return Replay::dropped;
   }
   for (Metric& m : historical.metrics) m.historical = true;
-  send(MessageType::ddata, it->name, std::move(historical), sink);
-  return Replay::sent;
+  // Refused: the record stays first in the store, for the next attempt.
+  return send(MessageType::ddata, it->name, historical, sink) ? Replay::sent : Replay::not_now;
 }
 
 // A device's metric as published: its value, stamped with when the drive reported it (spec
@@ -354,7 +357,7 @@ void EdgeNode::rebirth(const Now& now, Sink& sink) {
   p.metrics.push_back(
       {std::string(kRebirth), DataType::boolean, MetricValue{false}, {}, {}, false});
   p.metrics.push_back(string_metric(kVersion, options_.version));
-  send(MessageType::nbirth, {}, std::move(p), sink);
+  send(MessageType::nbirth, {}, p, sink);
   for (std::size_t i = 0; i < devices_.size(); ++i) {
     devices_[i].born = false;
     devices_[i].due.reset();
@@ -380,7 +383,7 @@ void EdgeNode::birth(std::size_t device, const Now& now, Sink& sink) {
   d.last_data = now.mono;
   d.last_counters = now.mono;
   ++births_;
-  send(MessageType::dbirth, def.name, std::move(p), sink);
+  send(MessageType::dbirth, def.name, p, sink);
 }
 
 void EdgeNode::death(std::size_t device, const Now& now, Sink& sink) {
@@ -388,13 +391,15 @@ void EdgeNode::death(std::size_t device, const Now& now, Sink& sink) {
   devices_[device].due.reset();
   Payload p;
   p.timestamp = now.unix_ms;
-  send(MessageType::ddeath, defs_[device].name, std::move(p), sink);
+  send(MessageType::ddeath, defs_[device].name, p, sink);
 }
 
-void EdgeNode::send(MessageType type, std::string_view device, Payload payload, Sink& sink) {
+bool EdgeNode::send(MessageType type, std::string_view device, Payload& payload, Sink& sink) {
   payload.seq = seq_;
+  // A message the client refused is not out: the host must not see a gap for it.
+  if (!sink.publish(topic(options_.group, type, options_.edge_node, device), payload)) return false;
   seq_ = static_cast<std::uint8_t>(seq_ + 1);  // 255 -> 0 (spec 6.4.1)
-  sink.publish(topic(options_.group, type, options_.edge_node, device), payload);
+  return true;
 }
 
 void EdgeNode::command(std::string_view device, std::string_view payload, const Now& now,
@@ -466,7 +471,7 @@ void EdgeNode::command_done(std::size_t device, std::string points, std::string 
   p.timestamp = now.unix_ms;
   p.metrics.push_back(string_metric(kCommandPoint, std::move(points)));
   p.metrics.push_back(string_metric(kCommandResult, std::move(result)));
-  send(MessageType::ddata, defs_[device].name, std::move(p), sink);
+  send(MessageType::ddata, defs_[device].name, p, sink);
 }
 
 }  // namespace drivegate::sparkplug

@@ -24,7 +24,8 @@
 //   timestamps   each device metric carries the time of the drive's state it shows (the last
 //                reply that carried it, never a write's echo); the payload's is when it was sent
 //   store and    with store_forward, changes while not online go to Sink::store by the DDATA
-//   forward      rules; replay() publishes them later as historical DDATA (spec 6.4.x)
+//   forward      rules, and so does a DDATA Sink::publish refused; replay() publishes them later
+//                as historical DDATA (spec 6.4.x)
 #pragma once
 
 #include <cstdint>
@@ -83,12 +84,14 @@ inline constexpr std::size_t kNoticeKinds = 4;
 class Sink {
  public:
   virtual ~Sink() = default;
-  virtual void publish(const std::string& topic, const Payload& payload) = 0;  // QoS 0
+  // QoS 0. Whether the MQTT client took it: not, when the session has just ended (the edge node
+  // hears of that only after), and then the message is not out.
+  virtual bool publish(const std::string& topic, const Payload& payload) = 0;
   // STATE offline: NDEATH was published; the session must end (and be made again later).
   virtual void drop_session() = 0;
   // Store and forward (EdgeNodeOptions::store_forward): a device's changes while there is no
-  // session, as the DDATA they would have been (metrics historical, stamped with their time);
-  // replayed later through EdgeNode::replay().
+  // session, or whose DDATA publish() refused, as the DDATA they would have been (metrics
+  // historical, stamped with their time); replayed later through EdgeNode::replay().
   virtual void store(std::string_view device, const Payload& historical) = 0;
   // STATE offline while the births wait for the host: nothing was published in this session.
   // Where there is another broker, the host may be online there (docs/mqtt.md).
@@ -158,9 +161,9 @@ class EdgeNode {
   void command_done(std::size_t device, std::string points, std::string result, const Now& now,
                     Sink& sink);
   // A change kept while there was no session (Sink::store), published now as historical DDATA
-  // after this session's births: sent; not_now (no session online: keep it); or dropped (counted
-  // in replay_dropped()) because the device is unknown now or not born in this session, or none
-  // of its metrics is one of the device's now.
+  // after this session's births: sent; not_now (no session online, or Sink::publish refused it:
+  // keep it); or dropped (counted in replay_dropped()) because the device is unknown now or not
+  // born in this session, or none of its metrics is one of the device's now.
   enum class Replay : std::uint8_t { sent, not_now, dropped };
   Replay replay(std::string_view device, Payload historical, Sink& sink);
   // Publishes the changes held back by min_interval whose time has come.
@@ -205,7 +208,8 @@ class EdgeNode {
   std::vector<std::size_t> changes(std::size_t device, const Now& now) const;
   void command(std::string_view device, std::string_view payload, const Now& now, Sink& sink);
   void host_state(std::string_view payload, const Now& now, Sink& sink);
-  void send(MessageType type, std::string_view device, Payload payload, Sink& sink);
+  // Publishes `payload` with the next seq: whether the Sink took it (if not, the seq is unused).
+  bool send(MessageType type, std::string_view device, Payload& payload, Sink& sink);
 
   EdgeNodeOptions options_;
   SessionState state_ = SessionState::offline;

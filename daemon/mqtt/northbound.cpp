@@ -439,8 +439,10 @@ std::vector<MetricValue> Northbound::sample(Watched& watched) const {
   return values;
 }
 
-void Northbound::publish(const std::string& topic, const sparkplug::Payload& payload) {
-  if (client_.publish(topic, sparkplug::encode(payload), 0, false)) ++status_.messages;
+bool Northbound::publish(const std::string& topic, const sparkplug::Payload& payload) {
+  const bool taken = client_.publish(topic, sparkplug::encode(payload), 0, false);
+  if (taken) ++status_.messages;
+  return taken;
 }
 
 void Northbound::store(std::string_view device, const sparkplug::Payload& historical) {

@@ -78,7 +78,7 @@ class Northbound final : private sparkplug::Sink {
   [[nodiscard]] std::vector<sparkplug::MetricValue> sample(Watched& watched) const;
 
   // Sink
-  void publish(const std::string& topic, const sparkplug::Payload& payload) override;
+  bool publish(const std::string& topic, const sparkplug::Payload& payload) override;
   void drop_session() override;
   void host_offline_before_births() override;
   void write(std::size_t device, std::vector<sparkplug::PointCommand> points) override;

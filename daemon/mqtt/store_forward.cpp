@@ -77,7 +77,7 @@ bool StoreForward::replay(sparkplug::EdgeNode& edge, sparkplug::Sink& sink, std:
       continue;
     }
     const auto outcome = edge.replay(change->device, std::move(change->payload), sink);
-    if (outcome == sparkplug::EdgeNode::Replay::not_now) break;  // offline again: kept
+    if (outcome == sparkplug::EdgeNode::Replay::not_now) break;  // offline again, refused: kept
     spool_.pop();
     if (outcome == sparkplug::EdgeNode::Replay::sent) ++replayed_;
   }

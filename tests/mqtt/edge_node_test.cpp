@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include "mqtt/sparkplug_codec.h"
+#include "mqtt/store_forward.h"
+#include "temp_dir.h"
 
 namespace drivegate::sparkplug {
 namespace {
@@ -35,8 +37,9 @@ struct Sent {
 
 class RecordingSink : public Sink {
  public:
-  void publish(const std::string& topic, const Payload& payload) override {
-    sent.push_back({topic, payload});
+  bool publish(const std::string& topic, const Payload& payload) override {
+    (refusing ? refused : sent).push_back({topic, payload});
+    return !refusing;
   }
   void drop_session() override { ++drops; }
   void host_offline_before_births() override { ++offline_waiting; }
@@ -50,6 +53,8 @@ class RecordingSink : public Sink {
   std::vector<Sent> take() { return std::exchange(sent, {}); }
 
   std::vector<Sent> sent;
+  bool refusing = false;  // publish() refuses, as the MQTT client does once its session ended
+  std::vector<Sent> refused;
   int drops = 0;
   int offline_waiting = 0;
   std::vector<Sent> stored;  // topic: the device's name
@@ -649,6 +654,78 @@ TEST_F(EdgeNodeTest, WithoutStoreForwardNothingIsKept) {
   node_.sample(0, true, values(100), 1'000, at(0ms), sink_);
   node_.sample(0, true, values(200), 1'000, at(500ms), sink_);
   EXPECT_TRUE(sink_.stored.empty());
+}
+
+// The client refuses a DDATA when its session has just ended, before the edge node hears of it:
+// the change is then in no DDATA, unless the store keeps it.
+TEST_F(EdgeNodeStoreForward, ADdataTheClientRefusesIsKeptAsHistoricalWithItsTime) {
+  online();
+  sink_.stored.clear();  // each device's first sample, from before the session
+  sink_.refusing = true;
+  node_.sample(0, true, values(100), 2'000, at(200ms), sink_);
+  ASSERT_EQ(sink_.refused.size(), 1u);
+  EXPECT_EQ(sink_.refused[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
+  ASSERT_EQ(sink_.stored.size(), 1u);
+  const Sent kept = sink_.stored[0];
+  EXPECT_EQ(kept.topic, "washer-a");
+  EXPECT_THAT(kept.names(), ElementsAre("speed_rpm"));
+  EXPECT_EQ(kept.metric("speed_rpm")->value, MetricValue{std::int64_t{100}});
+  EXPECT_TRUE(kept.metric("speed_rpm")->historical);
+  EXPECT_EQ(kept.metric("speed_rpm")->timestamp, 2'000u) << "the drive's time of the value";
+  EXPECT_EQ(kept.payload.timestamp, at(200ms).unix_ms) << "when it was to be sent";
+  EXPECT_FALSE(kept.payload.seq) << "seq is the session's, given at replay";
+  // The refused DDATA took no seq: the host sees none missing in what did go out.
+  sink_.refusing = false;
+  node_.sample(0, true, values(200), 2'300, at(500ms), sink_);
+  EXPECT_EQ(node_.replay("washer-a", kept.payload, sink_), EdgeNode::Replay::sent);
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].payload.seq, 3u) << "the first after the births";
+  EXPECT_FALSE(sent[0].metric("speed_rpm")->historical);
+  EXPECT_EQ(sent[1].payload.seq, 4u);
+  EXPECT_TRUE(sent[1].metric("speed_rpm")->historical);
+  EXPECT_EQ(sent[1].metric("speed_rpm")->timestamp, 2'000u);
+}
+
+TEST_F(EdgeNodeTest, WithoutStoreForwardADdataTheClientRefusesIsDropped) {
+  online();
+  sink_.refusing = true;
+  node_.sample(0, true, values(100), 2'000, at(200ms), sink_);
+  EXPECT_EQ(sink_.refused.size(), 1u);
+  EXPECT_TRUE(sink_.stored.empty());
+  // Counted as reported: the same values again are no change.
+  sink_.refusing = false;
+  node_.sample(0, true, values(100), 2'000, at(500ms), sink_);
+  EXPECT_TRUE(sink_.take().empty());
+}
+
+// A replay the client refuses is not_now, as offline: the store's record stays first, and the
+// next attempt sends it.
+TEST_F(EdgeNodeStoreForward, AReplayTheClientRefusesStaysInTheStoreForTheNextAttempt) {
+  test::TempDir tmp;
+  mqtt::StoreForward store(tmp / "store", mqtt::SpoolLimits{}, 100,
+                           std::make_shared<spdlog::logger>("edge_node_test"));
+  ASSERT_TRUE(store.open());
+  online();
+  ASSERT_EQ(sink_.stored.size(), 2u);  // each device's first sample, from before the session
+  for (const Sent& s : sink_.stored) store.keep(s.topic, s.payload, at(0ms).unix_ms);
+  sink_.refusing = true;
+  EXPECT_TRUE(store.replay(node_, sink_, at(1s).unix_ms)) << "nothing waits any more";
+  EXPECT_EQ(sink_.refused.size(), 1u) << "the batch goes on after a refusal";
+  auto stats = store.stats(node_);
+  EXPECT_EQ(stats.records, 2u);
+  EXPECT_EQ(stats.replayed, 0u);
+  EXPECT_EQ(stats.replay_dropped, 0u);
+  sink_.refusing = false;
+  EXPECT_FALSE(store.replay(node_, sink_, at(2s).unix_ms));
+  const auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 2u);
+  EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
+  EXPECT_EQ(sent[0].payload.seq, 3u) << "the refused attempt took no seq";
+  EXPECT_EQ(sent[1].topic, "spBv1.0/plant1/DDATA/gw01/washer-b");
+  stats = store.stats(node_);
+  EXPECT_EQ(stats.records, 0u);
+  EXPECT_EQ(stats.replayed, 2u);
 }
 
 }  // namespace
