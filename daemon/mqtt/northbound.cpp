@@ -319,14 +319,19 @@ void Northbound::lost(const std::string& why) {
                walk ? fmt::format("trying {} next", broker_url())
                     : fmt::format("retrying every {} s at most", kLongestRetry.count() / 1000));
   } else {
-    log_->debug("MQTT: {}: {}; next attempt{} in {} ms", failed, why,
+    log_->debug("MQTT: {}: {}; next attempt{} in {} ms at most", failed, why,
                 walk ? " on " + broker_url() : std::string(), backoff_.count());
   }
   connect_after(backoff_);
 }
 
 void Northbound::connect_after(Millis delay) {
-  retry_timer_.expires_after(delay);
+  // Gateways that lost their broker together would retry together, every one at the same
+  // instants of the back-off (1 s, 3 s, 7 s...), and a fleet's reconnects and births would hit
+  // the broker in bursts. Each waits a random part of the delay instead, from half of it to all
+  // of it ("equal jitter"): never later than the back-off says, spread over its second half.
+  std::uniform_int_distribution<Millis::rep> spread(delay.count() / 2, delay.count());
+  retry_timer_.expires_after(Millis{spread(random_)});
   retry_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (!ec) connect();
   });

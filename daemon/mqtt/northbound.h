@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -66,7 +67,7 @@ class Northbound final : private sparkplug::Sink {
   // broker, if there is one).
   void leave_broker(Millis delay);
   [[nodiscard]] const std::string& broker_url() const;
-  void connect_after(Millis delay);  // a new attempt, once `delay` has passed
+  void connect_after(Millis delay);  // a new attempt, after half of `delay` to all of it
   void connected();
   void lost(const std::string& why);
   void message(std::string_view topic, std::string_view payload, bool retained);
@@ -103,6 +104,7 @@ class Northbound final : private sparkplug::Sink {
   std::uint64_t generation_ = 0;  // of watched_: a watcher from before a reload is ignored
   Millis backoff_{0};
   Millis walk_backoff_{0};         // between brokers while the primary host is offline on each
+  std::minstd_rand random_{std::random_device{}()};  // spreads the retries (connect_after)
   std::size_t broker_ = 0;         // which of config_.brokers the next attempt uses
   std::size_t client_broker_ = 0;  // which one client_ is set up for
   bool stopping_ = false;
