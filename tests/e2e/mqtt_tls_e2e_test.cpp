@@ -4,11 +4,13 @@
 // broker's plain listener, the independent Sparkplug host (tests/support/sparkplug_peer.h). The
 // certificates are made at run time by tests/support/make_certs.sh in the test's own directory:
 // ca (the plant's CA: the broker's server.pem and the client operator.pem), other-ca and otherca
-// (a client certificate from that other CA).
+// (a client certificate from that other CA), and otherhost (a server certificate from ca for
+// other.example).
 //
 // What is shown: with the right files the daemon gets a session over TLS and the host sees the
 // births and data; a broker that wants a client certificate refuses the daemon without one or with
-// one from another CA; the daemon refuses a broker whose certificate does not chain to its `ca`.
+// one from another CA; the daemon refuses a broker whose certificate does not chain to its `ca`,
+// or does but names another host.
 // In each refusal Modbus goes on being served, the host sees nothing of the node, and the daemon
 // says why in its log and in /metrics and the status JSON. And a broker whose TCP handshake takes
 // a while (any broker across a network) still gets its TLS handshake, and one that is down is
@@ -199,14 +201,22 @@ class MqttE2ETls : public MqttE2E {
     const Ran made = run_make_certs();
     ASSERT_EQ(made.status, 0) << made.err;
     ASSERT_TRUE(fs::exists(certs_ / "otherca.key"));
+    start_broker("server");
+    add_drive("washer-a");
+    add_drive("washer-b");
+  }
+
+  // A broker presenting `server` (make_certs.sh's name) on its mqtts listener, and the peer on
+  // its plain one; any before them are stopped (a test whose broker shows another certificate).
+  void start_broker(const std::string& server) {
+    peer_.reset();
+    broker_.reset();
     broker_ = std::make_unique<Broker>(
-        dir_, Broker::Tls{certs_ / "ca.pem", certs_ / "server.pem", certs_ / "server.key",
+        dir_, Broker::Tls{certs_ / "ca.pem", certs_ / (server + ".pem"), certs_ / (server + ".key"),
                           /*require_certificate=*/true, /*use_identity_as_username=*/true});
     SparkplugPeer::Options o;
     o.stderr_file = dir_ / "peer.log";
     peer_ = std::make_unique<SparkplugPeer>(broker_->port(), o);
-    add_drive("washer-a");
-    add_drive("washer-b");
   }
 
   // `ca = ...` and, unless `client` is empty, `cert` and `key` (make_certs.sh's names).
@@ -395,6 +405,18 @@ TEST_F(MqttE2ETls, BrokerCertificateNotFromTheConfiguredCaIsRefusedByTheDaemon) 
   ASSERT_NO_FATAL_FAILURE(start_tls_daemon(tls_files("other-ca", "operator") + http_section()));
   serve_modbus_until_refused("alert unknown ca", 2);
   expect_no_session("certificate verify failed");
+}
+
+// 3b. The broker's certificate chains to the configured CA but is for another host (SAN
+// DNS:other.example, not the 127.0.0.1 the daemon connects to): a CA signs for many hosts, and
+// only the name tells this broker from any other server it has signed for. libmosquitto checks
+// the name unless told not to (mosquitto_tls_insecure_set), inside OpenSSL's certificate check,
+// so the daemon ends the handshake; OpenSSL's alert for it is a bare "internal error".
+TEST_F(MqttE2ETls, BrokerCertificateForAnotherHostNameIsRefusedByTheDaemon) {
+  ASSERT_NO_FATAL_FAILURE(start_broker("otherhost"));
+  ASSERT_NO_FATAL_FAILURE(start_tls_daemon(tls_files("ca", "operator") + http_section()));
+  serve_modbus_until_refused("alert internal error", 2);
+  expect_no_session("host name verification failed");
 }
 
 // 4. A broker whose TCP handshake takes a second (any broker not on this machine takes some):

@@ -7,6 +7,8 @@
 # Writes into DIR (keys mode 0600):
 #   ca.pem ca.key                 the plant's CA
 #   server.pem server.key         CN=localhost, SAN DNS:localhost, IP:127.0.0.1, IP:::1
+#   otherhost.pem otherhost.key   CN=other.example, SAN DNS:other.example: from the CA, but for
+#                                 another host than this one
 #   viewer / operator / engineer  .pem .key: client certificates with those roles
 #   norole.pem norole.key         a client certificate from the CA without the role extension
 #   otherca.pem otherca.key       role "operator", signed by another CA (other-ca.pem)
@@ -67,14 +69,20 @@ CNF
 ca ca "/O=drivegate test/CN=test plant CA"
 ca other-ca "/O=somebody else/CN=other CA"
 
-key server
-openssl req -new -key server.key -subj "/O=drivegate test/CN=localhost" -out server.csr
-printf '%s\n' "basicConstraints = CA:FALSE" "keyUsage = critical, digitalSignature" \
-  "extendedKeyUsage = serverAuth" "subjectAltName = DNS:localhost, IP:127.0.0.1, IP:::1" \
-  > server.ext
-openssl x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial -days 825 \
-  -extfile server.ext -out server.pem 2>/dev/null
-rm -f server.csr server.ext
+# issue_server NAME CN SAN: a server certificate from the CA.
+issue_server() {
+  name=$1
+  key "$name"
+  openssl req -new -key "$name.key" -subj "/O=drivegate test/CN=$2" -out "$name.csr"
+  printf '%s\n' "basicConstraints = CA:FALSE" "keyUsage = critical, digitalSignature" \
+    "extendedKeyUsage = serverAuth" "subjectAltName = $3" > "$name.ext"
+  openssl x509 -req -in "$name.csr" -CA ca.pem -CAkey ca.key -CAcreateserial -days 825 \
+    -extfile "$name.ext" -out "$name.pem" 2>/dev/null
+  rm -f "$name.csr" "$name.ext"
+}
+
+issue_server server localhost "DNS:localhost, IP:127.0.0.1, IP:::1"
+issue_server otherhost other.example "DNS:other.example"
 
 issue viewer ca viewer
 issue operator ca operator
