@@ -32,6 +32,7 @@
 #include <fstream>
 #include <future>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <set>
 
@@ -101,6 +102,7 @@ struct Gateway {
   std::string id;  // the edge node id
   std::unique_ptr<TempDir> dir;
   std::unique_ptr<Sim> sim;
+  int modbus_port = 0;
   int http_port = 0;
   std::unique_ptr<Daemon> daemon;
   std::string mqtt_extra;  // more [mqtt] keys
@@ -116,10 +118,26 @@ struct Gateway {
            "\"\nedge_node_id = \"" + id + "\"\nprimary_host_id = \"" + kHost +
            "\"\nmin_interval_ms = 0\n" + mqtt_extra;
   }
-  void start(const std::string& broker_url) {
-    daemon = std::make_unique<Daemon>(
-        *dir, toml(broker_url), std::vector<std::string>{"--state-dir", (*dir / "state").string()},
-        *dir / "drivegated.log");
+  // The ports are handed out by the fixture (Fleet::port), never twice. Another process's
+  // outgoing connection can still take one before this daemon binds it: the daemon then exits
+  // saying so, and is started again on new ones; any other start-up failure is the test's.
+  void start(const std::string& broker_url, const std::function<int()>& new_port) {
+    for (int attempt = 1;; ++attempt) {
+      try {
+        daemon = std::make_unique<Daemon>(
+            *dir, toml(broker_url),
+            std::vector<std::string>{"--state-dir", (*dir / "state").string()},
+            *dir / "drivegated.log", modbus_port);
+        return;
+      } catch (const std::runtime_error&) {
+        if (attempt == 3 ||
+            slurp(*dir / "drivegated.log").find("Address already in use") == std::string::npos) {
+          throw;
+        }
+        modbus_port = new_port();
+        http_port = new_port();
+      }
+    }
   }
   [[nodiscard]] double metric(const std::string& name) const {
     const auto r = http_get(http_port, "/metrics");
@@ -150,7 +168,8 @@ class MqttE2EFleet : public ::testing::Test {
       g.dir = std::make_unique<TempDir>();
       fs::create_directories(*g.dir / "state");
       g.sim = std::make_unique<Sim>("nidec-washer", *g.dir / "washer");
-      g.http_port = free_port();
+      g.modbus_port = port();
+      g.http_port = port();
       if (replay_per_s > 0) g.mqtt_extra = "replay_per_s = " + std::to_string(replay_per_s) + "\n";
       fleet_.push_back(std::move(g));
     }
@@ -221,6 +240,14 @@ class MqttE2EFleet : public ::testing::Test {
                        [&](const Gateway& g) { return seen[g.id] >= n; });
   }
 
+  // A free port no gateway of this fleet has been given (gateways start on several threads).
+  int port() {
+    const std::lock_guard lock(ports_mutex_);
+    int p = free_port();
+    while (!ports_.insert(p).second) p = free_port();
+    return p;
+  }
+
   void figure(const std::string& key, double value) {
     std::cerr << "fleet: " << key << " " << value << "\n";
     if (report_) report_ << key << " " << value << "\n";
@@ -275,6 +302,8 @@ class MqttE2EFleet : public ::testing::Test {
   std::unique_ptr<SparkplugPeer> host_;
   std::vector<Gateway> fleet_;
   std::ofstream report_;
+  std::mutex ports_mutex_;
+  std::set<int> ports_;  // handed out to the gateways
 };
 
 TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAKill) {
@@ -284,7 +313,8 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
   {
     std::vector<std::future<void>> starting;
     for (auto& g : fleet_) {
-      starting.push_back(std::async(std::launch::async, [&] { g.start(broker_->url()); }));
+      starting.push_back(std::async(std::launch::async,
+                                    [&] { g.start(broker_->url(), [this] { return port(); }); }));
     }
     for (auto& f : starting) f.get();  // rethrows a gateway that did not start
   }
@@ -345,11 +375,14 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
   ASSERT_EQ(broker_->stop(), 0);
   const double outage_from = unix_now();
   pump(outage_);
+  double store_bytes = 0;
   for (const auto& g : fleet_) {
     EXPECT_EQ(g.metric("drivegate_mqtt_connected"), 0) << g.id;
     EXPECT_GE(g.metric("drivegate_mqtt_store_records"), static_cast<double>(outage_.count()) * 5.0)
         << g.id << ": the ramp was not kept";
+    store_bytes = std::max(store_bytes, g.metric("drivegate_mqtt_store_bytes"));
   }
+  figure("outage_store_bytes_max", store_bytes);
   broker_->start();
   const double outage_to = unix_now();
   figure("outage_s", outage_to - outage_from);
@@ -374,6 +407,7 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
   std::size_t historical_total = 0;
   std::size_t replayed_after_outage = 0;
   std::vector<double> replay_rates;  // records per second, per gateway
+  std::size_t kept_and_in_a_birth = 0;
   double worst_hole_ms = 0;
   for (const auto& g : fleet_) {
     SCOPED_TRACE(g.id);
@@ -384,6 +418,8 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
     // few from the start, before the host's STATE let the first births go.
     std::vector<std::pair<std::uint64_t, std::int64_t>> ramp;  // (metric timestamp, speed)
     std::vector<std::int64_t> historical;
+    std::set<std::pair<std::uint64_t, std::int64_t>> sent_live;  // (metric timestamp, speed)
+    std::set<std::pair<std::uint64_t, std::int64_t>> born_as;
     std::vector<std::string> bd_seqs;
     double replay_from = 0;
     double replay_to = 0;
@@ -397,7 +433,15 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
       const Metric* s = m.metric("speed_rpm");
       if (s == nullptr || !s->timestamp) continue;
       ramp.emplace_back(*s->timestamp, s->as_int());
-      if (!s->has_flag("historical")) continue;
+      const std::pair<std::uint64_t, std::int64_t> change{*s->timestamp, s->as_int()};
+      if (!s->has_flag("historical")) {
+        (is(m, "DBIRTH") ? born_as : sent_live).insert(change);
+        continue;
+      }
+      // Kept, and also sent live: twice. Kept while the births waited, and in the birth after
+      // it: a state the host may see twice (the birth is no change), counted.
+      EXPECT_FALSE(sent_live.contains(change)) << "sent live and kept: " << change.second;
+      if (born_as.contains(change)) ++kept_and_in_a_birth;
       historical.push_back(s->as_int());
       if (m.received_unix < outage_to) continue;
       replay_from = replayed == 0 ? m.received_unix : replay_from;
@@ -446,11 +490,23 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
     worst_hole_ms = std::max(worst_hole_ms, hole);
   }
   figure("ramp_worst_hole_ms", worst_hole_ms);
+  figure("kept_and_in_a_birth", static_cast<double>(kept_and_in_a_birth));
   figure("reconnect_last_s", last_reconnect - outage_to);
   figure("kept_records", static_cast<double>(historical_total));
   figure("replayed_after_outage", static_cast<double>(replayed_after_outage));
   ASSERT_EQ(replay_rates.size(), fleet_.size()) << "a gateway replayed nothing";
   figure("replay_fleet_span_s", last_historical - first_historical);
+  // The most historical DDATA the host got in one second, from the whole fleet.
+  std::map<long, double> per_second;
+  for (const auto& m : host_->history()) {
+    if (is(m, "DDATA") && m.received_unix >= outage_to && !m.metrics.empty() &&
+        m.metrics.front().has_flag("historical")) {
+      ++per_second[static_cast<long>(m.received_unix)];
+    }
+  }
+  double peak = 0;
+  for (const auto& [second, n] : per_second) peak = std::max(peak, n);
+  figure("replay_fleet_peak_records_per_s", peak);
   figure("replay_gateway_records_per_s_min",
          *std::min_element(replay_rates.begin(), replay_rates.end()));
   figure("replay_gateway_records_per_s_median", percentile(replay_rates, 50));
@@ -476,7 +532,7 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
       EXPECT_EQ(bd_seq(m), last_bd_seq) << "the will of another session";
     }
   }
-  victim.start(broker_->url());
+  victim.start(broker_->url(), [this] { return port(); });
   ASSERT_TRUE(pump_until([&] { return count(victim.id, "NBIRTH", killed_at) == 1; }, 20s));
   const auto h = node_history(victim.id);
   const auto reborn =

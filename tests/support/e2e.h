@@ -350,10 +350,13 @@ inline std::vector<std::uint8_t> raw_request(int port, std::uint8_t unit,
 // drivegated on a configuration written from `toml`, listening on a free loopback port.
 class Daemon {
  public:
-  // `log`: where its stderr goes (empty: the test's own stderr).
+  // `log`: where its stderr goes (empty: the test's own stderr). `port`: its Modbus TCP port
+  // (0: a free_port()), for a test that hands out the ports of many daemons itself.
   Daemon(const TempDir& dir, const std::string& toml, std::vector<std::string> extra = {},
-         const std::filesystem::path& log = {})
-      : port_(free_port()), config_(dir / "drivegate.toml"), child_(argv(dir, toml, extra), log) {
+         const std::filesystem::path& log = {}, int port = 0)
+      : port_(port != 0 ? port : free_port()),
+        config_(dir / "drivegate.toml"),
+        child_(argv(dir, toml, extra), log) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
     while (std::chrono::steady_clock::now() < deadline) {
       Plc probe(port_);
