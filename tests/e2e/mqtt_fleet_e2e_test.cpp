@@ -37,6 +37,7 @@
 #include <set>
 
 #include "mqtt_e2e.h"
+#include "status/process_metrics.h"
 
 namespace drivegate::test {
 namespace {
@@ -60,21 +61,12 @@ double unix_now() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
-// CPU seconds (user + system) a process has used, from /proc/<pid>/stat (fields 14 and 15).
+// CPU seconds (user + system) a process has used, read as the daemon's own /metrics reads it.
 double cpu_seconds(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto close = stat.rfind(')');
-  if (close == std::string::npos) return 0;
-  std::istringstream rest(stat.substr(close + 2));  // from field 3, the state
-  std::string field;
-  std::uint64_t utime = 0;
-  std::uint64_t stime = 0;
-  for (int i = 3; i <= 15 && rest >> field; ++i) {
-    if (i == 14) utime = std::stoull(field);
-    if (i == 15) stime = std::stoull(field);
-  }
-  return static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK));
+  const auto stat = parse_proc_stat(slurp("/proc/" + std::to_string(pid) + "/stat"));
+  if (!stat) return 0;
+  return static_cast<double>(stat->utime_ticks + stat->stime_ticks) /
+         static_cast<double>(::sysconf(_SC_CLK_TCK));
 }
 
 // A /proc/<pid>/status field in kB (VmRSS, VmHWM), 0 when absent.
@@ -513,6 +505,7 @@ TEST_F(MqttE2EFleet, EveryChangeOfEveryGatewayReachesTheHostThroughAnOutageAndAK
   // Live data while the stores replay: paced replay batches do not hold it back.
   const auto during_replay_ms = live_latencies(first_historical, last_historical + 0.001);
   latency_figures("replay", during_replay_ms);
+  EXPECT_FALSE(during_replay_ms.empty()) << "no live data while the stores replayed";
   EXPECT_LT(percentile(during_replay_ms, 99), 1000) << "live data held back by the replay";
   cpu_figures("reconnect_replay", cpu_a, cpu_b, replay_done - outage_to);
   ASSERT_FALSE(HasFailure());

@@ -154,6 +154,9 @@ class Broker {
       << "log_dest stderr\n"
       << "log_type error\nlog_type warning\nlog_type notice\nlog_type information\n"
       << "connection_messages true\n"
+      // A host that must see every message: the default would drop a subscriber's messages
+      // beyond 1000 queued (a fleet's replay burst at a host that is still decoding).
+      << "max_queued_messages 0\n"
       << "log_timestamp_format %H:%M:%S\n";
     // Run as root (a test container), mosquitto would otherwise switch to the user "mosquitto",
     // who cannot read the 0600 keys make_certs.sh writes; as anybody else this line is ignored.
