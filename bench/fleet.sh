@@ -12,18 +12,9 @@
 # restarted. The run also asserts what the host must see (every change once, in order, the
 # will's bdSeq): a failed assertion fails the bench.
 #
-# Figures per run (the test writes them to a report file, this script puts them side by side):
-#   start-up   births per second: 2 x N births (NBIRTH + DBIRTH) over the time from the first
-#              drivegated spawned to the last DBIRTH at the host
-#   latency    frame -> host: the host's receipt time minus the metric timestamp, which is when
-#              the drive's reply frame arrived at drivegated (daemon/mqtt/northbound.cpp); one
-#              machine, one CLOCK_REALTIME. p50 / p99 / max while live, and of the live data
-#              that arrived while the stores replayed
-#   replay     historical DDATA after the outage, the span from the first to the last at the host
-#   CPU        CPU seconds per wall second (utime + stime from /proc/<pid>/stat, 100 Hz ticks) of
-#              each gateway (mean and max), of the broker and of the host, over the live window
-#              and over reconnect + replay
-#   memory     VmRSS / VmHWM of the gateways (max) and of the broker at the end
+# The test writes its figures (births per second, frame -> host latency, replay rate, CPU and
+# memory of the gateways, the broker and the host) to a report file; this script puts the runs
+# side by side. What each figure is and how it is taken: docs/performance.md, issue 29.
 #
 # Sizes run in SIZES order, each with the default replay_per_s (500), then the largest again with
 # FAST_REPLAY (replay_per_s 5000): what limits the replay when a gateway does not.
@@ -76,11 +67,14 @@ run() {  # run NAME GATEWAYS [REPLAY_PER_S]
   if ! DRIVEGATE_FLEET_GATEWAYS=$2 DRIVEGATE_FLEET_LIVE_S=$LIVE_S DRIVEGATE_FLEET_OUTAGE_S=$OUTAGE_S \
     DRIVEGATE_FLEET_REPLAY_PER_S=${3:-0} DRIVEGATE_FLEET_REPORT=$report \
     "$TEST" --gtest_filter='MqttE2EFleet.*' >"$W/$name.log" 2>&1; then
-    grep -A 12 -E '(Failure|exception)' "$W/$name.log" | head -n 80 >&2
+    grep -A 12 -E '(Failure|exception)' "$W/$name.log" | head -n 80 >&2 || true
+    tail -n 20 "$W/$name.log" >&2
     echo "fleet.sh: $name failed (its assertions above)" >&2
     exit 1
   fi
-  echo "load_before $LOAD" | tr -d '(!)' >>"$report"
+  # LOAD ends in "(!)" when the machine never got quiet: a figure of its own.
+  echo "load_before ${LOAD%(!)}" >>"$report"
+  [[ $LOAD == *'(!)' ]] && echo "load_over_max 1" >>"$report"
   RUNS+=("$name")
 }
 

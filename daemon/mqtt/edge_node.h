@@ -24,8 +24,9 @@
 //   timestamps   each device metric carries the time of the drive's state it shows (the last
 //                reply that carried it, never a write's echo); the payload's is when it was sent
 //   store and    with store_forward, changes while not online go to Sink::store by the DDATA
-//   forward      rules, and so does a DDATA Sink::publish refused; replay() publishes them later
-//                as historical DDATA (spec 6.4.x)
+//   forward      rules, and so does a DDATA of changes Sink::publish refused (not a command's
+//                result: it answers a DCMD of the session that ended); replay() publishes them
+//                later as historical DDATA (spec 6.4.x)
 #pragma once
 
 #include <cstdint>
