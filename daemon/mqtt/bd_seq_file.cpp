@@ -1,5 +1,6 @@
 #include "mqtt/bd_seq_file.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 
@@ -10,6 +11,7 @@ namespace drivegate::mqtt {
 
 namespace {
 constexpr std::size_t kMaxFile = 64;  // "255\n" and then some: anything longer is not ours
+constexpr std::string_view kPrefix = "sparkplug-";
 }
 
 BdSeqFile::BdSeqFile(const std::filesystem::path& state_dir, std::string_view group,
@@ -20,8 +22,24 @@ BdSeqFile::BdSeqFile(const std::filesystem::path& state_dir, std::string_view gr
 
 std::filesystem::path edge_node_state_path(const std::filesystem::path& dir, std::string_view group,
                                            std::string_view edge_node, std::string_view extension) {
-  return dir / ("sparkplug-" + std::string(group) + "-" + std::string(edge_node) +
+  return dir / (std::string(kPrefix) + std::string(group) + "-" + std::string(edge_node) +
                 std::string(extension));
+}
+
+std::vector<std::filesystem::path> other_edge_node_state(const std::filesystem::path& dir,
+                                                         std::string_view extension,
+                                                         const std::filesystem::path& own) {
+  std::vector<std::filesystem::path> out;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() > kPrefix.size() + extension.size() && name.starts_with(kPrefix) &&
+        name.ends_with(extension) && entry.path() != own) {
+      out.push_back(entry.path());
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 std::optional<std::uint8_t> BdSeqFile::load(std::string& error) const {

@@ -108,23 +108,29 @@ sparkplug::Property property(std::string key, MetricValue value) {
 }
 
 // [mqtt] store_forward's store, in the state directory; none without one (said once), or when
-// it cannot be opened (said why).
+// it cannot be opened (said why). The stores of other edge node ids there are named in the log.
 std::unique_ptr<StoreForward> make_store(const MqttConfig& config,
                                          const std::filesystem::path& state_dir,
                                          const std::shared_ptr<spdlog::logger>& log) {
-  if (!config.store_forward) return nullptr;
   if (state_dir.empty()) {
+    if (!config.store_forward) return nullptr;
     log->info(
         "MQTT: changes while the broker is away are not kept: no state directory "
         "(drivegated --state-dir, or StateDirectory= in the unit)");
     return nullptr;
   }
+  const auto own = edge_node_state_path(state_dir, config.group_id, config.edge_node_id, ".store");
+  for (const auto& other : other_edge_node_state(state_dir, ".store", own)) {
+    log->warn(
+        "MQTT: {} holds changes kept under another group_id or edge_node_id; nothing sends them "
+        "now: remove it once they are not needed",
+        other.string());
+  }
+  if (!config.store_forward) return nullptr;
   SpoolLimits limits;
   limits.max_bytes = config.store_max_bytes;
   limits.max_age = config.store_max_age;
-  auto store = std::make_unique<StoreForward>(
-      edge_node_state_path(state_dir, config.group_id, config.edge_node_id, ".store"), limits,
-      config.replay_per_s, log);
+  auto store = std::make_unique<StoreForward>(own, limits, config.replay_per_s, log);
   if (!store->open()) return nullptr;
   return store;
 }

@@ -40,6 +40,26 @@ TEST(ParseBdSeq, ANumber0To255AndAtMostOneNewline) {
   }
 }
 
+// An edge node id changed in the configuration: the store kept under the old one is found (and
+// named in the log by the northbound), the node's own and anything else are not.
+TEST_F(BdSeqFileTest, OtherEdgeNodesStateIsFoundByItsKind) {
+  const fs::path own = edge_node_state_path(dir_, "plant1", "gw01", ".store");
+  EXPECT_EQ(own, dir_ / "sparkplug-plant1-gw01.store");
+  fs::create_directories(own);
+  fs::create_directories(dir_ / "sparkplug-plant1-gw00.store");
+  fs::create_directories(dir_ / "sparkplug-line2-gw01.store");
+  std::ofstream(dir_ / "sparkplug-plant1-gw00.bdseq") << "3\n";
+  std::ofstream(dir_ / "sparkplug-.store") << "";  // no group or node: not an edge node's
+  std::ofstream(dir_ / "notes.store") << "";
+  EXPECT_EQ(other_edge_node_state(dir_, ".store", own),
+            (std::vector<fs::path>{dir_ / "sparkplug-line2-gw01.store",
+                                   dir_ / "sparkplug-plant1-gw00.store"}));
+  EXPECT_EQ(other_edge_node_state(dir_, ".bdseq", edge_node_state_path(dir_, "plant1", "gw01",
+                                                                       ".bdseq")),
+            std::vector<fs::path>{dir_ / "sparkplug-plant1-gw00.bdseq"});
+  EXPECT_TRUE(other_edge_node_state(dir_ / "missing", ".store", own).empty());
+}
+
 TEST_F(BdSeqFileTest, NoFileYetIsNothingAndNoError) {
   const BdSeqFile f(dir_, "plant1", "gw01");
   EXPECT_TRUE(f.enabled());
