@@ -6,8 +6,9 @@
 //
 // What a SCADA host must see of the whole fleet, and is asserted here:
 //   - every node's NBIRTH and its drive's DBIRTH, with the metrics a faceplate binds to;
-//   - every change, once and in order: per node, seq consecutive in each session, and the speed
-//     ramp's timestamps without a hole, across live data, a broker outage and the replay;
+//   - every change, once and in order: per node, seq consecutive in each session, each store's
+//     count at the host, and the speed ramp's timestamps without a lost stretch (a hole of a
+//     second), across live data, a broker outage and the replay;
 //   - a broker outage (DRIVEGATE_FLEET_OUTAGE_S, 30 s) during which every drive's speed climbs:
 //     afterwards the births first, then every kept change as historical DDATA in order, each
 //     node's count what its store kept, nothing dropped, nothing twice;
