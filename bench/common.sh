@@ -32,3 +32,21 @@ wait_for_port() {
   echo "${0##*/}: nothing answers on port $1" >&2
   return 1
 }
+
+# wait_load: until the 1-minute load average is below LOAD_MAX (LOAD_WAIT s at most, 60 s at a
+# time); sets LOAD, with "(!)" appended when it never got there and the run measures anyway.
+wait_load() {
+  local waited=0
+  while true; do
+    LOAD=$(cut -d' ' -f1 /proc/loadavg)
+    awk -v l="$LOAD" -v m="$LOAD_MAX" 'BEGIN {exit !(l < m)}' && return 0
+    if ((waited >= LOAD_WAIT)); then
+      echo "${0##*/}: load $LOAD still >= $LOAD_MAX after ${waited}s; measuring anyway" >&2
+      LOAD="$LOAD(!)"
+      return 0
+    fi
+    echo "${0##*/}: load $LOAD >= $LOAD_MAX ($(uptime | sed 's/.*average: //')); waiting 60 s" >&2
+    sleep 60
+    waited=$((waited + 60))
+  done
+}

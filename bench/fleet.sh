@@ -42,23 +42,6 @@ LOAD_WAIT=${LOAD_WAIT:-600}
 source "$HERE/common.sh"
 bench_workdir fleet
 
-# wait_load: until the 1-minute load average is below LOAD_MAX (LOAD_WAIT s at most); sets LOAD.
-wait_load() {
-  local waited=0
-  while true; do
-    LOAD=$(cut -d' ' -f1 /proc/loadavg)
-    awk -v l="$LOAD" -v m="$LOAD_MAX" 'BEGIN {exit !(l < m)}' && return 0
-    if ((waited >= LOAD_WAIT)); then
-      echo "fleet.sh: load $LOAD still >= $LOAD_MAX after ${waited}s; measuring anyway" >&2
-      LOAD="$LOAD(!)"
-      return 0
-    fi
-    echo "fleet.sh: load $LOAD >= $LOAD_MAX; waiting 60 s" >&2
-    sleep 60
-    waited=$((waited + 60))
-  done
-}
-
 RUNS=()
 run() {  # run NAME GATEWAYS [REPLAY_PER_S]
   local name=$1 report=$W/$1.txt

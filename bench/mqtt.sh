@@ -86,23 +86,6 @@ ticks_of_all() {  # the CPU ticks of every process this script started that stil
 busy_ticks() { awk '/^cpu / {print $2 + $3 + $4 + $7 + $8 + $9}' /proc/stat; }
 status_kb() { awk -v k="$2:" '$1 == k {print $2}' "/proc/$1/status"; }
 
-# wait_load: until the 1-minute load average is below LOAD_MAX (LOAD_WAIT s at most); sets LOAD.
-wait_load() {
-  local waited=0
-  while true; do
-    LOAD=$(cut -d' ' -f1 /proc/loadavg)
-    awk -v l="$LOAD" -v m="$LOAD_MAX" 'BEGIN {exit !(l < m)}' && return 0
-    if ((waited >= LOAD_WAIT)); then
-      echo "mqtt.sh: load $LOAD still >= $LOAD_MAX after ${waited}s; measuring anyway" >&2
-      LOAD="$LOAD(!)"
-      return 0
-    fi
-    echo "mqtt.sh: load $LOAD >= $LOAD_MAX ($(uptime | sed 's/.*average: //')); waiting 60 s" >&2
-    sleep 60
-    waited=$((waited + 60))
-  done
-}
-
 start_daemon() {  # start_daemon CONFIG LOG [PORT]: sets DG_PID
   "$BIN/drivegated" --config "$1" --plugin-dir "$PLUGINS" --log-level info >"$2" 2>&1 &
   DG_PID=$!
