@@ -556,14 +556,6 @@ TEST_F(MqttE2EFailsafe, WithFeedFailsafeAnMqttOnlyDriveTripsWhenTheDcmdsStop) {
 
 // --- 7. broker restart --------------------------------------------------------------------------
 
-// One sample of the daemon's /metrics, or -1.
-double metric(int http_port, const std::string& name) {
-  const auto r = http_get(http_port, "/metrics");
-  const auto at = r.body.find("\n" + name + " ");
-  if (r.status != 200 || at == std::string::npos) return -1;
-  return std::atof(r.body.c_str() + at + name.size() + 2);
-}
-
 TEST_F(MqttE2E, BrokerRestartKeepsModbusServedAndRebirthsWithANewBdSeq) {
   const int http_port = free_port();
   start_daemon("\n[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) + "\"\n");

@@ -45,14 +45,6 @@ using ::testing::HasSubstr;
 using ::testing::Not;
 namespace fs = std::filesystem;
 
-// One sample of the daemon's /metrics, or -1.
-double metric(int http_port, const std::string& name) {
-  const auto r = http_get(http_port, "/metrics");
-  const auto at = r.body.find("\n" + name + " ");
-  if (r.status != 200 || at == std::string::npos) return -1;
-  return std::atof(r.body.c_str() + at + name.size() + 2);
-}
-
 // A TCP relay to 127.0.0.1:`to` whose first connection is established only on the client's SYN
 // retransmission, a second after its connect(), as with a broker across a slow network: while the
 // client's socket is still connecting, its first writes fail with EAGAIN (on loopback the

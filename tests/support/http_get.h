@@ -56,4 +56,13 @@ inline HttpReply http_get(int port, const std::string& target) {
   return r;
 }
 
+// One sample of an unlabelled metric in the daemon's /metrics on 127.0.0.1:`port`, or -1 when
+// the scrape fails or the metric is not there.
+inline double metric(int port, const std::string& name) {
+  const auto r = http_get(port, "/metrics");
+  const auto at = r.body.find("\n" + name + " ");
+  if (r.status != 200 || at == std::string::npos) return -1;
+  return std::atof(r.body.c_str() + at + name.size() + 2);
+}
+
 }  // namespace drivegate::test
