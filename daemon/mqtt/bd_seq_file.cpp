@@ -12,7 +12,7 @@ namespace drivegate::mqtt {
 namespace {
 constexpr std::size_t kMaxFile = 64;  // "255\n" and then some: anything longer is not ours
 constexpr std::string_view kPrefix = "sparkplug-";
-}
+}  // namespace
 
 BdSeqFile::BdSeqFile(const std::filesystem::path& state_dir, std::string_view group,
                      std::string_view edge_node) {
@@ -26,12 +26,11 @@ std::filesystem::path edge_node_state_path(const std::filesystem::path& dir, std
                 std::string(extension));
 }
 
-std::vector<std::filesystem::path> other_edge_node_state(const std::filesystem::path& dir,
-                                                         std::string_view extension,
-                                                         const std::filesystem::path& own) {
+std::vector<std::filesystem::path> other_edge_node_state(const std::filesystem::path& own) {
+  const std::string extension = own.extension().string();
   std::vector<std::filesystem::path> out;
   std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+  for (const auto& entry : std::filesystem::directory_iterator(own.parent_path(), ec)) {
     const std::string name = entry.path().filename().string();
     if (name.size() > kPrefix.size() + extension.size() && name.starts_with(kPrefix) &&
         name.ends_with(extension) && entry.path() != own) {

@@ -40,11 +40,10 @@ class BdSeqFile {
 // "<dir>/sparkplug-<group>-<edge node><extension>" (".bdseq" here, ".store" for store_forward.h).
 std::filesystem::path edge_node_state_path(const std::filesystem::path& dir, std::string_view group,
                                            std::string_view edge_node, std::string_view extension);
-// The same kind of state (`extension`) of the other edge nodes in `dir`, all but `own`: what a
-// configuration whose group_id or edge_node_id changed left behind, which nothing reads now.
-std::vector<std::filesystem::path> other_edge_node_state(const std::filesystem::path& dir,
-                                                         std::string_view extension,
-                                                         const std::filesystem::path& own);
+// The same kind of state as `own` (an edge_node_state_path: same directory, same extension) of
+// the other edge nodes: what a configuration whose group_id or edge_node_id changed left behind,
+// which nothing reads now.
+std::vector<std::filesystem::path> other_edge_node_state(const std::filesystem::path& own);
 
 // "17\n" -> 17; anything but a number 0..255 and at most one trailing newline: nothing.
 std::optional<std::uint8_t> parse_bd_seq(std::string_view text);

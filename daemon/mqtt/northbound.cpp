@@ -120,7 +120,7 @@ std::unique_ptr<StoreForward> make_store(const MqttConfig& config,
     return nullptr;
   }
   const auto own = edge_node_state_path(state_dir, config.group_id, config.edge_node_id, ".store");
-  for (const auto& other : other_edge_node_state(state_dir, ".store", own)) {
+  for (const auto& other : other_edge_node_state(own)) {
     log->warn(
         "MQTT: {} holds changes kept under another group_id or edge_node_id; nothing sends them "
         "now: remove it once they are not needed",

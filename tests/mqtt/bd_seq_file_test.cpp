@@ -51,13 +51,14 @@ TEST_F(BdSeqFileTest, OtherEdgeNodesStateIsFoundByItsKind) {
   std::ofstream(dir_ / "sparkplug-plant1-gw00.bdseq") << "3\n";
   std::ofstream(dir_ / "sparkplug-.store") << "";  // no group or node: not an edge node's
   std::ofstream(dir_ / "notes.store") << "";
-  EXPECT_EQ(other_edge_node_state(dir_, ".store", own),
+  EXPECT_EQ(other_edge_node_state(own),
             (std::vector<fs::path>{dir_ / "sparkplug-line2-gw01.store",
                                    dir_ / "sparkplug-plant1-gw00.store"}));
-  EXPECT_EQ(other_edge_node_state(dir_, ".bdseq", edge_node_state_path(dir_, "plant1", "gw01",
-                                                                       ".bdseq")),
+  EXPECT_EQ(other_edge_node_state(edge_node_state_path(dir_, "plant1", "gw01", ".bdseq")),
             std::vector<fs::path>{dir_ / "sparkplug-plant1-gw00.bdseq"});
-  EXPECT_TRUE(other_edge_node_state(dir_ / "missing", ".store", own).empty());
+  EXPECT_TRUE(
+      other_edge_node_state(edge_node_state_path(dir_ / "missing", "plant1", "gw01", ".store"))
+          .empty());
 }
 
 TEST_F(BdSeqFileTest, NoFileYetIsNothingAndNoError) {
