@@ -210,20 +210,35 @@ void Gateway::refused_write(const Session& session, std::uint8_t unit,
   refuse(session, unit, Device::describe_pdu(request), Outcome::denied);
 }
 
+void Gateway::refused_write(const Source& source, const Device* device, std::string asked,
+                            Outcome result, std::string why) {
+  record_refusal(source, device != nullptr ? device->config().name : std::string(),
+                 device != nullptr ? device->config().unit_id : 0, std::move(asked), result,
+                 std::move(why));
+}
+
 Outcome Gateway::refuse(const Session& session, std::uint8_t unit, std::string asked,
                         Outcome why) {
-  if (history_ != nullptr) {
-    CommandRecord r;
-    r.source = session.source;
-    r.unit = unit;
-    if (const Device* d = units_[unit]) r.device = d->config().name;
-    r.points = std::move(asked);
-    r.result = why;
-    if (why == Outcome::no_response) r.why = "the gateway is not running";
-    if (why == Outcome::denied) r.why = "beyond access " + std::string(to_string(session.access));
-    history_->audit().record(r, Clock::now());
-  }
+  std::string more;
+  if (why == Outcome::no_response) more = "the gateway is not running";
+  if (why == Outcome::denied) more = "beyond access " + std::string(to_string(session.access));
+  const Device* d = units_[unit];
+  record_refusal(session.source, d != nullptr ? d->config().name : std::string(), unit,
+                 std::move(asked), why, std::move(more));
   return why;
+}
+
+void Gateway::record_refusal(const Source& source, std::string device, std::uint8_t unit,
+                             std::string asked, Outcome result, std::string why) {
+  if (history_ == nullptr) return;
+  CommandRecord r;
+  r.source = source;
+  r.device = std::move(device);
+  r.unit = unit;
+  r.points = std::move(asked);
+  r.result = result;
+  r.why = std::move(why);
+  history_->audit().record(r, Clock::now());
 }
 
 bool Gateway::forwards(std::uint8_t unit) const {

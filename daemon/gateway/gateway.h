@@ -69,6 +69,11 @@ class Gateway {
   // the audit trail as denied, with its PDU.
   void refused_write(const Session& session, std::uint8_t unit,
                      std::span<const std::uint8_t> request);
+  // A write another northbound refused itself before it reached a device's write path (a DCMD
+  // the MQTT side could not take: retained by the broker, an unknown metric...): recorded in the
+  // audit trail as `asked`, with `result` and `why`. `device`: null when it named none of ours.
+  void refused_write(const Source& source, const Device* device, std::string asked, Outcome result,
+                     std::string why);
   // Whether the device at `unit` is a pass-through one (Device::forwards); then every request
   // for it goes to forward() (Device::forward) instead of read() and write().
   [[nodiscard]] bool forwards(std::uint8_t unit) const;
@@ -88,6 +93,9 @@ class Gateway {
   // A write refused before it reached a device (none at that unit, the gateway not running):
   // recorded, and returned.
   Outcome refuse(const Session& session, std::uint8_t unit, std::string asked, Outcome why);
+  // The audit record of a write refused before it reached a device.
+  void record_refusal(const Source& source, std::string device, std::uint8_t unit,
+                      std::string asked, Outcome result, std::string why);
   [[nodiscard]] std::vector<Device*> devices_on(const std::string& bus) const;
   [[nodiscard]] std::vector<Station*> stations_on(const std::string& bus) const;
 

@@ -42,8 +42,16 @@ Event command_event(const CommandRecord& r) {
   e.kind = EventKind::command;
   e.device = r.device;
   e.unit = r.unit;
-  std::string where = r.device.empty() ? std::string("unit ") + std::to_string(r.unit)
-                                       : r.device + " (unit " + std::to_string(r.unit) + ")";
+  // A Modbus client addresses a unit; a DCMD names a device, and one not configured has no unit
+  // (its name is in `why`).
+  std::string where;
+  if (!r.device.empty()) {
+    where = r.device + " (unit " + std::to_string(r.unit) + ")";
+  } else if (r.source.kind == SourceKind::mqtt) {
+    where = "an unknown device";
+  } else {
+    where = "unit " + std::to_string(r.unit);
+  }
   e.message = "write to " + where + " from " + describe(r.source) + ": " +
               (r.points.empty() ? std::string("(nothing)") : r.points) + ": " +
               std::string(to_string(r.result));

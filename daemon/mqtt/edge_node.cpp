@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 
 #include "mqtt/sparkplug_codec.h"
@@ -28,6 +29,52 @@ bool moved(const MetricDef& def, const MetricValue& before, const MetricValue& n
   const auto b = number_of(now);
   if (!a || !b) return true;  // from or to null: always news
   return std::fabs(*b - *a) >= def.deadband;
+}
+
+// What a refused DCMD asked, for the audit trail: its metrics' names and values as they came,
+// printable and bounded (anyone on the broker writes them).
+constexpr std::size_t kAskedMax = 256;
+
+void append_printable(std::string& out, std::string_view text) {
+  for (const char c : text) out += (c >= 0x20 && c < 0x7F) ? c : '?';
+}
+
+std::string value_text(const MetricValue& v) {
+  if (const auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
+  if (const auto* u = std::get_if<std::uint64_t>(&v)) return std::to_string(*u);
+  if (const auto* d = std::get_if<double>(&v)) {
+    std::array<char, 32> buf{};
+    const auto r = std::to_chars(buf.data(), buf.data() + buf.size(), *d);
+    return {buf.data(), r.ptr};
+  }
+  if (const auto* text = std::get_if<std::string>(&v)) {
+    std::string out = "\"";
+    append_printable(out, std::string_view(*text).substr(0, 32));
+    return out + (text->size() > 32 ? "...\"" : "\"");
+  }
+  return "null";
+}
+
+std::string asked(const Payload& p) {
+  std::string out;
+  for (const Metric& m : p.metrics) {
+    if (out.size() >= kAskedMax) return out + " ...";
+    if (!out.empty()) out += ' ';
+    if (m.name.empty()) {
+      out += "<alias>";
+    } else {
+      append_printable(out, std::string_view(m.name).substr(0, 64));
+    }
+    out += "=" + value_text(m.value);
+  }
+  return out.empty() ? "<no metrics>" : out;
+}
+
+std::string asked(std::string_view payload) {
+  std::string why;
+  const auto p = decode(payload, why);
+  return p ? asked(*p) : "<" + std::to_string(payload.size()) + " bytes>";
 }
 
 }  // namespace
@@ -100,10 +147,14 @@ void EdgeNode::message(std::string_view t, std::string_view payload, const Now& 
   // now: a retained run_forward would start a motor a PLC stopped at every reconnect.
   if (retained) {
     ++retained_ignored_;
-    sink.notice(Notice::retained,
-                std::string(to_string(parsed->type)) + " on " + std::string(t) +
-                    " ignored: it was retained by the broker (commands are carried out only when "
-                    "they are live; clear it with an empty retained message)");
+    const std::string why =
+        "retained by the broker: a command is carried out only when it is live (clear it with an "
+        "empty retained message)";
+    if (parsed->type == MessageType::dcmd) {
+      sink.refused({std::string(parsed->device), asked(payload), Refusal::retained, why});
+    } else {
+      sink.notice(Notice::retained, "NCMD on " + std::string(t) + " ignored: " + why);
+    }
     return;
   }
   if (parsed->type == MessageType::dcmd) {
@@ -406,26 +457,29 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
                        Sink& sink) {
   const auto it = std::find_if(defs_.begin(), defs_.end(),
                                [&](const DeviceDef& d) { return d.name == device; });
+  std::optional<Payload> p;  // once decoded
+  const auto refuse = [&](Refusal refusal, std::string why) {
+    sink.refused({std::string(device), p ? asked(*p) : asked(payload), refusal, std::move(why)});
+  };
   if (it == defs_.end()) {
-    sink.notice(Notice::command, "DCMD for unknown device '" + std::string(device) + "' ignored");
+    refuse(Refusal::unknown_device, "no such device");
     return;
   }
   const auto index = static_cast<std::size_t>(it - defs_.begin());
   if (!options_.commands) {
-    sink.notice(Notice::command,
-                "DCMD for " + std::string(device) + " ignored: [mqtt] commands = false");
+    refuse(Refusal::commands_off, "[mqtt] commands = false");
     return;
   }
   std::string why;
-  const auto p = decode(payload, why);
+  p = decode(payload, why);
   if (!p) {
-    sink.notice(Notice::command, "DCMD for " + std::string(device) + " ignored: " + why);
+    refuse(Refusal::malformed, why);
     return;
   }
   if (p->metrics.size() > kMaxCommandMetrics) {
     const std::string refused = std::to_string(p->metrics.size()) + " metrics, more than the " +
                                 std::to_string(kMaxCommandMetrics) + " one command may carry";
-    sink.notice(Notice::command, "DCMD for " + std::string(device) + " refused: " + refused);
+    refuse(Refusal::malformed, refused);
     command_done(index, "<" + std::to_string(p->metrics.size()) + " metrics>",
                  "refused: " + refused, now, sink);
     return;
@@ -433,6 +487,7 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
   std::vector<PointCommand> points;
   std::string names;
   std::string refused;
+  Refusal refusal = Refusal::malformed;
   for (const Metric& m : p->metrics) {
     names += (names.empty() ? "" : ",") + (m.name.empty() ? std::string("<alias>") : m.name);
     const auto& metrics = it->metrics;
@@ -440,13 +495,17 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
                                   [&](const MetricDef& d) { return d.name == m.name; });
     if (m.name.empty()) {
       refused = "metrics must be named (drivegate publishes no aliases)";
+      refusal = Refusal::unknown_metric;
     } else if (def == metrics.end()) {
       refused = "no metric '" + m.name + "'";
+      refusal = Refusal::unknown_metric;
     } else if (!def->writable) {
       refused = "'" + m.name + "' is read-only";
+      refusal = Refusal::unknown_metric;
     } else if (std::holds_alternative<std::monostate>(m.value) ||
                std::holds_alternative<std::string>(m.value)) {
       refused = "'" + m.name + "' needs a number or a boolean";
+      refusal = Refusal::wrong_type;
     } else {
       points.push_back({static_cast<std::size_t>(def - metrics.begin()), m.value});
       continue;
@@ -455,7 +514,7 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
   }
   if (points.empty() && refused.empty()) refused = "no metrics";
   if (!refused.empty()) {
-    sink.notice(Notice::command, "DCMD for " + std::string(device) + " refused: " + refused);
+    refuse(refusal, refused);
     command_done(index, names, "refused: " + refused, now, sink);
     return;
   }

@@ -82,6 +82,26 @@ struct PointCommand {
 enum class Notice : std::uint8_t { command, retained, host_state, rebirth };
 inline constexpr std::size_t kNoticeKinds = 4;
 
+// Why the edge node refused a DCMD itself, before it reached any drive's write path.
+enum class Refusal : std::uint8_t {
+  retained,        // the broker kept it: an old command, not a host asking now (spec 6.4)
+  unknown_device,  // no device of that name
+  commands_off,    // [mqtt] commands = false
+  malformed,       // not a Sparkplug payload, or more metrics than one command may carry
+  unknown_metric,  // no metric of that name (or none named: an alias), or a read-only one
+  wrong_type,      // a null or a string where a number or a boolean is needed
+};
+
+// A DCMD refused by the edge node (Sink::refused).
+struct RefusedCommand {
+  std::string device;  // as its topic names it
+  // What it asked, as far as the payload could be read: "command=1 setpoint_rpm=800" (each
+  // metric's name and value as they came); "<N bytes>" when it could not be read at all.
+  std::string points;
+  Refusal refusal = Refusal::malformed;
+  std::string why;  // "no metric 'x'"
+};
+
 class Sink {
  public:
   virtual ~Sink() = default;
@@ -99,9 +119,12 @@ class Sink {
   virtual void host_offline_before_births() = 0;
   // Write `points` of device `device` in one request; answer with EdgeNode::command_done.
   virtual void write(std::size_t device, std::vector<PointCommand> points) = 0;
-  // Something the log should say (a command refused, a bad STATE payload), anyone on the broker
-  // can cause: throttled per kind.
+  // Something the log should say (a bad STATE or NCMD payload), anyone on the broker can cause:
+  // throttled per kind.
   virtual void notice(Notice kind, std::string message) = 0;
+  // A DCMD refused before any write path saw it: for the log as a notice does, and for the audit
+  // trail, which records every write that reaches the gateway, refused or not (docs/audit.md).
+  virtual void refused(RefusedCommand command) = 0;
 };
 
 struct EdgeNodeOptions {

@@ -211,6 +211,7 @@ std::optional<std::uint8_t> Northbound::last_bd_seq(std::optional<std::uint8_t> 
 
 void Northbound::use(Gateway& gateway) {
   ++generation_;
+  gateway_ = &gateway;
   std::vector<sparkplug::DeviceDef> defs;
   watched_.clear();
   const std::weak_ptr<bool> token = alive_;
@@ -249,6 +250,7 @@ void Northbound::stop() {
   if (store_) store_->sync();
   for (const Watched& w : watched_) w.device->watch({});
   watched_.clear();
+  gateway_ = nullptr;
   dirty_.clear();
   if (client_.connected()) {
     // A clean DISCONNECT makes the broker drop the will: the NDEATH goes out by hand (spec 5.6).
@@ -531,14 +533,8 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
     names += (names.empty() ? "" : ",") + p->spec.name;
   }
   ++status_.commands;
-  // A DCMD does not say who published it: the audit trail names the broker, our session's
-  // client id, and the primary host the commands are expected from (if one is configured).
   Session session{config_.access, WordOrder::big, config_.feed_failsafe};
-  session.source.kind = SourceKind::mqtt;
-  session.source.listener = broker_url();
-  session.source.client = config_.primary_host_id.empty() ? config_.client_id
-                                                          : config_.client_id + " (primary host " +
-                                                                config_.primary_host_id + ")";
+  session.source = source();
   const std::string name = w.device->name();
   log_->info("MQTT: DCMD {} {}", name, names);
   auto report = [this, token = std::weak_ptr<bool>(alive_), name, names](Outcome outcome) {
@@ -556,6 +552,47 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
   };
   const Outcome at_once = w.device->write_points(session, writes, report, Clock::now());
   if (at_once != Outcome::ok) report(at_once);  // refused before anything was applied
+}
+
+// A DCMD does not say who published it: the audit trail names the broker, our session's client
+// id, and the primary host the commands are expected from (if one is configured).
+Source Northbound::source() const {
+  Source s;
+  s.kind = SourceKind::mqtt;
+  s.listener = broker_url();
+  s.client = config_.primary_host_id.empty()
+                 ? config_.client_id
+                 : config_.client_id + " (primary host " + config_.primary_host_id + ")";
+  return s;
+}
+
+void Northbound::refused(sparkplug::RefusedCommand c) {
+  using sparkplug::Refusal;
+  notice(c.refusal == Refusal::retained ? sparkplug::Notice::retained : sparkplug::Notice::command,
+         fmt::format("DCMD for {} refused: {}", c.device, c.why));
+  if (gateway_ == nullptr) return;
+  // The result a Modbus client would get for the same (docs/audit.md, RESULT).
+  Outcome result = Outcome::invalid_value;  // malformed, wrong_type
+  switch (c.refusal) {
+    case Refusal::retained:
+      result = Outcome::refused;
+      break;
+    case Refusal::unknown_device:
+      result = Outcome::no_such_device;
+      break;
+    case Refusal::commands_off:
+      result = Outcome::denied;
+      break;
+    case Refusal::unknown_metric:
+      result = Outcome::no_such_point;
+      break;
+    case Refusal::malformed:
+    case Refusal::wrong_type:
+      break;
+  }
+  const Device* device = gateway_->find(c.device);
+  if (device == nullptr) c.why = "no device named '" + c.device + "'";
+  gateway_->refused_write(source(), device, std::move(c.points), result, std::move(c.why));
 }
 
 // Anyone who can publish to the broker can cause these: a burst, then one a second per kind.

@@ -84,6 +84,9 @@ class Northbound final : private sparkplug::Sink {
   void host_offline_before_births() override;
   void write(std::size_t device, std::vector<sparkplug::PointCommand> points) override;
   void notice(sparkplug::Notice kind, std::string message) override;
+  void refused(sparkplug::RefusedCommand command) override;
+  // Who a DCMD comes from, as the audit trail says it.
+  [[nodiscard]] Source source() const;
   void store(std::string_view device, const sparkplug::Payload& historical) override;
   void pace();  // every StoreForward::kReplayPeriod while there is a store
 
@@ -98,6 +101,7 @@ class Northbound final : private sparkplug::Sink {
   boost::asio::steady_timer tick_timer_;
   boost::asio::steady_timer pace_timer_;
   unsigned paces_ = 0;  // of pace_timer_, for the once-a-second sync
+  Gateway* gateway_ = nullptr;  // use()'s, until stop(): where refused DCMDs are audited
   std::vector<Watched> watched_;
   std::vector<bool> dirty_;
   bool flush_posted_ = false;

@@ -416,13 +416,49 @@ TEST_F(MqttE2E, DcmdSetpointReachesTheDriveThroughTheModbusWritePath) {
   EXPECT_TRUE(eventually([&] { return speed(1) == 0; }, 10s)) << speed(1);
   expect_seq_consecutive(peer_->history());
 
-  // Each DCMD that reached the drive's write path is one audit record, as MQTT's (the daemon's
-  // stderr is its journal's stand-in here: docs/audit.md).
+  // Each DCMD is one audit record, as MQTT's, those refused before the drive's write path too (the
+  // daemon's stderr is its journal's stand-in here: docs/audit.md).
   const std::string log = daemon_log();
-  EXPECT_EQ(occurrences(log, "from mqtt "), 3u) << log;
+  EXPECT_EQ(occurrences(log, "write to washer-a (unit 1) from mqtt "), 5u) << log;
   EXPECT_THAT(log, HasSubstr(": setpoint_rpm=800 command=run_forward: ok, "));
   EXPECT_THAT(log, HasSubstr(": accel_time=5.5: denied (beyond access operate)"));
+  EXPECT_THAT(log, HasSubstr(": speed_rpm=100: no such point ('speed_rpm' is read-only)"));
+  EXPECT_THAT(log, HasSubstr(": no_such_point=1: no such point (no metric 'no_such_point')"));
   EXPECT_THAT(log, HasSubstr(": command=stop: ok, "));
+}
+
+// A DCMD refused before it reached a drive is in the audit trail as any refused write is: a run
+// the broker kept (spec 6.4: commands are published with retain false) and a command for a device
+// this gateway does not have. Neither moves anything.
+TEST_F(MqttE2E, DcmdsRefusedBeforeAnyDriveAreInTheAuditTrail) {
+  peer_->publish_retained(device_topic("DCMD", "washer-a"),
+                          R"({"metrics":[{"name":"setpoint_rpm","type":"Int16","value":800},)"
+                          R"({"name":"command","type":"UInt16","value":1}]})");
+  start_daemon("commands = true\n");
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  const std::string retained =
+      "write to washer-a (unit 1) from mqtt drivegate-" + std::string(kEdge) + " on " +
+      broker_->url() +
+      ": setpoint_rpm=800 command=1: refused (retained by the broker: a command is carried out "
+      "only when it is live";
+  EXPECT_TRUE(eventually([&] { return daemon_log().find(retained) != std::string::npos; }, 5s))
+      << daemon_log();
+  dcmd("washer-b2", R"({"name":"command","type":"UInt16","value":1})");
+  EXPECT_TRUE(eventually(
+      [&] {
+        return daemon_log().find("write to an unknown device from mqtt drivegate-") !=
+               std::string::npos;
+      },
+      5s))
+      << daemon_log();
+  EXPECT_THAT(daemon_log(), HasSubstr(": command=1: no such device (no device named 'washer-b2')"));
+  pump(1s);
+  EXPECT_EQ(holding(1, reg::command), 0);
+  EXPECT_EQ(holding(1, reg::setpoint), 0);
+  EXPECT_EQ(speed(1), 0);
+  EXPECT_EQ(speed(2), 0);
+  EXPECT_THAT(drive("washer-a").sim->control("state"), HasSubstr("motion=stop"));
 }
 
 TEST_F(MqttE2E, DcmdChangesNothingWhileCommandsAreOff) {
@@ -435,6 +471,9 @@ TEST_F(MqttE2E, DcmdChangesNothingWhileCommandsAreOff) {
   EXPECT_TRUE(
       eventually([&] { return daemon_log().find("commands = false") != std::string::npos; }, 5s))
       << "no log line about the ignored DCMD";
+  EXPECT_THAT(daemon_log(), HasSubstr("write to washer-a (unit 1) from mqtt drivegate-"));
+  EXPECT_THAT(daemon_log(),
+              HasSubstr(": setpoint_rpm=800 command=1: denied ([mqtt] commands = false)"));
   pump(1500ms);
   EXPECT_EQ(holding(1, reg::setpoint), 0);
   EXPECT_EQ(holding(1, reg::command), 0);

@@ -71,6 +71,16 @@ class CheckingSink : public Sink {
     pending.emplace_back(device, points.size());
   }
   void notice(Notice, std::string) override {}
+  // What the audit trail gets of a refused DCMD: bounded, printable, and the right reason for a
+  // retained one or one while commands are off.
+  void refused(RefusedCommand c) override {
+    FUZZ_CHECK(!c.points.empty() && c.points.size() <= 400 && !c.why.empty());
+    for (const char ch : c.points) FUZZ_CHECK(ch >= 0x20 && ch < 0x7F);
+    if (retained) FUZZ_CHECK(c.refusal == Refusal::retained);
+    if (!retained && !commands) {
+      FUZZ_CHECK(c.refusal == Refusal::commands_off || c.refusal == Refusal::unknown_device);
+    }
+  }
   void lost() { last_seq_ = -1; }
 
   bool commands = false;

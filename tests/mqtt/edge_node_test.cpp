@@ -38,7 +38,7 @@ struct Sent {
 class RecordingSink : public Sink {
  public:
   bool publish(const std::string& topic, const Payload& payload) override {
-    (refusing ? refused : sent).push_back({topic, payload});
+    (refusing ? not_taken : sent).push_back({topic, payload});
     return !refusing;
   }
   void drop_session() override { ++drops; }
@@ -50,16 +50,21 @@ class RecordingSink : public Sink {
     writes.emplace_back(device, std::move(points));
   }
   void notice(Notice, std::string message) override { notices.push_back(std::move(message)); }
+  void refused(RefusedCommand c) override {
+    notices.push_back("DCMD for " + c.device + " refused: " + c.why);
+    refusals.push_back(std::move(c));
+  }
   std::vector<Sent> take() { return std::exchange(sent, {}); }
 
   std::vector<Sent> sent;
-  bool refusing = false;  // publish() refuses, as the MQTT client does once its session ended
-  std::vector<Sent> refused;
+  bool refusing = false;        // publish() refuses, as the MQTT client does once its session ended
+  std::vector<Sent> not_taken;  // what publish() refused
   int drops = 0;
   int offline_waiting = 0;
   std::vector<Sent> stored;  // topic: the device's name
   std::vector<std::pair<std::size_t, std::vector<PointCommand>>> writes;
   std::vector<std::string> notices;
+  std::vector<RefusedCommand> refusals;  // DCMDs refused before any write path, for the audit
 };
 
 MetricDef metric(std::string name, DataType type) {
@@ -347,10 +352,55 @@ TEST_F(EdgeNodeTest, CommandsAreCheckedThenWrittenThenReported) {
                 HasSubstr("refused"));
   }
   EXPECT_EQ(sink_.writes.size(), 1u);
-  // An unknown device: a notice only.
+  // An unknown device: nothing published (there is no DBIRTH to report against), refused.
   node_.message("spBv1.0/plant1/DCMD/gw01/nobody", encode(dcmd), at(3s), sink_);
   EXPECT_TRUE(sink_.take().empty());
-  EXPECT_THAT(sink_.notices.back(), HasSubstr("unknown device"));
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("DCMD for nobody refused: no such device"));
+
+  // Each refusal goes to the audit trail with its reason and what it asked, as it came.
+  ASSERT_EQ(sink_.refusals.size(), 5u);
+  const auto& r = sink_.refusals;
+  EXPECT_EQ(r[0].refusal, Refusal::unknown_metric);
+  EXPECT_EQ(r[0].why, "'speed_rpm' is read-only");
+  EXPECT_EQ(r[0].points, "speed_rpm=1");
+  EXPECT_EQ(r[1].refusal, Refusal::unknown_metric);
+  EXPECT_EQ(r[1].why, "no metric 'nope'");
+  EXPECT_EQ(r[2].refusal, Refusal::unknown_metric);
+  EXPECT_EQ(r[2].points, "<alias>=1");
+  EXPECT_EQ(r[3].refusal, Refusal::wrong_type);
+  EXPECT_EQ(r[3].points, "setpoint_rpm=\"1\"");
+  EXPECT_EQ(r[4].refusal, Refusal::unknown_device);
+  EXPECT_EQ(r[4].device, "nobody");
+  EXPECT_EQ(r[4].points, "setpoint_rpm=800");
+}
+
+// What a refused DCMD asked is recorded as it came, but printable and bounded: anyone on the
+// broker writes it, and it goes to the journal and the history.
+TEST_F(EdgeNodeTest, ARefusedCommandIsRecordedPrintableAndBounded) {
+  online();
+  Payload dcmd;
+  dcmd.metrics.push_back({"nope\n\x1b[2J", DataType::boolean, MetricValue{true}, {}});
+  dcmd.metrics.push_back({"x", DataType::float64, MetricValue{0.5}, {}});
+  dcmd.metrics.push_back({"y", DataType::string, MetricValue{std::string(100, 'a')}, {}});
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(1s), sink_);
+  ASSERT_EQ(sink_.refusals.size(), 1u);
+  EXPECT_EQ(sink_.refusals[0].points, "nope??[2J=true x=0.5 y=\"" + std::string(32, 'a') + "...\"");
+  // Sixty-four metrics of long names: cut short, marked so.
+  Payload many;
+  for (std::size_t i = 0; i < kMaxCommandMetrics; ++i) {
+    many.metrics.push_back(
+        {std::string(200, 'n'), DataType::int16, MetricValue{std::int64_t{1}}, {}});
+  }
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(many), at(2s), sink_);
+  ASSERT_EQ(sink_.refusals.size(), 2u);
+  EXPECT_LE(sink_.refusals[1].points.size(), 400u);
+  EXPECT_THAT(sink_.refusals[1].points, testing::EndsWith(" ..."));
+  EXPECT_THAT(sink_.refusals[1].points, testing::StartsWith(std::string(64, 'n') + "=1 "));
+  // Not a Sparkplug payload at all: its size.
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", std::string("\xff\xff\xff", 3), at(3s), sink_);
+  ASSERT_EQ(sink_.refusals.size(), 3u);
+  EXPECT_EQ(sink_.refusals[2].refusal, Refusal::malformed);
+  EXPECT_EQ(sink_.refusals[2].points, "<3 bytes>");
 }
 
 // Spec 6.4 (NCMD, DCMD): published with retain false. One the broker kept is an old command
@@ -366,7 +416,14 @@ TEST_F(EdgeNodeTest, RetainedCommandsAreNeverCarriedOut) {
   EXPECT_TRUE(sink_.writes.empty());
   EXPECT_TRUE(sink_.take().empty());  // no rebirth, no command result
   EXPECT_EQ(node_.retained_ignored(), 2u);
-  EXPECT_THAT(sink_.notices.back(), HasSubstr("retained"));
+  EXPECT_THAT(sink_.notices.back(),
+              HasSubstr("NCMD on spBv1.0/plant1/NCMD/gw01 ignored: retained"));
+  // The DCMD is refused for the audit trail, with what it would have done.
+  ASSERT_EQ(sink_.refusals.size(), 1u);
+  EXPECT_EQ(sink_.refusals[0].refusal, Refusal::retained);
+  EXPECT_EQ(sink_.refusals[0].device, "washer-a");
+  EXPECT_EQ(sink_.refusals[0].points, "setpoint_rpm=800");
+  EXPECT_THAT(sink_.refusals[0].why, HasSubstr("retained by the broker"));
   // The same, live, is carried out.
   node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(2s), sink_, false);
   EXPECT_EQ(sink_.writes.size(), 1u);
@@ -459,6 +516,9 @@ TEST_F(EdgeNodeNoCommands, DcmdIsIgnoredAndBirthsHaveNoCommandMetrics) {
   EXPECT_TRUE(sink_.writes.empty());
   EXPECT_TRUE(sink_.take().empty());
   EXPECT_THAT(sink_.notices.back(), HasSubstr("commands = false"));
+  ASSERT_EQ(sink_.refusals.size(), 1u);
+  EXPECT_EQ(sink_.refusals[0].refusal, Refusal::commands_off);
+  EXPECT_EQ(sink_.refusals[0].points, "setpoint_rpm=800");
 }
 
 class EdgeNodePrimaryHost : public EdgeNodeTest {
@@ -663,8 +723,8 @@ TEST_F(EdgeNodeStoreForward, ADdataTheClientRefusesIsKeptAsHistoricalWithItsTime
   sink_.stored.clear();  // each device's first sample, from before the session
   sink_.refusing = true;
   node_.sample(0, true, values(100), 2'000, at(200ms), sink_);
-  ASSERT_EQ(sink_.refused.size(), 1u);
-  EXPECT_EQ(sink_.refused[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
+  ASSERT_EQ(sink_.not_taken.size(), 1u);
+  EXPECT_EQ(sink_.not_taken[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
   ASSERT_EQ(sink_.stored.size(), 1u);
   const Sent kept = sink_.stored[0];
   EXPECT_EQ(kept.topic, "washer-a");
@@ -691,7 +751,7 @@ TEST_F(EdgeNodeTest, WithoutStoreForwardADdataTheClientRefusesIsDropped) {
   online();
   sink_.refusing = true;
   node_.sample(0, true, values(100), 2'000, at(200ms), sink_);
-  EXPECT_EQ(sink_.refused.size(), 1u);
+  EXPECT_EQ(sink_.not_taken.size(), 1u);
   EXPECT_TRUE(sink_.stored.empty());
   // Counted as reported: the same values again are no change.
   sink_.refusing = false;
@@ -711,7 +771,7 @@ TEST_F(EdgeNodeStoreForward, AReplayTheClientRefusesStaysInTheStoreForTheNextAtt
   for (const Sent& s : sink_.stored) store.keep(s.topic, s.payload, at(0ms).unix_ms);
   sink_.refusing = true;
   EXPECT_TRUE(store.replay(node_, sink_, at(1s).unix_ms)) << "nothing waits any more";
-  EXPECT_EQ(sink_.refused.size(), 1u) << "the batch goes on after a refusal";
+  EXPECT_EQ(sink_.not_taken.size(), 1u) << "the batch goes on after a refusal";
   auto stats = store.stats(node_);
   EXPECT_EQ(stats.records, 2u);
   EXPECT_EQ(stats.replayed, 0u);
