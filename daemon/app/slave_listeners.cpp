@@ -28,6 +28,7 @@ std::shared_ptr<const slave::SlavePolicy> policy_of(const ListenerConfig& l) {
   }
   p->write_reply = l.write_reply;
   p->broadcast = l.broadcast;
+  p->reply_timeout = l.reply_timeout;
   return p;
 }
 

@@ -135,7 +135,10 @@ struct ListenerConfig {
   std::optional<BusConfig> serial;
   // RTU / ASCII listeners only.
   WriteReply write_reply = WriteReply::confirmed;
-  bool broadcast = false;      // apply writes sent to address 0
+  bool broadcast = false;  // apply writes sent to address 0
+  // The master's response timeout: a reply that could leave only later is dropped, never sent
+  // (0: none; a reply waits for the drive however long it takes).
+  Millis reply_timeout{0};
   Millis ascii_timeout{1000};  // Serial Line 2.5.2.1: between two characters of a frame
   // A serial listener's port may hand over received bytes this late (a UART's FIFO, a USB
   // adapter's latency timer): pauses inside an RTU frame up to this are the port's.

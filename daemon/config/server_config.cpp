@@ -151,7 +151,7 @@ void read_framing(TableReader& r, ListenerConfig& l, Diagnostics& diag) {
     l.framing = ListenerFraming::rtu;
   }
   const bool slave = l.framing != ListenerFraming::mbap;
-  for (const char* key : {"write_reply", "broadcast", "ascii_timeout_ms"}) {
+  for (const char* key : {"write_reply", "broadcast", "ascii_timeout_ms", "reply_timeout_ms"}) {
     if (!slave && r.node(key) != nullptr) {
       diag.error(r.node(key), r.qualified(key),
                  "only for a listener with framing = \"rtu\" or \"ascii\" (Modbus TCP answers "
@@ -170,6 +170,7 @@ void read_framing(TableReader& r, ListenerConfig& l, Diagnostics& diag) {
     }
   }
   l.broadcast = r.boolean("broadcast").value_or(false);
+  if (auto v = r.integer("reply_timeout_ms", 0, 60'000, false)) l.reply_timeout = Millis(*v);
   if (auto v = r.integer("ascii_timeout_ms", 10, 60'000, false)) {
     l.ascii_timeout = Millis(*v);
     if (l.framing != ListenerFraming::ascii || !serial) {
@@ -236,6 +237,7 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
   TableReader r(t, prefix, diag);
   r.expect({"address", "allow", "access", "word_order", "tls", "roles", "max_clients",
             "tls_handshakes_per_s", "framing", "write_reply", "broadcast", "ascii_timeout_ms",
+            "reply_timeout_ms",
             "port", "baud", "parity", "data_bits", "stop_bits", "rs485", "reopen_max_ms", "echo",
             "rx_latency_ms"});
   ListenerConfig l;

@@ -1,5 +1,6 @@
 #include "slave_host.h"
 
+#include <algorithm>
 #include <boost/asio/post.hpp>
 
 namespace drivegate::slave {
@@ -76,6 +77,18 @@ void SlaveHost::superseded() {
   pending_.reset();
 }
 
+void SlaveHost::too_late(net::TimePoint would_leave) {
+  ++counters_.server_no_response;
+  if (auto held = late_log_.admit(clock_.now())) {
+    const auto late = std::chrono::duration_cast<Millis>(would_leave - *pending_->give_up_at);
+    log_->warn("modbus: {}: unit {} answered (function 0x{:02X}) {} ms after the master's "
+               "response timeout (reply_timeout_ms = {}); that reply is dropped, never sent late{}",
+               name_, pending_->unit, pending_->request.at(0), late.count(),
+               policy_->reply_timeout.count(), net::held_note(*held));
+  }
+  pending_.reset();
+}
+
 void SlaveHost::drain() {
   while (auto e = framer_.next()) serve(*e);
   arm();
@@ -130,6 +143,7 @@ void SlaveHost::serve(FramerEvent& e) {
   p.request.assign(pdu.begin(), pdu.end());
   p.forwarded = dispatcher_.forwards(unit);
   p.reply_at = e.reply_at;
+  if (policy_->reply_timeout > Millis(0)) p.give_up_at = clock_.now() + policy_->reply_timeout;
   pending_ = std::move(p);
   const auto generation = generation_;
   // `done` may fire inside handle(): on_done defers to the event loop.
@@ -224,6 +238,11 @@ void SlaveHost::on_done(std::uint32_t generation, Exception result,
     }
     auto& p = self->pending_;
     if (!p || p->generation != generation) return;  // given up on: never answered late
+    if (const auto leaves = std::max(self->clock_.now(), p->reply_at);
+        p->give_up_at && leaves > *p->give_up_at) {
+      self->too_late(leaves);
+      return;
+    }
     std::size_t n = 0;
     if (p->forwarded && result == Exception::none) {
       n = std::min(reply_copy.size(), self->out_.size());

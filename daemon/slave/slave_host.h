@@ -8,7 +8,9 @@
 // One request at a time, as a serial master asks. A write is answered when its drive took it
 // (write_reply = confirmed) or as soon as it is validated and queued (accepted). A reply is never
 // sent late: a master that sent anything since the request (a retry, the next request) has given
-// up on it, so its reply is dropped and counted (no response), and the new request is served.
+// up on it, so its reply is dropped and counted (no response), and the new request is served;
+// so is a reply that could leave only after the master's response timeout (reply_timeout_ms),
+// when the listener knows it.
 // RTU on a line: a reply starts 3.5 characters after the request's last byte (reply_at).
 #pragma once
 
@@ -35,9 +37,11 @@ struct SlavePolicy {
   Session session;  // access, word order, source (kind, listener; client per host)
   WriteReply write_reply = WriteReply::confirmed;
   bool broadcast = false;  // apply writes sent to address 0 (to every unit that takes them)
+  Millis reply_timeout{0};  // the master's response timeout (ListenerConfig::reply_timeout)
   friend bool operator==(const SlavePolicy& a, const SlavePolicy& b) {
     return a.session.access == b.session.access && a.session.word_order == b.session.word_order &&
-           a.write_reply == b.write_reply && a.broadcast == b.broadcast;
+           a.write_reply == b.write_reply && a.broadcast == b.broadcast &&
+           a.reply_timeout == b.reply_timeout;
   }
 };
 
@@ -81,6 +85,8 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
     Bytes request;                  // the PDU
     bool forwarded = false;
     net::TimePoint reply_at{};
+    // The master's response timeout from when the request was taken: past it, no reply.
+    std::optional<net::TimePoint> give_up_at;
   };
   // A write answered as accepted whose result is still to come (to tell of a failure).
   struct Accepted {
@@ -95,6 +101,8 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   void on_done(std::uint32_t generation, modbus::Exception result,
                std::span<const std::uint8_t> forwarded_reply);
   void superseded();
+  // The pending request's reply would leave after the master's response timeout: dropped.
+  void too_late(net::TimePoint would_leave);
   void arm();
   void on_timer(const boost::system::error_code& ec);
   void count_reply(std::span<const std::uint8_t> pdu);

@@ -252,6 +252,7 @@ baud = 19200
 rs485 = true
 access = "operate"
 write_reply = "accepted"
+reply_timeout_ms = 1500
 
 [[listener]]
 port = "/dev/ttyS2"
@@ -278,6 +279,7 @@ allow = ["127.0.0.1"]
   EXPECT_TRUE(ls[1].serial->rs485);
   EXPECT_EQ(ls[1].framing, ListenerFraming::rtu);
   EXPECT_EQ(ls[1].write_reply, WriteReply::accepted);
+  EXPECT_EQ(ls[1].reply_timeout, Millis(1500));
   EXPECT_FALSE(ls[1].broadcast);
   EXPECT_EQ(ls[1].options.policy.access, AccessLevel::operate);
   ASSERT_TRUE(ls[2].serial);
@@ -287,6 +289,7 @@ allow = ["127.0.0.1"]
   EXPECT_TRUE(ls[2].broadcast);
   EXPECT_EQ(ls[2].options.policy.access, AccessLevel::read);
   EXPECT_EQ(ls[2].write_reply, WriteReply::confirmed);
+  EXPECT_EQ(ls[2].reply_timeout, Millis(0));  // none: a reply waits for its drive
   EXPECT_FALSE(ls[3].serial);
   EXPECT_EQ(ls[3].framing, ListenerFraming::rtu);
   EXPECT_EQ(ls[3].options.port, 4001);
@@ -321,6 +324,11 @@ TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
   EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nframing = \"rtu\"\ntls = { cert = "
                      "\"/c\", key = \"/k\", ca = \"/a\" }\n"),
               ::testing::Contains(HasSubstr("a TLS listener's framing is \"mbap\"")));
+  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nreply_timeout_ms = 1000\n"),
+              ElementsAre(AllOf(HasSubstr("listener[0].reply_timeout_ms"),
+                                HasSubstr("only for a listener with framing"))));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = -1\n"),
+              ElementsAre(HasSubstr("listener[0].reply_timeout_ms")));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nwrite_reply = \"later\"\n"),
               ElementsAre(HasSubstr("must be \"confirmed\" or \"accepted\"")));
   // The drives' line is not a master's: the bus in kDevice is on /dev/ttyUSB0.

@@ -10,6 +10,7 @@ line in order, one line of output each:
   raw HEX                         bytes as they are (noise, half a frame): "reply HEX" (what came
                                   back within 300 ms, "" if none)
   rtu UNIT HEX                    the PDU HEX to UNIT with its CRC (a broadcast, FC 08): as raw
+  listen MS                       sends nothing: "heard HEX", what came within MS ("" if none)
   sleep MS
 """
 import argparse
@@ -111,6 +112,12 @@ def main():
                     chunk = s.read(256)
                     got += chunk
                 print("reply " + got.hex(), flush=True)
+            elif op == "listen" and not a.tcp:
+                deadline = time.monotonic() + int(steps.pop(0)) / 1000
+                got = b""
+                while time.monotonic() < deadline:
+                    got += c.socket.read(256)
+                print("heard " + got.hex(), flush=True)
             elif op == "sleep":
                 time.sleep(int(steps.pop(0)) / 1000)
             else:

@@ -315,6 +315,31 @@ TEST_F(SerialListenerE2E, ASilentDrivesWriteIs0x0BOverTheLineToo) {
   EXPECT_EQ(out[1], "ok " + tcp_status);
 }
 
+// reply_timeout_ms, the master's response timeout: the drive goes silent under a run command, the
+// master hears nothing within it and stops listening, and the write's 0x0B, which comes seconds
+// later (the inverter's ACK never came: adapters/nidec-washer/README.md, "Deadline", 2.5 s), never
+// reaches the line, where it would meet the master's next request. The master's next read is
+// answered as ever.
+TEST_F(SerialListenerE2E, AnAnswerPastTheMastersResponseTimeoutNeverReachesTheLine) {
+  start("access = \"operate\"\nreply_timeout_ms = 200\n");
+  sim_->control("silent on");
+  static_assert(reg::command == 0);
+  const auto out = master({"rtu", "1", "0600000001",  // FC 06: command = run_forward
+                           "listen", "4000",          // its 0x0B was due after 2.5 s
+                           "read", "1", "input", std::to_string(reg::status), "1",
+                           "rtu", "1", "08000f0000"});  // FC 08: server no response count
+  ASSERT_EQ(out.size(), 4U) << ::testing::PrintToString(out);
+  EXPECT_EQ(out[0], "reply ");  // nothing within 300 ms
+  EXPECT_EQ(out[1], "heard ") << "a reply after the master's timeout reached the line";
+  EXPECT_THAT(out[2], ::testing::StartsWith("ok "));  // the status word, its CRC good
+  EXPECT_THAT(out[3], ::testing::StartsWith("reply 0108000f0001"));  // the one dropped
+  EXPECT_THAT(log(), HasSubstr("after the master's response timeout (reply_timeout_ms = 200); "
+                               "that reply is dropped, never sent late"));
+  // The audit trail says what became of the write all the same.
+  EXPECT_THAT(log(), HasSubstr(": command=run_forward: no response"));
+  EXPECT_EQ(plc_->holding(reg::command, 1).regs[0], 0);  // never in force
+}
+
 // A read listener on the line: a write is exception 01 and reaches no drive, reads are served.
 TEST_F(SerialListenerE2E, AReadListenersMasterGetsException01ForAWrite) {
   start("access = \"read\"\n");

@@ -52,8 +52,9 @@ class HandBackend final : public modbus::Backend {
 class SlaveHostTest : public ::testing::Test {
  protected:
   void make(WriteReply reply = WriteReply::confirmed, bool broadcast = false,
-            AccessLevel access = AccessLevel::operate) {
+            AccessLevel access = AccessLevel::operate, Millis reply_timeout = Millis(0)) {
     auto p = std::make_shared<SlavePolicy>();
+    p->reply_timeout = reply_timeout;
     p->session.access = access;
     p->session.source.kind = SourceKind::modbus_serial;
     p->write_reply = reply;
@@ -157,6 +158,37 @@ TEST_F(SlaveHostTest, AReplyIsNeverSentLate) {
   advance(1s);
   EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kReadReply)));
   EXPECT_EQ(counters_.counts.server_no_response, 1U);
+}
+
+// reply_timeout_ms: the master's response timeout. A drive that takes the write within it is
+// answered; one that takes it later is not: the master stopped listening, and a reply that
+// leaves now could meet its next request on the line. The host then serves the next request.
+TEST_F(SlaveHostTest, AReplyPastTheMastersResponseTimeoutIsNeverSent) {
+  make(WriteReply::confirmed, false, AccessLevel::operate, 500ms);
+  receive(1, kWrite);
+  advance(499ms);
+  backend_.pending[0](Exception::none);
+  advance(0us);
+  ASSERT_THAT(sent_, ::testing::ElementsAre(frame(1, kWrite)));
+
+  receive(1, kWrite);
+  advance(501ms);
+  backend_.pending[1](Exception::none);  // the drive took it, too late for the master
+  advance(1s);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kWrite)));
+  EXPECT_EQ(counters_.counts.server_no_response, 1U);
+  // An exception is a reply like any other: too late is too late.
+  receive(2, kWrite);
+  advance(600ms);
+  backend_.pending[2](Exception::gateway_target_failed);
+  advance(1s);
+  EXPECT_EQ(sent_.size(), 1U);
+  EXPECT_EQ(counters_.counts.server_no_response, 2U);
+  // Nothing is left waiting: the next request is served as ever.
+  receive(1, kRead);
+  advance(timing_.t35);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kWrite), frame(1, kReadReply)));
+  EXPECT_EQ(counters_.counts.server_no_response, 2U);
 }
 
 // Even a retry of the very same write: answered once, for the retry.
