@@ -32,11 +32,20 @@ bool moved(const MetricDef& def, const MetricValue& before, const MetricValue& n
 }
 
 // What a refused DCMD asked, for the audit trail: its metrics' names and values as they came,
-// printable and bounded (anyone on the broker writes them).
+// printable and bounded (anyone on the broker writes them, and the journal and the history get
+// them): its device name and the reason, which may quote a metric's name, likewise.
 constexpr std::size_t kAskedMax = 256;
+constexpr std::size_t kNameMax = 64;
+constexpr std::size_t kDecodeMax = 64 * 1024;  // larger: said by its size, not decoded for this
 
 void append_printable(std::string& out, std::string_view text) {
   for (const char c : text) out += (c >= 0x20 && c < 0x7F) ? c : '?';
+}
+
+std::string printable(std::string_view text, std::size_t max) {
+  std::string out;
+  append_printable(out, text.substr(0, max));
+  return text.size() > max ? out + "..." : out;
 }
 
 std::string value_text(const MetricValue& v) {
@@ -64,7 +73,7 @@ std::string asked(const Payload& p) {
     if (m.name.empty()) {
       out += "<alias>";
     } else {
-      append_printable(out, std::string_view(m.name).substr(0, 64));
+      append_printable(out, std::string_view(m.name).substr(0, kNameMax));
     }
     out += "=" + value_text(m.value);
   }
@@ -73,8 +82,13 @@ std::string asked(const Payload& p) {
 
 std::string asked(std::string_view payload) {
   std::string why;
-  const auto p = decode(payload, why);
+  const auto p = payload.size() <= kDecodeMax ? decode(payload, why) : std::nullopt;
   return p ? asked(*p) : "<" + std::to_string(payload.size()) + " bytes>";
+}
+
+RefusedCommand make_refusal(std::string_view device, std::string points, Refusal kind,
+                            std::string_view why) {
+  return {printable(device, kNameMax), std::move(points), kind, printable(why, kAskedMax)};
 }
 
 }  // namespace
@@ -151,7 +165,7 @@ void EdgeNode::message(std::string_view t, std::string_view payload, const Now& 
         "retained by the broker: a command is carried out only when it is live (clear it with an "
         "empty retained message)";
     if (parsed->type == MessageType::dcmd) {
-      sink.refused({std::string(parsed->device), asked(payload), Refusal::retained, why});
+      sink.refused(make_refusal(parsed->device, asked(payload), Refusal::retained, why));
     } else {
       sink.notice(Notice::retained, "NCMD on " + std::string(t) + " ignored: " + why);
     }
@@ -458,8 +472,8 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
   const auto it = std::find_if(defs_.begin(), defs_.end(),
                                [&](const DeviceDef& d) { return d.name == device; });
   std::optional<Payload> p;  // once decoded
-  const auto refuse = [&](Refusal refusal, std::string why) {
-    sink.refused({std::string(device), p ? asked(*p) : asked(payload), refusal, std::move(why)});
+  const auto refuse = [&](Refusal kind, const std::string& why) {
+    sink.refused(make_refusal(device, p ? asked(*p) : asked(payload), kind, why));
   };
   if (it == defs_.end()) {
     refuse(Refusal::unknown_device, "no such device");

@@ -92,14 +92,15 @@ enum class Refusal : std::uint8_t {
   wrong_type,      // a null or a string where a number or a boolean is needed
 };
 
-// A DCMD refused by the edge node (Sink::refused).
+// A DCMD refused by the edge node (Sink::refused). Anyone on the broker writes what it says: its
+// text is printable (other bytes shown as '?') and bounded.
 struct RefusedCommand {
-  std::string device;  // as its topic names it
+  std::string device;  // as its topic names it (at most 64 characters, then "...")
   // What it asked, as far as the payload could be read: "command=1 setpoint_rpm=800" (each
   // metric's name and value as they came); "<N bytes>" when it could not be read at all.
   std::string points;
   Refusal refusal = Refusal::malformed;
-  std::string why;  // "no metric 'x'"
+  std::string why;  // "no metric 'x'" (at most 256 characters, then "...")
 };
 
 class Sink {

@@ -591,7 +591,11 @@ void Northbound::refused(sparkplug::RefusedCommand c) {
       break;
   }
   const Device* device = gateway_->find(c.device);
-  if (device == nullptr) c.why = "no device named '" + c.device + "'";
+  if (device == nullptr && c.refusal == Refusal::unknown_device) {
+    c.why = "no device named '" + c.device + "'";
+  } else if (device == nullptr) {  // retained, for a device this gateway does not have
+    c.why += " (no device named '" + c.device + "')";
+  }
   gateway_->refused_write(source(), device, std::move(c.points), result, std::move(c.why));
 }
 

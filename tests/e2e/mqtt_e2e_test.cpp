@@ -405,6 +405,10 @@ TEST_F(MqttE2E, DcmdSetpointReachesTheDriveThroughTheModbusWritePath) {
   r = wait_command_result("washer-a");
   ASSERT_TRUE(r.has_value());
   EXPECT_THAT(r->second, StartsWith("refused"));
+  dcmd("washer-a", R"({"name":"setpoint_rpm","type":"String","value":"fast"})");
+  r = wait_command_result("washer-a");
+  ASSERT_TRUE(r.has_value());
+  EXPECT_THAT(r->second, StartsWith("refused"));
   EXPECT_EQ(holding(1, reg::setpoint), 800);
   EXPECT_EQ(speed(1), 800);
 
@@ -419,11 +423,13 @@ TEST_F(MqttE2E, DcmdSetpointReachesTheDriveThroughTheModbusWritePath) {
   // Each DCMD is one audit record, as MQTT's, those refused before the drive's write path too (the
   // daemon's stderr is its journal's stand-in here: docs/audit.md).
   const std::string log = daemon_log();
-  EXPECT_EQ(occurrences(log, "write to washer-a (unit 1) from mqtt "), 5u) << log;
+  EXPECT_EQ(occurrences(log, "write to washer-a (unit 1) from mqtt "), 6u) << log;
   EXPECT_THAT(log, HasSubstr(": setpoint_rpm=800 command=run_forward: ok, "));
   EXPECT_THAT(log, HasSubstr(": accel_time=5.5: denied (beyond access operate)"));
   EXPECT_THAT(log, HasSubstr(": speed_rpm=100: no such point ('speed_rpm' is read-only)"));
   EXPECT_THAT(log, HasSubstr(": no_such_point=1: no such point (no metric 'no_such_point')"));
+  EXPECT_THAT(log, HasSubstr(": setpoint_rpm=\"fast\": invalid value ('setpoint_rpm' needs a number "
+                             "or a boolean)"));
   EXPECT_THAT(log, HasSubstr(": command=stop: ok, "));
 }
 

@@ -75,7 +75,10 @@ class CheckingSink : public Sink {
   // retained one or one while commands are off.
   void refused(RefusedCommand c) override {
     FUZZ_CHECK(!c.points.empty() && c.points.size() <= 400 && !c.why.empty());
-    for (const char ch : c.points) FUZZ_CHECK(ch >= 0x20 && ch < 0x7F);
+    FUZZ_CHECK(c.why.size() <= 259 && c.device.size() <= 67);
+    for (const std::string* text : {&c.points, &c.why, &c.device}) {
+      for (const char ch : *text) FUZZ_CHECK(ch >= 0x20 && ch < 0x7F);
+    }
     if (retained) FUZZ_CHECK(c.refusal == Refusal::retained);
     if (!retained && !commands) {
       FUZZ_CHECK(c.refusal == Refusal::commands_off || c.refusal == Refusal::unknown_device);

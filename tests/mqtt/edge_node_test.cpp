@@ -385,6 +385,7 @@ TEST_F(EdgeNodeTest, ARefusedCommandIsRecordedPrintableAndBounded) {
   node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(dcmd), at(1s), sink_);
   ASSERT_EQ(sink_.refusals.size(), 1u);
   EXPECT_EQ(sink_.refusals[0].points, "nope??[2J=true x=0.5 y=\"" + std::string(32, 'a') + "...\"");
+  EXPECT_EQ(sink_.refusals[0].why, "no metric 'nope??[2J'");  // the reason quotes it likewise
   // Sixty-four metrics of long names: cut short, marked so.
   Payload many;
   for (std::size_t i = 0; i < kMaxCommandMetrics; ++i) {
@@ -396,6 +397,13 @@ TEST_F(EdgeNodeTest, ARefusedCommandIsRecordedPrintableAndBounded) {
   EXPECT_LE(sink_.refusals[1].points.size(), 400u);
   EXPECT_THAT(sink_.refusals[1].points, testing::EndsWith(" ..."));
   EXPECT_THAT(sink_.refusals[1].points, testing::StartsWith(std::string(64, 'n') + "=1 "));
+  // A device name of any length and bytes (only / + # are not allowed in a topic level).
+  node_.message("spBv1.0/plant1/DCMD/gw01/" + std::string(1000, 'd') + "\r\n", encode(many), at(2s),
+                sink_);
+  ASSERT_EQ(sink_.refusals.size(), 3u);
+  EXPECT_EQ(sink_.refusals[2].refusal, Refusal::unknown_device);
+  EXPECT_EQ(sink_.refusals[2].device, std::string(64, 'd') + "...");
+  sink_.refusals.pop_back();
   // Not a Sparkplug payload at all: its size.
   node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", std::string("\xff\xff\xff", 3), at(3s), sink_);
   ASSERT_EQ(sink_.refusals.size(), 3u);
