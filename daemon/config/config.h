@@ -128,6 +128,10 @@ constexpr std::string_view to_string(WriteReply w) {
   return kWriteReplyNames.at(static_cast<std::size_t>(w));
 }
 
+// The shortest reply_timeout_ms a serial listener takes (0 aside): below it no confirmed write
+// could ever be answered.
+inline constexpr Millis kMinReplyTimeout{20};
+
 struct ListenerConfig {
   modbus::ListenerOptions options;  // a TCP listener's (address, policy); a serial one's policy
   ListenerFraming framing = ListenerFraming::mbap;
@@ -137,7 +141,7 @@ struct ListenerConfig {
   WriteReply write_reply = WriteReply::confirmed;
   bool broadcast = false;  // apply writes sent to address 0
   // The master's response timeout: a reply that could leave only later is dropped, never sent
-  // (0: none; a reply waits for the drive however long it takes).
+  // (0: none; a reply waits for the drive however long it takes; else at least kMinReplyTimeout).
   Millis reply_timeout{0};
   Millis ascii_timeout{1000};  // Serial Line 2.5.2.1: between two characters of a frame
   // A serial listener's port may hand over received bytes this late (a UART's FIFO, a USB

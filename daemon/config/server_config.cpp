@@ -170,7 +170,15 @@ void read_framing(TableReader& r, ListenerConfig& l, Diagnostics& diag) {
     }
   }
   l.broadcast = r.boolean("broadcast").value_or(false);
-  if (auto v = r.integer("reply_timeout_ms", 0, 60'000, false)) l.reply_timeout = Millis(*v);
+  if (auto v = r.integer("reply_timeout_ms", 0, 60'000, false)) {
+    l.reply_timeout = Millis(*v);
+    if (*v > 0 && *v < kMinReplyTimeout.count()) {
+      diag.error(r.node("reply_timeout_ms"), r.qualified("reply_timeout_ms"),
+                 "0 (none) or at least " + std::to_string(kMinReplyTimeout.count()) +
+                     " ms: no confirmed write could be answered sooner (a poll of its drive and "
+                     "the line's own silences)");
+    }
+  }
   if (auto v = r.integer("ascii_timeout_ms", 10, 60'000, false)) {
     l.ascii_timeout = Millis(*v);
     if (l.framing != ListenerFraming::ascii || !serial) {

@@ -84,7 +84,7 @@ void SlaveHost::too_late(net::TimePoint would_leave) {
     log_->warn("modbus: {}: unit {} answered (function 0x{:02X}) {} ms after the master's "
                "response timeout (reply_timeout_ms = {}); that reply is dropped, never sent late{}",
                name_, pending_->unit, pending_->request.at(0), late.count(),
-               policy_->reply_timeout.count(), net::held_note(*held));
+               pending_->reply_timeout.count(), net::held_note(*held));
   }
   pending_.reset();
 }
@@ -143,7 +143,8 @@ void SlaveHost::serve(FramerEvent& e) {
   p.request.assign(pdu.begin(), pdu.end());
   p.forwarded = dispatcher_.forwards(unit);
   p.reply_at = e.reply_at;
-  if (policy_->reply_timeout > Millis(0)) p.give_up_at = clock_.now() + policy_->reply_timeout;
+  p.reply_timeout = policy_->reply_timeout;
+  if (p.reply_timeout > Millis(0)) p.give_up_at = e.reply_at + p.reply_timeout;
   pending_ = std::move(p);
   const auto generation = generation_;
   // `done` may fire inside handle(): on_done defers to the event loop.

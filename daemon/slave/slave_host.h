@@ -85,7 +85,10 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
     Bytes request;                  // the PDU
     bool forwarded = false;
     net::TimePoint reply_at{};
-    // The master's response timeout from when the request was taken: past it, no reply.
+    // The master's response timeout (the policy's when the request came: a reload applies to
+    // the requests after it), counted from the earliest moment a reply could leave (reply_at,
+    // 3.5 characters after the request's end on the line): past it, no reply.
+    Millis reply_timeout{0};
     std::optional<net::TimePoint> give_up_at;
   };
   // A write answered as accepted whose result is still to come (to tell of a failure).

@@ -265,6 +265,7 @@ broadcast = true
 address = "127.0.0.1:4001"
 framing = "rtu"
 allow = ["127.0.0.1"]
+reply_timeout_ms = 20
 )");
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   const auto& ls = r.config->listeners;
@@ -293,6 +294,7 @@ allow = ["127.0.0.1"]
   EXPECT_FALSE(ls[3].serial);
   EXPECT_EQ(ls[3].framing, ListenerFraming::rtu);
   EXPECT_EQ(ls[3].options.port, 4001);
+  EXPECT_EQ(ls[3].reply_timeout, Millis(20));  // RTU over TCP: a master's timeout as on a line
   // A serial listener lets no network address write: no warning about it.
   EXPECT_THAT(r.warnings, IsEmpty());
 }
@@ -329,6 +331,11 @@ TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
                                 HasSubstr("only for a listener with framing"))));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = -1\n"),
               ElementsAre(HasSubstr("listener[0].reply_timeout_ms")));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = 60001\n"),
+              ElementsAre(HasSubstr("listener[0].reply_timeout_ms")));
+  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = 5\n"),
+              ElementsAre(AllOf(HasSubstr("gw.toml:4: listener[0].reply_timeout_ms"),
+                                HasSubstr("0 (none) or at least 20 ms"))));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nwrite_reply = \"later\"\n"),
               ElementsAre(HasSubstr("must be \"confirmed\" or \"accepted\"")));
   // The drives' line is not a master's: the bus in kDevice is on /dev/ttyUSB0.

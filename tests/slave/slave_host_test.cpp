@@ -191,6 +191,43 @@ TEST_F(SlaveHostTest, AReplyPastTheMastersResponseTimeoutIsNeverSent) {
   EXPECT_EQ(counters_.counts.server_no_response, 2U);
 }
 
+// The timeout counts from when the reply could first leave (3.5 characters after the request);
+// a reload changes it for the requests after it, not for the one waiting.
+TEST_F(SlaveHostTest, TheResponseTimeoutCountsFromTheSilenceAndAReloadAppliesToTheNextRequest) {
+  make(WriteReply::confirmed, false, AccessLevel::operate, 500ms);
+  receive(1, kWrite);
+  advance(timing_.t35 + 500ms);  // exactly at the deadline: still in time
+  backend_.pending[0](Exception::none);
+  advance(0us);
+  ASSERT_EQ(sent_.size(), 1U);
+
+  receive(1, kWrite);
+  auto longer = std::make_shared<SlavePolicy>();
+  longer->session.access = AccessLevel::operate;
+  longer->reply_timeout = 5s;
+  host_->set_policy(longer);
+  advance(timing_.t35 + 501ms);
+  backend_.pending[1](Exception::none);  // past the 500 ms it was taken with
+  advance(0us);
+  EXPECT_EQ(sent_.size(), 1U);
+  receive(1, kWrite);
+  advance(4s);
+  backend_.pending[2](Exception::none);  // within the new 5 s
+  advance(0us);
+  EXPECT_EQ(sent_.size(), 2U);
+}
+
+// write_reply = accepted answers at once: the timeout has nothing to drop.
+TEST_F(SlaveHostTest, AnAcceptedWriteIsAnsweredWhateverTheResponseTimeout) {
+  make(WriteReply::accepted, false, AccessLevel::operate, 20ms);
+  receive(1, kWrite);
+  advance(timing_.t35);
+  EXPECT_THAT(sent_, ::testing::ElementsAre(frame(1, kWrite)));
+  backend_.pending[0](Exception::none);
+  advance(1s);
+  EXPECT_EQ(counters_.counts.server_no_response, 0U);
+}
+
 // Even a retry of the very same write: answered once, for the retry.
 TEST_F(SlaveHostTest, ARetriedWriteIsAnsweredOnce) {
   make();
