@@ -901,19 +901,6 @@ TEST_F(MqttE2E, SighupChangingMqttEndsTheSessionAndBeginsTheNext) {
 
 // --- 11. several brokers (issue 29) --------------------------------------------------------------
 
-// A second broker and a peer on it, for the tests of brokers = [...].
-struct OtherBroker {
-  explicit OtherBroker(const fs::path& peer_log)
-      : broker(dir), peer(broker.port(), [&] {
-          SparkplugPeer::Options o;
-          o.stderr_file = peer_log;
-          return o;
-        }()) {}
-  TempDir dir;
-  Broker broker;
-  SparkplugPeer peer;
-};
-
 // brokers = [A, B]: the session is on A; A stops, and the next attempt goes to B, with the next
 // bdSeq and a full rebirth there; A back changes nothing. Modbus is served throughout.
 TEST_F(MqttE2E, SeveralBrokersTheNodeWalksToTheNextWhenOneFails) {

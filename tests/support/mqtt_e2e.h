@@ -126,6 +126,19 @@ inline void expect_seq_consecutive(const std::vector<Message>& history) {
   }
 }
 
+// A second broker and a Sparkplug host on it, for the tests of brokers = [...].
+struct OtherBroker {
+  explicit OtherBroker(const fs::path& peer_log)
+      : broker(dir), peer(broker.port(), [&] {
+          SparkplugPeer::Options o;
+          o.stderr_file = peer_log;
+          return o;
+        }()) {}
+  TempDir dir;
+  Broker broker;
+  SparkplugPeer peer;
+};
+
 struct Drive {
   std::string name;
   int unit;
