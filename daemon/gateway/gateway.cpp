@@ -212,9 +212,8 @@ void Gateway::refused_write(const Session& session, std::uint8_t unit,
 
 void Gateway::refused_write(const Source& source, const Device* device, std::string asked,
                             Outcome result, std::string why) {
-  record_refusal(source, device != nullptr ? device->config().name : std::string(),
-                 device != nullptr ? device->config().unit_id : 0, std::move(asked), result,
-                 std::move(why));
+  record_refusal(source, device, device != nullptr ? device->config().unit_id : 0,
+                 std::move(asked), result, std::move(why));
 }
 
 Outcome Gateway::refuse(const Session& session, std::uint8_t unit, std::string asked,
@@ -222,18 +221,16 @@ Outcome Gateway::refuse(const Session& session, std::uint8_t unit, std::string a
   std::string more;
   if (why == Outcome::no_response) more = "the gateway is not running";
   if (why == Outcome::denied) more = "beyond access " + std::string(to_string(session.access));
-  const Device* d = units_[unit];
-  record_refusal(session.source, d != nullptr ? d->config().name : std::string(), unit,
-                 std::move(asked), why, std::move(more));
+  record_refusal(session.source, units_[unit], unit, std::move(asked), why, std::move(more));
   return why;
 }
 
-void Gateway::record_refusal(const Source& source, std::string device, std::uint8_t unit,
+void Gateway::record_refusal(const Source& source, const Device* device, std::uint8_t unit,
                              std::string asked, Outcome result, std::string why) {
   if (history_ == nullptr) return;
   CommandRecord r;
   r.source = source;
-  r.device = std::move(device);
+  if (device != nullptr) r.device = device->config().name;
   r.unit = unit;
   r.points = std::move(asked);
   r.result = result;

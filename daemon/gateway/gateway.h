@@ -93,8 +93,9 @@ class Gateway {
   // A write refused before it reached a device (none at that unit, the gateway not running):
   // recorded, and returned.
   Outcome refuse(const Session& session, std::uint8_t unit, std::string asked, Outcome why);
-  // The audit record of a write refused before it reached a device.
-  void record_refusal(const Source& source, std::string device, std::uint8_t unit,
+  // The audit record of a write refused before it reached a device (`device`: the one at `unit`,
+  // if any).
+  void record_refusal(const Source& source, const Device* device, std::uint8_t unit,
                       std::string asked, Outcome result, std::string why);
   [[nodiscard]] std::vector<Device*> devices_on(const std::string& bus) const;
   [[nodiscard]] std::vector<Station*> stations_on(const std::string& bus) const;

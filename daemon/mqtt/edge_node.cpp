@@ -57,11 +57,7 @@ std::string value_text(const MetricValue& v) {
     const auto r = std::to_chars(buf.data(), buf.data() + buf.size(), *d);
     return {buf.data(), r.ptr};
   }
-  if (const auto* text = std::get_if<std::string>(&v)) {
-    std::string out = "\"";
-    append_printable(out, std::string_view(*text).substr(0, 32));
-    return out + (text->size() > 32 ? "...\"" : "\"");
-  }
+  if (const auto* text = std::get_if<std::string>(&v)) return "\"" + printable(*text, 32) + "\"";
   return "null";
 }
 

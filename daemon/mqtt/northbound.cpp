@@ -151,6 +151,26 @@ BrokerOptions broker_options(const MqttConfig& config, std::size_t index) {
           std::chrono::milliseconds(10'000)};
 }
 
+// A DCMD the edge node refused, as the audit trail's result: the one a Modbus client would get
+// for the same mistake (docs/audit.md, RESULT).
+Outcome outcome_of(sparkplug::Refusal r) {
+  using sparkplug::Refusal;
+  switch (r) {
+    case Refusal::retained:
+      return Outcome::refused;
+    case Refusal::unknown_device:
+      return Outcome::no_such_device;
+    case Refusal::commands_off:
+      return Outcome::denied;  // as a read-only session's write
+    case Refusal::unknown_metric:
+      return Outcome::no_such_point;
+    case Refusal::malformed:
+    case Refusal::wrong_type:
+      return Outcome::invalid_value;
+  }
+  return Outcome::invalid_value;
+}
+
 }  // namespace
 
 Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::string version,
@@ -571,32 +591,14 @@ void Northbound::refused(sparkplug::RefusedCommand c) {
   notice(c.refusal == Refusal::retained ? sparkplug::Notice::retained : sparkplug::Notice::command,
          fmt::format("DCMD for {} refused: {}", c.device, c.why));
   if (gateway_ == nullptr) return;
-  // The result a Modbus client would get for the same (docs/audit.md, RESULT).
-  Outcome result = Outcome::invalid_value;  // malformed, wrong_type
-  switch (c.refusal) {
-    case Refusal::retained:
-      result = Outcome::refused;
-      break;
-    case Refusal::unknown_device:
-      result = Outcome::no_such_device;
-      break;
-    case Refusal::commands_off:
-      result = Outcome::denied;
-      break;
-    case Refusal::unknown_metric:
-      result = Outcome::no_such_point;
-      break;
-    case Refusal::malformed:
-    case Refusal::wrong_type:
-      break;
-  }
   const Device* device = gateway_->find(c.device);
   if (device == nullptr && c.refusal == Refusal::unknown_device) {
     c.why = "no device named '" + c.device + "'";
   } else if (device == nullptr) {  // retained, for a device this gateway does not have
     c.why += " (no device named '" + c.device + "')";
   }
-  gateway_->refused_write(source(), device, std::move(c.points), result, std::move(c.why));
+  gateway_->refused_write(source(), device, std::move(c.points), outcome_of(c.refusal),
+                          std::move(c.why));
 }
 
 // Anyone who can publish to the broker can cause these: a burst, then one a second per kind.
