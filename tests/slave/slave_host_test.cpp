@@ -51,14 +51,19 @@ class HandBackend final : public modbus::Backend {
 
 class SlaveHostTest : public ::testing::Test {
  protected:
-  void make(WriteReply reply = WriteReply::confirmed, bool broadcast = false,
-            AccessLevel access = AccessLevel::operate, Millis reply_timeout = Millis(0)) {
+  static std::shared_ptr<SlavePolicy> policy(WriteReply reply, bool broadcast, AccessLevel access,
+                                             Millis reply_timeout) {
     auto p = std::make_shared<SlavePolicy>();
     p->reply_timeout = reply_timeout;
     p->session.access = access;
     p->session.source.kind = SourceKind::modbus_serial;
     p->write_reply = reply;
     p->broadcast = broadcast;
+    return p;
+  }
+  void make(WriteReply reply = WriteReply::confirmed, bool broadcast = false,
+            AccessLevel access = AccessLevel::operate, Millis reply_timeout = Millis(0)) {
+    auto p = policy(reply, broadcast, access, reply_timeout);
     host_ = std::make_shared<SlaveHost>(
         io_, clock_, backend_, modbus::DeviceIdentity{}, Framing::rtu, modbus::Delimit::silence,
         timing_, p, counters_, log_, "test", [this](Bytes frame) { sent_.push_back(frame); });
@@ -202,10 +207,7 @@ TEST_F(SlaveHostTest, TheResponseTimeoutCountsFromTheSilenceAndAReloadAppliesToT
   ASSERT_EQ(sent_.size(), 1U);
 
   receive(1, kWrite);
-  auto longer = std::make_shared<SlavePolicy>();
-  longer->session.access = AccessLevel::operate;
-  longer->reply_timeout = 5s;
-  host_->set_policy(longer);
+  host_->set_policy(policy(WriteReply::confirmed, false, AccessLevel::operate, 5s));
   advance(timing_.t35 + 501ms);
   backend_.pending[1](Exception::none);  // past the 500 ms it was taken with
   advance(0us);

@@ -123,18 +123,6 @@ class MqttAttack : public MqttE2E {
   }
 };
 
-// The Command/Last Result of the next DDATA of `device` on `peer`'s broker carrying one.
-std::optional<std::string> wait_command_result_on(SparkplugPeer& peer, const std::string& device,
-                                                  std::chrono::milliseconds timeout = 10s) {
-  const auto m = peer.wait_for(
-      [&](const Message& x) {
-        return is(x, "DDATA", device) && x.metric("Command/Last Result") != nullptr;
-      },
-      timeout);
-  if (!m) return std::nullopt;
-  return m->metric("Command/Last Result")->value;
-}
-
 // What a host that keeps a device's current values from its births and data has for `device` of
 // edge node `node`: the last DBIRTH's metrics, each overwritten by every live DDATA after it
 // (historical ones belong in the host's history, not in its current values: spec 6.4.x,
@@ -269,9 +257,9 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
 
   // A live run on B is carried out: the inverter turns and the PLC reads it.
   b.peer.publish(topic, run_at(600));
-  const auto result = wait_command_result_on(b.peer, "washer-a");
+  const auto result = test::wait_command_result(b.peer, "washer-a");
   ASSERT_TRUE(result.has_value()) << "no result for the live DCMD on B";
-  EXPECT_EQ(*result, "ok");
+  EXPECT_EQ(result->second, "ok");
   expect_turning(600);
   plc_->unit(1);
   EXPECT_EQ(plc_->write(reg::command, {0}), 0);

@@ -126,6 +126,24 @@ inline void expect_seq_consecutive(const std::vector<Message>& history) {
   }
 }
 
+// The Command/Last Point and Command/Last Result of the next DDATA of `device` carrying them,
+// as `peer` sees it.
+inline std::optional<std::pair<std::string, std::string>> wait_command_result(
+    SparkplugPeer& peer, const std::string& device,
+    std::chrono::milliseconds timeout = std::chrono::seconds(10)) {
+  const auto m = peer.wait_for(
+      [&](const Message& x) {
+        return is(x, "DDATA", device) && x.metric("Command/Last Result") != nullptr;
+      },
+      timeout);
+  if (!m) return std::nullopt;
+  const auto* point = m->metric("Command/Last Point");
+  const auto* result = m->metric("Command/Last Result");
+  EXPECT_EQ(result->type, "String");
+  EXPECT_NE(point, nullptr) << describe(*m);
+  return std::pair{point != nullptr ? point->value : "", result->value};
+}
+
 // A second broker and a Sparkplug host on it, for the tests of brokers = [...].
 struct OtherBroker {
   explicit OtherBroker(const fs::path& peer_log)
@@ -293,20 +311,10 @@ class MqttE2E : public ::testing::Test {
   void dcmd(const std::string& device, const std::string& metrics_json) {
     peer_->publish(device_topic("DCMD", device), R"({"metrics":[)" + metrics_json + "]}");
   }
-  // The Command/Last Result of the next DDATA of `device` carrying one.
+  // The same on this test's broker.
   std::optional<std::pair<std::string, std::string>> wait_command_result(
       const std::string& device, std::chrono::milliseconds timeout = 10s) {
-    const auto m = peer_->wait_for(
-        [&](const Message& x) {
-          return is(x, "DDATA", device) && x.metric("Command/Last Result") != nullptr;
-        },
-        timeout);
-    if (!m) return std::nullopt;
-    const auto* point = m->metric("Command/Last Point");
-    const auto* result = m->metric("Command/Last Result");
-    EXPECT_EQ(result->type, "String");
-    EXPECT_NE(point, nullptr) << describe(*m);
-    return std::pair{point != nullptr ? point->value : "", result->value};
+    return test::wait_command_result(*peer_, device, timeout);
   }
 
   TempDir dir_;
