@@ -116,11 +116,13 @@ class Device final : public Station {
   // Whether every Modbus request for this device is forwarded to it as it is (pass-through,
   // Driver::forwards) rather than served from the register map.
   [[nodiscard]] bool forwards() const { return driver_->forwards(); }
-  // A Modbus request PDU for a pass-through device: refused at once (denied) when its function
-  // needs more than the session's access (forward_access.h), then queued and carried out like a
-  // write (the same bounded queue, write turns alternating with the line's polls, the same
-  // deadline), sent as it is, and answered with the slave's reply. Nothing but ok returned here
-  // calls `done`. It never feeds the failsafe: a pass-through device has no command block.
+  // A Modbus request PDU for a pass-through device: refused at once when it is not one whole,
+  // well-formed request (invalid_value), when its function is one no client may forward or
+  // needs more than the session's access (denied; forward_access.h), then queued and carried
+  // out like a write (the same bounded queue, write turns alternating with the line's polls, the
+  // same deadline), sent as it is, and answered with the slave's reply. Nothing but ok returned
+  // here calls `done`. Every refusal and every forwarded request that may write is in the audit
+  // trail. It never feeds the failsafe: a pass-through device has no command block.
   Outcome forward(const Session& session, std::span<const std::uint8_t> pdu, ForwardDone done,
                   TimePoint now);
   // A command from the gateway itself (shutdown, or on_start = stop: `source` says which),

@@ -456,14 +456,25 @@ Device::Progress Device::advance_forward(Request& r, TimePoint now, Outcome& fai
 
 Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pdu,
                         ForwardDone done, TimePoint now) {
-  // A forwarded write is audited like any other; a forwarded read is not a write.
-  const AccessLevel needs = forward_level(pdu);
+  const ForwardVerdict verdict = judge_forward(pdu, static_cast<std::uint8_t>(config_.address));
+  // A forwarded read is not a write: recorded only when it is refused for what it is. A
+  // forwarded write is audited like any other.
+  const bool reads_only = verdict.needs == AccessLevel::read;
   Answer a = answer_to(session, nullptr, describe_pdu(pdu), now);
-  if (needs == AccessLevel::read) a.audit = Answer::Audit::none;
+  if (reads_only && verdict.refusal == Outcome::ok) a.audit = Answer::Audit::none;
   const Outcome o = [&] {
     if (!driver_->forwards()) return Outcome::no_such_point;
-    // outcome.h: beyond the session's level is denied, checked before anything else.
-    if (needs > session.access) return Outcome::denied;
+    // outcome.h: beyond the session's level is denied, checked before anything else; a function
+    // no level may send is beyond every session's.
+    if (verdict.refusal == Outcome::denied) {
+      a.record.why = verdict.why;
+      return Outcome::denied;
+    }
+    if (verdict.needs > session.access) return Outcome::denied;
+    if (verdict.refusal != Outcome::ok) {
+      a.record.why = verdict.why;
+      return verdict.refusal;
+    }
     if (closed_to_clients_ || comm_lost()) return Outcome::no_response;
     if (queued(false) >= kMaxQueuedWrites) {
       ++write_stats_.busy;

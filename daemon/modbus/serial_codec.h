@@ -39,8 +39,8 @@ inline constexpr std::uint16_t kMaxReadBits = 2000;
 inline constexpr std::uint16_t kMaxReadRegisters = 125;
 inline constexpr std::uint16_t kMaxWriteRegisters = 123;
 
-// Function codes the codec knows the reply length of (Application Protocol 6.x). Any other is
-// still forwarded in pass-through; its RTU reply is delimited by its CRC (see decode_reply).
+// Function codes the codec knows the lengths of (Application Protocol 6.x). A frame of any other
+// is delimited by its CRC (decode_reply, decode_request); pass-through forwards none of them.
 namespace fc {
 inline constexpr std::uint8_t read_coils = 0x01;                // 6.1
 inline constexpr std::uint8_t read_discrete_inputs = 0x02;      // 6.2

@@ -89,7 +89,10 @@ TEST_F(PassthroughByHand, AnotherSlavesOrAnotherFunctionsFrameIsNotTheReply) {
   EXPECT_TRUE(done[0].reply.empty());
 }
 
-TEST_F(PassthroughByHand, FunctionsItDoesNotKnowAreForwardedAndDelimitedByTheirCrc) {
+// The gateway hands the driver no function of unknown length (forward_access.h); the driver
+// itself sends what it is handed, and the reply of a function the codec does not know ends where
+// its CRC holds.
+TEST_F(PassthroughByHand, AFunctionItDoesNotKnowIsSentAsHandedAndItsReplyDelimitedByItsCrc) {
   // 0x41: a user-defined function (Application Protocol 5: 65..72).
   ASSERT_EQ(d.apply(WriteOp::of_forward({0x41, 0x12, 0x34}), 1, now), WriteStatus::pending);
   ASSERT_TRUE(d.next_exchange(now));
