@@ -320,9 +320,11 @@ Outcome Device::begin(Request& r, bool at_once, TimePoint now) {
   return failure;
 }
 
-std::size_t Device::queued(bool urgent) const {
-  return static_cast<std::size_t>(std::count_if(
-      requests_.begin(), requests_.end(), [urgent](const auto& r) { return r->urgent == urgent; }));
+std::size_t Device::queued(bool urgent, bool reads_only) const {
+  return static_cast<std::size_t>(
+      std::count_if(requests_.begin(), requests_.end(), [urgent, reads_only](const auto& r) {
+        return r->urgent == urgent && r->reads_only == reads_only;
+      }));
 }
 
 // A stop is on its way: the queued requests that would run the motor after it never reach it.
@@ -476,7 +478,9 @@ Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pd
       return verdict.refusal;
     }
     if (closed_to_clients_ || comm_lost()) return Outcome::no_response;
-    if (queued(false) >= kMaxQueuedWrites) {
+    // Reads wait in places of their own: however many read clients fill theirs, a write from
+    // a client that may write is never refused busy for them.
+    if (queued(false, reads_only) >= kMaxQueuedWrites) {
       ++write_stats_.busy;
       return Outcome::busy;
     }
@@ -484,6 +488,7 @@ Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pd
     Request* r = owned.get();
     r->forward = Bytes(pdu.begin(), pdu.end());
     r->forward_done = std::move(done);
+    r->reads_only = reads_only;
     r->feeds_failsafe = false;
     r->deadline = now + traits_.write_timeout;
     a.taken = true;

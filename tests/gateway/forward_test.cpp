@@ -1,6 +1,7 @@
 // Pass-through requests at the device (Device::forward, gateway/forward_access.h): every refusal
 // is in the audit trail with its reason and never reaches the driver, a whole read is forwarded
-// and not recorded, a write is. On the real device with a forwarding fake driver and clock.
+// and not recorded, a write is, and reads never lock writes out of the device's queue. On the
+// real device with a forwarding fake driver and clock.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
@@ -100,6 +101,28 @@ TEST_F(ForwardTest, AWholeReadIsForwardedUnrecordedAndAWriteIsRecordedWhenItSett
   EXPECT_EQ(c[0].field("points"), "pdu 06 00 01 00 03");
   EXPECT_EQ(c[0].field("result"), "ok");
   EXPECT_EQ(answers_, (std::vector<Outcome>{Outcome::ok, Outcome::ok}));
+}
+
+// Reads fill their places (and are refused busy past them); a write from a maintain client
+// still finds one of its own, and is carried out once the reads ahead of it are answered.
+TEST_F(ForwardTest, ReadsFillingTheQueueNeverRefuseAWriteBusy) {
+  const Bytes read = {0x03, 0x00, 0x00, 0x00, 0x01};
+  for (std::size_t i = 0; i < kMaxQueuedWrites; ++i) {
+    ASSERT_EQ(forward(AccessLevel::read, read), Outcome::ok);
+  }
+  EXPECT_EQ(forward(AccessLevel::read, read), Outcome::busy);
+  const Bytes write = {0x06, 0x00, 0x01, 0x00, 0x03};
+  ASSERT_EQ(forward(AccessLevel::maintain, write), Outcome::ok);
+  for (std::size_t i = 0; i < kMaxQueuedWrites; ++i) answer({0x03, 0x02, 0x00, 0x07});
+  ASSERT_EQ(fake_->forwarded.size(), kMaxQueuedWrites + 1);
+  EXPECT_EQ(fake_->forwarded.back(), write);
+  answer(write);
+  EXPECT_EQ(answers_.back(), Outcome::ok);
+  // Writes have as many places as reads, and no more.
+  for (std::size_t i = 0; i < kMaxQueuedWrites; ++i) {
+    ASSERT_EQ(forward(AccessLevel::maintain, write), Outcome::ok);
+  }
+  EXPECT_EQ(forward(AccessLevel::maintain, write), Outcome::busy);
 }
 
 }  // namespace
