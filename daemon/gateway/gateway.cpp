@@ -210,6 +210,11 @@ void Gateway::refused_write(const Session& session, std::uint8_t unit,
   refuse(session, unit, Device::describe_pdu(request), Outcome::denied);
 }
 
+void Gateway::refused_broadcast(const Session& session, std::span<const std::uint8_t> request) {
+  record_refusal(session.source, nullptr, 0, Device::describe_pdu(request), Outcome::refused,
+                 "a broadcast, and the listener has broadcast = false");
+}
+
 void Gateway::refused_write(const Source& source, const Device* device, std::string asked,
                             Outcome result, std::string why) {
   record_refusal(source, device, device != nullptr ? device->config().unit_id : 0,
