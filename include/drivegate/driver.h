@@ -258,7 +258,8 @@ class Driver {
   // served from the register map: the gateway then hands the driver each request's PDU as a
   // WriteOp::Target::forward part (apply() -> pending; check() is not asked), on the device's
   // write turns like any write, and answers the client with the Completion's reply. The gateway
-  // has judged the client's access to the function already.
+  // has judged the request already: one whole, well-formed request of a function whose length
+  // it knows, holding no other frame, within the client's access (daemon/gateway/forward_access.h).
   [[nodiscard]] virtual bool forwards() const { return false; }
 };
 
