@@ -369,10 +369,18 @@ void BusEngine::finish(TimePoint now) {
 }
 
 void BusEngine::unanswered(TimePoint now, bool silent) {
+  note_held(*current_, now);
   Station* st = release();
   st->on_no_reply(now);
   if (silent) st->link().health.turn_failed(now, st->link().policy);
   pump(now);
+}
+
+// A turn that ran into a reply timeout held the line from its first frame until the guard time
+// after it ends: the device waits for its next poll turn for a multiple of that.
+void BusEngine::note_held(Station& st, TimePoint now) {
+  if (!timed_out_) return;
+  st.link().health.turn_held(now, std::max(now, quiet_until_) - first_sent_);
 }
 
 // --- receiving ---

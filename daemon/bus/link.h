@@ -7,6 +7,7 @@
 #include <spdlog/logger.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -85,6 +86,13 @@ class LinkHealth {
     const Millis pause = std::min<Millis>(p.poll_interval * (1 << shift), p.backoff_max);
     probe_at_ = failures_ > 1 ? now + pause : TimePoint{};
   }
+  // A turn ran into a reply timeout, answered in the end or not, and held the line for `held`
+  // (its attempts, their timeouts and guard times): the device's next poll turn waits
+  // kSickPause times that, whatever it answers meanwhile, so that waiting on a sick device takes
+  // at most a third of the line from its neighbours (bus_engine.h, "Sick devices").
+  void turn_held(TimePoint now, std::chrono::nanoseconds held) {
+    pause_until_ = std::max(pause_until_, now + std::chrono::ceil<Millis>(held * kSickPause));
+  }
   // True once: at the first call after the comm timeout passed without a good frame.
   bool lost_by(TimePoint now, Millis comm_timeout) {
     if (comm_lost_ || now - last_good_ <= comm_timeout) return false;
@@ -105,8 +113,13 @@ class LinkHealth {
   [[nodiscard]] std::optional<TimePoint> last_data() const {
     return ever_data_ ? std::optional<TimePoint>(last_data_) : std::nullopt;
   }
-  [[nodiscard]] bool in_backoff(TimePoint now) const { return now < probe_at_; }
-  [[nodiscard]] TimePoint probe_at() const { return probe_at_; }
+  // Whether the device waits for its next poll turn: backed off after silence, or paused after
+  // a turn that held the line.
+  [[nodiscard]] bool in_backoff(TimePoint now) const { return now < probe_at(); }
+  [[nodiscard]] TimePoint probe_at() const { return std::max(probe_at_, pause_until_); }
+
+  // How many times its held line time a sick device leaves to its neighbours (turn_held).
+  static constexpr int kSickPause = 2;
 
  private:
   TimePoint last_good_;
@@ -117,6 +130,7 @@ class LinkHealth {
   bool comm_lost_ = false;
   int failures_ = 0;  // consecutive turns without an answer
   TimePoint probe_at_{};
+  TimePoint pause_until_{};  // turn_held()
 };
 
 // One device's place on its line.
