@@ -523,12 +523,13 @@ void BusEngine::process_rx(Station& st, TimePoint now) {
         ++link.counters.frames_good;
         // Only a frame carrying the drive's state makes its data fresh; an ack (a write's echo)
         // shows the drive answers, nothing more.
-        const bool back =
-            v.kind == RxKind::ack ? link.health.frame_good(now) : link.health.data_good(now);
+        const bool back = v.kind == RxKind::ack ? link.health.frame_good(now)
+                                                : link.health.data_good(now, st.state_read_at(now));
         if (back) link.log->info("device {}: answering again", st.name());
         if (v.kind != RxKind::frame && awaited) {
           // Answered only after a timeout: a reply to an attempt that timed out may still come.
           if (timed_out_) start_guard(st, now);
+          note_held(st, now);
           finish(now);
           return;
         }

@@ -81,6 +81,9 @@ class Device final : public Station {
   void on_work(std::function<void()> kick) override { kick_ = std::move(kick); }
   std::optional<Exchange> next_exchange(TimePoint now, Turn turn) override;
   [[nodiscard]] TimePoint wake_at() const override { return driver_->wake_at(); }
+  [[nodiscard]] std::optional<TimePoint> state_read_at(TimePoint now) const override {
+    return traits_.state_in_parts ? driver_->state_read_at() : now;
+  }
   RxVerdict on_receive(ByteView rx, TimePoint now) override;
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;
@@ -125,8 +128,7 @@ class Device final : public Station {
                   TimePoint now);
   // A command from the gateway itself (shutdown, or on_start = stop: `source` says which),
   // outside Modbus: it neither feeds nor resets the failsafe. `done` is called exactly once.
-  void command(Command c, WriteDone done, TimePoint now,
-               SourceKind source = SourceKind::shutdown);
+  void command(Command c, WriteDone done, TimePoint now, SourceKind source = SourceKind::shutdown);
   // Shutdown has begun: from now on every client's write, from any northbound, is refused
   // (no_response) before it reaches the driver, so that nothing runs the motor after the shutdown
   // stop.
