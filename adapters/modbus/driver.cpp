@@ -42,6 +42,14 @@ PointSpec spec_of(const ProfilePoint& p) {
   return s;
 }
 
+// A speed in rpm as the common block carries it: nothing for NaN, an infinity or a speed beyond
+// kMaxSpeedRpm either way.
+std::optional<std::int32_t> rpm_of(double speed) {
+  const double rpm = std::round(speed);
+  if (!std::isfinite(rpm) || std::fabs(rpm) > kMaxSpeedRpm) return std::nullopt;
+  return static_cast<std::int32_t>(rpm);
+}
+
 }  // namespace
 
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
@@ -350,26 +358,42 @@ std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) con
 void ModbusDriver::update_common() {
   const CommonBindings& c = profile_.common;
   if (const auto speed = engineering(c.speed_rpm)) {
-    common_.speed_rpm = static_cast<std::int32_t>(std::lround(*speed));
+    // A speed is a number the common block carries, by the point's own type and signedness; NaN,
+    // an infinity or a speed beyond it (2^32 from a float, 4294967295 from a u32) is none.
+    const auto rpm = rpm_of(*speed);
+    common_.speed_unknown = !rpm;
+    common_.speed_rpm = rpm.value_or(0);
   }
   if (const auto running = bit_of(c.running)) {
     common_.running = *running;
   } else if (!c.running && c.speed_rpm && raw_[*c.speed_rpm]) {
-    common_.running = common_.speed_rpm != 0;  // no run bit: a turning motor runs
+    // No run bit: a turning motor runs, and one whose speed is not known may be turning.
+    common_.running = common_.speed_unknown || common_.speed_rpm != 0;
   }
   // The fault bit, where there is one, says whether a fault is active; the fault code which.
   FaultSet faults;
   std::optional<Fault> coded;
   if (c.fault_code && raw_[c.fault_code->point]) {
     const ProfilePoint& p = profile_.points[c.fault_code->point];
-    const auto native = static_cast<std::int64_t>(raw_of(p, *raw_[c.fault_code->point]));
-    common_.native_fault = static_cast<std::uint32_t>(native);
-    const auto it = c.fault_code->map.find(static_cast<std::uint32_t>(native));
-    coded = it != c.fault_code->map.end() ? it->second : c.fault_code->other;
+    const double raw = raw_of(p, *raw_[c.fault_code->point]);
+    if (std::isfinite(raw) && raw == std::trunc(raw) && std::fabs(raw) <= 4294967295.0) {
+      const auto native = static_cast<std::uint32_t>(static_cast<std::int64_t>(raw));
+      common_.native_fault = native;
+      const auto it = c.fault_code->map.find(native);
+      coded = it != c.fault_code->map.end() ? it->second : c.fault_code->other;
+    } else {
+      // A code that is not a whole number (a float point reading NaN): no code, but something
+      // is wrong, whatever the profile names the codes it does not map.
+      common_.native_fault = 0xFFFFFFFF;
+      coded = Fault::other;
+    }
   }
   const auto fault_bit = bit_of(c.fault);
   const bool active = fault_bit ? *fault_bit : (coded && *coded != Fault::none);
   if (active) faults.set(coded && *coded != Fault::none ? *coded : Fault::other);
+  // A speed reading that is not a number is a measurement the drive cannot give: a fault of its
+  // own, so that the PLC sees it (status bit fault) beside speed_rpm's unknown mark.
+  if (common_.speed_unknown) faults.set(Fault::sensor_fault);
   common_.faults = faults;
   // A trip stops the output: the run in force is over.
   if (active && !common_.running && is_run(common_.command)) common_.command = Command::stop;
@@ -388,7 +412,7 @@ void ModbusDriver::adopt() {
   if (!adopting_ || !common_.ready) return;
   adopting_ = false;
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
-    common_.setpoint_rpm = static_cast<std::int32_t>(std::lround(*reference));
+    if (const auto rpm = rpm_of(*reference)) common_.setpoint_rpm = *rpm;
   }
   if (!common_.running || !common_.faults.empty()) return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;

@@ -94,6 +94,10 @@ RxVerdict damaged(const Decoded<Frame>& d) {
   return {d.error == FrameError::bad_checksum ? RxKind::bad_checksum : RxKind::noise, d.consumed};
 }
 
+// The largest speed the common block's speed_rpm (i16) carries either way; -32768 there means
+// the speed is not known.
+inline constexpr std::int32_t kMaxSpeedRpm = 32767;
+
 // State every adapter publishes; the gateway turns it into the common register block.
 struct CommonState {
   bool ready = false;    // the protocol's handshake is done (e.g. ping answered)
@@ -104,6 +108,9 @@ struct CommonState {
   std::int32_t speed_rpm = 0;       // actual speed, negative in reverse where the drive says so
   std::int32_t setpoint_rpm = 0;    // the target the driver works towards
   Command command = Command::stop;  // the command in force
+  // The drive's speed reading is not a number (NaN, infinite, beyond kMaxSpeedRpm): speed_rpm is
+  // not to be shown, and the common block shows it unknown (README, "Register map").
+  bool speed_unknown = false;
 };
 
 // Ticket of a write in flight; the driver reports its outcome through take_completions().

@@ -1,10 +1,14 @@
-// A profile device tells the truth about how old its state is, on the real bus engine against
-// the simulator (tests/support/adapter_bench.h): a block the slave refuses, leaves unanswered or
-// answers with a wrong byte count is asked again and ages the data (then comm_lost), never
-// leaving the last value in force under a fresh data age.
+// A profile device tells the truth about how old and how sound its state is, on the real bus
+// engine against the simulator (tests/support/adapter_bench.h): a block the slave refuses, leaves
+// unanswered or answers with a wrong byte count is asked again and ages the data (then comm_lost),
+// never leaving the last value in force under a fresh data age; a bound speed that is not a
+// number is unknown (speed_rpm -32768) and a fault, by the point's own type and signedness.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "adapter_bench.h"
@@ -94,6 +98,76 @@ TEST(ModbusFreshness, AnOwnPointWhoseBlockIsRefusedIsUnknownUntilReadAgain) {
   ASSERT_TRUE(ok(b.control("refuse input 202 4 2")));  // slave device failure, twice
   EXPECT_TRUE(b.rig.run_until([&] { return std::isnan(b.read_f32("motor_current")); }, 2s));
   EXPECT_TRUE(b.rig.run_until([&] { return b.read_f32("motor_current") == 12.5F; }, 5s));
+}
+
+// A profile whose speed is a float, or a u32, on holding 10, and no run bit: running is then a
+// speed that is not 0.
+std::filesystem::path speed_profile(const std::string& type) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("dg-speed-" + type + "-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "speed.toml";
+  std::ofstream(file) << "[profile]\nname = \"speed\"\nsource = \"a test\"\n"
+                         "[[point]]\nname = \"status_word\"\ntable = \"holding\"\naddress = 0\n"
+                         "type = \"u16\"\n"
+                         "[[point]]\nname = \"speed\"\ntable = \"holding\"\naddress = 10\n"
+                         "type = \"" +
+                             type +
+                             "\"\n"
+                             "[common]\nspeed_rpm = \"speed\"\n";
+  return file;
+}
+
+struct SpeedBench {
+  explicit SpeedBench(const std::string& type)
+      : file(speed_profile(type)),
+        b(drivegate_adapter, {.options = {{"profile", file.string()}}}) {}
+  ~SpeedBench() { std::filesystem::remove_all(file.parent_path()); }
+  // The speed the PLC reads once the slave holds `high` `low` (high word first).
+  std::int32_t speed_for(std::uint16_t high, std::uint16_t low) {
+    const std::string words = std::to_string(high) + " " + std::to_string(low);
+    EXPECT_TRUE(ok(b.control("raw holding 10 " + words)));
+    b.rig.run_for(1200ms);  // two cycles
+    return b.read_i16("speed_rpm");
+  }
+  std::filesystem::path file;
+  test::AdapterBench b;
+};
+
+constexpr std::int32_t kUnknownSpeed = -32768;
+
+// NaN, +-Inf and 2^32 in a float speed are no speed: speed_rpm reads the unknown mark, the status
+// says a fault (sensor_fault), and the drive is never shown stopped at 0 rpm.
+TEST(ModbusFreshness, AFloatSpeedThatIsNotANumberIsUnknownAndAFault) {
+  SpeedBench s("f32");
+  ASSERT_TRUE(s.b.until_online());
+  EXPECT_EQ(s.speed_for(0x447A, 0x0000), 1000);  // 1000.0
+  EXPECT_EQ(s.b.status() & kFaulted, 0u);
+  for (const auto& [high, low] : {std::pair{0x7FC0, 0x0000},     // NaN
+                                  std::pair{0x7F80, 0x0000},     // +Inf
+                                  std::pair{0xFF80, 0x0000},     // -Inf
+                                  std::pair{0x4F80, 0x0000}}) {  // 2^32
+    SCOPED_TRACE(testing::Message() << std::hex << high << " " << low);
+    EXPECT_EQ(s.speed_for(static_cast<std::uint16_t>(high), static_cast<std::uint16_t>(low)),
+              kUnknownSpeed);
+    EXPECT_NE(s.b.status() & kFaulted, 0u);
+    EXPECT_NE(s.b.status() & kRunning, 0u) << "no run bit set, but a speed nobody knows";
+    EXPECT_EQ(s.b.read("fault_code"), static_cast<std::uint32_t>(Fault::sensor_fault));
+  }
+  EXPECT_EQ(s.speed_for(0xC47A, 0x0000), -1000);  // -1000.0: a number again, no fault
+  EXPECT_EQ(s.b.status() & kFaulted, 0u);
+}
+
+// A u32 speed is unsigned: 0xFFFFFFFF is 4294967295 rpm, beyond what speed_rpm carries
+// (unknown), never -1 (reverse).
+TEST(ModbusFreshness, AU32SpeedKeepsItsSignedness) {
+  SpeedBench s("u32");
+  ASSERT_TRUE(s.b.until_online());
+  EXPECT_EQ(s.speed_for(0x0000, 0x0064), 100);
+  EXPECT_EQ(s.speed_for(0xFFFF, 0xFFFF), kUnknownSpeed);
+  EXPECT_NE(s.b.status() & kFaulted, 0u);
+  EXPECT_EQ(s.speed_for(0x0000, 0x7FFF), 32767);  // the largest speed carried
+  EXPECT_EQ(s.speed_for(0x0000, 0x8000), kUnknownSpeed);
 }
 
 }  // namespace
