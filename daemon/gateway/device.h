@@ -82,6 +82,9 @@ class Device final : public Station {
   void on_work(std::function<void()> kick) override { kick_ = std::move(kick); }
   std::optional<Exchange> next_exchange(TimePoint now, Turn turn) override;
   [[nodiscard]] TimePoint wake_at() const override { return driver_->wake_at(); }
+  [[nodiscard]] std::optional<TimePoint> state_read_at(TimePoint now) const override {
+    return traits_.state_in_parts ? driver_->state_read_at() : now;
+  }
   RxVerdict on_receive(ByteView rx, TimePoint now) override;
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;

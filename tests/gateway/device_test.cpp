@@ -4,9 +4,9 @@
 #include "gateway/device.h"
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
 
 #include <cmath>
-#include <spdlog/sinks/null_sink.h>
 
 #include "fake_adapter.h"
 
@@ -56,7 +56,7 @@ class DeviceTest : public ::testing::Test {
     device_->next_exchange(at, Turn::write);
   }
   // A reply carrying the drive's state.
-  void heard(TimePoint at) { device_->link().health.data_good(at); }
+  void heard(TimePoint at) { device_->link().health.data_good(at, at); }
 
   TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
   test::FakeDriver* fake_;
