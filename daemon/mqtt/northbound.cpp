@@ -24,6 +24,9 @@ namespace {
 
 constexpr Millis kFirstRetry{1'000};
 constexpr Millis kLongestRetry{30'000};
+// With several brokers: a primary host that says nothing on one (no retained STATE) for this long
+// after the subscriptions may be online on another; the node looks there.
+constexpr Millis kHostSilence{5'000};
 // Sparkplug timestamps carry a value's age; a per-poll data age would be news at every poll.
 constexpr std::string_view kNotPublished = "data_age_ms";
 
@@ -167,6 +170,8 @@ Outcome outcome_of(sparkplug::Refusal r) {
     case Refusal::malformed:
     case Refusal::wrong_type:
       return Outcome::invalid_value;
+    case Refusal::not_born:
+      return Outcome::refused;
   }
   return Outcome::invalid_value;
 }
@@ -200,7 +205,8 @@ Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::stri
           log),
       retry_timer_(io),
       tick_timer_(io),
-      pace_timer_(io) {
+      pace_timer_(io),
+      host_timer_(io) {
   status_.broker = config.brokers.at(0).url;
   status_.brokers = config.brokers.size();
   if (store_) pace();
@@ -236,7 +242,7 @@ void Northbound::use(Gateway& gateway) {
   watched_.clear();
   const std::weak_ptr<bool> token = alive_;
   for (const auto& d : gateway.devices()) {
-    watched_.push_back({d.get(), {}, {}, {}});
+    watched_.push_back({d.get(), {}, {}, {}, std::nullopt, 0});
     defs.push_back(define(*d, watched_.back()));
     const std::size_t index = watched_.size() - 1;
     d->watch([this, token, index, generation = generation_] {
@@ -328,8 +334,21 @@ void Northbound::connected() {
   // Fresh values for the births.
   std::fill(dirty_.begin(), dirty_.end(), true);
   flush();
-  edge_.connected(now(), *this);
+  edge_.connected(now(), *this, broker_);
   schedule_tick();
+  if (edge_.state() == sparkplug::SessionState::waiting_for_host && config_.brokers.size() > 1) {
+    // A host that says nothing here (no retained STATE) may be online on another broker.
+    host_timer_.expires_after(kHostSilence);
+    host_timer_.async_wait([this, session = status_.connects](const boost::system::error_code& ec) {
+      if (ec || stopping_ || session != status_.connects || !client_.connected() ||
+          edge_.state() != sparkplug::SessionState::waiting_for_host) {
+        return;
+      }
+      log_->warn("MQTT: no STATE from primary host '{}' on {} within {} s: trying the next broker",
+                 config_.primary_host_id, broker_url(), kHostSilence.count() / 1000);
+      walk_on();
+    });
+  }
 }
 
 void Northbound::lost(const std::string& why) {
@@ -393,16 +412,20 @@ void Northbound::flush() {
   for (std::size_t i = 0; i < watched_.size(); ++i) {
     if (!dirty_[i]) continue;
     dirty_[i] = false;
-    const Device& d = *watched_[i].device;
+    Watched& w = watched_[i];
+    const Device& d = *w.device;
     const bool alive = d.line().health.ever_good() && !d.comm_lost();
     // When the drive's state last arrived, on the payload's clock: a write's echo never counts.
-    std::uint64_t data_ms = 0;
-    if (const auto at = d.line().health.last_data()) {
+    // Worked out once per reply (two clocks read a moment apart would put the same reply a
+    // millisecond either way), and never before the last one's.
+    if (const auto at = d.line().health.last_data(); at && at != w.data_at) {
       const auto age = std::chrono::duration_cast<Millis>(t.mono - *at).count();
-      data_ms = t.unix_ms - static_cast<std::uint64_t>(std::clamp<std::int64_t>(
-                                age, 0, static_cast<std::int64_t>(t.unix_ms)));
+      const std::uint64_t ms = t.unix_ms - static_cast<std::uint64_t>(std::clamp<std::int64_t>(
+                                               age, 0, static_cast<std::int64_t>(t.unix_ms)));
+      w.data_at = at;
+      w.data_ms = std::max(w.data_ms, ms);
     }
-    edge_.sample(i, alive, sample(watched_[i]), data_ms, t, *this);
+    edge_.sample(i, alive, sample(w), w.data_ms, t, *this);
   }
   schedule_tick();
 }
@@ -508,6 +531,10 @@ void Northbound::host_offline_before_births() {
   if (config_.brokers.size() < 2) return;  // nowhere else to look: wait here for the host
   log_->warn("MQTT: primary host '{}' is offline on {}: trying the next broker",
              config_.primary_host_id, broker_url());
+  walk_on();
+}
+
+void Northbound::walk_on() {
   // Growing while no broker has the host online, so a plant whose host is down is not
   // reconnected to every second: 1 s, 2 s, 4 s... 30 s, back to 1 s once born somewhere.
   walk_backoff_ =
@@ -575,12 +602,14 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
 }
 
 // A DCMD does not say who published it: the audit trail names the broker, our session's client
-// id, and the primary host the commands are expected from (if one is configured).
+// id, and the primary host the commands are expected from while it is online (the node is born);
+// otherwise no host is named, and the refusal says why.
 Source Northbound::source() const {
   Source s;
   s.kind = SourceKind::mqtt;
   s.listener = broker_url();
-  s.client = config_.primary_host_id.empty()
+  const bool host_online = edge_.state() == sparkplug::SessionState::online;
+  s.client = config_.primary_host_id.empty() || !host_online
                  ? config_.client_id
                  : config_.client_id + " (primary host " + config_.primary_host_id + ")";
   return s;

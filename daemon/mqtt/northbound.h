@@ -57,6 +57,8 @@ class Northbound final : private sparkplug::Sink {
     std::vector<const MappedPoint*> points;  // the device's metrics, in DeviceDef order
     std::vector<std::int32_t> metric_of;     // per map point: its metric, or -1 (not published)
     std::vector<PointValue> scratch;         // point_values() of the last sample
+    std::optional<TimePoint> data_at;        // the drive's last reply with its state...
+    std::uint64_t data_ms = 0;               // ... on the payload's clock (Unix ms)
   };
 
   [[nodiscard]] std::optional<std::uint8_t> last_bd_seq(std::optional<std::uint8_t> previous) const;
@@ -66,6 +68,8 @@ class Northbound final : private sparkplug::Sink {
   // The primary host is offline here: end the session, try again `delay` later (on the next
   // broker, if there is one).
   void leave_broker(Millis delay);
+  // Births still waiting for the host here: the next broker, the longer the more of them fail.
+  void walk_on();
   [[nodiscard]] const std::string& broker_url() const;
   void connect_after(Millis delay);  // a new attempt, after half of `delay` to all of it
   void connected();
@@ -100,6 +104,9 @@ class Northbound final : private sparkplug::Sink {
   boost::asio::steady_timer retry_timer_;
   boost::asio::steady_timer tick_timer_;
   boost::asio::steady_timer pace_timer_;
+  boost::asio::steady_timer host_timer_;  // a primary host silent on this broker
+  unsigned replay_budget_ = 0;            // records this replay period may still send
+  bool replay_posted_ = false;            // a replay_step() is on its way
   unsigned paces_ = 0;  // of pace_timer_, for the once-a-second sync
   Gateway* gateway_ = nullptr;  // use()'s, until stop(): where refused DCMDs are audited
   std::vector<Watched> watched_;

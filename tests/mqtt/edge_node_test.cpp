@@ -310,14 +310,19 @@ TEST_F(EdgeNodeTest, ChangedDevicesAreARebirth) {
   auto defs = drives();
   defs.pop_back();  // washer-b removed
   EXPECT_TRUE(node_.set_devices(defs, at(1s), sink_));
-  const auto sent = sink_.take();
-  ASSERT_EQ(sent.size(), 2u);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 3u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDEATH/gw01/washer-b");
   EXPECT_EQ(sent[1].topic, "spBv1.0/plant1/NBIRTH/gw01");
-  // Births of the devices follow as they are sampled.
-  node_.sample(0, true, values(3), kNoData, at(1s), sink_);
-  EXPECT_EQ(sink_.take().at(0).topic, "spBv1.0/plant1/DBIRTH/gw01/washer-a");
-  EXPECT_FALSE(node_.set_devices(defs, at(2s), sink_));
+  // washer-a, defined as before, goes on as it was: alive, born again at once.
+  EXPECT_EQ(sent[2].topic, "spBv1.0/plant1/DBIRTH/gw01/washer-a");
+  // A device new to the set is born as it is sampled.
+  defs.push_back({"washer-c", {metric("speed_rpm", DataType::int16)}});
+  EXPECT_TRUE(node_.set_devices(defs, at(2s), sink_));
+  sink_.take();
+  node_.sample(1, true, {MetricValue{std::int64_t{3}}}, kNoData, at(2s), sink_);
+  EXPECT_EQ(sink_.take().at(0).topic, "spBv1.0/plant1/DBIRTH/gw01/washer-c");
+  EXPECT_FALSE(node_.set_devices(defs, at(3s), sink_));
   EXPECT_TRUE(sink_.take().empty());
 }
 
@@ -794,6 +799,166 @@ TEST_F(EdgeNodeStoreForward, AReplayTheClientRefusesStaysInTheStoreForTheNextAtt
   stats = store.stats(node_);
   EXPECT_EQ(stats.records, 0u);
   EXPECT_EQ(stats.replayed, 2u);
+}
+
+// A DCMD is carried out only while the node is born here (its primary host online) and the device
+// is born: while the births wait for the host, on a session that has ended, or for a device with
+// no DBIRTH, it is refused with the real reason and nothing is written; an NCMD likewise does
+// nothing. Where there is no DBIRTH there is no DDATA to answer with.
+TEST_F(EdgeNodePrimaryHost, ACommandIsCarriedOutOnlyWhileTheNodeAndTheDeviceAreBorn) {
+  Payload run;
+  run.metrics.push_back({"setpoint_rpm", DataType::int16, MetricValue{std::int64_t{900}}, {}});
+  Payload rebirth;
+  rebirth.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  ASSERT_EQ(node_.state(), SessionState::waiting_for_host);
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(10ms), sink_);
+  node_.message("spBv1.0/plant1/NCMD/gw01", encode(rebirth), at(10ms), sink_);
+  EXPECT_TRUE(sink_.writes.empty()) << "written before the node was born";
+  EXPECT_TRUE(sink_.take().empty()) << "nothing may be published before the births";
+  ASSERT_EQ(sink_.refusals.size(), 1u);
+  EXPECT_EQ(sink_.refusals[0].refusal, Refusal::not_born);
+  EXPECT_EQ(sink_.refusals[0].points, "setpoint_rpm=900");
+  EXPECT_EQ(sink_.refusals[0].why,
+            "the edge node is not born on this broker: primary host 'scada' is not online here "
+            "(no STATE from it yet)");
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("NCMD ignored: the edge node is not born"));
+  // The host offline here: the reason says so.
+  state(false, 50, 20ms);
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(30ms), sink_);
+  ASSERT_EQ(sink_.refusals.size(), 2u);
+  EXPECT_THAT(sink_.refusals[1].why, HasSubstr("its STATE says offline"));
+  // Born: washer-a takes it; washer-b, never heard from, has no DBIRTH and does not.
+  state(true, 100, 40ms);
+  ASSERT_EQ(node_.state(), SessionState::online);
+  sink_.take();
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-b", encode(run), at(50ms), sink_);
+  EXPECT_TRUE(sink_.writes.empty());
+  ASSERT_EQ(sink_.refusals.size(), 3u);
+  EXPECT_EQ(sink_.refusals[2].refusal, Refusal::not_born);
+  EXPECT_EQ(sink_.refusals[2].why,
+            "device 'washer-b' is not born in this session (not heard from, or comm_lost)");
+  EXPECT_TRUE(sink_.take().empty()) << "no DDATA for a device without a DBIRTH";
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(60ms), sink_);
+  EXPECT_EQ(sink_.writes.size(), 1u);
+  // The session ended (the host went offline), a command still in the client's buffer: refused.
+  state(false, 200, 70ms);
+  ASSERT_EQ(node_.state(), SessionState::offline);
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(80ms), sink_);
+  EXPECT_EQ(sink_.writes.size(), 1u);
+  ASSERT_EQ(sink_.refusals.size(), 4u);
+  EXPECT_EQ(sink_.refusals[3].why, "the edge node is not born: its session has ended");
+}
+
+// Clearing a retained command the way docs/mqtt.md says (an empty retained publish): the broker
+// hands the empty message to its subscribers too. It asks nothing: no refusal in the audit trail.
+TEST_F(EdgeNodeTest, AnEmptyCommandClearsARetainedOneAndAsksNothing) {
+  online();
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", "", at(1s), sink_);
+  node_.message("spBv1.0/plant1/NCMD/gw01", "", at(1s), sink_);
+  EXPECT_TRUE(sink_.refusals.empty()) << sink_.refusals.front().why;
+  EXPECT_TRUE(sink_.writes.empty());
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("a retained command cleared"));
+}
+
+// A host online on two brokers stamps each connection with its own time: each broker's STATEs are
+// a sequence of their own. Online on broker 1 at T, on broker 0 at T - 1000: the node that moves
+// from 1 to 0 is born there.
+TEST_F(EdgeNodePrimaryHost, EachBrokersStateIsASequenceOfItsOwn) {
+  const std::uint64_t t = at(0ms).unix_ms;
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_, 1);
+  state(true, t, 10ms);
+  ASSERT_EQ(node_.state(), SessionState::online);
+  node_.connection_lost();  // broker 1's will, say: the node goes on to broker 0
+  sink_.take();
+  node_.begin_connect(at(1s));
+  node_.connected(at(1s), sink_, 0);
+  state(true, t - 1000, 1010ms);
+  EXPECT_EQ(node_.state(), SessionState::online) << "broker 0's ONLINE taken for stale";
+  EXPECT_EQ(sink_.take().size(), 2u);
+  // And back on broker 1, its own sequence still holds: an older STATE there is stale.
+  node_.connection_lost();
+  node_.begin_connect(at(2s));
+  node_.connected(at(2s), sink_, 1);
+  state(false, t - 1, 2010ms);
+  state(true, t - 1, 2020ms);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  EXPECT_EQ(sink_.offline_waiting, 0);
+}
+
+// Anyone on the broker may publish a STATE. An offline stamped inside the tolerance (290 s ahead)
+// takes the node offline, but cannot make the host's next genuine ONLINE, stamped with the host's
+// own clock, look stale: the node is born again on it.
+TEST_F(EdgeNodePrimaryHost, AForgedOfflineCannotHoldTheNodeOfflinePastTheHostsNextOnline) {
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  state(true, at(0ms).unix_ms, 10ms);
+  ASSERT_EQ(node_.state(), SessionState::online);
+  sink_.take();
+  state(false, at(0ms).unix_ms + 290'000, 1s);  // forged
+  EXPECT_EQ(node_.state(), SessionState::offline);
+  EXPECT_EQ(sink_.drops, 1);
+  sink_.take();  // the NDEATH
+  // Connected again, the forged STATE is what the broker kept.
+  node_.begin_connect(at(2s));
+  node_.connected(at(2s), sink_);
+  state(false, at(0ms).unix_ms + 290'000, 2010ms);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  // The host sees it on its own topic and says again that it is online, now.
+  state(true, at(3s).unix_ms, 3s);
+  EXPECT_EQ(node_.state(), SessionState::online) << "the genuine ONLINE taken for stale";
+  EXPECT_EQ(sink_.take().size(), 2u);
+  // An earlier session's death certificate (older than the ONLINE believed) is still stale.
+  state(false, at(2s).unix_ms, 4s);
+  EXPECT_EQ(node_.state(), SessionState::online);
+}
+
+// A setpoint written while the drive is stopped changes no reply: the DDATA that reports it says
+// when it changed, not the last poll's time, which is from before it held.
+TEST_F(EdgeNodeTest, AValueAWriteChangedCarriesTheTimeItChanged) {
+  online();
+  const std::uint64_t poll = at(900ms).unix_ms;
+  node_.sample(0, true, values(0, 0, 0), poll, at(1s), sink_);
+  sink_.take();
+  node_.sample(0, true, values(0, 0, 700), poll, at(5s), sink_);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  ASSERT_NE(sent[0].metric("setpoint_rpm"), nullptr);
+  EXPECT_EQ(sent[0].metric("setpoint_rpm")->timestamp, at(5s).unix_ms);
+  // The next reply carries the drive's state with it: its time from then on.
+  node_.sample(0, true, values(10, 0, 700), at(5200ms).unix_ms, at(5300ms), sink_);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].metric("speed_rpm")->timestamp, at(5200ms).unix_ms);
+  // A rebirth's DBIRTH gives each metric the later of the two.
+  Payload rebirth;
+  rebirth.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
+  node_.message("spBv1.0/plant1/NCMD/gw01", encode(rebirth), at(6s), sink_);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 3u);
+  EXPECT_EQ(sent[1].metric("setpoint_rpm")->timestamp, at(5200ms).unix_ms);
+}
+
+// A SIGHUP during an outage that changes the device set: the devices defined as before go on as
+// they were, so what was kept of them is not kept again.
+TEST_F(EdgeNodeStoreForward, AReloadDuringAnOutageKeepsNothingTwice) {
+  node_.sample(0, true, values(100, 1, 0), 1'000, at(0ms), sink_);
+  ASSERT_EQ(sink_.stored.size(), 1u);
+  auto defs = drives();
+  DeviceDef added{"washer-c", {metric("speed_rpm", DataType::int16)}};
+  defs.push_back(added);
+  ASSERT_TRUE(node_.set_devices(defs, at(500ms), sink_));
+  node_.sample(0, true, values(100, 1, 0), 1'000, at(600ms), sink_);
+  EXPECT_EQ(sink_.stored.size(), 1u) << "kept again after the reload";
+  node_.sample(0, true, values(110, 1, 0), 1'700, at(700ms), sink_);
+  ASSERT_EQ(sink_.stored.size(), 2u);
+  EXPECT_THAT(sink_.stored[1].names(), ElementsAre("speed_rpm"));
 }
 
 }  // namespace
