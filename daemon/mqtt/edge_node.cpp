@@ -414,11 +414,15 @@ void EdgeNode::keep(std::size_t device, const Now& now, Sink& sink) {
   report_or_hold(device, now, sink);
 }
 
-EdgeNode::Replay EdgeNode::replay(std::string_view device, Payload historical, Sink& sink) {
+EdgeNode::Replay EdgeNode::replay(std::string_view device, Payload historical, const Now& now,
+                                  Sink& sink) {
   if (state_ != SessionState::online) return Replay::not_now;
   const auto it = std::find_if(defs_.begin(), defs_.end(),
                                [&](const DeviceDef& d) { return d.name == device; });
   const auto index = static_cast<std::size_t>(it - defs_.begin());
+  if (it != defs_.end() && !devices_[index].born && now.mono < online_since_ + kReplayBirthWait) {
+    return Replay::not_now;  // its DBIRTH may come yet: the drive has not answered since the start
+  }
   if (it == defs_.end() || !devices_[index].born) {
     ++replay_dropped_;  // a DDATA before its DBIRTH would be a protocol error (spec 6.4.x)
     return Replay::dropped;

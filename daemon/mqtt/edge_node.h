@@ -32,7 +32,9 @@
 //   store and    with store_forward, changes while not online go to Sink::store by the DDATA
 //   forward      rules, and so does a DDATA of changes Sink::publish refused (not a command's
 //                result: it answers a DCMD of the session that ended); replay() publishes them
-//                later as historical DDATA (spec 6.4.x)
+//                later as historical DDATA (spec 6.4.x), a device's once its DBIRTH is out (waiting
+//                for it at most kReplayBirthWait); as_history() is what a message published on a
+//                link that turned out dead says about the past, to be kept the same way
 #pragma once
 
 #include <cstdint>
@@ -55,6 +57,10 @@ inline constexpr Millis kRebirthInterval{5'000};       // between rebirths a hos
 // A primary host's STATE stamped further ahead of this node's clock than this is not believed:
 // it would make every later genuine STATE look stale.
 inline constexpr std::chrono::milliseconds kStateClockTolerance{5 * 60 * 1000};
+// A kept change of a device that is not born (yet) in the session waits this long after the
+// session's births for the device's DBIRTH (a drive slow to answer after a restart), then is
+// dropped (counted): a device that stays dead must not hold the rest of the store back for ever.
+inline constexpr Millis kReplayBirthWait{30'000};
 
 struct MetricDef {
   std::string name;
@@ -196,11 +202,12 @@ class EdgeNode {
   void command_done(std::size_t device, std::string points, std::string result, const Now& now,
                     Sink& sink);
   // A change kept while there was no session (Sink::store), published now as historical DDATA
-  // after this session's births: sent; not_now (no session online, or Sink::publish refused it:
-  // keep it); or dropped (counted in replay_dropped()) because the device is unknown now or not
-  // born in this session, or none of its metrics is one of the device's now.
+  // after this session's births: sent; not_now (no session online, Sink::publish refused it, or
+  // its device is not born yet and the session's births are less than kReplayBirthWait old: keep
+  // it); or dropped (counted in replay_dropped()) because the device is unknown now or still not
+  // born, or none of its metrics is one of the device's now.
   enum class Replay : std::uint8_t { sent, not_now, dropped };
-  Replay replay(std::string_view device, Payload historical, Sink& sink);
+  Replay replay(std::string_view device, Payload historical, const Now& now, Sink& sink);
   // Publishes the changes held back by min_interval whose time has come.
   void tick(const Now& now, Sink& sink);
   // When tick() has something to do; nullopt: nothing held back.

@@ -201,7 +201,8 @@ Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::stri
           MosquittoClient::Handlers{[this] { connected(); }, [this](std::string why) { lost(why); },
                                     [this](std::string_view t, std::string_view p, bool retained) {
                                       message(t, p, retained);
-                                    }},
+                                    },
+                                    [this](std::uint64_t up_to) { delivered(up_to); }},
           log),
       retry_timer_(io),
       tick_timer_(io),
@@ -273,7 +274,7 @@ void Northbound::stop() {
   retry_timer_.cancel();
   tick_timer_.cancel();
   pace_timer_.cancel();
-  if (store_) store_->sync();
+  host_timer_.cancel();
   for (const Watched& w : watched_) w.device->watch({});
   watched_.clear();
   gateway_ = nullptr;
@@ -284,7 +285,14 @@ void Northbound::stop() {
     ++status_.messages;
   }
   client_.disconnect();
+  session_ended();
+  if (store_) store_->sync();
+}
+
+void Northbound::session_ended() {
   edge_.connection_lost();
+  // What the broker did not confirm is kept for the next session (store_forward.h).
+  if (store_) store_->lost(now().unix_ms);
 }
 
 NorthboundStatus Northbound::status() const {
@@ -352,7 +360,7 @@ void Northbound::connected() {
 }
 
 void Northbound::lost(const std::string& why) {
-  edge_.connection_lost();
+  session_ended();
   if (stopping_) return;
   ++status_.losses;
   const bool first = status_.last_error.empty();
@@ -497,28 +505,64 @@ std::vector<MetricValue> Northbound::sample(Watched& watched) const {
 
 bool Northbound::publish(const std::string& topic, const sparkplug::Payload& payload) {
   const bool taken = client_.publish(topic, sparkplug::encode(payload), 0, false);
-  if (taken) ++status_.messages;
-  return taken;
+  if (!taken) return false;
+  ++status_.messages;
+  if (store_) store_->sent(client_.published(), topic, payload);
+  return true;
 }
 
 void Northbound::store(std::string_view device, const sparkplug::Payload& historical) {
   if (store_) store_->keep(device, historical, now().unix_ms);
 }
 
+void Northbound::delivered(std::uint64_t up_to) {
+  if (!store_) return;
+  const bool was_full = store_->window_full();
+  store_->delivered(up_to);
+  // The replay waited for this: it goes on at once, within this period's budget.
+  if (was_full && !replay_posted_) {
+    replay_posted_ = true;
+    asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
+      if (!token.expired()) replay_step();
+    });
+  }
+}
+
 void Northbound::pace() {
   pace_timer_.expires_after(StoreForward::kReplayPeriod);
   pace_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (ec || stopping_) return;
-    // A broker slower than the replay: wait for what is queued to go before adding more.
-    if (edge_.state() == sparkplug::SessionState::online && store_->waiting() && !client_.busy()) {
-      store_->replay(edge_, *this, now().unix_ms);
-    }
+    replay_budget_ = store_->batch();  // this period's; what the last did not use is gone
+    if (!replay_posted_) replay_step();
     if (++paces_ % 10 == 0) store_->sync();
     pace();
   });
 }
 
+// One record per turn of the event loop: a Modbus request, a poll's reply or a live change waits
+// behind one record's work at most, whatever replay_per_s says.
+void Northbound::replay_step() {
+  replay_posted_ = false;
+  // A broker slower than the replay: wait for what is queued to go before adding more.
+  if (stopping_ || replay_budget_ == 0 || edge_.state() != sparkplug::SessionState::online ||
+      !store_->waiting() || client_.busy()) {
+    return;
+  }
+  --replay_budget_;
+  // Nothing could go (its device's DBIRTH awaited, the client refused): the next period retries.
+  const unsigned sent = store_->replay(edge_, *this, now(), 1);
+  if (store_->window_full()) client_.confirm_now();  // the replay goes on once it is confirmed
+  if (sent == 0) return;
+  replay_posted_ = true;
+  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
+    if (!token.expired()) replay_step();
+  });
+}
+
 void Northbound::drop_session() {
+  // The NDEATH is out: what the broker did not confirm goes back to the store now, before any
+  // change kept from here on.
+  if (store_) store_->lost(now().unix_ms);
   log_->warn(
       "MQTT: primary host '{}' is offline: NDEATH published, session ended; "
       "reconnecting to wait for it",
@@ -549,7 +593,7 @@ void Northbound::leave_broker(Millis delay) {
     // Once: a second STATE in the same turn, or a lost session, finds it already ended.
     if (token.expired() || stopping_ || !client_.connected()) return;
     client_.disconnect();
-    edge_.connection_lost();
+    session_ended();
     // Spec 5.x (multiple MQTT servers): the host may be online on another server.
     if (next_broker()) log_->info("MQTT: trying {} next", broker_url());
     connect_after(delay);

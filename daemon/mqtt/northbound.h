@@ -74,6 +74,9 @@ class Northbound final : private sparkplug::Sink {
   void connect_after(Millis delay);  // a new attempt, after half of `delay` to all of it
   void connected();
   void lost(const std::string& why);
+  // The session is over, however it ended: the edge node is told, the store keeps what the
+  // broker did not confirm.
+  void session_ended();
   void message(std::string_view topic, std::string_view payload, bool retained);
   void changed(std::size_t index, std::uint64_t generation);
   void flush();
@@ -93,6 +96,8 @@ class Northbound final : private sparkplug::Sink {
   [[nodiscard]] Source source() const;
   void store(std::string_view device, const sparkplug::Payload& historical) override;
   void pace();  // every StoreForward::kReplayPeriod while there is a store
+  void replay_step();
+  void delivered(std::uint64_t up_to);  // the client's: the broker confirmed up to this message
 
   boost::asio::io_context& io_;
   MqttConfig config_;

@@ -116,6 +116,97 @@ TEST_F(MqttE2EFaults, ADcmdBeforeTheBirthsMovesNothing) {
 
 // --- nothing lost on a dead link -----------------------------------------------------------------
 
+// The link goes half-open while a drive ramps (a DDATA every poll) and keep-alive is 30 s: the
+// broker confirms nothing, the link is taken for dead within kConfirmDelay + kAckTimeout, and
+// every change published into it reaches the host after the reconnect, as history; the host sees
+// a change twice only when it got it live in the last moments before the link went.
+TEST_F(MqttE2EFaults, AHalfOpenLinkLosesNoChangeAndIsDetectedWithinItsBound) {
+  FaultProxy proxy(broker_->port());
+  ramping_through(proxy, false);
+  ASSERT_FALSE(HasFailure());
+  pump(2s);
+  const std::uint64_t held_at = unix_ms();
+  const auto held = std::chrono::steady_clock::now();
+  proxy.hold();
+  ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_connected") == 0; }, 15s))
+      << "the half-open link was not noticed";
+  const double detected_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - held).count();
+  std::cerr << "half-open link detected after " << detected_s << " s\n";
+  EXPECT_LT(detected_s, 8.0) << "bound: kConfirmDelay + kAckTimeout = 5.25 s";
+  EXPECT_THAT(daemon_log(), HasSubstr("the broker confirmed nothing within 5 s"));
+  // A new connection is forwarded: reborn, and what went into the dead link replayed.
+  const Births again = wait_births(15s);
+  ASSERT_FALSE(HasFailure());
+  ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_store_records") == 0; }, 15s));
+  pump(1500ms);
+  const std::uint64_t until = unix_ms() - 1000;
+  const RampSeen r = ramp("washer-a", held_at - 1500, until);
+  std::cerr << "ramp: " << r.values << " values, worst gap " << r.worst_gap_ms << " ms, " << r.twice
+            << " received twice\n";
+  EXPECT_GE(r.values, 40u);
+  EXPECT_LT(r.worst_gap_ms, 1000) << "changes lost on the dead link";
+  EXPECT_LE(r.twice, 10u) << "more duplicates than the last moments before the link went";
+  EXPECT_EQ(m("drivegate_mqtt_store_replayed_total"), m("drivegate_mqtt_store_kept_total"));
+  EXPECT_EQ(m("drivegate_mqtt_store_dropped_total"), 0);
+  expect_seq_consecutive(peer_->history());
+  // Live metric timestamps never step back.
+  std::uint64_t last = 0;
+  for (const auto& msg : peer_->history()) {
+    const Metric* s = is(msg, "DDATA", "washer-a") ? msg.metric("speed_rpm") : nullptr;
+    if (s == nullptr || s->has_flag("historical") || !s->timestamp) continue;
+    EXPECT_GE(*s->timestamp, last) << "a live timestamp stepped back";
+    last = *s->timestamp;
+  }
+}
+
+// Store and forward's replay over a link cut every few kilobytes (a flaky radio, a firewall that
+// resets long connections): every record kept reaches the host, and the store counts a record as
+// replayed only when the broker confirmed it (before, it counted what libmosquitto was handed).
+TEST_F(MqttE2EFaults, ALinkCutEveryFewKilobytesLosesNoReplayedRecord) {
+  FaultProxy proxy(broker_->port());
+  ramping_through(proxy, true);
+  ASSERT_FALSE(HasFailure());
+  pump(1s);
+  broker_->stop();
+  ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_connected") == 0; }, 5s));
+  std::this_thread::sleep_for(8s);
+  const double kept_in_outage = m("drivegate_mqtt_store_records");
+  EXPECT_GE(kept_in_outage, 100);
+  proxy.cut_after(16'000);  // the births (about 8 KB) and about 100 records
+  broker_->start();
+  ASSERT_TRUE(peer_->wait_for([](const Message& x) { return x.kind == "reconnected"; }, 5s));
+  ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_store_records") == 0; }, 60s))
+      << m("drivegate_mqtt_store_records") << " records left after " << proxy.cuts() << " cuts";
+  proxy.cut_after(0);
+  pump(2s);
+  std::cerr << proxy.cuts() << " cuts, " << proxy.connections() << " connections\n";
+  EXPECT_GE(proxy.cuts(), 2u) << "the replay was not cut";
+  // What the host received as history, each record once however often it came.
+  std::set<std::string> records;
+  std::size_t received = 0;
+  for (const auto& msg : peer_->history()) {
+    if (!is(msg, "DDATA") || msg.metrics.empty() || !msg.metrics.front().has_flag("historical")) {
+      continue;
+    }
+    std::string key = msg.device();
+    for (const auto& x : msg.metrics) {
+      key += " " + x.name + "=" + x.value + "@" + std::to_string(x.timestamp.value_or(0));
+    }
+    records.insert(key);
+    ++received;
+  }
+  const double kept = m("drivegate_mqtt_store_kept_total");
+  std::cerr << "kept " << kept << ", host received " << received << " historical DDATA, "
+            << records.size() << " distinct\n";
+  EXPECT_EQ(static_cast<double>(records.size()), kept) << "kept, but not at the host";
+  EXPECT_EQ(m("drivegate_mqtt_store_replayed_total"), kept);
+  for (const char* d : {"washer-a", "washer-b"}) {
+    const RampSeen r = ramp(d, 0, unix_ms() - 1000);
+    EXPECT_LT(r.worst_gap_ms, 1000) << d << ": changes lost";
+  }
+}
+
 // A link that goes silent with nothing to publish, then a broker that accepts and never answers:
 // the reasons say so, not "Unknown error." (the retries are logged at debug level).
 TEST_F(MqttE2EFaults, KeepaliveLossesSayWhatHappened) {
@@ -187,6 +278,46 @@ TEST_F(MqttE2EFaults, AForgedOfflineCannotHoldTheNodeOfflinePastTheHostsNextOnli
   const auto reborn = wait("NBIRTH", {}, 10s);
   EXPECT_TRUE(reborn.has_value()) << "held offline by a forged STATE\n" << daemon_log();
   peer_->publish_text(state, "", true, 1);
+}
+
+// --- a kept change waits for its drive's birth ------------------------------------------------
+
+// Changes kept during an outage, the daemon restarted while the drive does not answer yet: the
+// kept changes wait for its DBIRTH and are then sent, none dropped.
+TEST_F(MqttE2EFaults, KeptChangesWaitForADriveSlowToAnswerAfterARestart) {
+  ramping();
+  start_on(broker_->url());
+  wait_births();
+  ASSERT_FALSE(HasFailure());
+  broker_->stop();
+  ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_connected") == 0; }, 5s));
+  run(2, 600);
+  std::this_thread::sleep_for(3s);
+  const double kept = m("drivegate_mqtt_store_records");
+  EXPECT_GE(kept, 10);
+  EXPECT_EQ(daemon_->stop(), 0);
+  drive("washer-b").sim->control("silent on");
+  broker_->start();
+  ASSERT_TRUE(peer_->wait_for([](const Message& x) { return x.kind == "reconnected"; }, 5s));
+  daemon_ = std::make_unique<Daemon>(dir_,
+                                     config("min_interval_ms = 0\n\n[http]\nlisten = "
+                                            "\"127.0.0.1:" +
+                                            std::to_string(http_port_) + "\"\n"),
+                                     daemon_args_, dir_ / "drivegated.log");
+  ASSERT_TRUE(wait("NBIRTH", {}, 10s).has_value());
+  pump(3s);  // washer-b silent: no DBIRTH, its kept changes wait
+  EXPECT_EQ(count("DBIRTH", "washer-b"), 1u) << "born before the restart only";
+  drive("washer-b").sim->control("silent off");
+  ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_store_records") == 0; }, 20s));
+  pump(500ms);
+  std::size_t historical = 0;
+  for (const auto& msg : peer_->history()) {
+    historical += is(msg, "DDATA", "washer-b") && !msg.metrics.empty() &&
+                  msg.metrics.front().has_flag("historical");
+  }
+  EXPECT_GE(static_cast<double>(historical), kept - 1) << "kept changes dropped";
+  EXPECT_EQ(m("drivegate_mqtt_store_dropped_total"), 0);
+  expect_seq_consecutive(peer_->history());
 }
 
 }  // namespace
