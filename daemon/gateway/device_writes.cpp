@@ -265,7 +265,10 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
     if (const WriteCheck c = driver_->check(ops); c != WriteCheck::ok) return to_outcome(c);
   }
 
-  const bool urgent = origin == Origin::gateway || commands(parts, &is_stop);
+  // A stop goes ahead of everything; a request that also runs the motor is no stop, and waits its
+  // turn like any run (else it would drop the runs queued before it and then run itself).
+  const bool urgent =
+      origin == Origin::gateway || (commands(parts, &is_stop) && !commands(parts, &is_run));
   if (!urgent && !heartbeat_only) {
     // Equal to the request queued last, which has not started: the same effect, one answer.
     const auto last = std::find_if(requests_.rbegin(), requests_.rend(),
