@@ -130,5 +130,99 @@ TEST_F(NidecVectors, DamagedFramesAreDroppedUpToTheNextFrameStart) {
             DecodeStatus::bad);
 }
 
+// ---- mdriver-2400 (002): src dst cmd n data cs, the sum of all bytes 0x55 -------------------
+
+class MdriverVectors : public ::testing::Test {
+ protected:
+  Protocol p{"mdriver-2400"};
+};
+
+TEST_F(MdriverVectors, TheSpecsReadmeVectors) {
+  // shared/specs/README.md: the fixed-code check and the run at 504 rpm (code 0x1C, normal).
+  EXPECT_EQ(p.encode("check", {{"master", 0}, {"address", 1}}), hex("00 01 00 03 01 12 00 06 38"));
+  EXPECT_EQ(p.encode("run", {{"master", 0}, {"address", 1}, {"code", 0x1C}, {"change", 0x01}}),
+            hex("00 01 10 02 1C 01 00 25"));
+  expect_decodes(p, Direction::request, hex("00 01 10 02 1C 01 00 25"), "run");
+  // The length byte is data length - 1 (n = 02 for three data bytes), worked out on encoding.
+  const auto run = p.decode(Direction::request, hex("00 01 10 02 1C 01 00 25"));
+  EXPECT_EQ(p.field(run, "n"), 2);
+  EXPECT_EQ(p.field(run, "code"), 0x1C);
+}
+
+TEST_F(MdriverVectors, TheCppAdaptersOwnTableAndEveryRowOfTheConversionTables) {
+  // adapters/mdriver-2400/README.md, "Frames": the driver's echo, the fixed-code error, a reply.
+  expect_decodes(p, Direction::reply, hex("01 00 00 03 01 12 00 06 38"), "check_reply");
+  auto d = p.decode(Direction::reply, hex("01 00 00 03 00 00 00 00 51"));
+  EXPECT_EQ(p.name_of(d), "check_reply");
+  EXPECT_EQ(p.field(d, "code"), 0);
+  const auto reply = hex("01 00 10 07 1C 1C 00 00 1A 00 00 00 EB");
+  expect_decodes(p, Direction::reply, reply, "run_reply");
+  d = p.decode(Direction::reply, reply);
+  EXPECT_EQ(p.field(d, "target_code"), 0x1C);
+  EXPECT_EQ(p.field(d, "ipm_temperature"), 26);
+  // Both conversion tables: every row's checksum, normal (D5 = 01) and continuous (FF) mode.
+  for (unsigned code = 0; code <= 0x9F; ++code) {
+    for (const unsigned change : {0x01u, 0xFFu}) {
+      const Bytes f =
+          p.encode("run", {{"master", 0}, {"address", 1}, {"code", code}, {"change", change}});
+      const auto want =
+          static_cast<std::uint8_t>(0x55 - (0x00 + 0x01 + 0x10 + 0x02 + code + change));
+      ASSERT_EQ(f.back(), want) << std::hex << code;
+    }
+  }
+}
+
+TEST_F(MdriverVectors, ALengthByteThatDoesNotFitIsNotTheFrame) {
+  // n = 03 on a run: no layout holds three data bytes after it, so one byte is dropped.
+  auto d = p.decode(Direction::reply, hex("01 00 10 03 1C 1C 00 00 1A 00 00 00 EA"));
+  EXPECT_EQ(d.status, DecodeStatus::bad);
+  EXPECT_EQ(d.error, make_error_code(FrameError::bad_length));
+  EXPECT_EQ(d.consumed, 1u);
+  // A bad sum drops the run.
+  d = p.decode(Direction::reply, hex("01 00 10 07 1C 1C 00 00 1A 00 00 00 EC"));
+  EXPECT_EQ(d.error, make_error_code(FrameError::bad_checksum));
+}
+
+// ---- fdc1 (003): the stream 27 76 b3 b4 b5 b6 co ce, decimal numbers ----------------------------
+
+class Fdc1Vectors : public ::testing::Test {
+ protected:
+  Protocol p{"fdc1"};
+};
+
+TEST_F(Fdc1Vectors, TheSpecsReadmeAndTheCppAdaptersVectors) {
+  // shared/specs/README.md: 2000..3000 rpm gives x = 10.
+  EXPECT_EQ(p.encode("speed", {{"min", 2000}, {"max", 3000}}), hex("48 73 07 D0 0B B8 55 0A"));
+  // adapters/fdc1/README.md, "Golden vectors".
+  EXPECT_EQ(p.encode("speed", {{"min", 2000}, {"max", 2000}}), hex("48 73 07 D0 07 D0 55 6E"));
+  EXPECT_EQ(p.encode("speed", {{"min", 0}, {"max", 3500}}), hex("48 73 00 00 0D AC 55 CF"));
+  expect_decodes(p, Direction::reply, hex("1B 4C 09 C4 1E DC 0C 54"), "status_on");
+  auto d = p.decode(Direction::reply, hex("1B 4C 09 C4 1E DC 0C 54"));  // ON, 2500 rpm, 2.5 A
+  EXPECT_EQ(p.field(d, "rpm"), 2500);
+  EXPECT_EQ(p.field(d, "current"), 7900);
+  expect_decodes(p, Direction::reply, hex("1B 4C 00 30 04 C4 1F B8"), "status_off");
+  d = p.decode(Direction::reply, hex("1B 4C 00 30 04 C4 1F B8"));  // OFF, alarm 48, 10 s
+  EXPECT_EQ(p.field(d, "alarm_code"), 48);
+  EXPECT_EQ(p.field(d, "restart"), 1220);
+  expect_decodes(p, Direction::reply, hex("1B 4C 00 00 00 00 1B 4C"), "status_off");  // idle
+  EXPECT_EQ(p.encode("status_on", {{"rpm", 2500}, {"current", 7900}}),
+            hex("1B 4C 09 C4 1E DC 0C 54"));
+}
+
+TEST_F(Fdc1Vectors, TheStreamResynchronisesOnItsHeader) {
+  // A byte lost inside a status: dropped up to the next 1B, which starts the next one.
+  const Bytes wire = hex("1B 4C 09 C4 1E DC 0C 1B 4C 00 00 00 00 1B 4C");
+  auto d = p.decode(Direction::reply, wire);
+  EXPECT_EQ(d.error, make_error_code(FrameError::bad_checksum));
+  EXPECT_EQ(d.consumed, 7u);
+  d = p.decode(Direction::reply, Bytes(wire.begin() + 7, wire.end()));
+  EXPECT_EQ(p.name_of(d), "status_off");
+  // Noise before a header; a wrong second header byte.
+  EXPECT_EQ(p.decode(Direction::reply, hex("00 FF 1B")).consumed, 1u);
+  EXPECT_EQ(p.decode(Direction::reply, hex("1B 4D 00 00 00 00 1B 4D")).status, DecodeStatus::bad);
+  // The master's own header is not the controller's.
+  EXPECT_EQ(p.decode(Direction::reply, hex("48 73")).status, DecodeStatus::bad);
+}
+
 }  // namespace
 }  // namespace drivegate::framed
