@@ -104,13 +104,65 @@ double read_field(const Token& t, ByteView frame) {
 }
 
 Codec::Codec(const Description& d) : d_(d) {
+  plans_.resize(d_.messages.size());
+  for (std::size_t i = 0; i < d_.messages.size(); ++i) {
+    const Message& m = d_.messages[i];
+    Plan& p = plans_[i];
+    p.skeleton.assign(m.size, 0);
+    p.fields.assign(m.fields.size(), nullptr);
+    p.first_check = m.size;
+    for (const Token& t : m.tokens) {
+      switch (t.kind) {
+        case Token::Kind::constant:
+          p.skeleton[t.offset] = t.byte;
+          p.constants.emplace_back(t.offset, t.byte);
+          break;
+        case Token::Kind::field: {
+          p.fields[t.field] = &t;
+          const Field& f = m.fields[t.field];
+          const bool length = m.length && m.length->field == t.field;
+          if (f.min || f.max || length || t.encoding == Encoding::bcd) p.judged.push_back(&t);
+          break;
+        }
+        case Token::Kind::check:
+          p.checks.push_back({&t, 0, 0});
+          p.first_check = std::min(p.first_check, t.offset);
+          break;
+      }
+    }
+    // Every layout has a fixed size: each check's range is known now.
+    p.size = m.size;
+    const auto n = static_cast<long>(m.size);
+    if (m.length) p.length_field = m.length->field;
+    for (CheckPlan& cp : p.checks) {
+      const Check& c = d_.checks[cp.token->check];
+      cp.check = &c;
+      const long from = std::clamp<long>(c.from >= 0 ? c.from : n + c.from, 0, n);
+      long to = static_cast<long>(p.first_check);
+      if (c.to) to = *c.to >= 0 ? *c.to : n + *c.to;
+      cp.from = static_cast<std::size_t>(from);
+      cp.to = static_cast<std::size_t>(std::clamp<long>(to, from, n));
+    }
+  }
   for (std::size_t i = 0; i < d_.messages.size(); ++i) {
     const Message& m = d_.messages[i];
     auto& table = by_first_[dir_index(m.direction)];
-    if (!m.tokens.empty() && m.tokens.front().kind == Token::Kind::constant) {
-      table[m.tokens.front().byte].push_back(i);
-    } else {
-      for (auto& list : table) list.push_back(i);
+    const bool first_constant = !m.tokens.empty() && m.tokens.front().kind == Token::Kind::constant;
+    for (unsigned b = 0; b < 256; ++b) {
+      if (!first_constant || m.tokens.front().byte == b) table[b].all.push_back(i);
+    }
+  }
+  // A second level where every candidate of a first byte has a constant second byte.
+  for (auto& table : by_first_) {
+    for (Candidates& c : table) {
+      const auto second = [&](std::size_t i) -> const Token* {
+        const Message& m = d_.messages[i];
+        return m.tokens.size() > 1 && m.tokens[1].kind == Token::Kind::constant ? &m.tokens[1]
+                                                                                : nullptr;
+      };
+      if (c.all.size() < 2 || !std::all_of(c.all.begin(), c.all.end(), second)) continue;
+      c.by_second.resize(256);
+      for (const std::size_t i : c.all) c.by_second[second(i)->byte].push_back(i);
     }
   }
   crc_tables_.resize(d_.checks.size());
@@ -128,8 +180,23 @@ Codec::Codec(const Description& d) : d_(d) {
   }
 }
 
-std::span<const std::size_t> Codec::candidates(Direction dir, std::uint8_t first) const {
-  return by_first_[dir_index(dir)][first];
+const std::vector<std::size_t>& Codec::candidates(Direction dir, ByteView rx) const {
+  const Candidates& c = by_first_[dir_index(dir)][rx[0]];
+  if (c.by_second.empty()) return c.all;
+  if (rx.size() < 2) return c.all;  // not told apart yet: each waits for its second byte
+  return c.by_second[rx[1]];
+}
+
+double Codec::value(const Frame& f, std::size_t field) const {
+  const Token* t = plans_[f.message].fields[field];
+  return read_field(*t, f.bytes);
+}
+
+void Codec::values(const Frame& f, std::span<double> out) const {
+  const auto& fields = plans_[f.message].fields;
+  for (std::size_t i = 0; i < fields.size() && i < out.size(); ++i) {
+    out[i] = read_field(*fields[i], f.bytes);
+  }
 }
 
 std::uint32_t Codec::check_value(std::size_t check, ByteView frame, std::size_t to_default) const {
@@ -139,17 +206,25 @@ std::uint32_t Codec::check_value(std::size_t check, ByteView frame, std::size_t 
   long to = static_cast<long>(to_default);
   if (c.to) to = *c.to >= 0 ? *c.to : n + *c.to;
   to = std::clamp<long>(to, from, n);
+  return compute(check, frame.data(), static_cast<std::size_t>(from), static_cast<std::size_t>(to));
+}
+
+std::uint32_t Codec::compute(std::size_t check, const std::uint8_t* data, std::size_t from,
+                             std::size_t to) const {
+  const Check& c = d_.checks[check];
   const std::uint64_t mask = mask_of(c.width);
   std::uint64_t acc = 0;
   switch (c.kind) {
-    case CheckKind::xor_bytes:
-      for (long i = from; i < to; i += c.step) acc ^= frame[static_cast<std::size_t>(i)];
-      return static_cast<std::uint32_t>(acc);
+    case CheckKind::xor_bytes: {
+      std::uint8_t x = 0;
+      for (std::size_t i = from; i < to; i += c.step) x ^= data[i];
+      return x;
+    }
     case CheckKind::sum:
     case CheckKind::sum_to:
     case CheckKind::twos_complement:
     case CheckKind::lrc:
-      for (long i = from; i < to; i += c.step) acc += frame[static_cast<std::size_t>(i)];
+      for (std::size_t i = from; i < to; i += c.step) acc += data[i];
       if (c.kind == CheckKind::sum) return static_cast<std::uint32_t>(acc & mask);
       if (c.kind == CheckKind::sum_to) return static_cast<std::uint32_t>((c.total - acc) & mask);
       if (c.kind == CheckKind::lrc) return static_cast<std::uint32_t>((0 - (acc & 0xFF)) & 0xFF);
@@ -158,8 +233,8 @@ std::uint32_t Codec::check_value(std::size_t check, ByteView frame, std::size_t 
       const unsigned bits = 8u * c.width;
       const auto& table = crc_tables_[check];
       std::uint64_t crc = c.init & mask;
-      for (long i = from; i < to; i += c.step) {
-        std::uint8_t b = frame[static_cast<std::size_t>(i)];
+      for (std::size_t i = from; i < to; i += c.step) {
+        std::uint8_t b = data[i];
         if (c.reflect_in) b = static_cast<std::uint8_t>(reflect(b, 8));
         crc = ((crc << 8) ^ table[((crc >> (bits - 8)) ^ b) & 0xFF]) & mask;
       }
@@ -172,27 +247,15 @@ std::uint32_t Codec::check_value(std::size_t check, ByteView frame, std::size_t 
 
 Bytes Codec::encode(std::size_t message, std::span<const double> values) const {
   const Message& m = d_.messages.at(message);
-  Bytes out(m.size, 0);
-  std::size_t first_check = m.size;
-  for (const Token& t : m.tokens) {
-    switch (t.kind) {
-      case Token::Kind::constant:
-        out[t.offset] = t.byte;
-        break;
-      case Token::Kind::field: {
-        double v = t.field < values.size() ? values[t.field] : 0.0;
-        if (m.length && m.length->field == t.field) v = m.length_value;
-        write_field(t, v, out.data() + t.offset);
-        break;
-      }
-      case Token::Kind::check:
-        first_check = std::min(first_check, t.offset);
-        break;
-    }
+  const Plan& p = plans_[message];
+  Bytes out = p.skeleton;
+  for (std::size_t i = 0; i < p.fields.size(); ++i) {
+    const double v = i == p.length_field ? m.length_value : i < values.size() ? values[i] : 0.0;
+    write_field(*p.fields[i], v, out.data() + p.fields[i]->offset);
   }
-  for (const Token& t : m.tokens) {
-    if (t.kind != Token::Kind::check) continue;
-    put_uint(check_value(t.check, out, first_check), t, out.data() + t.offset);
+  for (const CheckPlan& c : p.checks) {
+    put_uint(compute(c.token->check, out.data(), c.from, c.to), *c.token,
+             out.data() + c.token->offset);
   }
   if (!d_.framing.flagged()) return out;
   Bytes wire;
@@ -211,40 +274,52 @@ Bytes Codec::encode(std::size_t message, std::span<const double> values) const {
   return wire;
 }
 
-Codec::Fit Codec::fit(const Message& m, ByteView rx, Frame* out) const {
-  std::size_t first_check = m.size;
-  for (const Token& t : m.tokens) {
-    if (t.offset + t.width > rx.size()) return Fit::incomplete;
-    switch (t.kind) {
-      case Token::Kind::constant:
-        if (rx[t.offset] != t.byte) return Fit::reject;
-        break;
-      case Token::Kind::field: {
-        const double v = read_field(t, rx);
-        if (std::isnan(v)) return Fit::reject;
-        const Field& f = m.fields[t.field];
-        if ((f.min && v < *f.min) || (f.max && v > *f.max)) return Fit::reject;
-        if (m.length && m.length->field == t.field && v != m.length_value) return Fit::bad_length;
-        if (out != nullptr) out->fields[t.field] = v;
-        break;
-      }
-      case Token::Kind::check:
-        first_check = std::min(first_check, t.offset);
-        break;
+Codec::Fit Codec::fit(std::size_t message, ByteView rx) const {
+  const Plan& p = plans_[message];
+  const std::uint8_t* data = rx.data();
+  if (rx.size() < p.size) {
+    // The constants the bytes so far hold say no at once; all of them hold: wait for the rest.
+    for (const auto& [offset, byte] : p.constants) {
+      if (offset >= rx.size()) return Fit::incomplete;
+      if (data[offset] != byte) return Fit::reject;
+    }
+    return Fit::incomplete;
+  }
+  for (const auto& [offset, byte] : p.constants) {
+    if (data[offset] != byte) return Fit::reject;
+  }
+  if (!p.judged.empty()) {
+    const Message& m = d_.messages[message];
+    for (const Token* t : p.judged) {
+      const double v = read_field(*t, rx);
+      if (std::isnan(v)) return Fit::reject;
+      const Field& f = m.fields[t->field];
+      if ((f.min && v < *f.min) || (f.max && v > *f.max)) return Fit::reject;
+      if (m.length && m.length->field == t->field && v != m.length_value) return Fit::bad_length;
     }
   }
-  for (const Token& t : m.tokens) {
-    if (t.kind != Token::Kind::check) continue;
-    const auto got = static_cast<std::uint32_t>(get_uint(t, rx.data() + t.offset));
-    if (got != check_value(t.check, rx.first(m.size), first_check)) return Fit::bad_check;
+  for (const CheckPlan& c : p.checks) {
+    std::uint32_t want = 0;
+    if (c.check->kind == CheckKind::xor_bytes) {  // the commonest, inline
+      std::uint8_t x = 0;
+      for (std::size_t i = c.from; i < c.to; i += c.check->step) x ^= data[i];
+      want = x;
+    } else {
+      want = compute(c.token->check, data, c.from, c.to);
+    }
+    const std::uint32_t got =
+        c.token->width == 1
+            ? data[c.token->offset]
+            : static_cast<std::uint32_t>(get_uint(*c.token, data + c.token->offset));
+    if (got != want) return Fit::bad_check;
   }
   return Fit::good;
 }
 
 bool Codec::could_start(Direction dir, ByteView rx) const {
   if (rx.empty()) return true;
-  for (const std::size_t i : candidates(dir, rx[0])) {
-    const Fit f = fit(d_.messages[i], rx, nullptr);
+  for (const std::size_t i : candidates(dir, rx)) {
+    const Fit f = fit(i, rx);
     if (f == Fit::incomplete || f == Fit::good || f == Fit::bad_check) return true;
   }
   return false;
@@ -258,19 +333,16 @@ Decoded<Frame> Codec::decode(Direction dir, ByteView rx) const {
 Decoded<Frame> Codec::decode_plain(Direction dir, ByteView rx) const {
   bool incomplete = false;
   bool bad_length = false;
-  const Message* bad_check = nullptr;
-  Frame frame;
-  for (const std::size_t i : candidates(dir, rx[0])) {
-    const Message& m = d_.messages[i];
-    switch (fit(m, rx, &frame)) {
+  std::optional<std::size_t> bad_check;
+  for (const std::size_t i : candidates(dir, rx)) {
+    switch (fit(i, rx)) {
       case Fit::good:
-        frame.message = i;
-        return decoded_frame(m.size, frame);
+        return decoded_frame(plans_[i].size, Frame{i, rx.first(plans_[i].size)});
       case Fit::incomplete:
         incomplete = true;
         break;
       case Fit::bad_check:
-        if (bad_check == nullptr) bad_check = &m;
+        if (!bad_check) bad_check = i;
         break;
       case Fit::bad_length:
         bad_length = true;
@@ -284,13 +356,14 @@ Decoded<Frame> Codec::decode_plain(Direction dir, ByteView rx) const {
     if (rx.size() >= d_.framing.max_frame) return decoded_bad<Frame>(1, FrameError::bad_length);
     return {};
   }
-  if (bad_check != nullptr) {
+  if (bad_check) {
     // A byte may have been lost, so a good frame can start inside the damaged run: drop only up
     // to the next byte that could start one. Still a bad checksum, so the bus counts it.
-    for (std::size_t k = 1; k < bad_check->size; ++k) {
+    const std::size_t size = d_.messages[*bad_check].size;
+    for (std::size_t k = 1; k < size; ++k) {
       if (could_start(dir, rx.subspan(k))) return decoded_bad<Frame>(k, FrameError::bad_checksum);
     }
-    return decoded_bad<Frame>(bad_check->size, FrameError::bad_checksum);
+    return decoded_bad<Frame>(size, FrameError::bad_checksum);
   }
   return decoded_bad<Frame>(1, bad_length ? FrameError::bad_length : FrameError::bad_header);
 }
@@ -335,18 +408,16 @@ Decoded<Frame> Codec::decode_flagged(Direction dir, ByteView rx) const {
   }
   // Two flags in a row: an end and the next start. Drop the first; the second opens a frame.
   if (end == 1) return decoded_bad<Frame>(1, FrameError::bad_length);
+  // The frame's bytes live here until the next decode on this thread (Frame::bytes).
   thread_local Bytes body;
   FrameError error = FrameError::ok;
   if (!unstuff(rx.subspan(1, end - 1), body, error)) return decoded_bad<Frame>(end, error);
   bool bad_check = false;
-  Frame frame;
-  for (const std::size_t i : candidates(dir, body[0])) {
-    const Message& m = d_.messages[i];
-    if (m.size != body.size()) continue;
-    switch (fit(m, body, &frame)) {
+  for (const std::size_t i : candidates(dir, body)) {
+    if (d_.messages[i].size != body.size()) continue;
+    switch (fit(i, body)) {
       case Fit::good:
-        frame.message = i;
-        return decoded_frame(end + 1, frame);  // start flag through end flag
+        return decoded_frame(end + 1, Frame{i, body});  // start flag through end flag
       case Fit::bad_check:
         bad_check = true;
         break;

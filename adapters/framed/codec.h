@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -17,13 +18,12 @@
 
 namespace drivegate::framed {
 
-// One decoded frame: which message, and its fields' values (Message::fields order).
+// One decoded frame: which message, and its bytes (unstuffed where the framing stuffs), read
+// in place: valid while the buffer decoded from is unchanged, and for a stuffed frame until the
+// next decode on this thread.
 struct Frame {
   std::size_t message = 0;
-  std::array<double, kMaxFields> fields{};
-  [[nodiscard]] std::span<const double> values(std::size_t count) const {
-    return {fields.data(), count};
-  }
+  ByteView bytes;
 };
 
 class Codec {
@@ -35,6 +35,9 @@ class Codec {
   [[nodiscard]] Bytes encode(std::size_t message, std::span<const double> values) const;
   // The frame at the start of `rx` among the messages of one direction.
   [[nodiscard]] Decoded<Frame> decode(Direction dir, ByteView rx) const;
+  // A decoded frame's field (Message::fields index), and all of them in order into `out`.
+  [[nodiscard]] double value(const Frame& f, std::size_t field) const;
+  void values(const Frame& f, std::span<double> out) const;
   // A check's value over `frame`, its range ending at `to_default` unless the check says where.
   [[nodiscard]] std::uint32_t check_value(std::size_t check, ByteView frame,
                                           std::size_t to_default) const;
@@ -45,15 +48,41 @@ class Codec {
 
  private:
   enum class Fit : std::uint8_t { reject, incomplete, good, bad_check, bad_length };
-  Fit fit(const Message& m, ByteView rx, Frame* out) const;
+  // A check of a message: where it is, and the range it covers once the message's size is known.
+  struct CheckPlan {
+    const Token* token = nullptr;
+    const Check* check = nullptr;
+    std::size_t from = 0;
+    std::size_t to = 0;
+  };
+  // What decoding and encoding a message takes, worked out once.
+  struct Plan {
+    std::size_t size = 0;
+    Bytes skeleton;  // the constants in place, zeros elsewhere
+    std::vector<std::pair<std::size_t, std::uint8_t>> constants;  // offset, byte; in order
+    std::vector<const Token*> fields;                             // by field index
+    std::vector<const Token*> judged;  // fields with limits, or the length field
+    std::vector<CheckPlan> checks;
+    std::size_t first_check = 0;
+    std::size_t length_field = SIZE_MAX;  // the length field's index, if any
+  };
+  [[nodiscard]] std::uint32_t compute(std::size_t check, const std::uint8_t* data, std::size_t from,
+                                      std::size_t to) const;
+  // The messages that may start with a byte: a list, or by their second byte too when every one
+  // of them has a constant there.
+  struct Candidates {
+    std::vector<std::size_t> all;
+    std::vector<std::vector<std::size_t>> by_second;  // empty, or 256 lists
+  };
+  Fit fit(std::size_t message, ByteView rx) const;
   [[nodiscard]] bool could_start(Direction dir, ByteView rx) const;
   [[nodiscard]] Decoded<Frame> decode_plain(Direction dir, ByteView rx) const;
   [[nodiscard]] Decoded<Frame> decode_flagged(Direction dir, ByteView rx) const;
-  [[nodiscard]] std::span<const std::size_t> candidates(Direction dir, std::uint8_t first) const;
+  [[nodiscard]] const std::vector<std::size_t>& candidates(Direction dir, ByteView rx) const;
 
   const Description& d_;
-  // Per direction and first byte, the messages that may start with it, in declaration order.
-  std::array<std::array<std::vector<std::size_t>, 256>, 2> by_first_;
+  std::vector<Plan> plans_;
+  std::array<std::array<Candidates, 256>, 2> by_first_;
   std::vector<std::array<std::uint32_t, 256>> crc_tables_;  // per check (crc only)
 };
 

@@ -145,7 +145,7 @@ bool FramedDriver::answers(const Message& reply, const Frame& f) const {
   const auto index = static_cast<std::size_t>(&reply - d_->messages.data());
   if (std::find(req.replies.begin(), req.replies.end(), index) == req.replies.end()) return false;
   return std::all_of(reply.echo.begin(), reply.echo.end(),
-                     [&](const auto& e) { return f.fields[e.first] == sent_[e.second]; });
+                     [&](const auto& e) { return codec_.value(f, e.first) == sent_[e.second]; });
 }
 
 RxVerdict FramedDriver::on_receive(ByteView rx, TimePoint now) {
@@ -157,7 +157,9 @@ RxVerdict FramedDriver::on_receive(ByteView rx, TimePoint now) {
   if (m.nack) return {RxKind::nack, d.consumed};  // the engine resends
   const bool awaited = answers(m, d.frame);
   if (!awaited && !m.unsolicited) return {RxKind::foreign, d.consumed};
-  state_.lay_out(m, d.frame.values(m.fields.size()), fields_);
+  std::array<double, kMaxFields> values{};
+  codec_.values(d.frame, values);
+  state_.lay_out(m, {values.data(), m.fields.size()}, fields_);
   state_.assign(m.update, state_.scope_with(fields_, sent_));
   RxKind kind = RxKind::frame;
   if (awaited) {

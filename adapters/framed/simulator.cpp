@@ -46,7 +46,9 @@ Bytes FramedSimulator::send(std::size_t message, std::span<const double> sent) {
 Bytes FramedSimulator::answer(const Frame& request, TimePoint now) {
   (void)now;
   const Message& req = d_->messages[request.message];
-  state_.lay_out(req, request.values(req.fields.size()), sent_);
+  std::array<double, kMaxFields> values{};
+  codec_.values(request, values);
+  state_.lay_out(req, {values.data(), req.fields.size()}, sent_);
   const Scope s = state_.scope_with(sent_, sent_);
   std::optional<std::size_t> reply;
   bool ruled = false;

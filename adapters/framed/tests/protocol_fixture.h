@@ -63,14 +63,16 @@ class Protocol {
     ADD_FAILURE() << "no field " << field << " in " << d_->messages[m].name;
     return 0;
   }
+  // A frame is read in place: the fixture keeps the bytes of the last one decoded.
   [[nodiscard]] Decoded<Frame> decode(Direction dir, const Bytes& rx) const {
-    return codec_.decode(dir, rx);
+    last_ = rx;
+    return codec_.decode(dir, last_);
   }
   [[nodiscard]] std::string name_of(const Decoded<Frame>& d) const {
     return d.status == DecodeStatus::frame ? d_->messages[d.frame.message].name : "";
   }
   [[nodiscard]] double field(const Decoded<Frame>& d, const std::string& name) const {
-    return d.frame.fields.at(field_index(d.frame.message, name));
+    return codec_.value(d.frame, field_index(d.frame.message, name));
   }
   [[nodiscard]] const Description& description() const { return *d_; }
   [[nodiscard]] const Codec& codec() const { return codec_; }
@@ -78,6 +80,7 @@ class Protocol {
  private:
   std::shared_ptr<const Description> d_;
   Codec codec_;
+  mutable Bytes last_;
 };
 
 }  // namespace drivegate::framed::test
