@@ -73,6 +73,7 @@ struct Token {
   bool little_endian = false;
   std::size_t field = 0;  // field: index into Message::fields
   std::size_t check = 0;  // check: index into Description::checks
+  std::string name;       // check: its name in the layout ("checksum:xor")
 };
 
 // How the frames are told apart on the line: by their layouts alone (fixed lengths, constants,

@@ -827,6 +827,7 @@ class Parser {
                                         [&](const Check& c) { return c.name == type; });
         if (check != d_->checks.end()) {
           t.kind = Token::Kind::check;
+          t.name = name;
           t.check = static_cast<std::size_t>(check - d_->checks.begin());
           t.width = check->width;
           t.little_endian = check->little_endian;
