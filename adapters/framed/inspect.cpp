@@ -177,7 +177,9 @@ std::optional<Bytes> encode_message(const Description& d, const std::string& mes
 
 std::string lua_table(const Description& d) {
   std::ostringstream o;
-  o << "return {\n  name = " << lua_string(d.name) << ",\n  summary = " << lua_string(d.summary)
+  o << "-- " << d.name << ": the data adapters/framed/dissector.lua decodes it with, made by\n"
+    << "-- `drivegate protocol dissector " << d.name << "` from its description: do not edit.\n"
+    << "local p = {\n  name = " << lua_string(d.name) << ",\n  summary = " << lua_string(d.summary)
     << ",\n";
   const Framing& f = d.framing;
   o << "  framing = { max_frame = " << f.max_frame;
@@ -218,7 +220,13 @@ std::string lua_table(const Description& d) {
     }
     o << "      } },\n";
   }
-  o << "  },\n}\n";
+  o << "  },\n}\n"
+    << "local drivegate = _G.drivegate or { loaded = {} }\n"
+    << "_G.drivegate = drivegate\n"
+    << "drivegate.framed_protocols = drivegate.framed_protocols or {}\n"
+    << "if drivegate.framed_protocols[p.name] then return end\n"
+    << "drivegate.framed_protocols[p.name] = p\n"
+    << "if drivegate.framed_register then drivegate.framed_register(p) end\n";
   return o.str();
 }
 

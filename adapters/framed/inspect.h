@@ -31,8 +31,9 @@ std::optional<Bytes> encode_message(const Description& d, const std::string& mes
                                     const std::vector<std::pair<std::string, double>>& fields,
                                     const Options& options, std::string& error);
 
-// The description as a Lua table for adapters/framed/dissector.lua: its messages' layouts (names,
-// offsets, widths, encodings), constants and checks with their parameters.
+// The description as the data adapters/framed/dissector.lua decodes it with: a Lua chunk holding
+// its messages' layouts (names, offsets, widths, encodings), constants and checks with their
+// parameters, which hands itself to the dissector when loaded (before it or after).
 std::string lua_table(const Description& d);
 
 }  // namespace drivegate::framed
