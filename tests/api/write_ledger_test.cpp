@@ -1,6 +1,6 @@
-// PendingWrites (include/drivegate/pending_writes.h): the bookkeeping of writes on their way to a
+// WriteLedger (include/drivegate/write_ledger.h): the bookkeeping of writes on their way to a
 // drive that every driver keeps, and attempts_before().
-#include "drivegate/pending_writes.h"
+#include "drivegate/write_ledger.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -19,7 +19,7 @@ struct Job {
 
 const TimePoint t0{};
 
-std::vector<Completion> taken(PendingWrites<Job>& w) {
+std::vector<Completion> taken(WriteLedger<Job>& w) {
   std::vector<Completion> out;
   w.take_completions(out);
   return out;
@@ -29,8 +29,8 @@ MATCHER_P2(Is, ticket, result, "") {
   return arg.ticket == static_cast<Ticket>(ticket) && arg.result == result;
 }
 
-TEST(PendingWrites, SettlesInTheOrderAskedEveryTicketOnce) {
-  PendingWrites<Job> w;
+TEST(WriteLedger, SettlesInTheOrderAskedEveryTicketOnce) {
+  WriteLedger<Job> w;
   w.push({"run"}, 1, t0 + 2500ms);
   w.push({"setpoint"}, 2, t0 + 2600ms);
   EXPECT_EQ(w.size(), 2u);
@@ -45,16 +45,16 @@ TEST(PendingWrites, SettlesInTheOrderAskedEveryTicketOnce) {
   EXPECT_TRUE(taken(w).empty());
 }
 
-TEST(PendingWrites, AJoinedTicketSettlesWithTheEntryItJoined) {
-  PendingWrites<Job> w;
+TEST(WriteLedger, AJoinedTicketSettlesWithTheEntryItJoined) {
+  WriteLedger<Job> w;
   auto& e = w.push({"run"}, 1, t0 + 1s);
   w.join(e, 7);
   w.settle_front(WriteResult::ok);
   EXPECT_THAT(taken(w), ElementsAre(Is(1, WriteResult::ok), Is(7, WriteResult::ok)));
 }
 
-TEST(PendingWrites, ExpiresAtTheDeadlineNotBefore) {
-  PendingWrites<Job> w;
+TEST(WriteLedger, ExpiresAtTheDeadlineNotBefore) {
+  WriteLedger<Job> w;
   w.push({"a"}, 1, t0 + 2500ms);
   w.push({"b"}, 2, t0 + 1000ms);
   EXPECT_EQ(w.next_deadline(), t0 + 1000ms);
@@ -67,8 +67,8 @@ TEST(PendingWrites, ExpiresAtTheDeadlineNotBefore) {
   EXPECT_FALSE(w.next_deadline().has_value());
 }
 
-TEST(PendingWrites, SupersedingLeavesTheOneOnTheLine) {
-  PendingWrites<Job> w;
+TEST(WriteLedger, SupersedingLeavesTheOneOnTheLine) {
+  WriteLedger<Job> w;
   w.push({"on the line"}, 1, t0 + 1s).sent = true;
   w.push({"waiting"}, 2, t0 + 1s);
   w.push({"waiting too"}, 3, t0 + 1s);
@@ -82,10 +82,10 @@ TEST(PendingWrites, SupersedingLeavesTheOneOnTheLine) {
   EXPECT_THAT(taken(w), ElementsAre(Is(1, WriteResult::no_response)));
 }
 
-TEST(PendingWrites, TheDriverHearsOfEachEntryAfterItLeftTheQueue) {
+TEST(WriteLedger, TheDriverHearsOfEachEntryAfterItLeftTheQueue) {
   std::vector<std::string> heard;
-  PendingWrites<Job>* self = nullptr;
-  PendingWrites<Job> w([&](const PendingWrites<Job>::Entry& e, WriteResult r) {
+  WriteLedger<Job>* self = nullptr;
+  WriteLedger<Job> w([&](const WriteLedger<Job>::Entry& e, WriteResult r) {
     heard.push_back(e.job.what + (r == WriteResult::ok ? " ok" : " failed"));
     EXPECT_EQ(self->size(), 0u);  // already gone when the driver hears of it
   });
@@ -97,8 +97,8 @@ TEST(PendingWrites, TheDriverHearsOfEachEntryAfterItLeftTheQueue) {
   EXPECT_THAT(heard, ElementsAre("action ok", "action failed"));
 }
 
-TEST(PendingWrites, AnUndoWithoutTicketsGoesFirstAndSettlesSilently) {
-  PendingWrites<Job> w;
+TEST(WriteLedger, AnUndoWithoutTicketsGoesFirstAndSettlesSilently) {
+  WriteLedger<Job> w;
   w.push({"setpoint"}, 4, t0 + 1s);
   w.push_front({"undo"}, {}, t0 + 1s);
   EXPECT_EQ(w.first_unsent()->job.what, "undo");

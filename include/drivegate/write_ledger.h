@@ -5,7 +5,7 @@
 // asked, which take_completions() hands over. Header-only, no clock: time is the `now` given.
 //
 //   struct Job { Change change; std::uint16_t rpm; };
-//   PendingWrites<Job> writes_;
+//   WriteLedger<Job> writes_;
 //   WriteStatus apply(...)  { writes_.push({Change::run, rpm}, ticket, now + kConfirm); ... }
 //   next_exchange(now)      { writes_.expire(now); if (auto* w = writes_.first_unsent()) ... }
 //   on_receive(...)         { if (took) writes_.settle_front(WriteResult::ok); }
@@ -26,7 +26,7 @@
 namespace drivegate {
 
 template <class Job>
-class PendingWrites {
+class WriteLedger {
  public:
   struct Entry {
     Job job;
@@ -39,8 +39,8 @@ class PendingWrites {
   // decides to send next it keeps aside.
   using Settled = std::function<void(const Entry&, WriteResult)>;
 
-  PendingWrites() = default;
-  explicit PendingWrites(Settled on_settled) : on_settled_(std::move(on_settled)) {}
+  WriteLedger() = default;
+  explicit WriteLedger(Settled on_settled) : on_settled_(std::move(on_settled)) {}
 
   [[nodiscard]] bool empty() const { return entries_.empty(); }
   [[nodiscard]] std::size_t size() const { return entries_.size(); }
