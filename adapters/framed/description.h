@@ -165,8 +165,9 @@ inline constexpr std::size_t address = 2;   // the device's bus address
 inline constexpr std::size_t poll_ms = 3;   // the device's poll interval
 inline constexpr std::size_t value = 4;     // the value a point write carries (on_write rules)
 inline constexpr std::size_t dt_ms = 5;     // the simulator's: ms since its last tick
+inline constexpr std::size_t sequence = 6;  // 0..255, one more for each request made (not resends)
 // Constants: the unified commands by name (include/drivegate/common.h), true and false.
-inline constexpr std::size_t first_constant = 6;
+inline constexpr std::size_t first_constant = 7;
 inline constexpr std::size_t count = first_constant + 7;
 }  // namespace builtin
 
@@ -205,6 +206,7 @@ struct Periodic {
   std::size_t send = 0;          // request message
   std::optional<Expr> every_ms;  // the period (init: between attempts; 0 at once)
   std::optional<Expr> when;      // sent only while this holds
+  bool at_ready = false;         // poll: the first one at once when the device becomes ready
 };
 
 // One way to carry out a unified write (a command or a setpoint): the first alternative whose

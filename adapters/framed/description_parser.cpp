@@ -550,6 +550,7 @@ class Parser {
     add("poll_ms", 500);
     add("value", 0);
     add("dt_ms", 0);
+    add("sequence", 0);
     for (std::size_t c = 0; c < kCommandNames.size(); ++c) {
       add(std::string(kCommandNames[c]), static_cast<double>(c));
     }
@@ -1264,13 +1265,14 @@ class Parser {
     const toml::table* t = table_at(top, key, false);
     if (t == nullptr) return;
     TableReader r(*t, key, diag_);
-    r.expect({"send", "every_ms", "when"});
+    r.expect({"send", "every_ms", "when", "at_ready"});
     const auto send = message_ref(r, "send", Direction::request, true);
     if (!send) return;
     Periodic p;
     p.send = *send;
     p.every_ms = expr(r, "every_ms");
     p.when = expr(r, "when");
+    p.at_ready = r.boolean("at_ready").value_or(false);
     out = std::move(p);
   }
 

@@ -72,7 +72,12 @@ std::vector<Val> FramedDriver::line_state() const {
 Exchange FramedDriver::exchange(std::size_t message, const std::vector<Val>& vars, Sent what,
                                 TimePoint now, std::optional<TimePoint> deadline) {
   const Message& m = d_->messages[message];
-  const Scope s{vars, {}, {}};
+  // A new request (the engine's resends are the same frame): the next sequence number.
+  const double sequence = std::fmod(state_.num(builtin::sequence) + 1, 256.0);
+  state_.set(builtin::sequence, sequence);
+  std::vector<Val> with_sequence = vars;
+  with_sequence[builtin::sequence] = Val::of(sequence);
+  const Scope s{with_sequence, {}, {}};
   for (std::size_t i = 0; i < m.fields.size(); ++i) sent_values_[i] = m.fields[i].value.num(s);
   Exchange ex;
   ex.frame = codec_.encode(message, {sent_values_.data(), m.fields.size()});
@@ -211,7 +216,7 @@ void FramedDriver::refresh(TimePoint now) {
   }
   confirm_by_state();
   const bool rdy = ready();
-  if (rdy && !was_ready_) next_poll_ = now;  // the first poll at once
+  if (rdy && !was_ready_ && d_->poll && d_->poll->at_ready) next_poll_ = now;
   was_ready_ = rdy;
   publish();
 }

@@ -6,7 +6,7 @@
 //                      and the unified block
 //   driver_writes.cpp  check() and apply(): commands, the setpoint and point writes, carried out
 //                      by the description's messages and confirmed by its rules, on the shared
-//                      bookkeeping of writes (drivegate/pending_writes.h)
+//                      bookkeeping of writes (drivegate/write_ledger.h)
 #pragma once
 
 #include <memory>
@@ -16,7 +16,7 @@
 #include "codec.h"
 #include "description.h"
 #include "drivegate/driver.h"
-#include "drivegate/pending_writes.h"
+#include "drivegate/write_ledger.h"
 #include "state.h"
 
 namespace drivegate::framed {
@@ -55,7 +55,7 @@ class FramedDriver final : public Driver {
     std::optional<std::size_t> message;
     bool awaiting_state = false;  // sent; confirmed by `until` on the device's state
   };
-  using Writes = PendingWrites<Job>;
+  using Writes = WriteLedger<Job>;
   enum class Sent : std::uint8_t { init, poll, write };
   struct InFlight {
     Sent what = Sent::poll;
