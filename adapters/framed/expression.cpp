@@ -95,7 +95,8 @@ double binary(Bin op, const Val& a, const Val& b) {
       return y == 0.0 ? 0.0 : x / y;  // a rule never divides by zero on purpose
     case Bin::mod: {
       const std::int64_t d = whole(y);
-      return d == 0 ? 0.0 : static_cast<double>(whole(x) % d);
+      // By 0: 0, as division. By -1: 0 too, and never the overflow of the smallest number's.
+      return d == 0 || d == -1 ? 0.0 : static_cast<double>(whole(x) % d);
     }
     case Bin::band:
       return static_cast<double>(whole(x) & whole(y));

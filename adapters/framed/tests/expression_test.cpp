@@ -62,6 +62,8 @@ TEST_F(ExpressionTest, ArithmeticAndPrecedence) {
   EXPECT_EQ(eval("-x + +y"), -7);
   EXPECT_EQ(eval("0.001 * 2500"), 2.5);
   EXPECT_EQ(eval("x / 0"), 0);  // never a crash, never infinity
+  EXPECT_EQ(eval("x % 0"), 0);
+  EXPECT_EQ(eval("-9.3e18 % -1"), 0);  // the smallest int64 by -1 would trap
 }
 
 TEST_F(ExpressionTest, BitsShiftsAndLogic) {
