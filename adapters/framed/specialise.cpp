@@ -1,5 +1,6 @@
 #include "specialise.h"
 
+#include <array>
 #include <list>
 #include <map>
 #include <mutex>
@@ -16,6 +17,7 @@ struct Specialised {
   std::string id;
   std::string summary;
   std::vector<OptionSpec> options;
+  std::array<OptionSetting, 1> demo{};  // protocol = this description
   AdapterDescriptor descriptor{};
 };
 
@@ -63,7 +65,8 @@ const AdapterDescriptor* specialise(const AdapterDescriptor& base, const Options
   a.address_max = d->address_max;
   a.default_address = d->address_default;
   a.streaming = d->streaming;
-  a.demo.running_rpm = d->demo_rpm;
+  s->demo[0] = {"protocol", d->name.c_str()};
+  a.demo = {.options = s->demo.data(), .option_count = s->demo.size(), .running_rpm = d->demo_rpm};
   a.specialise = nullptr;  // already one device's
   const AdapterDescriptor* out = &a;
   made.emplace(d.get(), std::move(s));

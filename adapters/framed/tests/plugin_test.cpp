@@ -45,6 +45,9 @@ TEST(FramedPlugin, SpecialisesADeviceToItsDescription) {
   EXPECT_STREQ(a->options[1].name, "platform");
   EXPECT_STREQ(a->options[1].default_value, "7");
   EXPECT_EQ(a->specialise, nullptr);
+  ASSERT_EQ(a->demo.option_count, 1u);  // the demo of this description, at its speed
+  EXPECT_STREQ(a->demo.options[0].value, "nidec-washer");
+  EXPECT_EQ(a->demo.running_rpm, 800);
   // The same description: the same descriptor.
   EXPECT_EQ(drivegate_adapter.specialise(with_protocol("nidec-washer"), error), a);
 }
