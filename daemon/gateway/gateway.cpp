@@ -48,10 +48,18 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
   std::unique_ptr<Gateway> gw(new Gateway(io, log, history));
   const auto now = Clock::now();
   for (const auto& dc : config.devices) {
-    const AdapterDescriptor* adapter = plugins.find(dc.adapter);
-    if (adapter == nullptr) {
+    const AdapterDescriptor* base = plugins.find(dc.adapter);
+    if (base == nullptr) {
       errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
                        dc.name + "': adapter '" + dc.adapter + "' is not installed");
+      continue;
+    }
+    // The device's own descriptor (a described protocol's: AdapterDescriptor::specialise).
+    std::string why;
+    const AdapterDescriptor* adapter = specialised(*base, dc.options, why);
+    if (adapter == nullptr) {
+      errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
+                       dc.name + "': " + why);
       continue;
     }
     const auto bus = std::find_if(config.buses.begin(), config.buses.end(),
