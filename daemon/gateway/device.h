@@ -11,6 +11,7 @@
 //                        write turn of the line per part), applied part by part, confirmed
 //   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
 //   device_history.cpp   what it records in the history: each write's audit record, its events
+//   device_reload.cpp    a reload: the new device takes over the PLC's failsafe watchdog
 #pragma once
 
 #include <spdlog/logger.h>
@@ -133,6 +134,11 @@ class Device final : public Station {
   void close_to_clients() { closed_to_clients_ = true; }
   // Fails every request in flight (shutdown, bus closed for good); `reason` for the audit trail.
   void fail_pending(Outcome why, TimePoint now, std::string_view reason = {});
+  // A reload replaced `old` (the same name, other settings) by this device, not started yet: it
+  // takes over what was promised to the PLC there (docs/safety.md, "A reload and the failsafe"):
+  // the failsafe watchdog, armed with its deadline or latched (its action then sent again to
+  // this driver), and the heartbeat register.
+  void take_over(const Device& old);
   // Writes waiting or being carried out (status bit command_pending).
   [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
   [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }

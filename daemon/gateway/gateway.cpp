@@ -100,17 +100,29 @@ std::vector<Station*> Gateway::stations_on(const std::string& bus) const {
 void Gateway::adopt(Gateway& old) {
   // Devices: the running one in place of the fresh one wherever the settings are the same. The
   // fresh ones it replaces go last, once no engine points to them.
+  // A changed one takes over the PLC's failsafe from the one it replaces.
   std::vector<std::unique_ptr<Device>> replaced;
   for (auto& fresh : devices_) {
     const auto running = std::find_if(old.devices_.begin(), old.devices_.end(), [&](const auto& d) {
-      return d && d->config().name == fresh->config().name &&
-             same_settings(d->config(), fresh->config());
+      return d && d->config().name == fresh->config().name;
     });
     if (running == old.devices_.end()) continue;
+    if (!same_settings((*running)->config(), fresh->config())) {
+      fresh->take_over(**running);
+      continue;
+    }
     replaced.push_back(std::move(fresh));
     fresh = std::move(*running);
   }
   std::erase(old.devices_, nullptr);
+  for (const auto& gone : old.devices_) {
+    if (find(gone->config().name) != nullptr) continue;  // changed, not removed
+    if (gone->failsafe_latched() || gone->state().running) {
+      log_->warn("device {}: removed by the reload while {}: the gateway no longer watches it",
+                 gone->config().name,
+                 gone->failsafe_latched() ? "its failsafe is latched" : "its drive runs");
+    }
+  }
   // Buses: the running one, port open, wherever its own settings are the same.
   for (auto& fresh_bus : buses_) {
     const auto running = std::find_if(old.buses_.begin(), old.buses_.end(), [&](const auto& b) {

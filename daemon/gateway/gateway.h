@@ -46,10 +46,11 @@ class Gateway {
   // For a reload, before start(): every device of this (new, not started) gateway whose settings
   // are unchanged in `old` (config/config_diff.h) is taken from `old` as it runs, in place of the
   // fresh one: driver, command in force, failsafe timer and latch, counters, writes in flight,
-  // whatever else changes on its line. Every bus whose own settings are unchanged is taken with
-  // its port open and gets this gateway's devices; the others start afresh when this gateway
-  // starts, once the caller has stopped `old` (and with it their ports and the devices left in
-  // it: removed or changed).
+  // whatever else changes on its line. A changed device takes over the PLC's failsafe watchdog
+  // from the one it replaces (Device::take_over). Every bus whose own settings are unchanged is
+  // taken with its port open and gets this gateway's devices; the others start afresh when this
+  // gateway starts, once the caller has stopped `old` (and with it their ports and the devices
+  // left in it: removed or changed).
   void adopt(Gateway& old);
 
   void start();  // opens the buses and starts polling (kept buses poll on)
