@@ -259,6 +259,7 @@ class Device final : public Station {
   bool recorded_comm_lost_ = false;
   bool recorded_contact_ = false;  // the drive's own state was heard and recorded once
   bool recorded_running_ = false;
+  bool recorded_run_known_ = false;  // whether it runs was recorded once (online)
   bool recorded_latched_ = false;
   FaultSet recorded_faults_;
   std::uint32_t recorded_native_ = 0;

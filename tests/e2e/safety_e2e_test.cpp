@@ -153,7 +153,8 @@ std::string ed3100_device(const std::filesystem::path& port, int http_port, bool
 // later a SIGHUP switches the device from the ed3100 adapter to the modbus one with the
 // ed3100-standard profile. The new device inherits the watchdog: the drive is stopped within the
 // deadline the PLC's last write set plus one poll cycle, the PLC reads the failsafe bit and the
-// stop, and the history says the failsafe tripped.
+// stop, and the history says the new device found the drive running (run_forward), as the log
+// does, then that the failsafe tripped.
 TEST(SafetyReloadE2E, AnAdapterSwitchWithThePlcGoneKeepsTheFailsafesDeadline) {
   TempDir dir;
   Sim sim("ed3100", dir / "line", {"--address", "1", "--set", "sim_reply_form=standard"});
@@ -202,7 +203,10 @@ TEST(SafetyReloadE2E, AnAdapterSwitchWithThePlcGoneKeepsTheFailsafesDeadline) {
       },
       5s));
   EXPECT_EQ(observer.holding(reg::command, 1).regs.at(0), 0);
-  // The history: the failsafe tripped.
+  // The history: the new device found the drive running, then the failsafe tripped.
+  const std::string started = http_get(http, "/api/v1/events?device=vfd&kind=drive_started").body;
+  EXPECT_THAT(started, HasSubstr("found running (run_forward")) << started;
+  EXPECT_THAT(started, Not(HasSubstr("running (stop"))) << started;
   EXPECT_THAT(http_get(http, "/api/v1/events?device=vfd&kind=failsafe_tripped").body,
               HasSubstr("failsafe stop"));
 }

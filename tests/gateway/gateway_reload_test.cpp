@@ -322,5 +322,36 @@ TEST_F(GatewayReload, AFailsafeTurnedOnStartsAtTheNextWrite) {
   EXPECT_TRUE(after.failsafe_latched());
 }
 
+// The history says what the new device found the drive doing once the driver knows (ready), as
+// the log does: not "running (stop)" from a half-read state, and as found, not as a change.
+TEST_F(GatewayReload, TheHistorySaysWhatAChangedDeviceFoundOnceItKnows) {
+  auto old = build(config());
+  auto changed = config();
+  changed.devices[0].poll_interval = 250ms;
+  auto next = build(changed);
+  next->adopt(*old);
+  Device& d = *next->find("a1");
+  test::FakeDriver& drive = fake(d);
+  // The first blocks read: speed, not yet the status word.
+  drive.common_.ready = false;
+  d.link().health.data_good(at(0ms));
+  d.on_tick(at(0ms));
+  // The status word: running, while the command in force is not known yet.
+  drive.common_.running = true;
+  drive.common_.speed_rpm = 1500;
+  d.on_tick(at(100ms));
+  // Every block read: the driver adopts the run it found.
+  drive.common_.ready = true;
+  drive.common_.command = Command::run_forward;
+  drive.common_.setpoint_rpm = 1500;
+  d.link().health.data_good(at(200ms));
+  d.on_tick(at(200ms));
+  const auto started = events("a1", EventKind::drive_started);
+  ASSERT_EQ(started.size(), 1u);
+  EXPECT_EQ(started[0].field("found"), "true");
+  EXPECT_EQ(started[0].field("command"), "run_forward");
+  EXPECT_EQ(started[0].field("setpoint_rpm"), "1500");
+}
+
 }  // namespace
 }  // namespace drivegate
