@@ -304,7 +304,7 @@ void Daemon::reload() {
   const bool mqtt_reconfigured = mqtt_changed(config_.mqtt, config->mqtt);
   // Unchanged devices and buses move over running; the changed buses close before the new ones
   // open their ports.
-  const ConfigDiff diff = diff_config(config_, *config);
+  const ConfigDiff diff = next->changes_from(*gateway_);  // profiles' content included
   next->adopt(*gateway_);
   gateway_->stop();
   next->start();

@@ -260,6 +260,12 @@ class Driver {
   // write turns like any write, and answers the client with the Completion's reply. The gateway
   // has judged the client's access to the function already.
   [[nodiscard]] virtual bool forwards() const { return false; }
+
+  // What the driver read beyond its options to make the device (a profile file), said so that
+  // equal text means equal content: which file, and a fingerprint of what it held. Empty when it
+  // read nothing. A reload compares it like a setting: a device whose file changed is a changed
+  // device, started afresh with the new content.
+  [[nodiscard]] virtual std::string files_read() const { return {}; }
 };
 
 }  // namespace drivegate
