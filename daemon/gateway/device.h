@@ -132,6 +132,14 @@ class Device final : public Station {
   // (no_response) before it reaches the driver, so that nothing runs the motor after the shutdown
   // stop.
   void close_to_clients() { closed_to_clients_ = true; }
+  // A reload is about to replace or remove this device and waits for its writes in flight to
+  // settle with what the drive says (Gateway::hold_for_reload): until then a client's new write
+  // is refused busy before it reaches the driver, but a stop and the heartbeat alone, which are
+  // carried out as ever.
+  void hold_for_reload() { held_for_reload_ = true; }
+  [[nodiscard]] bool held_for_reload() const { return held_for_reload_; }
+  // How long a write may take before it is failed unconfirmed (DriverTraits::write_timeout).
+  [[nodiscard]] Millis write_timeout() const { return traits_.write_timeout; }
   // Fails every request in flight (shutdown, bus closed for good); `reason` for the audit trail.
   void fail_pending(Outcome why, TimePoint now, std::string_view reason = {});
   // A reload replaced `old` (the same name, other settings) by this device, not started yet: it
@@ -230,6 +238,7 @@ class Device final : public Station {
   // a time, oldest first, each part on a write turn the bus engine gives (release()).
   std::vector<std::unique_ptr<Request>> requests_;
   bool closed_to_clients_ = false;
+  bool held_for_reload_ = false;
   bool urgent_unsent_ = false;  // a stop was handed to the driver since its last next_exchange
   bool handed_ = false;         // a queued write's part likewise
   bool last_exchange_wrote_ = false;  // the device's last exchange carried a write

@@ -118,6 +118,25 @@ bool listed(const std::vector<std::string>& names, const std::string& name) {
 
 }  // namespace
 
+Millis Gateway::hold_for_reload(const Gateway& next) {
+  const ConfigDiff diff = next.changes_from(*this);
+  Millis longest{0};
+  for (const auto& d : devices_) {
+    if (listed(diff.devices_kept, d->config().name)) continue;  // moves over, writes and all
+    d->hold_for_reload();
+    if (d->writes_in_flight() > 0) longest = std::max(longest, d->write_timeout());
+  }
+  return longest;
+}
+
+std::size_t Gateway::held_writes() const {
+  std::size_t n = 0;
+  for (const auto& d : devices_) {
+    if (d->held_for_reload()) n += d->writes_in_flight();
+  }
+  return n;
+}
+
 void Gateway::adopt(Gateway& old) {
   const ConfigDiff diff = changes_from(old);
   // Devices: the running one in place of the fresh one wherever the settings are the same; a

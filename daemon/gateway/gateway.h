@@ -47,6 +47,13 @@ class Gateway {
   // What a reload from `running` to this (new) gateway changes (config/config_diff.h), device
   // by device and bus by bus, each device with what its adapter read (a profile's content).
   [[nodiscard]] ConfigDiff changes_from(const Gateway& running) const;
+  // For a reload to `next` (built, not started), before adopt(): every device of this (running)
+  // gateway that `next` replaces or removes refuses new client writes from now on but stops and
+  // the heartbeat (Device::hold_for_reload), so that its writes in flight settle with what its
+  // drive says before it goes. Returns the longest write_timeout of those with writes in flight
+  // (zero: none, nothing to wait for); held_writes() counts what is left.
+  Millis hold_for_reload(const Gateway& next);
+  [[nodiscard]] std::size_t held_writes() const;
   // For a reload, before start(): every device of this (new, not started) gateway whose settings
   // are unchanged in `old` (changes_from) is taken from `old` as it runs, in place of the fresh
   // one: driver, command in force, failsafe timer and latch, counters, writes in flight,

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <future>
 #include <sstream>
 
 #include "e2e.h"
@@ -305,6 +306,49 @@ TEST(ReloadDiffE2E, AnEditedProfileIsAChangedDevice) {
   EXPECT_THAT(slurp(dir / "drivegated.log"), HasSubstr(profile.string() + ":"));
   EXPECT_EQ(speed(), 3000);
   EXPECT_TRUE(daemon.process().running());
+}
+
+// --- every write's outcome is the truth ---------------------------------------------------------
+
+// A run on its way to a slow ED3100 (60 ms before each reply) when a SIGHUP changes the device's
+// poll_ms: the reload waits for it, the PLC gets the drive's answer (the write echoed, not 0x0B
+// "the gateway stopped" over a drive that took it), the drive runs, and the new device shows the
+// run it finds.
+TEST(ReloadDiffE2E, AWriteInFlightAtAReloadGetsTheDrivesAnswer) {
+  TempDir dir;
+  Sim sim("ed3100", dir / "line", {"--address", "1", "--turnaround-ms", "60"});
+  Daemon daemon(dir, vfd(dir / "line", ""), {}, dir / "drivegated.log");
+  Plc plc(daemon.port(), 1);
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s));
+  std::ofstream(daemon.config()) << vfd(dir / "line", "poll_ms = 250\n");
+  // FC 16: command = run_forward, setpoint = 1500 rpm.
+  const std::vector<std::uint8_t> run = {0x10, 0x00, 0x00, 0x00, 0x02,
+                                         0x04, 0x00, 0x01, 0x05, 0xDC};
+  auto reply = std::async(std::launch::async, [&] { return raw_request(daemon.port(), 1, run); });
+  std::this_thread::sleep_for(30ms);
+  daemon.process().signal(SIGHUP);
+  EXPECT_EQ(reply.get(), (std::vector<std::uint8_t>{0x10, 0x00, 0x00, 0x00, 0x02}));
+  ASSERT_TRUE(eventually(
+      [&] {
+        return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos;
+      },
+      10s));
+  const std::string log = slurp(dir / "drivegated.log");
+  EXPECT_THAT(log, HasSubstr("reload: waiting for the writes in flight"));
+  EXPECT_THAT(log, HasSubstr("reload: device vfd changed (poll_ms 500 -> 250)"));
+  EXPECT_THAT(log, Not(HasSubstr("the gateway stopped")));
+  EXPECT_TRUE(
+      eventually([&] { return sim.control("state").find("running=1") != std::string::npos; }, 5s))
+      << sim.control("state");
+  EXPECT_TRUE(eventually(
+      [&] {
+        const auto held = plc.holding(reg::command, 1);
+        return held.ok() && held.regs[0] == 1;  // run_forward, as found
+      },
+      10s))
+      << slurp(dir / "drivegated.log");
+  EXPECT_EQ(plc.write(reg::command, {0}), 0);
 }
 
 // A listener's access changed from operate to read applies to the open connection, and the log

@@ -353,5 +353,69 @@ TEST_F(GatewayReload, TheHistorySaysWhatAChangedDeviceFoundOnceItKnows) {
   EXPECT_EQ(started[0].field("setpoint_rpm"), "1500");
 }
 
+// A write on its way to the drive when a reload replaces its device gets what the drive says of
+// it, and the audit with it: the reload holds the old device until the write settles (a client's
+// other writes refused busy meanwhile, a stop carried out, a kept neighbour untouched), and only
+// then puts the new one in its place. Without the hold the write failed "the gateway stopped"
+// (0x0B to the PLC) while the drive had taken it.
+TEST_F(GatewayReload, AWriteInFlightSettlesWithTheDrivesAnswerBeforeItsDeviceGoes) {
+  auto old = build(config());
+  Device& before = *old->find("a1");
+  Device& neighbour = *old->find("a2");
+  tick(before, 0ms);
+  tick(neighbour, 0ms);
+  std::vector<Outcome> answers;
+  const auto keep = [&](Outcome o) { answers.push_back(o); };
+  const std::vector<std::uint16_t> run = {1 /*run_forward*/, 800};
+  ASSERT_EQ(before.write(kPlc, Table::holding, 0, run, keep, at(0ms)), Outcome::ok);
+  before.next_exchange(at(0ms), Turn::write);  // on the line: the drive's answer is to come
+  const Ticket run_ticket = fake(before).last_ticket;
+  ASSERT_EQ(fake(before).commands, std::vector<Command>{Command::run_forward});
+
+  auto changed = config();
+  changed.devices[0].poll_interval = 250ms;  // a1 changes, a2 and b1 are kept
+  auto next = build(changed);
+  EXPECT_EQ(old->hold_for_reload(*next), before.write_timeout());
+  EXPECT_EQ(old->held_writes(), 1u);
+  const std::uint16_t faster = 900;
+  EXPECT_EQ(before.write(kPlc, Table::holding, 1, std::span(&faster, 1), keep, at(20ms)),
+            Outcome::busy);
+  EXPECT_TRUE(fake(before).setpoints == std::vector<std::int32_t>{800});  // never reached it
+  EXPECT_EQ(heartbeat(before, 20ms), Outcome::ok);
+  std::vector<Outcome> neighbours;
+  ASSERT_EQ(neighbour.write(
+                kPlc, Table::holding, 1, std::span(&faster, 1),
+                [&](Outcome o) { neighbours.push_back(o); }, at(20ms)),
+            Outcome::ok);  // kept: not held
+  EXPECT_EQ(neighbours, std::vector<Outcome>{Outcome::ok});
+  EXPECT_EQ(fake(neighbour).setpoints, std::vector<std::int32_t>{900});
+  EXPECT_EQ(old->held_writes(), 1u);
+  const std::uint16_t stop = 0;
+  ASSERT_EQ(before.write(kPlc, Table::holding, 0, std::span(&stop, 1), keep, at(30ms)),
+            Outcome::ok);
+  const Ticket stop_ticket = fake(before).last_ticket;
+  EXPECT_EQ(fake(before).commands, (std::vector<Command>{Command::run_forward, Command::stop}));
+  EXPECT_EQ(old->held_writes(), 2u);
+
+  fake(before).completions.push_back({run_ticket, WriteResult::ok});
+  fake(before).completions.push_back({stop_ticket, WriteResult::ok});
+  before.next_exchange(at(60ms), Turn::poll);
+  EXPECT_EQ(answers, (std::vector<Outcome>{Outcome::ok, Outcome::ok}));
+  EXPECT_EQ(old->held_writes(), 0u);
+
+  next->adopt(*old);
+  old->stop();
+  EXPECT_EQ(answers.size(), 2u);  // nothing failed by the stop
+  std::vector<std::string> audit;
+  for (const Event& e : events("a1", EventKind::command)) {
+    audit.push_back(std::string(e.field("points")) + " " + std::string(e.field("result")) + " " +
+                    std::string(e.field("why")));
+  }
+  EXPECT_EQ(audit, (std::vector<std::string>{
+                       "setpoint_rpm=900 busy a reload is replacing the device: try again",
+                       "setpoint_rpm=800 command=run_forward ok ", "command=stop ok "}));
+  EXPECT_EQ(next->find("a2"), &neighbour);
+}
+
 }  // namespace
 }  // namespace drivegate
