@@ -325,8 +325,16 @@ TEST(ReloadDiffE2E, AWriteInFlightAtAReloadGetsTheDrivesAnswer) {
   // FC 16: command = run_forward, setpoint = 1500 rpm.
   const std::vector<std::uint8_t> run = {0x10, 0x00, 0x00, 0x00, 0x02,
                                          0x04, 0x00, 0x01, 0x05, 0xDC};
+  // What the drive holds as its speed reference: the run's first part changes it, and the
+  // command part is still to go and be answered when it does.
+  const auto reference = [&] {
+    const std::string state = sim.control("state");
+    const auto at = state.find("reference=");
+    return at == std::string::npos ? state : state.substr(at, state.find(' ', at) - at);
+  };
+  const std::string idle = reference();
   auto reply = std::async(std::launch::async, [&] { return raw_request(daemon.port(), 1, run); });
-  std::this_thread::sleep_for(30ms);
+  ASSERT_TRUE(eventually([&] { return reference() != idle; }, 5s)) << idle;
   daemon.process().signal(SIGHUP);
   EXPECT_EQ(reply.get(), (std::vector<std::uint8_t>{0x10, 0x00, 0x00, 0x00, 0x02}));
   ASSERT_TRUE(eventually(
