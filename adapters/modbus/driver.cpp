@@ -53,8 +53,9 @@ std::optional<std::int32_t> rpm_of(double speed) {
 }  // namespace
 
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
-                           Millis poll_interval)
+                           Millis poll_interval, std::string files_read)
     : profile_(std::move(profile)),
+      files_read_(std::move(files_read)),
       address_(address),
       timing_(timing),
       poll_interval_(poll_interval),

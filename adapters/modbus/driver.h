@@ -37,7 +37,9 @@ struct Timing {
 class ModbusDriver final : public Driver {
  public:
   // `address`: 1..247 (Serial Line 2.2).
-  ModbusDriver(std::uint8_t address, Profile profile, Timing timing, Millis poll_interval);
+  // `files_read`: the profile as Driver::files_read says it (settings.h, profile_read).
+  ModbusDriver(std::uint8_t address, Profile profile, Timing timing, Millis poll_interval,
+               std::string files_read = {});
 
   [[nodiscard]] DriverTraits traits() const override;
   [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
@@ -54,6 +56,7 @@ class ModbusDriver final : public Driver {
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
   void take_completions(std::vector<Completion>& out) override;
+  [[nodiscard]] std::string files_read() const override { return files_read_; }
 
   // Which profile point each of points() is.
   [[nodiscard]] std::size_t profile_point(std::size_t point) const { return exposed_.at(point); }
@@ -122,6 +125,7 @@ class ModbusDriver final : public Driver {
   void fail_all();
 
   Profile profile_;
+  std::string files_read_;
   std::uint8_t address_;
   Timing timing_;
   Millis poll_interval_;

@@ -28,7 +28,8 @@ std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) 
   }
   return std::make_unique<ModbusDriver>(
       *address, std::move(settings->profile),
-      Timing{settings->attempts, settings->comm_timeout, env.char_time}, env.poll_interval);
+      Timing{settings->attempts, settings->comm_timeout, env.char_time}, env.poll_interval,
+      std::move(settings->files_read));
 }
 
 // A pass-through device's simulator is a slave like any other: it serves the profile its options

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string_view>
@@ -73,6 +74,18 @@ std::optional<ProfileText> find_profile(const std::string& name, std::string& er
   return std::nullopt;
 }
 
+std::string profile_read(const ProfileText& profile) {
+  // FNV-1a 64 (Fowler, Noll, Vo): offset basis 0xcbf29ce484222325, prime 0x100000001b3.
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (const char c : profile.text) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 0x100000001b3ULL;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return "profile " + profile.source + " (content " + hex + ")";
+}
+
 std::vector<std::string_view> shipped_profile_names() {
   std::vector<std::string_view> names;
   for (const ShippedProfile& p : kShippedProfiles) names.push_back(p.name);
@@ -94,6 +107,7 @@ std::optional<Settings> parse_settings(const Options& options, std::string& erro
     return std::nullopt;
   }
   s.profile = std::get<Profile>(std::move(parsed));
+  s.files_read = profile_read(*text);
   s.profile_source = std::move(text->source);
   s.attempts = static_cast<std::uint8_t>(options.integer("attempts"));
   s.comm_timeout = Millis(options.integer("comm_timeout_ms"));

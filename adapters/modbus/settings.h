@@ -47,6 +47,8 @@ inline constexpr std::size_t kMaxProfileBytes = 1 << 20;
 struct Settings {
   Profile profile;
   std::string profile_source;  // the file it was read from, or "shipped example-vfd"
+  // The profile as Driver::files_read says it: "profile SOURCE (content FINGERPRINT)".
+  std::string files_read;
   std::uint8_t attempts = 3;
   Millis comm_timeout{3000};
 };
@@ -78,6 +80,9 @@ struct ProfileText {
   std::string source;
 };
 std::optional<ProfileText> find_profile(const std::string& name, std::string& error);
+// What a reload compares of a profile (Driver::files_read): where it came from and a
+// fingerprint of its text (FNV-1a, 64 bits, in hex), so that an edit is a changed device.
+std::string profile_read(const ProfileText& profile);
 // The names of the profiles built into the plugin (`drivegate scan` looks through every profile
 // findable by name: these and the files in kProfileDirs).
 std::vector<std::string_view> shipped_profile_names();

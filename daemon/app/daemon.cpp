@@ -19,6 +19,10 @@ namespace asio = boost::asio;
 namespace {
 constexpr Millis kStopLimit{3000};  // longest wait for drives to confirm stop on shutdown
 constexpr Millis kStatusPeriod{2000};
+// A reload waiting for writes in flight: how often it looks, and how long past their deadlines
+// it waits at most (the device's housekeeping tick fails a write at its deadline).
+constexpr Millis kReloadSettleCheck{10};
+constexpr Millis kReloadSettleMargin{500};
 
 // [server] limits on SIGHUP: applied to the running server at once (modbus::Server::set_limits
 // says how).
@@ -99,7 +103,8 @@ Daemon::Daemon(DaemonOptions options, std::shared_ptr<spdlog::logger> log)
       signals_(io_, SIGINT, SIGTERM, SIGHUP),
       status_timer_(io_),
       watchdog_timer_(io_),
-      trend_timer_(io_) {}
+      trend_timer_(io_),
+      reload_timer_(io_) {}
 
 Daemon::~Daemon() {
   mqtt_.reset();
@@ -246,6 +251,12 @@ void Daemon::wait_signal() {
 }
 
 void Daemon::reload() {
+  if (pending_reload_) {
+    // The last one still waits for writes to settle: this file is read once it is applied.
+    log_->info("SIGHUP: the configuration is read again once the reload under way is applied");
+    reload_again_ = true;
+    return;
+  }
   notifier_.reloading();
   log_->info("SIGHUP: re-reading {}", options_.config.string());
   auto config = load_config();
@@ -301,16 +312,48 @@ void Daemon::reload() {
     restart.emplace_back("[history]");
   }
   config->history = config_.history;
-  const bool mqtt_reconfigured = mqtt_changed(config_.mqtt, config->mqtt);
+  // A device the new configuration replaces or removes first settles the writes it has in
+  // flight, each with what its drive says (docs/safety.md, section 2): the swap waits for them,
+  // at most until the deadline of a write in flight and of a stop sent meanwhile.
+  const Millis wait = gateway_->hold_for_reload(*next);
+  if (wait > Millis(0)) {
+    log_->info("reload: waiting for the writes in flight at the devices it replaces");
+  }
+  pending_reload_ = PendingReload{std::move(*config), std::move(next), std::move(restart),
+                                  Clock::now() + 2 * wait + kReloadSettleMargin};
+  finish_reload();
+}
+
+void Daemon::finish_reload() {
+  if (!pending_reload_ || stopping_) return;
+  if (gateway_->held_writes() > 0 && Clock::now() < pending_reload_->give_up) {
+    reload_timer_.expires_after(kReloadSettleCheck);
+    reload_timer_.async_wait([this](const boost::system::error_code& ec) {
+      if (!ec) finish_reload();
+    });
+    return;
+  }
+  PendingReload pending = std::move(*pending_reload_);
+  pending_reload_.reset();
+  swap_gateway(std::move(pending.config), std::move(pending.next), std::move(pending.restart));
+  if (reload_again_) {
+    reload_again_ = false;
+    reload();
+  }
+}
+
+void Daemon::swap_gateway(Config next_config, std::unique_ptr<Gateway> next,
+                          std::vector<std::string> restart) {
+  const bool mqtt_reconfigured = mqtt_changed(config_.mqtt, next_config.mqtt);
   // Unchanged devices and buses move over running; the changed buses close before the new ones
   // open their ports.
-  const ConfigDiff diff = diff_config(config_, *config);
+  const ConfigDiff diff = next->changes_from(*gateway_);  // profiles' content included
   next->adopt(*gateway_);
   gateway_->stop();
   next->start();
   backend_.set(next.get());
   if (mqtt_reconfigured) {
-    restart_mqtt(config->mqtt, *next);
+    restart_mqtt(next_config.mqtt, *next);
   } else if (mqtt_) {
     mqtt_->use(*next);  // a changed device set is a Sparkplug rebirth
   }
@@ -318,7 +361,7 @@ void Daemon::reload() {
   // that expired in this turn of the loop cannot be cancelled, and would find it freed).
   boost::asio::post(io_, [old = std::shared_ptr<Gateway>(std::move(gateway_))] {});
   gateway_ = std::move(next);
-  config_ = std::move(*config);
+  config_ = std::move(next_config);
   restart_needed_ = std::move(restart);
   const std::vector<std::string> changed = diff_lines(diff);
   for (const auto& line : changed) log_->info("reload: {}", line);
@@ -366,6 +409,8 @@ void Daemon::shutdown() {
   stopping_ = true;
   notifier_.stopping();
   signals_.cancel();
+  reload_timer_.cancel();
+  pending_reload_.reset();  // never started: nothing of it runs
   gateway_->stop_drives(kStopLimit, [this] {
     if (mqtt_) mqtt_->stop();
     if (http_) http_->close();

@@ -48,7 +48,12 @@ class Daemon {
  private:
   std::optional<Config> load_config();
   void wait_signal();
+  // SIGHUP: reads the file and, once the devices it replaces settled their writes in flight
+  // (finish_reload), puts the new gateway in place of the running one (swap_gateway).
   void reload();
+  void finish_reload();
+  void swap_gateway(Config next_config, std::unique_ptr<Gateway> next,
+                    std::vector<std::string> restart);
   void shutdown();
   void restart_mqtt(const MqttConfig& next, Gateway& gateway);
   void tick_status();
@@ -76,6 +81,7 @@ class Daemon {
   boost::asio::steady_timer status_timer_;
   boost::asio::steady_timer watchdog_timer_;
   boost::asio::steady_timer trend_timer_;
+  boost::asio::steady_timer reload_timer_;
   SystemdNotifier notifier_;
   std::string mqtt_state_;
   PluginRegistry plugins_;
@@ -88,6 +94,15 @@ class Daemon {
   std::unique_ptr<http::HttpServer> http_;
   std::unique_ptr<mqtt::Northbound> mqtt_;  // after gateway_: goes first, unhooking its devices
   bool stopping_ = false;
+  // A reload read and built, waiting for the writes in flight at the devices it replaces.
+  struct PendingReload {
+    Config config;
+    std::unique_ptr<Gateway> next;
+    std::vector<std::string> restart;
+    TimePoint give_up;  // then it goes on, whatever is still in flight
+  };
+  std::optional<PendingReload> pending_reload_;
+  bool reload_again_ = false;  // a SIGHUP came meanwhile
   // What the configuration file says and only a restart applies (listeners added, removed or
   // moved, [http], [mqtt]): the status page and JSON show it.
   std::vector<std::string> restart_needed_;

@@ -193,6 +193,10 @@ struct DeviceConfig {
   ShutdownAction on_shutdown = ShutdownAction::stop;
   StartAction on_start = StartAction::adopt;
   Options options;
+  // What its adapter read beyond these settings to make the device (Driver::files_read: a
+  // profile's file and a fingerprint of its content). Empty from the loader; the gateway fills it
+  // in when it builds the device, so that a reload compares it like a setting.
+  std::string files_read;
   int line = 0;
   friend bool operator==(const DeviceConfig&, const DeviceConfig&) = default;
 };

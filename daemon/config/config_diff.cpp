@@ -76,6 +76,11 @@ std::vector<std::string> changes(const DeviceConfig& a, const DeviceConfig& b) {
        std::string_view(b.on_shutdown == ShutdownAction::stop ? "stop" : "hold"));
   note(out, "on_start", std::string_view(a.on_start == StartAction::adopt ? "adopt" : "stop"),
        std::string_view(b.on_start == StartAction::adopt ? "adopt" : "stop"));
+  // What the adapter read (a profile): the file, and its content.
+  if (a.files_read != b.files_read) {
+    const auto read = [](const std::string& f) { return f.empty() ? "(no file)" : f; };
+    out.push_back(fmt::format("{} -> {}", read(a.files_read), read(b.files_read)));
+  }
   // Options, by name: those in either (a changed adapter has other names altogether).
   const auto& oa = a.options.all();
   const auto& ob = b.options.all();

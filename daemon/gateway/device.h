@@ -11,6 +11,7 @@
 //                        write turn of the line per part), applied part by part, confirmed
 //   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
 //   device_history.cpp   what it records in the history: each write's audit record, its events
+//   device_reload.cpp    a reload: the new device takes over the PLC's failsafe watchdog
 #pragma once
 
 #include <spdlog/logger.h>
@@ -137,8 +138,21 @@ class Device final : public Station {
   // (no_response) before it reaches the driver, so that nothing runs the motor after the shutdown
   // stop.
   void close_to_clients() { closed_to_clients_ = true; }
+  // A reload is about to replace or remove this device and waits for its writes in flight to
+  // settle with what the drive says (Gateway::hold_for_reload): until then a client's new write
+  // is refused busy before it reaches the driver, but a stop and the heartbeat alone, which are
+  // carried out as ever.
+  void hold_for_reload() { held_for_reload_ = true; }
+  [[nodiscard]] bool held_for_reload() const { return held_for_reload_; }
+  // How long a write may take before it is failed unconfirmed (DriverTraits::write_timeout).
+  [[nodiscard]] Millis write_timeout() const { return traits_.write_timeout; }
   // Fails every request in flight (shutdown, bus closed for good); `reason` for the audit trail.
   void fail_pending(Outcome why, TimePoint now, std::string_view reason = {});
+  // A reload replaced `old` (the same name, other settings) by this device, not started yet: it
+  // takes over what was promised to the PLC there (docs/safety.md, "A reload and the failsafe"):
+  // the failsafe watchdog, armed with its deadline or latched (its action then sent again to
+  // this driver), and the heartbeat register.
+  void take_over(const Device& old);
   // Writes waiting or being carried out (status bit command_pending).
   [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
   [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }
@@ -231,6 +245,7 @@ class Device final : public Station {
   // a time, oldest first, each part on a write turn the bus engine gives (release()).
   std::vector<std::unique_ptr<Request>> requests_;
   bool closed_to_clients_ = false;
+  bool held_for_reload_ = false;
   bool urgent_unsent_ = false;  // a stop was handed to the driver since its last next_exchange
   bool handed_ = false;         // a queued write's part likewise
   bool last_exchange_wrote_ = false;  // the device's last exchange carried a write
@@ -260,6 +275,7 @@ class Device final : public Station {
   bool recorded_comm_lost_ = false;
   bool recorded_contact_ = false;  // the drive's own state was heard and recorded once
   bool recorded_running_ = false;
+  bool recorded_run_known_ = false;  // whether it runs was recorded once (online)
   bool recorded_latched_ = false;
   FaultSet recorded_faults_;
   std::uint32_t recorded_native_ = 0;

@@ -128,16 +128,22 @@ void Device::record_changes() {
   recorded_contact_ = true;
   const CommonState& s = driver_->common();
   record_faults(s, found);
+  // Whether it runs, and with what command, once the driver knows the drive whole (online: its
+  // handshake done, every block read once), as the log says it (first_contact): half a state is
+  // not what the drive does.
+  if (!online()) return;
+  const bool found_running = !recorded_run_known_;
+  recorded_run_known_ = true;
   if (s.running != recorded_running_) {
     recorded_running_ = s.running;
-    const std::string how = std::string(found ? "found running" : "running") + " (" +
+    const std::string how = std::string(found_running ? "found running" : "running") + " (" +
                             std::string(to_string(s.command)) + ", setpoint " +
                             std::to_string(s.setpoint_rpm) + " rpm)";
     if (s.running) {
       record_event(EventKind::drive_started, config_.name + ": " + how,
                    {{"command", std::string(to_string(s.command))},
                     {"setpoint_rpm", std::to_string(s.setpoint_rpm)},
-                    {"found", found ? "true" : "false"}});
+                    {"found", found_running ? "true" : "false"}});
     } else {
       record_event(EventKind::drive_stopped, config_.name + ": stopped");
     }

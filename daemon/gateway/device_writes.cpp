@@ -26,6 +26,9 @@ namespace drivegate {
 
 namespace {
 
+// Why a write to a device a reload waits to replace is refused (Device::hold_for_reload).
+constexpr const char* kHeldForReload = "a reload is replacing the device: try again";
+
 Outcome to_outcome(WriteCheck c) {
   return c == WriteCheck::invalid_value ? Outcome::invalid_value : Outcome::refused;
 }
@@ -250,6 +253,10 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
       parts.size() == 1 && write_kind(*parts[0].point) == CommonWrite::heartbeat;
   if (heartbeat_only) answer.audit = Answer::Audit::count;
   if (comm_lost() && !heartbeat_only) return Outcome::no_response;
+  if (held_for_reload_ && origin == Origin::plc && !heartbeat_only && !commands(parts, &is_stop)) {
+    answer.record.why = kHeldForReload;
+    return Outcome::busy;
+  }
   if (failsafe_.latched() && !feeds && commands(parts, &is_run)) {
     answer.record.why = "the failsafe is latched";
     return refuse_run_while_latched(
@@ -481,6 +488,10 @@ Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pd
       return verdict.refusal;
     }
     if (closed_to_clients_ || comm_lost()) return Outcome::no_response;
+    if (held_for_reload_) {
+      a.record.why = kHeldForReload;
+      return Outcome::busy;
+    }
     // Reads wait in places of their own: however many read clients fill theirs, a write from
     // a client that may write is never refused busy for them.
     if (queued(false, reads_only) >= kMaxQueuedWrites) {

@@ -71,9 +71,11 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
       errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device " + error);
       continue;
     }
+    DeviceConfig with_files = dc;
+    with_files.files_read = driver->files_read();  // a reload compares it (config_diff.h)
     try {
       gw->devices_.push_back(std::make_unique<Device>(
-          dc, *adapter, std::move(driver),
+          std::move(with_files), *adapter, std::move(driver),
           context_logger(*log, {.device = dc.name, .bus = dc.bus, .unit = dc.unit_id}), now,
           history));
     } catch (const std::exception& e) {
@@ -105,25 +107,76 @@ std::vector<Station*> Gateway::stations_on(const std::string& bus) const {
   return {devices.begin(), devices.end()};
 }
 
+Config Gateway::running_config() const {
+  Config c;
+  for (const auto& d : devices_) c.devices.push_back(d->config());
+  for (const auto& b : buses_) c.buses.push_back(b->config());
+  return c;
+}
+
+ConfigDiff Gateway::changes_from(const Gateway& running) const {
+  return diff_config(running.running_config(), running_config());
+}
+
+namespace {
+
+bool listed(const std::vector<std::string>& names, const std::string& name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+}  // namespace
+
+Millis Gateway::hold_for_reload(const Gateway& next) {
+  const ConfigDiff diff = next.changes_from(*this);
+  Millis longest{0};
+  for (const auto& d : devices_) {
+    if (listed(diff.devices_kept, d->config().name)) continue;  // moves over, writes and all
+    d->hold_for_reload();
+    if (d->writes_in_flight() > 0) longest = std::max(longest, d->write_timeout());
+  }
+  return longest;
+}
+
+std::size_t Gateway::held_writes() const {
+  std::size_t n = 0;
+  for (const auto& d : devices_) {
+    if (d->held_for_reload()) n += d->writes_in_flight();
+  }
+  return n;
+}
+
 void Gateway::adopt(Gateway& old) {
-  // Devices: the running one in place of the fresh one wherever the settings are the same. The
-  // fresh ones it replaces go last, once no engine points to them.
+  const ConfigDiff diff = changes_from(old);
+  // Devices: the running one in place of the fresh one wherever the settings are the same; a
+  // changed one takes over the PLC's failsafe from the one it replaces. The fresh ones a running
+  // one replaces go last, once no engine points to them.
   std::vector<std::unique_ptr<Device>> replaced;
   for (auto& fresh : devices_) {
     const auto running = std::find_if(old.devices_.begin(), old.devices_.end(), [&](const auto& d) {
-      return d && d->config().name == fresh->config().name &&
-             same_settings(d->config(), fresh->config());
+      return d && d->config().name == fresh->config().name;
     });
     if (running == old.devices_.end()) continue;
+    if (!listed(diff.devices_kept, fresh->config().name)) {
+      fresh->take_over(**running);
+      continue;
+    }
     replaced.push_back(std::move(fresh));
     fresh = std::move(*running);
   }
   std::erase(old.devices_, nullptr);
+  for (const auto& gone : old.devices_) {
+    if (!listed(diff.devices_removed, gone->config().name)) continue;
+    if (gone->failsafe_latched() || gone->state().running) {
+      log_->warn("device {}: removed by the reload while {}: the gateway no longer watches it",
+                 gone->config().name,
+                 gone->failsafe_latched() ? "its failsafe is latched" : "its drive runs");
+    }
+  }
   // Buses: the running one, port open, wherever its own settings are the same.
   for (auto& fresh_bus : buses_) {
+    if (!listed(diff.buses_kept, fresh_bus->config().name)) continue;
     const auto running = std::find_if(old.buses_.begin(), old.buses_.end(), [&](const auto& b) {
-      return b->config().name == fresh_bus->config().name &&
-             same_settings(b->config(), fresh_bus->config());
+      return b->config().name == fresh_bus->config().name;
     });
     if (running == old.buses_.end()) continue;
     fresh_bus = std::move(*running);  // the fresh bus, never started, goes first

@@ -15,6 +15,7 @@
 
 #include "bus/bus.h"
 #include "config/config.h"
+#include "config/config_diff.h"
 #include "device.h"
 #include "gateway/outcome.h"
 #include "gateway/session.h"
@@ -43,13 +44,24 @@ class Gateway {
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;
 
+  // What a reload from `running` to this (new) gateway changes (config/config_diff.h), device
+  // by device and bus by bus, each device with what its adapter read (a profile's content).
+  [[nodiscard]] ConfigDiff changes_from(const Gateway& running) const;
+  // For a reload to `next` (built, not started), before adopt(): every device of this (running)
+  // gateway that `next` replaces or removes refuses new client writes from now on but stops and
+  // the heartbeat (Device::hold_for_reload), so that its writes in flight settle with what its
+  // drive says before it goes. Returns the longest write_timeout of those with writes in flight
+  // (zero: none, nothing to wait for); held_writes() counts what is left.
+  Millis hold_for_reload(const Gateway& next);
+  [[nodiscard]] std::size_t held_writes() const;
   // For a reload, before start(): every device of this (new, not started) gateway whose settings
-  // are unchanged in `old` (config/config_diff.h) is taken from `old` as it runs, in place of the
-  // fresh one: driver, command in force, failsafe timer and latch, counters, writes in flight,
-  // whatever else changes on its line. Every bus whose own settings are unchanged is taken with
-  // its port open and gets this gateway's devices; the others start afresh when this gateway
-  // starts, once the caller has stopped `old` (and with it their ports and the devices left in
-  // it: removed or changed).
+  // are unchanged in `old` (changes_from) is taken from `old` as it runs, in place of the fresh
+  // one: driver, command in force, failsafe timer and latch, counters, writes in flight,
+  // whatever else changes on its line. A changed device takes over the PLC's failsafe watchdog
+  // from the one it replaces (Device::take_over). Every bus whose own settings are unchanged is
+  // taken with its port open and gets this gateway's devices; the others start afresh when this
+  // gateway starts, once the caller has stopped `old` (and with it their ports and the devices
+  // left in it: removed or changed).
   void adopt(Gateway& old);
 
   void start();  // opens the buses and starts polling (kept buses poll on)
@@ -100,6 +112,8 @@ class Gateway {
   // if any).
   void record_refusal(const Source& source, const Device* device, std::uint8_t unit,
                       std::string asked, Outcome result, std::string why);
+  // The configuration as its devices and buses hold it (files_read filled in).
+  [[nodiscard]] Config running_config() const;
   [[nodiscard]] std::vector<Device*> devices_on(const std::string& bus) const;
   [[nodiscard]] std::vector<Station*> stations_on(const std::string& bus) const;
 

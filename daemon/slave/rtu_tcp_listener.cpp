@@ -34,6 +34,7 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
         listener.options_.framing, modbus::Delimit::length, modbus::LineTiming{},
         listener.client_policy(peer_), listener.counters_, listener.log_,
         listener.name_ + " client " + peer_, [this](Bytes frame) { send(std::move(frame)); });
+    host_->when_settled([this] { close_if_done(); });
   }
 
   void start() {
@@ -58,13 +59,22 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
 
  private:
   void read() {
+    if (input_done_) return;
     socket_.async_read_some(asio::buffer(rx_),
                             [self = shared_from_this()](const boost::system::error_code& ec,
                                                         std::size_t n) { self->on_read(ec, n); });
   }
   void on_read(const boost::system::error_code& ec, std::size_t n) {
     if (closed_) return;
-    if (ec) {  // the client closed (or reset): a write in progress settles unanswered
+    // The client is done sending (shutdown SHUT_WR): every request it sent is still carried out
+    // and answered, as on the Modbus TCP listener (modbus/connection.h); then the close. A frame
+    // left half-sent will never be finished.
+    if (ec == asio::error::eof) {
+      input_done_ = true;
+      close_if_done();
+      return;
+    }
+    if (ec) {  // reset: a write in progress settles unanswered
       gone();
       return;
     }
@@ -103,12 +113,17 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
                           return;
                         }
                         self->flush();
+                        self->close_if_done();
                         if (self->paused_ && !self->closed_ &&
                             self->tx_.size() + self->inflight_.size() <= kMaxReplyBacklog / 2) {
                           self->paused_ = false;
                           self->read();
                         }
                       });
+  }
+  // Half-closed, with nothing left to answer or to send: closed.
+  void close_if_done() {
+    if (input_done_ && !closed_ && !host_->busy() && !writing_ && tx_.empty()) gone();
   }
   // The next deadline: idle (no request for idle_timeout), or a partial frame left unfinished
   // for frame_timeout (a client holding a slot with one byte a minute).
@@ -164,6 +179,7 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
   Bytes inflight_;
   net::TimePoint last_request_{};
   bool writing_ = false;
+  bool input_done_ = false;  // the client half-closed: answer what it sent, then close
   bool closed_ = false;
 };
 

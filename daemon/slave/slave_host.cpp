@@ -219,46 +219,50 @@ void SlaveHost::on_done(std::uint32_t generation, Exception result,
                         std::span<const std::uint8_t> forwarded_reply) {
   // Deferred: the dispatcher's scratch may still hold the write that called this.
   Bytes reply_copy(forwarded_reply.begin(), forwarded_reply.end());
-  asio::post(io_, [weak = weak_from_this(), generation, result,
-                   reply_copy = std::move(reply_copy)] {
-    auto self = weak.lock();
-    if (!self || self->stopped_) return;
-    if (const auto a = self->accepted_.find(generation); a != self->accepted_.end()) {
-      const Accepted w = a->second;
-      self->accepted_.erase(a);
-      if (result != Exception::none) {  // write_reply = accepted: the master was told ok
-        ++self->counters_.write_timeouts;
-        if (auto held = self->accepted_log_.admit(self->clock_.now())) {
-          self->log_->warn("modbus: {}: write to unit {} (function 0x{:02X}) answered as "
-                           "accepted, then not applied: {}{}",
-                           self->name_, w.unit, w.function, modbus::to_string(result),
-                           net::held_note(*held));
-        }
+  asio::post(io_,
+             [weak = weak_from_this(), generation, result, reply_copy = std::move(reply_copy)] {
+               auto self = weak.lock();
+               if (!self || self->stopped_) return;
+               self->settle(generation, result, reply_copy);
+               if (self->settled_) self->settled_();
+             });
+}
+
+void SlaveHost::settle(std::uint32_t generation, Exception result, const Bytes& forwarded_reply) {
+  if (const auto a = accepted_.find(generation); a != accepted_.end()) {
+    const Accepted w = a->second;
+    accepted_.erase(a);
+    if (result != Exception::none) {  // write_reply = accepted: the master was told ok
+      ++counters_.write_timeouts;
+      if (auto held = accepted_log_.admit(clock_.now())) {
+        log_->warn(
+            "modbus: {}: write to unit {} (function 0x{:02X}) answered as "
+            "accepted, then not applied: {}{}",
+            name_, w.unit, w.function, modbus::to_string(result), net::held_note(*held));
       }
-      return;
     }
-    auto& p = self->pending_;
-    if (!p || p->generation != generation) return;  // given up on: never answered late
-    if (const auto leaves = std::max(self->clock_.now(), p->reply_at);
-        p->give_up_at && leaves > *p->give_up_at) {
-      self->too_late(leaves);
-      return;
-    }
-    std::size_t n = 0;
-    if (p->forwarded && result == Exception::none) {
-      n = std::min(reply_copy.size(), self->out_.size());
-      std::copy_n(reply_copy.begin(), n, self->out_.begin());
-    } else if (p->forwarded) {
-      n = modbus::exception_pdu(p->request.at(0), result, self->out_);
-    } else {
-      n = self->dispatcher_.complete(self->policy_->session, p->unit, p->request, result,
-                                     self->out_);
-    }
-    const auto unit = p->unit;
-    const auto at = p->reply_at;
-    self->pending_.reset();
-    self->reply(unit, std::span(self->out_).first(n), at);
-  });
+    return;
+  }
+  auto& p = pending_;
+  if (!p || p->generation != generation) return;  // given up on: never answered late
+  if (const auto leaves = std::max(clock_.now(), p->reply_at);
+      p->give_up_at && leaves > *p->give_up_at) {
+    too_late(leaves);
+    return;
+  }
+  std::size_t n = 0;
+  if (p->forwarded && result == Exception::none) {
+    n = std::min(forwarded_reply.size(), out_.size());
+    std::copy_n(forwarded_reply.begin(), n, out_.begin());
+  } else if (p->forwarded) {
+    n = modbus::exception_pdu(p->request.at(0), result, out_);
+  } else {
+    n = dispatcher_.complete(policy_->session, p->unit, p->request, result, out_);
+  }
+  const auto unit = p->unit;
+  const auto at = p->reply_at;
+  pending_.reset();
+  reply(unit, std::span(out_).first(n), at);
 }
 
 void SlaveHost::count_reply(std::span<const std::uint8_t> pdu) {
@@ -317,6 +321,7 @@ void SlaveHost::on_timer(const boost::system::error_code& ec) {
     Bytes frame = std::move(due_->second);
     due_.reset();
     put(std::move(frame));
+    if (settled_ && !busy()) settled_();
   }
   framer_.expire(now);
   drain();

@@ -74,7 +74,11 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   // sent.
   void stop();
   void set_policy(std::shared_ptr<const SlavePolicy> policy) { policy_ = std::move(policy); }
-  [[nodiscard]] bool busy() const { return pending_.has_value(); }
+  // A request is waiting for its device, or its reply for its moment on the line.
+  [[nodiscard]] bool busy() const { return pending_.has_value() || due_.has_value(); }
+  // Called each time a request that waited for its device has been answered or given up on:
+  // an owner waiting for the host to be done (a client that half-closed) looks again.
+  void when_settled(std::function<void()> settled) { settled_ = std::move(settled); }
   // Part of a frame is held, waiting for the rest.
   [[nodiscard]] bool partial() const { return framer_.partial(); }
 
@@ -103,6 +107,8 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   void reply(std::uint8_t unit, std::span<const std::uint8_t> pdu, net::TimePoint at);
   void on_done(std::uint32_t generation, modbus::Exception result,
                std::span<const std::uint8_t> forwarded_reply);
+  // on_done's work, in a later turn of the event loop.
+  void settle(std::uint32_t generation, modbus::Exception result, const Bytes& forwarded_reply);
   void superseded();
   // The pending request's reply would leave after the master's response timeout: dropped.
   void too_late(net::TimePoint would_leave);
@@ -123,6 +129,7 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   std::shared_ptr<spdlog::logger> log_;
   std::string name_;
   Send send_;
+  std::function<void()> settled_;
   net::Timer timer_;
   bool timer_armed_ = false;
   net::TimePoint timer_at_ = net::TimePoint::max();

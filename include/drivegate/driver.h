@@ -277,6 +277,12 @@ class Driver {
   // has judged the request already: one whole, well-formed request of a function whose length
   // it knows, holding no other frame, within the client's access (daemon/gateway/forward_access.h).
   [[nodiscard]] virtual bool forwards() const { return false; }
+
+  // What the driver read beyond its options to make the device (a profile file), said so that
+  // equal text means equal content: which file, and a fingerprint of what it held. Empty when it
+  // read nothing. A reload compares it like a setting: a device whose file changed is a changed
+  // device, started afresh with the new content.
+  [[nodiscard]] virtual std::string files_read() const { return {}; }
 };
 
 }  // namespace drivegate

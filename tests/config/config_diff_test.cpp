@@ -53,6 +53,23 @@ TEST(ConfigDiff, SaysWhatChangedKeyByKey) {
   EXPECT_FALSE(same_settings(d, e));
 }
 
+// What the adapter read (Driver::files_read, filled in by the gateway) is a setting like the
+// others: the same file with other content, or another file, is a changed device.
+TEST(ConfigDiff, AFileTheDeviceReadsIsComparedByContent) {
+  DeviceConfig d;
+  d.files_read = "profile /etc/drivegate/profiles/vfd.toml (content 00000000000000a1)";
+  DeviceConfig e = d;
+  EXPECT_TRUE(same_settings(d, e));
+  e.files_read = "profile /etc/drivegate/profiles/vfd.toml (content 00000000000000b2)";
+  EXPECT_THAT(changes(d, e),
+              ElementsAre("profile /etc/drivegate/profiles/vfd.toml (content 00000000000000a1) -> "
+                          "profile /etc/drivegate/profiles/vfd.toml (content 00000000000000b2)"));
+  e.files_read.clear();
+  EXPECT_THAT(changes(d, e),
+              ElementsAre("profile /etc/drivegate/profiles/vfd.toml (content 00000000000000a1) -> "
+                          "(no file)"));
+}
+
 TEST(ConfigDiff, SortsDevicesAndBusesByWhatHappensToThem) {
   const Config running = two_lines();
   Config next = two_lines();

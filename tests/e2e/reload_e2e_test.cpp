@@ -1,9 +1,11 @@
 // SIGHUP: a good new configuration is applied without dropping a Modbus TCP connection; a bad
 // one is refused and the daemon keeps serving the old one. [server] limits apply at once to the
 // open connections; a listen change waits for a restart.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <future>
 #include <sstream>
 
 #include "e2e.h"
@@ -12,6 +14,8 @@ namespace drivegate::test {
 namespace {
 
 using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+using ::testing::Not;
 
 std::string washer(const std::filesystem::path& port, int unit) {
   return "[[bus]]\nname = \"line\"\nport = \"" + port.string() +
@@ -236,6 +240,123 @@ TEST(ReloadDiffE2E, ANeighboursChangeDoesNotDisarmTheFailsafe) {
   plc.unit(1);
   EXPECT_NE(plc.input(reg::status, 1).regs.at(0) & (1 << 5), 0);  // latched
   EXPECT_NE(slurp(dir / "drivegated.log").find("failsafe stop"), std::string::npos);
+}
+
+// --- a reload reads content --------------------------------------------------------------------
+
+// One ED3100 on a 9600 8E1 line: the `ed3100` adapter with `extra` keys, or the `modbus` adapter
+// with the profile at `profile`.
+std::string vfd(const std::filesystem::path& port, const std::string& extra,
+                const std::filesystem::path& profile = {}) {
+  return "[[bus]]\nname = \"line\"\nport = \"" + port.string() +
+         "\"\nbaud = 9600\nparity = \"even\"\n\n[[device]]\nname = \"vfd\"\nbus = \"line\"\n"
+         "unit_id = 1\naddress = 1\n" +
+         extra +
+         (profile.empty()
+              ? "adapter = \"ed3100\"\n"
+              : "adapter = \"modbus\"\n[device.options]\nprofile = \"" + profile.string() + "\"\n");
+}
+
+// A profile file edited, then SIGHUP: the device that reads it is a changed device, started
+// afresh with the new content (here the speed's scale doubled), not "kept as it runs" with the
+// old one; the drive it finds running runs on. A profile edited into something that does not
+// load refuses the reload, with the reason, and the device goes on as it was.
+TEST(ReloadDiffE2E, AnEditedProfileIsAChangedDevice) {
+  TempDir dir;
+  const auto shipped =
+      std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "adapters/modbus/profiles/ed3100-standard.toml";
+  const std::string text = slurp(shipped);
+  const std::string old_scale = "scale = 0.3                 # 0.01 Hz (format bit 3";
+  ASSERT_NE(text.find(old_scale), std::string::npos) << "the shipped profile changed";
+  const auto profile = dir / "vfd.toml";
+  std::ofstream(profile) << text;
+  Sim sim("ed3100", dir / "line", {"--address", "1", "--set", "sim_reply_form=standard"});
+  ASSERT_THAT(sim.control("run forward 5000"), HasSubstr("ok"));  // 50.00 Hz: 1500 rpm
+  Daemon daemon(dir, vfd(dir / "line", "", profile), {}, dir / "drivegated.log");
+  Plc plc(daemon.port(), 1);
+  ASSERT_TRUE(plc.connect());
+  const auto speed = [&] {
+    const auto r = plc.input(reg::speed, 1);
+    return r.ok() ? static_cast<int>(r.regs[0]) : -1;
+  };
+  ASSERT_TRUE(eventually([&] { return speed() == 1500; }, 10s)) << speed();
+
+  std::string edited = text;
+  edited.replace(edited.find(old_scale), std::string("scale = 0.3").size(), "scale = 0.6");
+  std::ofstream(profile) << edited;
+  daemon.process().signal(SIGHUP);
+  ASSERT_TRUE(eventually(
+      [&] {
+        return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos;
+      },
+      10s));
+  const std::string log = slurp(dir / "drivegated.log");
+  EXPECT_THAT(log, HasSubstr("reload: device vfd changed (profile " + profile.string()));
+  EXPECT_THAT(log, Not(HasSubstr("kept as they run: vfd")));
+  EXPECT_TRUE(eventually([&] { return speed() == 3000; }, 10s)) << speed();
+  EXPECT_THAT(sim.control("state"), HasSubstr("running=1"));  // found running, runs on
+
+  std::ofstream(profile) << "[profile]\nname = 5\n";
+  daemon.process().signal(SIGHUP);
+  ASSERT_TRUE(eventually(
+      [&] {
+        return slurp(dir / "drivegated.log").find("new configuration refused") != std::string::npos;
+      },
+      10s));
+  EXPECT_THAT(slurp(dir / "drivegated.log"), HasSubstr(profile.string() + ":"));
+  EXPECT_EQ(speed(), 3000);
+  EXPECT_TRUE(daemon.process().running());
+}
+
+// --- every write's outcome is the truth ---------------------------------------------------------
+
+// A run on its way to a slow ED3100 (60 ms before each reply) when a SIGHUP changes the device's
+// poll_ms: the reload waits for it, the PLC gets the drive's answer (the write echoed, not 0x0B
+// "the gateway stopped" over a drive that took it), the drive runs, and the new device shows the
+// run it finds.
+TEST(ReloadDiffE2E, AWriteInFlightAtAReloadGetsTheDrivesAnswer) {
+  TempDir dir;
+  Sim sim("ed3100", dir / "line", {"--address", "1", "--turnaround-ms", "60"});
+  Daemon daemon(dir, vfd(dir / "line", ""), {}, dir / "drivegated.log");
+  Plc plc(daemon.port(), 1);
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s));
+  std::ofstream(daemon.config()) << vfd(dir / "line", "poll_ms = 250\n");
+  // FC 16: command = run_forward, setpoint = 1500 rpm.
+  const std::vector<std::uint8_t> run = {0x10, 0x00, 0x00, 0x00, 0x02,
+                                         0x04, 0x00, 0x01, 0x05, 0xDC};
+  // What the drive holds as its speed reference: the run's first part changes it, and the
+  // command part is still to go and be answered when it does.
+  const auto reference = [&] {
+    const std::string state = sim.control("state");
+    const auto at = state.find("reference=");
+    return at == std::string::npos ? state : state.substr(at, state.find(' ', at) - at);
+  };
+  const std::string idle = reference();
+  auto reply = std::async(std::launch::async, [&] { return raw_request(daemon.port(), 1, run); });
+  ASSERT_TRUE(eventually([&] { return reference() != idle; }, 5s)) << idle;
+  daemon.process().signal(SIGHUP);
+  EXPECT_EQ(reply.get(), (std::vector<std::uint8_t>{0x10, 0x00, 0x00, 0x00, 0x02}));
+  ASSERT_TRUE(eventually(
+      [&] {
+        return slurp(dir / "drivegated.log").find("configuration reloaded") != std::string::npos;
+      },
+      10s));
+  const std::string log = slurp(dir / "drivegated.log");
+  EXPECT_THAT(log, HasSubstr("reload: waiting for the writes in flight"));
+  EXPECT_THAT(log, HasSubstr("reload: device vfd changed (poll_ms 500 -> 250)"));
+  EXPECT_THAT(log, Not(HasSubstr("the gateway stopped")));
+  EXPECT_TRUE(
+      eventually([&] { return sim.control("state").find("running=1") != std::string::npos; }, 5s))
+      << sim.control("state");
+  EXPECT_TRUE(eventually(
+      [&] {
+        const auto held = plc.holding(reg::command, 1);
+        return held.ok() && held.regs[0] == 1;  // run_forward, as found
+      },
+      10s))
+      << slurp(dir / "drivegated.log");
+  EXPECT_EQ(plc.write(reg::command, {0}), 0);
 }
 
 // A listener's access changed from operate to read applies to the open connection, and the log

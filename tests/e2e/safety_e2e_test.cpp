@@ -1,13 +1,15 @@
 // PLC-loss failsafe end to end (issue 8, "Not done until"): the real daemon and a simulated
 // nidec-washer; a Modbus client runs the drive, then goes away. The gateway stops the drive
 // within failsafe_timeout + one poll cycle, status bit 5 (failsafe) latches, a setpoint alone
-// does not restart it, a fresh run command does. Also: on_shutdown = hold.
+// does not restart it, a fresh run command does. Also: on_shutdown = hold, and a reload that
+// changes the running drive's device (its adapter) while the PLC is gone.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <iostream>
 
 #include "e2e.h"
+#include "http_get.h"
 
 namespace drivegate::test {
 namespace {
@@ -130,6 +132,83 @@ TEST_F(HoldE2E, HoldLatchesTheBitAndLeavesTheDriveRunningAlsoAtShutdown) {
   EXPECT_EQ(daemon_.stop(), 0);
   EXPECT_THAT(sim_.control("state"),
               AllOf(HasSubstr("target_rpm=800"), Not(HasSubstr("motion=stop"))));
+}
+
+// --- a reload that changes the device while its failsafe is armed ----------------------------
+
+// An ED3100 answering in the standard form, so that both the `ed3100` adapter and the `modbus`
+// adapter with the shipped ed3100-standard profile drive it; the line is stated (9600 8E1), so
+// that it does not change with the adapter.
+std::string ed3100_device(const std::filesystem::path& port, int http_port, bool as_profile) {
+  return "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) +
+         "\"\nrequests_per_s = 0\n\n[[bus]]\nname = \"line\"\nport = \"" + port.string() +
+         "\"\nbaud = 9600\nparity = \"even\"\n\n[[device]]\nname = \"vfd\"\nbus = \"line\"\n"
+         "unit_id = 1\naddress = 1\npoll_ms = 500\nfailsafe_timeout_ms = 2000\n"
+         "failsafe_action = \"stop\"\n" +
+         (as_profile ? "adapter = \"modbus\"\n[device.options]\nprofile = \"ed3100-standard\"\n"
+                     : "adapter = \"ed3100\"\n");
+}
+
+// The issue's reload: the PLC runs the drive with a 2 s failsafe and goes away; half a second
+// later a SIGHUP switches the device from the ed3100 adapter to the modbus one with the
+// ed3100-standard profile. The new device inherits the watchdog: the drive is stopped within the
+// deadline the PLC's last write set plus one poll cycle, the PLC reads the failsafe bit and the
+// stop, and the history says the new device found the drive running (run_forward), as the log
+// does, then that the failsafe tripped.
+TEST(SafetyReloadE2E, AnAdapterSwitchWithThePlcGoneKeepsTheFailsafesDeadline) {
+  TempDir dir;
+  Sim sim("ed3100", dir / "line", {"--address", "1", "--set", "sim_reply_form=standard"});
+  const int http = free_port();
+  Daemon daemon(dir, ed3100_device(dir / "line", http, false), {}, dir / "drivegated.log");
+  Plc observer(daemon.port(), 1);
+  ASSERT_TRUE(observer.connect());
+  ASSERT_TRUE(eventually(
+      [&] {
+        const auto r = observer.input(reg::status, 1);
+        return r.ok() && (r.regs[0] & reg::online) != 0;
+      },
+      10s));
+  auto last_write = std::chrono::steady_clock::now();
+  {
+    Plc plc(daemon.port(), 1);
+    ASSERT_TRUE(plc.connect());
+    ASSERT_EQ(plc.write(reg::command, {1 /*run_forward*/, 1500}), 0);
+    last_write = std::chrono::steady_clock::now();
+  }  // the PLC is gone
+  ASSERT_THAT(sim.control("state"), HasSubstr("running=1"));
+  std::this_thread::sleep_for(500ms);
+  std::ofstream(daemon.config()) << ed3100_device(dir / "line", http, true);
+  daemon.process().signal(SIGHUP);
+  // The drive holds the stop command (0x2000 = 0x0001) from the moment it took it; its output
+  // then ramps down.
+  ASSERT_TRUE(eventually(
+      [&] { return sim.control("state").find("command=0x0001") != std::string::npos; }, 8s))
+      << "the failsafe never stopped the drive after the reload\n"
+      << slurp(dir / "drivegated.log");
+  const auto stopped = std::chrono::steady_clock::now() - last_write;
+  std::cerr << "drive stopped "
+            << std::chrono::duration_cast<std::chrono::milliseconds>(stopped).count()
+            << " ms after the last write\n";
+  EXPECT_LT(stopped, 2000ms + 500ms) << slurp(dir / "drivegated.log");  // deadline + a poll
+  EXPECT_TRUE(
+      eventually([&] { return sim.control("state").find("running=0") != std::string::npos; }, 5s));
+  const std::string log = slurp(dir / "drivegated.log");
+  EXPECT_THAT(log, HasSubstr("reload: device vfd changed (adapter ed3100 -> modbus"));
+  EXPECT_THAT(log, HasSubstr("device vfd: found running (run_forward"));
+  // The registers: the failsafe bit latched, the stop in force, the drive stopped.
+  EXPECT_TRUE(eventually(
+      [&] {
+        const auto s = observer.input(reg::status, 1);
+        return s.ok() && (s.regs[0] & kFailsafe) != 0 && (s.regs[0] & reg::running) == 0;
+      },
+      5s));
+  EXPECT_EQ(observer.holding(reg::command, 1).regs.at(0), 0);
+  // The history: the new device found the drive running, then the failsafe tripped.
+  const std::string started = http_get(http, "/api/v1/events?device=vfd&kind=drive_started").body;
+  EXPECT_THAT(started, HasSubstr("found running (run_forward")) << started;
+  EXPECT_THAT(started, Not(HasSubstr("running (stop"))) << started;
+  EXPECT_THAT(http_get(http, "/api/v1/events?device=vfd&kind=failsafe_tripped").body,
+              HasSubstr("failsafe stop"));
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "drivegate/crc.h"
 #include "e2e.h"
 #include "pymodbus_slave.h"  // have_pymodbus_tools
 #include "serial_master.h"
@@ -214,6 +215,46 @@ TEST_F(SerialListenerE2E, RtuOverTcpServesReadsAndRefusesWritesOnAReadListener) 
   EXPECT_EQ(out[3].size(), std::string("reply ").size() + 14);
   EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 900);
   EXPECT_THAT(log(), HasSubstr("(rtu over tcp)"));
+}
+
+// RTU over TCP: a client sends a run (setpoint and run_forward in one FC 16) and half-closes its
+// side at once (shutdown SHUT_WR), as the Modbus TCP listener's clients may: it still gets the
+// reply, the echo of what the drive took, CRC and all, and then the connection closes; the drive
+// runs, and the audit trail says ok because the client was told.
+TEST_F(SerialListenerE2E, RtuOverTcpAnswersAHalfClosedClientsRunThenCloses) {
+  const int port = free_port();
+  start("access = \"operate\"\n\n[[listener]]\naddress = \"127.0.0.1:" + std::to_string(port) +
+        "\"\nframing = \"rtu\"\nallow = [\"127.0.0.1\"]\naccess = \"operate\"\n");
+  Bytes run = {0x01, 0x10, 0x00, 0x00, 0x00, 0x02, 0x04, 0x00, 0x01, 0x03, 0x20};  // 1, 800
+  append_crc16_modbus(run);
+  const int fd = connect_loopback(port);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::write(fd, run.data(), run.size()), static_cast<ssize_t>(run.size()));
+  ::shutdown(fd, SHUT_WR);
+  Bytes in;
+  bool closed = false;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (!closed && std::chrono::steady_clock::now() < deadline) {
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, 100) <= 0) continue;
+    std::uint8_t buf[64];
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n <= 0) {
+      closed = true;
+      break;
+    }
+    in.insert(in.end(), buf, buf + n);
+  }
+  ::close(fd);
+  Bytes echo = {0x01, 0x10, 0x00, 0x00, 0x00, 0x02};
+  append_crc16_modbus(echo);
+  EXPECT_EQ(in, echo);
+  EXPECT_TRUE(closed) << "the connection was not closed after the reply";
+  EXPECT_THAT(sim_->control("state"), HasSubstr(" target_rpm=800 "));
+  EXPECT_TRUE(
+      eventually([&] { return (plc_->input(reg::status, 1).regs[0] & reg::running) != 0; }, 5s));
+  EXPECT_THAT(log(), HasSubstr("command=run_forward: ok"));
+  EXPECT_EQ(plc_->write(reg::command, {0}), 0);
 }
 
 // The PLC-loss failsafe (docs/safety.md) sees a serial master as it sees a TCP client: its

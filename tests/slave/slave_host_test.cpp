@@ -1,6 +1,8 @@
 // SlaveHost (daemon/slave/slave_host.h) on a manual clock, with a backend whose writes complete
 // when the test says: what goes onto the master's line, and when, for every kind of request the
 // issue names (issue 28, docs/serial-listeners.md). The frames are the serial line codec's.
+#include "slave/slave_host.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
@@ -8,8 +10,8 @@
 #include <boost/asio/io_context.hpp>
 #include <optional>
 
+#include "hand_backend.h"
 #include "manual_clock.h"
-#include "slave/slave_host.h"
 
 namespace drivegate::slave {
 namespace {
@@ -17,41 +19,6 @@ namespace {
 using namespace std::chrono_literals;
 using modbus::Exception;
 using modbus_serial::Framing;
-
-// Units 1 and 2 exist; holding registers read as 100 + address; writes wait for complete().
-class HandBackend final : public modbus::Backend {
- public:
-  Exception read(const Session&, std::uint8_t unit, Table, std::uint16_t address,
-                 std::span<std::uint16_t> out) override {
-    if (!serves(unit)) return Exception::gateway_path_unavailable;
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = static_cast<std::uint16_t>(100 + address + i);
-    return Exception::none;
-  }
-  Exception write(const Session&, std::uint8_t unit, Table, std::uint16_t address,
-                  std::span<const std::uint16_t> values, modbus::WriteDone done) override {
-    if (!serves(unit)) return Exception::gateway_path_unavailable;
-    writes.push_back({unit, address, std::vector<std::uint16_t>(values.begin(), values.end())});
-    pending.push_back(std::move(done));
-    return Exception::none;
-  }
-  void refused_write(const Session&, std::uint8_t unit, std::span<const std::uint8_t>) override {
-    refused.push_back(unit);
-  }
-  void refused_broadcast(const Session&, std::span<const std::uint8_t>) override {
-    ++refused_broadcasts;
-  }
-  bool serves(std::uint8_t unit) const override { return unit == 1 || unit == 2; }
-
-  struct Write {
-    std::uint8_t unit;
-    std::uint16_t address;
-    std::vector<std::uint16_t> values;
-  };
-  std::vector<Write> writes;
-  std::vector<modbus::WriteDone> pending;
-  std::vector<std::uint8_t> refused;
-  int refused_broadcasts = 0;
-};
 
 class SlaveHostTest : public ::testing::Test {
  protected:

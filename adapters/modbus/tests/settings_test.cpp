@@ -45,6 +45,44 @@ TEST(ModbusSettings, APathIsReadAndItsErrorsNameItsLines) {
   std::filesystem::remove_all(dir);
 }
 
+// The driver says which profile it read and a fingerprint of its text (Driver::files_read): the
+// same text gives the same words, an edit other words, so that a reload sees the edit.
+TEST(ModbusSettings, TheDriverSaysWhichProfileItReadAndItsContent) {
+  std::string error;
+  const auto shipped = find_profile("example-vfd", error);
+  ASSERT_TRUE(shipped) << error;
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("dg-profile-read-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "vfd.toml";
+  std::ofstream(file) << shipped->text;
+  const auto driver_of = [&] {
+    DeviceEnv env;
+    env.address = 1;
+    env.options = test::options_of(drivegate_adapter, {{"profile", file.string()}});
+    std::string why;
+    auto d = drivegate_adapter.create_driver(env, why);
+    EXPECT_TRUE(d) << why;
+    return d ? d->files_read() : std::string();
+  };
+  const std::string first = driver_of();
+  EXPECT_EQ(first.rfind("profile " + file.string() + " (content ", 0), 0u) << first;
+  EXPECT_EQ(driver_of(), first);  // read again, unchanged: the same
+  std::ofstream(file) << shipped->text << "\n# an edit that changes nothing else\n";
+  const std::string edited = driver_of();
+  EXPECT_NE(edited, first);
+  EXPECT_EQ(edited.rfind("profile " + file.string() + " (content ", 0), 0u) << edited;
+  // A pass-through device reads no file.
+  DeviceEnv pass;
+  pass.address = 1;
+  pass.options = test::options_of(drivegate_adapter, {{"passthrough", "true"}});
+  std::string why;
+  auto p = drivegate_adapter.create_driver(pass, why);
+  ASSERT_TRUE(p) << why;
+  EXPECT_EQ(p->files_read(), "");
+  std::filesystem::remove_all(dir);
+}
+
 TEST(ModbusSettings, NamesThatAreNotNamesAndFilesThatAreNotFilesAreRefused) {
   std::string error;
   EXPECT_FALSE(find_profile("../etc/passwd", error));  // a path: read as one, if it is there

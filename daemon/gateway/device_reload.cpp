@@ -1,0 +1,26 @@
+// What a reload does to a device it does not keep as it runs (docs/safety.md, section 2): the
+// new one takes over what was promised to the PLC there, the failsafe watchdog above all.
+#include "gateway/device.h"
+
+namespace drivegate {
+
+void Device::take_over(const Device& old) {
+  heartbeat_ = old.heartbeat_;
+  image_stale_ = true;
+  failsafe_.carry_over(old.failsafe_);
+  if (failsafe_.state() == FailsafeWatchdog::State::armed) {
+    log_->info("device {}: the failsafe stays armed across the reload, its deadline unchanged",
+               config_.name);
+    return;
+  }
+  if (!failsafe_.latched()) return;
+  // Latched there: this driver has not been told. The action (this configuration's) is sent to it
+  // at its first tick; the history has the trip already.
+  failsafe_now_ = config_.failsafe.action;
+  failsafe_done_ = false;
+  recorded_latched_ = true;
+  log_->warn("device {}: the failsafe stays latched across the reload: {} sent again", config_.name,
+             to_string(failsafe_now_));
+}
+
+}  // namespace drivegate
