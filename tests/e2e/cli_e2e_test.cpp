@@ -84,7 +84,7 @@ TEST(Cli, CheckConfigNamesFileLineAndKey) {
   const auto r = run({drivegated(), "--check-config", (dir / "bad.toml").string(), "--plugin-dir",
                       plugin_dir().string()});
   EXPECT_EQ(r.status, 1);
-  EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll: unknown key"));
+  EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll (device 'washer'): unknown key"));
 }
 
 TEST(Cli, DaemonRefusesABadConfigWithExitOne) {
