@@ -457,4 +457,30 @@ ConfigResult load_config(const std::filesystem::path& path, const PluginRegistry
   return result;
 }
 
+ConfigResult load_http_config(const std::filesystem::path& path) {
+  ConfigResult result;
+  std::string error;
+  const auto text = read_regular_file(path, kMaxConfigFile, error);
+  if (!text) {
+    result.errors.push_back(error);
+    return result;
+  }
+  Diagnostics diag(path.string());
+  const auto root = parse_toml(*text, path.string(), diag);
+  Config cfg;
+  cfg.path = path;
+  if (root) {
+    check_top_level(*root, diag);
+    read_server(*root, cfg, diag);
+    read_listeners(*root, cfg, diag);
+    read_http(*root, cfg, diag);
+  }
+  if (diag.errors.empty()) {
+    result.config = std::move(cfg);
+  } else {
+    result.errors = std::move(diag.errors);
+  }
+  return result;
+}
+
 }  // namespace drivegate

@@ -215,8 +215,8 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
        {"-c, --config FILE", "-d, --device NAME", "-t, --timeout-ms N", "-p, --plugin-dir DIR",
         "-h, --help"}},
       {{drivegate(), "capture", "--help"},
-       {"-b, --bus NAME", "-s, --seconds N", "-w, --write FILE", "--http HOST:PORT", "--progress",
-        "--no-progress", "-h, --help"}},
+       {"-b, --bus NAME", "-s, --seconds N", "-w, --write FILE", "-c, --config FILE",
+        "--http HOST:PORT", "--progress", "--no-progress", "-h, --help"}},
       {{drivegate(), "demo", "--help"},
        {"-l, --listen HOST:PORT", "--no-start", "-p, --plugin-dir DIR", "-h, --help"}},
       {{drivegate(), "sim", "--help"},
@@ -225,8 +225,8 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
         "--turnaround-us N", "--wire-timing", "--wire-log FILE", "-p, --plugin-dir DIR",
         "-h, --help"}},
       {{drivegate(), "events", "--help"},
-       {"-f, --follow", "-n, --lines N", "-d, --device NAME", "-k, --kind KIND", "--http HOST:PORT",
-        "-h, --help"}},
+       {"-f, --follow", "-n, --lines N", "-d, --device NAME", "-k, --kind KIND",
+        "-c, --config FILE", "--http HOST:PORT", "-h, --help"}},
       {{drivegate(), "scan", "--help"},
        {"--port DEVICE", "--baud N", "--parity PARITY", "--data-bits N", "--stop-bits N",
         "--framing FRAMING", "--rs485", "-a, --addresses LIST", "-t, --timeout-ms N",
@@ -304,6 +304,67 @@ TEST(Cli, RegmapPrintsTheServedMap) {
   const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
                        "md", "--plugin-dir", plugin_dir().string()});
   EXPECT_THAT(md.out, HasSubstr("## Unit 1: washer (nidec-washer)"));
+}
+
+// The tools that ask the running daemon find it where its configuration says: `--config FILE`'s
+// [http] listen (--http overrides it). A file without [http], a daemon not running, a capture
+// the file does not serve: each is said naming the file and the address, never a bare
+// "Connection refused" at a default address.
+TEST(Cli, EventsAndCaptureFindTheDaemonFromItsConfiguration) {
+  TempDir dir;
+  Sim sim("nidec-washer", dir / "washer");
+  const int http_port = free_port();
+  const std::string toml = "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) +
+                           "\"\n\n[[bus]]\nname = \"line\"\nport = \"" + (dir / "washer").string() +
+                           "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
+                           "adapter = \"nidec-washer\"\nunit_id = 1\n";
+  const std::string file = (dir / "drivegate.toml").string();
+  const std::string at = "127.0.0.1:" + std::to_string(http_port);
+  {
+    // Written, the daemon not started yet: refused, and said where and why.
+    std::ofstream(file) << toml;
+    const auto refused = run({drivegate(), "events", "--config", file});
+    EXPECT_EQ(refused.status, 1) << refused.out;
+    EXPECT_THAT(refused.out,
+                HasSubstr("drivegate events: " + at + " (the [http] listen of " + file +
+                          "): Connection refused; is drivegated running "
+                          "with " +
+                          file + "?"));
+  }
+  Daemon daemon(dir, toml);
+  const auto events = run({drivegate(), "events", "-c", daemon.config().string()});
+  EXPECT_EQ(events.status, 0) << events.out;
+  EXPECT_THAT(events.out, HasSubstr("Modbus listener"));
+  // --http still wins over the file, which is then not read.
+  const auto direct = run(
+      {drivegate(), "events", "--config", (dir / "none.toml").string(), "--http", at, "-n", "1"});
+  EXPECT_EQ(direct.status, 0) << direct.out;
+  // The file serves no captures: said before anything is asked.
+  const auto capture =
+      run({drivegate(), "capture", "-b", "line", "-s", "1", "-c", daemon.config().string()});
+  EXPECT_EQ(capture.status, 1) << capture.out;
+  EXPECT_THAT(capture.out, HasSubstr("says [http] capture = false: the daemon serves no captures"));
+
+  // A configuration without [http]: the daemon has no HTTP side to ask.
+  std::ofstream(dir / "no-http.toml") << toml.substr(toml.find("[[bus]]"));
+  for (const char* command : {"events", "capture"}) {
+    std::vector<std::string> argv = {drivegate(), command, "-c", (dir / "no-http.toml").string()};
+    if (std::string(command) == "capture") argv.insert(argv.end(), {"-b", "line"});
+    const auto none = run(argv);
+    EXPECT_EQ(none.status, 1) << none.out;
+    EXPECT_THAT(none.out, HasSubstr("drivegate " + std::string(command) + ": " +
+                                    (dir / "no-http.toml").string() +
+                                    " has no [http]: the daemon serves no HTTP side to ask"));
+  }
+  // One that cannot be read, or does not validate, is said to be the reason.
+  const auto missing = run({drivegate(), "events", "-c", (dir / "none.toml").string()});
+  EXPECT_EQ(missing.status, 1) << missing.out;
+  EXPECT_THAT(missing.out, HasSubstr("cannot tell where the daemon's HTTP side is from " +
+                                     (dir / "none.toml").string()));
+  std::ofstream(dir / "bad.toml") << "[http]\nlisten = \"nowhere\"\n";
+  const auto bad = run({drivegate(), "events", "-c", (dir / "bad.toml").string()});
+  EXPECT_EQ(bad.status, 1) << bad.out;
+  EXPECT_THAT(bad.out, HasSubstr("bad.toml:2: http.listen: "));
 }
 
 // Issue 24: a port has one owner. `drivegate write` on a line the daemon runs says at once who
