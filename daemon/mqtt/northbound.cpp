@@ -135,22 +135,6 @@ std::unique_ptr<StoreForward> make_store(const MqttConfig& config,
   return store;
 }
 
-// What the client needs for broker `index` of [mqtt].
-BrokerOptions broker_options(const MqttConfig& config, std::size_t index) {
-  const MqttBroker& b = config.brokers.at(index);
-  return {b.host,
-          b.port,
-          b.tls,
-          b.ca.string(),
-          b.cert.string(),
-          b.key.string(),
-          config.client_id,
-          config.username,
-          config.password,
-          config.keepalive,
-          std::chrono::milliseconds(10'000)};
-}
-
 // A DCMD the edge node refused, as the audit trail's result: the one a Modbus client would get
 // for the same mistake (docs/audit.md, RESULT).
 Outcome outcome_of(sparkplug::Refusal r) {
@@ -172,6 +156,21 @@ Outcome outcome_of(sparkplug::Refusal r) {
 }
 
 }  // namespace
+
+BrokerOptions broker_options(const MqttConfig& config, std::size_t index) {
+  const MqttBroker& b = config.brokers.at(index);
+  return {b.host,
+          b.port,
+          b.tls,
+          b.ca.string(),
+          b.cert.string(),
+          b.key.string(),
+          config.client_id,
+          config.username,
+          config.password,
+          config.keepalive,
+          std::chrono::milliseconds(10'000)};
+}
 
 Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::string version,
                        std::shared_ptr<spdlog::logger> log, const std::filesystem::path& state_dir,

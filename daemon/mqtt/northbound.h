@@ -31,6 +31,10 @@
 
 namespace drivegate::mqtt {
 
+// What the MQTT client needs for broker `index` of [mqtt] (its address, TLS files, credentials,
+// keep-alive), under the edge node's client id.
+BrokerOptions broker_options(const MqttConfig& config, std::size_t index);
+
 class Northbound final : private sparkplug::Sink {
  public:
   // `state_dir`: where the bdSeq is kept across restarts (mqtt/bd_seq_file.h; empty: it is not).
