@@ -325,6 +325,9 @@ int scan(std::span<const std::string> args) {
               << settings.timeout.count() << " ms each: at most "
               << seconds_text(scanner.time_left()) << " if none answers, "
               << seconds_text(scanner.answer_time()) << " more for each that does\n";
+    if (const std::string caveat = transport->caveat(); !caveat.empty()) {
+      std::cerr << "drivegate scan: warning: " << caveat << "\n";
+    }
   });
   io.run();
   if (run.error() && !run.opened()) {
