@@ -151,6 +151,27 @@ TEST(ScanE2E, NothingOnTheLineIsNoSlaveAndExitZero) {
                        " (19200 baud 8E1, rtu), addresses 1-3,8\n");
 }
 
+// A slave answering 150 ms after a probe of 100 ms, at the end of the range (here the only
+// address asked): no later probe is there to hear it, the wait after the last one does. It is
+// found, marked late, and the note says to raise the timeout. `drivegate sim modbus` with a
+// turnaround is the late slave; the pty it is on takes no parity, which the scan warns of.
+TEST(ScanE2E, ASlaveAnsweringLateAtTheEndOfTheRangeIsFoundAndNoted) {
+  TempDir dir;
+  Sim slave("modbus", dir / "late", {"--address", "17", "--turnaround-ms", "150"});
+  const auto r =
+      scan(dir, {"--port", (dir / "late").string(), "-a", "17", "-t", "100", "--no-progress"});
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  const auto lines = slave_lines(r.out);
+  ASSERT_EQ(lines.size(), 1u) << r.out;
+  EXPECT_THAT(lines[0], StartsWith("address 17: holding register 0 = "));
+  EXPECT_THAT(lines[0], HasSubstr(", late; "));
+  EXPECT_THAT(r.out, HasSubstr("\nnote: address 17 answered after its wait (found all the same): "
+                               "a longer --timeout-ms suits it\n"));
+  EXPECT_THAT(r.err, HasSubstr("drivegate scan: warning: " + (dir / "late").string() +
+                               " did not take every setting asked: parity even (the port has "
+                               "none)"));
+}
+
 TEST(ScanE2E, ABadParityIsAUsageError) {
   TempDir dir;
   const auto r = scan(dir, {"--port", "/dev/ttyUSB0", "--parity", "mark"});
