@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "gateway/point_values.h"
 #include "gateway/value_codec.h"
@@ -316,6 +317,7 @@ void Northbound::connect() {
 
 void Northbound::connected() {
   ++status_.connects;
+  session_up_ = true;
   status_.last_error.clear();
   log_->info("MQTT: connected to {} as {} (bdSeq {}){}", broker_url(), config_.client_id,
              edge_.bd_seq(),
@@ -335,6 +337,7 @@ void Northbound::lost(const std::string& why) {
   edge_.connection_lost();
   if (stopping_) return;
   ++status_.losses;
+  if (std::exchange(session_up_, false)) ++status_.sessions_lost;
   const bool first = status_.last_error.empty();
   status_.last_error = why;
   backoff_ = backoff_.count() == 0 ? kFirstRetry : std::min(backoff_ * 2, kLongestRetry);
@@ -521,6 +524,7 @@ void Northbound::leave_broker(Millis delay) {
     // Once: a second STATE in the same turn, or a lost session, finds it already ended.
     if (token.expired() || stopping_ || !client_.connected()) return;
     client_.disconnect();
+    session_up_ = false;  // left, not lost
     edge_.connection_lost();
     // Spec 5.x (multiple MQTT servers): the host may be online on another server.
     if (next_broker()) log_->info("MQTT: trying {} next", broker_url());

@@ -116,6 +116,7 @@ class Northbound final : private sparkplug::Sink {
   std::size_t broker_ = 0;         // which of config_.brokers the next attempt uses
   std::size_t client_broker_ = 0;  // which one client_ is set up for
   bool stopping_ = false;
+  bool session_up_ = false;  // a CONNACK came, and nothing ended that session since
   bool started_ = false;
   bool bd_seq_save_failed_ = false;  // warned once until a save succeeds again
   NorthboundStatus status_;
