@@ -76,6 +76,41 @@ TEST(Cli, TheDocumentedConfigurationsAreValid) {
   }
 }
 
+// The installed example names every adapter built here among the values of `adapter`, and its
+// commented-out modbus device, uncommented, is a valid part of it.
+TEST(Cli, TheInstalledExampleNamesEveryAdapterAndItsModbusDeviceIsValid) {
+  const auto example = std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "etc/drivegate.toml";
+  const std::string text = slurp(example);
+  const auto adapter_key = text.find("#   adapter ");
+  ASSERT_NE(adapter_key, std::string::npos);
+  const std::string described =
+      text.substr(adapter_key, text.find("#   unit_id", adapter_key) - adapter_key);
+  std::size_t plugins = 0;
+  for (const auto& f : std::filesystem::directory_iterator(plugin_dir())) {
+    const std::string name = f.path().filename().string();
+    if (!name.starts_with("drivegate-") || f.path().extension() != ".so") continue;
+    ++plugins;
+    const std::string id = name.substr(10, name.size() - 13);
+    EXPECT_THAT(described, HasSubstr(" " + id)) << "etc/drivegate.toml's adapter key lacks " << id;
+  }
+  EXPECT_GT(plugins, 0u);
+  // The modbus device at the end, uncommented (where that adapter is built).
+  if (!std::filesystem::exists(plugin_dir() / "drivegate-modbus.so")) return;
+  const auto from = text.find("# [[bus]]\n# name = \"modbus-line\"");
+  ASSERT_NE(from, std::string::npos);
+  std::string uncommented = text.substr(0, from);
+  std::istringstream rest(text.substr(from));
+  for (std::string line; std::getline(rest, line);) {
+    uncommented += (line.rfind("# ", 0) == 0 ? line.substr(2) : line == "#" ? "" : line) + "\n";
+  }
+  TempDir dir;
+  std::ofstream(dir / "with-modbus.toml") << uncommented;
+  const auto r = run({drivegated(), "--check-config", (dir / "with-modbus.toml").string(),
+                      "--plugin-dir", plugin_dir().string()});
+  EXPECT_EQ(r.status, 0) << uncommented.substr(from) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("OK (6 devices on 6 buses"));
+}
+
 TEST(Cli, CheckConfigNamesFileLineAndKey) {
   TempDir dir;
   std::string text = kConfig;
