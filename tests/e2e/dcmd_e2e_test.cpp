@@ -11,7 +11,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct Run {
+struct ToolRun {
   int status;
   std::string out;  // stdout
   std::string err;  // stderr
@@ -20,7 +20,7 @@ struct Run {
 class DcmdE2E : public MqttE2E {
  protected:
   // `drivegate dcmd` with `args` after the command, to its end.
-  Run dcmd(std::vector<std::string> args, const fs::path& config = {}) {
+  ToolRun dcmd(std::vector<std::string> args, const fs::path& config = {}) {
     std::vector<std::string> argv = {(bin_dir() / "drivegate").string(),
                                      "dcmd",
                                      "--config",
