@@ -35,7 +35,8 @@ constexpr std::chrono::seconds kFollowPeriod{1};
 int events(std::span<const std::string> args) {
   const CommandLine cli(
       "drivegate events", kOptions,
-      {"[-f] [-n N] [-d NAME] [-k KIND] [-c FILE | --http HOST:PORT]"},
+      {"[-f] [-n N] [-d NAME] [-k KIND] [-c FILE]",
+       "[-f] [-n N] [-d NAME] [-k KIND] --http HOST:PORT"},
       "Prints the running daemon's history, oldest first, one entry a line: time (UTC), kind,\n"
       "device, what happened. Asks the daemon's HTTP side, where the [http] listen of its\n"
       "configuration says (a daemon without [http] has none: docs/http.md).");
@@ -64,9 +65,8 @@ int events(std::span<const std::string> args) {
   bool first = true;
   bool lost = false;
   for (;;) {
-    const std::string target =
-        "/api/v1/events?limit=" + std::to_string(first ? lines : kMaxQuery) +
-        (first ? std::string() : "&after=" + std::to_string(after)) + filter;
+    const std::string target = "/api/v1/events?limit=" + std::to_string(first ? lines : kMaxQuery) +
+                               (first ? std::string() : "&after=" + std::to_string(after)) + filter;
     std::string error;
     const auto got = http_get(http->host, http->port, target, kTimeout, kMaxBytes, error);
     bool more = false;  // a full page: ask again at once

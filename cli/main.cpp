@@ -107,8 +107,8 @@ constexpr const char* kCommands =
     "             non-volatile programming)\n"
     "  capture    a pcap of one bus from the running daemon (for Wireshark)\n"
     "  events     the running daemon's history: commands, faults, trips, reloads\n"
-    "  dcmd       a Sparkplug command (DCMD) to a device, through the configuration's\n"
-    "             broker, and its result\n"
+    "  dcmd       a Sparkplug command (DCMD) to a device, through the broker of the\n"
+    "             configuration, and its result\n"
 #ifdef DRIVEGATE_SCAN
     "  scan       the Modbus slaves on a serial line, and the configuration for them\n"
 #endif
