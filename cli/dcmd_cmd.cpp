@@ -225,7 +225,8 @@ int dcmd(std::span<const std::string> args) {
     std::cerr << " from edge node " << config.mqtt.group_id << "/" << config.mqtt.edge_node_id
               << " on " << run.broker()
               << ": is drivegated connected to this broker, the device born (a comm_lost one "
-                 "answers nothing), and may this client publish DCMDs there?";
+                 "answers nothing), the edge node born there (with a primary_host, that host "
+                 "online), and may this client publish DCMDs there?";
   }
   std::cerr << "\n";
   return 1;

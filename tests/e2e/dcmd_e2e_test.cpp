@@ -105,6 +105,8 @@ TEST_F(DcmdE2E, WhatCannotBeSentOrAnsweredIsSaid) {
                                   "plant1/gw01 on " +
                                   broker_->url() +
                                   ": is drivegated connected to this broker, the device born"));
+  EXPECT_THAT(dead.err, HasSubstr(", the edge node born there (with a primary_host, that host "
+                                  "online), "));
 }
 
 // A broker that is not there: each of [mqtt] brokers is tried, and the refusal says which.
