@@ -11,12 +11,12 @@
 #include <sstream>
 
 #include "base/read_file.h"
+#include "drivegate/toml_reader.h"
+#include "line_config.h"
 #include "mqtt_config.h"
 #include "plugin/adapter_options.h"
-#include "line_config.h"
 #include "port_address.h"
 #include "server_config.h"
-#include "drivegate/toml_reader.h"
 
 namespace drivegate {
 namespace {

@@ -25,7 +25,7 @@ class SerialTransport final : public Transport {
   boost::asio::io_context& io_;
   BusConfig bus_;
   boost::asio::serial_port port_;
-  PortLock lock_;  // held while the port is open
+  PortLock lock_;        // held while the port is open
   std::string refused_;  // the settings the port did not take at its last open
   std::array<std::uint8_t, 512> chunk_{};
   Bytes tx_;

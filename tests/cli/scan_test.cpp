@@ -106,7 +106,7 @@ TEST(ScanRequests, TheWaitCountsTheRequestAndTheReplyOnTheWire) {
   // the slave, its longest reply's 7 bytes (4.0 ms, 5 whole).
   Scanner scan(settings({1, 2, 3}));
   EXPECT_EQ(scan.next()->wait, 110ms);
-  EXPECT_EQ(scan.probe_time(), 113ms);  // and the 3 ms gap
+  EXPECT_EQ(scan.probe_time(), 113ms);             // and the 3 ms gap
   EXPECT_EQ(scan.time_left(), 3 * 113ms + 110ms);  // and the last wait for a late reply
   // At 1200 baud the wire dominates: 8 + 7 characters of 9.17 ms.
   ScanSettings slow = settings({1});
