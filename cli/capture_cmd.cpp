@@ -14,7 +14,7 @@
 
 #include "capture_progress.h"
 #include "commands.h"
-#include "config/config_loader.h"
+#include "daemon_http.h"
 #include "dechunk.h"
 #include "http_client.h"
 #include "status_buses.h"
@@ -27,7 +27,8 @@ constexpr Option kOptions[] = {
     {"bus", 'b', "NAME", "the bus to capture, as the configuration names it"},
     {"seconds", 's', "N", "how long to capture: 1..300 seconds (default 10)"},
     {"write", 'w', "FILE", "write the pcap to FILE (default: standard output)"},
-    {"http", 0, "HOST:PORT", "where the daemon's HTTP side listens (default 127.0.0.1:8502)"},
+    kDaemonConfigOption,
+    kHttpOption,
     {"progress", 0, nullptr,
      "show the frames and bytes received and the seconds left on stderr, even when it is not a "
      "terminal (default: only in a terminal)"},
@@ -43,7 +44,7 @@ constexpr std::size_t kStatusMaxBytes = 8 << 20;
 
 // ", its buses: a, b" from the daemon's status JSON; empty when that cannot be had (the refusal
 // is reported all the same).
-std::string configured_buses(const ListenAddress& http) {
+std::string configured_buses(const DaemonHttp& http) {
   std::string error;
   const auto status = http_get(http.host, http.port, "/api/v1/status",
                                std::chrono::milliseconds(kStatusTimeout), kStatusMaxBytes, error);
@@ -60,10 +61,11 @@ std::string configured_buses(const ListenAddress& http) {
 
 int capture(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate capture", kOptions, {"-b NAME [-s N] [-w FILE] [--http HOST:PORT]"},
+      "drivegate capture", kOptions, {"-b NAME [-s N] [-w FILE] [-c FILE | --http HOST:PORT]"},
       "Captures every frame of bus NAME for N seconds from the running daemon ([http] capture =\n"
       "true) and writes a pcap (link type USER0 = 147, docs/capture.md). Open it with the\n"
-      "dissectors of tools/wireshark/.");
+      "dissectors of tools/wireshark/. The daemon is asked where the [http] listen of its\n"
+      "configuration says.");
   int exit_status = 0;
   const auto parsed = parse_command(cli, args, exit_status);
   if (!parsed) return exit_status;
@@ -80,11 +82,14 @@ int capture(std::span<const std::string> args) {
     }
   }
   const std::string file = parsed->value("write").value_or("");
-  ListenAddress http{"127.0.0.1", 8502};
-  if (const auto v = parsed->value("http")) {
-    auto at = parse_listen(*v);
-    if (!at) return cli.usage_error("--http needs HOST:PORT, not '" + *v + "'");
-    http = std::move(*at);
+  const auto found = daemon_http(cli, "drivegate capture", *parsed, exit_status);
+  if (!found) return exit_status;
+  const DaemonHttp& http = *found;
+  if (!http.capture) {
+    std::cerr << "drivegate capture: " << http.config
+              << " says [http] capture = false: the daemon serves no captures (set capture = "
+                 "true and restart it: docs/capture.md)\n";
+    return 1;
   }
   const bool tty = ::isatty(STDERR_FILENO) == 1;
   const auto progress_flag = parsed->last_of({"progress", "no-progress"});
@@ -93,8 +98,7 @@ int capture(std::span<const std::string> args) {
   std::string error;
   const int fd = connect_to(http.host, http.port, error);
   if (fd < 0) {
-    std::cerr << "drivegate capture: cannot connect to " << http.host << ":" << http.port << ": "
-              << error << "\n";
+    std::cerr << "drivegate capture: cannot connect to " << unreachable(http, error) << "\n";
     return 1;
   }
   const std::string request = get_request(
@@ -154,7 +158,7 @@ int capture(std::span<const std::string> args) {
       const auto end = head.find("\r\n\r\n");
       if (end == std::string::npos) {
         if (head.size() > 65536 || eof) {
-          std::cerr << "drivegate capture: no HTTP response from the daemon\n";
+          std::cerr << "drivegate capture: " << unreachable(http, "not an HTTP response") << "\n";
           ::close(fd);
           return 1;
         }

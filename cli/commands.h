@@ -8,8 +8,10 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "base/command_line.h"
+#include "config/config.h"
 #include "plugin/plugins.h"
 #include "point_writes.h"
 
@@ -22,6 +24,7 @@ int write(std::span<const std::string> args);
 int action(std::span<const std::string> args);
 int capture(std::span<const std::string> args);
 int events(std::span<const std::string> args);
+int dcmd(std::span<const std::string> args);
 int scan(std::span<const std::string> args);  // built with the modbus adapter (DRIVEGATE_SCAN)
 int protocol(std::span<const std::string> args);  // with the framed adapter (DRIVEGATE_PROTOCOL)
 
@@ -41,7 +44,7 @@ inline constexpr Option kTimeoutOption{
 std::optional<ParsedArgs> parse_command(const CommandLine& cli, std::span<const std::string> args,
                                         int& exit_status);
 
-// What `write` and `action` share: --config, --device, --plugin-dir, --timeout-ms.
+// What `write`, `action` and `dcmd` share: --config, --device, --plugin-dir, --timeout-ms.
 struct DeviceArgs {
   std::filesystem::path config;
   std::filesystem::path plugin_dir;
@@ -54,6 +57,20 @@ std::optional<DeviceArgs> device_args(const CommandLine& cli, const ParsedArgs& 
 
 // "POINT=VALUE" (or "KEY=VALUE"); nullopt when there is no '=' or nothing before it.
 std::optional<Assignment> parse_assignment(std::string_view arg);
+
+// What `write` and `dcmd` share: their DeviceArgs, the NAME=VALUE operands (at least one), and
+// the configuration, loaded with the plugins.
+struct DeviceCommand {
+  DeviceArgs device;
+  std::vector<Assignment> writes;
+  PluginRegistry plugins;
+  Config config;
+};
+// From `parsed` (a table with the four options of DeviceArgs); nullopt after a usage error
+// (`form`: what an operand must look like, "POINT=VALUE"; `exit_status` 2) or a configuration
+// that does not load (its errors printed; 1).
+std::optional<DeviceCommand> device_command(const CommandLine& cli, const ParsedArgs& parsed,
+                                            std::string_view form, int& exit_status);
 
 // Loads the plugins from --plugin-dir or the default place, reporting refusals on stderr.
 PluginRegistry load_plugins(const std::filesystem::path& dir);

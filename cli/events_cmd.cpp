@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "commands.h"
-#include "config/config_loader.h"
+#include "daemon_http.h"
 #include "event_lines.h"
 #include "history/event_log.h"
 #include "http_client.h"
@@ -21,7 +21,8 @@ constexpr Option kOptions[] = {
     {"lines", 'n', "N", "print the newest N entries first (1..1000, default 50)"},
     {"device", 'd', "NAME", "only entries of device NAME"},
     {"kind", 'k', "KIND", "only entries of one kind (command, fault_raised, ...: drivegate(1))"},
-    {"http", 0, "HOST:PORT", "where the daemon's HTTP side listens (default 127.0.0.1:8502)"},
+    kDaemonConfigOption,
+    kHttpOption,
     kHelpOption,
 };
 
@@ -33,9 +34,12 @@ constexpr std::chrono::seconds kFollowPeriod{1};
 
 int events(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate events", kOptions, {"[-f] [-n N] [-d NAME] [-k KIND] [--http HOST:PORT]"},
+      "drivegate events", kOptions,
+      {"[-f] [-n N] [-d NAME] [-k KIND] [-c FILE]",
+       "[-f] [-n N] [-d NAME] [-k KIND] --http HOST:PORT"},
       "Prints the running daemon's history, oldest first, one entry a line: time (UTC), kind,\n"
-      "device, what happened. Needs its HTTP side ([http] enabled, the default).");
+      "device, what happened. Asks the daemon's HTTP side, where the [http] listen of its\n"
+      "configuration says (a daemon without [http] has none: docs/http.md).");
   int exit_status = 0;
   const auto parsed = parse_command(cli, args, exit_status);
   if (!parsed) return exit_status;
@@ -49,12 +53,8 @@ int events(std::span<const std::string> args) {
       return cli.usage_error("--lines needs a number 1..1000, not '" + *v + "'");
     }
   }
-  ListenAddress http{"127.0.0.1", 8502};
-  if (const auto v = parsed->value("http")) {
-    auto at = parse_listen(*v);
-    if (!at) return cli.usage_error("--http needs HOST:PORT, not '" + *v + "'");
-    http = std::move(*at);
-  }
+  const auto http = daemon_http(cli, "drivegate events", *parsed, exit_status);
+  if (!http) return exit_status;
   std::string filter;
   if (const auto d = parsed->value("device")) filter += "&device=" + escape_query(*d);
   if (const auto k = parsed->value("kind")) filter += "&kind=" + escape_query(*k);
@@ -65,19 +65,17 @@ int events(std::span<const std::string> args) {
   bool first = true;
   bool lost = false;
   for (;;) {
-    const std::string target =
-        "/api/v1/events?limit=" + std::to_string(first ? lines : kMaxQuery) +
-        (first ? std::string() : "&after=" + std::to_string(after)) + filter;
+    const std::string target = "/api/v1/events?limit=" + std::to_string(first ? lines : kMaxQuery) +
+                               (first ? std::string() : "&after=" + std::to_string(after)) + filter;
     std::string error;
-    const auto got = http_get(http.host, http.port, target, kTimeout, kMaxBytes, error);
+    const auto got = http_get(http->host, http->port, target, kTimeout, kMaxBytes, error);
     bool more = false;  // a full page: ask again at once
     if (!got || got->head.status != 200) {
       const std::string why = !got ? error
                                    : std::to_string(got->head.status) + " " + got->head.reason +
                                          (got->body.empty() ? "" : ": " + got->body);
       if (!follow || first) {
-        std::cerr << "drivegate events: " << http.host << ":" << http.port << ": " << why;
-        if (why.empty() || why.back() != '\n') std::cerr << "\n";
+        std::cerr << "drivegate events: " << unreachable(*http, why) << "\n";
         return 1;
       }
       if (!lost) std::cerr << "drivegate events: lost the daemon (" << why << "), trying again\n";

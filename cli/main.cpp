@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "config/config_loader.h"
 
 namespace drivegate::cli {
 
@@ -50,6 +51,34 @@ std::optional<Assignment> parse_assignment(std::string_view arg) {
   return Assignment{std::string(arg.substr(0, eq)), std::string(arg.substr(eq + 1))};
 }
 
+std::optional<DeviceCommand> device_command(const CommandLine& cli, const ParsedArgs& parsed,
+                                            std::string_view form, int& exit_status) {
+  auto device = device_args(cli, parsed);
+  exit_status = 2;
+  if (!device) return std::nullopt;
+  std::vector<Assignment> writes;
+  for (const auto& arg : parsed.operands) {
+    auto a = parse_assignment(arg);
+    if (!a) {
+      cli.usage_error("'" + arg + "' is not " + std::string(form));
+      return std::nullopt;
+    }
+    writes.push_back(std::move(*a));
+  }
+  if (writes.empty()) {
+    cli.usage_error("nothing to write");
+    return std::nullopt;
+  }
+  exit_status = 1;
+  PluginRegistry plugins = load_plugins(device->plugin_dir);
+  auto result = load_config(device->config, plugins);
+  for (const auto& e : result.errors) std::cerr << e << "\n";
+  if (!result.config) return std::nullopt;
+  exit_status = 0;
+  return DeviceCommand{std::move(*device), std::move(writes), std::move(plugins),
+                       std::move(*result.config)};
+}
+
 PluginRegistry load_plugins(const std::filesystem::path& dir) {
   PluginRegistry plugins;
   for (const auto& refused : plugins.load_directory(dir.empty() ? default_plugin_dir() : dir)) {
@@ -78,6 +107,8 @@ constexpr const char* kCommands =
     "             non-volatile programming)\n"
     "  capture    a pcap of one bus from the running daemon (for Wireshark)\n"
     "  events     the running daemon's history: commands, faults, trips, reloads\n"
+    "  dcmd       a Sparkplug command (DCMD) to a device, through the broker of the\n"
+    "             configuration, and its result\n"
 #ifdef DRIVEGATE_SCAN
     "  scan       the Modbus slaves on a serial line, and the configuration for them\n"
 #endif
@@ -120,6 +151,7 @@ int main(int argc, char** argv) {
     if (command == "action") return drivegate::cli::action(args);
     if (command == "capture") return drivegate::cli::capture(args);
     if (command == "events") return drivegate::cli::events(args);
+    if (command == "dcmd") return drivegate::cli::dcmd(args);
 #ifdef DRIVEGATE_SCAN
     if (command == "scan") return drivegate::cli::scan(args);
 #endif

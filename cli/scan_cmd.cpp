@@ -184,6 +184,10 @@ class ScanRun {
       return;
     }
     request_ = std::move(*request);
+    if (request_.frame.empty()) {  // nothing to send: only the line listened to
+      wait(generation);
+      return;
+    }
     timer_.expires_after(request_.gap);
     timer_.async_wait([this, generation](const boost::system::error_code& ec) {
       if (ec || generation != generation_ || finished_) return;
@@ -193,13 +197,18 @@ class ScanRun {
           fail(written);
           return;
         }
-        timer_.expires_after(request_.wait);
-        timer_.async_wait([this, generation](const boost::system::error_code& expired) {
-          if (expired || generation != generation_ || finished_) return;
-          scanner_.on_timeout();
-          step();
-        });
+        wait(generation);
       });
+    });
+  }
+
+  // The request's wait: its reply ends it sooner (read()), else the Scanner hears it ran out.
+  void wait(unsigned generation) {
+    timer_.expires_after(request_.wait);
+    timer_.async_wait([this, generation](const boost::system::error_code& expired) {
+      if (expired || generation != generation_ || finished_) return;
+      scanner_.on_timeout();
+      step();
     });
   }
 
@@ -239,7 +248,7 @@ int scan(std::span<const std::string> args) {
       "exception, is a slave), asks each slave found for its identification (FC 0x2B / 0x0E,\n"
       "basic), and prints a line per slave, a summary and the configuration for them, with the\n"
       "profile whose [profile] identification matches (docs/profiles.md). A silent address\n"
-      "costs one timeout: 247 addresses at 100 ms and 19200 baud take at most 28 s. Stop the\n"
+      "costs one timeout: 247 addresses at 100 ms and 19200 baud take at most 29 s. Stop the\n"
       "daemon first if it owns the port. Exit status 0 when the scan ran, whether or not a\n"
       "slave answered.");
   int exit_status = 0;
@@ -325,6 +334,9 @@ int scan(std::span<const std::string> args) {
               << settings.timeout.count() << " ms each: at most "
               << seconds_text(scanner.time_left()) << " if none answers, "
               << seconds_text(scanner.answer_time()) << " more for each that does\n";
+    if (const std::string caveat = transport->caveat(); !caveat.empty()) {
+      std::cerr << "drivegate scan: warning: " << caveat << "\n";
+    }
   });
   io.run();
   if (run.error() && !run.opened()) {

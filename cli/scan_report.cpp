@@ -59,6 +59,10 @@ std::string probe_text(const md::FoundSlave& s) {
     out = exception_text(*code) + " to a read of holding register 0";
   } else if (pdu.size() == 4 && pdu[0] == md::fc::read_holding_registers && pdu[1] == 2) {
     out = "holding register 0 = " + std::to_string(be16(pdu[2], pdu[3]));
+  } else if (pdu.size() >= 2 && pdu[0] == md::fc::read_holding_registers) {
+    // Application Protocol 6.3: one register read is answered with a byte count of 2.
+    out = "a read of holding register 0 answered with byte count " + std::to_string(pdu[1]) +
+          " and " + std::to_string(pdu.size() - 2) + " bytes, not the 2 of one register";
   } else {
     out = "a reply of function 0x" + hex2(pdu.empty() ? 0 : pdu[0]);
   }
@@ -229,7 +233,8 @@ std::string scan_report(const ScanReport& r) {
   }
   if (!scan.garbled().empty()) {
     out += "note: bytes that made no good frame came at address " + address_list(scan.garbled()) +
-           ": another baud rate, parity or framing on the line, or two slaves at one address\n";
+           ": another baud rate, parity or framing on the line, two slaves at one address, or a "
+           "reply cut short or whose byte count says more than it carries\n";
   }
   if (scan.foreign_frames() > 0) {
     out += "note: " + std::to_string(scan.foreign_frames()) +

@@ -1,9 +1,6 @@
 // drivegate write: write points of one device directly on its serial line (daemon stopped), with
 // maintenance-only points enabled.
-#include <iostream>
-
 #include "commands.h"
-#include "config/config_loader.h"
 #include "point_writes.h"
 
 namespace drivegate::cli {
@@ -25,20 +22,10 @@ int write(std::span<const std::string> args) {
   int exit_status = 0;
   const auto parsed = parse_command(cli, args, exit_status);
   if (!parsed) return exit_status;
-  const auto device = device_args(cli, *parsed);
-  if (!device) return 2;
-  std::vector<Assignment> writes;
-  for (const auto& arg : parsed->operands) {
-    auto a = parse_assignment(arg);
-    if (!a) return cli.usage_error("'" + arg + "' is not POINT=VALUE");
-    writes.push_back(std::move(*a));
-  }
-  if (writes.empty()) return cli.usage_error("nothing to write");
-  const PluginRegistry plugins = load_plugins(device->plugin_dir);
-  auto result = load_config(device->config, plugins);
-  for (const auto& e : result.errors) std::cerr << e << "\n";
-  if (!result.config) return 1;
-  return run_point_writes({&*result.config, &plugins, device->name, writes, device->timeout, ""});
+  const auto job = device_command(cli, *parsed, "POINT=VALUE", exit_status);
+  if (!job) return exit_status;
+  return run_point_writes(
+      {&job->config, &job->plugins, job->device.name, job->writes, job->device.timeout, ""});
 }
 
 }  // namespace drivegate::cli

@@ -66,7 +66,7 @@ class Parser {
     try {
       root = toml::parse(text, source);
     } catch (const toml::parse_error& e) {
-      diag_.error_at(static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+      diag_.error_at(static_cast<int>(e.source().begin.line), "", syntax_error_text(text, e));
       return std::move(diag_.errors);
     }
     {

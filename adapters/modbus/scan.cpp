@@ -4,6 +4,7 @@
 #include <array>
 #include <bitset>
 #include <charconv>
+#include <utility>
 
 #include "line_timing.h"
 
@@ -118,7 +119,9 @@ std::chrono::nanoseconds Scanner::answer_time() const {
 }
 
 std::chrono::nanoseconds Scanner::time_left() const {
-  return static_cast<long>(total() - probed_) * probe_time();
+  const ScanRequest r = request(1, probe_pdu(), frame_size(settings_.framing, kProbeReplyPdu));
+  return static_cast<long>(total() - probed_) * probe_time() +
+         (listened_ ? std::chrono::nanoseconds(0) : r.wait);
 }
 
 void Scanner::start_probe(std::uint8_t address) {
@@ -153,6 +156,19 @@ std::optional<ScanRequest> Scanner::next() {
     start_identity(slave, 0);
   } else if (probed_ < total()) {
     start_probe(settings_.addresses[probed_]);
+  } else if (!std::exchange(listened_, true) && !silent_.empty() &&
+             silent_.back() == settings_.addresses.back()) {
+    // The last probe went unanswered: no probe after it will hear a late reply to it, so the
+    // line is listened to for as long as one would have.
+    asking_ = Asking::late_replies;
+    address_ = 0;
+    echo_.clear();
+    ScanRequest r = request(settings_.addresses.back(), probe_pdu(),
+                            frame_size(settings_.framing, kProbeReplyPdu));
+    r.address = 0;
+    r.frame.clear();
+    r.gap = {};
+    return r;
   } else {
     asking_ = Asking::nothing;
     return std::nullopt;
@@ -200,7 +216,7 @@ bool Scanner::on_frame(const Adu& adu) {
     ++echoes_;  // the request itself, given back after a stray byte hid it from on_receive()
     return false;
   }
-  if (asking_ == Asking::nothing || adu.address != address_) {
+  if (asking_ == Asking::nothing || asking_ == Asking::late_replies || adu.address != address_) {
     if (!late_probe_reply(adu)) ++foreign_;
     return false;
   }
@@ -268,6 +284,13 @@ void Scanner::probe_over() {
 }
 
 void Scanner::on_timeout() {
+  // Bytes still waiting to make a frame when the wait ran out made none: a reply cut short, or
+  // whose byte count says more than came. (A request's echo still coming is not one.)
+  if (!rx_.empty() && echo_.empty()) damaged_ = true;
+  if (asking_ == Asking::late_replies) {
+    asking_ = Asking::nothing;
+    return;
+  }
   if (asking_ == Asking::probe) {
     if (damaged_ && attempt_ < kAttempts) {
       repeat_ = true;

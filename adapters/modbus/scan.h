@@ -38,6 +38,8 @@ struct ScanSettings {
 
 // One request: keep the line silent for `gap`, send `frame`, and give up on the reply `wait`
 // after the write completed (the request's and the longest reply's time on the wire included).
+// An empty `frame` sends nothing: the line is only listened to for `wait` (after the last probe,
+// for a reply that comes after its own wait: a neighbour's probe would have heard it).
 struct ScanRequest {
   std::uint8_t address = 0;
   Bytes frame;
@@ -99,11 +101,12 @@ class Scanner {
   // The most an address that answers adds beyond its probe: one repeated probe (a damaged
   // reply) and every identification request with its one repeat.
   [[nodiscard]] std::chrono::nanoseconds answer_time() const;
-  // At most how long the probes still to send take if no other address answers.
+  // At most how long the probes still to send take if no other address answers, the last wait
+  // for a late reply included.
   [[nodiscard]] std::chrono::nanoseconds time_left() const;
 
  private:
-  enum class Asking : std::uint8_t { nothing, probe, identity };
+  enum class Asking : std::uint8_t { nothing, probe, identity, late_replies };
   void start_probe(std::uint8_t address);
   void start_identity(std::size_t slave, std::uint8_t first_object);
   ScanRequest request(std::uint8_t address, const Bytes& pdu, std::size_t longest_reply) const;
@@ -122,6 +125,7 @@ class Scanner {
   std::size_t foreign_ = 0;
   std::size_t echoes_ = 0;
   std::size_t probed_ = 0;  // of settings_.addresses
+  bool listened_ = false;   // the last wait for a late reply is over (or was not needed)
   Bytes rx_;
 
   // The request in flight.

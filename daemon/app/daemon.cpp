@@ -82,13 +82,14 @@ std::vector<std::string> diff_lines(const ConfigDiff& d) {
 void log_listener_changes(const std::vector<ListenerConfig>& running,
                           const std::vector<ListenerConfig>& next, spdlog::logger& log) {
   for (const auto& n : next) {
+    // Matched by name: a serial listener by its port (their addresses are all ":0").
     const auto r = std::find_if(running.begin(), running.end(), [&](const ListenerConfig& l) {
-      return l.options.name() == n.options.name();
+      return listener_name(l) == listener_name(n);
     });
     if (r == running.end()) continue;
     const auto what = changes(r->options.policy, n.options.policy);
     if (!what.empty()) {
-      log.info("reload: listener {}: {} (open connections take it at once)", n.options.name(),
+      log.info("reload: listener {}: {} (open connections take it at once)", listener_name(n),
                fmt::join(what, ", "));
     }
   }
@@ -142,7 +143,7 @@ std::optional<Config> Daemon::load_config() {
     if (network != ls.end()) {
       auto& first = network->options;
       // The file's warning about that listener's address no longer applies: --listen moved it.
-      const std::string moved = first.name() + " lets";
+      const std::string moved = listener_name(*network) + " lets";
       std::erase_if(result.warnings,
                     [&](const std::string& w) { return w.find(moved) != std::string::npos; });
       first.host = options_.listen->host;

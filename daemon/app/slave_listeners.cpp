@@ -47,10 +47,6 @@ bool same_place(const ListenerConfig& a, const ListenerConfig& b) {
   return a.options.host == b.options.host && a.options.port == b.options.port;
 }
 
-std::string name_of(const ListenerConfig& l) {
-  return l.serial ? l.serial->port : l.options.name() + " (" + std::string(to_string(l.framing)) + ")";
-}
-
 }  // namespace
 
 SlaveListeners::SlaveListeners(boost::asio::io_context& io, net::Clock& clock,
@@ -113,7 +109,7 @@ std::vector<std::string> SlaveListeners::reload(const std::vector<ListenerConfig
         return same_place(*n, configs[i]);
       });
       if (it == next.end()) {
-        restart.push_back(name_of(configs[i]) + " (removed or moved)");
+        restart.push_back(listener_name(configs[i]) + " (removed or moved)");
         continue;
       }
       matched[static_cast<std::size_t>(it - next.begin())] = true;
@@ -130,7 +126,7 @@ std::vector<std::string> SlaveListeners::reload(const std::vector<ListenerConfig
   apply(serial_configs_, serial_);
   apply(tcp_configs_, tcp_);
   for (std::size_t i = 0; i < next.size(); ++i) {
-    if (!matched[i]) restart.push_back(name_of(*next[i]) + " (added)");
+    if (!matched[i]) restart.push_back(listener_name(*next[i]) + " (added)");
   }
   return restart;
 }

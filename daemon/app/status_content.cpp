@@ -144,6 +144,15 @@ std::string StatusContent::regmap_json() {
     o.port = server_.port(i);
     listeners.push_back({o.name(), o.policy.word_order});
   }
+  // And the RTU / ASCII ones, each by the name it logs under (a serial one by its port).
+  if (slaves_) {
+    for (const auto& l : slaves_->serial()) {
+      listeners.push_back({l->name(), l->policy().session.word_order});
+    }
+    for (const auto& l : slaves_->tcp()) {
+      listeners.push_back({l->name(), l->policy().session.word_order});
+    }
+  }
   return format_regmap(devices, listeners, RegmapFormat::json);
 }
 

@@ -153,6 +153,19 @@ struct ListenerConfig {
   int line = 0;
 };
 
+// How the log, the register map, the reload log and the status documents name a listener, one
+// name per listener: a Modbus TCP one by its address ("0.0.0.0:502", "[::]:802 (TLS)"), one of RTU
+// or ASCII frames on TCP by its address and framing ("0.0.0.0:5020 (rtu over tcp)"), a serial
+// one by its port and framing ("serial /dev/ttyS1 (rtu)"), as the listeners name themselves in
+// the log (slave/serial_listener.cpp, slave/rtu_tcp_listener.cpp).
+inline std::string listener_name(const ListenerConfig& l) {
+  if (l.serial) return "serial " + l.serial->port + " (" + std::string(to_string(l.framing)) + ")";
+  if (l.framing != ListenerFraming::mbap) {
+    return l.options.name() + " (" + std::string(to_string(l.framing)) + " over tcp)";
+  }
+  return l.options.name();
+}
+
 // What the gateway does to a drive whose PLC stopped writing (docs/safety.md).
 enum class FailsafeAction : std::uint8_t {
   stop,        // Command::stop

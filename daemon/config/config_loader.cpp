@@ -28,19 +28,33 @@ constexpr std::size_t kMaxNameLength = 64;
 // Names of buses and devices go into the journal (as fields), the status page, the JSON, metric
 // labels and Sparkplug topics: letters, digits, '_', '-' and '.', starting with a letter or a
 // digit, at most kMaxNameLength, so that none of them can inject a line, a tag or a topic level.
-void check_name(const toml::node* at, const std::string& key, const std::string& name,
-                Diagnostics& diag) {
-  if (name.empty()) return;  // said elsewhere
+bool valid_name(std::string_view name) {
   const auto safe = [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
            c == '-' || c == '.';
   };
-  const bool alnum_first = safe(name[0]) && name[0] != '_' && name[0] != '-' && name[0] != '.';
-  if (name.size() > kMaxNameLength || !alnum_first ||
-      !std::all_of(name.begin(), name.end(), safe)) {
+  return !name.empty() && name.size() <= kMaxNameLength && safe(name[0]) && name[0] != '_' &&
+         name[0] != '-' && name[0] != '.' && std::all_of(name.begin(), name.end(), safe);
+}
+
+void check_name(const toml::node* at, const std::string& key, const std::string& name,
+                Diagnostics& diag) {
+  if (name.empty()) return;  // said elsewhere
+  if (!valid_name(name)) {
     diag.error(at, key,
                "names are 1 to " + std::to_string(kMaxNameLength) +
                    " letters, digits, '_', '-' or '.', starting with a letter or a digit");
+  }
+}
+
+// Table `t` of [[bus]] or [[device]] (`kind`), at `prefix` ("device[2]"): every message about a
+// key of it names it by its `name` too, when it has a valid one ("device 'pump-3'").
+void name_table(const toml::table& t, const std::string& prefix, std::string_view kind,
+                Diagnostics& diag) {
+  const auto* n = t.get("name");
+  const auto* s = n != nullptr ? n->as_string() : nullptr;
+  if (s != nullptr && valid_name(s->get())) {
+    diag.name_table(prefix, std::string(kind) + " '" + s->get() + "'");
   }
 }
 
@@ -146,6 +160,7 @@ std::vector<LineGiven> read_buses(const toml::table& root, Config& cfg, Diagnost
   for (std::size_t i = 0; i < buses->size(); ++i) {
     const auto& t = *buses->get(i)->as_table();
     const std::string prefix = "bus[" + std::to_string(i) + "]";
+    name_table(t, prefix, "bus", diag);
     TableReader r(t, prefix, diag);
     r.expect({"name", "port", "baud", "parity", "data_bits", "stop_bits", "echo", "rs485",
               "reopen_max_ms", "network_delay_ms"});
@@ -226,6 +241,7 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
   for (std::size_t i = 0; i < devices->size(); ++i) {
     const auto& t = *devices->get(i)->as_table();
     const std::string prefix = "device[" + std::to_string(i) + "]";
+    name_table(t, prefix, "device", diag);
     TableReader r(t, prefix, diag);
     r.expect({"name", "bus", "adapter", "unit_id", "address", "poll_ms", "budget_ms",
               "backoff_max_ms", "failsafe_timeout_ms", "failsafe_action", "failsafe_rpm",
@@ -390,33 +406,41 @@ void cross_check(Config& cfg, const std::vector<LineGiven>& given, const PluginR
   }
 }
 
+// The file's tables, or nullopt with the syntax error in `diag`.
+std::optional<toml::table> parse_toml(std::string_view text, const std::string& source_name,
+                                      Diagnostics& diag) {
+  try {
+    return toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    diag.error_at(static_cast<int>(e.source().begin.line), "", syntax_error_text(text, e));
+    return std::nullopt;
+  }
+}
+
+// Refuses top-level keys that are none of the configuration's tables.
+void check_top_level(const toml::table& root, Diagnostics& diag) {
+  TableReader top(root, "", diag);
+  top.expect({"server", "listener", "http", "history", "mqtt", "bus", "device"});
+  for (const char* key : {"server", "listener", "http", "history", "mqtt", "bus", "device"}) {
+    top.node(key);
+  }
+}
+
 }  // namespace
 
 ConfigResult parse_config(std::string_view text, const std::string& source_name,
                           const PluginRegistry& plugins) {
   ConfigResult result;
   Diagnostics diag(source_name);
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name);
-  } catch (const toml::parse_error& e) {
-    diag.error_at(static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+  auto parsed = parse_toml(text, source_name, diag);
+  if (!parsed) {
     result.errors = std::move(diag.errors);
     return result;
   }
+  const toml::table& root = *parsed;
   Config cfg;
   cfg.path = source_name;
-  {
-    TableReader top(root, "", diag);
-    top.expect({"server", "listener", "http", "history", "mqtt", "bus", "device"});
-    top.node("server");
-    top.node("listener");
-    top.node("http");
-    top.node("history");
-    top.node("mqtt");
-    top.node("bus");
-    top.node("device");
-  }
+  check_top_level(root, diag);
   read_server(root, cfg, diag);
   read_listeners(root, cfg, diag);
   read_http(root, cfg, diag);
@@ -448,6 +472,32 @@ ConfigResult load_config(const std::filesystem::path& path, const PluginRegistry
   }
   auto result = parse_config(*text, path.string(), plugins);
   if (result.config) result.config->path = path;
+  return result;
+}
+
+ConfigResult load_http_config(const std::filesystem::path& path) {
+  ConfigResult result;
+  std::string error;
+  const auto text = read_regular_file(path, kMaxConfigFile, error);
+  if (!text) {
+    result.errors.push_back(error);
+    return result;
+  }
+  Diagnostics diag(path.string());
+  const auto root = parse_toml(*text, path.string(), diag);
+  Config cfg;
+  cfg.path = path;
+  if (root) {
+    check_top_level(*root, diag);
+    read_server(*root, cfg, diag);
+    read_listeners(*root, cfg, diag);
+    read_http(*root, cfg, diag);
+  }
+  if (diag.errors.empty()) {
+    result.config = std::move(cfg);
+  } else {
+    result.errors = std::move(diag.errors);
+  }
   return result;
 }
 

@@ -23,6 +23,10 @@ struct ConfigResult {
 std::optional<ListenAddress> parse_listen(std::string_view text);
 
 ConfigResult load_config(const std::filesystem::path& path, const PluginRegistry& plugins);
+// Only [server], [[listener]] and [http] of the file at `path`, read and checked as load_config()
+// reads them (its other tables are not looked into, warnings are left out): where the running
+// daemon's HTTP side is, for the tools that talk to it, whatever adapters its devices name.
+ConfigResult load_http_config(const std::filesystem::path& path);
 // The same from text already in memory; `source_name` stands for the file in messages.
 ConfigResult parse_config(std::string_view text, const std::string& source_name,
                           const PluginRegistry& plugins);

@@ -333,7 +333,7 @@ void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
                   std::string(to_string(p.access)) + ")";
   diag.warning_at(
       l.line, where,
-      l.options.name() + what + "; give it an allow list, or access = \"read\" (docs/security.md)");
+      listener_name(l) + what + "; give it an allow list, or access = \"read\" (docs/security.md)");
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 
 #include "gateway/device.h"
@@ -83,6 +84,16 @@ bool commands(const Parts& parts, bool (*which)(Command)) {
 
 bool is_stop(Command c) {
   return c == Command::stop || c == Command::quick_stop;
+}
+
+// Why the drive refused a run, for the audit trail and the log: the fault it reports, if it
+// reports one (a tripped drive does not run until reset_fault); empty when it reports none.
+std::string why_run_refused(const CommonState& s) {
+  if (s.faults.empty()) return {};
+  char native[16];
+  std::snprintf(native, sizeof native, "0x%X", static_cast<unsigned>(s.native_fault));
+  return "the drive reports a fault: " + std::string(to_string(most_severe(s.faults))) +
+         " (native " + native + "); it runs again after reset_fault";
 }
 
 // Whether a number can be written at all: NaN and the infinities never reach a drive.
@@ -269,7 +280,12 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
     if (auto op = op_of(*p.point, p.value)) ops.push_back(std::move(*op));
   }
   if (!ops.empty()) {
-    if (const WriteCheck c = driver_->check(ops); c != WriteCheck::ok) return to_outcome(c);
+    if (const WriteCheck c = driver_->check(ops); c != WriteCheck::ok) {
+      if (c == WriteCheck::refused && commands(parts, &is_run)) {
+        answer.record.why = why_run_refused(driver_->common());
+      }
+      return to_outcome(c);
+    }
   }
 
   // A stop goes ahead of everything; a request that also runs the motor is no stop, and waits its
@@ -436,6 +452,9 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
         failure = Outcome::invalid_value;
         return Progress::failed;
       case WriteStatus::refused:
+        if (run) {
+          for (Answer& a : r.answers) a.record.why = why_run_refused(driver_->common());
+        }
         failure = Outcome::refused;
         return Progress::failed;
     }

@@ -178,8 +178,10 @@ void MosquittoClient::connect(const std::string& will_topic, const std::string& 
 
 void MosquittoClient::start(const std::string& address) {
   state_ = State::connecting;
-  int rc = mosquitto_will_set(mosq_, will_topic_.c_str(), static_cast<int>(will_payload_.size()),
-                              will_payload_.data(), 1, false);
+  int rc = will_topic_.empty() ? mosquitto_will_clear(mosq_)
+                               : mosquitto_will_set(mosq_, will_topic_.c_str(),
+                                                    static_cast<int>(will_payload_.size()),
+                                                    will_payload_.data(), 1, false);
   if (rc == MOSQ_ERR_SUCCESS) {
     rc = mosquitto_connect_async(mosq_, address.c_str(), options_.port,
                                  static_cast<int>(options_.keepalive.count()));

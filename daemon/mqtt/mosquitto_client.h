@@ -72,8 +72,9 @@ class MosquittoClient {
   // From the next connect() on, this broker (another of [mqtt] brokers): an attempt or session
   // in progress is abandoned (without calling lost), and the client set up afresh for it.
   void use_broker(BrokerOptions options);
-  // Starts an attempt with this will (QoS 1, not retained); connected or lost follows. An attempt
-  // or session in progress is abandoned first (without calling lost).
+  // Starts an attempt with this will (QoS 1, not retained; an empty topic: none, as for a tool
+  // that only sends a command); connected or lost follows. An attempt or session in progress is
+  // abandoned first (without calling lost).
   void connect(const std::string& will_topic, const std::string& will_payload);
   // Queues a message; false (nothing queued) when there is no session. Each message taken is
   // numbered, one on from the last, over every session: published() is the last one's number.

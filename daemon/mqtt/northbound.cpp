@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "gateway/point_values.h"
 #include "gateway/value_codec.h"
@@ -138,22 +139,6 @@ std::unique_ptr<StoreForward> make_store(const MqttConfig& config,
   return store;
 }
 
-// What the client needs for broker `index` of [mqtt].
-BrokerOptions broker_options(const MqttConfig& config, std::size_t index) {
-  const MqttBroker& b = config.brokers.at(index);
-  return {b.host,
-          b.port,
-          b.tls,
-          b.ca.string(),
-          b.cert.string(),
-          b.key.string(),
-          config.client_id,
-          config.username,
-          config.password,
-          config.keepalive,
-          std::chrono::milliseconds(10'000)};
-}
-
 // A DCMD the edge node refused, as the audit trail's result: the one a Modbus client would get
 // for the same mistake (docs/audit.md, RESULT).
 Outcome outcome_of(sparkplug::Refusal r) {
@@ -177,6 +162,21 @@ Outcome outcome_of(sparkplug::Refusal r) {
 }
 
 }  // namespace
+
+BrokerOptions broker_options(const MqttConfig& config, std::size_t index) {
+  const MqttBroker& b = config.brokers.at(index);
+  return {b.host,
+          b.port,
+          b.tls,
+          b.ca.string(),
+          b.cert.string(),
+          b.key.string(),
+          config.client_id,
+          config.username,
+          config.password,
+          config.keepalive,
+          std::chrono::milliseconds(10'000)};
+}
 
 Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::string version,
                        std::shared_ptr<spdlog::logger> log, const std::filesystem::path& state_dir,
@@ -331,6 +331,7 @@ void Northbound::connect() {
 
 void Northbound::connected() {
   ++status_.connects;
+  session_up_ = true;
   status_.last_error.clear();
   log_->info("MQTT: connected to {} as {} (bdSeq {}){}", broker_url(), config_.client_id,
              edge_.bd_seq(),
@@ -363,6 +364,7 @@ void Northbound::lost(const std::string& why) {
   session_ended();
   if (stopping_) return;
   ++status_.losses;
+  if (std::exchange(session_up_, false)) ++status_.sessions_lost;
   const bool first = status_.last_error.empty();
   status_.last_error = why;
   backoff_ = backoff_.count() == 0 ? kFirstRetry : std::min(backoff_ * 2, kLongestRetry);
@@ -593,6 +595,7 @@ void Northbound::leave_broker(Millis delay) {
     // Once: a second STATE in the same turn, or a lost session, finds it already ended.
     if (token.expired() || stopping_ || !client_.connected()) return;
     client_.disconnect();
+    session_up_ = false;  // left, not lost
     session_ended();
     // Spec 5.x (multiple MQTT servers): the host may be online on another server.
     if (next_broker()) log_->info("MQTT: trying {} next", broker_url());

@@ -31,6 +31,10 @@
 
 namespace drivegate::mqtt {
 
+// What the MQTT client needs for broker `index` of [mqtt] (its address, TLS files, credentials,
+// keep-alive), under the edge node's client id.
+BrokerOptions broker_options(const MqttConfig& config, std::size_t index);
+
 class Northbound final : private sparkplug::Sink {
  public:
   // `state_dir`: where the bdSeq is kept across restarts (mqtt/bd_seq_file.h; empty: it is not).
@@ -124,6 +128,7 @@ class Northbound final : private sparkplug::Sink {
   std::size_t broker_ = 0;         // which of config_.brokers the next attempt uses
   std::size_t client_broker_ = 0;  // which one client_ is set up for
   bool stopping_ = false;
+  bool session_up_ = false;  // a CONNACK came, and nothing ended that session since
   bool started_ = false;
   bool bd_seq_save_failed_ = false;  // warned once until a save succeeds again
   NorthboundStatus status_;

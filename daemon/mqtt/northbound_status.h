@@ -34,6 +34,7 @@ struct NorthboundStatus {
   std::uint8_t bd_seq = 0;
   std::uint64_t connects = 0;            // sessions begun (CONNACK)
   std::uint64_t losses = 0;              // attempts failed or sessions lost
+  std::uint64_t sessions_lost = 0;       // of them, sessions that were up (one an outage)
   std::uint64_t messages = 0;            // Sparkplug messages published
   std::uint64_t births = 0;              // DBIRTHs among them
   std::uint64_t commands = 0;            // DCMD writes carried out (any outcome)

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "base/json.h"
+#include "gateway/device.h"  // required_level
 
 namespace drivegate {
 namespace {
@@ -23,6 +24,14 @@ bool is_bits(Table t) {
 // Coils and discrete inputs are single bits on the wire, whatever the point's value type.
 std::string type_of(const MappedPoint& p) {
   return is_bits(p.spec.table) ? std::string("bit") : std::string(to_string(p.spec.type));
+}
+
+// Who may write the point, as the listeners' `access` levels name it: "operate" (the command
+// block, and points the adapter opens to operate), "maintain" (every other writable point), or
+// "read" (read-only: every level reads it, none writes it).
+std::string_view access_of(const MappedPoint& p) {
+  return p.spec.access() == Access::read_write ? to_string(required_level(p))
+                                               : to_string(AccessLevel::read);
 }
 
 // The Modicon order of the tables: their reference's leading digit.
@@ -115,8 +124,7 @@ std::string to_json(const std::vector<DeviceRegisters>& devices,
           << ", \"table\": \"" << to_string(p.spec.table) << "\", \"address\": " << p.address
           << ", \"reference\": \"" << modicon_reference(p.spec.table, p.address, digits)
           << "\", \"type\": \"" << type_of(p) << "\", \"scale\": " << number(p.spec.scale)
-          << ", \"unit\": " << json_string(p.spec.unit) << ", \"access\": \""
-          << (p.spec.access() == Access::read_write ? "rw" : "r")
+          << ", \"unit\": " << json_string(p.spec.unit) << ", \"access\": \"" << access_of(p)
           << "\", \"description\": " << json_string(p.spec.description);
       if (p.spec.type == PointType::string) out << ", \"registers\": " << p.spec.register_count();
       out << ", \"labels\": {";
@@ -152,8 +160,8 @@ std::string to_csv(const std::vector<DeviceRegisters>& devices) {
           << to_string(p.spec.table) << "," << p.address << ","
           << modicon_reference(p.spec.table, p.address, digits) << "," << type_of(p) << ","
           << p.spec.register_count() << "," << number(p.spec.scale) << "," << csv_field(p.spec.unit)
-          << "," << (p.spec.access() == Access::read_write ? "rw" : "r") << ","
-          << csv_field(p.spec.description) << "," << csv_field(labels_text(p.spec)) << "\n";
+          << "," << access_of(p) << "," << csv_field(p.spec.description) << ","
+          << csv_field(labels_text(p.spec)) << "\n";
     }
   }
   return out.str();
@@ -173,7 +181,9 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices,
       << " + address, holding registers " << h0
       << " + address (mbpoll's `-r` is the reference without its table digit: address + 1). "
          "Coils and discrete inputs are single bits. 32-bit values and floats take two registers; "
-         "engineering value = register x scale.\n\n";
+         "engineering value = register x scale. Access is the level a listener (or MQTT's "
+         "`access`) must have to write the point: `operate` or `maintain`; `read` points are "
+         "read-only.\n\n";
   if (listeners.empty()) {
     out << "Word order of 32-bit values and floats: big, high word first (mbpoll -B), unless a "
            "listener's `word_order` says otherwise.\n";
@@ -198,8 +208,8 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices,
       out << "| " << to_string(p.spec.table) << " | " << p.address << " | "
           << modicon_reference(p.spec.table, p.address, digits) << " | " << md_field(p.spec.name)
           << " | " << type_of(p) << " | " << number(p.spec.scale) << " | " << md_field(p.spec.unit)
-          << " | " << (p.spec.access() == Access::read_write ? "rw" : "r") << " | "
-          << md_field(p.spec.description) << " | " << md_field(labels_text(p.spec)) << " |\n";
+          << " | " << access_of(p) << " | " << md_field(p.spec.description) << " | "
+          << md_field(labels_text(p.spec)) << " |\n";
     }
   }
   return out.str();

@@ -575,6 +575,9 @@ void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
            static_cast<double>(m.connects));
   w.single("drivegate_mqtt_connection_losses_total", "counter",
            "connection attempts that failed and sessions lost", static_cast<double>(m.losses));
+  w.single("drivegate_mqtt_sessions_lost_total", "counter",
+           "sessions that were up and ended without being ended here (one per outage)",
+           static_cast<double>(m.sessions_lost));
   w.single("drivegate_mqtt_messages_total", "counter", "Sparkplug messages published",
            static_cast<double>(m.messages));
   w.single("drivegate_mqtt_device_births_total", "counter", "DBIRTH messages published",

@@ -186,10 +186,10 @@ void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
   append_json_string(out, m.session);
   fmt::format_to(std::back_inserter(out),
                  ", \"connected\": {}, \"bd_seq\": {}, \"connects\": {}, \"losses\": {}, "
-                 "\"messages\": {}, \"births\": {}, \"commands\": {}, \"commands_retained\": {}, "
-                 "\"rebirths_coalesced\": {}, \"last_error\": ",
-                 m.connected, m.bd_seq, m.connects, m.losses, m.messages, m.births, m.commands,
-                 m.commands_retained, m.rebirths_coalesced);
+                 "\"sessions_lost\": {}, \"messages\": {}, \"births\": {}, \"commands\": {}, "
+                 "\"commands_retained\": {}, \"rebirths_coalesced\": {}, \"last_error\": ",
+                 m.connected, m.bd_seq, m.connects, m.losses, m.sessions_lost, m.messages, m.births,
+                 m.commands, m.commands_retained, m.rebirths_coalesced);
   append_json_string(out, m.last_error);
   const mqtt::StoreStats& st = m.store;
   fmt::format_to(std::back_inserter(out),

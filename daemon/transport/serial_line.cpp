@@ -49,9 +49,48 @@ std::error_code configure(asio::serial_port& port, const BusConfig& bus) {
   return {};
 }
 
+std::string_view parity_name(asio::serial_port_base::parity::type p) {
+  using sp = asio::serial_port_base;
+  return p == sp::parity::none ? "none" : p == sp::parity::even ? "even" : "odd";
+}
+
 }  // namespace
 
-std::error_code open_serial(asio::serial_port& port, const BusConfig& bus, PortLock& lock) {
+std::string refused_settings(asio::serial_port& port, const BusConfig& bus) {
+  using sp = asio::serial_port_base;
+  std::string out;
+  const auto refused = [&](const std::string& asked, const std::string& held) {
+    out += (out.empty() ? "" : ", ") + asked + " (the port has " + held + ")";
+  };
+  // Each read back from the port's termios (tcgetattr) as Asio set it.
+  boost::system::error_code ec;
+  sp::baud_rate baud;
+  port.get_option(baud, ec);
+  if (!ec && baud.value() != bus.baud) {
+    refused("baud " + std::to_string(bus.baud), std::to_string(baud.value()));
+  }
+  sp::character_size size;
+  port.get_option(size, ec);
+  if (!ec && size.value() != bus.data_bits) {
+    refused("data bits " + std::to_string(bus.data_bits), std::to_string(size.value()));
+  }
+  sp::parity parity;
+  port.get_option(parity, ec);
+  const std::string_view asked = to_string(bus.parity);
+  if (!ec && parity_name(parity.value()) != asked) {
+    refused("parity " + std::string(asked), std::string(parity_name(parity.value())));
+  }
+  sp::stop_bits stop;
+  port.get_option(stop, ec);
+  const unsigned held_stop = stop.value() == sp::stop_bits::two ? 2 : 1;
+  if (!ec && held_stop != bus.stop_bits) {
+    refused("stop bits " + std::to_string(bus.stop_bits), std::to_string(held_stop));
+  }
+  return out;
+}
+
+std::error_code open_serial(asio::serial_port& port, const BusConfig& bus, PortLock& lock,
+                            std::string* refused) {
   if (const std::error_code ec = lock.acquire(bus.port)) return ec;
   boost::system::error_code opened;
   port.open(bus.port, opened);
@@ -63,6 +102,7 @@ std::error_code open_serial(asio::serial_port& port, const BusConfig& bus, PortL
   }
   std::error_code ec = make_exclusive(port.native_handle());
   if (!ec) ec = configure(port, bus);
+  if (!ec && refused != nullptr) *refused = refused_settings(port, bus);
   if (ec) {
     // The error_code overload: this path reports, it never throws. The step's error is the one
     // worth reporting, not close()'s.

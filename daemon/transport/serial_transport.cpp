@@ -13,7 +13,7 @@ SerialTransport::SerialTransport(asio::io_context& io, BusConfig bus)
     : io_(io), bus_(std::move(bus)), port_(io) {}
 
 void SerialTransport::open(Done done) {
-  const std::error_code ec = open_serial(port_, bus_, lock_);
+  const std::error_code ec = open_serial(port_, bus_, lock_, &refused_);
   asio::post(io_, [done = std::move(done), ec] { done(ec); });
 }
 
@@ -44,6 +44,19 @@ std::string SerialTransport::explain(std::error_code ec) const {
     return "in use by " + (lock_.owner().empty() ? std::string("another program") : lock_.owner());
   }
   return ec.message();
+}
+
+std::string SerialTransport::caveat() const {
+  std::string out = lock_.note();
+  if (!refused_.empty()) {
+    out += (out.empty() ? "" : "; ") + bus_.port +
+           " did not take every setting asked: " + refused_ +
+           ". It runs as the port has it: a pseudo-terminal has no parity "
+           "(a loopback test may ignore this); on a real line, a device set as asked will not "
+           "understand it (some USB adapters drop such settings: check with stty -F " +
+           bus_.port + ")";
+  }
+  return out;
 }
 
 std::string SerialTransport::describe() const {

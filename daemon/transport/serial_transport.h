@@ -17,14 +17,16 @@ class SerialTransport final : public Transport {
   void close() override;
   [[nodiscard]] std::string describe() const override;
   [[nodiscard]] std::string explain(std::error_code ec) const override;
-  [[nodiscard]] std::string caveat() const override { return lock_.note(); }
+  // A stale lock it could not remove, and the settings the port did not take (serial_line.h).
+  [[nodiscard]] std::string caveat() const override;
   [[nodiscard]] bool network() const override { return false; }
 
  private:
   boost::asio::io_context& io_;
   BusConfig bus_;
   boost::asio::serial_port port_;
-  PortLock lock_;  // held while the port is open
+  PortLock lock_;        // held while the port is open
+  std::string refused_;  // the settings the port did not take at its last open
   std::array<std::uint8_t, 512> chunk_{};
   Bytes tx_;
 };

@@ -10,6 +10,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace drivegate {
@@ -29,6 +30,12 @@ class Diagnostics {
   void warning_at(int line, std::string_view key, std::string_view what) {
     warnings.push_back(message(line, key, what));
   }
+  // From now on a key under `prefix` ("device[2]": "device[2].unit_id", "device[2].options.x")
+  // is named with `name` too ("device 'pump-3'"), beside it: "device[2].unit_id (device
+  // 'pump-3')". In a long file an index alone is hard to find.
+  void name_table(std::string prefix, std::string name) {
+    names_.emplace_back(std::move(prefix), std::move(name));
+  }
   std::vector<std::string> errors;
   std::vector<std::string> warnings;
 
@@ -37,12 +44,49 @@ class Diagnostics {
     std::string msg = source_;
     if (line > 0) msg += ":" + std::to_string(line);
     msg += ": ";
-    if (!key.empty()) msg += std::string(key) + ": ";
+    if (!key.empty()) {
+      msg += key;
+      for (const auto& [prefix, name] : names_) {
+        const bool under =
+            key.starts_with(prefix) && (key.size() == prefix.size() || key[prefix.size()] == '.');
+        if (under) msg += " (" + name + ")";
+      }
+      msg += ": ";
+    }
     msg += what;
     return msg;
   }
   std::string source_;
+  std::vector<std::pair<std::string, std::string>> names_;  // key prefix, what it is called
 };
+
+// A TOML syntax error as the one who wrote the file needs it: the parser's words, and where they
+// are its view of a common slip, what most likely happened. A string left open (its closing quote
+// missing) runs into the end of its line, which toml++ reports as a prohibited control character
+// (the line break) or, on the last line, as the end of the file.
+inline std::string syntax_error_text(std::string_view text, const toml::parse_error& e) {
+  std::string out(e.description());
+  const std::string_view what = e.description();
+  const bool in_string = what.find("string") != std::string_view::npos;
+  const bool control = what.find("control characters") != std::string_view::npos;
+  const bool eof = what.find("end-of-file") != std::string_view::npos;
+  if (!in_string || (!control && !eof)) return out;
+  // The line it stopped on, and whether it stopped at its end (columns count code points).
+  const auto line_no = static_cast<std::size_t>(e.source().begin.line);
+  std::size_t start = 0;
+  for (std::size_t n = 1; n < line_no && start != std::string_view::npos; ++n) {
+    start = text.find('\n', start);
+    if (start != std::string_view::npos) ++start;
+  }
+  if (start == std::string_view::npos) return out;
+  std::string_view line = text.substr(start, text.find('\n', start) - start);
+  if (line.ends_with('\r')) line.remove_suffix(1);
+  std::size_t code_points = 0;
+  for (const char c : line) code_points += (static_cast<unsigned char>(c) & 0xC0) != 0x80 ? 1 : 0;
+  if (!eof && static_cast<std::size_t>(e.source().begin.column) != code_points + 1) return out;
+  const char quote = what.find("literal string") != std::string_view::npos ? '\'' : '"';
+  return out + " (most likely a string left open: its closing " + quote + " is missing)";
+}
 
 inline int line_of(const toml::node& n) {
   return static_cast<int>(n.source().begin.line);

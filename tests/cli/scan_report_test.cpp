@@ -135,6 +135,8 @@ TEST(ScanReport, NothingFoundIsSaidWithoutAConfiguration) {
   scan.on_timeout();
   scan.next();
   scan.on_timeout();
+  ASSERT_TRUE(scan.next());  // the wait for a late reply to the last probe
+  scan.on_timeout();
   EXPECT_FALSE(scan.next());
   ScanReport r;
   r.line = tty();
@@ -147,7 +149,23 @@ TEST(ScanReport, NothingFoundIsSaidWithoutAConfiguration) {
   EXPECT_EQ(scan_report(r),
             "no slave found on /dev/ttyUSB0 (9600 baud 8N2, ascii), addresses 1,2\n"
             "note: bytes that made no good frame came at address 1: another baud rate, parity or "
-            "framing on the line, or two slaves at one address\n");
+            "framing on the line, two slaves at one address, or a reply cut short or whose byte "
+            "count says more than it carries\n");
+}
+
+// A slave whose well-formed reply carries another byte count than a read of one register has is
+// found, and its line says what it answered.
+TEST(ScanReport, AReplyWithAnotherByteCountIsSaidOnTheSlavesLine) {
+  md::ScanSettings s;
+  s.char_time = character_time(19200, Parity::even, 8, 1);
+  s.addresses = {17};
+  md::Scanner scan(s);
+  scan.next();
+  ASSERT_TRUE(
+      scan.on_receive(md::encode(md::Framing::rtu, 17, Bytes{0x03, 0x04, 0x00, 0x06, 0, 0})));
+  EXPECT_EQ(slave_line(scan.found().at(0), {}).substr(0, 126),
+            "address 17: a read of holding register 0 answered with byte count 4 and 4 bytes, not "
+            "the 2 of one register; identification not");
 }
 
 TEST(ScanReport, ADevicesStringsCannotWriteToTheTerminal) {

@@ -106,15 +106,16 @@ TEST(ScanRequests, TheWaitCountsTheRequestAndTheReplyOnTheWire) {
   // the slave, its longest reply's 7 bytes (4.0 ms, 5 whole).
   Scanner scan(settings({1, 2, 3}));
   EXPECT_EQ(scan.next()->wait, 110ms);
-  EXPECT_EQ(scan.probe_time(), 113ms);  // and the 3 ms gap
-  EXPECT_EQ(scan.time_left(), 3 * 113ms);
+  EXPECT_EQ(scan.probe_time(), 113ms);             // and the 3 ms gap
+  EXPECT_EQ(scan.time_left(), 3 * 113ms + 110ms);  // and the last wait for a late reply
   // At 1200 baud the wire dominates: 8 + 7 characters of 9.17 ms.
   ScanSettings slow = settings({1});
   slow.char_time = character_time(1200, Parity::even, 8, 1);
   EXPECT_EQ(Scanner(slow).next()->wait, 74ms + 100ms + 65ms);
-  // The whole default range, as `drivegate scan` says up front: 247 x 113 ms = 27.9 s.
+  // The whole default range, as `drivegate scan` says up front: 247 x 113 ms = 27.9 s, and one
+  // wait more listening for a late reply to the last probe: 28.0 s.
   std::string error;
-  EXPECT_EQ(Scanner(settings(*parse_addresses("1-247", error))).time_left(), 27911ms);
+  EXPECT_EQ(Scanner(settings(*parse_addresses("1-247", error))).time_left(), 28021ms);
 }
 
 TEST(ScanJudging, AnyGoodReplyFromTheAddressIsASlaveRegistersOrException) {
@@ -157,6 +158,12 @@ TEST(ScanJudging, ASilentAddressIsAskedOnceAndTheNextFollows) {
   EXPECT_EQ(scan.next()->frame, kProbe5Rtu);
   scan.on_timeout();
   EXPECT_EQ(scan.next()->frame, kProbe6Rtu);
+  scan.on_timeout();
+  // The last probe went unanswered: the line is listened to for one wait more, nothing sent.
+  const auto listen = scan.next();
+  ASSERT_TRUE(listen);
+  EXPECT_TRUE(listen->frame.empty());
+  EXPECT_EQ(listen->wait, 110ms);
   scan.on_timeout();
   EXPECT_FALSE(scan.next());
   EXPECT_TRUE(scan.found().empty());
@@ -218,6 +225,53 @@ TEST(ScanJudging, AReplyAfterItsWaitIsASlaveMarkedLate) {
   ASSERT_TRUE(id);
   EXPECT_EQ(id->address, 5);
   EXPECT_EQ(id->frame[1], fc::encapsulated_interface);
+}
+
+// A slave that answers after its wait at the end of the range (or the only address asked) has
+// no later probe to be heard during: the wait after the last probe hears it, as late.
+TEST(ScanJudging, AReplyAfterTheLastProbesWaitIsHeardInTheWaitAfterIt) {
+  Scanner scan(settings({5}));
+  EXPECT_EQ(scan.next()->frame, kProbe5Rtu);
+  scan.on_timeout();
+  const auto listen = scan.next();
+  ASSERT_TRUE(listen);
+  EXPECT_TRUE(listen->frame.empty());
+  EXPECT_FALSE(scan.on_receive(kRegisters5));
+  ASSERT_EQ(scan.found().size(), 1u);
+  EXPECT_EQ(scan.found()[0].address, 5);
+  EXPECT_TRUE(scan.found()[0].late);
+  scan.on_timeout();
+  // Then it is asked who it is, as any slave found.
+  const auto id = scan.next();
+  ASSERT_TRUE(id);
+  EXPECT_EQ(id->address, 5);
+  EXPECT_EQ(id->frame[1], fc::encapsulated_interface);
+  // A last probe that was answered needs no such wait.
+  Scanner answered(settings({17}));
+  answered.next();
+  EXPECT_TRUE(answered.on_receive(kRegisters17));
+  answered.next();
+  EXPECT_TRUE(answered.on_receive(kIdentityRefused17));
+  EXPECT_FALSE(answered.next());
+  EXPECT_EQ(answered.time_left(), 0ms);
+}
+
+// A reply whose byte count says more than it carries never makes a frame: the bytes are still
+// waiting for the rest when the wait runs out. That is a damaged reply (asked once more), then
+// an address where bytes made no frame, as with CRC errors, never silence.
+TEST(ScanJudging, AReplyShortOfItsByteCountIsDamagedNotSilence) {
+  // Slave 17 answers the probe with byte count 4 and two data bytes: 11 03 04 00 06 + CRC.
+  Bytes short_of_count = encode(Framing::rtu, 17, Bytes{0x03, 0x04, 0x00, 0x06});
+  Scanner scan(settings({17, 18}));
+  scan.next();
+  EXPECT_FALSE(scan.on_receive(short_of_count));
+  scan.on_timeout();
+  EXPECT_EQ(scan.next()->frame, kProbe17Rtu) << "asked once more, as a damaged reply";
+  EXPECT_FALSE(scan.on_receive(short_of_count));
+  scan.on_timeout();
+  EXPECT_EQ(scan.next()->address, 18);
+  EXPECT_EQ(scan.garbled(), (std::vector<std::uint8_t>{17}));
+  EXPECT_TRUE(scan.found().empty());
 }
 
 TEST(ScanJudging, ALineThatGivesBackTheRequestIsHeardThroughIt) {

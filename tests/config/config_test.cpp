@@ -19,6 +19,7 @@ namespace {
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
+using ::testing::Not;
 
 class ConfigTest : public ::testing::Test {
  protected:
@@ -215,6 +216,52 @@ TEST_F(ConfigTest, SyntaxErrorNamesTheLine) {
               HasSubstr("gw.toml:3:"));
 }
 
+// In a long file `device[2]` alone is hard to find: every message about a key of a [[device]] or
+// [[bus]] table names the table by its `name` beside the key (when the name is a valid one).
+TEST_F(ConfigTest, ErrorsNameTheDeviceAndTheBusByTheirNames) {
+  std::string text = kGood;
+  text.replace(text.find("unit_id = 3"), 11, "unit_id = 248");
+  text.replace(text.find("poll_ms = 250"), 13, "poll_ms = 250\npol_ms = 5");
+  text.replace(text.find("count = 9"), 9, "count = \"9\"");
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21, "port = \"/dev/ttyUSB0\"\nbaud = -1");
+  const auto r = parse(text);
+  const std::string all = ::testing::PrintToString(r.errors);
+  EXPECT_EQ(r.errors.size(), 4u) << all;
+  EXPECT_THAT(all, HasSubstr("gw.toml:15: device[0].unit_id (device 'washer'): must be in 1..247 "
+                             "(got 248)"));
+  EXPECT_THAT(all, HasSubstr("gw.toml:18: device[0].pol_ms (device 'washer'): unknown key"));
+  EXPECT_THAT(all, HasSubstr("device[0].options.count (device 'washer'): must be an integer"));
+  EXPECT_THAT(all, HasSubstr("gw.toml:9: bus[0].baud (bus 'line1'): "));
+  // A name that is not a valid one is not repeated (it could be anything): the index alone.
+  text = kGood;
+  text.replace(text.find("name = \"washer\""), 15, "name = \"wa sher\"");
+  text.replace(text.find("unit_id = 3"), 11, "unit_id = 0");
+  const std::string bad_name = ::testing::PrintToString(parse(text).errors);
+  EXPECT_THAT(bad_name, HasSubstr("device[0].unit_id: must be in 1..247"));
+  EXPECT_THAT(bad_name, Not(HasSubstr("wa sher")));
+}
+
+// toml++ sees a string left open as a control character (the line break) inside it, or as the
+// end of the file on the last line: the error says what most likely happened beside its words.
+TEST_F(ConfigTest, AnUnclosedStringIsSaidToBeOne) {
+  std::string text = kGood;
+  text.replace(text.find("port = \"/dev/ttyUSB0\""), 21, "port = \"/dev/ttyUSB0");
+  EXPECT_THAT(only_error(text),
+              AllOf(HasSubstr("gw.toml:8: "), HasSubstr("explicitly prohibited"),
+                    HasSubstr("(most likely a string left open: its closing \" is missing)")));
+  EXPECT_THAT(only_error("[server]\nlisten = '127.0.0.1:1502\n"),
+              AllOf(HasSubstr("gw.toml:2: "),
+                    HasSubstr("(most likely a string left open: its closing ' is missing)")));
+  EXPECT_THAT(only_error("[server]\nlisten = \"127.0.0.1:1502"),
+              AllOf(HasSubstr("end-of-file"), HasSubstr("closing \" is missing")));
+  // A control character inside a closed string is just that: no guess.
+  const std::string ctrl = only_error("[server]\nlisten = \"127.0\x01.0.1:1502\"\n");
+  EXPECT_THAT(ctrl, HasSubstr("explicitly prohibited"));
+  EXPECT_THAT(ctrl, Not(HasSubstr("left open")));
+  // Nor on another line's error.
+  EXPECT_THAT(only_error("[server]\nmax_clients = = 3\n"), Not(HasSubstr("left open")));
+}
+
 TEST_F(ConfigTest, EmptyFileSaysThereIsNothingToServe) {
   EXPECT_THAT(only_error(""), HasSubstr("no [[device]]"));
 }
@@ -400,8 +447,8 @@ TEST_F(ConfigTest, ABusBehindASerialDeviceServer) {
   EXPECT_EQ(r.config->buses[0].network_delay, Millis(20));
   text = kGood;
   text.replace(text.find("port = \"/dev/ttyUSB0\""), 21, "port = \"tcp://10.1.5.20\"");
-  EXPECT_THAT(only_error(text),
-              AllOf(HasSubstr("gw.toml:8: bus[0].port:"), HasSubstr("tcp://host:port")));
+  EXPECT_THAT(only_error(text), AllOf(HasSubstr("gw.toml:8: bus[0].port (bus 'line1'):"),
+                                      HasSubstr("tcp://host:port")));
   text = kGood;
   text.replace(text.find("port = \"/dev/ttyUSB0\""), 21,
                "port = \"tcp://10.1.5.20:4001\"\nrs485 = true");

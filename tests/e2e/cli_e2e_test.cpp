@@ -76,6 +76,41 @@ TEST(Cli, TheDocumentedConfigurationsAreValid) {
   }
 }
 
+// The installed example names every adapter built here among the values of `adapter`, and its
+// commented-out modbus device, uncommented, is a valid part of it.
+TEST(Cli, TheInstalledExampleNamesEveryAdapterAndItsModbusDeviceIsValid) {
+  const auto example = std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "etc/drivegate.toml";
+  const std::string text = slurp(example);
+  const auto adapter_key = text.find("#   adapter ");
+  ASSERT_NE(adapter_key, std::string::npos);
+  const std::string described =
+      text.substr(adapter_key, text.find("#   unit_id", adapter_key) - adapter_key);
+  std::size_t plugins = 0;
+  for (const auto& f : std::filesystem::directory_iterator(plugin_dir())) {
+    const std::string name = f.path().filename().string();
+    if (!name.starts_with("drivegate-") || f.path().extension() != ".so") continue;
+    ++plugins;
+    const std::string id = name.substr(10, name.size() - 13);
+    EXPECT_THAT(described, HasSubstr(" " + id)) << "etc/drivegate.toml's adapter key lacks " << id;
+  }
+  EXPECT_GT(plugins, 0u);
+  // The modbus device at the end, uncommented (where that adapter is built).
+  if (!std::filesystem::exists(plugin_dir() / "drivegate-modbus.so")) return;
+  const auto from = text.find("# [[bus]]\n# name = \"modbus-line\"");
+  ASSERT_NE(from, std::string::npos);
+  std::string uncommented = text.substr(0, from);
+  std::istringstream rest(text.substr(from));
+  for (std::string line; std::getline(rest, line);) {
+    uncommented += (line.rfind("# ", 0) == 0 ? line.substr(2) : line == "#" ? "" : line) + "\n";
+  }
+  TempDir dir;
+  std::ofstream(dir / "with-modbus.toml") << uncommented;
+  const auto r = run({drivegated(), "--check-config", (dir / "with-modbus.toml").string(),
+                      "--plugin-dir", plugin_dir().string()});
+  EXPECT_EQ(r.status, 0) << uncommented.substr(from) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("OK (6 devices on 6 buses"));
+}
+
 TEST(Cli, CheckConfigNamesFileLineAndKey) {
   TempDir dir;
   std::string text = kConfig;
@@ -84,7 +119,7 @@ TEST(Cli, CheckConfigNamesFileLineAndKey) {
   const auto r = run({drivegated(), "--check-config", (dir / "bad.toml").string(), "--plugin-dir",
                       plugin_dir().string()});
   EXPECT_EQ(r.status, 1);
-  EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll: unknown key"));
+  EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll (device 'washer'): unknown key"));
 }
 
 TEST(Cli, DaemonRefusesABadConfigWithExitOne) {
@@ -178,6 +213,9 @@ TEST(Cli, ABadOptionExitsTwoNamingItThenTheUsage) {
       {{drivegate(), "demo", "--listen"},
        "drivegate demo: option '--listen' needs a value",
        "usage: drivegate demo"},
+      {{drivegate(), "dcmd", "-c", "x", "-d", "y", "command"},
+       "drivegate dcmd: 'command' is not METRIC=VALUE\n",
+       "usage: drivegate dcmd -c FILE -d NAME"},
       {{drivegate(), "action", "--bogus"},
        "drivegate action: unknown option '--bogus'\n",
        "usage: drivegate action"},
@@ -215,8 +253,8 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
        {"-c, --config FILE", "-d, --device NAME", "-t, --timeout-ms N", "-p, --plugin-dir DIR",
         "-h, --help"}},
       {{drivegate(), "capture", "--help"},
-       {"-b, --bus NAME", "-s, --seconds N", "-w, --write FILE", "--http HOST:PORT", "--progress",
-        "--no-progress", "-h, --help"}},
+       {"-b, --bus NAME", "-s, --seconds N", "-w, --write FILE", "-c, --config FILE",
+        "--http HOST:PORT", "--progress", "--no-progress", "-h, --help"}},
       {{drivegate(), "demo", "--help"},
        {"-l, --listen HOST:PORT", "--no-start", "-p, --plugin-dir DIR", "-h, --help"}},
       {{drivegate(), "sim", "--help"},
@@ -224,11 +262,14 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
         "--baud N", "--parity PARITY", "--echo", "--no-echo", "--turnaround-ms N",
         "--turnaround-us N", "--wire-timing", "--wire-log FILE", "-p, --plugin-dir DIR",
         "-h, --help"}},
-      {{drivegate(), "events", "--help"},
-       {"-f, --follow", "-n, --lines N", "-d, --device NAME", "-k, --kind KIND", "--http HOST:PORT",
+      {{drivegate(), "dcmd", "--help"},
+       {"-c, --config FILE", "-d, --device NAME", "-t, --timeout-ms N", "-p, --plugin-dir DIR",
         "-h, --help"}},
       {{drivegate(), "protocol", "--help"},
        {"--request", "--reply", "--set OPTION=VALUE", "-h, --help"}},
+      {{drivegate(), "events", "--help"},
+       {"-f, --follow", "-n, --lines N", "-d, --device NAME", "-k, --kind KIND",
+        "-c, --config FILE", "--http HOST:PORT", "-h, --help"}},
       {{drivegate(), "scan", "--help"},
        {"--port DEVICE", "--baud N", "--parity PARITY", "--data-bits N", "--stop-bits N",
         "--framing FRAMING", "--rs485", "-a, --addresses LIST", "-t, --timeout-ms N",
@@ -306,6 +347,67 @@ TEST(Cli, RegmapPrintsTheServedMap) {
   const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
                        "md", "--plugin-dir", plugin_dir().string()});
   EXPECT_THAT(md.out, HasSubstr("## Unit 1: washer (nidec-washer)"));
+}
+
+// The tools that ask the running daemon find it where its configuration says: `--config FILE`'s
+// [http] listen (--http overrides it). A file without [http], a daemon not running, a capture
+// the file does not serve: each is said naming the file and the address, never a bare
+// "Connection refused" at a default address.
+TEST(Cli, EventsAndCaptureFindTheDaemonFromItsConfiguration) {
+  TempDir dir;
+  Sim sim("nidec-washer", dir / "washer");
+  const int http_port = free_port();
+  const std::string toml = "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) +
+                           "\"\n\n[[bus]]\nname = \"line\"\nport = \"" + (dir / "washer").string() +
+                           "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
+                           "adapter = \"nidec-washer\"\nunit_id = 1\n";
+  const std::string file = (dir / "drivegate.toml").string();
+  const std::string at = "127.0.0.1:" + std::to_string(http_port);
+  {
+    // Written, the daemon not started yet: refused, and said where and why.
+    std::ofstream(file) << toml;
+    const auto refused = run({drivegate(), "events", "--config", file});
+    EXPECT_EQ(refused.status, 1) << refused.out;
+    EXPECT_THAT(refused.out,
+                HasSubstr("drivegate events: " + at + " (the [http] listen of " + file +
+                          "): Connection refused; is drivegated running "
+                          "with " +
+                          file + "?"));
+  }
+  Daemon daemon(dir, toml);
+  const auto events = run({drivegate(), "events", "-c", daemon.config().string()});
+  EXPECT_EQ(events.status, 0) << events.out;
+  EXPECT_THAT(events.out, HasSubstr("Modbus listener"));
+  // --http still wins over the file, which is then not read.
+  const auto direct = run(
+      {drivegate(), "events", "--config", (dir / "none.toml").string(), "--http", at, "-n", "1"});
+  EXPECT_EQ(direct.status, 0) << direct.out;
+  // The file serves no captures: said before anything is asked.
+  const auto capture =
+      run({drivegate(), "capture", "-b", "line", "-s", "1", "-c", daemon.config().string()});
+  EXPECT_EQ(capture.status, 1) << capture.out;
+  EXPECT_THAT(capture.out, HasSubstr("says [http] capture = false: the daemon serves no captures"));
+
+  // A configuration without [http]: the daemon has no HTTP side to ask.
+  std::ofstream(dir / "no-http.toml") << toml.substr(toml.find("[[bus]]"));
+  for (const char* command : {"events", "capture"}) {
+    std::vector<std::string> argv = {drivegate(), command, "-c", (dir / "no-http.toml").string()};
+    if (std::string(command) == "capture") argv.insert(argv.end(), {"-b", "line"});
+    const auto none = run(argv);
+    EXPECT_EQ(none.status, 1) << none.out;
+    EXPECT_THAT(none.out, HasSubstr("drivegate " + std::string(command) + ": " +
+                                    (dir / "no-http.toml").string() +
+                                    " has no [http]: the daemon serves no HTTP side to ask"));
+  }
+  // One that cannot be read, or does not validate, is said to be the reason.
+  const auto missing = run({drivegate(), "events", "-c", (dir / "none.toml").string()});
+  EXPECT_EQ(missing.status, 1) << missing.out;
+  EXPECT_THAT(missing.out, HasSubstr("cannot tell where the daemon's HTTP side is from " +
+                                     (dir / "none.toml").string()));
+  std::ofstream(dir / "bad.toml") << "[http]\nlisten = \"nowhere\"\n";
+  const auto bad = run({drivegate(), "events", "-c", (dir / "bad.toml").string()});
+  EXPECT_EQ(bad.status, 1) << bad.out;
+  EXPECT_THAT(bad.out, HasSubstr("bad.toml:2: http.listen: "));
 }
 
 // Issue 24: a port has one owner. `drivegate write` on a line the daemon runs says at once who

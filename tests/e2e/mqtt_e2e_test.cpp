@@ -667,6 +667,13 @@ TEST_F(MqttE2E, BrokerRestartKeepsModbusServedAndRebirthsWithANewBdSeq) {
   expect_seq_consecutive(peer_->history());
   EXPECT_EQ(metric(http_port, "drivegate_mqtt_connected"), 1);
   EXPECT_EQ(metric(http_port, "drivegate_mqtt_connects_total"), 2);
+  // One outage: one session lost, whatever attempts failed while it lasted.
+  EXPECT_EQ(metric(http_port, "drivegate_mqtt_sessions_lost_total"), 1);
+  EXPECT_GE(metric(http_port, "drivegate_mqtt_connection_losses_total"), 3);
+  EXPECT_THAT(http_get(http_port, "/api/v1/status").body,
+              ::testing::HasSubstr("\"connects\": 2, \"losses\": "));
+  EXPECT_THAT(http_get(http_port, "/api/v1/status").body,
+              ::testing::HasSubstr(", \"sessions_lost\": 1, "));
   EXPECT_EQ(metric(http_port, "drivegate_mqtt_bdseq"), again.node.metric("bdSeq")->as_uint());
 }
 

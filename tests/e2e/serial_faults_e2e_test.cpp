@@ -261,6 +261,27 @@ TEST(SerialFaults, ADriveThatAnswersLaterThanTheTimeoutIsCommLostAndCounted) {
   EXPECT_TRUE(daemon.process().running());
 }
 
+// A port that silently drops a setting (a pseudo-terminal has no parity; some USB adapters do
+// the same) is named in the log with what it refused, once per open, and the daemon runs on:
+// a pty is a legitimate test line, so a warning, not a refusal. The ED3100's 8E1 on a pty.
+TEST(SerialFaults, APortThatDropsASettingIsWarnedOfAndTheDaemonRunsOn) {
+  REQUIRE_ADAPTER("ed3100");
+  TempDir dir;
+  Sim sim("ed3100", dir / "sim");
+  Daemon daemon(dir, one_device(dir / "sim", "ed3100"), {}, dir / "daemon.log");
+  Plc plc(daemon.port());
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(eventually([&] { return online(plc); }, 10s)) << slurp(dir / "daemon.log");
+  const std::string log = slurp(dir / "daemon.log");
+  EXPECT_EQ(occurrences(log, "bus line: " + (dir / "sim").string() +
+                                 " did not take every setting asked: parity even (the port has "
+                                 "none). It runs as the port has it"),
+            1u)
+      << log;
+  EXPECT_NE(log.find("parity even, 1 stop) open"), std::string::npos) << log;
+  EXPECT_TRUE(daemon.process().running());
+}
+
 TEST(SerialFaults, ThePortVanishesAndReturnsAndTheDriveComesBackByItself) {
   REQUIRE_ADAPTER("ed3100");
   TempDir dir;

@@ -8,6 +8,7 @@
 
 #include "drivegate/crc.h"
 #include "e2e.h"
+#include "http_get.h"
 #include "pymodbus_slave.h"  // have_pymodbus_tools
 #include "serial_master.h"
 
@@ -322,6 +323,58 @@ TEST_F(SerialListenerE2E, AReloadAppliesTheNewAccessLevelAtOnce) {
   EXPECT_THAT(master({"write", "1", setpoint, "400", "read", "1", "holding", setpoint, "1"}),
               ElementsAre("exception 1", "ok 300"));
   EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 300);
+}
+
+// Serial listeners are named by their port wherever a listener is named: two of them with
+// different access levels reload without a line about either while neither changed (their
+// network addresses are all ":0", which once made every SIGHUP log "listener :0: access operate
+// -> read"), and a change names the listener it is in. The register map names them the same way.
+TEST_F(SerialListenerE2E, SerialListenersAreNamedByTheirPortInTheReloadLogAndTheRegisterMap) {
+  if (!have_pymodbus_tools()) GTEST_SKIP() << "socat and python3-pymodbus: tools/deps.sh test";
+  Child second({"/usr/bin/socat", "pty,raw,echo=0,link=" + (dir_ / "m2").string(),
+                "pty,raw,echo=0,link=" + (dir_ / "s2").string()},
+               dir_ / "socat2.err");
+  for (int i = 0; i < 100 && !std::filesystem::exists(dir_ / "s2"); ++i) {
+    std::this_thread::sleep_for(20ms);
+  }
+  const std::string s1 = "serial " + (dir_ / "s").string() + " (rtu)";
+  const std::string s2 = "serial " + (dir_ / "s2").string() + " (rtu)";
+  const int http_port = free_port();
+  start("access = \"operate\"\n\n[[listener]]\nport = \"" + (dir_ / "s2").string() +
+        "\"\nbaud = 19200\naccess = \"read\"\nword_order = \"little\"\n\n[http]\nlisten = "
+        "\"127.0.0.1:" +
+        std::to_string(http_port) + "\"\n");
+  daemon_->process().signal(SIGHUP);
+  ASSERT_TRUE(
+      eventually([&] { return log().find("configuration reloaded") != std::string::npos; }, 10s))
+      << log();
+  EXPECT_THAT(log(), Not(HasSubstr("reload: listener"))) << "nothing changed";
+
+  std::string next = toml_;
+  next.replace(next.find("access = \"read\""), std::string("access = \"read\"").size(),
+               "access = \"maintain\"");
+  std::ofstream(daemon_->config()) << next;
+  daemon_->process().signal(SIGHUP);
+  ASSERT_TRUE(eventually([&] { return occurrences(log(), "configuration reloaded") == 2; }, 10s))
+      << log();
+  EXPECT_EQ(occurrences(log(), "reload: listener " + s2 + ": access read -> maintain"), 1u)
+      << log();
+  EXPECT_EQ(occurrences(log(), "reload: listener "), 1u) << log();
+
+  // The register map, from the same file: each by its port, with its word order.
+  Child regmap({(bin_dir() / "drivegate").string(), "regmap", "-c", daemon_->config().string(),
+                "-f", "md", "-p", plugin_dir().string()},
+               dir_ / "regmap.err");
+  std::string md;
+  while (auto line = regmap.read_line(10s)) md += *line + "\n";
+  EXPECT_THAT(md, HasSubstr("- " + s1 + ": big: high word first (mbpoll -B)\n"));
+  EXPECT_THAT(md, HasSubstr("- " + s2 + ": little: low word first (mbpoll without -B)\n"));
+  EXPECT_THAT(md, Not(HasSubstr("- :0")));
+  EXPECT_THAT(md, HasSubstr("| holding | 0 | 40001 | command | u16 | 1 |  | operate |"));
+  // And the running daemon's /api/v1/regmap: the serial listeners with the TCP one.
+  const std::string json = http_get(http_port, "/api/v1/regmap").body;
+  EXPECT_THAT(json, HasSubstr("{\"address\": \"" + s1 + "\", \"word_order\": \"big\"}"));
+  EXPECT_THAT(json, HasSubstr("{\"address\": \"" + s2 + "\", \"word_order\": \"little\"}"));
 }
 
 // A drive that went silent: over the line as over TCP, its status says comm_lost and a write to

@@ -142,6 +142,30 @@ TEST_F(AuditTest, WritesRefusedAtOnceAreEachOneRecordWithWhy) {
   EXPECT_TRUE(answers_.empty());  // answered by the return value only
 }
 
+// A run the drive cannot take because it is tripped says so: the fault it reports, and what
+// clears it. A refusal with no fault reported keeps to the result alone (the adapter's README
+// says when its drive refuses).
+TEST_F(AuditTest, ARunRefusedByATrippedDriveSaysWhichFault) {
+  fake_->common_.faults.set(Fault::stall);
+  fake_->common_.native_fault = 0x08;
+  fake_->refuse_command = Command::run_forward;
+  EXPECT_EQ(write(modbus_client(AccessLevel::operate), kCommand, {1}, 0ms), Outcome::refused);
+  fake_->common_.faults = FaultSet{};
+  fake_->common_.native_fault = 0;
+  EXPECT_EQ(write(modbus_client(AccessLevel::operate), kCommand, {1}, 10ms), Outcome::refused);
+  const auto c = commands();
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[0].field("result"), "refused");
+  EXPECT_EQ(c[0].field("why"),
+            "the drive reports a fault: stall (native 0x8); it runs again after reset_fault");
+  EXPECT_THAT(c[0].message, ::testing::EndsWith(
+                                "command=run_forward: " + std::string(to_string(Outcome::refused)) +
+                                " (the drive reports a fault: stall (native "
+                                "0x8); it runs again after reset_fault)"))
+      << "the log line";
+  EXPECT_EQ(c[1].field("why"), "");
+}
+
 TEST_F(AuditTest, TwoClientsAskingTheSameAreTwoRecords) {
   ASSERT_EQ(write(modbus_client(AccessLevel::maintain, "10.0.0.1:1"), kLimit, {0, 50}, 0ms),
             Outcome::ok);

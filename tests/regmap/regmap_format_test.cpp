@@ -29,7 +29,7 @@ TEST(RegmapFormat, JsonHasEveryFieldOfTheSchema) {
   EXPECT_THAT(json, HasSubstr("{\"unit_id\": 4, \"name\": \"c1\", \"adapter\": \"unicla-edrive\""));
   EXPECT_THAT(json, HasSubstr("{\"name\": \"suction_pressure\", \"table\": \"input\", "
                               "\"address\": 32, \"reference\": \"30033\", \"type\": \"f32\", "
-                              "\"scale\": 1, \"unit\": \"bar\", \"access\": \"r\", "
+                              "\"scale\": 1, \"unit\": \"bar\", \"access\": \"read\", "
                               "\"description\": \"suction \\\"P\\\"\""));
   EXPECT_THAT(json, HasSubstr("\"name\": \"command\", \"table\": \"holding\", \"address\": 0, "
                               "\"reference\": \"40001\""));
@@ -44,7 +44,7 @@ TEST(RegmapFormat, CsvAndMarkdown) {
   DeviceConfig cfg{.name = "c1", .adapter = "x", .unit_id = 4};
   const auto csv = format_regmap(one_device(cfg), kListeners, RegmapFormat::csv);
   EXPECT_THAT(csv, HasSubstr("unit_id,device,adapter,name,table,address,reference,type,"));
-  EXPECT_THAT(csv, HasSubstr("4,c1,x,suction_pressure,input,32,30033,f32,2,1,bar,r,"
+  EXPECT_THAT(csv, HasSubstr("4,c1,x,suction_pressure,input,32,30033,f32,2,1,bar,read,"
                              "\"suction \"\"P\"\"\","));
   const auto md = format_regmap(one_device(cfg), kListeners, RegmapFormat::markdown);
   EXPECT_THAT(md, HasSubstr("## Unit 4: c1 (x)"));
@@ -120,6 +120,46 @@ TEST(RegmapFormat, SixDigitReferencesPastAddress9998) {
   EXPECT_THAT(to_9999, HasSubstr("| holding | 0 | 400001 | command |"));
   EXPECT_THAT(to_9999, HasSubstr("| discrete | 0 | 100001 | status_online |"));
   EXPECT_THAT(to_9999, HasSubstr("input registers 300001 + address"));
+}
+
+// The access column names the level a client needs to write the point, as the listeners'
+// `access` does: the command block and a point its adapter opened to operate are operate's, any
+// other writable point maintain's, and a point nobody writes is read.
+TEST(RegmapFormat, AccessSaysWhichLevelMayWriteEachPoint) {
+  DeviceConfig cfg{.name = "d", .adapter = "x", .unit_id = 1};
+  PointSpec open_to_operate{
+      .name = "reset_counter", .table = Table::holding, .type = PointType::u16};
+  open_to_operate.write_level = PointSpec::WriteLevel::operate;
+  PointSpec closed{.name = "serial_no", .table = Table::holding, .type = PointType::u16};
+  closed.write_level = PointSpec::WriteLevel::none;
+  const std::vector<DeviceRegisters> devices = {
+      {&cfg, RegisterMap({{.name = "accel", .table = Table::holding, .type = PointType::u16},
+                          open_to_operate,
+                          closed,
+                          {.name = "dc_volts", .table = Table::input, .type = PointType::u16}})}};
+  const auto md = format_regmap(devices, kListeners, RegmapFormat::markdown);
+  for (const char* row : {"| holding | 0 | 40001 | command | u16 | 1 |  | operate |",
+                          "| holding | 1 | 40002 | setpoint_rpm | i16 | 1 | rpm | operate |",
+                          "| holding | 2 | 40003 | heartbeat | u16 | 1 |  | operate |",
+                          "| holding | 16 | 40017 | accel | u16 | 1 |  | maintain |",
+                          "| holding | 17 | 40018 | reset_counter | u16 | 1 |  | operate |",
+                          "| holding | 18 | 40019 | serial_no | u16 | 1 |  | read |",
+                          "| input | 32 | 30033 | dc_volts | u16 | 1 |  | read |",
+                          "| input | 0 | 30001 | status | u16 | 1 |  | read |"}) {
+    EXPECT_THAT(md, HasSubstr(row));
+  }
+  EXPECT_THAT(md, Not(HasSubstr("| rw |")));
+  EXPECT_THAT(md, HasSubstr("Access is the level a listener"));
+  const auto csv = format_regmap(devices, kListeners, RegmapFormat::csv);
+  EXPECT_THAT(csv, HasSubstr("1,d,x,accel,holding,16,40017,u16,1,1,,maintain,"));
+  EXPECT_THAT(csv, HasSubstr("1,d,x,command,holding,0,40001,u16,1,1,,operate,"));
+  const auto json = format_regmap(devices, kListeners, RegmapFormat::json);
+  EXPECT_THAT(json, HasSubstr("\"name\": \"reset_counter\", \"table\": \"holding\", \"address\": "
+                              "17, \"reference\": \"40018\", \"type\": \"u16\", \"scale\": 1, "
+                              "\"unit\": \"\", \"access\": \"operate\""));
+  EXPECT_THAT(json, HasSubstr("\"name\": \"serial_no\", \"table\": \"holding\", \"address\": 18, "
+                              "\"reference\": \"40019\", \"type\": \"u16\", \"scale\": 1, "
+                              "\"unit\": \"\", \"access\": \"read\""));
 }
 
 TEST(RegmapFormat, MarkdownSaysEachListenersWordOrder) {

@@ -112,6 +112,38 @@ TEST_F(SerialLine, AsioErrorsKeepTheirMeaning) {
   EXPECT_THAT(ec.message(), ::testing::HasSubstr("lready open"));
 }
 
+// A pseudo-terminal keeps the baud rate and the stop bits it is given, but has no parity: the
+// kernel drops it without an error. The port still opens (a pty is a fine test line), and what it
+// refused is named, read back from the port. (It has always 8 data bits too, but 7 is refused
+// outright: glibc's tcsetattr reads CSIZE back and says EINVAL.)
+TEST_F(SerialLine, SettingsThePortDroppedAreNamedAndThePortStillOpens) {
+  Pty pty;
+  if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";
+  BusConfig bus = bus_on(pty.path());
+  bus.parity = Parity::even;
+  std::string refused = "not set";
+  ASSERT_FALSE(open_serial(port_, bus, lock_, &refused));
+  EXPECT_TRUE(port_.is_open());
+  EXPECT_EQ(refused, "parity even (the port has none)");
+  port_.close();
+  lock_.release();
+  bus.parity = Parity::odd;
+  bus.stop_bits = 2;
+  ASSERT_FALSE(open_serial(port_, bus, lock_, &refused));
+  EXPECT_EQ(refused, "parity odd (the port has none)");
+  port_.close();
+  lock_.release();
+  bus.data_bits = 7;
+  EXPECT_EQ(open_serial(port_, bus, lock_, &refused), std::errc::invalid_argument);
+  EXPECT_FALSE(port_.is_open());
+  // What a pty takes is not refused: 8N1, 8N2, any standard rate.
+  bus = bus_on(pty.path());
+  bus.baud = 115200;
+  bus.stop_bits = 2;
+  ASSERT_FALSE(open_serial(port_, bus, lock_, &refused));
+  EXPECT_EQ(refused, "");
+}
+
 TEST_F(SerialLine, AFailedRs485SwitchClosesThePortAndReportsIt) {
   Pty pty;
   if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";

@@ -375,9 +375,11 @@
         ? q.broker + " (" + (q.broker_index + 1) + " of " + q.brokers + ")" : q.broker);
       set(field("session"), q.session);
       field("session").className = q.session === "online" ? "" : "nz";
-      for (const k of ["bd_seq", "connects", "losses", "messages", "births", "commands"]) {
+      for (const k of ["bd_seq", "connects", "sessions_lost", "messages", "births", "commands"]) {
         set(field(k), num(q[k]));
       }
+      // `losses` counts both: the sessions that were up and ended, and the attempts that failed.
+      set(field("attempts_failed"), num(q.losses - q.sessions_lost));
       set(field("last_error"), q.last_error ? "\u00b7 last error: " + q.last_error : "");
       const st = q.store || {};
       set(field("store"), !st.enabled ? "" : "\u00b7 kept for later " + num(st.records) +
