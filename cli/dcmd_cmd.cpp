@@ -51,8 +51,10 @@ class DcmdRun {
         timer_(io),
         client_(io, options(0),
                 mqtt::MosquittoClient::Handlers{
-                    [this] { connected(); }, [this](std::string why) { lost(std::move(why)); },
-                    [this](std::string_view t, std::string_view p, bool) { message(t, p); }},
+                    [this] { connected(); },
+                    [this](std::string why) { lost(std::move(why)); },
+                    [this](std::string_view t, std::string_view p, bool) { message(t, p); },
+                    {}},  // what the broker received: a DCMD waits for its result instead
                 make_logger("drivegate", spdlog::level::warn)) {}
 
   void start() {

@@ -62,7 +62,7 @@ class GatewayReload : public ::testing::Test {
   // The drive answers, ready, and the device's housekeeping tick runs, as the engine runs it.
   void tick(Device& d, Millis ms) {
     fake(d).common_.ready = true;
-    d.link().health.data_good(at(ms));
+    d.link().health.data_good(at(ms), at(ms));
     d.on_tick(at(ms));
   }
   // The PLC runs the drive at `rpm` and the drive confirms it at once.
@@ -334,7 +334,7 @@ TEST_F(GatewayReload, TheHistorySaysWhatAChangedDeviceFoundOnceItKnows) {
   test::FakeDriver& drive = fake(d);
   // The first blocks read: speed, not yet the status word.
   drive.common_.ready = false;
-  d.link().health.data_good(at(0ms));
+  d.link().health.data_good(at(0ms), at(0ms));
   d.on_tick(at(0ms));
   // The status word: running, while the command in force is not known yet.
   drive.common_.running = true;
@@ -344,7 +344,7 @@ TEST_F(GatewayReload, TheHistorySaysWhatAChangedDeviceFoundOnceItKnows) {
   drive.common_.ready = true;
   drive.common_.command = Command::run_forward;
   drive.common_.setpoint_rpm = 1500;
-  d.link().health.data_good(at(200ms));
+  d.link().health.data_good(at(200ms), at(200ms));
   d.on_tick(at(200ms));
   const auto started = events("a1", EventKind::drive_started);
   ASSERT_EQ(started.size(), 1u);
