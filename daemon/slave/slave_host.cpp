@@ -68,7 +68,7 @@ void SlaveHost::receive(ByteView bytes) {
 
 void SlaveHost::superseded() {
   ++counters_.server_no_response;
-  if (auto held = late_log_.admit(clock_.now())) {
+  if (auto held = line_.late_log.admit(clock_.now())) {
     log_->warn("modbus: {}: the master sent again before unit {} answered (function 0x{:02X}); "
                "that reply is dropped, never sent late (raise the master's response timeout, or "
                "write_reply = \"accepted\"){}",
@@ -79,7 +79,7 @@ void SlaveHost::superseded() {
 
 void SlaveHost::too_late(net::TimePoint would_leave) {
   ++counters_.server_no_response;
-  if (auto held = late_log_.admit(clock_.now())) {
+  if (auto held = line_.late_log.admit(clock_.now())) {
     const auto late = std::chrono::duration_cast<Millis>(would_leave - *pending_->give_up_at);
     log_->warn("modbus: {}: unit {} answered (function 0x{:02X}) {} ms after the master's "
                "response timeout (reply_timeout_ms = {}); that reply is dropped, never sent late{}",
@@ -161,7 +161,7 @@ void SlaveHost::serve(FramerEvent& e) {
     });
   }
   if (r.denied) {
-    if (auto held = denied_log_.admit(clock_.now())) {
+    if (auto held = line_.denied_log.admit(clock_.now())) {
       log_->warn("modbus: {}: write (function 0x{:02X}, unit {}) beyond its access level \"{}\": "
                  "refused with exception 01{}",
                  name_, pdu[0], unit, to_string(session.access), net::held_note(*held));
@@ -198,7 +198,7 @@ void SlaveHost::serve_broadcast(const modbus_serial::Adu& adu) {
   if (!policy_->broadcast) {
     ++counters_.broadcasts_refused;
     backend_.refused_write(session, modbus_serial::kBroadcast, pdu);
-    if (auto held = broadcast_log_.admit(clock_.now())) {
+    if (auto held = line_.broadcast_log.admit(clock_.now())) {
       log_->warn("modbus: {}: broadcast write (function 0x{:02X}) refused: not applied to any "
                  "drive (the listener has broadcast = false){}",
                  name_, pdu[0], net::held_note(*held));
@@ -228,7 +228,7 @@ void SlaveHost::on_done(std::uint32_t generation, Exception result,
       self->accepted_.erase(a);
       if (result != Exception::none) {  // write_reply = accepted: the master was told ok
         ++self->counters_.write_timeouts;
-        if (auto held = self->accepted_log_.admit(self->clock_.now())) {
+        if (auto held = self->line_.accepted_log.admit(self->clock_.now())) {
           self->log_->warn("modbus: {}: write to unit {} (function 0x{:02X}) answered as "
                            "accepted, then not applied: {}{}",
                            self->name_, w.unit, w.function, modbus::to_string(result),
