@@ -161,8 +161,9 @@ int Daemon::run() {
     return 1;
   }
   config_ = std::move(*config);
-  history_ = std::make_unique<History>(config_.history.events, &EventLog::system_ms,
-                                       journal_.get(), config_.history.trend_seconds);
+  history_ = std::make_unique<History>(
+      HistoryBounds{config_.history.events, config_.history.commands, config_.history.refusals},
+      &EventLog::system_ms, journal_.get(), config_.history.trend_seconds);
   if (config_.history.trend_seconds > 0) {
     sampler_ = std::make_unique<TrendSampler>(history_->trends());
   }
@@ -296,6 +297,8 @@ void Daemon::reload() {
     config->http = config_.http;
   }
   if (config->history.events != config_.history.events ||
+      config->history.commands != config_.history.commands ||
+      config->history.refusals != config_.history.refusals ||
       config->history.trend_seconds != config_.history.trend_seconds) {
     log_->warn("[history] changes take effect at the next restart");
     restart.emplace_back("[history]");

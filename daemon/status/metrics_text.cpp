@@ -662,6 +662,26 @@ void history_metrics(Writer& w, const EventLog& log) {
            static_cast<double>(log.dropped()));
   w.single("drivegate_history_bytes", "gauge", "memory the event history's entries take",
            static_cast<double>(log.memory_bytes()));
+  const auto by_shelf = [&](std::string_view name, std::string_view type, std::string_view help,
+                            auto value) {
+    w.family(name, type, help);
+    std::string labels;
+    for (std::size_t i = 0; i < kShelfNames.size(); ++i) {
+      labels = "shelf=\"";
+      labels += kShelfNames[i];
+      labels += '"';
+      w.sample(name, labels, static_cast<double>(value(static_cast<Shelf>(i))));
+    }
+  };
+  by_shelf("drivegate_history_shelf_entries", "gauge",
+           "entries each shelf of the event history holds now",
+           [&](Shelf s) { return log.size(s); });
+  by_shelf("drivegate_history_shelf_capacity", "gauge",
+           "entries each shelf of the event history keeps at most ([history])",
+           [&](Shelf s) { return log.capacity(s); });
+  by_shelf("drivegate_history_shelf_dropped_total", "counter",
+           "entries each shelf of the event history pushed out, oldest first",
+           [&](Shelf s) { return log.dropped(s); });
 }
 
 // The standard process metrics (status/process_metrics.h); one whose file could not be read is

@@ -363,6 +363,18 @@ TEST_F(MetricsText, TheEventHistory) {
   EXPECT_THAT(family(text, "drivegate_history_bytes"),
               Contains("drivegate_history_bytes " + std::to_string(history_.memory_bytes())));
   EXPECT_GT(history_.memory_bytes(), 0u);
+  // Each shelf: what it holds, keeps at most, and let go (the reloads are the plant's events).
+  EXPECT_THAT(family(text, "drivegate_history_shelf_entries"),
+              ElementsAre("# HELP drivegate_history_shelf_entries entries each shelf of the event "
+                          "history holds now",
+                          "# TYPE drivegate_history_shelf_entries gauge",
+                          R"(drivegate_history_shelf_entries{shelf="events"} 3)",
+                          R"(drivegate_history_shelf_entries{shelf="commands"} 0)",
+                          R"(drivegate_history_shelf_entries{shelf="refusals"} 0)"));
+  EXPECT_THAT(family(text, "drivegate_history_shelf_capacity"),
+              Contains(R"(drivegate_history_shelf_capacity{shelf="refusals"} 3)"));
+  EXPECT_THAT(family(text, "drivegate_history_shelf_dropped_total"),
+              Contains(R"(drivegate_history_shelf_dropped_total{shelf="events"} 2)"));
 }
 
 TEST_F(MetricsText, NoWritesNorHistoryInADocumentRenderedWithout) {
