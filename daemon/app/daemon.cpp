@@ -229,6 +229,8 @@ int Daemon::run() {
   tick_watchdog();
   tick_trends();
   io_.run();
+  // Whatever was folded is said before the daemon goes: no write is left uncounted.
+  history_->audit().flush(Clock::now(), /*all=*/true);
   log_->info("stopped");
   return 0;
 }
@@ -400,6 +402,7 @@ void Daemon::tick_status() {
 void Daemon::tick_trends() {
   if (sampler_) sampler_->sample(*gateway_, EventLog::system_ms(), Clock::now());
   record_mqtt_state();
+  history_->audit().flush(Clock::now());  // the summaries of folded writes now due
   trend_timer_.expires_after(kTrendPeriod);
   trend_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (!ec && !stopping_) tick_trends();

@@ -22,11 +22,10 @@ void cut(std::string& s) {
   s.shrink_to_fit();
 }
 
-// The fields a repeat may differ in: how long the drive took, and the count of refusals held
-// before it (command_audit.h), besides the repeat's own bookkeeping.
+// The fields a repeat may differ in: how long the drive took, besides the repeat's own
+// bookkeeping.
 bool compared(const std::pair<std::string, std::string>& f) {
-  return f.first != "took_ms" && f.first != "held" && f.first != "repeats" &&
-         f.first != "last_ms";
+  return f.first != "took_ms" && f.first != "repeats" && f.first != "last_ms";
 }
 
 bool same_but_time(const Event& a, const Event& b) {
@@ -172,6 +171,10 @@ bool EventLog::repeat(const Event& e) {
     bytes_ += footprint(*kept);
   }
   return true;
+}
+
+void EventLog::interrupt(std::string_view device) {
+  if (const auto it = newest_.find(device); it != newest_.end()) newest_.erase(it);
 }
 
 std::vector<Event> EventLog::query(const EventFilter& filter) const {

@@ -87,8 +87,13 @@ class EventLog {
   // Records `e` now (its seq and time are set here) and returns its seq.
   std::uint64_t add(Event e);
   // Whether `e` (fitted) repeats its device's newest entry: a command whose fields are all equal
-  // but "took_ms" and "held". If so one more repeat is counted there, and `e` is not to be added.
+  // but "took_ms". If so one more repeat is counted there, and `e` is not to be added.
   bool repeat(const Event& e);
+  // Something happened to `device` that the log does not keep (a write folded into a summary,
+  // command_fold.h): its newest entry is no longer what a repeat would repeat.
+  void interrupt(std::string_view device);
+  // The wall clock's time now.
+  [[nodiscard]] std::int64_t now_ms() const { return wall_(); }
 
   // Matching entries of every shelf, in sequence, oldest first.
   [[nodiscard]] std::vector<Event> query(const EventFilter& filter) const;

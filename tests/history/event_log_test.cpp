@@ -110,6 +110,17 @@ TEST(EventLogShelves, QueriesMergeTheShelvesInSequence) {
   EXPECT_EQ(log.query({.limit = 1000}).size(), 30u);
 }
 
+// A repeat counts in its entry on whichever shelf; a write folded away (interrupt) ends the run.
+TEST(EventLogShelves, ARepeatIsCountedOnItsShelfUntilInterrupted) {
+  EventLog log(HistoryBounds{}, [] { return std::int64_t{5}; });
+  log.add(Event{.kind = EventKind::fault_raised, .device = "a"});
+  log.add(command("modbus", "denied", 1));
+  EXPECT_TRUE(log.repeat(command("modbus", "denied", 1)));
+  EXPECT_EQ(log.query({.kind = EventKind::command})[0].field("repeats"), "1");
+  log.interrupt("a");
+  EXPECT_FALSE(log.repeat(command("modbus", "denied", 1)));
+}
+
 // A flood of entries as long as a client can make them: the memory stays within the bound the
 // header states, and what is kept is cut, not refused.
 TEST(EventLogBound, AFloodOfHugeEntriesStaysWithinItsBound) {

@@ -136,6 +136,7 @@ class MetricsText : public ::testing::Test {
     counts_.n[static_cast<std::size_t>(SourceKind::mqtt)]
              [static_cast<std::size_t>(Outcome::no_such_device)] = 2;
     counts_.n[static_cast<std::size_t>(SourceKind::failsafe)][0] = 1;
+    counts_.folded_n[static_cast<std::size_t>(SourceKind::modbus)][0] = 4;
     for (int i = 0; i < 5; ++i) {
       history_.add(Event{.kind = EventKind::reload, .message = "reloaded " + std::to_string(i)});
     }
@@ -348,6 +349,12 @@ TEST_F(MetricsText, WritesBySourceAndResultEveryPair) {
   EXPECT_THAT(lines,
               Contains(R"(drivegate_writes_total{source="gateway",result="no_response"} 0)"));
   for (const auto& l : lines) EXPECT_THAT(l, Not(HasSubstr("result=\"no such")));
+  // Of those, the writes folded into a summary record (docs/audit.md), likewise every pair.
+  const auto folded = family(text, "drivegate_audit_folded_total");
+  ASSERT_EQ(folded.size(), 2 + kSourceKindNames.size() * kOutcomeNames.size());
+  EXPECT_EQ(folded[1], "# TYPE drivegate_audit_folded_total counter");
+  EXPECT_EQ(folded[2], R"(drivegate_audit_folded_total{source="modbus",result="ok"} 4)");
+  EXPECT_THAT(folded, Contains(R"(drivegate_audit_folded_total{source="mqtt",result="denied"} 0)"));
 }
 
 TEST_F(MetricsText, TheEventHistory) {
