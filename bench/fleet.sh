@@ -8,9 +8,12 @@
 # mosquitto (/usr/sbin/mosquitto, loopback, no persistence); one Sparkplug host (Tahu's codec over
 # MQTT.js, tests/mqtt/peer) that publishes a primary host STATE. Every gateway starts at once;
 # LIVE_S seconds of live data; the broker is stopped for OUTAGE_S seconds while every ramp goes
-# on; the broker back, every gateway reborn and its store replayed; one gateway killed with -9 and
-# restarted. The run also asserts what the host must see (every change once, in order, the
-# will's bdSeq): a failed assertion fails the bench.
+# on; the broker back, every gateway reborn and its store replayed; then a half-open outage of
+# HALF_OPEN_S seconds (the gateways reach the broker through the test's proxy, which stops
+# forwarding every connection, new ones too, without closing any: tests/support/fault_proxy.h),
+# each gateway's time to notice it and what the host lost (goal: nothing) and got twice; one
+# gateway killed with -9 and restarted. The run also asserts what the host must see (every change,
+# in order, the will's bdSeq): a failed assertion fails the bench.
 #
 # The test writes its figures (births per second, frame -> host latency, replay rate, CPU and
 # memory of the gateways, the broker and the host) to a report file; this script puts the runs
@@ -19,8 +22,8 @@
 # Sizes run in SIZES order, each with the default replay_per_s (500), then the largest again with
 # FAST_REPLAY (replay_per_s 5000): what limits the replay when a gateway does not.
 #
-# Environment: SIZES ("10 20 40"), LIVE_S (30), OUTAGE_S (30), FAST_REPLAY (5000; 0: skip),
-#   LOAD_MAX (1.5), LOAD_WAIT (600 s).
+# Environment: SIZES ("10 20 40"), LIVE_S (30), OUTAGE_S (30), HALF_OPEN_S (30; 0: skip),
+#   FAST_REPLAY (5000; 0: skip), LOAD_MAX (1.5), LOAD_WAIT (600 s).
 set -euo pipefail
 
 B=$(realpath "${1:-build}")
@@ -29,6 +32,7 @@ HERE=$(dirname "$(realpath "$0")")
 SIZES=${SIZES:-"10 20 40"}
 LIVE_S=${LIVE_S:-30}
 OUTAGE_S=${OUTAGE_S:-30}
+HALF_OPEN_S=${HALF_OPEN_S:-30}
 FAST_REPLAY=${FAST_REPLAY:-5000}
 LOAD_MAX=${LOAD_MAX:-1.5}
 LOAD_WAIT=${LOAD_WAIT:-600}
@@ -48,6 +52,7 @@ run() {  # run NAME GATEWAYS [REPLAY_PER_S]
   wait_load
   echo "fleet.sh: $name: $2 gateways, replay_per_s ${3:-500}, load $LOAD" >&2
   if ! DRIVEGATE_FLEET_GATEWAYS=$2 DRIVEGATE_FLEET_LIVE_S=$LIVE_S DRIVEGATE_FLEET_OUTAGE_S=$OUTAGE_S \
+    DRIVEGATE_FLEET_HALF_OPEN_S=$HALF_OPEN_S \
     DRIVEGATE_FLEET_REPLAY_PER_S=${3:-0} DRIVEGATE_FLEET_REPORT=$report \
     "$TEST" --gtest_filter='MqttE2EFleet.*' >"$W/$name.log" 2>&1; then
     grep -A 12 -E '(Failure|exception)' "$W/$name.log" | head -n 80 >&2 || true

@@ -14,6 +14,15 @@ Rebirth storm (REBIRTH=1, needs mosquitto and tests/mqtt/peer's node_modules): t
 with [mqtt] on a local mosquitto; phases without and with 2000 NCMD rebirth requests published
 back to back at the phase's start; Modbus p50 / p99 as above, and the NBIRTHs the storm caused.
 
+Sick neighbour (SICK=1): two example-vfd profile devices on one simulated 19200 8E1 line
+(`drivegate sim modbus`, addresses 1 and 2, poll_ms 100: four blocks a cycle each). Phases of
+DURATION seconds, the order rotated each round: the line healthy, then device 2 silent, answering
+1.1 s late, or answering every other request (the simulator's operator commands):
+  - healthy frames/s: device 1's frames_good over the phase, and its share of the healthy line's
+  - healthy worst data age: the largest data_age_ms a PLC reads for device 1 (every 50 ms), and
+    its ratio to the healthy line's
+  - sick frames/s: device 2's frames_good over the phase
+
 Nothing here asserts: it prints medians over the rounds (docs/performance.md).
 """
 import os
@@ -34,6 +43,8 @@ WRITERS = [int(x) for x in os.environ.get("WRITERS", "0 1 4").split()]
 SERVER_CPU = os.environ.get("SERVER_CPU", "0")
 LOAD_CPU = os.environ.get("LOAD_CPU", "1")
 REBIRTH = os.environ.get("REBIRTH", "1") == "1"
+STORM = os.environ.get("STORM", "1") == "1"
+SICK = os.environ.get("SICK", "1") == "1"
 HERE = os.path.dirname(os.path.abspath(__file__))
 PEER = os.path.join(HERE, "..", "tests", "mqtt", "peer", "sparkplug_peer.js")
 PLUGINS = os.path.join(BIN, "..", "adapters")
@@ -131,22 +142,24 @@ def loadgen(port, pid, seconds):
     return dict(kv.split("=") for kv in out.split())
 
 
-def start_gateway(work, extra_toml=""):
+def start_line(work, sim_args, bus_toml, device_toml, extra_toml=""):
+    """A simulator with devices 1 and 2 on a line, the gateway polling both (`device_toml` for a
+    unit: its adapter, poll and options), both online; its port, daemon, simulator and a PLC."""
     line = os.path.join(work, "line")
-    sim = pinned(LOAD_CPU, [os.path.join(BIN, "drivegate"), "sim", "ed3100", "--plugin-dir",
-                            PLUGINS, "--address", "1", "--address", "2", "--link", line],
-                 stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    sim = pinned(LOAD_CPU, [os.path.join(BIN, "drivegate"), "sim"] + sim_args +
+                 ["--plugin-dir", PLUGINS, "--address", "1", "--address", "2", "--link", line],
+                 stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                 text=True)
     for _ in range(50):
         if os.path.exists(line):
             break
         time.sleep(0.1)
     port = free_port()
     toml = f'[[listener]]\naddress = "127.0.0.1:{port}"\naccess = "operate"\n'
-    toml += f'\n[[bus]]\nname = "line"\nport = "{line}"\n'
+    toml += f'\n[[bus]]\nname = "line"\nport = "{line}"\n{bus_toml}'
     for unit in (1, 2):
-        toml += (f'\n[[device]]\nname = "ed-{unit}"\nbus = "line"\nadapter = "ed3100"\n'
-                 f'unit_id = {unit}\naddress = {unit}\npoll_ms = 300\n'
-                 '[device.options]\nmonitors = ["0D00:Hz"]\n')
+        toml += f'\n[[device]]\nbus = "line"\nunit_id = {unit}\naddress = {unit}\n'
+        toml += device_toml(unit)
     toml += extra_toml
     path = os.path.join(work, "drivegate.toml")
     with open(path, "w") as f:
@@ -164,6 +177,15 @@ def start_gateway(work, extra_toml=""):
         time.sleep(0.1)
     else:
         sys.exit("stress.py: the gateway did not come online; see " + work)
+    return port, daemon, sim, m
+
+
+def start_gateway(work, extra_toml=""):
+    """Two ED3100s, drive 1 running."""
+    port, daemon, sim, m = start_line(
+        work, ["ed3100"], "",
+        lambda unit: (f'name = "ed-{unit}"\nadapter = "ed3100"\npoll_ms = 300\n'
+                      '[device.options]\nmonitors = ["0D00:Hz"]\n'), extra_toml)
     m.write(1, 0, [1, 1000])  # drive 1 runs: each setpoint goes to the drive
     time.sleep(1)
     return port, daemon, sim, m
@@ -285,10 +307,84 @@ def rebirth_storm():
               f"| {med(r, 'p999_us') / 1000:.3f} ms | {med(r, 'births'):.0f} |")
 
 
+def start_profile_line(work):
+    """Two example-vfd slaves on one simulated line, polled every 100 ms."""
+    _, daemon, sim, m = start_line(
+        work, ["modbus", "--set", "profile=example-vfd"], 'baud = 19200\nparity = "even"\n',
+        lambda unit: (f'name = "vfd-{unit}"\nadapter = "modbus"\npoll_ms = 100\n'
+                      '[device.options]\nprofile = "example-vfd"\n'))
+    return daemon, sim, m
+
+
+# Each sickness as the simulator's operator commands for device 2: to begin, to end.
+SICKNESS = {
+    "healthy line": ([], []),
+    "silent": (["@2 silent on"], ["@2 silent off"]),
+    "1.1 s late": (["@2 late 1100"], ["@2 late 0"]),
+    "every other": (["@2 every-other on"], ["@2 every-other off"]),
+}
+
+
+def sick_phase(sim, m, name):
+    begin, end = SICKNESS[name]
+    for line in begin:
+        sim.stdin.write(line + "\n")
+    sim.stdin.flush()
+    time.sleep(1)  # the sickness takes hold (a first timeout, its back-off)
+    f1, f2, worst_age, t0 = common(m, 1)["frames"], common(m, 2)["frames"], 0, time.monotonic()
+    while time.monotonic() - t0 < DURATION:
+        worst_age = max(worst_age, common(m, 1)["age"])
+        time.sleep(0.05)
+    span = time.monotonic() - t0
+    row = {"frames_s": (common(m, 1)["frames"] - f1) / span, "age_ms": worst_age,
+           "sick_s": (common(m, 2)["frames"] - f2) / span}
+    for line in end:
+        sim.stdin.write(line + "\n")
+    sim.stdin.flush()
+    # Device 2 back: answering, its back-off and comm_lost over, before the next phase.
+    for _ in range(200):
+        if common(m, 2)["status"] & 1 and common(m, 2)["age"] < 1000:
+            break
+        time.sleep(0.1)
+    time.sleep(1)
+    return row
+
+
+def sick_neighbour():
+    with tempfile.TemporaryDirectory(prefix="dg-sick-") as work:
+        daemon, sim, m = start_profile_line(work)
+        names = list(SICKNESS)
+        rows = {n: [] for n in names}
+        try:
+            time.sleep(1)
+            for rnd in range(ROUNDS):
+                for n in names[rnd % len(names):] + names[:rnd % len(names)]:
+                    rows[n].append(sick_phase(sim, m, n))
+                    print(f"# round {rnd + 1} {n}: {rows[n][-1]}", file=sys.stderr)
+        finally:
+            daemon.terminate()
+            sim.terminate()
+            daemon.wait()
+    base = rows["healthy line"]
+    print("\nsick neighbour (median of %d rounds of %.0f s; device 1 healthy, device 2 as said)"
+          % (ROUNDS, DURATION))
+    print("| device 2 | device 1 frames/s | of the healthy line | device 1 worst data age "
+          "| of the healthy line | device 2 frames/s |")
+    print("|---|---|---|---|---|---|")
+    for n in names:
+        r = rows[n]
+        print(f"| {n} | {med(r, 'frames_s'):.1f} | {med(r, 'frames_s') / med(base, 'frames_s'):.2f} "
+              f"| {med(r, 'age_ms'):.0f} ms | {med(r, 'age_ms') / med(base, 'age_ms'):.2f} "
+              f"| {med(r, 'sick_s'):.1f} |")
+
+
 if __name__ == "__main__":
     try:
-        write_storm()
+        if STORM:
+            write_storm()
         if REBIRTH:
             rebirth_storm()
+        if SICK:
+            sick_neighbour()
     finally:
         shutil.rmtree(LOCK_DIR, ignore_errors=True)

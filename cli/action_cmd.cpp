@@ -98,7 +98,7 @@ int action(std::span<const std::string> args) {
               << device->config.string() << "\n";
     return 1;
   }
-  const AdapterDescriptor& adapter = *plugins.find(dc->adapter);
+  const AdapterDescriptor& adapter = *plugins.find(dc->adapter, dc->options);
   if (name.empty()) return list_actions(adapter, *dc);
   const MaintenanceAction* a = find_action(adapter, name);
   if (a == nullptr) {

@@ -17,8 +17,8 @@
 #include <thread>
 
 #include "commands.h"
-#include "plugin/adapter_options.h"
 #include "config/config_loader.h"
+#include "plugin/adapter_options.h"
 #include "sim_host.h"
 
 extern char** environ;
@@ -161,12 +161,18 @@ int demo(std::span<const std::string> args) {
       std::cerr << "drivegate demo: adapter '" << a->id << "': demo option " << error << "\n";
       return 1;
     }
+    // A described protocol's device runs on its description's line (AdapterDescriptor::specialise).
+    const AdapterDescriptor* device = specialised(*a, *options, error);
+    if (device == nullptr) {
+      std::cerr << "drivegate demo: adapter '" << a->id << "': " << error << "\n";
+      return 1;
+    }
     SimHostOptions so;
-    so.addresses = {a->default_address};
+    so.addresses = {device->default_address};
     so.options = *options;  // the simulator takes the same options the device gets
-    so.echo = a->line.echo;
+    so.echo = device->line.echo;
     so.link = dir / a->id;
-    auto host = std::make_unique<SimHost>(io, *a, so);
+    auto host = std::make_unique<SimHost>(io, *device, so);
     if (const auto why = host->open(); !why.empty()) {
       std::cerr << "drivegate demo: " << a->id << ": " << why << "\n";
       return 1;

@@ -81,6 +81,9 @@ constexpr const char* kCommands =
 #ifdef DRIVEGATE_SCAN
     "  scan       the Modbus slaves on a serial line, and the configuration for them\n"
 #endif
+#ifdef DRIVEGATE_PROTOCOL
+    "  protocol   check a protocol description: decode and encode frames by hand\n"
+#endif
     "  version    print the version\n"
     "\n"
     "`drivegate COMMAND --help` lists the command's options. See drivegate(1).";
@@ -119,6 +122,9 @@ int main(int argc, char** argv) {
     if (command == "events") return drivegate::cli::events(args);
 #ifdef DRIVEGATE_SCAN
     if (command == "scan") return drivegate::cli::scan(args);
+#endif
+#ifdef DRIVEGATE_PROTOCOL
+    if (command == "protocol") return drivegate::cli::protocol(args);
 #endif
     if (command == "version") {
       std::cout << "drivegate " << DRIVEGATE_VERSION << "\n";

@@ -52,7 +52,7 @@ int regmap(std::span<const std::string> args) {
   std::vector<DeviceRegisters> devices;
   for (const auto& dc : result.config->devices) {
     std::string error;
-    auto driver = make_driver(dc, *plugins.find(dc.adapter), false, error);
+    auto driver = make_driver(dc, *plugins.find(dc.adapter, dc.options), false, error);
     if (!driver) {
       std::cerr << config_path.string() << ":" << dc.line << ": device " << error << "\n";
       return 1;

@@ -148,6 +148,21 @@ int sim(std::span<const std::string> args) {
               << ")\n";
     return 1;
   }
+  if (adapter->specialise != nullptr) {
+    // A described protocol (the framed adapter): its own options, line and addresses come from
+    // the description the adapter's own options (--set protocol=NAME) name.
+    Options base = default_options(*adapter);
+    for (const auto& [key, text] : sets) {
+      std::string ignored;  // the description's own options: judged once it is known
+      set_option_text(*adapter, base, key, text, ignored);
+    }
+    std::string error;
+    adapter = specialised(*adapter, base, error);
+    if (adapter == nullptr) {
+      std::cerr << "drivegate sim: " << adapter_id << ": " << error << "\n";
+      return 1;
+    }
+  }
   options.options = default_options(*adapter);
   for (const auto& [key, text] : sets) {
     std::string error;

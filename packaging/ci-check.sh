@@ -94,6 +94,10 @@ for src in "$here"/../adapters/modbus/profiles/*.toml; do
     check "profile /usr/share/drivegate/profiles/$(basename "$src")" \
         test -f "/usr/share/drivegate/profiles/$(basename "$src")"
 done
+for src in "$here"/../adapters/framed/protocols/*.toml; do
+    check "protocol /usr/share/drivegate/protocols/$(basename "$src")" \
+        test -f "/usr/share/drivegate/protocols/$(basename "$src")"
+done
 check "Grafana dashboard /usr/share/drivegate/grafana/drivegate.json" \
     test -f /usr/share/drivegate/grafana/drivegate.json
 check "unit $unit" test -f "$unit"

@@ -11,6 +11,10 @@
 namespace drivegate::modbus_device {
 namespace {
 
+// Exception 02, illegal data address (Application Protocol 7): the slave lacks a register the
+// block covers. Any other exception (04 failure, 05 acknowledge, 06 busy...) may pass.
+constexpr std::uint8_t kIllegalAddress = 0x02;
+
 // The register-map face of a profile point.
 PointSpec spec_of(const ProfilePoint& p) {
   PointSpec s;
@@ -38,6 +42,14 @@ PointSpec spec_of(const ProfilePoint& p) {
   return s;
 }
 
+// A speed in rpm as the common block carries it: nothing for NaN, an infinity or a speed beyond
+// kMaxSpeedRpm either way.
+std::optional<std::int32_t> rpm_of(double speed) {
+  const double rpm = std::round(speed);
+  if (!std::isfinite(rpm) || std::fabs(rpm) > kMaxSpeedRpm) return std::nullopt;
+  return static_cast<std::int32_t>(rpm);
+}
+
 }  // namespace
 
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
@@ -48,7 +60,7 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
       poll_interval_(poll_interval),
       exposed_index_(profile_.points.size()),
       raw_(profile_.points.size()),
-      unreadable_(profile_.points.size(), false),
+      reading_(profile_.points.size()),
       alone_(profile_.points.size(), false) {
   // Every point not bound to the common block is one of the device's own (issue 26).
   std::vector<bool> bound(profile_.points.size(), false);
@@ -60,6 +72,15 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
     if (b) bound[b->point] = true;
   }
   if (c.fault_code) bound[c.fault_code->point] = true;
+  std::vector<bool> state(profile_.points.size(), false);
+  if (c.speed_rpm) state[*c.speed_rpm] = true;
+  for (const auto& b : {c.running, c.fault}) {
+    if (b) state[b->point] = true;
+  }
+  if (c.fault_code) state[c.fault_code->point] = true;
+  for (std::size_t i = 0; i < state.size(); ++i) {
+    if (state[i]) state_points_.push_back(i);
+  }
   for (const auto& v : {c.stop, c.run_forward, c.run_reverse, c.reset_fault}) {
     if (v) bound[v->point] = true;
   }
@@ -91,7 +112,6 @@ void ModbusDriver::plan(Group& g) const {
   std::vector<std::size_t> joined;
   g.blocks.clear();
   for (const std::size_t p : g.points) {
-    if (unreadable_[p]) continue;
     if (alone_[p]) {
       const std::size_t one[] = {p};
       const auto b = plan_reads(profile_, one);
@@ -110,9 +130,8 @@ Millis ModbusDriver::inter_frame_gap() const {
 
 // The longest one exchange of this device takes.
 Millis ModbusDriver::turn() const {
-  return exchange_time(profile_.line.framing, timing_.char_time,
-                       Millis(profile_.modbus.timeout_ms), timing_.attempts,
-                       longest_frame(profile_.line.framing));
+  return exchange_time(profile_.line.framing, timing_.char_time, Millis(profile_.modbus.timeout_ms),
+                       timing_.attempts, longest_frame(profile_.line.framing));
 }
 
 Millis ModbusDriver::send_limit() const {
@@ -126,6 +145,7 @@ DriverTraits ModbusDriver::traits() const {
   // A write settles within send_limit() and one turn of its own; a request holds at most two
   // that need the line (a setpoint, then a command).
   t.write_timeout = write_backstop(turn(), 2);
+  t.state_in_parts = !state_points_.empty();
   return t;
 }
 
@@ -168,7 +188,16 @@ std::optional<Exchange> ModbusDriver::next_exchange(TimePoint now) {
   if (reads_.empty()) {
     for (Group& g : groups_) {
       if (now < g.due) continue;
-      reads_.insert(reads_.end(), g.blocks.begin(), g.blocks.end());
+      for (const Block& b : g.blocks) {
+        // A block whose last read failed sits out cycles of its back-off (on_read_failed).
+        if (reading_[b.points.front()].skip == 0) {
+          reads_.push_back(b);
+          continue;
+        }
+        for (const std::size_t p : b.points) {
+          if (reading_[p].skip > 0) --reading_[p].skip;
+        }
+      }
       g.due = now + g.interval;
     }
   }
@@ -221,14 +250,14 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
     return {RxKind::ack, d.consumed};  // an echo says nothing of the drive's state
   }
   if (exception) {
-    on_read_refused(*job.read);
+    on_read_failed(*job.read, a.pdu[1]);
     return {RxKind::ack, d.consumed};
   }
-  on_read(*job.read, a.pdu);
+  on_read(*job.read, a.pdu, now);
   return {RxKind::reply, d.consumed};
 }
 
-void ModbusDriver::on_read(const Block& b, ByteView pdu) {
+void ModbusDriver::on_read(const Block& b, ByteView pdu, TimePoint now) {
   const ByteView data = pdu.subspan(2);
   for (const std::size_t i : b.points) {
     const ProfilePoint& p = profile_.points[i];
@@ -243,27 +272,46 @@ void ModbusDriver::on_read(const Block& b, ByteView pdu) {
     }
     if (const auto e = exposed_index_[i]) values_[*e] = value_of(p, words);
     raw_[i] = std::move(words);
+    reading_[i] = Reading{now, 0, 0};
   }
   ++blocks_read_;
   update_common();
   adopt();
 }
 
-// A slave that refuses a block (exception 02, illegal data address, most often) may lack one of
-// its points: the block's points are read one by one from now on, and a point refused alone is
-// left unknown, so one missing register never costs the device its other points.
-void ModbusDriver::on_read_refused(const Block& b) {
-  if (b.points.size() == 1) {
-    unreadable_[b.points[0]] = true;
-  } else {
+// A slave that refuses a block with exception 02 (illegal data address) may lack one of its
+// points: the block's points are read one by one from the next cycle on, so one missing register
+// never costs the device its other points. Any other refusal, a point refused alone, and a block
+// left unanswered are a read that failed: its points are asked again at their next cycle, then
+// after 1, 3, 7... cycles sat out (twice the wait each time, at most the comm timeout apart, or
+// every cycle where one is longer), and the device's own points among them are unknown
+// meanwhile. A part of the drive's state that is not read ages the state (state_read_at), which
+// the data age and comm_lost then tell.
+void ModbusDriver::on_read_failed(const Block& b, std::optional<std::uint8_t> code) {
+  if (code == kIllegalAddress && b.points.size() > 1) {
     for (const std::size_t p : b.points) alone_[p] = true;
+    for (Group& g : groups_) plan(g);
+    return;
   }
-  for (Group& g : groups_) plan(g);
+  for (const std::size_t p : b.points) {
+    Reading& r = reading_[p];
+    const auto most = std::max<std::int64_t>(timing_.comm_timeout / interval_of(p) - 1, 0);
+    const int shift = std::min(r.failures, 20);
+    ++r.failures;
+    r.skip = static_cast<int>(std::min<std::int64_t>((std::int64_t{1} << shift) - 1, most));
+    if (const auto e = exposed_index_[p]) values_[*e] = Value{};
+  }
+}
+
+Millis ModbusDriver::interval_of(std::size_t point) const {
+  const auto own = profile_.points[point].poll_ms;
+  return own != 0 ? Millis(own) : poll_interval_;
 }
 
 void ModbusDriver::on_no_reply(TimePoint now) {
   last_now_ = now;
   if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
+  if (inflight_ && inflight_->read) on_read_failed(*inflight_->read, std::nullopt);
   inflight_.reset();
 }
 
@@ -276,13 +324,24 @@ void ModbusDriver::on_comm_lost(TimePoint now) {
   reads_.clear();
   blocks_read_ = 0;
   common_.ready = false;
-  // A slave that comes back may be another one (replaced, reconfigured): ask it everything again.
-  std::fill(unreadable_.begin(), unreadable_.end(), false);
+  // A slave that comes back may be another one (replaced, reconfigured): ask it everything again,
+  // and its state is whole again only once every part of it was read anew.
+  std::fill(reading_.begin(), reading_.end(), Reading{});
   std::fill(alone_.begin(), alone_.end(), false);
   for (Group& g : groups_) {
     plan(g);
     g.due = now;
   }
+}
+
+std::optional<TimePoint> ModbusDriver::state_read_at() const {
+  std::optional<TimePoint> oldest;
+  for (const std::size_t p : state_points_) {
+    const auto at = reading_[p].at;
+    if (!at) return std::nullopt;
+    if (!oldest || *at < *oldest) oldest = at;
+  }
+  return oldest;
 }
 
 std::optional<double> ModbusDriver::engineering(std::optional<std::size_t> point) const {
@@ -299,33 +358,50 @@ std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) con
 void ModbusDriver::update_common() {
   const CommonBindings& c = profile_.common;
   if (const auto speed = engineering(c.speed_rpm)) {
-    common_.speed_rpm = static_cast<std::int32_t>(std::lround(*speed));
+    // A speed is a number the common block carries, by the point's own type and signedness; NaN,
+    // an infinity or a speed beyond it (2^32 from a float, 4294967295 from a u32) is none.
+    const auto rpm = rpm_of(*speed);
+    common_.speed_unknown = !rpm;
+    common_.speed_rpm = rpm.value_or(0);
   }
   if (const auto running = bit_of(c.running)) {
     common_.running = *running;
   } else if (!c.running && c.speed_rpm && raw_[*c.speed_rpm]) {
-    common_.running = common_.speed_rpm != 0;  // no run bit: a turning motor runs
+    // No run bit: a turning motor runs, and one whose speed is not known may be turning.
+    common_.running = common_.speed_unknown || common_.speed_rpm != 0;
   }
   // The fault bit, where there is one, says whether a fault is active; the fault code which.
   FaultSet faults;
   std::optional<Fault> coded;
   if (c.fault_code && raw_[c.fault_code->point]) {
     const ProfilePoint& p = profile_.points[c.fault_code->point];
-    const auto native = static_cast<std::int64_t>(raw_of(p, *raw_[c.fault_code->point]));
-    common_.native_fault = static_cast<std::uint32_t>(native);
-    const auto it = c.fault_code->map.find(static_cast<std::uint32_t>(native));
-    coded = it != c.fault_code->map.end() ? it->second : c.fault_code->other;
+    const double raw = raw_of(p, *raw_[c.fault_code->point]);
+    if (std::isfinite(raw) && raw == std::trunc(raw) && std::fabs(raw) <= 4294967295.0) {
+      const auto native = static_cast<std::uint32_t>(static_cast<std::int64_t>(raw));
+      common_.native_fault = native;
+      const auto it = c.fault_code->map.find(native);
+      coded = it != c.fault_code->map.end() ? it->second : c.fault_code->other;
+    } else {
+      // A code that is not a whole number (a float point reading NaN): no code, but something
+      // is wrong, whatever the profile names the codes it does not map.
+      common_.native_fault = 0xFFFFFFFF;
+      coded = Fault::other;
+    }
   }
   const auto fault_bit = bit_of(c.fault);
   const bool active = fault_bit ? *fault_bit : (coded && *coded != Fault::none);
   if (active) faults.set(coded && *coded != Fault::none ? *coded : Fault::other);
+  // A speed reading that is not a number is a measurement the drive cannot give: a fault of its
+  // own, so that the PLC sees it (status bit fault) beside speed_rpm's unknown mark.
+  if (common_.speed_unknown) faults.set(Fault::sensor_fault);
   common_.faults = faults;
   // A trip stops the output: the run in force is over.
   if (active && !common_.running && is_run(common_.command)) common_.command = Command::stop;
   const std::size_t blocks =
       std::accumulate(groups_.begin(), groups_.end(), std::size_t{0},
                       [](std::size_t n, const Group& g) { return n + g.blocks.size(); });
-  common_.ready = blocks_read_ >= blocks;
+  // Ready once every block was read and the drive's state is whole.
+  common_.ready = blocks_read_ >= blocks && (state_points_.empty() || state_read_at());
 }
 
 // A drive found running, before anything was written to it, runs on as it is: its run is the
@@ -336,7 +412,7 @@ void ModbusDriver::adopt() {
   if (!adopting_ || !common_.ready) return;
   adopting_ = false;
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
-    common_.setpoint_rpm = static_cast<std::int32_t>(std::lround(*reference));
+    if (const auto rpm = rpm_of(*reference)) common_.setpoint_rpm = *rpm;
   }
   if (!common_.running || !common_.faults.empty()) return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;

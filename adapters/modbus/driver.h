@@ -3,6 +3,12 @@
 // interval; the common block follows the profile's bindings; writes go out as FC 05 / 06 / 16 and
 // are in force once the slave's echo confirmed them.
 //
+// Freshness. The drive's state (speed, run and fault bits, fault code) may come in several
+// blocks: it is as old as the oldest of them (state_read_at(), DriverTraits::state_in_parts). A
+// block the slave refuses or leaves unanswered is asked again at its next cycle, then backed off
+// (twice the wait each time, at most the comm timeout), its own points unknown meanwhile, never
+// left at their last value.
+//
 //   driver.cpp         the poll plan, the line side, replies into points and the common state
 //   driver_writes.cpp  check() and apply(), the writes waiting for the line, their confirmation
 #pragma once
@@ -43,6 +49,7 @@ class ModbusDriver final : public Driver {
   RxVerdict on_receive(ByteView rx, TimePoint now) override;
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;
+  [[nodiscard]] std::optional<TimePoint> state_read_at() const override;
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
@@ -50,9 +57,10 @@ class ModbusDriver final : public Driver {
 
   // Which profile point each of points() is.
   [[nodiscard]] std::size_t profile_point(std::size_t point) const { return exposed_.at(point); }
-  // Profile points a slave refused to read (exception 02 for the point alone): left unknown
-  // until the next reconnect.
-  [[nodiscard]] const std::vector<bool>& unreadable() const { return unreadable_; }
+  // Cycles of its group a profile point sits out after failed reads (refused, unanswered).
+  [[nodiscard]] int backed_off(std::size_t profile_point) const {
+    return reading_.at(profile_point).skip;
+  }
 
  private:
   // A write, in the slave's terms: the words for a profile point, and what it puts in force.
@@ -60,7 +68,7 @@ class ModbusDriver final : public Driver {
   struct Write {
     Ticket ticket = 0;
     Change change = Change::point;
-    std::size_t point = 0;  // profile point written
+    std::size_t point = 0;             // profile point written
     std::vector<std::uint16_t> words;  // registers (or, for a coil, {0 or 1})
     Command command = Command::stop;   // Change::command
     std::int32_t rpm = 0;              // Change::setpoint
@@ -72,6 +80,12 @@ class ModbusDriver final : public Driver {
     std::vector<std::size_t> points;
     std::vector<Block> blocks;
     TimePoint due{};
+  };
+  // A profile point's reads since the driver started or comm was lost.
+  struct Reading {
+    std::optional<TimePoint> at;  // its last good read
+    int failures = 0;             // reads refused or unanswered in a row
+    int skip = 0;                 // cycles of its group it sits out before it is asked again
   };
   struct Job {
     std::optional<Block> read;
@@ -87,8 +101,10 @@ class ModbusDriver final : public Driver {
   [[nodiscard]] Millis turn() const;
   [[nodiscard]] Millis send_limit() const;
   [[nodiscard]] Job read_job(const Block& b) const;
-  void on_read(const Block& b, ByteView pdu);
-  void on_read_refused(const Block& b);
+  void on_read(const Block& b, ByteView pdu, TimePoint now);
+  // The slave answered `b` with exception `code`, or (nothing) not at all.
+  void on_read_failed(const Block& b, std::optional<std::uint8_t> code);
+  [[nodiscard]] Millis interval_of(std::size_t point) const;
   void update_common();
   void adopt();
   [[nodiscard]] std::optional<double> engineering(std::optional<std::size_t> point) const;
@@ -116,8 +132,10 @@ class ModbusDriver final : public Driver {
   CommonState common_;
 
   std::vector<std::optional<std::vector<std::uint16_t>>> raw_;  // per profile point, last read
-  std::vector<bool> unreadable_;  // per profile point
-  std::vector<bool> alone_;       // per profile point: read on its own after a refused block
+  std::vector<Reading> reading_;                                // per profile point
+  std::vector<bool> alone_;  // per profile point: read on its own after a refused block
+  // The profile points the drive's state is made of (speed, run and fault bits, fault code).
+  std::vector<std::size_t> state_points_;
   std::vector<Group> groups_;
   std::deque<Block> reads_;
   std::deque<Write> writes_;

@@ -1,6 +1,7 @@
 // The pass-through driver (passthrough = true): the device's unit id is a transparent window
-// onto a Modbus slave. Every request a client sends for it reaches this driver as a forward part
-// (Driver::forwards), goes on the line as it is, address and CRC or LRC around it, and the
+// onto a Modbus slave. Every request the gateway lets through for it (whole and well-formed:
+// daemon/gateway/forward_access.h) reaches this driver as a forward part (Driver::forwards),
+// goes on the line as it is, address and CRC or LRC around it, and the
 // slave's reply PDU, exception replies included, goes back to the client as it came. Nothing is
 // polled but a presence probe, so the device's common block says only whether the slave answers.
 //

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <utility>
 
 #include "drivegate/toml_reader.h"
 
@@ -481,7 +482,35 @@ class Parser {
       diag_.error(t, "common", "run_forward or run_reverse without stop: a profile that can start "
                                "the drive must say how to stop it");
     }
+    refuse_own_intervals();
   }
+
+  // The common block is the drive's state as of its data age: every point bound to it is polled
+  // at the device's poll_ms, so a point of its own interval there is an error.
+  void refuse_own_intervals() {
+    const CommonBindings& c = profile_.common;
+    std::vector<std::pair<std::size_t, std::string_view>> bound;
+    if (c.speed_rpm) bound.emplace_back(*c.speed_rpm, "speed_rpm");
+    if (c.setpoint_rpm) bound.emplace_back(*c.setpoint_rpm, "setpoint_rpm");
+    if (c.running) bound.emplace_back(c.running->point, "running");
+    if (c.fault) bound.emplace_back(c.fault->point, "fault");
+    if (c.fault_code) bound.emplace_back(c.fault_code->point, "fault_code");
+    for (const auto& [v, key] :
+         {std::pair{c.stop, "stop"}, std::pair{c.run_forward, "run_forward"},
+          std::pair{c.run_reverse, "run_reverse"}, std::pair{c.reset_fault, "reset_fault"}}) {
+      if (v) bound.emplace_back(v->point, key);
+    }
+    std::vector<bool> told(profile_.points.size(), false);
+    for (const auto& [index, key] : bound) {
+      const ProfilePoint& p = profile_.points[index];
+      if (p.poll_ms == 0 || told[index]) continue;
+      told[index] = true;
+      diag_.error_at(static_cast<int>(p.line), "point.poll_ms",
+                     "'" + p.name + "' is bound to the common block (common." + std::string(key) +
+                         "), which is polled at the device's poll_ms: remove poll_ms");
+    }
+  }
+
 
   Diagnostics diag_;
   Profile profile_;

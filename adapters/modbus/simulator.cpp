@@ -58,16 +58,87 @@ Bytes ModbusSimulator::on_receive(ByteView rx, TimePoint now) {
     if (d.status == DecodeStatus::bad) continue;  // a slave ignores a frame it cannot check
     if (d.frame.address != address_ && d.frame.address != kBroadcast) continue;
     if (silent_) continue;
-    const Bytes reply = handle(d.frame.pdu);
-    if (d.frame.address == kBroadcast) continue;  // Serial Line 2.2: no reply to a broadcast
-    const Bytes frame = encode(profile_.line.framing, address_, reply);
-    out.insert(out.end(), frame.begin(), frame.end());
+    if (every_other_ && heard_++ % 2 == 0) continue;
+    const std::optional<Bytes> reply = answer(d.frame.pdu);
+    if (!reply || d.frame.address == kBroadcast) continue;  // Serial Line 2.2: not a broadcast
+    const Bytes frame = encode(profile_.line.framing, address_, *reply);
+    if (late_.count() > 0) {
+      due_.emplace_back(now + late_, frame);
+    } else {
+      out.insert(out.end(), frame.begin(), frame.end());
+    }
   }
   return out;
 }
 
-Bytes ModbusSimulator::on_tick(TimePoint) {
-  return {};
+Bytes ModbusSimulator::on_tick(TimePoint now) {
+  Bytes out;
+  while (!due_.empty() && due_.front().first <= now) {
+    out.insert(out.end(), due_.front().second.begin(), due_.front().second.end());
+    due_.erase(due_.begin());
+  }
+  return out;
+}
+
+std::optional<ModbusSimulator::Range> ModbusSimulator::range_of(ByteView pdu) {
+  if (pdu.size() < 5) return std::nullopt;
+  const std::uint16_t start = be16(pdu[1], pdu[2]);
+  const std::uint16_t count = be16(pdu[3], pdu[4]);
+  switch (pdu[0]) {
+    case fc::read_coils:
+      return Range{Table::coil, start, count};
+    case fc::read_discrete_inputs:
+      return Range{Table::discrete, start, count};
+    case fc::read_holding_registers:
+    case fc::write_multiple_registers:
+      return Range{Table::holding, start, count};
+    case fc::read_input_registers:
+      return Range{Table::input, start, count};
+    case fc::write_single_coil:
+      return Range{Table::coil, start, 1};
+    case fc::write_single_register:
+      return Range{Table::holding, start, 1};
+    default:
+      return std::nullopt;
+  }
+}
+
+std::optional<Bytes> ModbusSimulator::answer(ByteView pdu) {
+  const auto range = range_of(pdu);
+  if (range) {
+    for (const Key& k : mute_) {
+      if (range->covers(k)) return std::nullopt;
+    }
+    for (auto it = refused_.begin(); it != refused_.end(); ++it) {
+      if (!range->covers(it->first)) continue;
+      const std::uint8_t code = it->second.first;
+      if (--it->second.second == 0) refused_.erase(it);
+      return exception_pdu(pdu[0], code);
+    }
+  }
+  Bytes reply = handle(pdu);
+  const bool read = pdu[0] >= fc::read_coils && pdu[0] <= fc::read_input_registers;
+  if (!range || !read || reply.size() < 3 || (reply[0] & kExceptionBit) != 0) return reply;
+  for (const Key& k : short_) {
+    if (!range->covers(k)) continue;
+    // A register (or a byte of bits) fewer than asked, and a byte count that says so.
+    const std::size_t cut = is_bit_table(range->table) ? 1 : 2;
+    reply.resize(reply.size() - std::min(cut, reply.size() - 2));
+    reply[1] = static_cast<std::uint8_t>(reply.size() - 2);
+    break;
+  }
+  return reply;
+}
+
+std::optional<ModbusSimulator::Key> ModbusSimulator::key_of(std::string_view table,
+                                                            std::string_view address) const {
+  std::optional<Table> t;
+  for (std::size_t i = 0; i < kProfileTableNames.size(); ++i) {
+    if (kProfileTableNames[i] == table) t = static_cast<Table>(i);
+  }
+  const auto a = parse_unsigned(address, 0xFFFF);
+  if (!t || !a) return std::nullopt;
+  return Key{*t, static_cast<std::uint16_t>(*a)};
 }
 
 Bytes ModbusSimulator::handle(ByteView pdu) {
@@ -212,7 +283,8 @@ void ModbusSimulator::drive() {
   if (fault_ != 0) running_ = false;  // a trip stops the output
   set_bit(c.running, running_);
   set_bit(c.fault, fault_ != 0);
-  if (c.fault_code) set_point(c.fault_code->point, fault_ * profile_.points[c.fault_code->point].scale);
+  if (c.fault_code)
+    set_point(c.fault_code->point, fault_ * profile_.points[c.fault_code->point].scale);
   if (c.speed_rpm) {
     double speed = 0;
     if (running_ && c.setpoint_rpm) speed = point_value(*c.setpoint_rpm).value_or(0);
@@ -222,9 +294,9 @@ void ModbusSimulator::drive() {
 
 std::string ModbusSimulator::state() const {
   std::ostringstream s;
-  s << "ok " << profile_.name << (running_ ? (reverse_ ? " running reverse" : " running forward")
-                                           : " stopped")
-    << ", fault " << fault_ << (silent_ ? ", silent" : "");
+  s << "ok " << profile_.name
+    << (running_ ? (reverse_ ? " running reverse" : " running forward") : " stopped") << ", fault "
+    << fault_ << (silent_ ? ", silent" : "");
   for (std::size_t i = 0; i < profile_.points.size(); ++i) {
     s << "\n  " << profile_.points[i].name << " = " << point_value(i).value_or(0);
   }
@@ -235,7 +307,14 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
   const auto w = split_words(line);
   const std::string usage =
       "commands: state | fault N (a native fault code; 0 clears) | set POINT VALUE | "
-      "missing TABLE ADDRESS | silent on|off | help";
+      "raw TABLE ADDRESS WORD... | missing TABLE ADDRESS | refuse TABLE ADDRESS CODE [TIMES] | "
+      "mute TABLE ADDRESS on|off | short TABLE ADDRESS on|off | silent on|off | late MS | "
+      "every-other on|off | help";
+  const auto on_off = [](const std::string& word) -> std::optional<bool> {
+    if (word == "on") return true;
+    if (word == "off") return false;
+    return std::nullopt;
+  };
   if (w.empty() || w[0] == "help") return "ok " + usage;
   if (w[0] == "state") return state();
   if (w[0] == "fault" && w.size() == 2) {
@@ -257,14 +336,58 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
     return "ok " + w[1] + " = " + w[2];
   }
   if (w[0] == "missing" && w.size() == 3) {
-    std::optional<Table> table;
-    for (std::size_t i = 0; i < kProfileTableNames.size(); ++i) {
-      if (kProfileTableNames[i] == w[1]) table = static_cast<Table>(i);
-    }
-    const auto address = parse_unsigned(w[2], 0xFFFF);
-    if (!table || !address) return "error: missing TABLE ADDRESS (holding 202, input 7, ...)";
-    missing_.insert({*table, static_cast<std::uint16_t>(*address)});
+    const auto key = key_of(w[1], w[2]);
+    if (!key) return "error: missing TABLE ADDRESS (holding 202, input 7, ...)";
+    missing_.insert(*key);
     return "ok " + w[1] + " " + w[2] + " answers illegal data address from now on";
+  }
+  if (w[0] == "refuse" && (w.size() == 4 || w.size() == 5)) {
+    const auto key = key_of(w[1], w[2]);
+    const auto code = parse_unsigned(w[3], 0xFF);
+    const auto times = w.size() == 5 ? parse_unsigned(w[4]) : std::optional<std::uint32_t>(1);
+    if (!key || !code || *code == 0 || !times || *times == 0) {
+      return "error: refuse TABLE ADDRESS CODE [TIMES] (holding 100 6: busy, once)";
+    }
+    refused_[*key] = {static_cast<std::uint8_t>(*code), *times};
+    return "ok the next " + std::to_string(*times) + " requests covering " + w[1] + " " + w[2] +
+           " answer exception " + w[3];
+  }
+  if ((w[0] == "mute" || w[0] == "short") && w.size() == 4) {
+    const auto key = key_of(w[1], w[2]);
+    const auto on = on_off(w[3]);
+    if (!key || !on) return "error: " + w[0] + " TABLE ADDRESS on|off";
+    std::set<Key>& keys = w[0] == "mute" ? mute_ : short_;
+    if (*on) {
+      keys.insert(*key);
+    } else {
+      keys.erase(*key);
+    }
+    return "ok " + w[0] + " " + w[1] + " " + w[2] + " " + w[3];
+  }
+  if (w[0] == "raw" && w.size() >= 4) {
+    const auto key = key_of(w[1], w[2]);
+    if (!key) return "error: raw TABLE ADDRESS WORD... (input 200 0x7FC0 0x0000)";
+    std::vector<std::uint16_t> words;
+    for (std::size_t i = 3; i < w.size(); ++i) {
+      const auto word = parse_unsigned(w[i], 0xFFFF);
+      if (!word) return "error: " + w[i] + " is not a register value 0..65535";
+      words.push_back(static_cast<std::uint16_t>(*word));
+    }
+    for (std::size_t i = 0; i < words.size(); ++i) {
+      memory_[{key->first, static_cast<std::uint16_t>(key->second + i)}] = words[i];
+    }
+    return "ok " + std::to_string(words.size()) + " registers from " + w[1] + " " + w[2];
+  }
+  if (w[0] == "late" && w.size() == 2) {
+    const auto ms = parse_unsigned(w[1], 60000);
+    if (!ms) return "error: late MS, 0..60000";
+    late_ = Millis(*ms);
+    return "ok answers " + w[1] + " ms late";
+  }
+  if (w[0] == "every-other" && w.size() == 2 && on_off(w[1])) {
+    every_other_ = *on_off(w[1]);
+    heard_ = 0;
+    return "ok every-other " + w[1];
   }
   if (w[0] == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
     silent_ = w[1] == "on";

@@ -1,7 +1,10 @@
 // A simulated Modbus slave from a profile: every point's registers (or bits), read and written
 // with the functions a profile device is polled and written with, and a drive behind them: the
 // profile's command values change the run and fault bits, the actual speed follows the reference
-// while running. For `drivegate sim modbus --set profile=NAME`, the demo and the tests.
+// while running. For `drivegate sim modbus --set profile=NAME`, the demo and the tests. Its
+// operator commands also make it sick the ways real slaves are: a register missing, refused a
+// few times (busy), left unanswered or answered with a wrong byte count; the whole slave silent,
+// late, or answering every other request; registers set raw (a float's NaN).
 #pragma once
 
 #include <map>
@@ -9,6 +12,7 @@
 #include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "codec.h"
 #include "drivegate/simulator.h"
@@ -26,6 +30,20 @@ class ModbusSimulator final : public Simulator {
 
  private:
   using Key = std::pair<Table, std::uint16_t>;
+  // The registers (or bits) a request covers.
+  struct Range {
+    Table table;
+    std::uint32_t start;
+    std::uint32_t count;
+    [[nodiscard]] bool covers(const Key& k) const {
+      return k.first == table && k.second >= start && k.second < start + count;
+    }
+  };
+  [[nodiscard]] static std::optional<Range> range_of(ByteView pdu);
+  // The reply to a request PDU as the operator's commands leave it: nothing (unanswered), an
+  // exception (refused, the request not carried out), a read one register short, or handle()'s.
+  std::optional<Bytes> answer(ByteView pdu);
+  [[nodiscard]] std::optional<Key> key_of(std::string_view table, std::string_view address) const;
 
   // The reply PDU to a request PDU (an exception where the slave would answer one).
   Bytes handle(ByteView pdu);
@@ -46,7 +64,14 @@ class ModbusSimulator final : public Simulator {
   std::optional<TimePoint> last_rx_;
   std::map<Key, std::uint16_t> memory_;  // every register (or bit) of every point
   std::map<Table, std::pair<std::uint16_t, std::uint32_t>> span_;  // per table: [first, end)
-  std::set<Key> missing_;                // addresses the operator removed ("missing")
+  std::set<Key> missing_;  // addresses the operator removed ("missing")
+  std::map<Key, std::pair<std::uint8_t, std::uint32_t>> refused_;  // exception, times left
+  std::set<Key> mute_;                            // requests covering them go unanswered
+  std::set<Key> short_;                           // reads covering them answer a register short
+  Millis late_{0};                                // every answer this late
+  std::vector<std::pair<TimePoint, Bytes>> due_;  // late answers, in order
+  bool every_other_ = false;
+  std::uint64_t heard_ = 0;  // requests for this slave, while every_other_
   bool running_ = false;
   bool reverse_ = false;
   std::uint32_t fault_ = 0;  // native fault code; 0: none

@@ -30,6 +30,9 @@ class BackendSwitch : public modbus::Backend {
                      std::span<const std::uint8_t> request) override {
     if (target_ != nullptr) target_->refused_write(session, unit, request);
   }
+  void refused_broadcast(const Session& session, std::span<const std::uint8_t> request) override {
+    if (target_ != nullptr) target_->refused_broadcast(session, request);
+  }
   bool serves(std::uint8_t unit) const override {
     return target_ != nullptr && target_->serves(unit);
   }

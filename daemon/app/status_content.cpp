@@ -163,7 +163,9 @@ std::unique_ptr<http::CaptureStream> StatusContent::start_capture(std::string_vi
       capture::StationInfo info;
       info.device = st->name();
       if (const Device* d = gateway_->find(st->name())) {
-        info.adapter = d->config().adapter;
+        // The device's descriptor's id: a described protocol's names it ("framed/NAME"), so
+        // that the dissector knows which description decodes the frames.
+        info.adapter = d->adapter().id;
         info.unit_id = d->config().unit_id;
       }
       stations.emplace(st, std::move(info));

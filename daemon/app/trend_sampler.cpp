@@ -18,7 +18,7 @@ void TrendSampler::sample(const Gateway& gateway, std::int64_t unix_ms, TimePoin
     const bool known = d->line().health.ever_good() && !d->comm_lost();
     const CommonState& s = d->state();
     series_.assign({{"speed_rpm", "rpm"}, {"setpoint_rpm", "rpm"}});
-    values_.assign({known ? static_cast<float>(s.speed_rpm) : kUnknown,
+    values_.assign({known && !s.speed_unknown ? static_cast<float>(s.speed_rpm) : kUnknown,
                     known ? static_cast<float>(s.setpoint_rpm) : kUnknown});
     const auto& values = d->driver().values();
     for (const MappedPoint& p : d->map().points()) {
@@ -38,7 +38,8 @@ void TrendSampler::sample(const Gateway& gateway, std::int64_t unix_ms, TimePoin
     float percent = kUnknown;
     const double span = std::chrono::duration<double>(now - it->second.at).count();
     if (!fresh && span > 0 && busy >= it->second.busy_seconds) {
-      percent = static_cast<float>(std::min(100.0, 100.0 * (busy - it->second.busy_seconds) / span));
+      percent =
+          static_cast<float>(std::min(100.0, 100.0 * (busy - it->second.busy_seconds) / span));
     }
     it->second = {busy, now};
     series_.assign({{"utilisation", "%"}});

@@ -369,10 +369,18 @@ void BusEngine::finish(TimePoint now) {
 }
 
 void BusEngine::unanswered(TimePoint now, bool silent) {
+  note_held(*current_, now);
   Station* st = release();
   st->on_no_reply(now);
   if (silent) st->link().health.turn_failed(now, st->link().policy);
   pump(now);
+}
+
+// A turn that ran into a reply timeout held the line from its first frame until the guard time
+// after it ends: the device waits for its next poll turn for a multiple of that.
+void BusEngine::note_held(Station& st, TimePoint now) {
+  if (!timed_out_) return;
+  st.link().health.turn_held(now, std::max(now, quiet_until_) - first_sent_);
 }
 
 // --- receiving ---
@@ -515,12 +523,13 @@ void BusEngine::process_rx(Station& st, TimePoint now) {
         ++link.counters.frames_good;
         // Only a frame carrying the drive's state makes its data fresh; an ack (a write's echo)
         // shows the drive answers, nothing more.
-        const bool back =
-            v.kind == RxKind::ack ? link.health.frame_good(now) : link.health.data_good(now);
+        const bool back = v.kind == RxKind::ack ? link.health.frame_good(now)
+                                                : link.health.data_good(now, st.state_read_at(now));
         if (back) link.log->info("device {}: answering again", st.name());
         if (v.kind != RxKind::frame && awaited) {
           // Answered only after a timeout: a reply to an attempt that timed out may still come.
           if (timed_out_) start_guard(st, now);
+          note_held(st, now);
           finish(now);
           return;
         }

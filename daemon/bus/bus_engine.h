@@ -21,6 +21,13 @@
 // reply is never taken for the answer to another request, and a drive that always answers late
 // goes comm_lost.
 //
+// Sick devices. A device whose turn runs into a reply timeout, silent, late or answering every
+// other request, held the line for the turn's attempts, timeouts and guard times: its next poll
+// turn waits twice that (LinkHealth::turn_held), answered meanwhile or not, on top of the back-off
+// of a device that stopped answering. Waiting on it then takes at most a third of the line, and
+// every healthy device beside it keeps at least half its poll rate; the sick device pays with
+// its own. Writes are not held back: they take their write turns as before.
+//
 // Time and the line are injected: the daemon wires BusClock and BusLine to Asio (bus/bus.h), the
 // tests to a simulated clock and line (tests/support/sim_line.h), and both run this same code.
 // Nothing here blocks or sleeps; every event is a call in, every action a call out.
@@ -132,6 +139,8 @@ class BusEngine {
   Station* release();
   // It ended without its reply: the station hears so and, `silent`, is backed off.
   void unanswered(TimePoint now, bool silent);
+  // The exchange ran into a timeout: its device pauses for the line time it held.
+  void note_held(Station& st, TimePoint now);
   [[nodiscard]] static Millis guard_for(const Link& link, Millis wait);
   void late_bytes(ByteView bytes, TimePoint now);
   void tap(FrameDirection dir, std::uint8_t flags, const Station* st, ByteView bytes,

@@ -7,8 +7,8 @@
 #include <optional>
 #include <string>
 
-#include "drivegate/driver.h"
 #include "bus/link.h"
+#include "drivegate/driver.h"
 
 namespace drivegate {
 
@@ -42,6 +42,9 @@ class Station {
   // driver the next part of its oldest write first.
   virtual std::optional<Exchange> next_exchange(TimePoint now, Turn turn) = 0;
   [[nodiscard]] virtual TimePoint wake_at() const = 0;
+  // When the drive's state it now publishes was read whole, after a reply that carried state:
+  // `now`, unless its driver reads the state in parts (Driver::state_read_at).
+  [[nodiscard]] virtual std::optional<TimePoint> state_read_at(TimePoint now) const { return now; }
   virtual RxVerdict on_receive(ByteView rx, TimePoint now) = 0;
   virtual void on_no_reply(TimePoint now) = 0;
   // The engine declared comm_lost.

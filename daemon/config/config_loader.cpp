@@ -11,12 +11,12 @@
 #include <sstream>
 
 #include "base/read_file.h"
+#include "drivegate/toml_reader.h"
+#include "line_config.h"
 #include "mqtt_config.h"
 #include "plugin/adapter_options.h"
-#include "line_config.h"
 #include "port_address.h"
 #include "server_config.h"
-#include "drivegate/toml_reader.h"
 
 namespace drivegate {
 namespace {
@@ -111,8 +111,9 @@ std::optional<OptionValue> read_option(const OptionSpec& spec, const toml::node&
   return std::nullopt;
 }
 
+// `lenient`: keys the schema does not know are left for a specialised schema to judge.
 Options read_options(const AdapterDescriptor& adapter, const toml::table* table,
-                     const std::string& prefix, Diagnostics& diag) {
+                     const std::string& prefix, Diagnostics& diag, bool lenient = false) {
   Options options = default_options(adapter);
   std::set<std::string> known;
   for (std::size_t i = 0; i < adapter.option_count; ++i) {
@@ -125,7 +126,7 @@ Options read_options(const AdapterDescriptor& adapter, const toml::table* table,
       }
     }
   }
-  if (table != nullptr) {
+  if (table != nullptr && !lenient) {
     for (const auto& [key, node] : *table) {
       if (known.contains(std::string(key.str()))) continue;
       std::string list;
@@ -251,6 +252,23 @@ void read_devices(const toml::table& root, Config& cfg, const PluginRegistry& pl
     }
     const toml::node* address = r.node("address");
     const toml::node* options = r.node("options");
+    if (adapter != nullptr && adapter->specialise != nullptr) {
+      // A device that follows a description it names (the framed adapter): its options, line and
+      // addresses are the description's, told by the descriptor specialised for it.
+      const toml::table* opts = options != nullptr ? options->as_table() : nullptr;
+      Diagnostics own(diag);  // the base schema's errors count once, below
+      const Options base = read_options(*adapter, opts, prefix + ".options", own, true);
+      std::string why;
+      const AdapterDescriptor* device_adapter = specialised(*adapter, base, why);
+      if (device_adapter == nullptr) {
+        const toml::node* at = opts != nullptr && opts->get("protocol") != nullptr
+                                   ? opts->get("protocol")
+                                   : (options != nullptr ? options : &t);
+        diag.error(at, prefix + ".options", why);
+        dev.options = base;
+      }
+      adapter = device_adapter;
+    }
     if (adapter != nullptr) {
       const bool addressed = adapter->address_max != 0;
       if (address == nullptr) {
@@ -292,7 +310,7 @@ std::vector<const AdapterDescriptor*> adapters_on(const std::vector<const Device
                                                   const PluginRegistry& plugins) {
   std::vector<const AdapterDescriptor*> out;
   for (const auto* dev : on_bus) {
-    if (const AdapterDescriptor* a = plugins.find(dev->adapter)) out.push_back(a);
+    if (const AdapterDescriptor* a = plugins.find(dev->adapter, dev->options)) out.push_back(a);
   }
   return out;
 }
@@ -353,10 +371,10 @@ void cross_check(Config& cfg, const std::vector<LineGiven>& given, const PluginR
       diag.error_at(bus.line, "bus '" + bus.name + "'", "no device uses this bus");
       continue;
     }
-    const AdapterDescriptor* first = plugins.find(on_bus.front()->adapter);
+    const AdapterDescriptor* first = plugins.find(on_bus.front()->adapter, on_bus.front()->options);
     if (first == nullptr) continue;
     for (const auto* dev : on_bus) {
-      const AdapterDescriptor* a = plugins.find(dev->adapter);
+      const AdapterDescriptor* a = plugins.find(dev->adapter, dev->options);
       if (a != nullptr && a->streaming && on_bus.size() > 1) {
         diag.error_at(dev->line, "device '" + dev->name + "'",
                       "adapter '" + dev->adapter +

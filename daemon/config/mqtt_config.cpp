@@ -146,6 +146,15 @@ std::optional<MqttBroker> make_broker(const std::string& url, const TlsFiles& ow
                                       const TlsFiles& shared, const toml::node* at,
                                       const std::string& key, Diagnostics& diag) {
   MqttBroker b;
+  // mqtt://user:password@host: the URL is shown in the status and the log, and the password with
+  // it. The message does not quote it either.
+  if (const auto scheme = url.find("://");
+      scheme != std::string::npos && url.find('@', scheme) != std::string::npos) {
+    diag.error(at, key,
+               "credentials in a broker URL are not supported (the URL is shown in the status "
+               "and the log): give them as username and password_file");
+    return std::nullopt;
+  }
   b.url = url;
   if (!parse_broker(url, b)) {
     diag.error(at, key, kBrokerForm);

@@ -7,11 +7,12 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 
+#include "bus/link.h"
 #include "drivegate/common.h"
 #include "drivegate/driver.h"
 #include "drivegate/point.h"
-#include "bus/link.h"
 
 namespace drivegate {
 
@@ -51,6 +52,9 @@ struct CommonRow {
   double min = 0.0;  // writable rows: the engineering range a write may carry
   double max = 0.0;
   bool counter = false;  // only ever grows (wrapping at 2^32): a Prometheus counter, not a gauge
+  // The value the row holds while what it shows is not known; the status JSON and MQTT then show
+  // null, /metrics NaN (README, "Register map").
+  std::optional<std::int64_t> unknown = std::nullopt;
 };
 
 // A row that counts events (see CommonRow::counter).
@@ -58,6 +62,16 @@ constexpr CommonRow counting(CommonRow row) {
   row.counter = true;
   return row;
 }
+
+// A row whose value may be unknown, holding `mark` then (CommonRow::unknown).
+constexpr CommonRow unknown_as(CommonRow row, std::int64_t mark) {
+  row.unknown = mark;
+  return row;
+}
+
+// What speed_rpm holds while the speed is not known (CommonState::speed_unknown, or a speed
+// beyond what the register carries): the one i16 value no known speed takes.
+inline constexpr std::int64_t kSpeedUnknown = -kMaxSpeedRpm - 1;
 
 // In address order within each table: a row's address is the sum of the register counts of the
 // rows of its table above it.
@@ -77,8 +91,14 @@ inline constexpr std::array kCommonBlock = {
     CommonRow{Table::input, "native_fault", PointType::u32, "",
               "the protocol's raw fault code or bits",
               [](const CommonSnapshot& s) -> std::int64_t { return s.drive.native_fault; }},
-    CommonRow{Table::input, "speed_rpm", PointType::i16, "rpm", "actual speed (negative: reverse)",
-              [](const CommonSnapshot& s) -> std::int64_t { return s.drive.speed_rpm; }},
+    unknown_as(CommonRow{Table::input, "speed_rpm", PointType::i16, "rpm",
+                         "actual speed (negative: reverse; -32768: unknown)",
+                         [](const CommonSnapshot& s) -> std::int64_t {
+                           const std::int32_t rpm = s.drive.speed_rpm;
+                           const bool carried = rpm >= -kMaxSpeedRpm && rpm <= kMaxSpeedRpm;
+                           return s.drive.speed_unknown || !carried ? kSpeedUnknown : rpm;
+                         }},
+               kSpeedUnknown),
     CommonRow{Table::input, "data_age_ms", PointType::u32, "ms",
               "time since the last reply carrying the drive's state (4294967295: never)",
               [](const CommonSnapshot& s) -> std::int64_t { return s.data_age_ms; }},

@@ -28,7 +28,11 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
       traits_(driver_->traits()),
       map_(driver_->points()),
       log_(std::move(log)),
-      link_{policy_of(config_, adapter_, traits_), LinkHealth(now), {}, nullptr, log_},
+      link_{policy_of(config_, adapter_, traits_),
+            LinkHealth(now, traits_.state_in_parts),
+            {},
+            nullptr,
+            log_},
       failsafe_(config_.failsafe.timeout),
       last_tick_(now),
       history_(history) {
@@ -91,13 +95,14 @@ void Device::first_contact() {
   const CommonState& s = driver_->common();
   if (!s.running) return;
   if (config_.on_start == StartAction::adopt) {
-    log_->info("device {}: found running ({}, setpoint {} rpm, speed {} rpm), shown as it runs "
-               "(on_start = adopt)",
-               config_.name, to_string(s.command), s.setpoint_rpm, s.speed_rpm);
+    log_->info(
+        "device {}: found running ({}, setpoint {} rpm, speed {} rpm), shown as it runs "
+        "(on_start = adopt)",
+        config_.name, to_string(s.command), s.setpoint_rpm, s.speed_rpm);
     return;
   }
-  log_->warn("device {}: found running (speed {} rpm): stopping it (on_start = stop)",
-             config_.name, s.speed_rpm);
+  log_->warn("device {}: found running (speed {} rpm): stopping it (on_start = stop)", config_.name,
+             s.speed_rpm);
   stop_on_start_ = true;
 }
 

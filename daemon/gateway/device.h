@@ -41,8 +41,9 @@ namespace drivegate {
 AccessLevel required_level(const MappedPoint& point);
 
 // Writes waiting at one device, the one being carried out included (docs/safety.md, "Fair line
-// time"): past it a write is refused at once (busy). Stops have as many
-// places again of their own, so a full queue never holds one back.
+// time"): past it a write is refused at once (busy). Stops have as many places again of their
+// own, so a full queue never holds one back, and so have a pass-through device's forwarded
+// reads, so that read clients never get a write refused busy.
 inline constexpr std::size_t kMaxQueuedWrites = 4;
 
 // What happened to the writes a device was asked for, beyond what the line counters say.
@@ -81,6 +82,9 @@ class Device final : public Station {
   void on_work(std::function<void()> kick) override { kick_ = std::move(kick); }
   std::optional<Exchange> next_exchange(TimePoint now, Turn turn) override;
   [[nodiscard]] TimePoint wake_at() const override { return driver_->wake_at(); }
+  [[nodiscard]] std::optional<TimePoint> state_read_at(TimePoint now) const override {
+    return traits_.state_in_parts ? driver_->state_read_at() : now;
+  }
   RxVerdict on_receive(ByteView rx, TimePoint now) override;
   void on_no_reply(TimePoint now) override;
   void on_comm_lost(TimePoint now) override;
@@ -116,17 +120,19 @@ class Device final : public Station {
   // Whether every Modbus request for this device is forwarded to it as it is (pass-through,
   // Driver::forwards) rather than served from the register map.
   [[nodiscard]] bool forwards() const { return driver_->forwards(); }
-  // A Modbus request PDU for a pass-through device: refused at once (denied) when its function
-  // needs more than the session's access (forward_access.h), then queued and carried out like a
-  // write (the same bounded queue, write turns alternating with the line's polls, the same
-  // deadline), sent as it is, and answered with the slave's reply. Nothing but ok returned here
-  // calls `done`. It never feeds the failsafe: a pass-through device has no command block.
+  // A Modbus request PDU for a pass-through device: refused at once when it is not one whole,
+  // well-formed request (invalid_value), when its function is one no client may forward or
+  // needs more than the session's access (denied; forward_access.h), then queued and carried
+  // out like a write (a bounded queue, reads in places of their own; write turns alternating
+  // with the line's polls, the same deadline), sent as it is, and answered with the slave's
+  // reply. Nothing but ok returned here calls `done`. Every refusal and every forwarded request
+  // that may write is in the audit trail. It never feeds the failsafe: a pass-through device has
+  // no command block.
   Outcome forward(const Session& session, std::span<const std::uint8_t> pdu, ForwardDone done,
                   TimePoint now);
   // A command from the gateway itself (shutdown, or on_start = stop: `source` says which),
   // outside Modbus: it neither feeds nor resets the failsafe. `done` is called exactly once.
-  void command(Command c, WriteDone done, TimePoint now,
-               SourceKind source = SourceKind::shutdown);
+  void command(Command c, WriteDone done, TimePoint now, SourceKind source = SourceKind::shutdown);
   // Shutdown has begun: from now on every client's write, from any northbound, is refused
   // (no_response) before it reaches the driver, so that nothing runs the motor after the shutdown
   // stop.
@@ -173,7 +179,8 @@ class Device final : public Station {
   [[nodiscard]] bool may_release(TimePoint now) const;
   void next_request(TimePoint now);
   [[nodiscard]] Request* queue_head() const;
-  [[nodiscard]] std::size_t queued(bool urgent) const;
+  // Requests waiting or being carried out: stops or not, forwarded reads or not.
+  [[nodiscard]] std::size_t queued(bool urgent, bool reads_only = false) const;
   Outcome refuse_run_while_latched(const char* source, TimePoint now);
   void supersede_runs(TimePoint now);
   Outcome submit(const Session& session, Table table, std::uint16_t address,

@@ -35,6 +35,9 @@ struct Device::Request {
   TimePoint deadline;
   bool urgent = false;         // a stop, or the gateway's own: handed to the driver at once
   bool feeds_failsafe = true;  // from the PLC, and from a client whose writes prove it is there
+  // A forwarded request that only reads (forward_access.h): it has places of its own in the
+  // queue (Device::queued), so that reads never fill a write's.
+  bool reads_only = false;
   // Whom to answer: the client that asked, and any that asked the same while it waited.
   std::vector<Answer> answers;
   // A forwarded request (Device::forward) instead of parts: its PDU, whom to answer, and the

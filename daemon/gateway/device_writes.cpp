@@ -265,7 +265,10 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
     if (const WriteCheck c = driver_->check(ops); c != WriteCheck::ok) return to_outcome(c);
   }
 
-  const bool urgent = origin == Origin::gateway || commands(parts, &is_stop);
+  // A stop goes ahead of everything; a request that also runs the motor is no stop, and waits its
+  // turn like any run (else it would drop the runs queued before it and then run itself).
+  const bool urgent =
+      origin == Origin::gateway || (commands(parts, &is_stop) && !commands(parts, &is_run));
   if (!urgent && !heartbeat_only) {
     // Equal to the request queued last, which has not started: the same effect, one answer.
     const auto last = std::find_if(requests_.rbegin(), requests_.rend(),
@@ -320,9 +323,11 @@ Outcome Device::begin(Request& r, bool at_once, TimePoint now) {
   return failure;
 }
 
-std::size_t Device::queued(bool urgent) const {
-  return static_cast<std::size_t>(std::count_if(
-      requests_.begin(), requests_.end(), [urgent](const auto& r) { return r->urgent == urgent; }));
+std::size_t Device::queued(bool urgent, bool reads_only) const {
+  return static_cast<std::size_t>(
+      std::count_if(requests_.begin(), requests_.end(), [urgent, reads_only](const auto& r) {
+        return r->urgent == urgent && r->reads_only == reads_only;
+      }));
 }
 
 // A stop is on its way: the queued requests that would run the motor after it never reach it.
@@ -456,16 +461,29 @@ Device::Progress Device::advance_forward(Request& r, TimePoint now, Outcome& fai
 
 Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pdu,
                         ForwardDone done, TimePoint now) {
-  // A forwarded write is audited like any other; a forwarded read is not a write.
-  const AccessLevel needs = forward_level(pdu);
+  const ForwardVerdict verdict = judge_forward(pdu, static_cast<std::uint8_t>(config_.address));
+  // A forwarded read is not a write: recorded only when it is refused for what it is. A
+  // forwarded write is audited like any other.
+  const bool reads_only = verdict.needs == AccessLevel::read;
   Answer a = answer_to(session, nullptr, describe_pdu(pdu), now);
-  if (needs == AccessLevel::read) a.audit = Answer::Audit::none;
+  if (reads_only && verdict.refusal == Outcome::ok) a.audit = Answer::Audit::none;
   const Outcome o = [&] {
     if (!driver_->forwards()) return Outcome::no_such_point;
-    // outcome.h: beyond the session's level is denied, checked before anything else.
-    if (needs > session.access) return Outcome::denied;
+    // outcome.h: beyond the session's level is denied, checked before anything else; a function
+    // no level may send is beyond every session's.
+    if (verdict.refusal == Outcome::denied) {
+      a.record.why = verdict.why;
+      return Outcome::denied;
+    }
+    if (verdict.needs > session.access) return Outcome::denied;
+    if (verdict.refusal != Outcome::ok) {
+      a.record.why = verdict.why;
+      return verdict.refusal;
+    }
     if (closed_to_clients_ || comm_lost()) return Outcome::no_response;
-    if (queued(false) >= kMaxQueuedWrites) {
+    // Reads wait in places of their own: however many read clients fill theirs, a write from
+    // a client that may write is never refused busy for them.
+    if (queued(false, reads_only) >= kMaxQueuedWrites) {
       ++write_stats_.busy;
       return Outcome::busy;
     }
@@ -473,6 +491,7 @@ Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pd
     Request* r = owned.get();
     r->forward = Bytes(pdu.begin(), pdu.end());
     r->forward_done = std::move(done);
+    r->reads_only = reads_only;
     r->feeds_failsafe = false;
     r->deadline = now + traits_.write_timeout;
     a.taken = true;

@@ -48,10 +48,18 @@ std::unique_ptr<Gateway> Gateway::build(asio::io_context& io, const Config& conf
   std::unique_ptr<Gateway> gw(new Gateway(io, log, history));
   const auto now = Clock::now();
   for (const auto& dc : config.devices) {
-    const AdapterDescriptor* adapter = plugins.find(dc.adapter);
-    if (adapter == nullptr) {
+    const AdapterDescriptor* base = plugins.find(dc.adapter);
+    if (base == nullptr) {
       errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
                        dc.name + "': adapter '" + dc.adapter + "' is not installed");
+      continue;
+    }
+    // The device's own descriptor (a described protocol's: AdapterDescriptor::specialise).
+    std::string why;
+    const AdapterDescriptor* adapter = specialised(*base, dc.options, why);
+    if (adapter == nullptr) {
+      errors.push_back(config.path.string() + ":" + std::to_string(dc.line) + ": device '" +
+                       dc.name + "': " + why);
       continue;
     }
     const auto bus = std::find_if(config.buses.begin(), config.buses.end(),
@@ -210,6 +218,11 @@ void Gateway::refused_write(const Session& session, std::uint8_t unit,
   refuse(session, unit, Device::describe_pdu(request), Outcome::denied);
 }
 
+void Gateway::refused_broadcast(const Session& session, std::span<const std::uint8_t> request) {
+  record_refusal(session.source, nullptr, 0, Device::describe_pdu(request), Outcome::refused,
+                 "a broadcast, and the listener has broadcast = false");
+}
+
 void Gateway::refused_write(const Source& source, const Device* device, std::string asked,
                             Outcome result, std::string why) {
   record_refusal(source, device, device != nullptr ? device->config().unit_id : 0,
@@ -249,7 +262,8 @@ Outcome Gateway::forward(const Session& session, std::uint8_t unit,
   if (d == nullptr) return Outcome::no_such_device;  // forwards(unit) said there is one
   if (!running_) {
     // A forwarded write is audited like any other; a forwarded read is not a write.
-    if (forward_level(pdu) == AccessLevel::read) return Outcome::no_response;
+    const ForwardVerdict v = judge_forward(pdu, static_cast<std::uint8_t>(d->config().address));
+    if (v.needs == AccessLevel::read && v.refusal == Outcome::ok) return Outcome::no_response;
     return refuse(session, unit, Device::describe_pdu(pdu), Outcome::no_response);
   }
   return d->forward(session, pdu, std::move(done), Clock::now());

@@ -69,6 +69,9 @@ class Gateway {
   // the audit trail as denied, with its PDU.
   void refused_write(const Session& session, std::uint8_t unit,
                      std::span<const std::uint8_t> request);
+  // A broadcast write a serial listener with broadcast = false applied to no device: recorded
+  // in the audit trail as refused, for that reason, with its PDU and no device.
+  void refused_broadcast(const Session& session, std::span<const std::uint8_t> request);
   // A write another northbound refused itself before it reached a device's write path (a DCMD
   // the MQTT side could not take: retained by the broker, an unknown metric...): recorded in the
   // audit trail as `asked`, with `result` and `why`. `device`: null when it named none of ours.

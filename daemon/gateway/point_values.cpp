@@ -45,16 +45,28 @@ void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
     }
   }
   out.reserve(map.points().size());
+  const std::vector<Value>& values = device.driver().values();
   for (const MappedPoint& p : map.points()) {
     const auto i = static_cast<std::size_t>(p.spec.table);
     const bool bits = p.spec.table == Table::coil || p.spec.table == Table::discrete;
     const std::size_t count = bits ? 1 : p.spec.register_count();
     if (std::size_t{p.address} + count > image[i].size() || !readable[i][p.address]) continue;
     const std::span<const std::uint16_t> regs = std::span(image[i]).subspan(p.address, count);
-    if (bits) {
+    // What the registers cannot say: an adapter's point its driver does not know, a common row
+    // holding its unknown mark, a float that is not a number.
+    const bool unknown_to_driver = p.source == PointSource::adapter && p.index < values.size() &&
+                                   std::holds_alternative<std::monostate>(values[p.index]);
+    if (unknown_to_driver) {
+      out.emplace_back(&p, Value{});
+    } else if (bits) {
       out.emplace_back(&p, std::int64_t{regs[0] != 0 ? 1 : 0});
     } else if (auto v = decode_value(p.spec, regs)) {
-      out.emplace_back(&p, std::move(*v));
+      const CommonRow* row = p.row();
+      const auto* i64 = std::get_if<std::int64_t>(&*v);
+      const bool marked = row != nullptr && row->unknown && i64 != nullptr && *i64 == *row->unknown;
+      out.emplace_back(&p, marked ? Value{} : std::move(*v));
+    } else if (p.spec.type == PointType::f32) {
+      out.emplace_back(&p, Value{});  // NaN or infinite
     }
   }
 }

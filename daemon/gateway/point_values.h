@@ -20,7 +20,9 @@ using PointValue = std::pair<const MappedPoint*, Value>;
 std::string_view label_of(const PointSpec& spec, const Value& value);
 
 // The common block, then the adapter's points, in the map's order; a point that cannot be read
-// is left out. `out` is replaced (its capacity kept, for the next device).
+// is left out, one whose value is not known is std::monostate (an adapter's point its driver does
+// not know, a common row holding its unknown mark, a float that is not a number). `out` is
+// replaced (its capacity kept, for the next device).
 void point_values(Device& device, TimePoint now, std::vector<PointValue>& out);
 
 // The same at Clock::now(), in a new vector.

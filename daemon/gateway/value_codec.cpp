@@ -49,7 +49,7 @@ void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint
       put32(static_cast<std::uint32_t>(saturate<std::int32_t>(scaled(spec, value))), out);
       return;
     case PointType::f32:
-      put32(std::bit_cast<std::uint32_t>(static_cast<float>(as_double(value))), out);
+      put32(std::bit_cast<std::uint32_t>(static_cast<float>(number_of(value))), out);
       return;
     case PointType::string: {
       const auto* s = std::get_if<std::string>(&value);
@@ -62,6 +62,12 @@ void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint
       return;
     }
   }
+}
+
+double number_of(const Value& value) {
+  if (std::holds_alternative<std::monostate>(value))
+    return std::numeric_limits<double>::quiet_NaN();
+  return as_double(value);
 }
 
 void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t> out) {

@@ -11,8 +11,11 @@
 namespace drivegate {
 
 // Writes spec.register_count() registers. Values out of the type's range saturate; unknown
-// values encode as 0.
+// values encode as NaN in a float, 0 in an integer (which has no value to spare).
 void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint16_t> out);
+
+// A value as a number: NaN when it is not known (std::monostate).
+double number_of(const Value& value);
 
 // An integer (already in register units) into a u16 / i16 / u32 / i32 point's registers,
 // saturating at the type's limits: what the common block's rows hold.

@@ -80,6 +80,10 @@ class Backend {
   // (docs/audit.md), which records every write refused or not; `request` is the PDU.
   virtual void refused_write(const Session& /*session*/, std::uint8_t /*unit*/,
                              std::span<const std::uint8_t> /*request*/) {}
+  // A broadcast write (serial address 0) a serial listener applied to no unit because it has
+  // broadcast = false: told for the audit trail, with its PDU.
+  virtual void refused_broadcast(const Session& /*session*/,
+                                 std::span<const std::uint8_t> /*request*/) {}
 
   // Whether a device answers at `unit`. A serial line is shared with other slaves, so a serial
   // listener stays silent for a unit nobody here serves (MODBUS over Serial Line 2.2), where TCP

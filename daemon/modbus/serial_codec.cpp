@@ -7,26 +7,24 @@
 namespace drivegate::modbus_serial {
 namespace {
 
-// RTU: address(1) + PDU + CRC(2); at most 256 bytes (Serial Line 2.5.1.1).
-constexpr std::size_t kRtuOverhead = 3;
+// RTU: at most 256 bytes (Serial Line 2.5.1.1).
 constexpr std::size_t kRtuMaxFrame = 256;
-// The least RTU frame: address, function, CRC (an exception adds its code: 5).
-constexpr std::size_t kRtuMinFrame = 4;
 // ASCII: ':' + 2 x (address + PDU + LRC) + CR LF; at most 513 characters (Serial Line 2.5.2.1).
 constexpr std::size_t kAsciiMaxFrame = 513;
 constexpr std::uint8_t kAsciiStart = ':';
 constexpr std::uint8_t kCr = '\r';
 constexpr std::uint8_t kLf = '\n';
 
-// How the length of an RTU frame is found from its first bytes.
+// MEI type 0x0E of function 0x2B: read device identification (Application Protocol 6.21).
+constexpr std::uint8_t kReadDeviceId = 0x0E;
+
+// How the length of an RTU reply is found from its first bytes.
 enum class Length : std::uint8_t {
-  fixed,        // `size` bytes in all
-  count_at_2,   // a byte count at offset 2, then that many bytes: `size` + count
-  count_at_6,   // a byte count at offset 6 (0x0F / 0x10 requests): `size` + count
-  count_at_10,  // a byte count at offset 10 (0x17 request): `size` + count
-  count16_at_2, // a 2-byte count at offset 2 (0x18 reply): `size` + count
-  device_id,    // 0x2B / 0x0E reply: objects follow (Application Protocol 6.21)
-  by_crc,       // unknown: where the CRC first holds
+  fixed,         // `size` bytes in all
+  count_at_2,    // a byte count at offset 2, then that many bytes: `size` + count
+  count16_at_2,  // a 2-byte count at offset 2 (0x18 reply): `size` + count
+  device_id,     // 0x2B / 0x0E reply: objects follow (Application Protocol 6.21)
+  by_crc,        // unknown: where the CRC first holds
 };
 struct Rule {
   Length how = Length::by_crc;
@@ -67,40 +65,6 @@ Rule reply_rule(std::uint8_t function) {
   }
 }
 
-// Request lengths, address and CRC included (Application Protocol 6.x, the "Request" tables).
-Rule request_rule(std::uint8_t function) {
-  switch (function) {
-    case fc::read_coils:
-    case fc::read_discrete_inputs:
-    case fc::read_holding_registers:
-    case fc::read_input_registers:
-    case fc::write_single_coil:
-    case fc::write_single_register:
-      return {Length::fixed, 8};  // function, address, quantity or value
-    case fc::read_exception_status:
-    case fc::get_comm_event_counter:
-    case fc::get_comm_event_log:
-    case fc::report_server_id:
-      return {Length::fixed, 4};  // the function alone
-    case fc::write_multiple_coils:
-    case fc::write_multiple_registers:
-      return {Length::count_at_6, 9};  // function, address, quantity, byte count, data
-    case fc::read_file_record:
-    case fc::write_file_record:
-      return {Length::count_at_2, 5};
-    case fc::mask_write_register:
-      return {Length::fixed, 10};
-    case fc::read_write_registers:
-      return {Length::count_at_10, 13};  // function, 4 x 2-byte fields, byte count, data
-    case fc::read_fifo_queue:
-      return {Length::fixed, 6};  // function, FIFO pointer address
-    case fc::encapsulated_interface:
-      return {Length::fixed, 7};  // function, MEI type, read device id code, object id
-    default:
-      return {Length::by_crc, 0};
-  }
-}
-
 Decoded<Adu> rtu_frame(ByteView rx, std::size_t size) {
   const ByteView frame = rx.first(size);
   if (!crc16_modbus_holds(frame)) return decoded_bad<Adu>(size, FrameError::bad_checksum);
@@ -114,7 +78,6 @@ Decoded<Adu> rtu_frame(ByteView rx, std::size_t size) {
 // in (Application Protocol 6.21: function, MEI type, read device id code, conformity level, more
 // follows, next object id, number of objects, then id, length, value for each object).
 std::optional<std::size_t> device_id_size(ByteView rx, bool& other_mei) {
-  constexpr std::uint8_t kReadDeviceId = 0x0E;
   constexpr std::size_t kObjectsAt = 8;  // address + the 7 bytes before the first object
   other_mei = false;
   if (rx.size() < 3) return std::nullopt;
@@ -134,56 +97,60 @@ std::optional<std::size_t> device_id_size(ByteView rx, bool& other_mei) {
 }
 
 // A frame of a function whose length the codec does not know: it ends where the bytes so far
-// first carry a good CRC. A buffer of a whole frame's length without one is a bad frame.
-// One running CRC over the bytes: each prefix's is the one before it and a byte more, so a noisy
-// line costs a pass over the buffer per read, not a CRC per prefix.
+// first carry a good CRC (crc_end). A buffer of a whole frame's length without one is a bad frame.
 Decoded<Adu> decode_rtu_by_crc(ByteView rx) {
-  const std::size_t most = std::min(rx.size(), kRtuMaxFrame);
-  std::uint16_t crc = 0xFFFF;  // of rx[0, k)
-  for (std::size_t k = 0; k + 2 <= most; ++k) {
-    if (k + 2 >= kRtuMinFrame && rx[k] == lo8(crc) && rx[k + 1] == hi8(crc)) {
-      return rtu_frame(rx, k + 2);
-    }
-    crc = crc16_modbus_update(crc, rx[k]);
-  }
+  if (const auto size = crc_end(rx)) return rtu_frame(rx, *size);
   if (rx.size() >= kRtuMaxFrame) return decoded_bad<Adu>(kRtuMaxFrame, FrameError::bad_checksum);
   return {};
+}
+
+// The whole length of the RTU reply at the start of `rx` (address and CRC included), or the
+// decoding of one that is not all in yet or is delimited by its CRC (`done`).
+std::optional<std::size_t> reply_size(ByteView rx, Decoded<Adu>& done) {
+  const Rule rule = reply_rule(rx[1]);
+  switch (rule.how) {
+    case Length::fixed:
+      return rule.size;
+    case Length::count_at_2:
+      if (rx.size() <= 2) return std::nullopt;
+      return rule.size + rx[2];
+    case Length::count16_at_2:
+      if (rx.size() < 4) return std::nullopt;
+      return rule.size + be16(rx[2], rx[3]);
+    case Length::device_id: {
+      bool other_mei = false;
+      const auto s = device_id_size(rx, other_mei);
+      if (other_mei) done = decode_rtu_by_crc(rx);
+      return s;
+    }
+    case Length::by_crc:
+      done = decode_rtu_by_crc(rx);
+      return std::nullopt;
+  }
+  return std::nullopt;
 }
 
 Decoded<Adu> decode_rtu(ByteView rx, bool reply) {
   if (rx.empty()) return {};
   if (rx[0] > kMaxSlave) return decoded_bad<Adu>(1, FrameError::bad_header);
   if (rx.size() < 2) return {};
-  const Rule rule = reply ? reply_rule(rx[1]) : request_rule(rx[1]);
   std::size_t size = 0;
-  switch (rule.how) {
-    case Length::fixed:
-      size = rule.size;
-      break;
-    case Length::count_at_2:
-    case Length::count_at_6:
-    case Length::count_at_10: {
-      const std::size_t at = rule.how == Length::count_at_2 ? 2
-                             : rule.how == Length::count_at_6 ? 6
-                                                             : 10;
-      if (rx.size() <= at) return {};
-      size = rule.size + rx[at];
-      break;
+  if (reply) {
+    Decoded<Adu> done;
+    const auto s = reply_size(rx, done);
+    if (!s) return done;
+    size = *s;
+  } else {
+    const RequestLength length = request_length(rx.subspan(1));
+    switch (length.status) {
+      case RequestLength::Status::incomplete:
+        return {};
+      case RequestLength::Status::unknown:
+        return decode_rtu_by_crc(rx);
+      case RequestLength::Status::known:
+        size = length.size + kRtuOverhead;
+        break;
     }
-    case Length::count16_at_2:
-      if (rx.size() < 4) return {};
-      size = rule.size + be16(rx[2], rx[3]);
-      break;
-    case Length::device_id: {
-      bool other_mei = false;
-      const auto s = device_id_size(rx, other_mei);
-      if (other_mei) return decode_rtu_by_crc(rx);
-      if (!s) return {};
-      size = *s;
-      break;
-    }
-    case Length::by_crc:
-      return decode_rtu_by_crc(rx);
   }
   if (size > kRtuMaxFrame) return decoded_bad<Adu>(1, FrameError::bad_length);
   if (rx.size() < size) return {};
@@ -282,6 +249,97 @@ Decoded<Adu> decode_reply(Framing framing, ByteView rx) {
 
 Decoded<Adu> decode_request(Framing framing, ByteView rx) {
   return framing == Framing::rtu ? decode_rtu(rx, false) : decode_ascii(rx);
+}
+
+// One running CRC over the bytes: each prefix's is the one before it and a byte more, so a noisy
+// line costs a pass over the buffer per read, not a CRC per prefix.
+std::optional<std::size_t> crc_end(ByteView rx) {
+  const std::size_t most = std::min(rx.size(), kRtuMaxFrame);
+  std::uint16_t crc = 0xFFFF;  // of rx[0, k)
+  for (std::size_t k = 0; k + 2 <= most; ++k) {
+    if (k + 2 >= kRtuMinFrame && rx[k] == lo8(crc) && rx[k + 1] == hi8(crc)) return k + 2;
+    crc = crc16_modbus_update(crc, rx[k]);
+  }
+  return std::nullopt;
+}
+
+RequestLength request_length(ByteView pdu) {
+  using Status = RequestLength::Status;
+  if (pdu.empty()) return {Status::incomplete, 0};
+  // A byte count at `at`, then that many bytes after the `fixed` ones.
+  const auto counted = [&](std::size_t at, std::size_t fixed) -> RequestLength {
+    if (pdu.size() <= at) return {Status::incomplete, 0};
+    return {Status::known, fixed + pdu[at]};
+  };
+  switch (pdu[0]) {
+    case fc::read_coils:
+    case fc::read_discrete_inputs:
+    case fc::read_holding_registers:
+    case fc::read_input_registers:
+    case fc::write_single_coil:
+    case fc::write_single_register:
+      return {Status::known, 5};  // function, address, quantity or value
+    case fc::read_exception_status:
+    case fc::get_comm_event_counter:
+    case fc::get_comm_event_log:
+    case fc::report_server_id:
+      return {Status::known, 1};  // the function alone
+    case fc::write_multiple_coils:
+    case fc::write_multiple_registers:
+      return counted(5, 6);  // function, address, quantity, byte count, data
+    case fc::read_file_record:
+    case fc::write_file_record:
+      return counted(1, 2);  // function, byte count, sub-requests
+    case fc::mask_write_register:
+      return {Status::known, 7};  // function, address, AND mask, OR mask
+    case fc::read_write_registers:
+      return counted(9, 10);  // function, 4 x 2-byte fields, byte count, data
+    case fc::read_fifo_queue:
+      return {Status::known, 3};  // function, FIFO pointer address
+    case fc::encapsulated_interface:
+      if (pdu.size() < 2) return {Status::incomplete, 0};
+      // Function, MEI type, read device id code, object id (6.21).
+      if (pdu[1] == kReadDeviceId) return {Status::known, 4};
+      return {Status::unknown, 0};
+    default:
+      return {Status::unknown, 0};
+  }
+}
+
+bool request_counts_agree(ByteView pdu) {
+  if (pdu.empty()) return false;
+  // File records (6.14, 6.15): a sub-request is reference type 6, file number, record number
+  // and record length (7 bytes); 0x15's carries that many words of record data after it.
+  constexpr std::uint8_t kReferenceType = 6;
+  constexpr std::size_t kSubRequest = 7;
+  switch (pdu[0]) {
+    case fc::write_multiple_coils:        // 6.11: N coils in ceil(N / 8) bytes
+    case fc::write_multiple_registers: {  // 6.12: N registers in 2 x N bytes
+      if (pdu.size() < 6) return false;
+      const std::size_t n = be16(pdu[3], pdu[4]);
+      const std::size_t bytes = pdu[0] == fc::write_multiple_coils ? (n + 7) / 8 : 2 * n;
+      return n >= 1 && pdu[5] == bytes;
+    }
+    case fc::read_write_registers: {  // 6.17: N registers written in 2 x N bytes
+      if (pdu.size() < 10) return false;
+      const std::size_t n = be16(pdu[7], pdu[8]);
+      return n >= 1 && pdu[9] == 2 * n;
+    }
+    case fc::read_file_record:
+    case fc::write_file_record: {
+      if (pdu.size() < 2 || pdu.size() != 2u + pdu[1]) return false;
+      const bool data = pdu[0] == fc::write_file_record;
+      std::size_t at = 2;
+      while (at < pdu.size()) {
+        if (pdu.size() - at < kSubRequest || pdu[at] != kReferenceType) return false;
+        at += kSubRequest;
+        if (data) at += 2 * std::size_t{be16(pdu[at - 2], pdu[at - 1])};
+      }
+      return at == pdu.size() && pdu.size() > 2;
+    }
+    default:
+      return true;
+  }
 }
 
 Bytes exception_pdu(std::uint8_t function, std::uint8_t code) {

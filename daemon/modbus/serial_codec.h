@@ -28,6 +28,9 @@ inline constexpr std::uint8_t kBroadcast = 0;
 inline constexpr std::uint8_t kMaxSlave = 247;
 // A PDU is at most 253 bytes: function code and data (Application Protocol 4.1).
 inline constexpr std::size_t kMaxPdu = 253;
+// An RTU frame is the address, the PDU and the CRC (Serial Line 2.5.1.1): at least 4 bytes.
+inline constexpr std::size_t kRtuOverhead = 3;
+inline constexpr std::size_t kRtuMinFrame = 4;
 // An exception reply's function code has its top bit set (Application Protocol 7).
 inline constexpr std::uint8_t kExceptionBit = 0x80;
 // Quantities one request may carry: 1..2000 coils or discrete inputs read (6.1, 6.2), 1..125
@@ -36,8 +39,8 @@ inline constexpr std::uint16_t kMaxReadBits = 2000;
 inline constexpr std::uint16_t kMaxReadRegisters = 125;
 inline constexpr std::uint16_t kMaxWriteRegisters = 123;
 
-// Function codes the codec knows the reply length of (Application Protocol 6.x). Any other is
-// still forwarded in pass-through; its RTU reply is delimited by its CRC (see decode_reply).
+// Function codes the codec knows the lengths of (Application Protocol 6.x). A frame of any other
+// is delimited by its CRC (decode_reply, decode_request); pass-through forwards none of them.
 namespace fc {
 inline constexpr std::uint8_t read_coils = 0x01;                // 6.1
 inline constexpr std::uint8_t read_discrete_inputs = 0x02;      // 6.2
@@ -83,8 +86,36 @@ Bytes encode(Framing framing, std::uint8_t address, ByteView pdu);
 Decoded<Adu> decode_reply(Framing framing, ByteView rx);
 
 // A request at the start of `rx` (a slave's receive buffer), for the simulator. RTU lengths follow
-// from the function code (Application Protocol 6.x); an unknown function is delimited by its CRC.
+// from the function code (request_length); an unknown function is delimited by its CRC.
 Decoded<Adu> decode_request(Framing framing, ByteView rx);
+
+// Where the RTU frame at the start of `rx` ends for a slave that finds its end by its CRC alone,
+// as decode_reply and decode_request do for a function of unknown length: the least size of at
+// least kRtuMinFrame bytes, within the longest frame, whose last two bytes are the CRC of the
+// bytes before them.
+std::optional<std::size_t> crc_end(ByteView rx);
+
+// How long a request PDU is, from its function code and the count in it (Application Protocol
+// 6.x, the "Request" tables): where a slave that finds frame ends by length ends it.
+struct RequestLength {
+  enum class Status : std::uint8_t {
+    known,       // `size` bytes, the function code included
+    incomplete,  // the PDU ends before the count its length is read from
+    // The codec does not know it: 0x08 (its data is any number of words, 6.8), 0x2B with an MEI
+    // type other than 0x0E (6.19), and every function of no table.
+    unknown,
+  };
+  Status status = Status::unknown;
+  std::size_t size = 0;
+};
+RequestLength request_length(ByteView pdu);
+
+// Whether the counts of a request PDU agree with each other, so that a slave finds the same end
+// whichever of them it reads: the byte count and the quantity of 0x0F, 0x10 and 0x17 (6.11, 6.12,
+// 6.17), the byte count and the sub-requests of 0x14 and 0x15 (6.14, 6.15: each of reference type
+// 6, and 0x15's record data as long as its record length says). `pdu` is whole
+// (request_length); a function with no such counts agrees.
+bool request_counts_agree(ByteView pdu);
 
 // The slave's exception reply PDU: function | 0x80, code (Application Protocol 7).
 Bytes exception_pdu(std::uint8_t function, std::uint8_t code);

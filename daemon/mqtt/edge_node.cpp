@@ -121,9 +121,13 @@ std::vector<std::string> EdgeNode::subscriptions() const {
   return s;
 }
 
-void EdgeNode::connected(const Now& now, Sink& sink) {
+void EdgeNode::connected(const Now& now, Sink& sink, std::size_t broker) {
+  broker_ = broker;
+  if (host_online_.size() <= broker) host_online_.resize(broker + 1, 0);
+  host_said_offline_ = false;
   if (options_.primary_host.empty()) {
     state_ = SessionState::online;
+    online_since_ = now.mono;
     rebirth(now, sink);
   } else {
     state_ = SessionState::waiting_for_host;  // the retained STATE arrives with the subscription
@@ -152,6 +156,14 @@ void EdgeNode::message(std::string_view t, std::string_view payload, const Now& 
   }
   const bool is_command = parsed->type == MessageType::dcmd || parsed->type == MessageType::ncmd;
   if (!is_command) return;
+  // How a retained command is cleared (an empty retained publish on its topic): the broker hands
+  // the empty message to its subscribers too. It asks nothing.
+  if (payload.empty()) {
+    sink.notice(Notice::command, "empty " + std::string(to_string(parsed->type)) + " on " +
+                                     printable(t, kAskedMax) +
+                                     " ignored (a retained command cleared)");
+    return;
+  }
   // Spec 6.4 (NCMD, DCMD): "MUST be published with the MQTT retain flag set to false". One that
   // was kept by the broker is an old command replayed at this subscription, not a host asking
   // now: a retained run_forward would start a motor a PLC stopped at every reconnect.
@@ -177,9 +189,13 @@ void EdgeNode::message(std::string_view t, std::string_view payload, const Now& 
     sink.notice(Notice::command, "NCMD ignored: " + why);
     return;
   }
+  if (const std::string refused = not_born(devices_.size()); !refused.empty()) {
+    sink.notice(Notice::command, "NCMD ignored: " + refused);
+    return;
+  }
   for (const Metric& m : p->metrics) {
     if (m.name == kRebirth && m.value == MetricValue{true}) {
-      if (state_ == SessionState::online) rebirth_requested(now, sink);
+      rebirth_requested(now, sink);
     } else {
       sink.notice(Notice::command, "NCMD metric '" + m.name + "' ignored: only " +
                                        std::string(kRebirth) + " = true is understood");
@@ -226,11 +242,20 @@ void EdgeNode::host_state(std::string_view payload, const Now& now, Sink& sink) 
                                         std::to_string(now.unix_ms) + "; check both clocks)");
     return;
   }
-  // Spec 5.13: a STATE older than the newest one seen is stale (a late retained copy).
-  if (s->timestamp < host_timestamp_) return;
-  host_timestamp_ = s->timestamp;
+  // Spec 5.13: a STATE older than the newest one seen is stale (a late copy). Which is newest is
+  // this broker's own sequence: a host online on two brokers stamps each connection there with
+  // its own time. Only an ONLINE sets the mark: a host's death certificate carries the timestamp
+  // of its birth (its ONLINE), so an offline older than the ONLINE believed is an earlier
+  // session's, while an offline (forged, or from a clock ahead) must never make the host's next
+  // genuine ONLINE look stale.
+  if (host_online_.size() <= broker_) host_online_.resize(broker_ + 1, 0);
+  std::uint64_t& mark = host_online_[broker_];
+  if (s->timestamp < mark) return;
+  if (s->online) mark = s->timestamp;
+  host_said_offline_ = !s->online;
   if (s->online && state_ == SessionState::waiting_for_host) {
     state_ = SessionState::online;
+    online_since_ = now.mono;
     rebirth(now, sink);
   } else if (!s->online && state_ == SessionState::online) {
     sink.publish(will_topic(), node_death(now));
@@ -250,8 +275,16 @@ bool EdgeNode::set_devices(std::vector<DeviceDef> devices, const Now& now, Sink&
       if (!kept && devices_[i].born) death(i, now, sink);
     }
   }
+  // A device defined as before goes on as it was: what was reported (or kept) of it is not news
+  // again, nor kept twice.
+  std::vector<DeviceState> next(devices.size());
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    const auto same = std::find(defs_.begin(), defs_.end(), devices[i]);
+    if (same != defs_.end())
+      next[i] = std::move(devices_[static_cast<std::size_t>(same - defs_.begin())]);
+  }
   defs_ = std::move(devices);
-  devices_.assign(defs_.size(), DeviceState{});
+  devices_ = std::move(next);
   if (state_ == SessionState::online) rebirth(now, sink);
   return true;
 }
@@ -261,6 +294,14 @@ void EdgeNode::sample(std::size_t device, bool alive, std::vector<MetricValue> v
   if (device >= devices_.size() || values.size() != defs_[device].metrics.size()) return;
   DeviceState& d = devices_[device];
   d.alive = alive;
+  // A value that changed with no new reply from the drive since the last sample (a setpoint
+  // written while stopped) is as of now: the last reply's time is from before it held.
+  d.changed_ms.resize(values.size(), 0);
+  if (d.latest.size() == values.size() && data_ms <= d.data_ms) {
+    for (std::size_t j = 0; j < values.size(); ++j) {
+      if (values[j] != d.latest[j]) d.changed_ms[j] = now.unix_ms;
+    }
+  }
   d.latest = std::move(values);
   d.data_ms = data_ms;
   if (state_ != SessionState::online) {
@@ -373,11 +414,15 @@ void EdgeNode::keep(std::size_t device, const Now& now, Sink& sink) {
   report_or_hold(device, now, sink);
 }
 
-EdgeNode::Replay EdgeNode::replay(std::string_view device, Payload historical, Sink& sink) {
+EdgeNode::Replay EdgeNode::replay(std::string_view device, Payload historical, const Now& now,
+                                  Sink& sink) {
   if (state_ != SessionState::online) return Replay::not_now;
   const auto it = std::find_if(defs_.begin(), defs_.end(),
                                [&](const DeviceDef& d) { return d.name == device; });
   const auto index = static_cast<std::size_t>(it - defs_.begin());
+  if (it != defs_.end() && !devices_[index].born && now.mono < online_since_ + kReplayBirthWait) {
+    return Replay::not_now;  // its DBIRTH may come yet: the drive has not answered since the start
+  }
   if (it == defs_.end() || !devices_[index].born) {
     ++replay_dropped_;  // a DDATA before its DBIRTH would be a protocol error (spec 6.4.x)
     return Replay::dropped;
@@ -405,7 +450,8 @@ Metric EdgeNode::device_metric(std::size_t device, std::size_t metric, bool birt
   Metric m{def.name,         def.type,
            d.latest[metric], birth ? def.properties : std::vector<Property>{},
            std::nullopt,     false};
-  if (d.data_ms != 0) m.timestamp = d.data_ms;
+  const std::uint64_t changed = metric < d.changed_ms.size() ? d.changed_ms[metric] : 0;
+  if (const std::uint64_t at = std::max(d.data_ms, changed); at != 0) m.timestamp = at;
   return m;
 }
 
@@ -480,6 +526,12 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
     refuse(Refusal::commands_off, "[mqtt] commands = false");
     return;
   }
+  // Spec 5.x: commands belong to a session where the node (and the device) is born. There is no
+  // DDATA to answer with before the device's DBIRTH: the refusal is logged and audited only.
+  if (const std::string refused = not_born(index); !refused.empty()) {
+    refuse(Refusal::not_born, refused);
+    return;
+  }
   std::string why;
   p = decode(payload, why);
   if (!p) {
@@ -529,6 +581,39 @@ void EdgeNode::command(std::string_view device, std::string_view payload, const 
     return;
   }
   sink.write(index, std::move(points));
+}
+
+std::string EdgeNode::not_born(std::size_t device) const {
+  switch (state_) {
+    case SessionState::offline:
+      return "the edge node is not born: its session has ended";
+    case SessionState::waiting_for_host:
+      return "the edge node is not born on this broker: primary host '" +
+             printable(options_.primary_host, kNameMax) + "' is not online here (" +
+             (host_said_offline_ ? "its STATE says offline" : "no STATE from it yet") + ")";
+    case SessionState::online:
+      break;
+  }
+  if (device < devices_.size() && !devices_[device].born) {
+    return "device '" + printable(defs_[device].name, kNameMax) +
+           "' is not born in this session (not heard from, or comm_lost)";
+  }
+  return {};
+}
+
+std::optional<Payload> as_history(MessageType type, const Payload& published) {
+  if (type != MessageType::dbirth && type != MessageType::ddata) return std::nullopt;
+  Payload out;
+  out.timestamp = published.timestamp;
+  for (const Metric& m : published.metrics) {
+    if (m.historical || m.name == kCommandPoint || m.name == kCommandResult) continue;
+    Metric h = m;
+    h.properties.clear();
+    h.historical = true;
+    out.metrics.push_back(std::move(h));
+  }
+  if (out.metrics.empty()) return std::nullopt;
+  return out;
 }
 
 void EdgeNode::command_done(std::size_t device, std::string points, std::string result,

@@ -14,19 +14,27 @@
 //                requests in between answered by one rebirth when it has passed), or when the
 //                device set changed
 //   primary host with primary_host set: births wait for its STATE online; STATE offline
-//                publishes NDEATH and drops the session (spec 5.13); a STATE stamped more than
-//                kStateClockTolerance ahead of this clock is ignored; the 3.0 JSON form, or
-//                the 2.2 ONLINE / OFFLINE text where configured (sparkplug.h)
-//   commands     DCMD: metrics checked here (known, writable, a value, at most
+//                publishes NDEATH and drops the session (spec 5.13); each broker's STATEs are a
+//                sequence of their own; an ONLINE older than the last ONLINE seen on that broker,
+//                or an offline older than it, is stale; an offline never makes a later genuine
+//                ONLINE look stale; a STATE stamped more than kStateClockTolerance ahead of this
+//                clock is ignored; the 3.0 JSON form, or the 2.2 ONLINE / OFFLINE text where
+//                configured (sparkplug.h)
+//   commands     DCMD: carried out only while the node is born in this session (online) and the
+//                device is born in it; metrics checked here (known, writable, a value, at most
 //                kMaxCommandMetrics), written by the Sink, the outcome published as the device's
 //                Command/Last Point and Command/Last Result; a retained NCMD or DCMD (a command
 //                replayed at every subscription) is never carried out
 //   timestamps   each device metric carries the time of the drive's state it shows (the last
-//                reply that carried it, never a write's echo); the payload's is when it was sent
+//                reply that carried it, never a write's echo), or, for a value a write changed
+//                after that reply, when the sample saw it change; the payload's is when it was
+//                sent
 //   store and    with store_forward, changes while not online go to Sink::store by the DDATA
 //   forward      rules, and so does a DDATA of changes Sink::publish refused (not a command's
 //                result: it answers a DCMD of the session that ended); replay() publishes them
-//                later as historical DDATA (spec 6.4.x)
+//                later as historical DDATA (spec 6.4.x), a device's once its DBIRTH is out (waiting
+//                for it at most kReplayBirthWait); as_history() is what a message published on a
+//                link that turned out dead says about the past, to be kept the same way
 #pragma once
 
 #include <cstdint>
@@ -49,6 +57,10 @@ inline constexpr Millis kRebirthInterval{5'000};       // between rebirths a hos
 // A primary host's STATE stamped further ahead of this node's clock than this is not believed:
 // it would make every later genuine STATE look stale.
 inline constexpr std::chrono::milliseconds kStateClockTolerance{5 * 60 * 1000};
+// A kept change of a device that is not born (yet) in the session waits this long after the
+// session's births for the device's DBIRTH (a drive slow to answer after a restart), then is
+// dropped (counted): a device that stays dead must not hold the rest of the store back for ever.
+inline constexpr Millis kReplayBirthWait{30'000};
 
 struct MetricDef {
   std::string name;
@@ -90,6 +102,8 @@ enum class Refusal : std::uint8_t {
   malformed,       // not a Sparkplug payload, or more metrics than one command may carry
   unknown_metric,  // no metric of that name (or none named: an alias), or a read-only one
   wrong_type,      // a null or a string where a number or a boolean is needed
+  not_born,        // the node is not born in this session (primary host not online), or the
+                   // device is not (no DBIRTH: not heard from, or comm_lost)
 };
 
 // A DCMD refused by the edge node (Sink::refused). Anyone on the broker writes what it says: its
@@ -168,7 +182,9 @@ class EdgeNode {
   // for a primary host.
   [[nodiscard]] std::vector<std::string> subscriptions() const;
 
-  void connected(const Now& now, Sink& sink);
+  // The session is up on broker `broker` (its place in the list of brokers: each broker's STATEs
+  // are a sequence of their own).
+  void connected(const Now& now, Sink& sink, std::size_t broker = 0);
   void connection_lost();
   // A message from the broker on one of subscriptions(); `retained`: delivered from the broker's
   // store at subscription, not live (MQTT 3.1.1 section 3.3.1.3).
@@ -186,11 +202,12 @@ class EdgeNode {
   void command_done(std::size_t device, std::string points, std::string result, const Now& now,
                     Sink& sink);
   // A change kept while there was no session (Sink::store), published now as historical DDATA
-  // after this session's births: sent; not_now (no session online, or Sink::publish refused it:
-  // keep it); or dropped (counted in replay_dropped()) because the device is unknown now or not
-  // born in this session, or none of its metrics is one of the device's now.
+  // after this session's births: sent; not_now (no session online, Sink::publish refused it, or
+  // its device is not born yet and the session's births are less than kReplayBirthWait old: keep
+  // it); or dropped (counted in replay_dropped()) because the device is unknown now or still not
+  // born, or none of its metrics is one of the device's now.
   enum class Replay : std::uint8_t { sent, not_now, dropped };
-  Replay replay(std::string_view device, Payload historical, Sink& sink);
+  Replay replay(std::string_view device, Payload historical, const Now& now, Sink& sink);
   // Publishes the changes held back by min_interval whose time has come.
   void tick(const Now& now, Sink& sink);
   // When tick() has something to do; nullopt: nothing held back.
@@ -217,6 +234,9 @@ class EdgeNode {
     std::vector<MetricValue> latest;
     std::vector<MetricValue> published;
     std::uint64_t data_ms = 0;  // when the drive last reported its state (Unix ms)
+    // Per metric: when a sample saw it change without a new reply from the drive (a write), Unix
+    // ms; 0: never. A metric's time is the later of this and data_ms.
+    std::vector<std::uint64_t> changed_ms;
     TimePoint last_data{};
     TimePoint last_counters{};
     std::optional<TimePoint> due;  // changes held back until then
@@ -232,6 +252,8 @@ class EdgeNode {
   void report_or_hold(std::size_t device, const Now& now, Sink& sink);
   std::vector<std::size_t> changes(std::size_t device, const Now& now) const;
   void command(std::string_view device, std::string_view payload, const Now& now, Sink& sink);
+  // Why a command cannot be carried out now, or "" (the node and `device` are born).
+  [[nodiscard]] std::string not_born(std::size_t device) const;
   void host_state(std::string_view payload, const Now& now, Sink& sink);
   // Publishes `payload` with the next seq: whether the Sink took it (if not, the seq is unused).
   bool send(MessageType type, std::string_view device, Payload& payload, Sink& sink);
@@ -240,7 +262,12 @@ class EdgeNode {
   SessionState state_ = SessionState::offline;
   std::uint8_t bd_seq_;  // begin_connect() makes the next
   std::uint8_t seq_ = 0;
-  std::uint64_t host_timestamp_ = 0;  // of the newest STATE accepted
+  // Per broker: the timestamp of the newest ONLINE STATE believed there (an offline older than it
+  // is a late copy of an earlier session's); `broker_` is the session's.
+  std::vector<std::uint64_t> host_online_;
+  std::size_t broker_ = 0;
+  bool host_said_offline_ = false;  // the last STATE believed in this session said offline
+  TimePoint online_since_{};        // when this session's births went out
   std::vector<DeviceDef> defs_;
   std::vector<DeviceState> devices_;
   std::uint64_t births_ = 0;
@@ -250,5 +277,12 @@ class EdgeNode {
   std::uint64_t rebirths_coalesced_ = 0;
   std::uint64_t replay_dropped_ = 0;
 };
+
+// What a message the edge node published says about the devices' past, as the historical DDATA
+// Sink::store keeps: for a DBIRTH or a live DDATA, its device metrics (not Command/...), each
+// flagged historical, without properties or seq; nullopt for any other message or when nothing
+// remains. Store and forward keeps it when the link it went out on turns out dead before the broker
+// confirmed it (store_forward.h).
+std::optional<Payload> as_history(MessageType type, const Payload& published);
 
 }  // namespace drivegate::sparkplug

@@ -84,7 +84,8 @@ MosquittoClient::MosquittoClient(asio::io_context& io, BrokerOptions options, Ha
       resolver_(io),
       socket_(io),
       misc_timer_(io),
-      connect_timer_(io) {
+      connect_timer_(io),
+      confirm_timer_(io) {
   init_library();
   mosq_ = mosquitto_new(options_.client_id.c_str(), true, this);
   if (mosq_ == nullptr) throw std::runtime_error("mosquitto_new failed");
@@ -106,6 +107,7 @@ std::string MosquittoClient::configure() {
   mosquitto_connect_callback_set(mosq_, &MosquittoClient::on_connect);
   mosquitto_disconnect_callback_set(mosq_, &MosquittoClient::on_disconnect);
   mosquitto_message_callback_set(mosq_, &MosquittoClient::on_message);
+  mosquitto_unsubscribe_callback_set(mosq_, &MosquittoClient::on_unsubscribe);
   mosquitto_log_callback_set(mosq_, &MosquittoClient::on_log);
   mosquitto_int_option(mosq_, MOSQ_OPT_TCP_NODELAY, 1);  // a DDATA leaves at once, not batched
   const auto failed = [](int rc, const char* what) {
@@ -279,7 +281,7 @@ void MosquittoClient::tick() {
     const int rc = mosquitto_loop_misc(mosq_);
     if (generation != generation_) return;
     if (rc != MOSQ_ERR_SUCCESS && rc != MOSQ_ERR_NO_CONN) {
-      fail(error_text(rc));
+      fail(lost_reason(rc));
       return;
     }
     watch();  // a ping may have been queued
@@ -296,8 +298,65 @@ bool MosquittoClient::publish(const std::string& topic, const std::string& paylo
     log_->warn("MQTT: publish to {} failed: {}", topic, error_text(rc));
     return false;
   }
+  ++published_;
+  confirm_later();
   watch();
   return true;
+}
+
+void MosquittoClient::confirm_later() {
+  if (question_ || confirm_armed_ || state_ != State::connected || confirmed_ >= published_) {
+    return;
+  }
+  confirm_armed_ = true;
+  confirm_timer_.expires_after(kConfirmDelay);
+  const std::uint64_t generation = generation_;
+  confirm_timer_.async_wait([this, generation](const boost::system::error_code& ec) {
+    if (ec || generation != generation_ || !confirm_armed_) return;
+    confirm_armed_ = false;
+    ask_broker();
+  });
+}
+
+void MosquittoClient::confirm_now() {
+  if (question_ || state_ != State::connected || confirmed_ >= published_) return;
+  if (confirm_armed_) {
+    confirm_armed_ = false;
+    confirm_timer_.cancel();
+  }
+  ask_broker();
+}
+
+void MosquittoClient::ask_broker() {
+  if (state_ != State::connected || question_ || confirmed_ >= published_) return;
+  int mid = 0;
+  // Never subscribed to: the broker answers, and nothing changes (MQTT 3.1.1 section 3.10.4).
+  const int rc = mosquitto_unsubscribe(mosq_, &mid, will_topic_.c_str());
+  if (rc != MOSQ_ERR_SUCCESS) {
+    fail(lost_reason(rc));
+    return;
+  }
+  question_ = mid;
+  question_covers_ = published_;
+  confirm_timer_.expires_after(kAckTimeout);
+  const std::uint64_t generation = generation_;
+  confirm_timer_.async_wait([this, generation, mid](const boost::system::error_code& ec) {
+    if (ec || generation != generation_ || question_ != mid) return;
+    fail("the broker confirmed nothing within " + std::to_string(kAckTimeout.count() / 1000) +
+         " s: the link is dead");
+  });
+  watch();
+}
+
+void MosquittoClient::on_unsubscribe(mosquitto* /*m*/, void* self, int mid) {
+  auto* c = static_cast<MosquittoClient*>(self);
+  if (c->question_ != mid) return;
+  c->question_.reset();
+  c->confirm_timer_.cancel();
+  c->confirmed_ = c->question_covers_;
+  const std::uint64_t generation = c->generation_;
+  if (c->handlers_.delivered) c->handlers_.delivered(c->confirmed_);
+  if (generation == c->generation_) c->confirm_later();
 }
 
 bool MosquittoClient::subscribe(const std::string& topic, int qos) {
@@ -325,7 +384,12 @@ void MosquittoClient::disconnect() {
 }
 
 std::string MosquittoClient::lost_reason(int rc) const {
-  const int err = errno;  // for MOSQ_ERR_ERRNO, as libmosquitto left it
+  const int err = errno;           // for MOSQ_ERR_ERRNO, as libmosquitto left it
+  if (rc == MOSQ_ERR_KEEPALIVE) {  // libmosquitto 2.0.11 has no text for it ("Unknown error.")
+    return std::string(state_ == State::connecting ? "no CONNACK" : "no answer to a PINGREQ") +
+           " from the broker within the keep-alive (" + std::to_string(options_.keepalive.count()) +
+           " s): the link is dead";
+  }
   std::string why = rc == MOSQ_ERR_ERRNO ? std::strerror(err) : mosquitto_strerror(rc);
   // With TLS 1.3 the client's side of the handshake is over before the broker has checked the
   // client certificate: a broker that does not accept it ends the session before CONNACK, which
@@ -352,6 +416,9 @@ void MosquittoClient::close_socket() {
   ++generation_;
   reading_ = false;
   writing_ = false;
+  question_.reset();  // what it did not confirm stays unconfirmed: the owner keeps it
+  confirm_armed_ = false;
+  confirm_timer_.cancel();
   resolver_.cancel();
   misc_timer_.cancel();
   if (socket_.is_open()) socket_.release();  // libmosquitto owns the descriptor
@@ -365,6 +432,7 @@ void MosquittoClient::on_connect(mosquitto* /*m*/, void* self, int rc) {
     return;
   }
   c->state_ = State::connected;
+  c->confirmed_ = c->published_;  // a new session: nothing of an earlier one waits here
   c->connect_timer_.cancel();
   c->lib_error_.clear();
   if (c->handlers_.connected) c->handlers_.connected();

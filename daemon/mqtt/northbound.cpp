@@ -24,6 +24,9 @@ namespace {
 
 constexpr Millis kFirstRetry{1'000};
 constexpr Millis kLongestRetry{30'000};
+// With several brokers: a primary host that says nothing on one (no retained STATE) for this long
+// after the subscriptions may be online on another; the node looks there.
+constexpr Millis kHostSilence{5'000};
 // Sparkplug timestamps carry a value's age; a per-poll data age would be news at every poll.
 constexpr std::string_view kNotPublished = "data_age_ms";
 
@@ -167,6 +170,8 @@ Outcome outcome_of(sparkplug::Refusal r) {
     case Refusal::malformed:
     case Refusal::wrong_type:
       return Outcome::invalid_value;
+    case Refusal::not_born:
+      return Outcome::refused;
   }
   return Outcome::invalid_value;
 }
@@ -196,11 +201,13 @@ Northbound::Northbound(asio::io_context& io, const MqttConfig& config, std::stri
           MosquittoClient::Handlers{[this] { connected(); }, [this](std::string why) { lost(why); },
                                     [this](std::string_view t, std::string_view p, bool retained) {
                                       message(t, p, retained);
-                                    }},
+                                    },
+                                    [this](std::uint64_t up_to) { delivered(up_to); }},
           log),
       retry_timer_(io),
       tick_timer_(io),
-      pace_timer_(io) {
+      pace_timer_(io),
+      host_timer_(io) {
   status_.broker = config.brokers.at(0).url;
   status_.brokers = config.brokers.size();
   if (store_) pace();
@@ -236,7 +243,7 @@ void Northbound::use(Gateway& gateway) {
   watched_.clear();
   const std::weak_ptr<bool> token = alive_;
   for (const auto& d : gateway.devices()) {
-    watched_.push_back({d.get(), {}, {}, {}});
+    watched_.push_back({d.get(), {}, {}, {}, std::nullopt, 0});
     defs.push_back(define(*d, watched_.back()));
     const std::size_t index = watched_.size() - 1;
     d->watch([this, token, index, generation = generation_] {
@@ -267,7 +274,7 @@ void Northbound::stop() {
   retry_timer_.cancel();
   tick_timer_.cancel();
   pace_timer_.cancel();
-  if (store_) store_->sync();
+  host_timer_.cancel();
   for (const Watched& w : watched_) w.device->watch({});
   watched_.clear();
   gateway_ = nullptr;
@@ -278,7 +285,14 @@ void Northbound::stop() {
     ++status_.messages;
   }
   client_.disconnect();
+  session_ended();
+  if (store_) store_->sync();
+}
+
+void Northbound::session_ended() {
   edge_.connection_lost();
+  // What the broker did not confirm is kept for the next session (store_forward.h).
+  if (store_) store_->lost(now().unix_ms);
 }
 
 NorthboundStatus Northbound::status() const {
@@ -328,12 +342,25 @@ void Northbound::connected() {
   // Fresh values for the births.
   std::fill(dirty_.begin(), dirty_.end(), true);
   flush();
-  edge_.connected(now(), *this);
+  edge_.connected(now(), *this, broker_);
   schedule_tick();
+  if (edge_.state() == sparkplug::SessionState::waiting_for_host && config_.brokers.size() > 1) {
+    // A host that says nothing here (no retained STATE) may be online on another broker.
+    host_timer_.expires_after(kHostSilence);
+    host_timer_.async_wait([this, session = status_.connects](const boost::system::error_code& ec) {
+      if (ec || stopping_ || session != status_.connects || !client_.connected() ||
+          edge_.state() != sparkplug::SessionState::waiting_for_host) {
+        return;
+      }
+      log_->warn("MQTT: no STATE from primary host '{}' on {} within {} s: trying the next broker",
+                 config_.primary_host_id, broker_url(), kHostSilence.count() / 1000);
+      walk_on();
+    });
+  }
 }
 
 void Northbound::lost(const std::string& why) {
-  edge_.connection_lost();
+  session_ended();
   if (stopping_) return;
   ++status_.losses;
   const bool first = status_.last_error.empty();
@@ -393,16 +420,20 @@ void Northbound::flush() {
   for (std::size_t i = 0; i < watched_.size(); ++i) {
     if (!dirty_[i]) continue;
     dirty_[i] = false;
-    const Device& d = *watched_[i].device;
+    Watched& w = watched_[i];
+    const Device& d = *w.device;
     const bool alive = d.line().health.ever_good() && !d.comm_lost();
     // When the drive's state last arrived, on the payload's clock: a write's echo never counts.
-    std::uint64_t data_ms = 0;
-    if (const auto at = d.line().health.last_data()) {
+    // Worked out once per reply (two clocks read a moment apart would put the same reply a
+    // millisecond either way), and never before the last one's.
+    if (const auto at = d.line().health.last_data(); at && at != w.data_at) {
       const auto age = std::chrono::duration_cast<Millis>(t.mono - *at).count();
-      data_ms = t.unix_ms - static_cast<std::uint64_t>(std::clamp<std::int64_t>(
-                                age, 0, static_cast<std::int64_t>(t.unix_ms)));
+      const std::uint64_t ms = t.unix_ms - static_cast<std::uint64_t>(std::clamp<std::int64_t>(
+                                               age, 0, static_cast<std::int64_t>(t.unix_ms)));
+      w.data_at = at;
+      w.data_ms = std::max(w.data_ms, ms);
     }
-    edge_.sample(i, alive, sample(watched_[i]), data_ms, t, *this);
+    edge_.sample(i, alive, sample(w), w.data_ms, t, *this);
   }
   schedule_tick();
 }
@@ -474,28 +505,64 @@ std::vector<MetricValue> Northbound::sample(Watched& watched) const {
 
 bool Northbound::publish(const std::string& topic, const sparkplug::Payload& payload) {
   const bool taken = client_.publish(topic, sparkplug::encode(payload), 0, false);
-  if (taken) ++status_.messages;
-  return taken;
+  if (!taken) return false;
+  ++status_.messages;
+  if (store_) store_->sent(client_.published(), topic, payload);
+  return true;
 }
 
 void Northbound::store(std::string_view device, const sparkplug::Payload& historical) {
   if (store_) store_->keep(device, historical, now().unix_ms);
 }
 
+void Northbound::delivered(std::uint64_t up_to) {
+  if (!store_) return;
+  const bool was_full = store_->window_full();
+  store_->delivered(up_to);
+  // The replay waited for this: it goes on at once, within this period's budget.
+  if (was_full && !replay_posted_) {
+    replay_posted_ = true;
+    asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
+      if (!token.expired()) replay_step();
+    });
+  }
+}
+
 void Northbound::pace() {
   pace_timer_.expires_after(StoreForward::kReplayPeriod);
   pace_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (ec || stopping_) return;
-    // A broker slower than the replay: wait for what is queued to go before adding more.
-    if (edge_.state() == sparkplug::SessionState::online && store_->waiting() && !client_.busy()) {
-      store_->replay(edge_, *this, now().unix_ms);
-    }
+    replay_budget_ = store_->batch();  // this period's; what the last did not use is gone
+    if (!replay_posted_) replay_step();
     if (++paces_ % 10 == 0) store_->sync();
     pace();
   });
 }
 
+// One record per turn of the event loop: a Modbus request, a poll's reply or a live change waits
+// behind one record's work at most, whatever replay_per_s says.
+void Northbound::replay_step() {
+  replay_posted_ = false;
+  // A broker slower than the replay: wait for what is queued to go before adding more.
+  if (stopping_ || replay_budget_ == 0 || edge_.state() != sparkplug::SessionState::online ||
+      !store_->waiting() || client_.busy()) {
+    return;
+  }
+  --replay_budget_;
+  // Nothing could go (its device's DBIRTH awaited, the client refused): the next period retries.
+  const unsigned sent = store_->replay(edge_, *this, now(), 1);
+  if (store_->window_full()) client_.confirm_now();  // the replay goes on once it is confirmed
+  if (sent == 0) return;
+  replay_posted_ = true;
+  asio::post(io_, [this, token = std::weak_ptr<bool>(alive_)] {
+    if (!token.expired()) replay_step();
+  });
+}
+
 void Northbound::drop_session() {
+  // The NDEATH is out: what the broker did not confirm goes back to the store now, before any
+  // change kept from here on.
+  if (store_) store_->lost(now().unix_ms);
   log_->warn(
       "MQTT: primary host '{}' is offline: NDEATH published, session ended; "
       "reconnecting to wait for it",
@@ -508,6 +575,10 @@ void Northbound::host_offline_before_births() {
   if (config_.brokers.size() < 2) return;  // nowhere else to look: wait here for the host
   log_->warn("MQTT: primary host '{}' is offline on {}: trying the next broker",
              config_.primary_host_id, broker_url());
+  walk_on();
+}
+
+void Northbound::walk_on() {
   // Growing while no broker has the host online, so a plant whose host is down is not
   // reconnected to every second: 1 s, 2 s, 4 s... 30 s, back to 1 s once born somewhere.
   walk_backoff_ =
@@ -522,7 +593,7 @@ void Northbound::leave_broker(Millis delay) {
     // Once: a second STATE in the same turn, or a lost session, finds it already ended.
     if (token.expired() || stopping_ || !client_.connected()) return;
     client_.disconnect();
-    edge_.connection_lost();
+    session_ended();
     // Spec 5.x (multiple MQTT servers): the host may be online on another server.
     if (next_broker()) log_->info("MQTT: trying {} next", broker_url());
     connect_after(delay);
@@ -575,12 +646,14 @@ void Northbound::write(std::size_t device, std::vector<sparkplug::PointCommand> 
 }
 
 // A DCMD does not say who published it: the audit trail names the broker, our session's client
-// id, and the primary host the commands are expected from (if one is configured).
+// id, and the primary host the commands are expected from while it is online (the node is born);
+// otherwise no host is named, and the refusal says why.
 Source Northbound::source() const {
   Source s;
   s.kind = SourceKind::mqtt;
   s.listener = broker_url();
-  s.client = config_.primary_host_id.empty()
+  const bool host_online = edge_.state() == sparkplug::SessionState::online;
+  s.client = config_.primary_host_id.empty() || !host_online
                  ? config_.client_id
                  : config_.client_id + " (primary host " + config_.primary_host_id + ")";
   return s;

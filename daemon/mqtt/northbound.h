@@ -57,6 +57,8 @@ class Northbound final : private sparkplug::Sink {
     std::vector<const MappedPoint*> points;  // the device's metrics, in DeviceDef order
     std::vector<std::int32_t> metric_of;     // per map point: its metric, or -1 (not published)
     std::vector<PointValue> scratch;         // point_values() of the last sample
+    std::optional<TimePoint> data_at;        // the drive's last reply with its state...
+    std::uint64_t data_ms = 0;               // ... on the payload's clock (Unix ms)
   };
 
   [[nodiscard]] std::optional<std::uint8_t> last_bd_seq(std::optional<std::uint8_t> previous) const;
@@ -66,10 +68,15 @@ class Northbound final : private sparkplug::Sink {
   // The primary host is offline here: end the session, try again `delay` later (on the next
   // broker, if there is one).
   void leave_broker(Millis delay);
+  // Births still waiting for the host here: the next broker, the longer the more of them fail.
+  void walk_on();
   [[nodiscard]] const std::string& broker_url() const;
   void connect_after(Millis delay);  // a new attempt, after half of `delay` to all of it
   void connected();
   void lost(const std::string& why);
+  // The session is over, however it ended: the edge node is told, the store keeps what the
+  // broker did not confirm.
+  void session_ended();
   void message(std::string_view topic, std::string_view payload, bool retained);
   void changed(std::size_t index, std::uint64_t generation);
   void flush();
@@ -89,6 +96,8 @@ class Northbound final : private sparkplug::Sink {
   [[nodiscard]] Source source() const;
   void store(std::string_view device, const sparkplug::Payload& historical) override;
   void pace();  // every StoreForward::kReplayPeriod while there is a store
+  void replay_step();
+  void delivered(std::uint64_t up_to);  // the client's: the broker confirmed up to this message
 
   boost::asio::io_context& io_;
   MqttConfig config_;
@@ -100,6 +109,9 @@ class Northbound final : private sparkplug::Sink {
   boost::asio::steady_timer retry_timer_;
   boost::asio::steady_timer tick_timer_;
   boost::asio::steady_timer pace_timer_;
+  boost::asio::steady_timer host_timer_;  // a primary host silent on this broker
+  unsigned replay_budget_ = 0;            // records this replay period may still send
+  bool replay_posted_ = false;            // a replay_step() is on its way
   unsigned paces_ = 0;  // of pace_timer_, for the once-a-second sync
   Gateway* gateway_ = nullptr;  // use()'s, until stop(): where refused DCMDs are audited
   std::vector<Watched> watched_;

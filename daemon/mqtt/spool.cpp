@@ -63,6 +63,10 @@ bool read_exact(int fd, void* buf, std::size_t n, std::uint64_t at) {
   return true;
 }
 
+bool before(const SpoolPosition& a, const SpoolPosition& b) {
+  return a.segment < b.segment || (a.segment == b.segment && a.offset < b.offset);
+}
+
 std::optional<std::uint64_t> segment_id(const fs::path& p) {
   const std::string name = p.filename().string();
   if (p.extension() != ".seg" || name.size() != 20) return std::nullopt;
@@ -122,8 +126,9 @@ std::error_code Spool::open() {
   }
   stats_.bytes -= cursor_offset_;
   stats_.records -= cursor_records_;
-  std::error_code ignored;
-  if (auto r = front(0, ignored)) stats_.oldest_ms = r->stored_ms;
+  rewind();
+  read_high_ = read_;
+  find_oldest();
   return {};
 }
 
@@ -259,25 +264,50 @@ std::error_code Spool::append(std::uint64_t stored_ms, std::string_view bytes) {
 
 void Spool::trim_to_size() {
   // Whole segments, oldest first; the one being written stays.
+  bool trimmed = false;
   while (stats_.bytes > limits_.max_bytes && segments_.size() > 1) {
     stats_.dropped_size += segments_.front().records - cursor_records_;
     drop_front_segment();
+    trimmed = true;
   }
+  if (trimmed) find_oldest();
 }
 
+// The front segment goes, whatever of it was not released; reading goes on after it.
 void Spool::drop_front_segment() {
   const Segment& s = segments_.front();
+  const std::uint64_t id = s.id;
   stats_.bytes -= s.bytes - cursor_offset_;
   stats_.records -= s.records - cursor_records_;
-  if (reader_id_ == s.id) close_reader();
+  if (reader_id_ == id) close_reader();
   std::error_code ec;
-  fs::remove(path_of(s.id), ec);
+  fs::remove(path_of(id), ec);
   segments_.pop_front();
   cursor_offset_ = 0;
   cursor_records_ = 0;
   cursor_moved_ = true;
-  front_bytes_ = 0;
+  if (read_.segment <= id) {
+    read_ = {segments_.empty() ? id + 1 : segments_.front().id, 0, 0};
+    front_bytes_ = 0;
+  }
   stats_.oldest_ms.reset();
+}
+
+void Spool::find_oldest() {
+  stats_.oldest_ms.reset();
+  if (stats_.records == 0) return;
+  std::uint64_t at = cursor_offset_;
+  for (const Segment& s : segments_) {
+    if (at < s.bytes) {
+      const int fd = ::open(path_of(s.id).c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+      if (fd < 0) return;
+      std::array<std::uint8_t, kHeader> h{};
+      if (read_exact(fd, h.data(), h.size(), at)) stats_.oldest_ms = get_le(h.data() + 8, 8);
+      ::close(fd);
+      return;
+    }
+    at = 0;
+  }
 }
 
 void Spool::close_reader() {
@@ -288,10 +318,14 @@ void Spool::close_reader() {
 std::optional<SpoolRecord> Spool::front(std::uint64_t now_ms, std::error_code& error) {
   error.clear();
   while (!segments_.empty()) {
-    Segment& s = segments_.front();
-    if (cursor_offset_ >= s.bytes) {
-      if (segments_.size() == 1) return std::nullopt;  // the one being written: all taken
-      drop_front_segment();
+    if (read_.segment < segments_.front().id) rewind();  // its segment went (trimmed)
+    const auto seg = std::find_if(segments_.begin(), segments_.end(),
+                                  [&](const Segment& x) { return x.id == read_.segment; });
+    if (seg == segments_.end()) return std::nullopt;  // past the last: nothing appended yet
+    const Segment& s = *seg;
+    if (read_.offset >= s.bytes) {
+      if (std::next(seg) == segments_.end()) return std::nullopt;  // the one being written
+      read_ = {std::next(seg)->id, 0, 0};
       continue;
     }
     if (reader_ < 0 || reader_id_ != s.id) {
@@ -305,12 +339,12 @@ std::optional<SpoolRecord> Spool::front(std::uint64_t now_ms, std::error_code& e
     }
     std::array<std::uint8_t, kHeader> h{};
     SpoolRecord r;
-    const auto length = read_exact(reader_, h.data(), h.size(), cursor_offset_)
+    const auto length = read_exact(reader_, h.data(), h.size(), read_.offset)
                             ? static_cast<std::uint32_t>(get_le(h.data(), 4))
                             : kMaxRecord + 1;
     if (length <= kMaxRecord) r.bytes.resize(length);
     if (length > kMaxRecord ||
-        !read_exact(reader_, r.bytes.data(), length, cursor_offset_ + kHeader)) {
+        !read_exact(reader_, r.bytes.data(), length, read_.offset + kHeader)) {
       error = std::make_error_code(std::errc::io_error);
       return std::nullopt;
     }
@@ -318,27 +352,70 @@ std::optional<SpoolRecord> Spool::front(std::uint64_t now_ms, std::error_code& e
     front_bytes_ = kHeader + length;
     const auto age = std::chrono::milliseconds(now_ms > r.stored_ms ? now_ms - r.stored_ms : 0);
     if (now_ms != 0 && age > limits_.max_age) {
-      ++stats_.dropped_age;
-      pop();
-      --stats_.taken;  // dropped, not taken
+      // Passed over like a record taken (released with the ones around it), counted once: a
+      // rewind reads it again.
+      if (!before(read_, read_high_)) ++stats_.dropped_age;
+      --stats_.taken;
+      take();
       continue;
     }
-    stats_.oldest_ms = r.stored_ms;
     return r;
   }
   return std::nullopt;
 }
 
-void Spool::pop() {
+void Spool::take() {
   if (front_bytes_ == 0 || segments_.empty()) return;
-  cursor_offset_ += front_bytes_;
-  ++cursor_records_;
-  stats_.bytes -= front_bytes_;
-  --stats_.records;
+  read_.offset += front_bytes_;
+  ++read_.records;
   ++stats_.taken;
   front_bytes_ = 0;
+  if (before(read_high_, read_)) read_high_ = read_;
+}
+
+SpoolPosition Spool::position() const {
+  return read_;
+}
+
+void Spool::release(const SpoolPosition& p) {
+  // Segments wholly before it go; never the one being written, nor past what was read.
+  if (before(read_, p)) return;
+  while (segments_.size() > 1 && segments_.front().id < p.segment) drop_front_segment();
+  if (segments_.empty() || segments_.front().id != p.segment || p.offset <= cursor_offset_) {
+    find_oldest();
+    return;
+  }
+  stats_.bytes -= p.offset - cursor_offset_;
+  stats_.records -= p.records - cursor_records_;
+  cursor_offset_ = p.offset;
+  cursor_records_ = p.records;
   cursor_moved_ = true;
-  stats_.oldest_ms.reset();  // the next front() says
+  if (cursor_offset_ >= segments_.front().bytes && segments_.size() > 1) drop_front_segment();
+  find_oldest();
+}
+
+void Spool::rewind() {
+  read_ = {segments_.empty() ? 0 : segments_.front().id, cursor_offset_, cursor_records_};
+  front_bytes_ = 0;
+}
+
+void Spool::pop() {
+  if (front_bytes_ == 0 || segments_.empty()) return;
+  take();
+  release(read_);
+}
+
+std::uint64_t Spool::taken_unreleased() const {
+  // Reading is still before the first segment (none existed when it was last set): none taken.
+  if (segments_.empty() || read_.segment < segments_.front().id) return 0;
+  std::uint64_t n = 0;
+  std::uint64_t from = cursor_records_;
+  for (const Segment& s : segments_) {
+    if (s.id == read_.segment) return n + read_.records - std::min(from, read_.records);
+    n += s.records - from;
+    from = 0;
+  }
+  return n;
 }
 
 std::error_code Spool::sync() {

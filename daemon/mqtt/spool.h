@@ -10,14 +10,20 @@
 //   u64 time     Unix ms when the record was stored
 //   length bytes
 //
-// and "cursor", the first record not yet taken ("<segment> <offset>\n"). Appends go to the last
-// segment (a new one once it holds segment_bytes); segments wholly taken are deleted; beyond
-// max_bytes the oldest segment goes, its records counted as dropped. Nothing is synced by append
-// or take: sync() (the owner calls it once a second) syncs the segment written and replaces the
-// cursor file, so a power cut loses at most what came after the last sync() and replays at most
-// what was taken after it. Opening scans every segment: a record cut short or damaged ends its
-// segment there (the file is truncated, the bytes counted); a cursor that is not on a record of a
-// segment that exists is ignored and everything kept is replayed.
+// and "cursor", the first record not yet released ("<segment> <offset>\n"). Appends go to the
+// last segment (a new one once it holds segment_bytes); segments wholly released are deleted;
+// beyond max_bytes the oldest segment goes, its records counted as dropped.
+//
+// Reading runs ahead of the cursor: take() passes a record on, which stays kept (counted in
+// records, and on disk) until release() says the reader is done with everything up to a
+// position(), or rewind() reads again from the cursor. The edge node takes what it publishes and
+// releases it once the broker confirmed it (store_forward.h); pop() is take() and release at
+// once. Nothing is synced by append or release: sync() (the owner calls it once a second) syncs
+// the segment written and replaces the cursor file, so a power cut loses at most what came after
+// the last sync() and replays at most what was released after it. Opening scans every segment: a
+// record cut short or damaged ends its segment there (the file is truncated, the bytes counted); a
+// cursor that is not on a record of a segment that exists is ignored and everything kept is
+// replayed.
 //
 // Errors are std::error_code; a spool whose directory cannot be written keeps what it had taken
 // in and refuses the rest (counted), and the owner goes on without it.
@@ -41,8 +47,8 @@ struct SpoolLimits {
 };
 
 struct SpoolStats {
-  std::uint64_t bytes = 0;    // on disk, not yet taken or dropped
-  std::uint64_t records = 0;  // waiting
+  std::uint64_t bytes = 0;    // on disk, not yet released or dropped
+  std::uint64_t records = 0;  // waiting: not taken, or taken and not released
   std::uint64_t appended = 0;
   std::uint64_t taken = 0;
   std::uint64_t dropped_size = 0;          // records lost to max_bytes (oldest first)
@@ -50,6 +56,13 @@ struct SpoolStats {
   std::uint64_t dropped_corrupt = 0;       // bytes found cut short or damaged at open()
   std::uint64_t refused = 0;               // appends the disk refused
   std::optional<std::uint64_t> oldest_ms;  // the stored time of the oldest waiting record
+};
+
+// Where reading has got to: after the last record taken.
+struct SpoolPosition {
+  std::uint64_t segment = 0;
+  std::uint64_t offset = 0;   // in the segment's file
+  std::uint64_t records = 0;  // before it in the segment
 };
 
 struct SpoolRecord {
@@ -68,13 +81,24 @@ class Spool {
   std::error_code open();
   std::error_code append(std::uint64_t stored_ms, std::string_view bytes);
   // The oldest record not yet taken; those older than max_age at `now_ms` are dropped on the way
-  // (counted). nullopt: nothing waits (or it cannot be read: `error` says why).
+  // (counted once, taken). nullopt: nothing waits (or it cannot be read: `error` says why).
   std::optional<SpoolRecord> front(std::uint64_t now_ms, std::error_code& error);
-  // Takes front()'s record: it is not returned again.
+  // Takes front()'s record: front() goes on to the next; it stays kept until released.
+  void take();
+  // After the last record taken.
+  [[nodiscard]] SpoolPosition position() const;
+  // Everything taken before `p` (a position() of this spool) is done with: gone from the spool,
+  // and the cursor moves there. A position at or before the cursor changes nothing.
+  void release(const SpoolPosition& p);
+  // Reading goes back to the cursor: what was taken and not released is read again.
+  void rewind();
+  // take() and release() of front()'s record: it is gone.
   void pop();
   std::error_code sync();
 
   [[nodiscard]] bool empty() const { return stats_.records == 0; }
+  // Records taken and not yet released.
+  [[nodiscard]] std::uint64_t taken_unreleased() const;
   [[nodiscard]] const SpoolStats& stats() const { return stats_; }
   [[nodiscard]] const std::filesystem::path& dir() const { return dir_; }
 
@@ -94,12 +118,16 @@ class Spool {
   void drop_front_segment();
   void close_reader();
   void trim_to_size();
+  // The stored time of the record at the cursor (the oldest waiting), into stats_.oldest_ms.
+  void find_oldest();
 
   std::filesystem::path dir_;
   SpoolLimits limits_;
   std::deque<Segment> segments_;
   std::uint64_t cursor_offset_ = 0;   // in the front segment
-  std::uint64_t cursor_records_ = 0;  // taken there
+  std::uint64_t cursor_records_ = 0;  // released there
+  SpoolPosition read_;                // where front() reads: at or after the cursor
+  SpoolPosition read_high_;           // the furthest read_ has been (dropped_age counts once)
   std::uint64_t front_bytes_ = 0;     // front()'s record's size on disk, 0: none read
   int writer_ = -1;                   // the back segment, appended to
   int reader_ = -1;                   // the front segment

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "mqtt/sparkplug.h"
 #include "mqtt/sparkplug_codec.h"
 
 namespace drivegate::mqtt {
@@ -29,7 +30,10 @@ std::optional<StoredChange> decode_record(std::string_view bytes) {
 
 StoreForward::StoreForward(std::filesystem::path dir, SpoolLimits limits, unsigned per_second,
                            std::shared_ptr<spdlog::logger> log)
-    : spool_(std::move(dir), limits), batch_(std::max(1U, per_second / 10)), log_(std::move(log)) {}
+    : spool_(std::move(dir), limits),
+      batch_(std::max(1U, per_second / 10)),
+      max_window_(std::max(1U, per_second)),
+      log_(std::move(log)) {}
 
 bool StoreForward::open() {
   if (const auto ec = spool_.open()) {
@@ -62,10 +66,13 @@ void StoreForward::keep(std::string_view device, const sparkplug::Payload& histo
   failing_ = false;
 }
 
-bool StoreForward::replay(sparkplug::EdgeNode& edge, sparkplug::Sink& sink, std::uint64_t now_ms) {
-  for (unsigned i = 0; i < batch_; ++i) {
+unsigned StoreForward::replay(sparkplug::EdgeNode& edge, sparkplug::Sink& sink,
+                              const sparkplug::Now& now, unsigned max) {
+  using sparkplug::EdgeNode;
+  unsigned taken = 0;
+  for (; taken < (max == 0 ? batch_ : max) && !window_full(); ++taken) {
     std::error_code ec;
-    const auto r = spool_.front(now_ms, ec);
+    const auto r = spool_.front(now.unix_ms, ec);
     if (!r) {
       if (ec) log_->error("MQTT: {}: {}", spool_.dir().string(), ec.message());
       break;
@@ -73,17 +80,66 @@ bool StoreForward::replay(sparkplug::EdgeNode& edge, sparkplug::Sink& sink, std:
     auto change = decode_record(r->bytes);
     if (!change) {  // the CRC held, so only a bug could get here: never stop the queue on it
       ++unreadable_;
-      spool_.pop();
+      spool_.take();
       continue;
     }
-    const auto outcome = edge.replay(change->device, std::move(change->payload), sink);
-    if (outcome == sparkplug::EdgeNode::Replay::not_now) break;  // offline again, refused: kept
-    spool_.pop();
-    if (outcome == sparkplug::EdgeNode::Replay::sent) ++replayed_;
+    replaying_ = true;
+    replay_number_.reset();
+    const auto outcome = edge.replay(change->device, std::move(change->payload), now, sink);
+    replaying_ = false;
+    if (outcome == EdgeNode::Replay::not_now) break;  // offline again, refused, waiting: kept
+    spool_.take();
+    if (outcome == EdgeNode::Replay::sent && replay_number_) {
+      unconfirmed_.push_back({*replay_number_, spool_.position(), {}, {}});
+      ++records_out_;
+    } else if (outcome == EdgeNode::Replay::sent) {
+      ++replayed_;  // a sink that does not say what the client took: nothing to wait for
+    }
   }
-  std::error_code ignored;
-  spool_.front(now_ms, ignored);  // the oldest's time, for the stats
-  return waiting();
+  release_settled();
+  return taken;
+}
+
+void StoreForward::sent(std::uint64_t number, std::string_view topic,
+                        const sparkplug::Payload& payload) {
+  if (replaying_) {
+    replay_number_ = number;
+    return;
+  }
+  const auto t = sparkplug::parse_topic(topic);
+  if (!t) return;
+  auto history = sparkplug::as_history(t->type, payload);
+  if (!history) return;
+  unconfirmed_.push_back({number, std::nullopt, t->device, std::move(*history)});
+}
+
+void StoreForward::delivered(std::uint64_t number) {
+  bool released = false;
+  while (!unconfirmed_.empty() && unconfirmed_.front().number <= number) {
+    if (const auto& at = unconfirmed_.front().replayed) {
+      spool_.release(*at);
+      ++replayed_;
+      --records_out_;
+      released = true;
+    }
+    unconfirmed_.pop_front();
+  }
+  if (released) window_ = std::min(max_window_, window_ * 2);
+  release_settled();
+}
+
+void StoreForward::release_settled() {
+  if (records_out_ == 0) spool_.release(spool_.position());
+}
+
+void StoreForward::lost(std::uint64_t now_ms) {
+  spool_.rewind();
+  records_out_ = 0;
+  window_ = 1;
+  for (Unconfirmed& u : unconfirmed_) {
+    if (!u.replayed) keep(u.device, u.history, now_ms);
+  }
+  unconfirmed_.clear();
 }
 
 void StoreForward::sync() {

@@ -111,6 +111,28 @@ const AdapterDescriptor* PluginRegistry::find(std::string_view id) const {
   return nullptr;
 }
 
+const AdapterDescriptor* PluginRegistry::find(std::string_view id, const Options& options) const {
+  const AdapterDescriptor* base = find(id);
+  if (base == nullptr) return nullptr;
+  std::string error;
+  return specialised(*base, options, error);
+}
+
+const AdapterDescriptor* specialised(const AdapterDescriptor& base, const Options& options,
+                                     std::string& error) {
+  if (base.specialise == nullptr) return &base;
+  const AdapterDescriptor* d = base.specialise(options, error);
+  if (d == nullptr) {
+    if (error.empty()) error = "adapter '" + std::string(base.id) + "' cannot make this device";
+    return nullptr;
+  }
+  if (std::string why = descriptor_problem(*d); !why.empty()) {
+    error = why;
+    return nullptr;
+  }
+  return d;
+}
+
 std::vector<const AdapterDescriptor*> PluginRegistry::all() const {
   return descriptors_;
 }

@@ -33,6 +33,10 @@ class PluginRegistry {
   void add(const AdapterDescriptor& descriptor);
 
   [[nodiscard]] const AdapterDescriptor* find(std::string_view id) const;
+  // The descriptor a device of adapter `id` with these options runs under: the adapter's own, or
+  // for one that specialises (AdapterDescriptor::specialise) the one of the description its options
+  // name; nullptr when there is no such adapter or no such description.
+  [[nodiscard]] const AdapterDescriptor* find(std::string_view id, const Options& options) const;
   [[nodiscard]] std::vector<const AdapterDescriptor*> all() const;
   [[nodiscard]] std::string ids() const;  // "a, b, c" for messages
 
@@ -40,6 +44,12 @@ class PluginRegistry {
   std::vector<std::unique_ptr<PluginLibrary>> libraries_;
   std::vector<const AdapterDescriptor*> descriptors_;
 };
+
+// `base` specialised for a device with `options` (AdapterDescriptor::specialise), checked as a
+// plugin's descriptor is when it loads; `base` itself when it does not specialise. nullptr and
+// `error` (one line) when it cannot be.
+const AdapterDescriptor* specialised(const AdapterDescriptor& base, const Options& options,
+                                     std::string& error);
 
 // The plugin directory used when none is given: the build tree's when the program runs from it,
 // the installed one otherwise.

@@ -197,7 +197,7 @@ void SlaveHost::serve_broadcast(const modbus_serial::Adu& adu) {
   const Session& session = policy_->session;
   if (!policy_->broadcast) {
     ++counters_.broadcasts_refused;
-    backend_.refused_write(session, modbus_serial::kBroadcast, pdu);
+    backend_.refused_broadcast(session, pdu);
     if (auto held = line_.broadcast_log.admit(clock_.now())) {
       log_->warn("modbus: {}: broadcast write (function 0x{:02X}) refused: not applied to any "
                  "drive (the listener has broadcast = false){}",

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "gateway/value_codec.h"
 #include "status/metric_units.h"
 #include "status/process_metrics.h"
 #include "status/status_view.h"
@@ -134,7 +135,7 @@ bool in_force(const PointSpec& spec, const Label& l, const Value& v) {
   if (const auto* i = std::get_if<std::int64_t>(&v)) {
     n = *i;
   } else {
-    const double d = as_double(v);  // a float point with names: only a whole number is one
+    const double d = number_of(v);  // a float point with names: only a whole number is one
     if (!std::isfinite(d) || d != std::trunc(d) || std::fabs(d) > 9.2e18) return false;
     n = static_cast<std::int64_t>(d);
   }
@@ -243,7 +244,7 @@ void common_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
                  : row->description);
     for (const DeviceRow& r : rows) {
       const Value& v = r.values.at(i).second;
-      double x = as_double(v);
+      double x = number_of(v);                            // not known: NaN
       if (age) x = x >= 4294967295.0 ? NAN : x / 1000.0;  // never heard: NaN
       w.sample(name, r.labels, x);
     }
@@ -310,7 +311,7 @@ void point_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
     }
     // A float carries about 7 significant digits, a register times its scale at most 12.
     const int digits = point->spec.type == PointType::f32 ? 7 : 12;
-    w.sample(name, row.labels, round_significant(s.unit.to_base(as_double(value)), digits), extra);
+    w.sample(name, row.labels, round_significant(s.unit.to_base(number_of(value)), digits), extra);
   }
 }
 

@@ -21,13 +21,22 @@
 namespace drivegate {
 
 // Bumped whenever anything in include/drivegate/ changes layout or meaning.
-inline constexpr std::uint32_t kAdapterApiVersion = 5;
+inline constexpr std::uint32_t kAdapterApiVersion = 6;
 inline constexpr const char* kDescriptorSymbol = "drivegate_adapter";
 
 // Returns nullptr and sets `error` (one line, naming the option) when the options are
 // individually valid but do not make a device together.
 using DriverFactory = std::unique_ptr<Driver> (*)(const DeviceEnv& env, std::string& error);
 using SimulatorFactory = std::unique_ptr<Simulator> (*)(const SimEnv& env, std::string& error);
+
+struct AdapterDescriptor;
+// For an adapter whose devices each follow a description they name (framed: a protocol described
+// in a file declares its own options, line, addresses and streaming): the descriptor of one
+// device, given the options of this descriptor's own schema (defaults filled in). The core then
+// reads that device's options, line and addresses from it, and creates its driver and simulator
+// with its factories. Owned by the plugin for the process's lifetime. nullptr and `error` (one
+// line, naming the option) when the options name nothing usable.
+using Specialiser = const AdapterDescriptor* (*)(const Options& options, std::string& error);
 
 // One option of a demo or test device, as text (parsed like the command line's --set).
 struct OptionSetting {
@@ -72,6 +81,7 @@ struct AdapterDescriptor {
   DemoSetup demo;
   const MaintenanceAction* actions = nullptr;  // none for most adapters
   std::size_t action_count = 0;
+  Specialiser specialise = nullptr;  // none for most adapters
 };
 
 }  // namespace drivegate

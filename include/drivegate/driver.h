@@ -94,6 +94,10 @@ RxVerdict damaged(const Decoded<Frame>& d) {
   return {d.error == FrameError::bad_checksum ? RxKind::bad_checksum : RxKind::noise, d.consumed};
 }
 
+// The largest speed the common block's speed_rpm (i16) carries either way; -32768 there means
+// the speed is not known.
+inline constexpr std::int32_t kMaxSpeedRpm = 32767;
+
 // State every adapter publishes; the gateway turns it into the common register block.
 struct CommonState {
   bool ready = false;    // the protocol's handshake is done (e.g. ping answered)
@@ -104,6 +108,9 @@ struct CommonState {
   std::int32_t speed_rpm = 0;       // actual speed, negative in reverse where the drive says so
   std::int32_t setpoint_rpm = 0;    // the target the driver works towards
   Command command = Command::stop;  // the command in force
+  // The drive's speed reading is not a number (NaN, infinite, beyond kMaxSpeedRpm): speed_rpm is
+  // not to be shown, and the common block shows it unknown (README, "Register map").
+  bool speed_unknown = false;
 };
 
 // Ticket of a write in flight; the driver reports its outcome through take_completions().
@@ -201,6 +208,11 @@ struct DriverTraits {
   // that nothing the PLC was told failed is still on its way to the drive.
   Millis write_timeout{3000};
   Millis inter_frame_gap{0};  // line silence the bus keeps before each frame
+  // The drive's state (status, faults, speed) comes in several replies that each carry part of it
+  // (a profile's blocks): the engine then dates it by Driver::state_read_at() rather than by the
+  // last reply, and declares comm_lost once it is older than comm_timeout whatever else the
+  // device answers.
+  bool state_in_parts = false;
 };
 
 // What the gateway knows about the device when it creates the driver.
@@ -242,6 +254,10 @@ class Driver {
   virtual void on_no_reply(TimePoint now) = 0;
   // The engine declared comm_lost: forget the handshake, fail pending writes.
   virtual void on_comm_lost(TimePoint now) = 0;
+  // A driver whose traits().state_in_parts: when the state common() publishes was read whole,
+  // the time of the oldest reply it is made of; nothing while a part was not read since the
+  // driver started or since comm_lost. Others leave it: the engine dates their state by each reply.
+  [[nodiscard]] virtual std::optional<TimePoint> state_read_at() const { return std::nullopt; }
 
   // Writes. A Modbus request is all or nothing from the PLC's point of view: the gateway asks
   // check() about every part first (no side effects; nothing is applied unless it says ok), then
@@ -258,7 +274,8 @@ class Driver {
   // served from the register map: the gateway then hands the driver each request's PDU as a
   // WriteOp::Target::forward part (apply() -> pending; check() is not asked), on the device's
   // write turns like any write, and answers the client with the Completion's reply. The gateway
-  // has judged the client's access to the function already.
+  // has judged the request already: one whole, well-formed request of a function whose length
+  // it knows, holding no other frame, within the client's access (daemon/gateway/forward_access.h).
   [[nodiscard]] virtual bool forwards() const { return false; }
 };
 

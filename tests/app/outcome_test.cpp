@@ -18,7 +18,7 @@
 #include "gateway/gateway.h"
 #include "modbus/pdu.h"
 #include "mqtt/command_result.h"
-#include "plugin/adapter_options.h"
+#include "one_fake_device.h"
 
 namespace drivegate {
 namespace {
@@ -64,33 +64,12 @@ TEST(Outcome, ADcmdResultNamesTheExceptionAModbusClientGets) {
 // An operate client writing an adapter point (maintain's): the gateway denies it, and the bytes
 // the connection sends are the exception response 0x90 0x01, counted as a denied write.
 TEST(Outcome, ADeniedWriteReachesTheWireAsException01) {
-  PluginRegistry plugins;
-  plugins.add(test::kFakeAdapter);
-  Config config;
-  config.path = "drivegate.toml";
-  BusConfig bus;
-  bus.name = "a";
-  bus.port = "/nonexistent/tty-a";  // never opened: the gateway judges the write before any line
-  bus.baud = 4800;
-  config.buses.push_back(bus);
-  DeviceConfig device;
-  device.name = "d1";
-  device.bus = "a";
-  device.adapter = "fake";
-  device.unit_id = 1;
-  device.address = 1;
-  device.options = default_options(test::kFakeAdapter);
-  config.devices.push_back(device);
-
-  boost::asio::io_context io;
-  const auto log =
-      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>());
-  std::vector<std::string> errors;
-  const auto gateway = Gateway::build(io, config, plugins, log, errors);
+  test::OneFakeDevice fake;  // never opened: the gateway judges the write before any line
+  Gateway* gateway = fake.gateway();
   ASSERT_NE(gateway, nullptr);
   gateway->start();
   BackendSwitch backend;
-  backend.set(gateway.get());
+  backend.set(gateway);
   modbus::Dispatcher dispatcher(backend, {});
 
   const MappedPoint* limit = gateway->find("d1")->map().find("limit");  // u32, holding

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <deque>
 
 #include "bus_rig.h"
 #include "fake_adapter.h"
@@ -22,7 +23,8 @@ constexpr std::uint8_t kPoll = 0xA0, kPollReply = 0xB0, kCommand = 0xC0, kComman
 
 class PingDriver final : public Driver {
  public:
-  PingDriver(std::uint8_t address, Millis poll) : address_(address), poll_(poll) {
+  PingDriver(std::uint8_t address, Millis poll, Millis timeout = Millis(50))
+      : address_(address), poll_(poll), timeout_(timeout) {
     points_.push_back(input_point("value", PointType::u16, "", "the polled value"));
     values_.resize(1);
   }
@@ -32,7 +34,7 @@ class PingDriver final : public Driver {
   const CommonState& common() const override { return common_; }
   std::optional<Exchange> next_exchange(TimePoint now) override {
     Exchange ex;
-    ex.timeout = Millis(50);
+    ex.timeout = timeout_;
     ex.attempts = 3;
     if (pending_ && !pending_sent_) {
       pending_sent_ = true;
@@ -95,6 +97,7 @@ class PingDriver final : public Driver {
  private:
   std::uint8_t address_;
   Millis poll_;
+  Millis timeout_;
   TimePoint next_poll_{};
   std::vector<PointSpec> points_;
   std::vector<Value> values_;
@@ -106,36 +109,42 @@ class PingDriver final : public Driver {
 };
 
 // The device side: answers its address; silent, NACKing or damaging on request, answering only
-// commands (its polls NACKed), or answering 70 ms late (from its 10 ms ticks).
+// commands (its polls NACKed), answering `lateness` late (from its 10 ms ticks), or answering every
+// other request it hears.
 class PingSim final : public Simulator {
  public:
-  enum class Mode { answer, silent, nack, damage, commands_only, late };
+  enum class Mode { answer, silent, nack, damage, commands_only, late, every_other };
   explicit PingSim(std::uint8_t address) : address_(address) {}
   Bytes on_receive(ByteView rx, TimePoint now) override {
     if (rx.size() < 2 || rx[1] != address_ || mode == Mode::silent) return {};
+    if (mode == Mode::every_other && (heard_++ % 2) == 0) return {};
     if (mode == Mode::nack) return {kNack, address_, 0};
     if (mode == Mode::damage) return {kDamaged, address_, 0};
     if (rx[0] == kCommand && rx.size() == 3) return {kCommandReply, address_, rx[2]};
     if (mode == Mode::commands_only) return {kNack, address_, 0};
     if (mode == Mode::late) {
-      late_ = {now + 70ms, {kPollReply, address_, value}};
+      late_.push_back({now + lateness, {kPollReply, address_, value}});
       return {};
     }
     return {kPollReply, address_, value};
   }
   Bytes on_tick(TimePoint now) override {
-    if (!late_ || now < late_->first) return {};
-    Bytes out = std::move(late_->second);
-    late_.reset();
+    Bytes out;
+    while (!late_.empty() && now >= late_.front().first) {
+      out.insert(out.end(), late_.front().second.begin(), late_.front().second.end());
+      late_.pop_front();
+    }
     return out;
   }
   std::string control(std::string_view, TimePoint) override { return {}; }
   Mode mode = Mode::answer;
   std::uint8_t value = 42;
+  Millis lateness{70};
 
  private:
   std::uint8_t address_;
-  std::optional<std::pair<TimePoint, Bytes>> late_;
+  std::uint64_t heard_ = 0;
+  std::deque<std::pair<TimePoint, Bytes>> late_;  // every request's answer, in order
 };
 
 BusConfig line(bool echo = false) {
@@ -148,12 +157,13 @@ BusConfig line(bool echo = false) {
 
 struct Bench {
   explicit Bench(BusConfig config = line()) : rig(test::kFakeAdapter, std::move(config)) {}
-  Device& add(std::uint8_t address, Millis poll = 100ms, Millis budget = 1000ms) {
+  Device& add(std::uint8_t address, Millis poll = 100ms, Millis budget = 1000ms,
+              Millis timeout = 50ms) {
     DeviceConfig c = rig.device_config("dev" + std::to_string(address), address);
     c.poll_interval = poll;
     c.budget = budget;
     c.backoff_max = 2000ms;
-    auto& d = rig.add_device(c, std::make_unique<PingDriver>(address, poll));
+    auto& d = rig.add_device(c, std::make_unique<PingDriver>(address, poll, timeout));
     auto sim = std::make_unique<PingSim>(address);
     sims.push_back(sim.get());
     rig.add_simulator(std::move(sim));
@@ -198,16 +208,16 @@ TEST(BusEngine, ASilentReplyIsResentAfterItsTimeoutCountingTheWire) {
   b.sims[0]->mode = PingSim::Mode::silent;
   const TimePoint from = b.rig.now();
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.read(d, Table::input, 13, 2)[1] == 3; }, 1s));
-  b.rig.run_for(60ms);
+  ASSERT_TRUE(b.rig.run_until([&] { return b.sent(kPoll, 1, from).size() == 4; }, 1s));
   const auto polls = b.sent(kPoll, 1, from);
-  // Three attempts, then the next turn (the next poll is overdue and one silent turn is not yet
-  // backed off). 2 bytes at 9600 8N1 leave the UART in 2.08 ms (counted as 2): the 50 ms wait
+  // Three attempts. 2 bytes at 9600 8N1 leave the UART in 2.08 ms (counted as 2): the 50 ms wait
   // counts from then, then the line is kept quiet for the guard time (the timeout again) before
   // the identical frame goes again.
-  ASSERT_EQ(polls.size(), 4u);
   EXPECT_EQ(polls[1] - polls[0], 102ms);
   EXPECT_EQ(polls[2] - polls[1], 102ms);
-  EXPECT_EQ(polls[3] - polls[2], 102ms);
+  // The turn held the line 306 ms, to the end of its third attempt's guard time: the next poll
+  // turn comes twice that after the third attempt's wait (52 ms after it was sent) ended.
+  EXPECT_EQ(polls[3] - polls[2], 52ms + 2 * 306ms);
   EXPECT_EQ(b.rig.read(d, Table::input, 15, 2)[1], 2);  // retries: 3 attempts, 2 of them resends
 }
 
@@ -358,7 +368,6 @@ TEST(BusEngine, ThePortFailingFailsTheExchangeAndReopeningCounts) {
   EXPECT_EQ(b.rig.read(d, Table::input, 27, 2)[1], 1);  // bus_reopens
 }
 
-
 // --- late replies (docs/safety.md, "Late replies") ---------------------------------------------
 
 // A device that answers 70 ms after each request, its timeout being 50 ms: every reply arrives in
@@ -373,7 +382,7 @@ TEST(BusEngine, AReplyAfterItsTimeoutIsDroppedAsLateNeverCreditedToALaterRequest
   b.rig.run_for(3s);
   EXPECT_TRUE(d.comm_lost());
   EXPECT_FALSE(d.online());
-  EXPECT_EQ(b.rig.read(d, Table::input, 9, 2)[1], 0);        // frames_good: none
+  EXPECT_EQ(b.rig.read(d, Table::input, 9, 2)[1], 0);                // frames_good: none
   EXPECT_NE(b.rig.read(d, "value"), std::vector<std::uint16_t>{7});  // never taken
   EXPECT_GT(d.line().counters.late_bytes, 0u);
   EXPECT_EQ(d.line().counters.late_bytes, b.rig.counters().late_bytes);
@@ -406,6 +415,42 @@ TEST(BusEngine, ALateDeviceNeverAnswersForItsNeighbour) {
 }
 
 // --- fair line time (docs/safety.md, "Fair line time") -----------------------------------------
+
+// A sick neighbour costs its own line time: beside a device that is silent, answers 1.1 s late or
+// answers every other request (each turn of it then runs into 150 ms timeouts and their guard
+// times), a healthy device polled every 100 ms keeps at least half of its 100 good frames in 10 s,
+// and the sick one is still asked.
+void healthy_keeps_half_its_rate(PingSim::Mode sickness) {
+  Bench b;
+  Device& healthy = b.add(1, 100ms);
+  b.add(2, 100ms, 1000ms, 150ms);  // the sick one
+  b.sims[1]->lateness = 1100ms;
+  b.rig.start();
+  b.rig.run_for(500ms);
+  b.sims[1]->mode = sickness;
+  const auto frames = [&](Device& d) {
+    const auto r = b.rig.read(d, Table::input, 9, 2);
+    return (std::uint32_t{r[0]} << 16) | r[1];
+  };
+  const std::uint32_t before = frames(healthy);
+  const TimePoint from = b.rig.now();
+  b.rig.run_for(10s);
+  EXPECT_GE(frames(healthy) - before, 50u);
+  EXPECT_FALSE(healthy.comm_lost());
+  EXPECT_GE(b.sent(kPoll, 2, from).size(), 3u);  // backed off, never forgotten
+}
+
+TEST(BusEngine, ASilentNeighbourLeavesAHealthyDeviceHalfItsRate) {
+  healthy_keeps_half_its_rate(PingSim::Mode::silent);
+}
+
+TEST(BusEngine, ANeighbourAnsweringLateLeavesAHealthyDeviceHalfItsRate) {
+  healthy_keeps_half_its_rate(PingSim::Mode::late);
+}
+
+TEST(BusEngine, ANeighbourAnsweringEveryOtherRequestLeavesAHealthyDeviceHalfItsRate) {
+  healthy_keeps_half_its_rate(PingSim::Mode::every_other);
+}
 
 // A client that keeps writing to device 1 (each write followed by the next as soon as it is
 // answered) never stops the line's polls: device 2 keeps its poll rate to within half, device 1

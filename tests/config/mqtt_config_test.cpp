@@ -102,6 +102,24 @@ TEST_F(MqttConfigTest, BrokerForms) {
   }
 }
 
+// A URL with credentials would never connect (the host would be "user:secret@h") and would show
+// the password in the status JSON and the log: refused by the check, without quoting it.
+TEST_F(MqttConfigTest, CredentialsInABrokerUrlAreRefusedWithoutShowingThem) {
+  for (const char* bad : {"mqtt://gw01:s3cret@10.1.2.3:1883", "mqtts://gw01:s3cret@broker",
+                          "mqtt://s3cret@[::1]:1883"}) {
+    const std::string e = only_error(std::string("[mqtt]\nbroker = \"") + bad +
+                                     "\"\ngroup_id = \"g\"\nedge_node_id = \"e\"\n");
+    EXPECT_THAT(e, AllOf(HasSubstr("gw.toml:"), HasSubstr("mqtt.broker"),
+                         HasSubstr("credentials in a broker URL"), HasSubstr("password_file")))
+        << bad;
+    EXPECT_THAT(e, Not(HasSubstr("s3cret"))) << bad;
+  }
+  const std::string e = only_error(
+      "[mqtt]\nbrokers = [\"mqtt://a\", { url = \"mqtt://u:s3cret@b\" }]\ngroup_id = "
+      "\"g\"\nedge_node_id = \"e\"\n");
+  EXPECT_THAT(e, AllOf(HasSubstr("mqtt.brokers[1]"), Not(HasSubstr("s3cret"))));
+}
+
 TEST_F(MqttConfigTest, IdsAreRequiredAndMustBeSparkplugIds) {
   EXPECT_THAT(only_error("[mqtt]\nbroker = \"mqtt://h\"\nedge_node_id = \"e\"\n"),
               AllOf(HasSubstr("mqtt.group_id"), HasSubstr("missing")));

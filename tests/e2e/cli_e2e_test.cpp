@@ -227,6 +227,8 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
       {{drivegate(), "events", "--help"},
        {"-f, --follow", "-n, --lines N", "-d, --device NAME", "-k, --kind KIND", "--http HOST:PORT",
         "-h, --help"}},
+      {{drivegate(), "protocol", "--help"},
+       {"--request", "--reply", "--set OPTION=VALUE", "-h, --help"}},
       {{drivegate(), "scan", "--help"},
        {"--port DEVICE", "--baud N", "--parity PARITY", "--data-bits N", "--stop-bits N",
         "--framing FRAMING", "--rs485", "-a, --addresses LIST", "-t, --timeout-ms N",

@@ -10,6 +10,8 @@ line in order, one line of output each:
   raw HEX                         bytes as they are (noise, half a frame): "reply HEX" (what came
                                   back within 300 ms, "" if none)
   rtu UNIT HEX                    the PDU HEX to UNIT with its CRC (a broadcast, FC 08): as raw
+  ascii UNIT HEX                  the PDU HEX to UNIT as an ASCII frame (':', hex, LRC, CR LF):
+                                  as raw
   listen MS                       sends nothing: "heard HEX", what came within MS ("" if none)
   sleep MS
 """
@@ -32,12 +34,27 @@ def crc16(data):
     return bytes([crc & 0xFF, crc >> 8])
 
 
+def ascii_frame(body):
+    """MODBUS over Serial Line V1.02, 2.5.2.1: ':', the bytes and their LRC (6.2.1) in hex,
+    CR LF."""
+    lrc = (-sum(body)) & 0xFF
+    return b":" + (body + bytes([lrc])).hex().upper().encode() + b"\r\n"
+
+
 def answer(r):
     if r is None or getattr(r, "isError", lambda: True)():
         code = getattr(r, "exception_code", None)
         return f"exception {code}" if code is not None else "none"
     regs = getattr(r, "registers", None)
     return "ok" + ("" if regs is None else " " + " ".join(str(v) for v in regs))
+
+
+def frame_of(op, steps):
+    """The bytes a raw, rtu or ascii step sends, its arguments taken from `steps`."""
+    if op == "raw":
+        return bytes.fromhex(steps.pop(0))
+    body = bytes([int(steps.pop(0))]) + bytes.fromhex(steps.pop(0))
+    return body + crc16(body) if op == "rtu" else ascii_frame(body)
 
 
 def main():
@@ -75,12 +92,8 @@ def main():
                 unit, address = int(steps.pop(0)), int(steps.pop(0))
                 values = [int(v) for v in steps.pop(0).split(",")]
                 print(answer(c.write_registers(address, values, slave=unit)), flush=True)
-            elif op in ("raw", "rtu") and a.tcp:
-                if op == "rtu":
-                    body = bytes([int(steps.pop(0))]) + bytes.fromhex(steps.pop(0))
-                    data = body + crc16(body)
-                else:
-                    data = bytes.fromhex(steps.pop(0))
+            elif op in ("raw", "rtu", "ascii") and a.tcp:
+                data = frame_of(op, steps)
                 if c.socket is None:  # pymodbus closes the socket after a request timed out
                     c.connect()
                 s = c.socket
@@ -96,12 +109,8 @@ def main():
                 except OSError:
                     pass
                 print("reply " + got.hex(), flush=True)
-            elif op in ("raw", "rtu"):
-                if op == "rtu":
-                    body = bytes([int(steps.pop(0))]) + bytes.fromhex(steps.pop(0))
-                    data = body + crc16(body)
-                else:
-                    data = bytes.fromhex(steps.pop(0))
+            elif op in ("raw", "rtu", "ascii"):
+                data = frame_of(op, steps)
                 s = c.socket
                 s.reset_input_buffer()
                 s.write(data)

@@ -8,6 +8,7 @@
 
 #include "e2e.h"
 #include "pymodbus_slave.h"  // have_pymodbus_tools
+#include "serial_master.h"
 
 namespace drivegate::test {
 namespace {
@@ -16,10 +17,6 @@ using namespace std::chrono_literals;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using ::testing::Not;
-
-std::filesystem::path master_script() {
-  return std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "tests/e2e/pymodbus_serial_master.py";
-}
 
 class SerialListenerE2E : public ::testing::Test {
  protected:
@@ -58,31 +55,18 @@ class SerialListenerE2E : public ::testing::Test {
   }
   std::vector<std::string> run_master(const std::vector<std::string>& where,
                                       const std::vector<std::string>& steps) {
-    std::vector<std::string> argv = {kSystemPython, master_script().string()};
-    argv.insert(argv.end(), where.begin(), where.end());
-    argv.insert(argv.end(), steps.begin(), steps.end());
-    Child c(argv, dir_ / "master.err");
-    std::vector<std::string> lines;
-    while (auto line = c.read_line(20s)) lines.push_back(*line);
-    c.wait_exit(5s);
-    return lines;
+    return run_serial_master(where, steps, dir_ / "master.err");
   }
   std::string log() { return slurp(dir_ / "daemon.log"); }
 
-  // The pseudo-terminal pair, made again after `socat_` was stopped (an adapter plugged back).
+  // The pseudo-terminal pair, made again after `line_` went (an adapter plugged back).
   void make_line() {
-    socat_ = std::make_unique<Child>(
-        std::vector<std::string>{"/usr/bin/socat", "pty,raw,echo=0,link=" + (dir_ / "m").string(),
-                                 "pty,raw,echo=0,link=" + (dir_ / "s").string()},
-        dir_ / "socat.err");
-    for (int i = 0; i < 100 && !std::filesystem::exists(dir_ / "s"); ++i) {
-      std::this_thread::sleep_for(20ms);
-    }
+    line_ = std::make_unique<PtyPair>(dir_ / "m", dir_ / "s", dir_ / "socat.err");
   }
 
   TempDir dir_;
   std::string toml_;
-  std::unique_ptr<Child> socat_;
+  std::unique_ptr<PtyPair> line_;
   std::unique_ptr<Sim> sim_;
   std::unique_ptr<Daemon> daemon_;
   std::unique_ptr<Plc> plc_;
@@ -265,7 +249,7 @@ TEST_F(SerialListenerE2E, ASerialMastersWritesFeedTheFailsafeAndItsSilenceTripsI
 TEST_F(SerialListenerE2E, ALineUnpluggedAndBackIsReopenedAndLoggedOnce) {
   start("access = \"operate\"\n");
   ASSERT_THAT(master({"read", "1", "input", "0", "1"}), ElementsAre(::testing::StartsWith("ok ")));
-  socat_->stop();  // both ends of the pair go away
+  line_.reset();  // both ends of the pair go away
   ASSERT_TRUE(eventually([&] { return log().find("reopening (logged once") != std::string::npos; },
                          5s))
       << log();

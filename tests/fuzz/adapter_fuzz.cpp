@@ -163,12 +163,24 @@ class DriverRun {
   std::map<Ticket, bool> pending_;
 };
 
+// The options a device is made with: the defaults, and for an adapter whose devices follow a
+// description they name (AdapterDescriptor::specialise) its demo's, which name one.
+Options options_of(const AdapterDescriptor& a) {
+  Options options = default_options(a);
+  if (a.specialise == nullptr) return options;
+  for (std::size_t i = 0; i < a.demo.option_count; ++i) {
+    std::string error;
+    (void)set_option_text(a, options, a.demo.options[i].name, a.demo.options[i].value, error);
+  }
+  return options;
+}
+
 void fuzz_driver(const AdapterDescriptor& a, FuzzInput& in) {
   DeviceEnv env;
   env.name = "fuzz";
   env.address = pick_address(a, in.u8());
   env.poll_interval = Millis(50 + 10 * in.u8());
-  env.options = default_options(a);
+  env.options = options_of(a);
   env.maintenance = (in.u8() & 1) != 0;
   std::string error;
   auto driver = a.create_driver(env, error);
@@ -182,7 +194,7 @@ void fuzz_driver(const AdapterDescriptor& a, FuzzInput& in) {
 void fuzz_simulator(const AdapterDescriptor& a, FuzzInput& in) {
   SimEnv env;
   env.address = pick_address(a, in.u8());
-  env.options = default_options(a);
+  env.options = options_of(a);
   std::string error;
   auto sim = a.create_simulator(env, error);
   if (!sim) return;

@@ -20,10 +20,16 @@ OUT = ROOT / "tests" / "fuzz" / "corpus"
 BYTES = re.compile(r"\{\s*((?:0x[0-9A-Fa-f]{2}\s*,\s*){2,}0x[0-9A-Fa-f]{2})\s*,?\s*\}")
 
 
+HEX = re.compile(r'hex\("((?:[0-9A-Fa-f]{2} ){2,}[0-9A-Fa-f]{2})"\)')
+
+
 def vectors(path):
     text = path.read_text()
     for m in BYTES.finditer(text):
         yield bytes(int(b, 16) for b in re.findall(r"0x([0-9A-Fa-f]{2})", m.group(1)))
+    # The framed adapter's tests write frames as hex("A5 05 00 ...").
+    for m in HEX.finditer(text):
+        yield bytes.fromhex(m.group(1))
 
 
 def write(target, data):
@@ -60,6 +66,14 @@ def adapter_seeds(adapter):
     # The modbus adapter's codec mode also reads its input as a profile: the shipped ones.
     for profile in sorted((ROOT / "adapters" / adapter / "profiles").glob("*.toml")):
         write(target, b"\x00" + profile.read_bytes())
+    # The framed adapter's codec mode picks a shipped description (in name order) for the bytes,
+    # or, one past them, reads the rest as a description: the shipped ones.
+    descriptions = sorted((ROOT / "adapters" / adapter / "protocols").glob("*.toml"))
+    for pick in range(len(descriptions)):
+        for v in vecs:
+            write(target, bytes([0, pick]) + v)
+    for description in descriptions:
+        write(target, bytes([0, len(descriptions)]) + description.read_bytes())
 
 
 def mbap(transaction, unit, pdu):

@@ -4,9 +4,9 @@
 #include "gateway/device.h"
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
 
 #include <cmath>
-#include <spdlog/sinks/null_sink.h>
 
 #include "fake_adapter.h"
 
@@ -56,7 +56,7 @@ class DeviceTest : public ::testing::Test {
     device_->next_exchange(at, Turn::write);
   }
   // A reply carrying the drive's state.
-  void heard(TimePoint at) { device_->link().health.data_good(at); }
+  void heard(TimePoint at) { device_->link().health.data_good(at, at); }
 
   TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
   test::FakeDriver* fake_;
@@ -298,6 +298,37 @@ TEST_F(DeviceTest, WritePointsTakesTheSamePathAsAModbusWrite) {
   EXPECT_EQ(fake_->commands, std::vector<Command>{Command::run_forward});
   EXPECT_EQ(answer, Outcome::ok);
   EXPECT_EQ(holding(0, 2), (std::vector<std::uint16_t>{1, 900}));
+}
+
+// A request that stops and runs at once (a DCMD naming command twice: stop, then run_forward) is
+// no stop: it waits its turn behind the runs queued before it and drops none of them, where a
+// stop would go to the drive at once and drop them.
+TEST_F(DeviceTest, ARequestThatStopsAndRunsIsNoStopAndDropsNoQueuedRun) {
+  fake_->setpoint_answer = WriteStatus::pending;
+  std::optional<Outcome> first;
+  std::optional<Outcome> queued;
+  ASSERT_EQ(write(Table::holding, 0, {1, 1200}, first), Outcome::ok);  // its setpoint in flight
+  ASSERT_EQ(write(Table::holding, 0, {1, 800}, queued), Outcome::ok);  // waits behind it
+  const auto* command = device_->map().find("command");
+  ASSERT_NE(command, nullptr);
+  const std::vector<Device::PointWrite> stop_run = {{command, std::int64_t{0}},
+                                                    {command, std::int64_t{1}}};
+  std::optional<Outcome> both;
+  ASSERT_EQ(device_->write_points(
+                session_, stop_run, [&both](Outcome e) { both = e; }, t0_),
+            Outcome::ok);
+  EXPECT_FALSE(queued) << "the queued run was answered: "
+                       << to_string(queued.value_or(Outcome::ok));
+  EXPECT_TRUE(fake_->commands.empty()) << "sent past the queue";
+  EXPECT_FALSE(both);
+  // A plain stop still goes first and drops the queued runs, this one with them.
+  const std::vector<Device::PointWrite> stop = {{command, std::int64_t{0}}};
+  std::optional<Outcome> stopped;
+  device_->write_points(
+      session_, stop, [&stopped](Outcome e) { stopped = e; }, t0_);
+  EXPECT_EQ(fake_->commands, std::vector<Command>{Command::stop});
+  EXPECT_EQ(queued, Outcome::no_response);
+  EXPECT_EQ(both, Outcome::no_response);
 }
 
 TEST_F(DeviceTest, WritePointsRefusesValuesItsRegistersCannotHold) {

@@ -39,6 +39,8 @@ class RecordingSink : public Sink {
  public:
   bool publish(const std::string& topic, const Payload& payload) override {
     (refusing ? not_taken : sent).push_back({topic, payload});
+    // As the northbound does: the client numbers what it takes, the store hears of it.
+    if (!refusing && numbering != nullptr) numbering->sent(++numbered, topic, payload);
     return !refusing;
   }
   void drop_session() override { ++drops; }
@@ -64,7 +66,9 @@ class RecordingSink : public Sink {
   std::vector<Sent> stored;  // topic: the device's name
   std::vector<std::pair<std::size_t, std::vector<PointCommand>>> writes;
   std::vector<std::string> notices;
-  std::vector<RefusedCommand> refusals;  // DCMDs refused before any write path, for the audit
+  std::vector<RefusedCommand> refusals;     // DCMDs refused before any write path, for the audit
+  mqtt::StoreForward* numbering = nullptr;  // told what the client took, numbered from 1
+  std::uint64_t numbered = 0;
 };
 
 MetricDef metric(std::string name, DataType type) {
@@ -310,14 +314,19 @@ TEST_F(EdgeNodeTest, ChangedDevicesAreARebirth) {
   auto defs = drives();
   defs.pop_back();  // washer-b removed
   EXPECT_TRUE(node_.set_devices(defs, at(1s), sink_));
-  const auto sent = sink_.take();
-  ASSERT_EQ(sent.size(), 2u);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 3u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDEATH/gw01/washer-b");
   EXPECT_EQ(sent[1].topic, "spBv1.0/plant1/NBIRTH/gw01");
-  // Births of the devices follow as they are sampled.
-  node_.sample(0, true, values(3), kNoData, at(1s), sink_);
-  EXPECT_EQ(sink_.take().at(0).topic, "spBv1.0/plant1/DBIRTH/gw01/washer-a");
-  EXPECT_FALSE(node_.set_devices(defs, at(2s), sink_));
+  // washer-a, defined as before, goes on as it was: alive, born again at once.
+  EXPECT_EQ(sent[2].topic, "spBv1.0/plant1/DBIRTH/gw01/washer-a");
+  // A device new to the set is born as it is sampled.
+  defs.push_back({"washer-c", {metric("speed_rpm", DataType::int16)}});
+  EXPECT_TRUE(node_.set_devices(defs, at(2s), sink_));
+  sink_.take();
+  node_.sample(1, true, {MetricValue{std::int64_t{3}}}, kNoData, at(2s), sink_);
+  EXPECT_EQ(sink_.take().at(0).topic, "spBv1.0/plant1/DBIRTH/gw01/washer-c");
+  EXPECT_FALSE(node_.set_devices(defs, at(3s), sink_));
   EXPECT_TRUE(sink_.take().empty());
 }
 
@@ -693,13 +702,16 @@ TEST_F(EdgeNodeStoreForward, KeptChangesReplayAfterTheBirthsAsHistoricalDdata) {
   ASSERT_EQ(sink_.stored.size(), 2u);
   EXPECT_THAT(sink_.stored[0].names(), ElementsAre("speed_rpm")) << "relative to the last DDATA";
   // No session: replay() keeps the record.
-  EXPECT_EQ(node_.replay("washer-a", sink_.stored[0].payload, sink_), EdgeNode::Replay::not_now);
+  EXPECT_EQ(node_.replay("washer-a", sink_.stored[0].payload, at(600ms), sink_),
+            EdgeNode::Replay::not_now);
   node_.begin_connect(at(1s));
   node_.connected(at(1s), sink_);
   auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 3u);  // NBIRTH, DBIRTH x2
-  EXPECT_EQ(node_.replay("washer-a", sink_.stored[0].payload, sink_), EdgeNode::Replay::sent);
-  EXPECT_EQ(node_.replay("washer-a", sink_.stored[1].payload, sink_), EdgeNode::Replay::sent);
+  EXPECT_EQ(node_.replay("washer-a", sink_.stored[0].payload, at(1s), sink_),
+            EdgeNode::Replay::sent);
+  EXPECT_EQ(node_.replay("washer-a", sink_.stored[1].payload, at(1s), sink_),
+            EdgeNode::Replay::sent);
   sent = sink_.take();
   ASSERT_EQ(sent.size(), 2u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
@@ -710,10 +722,11 @@ TEST_F(EdgeNodeStoreForward, KeptChangesReplayAfterTheBirthsAsHistoricalDdata) {
   EXPECT_EQ(sent[0].metric("speed_rpm")->timestamp, 2'000u);
   EXPECT_EQ(sent[1].metric("speed_rpm")->timestamp, 2'300u);
   // A device unknown now, or a metric it no longer has: dropped, counted, nothing sent.
-  EXPECT_EQ(node_.replay("washer-z", sink_.stored[0].payload, sink_), EdgeNode::Replay::dropped);
+  EXPECT_EQ(node_.replay("washer-z", sink_.stored[0].payload, at(1s), sink_),
+            EdgeNode::Replay::dropped);
   Payload other = sink_.stored[0].payload;
   other.metrics[0].name = "gone";
-  EXPECT_EQ(node_.replay("washer-a", other, sink_), EdgeNode::Replay::dropped);
+  EXPECT_EQ(node_.replay("washer-a", other, at(1s), sink_), EdgeNode::Replay::dropped);
   EXPECT_EQ(node_.replay_dropped(), 2u);
   EXPECT_TRUE(sink_.take().empty());
 }
@@ -745,7 +758,7 @@ TEST_F(EdgeNodeStoreForward, ADdataTheClientRefusesIsKeptAsHistoricalWithItsTime
   // The refused DDATA took no seq: the host sees none missing in what did go out.
   sink_.refusing = false;
   node_.sample(0, true, values(200), 2'300, at(500ms), sink_);
-  EXPECT_EQ(node_.replay("washer-a", kept.payload, sink_), EdgeNode::Replay::sent);
+  EXPECT_EQ(node_.replay("washer-a", kept.payload, at(500ms), sink_), EdgeNode::Replay::sent);
   const auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 2u);
   EXPECT_EQ(sent[0].payload.seq, 3u) << "the first after the births";
@@ -778,14 +791,16 @@ TEST_F(EdgeNodeStoreForward, AReplayTheClientRefusesStaysInTheStoreForTheNextAtt
   ASSERT_EQ(sink_.stored.size(), 2u);  // each device's first sample, from before the session
   for (const Sent& s : sink_.stored) store.keep(s.topic, s.payload, at(0ms).unix_ms);
   sink_.refusing = true;
-  EXPECT_TRUE(store.replay(node_, sink_, at(1s).unix_ms)) << "nothing waits any more";
+  EXPECT_EQ(store.replay(node_, sink_, at(1s)), 0u) << "refused: nothing taken";
+  EXPECT_TRUE(store.waiting());
   EXPECT_EQ(sink_.not_taken.size(), 1u) << "the batch goes on after a refusal";
   auto stats = store.stats(node_);
   EXPECT_EQ(stats.records, 2u);
   EXPECT_EQ(stats.replayed, 0u);
   EXPECT_EQ(stats.replay_dropped, 0u);
   sink_.refusing = false;
-  EXPECT_FALSE(store.replay(node_, sink_, at(2s).unix_ms));
+  EXPECT_EQ(store.replay(node_, sink_, at(2s)), 2u);
+  EXPECT_FALSE(store.waiting());
   const auto sent = sink_.take();
   ASSERT_EQ(sent.size(), 2u);
   EXPECT_EQ(sent[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-a");
@@ -794,6 +809,341 @@ TEST_F(EdgeNodeStoreForward, AReplayTheClientRefusesStaysInTheStoreForTheNextAtt
   stats = store.stats(node_);
   EXPECT_EQ(stats.records, 0u);
   EXPECT_EQ(stats.replayed, 2u);
+}
+
+// --- commands only in a born session -------------------------------------------------------------
+
+// A DCMD is carried out only while the node is born here (its primary host online) and the device
+// is born: while the births wait for the host, on a session that has ended, or for a device with
+// no DBIRTH, it is refused with the real reason and nothing is written; an NCMD likewise does
+// nothing. Where there is no DBIRTH there is no DDATA to answer with.
+TEST_F(EdgeNodePrimaryHost, ACommandIsCarriedOutOnlyWhileTheNodeAndTheDeviceAreBorn) {
+  Payload run;
+  run.metrics.push_back({"setpoint_rpm", DataType::int16, MetricValue{std::int64_t{900}}, {}});
+  Payload rebirth;
+  rebirth.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  ASSERT_EQ(node_.state(), SessionState::waiting_for_host);
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(10ms), sink_);
+  node_.message("spBv1.0/plant1/NCMD/gw01", encode(rebirth), at(10ms), sink_);
+  EXPECT_TRUE(sink_.writes.empty()) << "written before the node was born";
+  EXPECT_TRUE(sink_.take().empty()) << "nothing may be published before the births";
+  ASSERT_EQ(sink_.refusals.size(), 1u);
+  EXPECT_EQ(sink_.refusals[0].refusal, Refusal::not_born);
+  EXPECT_EQ(sink_.refusals[0].points, "setpoint_rpm=900");
+  EXPECT_EQ(sink_.refusals[0].why,
+            "the edge node is not born on this broker: primary host 'scada' is not online here "
+            "(no STATE from it yet)");
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("NCMD ignored: the edge node is not born"));
+  // The host offline here: the reason says so.
+  state(false, 50, 20ms);
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(30ms), sink_);
+  ASSERT_EQ(sink_.refusals.size(), 2u);
+  EXPECT_THAT(sink_.refusals[1].why, HasSubstr("its STATE says offline"));
+  // Born: washer-a takes it; washer-b, never heard from, has no DBIRTH and does not.
+  state(true, 100, 40ms);
+  ASSERT_EQ(node_.state(), SessionState::online);
+  sink_.take();
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-b", encode(run), at(50ms), sink_);
+  EXPECT_TRUE(sink_.writes.empty());
+  ASSERT_EQ(sink_.refusals.size(), 3u);
+  EXPECT_EQ(sink_.refusals[2].refusal, Refusal::not_born);
+  EXPECT_EQ(sink_.refusals[2].why,
+            "device 'washer-b' is not born in this session (not heard from, or comm_lost)");
+  EXPECT_TRUE(sink_.take().empty()) << "no DDATA for a device without a DBIRTH";
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(60ms), sink_);
+  EXPECT_EQ(sink_.writes.size(), 1u);
+  // The session ended (the host went offline), a command still in the client's buffer: refused.
+  state(false, 200, 70ms);
+  ASSERT_EQ(node_.state(), SessionState::offline);
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", encode(run), at(80ms), sink_);
+  EXPECT_EQ(sink_.writes.size(), 1u);
+  ASSERT_EQ(sink_.refusals.size(), 4u);
+  EXPECT_EQ(sink_.refusals[3].why, "the edge node is not born: its session has ended");
+}
+
+// Clearing a retained command the way docs/mqtt.md says (an empty retained publish): the broker
+// hands the empty message to its subscribers too. It asks nothing: no refusal in the audit trail.
+TEST_F(EdgeNodeTest, AnEmptyCommandClearsARetainedOneAndAsksNothing) {
+  online();
+  node_.message("spBv1.0/plant1/DCMD/gw01/washer-a", "", at(1s), sink_);
+  node_.message("spBv1.0/plant1/NCMD/gw01", "", at(1s), sink_);
+  EXPECT_TRUE(sink_.refusals.empty()) << sink_.refusals.front().why;
+  EXPECT_TRUE(sink_.writes.empty());
+  EXPECT_TRUE(sink_.take().empty());
+  EXPECT_THAT(sink_.notices.back(), HasSubstr("a retained command cleared"));
+}
+
+// --- the primary host's STATE, broker by broker ----------------------------------------------
+
+// A host online on two brokers stamps each connection with its own time: each broker's STATEs are
+// a sequence of their own. Online on broker 1 at T, on broker 0 at T - 1000: the node that moves
+// from 1 to 0 is born there.
+TEST_F(EdgeNodePrimaryHost, EachBrokersStateIsASequenceOfItsOwn) {
+  const std::uint64_t t = at(0ms).unix_ms;
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_, 1);
+  state(true, t, 10ms);
+  ASSERT_EQ(node_.state(), SessionState::online);
+  node_.connection_lost();  // broker 1's will, say: the node goes on to broker 0
+  sink_.take();
+  node_.begin_connect(at(1s));
+  node_.connected(at(1s), sink_, 0);
+  state(true, t - 1000, 1010ms);
+  EXPECT_EQ(node_.state(), SessionState::online) << "broker 0's ONLINE taken for stale";
+  EXPECT_EQ(sink_.take().size(), 2u);
+  // And back on broker 1, its own sequence still holds: an older STATE there is stale.
+  node_.connection_lost();
+  node_.begin_connect(at(2s));
+  node_.connected(at(2s), sink_, 1);
+  state(false, t - 1, 2010ms);
+  state(true, t - 1, 2020ms);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  EXPECT_EQ(sink_.offline_waiting, 0);
+}
+
+// Anyone on the broker may publish a STATE. An offline stamped inside the tolerance (290 s ahead)
+// takes the node offline, but cannot make the host's next genuine ONLINE, stamped with the host's
+// own clock, look stale: the node is born again on it.
+TEST_F(EdgeNodePrimaryHost, AForgedOfflineCannotHoldTheNodeOfflinePastTheHostsNextOnline) {
+  node_.begin_connect(at(0ms));
+  node_.sample(0, true, values(1), kNoData, at(0ms), sink_);
+  node_.connected(at(0ms), sink_);
+  state(true, at(0ms).unix_ms, 10ms);
+  ASSERT_EQ(node_.state(), SessionState::online);
+  sink_.take();
+  state(false, at(0ms).unix_ms + 290'000, 1s);  // forged
+  EXPECT_EQ(node_.state(), SessionState::offline);
+  EXPECT_EQ(sink_.drops, 1);
+  sink_.take();  // the NDEATH
+  // Connected again, the forged STATE is what the broker kept.
+  node_.begin_connect(at(2s));
+  node_.connected(at(2s), sink_);
+  state(false, at(0ms).unix_ms + 290'000, 2010ms);
+  EXPECT_EQ(node_.state(), SessionState::waiting_for_host);
+  // The host sees it on its own topic and says again that it is online, now.
+  state(true, at(3s).unix_ms, 3s);
+  EXPECT_EQ(node_.state(), SessionState::online) << "the genuine ONLINE taken for stale";
+  EXPECT_EQ(sink_.take().size(), 2u);
+  // An earlier session's death certificate (older than the ONLINE believed) is still stale.
+  state(false, at(2s).unix_ms, 4s);
+  EXPECT_EQ(node_.state(), SessionState::online);
+}
+
+// --- timestamps ----------------------------------------------------------------------------------
+
+// A setpoint written while the drive is stopped changes no reply: the DDATA that reports it says
+// when it changed, not the last poll's time, which is from before it held.
+TEST_F(EdgeNodeTest, AValueAWriteChangedCarriesTheTimeItChanged) {
+  online();
+  const std::uint64_t poll = at(900ms).unix_ms;
+  node_.sample(0, true, values(0, 0, 0), poll, at(1s), sink_);
+  sink_.take();
+  node_.sample(0, true, values(0, 0, 700), poll, at(5s), sink_);
+  auto sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  ASSERT_NE(sent[0].metric("setpoint_rpm"), nullptr);
+  EXPECT_EQ(sent[0].metric("setpoint_rpm")->timestamp, at(5s).unix_ms);
+  // The next reply carries the drive's state with it: its time from then on.
+  node_.sample(0, true, values(10, 0, 700), at(5200ms).unix_ms, at(5300ms), sink_);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].metric("speed_rpm")->timestamp, at(5200ms).unix_ms);
+  // A rebirth's DBIRTH gives each metric the later of the two.
+  Payload rebirth;
+  rebirth.metrics.push_back({"Node Control/Rebirth", DataType::boolean, MetricValue{true}, {}});
+  node_.message("spBv1.0/plant1/NCMD/gw01", encode(rebirth), at(6s), sink_);
+  sent = sink_.take();
+  ASSERT_EQ(sent.size(), 3u);
+  EXPECT_EQ(sent[1].metric("setpoint_rpm")->timestamp, at(5200ms).unix_ms);
+}
+
+// --- store and forward: births, reloads, delivery ------------------------------------------------
+
+// A drive slow to answer after a restart: its kept changes wait for its DBIRTH (within
+// kReplayBirthWait) instead of being dropped.
+TEST_F(EdgeNodeStoreForward, AKeptChangeWaitsForItsDevicesBirth) {
+  node_.sample(1, true, values(5), 1'000, at(0ms), sink_);  // kept while offline
+  ASSERT_EQ(sink_.stored.size(), 1u);
+  const Payload kept = sink_.stored[0].payload;
+  node_.sample(1, false, values(5), 1'000, at(10ms), sink_);  // the restart: not heard from yet
+  node_.begin_connect(at(1s));
+  node_.connected(at(1s), sink_);
+  sink_.take();
+  EXPECT_EQ(node_.replay("washer-b", kept, at(1100ms), sink_), EdgeNode::Replay::not_now);
+  EXPECT_EQ(node_.replay("washer-b", kept, at(20s), sink_), EdgeNode::Replay::not_now);
+  EXPECT_EQ(node_.replay_dropped(), 0u);
+  node_.sample(1, true, values(6), 21'000, at(21s), sink_);  // it answers: DBIRTH
+  ASSERT_EQ(sink_.take().size(), 1u);
+  EXPECT_EQ(node_.replay("washer-b", kept, at(21s), sink_), EdgeNode::Replay::sent);
+  // One that never answers holds the rest back no longer than the bound.
+  node_.sample(1, false, values(6), 21'000, at(22s), sink_);
+  EXPECT_EQ(node_.replay("washer-b", kept, at(1s + kReplayBirthWait), sink_),
+            EdgeNode::Replay::dropped);
+  EXPECT_EQ(node_.replay_dropped(), 1u);
+}
+
+// A SIGHUP during an outage that changes the device set: the devices defined as before go on as
+// they were, so what was kept of them is not kept again.
+TEST_F(EdgeNodeStoreForward, AReloadDuringAnOutageKeepsNothingTwice) {
+  node_.sample(0, true, values(100, 1, 0), 1'000, at(0ms), sink_);
+  ASSERT_EQ(sink_.stored.size(), 1u);
+  auto defs = drives();
+  DeviceDef added{"washer-c", {metric("speed_rpm", DataType::int16)}};
+  defs.push_back(added);
+  ASSERT_TRUE(node_.set_devices(defs, at(500ms), sink_));
+  node_.sample(0, true, values(100, 1, 0), 1'000, at(600ms), sink_);
+  EXPECT_EQ(sink_.stored.size(), 1u) << "kept again after the reload";
+  node_.sample(0, true, values(110, 1, 0), 1'700, at(700ms), sink_);
+  ASSERT_EQ(sink_.stored.size(), 2u);
+  EXPECT_THAT(sink_.stored[1].names(), ElementsAre("speed_rpm"));
+}
+
+TEST(AsHistory, ADbirthOrALiveDdataIsItsDeviceMetricsFlaggedHistorical) {
+  Payload birth;
+  birth.timestamp = 5;
+  birth.seq = 3;
+  birth.metrics.push_back({"speed_rpm",
+                           DataType::int16,
+                           MetricValue{std::int64_t{10}},
+                           {{"engUnit", DataType::string, MetricValue{std::string("rpm")}}},
+                           std::uint64_t{4}});
+  birth.metrics.push_back(
+      {std::string(kCommandResult), DataType::string, MetricValue{std::string()}, {}});
+  const auto h = as_history(MessageType::dbirth, birth);
+  ASSERT_TRUE(h);
+  ASSERT_EQ(h->metrics.size(), 1u);
+  EXPECT_EQ(h->metrics[0].name, "speed_rpm");
+  EXPECT_TRUE(h->metrics[0].historical);
+  EXPECT_TRUE(h->metrics[0].properties.empty());
+  EXPECT_EQ(h->metrics[0].timestamp, 4u);
+  EXPECT_FALSE(h->seq);
+  EXPECT_TRUE(as_history(MessageType::ddata, birth));
+  for (const auto type : {MessageType::nbirth, MessageType::ddeath, MessageType::ndeath}) {
+    EXPECT_FALSE(as_history(type, birth));
+  }
+  Payload result;  // a command's result answers a DCMD of its own session: not history
+  result.metrics.push_back(
+      {std::string(kCommandPoint), DataType::string, MetricValue{std::string("command")}, {}});
+  result.metrics.push_back(
+      {std::string(kCommandResult), DataType::string, MetricValue{std::string("ok")}, {}});
+  EXPECT_FALSE(as_history(MessageType::ddata, result));
+}
+
+class StoreDelivery : public EdgeNodeStoreForward {
+ protected:
+  StoreDelivery() : store_(tmp_ / "store", mqtt::SpoolLimits{}, 100, log()) {
+    EXPECT_TRUE(store_.open());
+  }
+  static std::shared_ptr<spdlog::logger> log() {
+    return std::make_shared<spdlog::logger>("edge_node_test");
+  }
+  // Online, with the store told what the client takes; the samples from before kept there.
+  void online_numbered() {
+    online();
+    for (const Sent& s : sink_.stored) store_.keep(s.topic, s.payload, at(0ms).unix_ms);
+    sink_.stored.clear();
+    sink_.numbering = &store_;
+  }
+  // Replayed and confirmed until nothing waits: what was published.
+  std::vector<Sent> drain(const Now& now) {
+    std::vector<Sent> out;
+    while (store_.waiting()) {
+      if (store_.replay(node_, sink_, now) == 0) break;
+      for (auto& x : sink_.take()) out.push_back(std::move(x));
+      store_.delivered(sink_.numbered);
+    }
+    return out;
+  }
+  test::TempDir tmp_;
+  mqtt::StoreForward store_;
+};
+
+// A record replayed leaves the store, and counts as replayed, only once the broker confirmed the
+// message that carried it; the session lost before that, it is sent again in the next. The
+// records out unconfirmed are a window that starts at one in each session and doubles with each
+// confirmation.
+TEST_F(StoreDelivery, ARecordLeavesTheStoreOnlyOnceTheBrokerConfirmedIt) {
+  online_numbered();
+  EXPECT_EQ(store_.replay(node_, sink_, at(1s)), 1u) << "a window of one record at first";
+  EXPECT_TRUE(store_.window_full());
+  ASSERT_EQ(sink_.take().size(), 1u);
+  auto stats = store_.stats(node_);
+  EXPECT_EQ(stats.records, 2u) << "not confirmed: still kept";
+  EXPECT_EQ(stats.replayed, 0u);
+  store_.delivered(sink_.numbered);
+  stats = store_.stats(node_);
+  EXPECT_EQ(stats.records, 1u);
+  EXPECT_EQ(stats.replayed, 1u);
+  EXPECT_FALSE(store_.window_full());
+  EXPECT_EQ(store_.replay(node_, sink_, at(1s)), 1u);
+  ASSERT_EQ(sink_.take().size(), 1u);
+  EXPECT_EQ(store_.stats(node_).records, 1u);
+  // The link dies before the second is confirmed: the next session sends it again.
+  node_.connection_lost();
+  store_.lost(at(2s).unix_ms);
+  EXPECT_TRUE(store_.waiting());
+  node_.begin_connect(at(3s));
+  node_.connected(at(3s), sink_);
+  sink_.take();
+  store_.replay(node_, sink_, at(3s));
+  const auto again = sink_.take();
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(again[0].topic, "spBv1.0/plant1/DDATA/gw01/washer-b");
+  EXPECT_TRUE(again[0].metric("speed_rpm")->historical);
+  store_.delivered(sink_.numbered);
+  stats = store_.stats(node_);
+  EXPECT_EQ(stats.records, 0u);
+  EXPECT_EQ(stats.replayed, 2u);
+  EXPECT_EQ(stats.kept, 2u);
+}
+
+// The window grows with each confirmation, up to a second's worth (per_second, 100 here).
+TEST_F(StoreDelivery, TheWindowDoublesWithEachConfirmation) {
+  online_numbered();
+  for (int i = 0; i < 300; ++i) {
+    Payload p;
+    p.metrics.push_back(
+        {"speed_rpm", DataType::int16, MetricValue{std::int64_t{i}}, {}, std::uint64_t(i), true});
+    store_.keep("washer-a", p, at(0ms).unix_ms);
+  }
+  std::vector<unsigned> sent;
+  for (int round = 0; round < 9; ++round) {
+    sent.push_back(store_.replay(node_, sink_, at(1s), 1000));
+    store_.delivered(sink_.numbered);
+  }
+  EXPECT_THAT(sent, ElementsAre(1u, 2u, 4u, 8u, 16u, 32u, 64u, 100u, 75u));
+  EXPECT_EQ(store_.stats(node_).records, 0u);
+}
+
+// Live DDATA and births published on a link that turned out dead, not confirmed: kept as
+// historical DDATA when the session is lost, and replayed in the next; confirmed ones are not.
+TEST_F(StoreDelivery, LiveChangesNotConfirmedAreKeptWhenTheLinkDies) {
+  online_numbered();
+  drain(at(1s));
+  sink_.take();
+  node_.sample(0, true, values(10), 1'100, at(1100ms), sink_);  // confirmed below
+  store_.delivered(sink_.numbered);
+  node_.sample(0, true, values(20), 1'300, at(1300ms), sink_);  // into the dead link
+  node_.sample(0, true, values(30), 1'500, at(1500ms), sink_);
+  ASSERT_EQ(sink_.take().size(), 3u);
+  EXPECT_EQ(store_.stats(node_).records, 0u);
+  node_.connection_lost();
+  store_.lost(at(9s).unix_ms);
+  EXPECT_EQ(store_.stats(node_).records, 2u) << "the two changes the broker never confirmed";
+  node_.begin_connect(at(10s));
+  node_.connected(at(10s), sink_);
+  sink_.take();
+  const auto replayed = drain(at(10s));
+  ASSERT_EQ(replayed.size(), 2u);
+  EXPECT_EQ(replayed[0].metric("speed_rpm")->value, MetricValue{std::int64_t{20}});
+  EXPECT_EQ(replayed[0].metric("speed_rpm")->timestamp, 1'300u);
+  EXPECT_TRUE(replayed[0].metric("speed_rpm")->historical);
+  EXPECT_EQ(replayed[1].metric("speed_rpm")->value, MetricValue{std::int64_t{30}});
+  EXPECT_EQ(store_.stats(node_).records, 0u);
 }
 
 }  // namespace

@@ -90,6 +90,53 @@ TEST_F(SpoolTest, OlderThanMaxAgeIsDroppedWhenItsTurnComes) {
   EXPECT_EQ(s.stats().taken, 1u);
 }
 
+// Reading runs ahead of the cursor: a record taken stays kept (counted, on disk, and after a
+// restart) until it is released; a rewind reads what was not released again.
+TEST_F(SpoolTest, TakenRecordsStayUntilReleasedAndARewindReadsThemAgain) {
+  Spool s(dir_, {1 << 20, 24h, 64});
+  ASSERT_FALSE(s.open());
+  for (int i = 0; i < 10; ++i) ASSERT_FALSE(s.append(100 + i, "r" + std::to_string(i)));
+  std::error_code ec;
+  std::vector<SpoolPosition> after;
+  for (int i = 0; i < 6; ++i) {
+    ASSERT_EQ(s.front(0, ec)->bytes, "r" + std::to_string(i));
+    s.take();
+    after.push_back(s.position());
+  }
+  EXPECT_EQ(s.stats().records, 10u);
+  EXPECT_EQ(s.taken_unreleased(), 6u);
+  EXPECT_EQ(s.stats().oldest_ms, 100u);
+  s.release(after[1]);  // r0, r1 done with
+  EXPECT_EQ(s.stats().records, 8u);
+  EXPECT_EQ(s.taken_unreleased(), 4u);
+  EXPECT_EQ(s.stats().oldest_ms, 102u);
+  s.release(after[0]);  // before the cursor: nothing
+  EXPECT_EQ(s.stats().records, 8u);
+  ASSERT_FALSE(s.sync());
+  s.rewind();
+  EXPECT_EQ(s.taken_unreleased(), 0u);
+  EXPECT_EQ(s.front(0, ec)->bytes, "r2") << "read again from the cursor";
+  {
+    Spool again(dir_, {1 << 20, 24h, 64});  // (a second reader of the same files, for the test)
+    ASSERT_FALSE(again.open());
+    EXPECT_EQ(again.stats().records, 8u) << "taken, not released: kept across a restart";
+  }
+  EXPECT_EQ(drain(s), (std::vector<std::string>{"r2", "r3", "r4", "r5", "r6", "r7", "r8", "r9"}));
+  EXPECT_TRUE(s.empty());
+  EXPECT_EQ(segments(), 1u);
+}
+
+// Trimmed to max_bytes while records wait: the oldest waiting is still known.
+TEST_F(SpoolTest, AfterASizeTrimTheOldestWaitingIsStillKnown) {
+  Spool s(dir_, {400, 24h, 100});
+  ASSERT_FALSE(s.open());
+  for (int i = 0; i < 100; ++i) ASSERT_FALSE(s.append(1000 + i, "0123456789abcdef"));
+  ASSERT_GT(s.stats().dropped_size, 0u);
+  ASSERT_GT(s.stats().records, 0u);
+  ASSERT_TRUE(s.stats().oldest_ms.has_value()) << s.stats().records << " records wait";
+  EXPECT_EQ(*s.stats().oldest_ms, 1000u + s.stats().dropped_size);
+}
+
 TEST_F(SpoolTest, ARestartKeepsWhatWasNotTakenAfterTheLastSync) {
   {
     Spool s(dir_, {1 << 20, 24h, 64});

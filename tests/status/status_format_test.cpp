@@ -1,13 +1,20 @@
 // What the status JSON and the metrics are made of: a device's points read a table at a time give
-// what reading them one by one gives, and the JSON string writer escapes what RFC 8259 says.
+// what reading them one by one gives, what is not known has no value, and the JSON string writer
+// escapes what RFC 8259 says.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 
-#include "fake_adapter.h"
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <optional>
+
 #include "base/json.h"
-#include "status/status_view.h"
+#include "fake_adapter.h"
 #include "gateway/device.h"
 #include "gateway/value_codec.h"
+#include "status/status_view.h"
 
 namespace drivegate {
 namespace {
@@ -50,6 +57,22 @@ std::vector<PointValue> one_by_one(Device& device, TimePoint now) {
   return out;
 }
 
+// When the fake drive last answered.
+const TimePoint kHeard = TimePoint{} + std::chrono::hours(1);
+
+// A device of the fake adapter around `driver`, its drive answering at kHeard.
+std::unique_ptr<Device> answering(std::unique_ptr<test::FakeDriver> driver) {
+  DeviceConfig cfg;
+  cfg.name = "dev";
+  cfg.unit_id = 1;
+  auto device = std::make_unique<Device>(
+      cfg, test::kFakeAdapter, std::move(driver),
+      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>()),
+      kHeard);
+  device->link().health.frame_good(kHeard);
+  return device;
+}
+
 TEST(PointValues, ATableAtATimeReadsWhatPointByPointReads) {
   auto driver = std::make_unique<test::FakeDriver>(DeviceEnv{});
   test::FakeDriver& fake = *driver;
@@ -76,14 +99,9 @@ TEST(PointValues, ATableAtATimeReadsWhatPointByPointReads) {
                   std::string("AB12")};
   fake.common_.speed_rpm = 1499;
   fake.common_.running = true;
-  const TimePoint t0 = TimePoint{} + std::chrono::hours(1);
-  DeviceConfig cfg;
-  cfg.name = "dev";
-  cfg.unit_id = 1;
-  Device device(
-      cfg, test::kFakeAdapter, std::move(driver),
-      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>()), t0);
-  device.link().health.frame_good(t0);
+  const TimePoint t0 = kHeard;
+  const auto owner = answering(std::move(driver));
+  Device& device = *owner;
 
   const auto now = t0 + Millis(250);
   const auto want = one_by_one(device, now);
@@ -109,6 +127,57 @@ TEST(PointValues, ATableAtATimeReadsWhatPointByPointReads) {
   EXPECT_EQ(by_name("serial"), Value{});
   EXPECT_EQ(by_name("relay"), Value{std::int64_t{1}});
   EXPECT_EQ(by_name("pressure"), Value{3.5});
+}
+
+// What is not known is never a plausible number: a speed the drive cannot give reads -32768 in
+// speed_rpm, a float not known NaN, an integer not known 0 (no value to spare); the documents and
+// MQTT, which read point_values(), get no value (null in the JSON, NaN in /metrics).
+TEST(PointValues, WhatIsNotKnownHasNoValue) {
+  auto driver = std::make_unique<test::FakeDriver>(DeviceEnv{});
+  test::FakeDriver& fake = *driver;
+  fake.values_ = {Value{},  // temperature: never read
+                  std::int64_t{4242},
+                  std::numeric_limits<double>::quiet_NaN(),  // pressure: a float reading NaN
+                  Value{}};                                  // gain: never read
+  fake.common_.speed_rpm = 0;
+  fake.common_.speed_unknown = true;
+  const TimePoint t0 = kHeard;
+  const auto owner = answering(std::move(driver));
+  Device& device = *owner;
+  const Session reader{AccessLevel::read, WordOrder::big};
+  const auto regs = [&](Table t, std::uint16_t address, std::size_t n) {
+    std::vector<std::uint16_t> out(n);
+    EXPECT_EQ(device.read(reader, t, address, out, t0), Outcome::ok);
+    return out;
+  };
+  EXPECT_EQ(regs(Table::input, 6, 1), std::vector<std::uint16_t>{0x8000});  // speed_rpm
+  const auto at = [&](std::string_view n) { return device.map().find(n)->address; };
+  EXPECT_EQ(regs(Table::input, at("temperature"), 1), std::vector<std::uint16_t>{0});
+  const auto pressure = regs(Table::input, at("pressure"), 2);
+  EXPECT_TRUE(std::isnan(std::bit_cast<float>((std::uint32_t{pressure[0]} << 16) | pressure[1])));
+  const auto gain = regs(Table::holding, at("gain"), 2);
+  EXPECT_TRUE(std::isnan(std::bit_cast<float>((std::uint32_t{gain[0]} << 16) | gain[1])));
+
+  std::vector<PointValue> got;
+  point_values(device, t0, got);
+  const auto by_name = [&](std::string_view n) -> std::optional<Value> {
+    for (const auto& [p, v] : got) {
+      if (p->spec.name == n) return v;
+    }
+    return std::nullopt;
+  };
+  for (const char* unknown : {"speed_rpm", "temperature", "pressure", "gain"}) {
+    EXPECT_EQ(by_name(unknown), Value{}) << unknown;
+  }
+  EXPECT_EQ(by_name("limit"), Value{std::int64_t{4242}});
+  EXPECT_TRUE(std::isnan(number_of(Value{})));
+  EXPECT_EQ(number_of(Value{std::int64_t{-3}}), -3.0);
+  // A speed the register cannot carry is unknown too, whatever the driver says of it.
+  fake.common_.speed_unknown = false;
+  fake.common_.speed_rpm = 40000;
+  EXPECT_EQ(regs(Table::input, 6, 1), std::vector<std::uint16_t>{0x8000});
+  fake.common_.speed_rpm = -32767;
+  EXPECT_EQ(regs(Table::input, 6, 1), std::vector<std::uint16_t>{0x8001});
 }
 
 }  // namespace

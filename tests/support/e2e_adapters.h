@@ -25,6 +25,9 @@ struct E2eAdapter {
   // status field(s) it sets (1 = Good).
   std::string protocol;
   std::string checksum_field;
+  // The adapter id a capture names its frames with, where it is not `id`: a described protocol's
+  // device is "framed/NAME" (AdapterDescriptor::specialise).
+  std::string capture_id;
 };
 
 // Every registered adapter, by id.

@@ -75,11 +75,14 @@ class FakeDriver final : public Driver {
       case WriteOp::Target::point:
         writes.emplace_back(op.point, op.value);
         return answer;
-      case WriteOp::Target::forward:  // a fake driver does not forward
-        break;
+      case WriteOp::Target::forward:  // only a forwarding one takes them
+        if (!forwarding) break;
+        forwarded.push_back(op.pdu);
+        return answer;
     }
     return WriteStatus::invalid_value;
   }
+  bool forwards() const override { return forwarding; }
   void take_completions(std::vector<Completion>& out) override {
     out.insert(out.end(), completions.begin(), completions.end());
     completions.clear();
@@ -99,6 +102,8 @@ class FakeDriver final : public Driver {
   std::vector<Command> commands;
   std::vector<std::int32_t> setpoints;
   std::vector<std::pair<std::size_t, Value>> writes;
+  bool forwarding = false;       // a pass-through driver: every request is forwarded
+  std::vector<Bytes> forwarded;  // the forward parts applied, their PDUs
   std::vector<Completion> completions;
   Ticket last_ticket = 0;
   int no_replies = 0;

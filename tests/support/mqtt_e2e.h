@@ -16,6 +16,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 
 #include "e2e.h"
@@ -124,6 +125,48 @@ inline void expect_seq_consecutive(const std::vector<Message>& history) {
     }
     if (t == "DDEATH") born[m.device()] = false;
   }
+}
+
+// A ramping drive's speed as a host can put it together from `history` (every DBIRTH and DDATA of
+// `device`, of edge node `node` or any when empty, live and historical) by the metrics'
+// timestamps, those in [from_ms, to_ms]: how many speeds, the longest gap between two of them,
+// how many speeds between the lowest and the highest it never got, and how many it got both live
+// and as history (the same time, the same value).
+struct RampSeen {
+  std::size_t values = 0;
+  double worst_gap_ms = 0;
+  std::size_t missing = 0;
+  std::size_t twice = 0;
+};
+inline RampSeen ramp_seen(const std::vector<Message>& history, std::string_view node,
+                          std::string_view device, std::uint64_t from_ms, std::uint64_t to_ms) {
+  std::set<std::pair<std::uint64_t, std::int64_t>> all;
+  std::set<std::pair<std::uint64_t, std::int64_t>> live;
+  std::set<std::pair<std::uint64_t, std::int64_t>> historical;
+  for (const auto& m : history) {
+    if (!is(m, "DDATA", device) && !is(m, "DBIRTH", device)) continue;
+    if (!node.empty() && m.node() != node) continue;
+    const Metric* s = m.metric("speed_rpm");
+    if (s == nullptr || !s->timestamp || *s->timestamp < from_ms || *s->timestamp > to_ms) continue;
+    const std::pair<std::uint64_t, std::int64_t> v{*s->timestamp, s->as_int()};
+    all.insert(v);
+    (s->has_flag("historical") ? historical : live).insert(v);
+  }
+  RampSeen r;
+  r.values = all.size();
+  std::set<std::int64_t> speeds;
+  for (auto it = all.begin(); it != all.end(); ++it) {
+    speeds.insert(it->second);
+    if (it != all.begin()) {
+      r.worst_gap_ms =
+          std::max(r.worst_gap_ms, static_cast<double>(it->first - std::prev(it)->first));
+    }
+  }
+  if (!speeds.empty()) {
+    r.missing = static_cast<std::size_t>(*speeds.rbegin() - *speeds.begin() + 1) - speeds.size();
+  }
+  for (const auto& v : historical) r.twice += live.contains(v) ? 1 : 0;
+  return r;
 }
 
 // The Command/Last Point and Command/Last Result of the next DDATA of `device` carrying them,

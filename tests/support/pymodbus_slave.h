@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "e2e.h"
+#include "serial_master.h"
 
 namespace drivegate::test {
 
@@ -29,15 +30,8 @@ inline bool have_pymodbus_tools() {
 class PymodbusSlave {
  public:
   PymodbusSlave(const TempDir& dir, const std::vector<std::string>& args)
-      : a_(dir / "a"),
-        out_(dir / "slave.out"),
-        socat_({"/usr/bin/socat", "pty,raw,echo=0,link=" + (dir / "a").string(),
-                "pty,raw,echo=0,link=" + (dir / "b").string()},
-               dir / "socat.err") {
+      : a_(dir / "a"), out_(dir / "slave.out"), line_(dir / "a", dir / "b", dir / "socat.err") {
     using namespace std::chrono_literals;
-    for (int i = 0; i < 100 && !std::filesystem::exists(dir / "b"); ++i) {
-      std::this_thread::sleep_for(20ms);
-    }
     std::vector<std::string> argv = {"/bin/sh", "-c",
                                      "exec " + kSystemPython + " " +
                                          pymodbus_slave_script().string() + " --port " +
@@ -57,7 +51,7 @@ class PymodbusSlave {
  private:
   std::filesystem::path a_;
   std::filesystem::path out_;
-  Child socat_;
+  PtyPair line_;
   std::unique_ptr<Child> slave_;
 };
 

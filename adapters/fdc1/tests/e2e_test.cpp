@@ -1,13 +1,15 @@
 // fdc1 end to end: the daemon on a simulated FDC1 controller (a streaming device, 1200 8N1), driven
 // from Modbus TCP as a PLC would (issue 5, "Not done until"), and `drivegate action ... program` on
 // the same simulator with the daemon not running.
+#include "e2e.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-#include "e2e.h"
 #include "e2e_adapters.h"
+#include "protocol_adapters.h"
 
 namespace drivegate::test {
 namespace {
@@ -40,12 +42,15 @@ constexpr int kRefreshS = 2;
 constexpr int kWindowS = 5;
 constexpr int kStaleMs = 2000;
 
-std::string config(const std::filesystem::path& port, bool slave = true) {
+// The controller under the C++ adapter (the default) or the framed one with its description
+// (protocol_adapters.h).
+std::string config(const std::filesystem::path& port, bool slave = true,
+                   const ProtocolAdapter& a = {"fdc1", ""}) {
   return "[[bus]]\nname = \"fdc1-line\"\nport = \"" + port.string() +
-         "\"\n\n[[device]]\nname = \"fridge\"\nbus = \"fdc1-line\"\nadapter = \"fdc1\"\n"
-         "unit_id = 1\n[device.options]\nslave_mode = " +
-         (slave ? "true" : "false") + "\nrefresh_s = " + std::to_string(kRefreshS) +
-         "\nstale_ms = " + std::to_string(kStaleMs) + "\n";
+         "\"\n\n[[device]]\nname = \"fridge\"\nbus = \"fdc1-line\"\nunit_id = 1\n" +
+         device_adapter(a, std::string("slave_mode = ") + (slave ? "true" : "false") +
+                               "\nrefresh_s = " + std::to_string(kRefreshS) +
+                               "\nstale_ms = " + std::to_string(kStaleMs) + "\n");
 }
 
 // The number after `key=` in the simulator's `state` line, or -1.
@@ -56,11 +61,11 @@ long field(const std::string& state, const std::string& key) {
   return std::stol(padded.substr(at + key.size() + 2));
 }
 
-class Fdc1E2E : public ::testing::Test {
+class Fdc1E2E : public ::testing::TestWithParam<ProtocolAdapter> {
  protected:
   Fdc1E2E()
       : sim_("fdc1", dir_ / "fdc1", {"--set", "slave_mode=true"}),
-        daemon_(dir_, config(dir_ / "fdc1")) {}
+        daemon_(dir_, config(dir_ / "fdc1", true, GetParam())) {}
   void SetUp() override {
     ASSERT_EQ(sim_.control("window " + std::to_string(kWindowS)), "ok");
     ASSERT_TRUE(plc_.connect());
@@ -80,7 +85,7 @@ class Fdc1E2E : public ::testing::Test {
   Plc plc_{daemon_.port()};
 };
 
-TEST_F(Fdc1E2E, RunsAt2000InSlaveModePastTheRefreshWindow) {
+TEST_P(Fdc1E2E, RunsAt2000InSlaveModePastTheRefreshWindow) {
   run_at_2000();
   EXPECT_THAT(state(), HasSubstr("min=2000 max=2000"));  // slave: minimum = maximum = setpoint
   const auto in = plc_.input(fdc1::motor_on, 6);
@@ -118,7 +123,7 @@ TEST_F(Fdc1E2E, RunsAt2000InSlaveModePastTheRefreshWindow) {
   EXPECT_THAT(state(), HasSubstr("motor=off"));
 }
 
-TEST_F(Fdc1E2E, StopProgramsZeroAndTheStreamConfirmsIt) {
+TEST_P(Fdc1E2E, StopProgramsZeroAndTheStreamConfirmsIt) {
   run_at_2000();
   ASSERT_EQ(plc_.write(reg::command, {0 /*stop*/}), 0);
   EXPECT_THAT(state(), HasSubstr("motor=off"));  // the reply waited for the OFF form
@@ -127,7 +132,7 @@ TEST_F(Fdc1E2E, StopProgramsZeroAndTheStreamConfirmsIt) {
   EXPECT_EQ(plc_.input(fdc1::sent_speed_rpm, 1).regs[0], 0);
 }
 
-TEST_F(Fdc1E2E, AlarmIsAUnifiedFaultWithItsRawCode) {
+TEST_P(Fdc1E2E, AlarmIsAUnifiedFaultWithItsRawCode) {
   run_at_2000();
   sim_.control("fault start");  // 48: motor failed to start
   ASSERT_TRUE(eventually([&] { return plc_.input(reg::fault_code, 1).regs[0] == kStall; }, 5s))
@@ -167,7 +172,7 @@ TEST_F(Fdc1E2E, AlarmIsAUnifiedFaultWithItsRawCode) {
   run_at_2000();
 }
 
-TEST_F(Fdc1E2E, SpeedsOutsideTheRangeAndReverseAre0x03) {
+TEST_P(Fdc1E2E, SpeedsOutsideTheRangeAndReverseAre0x03) {
   // In slave mode the driver sends the order in force (stop) once it is ready: counted from
   // after that frame, or it races the refused writes below (seen under TSan).
   ASSERT_TRUE(eventually([&] { return field(state(), "speeds") >= 1; }, 5s))
@@ -191,7 +196,7 @@ TEST_F(Fdc1E2E, SpeedsOutsideTheRangeAndReverseAre0x03) {
   EXPECT_EQ(plc_.holding(reg::setpoint, 1).regs[0], 3500);
 }
 
-TEST_F(Fdc1E2E, CommLostAfterStaleMsWhenTheStreamStops) {
+TEST_P(Fdc1E2E, CommLostAfterStaleMsWhenTheStreamStops) {
   run_at_2000();
   sim_.control("silent on");
   const auto silent_at = std::chrono::steady_clock::now();
@@ -219,11 +224,11 @@ TEST_F(Fdc1E2E, CommLostAfterStaleMsWhenTheStreamStops) {
 // A reload that adds a compressor on another line leaves the running one alone: its bus and
 // device move over as they run. A fresh device would begin with a start-up that asserts stop,
 // so the compressor would stop within a stream period (0.5 s).
-TEST_F(Fdc1E2E, AReloadAddingALineLeavesTheRunningCompressorAlone) {
+TEST_P(Fdc1E2E, AReloadAddingALineLeavesTheRunningCompressorAlone) {
   run_at_2000();
   Sim freezer("fdc1", dir_ / "fdc1-b", {"--set", "slave_mode=true"});
   std::ofstream(daemon_.config())
-      << config(dir_ / "fdc1") << "\n[[bus]]\nname = \"line-b\"\nport = \""
+      << config(dir_ / "fdc1", true, GetParam()) << "\n[[bus]]\nname = \"line-b\"\nport = \""
       << (dir_ / "fdc1-b").string()
       << "\"\n\n[[device]]\nname = \"freezer\"\nbus = \"line-b\"\nadapter = \"fdc1\"\n"
          "unit_id = 2\n[device.options]\nslave_mode = true\n";
@@ -246,7 +251,7 @@ TEST_F(Fdc1E2E, AReloadAddingALineLeavesTheRunningCompressorAlone) {
   EXPECT_EQ(plc_.input(reg::speed, 1).regs[0], 2000);
 }
 
-TEST_F(Fdc1E2E, NoiseAndBadChecksumsCostFramesNotTheLink) {
+TEST_P(Fdc1E2E, NoiseAndBadChecksumsCostFramesNotTheLink) {
   const auto before = plc_.input(reg::status, 19);
   sim_.control("noise 20");
   sim_.control("corrupt 3");
@@ -269,6 +274,8 @@ TEST_F(Fdc1E2E, NoiseAndBadChecksumsCostFramesNotTheLink) {
       2s));
   EXPECT_LT(after.u32(reg::data_age), 1000u);
 }
+
+INSTANTIATE_TEST_SUITE_P(, Fdc1E2E, ::testing::ValuesIn(protocol_adapters("fdc1")), adapter_name);
 
 // `drivegate action ... program` (the adapter's maintenance action) with the daemon NOT running:
 // the CLI owns the line.

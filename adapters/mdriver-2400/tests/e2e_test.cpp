@@ -1,14 +1,16 @@
 // mdriver-2400 end to end (issue 4, "Not done until"): the daemon drives the simulated compressor
 // driver from Modbus TCP as a PLC would. The run frames on the line are taken from drivegated's
 // trace log (sum of all bytes = 0x55, adapters/mdriver-2400/README.md "Frames").
+#include "e2e.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <sstream>
 
-#include "e2e.h"
 #include "e2e_adapters.h"
+#include "protocol_adapters.h"
 #include "trace_log.h"
 
 namespace drivegate::test {
@@ -37,17 +39,18 @@ constexpr const char* kRun1149 = "00 01 10 02 40 01 00 01";  // code 0x40 = 1149
 constexpr const char* kStop = "00 01 10 02 01 01 00 40";     // code 0x01: stop
 constexpr const char* kReset = "00 01 10 02 00 01 00 41";    // code 0x00: reset and stop
 
-std::string config(const std::filesystem::path& port, int poll_ms) {
+// The driver under the C++ adapter or the framed one with its description (protocol_adapters.h).
+std::string config(const std::filesystem::path& port, int poll_ms, const ProtocolAdapter& a) {
   return "[[bus]]\nname = \"" + std::string(kBus) + "\"\nport = \"" + port.string() +
          "\"\n\n[[device]]\nname = \"compressor\"\nbus = \"" + kBus +
-         "\"\nadapter = \"mdriver-2400\"\nunit_id = 1\npoll_ms = " + std::to_string(poll_ms) + "\n";
+         "\"\nunit_id = 1\npoll_ms = " + std::to_string(poll_ms) + "\n" + device_adapter(a);
 }
 
-class MDriverE2E : public ::testing::Test {
+class MDriverE2E : public ::testing::TestWithParam<ProtocolAdapter> {
  protected:
   explicit MDriverE2E(int poll_ms = 500)
       : sim_("mdriver-2400", dir_ / "compressor"),
-        daemon_(dir_, config(dir_ / "compressor", poll_ms), {"--log-level", "trace"},
+        daemon_(dir_, config(dir_ / "compressor", poll_ms, GetParam()), {"--log-level", "trace"},
                 dir_ / "drivegated.log") {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
@@ -65,13 +68,13 @@ class MDriverE2E : public ::testing::Test {
   Plc plc_{daemon_.port()};
 };
 
-TEST_F(MDriverE2E, StartsWithTheFixedCodeCheck) {
+TEST_P(MDriverE2E, StartsWithTheFixedCodeCheck) {
   EXPECT_THAT(frames(), Contains("00 01 00 03 01 12 00 06 38"));  // section 3 No.1
   EXPECT_EQ(in(md::fixed_code_state), 1);                         // ok
   EXPECT_EQ(in(reg::fault_code), 0);
 }
 
-TEST_F(MDriverE2E, RunsAt1149RpmAsCode0x40AndReadsSpeedAndTemperatureBack) {
+TEST_P(MDriverE2E, RunsAt1149RpmAsCode0x40AndReadsSpeedAndTemperatureBack) {
   EXPECT_THAT(sim_.control("temp 47"), HasSubstr("temp=47"));
   // Setpoint and command in one request: the setpoint applies first.
   ASSERT_EQ(plc_.write(reg::command, {1 /*run_forward*/, 1149}), 0);
@@ -94,7 +97,7 @@ TEST_F(MDriverE2E, RunsAt1149RpmAsCode0x40AndReadsSpeedAndTemperatureBack) {
   ASSERT_TRUE(eventually([&] { return in(reg::speed) == 0; }, 10s)) << sim_.control("state");
 }
 
-TEST_F(MDriverE2E, OverTemperatureTripIsDriveOverTemperatureAndResetClearsIt) {
+TEST_P(MDriverE2E, OverTemperatureTripIsDriveOverTemperatureAndResetClearsIt) {
   ASSERT_EQ(plc_.write(reg::command, {1, 1149}), 0);
   EXPECT_THAT(sim_.control("fault ipm_over_temperature"), HasSubstr("ok"));
   ASSERT_TRUE(eventually([&] { return in(reg::fault_code) == 5; }, 5s))  // drive_over_temperature
@@ -120,7 +123,7 @@ TEST_F(MDriverE2E, OverTemperatureTripIsDriveOverTemperatureAndResetClearsIt) {
   ASSERT_TRUE(eventually([&] { return in(reg::speed) == 1149; }, 10s)) << sim_.control("state");
 }
 
-TEST_F(MDriverE2E, ReverseAndSpeedsOffTheTableAreIllegalValues) {
+TEST_P(MDriverE2E, ReverseAndSpeedsOffTheTableAreIllegalValues) {
   EXPECT_EQ(plc_.write(reg::command, {2 /*run_reverse*/}), 0x03);  // one direction only
   EXPECT_EQ(plc_.write(reg::setpoint, {503}), 0x03);               // under the lowest running speed
   EXPECT_EQ(plc_.write(reg::setpoint, {0}), 0x03);
@@ -130,7 +133,7 @@ TEST_F(MDriverE2E, ReverseAndSpeedsOffTheTableAreIllegalValues) {
   EXPECT_THAT(frames(), Contains("00 01 10 02 1C 01 00 25"));  // section 3 No.2
 }
 
-TEST_F(MDriverE2E, FailedFixedCodeCheckIsHardwareFaultNotOnline) {
+TEST_P(MDriverE2E, FailedFixedCodeCheckIsHardwareFaultNotOnline) {
   // The driver forgets the check and answers the next one with zeros (section 3 No.1); run data
   // goes unanswered meanwhile, so the gateway declares comm_lost (6 s) and checks again.
   EXPECT_EQ(sim_.control("eeprom fail"), "ok eeprom=fail");
@@ -158,7 +161,7 @@ class MDriverKeepAliveE2E : public MDriverE2E {
   MDriverKeepAliveE2E() : MDriverE2E(10'000) {}
 };
 
-TEST_F(MDriverKeepAliveE2E, KeepsTheDriverRunningWellPast6sWithoutModbusTraffic) {
+TEST_P(MDriverKeepAliveE2E, KeepsTheDriverRunningWellPast6sWithoutModbusTraffic) {
   ASSERT_EQ(plc_.write(reg::command, {1, 1149}), 0);
   const std::size_t before = wire().tx.size();
   std::this_thread::sleep_for(9s);  // no Modbus traffic
@@ -182,6 +185,11 @@ TEST_F(MDriverKeepAliveE2E, KeepsTheDriverRunningWellPast6sWithoutModbusTraffic)
   EXPECT_EQ(r.regs[reg::fault_code], 0);
   EXPECT_EQ(r.regs[reg::speed], 1149);
 }
+
+INSTANTIATE_TEST_SUITE_P(, MDriverE2E, ::testing::ValuesIn(protocol_adapters("mdriver-2400")),
+                         adapter_name);
+INSTANTIATE_TEST_SUITE_P(, MDriverKeepAliveE2E,
+                         ::testing::ValuesIn(protocol_adapters("mdriver-2400")), adapter_name);
 
 }  // namespace
 }  // namespace drivegate::test

@@ -226,5 +226,58 @@ TEST(ModbusCodec, EncodeRefusesAnEmptyOrOversizedPdu) {
   EXPECT_EQ(encode(Framing::ascii, 1, Buffer(kMaxPdu, 0x03)).size(), 513u);
 }
 
+// The Application Protocol's own request examples (6.11, 6.12, 6.14, 6.15, 6.17, 6.18, 6.21): the
+// length each function and count gives is the example's length, and the counts in each agree.
+TEST(ModbusCodec, RequestLengthsAreTheExamplesLengthsAndTheirCountsAgree) {
+  const std::vector<Buffer> examples = {
+      {0x0F, 0x00, 0x13, 0x00, 0x0A, 0x02, 0xCD, 0x01},              // 6.11
+      {0x10, 0x00, 0x01, 0x00, 0x02, 0x04, 0x00, 0x0A, 0x01, 0x02},  // 6.12
+      {0x14, 0x0E, 0x06, 0x00, 0x04, 0x00, 0x01, 0x00, 0x02,         // 6.14
+       0x06, 0x00, 0x03, 0x00, 0x09, 0x00, 0x02},
+      {0x15, 0x0D, 0x06, 0x00, 0x04, 0x00, 0x07, 0x00, 0x03,  // 6.15
+       0x06, 0xAF, 0x04, 0xBE, 0x10, 0x0D},
+      {0x17, 0x00, 0x03, 0x00, 0x06, 0x00, 0x0E, 0x00, 0x03, 0x06,  // 6.17
+       0x00, 0xFF, 0x00, 0xFF, 0x00, 0xFF},
+      {0x18, 0x04, 0xDE},                          // 6.18
+      {0x2B, 0x0E, 0x01, 0x00},                    // 6.21
+      {0x03, 0x00, 0x6B, 0x00, 0x03},              // 6.3
+      {0x07},                                      // 6.7
+      {0x16, 0x00, 0x04, 0x00, 0xF2, 0x00, 0x25},  // 6.16
+  };
+  for (const Buffer& pdu : examples) {
+    const RequestLength l = request_length(pdu);
+    EXPECT_EQ(l.status, RequestLength::Status::known) << std::hex << int{pdu[0]};
+    EXPECT_EQ(l.size, pdu.size()) << std::hex << int{pdu[0]};
+    EXPECT_TRUE(request_counts_agree(pdu)) << std::hex << int{pdu[0]};
+    // Cut before its byte count: not known yet.
+    const bool counted =
+        pdu[0] == 0x0F || pdu[0] == 0x10 || pdu[0] == 0x14 || pdu[0] == 0x15 || pdu[0] == 0x17;
+    if (counted) {
+      EXPECT_EQ(request_length(ByteView(pdu).first(1)).status, RequestLength::Status::incomplete);
+    }
+  }
+}
+
+TEST(ModbusCodec, FunctionsOfAnyLengthAreUnknownAndCountsThatDisagreeAreSaid) {
+  // 0x08's data is any number of words (6.8); 0x2B / 0x0D (CANopen) has no fixed request; 0x41
+  // is a user-defined function (Application Protocol 5).
+  for (const Buffer& pdu :
+       {Buffer{0x08, 0x00, 0x00, 0x12, 0x34}, Buffer{0x2B, 0x0D, 0x00}, Buffer{0x41, 0x12, 0x34}}) {
+    EXPECT_EQ(request_length(pdu).status, RequestLength::Status::unknown) << int{pdu[0]};
+  }
+  // A byte count that is not its quantity's: a slave reading either would end elsewhere.
+  EXPECT_FALSE(request_counts_agree(Buffer{0x10, 0x00, 0x01, 0x00, 0x01, 0x04, 0, 1, 0, 2}));
+  EXPECT_FALSE(request_counts_agree(Buffer{0x0F, 0x00, 0x13, 0x00, 0x0A, 0x01, 0xCD}));
+  EXPECT_FALSE(request_counts_agree(
+      Buffer{0x17, 0x00, 0x03, 0x00, 0x06, 0x00, 0x0E, 0x00, 0x01, 0x04, 0x00, 0xFF, 0x00, 0xFF}));
+  // A file sub-request of another reference type, or cut short; record data longer than its
+  // record length says.
+  EXPECT_FALSE(request_counts_agree(Buffer{0x14, 0x07, 0x05, 0x00, 0x04, 0x00, 0x01, 0x00, 0x02}));
+  EXPECT_FALSE(request_counts_agree(Buffer{0x14, 0x05, 0x06, 0x00, 0x04, 0x00, 0x01}));
+  EXPECT_FALSE(request_counts_agree(Buffer{0x15, 0x0F, 0x06, 0x00, 0x04, 0x00, 0x07, 0x00, 0x03,
+                                           0x06, 0xAF, 0x04, 0xBE, 0x10, 0x0D, 0x00, 0x00}));
+  EXPECT_FALSE(request_counts_agree(Buffer{0x10, 0x00, 0x01, 0x00, 0x00, 0x00}));  // quantity 0
+}
+
 }  // namespace
 }  // namespace drivegate::modbus_device

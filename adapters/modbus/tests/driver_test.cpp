@@ -66,6 +66,17 @@ class ModbusDriverTest : public ::testing::Test {
     EXPECT_EQ(answer(frame(words_pdu(0x03, {status}))).kind, RxKind::reply);
   }
 
+  // The example's blocks after the first (fault code, control word and reference, status word),
+  // answered with a stopped drive's registers.
+  void rest_of_cycle() {
+    ASSERT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
+    answer(frame(words_pdu(0x04, {0})));
+    ASSERT_EQ(sent(), frame(read_pdu(0x03, 0, 2)));
+    answer(frame(words_pdu(0x03, {6, 0})));
+    ASSERT_EQ(sent(), frame(read_pdu(0x03, 100, 1)));
+    answer(frame(words_pdu(0x03, {0})));
+  }
+
   std::vector<Completion> completions() {
     std::vector<Completion> out;
     d.take_completions(out);
@@ -180,13 +191,7 @@ TEST_F(ModbusDriverTest, AStopOvertakesARunStillWaitingForTheLine) {
 TEST_F(ModbusDriverTest, ARefusedBlockIsReadPointByPointAndAMissingPointLeftOut) {
   ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
   EXPECT_EQ(answer(frame({0x84, 0x02})).kind, RxKind::ack);  // illegal data address
-  // The rest of the cycle goes on.
-  ASSERT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
-  answer(frame(words_pdu(0x04, {0})));
-  ASSERT_EQ(sent(), frame(read_pdu(0x03, 0, 2)));
-  answer(frame(words_pdu(0x03, {6, 0})));
-  ASSERT_EQ(sent(), frame(read_pdu(0x03, 100, 1)));
-  answer(frame(words_pdu(0x03, {0})));
+  rest_of_cycle();  // the rest of the cycle goes on
   now += 500ms;
   // Next cycle: 200 and 202 alone; the slave lacks 202.
   ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 1)));
@@ -194,8 +199,81 @@ TEST_F(ModbusDriverTest, ARefusedBlockIsReadPointByPointAndAMissingPointLeftOut)
   EXPECT_EQ(d.common().speed_rpm, 1500);
   ASSERT_EQ(sent(), frame(read_pdu(0x04, 202, 2)));
   answer(frame({0x84, 0x02}));
-  EXPECT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
-  EXPECT_TRUE(d.unreadable()[*example().find("motor_current")]);
+  // Unknown now, not its last value; asked again at the next cycle, then backed off.
+  EXPECT_TRUE(std::holds_alternative<std::monostate>(d.values()[0]));
+  const std::size_t current = *example().find("motor_current");
+  EXPECT_EQ(d.backed_off(current), 0);
+  rest_of_cycle();
+  now += 500ms;
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 1)));
+  answer(frame(words_pdu(0x04, {15000})));
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 202, 2)));
+  answer(frame({0x84, 0x02}));
+  EXPECT_EQ(d.backed_off(current), 1);  // the next cycle sat out
+}
+
+// A read refused with anything but 02 (here 06, busy) is not a missing register: the same
+// block is asked again at the next cycle, and after each further refusal one cycle, three,
+// seven... later, at most the comm timeout (3 s) apart; answered, it is read every cycle again.
+TEST_F(ModbusDriverTest, ARefusedReadIsAskedAgainAtTheNextCycleThenBackedOff) {
+  cycle(0, 0, 0);
+  const Bytes status = frame(read_pdu(0x03, 100, 1));
+  const auto refuse_status_for = [&](Millis span) {
+    std::vector<TimePoint> asked;
+    const TimePoint end = now + span;
+    for (; now < end; now += 500ms) {
+      for (Bytes f = sent(); !f.empty(); f = sent()) {
+        if (f == status) {
+          asked.push_back(now);
+          EXPECT_EQ(answer(frame({0x83, 0x06})).kind, RxKind::ack);
+        } else {
+          answer(frame(words_pdu(f[1], std::vector<std::uint16_t>(f[5], 0))));
+        }
+      }
+    }
+    return asked;
+  };
+  now += 500ms;
+  const TimePoint start = now;
+  const auto asked = refuse_status_for(12s);
+  // Cycles 0, 1, then 1 skipped, 3, 5 (capped at 3 s)...
+  ASSERT_GE(asked.size(), 6u);
+  EXPECT_EQ(asked[0] - start, 0ms);
+  EXPECT_EQ(asked[1] - asked[0], 500ms);
+  EXPECT_EQ(asked[2] - asked[1], 1000ms);
+  EXPECT_EQ(asked[3] - asked[2], 2000ms);
+  EXPECT_EQ(asked[4] - asked[3], 3000ms);
+  EXPECT_EQ(asked[5] - asked[4], 3000ms);
+  // The state is as old as the status word's last good read, however fresh the other blocks.
+  ASSERT_TRUE(d.state_read_at());
+  EXPECT_EQ(*d.state_read_at(), start - 500ms);
+  EXPECT_TRUE(d.traits().state_in_parts);
+}
+
+// The state's time is its oldest part's: speed (input 200), fault code (input 210) and status
+// word (holding 100) read at different moments.
+TEST_F(ModbusDriverTest, TheStateIsAsOldAsItsOldestPart) {
+  EXPECT_FALSE(d.state_read_at());
+  const TimePoint first = now;
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
+  answer(frame(words_pdu(0x04, {0, 0, 0, 0})));
+  EXPECT_FALSE(d.state_read_at());  // the rest never read
+  now += 20ms;
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
+  answer(frame(words_pdu(0x04, {0})));
+  now += 20ms;
+  ASSERT_EQ(sent(), frame(read_pdu(0x03, 0, 2)));
+  answer(frame(words_pdu(0x03, {6, 0})));
+  now += 20ms;
+  ASSERT_EQ(sent(), frame(read_pdu(0x03, 100, 1)));
+  answer(frame(words_pdu(0x03, {0})));
+  EXPECT_EQ(d.state_read_at(), first);
+  now = first + 500ms;
+  ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
+  answer(frame(words_pdu(0x04, {0, 0, 0, 0})));
+  EXPECT_EQ(d.state_read_at(), first + 20ms);  // the fault code is now the oldest
+  d.on_comm_lost(now);
+  EXPECT_FALSE(d.state_read_at());  // whole again only once every part is read anew
 }
 
 TEST_F(ModbusDriverTest, OnlyTheAwaitedReplyIsTaken) {

@@ -197,6 +197,22 @@ TEST(Profile, CommonBindingsMustNameRealPointsAndBits) {
   EXPECT_EQ(p.common.fault_code->map.at(0x11), Fault::over_current);
 }
 
+// The common block is the drive's state as of one data age: a point bound to it cannot have a
+// poll interval of its own (a status word read hourly would show a running drive stopped).
+TEST(Profile, APointBoundToTheCommonBlockHasNoPollIntervalOfItsOwn) {
+  const std::string slow = kHead + "poll_ms = 3600000\n";  // the status word, line 9
+  EXPECT_THAT(errors_of(slow + "[common]\nrunning = { point = \"status\", bit = 2 }\n"
+                               "fault = { point = \"status\", bit = 3 }\n"),
+              ElementsAre(HasSubstr("p.toml:4: point.poll_ms: 'status' is bound to the common "
+                                    "block (common.running), which is polled at the device's "
+                                    "poll_ms: remove poll_ms")));
+  EXPECT_THAT(errors_of(slow + "[common]\nstop = { point = \"status\", value = 6 }\n"),
+              ElementsAre(HasSubstr("(common.stop)")));
+  // A point of the device's own keeps its interval.
+  const Profile p = parsed(slow);
+  EXPECT_EQ(p.points[0].poll_ms, 3600000u);
+}
+
 TEST(Profile, EveryErrorIsReportedInOnePass) {
   const auto errors = errors_of(
       "[profile]\nname = \"t\"\nsource = \"m\"\n"

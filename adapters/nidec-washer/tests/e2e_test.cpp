@@ -1,10 +1,12 @@
 // nidec-washer end to end: the daemon on a simulated one-wire line (with echo) at 4800 8O1,
 // driven from Modbus TCP as a PLC would (issue: the gateway core, "Not done until").
+#include "e2e.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "e2e.h"
 #include "e2e_adapters.h"
+#include "protocol_adapters.h"
 
 namespace drivegate::test {
 namespace {
@@ -18,15 +20,17 @@ const RegisterE2eAdapter kE2eAdapter({.id = "nidec-washer",
 
 using namespace std::chrono_literals;
 
-std::string config(const std::filesystem::path& port) {
+// The washer under the C++ adapter or the framed one with its description (protocol_adapters.h).
+std::string config(const std::filesystem::path& port, const ProtocolAdapter& a) {
   return "[[bus]]\nname = \"washer-line\"\nport = \"" + port.string() +
-         "\"\n\n[[device]]\nname = \"washer\"\nbus = \"washer-line\"\nadapter = \"nidec-washer\"\n"
-         "unit_id = 1\n[device.options]\nplatform = 8\n";
+         "\"\n\n[[device]]\nname = \"washer\"\nbus = \"washer-line\"\nunit_id = 1\n" +
+         device_adapter(a, "platform = 8\n");
 }
 
-class NidecE2E : public ::testing::Test {
+class NidecE2E : public ::testing::TestWithParam<ProtocolAdapter> {
  protected:
-  NidecE2E() : sim_("nidec-washer", dir_ / "washer"), daemon_(dir_, config(dir_ / "washer")) {}
+  NidecE2E()
+      : sim_("nidec-washer", dir_ / "washer"), daemon_(dir_, config(dir_ / "washer", GetParam())) {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
     ASSERT_TRUE(
@@ -39,7 +43,7 @@ class NidecE2E : public ::testing::Test {
   Plc plc_{daemon_.port()};
 };
 
-TEST_F(NidecE2E, RunsForwardReadsLiveSpeedAndStops) {
+TEST_P(NidecE2E, RunsForwardReadsLiveSpeedAndStops) {
   // Setpoint and command in one request: the setpoint applies first.
   ASSERT_EQ(plc_.write(reg::command, {1 /*run_forward*/, 800}), 0);
   EXPECT_THAT(sim_.control("state"), ::testing::HasSubstr("platform=8"));
@@ -59,12 +63,12 @@ TEST_F(NidecE2E, RunsForwardReadsLiveSpeedAndStops) {
   EXPECT_EQ(plc_.holding(reg::command, 1).regs[0], 0);
 }
 
-TEST_F(NidecE2E, ReverseIsCounterClockwise) {
+TEST_P(NidecE2E, ReverseIsCounterClockwise) {
   ASSERT_EQ(plc_.write(reg::command, {2 /*run_reverse*/, 600}), 0);
   EXPECT_THAT(sim_.control("state"), ::testing::HasSubstr("motion=ccw"));
 }
 
-TEST_F(NidecE2E, NativeFaultBecomesUnifiedFault) {
+TEST_P(NidecE2E, NativeFaultBecomesUnifiedFault) {
   sim_.control("fault stall");
   ASSERT_TRUE(eventually([&] { return plc_.input(reg::fault_code, 1).regs[0] == 7; }, 5s));
   const auto r = plc_.input(reg::status, 6);
@@ -75,7 +79,7 @@ TEST_F(NidecE2E, NativeFaultBecomesUnifiedFault) {
   EXPECT_EQ(plc_.write(reg::command, {1, 800}), 0x04);
 }
 
-TEST_F(NidecE2E, SilentDriveIsCommLostAndWritesGet0x0B) {
+TEST_P(NidecE2E, SilentDriveIsCommLostAndWritesGet0x0B) {
   sim_.control("silent on");
   const auto lost_at = std::chrono::steady_clock::now();
   ASSERT_TRUE(
@@ -94,7 +98,7 @@ TEST_F(NidecE2E, SilentDriveIsCommLostAndWritesGet0x0B) {
   EXPECT_EQ(plc_.write(reg::command, {1, 500}), 0);
 }
 
-TEST_F(NidecE2E, UnknownUnitAndBadWritesAreExceptions) {
+TEST_P(NidecE2E, UnknownUnitAndBadWritesAreExceptions) {
   Plc other(daemon_.port(), 9);
   ASSERT_TRUE(other.connect());
   EXPECT_EQ(other.input(0, 1).exception, 0x0A);
@@ -103,12 +107,15 @@ TEST_F(NidecE2E, UnknownUnitAndBadWritesAreExceptions) {
   EXPECT_EQ(plc_.input(31, 1).exception, 0x02);    // reserved gap
 }
 
-TEST_F(NidecE2E, SigtermStopsTheRunningDriveThenExitsZero) {
+TEST_P(NidecE2E, SigtermStopsTheRunningDriveThenExitsZero) {
   ASSERT_EQ(plc_.write(reg::command, {1, 800}), 0);
   ASSERT_THAT(sim_.control("state"), ::testing::HasSubstr("target_rpm=800"));
   EXPECT_EQ(daemon_.stop(), 0);
   EXPECT_THAT(sim_.control("state"), ::testing::HasSubstr("motion=stop"));
 }
+
+INSTANTIATE_TEST_SUITE_P(, NidecE2E, ::testing::ValuesIn(protocol_adapters("nidec-washer")),
+                         adapter_name);
 
 }  // namespace
 }  // namespace drivegate::test

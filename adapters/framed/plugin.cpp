@@ -1,0 +1,75 @@
+// The framed plugin descriptor: one option of its own, `protocol`, and the specialiser that gives
+// each described device the descriptor of its description (specialise.h); the two factories read
+// the same description.
+#include <memory>
+#include <string>
+
+#include "drivegate/adapter.h"
+#include "driver.h"
+#include "settings.h"
+#include "simulator.h"
+#include "specialise.h"
+
+extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter;
+
+namespace drivegate::framed {
+namespace {
+
+// The description the options name, for a device at `address`: nullptr and `error` when there
+// is none or the address is outside its range (the core checks a configuration's; a tool's too).
+std::shared_ptr<const Description> description_for(const Options& options, std::uint32_t address,
+                                                   std::string& error) {
+  auto d = load_description(options.has("protocol") ? options.string("protocol") : "", error);
+  if (!d) return nullptr;
+  if (address < d->address_min || address > d->address_max) {
+    error = "address " + std::to_string(address) + " is outside " + d->name + "'s " +
+            std::to_string(d->address_min) + ".." + std::to_string(d->address_max);
+    return nullptr;
+  }
+  return d;
+}
+
+std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
+  auto d = description_for(env.options, env.address, error);
+  if (!d) return nullptr;
+  return std::make_unique<FramedDriver>(std::move(d), env);
+}
+
+std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
+  auto d = description_for(env.options, env.address, error);
+  if (!d) return nullptr;
+  return std::make_unique<FramedSimulator>(std::move(d), env);
+}
+
+const AdapterDescriptor* specialise_device(const Options& options, std::string& error) {
+  return specialise(drivegate_adapter, options, error);
+}
+
+// `drivegate demo`: the washer, described.
+constexpr OptionSetting kDemoOptions[] = {{"protocol", "nidec-washer"}};
+
+}  // namespace
+}  // namespace drivegate::framed
+
+extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
+    .api_version = drivegate::kAdapterApiVersion,
+    .id = "framed",
+    .summary = "any serial protocol described in a TOML file (docs/protocols.md)",
+    .options = drivegate::framed::kOptionSchema.data(),
+    .option_count = drivegate::framed::kOptionSchema.size(),
+    // The description's line, addresses and streaming come with its specialised descriptor; these
+    // are only what a device with no usable description would be shown with.
+    .line = {9600, drivegate::Parity::none, 8, 1, false},
+    .address_min = 0,
+    .address_max = 0,
+    .default_address = 0,
+    .streaming = false,
+    .create_driver = &drivegate::framed::create_driver,
+    .create_simulator = &drivegate::framed::create_simulator,
+    .demo = {.options = drivegate::framed::kDemoOptions,
+             .option_count = std::size(drivegate::framed::kDemoOptions),
+             .running_rpm = 800},
+    .actions = nullptr,
+    .action_count = 0,
+    .specialise = &drivegate::framed::specialise_device,
+};
