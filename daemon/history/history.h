@@ -21,8 +21,8 @@ class History {
                    JournalWriter* journal = nullptr, std::size_t samples = kTrendSamples)
       : events_(bounds, std::move(wall)), audit_(events_, journal), trends_(samples) {}
   // `each` entries on every shelf of the event history.
-  History(std::size_t each, EventLog::WallClock wall, JournalWriter* journal = nullptr,
-          std::size_t samples = kTrendSamples)
+  explicit History(std::size_t each, EventLog::WallClock wall = &EventLog::system_ms,
+                   JournalWriter* journal = nullptr, std::size_t samples = kTrendSamples)
       : History(HistoryBounds{each, each, each}, std::move(wall), journal, samples) {}
   History(const History&) = delete;
   History& operator=(const History&) = delete;
