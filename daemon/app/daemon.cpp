@@ -167,8 +167,9 @@ int Daemon::run() {
     return 1;
   }
   config_ = std::move(*config);
-  history_ = std::make_unique<History>(config_.history.events, &EventLog::system_ms,
-                                       journal_.get(), config_.history.trend_seconds);
+  history_ = std::make_unique<History>(
+      HistoryBounds{config_.history.events, config_.history.commands, config_.history.refusals},
+      &EventLog::system_ms, journal_.get(), config_.history.trend_seconds);
   if (config_.history.trend_seconds > 0) {
     sampler_ = std::make_unique<TrendSampler>(history_->trends());
   }
@@ -234,6 +235,8 @@ int Daemon::run() {
   tick_watchdog();
   tick_trends();
   io_.run();
+  // Whatever was folded is said before the daemon goes: no write is left uncounted.
+  history_->audit().flush(Clock::now(), /*all=*/true);
   log_->info("stopped");
   return 0;
 }
@@ -308,6 +311,8 @@ void Daemon::reload() {
     config->http = config_.http;
   }
   if (config->history.events != config_.history.events ||
+      config->history.commands != config_.history.commands ||
+      config->history.refusals != config_.history.refusals ||
       config->history.trend_seconds != config_.history.trend_seconds) {
     log_->warn("[history] changes take effect at the next restart");
     restart.emplace_back("[history]");
@@ -443,6 +448,7 @@ void Daemon::tick_status() {
 void Daemon::tick_trends() {
   if (sampler_) sampler_->sample(*gateway_, EventLog::system_ms(), Clock::now());
   record_mqtt_state();
+  history_->audit().flush(Clock::now());  // the summaries of folded writes now due
   trend_timer_.expires_after(kTrendPeriod);
   trend_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (!ec && !stopping_) tick_trends();

@@ -57,6 +57,7 @@ class Daemon {
   void shutdown();
   void restart_mqtt(const MqttConfig& next, Gateway& gateway);
   void tick_status();
+  // Once a second: the trends sampled, the MQTT session's state, the audit's summaries due.
   void tick_trends();
   // The MQTT session's state, recorded in the history when it changes.
   void record_mqtt_state();

@@ -4,15 +4,14 @@
 #include <spdlog/sinks/base_sink.h>
 #include <spdlog/sinks/stdout_sinks.h>
 #include <sys/stat.h>
-#include <sys/uio.h>
-// Else sd_journal_sendv() adds CODE_FILE= / CODE_LINE= of this sink to every entry.
-#define SD_JOURNAL_SUPPRESS_LOCATION
-#include <systemd/sd-journal.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
+#include <optional>
 #include <string>
+
+#include "app/journal_socket.h"
 
 namespace drivegate {
 namespace {
@@ -28,17 +27,18 @@ bool stderr_is_journal() {
   return expected == js;
 }
 
-// Entries with their fields, over the journal's native protocol (sd_journal_sendv(3)). When
-// sending fails (sd_journal_sendv() < 0) the line goes to stderr, which is the journal's stream,
-// with the "<N>" priority prefix journald reads there (sd-daemon(3)). Each device's and bus's
-// logger has its own sink, made by for_context(), carrying that device's or bus's fields.
+// Entries with their fields, over the journal's native protocol (journal_socket.h). When
+// sending fails the line goes to stderr, which is the journal's stream, with the "<N>" priority
+// prefix journald reads there (sd-daemon(3)). Each device's and bus's logger has its own sink,
+// made by for_context(), carrying that device's or bus's fields; they share one socket.
 class JournalSink final : public spdlog::sinks::base_sink<std::mutex>, public ContextSink {
  public:
-  JournalSink() = default;
-  explicit JournalSink(LogContext context) : context_(std::move(context)) {}
+  JournalSink() : socket_(std::make_shared<JournalSocket>()) {}
+  JournalSink(std::shared_ptr<const JournalSocket> socket, LogContext context)
+      : socket_(std::move(socket)), context_(std::move(context)) {}
 
   [[nodiscard]] spdlog::sink_ptr for_context(const LogContext& context) const override {
-    auto copy = std::make_shared<JournalSink>(context);
+    auto copy = std::make_shared<JournalSink>(socket_, context);
     copy->set_level(level());
     return copy;
   }
@@ -46,13 +46,10 @@ class JournalSink final : public spdlog::sinks::base_sink<std::mutex>, public Co
  protected:
   void sink_it_(const spdlog::details::log_msg& msg) override {
     const std::string_view text(msg.payload.data(), msg.payload.size());
-    std::vector<std::string> fields =
+    const std::vector<std::string> fields =
         journal_fields(text, msg.level,
                        std::string_view(msg.logger_name.data(), msg.logger_name.size()), context_);
-    std::vector<iovec> iov;
-    iov.reserve(fields.size());
-    for (auto& f : fields) iov.push_back({f.data(), f.size()});
-    if (sd_journal_sendv(iov.data(), static_cast<int>(iov.size())) < 0) {
+    if (socket_->send(fields)) {
       std::fprintf(stderr, "<%d>%.*s\n", syslog_priority(msg.level), static_cast<int>(text.size()),
                    text.data());
     }
@@ -60,34 +57,35 @@ class JournalSink final : public spdlog::sinks::base_sink<std::mutex>, public Co
   void flush_() override { std::fflush(stderr); }
 
  private:
+  std::shared_ptr<const JournalSocket> socket_;
   const LogContext context_{};
 };
 
-// The audit trail's entries, over the journal's native protocol; on failure, the logger's line.
+// The audit trail's entries, over the journal's native protocol; when the journal does not take
+// one (not there, not listening, full), the logger's line.
 class NativeJournal final : public JournalWriter {
  public:
   NativeJournal(std::shared_ptr<spdlog::logger> fallback, bool native)
-      : fallback_(std::move(fallback)), native_(native) {}
+      : fallback_(std::move(fallback)) {
+    if (native) socket_.emplace();
+  }
 
   void info(std::string_view message, std::span<const std::string> fields) override {
-    if (native_) {
+    if (socket_) {
       std::vector<std::string> all;
       all.reserve(fields.size() + 3);
       all.push_back("MESSAGE=" + std::string(message));
       all.push_back("PRIORITY=" + std::to_string(syslog_priority(spdlog::level::info)));
       all.push_back("SYSLOG_IDENTIFIER=" + fallback_->name());
       all.insert(all.end(), fields.begin(), fields.end());
-      std::vector<iovec> iov;
-      iov.reserve(all.size());
-      for (auto& f : all) iov.push_back({f.data(), f.size()});
-      if (sd_journal_sendv(iov.data(), static_cast<int>(iov.size())) >= 0) return;
+      if (!socket_->send(all)) return;
     }
     fallback_->info("{}", message);
   }
 
  private:
   std::shared_ptr<spdlog::logger> fallback_;
-  bool native_;
+  std::optional<JournalSocket> socket_;  // none: not the journal's to have
 };
 
 }  // namespace

@@ -46,7 +46,10 @@ struct HttpConfig {
 // [history]: what the daemon keeps of what happened (docs/audit.md). The audit trail goes to
 // the journal whatever this says; these bound what is kept in memory besides.
 struct HistoryConfig {
-  std::size_t events = 2000;        // entries of the event history; 0: none kept
+  // Entries the event history keeps on each shelf (history/event_log.h); 0: none kept there.
+  std::size_t events = 2000;        // the plant's events and the gateway's own writes
+  std::size_t commands = 2000;      // clients' writes carried out
+  std::size_t refusals = 2000;      // clients' writes refused
   std::size_t trend_seconds = 600;  // seconds of trends at one sample a second; 0: none
   int line = 0;
   bool operator==(const HistoryConfig&) const = default;

@@ -456,10 +456,16 @@ void read_history(const toml::table& root, Config& cfg, Diagnostics& diag) {
     return;
   }
   TableReader r(*t, "history", diag);
-  r.expect({"events", "trend_seconds"});
+  r.expect({"events", "commands", "refusals", "trend_seconds"});
   cfg.history.line = line_of(*t);
   if (auto v = r.integer("events", 0, 100'000, false)) {
     cfg.history.events = static_cast<std::size_t>(*v);
+  }
+  if (auto v = r.integer("commands", 0, 100'000, false)) {
+    cfg.history.commands = static_cast<std::size_t>(*v);
+  }
+  if (auto v = r.integer("refusals", 0, 100'000, false)) {
+    cfg.history.refusals = static_cast<std::size_t>(*v);
   }
   if (auto v = r.integer("trend_seconds", 0, 3600, false)) {
     cfg.history.trend_seconds = static_cast<std::size_t>(*v);

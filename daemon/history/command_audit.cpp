@@ -16,6 +16,40 @@ std::string describe(const Source& s) {
   return out;
 }
 
+// Where a write went, as a record says it.
+std::string describe_where(const std::string& device, std::uint8_t unit, SourceKind source) {
+  // A Modbus client addresses a unit; a DCMD names a device, and one not configured has no unit
+  // (its name is in `why`).
+  if (!device.empty()) return device + " (unit " + std::to_string(unit) + ")";
+  if (source == SourceKind::mqtt) return "an unknown device";
+  return "unit " + std::to_string(unit);
+}
+
+// Whether writes from `kind` are folded in a flood: the network's clients. The gateway's own
+// cannot flood, and are the ones an engineer looks for after a trip; `drivegate write` is an
+// operator at the console.
+bool folds(SourceKind kind) {
+  switch (kind) {
+    case SourceKind::modbus:
+    case SourceKind::modbus_tls:
+    case SourceKind::modbus_serial:
+    case SourceKind::modbus_rtu_tcp:
+    case SourceKind::mqtt:
+      return true;
+    case SourceKind::cli:
+    case SourceKind::failsafe:
+    case SourceKind::shutdown:
+    case SourceKind::gateway:
+      break;
+  }
+  return false;
+}
+
+std::string seconds_text(std::int64_t ms) {
+  const std::int64_t tenths = (std::max<std::int64_t>(ms, 0) + 50) / 100;
+  return std::to_string(tenths / 10) + "." + std::to_string(tenths % 10) + " s";
+}
+
 }  // namespace
 
 std::string result_name(Outcome o) {
@@ -42,19 +76,9 @@ Event command_event(const CommandRecord& r) {
   e.kind = EventKind::command;
   e.device = r.device;
   e.unit = r.unit;
-  // A Modbus client addresses a unit; a DCMD names a device, and one not configured has no unit
-  // (its name is in `why`).
-  std::string where;
-  if (!r.device.empty()) {
-    where = r.device + " (unit " + std::to_string(r.unit) + ")";
-  } else if (r.source.kind == SourceKind::mqtt) {
-    where = "an unknown device";
-  } else {
-    where = "unit " + std::to_string(r.unit);
-  }
-  e.message = "write to " + where + " from " + describe(r.source) + ": " +
-              (r.points.empty() ? std::string("(nothing)") : r.points) + ": " +
-              std::string(to_string(r.result));
+  e.message = "write to " + describe_where(r.device, r.unit, r.source.kind) + " from " +
+              describe(r.source) + ": " + (r.points.empty() ? std::string("(nothing)") : r.points) +
+              ": " + std::string(to_string(r.result));
   if (!r.why.empty()) e.message += " (" + r.why + ")";
   if (r.took) e.message += ", " + std::to_string(r.took->count()) + " ms";
   const auto add = [&e](const char* name, const std::string& value) {
@@ -89,8 +113,49 @@ std::vector<std::string> journal_fields(const Event& e) {
   return out;
 }
 
-CommandAudit::CommandAudit(EventLog& history, JournalWriter* journal)
-    : history_(history), journal_(journal) {}
+Event summary_event(const FoldSummary& s) {
+  Event e;
+  e.kind = EventKind::command;
+  e.device = s.device;
+  e.unit = s.unit;
+  std::string where = describe_where(s.device, s.unit, s.source);
+  std::string who = std::string(to_string(s.source)) + " " + s.client + " on " + s.listener;
+  if (s.spread != FoldSpread::points) where = "several devices";
+  if (s.spread == FoldSpread::source) {
+    who = "several " + std::string(to_string(s.source)) + " clients";
+  }
+  e.message = std::to_string(s.folded) + " write" + (s.folded == 1 ? "" : "s") + " to " + where +
+              " from " + who + " in " + seconds_text(s.last_ms - s.since_ms) +
+              ", folded into this record: " + (s.points.empty() ? "" : s.points + ": ") +
+              std::string(to_string(s.result)) +
+              "; the last: " + (s.last_points.empty() ? std::string("(nothing)") : s.last_points);
+  if (s.spread != FoldSpread::points) {
+    e.message += " to " + describe_where(s.last_device, s.last_unit, s.source);
+  }
+  if (s.spread == FoldSpread::source) e.message += " from " + describe(s.last_source);
+  if (!s.last_why.empty()) e.message += " (" + s.last_why + ")";
+  const auto add = [&e](const char* name, const std::string& value) {
+    if (!value.empty()) e.fields.emplace_back(name, value);
+  };
+  const bool one_client = s.spread != FoldSpread::source;
+  add("source", std::string(to_string(s.source)));
+  add("listener", one_client ? s.listener : s.last_source.listener);
+  add("client", one_client ? s.client : s.last_source.client);
+  add("subject", s.last_source.subject);
+  add("role", s.last_source.role);
+  add("points", s.last_points);
+  add("result", result_name(s.result));
+  add("why", s.last_why);
+  add("folded", std::to_string(s.folded));
+  add("since_ms", std::to_string(s.since_ms));
+  add("last_ms", std::to_string(s.last_ms));
+  if (s.spread == FoldSpread::client) add("spread", "client");
+  if (s.spread == FoldSpread::source) add("spread", "source");
+  return e;
+}
+
+CommandAudit::CommandAudit(EventLog& history, JournalWriter* journal, FoldLimits limits)
+    : history_(history), journal_(journal), accepted_(limits), refused_(limits) {}
 
 void CommandAudit::count(SourceKind source, Outcome result) {
   ++counts_.n[static_cast<std::size_t>(source)][static_cast<std::size_t>(result)];
@@ -101,24 +166,27 @@ void CommandAudit::record(const CommandRecord& r, TimePoint now) {
   Event e = command_event(r);
   // A repeat costs nothing: counted in the entry it repeats, whatever its result.
   if (history_.repeat(e)) return;
-  // The gateway's own writes (the failsafe's, shutdown's) are never held back: no client can
-  // cause them in a flood, and they are the ones an engineer looks for after a trip.
-  const bool clients = r.source.kind != SourceKind::failsafe &&
-                       r.source.kind != SourceKind::shutdown &&
-                       r.source.kind != SourceKind::gateway;
-  if (r.result != Outcome::ok && clients) {
-    const auto held = refusals_[static_cast<std::size_t>(r.source.kind)]
-                               [static_cast<std::size_t>(r.result)]
-                                   .admit(now);
-    if (!held) return;
-    if (*held > 0) {
-      e.message += " (" + std::to_string(*held) + " more " + std::string(to_string(r.result)) +
-                   " from " + std::string(to_string(r.source.kind)) + " clients not recorded)";
-      e.fields.emplace_back("held", std::to_string(*held));
+  if (folds(r.source.kind)) {
+    CommandFold& fold = r.result == Outcome::ok ? accepted_ : refused_;
+    if (!fold.admit(r, now, history_.now_ms())) {
+      ++counts_
+            .folded_n[static_cast<std::size_t>(r.source.kind)][static_cast<std::size_t>(r.result)];
+      // The device's newest entry is no longer the last thing it was asked.
+      history_.interrupt(r.device);
+      return;
     }
   }
-  const std::vector<std::string> fields = journal_fields(e);
-  if (journal_ != nullptr) journal_->info(e.message, fields);
+  write(std::move(e));
+}
+
+void CommandAudit::flush(TimePoint now, bool all) {
+  for (CommandFold* fold : {&accepted_, &refused_}) {
+    for (const FoldSummary& s : fold->due(now, all)) write(summary_event(s));
+  }
+}
+
+void CommandAudit::write(Event e) {
+  if (journal_ != nullptr) journal_->info(e.message, journal_fields(e));
   history_.add(std::move(e));
 }
 

@@ -5,10 +5,14 @@
 // (event_log.h). Devices record here (gateway/device.h); the daemon owns it across reloads.
 //
 // What is not recorded one by one, and why (each is still counted, in counts() and /metrics):
-// - a client's refusals past a burst per source kind and result (net::LogThrottle: 10, then one
-//   a second): anyone who can reach a port can cause them, and a flood must not push the plant's
-//   events out; the next one recorded says how many were held. The gateway's own (failsafe,
-//   shutdown) are never held;
+// - a network client's writes past its allowance, accepted or refused (command_fold.h): folded,
+//   per client address and listener, device, points and result, into one summary record an
+//   interval that says how many came, when, and the last of them. A flood must neither flood the
+//   journal (journald drops a service's messages past its rate limit, the ones that matter with
+//   them) nor push older records out of the history. The refused and the accepted have separate
+//   allowances, so that a client without write rights cannot fold the records of one with them.
+//   The gateway's own writes (failsafe, shutdown, on_start) and `drivegate write`'s are never
+//   folded;
 // - a repeat of the device's newest entry (the same points, values, source and result), which
 //   that entry counts (event_log.h): a PLC writing its command word every scan;
 // - a write of the heartbeat alone: the gateway's own register, written to prove the PLC is
@@ -26,9 +30,9 @@
 #include "drivegate/point.h"
 #include "gateway/outcome.h"
 #include "gateway/source.h"
+#include "history/command_fold.h"
 #include "history/event_log.h"
 #include "history/journal_writer.h"
-#include "net/log_throttle.h"
 
 namespace drivegate {
 
@@ -45,11 +49,18 @@ struct CommandRecord {
   std::optional<std::chrono::milliseconds> took;
 };
 
-// Writes by source and result, every one counted (drivegate_writes_total in /metrics).
+// Writes by source and result, every one counted (drivegate_writes_total in /metrics), and those
+// of them folded into a summary record (drivegate_audit_folded_total).
 struct CommandCounts {
-  std::array<std::array<std::uint64_t, kOutcomeNames.size()>, kSourceKindNames.size()> n{};
+  using Table =
+      std::array<std::array<std::uint64_t, kOutcomeNames.size()>, kSourceKindNames.size()>;
+  Table n{};
+  Table folded_n{};
   [[nodiscard]] std::uint64_t at(SourceKind s, Outcome o) const {
     return n[static_cast<std::size_t>(s)][static_cast<std::size_t>(o)];
+  }
+  [[nodiscard]] std::uint64_t folded(SourceKind s, Outcome o) const {
+    return folded_n[static_cast<std::size_t>(s)][static_cast<std::size_t>(o)];
   }
 };
 
@@ -64,6 +75,11 @@ std::string describe_registers(Table table, std::uint16_t address,
 // The record as a history entry: message and fields (source, listener, client, subject, role,
 // points, result, why, took_ms; those without a value left out).
 Event command_event(const CommandRecord& r);
+// A summary of folded records as a history entry: the fields of the last one's record (its
+// client's address only, unless it is its source kind's overflow), with "folded" (how many),
+// "since_ms" and "last_ms" (the first's and the last's time), and "spread" for an overflow
+// ("client": every device and point of the client; "source": every client of the kind).
+Event summary_event(const FoldSummary& s);
 // The journal fields of a history entry: each field upper-cased (SOURCE=, CLIENT=, ...), with
 // EVENT=, DEVICE= and UNIT=.
 std::vector<std::string> journal_fields(const Event& e);
@@ -71,20 +87,26 @@ std::vector<std::string> journal_fields(const Event& e);
 class CommandAudit {
  public:
   // `journal` may be null (nothing but the history).
-  CommandAudit(EventLog& history, JournalWriter* journal);
+  CommandAudit(EventLog& history, JournalWriter* journal, FoldLimits limits = {});
 
-  // One write's record; `now` paces the refusals.
+  // One write's record; `now` paces the clients' records (command_fold.h).
   void record(const CommandRecord& r, TimePoint now);
+  // Records the summaries of folded writes due at `now`; every one pending if `all` (the daemon
+  // stopping). The daemon calls it about once a second.
+  void flush(TimePoint now, bool all = false);
   // A write counted but not recorded (the heartbeat alone).
   void count(SourceKind source, Outcome result);
   [[nodiscard]] const CommandCounts& counts() const { return counts_; }
 
  private:
+  // Into the journal and the history.
+  void write(Event e);
+
   EventLog& history_;
   JournalWriter* journal_;
   CommandCounts counts_;
-  std::array<std::array<net::LogThrottle, kOutcomeNames.size()>, kSourceKindNames.size()>
-      refusals_{};
+  CommandFold accepted_;  // the clients' writes carried out
+  CommandFold refused_;   // ... and refused: an allowance of their own
 };
 
 }  // namespace drivegate

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include "gateway/source.h"
+
 namespace drivegate {
 
 namespace {
@@ -20,11 +22,10 @@ void cut(std::string& s) {
   s.shrink_to_fit();
 }
 
-// The fields a repeat may differ in: how long the drive took, and the count of refusals held
-// before it (command_audit.h), besides the repeat's own bookkeeping.
+// The fields a repeat may differ in: how long the drive took, besides the repeat's own
+// bookkeeping.
 bool compared(const std::pair<std::string, std::string>& f) {
-  return f.first != "took_ms" && f.first != "held" && f.first != "repeats" &&
-         f.first != "last_ms";
+  return f.first != "took_ms" && f.first != "repeats" && f.first != "last_ms";
 }
 
 bool same_but_time(const Event& a, const Event& b) {
@@ -63,7 +64,21 @@ void count_repeat(Event& e, std::int64_t now_ms) {
   set_field(e, "last_ms", std::to_string(now_ms));
 }
 
+bool by_seq(const Event& e, std::uint64_t seq) {
+  return e.seq < seq;
+}
+
 }  // namespace
+
+Shelf shelf_of(const Event& e) {
+  if (e.kind != EventKind::command) return Shelf::events;
+  const std::string_view source = e.field("source");
+  if (source == to_string(SourceKind::failsafe) || source == to_string(SourceKind::shutdown) ||
+      source == to_string(SourceKind::gateway)) {
+    return Shelf::events;
+  }
+  return e.field("result") == "ok" ? Shelf::commands : Shelf::refusals;
+}
 
 std::int64_t EventLog::system_ms() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -71,8 +86,27 @@ std::int64_t EventLog::system_ms() {
       .count();
 }
 
-EventLog::EventLog(std::size_t capacity, WallClock wall)
-    : capacity_(capacity), wall_(std::move(wall)), started_ms_(wall_()) {}
+EventLog::EventLog(HistoryBounds bounds, WallClock wall)
+    : bounds_(bounds), wall_(std::move(wall)), started_ms_(wall_()) {}
+
+EventLog::EventLog(std::size_t each, WallClock wall)
+    : EventLog(HistoryBounds{each, each, each}, std::move(wall)) {}
+
+std::size_t EventLog::size() const {
+  std::size_t n = 0;
+  for (const auto& s : shelves_) n += s.size();
+  return n;
+}
+
+std::size_t EventLog::capacity() const {
+  return bounds_.events + bounds_.commands + bounds_.refusals;
+}
+
+std::uint64_t EventLog::dropped() const {
+  std::uint64_t n = 0;
+  for (const auto d : dropped_) n += d;
+  return n;
+}
 
 std::size_t EventLog::footprint(const Event& e) {
   std::size_t n = sizeof(Event) + e.device.capacity() + e.message.capacity() +
@@ -92,9 +126,10 @@ void EventLog::fit(Event& e) {
   e.fields.shrink_to_fit();
 }
 
-Event* EventLog::entry(std::uint64_t seq) {
-  if (entries_.empty() || seq < entries_.front().seq || seq > entries_.back().seq) return nullptr;
-  return &entries_[seq - entries_.front().seq];
+Event* EventLog::entry(const Event& like) {
+  auto& shelf = shelves_[static_cast<std::size_t>(shelf_of(like))];
+  const auto it = std::lower_bound(shelf.begin(), shelf.end(), like.seq, by_seq);
+  return it != shelf.end() && it->seq == like.seq ? &*it : nullptr;
 }
 
 std::uint64_t EventLog::add(Event e) {
@@ -109,15 +144,18 @@ std::uint64_t EventLog::add(Event e) {
   } else {
     it->second = e;
   }
-  if (capacity_ == 0) return e.seq;  // [history] events = 0: nothing kept
-  if (entries_.size() == capacity_) {
-    bytes_ -= footprint(entries_.front());
-    entries_.pop_front();
-    ++dropped_;
+  const Shelf s = shelf_of(e);
+  const std::size_t capacity = bounds_.of(s);
+  if (capacity == 0) return e.seq;  // [history] NAME = 0: nothing kept there
+  auto& shelf = shelves_[static_cast<std::size_t>(s)];
+  if (shelf.size() >= capacity) {
+    bytes_ -= footprint(shelf.front());
+    shelf.pop_front();
+    ++dropped_[static_cast<std::size_t>(s)];
   }
   bytes_ += footprint(e);
-  entries_.push_back(std::move(e));
-  return entries_.back().seq;
+  shelf.push_back(std::move(e));
+  return shelf.back().seq;
 }
 
 bool EventLog::repeat(const Event& e) {
@@ -127,12 +165,16 @@ bool EventLog::repeat(const Event& e) {
   if (it == newest_.end() || !same_but_time(it->second, fitted)) return false;
   const std::int64_t now = wall_();
   count_repeat(it->second, now);
-  if (Event* kept = entry(it->second.seq)) {
+  if (Event* kept = entry(it->second)) {
     bytes_ -= footprint(*kept);
     count_repeat(*kept, now);
     bytes_ += footprint(*kept);
   }
   return true;
+}
+
+void EventLog::interrupt(std::string_view device) {
+  if (const auto it = newest_.find(device); it != newest_.end()) newest_.erase(it);
 }
 
 std::vector<Event> EventLog::query(const EventFilter& filter) const {
@@ -143,18 +185,43 @@ std::vector<Event> EventLog::query(const EventFilter& filter) const {
     return (filter.device.empty() || e.device == filter.device) &&
            (!filter.kind || e.kind == *filter.kind) && e.unix_ms >= filter.since_ms;
   };
+  // Only the events' shelf holds anything but commands.
+  const std::size_t shelves =
+      filter.kind && *filter.kind != EventKind::command ? 1 : shelves_.size();
   if (filter.after_seq > 0) {
-    // A follower: the oldest entries after the one it has, so that it misses none.
-    auto it = std::find_if(entries_.begin(), entries_.end(),
-                           [&](const Event& e) { return e.seq > filter.after_seq; });
-    for (; it != entries_.end() && out.size() < limit; ++it) {
-      if (matches(*it)) out.push_back(*it);
+    // A follower: the oldest entries after the one it has, so that it misses none; the shelves
+    // merged in sequence.
+    std::array<std::deque<Event>::const_iterator, kShelfNames.size()> at{};
+    for (std::size_t s = 0; s < shelves; ++s) {
+      at[s] = std::upper_bound(shelves_[s].begin(), shelves_[s].end(), filter.after_seq,
+                               [](std::uint64_t seq, const Event& e) { return seq < e.seq; });
+    }
+    while (out.size() < limit) {
+      std::size_t next = shelves;
+      for (std::size_t s = 0; s < shelves; ++s) {
+        if (at[s] != shelves_[s].end() && (next == shelves || at[s]->seq < at[next]->seq)) {
+          next = s;
+        }
+      }
+      if (next == shelves) break;
+      if (matches(*at[next])) out.push_back(*at[next]);
+      ++at[next];
     }
     return out;
   }
-  // Newest first until the limit, then turned oldest first.
-  for (auto it = entries_.rbegin(); it != entries_.rend() && out.size() < limit; ++it) {
-    if (matches(*it)) out.push_back(*it);
+  // Newest first until the limit, the shelves merged in sequence, then turned oldest first.
+  std::array<std::deque<Event>::const_reverse_iterator, kShelfNames.size()> at{};
+  for (std::size_t s = 0; s < shelves; ++s) at[s] = shelves_[s].rbegin();
+  while (out.size() < limit) {
+    std::size_t next = shelves;
+    for (std::size_t s = 0; s < shelves; ++s) {
+      if (at[s] != shelves_[s].rend() && (next == shelves || at[s]->seq > at[next]->seq)) {
+        next = s;
+      }
+    }
+    if (next == shelves) break;
+    if (matches(*at[next])) out.push_back(*at[next]);
+    ++at[next];
   }
   std::reverse(out.begin(), out.end());
   return out;

@@ -1,18 +1,27 @@
-// The daemon's history: the last events and commands (event.h), oldest dropped first, in bounded
-// memory. Each entry's strings are cut at kMaxText bytes and it has at most kMaxFields fields
-// (two more once it counts repeats), so `capacity` entries take at most about
-// capacity x 2 x (kMaxFields + 3) x kMaxText bytes (7.7 KB each) whatever a client sends; a
-// typical command entry takes about 0.8 KB (memory_bytes() counts them). Pure: the wall clock is
-// injected.
+// The daemon's history: the last events and commands (event.h), in bounded memory, on three
+// shelves each with its own bound, so that what one kind of entry floods cannot push another
+// out (docs/audit.md):
+// - events: what happened to the plant (faults, comm lost, failsafe, drives started and stopped,
+//   reloads, listeners, MQTT) and the gateway's own writes (the failsafe's, shutdown's,
+//   on_start's), which no client can cause in a flood;
+// - commands: the clients' writes carried out, which only a client with write rights can add;
+// - refusals: the clients' writes refused, which anyone who can reach a port can add.
+// Each keeps its newest `HistoryBounds` entries, the oldest dropped first (and counted); the
+// sequence numbers run across the three, and a query reads them as one list in that order.
+// Each entry's strings are cut at kMaxText bytes and it has at most kMaxFields fields (two more
+// once it counts repeats), so an entry takes at most about 2 x (kMaxFields + 3) x kMaxText bytes
+// (7.7 KB) whatever a client sends; a typical command entry takes about 0.8 KB (memory_bytes()
+// counts them). Pure: the wall clock is injected.
 //
 // A repeat (the same command from the same client with the same result as the device's newest
-// entry) updates that entry in place (its "repeats" and "last_ms" fields) instead of pushing the
-// plant's other events out: a PLC that writes its command word every scan leaves one entry, and
-// anything else that happens to the device in between still shows in its order. The device's
-// newest entry is kept aside (one per device), so a repeat is known as such however many other
-// devices wrote since, and with a capacity of 0 too.
+// entry) updates that entry in place (its "repeats" and "last_ms" fields) instead of pushing
+// anything out: a PLC that writes its command word every scan leaves one entry, and anything
+// else that happens to the device in between still shows in its order. The device's newest entry
+// is kept aside (one per device), so a repeat is known as such however many other devices wrote
+// since, and with a capacity of 0 too.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -20,16 +29,37 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "history/event.h"
 
 namespace drivegate {
 
-inline constexpr std::size_t kDefaultHistory = 2000;  // entries kept by default
+inline constexpr std::size_t kDefaultHistory = 2000;  // entries of each shelf kept by default
 inline constexpr std::size_t kMaxText = 256;          // bytes of one message or field value
 inline constexpr std::size_t kMaxFields = 12;         // fields of one entry as recorded
 inline constexpr std::size_t kMaxQuery = 1000;        // entries one query returns at most
+
+// The history's shelves (above), in the order of their names.
+enum class Shelf : std::uint8_t { events, commands, refusals };
+inline constexpr std::array<std::string_view, 3> kShelfNames = {"events", "commands", "refusals"};
+constexpr std::string_view to_string(Shelf s) {
+  return kShelfNames.at(static_cast<std::size_t>(s));
+}
+// The shelf an entry goes on: a command by its "source" and "result" fields, anything else on
+// the events'.
+Shelf shelf_of(const Event& e);
+
+// How many entries each shelf keeps ([history] events, commands, refusals); 0: none.
+struct HistoryBounds {
+  std::size_t events = kDefaultHistory;
+  std::size_t commands = kDefaultHistory;
+  std::size_t refusals = kDefaultHistory;
+  [[nodiscard]] std::size_t of(Shelf s) const {
+    return s == Shelf::events ? events : s == Shelf::commands ? commands : refusals;
+  }
+};
 
 // Which entries a query wants: all that match every criterion given; without `after_seq` the
 // newest `limit` of them, with it the oldest `limit` after that one (a follower catching up).
@@ -46,8 +76,10 @@ class EventLog {
   using WallClock = std::function<std::int64_t()>;  // milliseconds since the epoch
   static std::int64_t system_ms();
 
-  // `capacity` 0: nothing is kept (the audit trail still reaches the journal).
-  explicit EventLog(std::size_t capacity = kDefaultHistory, WallClock wall = &system_ms);
+  explicit EventLog(HistoryBounds bounds = {}, WallClock wall = &system_ms);
+  // `each` entries on every shelf; 0: nothing is kept (the audit trail still reaches the
+  // journal).
+  explicit EventLog(std::size_t each, WallClock wall = &system_ms);
 
   // Cuts `e` as the log keeps it (text at kMaxText on a character, fields at kMaxFields); add()
   // and repeat() do, so a caller may compare first.
@@ -55,15 +87,25 @@ class EventLog {
   // Records `e` now (its seq and time are set here) and returns its seq.
   std::uint64_t add(Event e);
   // Whether `e` (fitted) repeats its device's newest entry: a command whose fields are all equal
-  // but "took_ms" and "held". If so one more repeat is counted there, and `e` is not to be added.
+  // but "took_ms". If so one more repeat is counted there, and `e` is not to be added.
   bool repeat(const Event& e);
+  // Something happened to `device` that the log does not keep (a write folded into a summary,
+  // command_fold.h): its newest entry is no longer what a repeat would repeat.
+  void interrupt(std::string_view device);
+  // The wall clock's time now.
+  [[nodiscard]] std::int64_t now_ms() const { return wall_(); }
 
-  // Matching entries, oldest first.
+  // Matching entries of every shelf, in sequence, oldest first.
   [[nodiscard]] std::vector<Event> query(const EventFilter& filter) const;
-  [[nodiscard]] std::size_t size() const { return entries_.size(); }
-  [[nodiscard]] std::size_t capacity() const { return capacity_; }
+  [[nodiscard]] std::size_t size() const;
+  [[nodiscard]] std::size_t capacity() const;
   [[nodiscard]] std::uint64_t last_seq() const { return next_seq_ - 1; }
-  [[nodiscard]] std::uint64_t dropped() const { return dropped_; }  // pushed out, oldest first
+  [[nodiscard]] std::uint64_t dropped() const;  // pushed out, oldest first, from any shelf
+  [[nodiscard]] std::size_t size(Shelf s) const { return shelf(s).size(); }
+  [[nodiscard]] std::size_t capacity(Shelf s) const { return bounds_.of(s); }
+  [[nodiscard]] std::uint64_t dropped(Shelf s) const {
+    return dropped_[static_cast<std::size_t>(s)];
+  }
   [[nodiscard]] std::size_t memory_bytes() const { return bytes_; }
   // When this log began: a follower seeing it change knows the daemon restarted and its
   // sequence numbers began again.
@@ -71,14 +113,18 @@ class EventLog {
 
  private:
   static std::size_t footprint(const Event& e);
-  Event* entry(std::uint64_t seq);
+  // The entry `like` was recorded as, if its shelf still holds it.
+  Event* entry(const Event& like);
+  [[nodiscard]] const std::deque<Event>& shelf(Shelf s) const {
+    return shelves_[static_cast<std::size_t>(s)];
+  }
 
-  std::size_t capacity_;
+  HistoryBounds bounds_;
   WallClock wall_;
   std::int64_t started_ms_;
-  std::deque<Event> entries_;  // consecutive seqs, oldest first
+  std::array<std::deque<Event>, kShelfNames.size()> shelves_;  // each in seq order, oldest first
   std::uint64_t next_seq_ = 1;
-  std::uint64_t dropped_ = 0;
+  std::array<std::uint64_t, kShelfNames.size()> dropped_{};
   std::size_t bytes_ = 0;
   // Each device's newest entry ("" for the gateway's own), whether or not the log still holds it.
   std::map<std::string, Event, std::less<>> newest_;

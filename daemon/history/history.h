@@ -17,10 +17,13 @@ namespace drivegate {
 class History {
  public:
   // `journal` (may be null) gets each command record (command_audit.h).
-  explicit History(std::size_t events = kDefaultHistory,
-                   EventLog::WallClock wall = &EventLog::system_ms,
+  explicit History(HistoryBounds bounds = {}, EventLog::WallClock wall = &EventLog::system_ms,
                    JournalWriter* journal = nullptr, std::size_t samples = kTrendSamples)
-      : events_(events, std::move(wall)), audit_(events_, journal), trends_(samples) {}
+      : events_(bounds, std::move(wall)), audit_(events_, journal), trends_(samples) {}
+  // `each` entries on every shelf of the event history.
+  explicit History(std::size_t each, EventLog::WallClock wall = &EventLog::system_ms,
+                   JournalWriter* journal = nullptr, std::size_t samples = kTrendSamples)
+      : History(HistoryBounds{each, each, each}, std::move(wall), journal, samples) {}
   History(const History&) = delete;
   History& operator=(const History&) = delete;
 

@@ -35,7 +35,20 @@ std::string events_json(const EventLog& log, const EventFilter& filter) {
   append_number(out, log.started_ms());
   out += ",\"capacity\":";
   append_number(out, static_cast<std::int64_t>(log.capacity()));
-  out += ",\"events\":[";
+  out += ",\"shelves\":{";
+  for (std::size_t i = 0; i < kShelfNames.size(); ++i) {
+    const auto shelf = static_cast<Shelf>(i);
+    if (i > 0) out += ',';
+    append_json_string(out, kShelfNames[i]);
+    out += ":{\"capacity\":";
+    append_number(out, static_cast<std::int64_t>(log.capacity(shelf)));
+    out += ",\"size\":";
+    append_number(out, static_cast<std::int64_t>(log.size(shelf)));
+    out += ",\"dropped\":";
+    append_number(out, static_cast<std::int64_t>(log.dropped(shelf)));
+    out += '}';
+  }
+  out += "},\"events\":[";
   bool first = true;
   for (const Event& e : events) {
     if (!first) out += ',';

@@ -11,9 +11,11 @@
 
 namespace drivegate {
 
-// {"last_seq": N, "dropped": N, "started_ms": T, "capacity": N, "events": [{"seq", "unix_ms",
-// "kind", "device", "unit", "message", "fields": {...}}, ...]}, oldest first; last_seq is the
-// log's, whatever matched; started_ms when the log began (a follower's sign of a restart).
+// {"last_seq": N, "dropped": N, "started_ms": T, "capacity": N, "shelves": {"events":
+// {"capacity", "size", "dropped"}, "commands": {...}, "refusals": {...}}, "events": [{"seq",
+// "unix_ms", "kind", "device", "unit", "message", "fields": {...}}, ...]}, oldest first; last_seq
+// is the log's, whatever matched; started_ms when the log began (a follower's sign of a
+// restart); dropped and capacity are the shelves' together.
 std::string events_json(const EventLog& log, const EventFilter& filter);
 
 // Which trends: `name` empty for all, else the one key ("device:NAME", "bus:NAME"); rows at or

@@ -335,12 +335,17 @@ void Connection::dispatch(const MbapHeader& header, std::span<const std::uint8_t
   ++by_function[pdu[0] < by_function.size() ? pdu[0] : 0];
   if (result.denied) {
     ++listener_->stats.writes_denied;
-    if (!denial_logged_) {  // once per connection: a PLC retrying must not flood the journal
+    // Once per connection (a PLC retrying), and paced per listener (a client connecting anew
+    // for each write): neither floods the journal. The audit trail has each (folded in a flood).
+    if (!denial_logged_) {
       denial_logged_ = true;
-      state_->log->warn(
-          "modbus: {}: write (function 0x{:02X}, unit {}) beyond its access level \"{}\": "
-          "refused with exception 01 (further refusals on this connection are counted only)",
-          who(), pdu[0], header.unit, to_string(session_.access));
+      if (const auto held = listener_->denied_log.admit(state_->clock.now())) {
+        state_->log->warn(
+            "modbus: {}: write (function 0x{:02X}, unit {}) beyond its access level \"{}\": "
+            "refused with exception 01 (further refusals on this connection are counted "
+            "only){}",
+            who(), pdu[0], header.unit, to_string(session_.access), net::held_note(*held));
+      }
     }
   }
   if (result.status == Dispatcher::Result::Status::reply) {

@@ -48,8 +48,11 @@ struct ListenerState {
   net::LogThrottle refused_log;    // clients refused: full, none to evict
   net::LogThrottle evicted_log;    // idle read-only clients closed for a new one
   net::LogThrottle limited_log;    // TLS clients closed at accept: handshake rate
-  net::AddressRate handshakes;     // TLS handshakes per client address
-  ListenerStats stats;             // its own counts; the acceptor's four are in `acceptor`
+  // Writes beyond a connection's access level: once a connection, and paced across them, so
+  // that a client connecting anew for every write does not flood the journal either.
+  net::LogThrottle denied_log;
+  net::AddressRate handshakes;  // TLS handshakes per client address
+  ListenerStats stats;          // its own counts; the acceptor's four are in `acceptor`
 };
 
 struct ServerState {

@@ -13,51 +13,30 @@
 #include <string>
 #include <utility>
 
+#include "net/token_bucket.h"
+
 namespace drivegate::net {
 
 class LogThrottle {
  public:
-  using Clock = std::chrono::steady_clock;
+  using Clock = TokenBucket::Clock;
 
   LogThrottle() : LogThrottle(10) {}
   explicit LogThrottle(unsigned burst, Clock::duration interval = std::chrono::seconds(1))
-      : burst_(burst > 0 ? burst : 1),
-        interval_(interval > Clock::duration::zero() ? interval : Clock::duration(1)),
-        tokens_(burst_) {}
+      : bucket_(burst, interval) {}
 
   // One occurrence at `now`. nullopt: not to be written (it is counted); else write it, saying
   // that this many before it were not.
   std::optional<std::uint64_t> admit(Clock::time_point now) {
-    refill(now);
-    if (tokens_ == 0) {
+    if (!bucket_.take(now)) {
       ++held_;
       return std::nullopt;
     }
-    --tokens_;
     return std::exchange(held_, 0);
   }
 
  private:
-  void refill(Clock::time_point now) {
-    if (tokens_ == burst_) {
-      refilled_ = now;  // a full bucket starts refilling from its first use
-      return;
-    }
-    const auto whole = (now - refilled_) / interval_;
-    if (whole <= 0) return;
-    if (static_cast<std::uint64_t>(whole) >= burst_ - tokens_) {
-      tokens_ = burst_;
-      refilled_ = now;
-      return;
-    }
-    tokens_ += static_cast<unsigned>(whole);
-    refilled_ += whole * interval_;
-  }
-
-  unsigned burst_;
-  Clock::duration interval_;
-  unsigned tokens_;
-  Clock::time_point refilled_{};
+  TokenBucket bucket_;
   std::uint64_t held_ = 0;
 };
 

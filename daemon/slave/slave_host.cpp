@@ -68,23 +68,25 @@ void SlaveHost::receive(ByteView bytes) {
 
 void SlaveHost::superseded() {
   ++counters_.server_no_response;
-  if (auto held = late_log_.admit(clock_.now())) {
-    log_->warn("modbus: {}: the master sent again before unit {} answered (function 0x{:02X}); "
-               "that reply is dropped, never sent late (raise the master's response timeout, or "
-               "write_reply = \"accepted\"){}",
-               name_, pending_->unit, pending_->request.at(0), net::held_note(*held));
+  if (auto held = line_.late_log.admit(clock_.now())) {
+    log_->warn(
+        "modbus: {}: the master sent again before unit {} answered (function 0x{:02X}); "
+        "that reply is dropped, never sent late (raise the master's response timeout, or "
+        "write_reply = \"accepted\"){}",
+        name_, pending_->unit, pending_->request.at(0), net::held_note(*held));
   }
   pending_.reset();
 }
 
 void SlaveHost::too_late(net::TimePoint would_leave) {
   ++counters_.server_no_response;
-  if (auto held = late_log_.admit(clock_.now())) {
+  if (auto held = line_.late_log.admit(clock_.now())) {
     const auto late = std::chrono::duration_cast<Millis>(would_leave - *pending_->give_up_at);
-    log_->warn("modbus: {}: unit {} answered (function 0x{:02X}) {} ms after the master's "
-               "response timeout (reply_timeout_ms = {}); that reply is dropped, never sent late{}",
-               name_, pending_->unit, pending_->request.at(0), late.count(),
-               pending_->reply_timeout.count(), net::held_note(*held));
+    log_->warn(
+        "modbus: {}: unit {} answered (function 0x{:02X}) {} ms after the master's "
+        "response timeout (reply_timeout_ms = {}); that reply is dropped, never sent late{}",
+        name_, pending_->unit, pending_->request.at(0), late.count(),
+        pending_->reply_timeout.count(), net::held_note(*held));
   }
   pending_.reset();
 }
@@ -161,10 +163,11 @@ void SlaveHost::serve(FramerEvent& e) {
     });
   }
   if (r.denied) {
-    if (auto held = denied_log_.admit(clock_.now())) {
-      log_->warn("modbus: {}: write (function 0x{:02X}, unit {}) beyond its access level \"{}\": "
-                 "refused with exception 01{}",
-                 name_, pdu[0], unit, to_string(session.access), net::held_note(*held));
+    if (auto held = line_.denied_log.admit(clock_.now())) {
+      log_->warn(
+          "modbus: {}: write (function 0x{:02X}, unit {}) beyond its access level \"{}\": "
+          "refused with exception 01{}",
+          name_, pdu[0], unit, to_string(session.access), net::held_note(*held));
     }
   }
   if (r.status == modbus::Dispatcher::Result::Status::reply) {  // refused before it started
@@ -198,10 +201,11 @@ void SlaveHost::serve_broadcast(const modbus_serial::Adu& adu) {
   if (!policy_->broadcast) {
     ++counters_.broadcasts_refused;
     backend_.refused_broadcast(session, pdu);
-    if (auto held = broadcast_log_.admit(clock_.now())) {
-      log_->warn("modbus: {}: broadcast write (function 0x{:02X}) refused: not applied to any "
-                 "drive (the listener has broadcast = false){}",
-                 name_, pdu[0], net::held_note(*held));
+    if (auto held = line_.broadcast_log.admit(clock_.now())) {
+      log_->warn(
+          "modbus: {}: broadcast write (function 0x{:02X}) refused: not applied to any "
+          "drive (the listener has broadcast = false){}",
+          name_, pdu[0], net::held_note(*held));
     }
     return;
   }
@@ -234,7 +238,7 @@ void SlaveHost::settle(std::uint32_t generation, Exception result, const Bytes& 
     accepted_.erase(a);
     if (result != Exception::none) {  // write_reply = accepted: the master was told ok
       ++counters_.write_timeouts;
-      if (auto held = accepted_log_.admit(clock_.now())) {
+      if (auto held = line_.accepted_log.admit(clock_.now())) {
         log_->warn(
             "modbus: {}: write to unit {} (function 0x{:02X}) answered as "
             "accepted, then not applied: {}{}",

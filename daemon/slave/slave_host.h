@@ -46,10 +46,16 @@ struct SlavePolicy {
 };
 
 // A listener's counters (every host of an RTU-over-TCP listener adds to the same), and where a
-// master's FC 08 0x0A last cleared them (modbus/diagnostics.h).
+// master's FC 08 0x0A last cleared them (modbus/diagnostics.h). And the pace of the lines its
+// masters can cause, shared likewise: a client connecting anew for every request gets no fresh
+// burst of lines each time.
 struct LineCounters {
   modbus::SerialCounters counts;
   modbus::SerialCounters cleared;
+  net::LogThrottle denied_log;     // writes beyond the listener's access level
+  net::LogThrottle broadcast_log;  // broadcasts refused
+  net::LogThrottle late_log;       // replies dropped: too late, or the master asked again
+  net::LogThrottle accepted_log;   // writes answered as accepted that then failed
 };
 
 class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
@@ -141,10 +147,6 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   std::optional<std::pair<net::TimePoint, Bytes>> due_;
   std::array<std::uint8_t, modbus::kMaxPduSize> out_{};
   std::array<std::uint8_t, modbus::kMaxPduSize> broadcast_out_{};
-  net::LogThrottle denied_log_;
-  net::LogThrottle broadcast_log_;
-  net::LogThrottle late_log_;
-  net::LogThrottle accepted_log_;
   bool stopped_ = false;
 };
 

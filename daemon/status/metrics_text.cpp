@@ -641,20 +641,29 @@ void http_metrics(Writer& w, const http::HttpStats& h, std::size_t clients) {
 // Every write by who asked and what came of it (history/command_audit.h): every pair, those
 // that never happened as 0, so that a rate or an alert on one has a series from the start.
 void write_metrics(Writer& w, const CommandCounts& counts) {
+  const auto by_source_and_result = [&](std::string_view name, auto value) {
+    std::string labels;
+    for (std::size_t s = 0; s < kSourceKindNames.size(); ++s) {
+      for (std::size_t o = 0; o < kOutcomeNames.size(); ++o) {
+        labels = "source=\"";
+        labels += kSourceKindNames[s];
+        labels += "\",result=\"";
+        labels += result_name(static_cast<Outcome>(o));  // as the journal's RESULT= says it
+        labels += '"';
+        w.sample(name, labels,
+                 static_cast<double>(value(static_cast<SourceKind>(s), static_cast<Outcome>(o))));
+      }
+    }
+  };
   w.family("drivegate_writes_total", "counter",
            "writes to the drives, from any northbound or the gateway itself, by source and result");
-  std::string labels;
-  for (std::size_t s = 0; s < kSourceKindNames.size(); ++s) {
-    for (std::size_t o = 0; o < kOutcomeNames.size(); ++o) {
-      labels = "source=\"";
-      labels += kSourceKindNames[s];
-      labels += "\",result=\"";
-      labels += result_name(static_cast<Outcome>(o));  // as the journal's RESULT= says it
-      labels += '"';
-      w.sample("drivegate_writes_total", labels,
-               static_cast<double>(counts.at(static_cast<SourceKind>(s), static_cast<Outcome>(o))));
-    }
-  }
+  by_source_and_result("drivegate_writes_total",
+                       [&](SourceKind s, Outcome o) { return counts.at(s, o); });
+  w.family("drivegate_audit_folded_total", "counter",
+           "of those, writes not recorded one by one but folded into a summary record, "
+           "by source and result");
+  by_source_and_result("drivegate_audit_folded_total",
+                       [&](SourceKind s, Outcome o) { return counts.folded(s, o); });
 }
 
 // The event history (history/event_log.h): how full it is, and what it had to let go.
@@ -666,6 +675,26 @@ void history_metrics(Writer& w, const EventLog& log) {
            static_cast<double>(log.dropped()));
   w.single("drivegate_history_bytes", "gauge", "memory the event history's entries take",
            static_cast<double>(log.memory_bytes()));
+  const auto by_shelf = [&](std::string_view name, std::string_view type, std::string_view help,
+                            auto value) {
+    w.family(name, type, help);
+    std::string labels;
+    for (std::size_t i = 0; i < kShelfNames.size(); ++i) {
+      labels = "shelf=\"";
+      labels += kShelfNames[i];
+      labels += '"';
+      w.sample(name, labels, static_cast<double>(value(static_cast<Shelf>(i))));
+    }
+  };
+  by_shelf("drivegate_history_shelf_entries", "gauge",
+           "entries each shelf of the event history holds now",
+           [&](Shelf s) { return log.size(s); });
+  by_shelf("drivegate_history_shelf_capacity", "gauge",
+           "entries each shelf of the event history keeps at most ([history])",
+           [&](Shelf s) { return log.capacity(s); });
+  by_shelf("drivegate_history_shelf_dropped_total", "counter",
+           "entries each shelf of the event history pushed out, oldest first",
+           [&](Shelf s) { return log.dropped(s); });
 }
 
 // The standard process metrics (status/process_metrics.h); one whose file could not be read is

@@ -140,6 +140,21 @@ TEST_F(ConfigTest, OutOfRangeValuesAreRefused) {
   EXPECT_THAT(only_error(text), AllOf(HasSubstr("address"), HasSubstr("1..31")));
 }
 
+// [history]: a bound for each shelf of the event history, 0 keeping none there.
+TEST_F(ConfigTest, TheHistoryHasABoundForEachShelf) {
+  auto r = parse(std::string(kGood) + "[history]\nevents = 10\ncommands = 20\nrefusals = 0\n");
+  ASSERT_TRUE(r.config.has_value()) << ::testing::PrintToString(r.errors);
+  EXPECT_EQ(r.config->history.events, 10u);
+  EXPECT_EQ(r.config->history.commands, 20u);
+  EXPECT_EQ(r.config->history.refusals, 0u);
+  r = parse(kGood);
+  ASSERT_TRUE(r.config.has_value());
+  EXPECT_EQ(r.config->history.commands, 2000u);
+  EXPECT_EQ(r.config->history.refusals, 2000u);
+  EXPECT_THAT(only_error(std::string(kGood) + "[history]\nrefusals = 100001\n"),
+              AllOf(HasSubstr("refusals"), HasSubstr("0..100000")));
+}
+
 TEST_F(ConfigTest, AdapterOptionsAreCheckedAgainstTheSchema) {
   std::string text = kGood;
   text.replace(text.find("count = 9"), 9, "count = 11");

@@ -1,10 +1,14 @@
 // The audit trail's records (daemon/history/command_audit.h): the journal fields IEC 62443-3-3
-// SR 2.8 asks for, the message, the history entry; a flood of refusals paced per cause without
-// losing count; the heartbeat counted only.
+// SR 2.8 asks for, the message, the history entry; a flood of writes, accepted or refused,
+// folded per client and point into summaries without losing count, on made-up time; the
+// heartbeat counted only.
 #include "history/command_audit.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iostream>
 
 namespace drivegate {
 namespace {
@@ -43,7 +47,8 @@ CommandRecord tls_run() {
 
 class CommandAuditTest : public ::testing::Test {
  protected:
-  EventLog history_{100, [] { return std::int64_t{1'000}; }};
+  std::int64_t wall_ms_ = 1'000;
+  EventLog history_{100, [this] { return wall_ms_; }};
   FakeJournal journal_;
   CommandAudit audit_{history_, &journal_};
   TimePoint t0_ = TimePoint{} + std::chrono::hours(1);
@@ -85,40 +90,174 @@ TEST_F(CommandAuditTest, ARefusalSaysWhyAndHasNoDuration) {
   EXPECT_THAT(journal_.entries[0].fields, Not(Contains(HasSubstr("TOOK_MS"))));
 }
 
-// A client hammering refused writes: every one counted, a burst recorded, then one a second;
-// the next one recorded says how many were not. The plant's events are not pushed out.
-TEST_F(CommandAuditTest, AFloodOfRefusalsIsPacedPerCauseAndCounted) {
-  history_.add(Event{.kind = EventKind::fault_raised, .device = "washer-1"});
-  CommandRecord denied = tls_run();
-  denied.result = Outcome::denied;
-  denied.took.reset();
-  for (int i = 0; i < 5000; ++i) {
-    denied.points = "holding 0 = " + std::to_string(i);  // no two alike: no repeats
-    audit_.record(denied, t0_);
+// The fields a journal entry has, by name ("FOLDED" -> "190"); "" if none.
+std::string field(const FakeJournal::Entry& e, const std::string& name) {
+  for (const auto& f : e.fields) {
+    if (f.starts_with(name + "=")) return f.substr(name.size() + 1);
   }
-  EXPECT_EQ(audit_.counts().at(SourceKind::modbus_tls, Outcome::denied), 5000u);
+  return "";
+}
+
+// Every write a journal's entries stand for: one each, or as many as a summary says it folded.
+std::uint64_t written(const std::vector<FakeJournal::Entry>& entries) {
+  std::uint64_t n = 0;
+  for (const auto& e : entries) {
+    const std::string folded = field(e, "FOLDED");
+    n += folded.empty() ? 1 : std::stoull(folded);
+  }
+  return n;
+}
+
+CommandRecord plain_write(std::string client, std::string points, Outcome result = Outcome::ok) {
+  CommandRecord r;
+  r.source =
+      Source{.kind = SourceKind::modbus, .listener = "0.0.0.0:502", .client = std::move(client)};
+  r.device = "washer-1";
+  r.unit = 3;
+  r.points = std::move(points);
+  r.result = result;
+  if (result == Outcome::denied) r.why = "beyond access read";
+  return r;
+}
+
+// A read-only client opening a new connection for every write (a new port each time) and a PLC
+// writing a new setpoint 20 times a second: each is one client writing one point, recorded one
+// by one for a burst, then folded; one summary an interval says how many, when, and the last.
+// Nothing is lost: every write is in a record or counted in a summary, and in the counts.
+TEST_F(CommandAuditTest, AFloodFromOneClientIsFoldedIntoOneSummaryAnInterval) {
+  const auto at = [&](int ms) {
+    wall_ms_ = 1'000 + ms;
+    return t0_ + std::chrono::milliseconds(ms);
+  };
+  for (int i = 0; i < 400; ++i) {  // 20 s at 20 a second, each on a connection of its own
+    CommandRecord denied = plain_write("192.0.2.66:" + std::to_string(40000 + i),
+                                       "holding 0 = " + std::to_string(i), Outcome::denied);
+    audit_.record(denied, at(50 * i));
+    audit_.record(plain_write("192.0.2.7:50122", "setpoint_rpm=" + std::to_string(1000 + i)),
+                  at(50 * i + 1));
+    audit_.flush(at(50 * i + 2));
+  }
+  audit_.flush(at(30'000));
+  // Each client: its burst of 10, then a summary at 10 s and another at 20 s.
+  EXPECT_EQ(journal_.entries.size(), 2u * (10 + 2));
+  EXPECT_EQ(written(journal_.entries), 800u);
+  EXPECT_EQ(audit_.counts().at(SourceKind::modbus, Outcome::ok), 400u);
+  EXPECT_EQ(audit_.counts().at(SourceKind::modbus, Outcome::denied), 400u);
+  EXPECT_EQ(audit_.counts().folded(SourceKind::modbus, Outcome::ok), 390u);
+  EXPECT_EQ(audit_.counts().folded(SourceKind::modbus, Outcome::denied), 390u);
+  // The first summary of the PLC's: its client's address, what it wrote, the last value.
+  const auto summary = std::find_if(
+      journal_.entries.begin(), journal_.entries.end(),
+      [](const auto& e) { return !field(e, "FOLDED").empty() && field(e, "RESULT") == "ok"; });
+  ASSERT_NE(summary, journal_.entries.end());
+  EXPECT_EQ(field(*summary, "CLIENT"), "192.0.2.7");
+  EXPECT_EQ(field(*summary, "DEVICE"), "washer-1");
+  EXPECT_EQ(field(*summary, "SOURCE"), "modbus");
+  EXPECT_EQ(field(*summary, "LISTENER"), "0.0.0.0:502");
+  // From the first write past the burst (0.501 s) to the flush at 10.502 s: 201 writes.
+  EXPECT_EQ(field(*summary, "FOLDED"), "201");
+  EXPECT_EQ(field(*summary, "POINTS"), "setpoint_rpm=1210");
+  EXPECT_EQ(field(*summary, "SINCE_MS"), "1501");
+  EXPECT_EQ(field(*summary, "LAST_MS"), "11501");
+  EXPECT_EQ(field(*summary, "EVENT"), "command");
+  EXPECT_EQ(summary->message,
+            "201 writes to washer-1 (unit 3) from modbus 192.0.2.7 on 0.0.0.0:502 in 10.0 s, "
+            "folded into this record: setpoint_rpm: ok; the last: setpoint_rpm=1210");
+  // The history has the same entries as the journal.
+  EXPECT_EQ(history_.size(), journal_.entries.size());
+  const auto refused = history_.query({.kind = EventKind::command});
+  EXPECT_EQ(std::count_if(refused.begin(), refused.end(),
+                          [](const Event& e) { return e.field("result") == "denied"; }),
+            12);
+}
+
+// A summary is due an interval after the first write it folds, whether or not more come; and
+// the daemon says every pending one as it stops.
+TEST_F(CommandAuditTest, ASummaryIsWrittenWhenItsIntervalEndsOrAtTheEnd) {
+  for (int i = 0; i < 15; ++i) {
+    audit_.record(plain_write("192.0.2.7:1", "setpoint_rpm=" + std::to_string(i)), t0_);
+  }
   EXPECT_EQ(journal_.entries.size(), 10u);
-  EXPECT_EQ(history_.size(), 11u);
-  EXPECT_EQ(history_.query({.kind = EventKind::fault_raised}).size(), 1u);
-  // Another cause has its own bucket.
-  CommandRecord busy = denied;
-  busy.result = Outcome::busy;
-  audit_.record(busy, t0_);
-  EXPECT_EQ(journal_.entries.size(), 11u);
-  // A second later: recorded again, saying how many were held.
-  denied.points = "holding 0 = last";
-  audit_.record(denied, t0_ + std::chrono::seconds(1));
-  ASSERT_EQ(journal_.entries.size(), 12u);
-  EXPECT_THAT(journal_.entries.back().message,
-              HasSubstr("(4990 more denied from modbus_tls clients not recorded)"));
-  EXPECT_THAT(journal_.entries.back().fields, Contains("HELD=4990"));
-  // Writes that succeed are never paced.
-  for (int i = 0; i < 50; ++i) {
-    CommandRecord ok = tls_run();
-    ok.points = "setpoint_rpm=" + std::to_string(i);
-    audit_.record(ok, t0_ + std::chrono::seconds(1));
+  audit_.flush(t0_ + std::chrono::milliseconds(9'999));
+  EXPECT_EQ(journal_.entries.size(), 10u);
+  audit_.flush(t0_ + std::chrono::seconds(10));
+  ASSERT_EQ(journal_.entries.size(), 11u);
+  EXPECT_EQ(field(journal_.entries.back(), "FOLDED"), "5");
+  // Quiet again: the allowance refills, and the next writes are recorded one by one.
+  audit_.flush(t0_ + std::chrono::seconds(30));
+  audit_.record(plain_write("192.0.2.7:1", "setpoint_rpm=99"), t0_ + std::chrono::seconds(31));
+  EXPECT_EQ(journal_.entries.size(), 12u);
+  EXPECT_TRUE(field(journal_.entries.back(), "FOLDED").empty());
+  // The daemon stopping: everything pending, due or not.
+  for (int i = 0; i < 20; ++i) {
+    audit_.record(plain_write("192.0.2.8:1", "setpoint_rpm=" + std::to_string(i)),
+                  t0_ + std::chrono::seconds(31));
   }
-  EXPECT_EQ(journal_.entries.size(), 62u);
+  audit_.flush(t0_ + std::chrono::seconds(31), /*all=*/true);
+  EXPECT_EQ(field(journal_.entries.back(), "FOLDED"), "10");
+  EXPECT_EQ(written(journal_.entries), 15u + 1 + 20);
+}
+
+// Each client and point is its own: a run command amid a PLC's setpoint flood, another client's
+// write, and an operate client's writes amid a read-only client's flood of refusals from many
+// addresses are all recorded one by one.
+TEST_F(CommandAuditTest, AFloodFoldsOnlyItsOwnClientAndPoints) {
+  for (int i = 0; i < 100; ++i) {
+    audit_.record(plain_write("192.0.2.7:1", "setpoint_rpm=" + std::to_string(i)), t0_);
+  }
+  const std::size_t before = journal_.entries.size();
+  audit_.record(plain_write("192.0.2.7:1", "setpoint_rpm=5 command=run_forward"), t0_);
+  audit_.record(plain_write("192.0.2.7:1", "setpoint_rpm=5 command=stop"), t0_);
+  audit_.record(plain_write("192.0.2.9:1", "setpoint_rpm=5"), t0_);
+  EXPECT_EQ(journal_.entries.size(), before + 3);
+  // Refusals from 5000 addresses use up the refusals' overall allowance...
+  for (int i = 0; i < 5000; ++i) {
+    audit_.record(plain_write("198.51.100." + std::to_string(i % 250) + ":" + std::to_string(i),
+                              "holding 0 = " + std::to_string(i), Outcome::denied),
+                  t0_);
+  }
+  EXPECT_EQ(audit_.counts().at(SourceKind::modbus, Outcome::denied), 5000u);
+  // ...not the accepted writes'.
+  const std::size_t after = journal_.entries.size();
+  audit_.record(plain_write("192.0.2.10:1", "setpoint_rpm=7"), t0_);
+  EXPECT_EQ(journal_.entries.size(), after + 1);
+  audit_.flush(t0_ + std::chrono::seconds(10));
+  EXPECT_EQ(written(journal_.entries), 100u + 3 + 5000 + 1);
+}
+
+// However many clients, devices and points a flood spreads over, the keys tracked stay bounded,
+// the journal gets at most the overall allowance and one summary per key an interval, and every
+// write is counted in a record or a summary.
+TEST_F(CommandAuditTest, AFloodFromEverywhereStaysWithinTheJournalsBound) {
+  const FoldLimits limits;
+  constexpr int kSeconds = 60;
+  constexpr int kPerSecond = 2000;
+  std::uint64_t sent = 0;
+  for (int s = 0; s < kSeconds; ++s) {
+    for (int i = 0; i < kPerSecond; ++i) {
+      const int n = s * kPerSecond + i;
+      CommandRecord r = plain_write(
+          "10." + std::to_string(n % 7) + "." + std::to_string(n % 251) + ".1:" + std::to_string(n),
+          "holding " + std::to_string(n % 100) + " = 1",
+          n % 3 == 0 ? Outcome::ok : Outcome::denied);
+      r.unit = static_cast<std::uint8_t>(n % 200);
+      r.device = "d" + std::to_string(n % 200);
+      audit_.record(r, t0_ + std::chrono::seconds(s) + std::chrono::microseconds(400 * i));
+      ++sent;
+    }
+    audit_.flush(t0_ + std::chrono::seconds(s + 1));
+  }
+  audit_.flush(t0_ + std::chrono::seconds(kSeconds + 1), /*all=*/true);
+  EXPECT_EQ(written(journal_.entries), sent);
+  // Two allowances (accepted, refused), each: its burst, its rate, and one summary per key an
+  // interval, keys at most the bound plus the source kinds' overflows.
+  const std::size_t overflows = kSourceKindNames.size() * kOutcomeNames.size();
+  const std::size_t intervals = kSeconds * 1000 / limits.interval.count() + 2;
+  const std::size_t bound = 2 * (limits.overall_burst + kSeconds * limits.overall_per_second +
+                                 intervals * (limits.keys + overflows));
+  EXPECT_LE(journal_.entries.size(), bound);
+  EXPECT_LT(journal_.entries.size(), sent / 20);
+  std::cerr << journal_.entries.size() << " journal entries for " << sent << " writes\n";
 }
 
 // The failsafe's refused stops are what an engineer looks for after a trip: never held back,

@@ -1,9 +1,13 @@
 // The event history (daemon/history/event_log.h): bounded in entries and in bytes whatever is
-// recorded, the oldest dropped first and counted; queries by device, kind, time and sequence;
-// a repeated command counted in its entry, unless anything else happened to the device between.
+// recorded, the oldest dropped first and counted, each shelf on its own (no flood of commands
+// pushes the plant's events out, no flood of refusals the commands); queries by device, kind,
+// time and sequence across the shelves; a repeated command counted in its entry, unless anything
+// else happened to the device between.
 #include "history/event_log.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
 
 namespace drivegate {
 namespace {
@@ -44,6 +48,77 @@ TEST_F(EventLogTest, DropsTheOldestPastItsCapacityAndCountsThem) {
   EXPECT_EQ(all.front().message, "fault 7");
   EXPECT_EQ(all.back().message, "fault 11");
   EXPECT_EQ(all.back().seq, 12u);
+}
+
+Event command(std::string source, std::string result, int n) {
+  return Event{.kind = EventKind::command,
+               .device = "a",
+               .message = "write " + std::to_string(n),
+               .fields = {{"source", std::move(source)},
+                          {"points", "setpoint_rpm=" + std::to_string(n)},
+                          {"result", std::move(result)}}};
+}
+
+// A comm_lost, then commands carried out and refused by the thousand: the comm_lost is still
+// there, and so are the newest commands carried out, whatever the refusals; the failsafe's own
+// write is kept with the plant's events.
+TEST(EventLogShelves, NoFloodOfCommandsPushesThePlantsEventsOut) {
+  EventLog log(HistoryBounds{.events = 10, .commands = 100, .refusals = 50},
+               [] { return std::int64_t{0}; });
+  log.add(Event{.kind = EventKind::comm_lost, .device = "a", .message = "a: comm lost"});
+  log.add(command("failsafe", "ok", -1));
+  for (int i = 0; i < 5'000; ++i) log.add(command("modbus", "ok", i));
+  for (int i = 0; i < 5'000; ++i) log.add(command("modbus", "denied", i));
+  EXPECT_EQ(log.query({.kind = EventKind::comm_lost}).size(), 1u);
+  EXPECT_EQ(log.size(Shelf::events), 2u);
+  EXPECT_EQ(log.size(Shelf::commands), 100u);
+  EXPECT_EQ(log.size(Shelf::refusals), 50u);
+  EXPECT_EQ(log.dropped(Shelf::events), 0u);
+  EXPECT_EQ(log.dropped(Shelf::commands), 4'900u);
+  EXPECT_EQ(log.dropped(Shelf::refusals), 4'950u);
+  EXPECT_EQ(log.dropped(), 9'850u);
+  EXPECT_EQ(log.size(), 152u);
+  EXPECT_EQ(log.capacity(), 160u);
+  const auto ok = log.query({.kind = EventKind::command, .limit = 1000});
+  EXPECT_EQ(
+      std::count_if(ok.begin(), ok.end(), [](const Event& e) { return e.field("result") == "ok"; }),
+      101);  // the failsafe's and the newest 100
+  EXPECT_EQ(log.query({.device = "a", .limit = 1000}).front().kind, EventKind::comm_lost);
+}
+
+// The shelves read as one list in sequence: the newest `limit`, and a follower's next page.
+TEST(EventLogShelves, QueriesMergeTheShelvesInSequence) {
+  EventLog log(HistoryBounds{.events = 100, .commands = 100, .refusals = 100},
+               [] { return std::int64_t{0}; });
+  for (int i = 0; i < 30; ++i) {
+    if (i % 3 == 0) log.add(Event{.kind = EventKind::fault_raised, .device = "a"});
+    if (i % 3 == 1) log.add(command("modbus", "ok", i));
+    if (i % 3 == 2) log.add(command("modbus", "busy", i));
+  }
+  const auto seqs = [](const std::vector<Event>& v) {
+    std::vector<std::uint64_t> out;
+    for (const auto& e : v) out.push_back(e.seq);
+    return out;
+  };
+  EXPECT_EQ(seqs(log.query({.limit = 4})), (std::vector<std::uint64_t>{27, 28, 29, 30}));
+  EXPECT_EQ(seqs(log.query({.after_seq = 10, .limit = 4})),
+            (std::vector<std::uint64_t>{11, 12, 13, 14}));
+  EXPECT_EQ(seqs(log.query({.kind = EventKind::fault_raised, .after_seq = 10, .limit = 2})),
+            (std::vector<std::uint64_t>{13, 16}));
+  EXPECT_EQ(seqs(log.query({.kind = EventKind::command, .limit = 3})),
+            (std::vector<std::uint64_t>{27, 29, 30}));
+  EXPECT_EQ(log.query({.limit = 1000}).size(), 30u);
+}
+
+// A repeat counts in its entry on whichever shelf; a write folded away (interrupt) ends the run.
+TEST(EventLogShelves, ARepeatIsCountedOnItsShelfUntilInterrupted) {
+  EventLog log(HistoryBounds{}, [] { return std::int64_t{5}; });
+  log.add(Event{.kind = EventKind::fault_raised, .device = "a"});
+  log.add(command("modbus", "denied", 1));
+  EXPECT_TRUE(log.repeat(command("modbus", "denied", 1)));
+  EXPECT_EQ(log.query({.kind = EventKind::command})[0].field("repeats"), "1");
+  log.interrupt("a");
+  EXPECT_FALSE(log.repeat(command("modbus", "denied", 1)));
 }
 
 // A flood of entries as long as a client can make them: the memory stays within the bound the

@@ -18,7 +18,10 @@ TEST(EventsJson, EachEntryWithItsFields) {
                 .fields = {{"fault", "over_current"}, {"native", "0x21"}}});
   log.add(Event{.kind = EventKind::reload, .message = "say \"hi\"\n"});
   EXPECT_EQ(events_json(log, {}),
-            "{\"last_seq\":2,\"dropped\":0,\"started_ms\":1700000000123,\"capacity\":10,\"events\":["
+            "{\"last_seq\":2,\"dropped\":0,\"started_ms\":1700000000123,\"capacity\":30,"
+            "\"shelves\":{\"events\":{\"capacity\":10,\"size\":2,\"dropped\":0},"
+            "\"commands\":{\"capacity\":10,\"size\":0,\"dropped\":0},"
+            "\"refusals\":{\"capacity\":10,\"size\":0,\"dropped\":0}},\"events\":["
             "{\"seq\":1,\"unix_ms\":1700000000123,\"kind\":\"fault_raised\",\"device\":"
             "\"washer-1\",\"unit\":3,\"message\":\"washer-1: fault over_current (native 0x21)\","
             "\"fields\":{\"fault\":\"over_current\",\"native\":\"0x21\"}},"
@@ -26,8 +29,10 @@ TEST(EventsJson, EachEntryWithItsFields) {
             "\"message\":\"say \\\"hi\\\"\\n\",\"fields\":{}}]}");
   // last_seq is the log's, whatever matched.
   EXPECT_EQ(events_json(log, {.device = "nobody"}),
-            "{\"last_seq\":2,\"dropped\":0,\"started_ms\":1700000000123,\"capacity\":10,"
-            "\"events\":[]}");
+            "{\"last_seq\":2,\"dropped\":0,\"started_ms\":1700000000123,\"capacity\":30,"
+            "\"shelves\":{\"events\":{\"capacity\":10,\"size\":2,\"dropped\":0},"
+            "\"commands\":{\"capacity\":10,\"size\":0,\"dropped\":0},"
+            "\"refusals\":{\"capacity\":10,\"size\":0,\"dropped\":0}},\"events\":[]}");
 }
 
 TEST(TrendsJson, SeriesTimesAndValuesWithGapsAsNull) {

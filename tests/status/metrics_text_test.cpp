@@ -136,6 +136,7 @@ class MetricsText : public ::testing::Test {
     counts_.n[static_cast<std::size_t>(SourceKind::mqtt)]
              [static_cast<std::size_t>(Outcome::no_such_device)] = 2;
     counts_.n[static_cast<std::size_t>(SourceKind::failsafe)][0] = 1;
+    counts_.folded_n[static_cast<std::size_t>(SourceKind::modbus)][0] = 4;
     for (int i = 0; i < 5; ++i) {
       history_.add(Event{.kind = EventKind::reload, .message = "reloaded " + std::to_string(i)});
     }
@@ -348,6 +349,12 @@ TEST_F(MetricsText, WritesBySourceAndResultEveryPair) {
   EXPECT_THAT(lines,
               Contains(R"(drivegate_writes_total{source="gateway",result="no_response"} 0)"));
   for (const auto& l : lines) EXPECT_THAT(l, Not(HasSubstr("result=\"no such")));
+  // Of those, the writes folded into a summary record (docs/audit.md), likewise every pair.
+  const auto folded = family(text, "drivegate_audit_folded_total");
+  ASSERT_EQ(folded.size(), 2 + kSourceKindNames.size() * kOutcomeNames.size());
+  EXPECT_EQ(folded[1], "# TYPE drivegate_audit_folded_total counter");
+  EXPECT_EQ(folded[2], R"(drivegate_audit_folded_total{source="modbus",result="ok"} 4)");
+  EXPECT_THAT(folded, Contains(R"(drivegate_audit_folded_total{source="mqtt",result="denied"} 0)"));
 }
 
 TEST_F(MetricsText, TheEventHistory) {
@@ -363,6 +370,18 @@ TEST_F(MetricsText, TheEventHistory) {
   EXPECT_THAT(family(text, "drivegate_history_bytes"),
               Contains("drivegate_history_bytes " + std::to_string(history_.memory_bytes())));
   EXPECT_GT(history_.memory_bytes(), 0u);
+  // Each shelf: what it holds, keeps at most, and let go (the reloads are the plant's events).
+  EXPECT_THAT(family(text, "drivegate_history_shelf_entries"),
+              ElementsAre("# HELP drivegate_history_shelf_entries entries each shelf of the event "
+                          "history holds now",
+                          "# TYPE drivegate_history_shelf_entries gauge",
+                          R"(drivegate_history_shelf_entries{shelf="events"} 3)",
+                          R"(drivegate_history_shelf_entries{shelf="commands"} 0)",
+                          R"(drivegate_history_shelf_entries{shelf="refusals"} 0)"));
+  EXPECT_THAT(family(text, "drivegate_history_shelf_capacity"),
+              Contains(R"(drivegate_history_shelf_capacity{shelf="refusals"} 3)"));
+  EXPECT_THAT(family(text, "drivegate_history_shelf_dropped_total"),
+              Contains(R"(drivegate_history_shelf_dropped_total{shelf="events"} 2)"));
 }
 
 TEST_F(MetricsText, NoWritesNorHistoryInADocumentRenderedWithout) {

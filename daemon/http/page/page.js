@@ -710,7 +710,13 @@
     what.append(who, " ", el("span", {"class": "pts"}, f.points || "(nothing)"), " \u2192 ", res);
     if (f.why) what.append(el("span", {"class": "why"}, " " + f.why));
     if (f.took_ms) what.append(el("span", {"class": "dim"}, " " + f.took_ms + " ms"));
-    if (f.held) what.append(el("span", {"class": "dim"}, " (" + f.held + " more like it not recorded)"));
+    // A summary of a flood's writes (docs/audit.md): how many, over what time, the last shown.
+    if (f.folded) {
+      what.append(el("span", {"class": "dim"}, " (" + f.folded + " writes folded into this record" +
+        (f.since_ms ? ", " + eventTime(Number(f.since_ms)) + " to " + eventTime(Number(f.last_ms)) : "") +
+        (f.spread ? ", every " + (f.spread === "source" ? "client of the kind" : "device and point") : "") +
+        ")"));
+    }
     what.append(el("span", {"class": "rep"}, repeatText(f)));
     return what;
   }
