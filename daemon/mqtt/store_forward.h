@@ -52,7 +52,9 @@ class StoreForward {
   std::shared_ptr<spdlog::logger> log_;
   std::uint64_t replayed_ = 0;
   std::uint64_t unreadable_ = 0;
-  bool failing_ = false;  // a disk error was logged; the next success says it is over
+  bool failing_ = false;       // a disk error was logged; the next success says it is over
+  bool read_failing_ = false;  // the same, reading for a replay (said once)
+  bool sync_failing_ = false;  // the same, syncing (said once)
 };
 
 }  // namespace drivegate::mqtt
