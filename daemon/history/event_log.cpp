@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 
 namespace drivegate {
 
@@ -93,11 +94,11 @@ void EventLog::fit(Event& e) {
 }
 
 Event* EventLog::entry(std::uint64_t seq) {
-  if (entries_.empty() || seq < entries_.front().seq || seq > entries_.back().seq) return nullptr;
-  return &entries_[seq - entries_.front().seq];
+  return const_cast<Event*>(std::as_const(*this).find(seq));  // this log's own, not const
 }
 
 std::uint64_t EventLog::add(Event e) {
+  ++revision_;
   e.seq = next_seq_++;
   e.unix_ms = wall_();
   fit(e);
@@ -126,6 +127,7 @@ bool EventLog::repeat(const Event& e) {
   const auto it = newest_.find(fitted.device);
   if (it == newest_.end() || !same_but_time(it->second, fitted)) return false;
   const std::int64_t now = wall_();
+  ++revision_;
   count_repeat(it->second, now);
   if (Event* kept = entry(it->second.seq)) {
     bytes_ -= footprint(*kept);
@@ -135,9 +137,14 @@ bool EventLog::repeat(const Event& e) {
   return true;
 }
 
-std::vector<Event> EventLog::query(const EventFilter& filter) const {
+const Event* EventLog::find(std::uint64_t seq) const {
+  if (entries_.empty() || seq < entries_.front().seq || seq > entries_.back().seq) return nullptr;
+  return &entries_[seq - entries_.front().seq];
+}
+
+std::vector<std::uint64_t> EventLog::matching(const EventFilter& filter) const {
   const std::size_t limit = std::min(filter.limit, kMaxQuery);
-  std::vector<Event> out;
+  std::vector<std::uint64_t> out;
   if (limit == 0) return out;
   const auto matches = [&](const Event& e) {
     return (filter.device.empty() || e.device == filter.device) &&
@@ -148,15 +155,21 @@ std::vector<Event> EventLog::query(const EventFilter& filter) const {
     auto it = std::find_if(entries_.begin(), entries_.end(),
                            [&](const Event& e) { return e.seq > filter.after_seq; });
     for (; it != entries_.end() && out.size() < limit; ++it) {
-      if (matches(*it)) out.push_back(*it);
+      if (matches(*it)) out.push_back(it->seq);
     }
     return out;
   }
   // Newest first until the limit, then turned oldest first.
   for (auto it = entries_.rbegin(); it != entries_.rend() && out.size() < limit; ++it) {
-    if (matches(*it)) out.push_back(*it);
+    if (matches(*it)) out.push_back(it->seq);
   }
   std::reverse(out.begin(), out.end());
+  return out;
+}
+
+std::vector<Event> EventLog::query(const EventFilter& filter) const {
+  std::vector<Event> out;
+  for (const std::uint64_t seq : matching(filter)) out.push_back(*find(seq));
   return out;
 }
 
