@@ -19,6 +19,7 @@
 
 #include "fake_content.h"
 #include "http/http_server.h"
+#include "http/slice_renderer.h"
 #include "server_thread.h"
 #include "tcp_client.h"
 
@@ -202,6 +203,33 @@ TEST(HttpServer, ALargeDocumentArrivesWholeInSlices) {
 // (no TCP_NODELAY), each slice after the first is held until the one before is acknowledged, and
 // a client that delays its ACKs (Linux: at least 40 ms) got every kept-alive scrape 40 ms late.
 // The bound is the delayed-ACK timer, not a speed: the median of ten is far below it or at it.
+// A page of the history is made a slice at a time (content.h, SlicedDocument): kSliceBytes of it
+// per turn of the event loop, never the whole at once, and it arrives whole; the connection goes
+// on serving after it, and a HEAD gets its length without it.
+TEST(HttpServer, AnEventsPageIsMadeASliceAtATimeAndArrivesWhole) {
+  std::string doc;
+  for (int i = 0; doc.size() < 100 * 1024; ++i) doc += "{\"seq\": " + std::to_string(i) + "},\n";
+  Harness h;
+  h.content().events = doc;
+  Client c(h.port());
+  ASSERT_TRUE(c.connected());
+  ASSERT_TRUE(c.send(get("/api/v1/events?limit=1000")));
+  const std::string r = c.read_response();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 200"));
+  EXPECT_THAT(r, HasSubstr("Content-Type: application/json\r\n"));
+  EXPECT_EQ(body_of(r), doc);
+  const auto slices = static_cast<int>((doc.size() + kSliceBytes - 1) / kSliceBytes);
+  EXPECT_EQ(h.content().slices, slices);
+  ASSERT_TRUE(c.send("HEAD /api/v1/events HTTP/1.1\r\nHost: x\r\n\r\n"));
+  const std::string head = c.read_response(/*head=*/true);
+  EXPECT_THAT(head, HasSubstr("Content-Length: " + std::to_string(doc.size()) + "\r\n"));
+  EXPECT_EQ(body_of(head), "");
+  ASSERT_TRUE(c.send(get("/api/v1/events?kind=nonsense")));
+  EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 400"));
+  ASSERT_TRUE(c.send(get("/metrics")));
+  EXPECT_EQ(body_of(c.read_response()), h.content().metrics());
+}
+
 TEST(HttpServer, AKeptAliveDocumentIsNotHeldBackForTheClientsDelayedAck) {
   Harness h;
   h.content().status = std::string(17 * 1024, 'x');  // a status document's size: five slices
