@@ -213,6 +213,11 @@ void HttpConnection::reply(unsigned status, const std::string& content_type,
   response_.keep_alive(keep_alive);
   body_ = std::move(body);
   const std::size_t size = body_->size();
+  // A large response counts as the requests its size is worth (HttpOptions::requests): the
+  // address's next request waits for them, so the bytes one address pulls a second are bounded.
+  if (const std::size_t more = size / HttpOptions::kBytesPerRequest; more > 0) {
+    state_->request_rate.charge(address_, static_cast<double>(more), state_->clock.now());
+  }
   if (!head) response_.body() = {body_->data(), size};
   response_.content_length(size);
   within_timeout(false);  // a client that does not read

@@ -560,6 +560,36 @@ TEST(HttpServer, AHammeringClientIsPacedWhileAnotherAddressIsAnsweredAtOnce) {
   EXPECT_EQ(h.stats().requests_paced, static_cast<std::uint64_t>(kRequests - 5));
 }
 
+// A large response counts as the requests its size is worth (HttpOptions::kBytesPerRequest): an
+// address pulling the history's largest page again and again waits for the bytes it took, where
+// one that asks for small documents is answered at once.
+TEST(HttpServer, ALargePageCountsAsTheRequestsItsSizeIsWorth) {
+  HttpOptions o;
+  o.requests = {10, 20};
+  Harness h(o);
+  h.content().events.assign(5 * HttpOptions::kBytesPerRequest + 10, 'x');  // worth 1 + 5
+  Client puller(h.port());
+  ASSERT_TRUE(puller.connected());
+  std::string burst;
+  for (int i = 0; i < 5; ++i) burst += get("/api/v1/events?limit=1000");
+  ASSERT_TRUE(puller.send(burst));
+  // A burst of 20: four pages of 1 + 5 each take it to -4, so the fifth waits.
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_THAT(puller.read_response(false, 2s), StartsWith("HTTP/1.1 200")) << "page " << i;
+  }
+  ASSERT_TRUE(h.eventually([&h] { return h.server().stats().requests_paced == 1; }));
+  EXPECT_EQ(puller.read_response(false, 100ms), "");
+  Client other(h.port(), "127.0.0.2");
+  ASSERT_TRUE(other.connected());
+  ASSERT_TRUE(other.send(get("/api/v1/status")));
+  EXPECT_THAT(other.read_response(false, 2s), StartsWith("HTTP/1.1 200"));
+  // -4 + 10 a second: the next token after 500 ms of the server's time.
+  h.advance(490ms);
+  EXPECT_EQ(puller.read_response(false, 100ms), "");
+  h.advance(20ms);
+  EXPECT_THAT(puller.read_response(false, 2s), StartsWith("HTTP/1.1 200"));
+}
+
 TEST(HttpServer, AddressOutsideTheAllowListIsClosedAtAccept) {
   HttpOptions o;
   std::string error;
