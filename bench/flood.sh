@@ -17,13 +17,19 @@
 #              clients' CPU: what the flood costs the machine, not the daemon under test
 #   http       $HAMMERS dg-scraper clients from 127.0.0.1, each fetching /metrics and
 #              /api/v1/status $HAMMER_RATE times a second on kept-alive connections
+#   history    $PULLERS dg-scraper clients, each from its own address (127.0.0.2, .3, ...),
+#              fetching the history's largest page (/api/v1/events?limit=1000, the history first
+#              filled with $FILL distinct setpoint writes: about 330 KB) $PULL_RATE times a second
+#              on a kept-alive connection
+# With BASELINE_BIN (another build's bin directory, e.g. main's), a third daemon "baseline" of
+# that build with the defaults, measured in the same rounds: the same phases before and after.
 # The load generators and the simulators run on CPU $LOAD_CPU, the flooding and hammering
 # clients at nice 19 there, so that what is measured is what the daemon does with the load, not
 # the measuring client waiting for its own CPU. Prints the medians and each phase's p99 over its
 # daemon's quiet p99.
 # Environment: ROUNDS (4), DURATION (4 s), FLOOD_SLOTS (8), HAMMERS (12), HAMMER_RATE (200),
-#   HS_RATE (the limited daemon's tls_handshakes_per_s; its default when unset), SERVER_CPU (0),
-#   LOAD_CPU (1).
+#   PULLERS (16), PULL_RATE (50), FILL (1100), HS_RATE (the limited daemon's tls_handshakes_per_s;
+#   its default when unset), BASELINE_BIN, SERVER_CPU (0), LOAD_CPU (1).
 set -euo pipefail
 
 B=$(realpath "${1:-build-bench}")
@@ -33,6 +39,10 @@ DURATION=${DURATION:-4}
 FLOOD_SLOTS=${FLOOD_SLOTS:-8}
 HAMMERS=${HAMMERS:-12}
 HAMMER_RATE=${HAMMER_RATE:-200}
+PULLERS=${PULLERS:-16}
+PULL_RATE=${PULL_RATE:-50}
+FILL=${FILL:-1100}
+BASELINE_BIN=${BASELINE_BIN:+$(realpath "$BASELINE_BIN")}
 SERVER_CPU=${SERVER_CPU:-0}
 LOAD_CPU=${LOAD_CPU:-1}
 HERE=$(dirname "$(realpath "$0")")
@@ -51,8 +61,10 @@ sh "$HERE/../tests/support/make_certs.sh" "$C" >/dev/null
 TLS_ARGS=(--tls-ca "$C/ca.pem" --tls-cert "$C/engineer.pem" --tls-key "$C/engineer.key")
 
 declare -A PLAIN TLS HTTP PID
+TAGS=(limited unlimited)
+[[ -n $BASELINE_BIN ]] && TAGS+=(baseline)
 port=15300
-for tag in limited unlimited; do
+for tag in "${TAGS[@]}"; do
   PLAIN[$tag]=$port TLS[$tag]=$((port + 1)) HTTP[$tag]=$((port + 2))
   port=$((port + 10))
   hs="" rq=""
@@ -61,7 +73,9 @@ for tag in limited unlimited; do
     hs="tls_handshakes_per_s = 0"
     rq="requests_per_s = 0"
   fi
-  start_gateway "$BIN" "$tag" "[server]
+  bin=$BIN
+  [[ $tag == baseline ]] && bin=$BASELINE_BIN
+  start_gateway "$bin" "$tag" "[server]
 max_clients = 64
 
 [http]
@@ -92,9 +106,34 @@ access = \"maintain\"
 address = \"127.0.0.1:${TLS[decoy]}\"
 tls = { cert = \"$C/server.pem\", key = \"$C/server.key\", ca = \"$C/ca.pem\" }
 roles = { engineer = \"maintain\" }"
-for tag in limited unlimited decoy; do
+for tag in "${TAGS[@]}" decoy; do
   wait_for_port "${PLAIN[$tag]}" || { cat "$W/$tag/drivegated.log" >&2; exit 1; }
   python3 "$HERE/mbwrite.py" --wait-online "${PLAIN[$tag]}" "${START[@]}"
+done
+
+# fill_history PORT: $FILL setpoint writes, each a value its drive had not just before, spread
+# over the five running drives (one connection each): as many command records in the history.
+fill_history() {
+  python3 - "$1" "$FILL" <<'PY'
+import socket, struct, sys, threading
+port, total = int(sys.argv[1]), int(sys.argv[2])
+def writer(unit, n):
+    s = socket.create_connection(("127.0.0.1", port))
+    for i in range(n):
+        # FC06 to setpoint_rpm (holding 1): Modbus Application Protocol 6.6.
+        pdu = struct.pack(">BHH", 6, 1, 600 + i % 500)
+        s.sendall(struct.pack(">HHHB", i & 0xFFFF, 0, len(pdu) + 1, unit) + pdu)
+        head = s.recv(7, socket.MSG_WAITALL)
+        s.recv(struct.unpack(">H", head[4:6])[0] - 1, socket.MSG_WAITALL)
+threads = [threading.Thread(target=writer, args=(u, total // 5 + 1)) for u in range(1, 6)]
+for t in threads: t.start()
+for t in threads: t.join()
+PY
+}
+for tag in "${TAGS[@]}"; do
+  fill_history "${PLAIN[$tag]}"
+  bytes=$(curl -s "http://127.0.0.1:${HTTP[$tag]}/api/v1/events?limit=1000" | wc -c)
+  echo "flood.sh: $tag: the history's largest page is $bytes bytes" >&2
 done
 sleep 2
 
@@ -117,7 +156,7 @@ flood() {  # flood TARGET_TAG: a handshake flood on that daemon's TLS listener, 
 }
 
 for round in $(seq "$ROUNDS"); do
-  for tag in limited unlimited; do
+  for tag in "${TAGS[@]}"; do
     measure "$tag" quiet "$round"
 
     flood "$tag"
@@ -141,13 +180,26 @@ for round in $(seq "$ROUNDS"); do
     # Paced, a hammer would still be working through its schedule long after: stopped here.
     kill "${hammers[@]}" 2>/dev/null || true
     wait "${hammers[@]}" 2>/dev/null || true
+
+    pullers=()
+    for i in $(seq "$PULLERS"); do
+      taskset -c "$LOAD_CPU" nice -n 19 "$BIN/dg-scraper" "${HTTP[$tag]}" "$PULL_RATE" \
+        "$((DURATION + 2))" "$W/pull-$tag.out" --keep-alive --path "/api/v1/events?limit=1000" \
+        --from "127.0.0.$((1 + i))" >/dev/null 2>>"$W/pull.err" &
+      pullers+=($!)
+    done
+    sleep 0.5
+    measure "$tag" history "$round"
+    kill "${pullers[@]}" 2>/dev/null || true
+    wait "${pullers[@]}" 2>/dev/null || true
   done
 done
 
 echo
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) CPUs," \
   "$(uname -sr); both daemons on CPU $SERVER_CPU, clients on CPU $LOAD_CPU; $ROUNDS rounds x" \
-  "${DURATION}s; flood: $FLOOD_SLOTS handshake slots; http: $HAMMERS clients x $HAMMER_RATE/s"
+  "${DURATION}s; flood: $FLOOD_SLOTS handshake slots; http: $HAMMERS clients x $HAMMER_RATE/s;" \
+  "history: $PULLERS addresses x $PULL_RATE/s; baseline: ${BASELINE_BIN:-none}"
 python3 - "$W/results.txt" <<'EOF'
 import statistics, sys
 rows = {}
@@ -157,9 +209,11 @@ for line in open(sys.argv[1]):
     rows.setdefault((tag, phase), []).append((float(d["p50_us"]), float(d["p99_us"]), float(d["rps"])))
 print("| daemon | phase | Modbus p50 | p99 | p99 / quiet p99 | requests/s |")
 print("|---|---|---|---|---|---|")
-for tag in ("limited", "unlimited"):
+for tag in ("limited", "unlimited", "baseline"):
+    if (tag, "quiet") not in rows:
+        continue
     quiet = statistics.median(r[1] for r in rows[(tag, "quiet")])
-    for phase in ("quiet", "tls-flood", "tls-decoy", "http"):
+    for phase in ("quiet", "tls-flood", "tls-decoy", "http", "history"):
         if (tag, phase) not in rows:
             continue
         r = rows[(tag, phase)]
@@ -170,8 +224,16 @@ for tag in ("limited", "unlimited"):
 EOF
 echo "handshake floods (dg-loadgen --flood, per run, in order: limited, decoy, unlimited):"
 sed -n 's/.*handshakes=\([0-9]*\) errors=\([0-9]*\).*/  \1 completed, \2 refused/p' "$W/flood.out" | head -6
+echo "history pulls (dg-scraper, per daemon: pages, p50 and p99 of a page):"
+for tag in "${TAGS[@]}"; do
+  [[ -e $W/pull-$tag.out ]] || continue
+  awk -v t="$tag" '{for (i = 2; i <= NF; i++) {split($i, kv, "="); v[kv[1]] = kv[2]}
+    n += v["requests"]; p50 = v["p50_ms"]; p99 = v["p99_ms"]}
+    END {printf "  %s: %d pages, last puller p50 %s ms, p99 %s ms\n", t, n, p50, p99}' \
+    "$W/pull-$tag.out"
+done
 echo "daemons' limit counters:"
-for tag in limited unlimited; do
+for tag in "${TAGS[@]}"; do
   curl -s "http://127.0.0.1:${HTTP[$tag]}/metrics" 2>/dev/null |
     grep -E "^drivegate_(modbus_tls_handshakes_limited_total|http_requests_paced_total)" |
     sed "s/^/  $tag: /" || true

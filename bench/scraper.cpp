@@ -1,7 +1,8 @@
-// dg-scraper PORT RATE SECONDS OUT [--keep-alive] [--decoy]: the HTTP scraper of
-// bench/http_load.sh, in C++ so that its own CPU time (on the load generator's CPU: the bench
-// machine has two) is as small as a client's can be. It replaced a Python scraper that took
-// ~0.4 ms of CPU a request, enough to delay the load generator and show in its latencies.
+// dg-scraper PORT RATE SECONDS OUT [--keep-alive] [--decoy] [--path P] [--from A]: the HTTP
+// scraper of bench/http_load.sh and bench/flood.sh, in C++ so that its own CPU time (on the load
+// generator's CPU: the bench machine has two) is as small as a client's can be. It replaced a
+// Python scraper that took ~0.4 ms of CPU a request, enough to delay the load generator and show in
+// its latencies.
 //
 // For SECONDS seconds, fetches /metrics and /api/v1/status of 127.0.0.1:PORT RATE times a second
 // each, interleaved: one request every 1 / (2 x RATE) s on an absolute schedule (request i is due
@@ -10,7 +11,9 @@
 // connection (connect, send, read the whole body, close), or with --keep-alive on one connection
 // per path kept open; latency is connect (or send) -> last body byte, CLOCK_MONOTONIC. --decoy:
 // the same requests, connections and pacing to two paths the daemon does not serve (a 10-byte
-// 404): the client's and the connections' cost without rendering anything.
+// 404): the client's and the connections' cost without rendering anything. --path P: P in place
+// of both paths (bench/flood.sh's history pull: /api/v1/events?limit=1000). --from A: connect from
+// the local IPv4 address A (127.0.0.2 ...: one client address of many, as the daemon counts them).
 // Appends one line to OUT:
 //   scrape requests=N errors=E late=L p50_ms= p99_ms= max_ms= metrics_p50_ms= status_p50_ms=
 //          metrics_bytes= status_bytes= cpu_ms= (this process's user + system CPU) seconds=
@@ -61,9 +64,18 @@ double cpu_ms() {
   return ms(u.ru_utime) + ms(u.ru_stime);
 }
 
-int connect_to(int port) {
+int connect_to(int port, const in_addr& from) {
   const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return -1;
+  if (from.s_addr != htonl(INADDR_ANY)) {
+    sockaddr_in local{};
+    local.sin_family = AF_INET;
+    local.sin_addr = from;
+    if (bind(fd, reinterpret_cast<const sockaddr*>(&local), sizeof local) != 0) {
+      close(fd);
+      return -1;
+    }
+  }
   const timeval tv{kTimeoutS, 0};
   setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
   setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
@@ -140,7 +152,9 @@ double pct(std::vector<double> v, double q) {
 
 int main(int argc, char** argv) {
   if (argc < 5) {
-    std::fprintf(stderr, "usage: dg-scraper PORT RATE SECONDS OUT [--keep-alive] [--decoy]\n");
+    std::fprintf(stderr,
+                 "usage: dg-scraper PORT RATE SECONDS OUT [--keep-alive] [--decoy] [--path P] "
+                 "[--from A]\n");
     return 2;
   }
   const int port = std::atoi(argv[1]);
@@ -149,12 +163,18 @@ int main(int argc, char** argv) {
   const char* out = argv[4];
   bool keep_alive = false;
   bool decoy = false;
+  std::string_view only_path;
+  in_addr from{htonl(INADDR_ANY)};
   for (int i = 5; i < argc; ++i) {
     const std::string_view a = argv[i];
     if (a == "--keep-alive") {
       keep_alive = true;
     } else if (a == "--decoy") {
       decoy = true;
+    } else if (a == "--path" && i + 1 < argc) {
+      only_path = argv[++i];
+    } else if (a == "--from" && i + 1 < argc && inet_pton(AF_INET, argv[i + 1], &from) == 1) {
+      ++i;
     } else {
       std::fprintf(stderr, "dg-scraper: unknown option %s\n", argv[i]);
       return 2;
@@ -164,7 +184,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "dg-scraper: PORT 1..65535, RATE and SECONDS above 0\n");
     return 2;
   }
-  const std::array<std::string_view, 2> paths{"/metrics", "/api/v1/status"};
+  const std::array<std::string_view, 2> paths =
+      only_path.empty() ? std::array<std::string_view, 2>{"/metrics", "/api/v1/status"}
+                        : std::array<std::string_view, 2>{only_path, only_path};
   const std::array<std::string_view, 2> sent =
       decoy ? std::array<std::string_view, 2>{"/metrics-decoy", "/api/v1/status-decoy"} : paths;
   const int want = decoy ? 404 : 200;
@@ -189,7 +211,7 @@ int main(int argc, char** argv) {
     const std::size_t k = static_cast<std::size_t>(i % 2);
     const long long t0 = now_ns();
     int fd = keep_alive ? conns[k] : -1;
-    if (fd < 0) fd = connect_to(port);
+    if (fd < 0) fd = connect_to(port, from);
     std::string why = "connect: " + std::string(std::strerror(errno));
     const long n = fd < 0 ? -1 : exchange(fd, sent[k], keep_alive, want, why);
     if (n >= 0) {

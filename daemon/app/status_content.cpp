@@ -17,6 +17,20 @@ namespace {
 double unix_now() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
+// A page of the history (history_json.h) as the HTTP side renders it, a slice at a time.
+class SlicedPage final : public http::SlicedDocument {
+ public:
+  explicit SlicedPage(std::shared_ptr<EventsPage> page) : page_(std::move(page)) {}
+  bool render_slice(std::size_t bytes) override { return page_->render(bytes); }
+  [[nodiscard]] bool whole() const override { return page_->whole(); }
+  [[nodiscard]] std::shared_ptr<const std::string> document() const override {
+    return page_->json();
+  }
+
+ private:
+  std::shared_ptr<EventsPage> page_;
+};
+
 // A capture of one bus: the tap is on the bus from construction to destruction. Holding the bus
 // keeps it (and its engine) alive should a reload drop it meanwhile; it then just goes quiet.
 class BusCapture final : public http::CaptureStream {
@@ -59,6 +73,7 @@ StatusContent::StatusContent(const std::unique_ptr<Gateway>& gateway, const modb
       restart_needed_(restart_needed),
       history_(history),
       slaves_(serial),
+      events_pages_(history.events()),
       started_unix_(unix_now()) {}
 
 StatusView StatusContent::view(mqtt::NorthboundStatus& mqtt) const {
@@ -113,18 +128,18 @@ std::string StatusContent::metrics() {
   return metrics_text(view(mqtt));
 }
 
-std::optional<std::string> StatusContent::events_json(const http::EventsQuery& query) {
+std::shared_ptr<http::SlicedDocument> StatusContent::events_page(const http::EventsQuery& query) {
   EventFilter f;
   if (!query.kind.empty()) {
     EventKind kind{};
-    if (!parse_event_kind(query.kind, kind)) return std::nullopt;
+    if (!parse_event_kind(query.kind, kind)) return nullptr;
     f.kind = kind;
   }
   f.device = query.device;
   f.since_ms = query.since_ms;
   f.after_seq = query.after;
   f.limit = query.limit;
-  return drivegate::events_json(history_.events(), f);
+  return std::make_shared<SlicedPage>(events_pages_.page(f));
 }
 
 std::string StatusContent::trends_json(const http::TrendsQuery& query) {

@@ -8,6 +8,7 @@
 #include "status/status_view.h"
 #include "gateway/gateway.h"
 #include "history/history.h"
+#include "history/history_json.h"
 #include "http/content.h"
 #include "http/http_server.h"
 #include "modbus/server.h"
@@ -26,7 +27,7 @@ class StatusContent final : public http::Content {
                 const std::vector<std::string>& restart_needed, const History& history,
                 const std::unique_ptr<SlaveListeners>& serial);
   std::string status_json() override;
-  std::optional<std::string> events_json(const http::EventsQuery& query) override;
+  std::shared_ptr<http::SlicedDocument> events_page(const http::EventsQuery& query) override;
   std::string trends_json(const http::TrendsQuery& query) override;
   std::string metrics() override;
   std::string regmap_json() override;
@@ -44,6 +45,7 @@ class StatusContent final : public http::Content {
   const std::vector<std::string>& restart_needed_;
   const History& history_;
   const std::unique_ptr<SlaveListeners>& slaves_;  // empty until the daemon made them
+  EventsPages events_pages_;  // GET /api/v1/events: each page rendered once per change of the log
   double started_unix_;
 };
 

@@ -11,15 +11,6 @@ namespace drivegate {
 
 namespace {
 
-const char* kind_of(mode_t mode) {
-  if (S_ISDIR(mode)) return "a directory";
-  if (S_ISFIFO(mode)) return "a FIFO";
-  if (S_ISCHR(mode)) return "a character device";
-  if (S_ISBLK(mode)) return "a block device";
-  if (S_ISSOCK(mode)) return "a socket";
-  return "not a regular file";
-}
-
 std::string size_text(std::size_t bytes) {
   if (bytes >= 1024 * 1024 && bytes % (1024 * 1024) == 0) {
     return std::to_string(bytes / (1024 * 1024)) + " MiB";
@@ -28,34 +19,56 @@ std::string size_text(std::size_t bytes) {
   return std::to_string(bytes) + " bytes";
 }
 
-// Opens without blocking (O_NONBLOCK: a FIFO without a writer opens at once) and checks the
-// open file itself (fstat: no race with a rename in between). -1 and `error` when refused.
-int open_regular(const std::filesystem::path& path, struct stat& st, std::string& error) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+}  // namespace
+
+const char* file_kind(mode_t mode) {
+  if (S_ISREG(mode)) return "a regular file";
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISLNK(mode)) return "a symbolic link";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+// Opens without blocking (O_NONBLOCK: a FIFO without a writer opens at once) and checks the open
+// file itself (fstat: no race with a rename in between).
+int open_regular_file(int dir_fd, const std::string& name, int flags, Links links,
+                      std::string& error) {
+  const int extra = links == Links::refuse ? O_NOFOLLOW : 0;
+  const int fd = ::openat(dir_fd, name.c_str(), flags | extra | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
   if (fd < 0) {
-    error = path.string() + ": cannot open: " + std::strerror(errno);
+    const int e = errno;
+    error = e == ELOOP && links == Links::refuse ? name + ": a symbolic link, not followed"
+                                                 : name + ": cannot open: " + std::strerror(e);
+    errno = e;
     return -1;
   }
+  struct stat st {};
   if (::fstat(fd, &st) != 0) {
-    error = path.string() + ": " + std::strerror(errno);
+    const int e = errno;
+    error = name + ": " + std::strerror(e);
     ::close(fd);
+    errno = e;
     return -1;
   }
   if (!S_ISREG(st.st_mode)) {
-    error = path.string() + ": " + kind_of(st.st_mode) + ", not a regular file";
+    error = name + ": " + file_kind(st.st_mode) + ", not a regular file";
     ::close(fd);
+    errno = EINVAL;
     return -1;
   }
   return fd;
 }
 
-}  // namespace
-
 std::optional<std::string> read_regular_file(const std::filesystem::path& path,
-                                             std::size_t max_bytes, std::string& error) {
-  struct stat st {};
-  const int fd = open_regular(path, st, error);
+                                             std::size_t max_bytes, std::string& error,
+                                             Links links) {
+  const int fd = open_regular_file(AT_FDCWD, path.string(), O_RDONLY, links, error);
   if (fd < 0) return std::nullopt;
+  struct stat st {};
+  ::fstat(fd, &st);
   if (static_cast<std::size_t>(st.st_size) > max_bytes) {
     error = path.string() + ": " + std::to_string(st.st_size) + " bytes, more than the " +
             size_text(max_bytes) + " allowed";
@@ -77,8 +90,7 @@ std::optional<std::string> read_regular_file(const std::filesystem::path& path,
 }
 
 bool is_readable_regular_file(const std::filesystem::path& path, std::string& error) {
-  struct stat st {};
-  const int fd = open_regular(path, st, error);
+  const int fd = open_regular_file(AT_FDCWD, path.string(), O_RDONLY, Links::follow, error);
   if (fd < 0) return false;
   ::close(fd);
   return true;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 
 #include "gateway/source.h"
 
@@ -133,6 +134,7 @@ Event* EventLog::entry(const Event& like) {
 }
 
 std::uint64_t EventLog::add(Event e) {
+  ++revision_;
   e.seq = next_seq_++;
   e.unix_ms = wall_();
   fit(e);
@@ -164,6 +166,7 @@ bool EventLog::repeat(const Event& e) {
   const auto it = newest_.find(fitted.device);
   if (it == newest_.end() || !same_but_time(it->second, fitted)) return false;
   const std::int64_t now = wall_();
+  ++revision_;
   count_repeat(it->second, now);
   if (Event* kept = entry(it->second)) {
     bytes_ -= footprint(*kept);
@@ -177,9 +180,23 @@ void EventLog::interrupt(std::string_view device) {
   if (const auto it = newest_.find(device); it != newest_.end()) newest_.erase(it);
 }
 
+const Event* EventLog::find(std::uint64_t seq) const {
+  for (const auto& shelf : shelves_) {
+    const auto it = std::lower_bound(shelf.begin(), shelf.end(), seq, by_seq);
+    if (it != shelf.end() && it->seq == seq) return &*it;
+  }
+  return nullptr;
+}
+
 std::vector<Event> EventLog::query(const EventFilter& filter) const {
-  const std::size_t limit = std::min(filter.limit, kMaxQuery);
   std::vector<Event> out;
+  for (const std::uint64_t seq : matching(filter)) out.push_back(*find(seq));
+  return out;
+}
+
+std::vector<std::uint64_t> EventLog::matching(const EventFilter& filter) const {
+  const std::size_t limit = std::min(filter.limit, kMaxQuery);
+  std::vector<std::uint64_t> out;
   if (limit == 0) return out;
   const auto matches = [&](const Event& e) {
     return (filter.device.empty() || e.device == filter.device) &&
@@ -204,7 +221,7 @@ std::vector<Event> EventLog::query(const EventFilter& filter) const {
         }
       }
       if (next == shelves) break;
-      if (matches(*at[next])) out.push_back(*at[next]);
+      if (matches(*at[next])) out.push_back(at[next]->seq);
       ++at[next];
     }
     return out;
@@ -220,7 +237,7 @@ std::vector<Event> EventLog::query(const EventFilter& filter) const {
       }
     }
     if (next == shelves) break;
-    if (matches(*at[next])) out.push_back(*at[next]);
+    if (matches(*at[next])) out.push_back(at[next]->seq);
     ++at[next];
   }
   std::reverse(out.begin(), out.end());

@@ -97,6 +97,10 @@ class EventLog {
 
   // Matching entries of every shelf, in sequence, oldest first.
   [[nodiscard]] std::vector<Event> query(const EventFilter& filter) const;
+  // The sequence numbers of the entries query() returns, without copying them.
+  [[nodiscard]] std::vector<std::uint64_t> matching(const EventFilter& filter) const;
+  // The entry with sequence number `seq`, while the log holds it (until the next add()).
+  [[nodiscard]] const Event* find(std::uint64_t seq) const;
   [[nodiscard]] std::size_t size() const;
   [[nodiscard]] std::size_t capacity() const;
   [[nodiscard]] std::uint64_t last_seq() const { return next_seq_ - 1; }
@@ -110,6 +114,9 @@ class EventLog {
   // When this log began: a follower seeing it change knows the daemon restarted and its
   // sequence numbers began again.
   [[nodiscard]] std::int64_t started_ms() const { return started_ms_; }
+  // Changes whenever what a query may return does (an entry added, pushed out, or updated by a
+  // repeat): what was rendered from the log at one revision is still true at the same one.
+  [[nodiscard]] std::uint64_t revision() const { return revision_; }
 
  private:
   static std::size_t footprint(const Event& e);
@@ -126,6 +133,7 @@ class EventLog {
   std::uint64_t next_seq_ = 1;
   std::array<std::uint64_t, kShelfNames.size()> dropped_{};
   std::size_t bytes_ = 0;
+  std::uint64_t revision_ = 0;
   // Each device's newest entry ("" for the gateway's own), whether or not the log still holds it.
   std::map<std::string, Event, std::less<>> newest_;
 };

@@ -5,7 +5,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <optional>
 #include <functional>
 #include <memory>
 #include <string>
@@ -22,6 +21,20 @@ class CaptureStream {
   virtual std::string take() = 0;
   // It has reached its size cap: nothing more will come.
   [[nodiscard]] virtual bool full() const = 0;
+};
+
+// A document made a slice at a time (GET /api/v1/events: its largest page is about 330 KB of JSON,
+// milliseconds of work at once). The server renders one slice of one such document per turn of
+// the event loop, whoever asked for it, so the loop serves the PLCs between two slices; a
+// document many requests ask for at once is rendered once for all of them.
+class SlicedDocument {
+ public:
+  virtual ~SlicedDocument() = default;
+  // Renders about `bytes` more of it unless it is whole: whether it is whole now.
+  virtual bool render_slice(std::size_t bytes) = 0;
+  [[nodiscard]] virtual bool whole() const = 0;
+  // The document, once whole.
+  [[nodiscard]] virtual std::shared_ptr<const std::string> document() const = 0;
 };
 
 // GET /api/v1/events: which entries of the history (docs/http.md); the route parses the query,
@@ -49,9 +62,10 @@ class Content {
   virtual std::string metrics() = 0;
   // GET /api/v1/regmap: the register map, as `drivegate regmap --format json` prints it.
   virtual std::string regmap_json() = 0;
-  // GET /api/v1/events (JSON), or nullopt for a kind that is not one (400).
-  virtual std::optional<std::string> events_json(const EventsQuery& /*query*/) {
-    return std::nullopt;
+  // GET /api/v1/events (JSON, made a slice at a time), or nullptr for a kind that is not one
+  // (400).
+  virtual std::shared_ptr<SlicedDocument> events_page(const EventsQuery& /*query*/) {
+    return nullptr;
   }
   // GET /api/v1/trends (JSON).
   virtual std::string trends_json(const TrendsQuery& /*query*/) { return "{\"trends\":[]}"; }

@@ -18,10 +18,6 @@ namespace bhttp = boost::beast::http;
 namespace {
 // Request line and headers together; a status page or a scraper sends a few hundred bytes.
 constexpr std::uint32_t kHeaderLimit = 8 * 1024;
-// The most of a response one send may carry. A 17 KB document sent at once is one long system
-// call on the event loop (loopback delivers it to the reader inside it); in slices, a Modbus
-// request that arrives meanwhile is answered between two of them (docs/performance.md).
-constexpr std::size_t kWriteSlice = 4 * 1024;
 }  // namespace
 
 HttpConnection::HttpConnection(std::shared_ptr<HttpState> state,
@@ -175,13 +171,32 @@ void HttpConnection::answer() {
     serve_capture(*r.capture);
     return;
   }
-  reply(r.status, r.content_type, std::move(r.body), request.keep_alive(),
-        request.method() == bhttp::verb::head, r.allow);
+  const bool head = request.method() == bhttp::verb::head;
+  if (r.sliced) {
+    // Nothing is read from the connection until the document is whole and answered.
+    state_->slicer->render(
+        std::move(r.sliced),
+        [self = shared_from_this(), status = r.status, type = r.content_type,
+         keep_alive = request.keep_alive(), head](std::shared_ptr<const std::string> document) {
+          if (!self->closed_) {
+            self->reply(status, type, std::move(document), keep_alive, head);
+          }
+        });
+    return;
+  }
+  reply(r.status, r.content_type, std::move(r.body), request.keep_alive(), head, r.allow);
 }
 
 void HttpConnection::reply(unsigned status, const std::string& content_type, std::string body,
                            bool keep_alive, bool head, const std::string& allow,
                            unsigned retry_after_s) {
+  reply(status, content_type, std::make_shared<const std::string>(std::move(body)), keep_alive,
+        head, allow, retry_after_s);
+}
+
+void HttpConnection::reply(unsigned status, const std::string& content_type,
+                           std::shared_ptr<const std::string> body, bool keep_alive, bool head,
+                           const std::string& allow, unsigned retry_after_s) {
   response_ = {};
   response_.version(11);
   response_.result(status);
@@ -196,12 +211,18 @@ void HttpConnection::reply(unsigned status, const std::string& content_type, std
   if (!allow.empty()) response_.set(bhttp::field::allow, allow);
   if (retry_after_s > 0) response_.set(bhttp::field::retry_after, std::to_string(retry_after_s));
   response_.keep_alive(keep_alive);
-  const std::size_t size = body.size();
-  if (!head) response_.body() = std::move(body);
+  body_ = std::move(body);
+  const std::size_t size = body_->size();
+  // A large response counts as the requests its size is worth (HttpOptions::requests): the
+  // address's next request waits for them, so the bytes one address pulls a second are bounded.
+  if (const std::size_t more = size / HttpOptions::kBytesPerRequest; more > 0) {
+    state_->request_rate.charge(address_, static_cast<double>(more), state_->clock.now());
+  }
+  if (!head) response_.body() = {body_->data(), size};
   response_.content_length(size);
   within_timeout(false);  // a client that does not read
   response_writer_.emplace(response_);
-  response_writer_->limit(kWriteSlice);
+  response_writer_->limit(kSliceBytes);
   bhttp::async_write(
       stream_, *response_writer_,
       [self = shared_from_this(), keep_alive](const boost::system::error_code& ec, std::size_t) {

@@ -12,7 +12,7 @@
 #include <boost/beast/http/empty_body.hpp>
 #include <boost/beast/http/parser.hpp>
 #include <boost/beast/http/serializer.hpp>
-#include <boost/beast/http/string_body.hpp>
+#include <boost/beast/http/span_body.hpp>
 #include <memory>
 #include <optional>
 
@@ -40,6 +40,10 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   void answer();
   void reply(unsigned status, const std::string& content_type, std::string body, bool keep_alive,
              bool head, const std::string& allow = {}, unsigned retry_after_s = 0);
+  // The same for a body kept elsewhere too (a page many requests share): not copied.
+  void reply(unsigned status, const std::string& content_type,
+             std::shared_ptr<const std::string> body, bool keep_alive, bool head,
+             const std::string& allow = {}, unsigned retry_after_s = 0);
   void on_written(const boost::system::error_code& ec, bool keep_alive);
   // The capture stream: headers, then a chunk per batch of frames, then the last chunk.
   void serve_capture(const CaptureRequest& request);
@@ -52,11 +56,13 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
   boost::beast::flat_buffer buffer_;
   std::optional<boost::beast::http::request_parser<boost::beast::http::empty_body>> parser_;
   std::size_t header_bytes_ = 0;  // of the request being read, as the parser consumed them
-  boost::beast::http::response<boost::beast::http::string_body> response_;
-  // Writes response_ a slice at a time (kWriteSlice): between slices the event loop runs what
+  // The response: its body is a view of body_, which may be shared with other requests.
+  using Body = boost::beast::http::span_body<const char>;
+  boost::beast::http::response<Body> response_;
+  std::shared_ptr<const std::string> body_;
+  // Writes response_ a slice at a time (kSliceBytes): between slices the event loop runs what
   // else is ready, Modbus requests first among them, instead of waiting for one long send.
-  std::optional<boost::beast::http::response_serializer<boost::beast::http::string_body>>
-      response_writer_;
+  std::optional<boost::beast::http::response_serializer<Body>> response_writer_;
   std::string peer_;
   boost::asio::ip::address address_;  // the client's, for the request rate
   net::Timer deadline_;  // request_timeout: for a whole request, or for the client to read

@@ -29,8 +29,10 @@ struct HttpOptions {
   std::size_t max_clients = 16;    // past it a client is closed at accept (captures aside)
   // Requests one client address may have served a second, in bursts of `burst`; a request over
   // it waits for its turn (its connection is not read meanwhile), so one client hammering the
-  // page slows itself, not the event loop that serves the PLCs. 0: no limit.
+  // page slows itself, not the event loop that serves the PLCs. 0: no limit. A response counts
+  // one request for every kBytesPerRequest it holds: its cost to the loop is its size.
   net::RateLimit requests = net::RateLimit::per_second_in_bursts_of_two(20);
+  static constexpr std::size_t kBytesPerRequest = 64 * 1024;
   // A request (its line and headers) must arrive whole within this; a keep-alive connection with
   // no new request for this long is closed.
   std::chrono::milliseconds request_timeout{10'000};

@@ -11,6 +11,7 @@
 #include "net/address_rate.h"
 #include "net/clock.h"
 #include "net/log_throttle.h"
+#include "slice_renderer.h"
 
 namespace drivegate::http {
 
@@ -25,7 +26,8 @@ struct HttpState {
         options(std::move(options_)),
         log(std::move(log_)),
         acceptor(std::make_shared<net::Acceptor>(io_, clock_, log, "http", options.allow)),
-        request_rate(options.requests) {}
+        request_rate(options.requests),
+        slicer(std::make_shared<SliceRenderer>(io_.get_executor())) {}
   boost::asio::io_context& io;
   net::Clock& clock;  // every deadline of the server and its connections (net/clock.h)
   Content& content;
@@ -35,6 +37,7 @@ struct HttpState {
   std::unordered_set<HttpConnection*> live;
   std::size_t capturing = 0;      // of `live`, the connections streaming a capture
   net::AddressRate request_rate;  // options.requests, per client address
+  std::shared_ptr<SliceRenderer> slicer;  // documents made a slice at a time (/api/v1/events)
   HttpStats stats;  // its own counts; the acceptor's (accepted, not allowed, refused) are its
   net::LogThrottle bad_request_log;  // any client can cause one: a burst, then one a second
   net::LogThrottle paced_log;        // requests held back by the rate limit

@@ -107,49 +107,49 @@ std::optional<std::uint64_t> whole(const std::string& v, std::uint64_t max) {
 }
 
 Response events_route(std::string_view target, Content& content) {
-  if (!query_decodes(target)) return {400, kText, kBadEscape, {}, {}};
+  if (!query_decodes(target)) return {400, kText, kBadEscape, {}, {}, {}};
   EventsQuery q;
   q.device = query_value(target, "device").value_or("");
   q.kind = query_value(target, "kind").value_or("");
   const auto since = since_ms(target);
-  if (!since) return {400, kText, "since must be seconds since the epoch\n", {}, {}};
+  if (!since) return {400, kText, "since must be seconds since the epoch\n", {}, {}, {}};
   q.since_ms = *since;
   if (const auto after = query_value(target, "after")) {
     const auto n = whole(*after, UINT64_MAX / 2);
-    if (!n) return {400, kText, "after must be a sequence number\n", {}, {}};
+    if (!n) return {400, kText, "after must be a sequence number\n", {}, {}, {}};
     q.after = *n;
   }
   if (const auto limit = query_value(target, "limit")) {
     // The history returns at most its own maximum however many are asked for.
     const auto n = whole(*limit, UINT32_MAX);
-    if (!n || *n == 0) return {400, kText, "limit must be a whole number above 0\n", {}, {}};
+    if (!n || *n == 0) return {400, kText, "limit must be a whole number above 0\n", {}, {}, {}};
     q.limit = *n;
   }
-  auto body = content.events_json(q);
-  if (!body) return {400, kText, "no such kind of event\n", {}, {}};
-  return {200, kJson, std::move(*body), {}, {}};
+  auto page = content.events_page(q);
+  if (!page) return {400, kText, "no such kind of event\n", {}, {}, {}};
+  return {200, kJson, {}, {}, {}, std::move(page)};
 }
 
 Response trends_route(std::string_view target, Content& content) {
-  if (!query_decodes(target)) return {400, kText, kBadEscape, {}, {}};
+  if (!query_decodes(target)) return {400, kText, kBadEscape, {}, {}, {}};
   TrendsQuery q;
   const auto device = query_value(target, "device");
   const auto bus = query_value(target, "bus");
-  if (device && bus) return {400, kText, "device or bus, not both\n", {}, {}};
+  if (device && bus) return {400, kText, "device or bus, not both\n", {}, {}, {}};
   if (device) q.name = "device:" + *device;
   if (bus) q.name = "bus:" + *bus;
   const auto since = since_ms(target);
-  if (!since) return {400, kText, "since must be seconds since the epoch\n", {}, {}};
+  if (!since) return {400, kText, "since must be seconds since the epoch\n", {}, {}, {}};
   q.since_ms = *since;
-  return {200, kJson, content.trends_json(q), {}, {}};
+  return {200, kJson, content.trends_json(q), {}, {}, {}};
 }
 
 Response capture_route(std::string_view target, Content& content, const RouteOptions& options) {
   if (!options.capture) {
-    return {403, kText, "capture is not enabled ([http] capture = true)\n", {}, {}};
+    return {403, kText, "capture is not enabled ([http] capture = true)\n", {}, {}, {}};
   }
   const auto bus = query_value(target, "bus");
-  if (!bus || bus->empty()) return {400, kText, "capture needs ?bus=NAME\n", {}, {}};
+  if (!bus || bus->empty()) return {400, kText, "capture needs ?bus=NAME\n", {}, {}, {}};
   CaptureRequest req{*bus, kCaptureDefault};
   if (const auto seconds = query_value(target, "seconds")) {
     const auto& t = *seconds;
@@ -158,13 +158,13 @@ Response capture_route(std::string_view target, Content& content, const RouteOpt
         !t.empty() && t.size() <= 4 && t.find_first_not_of("0123456789") == std::string::npos;
     if (digits) n = std::stol(t);
     if (!digits || n < 1 || n > kCaptureMax.count()) {
-      return {
-          400, kText, "seconds must be 1.." + std::to_string(kCaptureMax.count()) + "\n", {}, {}};
+      return {400, kText, "seconds must be 1.." + std::to_string(kCaptureMax.count()) + "\n", {},
+              {}, {}};
     }
     req.duration = std::chrono::seconds(n);
   }
-  if (!content.has_bus(req.bus)) return {404, kText, "no such bus\n", {}, {}};
-  return {200, kPcap, {}, {}, std::move(req)};
+  if (!content.has_bus(req.bus)) return {404, kText, "no such bus\n", {}, {}, {}};
+  return {200, kPcap, {}, {}, std::move(req), {}};
 }
 }  // namespace
 
@@ -175,19 +175,20 @@ Response route(std::string_view method, std::string_view target, Content& conten
             "text/plain; charset=utf-8",
             "only GET and HEAD are served: this is read-only\n",
             "GET, HEAD",
+            {},
             {}};
   }
   const std::string_view path = path_of(target);
   if (path == "/" || path == "/index.html") {
-    return {200, "text/html; charset=utf-8", std::string(status_page()), {}, {}};
+    return {200, "text/html; charset=utf-8", std::string(status_page()), {}, {}, {}};
   }
-  if (path == "/api/v1/status") return {200, kJson, content.status_json(), {}, {}};
-  if (path == "/api/v1/regmap") return {200, kJson, content.regmap_json(), {}, {}};
-  if (path == "/metrics") return {200, kPrometheus, content.metrics(), {}, {}};
+  if (path == "/api/v1/status") return {200, kJson, content.status_json(), {}, {}, {}};
+  if (path == "/api/v1/regmap") return {200, kJson, content.regmap_json(), {}, {}, {}};
+  if (path == "/metrics") return {200, kPrometheus, content.metrics(), {}, {}, {}};
   if (path == "/api/v1/capture") return capture_route(target, content, options);
   if (path == "/api/v1/events") return events_route(target, content);
   if (path == "/api/v1/trends") return trends_route(target, content);
-  return {404, "text/plain; charset=utf-8", "not found\n", {}, {}};
+  return {404, "text/plain; charset=utf-8", "not found\n", {}, {}, {}};
 }
 
 }  // namespace drivegate::http

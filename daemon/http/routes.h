@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -26,8 +27,9 @@ struct Response {
   unsigned status = 200;
   std::string content_type;
   std::string body;
-  std::string allow;                      // for 405: the methods that are
-  std::optional<CaptureRequest> capture;  // set: stream this capture instead of `body`
+  std::string allow;                       // for 405: the methods that are
+  std::optional<CaptureRequest> capture;   // set: stream this capture instead of `body`
+  std::shared_ptr<SlicedDocument> sliced;  // set: this (a slice at a time) instead of `body`
 };
 
 struct RouteOptions {

@@ -1,8 +1,12 @@
 #include "mqtt/bd_seq_file.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
+#include <cstring>
 
 #include "base/read_file.h"
 #include "base/state_file.h"
@@ -44,12 +48,20 @@ std::vector<std::filesystem::path> other_edge_node_state(const std::filesystem::
 std::optional<std::uint8_t> BdSeqFile::load(std::string& error) const {
   error.clear();
   if (path_.empty()) return std::nullopt;
-  std::error_code ec;
-  if (!std::filesystem::exists(path_, ec)) {
-    if (ec) error = path_.string() + ": " + ec.message();
-    return std::nullopt;  // the first start with this edge node id
+  struct stat st {};
+  if (::lstat(path_.c_str(), &st) != 0) {  // the name itself: a link is not followed
+    if (errno != ENOENT) error = path_.string() + ": " + std::strerror(errno);
+    return std::nullopt;  // ENOENT: the first start with this edge node id
   }
-  const auto text = read_regular_file(path_, kMaxFile, error);
+  if (!S_ISREG(st.st_mode)) {
+    // A FIFO, a link, a directory: never opened, and moved out of the way of the next save.
+    std::string why;
+    const auto aside = set_aside(AT_FDCWD, path_.string(), why);
+    error = path_.string() + ": " + file_kind(st.st_mode) + ", not a regular file; " +
+            (aside ? "set aside as " + *aside : why);
+    return std::nullopt;
+  }
+  const auto text = read_regular_file(path_, kMaxFile, error, Links::refuse);
   if (!text) return std::nullopt;
   const auto n = parse_bd_seq(*text);
   if (!n) error = path_.string() + ": not a bdSeq (a number 0..255)";
@@ -58,7 +70,15 @@ std::optional<std::uint8_t> BdSeqFile::load(std::string& error) const {
 
 std::error_code BdSeqFile::save(std::uint8_t bd_seq) const {
   if (path_.empty()) return {};
-  return replace_file(path_, std::to_string(bd_seq) + "\n");
+  const std::string text = std::to_string(bd_seq) + "\n";
+  auto ec = replace_file(path_, text);
+  if (ec == std::errc::no_such_file_or_directory) {
+    // The state directory was removed while the daemon ran: made again (as StateDirectory= had).
+    std::error_code made;
+    std::filesystem::create_directories(path_.parent_path(), made);
+    if (!made) ec = replace_file(path_, text);
+  }
+  return ec;
 }
 
 std::optional<std::uint8_t> parse_bd_seq(std::string_view text) {

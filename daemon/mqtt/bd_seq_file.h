@@ -25,8 +25,12 @@ class BdSeqFile {
             std::string_view edge_node);
 
   // The bdSeq saved last; nothing when there is no file yet (`error` empty) or when it cannot be
-  // read or holds no number 0..255 (`error` says which and why; the caller starts at 0).
+  // read or holds no number 0..255 (`error` says which and why; the caller starts at 0). What
+  // has the file's name and is no regular file (a FIFO, a link, a directory) is never opened:
+  // it is set aside (base/state_file.h) and `error` says so.
   std::optional<std::uint8_t> load(std::string& error) const;
+  // Writes it (base/state_file.h: a fresh temporary, synced, renamed); a state directory deleted
+  // while the daemon runs is made again.
   std::error_code save(std::uint8_t bd_seq) const;
 
   [[nodiscard]] bool enabled() const { return !path_.empty(); }

@@ -19,7 +19,8 @@ struct StoreStats {
   std::uint64_t replayed = 0;         // published as historical DDATA
   std::uint64_t dropped_size = 0;     // beyond store_max_mb, oldest first
   std::uint64_t dropped_age = 0;      // older than store_max_age_h when their turn came
-  std::uint64_t dropped_corrupt = 0;  // bytes cut short or damaged, found at start
+  std::uint64_t dropped_corrupt = 0;  // bytes cut short or damaged, skipped
+  std::uint64_t dropped_lost = 0;     // lost with their file: deleted, or damaged later
   std::uint64_t refused = 0;          // the disk refused them
   std::uint64_t replay_dropped = 0;   // unreadable, or for a device not born now
 };

@@ -30,7 +30,10 @@ std::optional<StoredChange> decode_record(std::string_view bytes) {
 
 StoreForward::StoreForward(std::filesystem::path dir, SpoolLimits limits, unsigned per_second,
                            std::shared_ptr<spdlog::logger> log)
-    : spool_(std::move(dir), limits),
+    : spool_(dir, limits,
+             [log, dir](const std::string& what) {
+               log->warn("MQTT: store and forward: {}: {}", dir.string(), what);
+             }),
       batch_(std::max(1U, per_second / 10)),
       max_window_(std::max(1U, per_second)),
       log_(std::move(log)) {}
@@ -41,10 +44,6 @@ bool StoreForward::open() {
     return false;
   }
   const SpoolStats& s = spool_.stats();
-  if (s.dropped_corrupt != 0) {
-    log_->warn("MQTT: {}: {} bytes cut short or damaged (a power cut while writing) left out",
-               spool_.dir().string(), s.dropped_corrupt);
-  }
   if (s.records != 0) {
     log_->info("MQTT: {} changes kept from before ({} bytes) will be sent once a session is online",
                s.records, s.bytes);
@@ -74,9 +73,14 @@ unsigned StoreForward::replay(sparkplug::EdgeNode& edge, sparkplug::Sink& sink,
     std::error_code ec;
     const auto r = spool_.front(now.unix_ms, ec);
     if (!r) {
-      if (ec) log_->error("MQTT: {}: {}", spool_.dir().string(), ec.message());
+      if (ec && !read_failing_) {
+        log_->error("MQTT: cannot read the changes kept in {}: {}; they wait until it can",
+                    spool_.dir().string(), ec.message());
+      }
+      read_failing_ = static_cast<bool>(ec);
       break;
     }
+    read_failing_ = false;
     auto change = decode_record(r->bytes);
     if (!change) {  // the CRC held, so only a bug could get here: never stop the queue on it
       ++unreadable_;
@@ -143,9 +147,14 @@ void StoreForward::lost(std::uint64_t now_ms) {
 }
 
 void StoreForward::sync() {
-  if (const auto ec = spool_.sync()) {
-    log_->warn("MQTT: {}: cannot sync: {}", spool_.dir().string(), ec.message());
+  const auto ec = spool_.sync();
+  if (ec && !sync_failing_) {
+    log_->warn("MQTT: {}: cannot sync: {}; said again only after it could", spool_.dir().string(),
+               ec.message());
+  } else if (!ec && sync_failing_) {
+    log_->info("MQTT: {}: synced again", spool_.dir().string());
   }
+  sync_failing_ = static_cast<bool>(ec);
 }
 
 StoreStats StoreForward::stats(const sparkplug::EdgeNode& edge) const {
@@ -160,6 +169,7 @@ StoreStats StoreForward::stats(const sparkplug::EdgeNode& edge) const {
   out.dropped_size = s.dropped_size;
   out.dropped_age = s.dropped_age;
   out.dropped_corrupt = s.dropped_corrupt;
+  out.dropped_lost = s.dropped_lost;
   out.refused = s.refused;
   out.replay_dropped = unreadable_ + edge.replay_dropped();
   return out;

@@ -99,7 +99,9 @@ class StoreForward {
   bool replaying_ = false;
   std::uint64_t replayed_ = 0;
   std::uint64_t unreadable_ = 0;
-  bool failing_ = false;  // a disk error was logged; the next success says it is over
+  bool failing_ = false;       // a disk error was logged; the next success says it is over
+  bool read_failing_ = false;  // the same, reading for a replay (said once)
+  bool sync_failing_ = false;  // the same, syncing (said once)
 };
 
 }  // namespace drivegate::mqtt

@@ -50,6 +50,14 @@ bool AddressRate::admit(const boost::asio::ip::address& who, Clock::time_point n
   return true;
 }
 
+void AddressRate::charge(const boost::asio::ip::address& who, double tokens,
+                         Clock::time_point now) {
+  if (limit_.per_second == 0 || tokens <= 0) return;
+  Bucket& b = bucket_for(key_of(who), now);
+  b.tokens = tokens_at(b, now) - tokens;
+  b.at = now;
+}
+
 AddressRate::Clock::time_point AddressRate::next_token(const boost::asio::ip::address& who,
                                                        Clock::time_point now) const {
   if (limit_.per_second == 0) return now;

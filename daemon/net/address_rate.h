@@ -42,6 +42,9 @@ class AddressRate {
 
   // Takes a token for `who` at `now`: false when it has none left (the caller refuses or waits).
   bool admit(const boost::asio::ip::address& who, Clock::time_point now);
+  // Takes `tokens` more from `who` at `now`, for what turned out to cost more than one (a large
+  // HTTP response): the balance may go below zero, and its next admit() waits until it is back.
+  void charge(const boost::asio::ip::address& who, double tokens, Clock::time_point now);
   // When `who` has its next token: `now` if it has one (or no limit applies).
   [[nodiscard]] Clock::time_point next_token(const boost::asio::ip::address& who,
                                              Clock::time_point now) const;

@@ -603,9 +603,9 @@ void mqtt_metrics(Writer& w, const mqtt::NorthboundStatus& m) {
   w.single("drivegate_mqtt_store_replayed_total", "counter",
            "kept changes sent as historical DDATA", count(st.replayed));
   w.single("drivegate_mqtt_store_dropped_total", "counter",
-           "kept changes never sent: beyond store_max_mb (oldest first) or store_max_age_h, or "
-           "for a device not born in the session",
-           count(st.dropped_size + st.dropped_age + st.replay_dropped));
+           "kept changes never sent: beyond store_max_mb (oldest first) or store_max_age_h, for "
+           "a device not born in the session, or lost with a file of the store",
+           count(st.dropped_size + st.dropped_age + st.replay_dropped + st.dropped_lost));
   w.single("drivegate_mqtt_store_refused_total", "counter",
            "changes the disk refused to keep (see the journal)", count(st.refused));
 }

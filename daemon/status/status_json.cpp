@@ -195,12 +195,12 @@ void mqtt_json(std::string& out, const mqtt::NorthboundStatus& m) {
   fmt::format_to(std::back_inserter(out),
                  ", \"store\": {{\"enabled\": {}, \"records\": {}, \"bytes\": {}, "
                  "\"oldest_ms\": {}, \"kept\": {}, \"replayed\": {}, \"dropped_size\": {}, "
-                 "\"dropped_age\": {}, \"dropped_corrupt_bytes\": {}, \"refused\": {}, "
-                 "\"replay_dropped\": {}}}",
+                 "\"dropped_age\": {}, \"dropped_corrupt_bytes\": {}, \"dropped_lost\": {}, "
+                 "\"refused\": {}, \"replay_dropped\": {}}}",
                  st.enabled, st.records, st.bytes,
                  st.oldest_ms ? std::to_string(*st.oldest_ms) : std::string("null"), st.kept,
-                 st.replayed, st.dropped_size, st.dropped_age, st.dropped_corrupt, st.refused,
-                 st.replay_dropped);
+                 st.replayed, st.dropped_size, st.dropped_age, st.dropped_corrupt, st.dropped_lost,
+                 st.refused, st.replay_dropped);
   out += '}';
 }
 

@@ -14,6 +14,8 @@
 #include <optional>
 #include <sstream>
 
+#include "base/read_file.h"
+
 namespace drivegate {
 
 namespace {
@@ -25,11 +27,15 @@ class PortCategory final : public std::error_category {
 };
 
 // The PID a lock file names (HDB UUCP: ten ASCII digits and a newline; binary locks of the old
-// kind are not written on Linux), or 0.
+// kind are not written on Linux), or 0. The lock directory is everyone's (/run/lock is sticky and
+// world-writable): what has the lock file's name is read without blocking or following a link,
+// and only when it is a regular file (a FIFO there would block the open, and the daemon with it).
 pid_t read_pid(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::string error;
+  const auto text = read_regular_file(file, 64, error, Links::refuse);
+  if (!text) return 0;
   long pid = 0;
-  if (!(in >> pid) || pid <= 0) return 0;
+  if (!(std::istringstream(*text) >> pid) || pid <= 0) return 0;
   return static_cast<pid_t>(pid);
 }
 

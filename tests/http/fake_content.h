@@ -1,6 +1,7 @@
 // A Content with fixed documents that counts what it was asked for.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <functional>
 #include <memory>
@@ -36,12 +37,13 @@ class FakeContent : public Content {
     on_data();  // the global header is there to take
     return std::make_unique<QuietCapture>();
   }
-  // The history's documents: what the route parsed is kept; only "command" is a known kind.
-  std::optional<std::string> events_json(const EventsQuery& q) override {
+  // The history's documents: what the route parsed is kept; only "command" is a known kind. The
+  // events page is `events` (a small one unless set), made in slices of the size asked for.
+  std::shared_ptr<SlicedDocument> events_page(const EventsQuery& q) override {
     ++history_calls;
     events_query = q;
-    if (!q.kind.empty() && q.kind != "command") return std::nullopt;
-    return R"({"events":[]})";
+    if (!q.kind.empty() && q.kind != "command") return nullptr;
+    return std::make_shared<Page>(events.empty() ? R"({"events":[]})" : events, slices);
   }
   std::string trends_json(const TrendsQuery& q) override {
     ++history_calls;
@@ -51,14 +53,34 @@ class FakeContent : public Content {
   EventsQuery events_query;
   TrendsQuery trends_query;
   [[nodiscard]] int calls() const { return status_calls + metrics_calls + regmap_calls; }
-  std::string status;  // the status document when set (before the server starts)
+  std::string status;          // the status document when set (before the server starts)
+  std::string events;          // the events page when set (before the server starts)
+  std::atomic<int> slices{0};  // of events pages rendered, all pages together
   std::atomic<int> status_calls{0};
   std::atomic<int> metrics_calls{0};
   std::atomic<int> regmap_calls{0};
   std::atomic<int> captures_started{0};
-  std::atomic<int> history_calls{0};  // events_json and trends_json, refused or not
+  std::atomic<int> history_calls{0};  // events_page and trends_json, refused or not
 
  private:
+  class Page : public SlicedDocument {
+   public:
+    Page(std::string text, std::atomic<int>& slices) : text_(std::move(text)), slices_(slices) {}
+    bool render_slice(std::size_t bytes) override {
+      ++slices_;
+      made_ = std::min(text_.size(), made_ + bytes);
+      if (made_ == text_.size()) json_ = std::make_shared<const std::string>(text_);
+      return whole();
+    }
+    [[nodiscard]] bool whole() const override { return json_ != nullptr; }
+    [[nodiscard]] std::shared_ptr<const std::string> document() const override { return json_; }
+
+   private:
+    std::string text_;
+    std::atomic<int>& slices_;
+    std::size_t made_ = 0;
+    std::shared_ptr<const std::string> json_;
+  };
   class QuietCapture : public CaptureStream {
    public:
     std::string take() override { return std::exchange(header_, {}); }

@@ -19,6 +19,7 @@
 
 #include "fake_content.h"
 #include "http/http_server.h"
+#include "http/slice_renderer.h"
 #include "server_thread.h"
 #include "tcp_client.h"
 
@@ -202,6 +203,33 @@ TEST(HttpServer, ALargeDocumentArrivesWholeInSlices) {
 // (no TCP_NODELAY), each slice after the first is held until the one before is acknowledged, and
 // a client that delays its ACKs (Linux: at least 40 ms) got every kept-alive scrape 40 ms late.
 // The bound is the delayed-ACK timer, not a speed: the median of ten is far below it or at it.
+// A page of the history is made a slice at a time (content.h, SlicedDocument): kSliceBytes of it
+// per turn of the event loop, never the whole at once, and it arrives whole; the connection goes
+// on serving after it, and a HEAD gets its length without it.
+TEST(HttpServer, AnEventsPageIsMadeASliceAtATimeAndArrivesWhole) {
+  std::string doc;
+  for (int i = 0; doc.size() < 100 * 1024; ++i) doc += "{\"seq\": " + std::to_string(i) + "},\n";
+  Harness h;
+  h.content().events = doc;
+  Client c(h.port());
+  ASSERT_TRUE(c.connected());
+  ASSERT_TRUE(c.send(get("/api/v1/events?limit=1000")));
+  const std::string r = c.read_response();
+  EXPECT_THAT(r, StartsWith("HTTP/1.1 200"));
+  EXPECT_THAT(r, HasSubstr("Content-Type: application/json\r\n"));
+  EXPECT_EQ(body_of(r), doc);
+  const auto slices = static_cast<int>((doc.size() + kSliceBytes - 1) / kSliceBytes);
+  EXPECT_EQ(h.content().slices, slices);
+  ASSERT_TRUE(c.send("HEAD /api/v1/events HTTP/1.1\r\nHost: x\r\n\r\n"));
+  const std::string head = c.read_response(/*head=*/true);
+  EXPECT_THAT(head, HasSubstr("Content-Length: " + std::to_string(doc.size()) + "\r\n"));
+  EXPECT_EQ(body_of(head), "");
+  ASSERT_TRUE(c.send(get("/api/v1/events?kind=nonsense")));
+  EXPECT_THAT(c.read_response(), StartsWith("HTTP/1.1 400"));
+  ASSERT_TRUE(c.send(get("/metrics")));
+  EXPECT_EQ(body_of(c.read_response()), h.content().metrics());
+}
+
 TEST(HttpServer, AKeptAliveDocumentIsNotHeldBackForTheClientsDelayedAck) {
   Harness h;
   h.content().status = std::string(17 * 1024, 'x');  // a status document's size: five slices
@@ -530,6 +558,36 @@ TEST(HttpServer, AHammeringClientIsPacedWhileAnotherAddressIsAnsweredAtOnce) {
   EXPECT_FALSE(hammer.closed);
   EXPECT_EQ(h.stats().requests, static_cast<std::uint64_t>(kRequests + 1));
   EXPECT_EQ(h.stats().requests_paced, static_cast<std::uint64_t>(kRequests - 5));
+}
+
+// A large response counts as the requests its size is worth (HttpOptions::kBytesPerRequest): an
+// address pulling the history's largest page again and again waits for the bytes it took, where
+// one that asks for small documents is answered at once.
+TEST(HttpServer, ALargePageCountsAsTheRequestsItsSizeIsWorth) {
+  HttpOptions o;
+  o.requests = {10, 20};
+  Harness h(o);
+  h.content().events.assign(5 * HttpOptions::kBytesPerRequest + 10, 'x');  // worth 1 + 5
+  Client puller(h.port());
+  ASSERT_TRUE(puller.connected());
+  std::string burst;
+  for (int i = 0; i < 5; ++i) burst += get("/api/v1/events?limit=1000");
+  ASSERT_TRUE(puller.send(burst));
+  // A burst of 20: four pages of 1 + 5 each take it to -4, so the fifth waits.
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_THAT(puller.read_response(false, 2s), StartsWith("HTTP/1.1 200")) << "page " << i;
+  }
+  ASSERT_TRUE(h.eventually([&h] { return h.server().stats().requests_paced == 1; }));
+  EXPECT_EQ(puller.read_response(false, 100ms), "");
+  Client other(h.port(), "127.0.0.2");
+  ASSERT_TRUE(other.connected());
+  ASSERT_TRUE(other.send(get("/api/v1/status")));
+  EXPECT_THAT(other.read_response(false, 2s), StartsWith("HTTP/1.1 200"));
+  // -4 + 10 a second: the next token after 500 ms of the server's time.
+  h.advance(490ms);
+  EXPECT_EQ(puller.read_response(false, 100ms), "");
+  h.advance(20ms);
+  EXPECT_THAT(puller.read_response(false, 2s), StartsWith("HTTP/1.1 200"));
 }
 
 TEST(HttpServer, AddressOutsideTheAllowListIsClosedAtAccept) {

@@ -1,16 +1,21 @@
 // The bdSeq kept across restarts (daemon/mqtt/bd_seq_file.h) and the atomic replacement under it
-// (daemon/base/state_file.h), on a real directory.
+// (daemon/base/state_file.h), on a real directory, with FIFOs and links where its files should be.
 #include "mqtt/bd_seq_file.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "base/state_file.h"
+#include "fifo_trap.h"
 #include "temp_dir.h"
 
 namespace drivegate::mqtt {
@@ -101,28 +106,82 @@ TEST_F(BdSeqFileTest, AFileWithoutABdSeqIsAnErrorNamingIt) {
     EXPECT_FALSE(f.load(error).has_value()) << content;
     EXPECT_NE(error.find(f.path().string()), std::string::npos) << error;
   }
-  // A directory where the file should be: refused as not a regular file, and a save fails
-  // without touching it.
+  // A directory where the file should be: refused as not a regular file and set aside, so that
+  // the next save can put the file there.
   fs::remove(f.path());
   fs::create_directory(f.path());
   std::string error;
   EXPECT_FALSE(f.load(error).has_value());
-  EXPECT_NE(error, "");
-  EXPECT_TRUE(f.save(3));
-  EXPECT_TRUE(fs::is_directory(f.path()));
-  EXPECT_FALSE(fs::exists(f.path().string() + ".tmp"));
+  EXPECT_EQ(error, f.path().string() + ": a directory, not a regular file; set aside as " +
+                       f.path().string() + ".bad");
+  EXPECT_TRUE(fs::is_directory(f.path().string() + ".bad"));
+  EXPECT_FALSE(f.save(3));
+  EXPECT_EQ(f.load(error), 3);
 }
 
+// Nothing at the file's or its temporary's name can hang the daemon or redirect the write: a
+// FIFO (whose open would block the event loop, Modbus, HTTP and the failsafe timers with it), a
+// hard link (written through with O_TRUNC), a symbolic link (read and written elsewhere).
+TEST_F(BdSeqFileTest, NoFifoOrLinkIsOpenedOrWrittenThrough) {
+  const BdSeqFile f(dir_, "plant1", "gw01");
+  const fs::path tmp = f.path().string() + ".tmp";
+  const auto took = [](auto&& op) {
+    const auto t0 = std::chrono::steady_clock::now();
+    op();
+    return std::chrono::steady_clock::now() - t0;
+  };
+  {
+    test::FifoTrap trap({tmp});
+    std::error_code ec;
+    EXPECT_LT(took([&] { ec = f.save(1); }), std::chrono::seconds(1)) << "blocked on the FIFO";
+    EXPECT_FALSE(ec) << ec.message();
+  }
+  EXPECT_EQ(read(f.path()), "1\n");
+  EXPECT_FALSE(fs::exists(fs::symlink_status(tmp)));
+
+  const fs::path elsewhere = tmp_ / "someone-elses";
+  std::ofstream(elsewhere) << "precious\n";
+  fs::create_hard_link(elsewhere, tmp);
+  ASSERT_FALSE(f.save(2));
+  EXPECT_EQ(read(elsewhere), "precious\n") << "written through the hard link";
+  EXPECT_EQ(read(f.path()), "2\n");
+
+  fs::remove(f.path());
+  std::ofstream(tmp_ / "planted") << "200\n";
+  fs::create_symlink(tmp_ / "planted", f.path());
+  std::string error;
+  EXPECT_FALSE(f.load(error).has_value()) << "read through the link";
+  EXPECT_EQ(error, f.path().string() + ": a symbolic link, not a regular file; set aside as " +
+                       f.path().string() + ".bad");
+  ASSERT_FALSE(f.save(4));
+  EXPECT_EQ(read(tmp_ / "planted"), "200\n");
+
+  fs::remove(f.path());
+  {
+    test::FifoTrap trap({f.path()});
+    EXPECT_LT(took([&] { EXPECT_FALSE(f.load(error).has_value()); }), std::chrono::seconds(1));
+  }
+  EXPECT_THAT(error, ::testing::HasSubstr("a FIFO, not a regular file; set aside as"));
+}
+
+// A write that fails (past the file size limit, which binds root too) leaves the old value.
 TEST_F(BdSeqFileTest, AFailedSaveLeavesTheOldValue) {
   const BdSeqFile f(dir_, "plant1", "gw01");
   ASSERT_FALSE(f.save(9));
-  // The temporary file cannot be made (a directory has its name; root included): the save fails
-  // before anything is renamed.
-  fs::create_directory(f.path().string() + ".tmp");
-  EXPECT_TRUE(f.save(10));
+  struct rlimit old {};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old), 0);
+  const auto previous = ::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit tiny = old;
+  tiny.rlim_cur = 1;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &tiny), 0);
+  const auto ec = f.save(100);
+  ::setrlimit(RLIMIT_FSIZE, &old);
+  ::signal(SIGXFSZ, previous);
+  EXPECT_TRUE(ec);
   std::string error;
   EXPECT_EQ(f.load(error), 9);
   EXPECT_EQ(error, "");
+  EXPECT_FALSE(fs::exists(f.path().string() + ".tmp"));
 }
 
 TEST_F(BdSeqFileTest, NoStateDirectoryKeepsNothing) {
@@ -134,10 +193,12 @@ TEST_F(BdSeqFileTest, NoStateDirectoryKeepsNothing) {
   EXPECT_EQ(error, "");
 }
 
-TEST_F(BdSeqFileTest, AMissingDirectoryIsAnError) {
+// The state directory removed while the daemon runs: made again by the next save.
+TEST_F(BdSeqFileTest, AMissingDirectoryIsMadeAgain) {
   const BdSeqFile f(dir_ / "absent", "plant1", "gw01");
-  EXPECT_TRUE(f.save(1));
-  EXPECT_FALSE(fs::exists(dir_ / "absent"));
+  EXPECT_FALSE(f.save(1));
+  std::string error;
+  EXPECT_EQ(f.load(error), 1);
 }
 
 }  // namespace

@@ -29,6 +29,23 @@ TEST(AddressRate, ABurstThenThePerSecondRate) {
   EXPECT_FALSE(r.admit(a, t0 + 60s));
 }
 
+// What cost more than a token (a large response) is charged after the fact: the address waits
+// until its balance, below zero now, is back to one token.
+TEST(AddressRate, ACostlyRequestIsChargedAndTheNextWaitsForIt) {
+  AddressRate r({10, 20});
+  const auto a = ip::make_address("192.0.2.1");
+  ASSERT_TRUE(r.admit(a, t0));
+  r.charge(a, 24, t0);  // 19 left, 24 more taken: -5
+  EXPECT_FALSE(r.admit(a, t0));
+  EXPECT_EQ(r.next_token(a, t0), t0 + 600ms);
+  EXPECT_FALSE(r.admit(a, t0 + 599ms));
+  EXPECT_TRUE(r.admit(a, t0 + 600ms));
+  EXPECT_TRUE(r.admit(ip::make_address("192.0.2.2"), t0)) << "another address is not charged";
+  AddressRate unlimited({0, 1});
+  unlimited.charge(a, 1000, t0);
+  EXPECT_TRUE(unlimited.admit(a, t0));
+}
+
 TEST(AddressRate, ZeroIsUnlimited) {
   AddressRate r({0, 1});
   const auto a = ip::make_address("192.0.2.1");

@@ -10,11 +10,14 @@
 #include <unistd.h>
 
 #include <boost/asio/io_context.hpp>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <stdexcept>
 #include <string>
+
+#include "fifo_trap.h"
 
 namespace drivegate {
 namespace {
@@ -213,6 +216,28 @@ TEST_F(SerialLine, AStaleLockThatCannotBeRemovedStillLetsThePortOpen) {
   }
   lock_.release();
   EXPECT_TRUE(std::filesystem::exists(file / "held"));  // never ours to remove
+}
+
+// /run/lock is everyone's (sticky, world-writable): a FIFO anyone made at a port's lock file name
+// would block the daemon's open of it, and with it Modbus, HTTP and every other bus. It is no
+// lock (no PID can be read from it): taken over as a stale one, and the port opens at once.
+TEST_F(SerialLine, AFifoAtTheLockFilesNameNeitherBlocksNorHoldsThePort) {
+  Pty pty;
+  if (pty.path().empty()) GTEST_SKIP() << "no pseudo-terminals here";
+  const auto file = lock_.lock_file(pty.path());
+  std::error_code ec;
+  std::chrono::steady_clock::duration took{};
+  {
+    test::FifoTrap trap({file});
+    const auto t0 = std::chrono::steady_clock::now();
+    ec = open_serial(port_, bus_on(pty.path()), lock_);
+    took = std::chrono::steady_clock::now() - t0;
+  }
+  EXPECT_LT(took, std::chrono::seconds(1)) << "blocked on the FIFO";
+  EXPECT_FALSE(ec) << ec.message();
+  EXPECT_TRUE(port_.is_open());
+  EXPECT_TRUE(std::filesystem::is_regular_file(std::filesystem::symlink_status(file)))
+      << "a lock file of its own";
 }
 
 }  // namespace

@@ -384,7 +384,8 @@
       const st = q.store || {};
       set(field("store"), !st.enabled ? "" : "\u00b7 kept for later " + num(st.records) +
         " (" + num(Math.round(st.bytes / 1024)) + " KiB), sent " + num(st.replayed) +
-        ", dropped " + num(st.dropped_size + st.dropped_age + st.replay_dropped));
+        ", dropped " + num(st.dropped_size + st.dropped_age + st.dropped_lost +
+        st.replay_dropped));
     }
     set($("version"), s.version ? "v" + s.version : "");
     const restart = $("restart"), needed = s.restart_needed || [];
