@@ -453,6 +453,38 @@ TEST_F(SpoolTest, ASegmentDamagedWhileRunningIsSetAsideAndTheQueueGoesOn) {
   EXPECT_TRUE(fs::exists(dir_ / "0000000000000001.seg.bad"));
 }
 
+// Damage found while reading ahead of the cursor: the records taken before it are on their way to
+// the broker, not lost. The segment is given up only once they are released, and then costs only
+// what of it was not taken.
+TEST_F(SpoolTest, DamageAheadOfTheCursorWaitsUntilWhatWasTakenIsReleased) {
+  Spool s(dir_, {1 << 20, 24h, 64}, note_);  // two records a segment
+  ASSERT_FALSE(s.open());
+  for (int i = 0; i < 6; ++i) ASSERT_FALSE(s.append(i, "record-" + std::to_string(i)));
+  {  // record-3, the second of segment 2
+    std::fstream f(dir_ / "0000000000000002.seg", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(24 + Spool::kHeader + 2);
+    f.put('#');
+  }
+  std::error_code ec;
+  for (int i = 0; i < 3; ++i) {
+    const auto r = s.front(0, ec);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->bytes, "record-" + std::to_string(i));
+    s.take();
+  }
+  EXPECT_FALSE(s.front(0, ec)) << "nothing more until what was taken is released";
+  EXPECT_FALSE(ec);
+  EXPECT_EQ(s.stats().dropped_lost, 0u);
+  EXPECT_EQ(s.taken_unreleased(), 3u);
+  EXPECT_TRUE(notes_.empty());
+  s.release(s.position());  // the broker confirmed record-0 to record-2
+  const auto next = s.front(0, ec);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->bytes, "record-4");
+  EXPECT_EQ(s.stats().dropped_lost, 1u) << "record-3 alone";
+  EXPECT_THAT(notes_, ElementsAre(HasSubstr("1 change not yet sent in it lost")));
+}
+
 TEST(StoredChange, RecordsRoundTripAndBrokenOnesAreRefused) {
   sparkplug::Payload p;
   p.timestamp = 1'700'000'000'000;
