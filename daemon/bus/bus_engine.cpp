@@ -377,9 +377,11 @@ void BusEngine::unanswered(TimePoint now, bool silent) {
 }
 
 // A turn that ran into a reply timeout held the line from its first frame until the guard time
-// after it ends: the device waits for its next poll turn for a multiple of that.
+// after it ends: the device waits for its next poll turn for a multiple of that. A device alone
+// on its line has no neighbour to leave the time to: it keeps the cadence its protocol gives
+// (its resends, its silence back-off) and pays nothing more.
 void BusEngine::note_held(Station& st, TimePoint now) {
-  if (!timed_out_) return;
+  if (!timed_out_ || stations_.size() < 2) return;
   st.link().health.turn_held(now, std::max(now, quiet_until_) - first_sent_);
 }
 

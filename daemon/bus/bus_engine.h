@@ -26,7 +26,8 @@
 // turn waits twice that (LinkHealth::turn_held), answered meanwhile or not, on top of the back-off
 // of a device that stopped answering. Waiting on it then takes at most a third of the line, and
 // every healthy device beside it keeps at least half its poll rate; the sick device pays with
-// its own. Writes are not held back: they take their write turns as before.
+// its own. Writes are not held back: they take their write turns as before. A device alone on
+// its line pays nothing: there is nobody to leave the time to.
 //
 // Time and the line are injected: the daemon wires BusClock and BusLine to Asio (bus/bus.h), the
 // tests to a simulated clock and line (tests/support/sim_line.h), and both run this same code.
