@@ -19,8 +19,9 @@
 #              /api/v1/status $HAMMER_RATE times a second on kept-alive connections
 #   history    $PULLERS dg-scraper clients, each from its own address (127.0.0.2, .3, ...),
 #              fetching the history's largest page (/api/v1/events?limit=1000, the history first
-#              filled with $FILL distinct setpoint writes: about 330 KB) $PULL_RATE times a second
-#              on a kept-alive connection
+#              filled with $FILL distinct setpoint writes: since the history folds a client's
+#              flood, a few KB; the 330 KB page needs plant events) $PULL_RATE times a second on
+#              a kept-alive connection
 # With BASELINE_BIN (another build's bin directory, e.g. main's), a third daemon "baseline" of
 # that build with the defaults, measured in the same rounds: the same phases before and after.
 # The load generators and the simulators run on CPU $LOAD_CPU, the flooding and hammering

@@ -307,7 +307,8 @@ bool MosquittoClient::publish(const std::string& topic, const std::string& paylo
 }
 
 void MosquittoClient::confirm_later() {
-  if (question_ || confirm_armed_ || state_ != State::connected || confirmed_ >= published_) {
+  if (!asks_broker() || question_ || confirm_armed_ || state_ != State::connected ||
+      confirmed_ >= published_) {
     return;
   }
   confirm_armed_ = true;
@@ -330,7 +331,9 @@ void MosquittoClient::confirm_now() {
 }
 
 void MosquittoClient::ask_broker() {
-  if (state_ != State::connected || question_ || confirmed_ >= published_) return;
+  if (!asks_broker() || state_ != State::connected || question_ || confirmed_ >= published_) {
+    return;
+  }
   int mid = 0;
   // Never subscribed to: the broker answers, and nothing changes (MQTT 3.1.1 section 3.10.4).
   const int rc = mosquitto_unsubscribe(mosq_, &mid, will_topic_.c_str());

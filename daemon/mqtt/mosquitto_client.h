@@ -13,7 +13,9 @@
 // UNSUBACK proves every message before it arrived (Handlers::delivered). One such question is out
 // at a time. Unanswered for kAckTimeout, the link is taken for dead and the session ends (lost):
 // a dead link is detected at most kConfirmDelay + kAckTimeout after the first message published
-// on it; with nothing published, keep-alive detects it as before.
+// on it; with nothing published, keep-alive detects it as before. A client with no will (a
+// tool's) or no Handlers::delivered asks nothing: it has no topic that is surely its own to ask
+// with, or nobody to tell.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -104,6 +106,10 @@ class MosquittoClient {
   // wait for one and none is out.
   void confirm_later();
   void ask_broker();
+  // Whether it asks at all: with a will's topic to ask by, and someone to tell (above).
+  [[nodiscard]] bool asks_broker() const {
+    return !will_topic_.empty() && static_cast<bool>(handlers_.delivered);
+  }
   void fail(std::string why);
   // libmosquitto's `rc` (and errno) as the reason an attempt or session ended.
   [[nodiscard]] std::string lost_reason(int rc) const;

@@ -33,6 +33,12 @@ std::string gateway_config(const drivegate::PluginRegistry& plugins) {
     text += "[[bus]]\nname = \"bus" + n + "\"\nport = \"/dev/null\"\n";
     text += "[[device]]\nname = \"dev" + n + "\"\nbus = \"bus" + n + "\"\nadapter = \"" + a->id +
             "\"\nunit_id = " + n + "\n";
+    // A device that follows a description names one: its adapter's demo does.
+    if (a->specialise == nullptr || a->demo.option_count == 0) continue;
+    text += "[device.options]\n";
+    for (std::size_t i = 0; i < a->demo.option_count; ++i) {
+      text += std::string(a->demo.options[i].name) + " = \"" + a->demo.options[i].value + "\"\n";
+    }
   }
   return text;
 }

@@ -77,7 +77,7 @@ TEST_F(FramedE2E, ADescriptionByPathIsCheckedWithTheConfiguration) {
   EXPECT_EQ(check.wait_exit(10s), 1);
   const std::string err = slurp(dir_ / "check.err");
   EXPECT_THAT(err, ::testing::HasSubstr(
-                       "drivegate.toml:11: device[0].options: option protocol: " + file.string() +
+                       "drivegate.toml:11: device[0].options (device 'washer'): option protocol: " + file.string() +
                        ": message: a description needs at least "
                        "one [[message]]; "));
   EXPECT_THAT(
