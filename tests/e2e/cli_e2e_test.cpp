@@ -321,7 +321,7 @@ TEST(Cli, TheRegisterMapInTheDocsIsWhatRegmapPrints) {
   std::string doc = slurp(docs / "register-map.md");
   // The file says where it comes from, after its title; the rest is the command's output.
   const std::string provenance = "register-map.md`.\n";
-  const auto from = doc.find("\n\nThe demo's six drives");
+  const auto from = doc.find("\n\nThe demo's ");
   const auto to = doc.find(provenance);
   ASSERT_NE(from, std::string::npos);
   ASSERT_NE(to, std::string::npos);
