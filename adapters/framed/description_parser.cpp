@@ -1029,8 +1029,9 @@ class Parser {
         const auto* lt = n->as_table();
         if (lt == nullptr) diag_.error(n, key + ".limits", "must be a table of [min, max]");
         for (const auto& [k, v] : lt != nullptr ? *lt : toml::table{}) {
+          const std::string_view name = k.str();  // clang 14 captures no structured binding
           const auto f = std::find_if(m.fields.begin(), m.fields.end(),
-                                      [&](const Field& x) { return x.name == k.str(); });
+                                      [&](const Field& x) { return x.name == name; });
           const auto* pair = v.as_array();
           if (f == m.fields.end() || pair == nullptr || pair->size() != 2 ||
               !pair->get(0)->is_number() || !pair->get(1)->is_number()) {
@@ -1057,8 +1058,9 @@ class Parser {
       for (const toml::table* vt : {values, env_values}) {
         if (vt == nullptr) continue;
         for (const auto& [k, v] : *vt) {
+          const std::string_view name = k.str();  // clang 14 captures no structured binding
           const auto f = std::find_if(m.fields.begin(), m.fields.end(),
-                                      [&](const Field& x) { return x.name == k.str(); });
+                                      [&](const Field& x) { return x.name == name; });
           if (f == m.fields.end()) {
             if (vt == values) {
               diag_.error(&v, key + ".values." + std::string(k.str()),
