@@ -1,6 +1,7 @@
 // A fuzz target as an ordinary test: feeds it every file of its seed corpus and of its crash
-// regressions (DG_FUZZ_CORPUS_DIR, DG_FUZZ_REGRESSION_DIR: tests/fuzz/corpus/<target>/ and
-// tests/fuzz/regressions/<target>/, or an adapter's adapters/<id>/fuzz/corpus/ and regressions/).
+// regressions (replay_dirs.h: tests/fuzz/corpus/<target>/ and tests/fuzz/regressions/<target>/,
+// or an adapter's adapters/<id>/fuzz/corpus/ and regressions/). Compiled once for every replay
+// binary; each binary links the directories of its own target.
 // A regression input that crashes again aborts the test binary, which ctest reports as a failure.
 #include <gtest/gtest.h>
 
@@ -10,6 +11,8 @@
 #include <fstream>
 #include <iterator>
 #include <vector>
+
+#include "replay_dirs.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
@@ -42,11 +45,11 @@ std::size_t replay(const fs::path& dir) {
 
 TEST(FuzzReplay, SeedCorpus) {
   // The seeds are the golden vectors; a target without any would start blind.
-  EXPECT_GT(replay(DG_FUZZ_CORPUS_DIR), 0u) << DG_FUZZ_CORPUS_DIR;
+  EXPECT_GT(replay(drivegate::fuzz::kCorpusDir), 0u) << drivegate::fuzz::kCorpusDir;
 }
 
 TEST(FuzzReplay, CrashRegressions) {
-  replay(DG_FUZZ_REGRESSION_DIR);
+  replay(drivegate::fuzz::kRegressionDir);
 }
 
 TEST(FuzzReplay, EmptyAndTinyInputs) {
