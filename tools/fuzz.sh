@@ -27,9 +27,13 @@ command -v clang++-14 >/dev/null || {
 # Everything is instrumented for coverage (fuzzer-no-link) and sanitized, plugins included; only
 # the fuzz_* executables link libFuzzer's main. The adapters' plugins and the e2e programs are not
 # needed here, so the tests and the daemon's own programs are left to the other build trees.
+# -O1 with line tables only, as OSS-Fuzz builds: a crash's stack still names file and line, and
+# a source compiles about an eighth faster than with -O2 -g (gateway/device_writes.cpp under
+# clang-14 with the sanitizers: 14.9 s against 17.1 s of CPU).
 cmake -S "$root" -B "$build" \
   -DCMAKE_CXX_COMPILER=clang++-14 \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" \
   -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link" \
   -DDRIVEGATE_SANITIZE=address,undefined \
   -DDRIVEGATE_FUZZ=ON \
