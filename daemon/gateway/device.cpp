@@ -1,7 +1,5 @@
 #include "gateway/device.h"
 
-#include "gateway/device_request.h"
-
 namespace drivegate {
 
 namespace {
@@ -33,6 +31,7 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
             {},
             nullptr,
             log_},
+      writes_(traits_.write_timeout),
       failsafe_(config_.failsafe.timeout),
       last_tick_(now),
       history_(history) {
@@ -52,9 +51,7 @@ bool Device::online() const {
 
 std::optional<Exchange> Device::next_exchange(TimePoint now, Turn turn) {
   const bool applied = turn == Turn::write && release(now, true);
-  last_exchange_wrote_ = handed_ || urgent_unsent_;
-  handed_ = false;
-  urgent_unsent_ = false;
+  writes_.exchanged();
   std::optional<Exchange> ex = driver_->next_exchange(now);
   // Choosing what to send changes no value a watcher reads; a part applied may have.
   publish(now, applied);

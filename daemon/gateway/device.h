@@ -8,7 +8,8 @@
 //                        what is done with a drive first found running (on_start)
 //   device_image.cpp     the register image (common block and adapter points) and reads
 //   device_writes.cpp    Modbus write requests: validated, checked whole, queued (bounded, one
-//                        write turn of the line per part), applied part by part, confirmed
+//                        write turn of the line per part), applied part by part, confirmed; the
+//                        queue and its states are write_queue.h
 //   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
 //   device_history.cpp   what it records in the history: each write's audit record, its events
 //   device_reload.cpp    a reload: the new device takes over the PLC's failsafe watchdog
@@ -30,6 +31,7 @@
 #include "gateway/outcome.h"
 #include "gateway/register_map.h"
 #include "gateway/session.h"
+#include "gateway/write_queue.h"
 #include "history/history.h"
 #include "net/log_throttle.h"
 
@@ -40,19 +42,6 @@ namespace drivegate {
 // (PointSpec::write_level) are operate's, every other writable point maintain's. Device::write
 // and write_points deny less.
 AccessLevel required_level(const MappedPoint& point);
-
-// Writes waiting at one device, the one being carried out included (docs/safety.md, "Fair line
-// time"): past it a write is refused at once (busy). Stops have as many places again of their
-// own, so a full queue never holds one back, and so have a pass-through device's forwarded
-// reads, so that read clients never get a write refused busy.
-inline constexpr std::size_t kMaxQueuedWrites = 4;
-
-// What happened to the writes a device was asked for, beyond what the line counters say.
-struct WriteStats {
-  std::uint64_t busy = 0;              // refused at once (busy): the queue was full
-  std::uint64_t coalesced = 0;         // identical to the one waiting before it: answered with it
-  std::uint64_t refused_failsafe = 0;  // a run from a source that cannot clear a latched failsafe
-};
 
 class Device final : public Station {
  public:
@@ -154,7 +143,7 @@ class Device final : public Station {
   // this driver), and the heartbeat register.
   void take_over(const Device& old);
   // Writes waiting or being carried out (status bit command_pending).
-  [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
+  [[nodiscard]] std::size_t writes_in_flight() const { return writes_.size(); }
   [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }
   // A request PDU as the audit trail says it: "pdu 10 00 01 ..." (at most 32 bytes shown).
   [[nodiscard]] static std::string describe_pdu(std::span<const std::uint8_t> pdu);
@@ -167,13 +156,9 @@ class Device final : public Station {
     s.source.kind = source;
     return s;
   }
-  struct Part {
-    const MappedPoint* point;
-    Value value;
-  };
-  struct Request;
-  // Whom a request answers and what it records (device_request.h).
-  struct Answer;
+  using Part = WritePart;
+  using Request = WriteRequest;
+  using Answer = WriteAnswer;  // whom a request answers and what it records
   enum class Progress : std::uint8_t { done, waiting, failed };
 
   // device.cpp
@@ -192,9 +177,6 @@ class Device final : public Station {
   bool release(TimePoint now, bool write_turn);
   [[nodiscard]] bool may_release(TimePoint now) const;
   void next_request(TimePoint now);
-  [[nodiscard]] Request* queue_head() const;
-  // Requests waiting or being carried out: stops or not, forwarded reads or not.
-  [[nodiscard]] std::size_t queued(bool urgent, bool reads_only = false) const;
   Outcome refuse_run_while_latched(const char* source, TimePoint now);
   void supersede_runs(TimePoint now);
   Outcome submit(const Session& session, Table table, std::uint16_t address,
@@ -240,15 +222,9 @@ class Device final : public Station {
   bool image_stale_ = true;  // the driver may have changed since the last refresh_image()
   std::uint16_t heartbeat_ = 0;
 
-  Ticket next_ticket_ = 1;
-  // In flight, oldest first: stops (urgent) are handed to the driver at once, the others one at
-  // a time, oldest first, each part on a write turn the bus engine gives (release()).
-  std::vector<std::unique_ptr<Request>> requests_;
+  WriteQueue writes_;  // the requests in flight and what the driver was handed (write_queue.h)
   bool closed_to_clients_ = false;
   bool held_for_reload_ = false;
-  bool urgent_unsent_ = false;  // a stop was handed to the driver since its last next_exchange
-  bool handed_ = false;         // a queued write's part likewise
-  bool last_exchange_wrote_ = false;  // the device's last exchange carried a write
   WriteStats write_stats_;
   net::LogThrottle refusal_log_;  // refusals any client can cause, per device
   std::function<void()> kick_;

@@ -1,7 +1,6 @@
 // The device's PLC-loss failsafe (docs/safety.md): what it does when the PLC stops writing, and
 // how it retries a failsafe write the drive did not take. The timer itself is failsafe.h.
 #include "gateway/device.h"
-#include "gateway/device_request.h"
 
 namespace drivegate {
 

@@ -8,7 +8,6 @@
 #include <cstdio>
 
 #include "gateway/device.h"
-#include "gateway/device_request.h"
 #include "gateway/point_values.h"
 
 namespace drivegate {

@@ -48,7 +48,7 @@ void Device::refresh_common(Table table, TimePoint now) {
   bit(StatusBit::warning, c.warning);
   bit(StatusBit::comm_lost, lost);
   bit(StatusBit::failsafe, failsafe_.latched());
-  bit(StatusBit::command_pending, !requests_.empty());
+  bit(StatusBit::command_pending, !writes_.empty());
 
   // The age of the drive's state: of the last frame that carried it, never of a write's echo.
   const std::optional<TimePoint> data_at = link_.health.last_data();
@@ -62,11 +62,10 @@ void Device::refresh_common(Table table, TimePoint now) {
       .drive = c,
       .device = link_.counters,
       .bus = link_.bus != nullptr ? *link_.bus : no_bus,
-      .data_age_ms =
-          data_at ? static_cast<std::uint32_t>(std::clamp<long long>(
-                        std::chrono::duration_cast<Millis>(now - *data_at).count(), 0,
-                        std::numeric_limits<std::uint32_t>::max() - 1))
-                  : std::numeric_limits<std::uint32_t>::max(),
+      .data_age_ms = data_at ? static_cast<std::uint32_t>(std::clamp<long long>(
+                                   std::chrono::duration_cast<Millis>(now - *data_at).count(), 0,
+                                   std::numeric_limits<std::uint32_t>::max() - 1))
+                             : std::numeric_limits<std::uint32_t>::max(),
       .heartbeat = heartbeat_,
   };
   for (const auto& p : map_.common_points(table)) {
