@@ -34,7 +34,7 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
       writes_(traits_.write_timeout),
       failsafe_(config_.failsafe.timeout),
       last_tick_(now),
-      history_(history) {
+      recorder_(history, config_.name, config_.unit_id) {
   for (int t = 0; t < 4; ++t) image_[t].assign(map_.size(static_cast<Table>(t)), 0);
   refresh_image(now);
   refresh_common(Table::input, now);

@@ -12,6 +12,7 @@
 //                        queue and its states are write_queue.h
 //   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
 //   device_history.cpp   what it records in the history: each write's audit record, its events
+//                        (history_recorder.h keeps what was recorded last)
 //   device_reload.cpp    a reload: the new device takes over the PLC's failsafe watchdog
 #pragma once
 
@@ -28,6 +29,7 @@
 #include "bus/station.h"
 #include "config/config.h"
 #include "gateway/failsafe.h"
+#include "gateway/history_recorder.h"
 #include "gateway/outcome.h"
 #include "gateway/register_map.h"
 #include "gateway/session.h"
@@ -202,10 +204,8 @@ class Device final : public Station {
   void record(Answer& answer, Outcome outcome, TimePoint now);
   [[nodiscard]] static std::string describe(std::span<const Part> parts);
   [[nodiscard]] static std::string value_text(const PointSpec& spec, const Value& value);
-  void record_event(EventKind kind, std::string message,
-                    std::vector<std::pair<std::string, std::string>> fields = {});
+  // Tells the history recorder what the device shows now.
   void record_changes();
-  void record_faults(const CommonState& s, bool found);
   // device_failsafe.cpp
   void failsafe_tick(TimePoint now);
   void enforce_failsafe(TimePoint now);
@@ -246,15 +246,7 @@ class Device final : public Station {
   // What was last logged, to log changes only.
   bool logged_online_ = false;
   FaultSet logged_faults_;
-  // What was last recorded in the history, likewise.
-  History* history_;
-  bool recorded_comm_lost_ = false;
-  bool recorded_contact_ = false;  // the drive's own state was heard and recorded once
-  bool recorded_running_ = false;
-  bool recorded_run_known_ = false;  // whether it runs was recorded once (online)
-  bool recorded_latched_ = false;
-  FaultSet recorded_faults_;
-  std::uint32_t recorded_native_ = 0;
+  HistoryRecorder recorder_;  // the events recorded in the history (history_recorder.h)
 };
 
 }  // namespace drivegate

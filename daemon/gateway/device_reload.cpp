@@ -18,7 +18,7 @@ void Device::take_over(const Device& old) {
   // at its first tick; the history has the trip already.
   failsafe_now_ = config_.failsafe.action;
   failsafe_done_ = false;
-  recorded_latched_ = true;
+  recorder_.latched_before();
   log_->warn("device {}: the failsafe stays latched across the reload: {} sent again", config_.name,
              to_string(failsafe_now_));
 }
