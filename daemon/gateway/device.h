@@ -10,7 +10,8 @@
 //   device_writes.cpp    Modbus write requests: validated, checked whole, queued (bounded, one
 //                        write turn of the line per part), applied part by part, confirmed; the
 //                        queue and its states are write_queue.h
-//   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
+//   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time, failsafe_enforcer.h
+//                        decides what to write while it is latched)
 //   device_history.cpp   what it records in the history: each write's audit record, its events
 //                        (history_recorder.h keeps what was recorded last)
 //   device_reload.cpp    a reload: the new device takes over the PLC's failsafe watchdog
@@ -29,6 +30,7 @@
 #include "bus/station.h"
 #include "config/config.h"
 #include "gateway/failsafe.h"
+#include "gateway/failsafe_enforcer.h"
 #include "gateway/history_recorder.h"
 #include "gateway/outcome.h"
 #include "gateway/register_map.h"
@@ -230,14 +232,9 @@ class Device final : public Station {
   std::function<void()> kick_;
   std::function<void()> watcher_;
 
-  // PLC-loss failsafe (docs/safety.md). `failsafe_now_` is the action in force since the trip:
-  // the configured one, or stop when the drive refused quick_stop or the preset speed.
+  // PLC-loss failsafe (docs/safety.md): the watchdog's time, and what is done while it is latched.
   FailsafeWatchdog failsafe_;
-  FailsafeAction failsafe_now_ = FailsafeAction::stop;
-  bool failsafe_busy_ = false;     // the action's write is in flight
-  bool failsafe_done_ = false;     // the drive confirmed the action since the trip
-  bool failsafe_gave_up_ = false;  // the drive cannot take a stop at all (invalid_value)
-  TimePoint failsafe_retry_at_{};
+  FailsafeEnforcer enforcer_;
   TimePoint last_tick_{};
 
   bool start_checked_ = false;  // the drive was first reached and on_start applied
