@@ -31,11 +31,11 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
             {},
             nullptr,
             log_},
+      image_(map_),
       writes_(traits_.write_timeout),
       failsafe_(config_.failsafe.timeout),
       last_tick_(now),
       recorder_(history, config_.name, config_.unit_id) {
-  for (int t = 0; t < 4; ++t) image_[t].assign(map_.size(static_cast<Table>(t)), 0);
   refresh_image(now);
   refresh_common(Table::input, now);
   refresh_common(Table::discrete, now);
@@ -122,7 +122,7 @@ void Device::stop_on_start(TimePoint now) {
 // Settles the writes the driver completed (which may apply the next part of their request) and
 // logs what changed. The image itself is refreshed when it is next read.
 void Device::publish(TimePoint now, bool always) {
-  image_stale_ = true;
+  image_.stale();
   std::vector<Completion> completions;
   driver_->take_completions(completions);
   const bool settled = !completions.empty();

@@ -6,7 +6,8 @@
 //
 //   device.cpp           the Station side: driver calls, comm_lost, ticks, logging of changes,
 //                        what is done with a drive first found running (on_start)
-//   device_image.cpp     the register image (common block and adapter points) and reads
+//   device_image.cpp     the register image (common block and adapter points; register_image.h
+//                        holds the tables) and reads
 //   device_writes.cpp    Modbus write requests: validated, checked whole, queued (bounded, one
 //                        write turn of the line per part), applied part by part, confirmed; the
 //                        queue and its states are write_queue.h
@@ -33,6 +34,7 @@
 #include "gateway/failsafe_enforcer.h"
 #include "gateway/history_recorder.h"
 #include "gateway/outcome.h"
+#include "gateway/register_image.h"
 #include "gateway/register_map.h"
 #include "gateway/session.h"
 #include "gateway/write_queue.h"
@@ -174,7 +176,6 @@ class Device final : public Station {
   // device_image.cpp
   void refresh_image(TimePoint now);
   void refresh_common(Table table, TimePoint now);
-  std::span<std::uint16_t> registers(Table t) { return image_[static_cast<int>(t)]; }
   // device_writes.cpp
   // Hands the oldest queued write's next parts to the driver, on a write turn or whenever the
   // device owes no poll (may_release); true if any part was applied.
@@ -220,8 +221,7 @@ class Device final : public Station {
   RegisterMap map_;
   std::shared_ptr<spdlog::logger> log_;
   Link link_;
-  std::vector<std::uint16_t> image_[4];
-  bool image_stale_ = true;  // the driver may have changed since the last refresh_image()
+  RegisterImage image_;  // what a PLC reads (register_image.h)
   std::uint16_t heartbeat_ = 0;
 
   WriteQueue writes_;  // the requests in flight and what the driver was handed (write_queue.h)

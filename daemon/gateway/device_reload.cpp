@@ -6,7 +6,7 @@ namespace drivegate {
 
 void Device::take_over(const Device& old) {
   heartbeat_ = old.heartbeat_;
-  image_stale_ = true;
+  image_.stale();
   failsafe_.carry_over(old.failsafe_);
   if (failsafe_.state() == FailsafeWatchdog::State::armed) {
     log_->info("device {}: the failsafe stays armed across the reload, its deadline unchanged",

@@ -385,7 +385,7 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
     const std::optional<WriteOp> maybe_op = op_of(*part.point, part.value);
     if (!maybe_op) {
       heartbeat_ = static_cast<std::uint16_t>(whole(part.value));
-      image_stale_ = true;
+      image_.stale();
       continue;
     }
     const WriteOp& op = *maybe_op;
@@ -398,7 +398,7 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
     }
     const Ticket t = writes_.ticket();
     const WriteStatus s = driver_->apply(op, t, now);
-    image_stale_ = true;
+    image_.stale();
     const bool taken = s == WriteStatus::done || s == WriteStatus::pending;
     if (taken && r.feeds_failsafe && run && failsafe_.reset(now)) {
       log_->info("device {}: failsafe reset by {} from Modbus", config_.name,
