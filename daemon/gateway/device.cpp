@@ -88,7 +88,7 @@ void Device::on_tick(TimePoint now) {
 // running is shown as it runs (the driver's contract), or stopped if on_start says so, on the
 // next tick, unless a client has written to it meanwhile. A kept device never comes here again.
 void Device::first_contact() {
-  start_checked_ = true;
+  start_ = StartCheck::checked;
   const CommonState& s = driver_->common();
   if (!s.running) return;
   if (config_.on_start == StartAction::adopt) {
@@ -100,12 +100,12 @@ void Device::first_contact() {
   }
   log_->warn("device {}: found running (speed {} rpm): stopping it (on_start = stop)", config_.name,
              s.speed_rpm);
-  stop_on_start_ = true;
+  start_ = StartCheck::stop_due;
 }
 
 void Device::stop_on_start(TimePoint now) {
-  if (!stop_on_start_) return;
-  stop_on_start_ = false;
+  if (start_ != StartCheck::stop_due) return;
+  start_ = StartCheck::checked;
   command(
       Command::stop,
       [this](Outcome outcome) {
@@ -141,7 +141,7 @@ void Device::log_changes() {
   if (on != logged_online_) {
     logged_online_ = on;
     if (on) log_->info("device {}: online", config_.name);
-    if (on && !start_checked_) first_contact();
+    if (on && start_ == StartCheck::unchecked) first_contact();
   }
   const FaultSet faults = driver_->common().faults;
   if (faults != logged_faults_) {

@@ -237,8 +237,11 @@ class Device final : public Station {
   FailsafeEnforcer enforcer_;
   TimePoint last_tick_{};
 
-  bool start_checked_ = false;  // the drive was first reached and on_start applied
-  bool stop_on_start_ = false;  // found running with on_start = stop: the stop is due
+  // What on_start does with a drive first found running (first_contact):
+  //   unchecked --first contact--> checked, or stop_due (found running, on_start = stop)
+  //   stop_due --the next tick sends the stop, or a client writes first--> checked
+  enum class StartCheck : std::uint8_t { unchecked, stop_due, checked };
+  StartCheck start_ = StartCheck::unchecked;
 
   // What was last logged, to log changes only.
   bool logged_online_ = false;

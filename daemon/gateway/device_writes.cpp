@@ -252,7 +252,8 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
     answer.record.why = "shutting down";
     return Outcome::no_response;
   }
-  if (origin == Origin::plc) stop_on_start_ = false;  // a client decides from now on
+  // A client decides from now on.
+  if (origin == Origin::plc && start_ == StartCheck::stop_due) start_ = StartCheck::checked;
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
   std::stable_partition(parts.begin(), parts.end(),
