@@ -1,7 +1,5 @@
 #include "gateway/device.h"
 
-#include "gateway/device_request.h"
-
 namespace drivegate {
 
 namespace {
@@ -33,10 +31,11 @@ Device::Device(DeviceConfig config, const AdapterDescriptor& adapter,
             {},
             nullptr,
             log_},
+      image_(map_),
+      writes_(traits_.write_timeout),
       failsafe_(config_.failsafe.timeout),
       last_tick_(now),
-      history_(history) {
-  for (int t = 0; t < 4; ++t) image_[t].assign(map_.size(static_cast<Table>(t)), 0);
+      recorder_(history, config_.name, config_.unit_id) {
   refresh_image(now);
   refresh_common(Table::input, now);
   refresh_common(Table::discrete, now);
@@ -52,9 +51,7 @@ bool Device::online() const {
 
 std::optional<Exchange> Device::next_exchange(TimePoint now, Turn turn) {
   const bool applied = turn == Turn::write && release(now, true);
-  last_exchange_wrote_ = handed_ || urgent_unsent_;
-  handed_ = false;
-  urgent_unsent_ = false;
+  writes_.exchanged();
   std::optional<Exchange> ex = driver_->next_exchange(now);
   // Choosing what to send changes no value a watcher reads; a part applied may have.
   publish(now, applied);
@@ -91,7 +88,7 @@ void Device::on_tick(TimePoint now) {
 // running is shown as it runs (the driver's contract), or stopped if on_start says so, on the
 // next tick, unless a client has written to it meanwhile. A kept device never comes here again.
 void Device::first_contact() {
-  start_checked_ = true;
+  start_ = StartCheck::checked;
   const CommonState& s = driver_->common();
   if (!s.running) return;
   if (config_.on_start == StartAction::adopt) {
@@ -103,12 +100,12 @@ void Device::first_contact() {
   }
   log_->warn("device {}: found running (speed {} rpm): stopping it (on_start = stop)", config_.name,
              s.speed_rpm);
-  stop_on_start_ = true;
+  start_ = StartCheck::stop_due;
 }
 
 void Device::stop_on_start(TimePoint now) {
-  if (!stop_on_start_) return;
-  stop_on_start_ = false;
+  if (start_ != StartCheck::stop_due) return;
+  start_ = StartCheck::checked;
   command(
       Command::stop,
       [this](Outcome outcome) {
@@ -125,7 +122,7 @@ void Device::stop_on_start(TimePoint now) {
 // Settles the writes the driver completed (which may apply the next part of their request) and
 // logs what changed. The image itself is refreshed when it is next read.
 void Device::publish(TimePoint now, bool always) {
-  image_stale_ = true;
+  image_.stale();
   std::vector<Completion> completions;
   driver_->take_completions(completions);
   const bool settled = !completions.empty();
@@ -144,7 +141,7 @@ void Device::log_changes() {
   if (on != logged_online_) {
     logged_online_ = on;
     if (on) log_->info("device {}: online", config_.name);
-    if (on && !start_checked_) first_contact();
+    if (on && start_ == StartCheck::unchecked) first_contact();
   }
   const FaultSet faults = driver_->common().faults;
   if (faults != logged_faults_) {

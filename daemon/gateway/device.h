@@ -6,11 +6,15 @@
 //
 //   device.cpp           the Station side: driver calls, comm_lost, ticks, logging of changes,
 //                        what is done with a drive first found running (on_start)
-//   device_image.cpp     the register image (common block and adapter points) and reads
+//   device_image.cpp     the register image (common block and adapter points; register_image.h
+//                        holds the tables) and reads
 //   device_writes.cpp    Modbus write requests: validated, checked whole, queued (bounded, one
-//                        write turn of the line per part), applied part by part, confirmed
-//   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time)
+//                        write turn of the line per part), applied part by part, confirmed; the
+//                        queue and its states are write_queue.h
+//   device_failsafe.cpp  the PLC-loss failsafe (failsafe.h keeps its time, failsafe_enforcer.h
+//                        decides what to write while it is latched)
 //   device_history.cpp   what it records in the history: each write's audit record, its events
+//                        (history_recorder.h keeps what was recorded last)
 //   device_reload.cpp    a reload: the new device takes over the PLC's failsafe watchdog
 #pragma once
 
@@ -27,9 +31,13 @@
 #include "bus/station.h"
 #include "config/config.h"
 #include "gateway/failsafe.h"
+#include "gateway/failsafe_enforcer.h"
+#include "gateway/history_recorder.h"
 #include "gateway/outcome.h"
+#include "gateway/register_image.h"
 #include "gateway/register_map.h"
 #include "gateway/session.h"
+#include "gateway/write_queue.h"
 #include "history/history.h"
 #include "net/log_throttle.h"
 
@@ -40,19 +48,6 @@ namespace drivegate {
 // (PointSpec::write_level) are operate's, every other writable point maintain's. Device::write
 // and write_points deny less.
 AccessLevel required_level(const MappedPoint& point);
-
-// Writes waiting at one device, the one being carried out included (docs/safety.md, "Fair line
-// time"): past it a write is refused at once (busy). Stops have as many places again of their
-// own, so a full queue never holds one back, and so have a pass-through device's forwarded
-// reads, so that read clients never get a write refused busy.
-inline constexpr std::size_t kMaxQueuedWrites = 4;
-
-// What happened to the writes a device was asked for, beyond what the line counters say.
-struct WriteStats {
-  std::uint64_t busy = 0;              // refused at once (busy): the queue was full
-  std::uint64_t coalesced = 0;         // identical to the one waiting before it: answered with it
-  std::uint64_t refused_failsafe = 0;  // a run from a source that cannot clear a latched failsafe
-};
 
 class Device final : public Station {
  public:
@@ -154,7 +149,7 @@ class Device final : public Station {
   // this driver), and the heartbeat register.
   void take_over(const Device& old);
   // Writes waiting or being carried out (status bit command_pending).
-  [[nodiscard]] std::size_t writes_in_flight() const { return requests_.size(); }
+  [[nodiscard]] std::size_t writes_in_flight() const { return writes_.size(); }
   [[nodiscard]] const WriteStats& write_stats() const { return write_stats_; }
   // A request PDU as the audit trail says it: "pdu 10 00 01 ..." (at most 32 bytes shown).
   [[nodiscard]] static std::string describe_pdu(std::span<const std::uint8_t> pdu);
@@ -167,13 +162,9 @@ class Device final : public Station {
     s.source.kind = source;
     return s;
   }
-  struct Part {
-    const MappedPoint* point;
-    Value value;
-  };
-  struct Request;
-  // Whom a request answers and what it records (device_request.h).
-  struct Answer;
+  using Part = WritePart;
+  using Request = WriteRequest;
+  using Answer = WriteAnswer;  // whom a request answers and what it records
   enum class Progress : std::uint8_t { done, waiting, failed };
 
   // device.cpp
@@ -185,16 +176,12 @@ class Device final : public Station {
   // device_image.cpp
   void refresh_image(TimePoint now);
   void refresh_common(Table table, TimePoint now);
-  std::span<std::uint16_t> registers(Table t) { return image_[static_cast<int>(t)]; }
   // device_writes.cpp
   // Hands the oldest queued write's next parts to the driver, on a write turn or whenever the
   // device owes no poll (may_release); true if any part was applied.
   bool release(TimePoint now, bool write_turn);
   [[nodiscard]] bool may_release(TimePoint now) const;
   void next_request(TimePoint now);
-  [[nodiscard]] Request* queue_head() const;
-  // Requests waiting or being carried out: stops or not, forwarded reads or not.
-  [[nodiscard]] std::size_t queued(bool urgent, bool reads_only = false) const;
   Outcome refuse_run_while_latched(const char* source, TimePoint now);
   void supersede_runs(TimePoint now);
   Outcome submit(const Session& session, Table table, std::uint16_t address,
@@ -220,10 +207,8 @@ class Device final : public Station {
   void record(Answer& answer, Outcome outcome, TimePoint now);
   [[nodiscard]] static std::string describe(std::span<const Part> parts);
   [[nodiscard]] static std::string value_text(const PointSpec& spec, const Value& value);
-  void record_event(EventKind kind, std::string message,
-                    std::vector<std::pair<std::string, std::string>> fields = {});
+  // Tells the history recorder what the device shows now.
   void record_changes();
-  void record_faults(const CommonState& s, bool found);
   // device_failsafe.cpp
   void failsafe_tick(TimePoint now);
   void enforce_failsafe(TimePoint now);
@@ -236,49 +221,32 @@ class Device final : public Station {
   RegisterMap map_;
   std::shared_ptr<spdlog::logger> log_;
   Link link_;
-  std::vector<std::uint16_t> image_[4];
-  bool image_stale_ = true;  // the driver may have changed since the last refresh_image()
+  RegisterImage image_;  // what a PLC reads (register_image.h)
   std::uint16_t heartbeat_ = 0;
 
-  Ticket next_ticket_ = 1;
-  // In flight, oldest first: stops (urgent) are handed to the driver at once, the others one at
-  // a time, oldest first, each part on a write turn the bus engine gives (release()).
-  std::vector<std::unique_ptr<Request>> requests_;
+  WriteQueue writes_;  // the requests in flight and what the driver was handed (write_queue.h)
   bool closed_to_clients_ = false;
   bool held_for_reload_ = false;
-  bool urgent_unsent_ = false;  // a stop was handed to the driver since its last next_exchange
-  bool handed_ = false;         // a queued write's part likewise
-  bool last_exchange_wrote_ = false;  // the device's last exchange carried a write
   WriteStats write_stats_;
   net::LogThrottle refusal_log_;  // refusals any client can cause, per device
   std::function<void()> kick_;
   std::function<void()> watcher_;
 
-  // PLC-loss failsafe (docs/safety.md). `failsafe_now_` is the action in force since the trip:
-  // the configured one, or stop when the drive refused quick_stop or the preset speed.
+  // PLC-loss failsafe (docs/safety.md): the watchdog's time, and what is done while it is latched.
   FailsafeWatchdog failsafe_;
-  FailsafeAction failsafe_now_ = FailsafeAction::stop;
-  bool failsafe_busy_ = false;     // the action's write is in flight
-  bool failsafe_done_ = false;     // the drive confirmed the action since the trip
-  bool failsafe_gave_up_ = false;  // the drive cannot take a stop at all (invalid_value)
-  TimePoint failsafe_retry_at_{};
+  FailsafeEnforcer enforcer_;
   TimePoint last_tick_{};
 
-  bool start_checked_ = false;  // the drive was first reached and on_start applied
-  bool stop_on_start_ = false;  // found running with on_start = stop: the stop is due
+  // What on_start does with a drive first found running (first_contact):
+  //   unchecked --first contact--> checked, or stop_due (found running, on_start = stop)
+  //   stop_due --the next tick sends the stop, or a client writes first--> checked
+  enum class StartCheck : std::uint8_t { unchecked, stop_due, checked };
+  StartCheck start_ = StartCheck::unchecked;
 
   // What was last logged, to log changes only.
   bool logged_online_ = false;
   FaultSet logged_faults_;
-  // What was last recorded in the history, likewise.
-  History* history_;
-  bool recorded_comm_lost_ = false;
-  bool recorded_contact_ = false;  // the drive's own state was heard and recorded once
-  bool recorded_running_ = false;
-  bool recorded_run_known_ = false;  // whether it runs was recorded once (online)
-  bool recorded_latched_ = false;
-  FaultSet recorded_faults_;
-  std::uint32_t recorded_native_ = 0;
+  HistoryRecorder recorder_;  // the events recorded in the history (history_recorder.h)
 };
 
 }  // namespace drivegate

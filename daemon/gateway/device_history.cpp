@@ -1,14 +1,13 @@
 // What a device records in the history (history/history.h): the audit record of each write it
 // is asked for, whatever comes of it, and the events that matter to the plant as they happen
-// (fault raised and cleared, comm lost and back, failsafe tripped and cleared, drive started and
-// stopped). Every write entry (write, write_points, forward, command, the failsafe's) makes an
-// Answer with answer_to() and returns through answered(): a write refused at once is recorded
-// there; one a request took is recorded when the request settles (finish, fail_pending).
+// (history_recorder.h keeps what it recorded last). Every write entry (write, write_points,
+// forward, command, the failsafe's) makes an Answer with answer_to() and returns through
+// answered(): a write refused at once is recorded there; one a request took is recorded when the
+// request settles (finish, fail_pending).
 #include <chrono>
 #include <cstdio>
 
 #include "gateway/device.h"
-#include "gateway/device_request.h"
 #include "gateway/point_values.h"
 
 namespace drivegate {
@@ -32,9 +31,10 @@ Outcome Device::answered(Answer& answer, Outcome outcome, TimePoint now) {
 }
 
 void Device::record(Answer& a, Outcome outcome, TimePoint now) {
-  if (history_ == nullptr || a.audit == Answer::Audit::none) return;
+  History* history = recorder_.history();
+  if (history == nullptr || a.audit == Answer::Audit::none) return;
   if (a.audit == Answer::Audit::count) {
-    history_->audit().count(a.record.source.kind, outcome);
+    history->audit().count(a.record.source.kind, outcome);
     return;
   }
   a.record.result = outcome;
@@ -50,7 +50,7 @@ void Device::record(Answer& a, Outcome outcome, TimePoint now) {
   if (a.taken) {
     a.record.took = std::chrono::duration_cast<std::chrono::milliseconds>(now - a.since);
   }
-  history_->audit().record(a.record, now);
+  history->audit().record(a.record, now);
 }
 
 std::string Device::value_text(const PointSpec& spec, const Value& value) {
@@ -92,91 +92,14 @@ std::string Device::describe_pdu(std::span<const std::uint8_t> pdu) {
   return out;
 }
 
-void Device::record_event(EventKind kind, std::string message,
-                          std::vector<std::pair<std::string, std::string>> fields) {
-  history_->record(kind, config_.name, config_.unit_id, std::move(message), std::move(fields));
-}
-
 void Device::record_changes() {
-  if (history_ == nullptr) return;
-  if (const bool lost = comm_lost(); lost != recorded_comm_lost_) {
-    recorded_comm_lost_ = lost;
-    if (lost) {
-      record_event(EventKind::comm_lost, config_.name + ": comm lost: the drive stopped answering");
-    } else {
-      record_event(EventKind::comm_restored, config_.name + ": answers again");
-    }
-  }
-  if (const bool latched = failsafe_.latched(); latched != recorded_latched_) {
-    recorded_latched_ = latched;
-    if (latched) {
-      record_event(EventKind::failsafe_tripped,
-                   config_.name + ": failsafe " + std::string(to_string(config_.failsafe.action)) +
-                       ": no write from the PLC for " +
-                       std::to_string(failsafe_.timeout().count()) + " ms",
-                   {{"action", std::string(to_string(config_.failsafe.action))}});
-    } else {
-      record_event(EventKind::failsafe_cleared,
-                   config_.name + ": failsafe reset by a run command from the PLC");
-    }
-  }
-  // What the drive says of itself counts only while it answers: a drive that stopped answering
-  // has not stopped running, nor cleared its faults. The first state heard (daemon start, the
-  // device added or changed by a reload) is said as found, not as a change.
-  if (comm_lost() || !link_.health.ever_good()) return;
-  const bool found = !recorded_contact_;
-  recorded_contact_ = true;
-  const CommonState& s = driver_->common();
-  record_faults(s, found);
-  // Whether it runs, and with what command, once the driver knows the drive whole (online: its
-  // handshake done, every block read once), as the log says it (first_contact): half a state is
-  // not what the drive does.
-  if (!online()) return;
-  const bool found_running = !recorded_run_known_;
-  recorded_run_known_ = true;
-  if (s.running != recorded_running_) {
-    recorded_running_ = s.running;
-    const std::string how = std::string(found_running ? "found running" : "running") + " (" +
-                            std::string(to_string(s.command)) + ", setpoint " +
-                            std::to_string(s.setpoint_rpm) + " rpm)";
-    if (s.running) {
-      record_event(EventKind::drive_started, config_.name + ": " + how,
-                   {{"command", std::string(to_string(s.command))},
-                    {"setpoint_rpm", std::to_string(s.setpoint_rpm)},
-                    {"found", found_running ? "true" : "false"}});
-    } else {
-      record_event(EventKind::drive_stopped, config_.name + ": stopped");
-    }
-  }
-}
-
-// One entry per unified fault raised or cleared (comm_lost is comm's own event), each with the
-// native code in force; a native code that changes under the same faults is a fault raised anew.
-void Device::record_faults(const CommonState& s, bool found) {
-  char native[16];
-  std::snprintf(native, sizeof native, "0x%X", static_cast<unsigned>(s.native_fault));
-  const bool native_changed = s.native_fault != recorded_native_ && s.native_fault != 0;
-  for (std::size_t i = 1; i < kFaultCount; ++i) {
-    const auto f = static_cast<Fault>(i);
-    if (f == Fault::comm_lost) continue;
-    const bool now = s.faults.has(f);
-    const bool was = recorded_faults_.has(f);
-    if (now && (!was || native_changed)) {
-      record_event(EventKind::fault_raised,
-                   config_.name + ": " + (found ? "found with fault " : "fault ") +
-                       std::string(to_string(f)) + " (native " + native + ")",
-                   {{"fault", std::string(to_string(f))},
-                    {"code", std::to_string(i)},
-                    {"native", native},
-                    {"found", found ? "true" : "false"}});
-    } else if (!now && was) {
-      record_event(EventKind::fault_cleared,
-                   config_.name + ": fault " + std::string(to_string(f)) + " cleared",
-                   {{"fault", std::string(to_string(f))}, {"code", std::to_string(i)}});
-    }
-  }
-  recorded_faults_ = s.faults;
-  recorded_native_ = s.native_fault;
+  recorder_.seen({.comm_lost = comm_lost(),
+                  .ever_good = link_.health.ever_good(),
+                  .online = online(),
+                  .latched = failsafe_.latched(),
+                  .action = config_.failsafe.action,
+                  .failsafe_timeout = failsafe_.timeout(),
+                  .drive = driver_->common()});
 }
 
 }  // namespace drivegate

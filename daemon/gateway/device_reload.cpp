@@ -6,7 +6,7 @@ namespace drivegate {
 
 void Device::take_over(const Device& old) {
   heartbeat_ = old.heartbeat_;
-  image_stale_ = true;
+  image_.stale();
   failsafe_.carry_over(old.failsafe_);
   if (failsafe_.state() == FailsafeWatchdog::State::armed) {
     log_->info("device {}: the failsafe stays armed across the reload, its deadline unchanged",
@@ -16,11 +16,10 @@ void Device::take_over(const Device& old) {
   if (!failsafe_.latched()) return;
   // Latched there: this driver has not been told. The action (this configuration's) is sent to it
   // at its first tick; the history has the trip already.
-  failsafe_now_ = config_.failsafe.action;
-  failsafe_done_ = false;
-  recorded_latched_ = true;
+  enforcer_.trip(config_.failsafe.action);
+  recorder_.latched_before();
   log_->warn("device {}: the failsafe stays latched across the reload: {} sent again", config_.name,
-             to_string(failsafe_now_));
+             to_string(enforcer_.action()));
 }
 
 }  // namespace drivegate

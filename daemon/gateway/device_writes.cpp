@@ -14,12 +14,12 @@
 // run the motor after it are dropped, never sent (no_response).
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <optional>
 
 #include "gateway/device.h"
-#include "gateway/device_request.h"
 #include "gateway/forward_access.h"
 #include "gateway/value_codec.h"
 
@@ -120,11 +120,11 @@ void Device::command(Command c, WriteDone done, TimePoint now, SourceKind source
   const auto value = static_cast<std::uint16_t>(c);
   const Session session = gateway_session(source);
   Answer a = answer_to(session, done, "command=" + std::string(to_string(c)), now);
-  const Outcome at_once = answered(
-      a,
-      submit(session, Table::holding, 0, std::span<const std::uint16_t>(&value, 1), a, now,
-             Origin::gateway),
-      now);
+  const Outcome at_once =
+      answered(a,
+               submit(session, Table::holding, 0, std::span<const std::uint16_t>(&value, 1), a, now,
+                      Origin::gateway),
+               now);
   if (at_once != Outcome::ok) done(at_once);
 }
 
@@ -252,7 +252,8 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
     answer.record.why = "shutting down";
     return Outcome::no_response;
   }
-  if (origin == Origin::plc) stop_on_start_ = false;  // a client decides from now on
+  // A client decides from now on.
+  if (origin == Origin::plc && start_ == StartCheck::stop_due) start_ = StartCheck::checked;
   // One request writing setpoint and command together means "run at this speed": the setpoint
   // applies first, whatever the address order.
   std::stable_partition(parts.begin(), parts.end(),
@@ -294,43 +295,39 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
       origin == Origin::gateway || (commands(parts, &is_stop) && !commands(parts, &is_run));
   if (!urgent && !heartbeat_only) {
     // Equal to the request queued last, which has not started: the same effect, one answer.
-    const auto last = std::find_if(requests_.rbegin(), requests_.rend(),
-                                   [](const auto& r) { return !r->urgent; });
-    if (last != requests_.rend() && !(*last)->started() &&
-        (*last)->feeds_failsafe == feeds &&
-        std::equal(parts.begin(), parts.end(), (*last)->parts.begin(), (*last)->parts.end(),
+    Request* last = writes_.last_queued();
+    if (last != nullptr && last->feeds_failsafe == feeds &&
+        std::equal(parts.begin(), parts.end(), last->parts.begin(), last->parts.end(),
                    [](const Part& a, const Part& b) {
                      return a.point == b.point && a.value == b.value;
                    })) {
       ++write_stats_.coalesced;
       answer.taken = true;
-      (*last)->answers.push_back(std::move(answer));
+      last->answers.push_back(std::move(answer));
       return Outcome::ok;
     }
   }
-  if (!heartbeat_only && queued(urgent) >= kMaxQueuedWrites) {
+  if (!heartbeat_only && writes_.full(urgent)) {
     ++write_stats_.busy;
     return Outcome::busy;
   }
   if (urgent) supersede_runs(now);
 
   auto owned = std::make_unique<Request>();
-  Request* r = owned.get();
-  r->parts = std::move(parts);
-  r->urgent = urgent;
-  r->feeds_failsafe = feeds;
+  owned->parts = std::move(parts);
+  owned->urgent = urgent;
+  owned->feeds_failsafe = feeds;
   answer.taken = true;
-  r->answers.push_back(std::move(answer));
-  r->deadline = now + traits_.write_timeout;
-  requests_.push_back(std::move(owned));
+  owned->answers.push_back(std::move(answer));
+  Request& r = writes_.push(std::move(owned), now);
   // A stop and the heartbeat go to the driver (or the image) at once.
-  return begin(*r, urgent || heartbeat_only, now);
+  return begin(r, urgent || heartbeat_only, now);
 }
 
 // A request just queued: started now when it must be (`at_once`) or may be (it heads the queue
 // and no poll of the device's own is due), else left for a write turn.
 Outcome Device::begin(Request& r, bool at_once, TimePoint now) {
-  if (!at_once && (queue_head() != &r || !may_release(now))) {
+  if (!at_once && (writes_.head() != &r || !may_release(now))) {
     if (kick_) kick_();  // the engine gives it a write turn
     return Outcome::ok;
   }
@@ -346,50 +343,23 @@ Outcome Device::begin(Request& r, bool at_once, TimePoint now) {
   return failure;
 }
 
-std::size_t Device::queued(bool urgent, bool reads_only) const {
-  return static_cast<std::size_t>(
-      std::count_if(requests_.begin(), requests_.end(), [urgent, reads_only](const auto& r) {
-        return r->urgent == urgent && r->reads_only == reads_only;
-      }));
-}
-
 // A stop is on its way: the queued requests that would run the motor after it never reach it.
 void Device::supersede_runs(TimePoint now) {
   std::vector<const Request*> dropped;
-  for (const auto& r : requests_) {
+  for (const auto& r : writes_.requests()) {
     if (!r->urgent && !r->started() && commands(r->parts, &is_run)) dropped.push_back(r.get());
   }
   for (const Request* r : dropped) finish(r, Outcome::no_response, now, "a stop went before it");
 }
 
-// The oldest request that is not a stop: the only one of them the driver may be carrying out.
-Device::Request* Device::queue_head() const {
-  const auto it =
-      std::find_if(requests_.begin(), requests_.end(), [](const auto& r) { return !r->urgent; });
-  return it != requests_.end() ? it->get() : nullptr;
-}
-
 PendingWrites Device::pending_writes(TimePoint now) const {
-  if (urgent_unsent_) return PendingWrites::urgent;
-  // A part the driver still carries may want the line again (resent each turn until confirmed or
-  // its deadline passes, which the driver judges when asked), even while the device is backed
-  // off.
-  const bool driver_due = driver_->wake_at() <= now;
-  bool carried = false;
-  for (const auto& r : requests_) {
-    if (!r->waiting || !driver_due) continue;
-    if (r->urgent) return PendingWrites::urgent;
-    carried = true;
-  }
-  if (handed_ || carried) return PendingWrites::waiting;
-  const Request* head = queue_head();
-  return head != nullptr && !head->waiting ? PendingWrites::waiting : PendingWrites::none;
+  return writes_.pending(driver_->wake_at() <= now);
 }
 
 // A queued write's part may go to the driver outside a write turn unless the device's last
 // exchange carried a write and a poll of its own is now due: then that poll goes first.
 bool Device::may_release(TimePoint now) const {
-  return !last_exchange_wrote_ || driver_->wake_at() > now;
+  return writes_.may_release(driver_->wake_at() <= now);
 }
 
 // The head request's next parts go to the driver, up to the first one that needs the line;
@@ -397,8 +367,8 @@ bool Device::may_release(TimePoint now) const {
 // once. Outside a write turn only while the device owes no poll.
 bool Device::release(TimePoint now, bool write_turn) {
   bool applied = false;
-  while (Request* r = queue_head()) {
-    if (r->waiting || (!write_turn && !may_release(now))) break;
+  while (Request* r = writes_.head()) {
+    if (r->carried() || (!write_turn && !may_release(now))) break;
     Outcome failure = Outcome::ok;
     const Progress progress = advance(*r, now, failure);
     applied = true;
@@ -408,8 +378,6 @@ bool Device::release(TimePoint now, bool write_turn) {
   return applied;
 }
 
-
-
 // Applies parts from r.next on until one is pending or fails.
 Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
   if (r.forward) return advance_forward(r, now, failure);
@@ -418,7 +386,7 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
     const std::optional<WriteOp> maybe_op = op_of(*part.point, part.value);
     if (!maybe_op) {
       heartbeat_ = static_cast<std::uint16_t>(whole(part.value));
-      image_stale_ = true;
+      image_.stale();
       continue;
     }
     const WriteOp& op = *maybe_op;
@@ -429,9 +397,9 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
       failure = refuse_run_while_latched("a client that does not feed it", now);
       return Progress::failed;
     }
-    const Ticket t = next_ticket_++;
+    const Ticket t = writes_.ticket();
     const WriteStatus s = driver_->apply(op, t, now);
-    image_stale_ = true;
+    image_.stale();
     const bool taken = s == WriteStatus::done || s == WriteStatus::pending;
     if (taken && r.feeds_failsafe && run && failsafe_.reset(now)) {
       log_->info("device {}: failsafe reset by {} from Modbus", config_.name,
@@ -440,14 +408,12 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
     switch (s) {
       case WriteStatus::done:
         continue;
-      case WriteStatus::pending:
-        // Each part gets the driver's whole write_timeout from when it is applied: the driver's
-        // own deadline (shorter) fails it first, so a part the client was told failed is never
-        // still on its way to the drive.
-        r.waiting = t;
-        r.deadline = now + traits_.write_timeout;
-        (r.urgent ? urgent_unsent_ : handed_) = true;
+      case WriteStatus::pending: {
+        // Due by the driver's whole write_timeout from now (WriteQueue::handed).
+        [[maybe_unused]] const bool handed = writes_.handed(r, t, now);
+        assert(handed);  // advance() is never called on a request whose part is carried
         return Progress::waiting;
+      }
       case WriteStatus::invalid_value:
         failure = Outcome::invalid_value;
         return Progress::failed;
@@ -466,13 +432,13 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
 Device::Progress Device::advance_forward(Request& r, TimePoint now, Outcome& failure) {
   if (r.started()) return Progress::done;
   ++r.next;
-  const Ticket t = next_ticket_++;
+  const Ticket t = writes_.ticket();
   switch (driver_->apply(WriteOp::of_forward(*r.forward), t, now)) {
-    case WriteStatus::pending:
-      r.waiting = t;
-      r.deadline = now + traits_.write_timeout;
-      handed_ = true;
+    case WriteStatus::pending: {
+      [[maybe_unused]] const bool handed = writes_.handed(r, t, now);
+      assert(handed);
       return Progress::waiting;
+    }
     case WriteStatus::done:  // a forward always needs the line: nothing came back to answer
     case WriteStatus::refused:
       failure = Outcome::refused;
@@ -485,8 +451,8 @@ Device::Progress Device::advance_forward(Request& r, TimePoint now, Outcome& fai
   return Progress::failed;
 }
 
-Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pdu,
-                        ForwardDone done, TimePoint now) {
+Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pdu, ForwardDone done,
+                        TimePoint now) {
   const ForwardVerdict verdict = judge_forward(pdu, static_cast<std::uint8_t>(config_.address));
   // A forwarded read is not a write: recorded only when it is refused for what it is. A
   // forwarded write is audited like any other.
@@ -513,31 +479,25 @@ Outcome Device::forward(const Session& session, std::span<const std::uint8_t> pd
     }
     // Reads wait in places of their own: however many read clients fill theirs, a write from
     // a client that may write is never refused busy for them.
-    if (queued(false, reads_only) >= kMaxQueuedWrites) {
+    if (writes_.full(false, reads_only)) {
       ++write_stats_.busy;
       return Outcome::busy;
     }
     auto owned = std::make_unique<Request>();
-    Request* r = owned.get();
-    r->forward = Bytes(pdu.begin(), pdu.end());
-    r->forward_done = std::move(done);
-    r->reads_only = reads_only;
-    r->feeds_failsafe = false;
-    r->deadline = now + traits_.write_timeout;
+    owned->forward = Bytes(pdu.begin(), pdu.end());
+    owned->forward_done = std::move(done);
+    owned->reads_only = reads_only;
+    owned->feeds_failsafe = false;
     a.taken = true;
-    r->answers.push_back(std::move(a));
-    requests_.push_back(std::move(owned));
-    return begin(*r, false, now);
+    owned->answers.push_back(std::move(a));
+    return begin(writes_.push(std::move(owned), now), false, now);
   }();
   return answered(a, o, now);
 }
 
 void Device::settle(const Completion& c, TimePoint now) {
-  const auto it = std::find_if(requests_.begin(), requests_.end(),
-                               [&](const auto& r) { return r->waiting == c.ticket; });
-  if (it == requests_.end()) return;  // its request timed out already
-  Request* r = it->get();
-  r->waiting.reset();
+  Request* r = writes_.carrying(c.ticket);
+  if (r == nullptr) return;  // its request timed out already
   if (r->forward) r->reply = c.reply;
   if (c.result != WriteResult::ok || r->all_applied()) {
     // Done, or failed: the parts after it are never applied. The next request may go.
@@ -545,9 +505,10 @@ void Device::settle(const Completion& c, TimePoint now) {
     next_request(now);
     return;
   }
+  [[maybe_unused]] const bool confirmed = writes_.confirmed(*r, now);
+  assert(confirmed);  // carrying() found it carried
   if (!r->urgent) {
     // The next part goes now, or at the device's next write turn if a poll is due first.
-    r->deadline = now + traits_.write_timeout;
     release(now, false);
     if (kick_) kick_();
     return;
@@ -559,11 +520,8 @@ void Device::settle(const Completion& c, TimePoint now) {
 }
 
 void Device::finish(const Request* r, Outcome outcome, TimePoint now, std::string_view why) {
-  const auto it = std::find_if(requests_.begin(), requests_.end(),
-                               [r](const auto& owned) { return owned.get() == r; });
-  if (it == requests_.end()) return;
-  const std::unique_ptr<Request> owned = std::move(*it);
-  requests_.erase(it);
+  const std::unique_ptr<Request> owned = writes_.remove(r);
+  if (owned == nullptr) return;
   // Only a write that succeeded proves the PLC is there: one refused for any reason (by the
   // gateway or by the drive) or unanswered feeds nothing (docs/safety.md).
   if (outcome == Outcome::ok && owned->feeds_failsafe &&
@@ -592,7 +550,7 @@ void Device::finish(const Request* r, Outcome outcome, TimePoint now, std::strin
 // it.
 void Device::expire_requests(TimePoint now) {
   std::vector<const Request*> late;
-  for (const auto& r : requests_) {
+  for (const auto& r : writes_.requests()) {
     if (now >= r->deadline) late.push_back(r.get());
   }
   for (const Request* r : late) {
@@ -604,15 +562,13 @@ void Device::expire_requests(TimePoint now) {
 
 // A request left the queue: the next one's first part goes now, or at a write turn.
 void Device::next_request(TimePoint now) {
-  if (queue_head() == nullptr) return;
+  if (writes_.head() == nullptr) return;
   release(now, false);
   if (kick_) kick_();
 }
 
 void Device::fail_pending(Outcome why, TimePoint now, std::string_view reason) {
-  auto failing = std::move(requests_);
-  requests_.clear();
-  urgent_unsent_ = false;
+  auto failing = writes_.take_all();
   for (auto& r : failing) {
     for (Answer& a : r->answers) {
       if (!reason.empty()) a.record.why = reason;
