@@ -65,7 +65,7 @@ std::filesystem::path self_path() {
 
 // The daemon beside this program (the build tree's bin/), else the installed one.
 std::filesystem::path daemon_binary() {
-  const auto beside = self_path().parent_path() / "drivegated";
+  auto beside = self_path().parent_path() / "drivegated";
   std::error_code ec;
   if (std::filesystem::exists(beside, ec)) return beside;
   return "/usr/sbin/drivegated";
@@ -194,10 +194,11 @@ int demo(std::span<const std::string> args) {
   std::vector<std::string> argv_s = {daemon.string(), "--config", config_path.string(), "--listen",
                                      listen_text};
   if (!plugin_dir.empty()) {
-    argv_s.push_back("--plugin-dir");
+    argv_s.emplace_back("--plugin-dir");
     argv_s.push_back(plugin_dir.string());
   }
   std::vector<char*> argv;
+  argv.reserve(argv_s.size() + 1);
   for (auto& s : argv_s) argv.push_back(s.data());
   argv.push_back(nullptr);
   pid_t child = -1;

@@ -1,9 +1,8 @@
 #include "point_writes.h"
 
+#include <fmt/format.h>
 #include <pwd.h>
 #include <unistd.h>
-
-#include <fmt/format.h>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
@@ -12,10 +11,10 @@
 #include <iostream>
 
 #include "app/logging.h"
-#include "app/modbus_exception.h"
 #include "config/port_address.h"
 #include "gateway/gateway.h"
 #include "gateway/value_codec.h"
+#include "modbus/modbus_exception.h"
 #include "transport/port_lock.h"
 
 namespace drivegate::cli {
@@ -124,8 +123,8 @@ int run_point_writes(const PointWriteJob& job) {
   // Held until the writes are done; the bus below finds it ours.
   PortLock lock;
   std::string ignored;
-  const auto address = cfg.buses.empty() ? std::nullopt
-                                         : parse_port_address(cfg.buses[0].port, ignored);
+  const auto address =
+      cfg.buses.empty() ? std::nullopt : parse_port_address(cfg.buses[0].port, ignored);
   if (address && !address->network()) {
     if (lock.acquire(address->path) == PortError::in_use) {
       std::cerr << "drivegate: " << cfg.buses[0].port << " is in use by " << lock.owner()
@@ -143,8 +142,7 @@ int run_point_writes(const PointWriteJob& job) {
   const auto journal =
       make_journal_writer(make_logger("drivegate", spdlog::level::info), /*always_journal=*/true);
   History history(kDefaultHistory, &EventLog::system_ms, journal.get());
-  auto gateway =
-      Gateway::build(io, cfg, *job.plugins, log, errors, /*maintenance=*/true, &history);
+  auto gateway = Gateway::build(io, cfg, *job.plugins, log, errors, /*maintenance=*/true, &history);
   for (const auto& e : errors) std::cerr << e << "\n";
   if (!gateway) return 1;
   Device& device = *gateway->devices().front();

@@ -3,8 +3,8 @@
 
 #include "commands.h"
 #include "config/config_loader.h"
-#include "regmap/regmap_format.h"
 #include "gateway/gateway.h"
+#include "regmap/regmap_format.h"
 
 namespace drivegate::cli {
 
@@ -61,7 +61,7 @@ int regmap(std::span<const std::string> args) {
   }
   std::vector<ServedOn> listeners;
   for (const auto& l : result.config->listeners) {
-    listeners.push_back({listener_name(l), l.options.policy.word_order});
+    listeners.push_back({listener_name(l), l.policy.word_order});
   }
   std::cout << format_regmap(devices, listeners, format);
   return 0;

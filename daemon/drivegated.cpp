@@ -13,6 +13,7 @@
 #include "app/logging.h"
 #include "config/config_loader.h"
 #include "gateway/gateway.h"
+#include "modbus/options_from_config.h"
 #include "modbus/tls.h"
 
 namespace {
@@ -31,11 +32,12 @@ int check_config(const std::filesystem::path& file, const std::filesystem::path&
     drivegate::Gateway::build(io, *result.config, plugins, log, errors);
     // The TLS files as the listener will read them (permissions, PEM, key matching certificate).
     for (const auto& l : result.config->listeners) {
-      if (!l.options.policy.tls) continue;
+      if (!l.policy.tls) continue;
       std::string error;
-      if (!drivegate::modbus::make_tls_context(*l.options.policy.tls, error)) {
+      if (!drivegate::modbus::make_tls_context(drivegate::modbus::tls_options(*l.policy.tls),
+                                               error)) {
         errors.push_back(file.string() + ":" + std::to_string(l.line) + ": listener " +
-                         l.options.name() + ": " + error);
+                         drivegate::listener_name(l) + ": " + error);
       }
     }
   }
@@ -74,8 +76,8 @@ int main(int argc, char** argv) {
     case drivegate::DaemonAction::run:
       break;
   }
-  a.options.state_dir = drivegate::resolve_state_dir(a.options.state_dir,
-                                                      std::getenv("STATE_DIRECTORY"));
+  a.options.state_dir =
+      drivegate::resolve_state_dir(a.options.state_dir, std::getenv("STATE_DIRECTORY"));
   try {
     drivegate::Daemon daemon(std::move(a.options),
                              drivegate::make_logger("drivegated", a.log_level));

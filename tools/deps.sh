@@ -8,6 +8,9 @@
 #                                            prometheus, tshark, mosquitto, ser2net, pymodbus,
 #                                            openssl, Node.js), and the npm packages of the
 #                                            end-to-end tests' Sparkplug peer (tests/mqtt/peer)
+#   tools/deps.sh ci [extra-package...]      the above, plus what only CI runs: clang-14 for the
+#                                            fuzzers (tools/fuzz.sh) and clang-tidy-14
+#                                            (tools/tidy.sh)
 #   tools/deps.sh [extra-package...]         the same as `test`
 #
 # Each list is written once, here; tools/demo.sh installs `build`, tools/test.sh `test`.
@@ -21,17 +24,20 @@ libprotobuf-dev mbpoll"
 # The tests' own: GoogleTest, and the programs the end-to-end tests run beside the daemon.
 test_packages="libgtest-dev libgmock-dev openssl python3-pymodbus python3-serial-asyncio ser2net socat
 chromium prometheus tshark mosquitto mosquitto-clients"
+# CI's own: the fuzzers' compiler and runtime, and the linter.
+ci_packages="clang-14 libclang-rt-14-dev clang-tidy-14"
 
 profile="test"
 case "${1:-}" in
-  build | test)
+  build | test | ci)
     profile=$1
     shift
     ;;
 esac
 
 packages="$build_packages $*"
-if [ "$profile" = test ]; then
+[ "$profile" = ci ] && packages="$packages $ci_packages"
+if [ "$profile" != build ]; then
   packages="$packages $test_packages"
   # Node.js runs the Sparkplug peer; Debian's only where no node is on PATH already.
   command -v node >/dev/null 2>&1 || packages="$packages nodejs npm"
@@ -49,7 +55,7 @@ if [ -n "$missing" ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends $missing >/dev/null
 fi
 
-[ "$profile" = test ] || exit 0
+[ "$profile" != build ] || exit 0
 
 # The peer's node_modules, exactly as package-lock.json pins them (npm writes
 # node_modules/.package-lock.json at each install).

@@ -11,6 +11,7 @@
 #include "app/logging.h"
 #include "config/config_diff.h"
 #include "config/config_loader.h"
+#include "modbus/options_from_config.h"
 
 namespace drivegate {
 
@@ -24,42 +25,6 @@ constexpr Millis kStatusPeriod{2000};
 constexpr Millis kReloadSettleCheck{10};
 constexpr Millis kReloadSettleMargin{500};
 
-// [server] limits on SIGHUP: applied to the running server at once (modbus::Server::set_limits
-// says how).
-void reload_limits(const ServerConfig& running, const ServerConfig& next, modbus::Server& server,
-                   spdlog::logger& log) {
-  std::vector<std::string> changed;
-  if (next.max_clients != running.max_clients) {
-    changed.push_back(fmt::format("max_clients {} -> {}", running.max_clients, next.max_clients));
-  }
-  if (next.idle_timeout != running.idle_timeout) {
-    changed.push_back(fmt::format("idle_timeout_ms {} -> {}", running.idle_timeout.count(),
-                                  next.idle_timeout.count()));
-  }
-  if (next.frame_timeout != running.frame_timeout) {
-    changed.push_back(fmt::format("frame_timeout_ms {} -> {}", running.frame_timeout.count(),
-                                  next.frame_timeout.count()));
-  }
-  if (!changed.empty()) {
-    server.set_limits({next.max_clients, next.frame_timeout, next.idle_timeout});
-    log.info("[server] applied without closing a connection: {}", fmt::join(changed, ", "));
-  }
-}
-
-// Whether [mqtt] differs in anything but where it is in the file.
-bool mqtt_changed(const MqttConfig& running, MqttConfig next) {
-  next.line = running.line;
-  return !(next == running);
-}
-
-std::vector<modbus::ListenerOptions> listener_options(const std::vector<ListenerConfig>& ls) {
-  std::vector<modbus::ListenerOptions> out;
-  for (const auto& l : ls) {
-    if (l.framing == ListenerFraming::mbap) out.push_back(l.options);  // the rest: RTU / ASCII
-  }
-  return out;
-}
-
 // What a reload did to the devices and buses: one line for each change, with why (the log has
 // each, the history all of them in one entry).
 std::vector<std::string> diff_lines(const ConfigDiff& d) {
@@ -68,7 +33,8 @@ std::vector<std::string> diff_lines(const ConfigDiff& d) {
     out.push_back(fmt::format("bus {} reopened: {}", b.name, fmt::join(b.what, ", ")));
   }
   for (const auto& b : d.buses_added) out.push_back(fmt::format("bus {} added", b));
-  for (const auto& b : d.buses_removed) out.push_back(fmt::format("bus {} removed (port closed)", b));
+  for (const auto& b : d.buses_removed)
+    out.push_back(fmt::format("bus {} removed (port closed)", b));
   for (const auto& c : d.devices_changed) {
     out.push_back(
         fmt::format("device {} changed ({}): started afresh", c.name, fmt::join(c.what, ", ")));
@@ -76,23 +42,6 @@ std::vector<std::string> diff_lines(const ConfigDiff& d) {
   for (const auto& n : d.devices_added) out.push_back(fmt::format("device {} added", n));
   for (const auto& n : d.devices_removed) out.push_back(fmt::format("device {} removed", n));
   return out;
-}
-
-// What the listeners' new policies change, listener by listener (applied as they run).
-void log_listener_changes(const std::vector<ListenerConfig>& running,
-                          const std::vector<ListenerConfig>& next, spdlog::logger& log) {
-  for (const auto& n : next) {
-    // Matched by name: a serial listener by its port (their addresses are all ":0").
-    const auto r = std::find_if(running.begin(), running.end(), [&](const ListenerConfig& l) {
-      return listener_name(l) == listener_name(n);
-    });
-    if (r == running.end()) continue;
-    const auto what = changes(r->options.policy, n.options.policy);
-    if (!what.empty()) {
-      log.info("reload: listener {}: {} (open connections take it at once)", listener_name(n),
-               fmt::join(what, ", "));
-    }
-  }
 }
 
 }  // namespace
@@ -141,7 +90,7 @@ std::optional<Config> Daemon::load_config() {
     const auto network =
         std::find_if(ls.begin(), ls.end(), [](const ListenerConfig& l) { return !l.serial; });
     if (network != ls.end()) {
-      auto& first = network->options;
+      auto& first = *network;
       // The file's warning about that listener's address no longer applies: --listen moved it.
       const std::string moved = listener_name(*network) + " lets";
       std::erase_if(result.warnings,
@@ -178,11 +127,7 @@ int Daemon::run() {
   for (const auto& e : errors) log_->error("{}", e);
   if (!gateway_) return 1;
 
-  modbus::ServerOptions so;
-  so.listeners = listener_options(config_.listeners);
-  so.max_clients = config_.server.max_clients;
-  so.idle_timeout = config_.server.idle_timeout;
-  so.frame_timeout = config_.server.frame_timeout;
+  auto so = modbus::server_options(config_);
   so.identity.product = "drivegate Modbus TCP gateway";
   so.identity.version = DRIVEGATE_VERSION;
   server_ = std::make_unique<modbus::Server>(io_, clock_, backend_, so, log_);
@@ -195,8 +140,8 @@ int Daemon::run() {
   backend_.set(gateway_.get());
   modbus::DeviceIdentity serial_identity = so.identity;
   serial_identity.product = "drivegate Modbus gateway";
-  slaves_ = std::make_unique<SlaveListeners>(io_, clock_, backend_, serial_identity,
-                                             config_.server, log_);
+  slaves_ = std::make_unique<SlaveListeners>(io_, clock_, backend_, serial_identity, config_.server,
+                                             log_);
   if (!slaves_->start(config_.listeners)) {  // it logged which listener, and why
     log_->critical("Modbus RTU / ASCII listener not started");
     return 1;
@@ -211,11 +156,12 @@ int Daemon::run() {
                gateway_->devices().size(), config_.buses.size(), server_->listener_count(),
                server_->port());
   } else {
-    log_->info("serving {} devices on {} buses, no Modbus TCP listener",
-               gateway_->devices().size(), config_.buses.size());
+    log_->info("serving {} devices on {} buses, no Modbus TCP listener", gateway_->devices().size(),
+               config_.buses.size());
   }
   for (const auto& s : slaves_->serial()) {
-    history_->record(EventKind::listener, "", 0, fmt::format("Modbus listener {} started", s->name()),
+    history_->record(EventKind::listener, "", 0,
+                     fmt::format("Modbus listener {} started", s->name()),
                      {{"listener", s->name()}, {"state", "open"}});
   }
   for (const auto& t : slaves_->tcp()) {
@@ -225,9 +171,9 @@ int Daemon::run() {
   }
   for (std::size_t i = 0; i < server_->listener_count(); ++i) {
     history_->record(EventKind::listener, "", 0,
-                    fmt::format("Modbus listener {} open on port {}",
-                                server_->listener(i).name(), server_->port(i)),
-                    {{"listener", server_->listener(i).name()}, {"state", "open"}});
+                     fmt::format("Modbus listener {} open on port {}", server_->listener(i).name(),
+                                 server_->port(i)),
+                     {{"listener", server_->listener(i).name()}, {"state", "open"}});
   }
   wait_signal();
   notifier_.ready(status_line());
@@ -264,6 +210,8 @@ void Daemon::reload() {
   notifier_.reloading();
   log_->info("SIGHUP: re-reading {}", options_.config.string());
   auto config = load_config();
+  // What this reload applies now and what waits for a restart (config/config_diff.h).
+  const ReloadPlan plan = config ? plan_reload(config_, *config) : ReloadPlan{};
   std::vector<std::string> errors;
   std::unique_ptr<Gateway> next;
   if (config) next = Gateway::build(io_, *config, plugins_, log_, errors, false, history_.get());
@@ -271,53 +219,49 @@ void Daemon::reload() {
   // The listeners' new policies, TLS files re-read; nothing changes if any of it fails.
   std::vector<std::string> restart;
   if (next) {
-    const auto listeners = server_->reload_listeners(listener_options(config->listeners));
+    const auto listeners = server_->reload_listeners(modbus::tcp_listeners(config->listeners));
     for (const auto& e : listeners.errors) log_->error("listener {}", e);
     if (!listeners.errors.empty()) next.reset();
-    auto restart_listeners = listeners.restart_needed;
-    if (!listeners.errors.empty() || !next) {
-      // nothing changes
-    } else {
-      for (auto& s : slaves_->reload(config->listeners)) restart_listeners.push_back(std::move(s));
+    auto restart_listeners = plan.tcp_listeners_restart;
+    if (next) {  // nothing changes otherwise
+      slaves_->reload(config->listeners);
+      restart_listeners.insert(restart_listeners.end(), plan.serial_listeners_restart.begin(),
+                               plan.serial_listeners_restart.end());
     }
     for (const auto& l : restart_listeners) {
       log_->warn("listener {}: takes effect at the next restart (listening sockets are bound once)",
                  l);
       restart.push_back("listener " + l);
       history_->record(EventKind::listener, "", 0,
-                      "listener " + l + ": takes effect at the next restart",
-                      {{"listener", l}, {"state", "restart needed"}});
+                       "listener " + l + ": takes effect at the next restart",
+                       {{"listener", l}, {"state", "restart needed"}});
     }
-    if (next) log_listener_changes(config_.listeners, config->listeners, *log_);
-    if (!restart_listeners.empty()) config->listeners = config_.listeners;
+    if (next) {
+      for (const auto& c : plan.listener_policies) {
+        log_->info("reload: listener {}: {} (open connections take it at once)", c.name,
+                   fmt::join(c.what, ", "));
+      }
+    }
   }
   if (!next) {
     log_->error("new configuration refused: still running the previous one");
     std::string why = errors.empty() ? std::string("see the journal") : errors.front();
     history_->record(EventKind::reload, "", 0,
-                    "reload refused, still running the previous configuration: " + why,
-                    {{"result", "refused"}, {"why", why}});
+                     "reload refused, still running the previous configuration: " + why,
+                     {{"result", "refused"}, {"why", why}});
     notifier_.ready(status_line());
     return;
   }
-  reload_limits(config_.server, config->server, *server_, *log_);
-  if (config->http.enabled != config_.http.enabled ||
-      config->http.listen.host != config_.http.listen.host ||
-      config->http.listen.port != config_.http.listen.port ||
-      config->http.allow != config_.http.allow || config->http.capture != config_.http.capture ||
-      config->http.requests_per_s != config_.http.requests_per_s) {
-    log_->warn("[http] changes take effect at the next restart");
-    restart.emplace_back("[http]");
-    config->http = config_.http;
+  if (!plan.server_limits.empty()) {
+    server_->set_limits(modbus::server_limits(config->server));
+    log_->info("[server] applied without closing a connection: {}",
+               fmt::join(plan.server_limits, ", "));
   }
-  if (config->history.events != config_.history.events ||
-      config->history.commands != config_.history.commands ||
-      config->history.refusals != config_.history.refusals ||
-      config->history.trend_seconds != config_.history.trend_seconds) {
-    log_->warn("[history] changes take effect at the next restart");
-    restart.emplace_back("[history]");
+  for (const auto& section : plan.sections_restart) {
+    log_->warn("{} changes take effect at the next restart", section);
+    restart.push_back(section);
   }
-  config->history = config_.history;
+  plan.keep_what_waits(config_, *config);
   // A device the new configuration replaces or removes first settles the writes it has in
   // flight, each with what its drive says (docs/safety.md, section 2): the swap waits for them,
   // at most until the deadline of a write in flight and of a stop sent meanwhile.
@@ -350,7 +294,7 @@ void Daemon::finish_reload() {
 
 void Daemon::swap_gateway(Config next_config, std::unique_ptr<Gateway> next,
                           std::vector<std::string> restart) {
-  const bool mqtt_reconfigured = mqtt_changed(config_.mqtt, next_config.mqtt);
+  const bool mqtt_reconfigured = plan_reload(config_, next_config).mqtt_session;
   // Unchanged devices and buses move over running; the changed buses close before the new ones
   // open their ports.
   const ConfigDiff diff = next->changes_from(*gateway_);  // profiles' content included
@@ -371,13 +315,13 @@ void Daemon::swap_gateway(Config next_config, std::unique_ptr<Gateway> next,
   restart_needed_ = std::move(restart);
   const std::vector<std::string> changed = diff_lines(diff);
   for (const auto& line : changed) log_->info("reload: {}", line);
-  history_->record(
-      EventKind::reload, "", 0,
-      changed.empty() ? std::string("configuration reloaded: no device or bus changed")
-                      : fmt::format("configuration reloaded: {}", fmt::join(changed, "; ")),
-      {{"result", "ok"},
-       {"kept", std::to_string(diff.devices_kept.size())},
-       {"restart_needed", fmt::format("{}", fmt::join(restart_needed_, ", "))}});
+  history_->record(EventKind::reload, "", 0,
+                   changed.empty()
+                       ? std::string("configuration reloaded: no device or bus changed")
+                       : fmt::format("configuration reloaded: {}", fmt::join(changed, "; ")),
+                   {{"result", "ok"},
+                    {"kept", std::to_string(diff.devices_kept.size())},
+                    {"restart_needed", fmt::format("{}", fmt::join(restart_needed_, ", "))}});
   log_->info("configuration reloaded: {} devices on {} buses; {} kept as they run{}{}{}",
              gateway_->devices().size(), config_.buses.size(), diff.devices_kept.size(),
              diff.devices_kept.empty() ? "" : ": ", fmt::join(diff.devices_kept, ", "),
@@ -461,7 +405,7 @@ void Daemon::record_mqtt_state() {
   std::string state = s.session + (s.connected ? "" : " (broker not connected)");
   if (state == mqtt_state_) return;
   history_->record(EventKind::mqtt, "", 0, "MQTT session: " + state,
-                  {{"session", s.session}, {"connected", s.connected ? "true" : "false"}});
+                   {{"session", s.session}, {"connected", s.connected ? "true" : "false"}});
   mqtt_state_ = std::move(state);
 }
 

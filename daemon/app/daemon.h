@@ -15,19 +15,19 @@
 #include <optional>
 #include <string>
 
-#include "backend_switch.h"
 #include "config/config.h"
-#include "plugin/plugins.h"
 #include "gateway/gateway.h"
 #include "history/history.h"
-#include "trend_sampler.h"
 #include "http/http_server.h"
+#include "modbus/backend_switch.h"
 #include "modbus/server.h"
+#include "modbus/slave_listeners.h"
 #include "mqtt/northbound.h"
 #include "net/clock.h"
-#include "slave_listeners.h"
+#include "plugin/plugins.h"
 #include "status_content.h"
 #include "systemd_notifier.h"
+#include "trend_sampler.h"
 
 namespace drivegate {
 

@@ -5,15 +5,15 @@
 
 #include <memory>
 
-#include "status/status_view.h"
 #include "gateway/gateway.h"
 #include "history/history.h"
 #include "history/history_json.h"
 #include "http/content.h"
 #include "http/http_server.h"
 #include "modbus/server.h"
+#include "modbus/slave_listeners.h"
 #include "mqtt/northbound.h"
-#include "slave_listeners.h"
+#include "status/status_view.h"
 
 namespace drivegate {
 

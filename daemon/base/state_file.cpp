@@ -1,11 +1,11 @@
 #include "base/state_file.h"
 
 #include <fcntl.h>
-#include <stdio.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>  // renameat, renameat2 and RENAME_NOREPLACE (glibc: _GNU_SOURCE)
 #include <cstring>
 #include <string>
 

@@ -13,8 +13,7 @@ constexpr Millis kSilenceCheck{1000};
 
 Bus::Bus(asio::io_context& io, BusConfig config, std::vector<Station*> stations,
          std::shared_ptr<spdlog::logger> log)
-    : io_(io),
-      config_(std::move(config)),
+    : config_(std::move(config)),
       log_(std::move(log)),
       engine_(config_, std::move(stations), *this, *this, log_),
       transport_(make_transport(io, config_, log_)),

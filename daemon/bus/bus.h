@@ -12,8 +12,8 @@
 #include <memory>
 #include <vector>
 
-#include "config/config.h"
 #include "bus/bus_engine.h"
+#include "config/config.h"
 #include "transport/transport.h"
 
 namespace drivegate {
@@ -54,7 +54,6 @@ class Bus final : public std::enable_shared_from_this<Bus>, private BusClock, pr
   void read_more();
   void check_silence();
 
-  boost::asio::io_context& io_;
   BusConfig config_;
   std::shared_ptr<spdlog::logger> log_;
   BusEngine engine_;

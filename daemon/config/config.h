@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -14,8 +16,9 @@
 
 #include "drivegate/adapter.h"
 #include "gateway/session.h"
-#include "modbus/server_options.h"
-#include "mqtt/sparkplug.h"
+#include "net/address_rate.h"
+#include "net/allow_list.h"
+#include "net/listen_host.h"
 
 namespace drivegate {
 
@@ -31,7 +34,32 @@ struct ListenAddress {
   std::uint16_t port = 0;
 };
 
-// One [[listener]], or the one listener [server] listen declares.
+// A listener's Modbus/TCP Security (tls = { cert, key, ca } and roles): the files its TLS
+// context is made of, and the access level each role a client certificate carries gets.
+// Role names, as client certificates carry them, to the access level each gets.
+using TlsRoles = std::map<std::string, AccessLevel, std::less<>>;
+
+struct ListenerTlsConfig {
+  std::filesystem::path cert;  // PEM: the server's certificate (chain)
+  std::filesystem::path key;   // PEM: its private key
+  std::filesystem::path ca;    // PEM: the CA(s) a client certificate must be signed by
+  TlsRoles roles;              // a role not in here, or no role, gets the listener's access
+  friend bool operator==(const ListenerTlsConfig&, const ListenerTlsConfig&) = default;
+};
+
+// Who a listener serves and what they may do: what a reload applies to a running listener.
+struct ListenerPolicyConfig {
+  net::AllowList allow;  // client addresses served; empty: every address
+  // Plain TCP: every client's level. TLS: the level of a client whose certificate carries no
+  // role in tls->roles.
+  AccessLevel access = AccessLevel::maintain;
+  WordOrder word_order = WordOrder::big;
+  std::optional<ListenerTlsConfig> tls;
+  std::optional<std::size_t> max_clients;  // its own connection slots; none: [server]'s
+  // TLS handshakes one client address may start (tls_handshakes_per_s).
+  net::RateLimit handshakes = net::RateLimit::per_second_in_bursts_of_two(5);
+  friend bool operator==(const ListenerPolicyConfig&, const ListenerPolicyConfig&) = default;
+};
 
 // [http]: the status page, its JSON and /metrics. Off unless the file has [http].
 struct HttpConfig {
@@ -70,6 +98,9 @@ struct MqttBroker {
 
 inline constexpr std::size_t kMaxBrokers = 8;
 
+// The form of the primary host's STATE message (primary_host_state): Sparkplug 3.0's, or 2.2's.
+enum class MqttHostState : std::uint8_t { v3_0, v2_2 };
+
 struct MqttConfig {
   bool enabled = false;
   // In the order they are tried: the edge node walks to the next when one fails (docs/mqtt.md).
@@ -78,7 +109,7 @@ struct MqttConfig {
   std::string group_id;
   std::string edge_node_id;
   std::string primary_host_id;  // empty: publish without waiting for a primary host
-  sparkplug::HostStateForm primary_host_state = sparkplug::HostStateForm::v3_0;  // its STATE's
+  MqttHostState primary_host_state = MqttHostState::v3_0;  // its STATE's form
   std::string username;
   std::filesystem::path password_file;                   // its first line is the password
   std::string password;                                  // read from password_file at load
@@ -135,8 +166,14 @@ constexpr std::string_view to_string(WriteReply w) {
 // could ever be answered.
 inline constexpr Millis kMinReplyTimeout{20};
 
+// One [[listener]], or the one listener [server] listen declares.
 struct ListenerConfig {
-  modbus::ListenerOptions options;  // a TCP listener's (address, policy); a serial one's policy
+  // A TCP listener's address: a numeric IPv4 or IPv6 address ("[::1]" accepted), "localhost",
+  // or "" / "*" for every interface (net/listen_host.h); port 0: an ephemeral one. A serial
+  // listener's are "" and 0.
+  std::string host = "*";
+  std::uint16_t port = 502;
+  ListenerPolicyConfig policy;
   ListenerFraming framing = ListenerFraming::mbap;
   // A serial listener (`port` instead of `address`): the master's line, with a bus's settings.
   std::optional<BusConfig> serial;
@@ -160,13 +197,14 @@ struct ListenerConfig {
 // name per listener: a Modbus TCP one by its address ("0.0.0.0:502", "[::]:802 (TLS)"), one of RTU
 // or ASCII frames on TCP by its address and framing ("0.0.0.0:5020 (rtu over tcp)"), a serial
 // one by its port and framing ("serial /dev/ttyS1 (rtu)"), as the listeners name themselves in
-// the log (slave/serial_listener.cpp, slave/rtu_tcp_listener.cpp).
+// the log (modbus/serial_listener.cpp, modbus/rtu_tcp_listener.cpp).
 inline std::string listener_name(const ListenerConfig& l) {
   if (l.serial) return "serial " + l.serial->port + " (" + std::string(to_string(l.framing)) + ")";
   if (l.framing != ListenerFraming::mbap) {
-    return l.options.name() + " (" + std::string(to_string(l.framing)) + " over tcp)";
+    return net::listen_name(l.host, l.port, false) + " (" + std::string(to_string(l.framing)) +
+           " over tcp)";
   }
-  return l.options.name();
+  return net::listen_name(l.host, l.port, l.policy.tls.has_value());
 }
 
 // What the gateway does to a drive whose PLC stopped writing (docs/safety.md).

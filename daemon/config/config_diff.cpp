@@ -98,7 +98,7 @@ std::vector<std::string> changes(const DeviceConfig& a, const DeviceConfig& b) {
   return out;
 }
 
-std::vector<std::string> changes(const modbus::ListenerPolicy& a, const modbus::ListenerPolicy& b) {
+std::vector<std::string> changes(const ListenerPolicyConfig& a, const ListenerPolicyConfig& b) {
   std::vector<std::string> out;
   note(out, "access", to_string(a.access), to_string(b.access));
   note(out, "word_order", to_string(a.word_order), to_string(b.word_order));
@@ -151,6 +151,123 @@ ConfigDiff diff_config(const Config& running, const Config& next) {
     if (by_name(next.buses, r.name) == nullptr) d.buses_removed.push_back(r.name);
   }
   return d;
+}
+
+bool same_place(const ListenerConfig& a, const ListenerConfig& b) {
+  if (a.framing != b.framing) return false;
+  if (a.framing == ListenerFraming::mbap) {
+    return a.host == b.host && a.port == b.port &&
+           a.policy.tls.has_value() == b.policy.tls.has_value();
+  }
+  if (a.ascii_timeout != b.ascii_timeout || a.rx_latency != b.rx_latency) return false;
+  if (a.serial || b.serial) {
+    if (!a.serial || !b.serial) return false;
+    BusConfig x = *a.serial;
+    x.line = b.serial->line;  // where it is written in the file is no change
+    return x == *b.serial;
+  }
+  return a.host == b.host && a.port == b.port;
+}
+
+namespace {
+
+bool mbap(const ListenerConfig& l) {
+  return l.framing == ListenerFraming::mbap;
+}
+
+// The Modbus TCP listeners a restart changes: each new one no running one is, then each running
+// one no new one is.
+std::vector<std::string> tcp_restart(const std::vector<ListenerConfig>& running,
+                                     const std::vector<ListenerConfig>& next) {
+  std::vector<std::string> out;
+  const auto in = [](const std::vector<ListenerConfig>& list, const ListenerConfig& l) {
+    return std::any_of(list.begin(), list.end(),
+                       [&](const ListenerConfig& x) { return mbap(x) && same_place(x, l); });
+  };
+  for (const auto& n : next) {
+    if (mbap(n) && !in(running, n)) out.push_back(listener_name(n));
+  }
+  for (const auto& r : running) {
+    if (mbap(r) && !in(next, r)) out.push_back(listener_name(r) + " (removed)");
+  }
+  return out;
+}
+
+// The RTU / ASCII listeners a restart changes: each running one (those on serial lines first)
+// no new one is, then each new one no running one is.
+std::vector<std::string> serial_restart(const std::vector<ListenerConfig>& running,
+                                        const std::vector<ListenerConfig>& next) {
+  std::vector<std::string> out;
+  std::vector<bool> matched(next.size(), false);
+  for (const bool on_line : {true, false}) {
+    for (const auto& r : running) {
+      if (mbap(r) || r.serial.has_value() != on_line) continue;
+      bool found = false;
+      for (std::size_t i = 0; i < next.size() && !found; ++i) {
+        if (!mbap(next[i]) && same_place(next[i], r)) found = matched[i] = true;
+      }
+      if (!found) out.push_back(listener_name(r) + " (removed or moved)");
+    }
+  }
+  for (std::size_t i = 0; i < next.size(); ++i) {
+    if (!mbap(next[i]) && !matched[i]) out.push_back(listener_name(next[i]) + " (added)");
+  }
+  return out;
+}
+
+std::vector<std::string> limit_changes(const ServerConfig& a, const ServerConfig& b) {
+  std::vector<std::string> out;
+  note(out, "max_clients", a.max_clients, b.max_clients);
+  note(out, "idle_timeout_ms", a.idle_timeout.count(), b.idle_timeout.count());
+  note(out, "frame_timeout_ms", a.frame_timeout.count(), b.frame_timeout.count());
+  return out;
+}
+
+bool same_http(const HttpConfig& a, const HttpConfig& b) {
+  return a.enabled == b.enabled && a.listen.host == b.listen.host &&
+         a.listen.port == b.listen.port && a.allow == b.allow && a.capture == b.capture &&
+         a.requests_per_s == b.requests_per_s;
+}
+
+bool same_history(const HistoryConfig& a, const HistoryConfig& b) {
+  return a.events == b.events && a.commands == b.commands && a.refusals == b.refusals &&
+         a.trend_seconds == b.trend_seconds;
+}
+
+}  // namespace
+
+ReloadPlan plan_reload(const Config& running, const Config& next) {
+  ReloadPlan p;
+  p.tcp_listeners_restart = tcp_restart(running.listeners, next.listeners);
+  p.serial_listeners_restart = serial_restart(running.listeners, next.listeners);
+  for (const auto& n : next.listeners) {
+    // Matched by name: a serial listener by its port (their addresses are all ":0").
+    const auto r =
+        std::find_if(running.listeners.begin(), running.listeners.end(),
+                     [&](const ListenerConfig& l) { return listener_name(l) == listener_name(n); });
+    if (r == running.listeners.end()) continue;
+    if (auto what = changes(r->policy, n.policy); !what.empty()) {
+      p.listener_policies.push_back({listener_name(n), std::move(what)});
+    }
+  }
+  p.server_limits = limit_changes(running.server, next.server);
+  if (!same_http(running.http, next.http)) p.sections_restart.emplace_back("[http]");
+  if (!same_history(running.history, next.history)) p.sections_restart.emplace_back("[history]");
+  MqttConfig mqtt = next.mqtt;
+  mqtt.line = running.mqtt.line;  // where it is in the file is no change
+  p.mqtt_session = !(mqtt == running.mqtt);
+  return p;
+}
+
+void ReloadPlan::keep_what_waits(const Config& running, Config& next) const {
+  if (!tcp_listeners_restart.empty() || !serial_listeners_restart.empty()) {
+    next.listeners = running.listeners;
+  }
+  if (std::find(sections_restart.begin(), sections_restart.end(), "[http]") !=
+      sections_restart.end()) {
+    next.http = running.http;
+  }
+  next.history = running.history;  // equal, or waiting for a restart
 }
 
 }  // namespace drivegate

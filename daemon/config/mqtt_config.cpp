@@ -275,7 +275,7 @@ void read_mqtt(const toml::table& root, Config& cfg, Diagnostics& diag) {
   if (const auto v = r.string("primary_host_version", false)) {
     // Which STATE the primary host publishes: 3.0's JSON (the default) or 2.2's text.
     if (*v == "2.2") {
-      m.primary_host_state = sparkplug::HostStateForm::v2_2;
+      m.primary_host_state = MqttHostState::v2_2;
     } else if (*v != "3.0") {
       diag.error(r.node("primary_host_version"), "mqtt.primary_host_version",
                  "must be \"3.0\" (spBv1.0/STATE/<id>, JSON) or \"2.2\" (STATE/<id>, ONLINE / "

@@ -50,9 +50,9 @@ constexpr const char* kListenForm = "must be \"host:port\" (e.g. \"0.0.0.0:502\"
 // The listener [server] listen declares (or the default one): what drivegate always served.
 ListenerConfig server_listener(ListenAddress at, int line) {
   ListenerConfig l;
-  l.options.host = std::move(at.host);
-  l.options.port = at.port;
-  l.options.policy.access = AccessLevel::maintain;
+  l.host = std::move(at.host);
+  l.port = at.port;
+  l.policy.access = AccessLevel::maintain;
   l.from_server_listen = true;
   l.line = line;
   return l;
@@ -98,8 +98,8 @@ net::AllowList read_allow(const toml::node& n, const std::string& key, Diagnosti
   return allow;
 }
 
-std::optional<modbus::TlsOptions> read_tls(const toml::node& n, const std::string& key,
-                                           Diagnostics& diag) {
+std::optional<ListenerTlsConfig> read_tls(const toml::node& n, const std::string& key,
+                                          Diagnostics& diag) {
   const auto* t = n.as_table();
   if (t == nullptr) {
     diag.error(&n, key, "must be a table: { cert = \"...\", key = \"...\", ca = \"...\" }");
@@ -107,7 +107,7 @@ std::optional<modbus::TlsOptions> read_tls(const toml::node& n, const std::strin
   }
   TableReader r(*t, key, diag);
   r.expect({"cert", "key", "ca"});
-  modbus::TlsOptions tls;
+  ListenerTlsConfig tls;
   const auto cert = r.string("cert", true);
   const auto private_key = r.string("key", true);
   const auto ca = r.string("ca", true);
@@ -118,8 +118,8 @@ std::optional<modbus::TlsOptions> read_tls(const toml::node& n, const std::strin
   return tls;
 }
 
-modbus::RoleMap read_roles(const toml::node& n, const std::string& key, Diagnostics& diag) {
-  modbus::RoleMap roles;
+TlsRoles read_roles(const toml::node& n, const std::string& key, Diagnostics& diag) {
+  TlsRoles roles;
   const auto* t = n.as_table();
   if (t == nullptr) {
     diag.error(&n, key, "must be a table of role = access level, e.g. { operator = \"operate\" }");
@@ -164,9 +164,10 @@ void read_framing(TableReader& r, ListenerConfig& l, Diagnostics& diag) {
     if (i) {
       l.write_reply = static_cast<WriteReply>(*i);
     } else {
-      diag.error(n, r.qualified("write_reply"),
-                 "must be " + one_of(kWriteReplyNames) +
-                     " (answer a write when the drive took it, or once it is validated and queued)");
+      diag.error(
+          n, r.qualified("write_reply"),
+          "must be " + one_of(kWriteReplyNames) +
+              " (answer a write when the drive took it, or once it is validated and queued)");
     }
   }
   l.broadcast = r.boolean("broadcast").value_or(false);
@@ -207,8 +208,7 @@ std::optional<std::string> first_line_key(TableReader& r) {
 
 // A serial listener: `port` and the line's settings, as a bus's (config/line_config.h). Modbus
 // serial lines default to even parity (Serial Line 2.5.1), and ASCII to 7 data bits (2.5.2).
-void read_serial(TableReader& r, const std::string& prefix, ListenerConfig& l,
-                 Diagnostics& diag) {
+void read_serial(TableReader& r, const std::string& prefix, ListenerConfig& l, Diagnostics& diag) {
   if (r.node("address") != nullptr) {
     diag.error(r.node("address"), r.qualified("address"),
                "give address (a TCP listener) or port (a serial one), not both");
@@ -235,22 +235,39 @@ void read_serial(TableReader& r, const std::string& prefix, ListenerConfig& l,
                "RTU frames are 8 data bits (Serial Line 2.5.1)");
   }
   line.name = "listener " + line.port;
-  l.options.port = 0;
-  l.options.host = "";
+  l.port = 0;
+  l.host = "";
   l.serial = std::move(line);
 }
 
 ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostics& diag) {
   const std::string prefix = "listener[" + std::to_string(index) + "]";
   TableReader r(t, prefix, diag);
-  r.expect({"address", "allow", "access", "word_order", "tls", "roles", "max_clients",
-            "tls_handshakes_per_s", "framing", "write_reply", "broadcast", "ascii_timeout_ms",
+  r.expect({"address",
+            "allow",
+            "access",
+            "word_order",
+            "tls",
+            "roles",
+            "max_clients",
+            "tls_handshakes_per_s",
+            "framing",
+            "write_reply",
+            "broadcast",
+            "ascii_timeout_ms",
             "reply_timeout_ms",
-            "port", "baud", "parity", "data_bits", "stop_bits", "rs485", "reopen_max_ms", "echo",
+            "port",
+            "baud",
+            "parity",
+            "data_bits",
+            "stop_bits",
+            "rs485",
+            "reopen_max_ms",
+            "echo",
             "rx_latency_ms"});
   ListenerConfig l;
   l.line = line_of(t);
-  auto& policy = l.options.policy;
+  auto& policy = l.policy;
   policy.access = AccessLevel::read;  // nothing may write unless the file says so
   read_framing(r, l, diag);
   const bool serial = r.node("port") != nullptr;
@@ -267,8 +284,8 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
                      "\" is not a numeric IPv4 or IPv6 address (no name lookup: "
                      "give the address of the interface, or 0.0.0.0 / [::] for all)");
     } else if (at) {
-      l.options.host = at->host;
-      l.options.port = at->port;
+      l.host = at->host;
+      l.port = at->port;
     } else {
       diag.error(r.node("address"), r.qualified("address"),
                  std::string(kListenForm) + ", got \"" + *address + "\"");
@@ -320,7 +337,7 @@ ListenerConfig read_listener(const toml::table& t, std::size_t index, Diagnostic
 // Whoever can reach this listener may write: worth a line in --check-config and the journal.
 void warn_open_writes(const ListenerConfig& l, Diagnostics& diag) {
   if (l.serial) return;  // its line's master is whoever the wiring says
-  const auto& p = l.options.policy;
+  const auto& p = l.policy;
   const bool can_write =
       p.access != AccessLevel::read ||
       (p.tls && std::any_of(p.tls->roles.begin(), p.tls->roles.end(),
@@ -391,10 +408,10 @@ void read_listeners(const toml::table& root, Config& cfg, Diagnostics& diag) {
   }
   if (cfg.listeners.empty()) cfg.listeners.push_back(server_listener({"0.0.0.0", 502}, 0));
   for (std::size_t i = 0; i < cfg.listeners.size(); ++i) {
-    const auto& a = cfg.listeners[i].options;
+    const auto& a = cfg.listeners[i];
     for (std::size_t j = 0; j < i && !cfg.listeners[i].serial; ++j) {
       if (cfg.listeners[j].serial) continue;
-      const auto& b = cfg.listeners[j].options;
+      const auto& b = cfg.listeners[j];
       // Two listeners on one port clash when they name the same address, or when either is
       // every address ([::] is dual stack: it takes the IPv4 port too).
       if (a.port == b.port && a.port != 0 &&
@@ -499,9 +516,8 @@ void read_http(const toml::table& root, Config& cfg, Diagnostics& diag) {
   }
   for (const auto& l : cfg.listeners) {
     if (l.serial) continue;
-    if (l.options.port == cfg.http.listen.port && l.options.port != 0 &&
-        (l.options.host == cfg.http.listen.host || wildcard(l.options.host) ||
-         wildcard(cfg.http.listen.host))) {
+    if (l.port == cfg.http.listen.port && l.port != 0 &&
+        (l.host == cfg.http.listen.host || wildcard(l.host) || wildcard(cfg.http.listen.host))) {
       diag.error(r.node("listen"), "http.listen",
                  "overlaps the Modbus listener on line " + std::to_string(l.line));
     }

@@ -5,7 +5,7 @@
 #include <optional>
 
 #include "drivegate/crc.h"
-#include "modbus/serial_codec.h"
+#include "modbus_serial/serial_codec.h"
 
 namespace drivegate {
 namespace {

@@ -1,7 +1,7 @@
 // The gateway: every configured device and bus, served to the northbounds by unit id. Each Modbus
 // unit id is one device. Reads come from the register image; writes go to the device's driver and
 // are answered when the drive confirmed them. The Modbus server reaches it through
-// app/backend_switch.h, which says its outcomes as Modbus exceptions.
+// modbus/backend_switch.h, which says its outcomes as Modbus exceptions.
 #pragma once
 
 #include <spdlog/logger.h>

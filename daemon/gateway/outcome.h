@@ -1,6 +1,6 @@
 // What came of a read or a write the gateway was asked for, in the gateway's terms. Each
 // northbound says it in its own words, in one place: the Modbus server as an exception code
-// (app/modbus_exception.h), the MQTT northbound as a DCMD's result (mqtt/command_result.h).
+// (modbus/modbus_exception.h), the MQTT northbound as a DCMD's result (mqtt/command_result.h).
 //
 // Header-only, in the CMake target dg_gateway_api with session.h (who asks).
 #pragma once

@@ -1,7 +1,7 @@
 // What the Modbus TCP server asks of the gateway. The server owns framing, dispatch and
 // connections; the backend owns the register image and the devices. Reads are synchronous (they
 // are served from memory and never wait on a serial bus); writes complete later, when the device
-// confirmed them or failed to. The daemon's backend is app/backend_switch.h: the gateway, its
+// confirmed them or failed to. The daemon's backend is modbus/backend_switch.h: the gateway, its
 // outcomes (gateway/outcome.h) answered as these exceptions.
 #pragma once
 

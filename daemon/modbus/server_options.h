@@ -11,6 +11,7 @@
 
 #include "net/address_rate.h"
 #include "net/allow_list.h"
+#include "net/listen_host.h"
 #include "pdu.h"
 #include "tls.h"
 
@@ -53,8 +54,7 @@ struct ListenerOptions {
 
   // "host:port" (and " (TLS)"), as the log names it.
   [[nodiscard]] std::string name() const {
-    return (host.find(':') != std::string::npos && host.front() != '[' ? "[" + host + "]" : host) +
-           ":" + std::to_string(port) + (policy.tls ? " (TLS)" : "");
+    return net::listen_name(host, port, policy.tls.has_value());
   }
 };
 

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "drivegate/bytes.h"
-#include "serial_codec.h"
+#include "modbus_serial/serial_codec.h"
 
 namespace drivegate::modbus {
 

@@ -1,8 +1,8 @@
 // A DCMD's outcome as `Command/Last Result` publishes it (docs/mqtt.md, "Commands"): "ok", or the
 // Modbus exception, code and name, that the same write gets from a Modbus client's listener, so a
 // host that watches both sees one vocabulary. Written out here, since the MQTT side does not link
-// the Modbus server; tests/app/outcome_test.cpp holds every text to the Modbus edge's table
-// (app/modbus_exception.h).
+// the Modbus server; tests/modbus/outcome_test.cpp holds every text to the Modbus edge's table
+// (modbus/modbus_exception.h).
 #pragma once
 
 #include <array>

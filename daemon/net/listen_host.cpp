@@ -16,4 +16,9 @@ std::optional<ListenHost> parse_listen_host(std::string_view host) {
   return ListenHost{address, false};
 }
 
+std::string listen_name(const std::string& host, std::uint16_t port, bool tls) {
+  return (host.find(':') != std::string::npos && host.front() != '[' ? "[" + host + "]" : host) +
+         ":" + std::to_string(port) + (tls ? " (TLS)" : "");
+}
+
 }  // namespace drivegate::net

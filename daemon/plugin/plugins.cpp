@@ -151,7 +151,7 @@ std::filesystem::path default_plugin_dir() {
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (!ec) {
     // In the build tree the programs sit in <build>/bin and the plugins in <build>/adapters.
-    const auto build_dir = exe.parent_path().parent_path() / "adapters";
+    auto build_dir = exe.parent_path().parent_path() / "adapters";
     if (std::filesystem::exists(build_dir / ".drivegate-build-tree", ec)) return build_dir;
   }
   return DRIVEGATE_PLUGIN_INSTALL_DIR;

@@ -31,7 +31,7 @@ void keep_alive(tcp::socket& s) {
 }  // namespace
 
 TcpTransport::TcpTransport(asio::io_context& io, std::string host, std::uint16_t port)
-    : io_(io), host_(std::move(host)), port_(port), resolver_(io), socket_(io) {}
+    : host_(std::move(host)), port_(port), resolver_(io), socket_(io) {}
 
 void TcpTransport::open(Done done) {
   // Name resolution is asynchronous (Asio runs getaddrinfo off the event loop), so a slow DNS

@@ -27,7 +27,6 @@ class TcpTransport final : public Transport {
   [[nodiscard]] std::string endpoint() const;
 
  private:
-  boost::asio::io_context& io_;
   std::string host_;
   std::uint16_t port_;
   boost::asio::ip::tcp::resolver resolver_;

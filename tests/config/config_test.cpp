@@ -9,9 +9,9 @@
 #include <fstream>
 #include <limits>
 
-#include "plugin/adapter_options.h"
 #include "config/config_loader.h"
 #include "fake_adapter.h"
+#include "plugin/adapter_options.h"
 
 namespace drivegate {
 namespace {
@@ -79,10 +79,10 @@ TEST_F(ConfigTest, GoodFileLoadsWithAdapterDefaults) {
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   const Config& c = *r.config;
   ASSERT_EQ(c.listeners.size(), 1u);  // [server] listen: one plain listener, as always
-  EXPECT_EQ(c.listeners[0].options.host, "127.0.0.1");
-  EXPECT_EQ(c.listeners[0].options.port, 1502);
-  EXPECT_EQ(c.listeners[0].options.policy.access, AccessLevel::maintain);
-  EXPECT_TRUE(c.listeners[0].options.policy.allow.empty());
+  EXPECT_EQ(c.listeners[0].host, "127.0.0.1");
+  EXPECT_EQ(c.listeners[0].port, 1502);
+  EXPECT_EQ(c.listeners[0].policy.access, AccessLevel::maintain);
+  EXPECT_TRUE(c.listeners[0].policy.allow.empty());
   EXPECT_TRUE(c.listeners[0].from_server_listen);
   EXPECT_EQ(c.server.max_clients, 8u);
   ASSERT_EQ(c.buses.size(), 1u);

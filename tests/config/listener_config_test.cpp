@@ -1,13 +1,12 @@
 // [[listener]] in drivegate.toml: what is read, the defaults (read-only unless the file says
 // otherwise), every mistake named with its line, and the warning for a listener anyone may write
 // through.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 
 #include "config/config_loader.h"
 #include "fake_adapter.h"
@@ -67,7 +66,7 @@ roles = { viewer = "read", operator = "operate", engineer = "maintain" }
   const auto& ls = r.config->listeners;
   ASSERT_EQ(ls.size(), 2u);
   EXPECT_EQ(r.config->server.max_clients, 9u);
-  const auto& plc = ls[0].options;
+  const auto& plc = ls[0];
   EXPECT_EQ(plc.host, "0.0.0.0");
   EXPECT_EQ(plc.port, 502);
   EXPECT_EQ(ls[0].line, 5);
@@ -78,7 +77,7 @@ roles = { viewer = "read", operator = "operate", engineer = "maintain" }
   EXPECT_EQ(plc.policy.access, AccessLevel::operate);
   EXPECT_EQ(plc.policy.word_order, WordOrder::little);
   EXPECT_FALSE(plc.policy.tls);
-  const auto& secure = ls[1].options;
+  const auto& secure = ls[1];
   EXPECT_EQ(secure.host, "::");
   EXPECT_EQ(secure.port, 802);
   EXPECT_EQ(secure.policy.access, AccessLevel::read);  // the default
@@ -96,8 +95,8 @@ roles = { viewer = "read", operator = "operate", engineer = "maintain" }
 TEST_F(ListenerConfig, AListenerThatSaysNothingElseIsReadOnlyAndUnwarned) {
   const auto r = parse("[[listener]]\naddress = \"127.0.0.1:1502\"\n");
   ASSERT_TRUE(r.config);
-  EXPECT_EQ(r.config->listeners[0].options.policy.access, AccessLevel::read);
-  EXPECT_TRUE(r.config->listeners[0].options.policy.allow.empty());
+  EXPECT_EQ(r.config->listeners[0].policy.access, AccessLevel::read);
+  EXPECT_TRUE(r.config->listeners[0].policy.allow.empty());
   EXPECT_THAT(r.warnings, IsEmpty());
 }
 
@@ -108,8 +107,8 @@ TEST_F(ListenerConfig, ServerListenAndNothingAtAllKeepTheirOldMeaningWithAWarnin
     ASSERT_EQ(r.config->listeners.size(), 1u);
     const auto& l = r.config->listeners[0];
     EXPECT_TRUE(l.from_server_listen);
-    EXPECT_EQ(l.options.policy.access, AccessLevel::maintain);
-    EXPECT_EQ(l.options.port, text.empty() ? 502 : 1502);
+    EXPECT_EQ(l.policy.access, AccessLevel::maintain);
+    EXPECT_EQ(l.port, text.empty() ? 502 : 1502);
     ASSERT_EQ(r.warnings.size(), 1u);
     EXPECT_THAT(r.warnings[0], HasSubstr("lets every address that can reach it write (access "
                                          "maintain)"));
@@ -179,10 +178,10 @@ tls = { cert = "c", key = "k", ca = "a" }
 )");
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
   const auto& ls = r.config->listeners;
-  EXPECT_EQ(ls[0].options.policy.max_clients, std::optional<std::size_t>(3));
-  EXPECT_EQ(ls[1].options.policy.max_clients, std::nullopt);  // [server] max_clients, 12
-  EXPECT_EQ(ls[1].options.policy.handshakes, (net::RateLimit{7, 14}));
-  EXPECT_EQ(ls[2].options.policy.handshakes, (net::RateLimit{5, 10}));  // the default
+  EXPECT_EQ(ls[0].policy.max_clients, std::optional<std::size_t>(3));
+  EXPECT_EQ(ls[1].policy.max_clients, std::nullopt);  // [server] max_clients, 12
+  EXPECT_EQ(ls[1].policy.handshakes, (net::RateLimit{7, 14}));
+  EXPECT_EQ(ls[2].policy.handshakes, (net::RateLimit{5, 10}));  // the default
   EXPECT_THAT(
       errors("[[listener]]\naddress = \":502\"\nmax_clients = 0\n"),
       ElementsAre(AllOf(HasSubstr("gw.toml:3: listener[0].max_clients"), HasSubstr("1..1024"))));
@@ -282,18 +281,18 @@ reply_timeout_ms = 20
   EXPECT_EQ(ls[1].write_reply, WriteReply::accepted);
   EXPECT_EQ(ls[1].reply_timeout, Millis(1500));
   EXPECT_FALSE(ls[1].broadcast);
-  EXPECT_EQ(ls[1].options.policy.access, AccessLevel::operate);
+  EXPECT_EQ(ls[1].policy.access, AccessLevel::operate);
   ASSERT_TRUE(ls[2].serial);
   EXPECT_EQ(ls[2].framing, ListenerFraming::ascii);
   EXPECT_EQ(ls[2].serial->data_bits, 7);  // Serial Line 2.5.2's default for ASCII
   EXPECT_EQ(ls[2].ascii_timeout, Millis(500));
   EXPECT_TRUE(ls[2].broadcast);
-  EXPECT_EQ(ls[2].options.policy.access, AccessLevel::read);
+  EXPECT_EQ(ls[2].policy.access, AccessLevel::read);
   EXPECT_EQ(ls[2].write_reply, WriteReply::confirmed);
   EXPECT_EQ(ls[2].reply_timeout, Millis(0));  // none: a reply waits for its drive
   EXPECT_FALSE(ls[3].serial);
   EXPECT_EQ(ls[3].framing, ListenerFraming::rtu);
-  EXPECT_EQ(ls[3].options.port, 4001);
+  EXPECT_EQ(ls[3].port, 4001);
   EXPECT_EQ(ls[3].reply_timeout, Millis(20));  // RTU over TCP: a master's timeout as on a line
   // A serial listener lets no network address write: no warning about it.
   EXPECT_THAT(r.warnings, IsEmpty());
@@ -305,13 +304,14 @@ TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
                                 HasSubstr("needs its line's baud rate"))));
   EXPECT_THAT(errors("[[listener]]\nport = \"rfc2217://10.0.0.5:4001\"\n"),
               ElementsAre(HasSubstr("needs its line's baud rate")));
-  EXPECT_THAT(errors("[[listener]]\naddress = \":502\"\nbaud = 9600\n"),
-              ElementsAre(AllOf(HasSubstr("listener[0].baud"),
-                                HasSubstr("only for a serial listener"))));
+  EXPECT_THAT(
+      errors("[[listener]]\naddress = \":502\"\nbaud = 9600\n"),
+      ElementsAre(AllOf(HasSubstr("listener[0].baud"), HasSubstr("only for a serial listener"))));
   EXPECT_THAT(errors("[[listener]]\naddress = \":4001\"\nframing = \"rtu\"\nrx_latency_ms = 5\n"),
               ElementsAre(HasSubstr("only for framing = \"rtu\" on a serial port")));
-  EXPECT_THAT(errors("[[listener]]\naddress = \":4001\"\nframing = \"ascii\"\nascii_timeout_ms = 50\n"),
-              ElementsAre(HasSubstr("on a serial port")));
+  EXPECT_THAT(
+      errors("[[listener]]\naddress = \":4001\"\nframing = \"ascii\"\nascii_timeout_ms = 50\n"),
+      ElementsAre(HasSubstr("on a serial port")));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nframing = \"mbap\"\n"),
               ElementsAre(HasSubstr("a serial line carries \"rtu\" or \"ascii\" frames")));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\ndata_bits = 7\n"),
@@ -331,8 +331,9 @@ TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
                                 HasSubstr("only for a listener with framing"))));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = -1\n"),
               ElementsAre(HasSubstr("listener[0].reply_timeout_ms")));
-  EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = 60001\n"),
-              ElementsAre(HasSubstr("listener[0].reply_timeout_ms")));
+  EXPECT_THAT(
+      errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = 60001\n"),
+      ElementsAre(HasSubstr("listener[0].reply_timeout_ms")));
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyS1\"\nbaud = 9600\nreply_timeout_ms = 5\n"),
               ElementsAre(AllOf(HasSubstr("gw.toml:4: listener[0].reply_timeout_ms"),
                                 HasSubstr("0 (none) or at least 20 ms"))));
@@ -340,11 +341,10 @@ TEST_F(ListenerConfig, SerialListenerMistakesAreNamedWithTheirLine) {
               ElementsAre(HasSubstr("must be \"confirmed\" or \"accepted\"")));
   // The drives' line is not a master's: the bus in kDevice is on /dev/ttyUSB0.
   EXPECT_THAT(errors("[[listener]]\nport = \"/dev/ttyUSB0\"\nbaud = 9600\n"),
-              ElementsAre(AllOf(HasSubstr("gw.toml:1: listener"),
-                                HasSubstr("is bus 'line1''s"))));
+              ElementsAre(AllOf(HasSubstr("gw.toml:1: listener"), HasSubstr("is bus 'line1''s"))));
   // The same port by another name: a symbolic link to it (as /dev/serial/by-id/... are).
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("drivegate-ports-" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("drivegate-ports-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "ttyUSB7") << "";
   std::filesystem::create_symlink(dir / "ttyUSB7", dir / "by-id-adapter");

@@ -170,10 +170,10 @@ TEST_F(MqttConfigTest, PrimaryHostVersionIs30Or22) {
       "[mqtt]\nbroker = \"mqtt://h\"\ngroup_id = \"g\"\nedge_node_id = \"e\"\n";
   auto r = parse(head + "primary_host_id = \"scada\"\n");
   ASSERT_TRUE(r.config);
-  EXPECT_EQ(r.config->mqtt.primary_host_state, sparkplug::HostStateForm::v3_0);
+  EXPECT_EQ(r.config->mqtt.primary_host_state, MqttHostState::v3_0);
   r = parse(head + "primary_host_id = \"scada\"\nprimary_host_version = \"2.2\"\n");
   ASSERT_TRUE(r.config) << ::testing::PrintToString(r.errors);
-  EXPECT_EQ(r.config->mqtt.primary_host_state, sparkplug::HostStateForm::v2_2);
+  EXPECT_EQ(r.config->mqtt.primary_host_state, MqttHostState::v2_2);
   EXPECT_THAT(::testing::PrintToString(r.warnings), Not(HasSubstr("mqtt")));
   EXPECT_THAT(only_error(head + "primary_host_id = \"scada\"\nprimary_host_version = \"2\"\n"),
               AllOf(HasSubstr("gw.toml:17"), HasSubstr("mqtt.primary_host_version"),

@@ -1,5 +1,5 @@
 // Fuzz target: a Modbus TCP byte stream through the MBAP parser and the Dispatcher against the
-// real Gateway behind the daemon's Modbus backend (app/backend_switch.h). The Gateway is built
+// real Gateway behind the daemon's Modbus backend (modbus/backend_switch.h). The Gateway is built
 // from a configuration with one device of every linked adapter (unit 1..n in registry order, each
 // alone on its bus) plus the core's fake adapter, so Device::read / write validate every request
 // and drivers receive every command, setpoint and point write a client can make. Buses are never
@@ -13,12 +13,12 @@
 #include <cstdint>
 #include <string>
 
-#include "app/backend_switch.h"
 #include "check.h"
 #include "config/config_loader.h"
 #include "fuzz_input.h"
 #include "gateway/gateway.h"
 #include "linked_adapters.h"
+#include "modbus/backend_switch.h"
 #include "modbus_stream.h"
 
 namespace {

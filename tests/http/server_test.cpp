@@ -317,7 +317,8 @@ TEST(HttpServer, HeadersOver8KiBInTwoReadsOnAKeptConnectionGet431) {
   }
   second += "\r\n";
   ASSERT_TRUE(c.send(first));
-  std::this_thread::sleep_for(100ms);  // the server reads and parses the first part
+  // The server reads and parses the first part before the second is sent.
+  ASSERT_TRUE(h.eventually([&c] { return c.unread_by_server() == std::optional<std::size_t>(0); }));
   ASSERT_TRUE(c.send(second));
   const std::string r = c.read_response();
   EXPECT_THAT(r, StartsWith("HTTP/1.1 431"))
@@ -365,7 +366,8 @@ TEST(HttpServer, ARequestAnnouncingABodyIsRefusedFromItsHeaderAlone) {
   Client c(h.port());
   ASSERT_TRUE(c.send("GET /metrics HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n"));
   for (const char ch : std::string("0\r\n\r\n")) {
-    std::this_thread::sleep_for(20ms);
+    // The server has read what came before (or answered and closed): each byte its own read.
+    ASSERT_TRUE(h.eventually([&c] { return c.unread_by_server().value_or(0) == 0; }));
     c.send(std::string(1, ch));  // may fail: the server has answered and closed
   }
   EXPECT_THAT(c.read_to_close(), StartsWith("HTTP/1.1 400"));

@@ -27,6 +27,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -133,13 +134,8 @@ class FaultProxy {
     }
     poke();
     // Applied before this returns: the test's next step sees it in force.
-    while (true) {
-      {
-        const std::lock_guard lock(mutex_);
-        if (pending_.empty()) return;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
+    std::unique_lock lock(mutex_);
+    applied_.wait(lock, [this] { return pending_.empty(); });
   }
   void poke() {
     const char c = 0;
@@ -206,6 +202,7 @@ class FaultProxy {
         const std::lock_guard lock(mutex_);
         for (auto& f : pending_) f(*this);
         pending_.clear();
+        applied_.notify_all();
       }
       if (fds[1].revents & POLLIN) accept_one();
       for (auto& l : links_) {
@@ -246,6 +243,7 @@ class FaultProxy {
   std::atomic<bool> stop_{false};
   std::mutex mutex_;
   std::vector<std::function<void(FaultProxy&)>> pending_;
+  std::condition_variable applied_;           // pending_ emptied
   std::vector<std::unique_ptr<Link>> links_;  // the proxy thread's
   std::uint64_t cut_after_ = 0;               // the proxy thread's
   bool hold_new_ = false;                     // the proxy thread's

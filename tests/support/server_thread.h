@@ -2,7 +2,8 @@
 // its own io_context thread while the test drives real sockets against it, on a clock the test
 // moves (manual_clock.h): its timeouts are tested without waiting for them. `Source` is what the
 // server serves from (the Modbus fake backend, the HTTP fake content), built before the server
-// and gone after it.
+// and gone after it. The server's thread looks at what a test waits for after every handler it
+// runs, so a test waits for the event itself, never a guessed time.
 #pragma once
 
 #include <spdlog/sinks/null_sink.h>
@@ -12,8 +13,11 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
 #include <chrono>
+#include <condition_variable>
+#include <functional>
 #include <future>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -32,7 +36,9 @@ class ServerThread {
         std::make_shared<spdlog::logger>(name, std::make_shared<spdlog::sinks::null_sink_st>());
     server_ = std::make_unique<Server>(io_, clock_, source_, std::move(options), log);
     error_ = server_->listen();
-    thread_ = std::thread([this] { io_.run(); });
+    thread_ = std::thread([this] {
+      while (io_.run_one() > 0) look();
+    });
   }
   ~ServerThread() {
     on_io([this] { server_->close(); });
@@ -59,14 +65,18 @@ class ServerThread {
   std::size_t clients() {
     return on_io([this] { return server_->client_count(); });
   }
-  // Waits (up to 5 s of real time) until `done()`, run on the server's thread, holds.
+  // Waits (up to 5 s of real time) until `done()` holds: the server's thread runs it now and
+  // again after each handler it runs (a client's bytes read, a timer, a connection closed), the
+  // only moments at which what it looks at can change.
   template <class Done>
   bool eventually(Done done) {
-    for (int i = 0; i < 500; ++i) {
-      if (on_io(done)) return true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return false;
+    std::unique_lock lock(wait_mutex_);
+    wait_for_ = [&done] { return static_cast<bool>(done()); };
+    waited_ = false;
+    boost::asio::post(io_, [] {});  // a first look at once
+    const bool met = wait_cv_.wait_for(lock, std::chrono::seconds(5), [this] { return waited_; });
+    wait_for_ = nullptr;
+    return met;
   }
   bool wait_clients(std::size_t n) {
     return eventually([this, n] { return server_->client_count() == n; });
@@ -94,7 +104,20 @@ class ServerThread {
   Source source_;
   std::unique_ptr<Server> server_;
   std::error_code error_;
+  // What eventually() waits for, looked at on the server's thread after each handler.
+  std::mutex wait_mutex_;
+  std::condition_variable wait_cv_;
+  std::function<bool()> wait_for_;
+  bool waited_ = false;
   std::thread thread_;
+
+  void look() {
+    const std::lock_guard lock(wait_mutex_);
+    if (wait_for_ && !waited_ && wait_for_()) {
+      waited_ = true;
+      wait_cv_.notify_all();
+    }
+  }
 };
 
 }  // namespace drivegate::test

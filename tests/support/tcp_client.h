@@ -12,6 +12,10 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
 
 namespace drivegate::test {
 
@@ -64,6 +68,36 @@ class TcpClient {
       at += static_cast<std::size_t>(n);
     }
     return true;
+  }
+  // What the server has not read yet of what this client sent: the receive queue of the
+  // server's end of this connection, as the kernel shows it (/proc/net/tcp, tcp6). nullopt once
+  // that end is gone. A test that needs the server to have read one part before the next is
+  // sent waits for 0 (ServerThread::eventually: it looks after each of the server's handlers).
+  [[nodiscard]] std::optional<std::size_t> unread_by_server() const {
+    sockaddr_in self{}, peer{};
+    socklen_t n = sizeof self;
+    if (::getsockname(fd_, reinterpret_cast<sockaddr*>(&self), &n) != 0) return std::nullopt;
+    n = sizeof peer;
+    if (::getpeername(fd_, reinterpret_cast<sockaddr*>(&peer), &n) != 0) return std::nullopt;
+    // The server's end: local port the server's, remote port ours (columns "local_address
+    // rem_address st tx_queue:rx_queue", addresses as hex address:port).
+    const unsigned server_port = ntohs(peer.sin_port), client_port = ntohs(self.sin_port);
+    for (const char* table : {"/proc/net/tcp", "/proc/net/tcp6"}) {
+      std::ifstream in(table);
+      std::string line;
+      std::getline(in, line);  // the header
+      while (std::getline(in, line)) {
+        std::istringstream fields(line);
+        std::string slot, local, remote, state, queues;
+        fields >> slot >> local >> remote >> state >> queues;
+        const auto port = [](const std::string& a) {
+          return std::stoul(a.substr(a.find(':') + 1), nullptr, 16);
+        };
+        if (port(local) != server_port || port(remote) != client_port) continue;
+        return std::stoul(queues.substr(queues.find(':') + 1), nullptr, 16);
+      }
+    }
+    return std::nullopt;
   }
   bool readable(std::chrono::milliseconds timeout) {
     pollfd p{fd_, POLLIN, 0};

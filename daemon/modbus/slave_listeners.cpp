@@ -1,12 +1,16 @@
-#include "slave_listeners.h"
+#include "modbus/slave_listeners.h"
 
 #include <algorithm>
+
+#include "config/config_diff.h"
 
 namespace drivegate {
 
 namespace {
 
-bool rtu_or_ascii(const ListenerConfig& l) { return l.framing != ListenerFraming::mbap; }
+bool rtu_or_ascii(const ListenerConfig& l) {
+  return l.framing != ListenerFraming::mbap;
+}
 
 modbus_serial::Framing framing_of(const ListenerConfig& l) {
   return l.framing == ListenerFraming::ascii ? modbus_serial::Framing::ascii
@@ -15,8 +19,8 @@ modbus_serial::Framing framing_of(const ListenerConfig& l) {
 
 std::shared_ptr<const slave::SlavePolicy> policy_of(const ListenerConfig& l) {
   auto p = std::make_shared<slave::SlavePolicy>();
-  p->session.access = l.options.policy.access;
-  p->session.word_order = l.options.policy.word_order;
+  p->session.access = l.policy.access;
+  p->session.word_order = l.policy.word_order;
   p->session.feeds_failsafe = true;  // a polling master is a PLC like a TCP one (docs/safety.md)
   if (l.serial) {
     p->session.source.kind = SourceKind::modbus_serial;
@@ -24,27 +28,12 @@ std::shared_ptr<const slave::SlavePolicy> policy_of(const ListenerConfig& l) {
     p->session.source.client = l.serial->port;
   } else {
     p->session.source.kind = SourceKind::modbus_rtu_tcp;
-    p->session.source.listener = l.options.name();
+    p->session.source.listener = net::listen_name(l.host, l.port, l.policy.tls.has_value());
   }
   p->write_reply = l.write_reply;
   p->broadcast = l.broadcast;
   p->reply_timeout = l.reply_timeout;
   return p;
-}
-
-// What only a restart changes.
-bool same_place(const ListenerConfig& a, const ListenerConfig& b) {
-  if (a.framing != b.framing || a.ascii_timeout != b.ascii_timeout ||
-      a.rx_latency != b.rx_latency) {
-    return false;
-  }
-  if (a.serial || b.serial) {
-    if (!a.serial || !b.serial) return false;
-    BusConfig x = *a.serial;
-    x.line = b.serial->line;  // where it is written in the file is no change
-    return x == *b.serial;
-  }
-  return a.options.host == b.options.host && a.options.port == b.options.port;
 }
 
 }  // namespace
@@ -59,7 +48,9 @@ SlaveListeners::SlaveListeners(boost::asio::io_context& io, net::Clock& clock,
       server_(server),
       log_(std::move(log)) {}
 
-SlaveListeners::~SlaveListeners() { close(); }
+SlaveListeners::~SlaveListeners() {
+  close();
+}
 
 bool SlaveListeners::start(const std::vector<ListenerConfig>& listeners) {
   for (const auto& l : listeners) {
@@ -79,10 +70,10 @@ bool SlaveListeners::start(const std::vector<ListenerConfig>& listeners) {
       continue;
     }
     slave::RtuTcpOptions o;
-    o.host = l.options.host;
-    o.port = l.options.port;
-    o.allow = l.options.policy.allow;
-    o.max_clients = l.options.policy.max_clients.value_or(server_.max_clients);
+    o.host = l.host;
+    o.port = l.port;
+    o.allow = l.policy.allow;
+    o.max_clients = l.policy.max_clients.value_or(server_.max_clients);
     o.idle_timeout = server_.idle_timeout;
     o.frame_timeout = server_.frame_timeout;
     o.framing = framing_of(l);
@@ -96,39 +87,29 @@ bool SlaveListeners::start(const std::vector<ListenerConfig>& listeners) {
   return true;
 }
 
-std::vector<std::string> SlaveListeners::reload(const std::vector<ListenerConfig>& listeners) {
-  std::vector<std::string> restart;
+void SlaveListeners::reload(const std::vector<ListenerConfig>& listeners) {
   std::vector<const ListenerConfig*> next;
   for (const auto& l : listeners) {
     if (rtu_or_ascii(l)) next.push_back(&l);
   }
-  std::vector<bool> matched(next.size(), false);
   const auto apply = [&](std::vector<ListenerConfig>& configs, auto& running) {
     for (std::size_t i = 0; i < configs.size(); ++i) {
       const auto it = std::find_if(next.begin(), next.end(), [&](const ListenerConfig* n) {
         return same_place(*n, configs[i]);
       });
-      if (it == next.end()) {
-        restart.push_back(listener_name(configs[i]) + " (removed or moved)");
-        continue;
-      }
-      matched[static_cast<std::size_t>(it - next.begin())] = true;
+      if (it == next.end()) continue;  // waits for a restart (plan_reload says so)
       configs[i] = **it;
       if constexpr (std::is_same_v<std::decay_t<decltype(running)>,
                                    std::vector<std::shared_ptr<slave::SerialListener>>>) {
         running[i]->set_policy(policy_of(**it));
       } else {
-        running[i]->set_policy(policy_of(**it), (*it)->options.policy.allow,
-                               (*it)->options.policy.max_clients.value_or(server_.max_clients));
+        running[i]->set_policy(policy_of(**it), (*it)->policy.allow,
+                               (*it)->policy.max_clients.value_or(server_.max_clients));
       }
     }
   };
   apply(serial_configs_, serial_);
   apply(tcp_configs_, tcp_);
-  for (std::size_t i = 0; i < next.size(); ++i) {
-    if (!matched[i]) restart.push_back(listener_name(*next[i]) + " (added)");
-  }
-  return restart;
 }
 
 void SlaveListeners::close() {

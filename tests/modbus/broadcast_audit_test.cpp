@@ -1,14 +1,14 @@
 // A broadcast write on a serial listener with broadcast = false (docs/serial-listeners.md) is
 // applied to no drive, and the audit trail says why: the listener's broadcast setting, not an
 // access level the master's session has. Through the daemon's own pieces: a SlaveHost on RTU
-// frames, the Modbus backend (app/backend_switch.h), the gateway and its history.
+// frames, the Modbus backend (modbus/backend_switch.h), the gateway and its history.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "app/backend_switch.h"
 #include "manual_clock.h"
+#include "modbus/backend_switch.h"
+#include "modbus/slave_host.h"
 #include "one_fake_device.h"
-#include "slave/slave_host.h"
 
 namespace drivegate {
 namespace {

@@ -185,7 +185,8 @@ Decoded<Adu> decode_ascii(ByteView rx) {
     }
   }
   if (end == 0) {
-    if (rx.size() >= kAsciiMaxFrame) return decoded_bad<Adu>(kAsciiMaxFrame, FrameError::bad_length);
+    if (rx.size() >= kAsciiMaxFrame)
+      return decoded_bad<Adu>(kAsciiMaxFrame, FrameError::bad_length);
     return {};
   }
   const std::size_t size = end + 1;

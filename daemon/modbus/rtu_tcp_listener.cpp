@@ -19,8 +19,7 @@ constexpr std::size_t kMaxReplyBacklog = 64 * 1024;
 // One client: its socket, its host, what it has yet to be sent.
 class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
  public:
-  Client(RtuTcpListener& listener, tcp::socket socket, asio::ip::address address,
-         std::string peer)
+  Client(RtuTcpListener& listener, tcp::socket socket, asio::ip::address address, std::string peer)
       : listener_(listener.weak_from_this()),
         socket_(std::move(socket)),
         address_(std::move(address)),
@@ -105,21 +104,22 @@ class RtuTcpListener::Client : public std::enable_shared_from_this<Client> {
     writing_ = true;
     inflight_ = std::move(tx_);
     tx_.clear();
-    asio::async_write(socket_, asio::buffer(inflight_),
-                      [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
-                        self->writing_ = false;
-                        if (ec) {
-                          self->gone();
-                          return;
-                        }
-                        self->flush();
-                        self->close_if_done();
-                        if (self->paused_ && !self->closed_ &&
-                            self->tx_.size() + self->inflight_.size() <= kMaxReplyBacklog / 2) {
-                          self->paused_ = false;
-                          self->read();
-                        }
-                      });
+    asio::async_write(
+        socket_, asio::buffer(inflight_),
+        [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+          self->writing_ = false;
+          if (ec) {
+            self->gone();
+            return;
+          }
+          self->flush();
+          self->close_if_done();
+          if (self->paused_ && !self->closed_ &&
+              self->tx_.size() + self->inflight_.size() <= kMaxReplyBacklog / 2) {
+            self->paused_ = false;
+            self->read();
+          }
+        });
   }
   // Half-closed, with nothing left to answer or to send: closed.
   void close_if_done() {
@@ -197,10 +197,12 @@ RtuTcpListener::RtuTcpListener(asio::io_context& io, net::Clock& clock, modbus::
             ":" + std::to_string(options_.port) +
             (options_.framing == modbus_serial::Framing::rtu ? " (rtu over tcp)"
                                                              : " (ascii over tcp)")),
-      acceptor_(std::make_shared<net::Acceptor>(io, clock, log_, "modbus: " + name_,
-                                                options_.allow)) {}
+      acceptor_(
+          std::make_shared<net::Acceptor>(io, clock, log_, "modbus: " + name_, options_.allow)) {}
 
-RtuTcpListener::~RtuTcpListener() { close(); }
+RtuTcpListener::~RtuTcpListener() {
+  close();
+}
 
 std::shared_ptr<const SlavePolicy> RtuTcpListener::client_policy(const std::string& peer) const {
   auto p = std::make_shared<SlavePolicy>(*policy_);
@@ -214,8 +216,8 @@ std::error_code RtuTcpListener::listen() {
     return ec;
   }
   const auto session = policy_->session;
-  log_->info("modbus: listening on {}: access {}, {} word order, writes answered when {}{}",
-             name_, to_string(session.access), to_string(session.word_order),
+  log_->info("modbus: listening on {}: access {}, {} word order, writes answered when {}{}", name_,
+             to_string(session.access), to_string(session.word_order),
              policy_->write_reply == WriteReply::confirmed ? "the drive took them"
                                                            : "validated and queued",
              policy_->broadcast ? ", broadcast writes applied" : "");

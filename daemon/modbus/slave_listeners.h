@@ -1,5 +1,5 @@
 // The daemon's Modbus RTU / ASCII listeners (docs/serial-listeners.md): on serial lines
-// (slave/serial_listener.h) and on TCP (slave/rtu_tcp_listener.h), made from the [[listener]]
+// (modbus/serial_listener.h) and on TCP (modbus/rtu_tcp_listener.h), made from the [[listener]]
 // tables whose framing is "rtu" or "ascii", reloaded in place when only their policy changed.
 // The Modbus TCP (MBAP) listeners are modbus::Server's.
 #pragma once
@@ -13,8 +13,8 @@
 
 #include "config/config.h"
 #include "modbus/backend.h"
-#include "slave/rtu_tcp_listener.h"
-#include "slave/serial_listener.h"
+#include "modbus/rtu_tcp_listener.h"
+#include "modbus/serial_listener.h"
 
 namespace drivegate {
 
@@ -29,9 +29,9 @@ class SlaveListeners {
   // listen; serial ports that cannot open yet are retried.
   bool start(const std::vector<ListenerConfig>& listeners);
   // The new policies (access, word order, write_reply, broadcast; allow and max_clients on TCP)
-  // apply at once; a listener added, removed, or whose line, address or framing changed is
-  // named in the result: that takes effect at the next restart.
-  std::vector<std::string> reload(const std::vector<ListenerConfig>& listeners);
+  // apply at once to the listeners in the same place (config/config_diff.h, same_place); one
+  // added, removed or moved waits for the next restart (plan_reload names it).
+  void reload(const std::vector<ListenerConfig>& listeners);
   void close();
   [[nodiscard]] const std::vector<std::shared_ptr<slave::SerialListener>>& serial() const {
     return serial_;

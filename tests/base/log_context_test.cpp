@@ -1,19 +1,14 @@
-// Per-device and per-bus loggers: the context travels as data to the sinks that record it (the
-// journal's DEVICE=, BUS=, UNIT= fields), whatever the message says.
+// Per-device and per-bus loggers: the context travels as data to the sinks that record it,
+// whatever the message says.
 #include "base/log_context.h"
 
-#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/sinks/base_sink.h>
 
 #include <mutex>
 
-#include "app/logging.h"
-
 namespace drivegate {
 namespace {
-
-using ::testing::ElementsAre;
 
 // Records every message with the context of the logger that sent it.
 class RecordingSink final : public spdlog::sinks::base_sink<std::mutex>, public ContextSink {
@@ -57,15 +52,6 @@ TEST(LogContext, EachLoggerCarriesItsOwnContextToTheSinks) {
   EXPECT_EQ((*entries)[2].context.bus, "");
   EXPECT_EQ(washer->name(), "drivegated");
   EXPECT_EQ(washer->level(), spdlog::level::debug);
-}
-
-TEST(LogContext, JournalFieldsComeFromTheContext) {
-  EXPECT_THAT(journal_fields("stall", spdlog::level::warn, "drivegated",
-                             {.device = "washer-1", .bus = "line", .unit = 3}),
-              ElementsAre("MESSAGE=stall", "PRIORITY=4", "SYSLOG_IDENTIFIER=drivegated",
-                          "DEVICE=washer-1", "BUS=line", "UNIT=3"));
-  EXPECT_THAT(journal_fields("device x: y", spdlog::level::info, "drivegated", {}),
-              ElementsAre("MESSAGE=device x: y", "PRIORITY=6", "SYSLOG_IDENTIFIER=drivegated"));
 }
 
 }  // namespace

@@ -3,9 +3,9 @@
 // swaps the devices without closing a single Modbus TCP connection.
 #pragma once
 
-#include "app/modbus_exception.h"
 #include "gateway/gateway.h"
 #include "modbus/backend.h"
+#include "modbus/modbus_exception.h"
 
 namespace drivegate {
 
@@ -43,11 +43,11 @@ class BackendSwitch : public modbus::Backend {
                             std::span<const std::uint8_t> request,
                             modbus::ForwardDone done) override {
     if (target_ == nullptr) return modbus_exception(Outcome::no_such_device);
-    return modbus_exception(target_->forward(
-        session, unit, request,
-        [done = std::move(done)](Outcome o, std::span<const std::uint8_t> reply) {
-          done(modbus_exception(o), reply);
-        }));
+    return modbus_exception(
+        target_->forward(session, unit, request,
+                         [done = std::move(done)](Outcome o, std::span<const std::uint8_t> reply) {
+                           done(modbus_exception(o), reply);
+                         }));
   }
 
  private:

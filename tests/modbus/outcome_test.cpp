@@ -1,5 +1,5 @@
 // The gateway's outcomes (gateway/outcome.h) as its northbounds say them: one Modbus exception per
-// outcome and one outcome per exception (app/modbus_exception.h), the codes clients got before
+// outcome and one outcome per exception (modbus/modbus_exception.h), the codes clients got before
 // the gateway had outcomes of its own; a DCMD's result naming the same exception; and a denied
 // write reaching the wire as exception 0x01 through the daemon's own Modbus backend.
 #include <fmt/format.h>
@@ -12,10 +12,10 @@
 #include <utility>
 #include <vector>
 
-#include "app/backend_switch.h"
-#include "app/modbus_exception.h"
 #include "fake_adapter.h"
 #include "gateway/gateway.h"
+#include "modbus/backend_switch.h"
+#include "modbus/modbus_exception.h"
 #include "modbus/pdu.h"
 #include "mqtt/command_result.h"
 #include "one_fake_device.h"

@@ -14,8 +14,8 @@ std::string framing_name(modbus_serial::Framing f) {
 
 modbus::LineTiming timing_of(const SerialListenerOptions& o) {
   // A character: start bit, data bits, parity bit if any, stop bits (Serial Line 2.5.1).
-  const unsigned bits = 1U + o.line.data_bits + (o.line.parity == Parity::none ? 0U : 1U) +
-                        o.line.stop_bits;
+  const unsigned bits =
+      1U + o.line.data_bits + (o.line.parity == Parity::none ? 0U : 1U) + o.line.stop_bits;
   auto t = modbus::line_timing(o.line.baud, bits);
   t.ascii_timeout = o.ascii_timeout;
   t.latency = o.latency;
@@ -28,9 +28,7 @@ SerialListener::SerialListener(boost::asio::io_context& io, net::Clock& clock,
                                modbus::Backend& backend, SerialListenerOptions options,
                                std::shared_ptr<const SlavePolicy> policy,
                                std::shared_ptr<spdlog::logger> log)
-    : io_(io),
-      clock_(clock),
-      options_(std::move(options)),
+    : options_(std::move(options)),
       policy_(std::move(policy)),
       log_(std::move(log)),
       name_("serial " + options_.line.port + " (" + framing_name(options_.framing) + ")"),
@@ -38,14 +36,16 @@ SerialListener::SerialListener(boost::asio::io_context& io, net::Clock& clock,
       retry_(io.get_executor(), clock) {
   // The host lives only as long as this listener (host_ is its one owner).
   auto send = [this](Bytes frame) { this->send(std::move(frame)); };
-  const auto delimit = options_.line.port.starts_with("tcp://") ? modbus::Delimit::length
-                                                                : modbus::Delimit::silence;
-  host_ = std::make_shared<SlaveHost>(io, clock, backend, options_.identity, options_.framing,
-                                      delimit, timing_of(options_), policy_, counters_, log_,
-                                      name_, send);
+  const auto delimit =
+      options_.line.port.starts_with("tcp://") ? modbus::Delimit::length : modbus::Delimit::silence;
+  host_ =
+      std::make_shared<SlaveHost>(io, clock, backend, options_.identity, options_.framing, delimit,
+                                  timing_of(options_), policy_, counters_, log_, name_, send);
 }
 
-SerialListener::~SerialListener() { close(); }
+SerialListener::~SerialListener() {
+  close();
+}
 
 void SerialListener::start() {
   log_->info("modbus: {}: {}, access {}, {} word order, writes answered when {}{}", name_,
@@ -67,7 +67,6 @@ void SerialListener::close() {
   transport_->close();
   open_ = false;
 }
-
 
 void SerialListener::set_policy(std::shared_ptr<const SlavePolicy> policy) {
   policy_ = std::move(policy);
@@ -177,9 +176,10 @@ void SerialListener::lost(std::error_code ec, const char* what) {
 void SerialListener::retry_later() {
   retry_.expires_after(backoff_);
   backoff_ = std::min<std::chrono::milliseconds>(backoff_ * 2, options_.line.reopen_max);
-  retry_.async_wait([this, alive = std::weak_ptr<bool>(alive_)](const boost::system::error_code& e) {
-    if (auto a = alive.lock(); a && *a && !e) try_open();
-  });
+  retry_.async_wait(
+      [this, alive = std::weak_ptr<bool>(alive_)](const boost::system::error_code& e) {
+        if (auto a = alive.lock(); a && *a && !e) try_open();
+      });
 }
 
 }  // namespace drivegate::slave

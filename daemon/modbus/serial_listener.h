@@ -56,8 +56,6 @@ class SerialListener : public std::enable_shared_from_this<SerialListener> {
   void lost(std::error_code ec, const char* what);
   void retry_later();
 
-  boost::asio::io_context& io_;
-  net::Clock& clock_;
   SerialListenerOptions options_;
   std::shared_ptr<const SlavePolicy> policy_;
   std::shared_ptr<spdlog::logger> log_;

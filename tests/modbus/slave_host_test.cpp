@@ -1,7 +1,7 @@
-// SlaveHost (daemon/slave/slave_host.h) on a manual clock, with a backend whose writes complete
+// SlaveHost (daemon/modbus/slave_host.h) on a manual clock, with a backend whose writes complete
 // when the test says: what goes onto the master's line, and when, for every kind of request the
 // issue names (issue 28, docs/serial-listeners.md). The frames are the serial line codec's.
-#include "slave/slave_host.h"
+#include "modbus/slave_host.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

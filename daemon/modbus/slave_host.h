@@ -36,7 +36,7 @@ namespace drivegate::slave {
 struct SlavePolicy {
   Session session;  // access, word order, source (kind, listener; client per host)
   WriteReply write_reply = WriteReply::confirmed;
-  bool broadcast = false;  // apply writes sent to address 0 (to every unit that takes them)
+  bool broadcast = false;   // apply writes sent to address 0 (to every unit that takes them)
   Millis reply_timeout{0};  // the master's response timeout (ListenerConfig::reply_timeout)
   friend bool operator==(const SlavePolicy& a, const SlavePolicy& b) {
     return a.session.access == b.session.access && a.session.word_order == b.session.word_order &&
@@ -92,7 +92,7 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   struct Pending {
     std::uint32_t generation = 0;
     std::uint8_t unit = 0;
-    Bytes request;                  // the PDU
+    Bytes request;  // the PDU
     bool forwarded = false;
     net::TimePoint reply_at{};
     // The master's response timeout (the policy's when the request came: a reload applies to

@@ -3,7 +3,7 @@
 // One code per outcome and one outcome per code, so that a client reads from the code alone what
 // happened, and the codes are those clients got before the gateway had outcomes of its own.
 // The server's backend (backend_switch.h) answers with it and `drivegate write` cites it;
-// tests/app/outcome_test.cpp holds it to the table, and mqtt/command_result.h, which names the
+// tests/modbus/outcome_test.cpp holds it to the table, and mqtt/command_result.h, which names the
 // same codes for DCMDs, to it.
 #pragma once
 

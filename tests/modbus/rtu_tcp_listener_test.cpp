@@ -1,8 +1,8 @@
-// RtuTcpListener (daemon/slave/rtu_tcp_listener.h) over loopback, on a manual clock, with a
+// RtuTcpListener (daemon/modbus/rtu_tcp_listener.h) over loopback, on a manual clock, with a
 // backend whose writes complete when the test says: what a client that half-closes its side
 // (shutdown SHUT_WR) after a request gets back, as the Modbus TCP listener's clients do
 // (modbus/connection.h): every request it sent carried out and answered, then the close.
-#include "slave/rtu_tcp_listener.h"
+#include "modbus/rtu_tcp_listener.h"
 
 #include <arpa/inet.h>
 #include <gmock/gmock.h>
@@ -15,11 +15,10 @@
 
 #include <boost/asio/io_context.hpp>
 #include <functional>
-#include <thread>
 
 #include "hand_backend.h"
 #include "manual_clock.h"
-#include "modbus/serial_codec.h"
+#include "modbus_serial/serial_codec.h"
 
 namespace drivegate::slave {
 namespace {
@@ -63,16 +62,17 @@ class RtuTcpListenerTest : public ::testing::Test {
     const Bytes frame = modbus_serial::encode(Framing::rtu, unit, pdu);
     ASSERT_EQ(::write(fd_, frame.data(), frame.size()), static_cast<ssize_t>(frame.size()));
   }
-  // Runs the listener's event loop until `done` or `limit` passed; whether `done`.
+  // Runs the listener's event loop until `done` or `limit` passed; whether `done`. It looks
+  // after each handler, and waits for the next one (a client's bytes, an accept) in between.
   bool pump(const std::function<bool()>& done, std::chrono::milliseconds limit = 2s) {
     const auto until = std::chrono::steady_clock::now() + limit;
-    while (std::chrono::steady_clock::now() < until) {
-      io_.poll();
-      io_.restart();
-      if (done()) return true;
-      std::this_thread::sleep_for(1ms);
+    while (!done()) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now >= until) return false;
+      if (io_.stopped()) io_.restart();
+      if (io_.run_one_for(until - now) == 0 && io_.stopped()) return done();  // nothing to wait for
     }
-    return done();
+    return true;
   }
   // What the client has been sent so far, and whether the listener closed its side after it.
   bool closed_ = false;

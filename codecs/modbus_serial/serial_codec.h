@@ -7,8 +7,10 @@
 //          (Serial Line 2.5.2.1, 6.2.1).
 // A master (the modbus adapter's driver) encodes requests and decodes replies; a slave (its
 // simulator, and the daemon's serial listeners) decodes requests and encodes replies. One codec
-// for both ends of the line: the adapter plugin and the daemon link this library (dg_modbus_serial). The decoders are incremental: they answer `incomplete`
-// until a whole frame is in, so they work on a receive buffer that grows byte by byte.
+// for both ends of the line: the adapter plugin and the daemon link this library
+// (dg_modbus_serial, in codecs/: below both, knowing neither). The decoders are incremental: they
+// answer `incomplete` until a whole frame is in, so they work on a receive buffer that grows
+// byte by byte.
 #pragma once
 
 #include <cstddef>

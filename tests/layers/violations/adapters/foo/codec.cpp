@@ -1,0 +1,2 @@
+// An adapter reaching into the daemon.
+#include "modbus/server.h"
