@@ -36,10 +36,6 @@ namespace drivegate {
 class Completions {
  public:
   void add(Ticket t, WriteResult r, Bytes reply = {}) { list_.push_back({t, r, std::move(reply)}); }
-  // Every ticket of a write that settled as one.
-  void add_all(const std::vector<Ticket>& tickets, WriteResult r) {
-    for (const Ticket t : tickets) list_.push_back({t, r});
-  }
   // Driver::take_completions(): appended to `out`, and handed over once.
   void take(std::vector<Completion>& out) {
     for (Completion& c : list_) out.push_back(std::move(c));
@@ -57,8 +53,8 @@ class WriteLedger {
   struct Entry {
     Job job;
     std::vector<Ticket> tickets;  // none: the driver's own frame (an undo), settled silently
-    TimePoint deadline{};         // settled no_response by expire() at or after it
-    bool sent = false;            // a frame carrying it went out
+    TimePoint deadline{};  // settled no_response by expire() at it, by expire_after() past it
+    bool sent = false;     // a frame carrying it went out
   };
   // Told of every entry as it settles, after it left the queue: the driver's own consequences (a
   // status point, undoing on the drive a write that failed). It must not touch this queue; what it
