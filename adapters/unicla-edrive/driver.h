@@ -121,9 +121,9 @@ class EDriveDriver final : public DriverBase {
   std::uint8_t address_;
   Millis poll_interval_;
   Settings settings_;
-  // command and setpoint_rpm are what the drive holds: set when a status confirmed a write, or
-  // when a setpoint is stored while no run is in force; nothing else touches them.
-  CommonState common_;
+  // common_ (DriverBase): its command and setpoint_rpm are what the drive holds, set when a
+  // status confirmed a write, or when a setpoint is stored while no run is in force; nothing else
+  // touches them.
 
   Phase phase_ = Phase::build_information;
   std::uint8_t sequence_ = 0;
