@@ -19,9 +19,9 @@ Ed3100Driver::Ed3100Driver(std::uint8_t address, Settings settings, Millis poll_
     : settings_(std::move(settings)),
       address_(address),
       poll_interval_(poll_interval),
-      points_(make_points(settings_)),
-      values_(points_.size()),
       param_known_(settings_.parameters.size(), false) {
+  points_ = make_points(settings_);
+  values_.resize(points_.size());
   values_[pt::frequency_setpoint] = 0.0;
 }
 
@@ -109,17 +109,16 @@ void Ed3100Driver::start_cycle(TimePoint now) {
 
 std::optional<Exchange> Ed3100Driver::next_exchange(TimePoint now) {
   last_now_ = now;
-  expire(now);
+  writes_.expire_after(now);
   // The engine asks only once the exchange before ended; one it abandoned without a word still
   // owes its write an answer.
-  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
-  inflight_.reset();
+  fail_inflight();
   if (std::optional<Job> w = next_write()) {
     Exchange ex = exchange(*w);
     if (broadcast()) {
       // Nothing will ever confirm a broadcast: it counts as taken once handed to the bus.
-      put_in_force(*w->write);
-      complete(*w->write, WriteResult::ok);
+      put_in_force(w->write->job);
+      writes_.settle(*w->write, WriteResult::ok);
     } else {
       inflight_ = std::move(w);
     }
@@ -199,16 +198,14 @@ void Ed3100Driver::on_reply(const Job& j, const Reply& r) {
 
 void Ed3100Driver::on_no_reply(TimePoint now) {
   last_now_ = now;
-  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
-  inflight_.reset();
+  fail_inflight();
 }
 
 void Ed3100Driver::on_comm_lost(TimePoint now) {
   last_now_ = now;
-  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
-  inflight_.reset();
+  fail_inflight();
   // Nothing waiting is sent once the drive answers again: the PLC was told these failed.
-  fail_all();
+  writes_.settle_all(WriteResult::no_response);
   reads_.clear();
   std::fill(param_known_.begin(), param_known_.end(), false);
   fault_known_ = false;

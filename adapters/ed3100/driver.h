@@ -11,7 +11,8 @@
 #include <vector>
 
 #include "codec.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
+#include "drivegate/write_ledger.h"
 #include "registers.h"
 #include "settings.h"
 
@@ -22,14 +23,11 @@ namespace drivegate::ed3100 {
 // 96 ms at 2400 baud 8E1 (11 bits a character).
 inline constexpr Millis kWireAllowance{100};
 
-class Ed3100Driver final : public Driver {
+class Ed3100Driver final : public DriverBase {
  public:
   Ed3100Driver(std::uint8_t address, Settings settings, Millis poll_interval);
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
   [[nodiscard]] TimePoint wake_at() const override;
@@ -39,20 +37,19 @@ class Ed3100Driver final : public Driver {
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
 
  private:
-  // What a write puts in force once the drive confirmed it.
+  // What a write puts in force once the drive confirmed it. Its ticket, and the time it must be
+  // on the line by (not by then: failed, and never sent), are the ledger's.
   enum class Change : std::uint8_t { command, reset, reference, parameter };
   struct Write {
-    Ticket ticket = 0;
     Change change = Change::command;
     Command command = Command::stop;  // Change::command: run_forward, run_reverse or stop
     std::uint16_t value = 0;          // reference (0.01 Hz) or parameter value
     std::int32_t rpm = 0;             // Change::reference: what setpoint_rpm reads then
     std::size_t slot = 0;             // Change::parameter: index into the parameters
-    TimePoint send_by{};              // not on the line by then: failed, and never sent
   };
+  using Writes = WriteLedger<Write>;
 
   enum class Op : std::uint8_t { read_fault, read_monitor, read_param, write };
   // One transaction, queued or on the line.
@@ -60,8 +57,8 @@ class Ed3100Driver final : public Driver {
     Op op = Op::read_fault;
     std::size_t slot = 0;  // monitor or parameter index
     std::uint16_t reg = 0;
-    std::vector<std::uint16_t> words;  // writes: the values sent
-    std::optional<Write> write;        // Op::write: what it carries
+    std::vector<std::uint16_t> words;    // writes: the values sent
+    std::optional<Writes::Entry> write;  // Op::write: what it carries, out of the ledger
   };
 
   // driver.cpp
@@ -87,27 +84,20 @@ class Ed3100Driver final : public Driver {
   [[nodiscard]] bool drive_runs() const;
   [[nodiscard]] bool run_under_way() const;
   [[nodiscard]] std::uint16_t register_of(const Write& w) const;
-  [[nodiscard]] std::optional<Job> job_of(const Write& w) const;
+  [[nodiscard]] std::optional<Job> job_of(const Writes::Entry& e) const;
   std::optional<Job> next_write();
   void confirm(const Job& j, const Reply& r);
   void put_in_force(const Write& w);
   void set_reference(std::uint16_t centi_hz, std::int32_t rpm);
-  void complete(const Write& w, WriteResult r);
-  void supersede(std::uint16_t reg);
-  void expire(TimePoint now);
-  void fail_all();
+  void fail_inflight();
 
   Settings settings_;
   std::uint8_t address_;
   Millis poll_interval_;
-  std::vector<PointSpec> points_;
-  std::vector<Value> values_;
-  CommonState common_;
 
-  std::deque<Write> writes_;  // waiting for the line, oldest first
+  Writes writes_{completions_};  // waiting for the line, oldest first
   std::deque<Job> reads_;
   std::optional<Job> inflight_;
-  std::vector<Completion> completions_;
   TimePoint next_cycle_{};
   TimePoint last_now_{};
   std::vector<bool> param_known_;  // answered since the last (re)connect

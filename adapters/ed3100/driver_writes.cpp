@@ -88,34 +88,25 @@ WriteCheck Ed3100Driver::check(std::span<const WriteOp> request) const {
 
 WriteStatus Ed3100Driver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   last_now_ = now;
-  expire(now);
+  writes_.expire_after(now);
   adopting_ = false;  // a client decides from now on
-  switch (judge(op)) {
-    case WriteCheck::ok:
-      break;
-    case WriteCheck::invalid_value:
-      return WriteStatus::invalid_value;
-    case WriteCheck::refused:
-      return WriteStatus::refused;
-  }
-  Write w = *write_of(op);  // judge() found it
-  w.ticket = t;
-  w.send_by = now + send_limit();
+  if (const auto no = refusal(judge(op))) return *no;
+  const Write w = *write_of(op);  // judge() found it
   // A newer write to the same register wins: the older one, still waiting for the line, never
   // reaches the drive (a run then a stop in quick succession never starts the motor).
-  supersede(register_of(w));
+  const std::uint16_t reg = register_of(w);
+  writes_.settle_if([&](const Writes::Entry& e) { return register_of(e.job) == reg; },
+                    WriteResult::no_response);
   // Stopped, with no run on its way to the drive: stored.
   if (w.change == Change::reference && !drive_runs() && !run_under_way()) {
     set_reference(w.value, w.rpm);
     return WriteStatus::done;
   }
-  writes_.push_back(w);
+  // Not on the line by then, it is failed and never sent: by then the gateway could not have its
+  // answer before its own deadline, and a run the PLC was told failed must not start the motor
+  // later (writes_.expire_after()).
+  writes_.push(w, t, now + send_limit());
   return WriteStatus::pending;
-}
-
-void Ed3100Driver::take_completions(std::vector<Completion>& out) {
-  out.insert(out.end(), completions_.begin(), completions_.end());
-  completions_.clear();
 }
 
 // The motor turns, or a run is in force: a new reference has to go to 0x2001 now.
@@ -125,7 +116,9 @@ bool Ed3100Driver::drive_runs() const {
 
 // A run waiting for the line or on it: once taken, a reference would have to go to 0x2001.
 bool Ed3100Driver::run_under_way() const {
-  const auto run = [](const Write& w) { return w.change == Change::command && is_run(w.command); };
+  const auto run = [](const Writes::Entry& e) {
+    return e.job.change == Change::command && is_run(e.job.command);
+  };
   return std::any_of(writes_.begin(), writes_.end(), run) ||
          (inflight_ && inflight_->write && run(*inflight_->write));
 }
@@ -146,11 +139,12 @@ std::uint16_t Ed3100Driver::register_of(const Write& w) const {
 
 // The frame that carries a write, worked out once it is first in line, from what is in force
 // then (a write ahead of it may have been confirmed or failed meanwhile). Nothing: it needs none.
-std::optional<Ed3100Driver::Job> Ed3100Driver::job_of(const Write& w) const {
+std::optional<Ed3100Driver::Job> Ed3100Driver::job_of(const Writes::Entry& e) const {
+  const Write& w = e.job;
   Job j;
   j.op = Op::write;
   j.reg = register_of(w);
-  j.write = w;
+  j.write = e;
   switch (w.change) {
     case Change::command:
       if (is_run(w.command)) {
@@ -176,31 +170,30 @@ std::optional<Ed3100Driver::Job> Ed3100Driver::job_of(const Write& w) const {
 
 std::optional<Ed3100Driver::Job> Ed3100Driver::next_write() {
   while (!writes_.empty()) {
-    const Write w = writes_.front();
-    writes_.pop_front();
-    if (std::optional<Job> j = job_of(w)) return j;
+    const Writes::Entry e = writes_.take_front();
+    if (std::optional<Job> j = job_of(e)) return j;
     // A reference that finds the motor stopped: stored, in force at once.
-    put_in_force(w);
-    complete(w, WriteResult::ok);
+    put_in_force(e.job);
+    writes_.settle(e, WriteResult::ok);
   }
   return std::nullopt;
 }
 
 // The drive's answer to the write on the line.
 void Ed3100Driver::confirm(const Job& j, const Reply& r) {
-  const Write& w = *j.write;
+  const Writes::Entry& e = *j.write;
   if (r.kind == ReplyKind::exception) {
-    complete(w, WriteResult::refused);
+    writes_.settle(e, WriteResult::refused);
     return;
   }
   // 06: the echo carries the value the register took; 10: the quantity of registers written.
   const bool took = j.words.size() > 1 ? r.value == j.words.size() : r.value == j.words.at(0);
   if (!took) {
-    complete(w, WriteResult::refused);
+    writes_.settle(e, WriteResult::refused);
     return;
   }
-  put_in_force(w);
-  complete(w, WriteResult::ok);
+  put_in_force(e.job);
+  writes_.settle(e, WriteResult::ok);
 }
 
 void Ed3100Driver::put_in_force(const Write& w) {
@@ -231,30 +224,10 @@ void Ed3100Driver::set_reference(std::uint16_t centi_hz, std::int32_t rpm) {
   values_[pt::frequency_setpoint] = centi_hz * 0.01;
 }
 
-void Ed3100Driver::complete(const Write& w, WriteResult r) {
-  completions_.push_back({w.ticket, r});
-}
-
-void Ed3100Driver::supersede(std::uint16_t reg) {
-  const auto older = std::stable_partition(writes_.begin(), writes_.end(),
-                                           [&](const Write& w) { return register_of(w) != reg; });
-  for (auto it = older; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
-  writes_.erase(older, writes_.end());
-}
-
-// A write not on the line by its send_by is failed and never sent: by then the gateway could
-// not have its answer before its own deadline, and a run the PLC was told failed must not start
-// the motor later.
-void Ed3100Driver::expire(TimePoint now) {
-  const auto late = std::stable_partition(writes_.begin(), writes_.end(),
-                                          [now](const Write& w) { return now <= w.send_by; });
-  for (auto it = late; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
-  writes_.erase(late, writes_.end());
-}
-
-void Ed3100Driver::fail_all() {
-  for (const Write& w : writes_) complete(w, WriteResult::no_response);
-  writes_.clear();
+// The exchange on the line ended without an answer to the write it carried, if any.
+void Ed3100Driver::fail_inflight() {
+  if (inflight_ && inflight_->write) writes_.settle(*inflight_->write, WriteResult::no_response);
+  inflight_.reset();
 }
 
 }  // namespace drivegate::ed3100

@@ -10,12 +10,6 @@
 namespace drivegate::ed3100 {
 namespace {
 
-std::string hex(std::uint16_t v) {
-  char b[8];
-  std::snprintf(b, sizeof b, "0x%04X", v);
-  return b;
-}
-
 constexpr const char* kUsage =
     "use state | fault <code> | clear | run forward|reverse <0.01 Hz> | silent on|off | "
     "lock on|off | corrupt <n> | "
@@ -23,8 +17,7 @@ constexpr const char* kUsage =
     "param <GG-nn> <value> | monitor <0Dnn> <value> <format>|auto | help";
 
 std::optional<std::uint16_t> number(std::string_view s) {
-  if (const auto v = parse_unsigned(s, 0xFFFF)) return static_cast<std::uint16_t>(*v);
-  return std::nullopt;
+  return parse_uint<std::uint16_t>(s);
 }
 
 }  // namespace
@@ -33,14 +26,15 @@ std::string Ed3100Simulator::state() const {
   std::ostringstream s;
   s << "address=" << int{address_}
     << " form=" << (form_ == ReadForm::document ? "document" : "standard")
-    << " command=" << hex(command_) << " reference=" << hex(reference_) << " output=" << output_
-    << " running=" << running_ << " direction=" << (rotating_reverse_ ? "reverse" : "forward")
-    << " commanded=" << (commanded_reverse_ ? "reverse" : "forward") << " fault=" << hex(fault_)
-    << " state=" << hex(state_word()) << " silent=" << silent_ << " lock=" << locked_
+    << " command=" << hex(command_, 4) << " reference=" << hex(reference_, 4)
+    << " output=" << output_ << " running=" << running_
+    << " direction=" << (rotating_reverse_ ? "reverse" : "forward")
+    << " commanded=" << (commanded_reverse_ ? "reverse" : "forward") << " fault=" << hex(fault_, 4)
+    << " state=" << hex(state_word(), 4) << " silent=" << silent_ << " lock=" << locked_
     << " corrupt=" << corrupt_;
   for (const auto& [reg, value] : params_) {
     char b[32];
-    std::snprintf(b, sizeof b, " param_%02x_%02x=%s", reg >> 8, reg & 0xFF, hex(value).c_str());
+    std::snprintf(b, sizeof b, " param_%02x_%02x=%s", reg >> 8, reg & 0xFF, hex(value, 4).c_str());
     s << b;
   }
   return s.str();
@@ -59,7 +53,7 @@ std::string Ed3100Simulator::control(std::string_view line, TimePoint /*now*/) {
     command_ = kCmdStop;  // a trip coasts the motor
     running_ = false;
     output_ = 0;
-    return "ok fault=" + hex(fault_);
+    return "ok fault=" + hex(fault_, 4);
   }
   if (cmd == "clear") {
     fault_ = kNoFault;
@@ -75,12 +69,12 @@ std::string Ed3100Simulator::control(std::string_view line, TimePoint /*now*/) {
     running_ = true;
     return "ok running " + a;
   }
-  if (cmd == "silent" && (a == "on" || a == "off")) {
-    silent_ = a == "on";
+  if (cmd == "silent" && parse_on_off(a)) {
+    silent_ = *parse_on_off(a);
     return "ok silent=" + a;
   }
-  if (cmd == "lock" && (a == "on" || a == "off")) {
-    locked_ = a == "on";
+  if (cmd == "lock" && parse_on_off(a)) {
+    locked_ = *parse_on_off(a);
     return "ok lock=" + a;
   }
   if (cmd == "corrupt") {

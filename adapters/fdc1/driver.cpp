@@ -9,8 +9,7 @@
 namespace drivegate::fdc1 {
 
 Fdc1Driver::Fdc1Driver(const Settings& settings, bool programming)
-    : settings_(settings), programming_(programming), points_(make_points(programming)) {
-  values_.resize(points_.size());
+    : DriverBase(make_points(programming)), settings_(settings), programming_(programming) {
   publish_program();
 }
 
@@ -149,15 +148,6 @@ void Fdc1Driver::on_no_reply(TimePoint) {
     finish_program(WriteResult::no_response, ProgStatus::no_response,
                    "the controller did not echo the programming frame");
   }
-}
-
-void Fdc1Driver::complete(Ticket t, WriteResult r) {
-  completions_.push_back({t, r});
-}
-
-void Fdc1Driver::take_completions(std::vector<Completion>& out) {
-  out.insert(out.end(), completions_.begin(), completions_.end());
-  completions_.clear();
 }
 
 }  // namespace drivegate::fdc1

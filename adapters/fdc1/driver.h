@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "codec.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
 #include "points.h"
 #include "program.h"
 #include "settings.h"
@@ -30,14 +30,11 @@ static_assert(kEchoTimeout > 2 * kProgramSize * kCharacterTime);
 // sends the second only when the device's budget_ms holds both attempts (README).
 inline constexpr std::uint8_t kEchoAttempts = 2;
 
-class Fdc1Driver final : public Driver {
+class Fdc1Driver final : public DriverBase {
  public:
   Fdc1Driver(const Settings& settings, bool programming);
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
   [[nodiscard]] TimePoint wake_at() const override;
@@ -47,7 +44,6 @@ class Fdc1Driver final : public Driver {
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
 
  private:
   // What the speed frame tells the controller: a command, and the setpoint a run runs at.
@@ -58,6 +54,8 @@ class Fdc1Driver final : public Driver {
   // What the stream must show for a speed write to be in force.
   enum class Expect : std::uint8_t { motor_off, motor_on, at_setpoint };
   // One write waiting for the stream: its ticket, and the speed it asked for if it was a setpoint.
+  // The writes settle into completions_ (DriverBase): one order under way carries writes that
+  // settle apart (a setpoint asking another speed is superseded), which a queue does not hold.
   struct Asked {
     Ticket ticket;
     std::optional<std::int32_t> rpm;
@@ -96,7 +94,6 @@ class Fdc1Driver final : public Driver {
   void confirm(const Status& s, TimePoint now);
   void fail_write(WriteResult r, TimePoint now);
   void expire(TimePoint now);
-  void complete(Ticket t, WriteResult r);
   // driver_program.cpp
   [[nodiscard]] WriteCheck judge_point(const WriteOp& op, const std::vector<Value>& fields) const;
   static void store_field(const WriteOp& op, std::vector<Value>& fields);
@@ -110,9 +107,6 @@ class Fdc1Driver final : public Driver {
 
   Settings settings_;
   bool programming_;
-  std::vector<PointSpec> points_;
-  std::vector<Value> values_;
-  CommonState common_;
 
   std::optional<Status> last_status_;  // the latest streamed status since start / comm_lost
   // Slave mode. In force: what the stream confirmed, and a setpoint stored while stopped; this is
@@ -130,8 +124,6 @@ class Fdc1Driver final : public Driver {
   Program prog_sent_;
   Ticket prog_ticket_ = 0;
   std::optional<std::pair<ProgStatus, std::string>> prog_outcome_;
-
-  std::vector<Completion> completions_;
 };
 
 }  // namespace drivegate::fdc1

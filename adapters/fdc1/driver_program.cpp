@@ -96,14 +96,7 @@ std::optional<std::string> Fdc1Driver::gather_program(const std::vector<Value>& 
 }
 
 WriteStatus Fdc1Driver::apply_point(const WriteOp& op, Ticket t, TimePoint now) {
-  switch (judge_point(op, values_)) {
-    case WriteCheck::ok:
-      break;
-    case WriteCheck::invalid_value:
-      return WriteStatus::invalid_value;
-    case WriteCheck::refused:
-      return WriteStatus::refused;
-  }
+  if (const auto no = refusal(judge_point(op, values_))) return *no;
   prog_outcome_.reset();  // the last commit's outcome was about the fields as they were
   if (op.point != pt::prog_commit) {
     store_field(op, values_);
@@ -135,7 +128,7 @@ RxVerdict Fdc1Driver::on_echo(const Echo& echo, std::size_t consumed) {
 }
 
 void Fdc1Driver::finish_program(WriteResult r, ProgStatus status, std::string message) {
-  complete(prog_ticket_, r);
+  completions_.add(prog_ticket_, r);
   prog_state_ = Programming::idle;
   prog_outcome_.emplace(status, std::move(message));
   publish_program();

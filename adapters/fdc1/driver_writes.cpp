@@ -63,14 +63,7 @@ WriteCheck Fdc1Driver::check(std::span<const WriteOp> request) const {
 WriteStatus Fdc1Driver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   if (op.target == WriteOp::Target::point) return apply_point(op, t, now);
   adopting_ = false;  // a client decides from now on
-  switch (judge(op, in_force())) {
-    case WriteCheck::ok:
-      break;
-    case WriteCheck::invalid_value:
-      return WriteStatus::invalid_value;
-    case WriteCheck::refused:
-      return WriteStatus::refused;
-  }
+  if (const auto no = refusal(judge(op, in_force()))) return *no;
   return op.target == WriteOp::Target::setpoint ? apply_setpoint(op.rpm, t, now)
                                                 : apply_command(op.command, t, now);
 }
@@ -130,7 +123,7 @@ WriteStatus Fdc1Driver::start_write(Asked a, Order order, Expect e, TimePoint no
     // a setpoint that asked another speed is superseded (it is never in force).
     for (const Asked& w : write_->asked) {
       if (w.rpm && *w.rpm != order.setpoint) {
-        complete(w.ticket, WriteResult::no_response);
+        completions_.add(w.ticket, WriteResult::no_response);
       } else {
         asked.push_back(w);
       }
@@ -153,7 +146,7 @@ void Fdc1Driver::confirm(const Status& s, TimePoint now) {
   if (!write_) return;
   if (shows(s, write_->order, write_->expect)) {
     in_force_ = write_->order;
-    for (const Asked& w : write_->asked) complete(w.ticket, WriteResult::ok);
+    for (const Asked& w : write_->asked) completions_.add(w.ticket, WriteResult::ok);
     write_.reset();
     return;
   }
@@ -166,7 +159,7 @@ void Fdc1Driver::confirm(const Status& s, TimePoint now) {
 
 void Fdc1Driver::fail_write(WriteResult r, TimePoint now) {
   const bool sent = write_->sent;
-  for (const Asked& w : write_->asked) complete(w.ticket, r);
+  for (const Asked& w : write_->asked) completions_.add(w.ticket, r);
   write_.reset();
   // In force is still what was. The controller may have acted on a frame of the failed write:
   // tell it what is in force, at once (after comm_lost the start-up does, once it streams again).

@@ -177,8 +177,9 @@ std::string Fdc1Simulator::control(std::string_view line, TimePoint now) {
   const std::string arg = words.size() > 1 ? words[1] : std::string();
   const auto number = parse_unsigned(arg);
   const auto on_off = [&](bool& flag) -> std::string {
-    if (arg != "on" && arg != "off") return "error: " + cmd + " takes on|off";
-    flag = arg == "on";
+    const auto on = parse_on_off(arg);
+    if (!on) return "error: " + cmd + " takes on|off";
+    flag = *on;
     return "ok";
   };
   if (cmd == "state") return state(now);

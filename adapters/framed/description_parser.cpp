@@ -27,9 +27,7 @@ std::optional<std::size_t> Description::var(std::string_view wanted) const {
 }
 
 bool valid_protocol_name(std::string_view name) {
-  return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
-  });
+  return valid_file_name(name);
 }
 
 namespace {
@@ -40,13 +38,6 @@ bool valid_name(std::string_view name) {
   return std::all_of(name.begin(), name.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
   });
-}
-
-template <std::size_t N>
-std::string names_list(const std::array<std::string_view, N>& names) {
-  std::string out;
-  for (const auto n : names) out += (out.empty() ? "" : ", ") + std::string(n);
-  return out;
 }
 
 template <std::size_t N>
@@ -143,28 +134,6 @@ class Parser {
 
  private:
   // ---- helpers -----------------------------------------------------------------------------
-
-  const toml::table* table_at(TableReader& r, std::string_view key, bool required) {
-    const toml::node* n = r.node(key);
-    if (n == nullptr) {
-      if (required) r.missing(key);
-      return nullptr;
-    }
-    const auto* t = n->as_table();
-    if (t == nullptr) diag_.error(n, r.qualified(key), "must be a table");
-    return t;
-  }
-
-  template <std::size_t N>
-  std::optional<std::size_t> choice(TableReader& r, std::string_view key,
-                                    const std::array<std::string_view, N>& names, bool required) {
-    const auto text = r.string(key, required);
-    if (!text) return std::nullopt;
-    if (const auto i = index_of(names, *text)) return i;
-    diag_.error(r.node(key), r.qualified(key),
-                "must be one of " + names_list(names) + " (got '" + *text + "')");
-    return std::nullopt;
-  }
 
   // A name's declaration: valid and not taken by another variable or table.
   bool declare(const toml::node* at, const std::string& key, const std::string& name) {
@@ -304,7 +273,7 @@ class Parser {
   // ---- [protocol], [line], [framing], [timing] ---------------------------------------------
 
   void read_protocol(TableReader& top) {
-    const toml::table* t = table_at(top, "protocol", true);
+    const toml::table* t = top.table("protocol", true);
     if (t == nullptr) return;
     TableReader r(*t, "protocol", diag_);
     r.expect({"name", "summary", "document", "demo_rpm"});
@@ -323,18 +292,18 @@ class Parser {
   }
 
   void read_line(TableReader& top) {
-    const toml::table* t = table_at(top, "line", true);
+    const toml::table* t = top.table("line", true);
     if (t == nullptr) return;
     TableReader r(*t, "line", diag_);
     r.expect({"baud", "parity", "data_bits", "stop_bits", "echo", "streaming", "address"});
     LineDefaults& l = d_->line;
     if (auto v = r.integer("baud", 50, 4'000'000, true)) l.baud = static_cast<std::uint32_t>(*v);
-    if (auto p = choice(r, "parity", kParityNames, false)) l.parity = static_cast<Parity>(*p);
+    if (auto p = r.choice("parity", kParityNames, false)) l.parity = static_cast<Parity>(*p);
     if (auto v = r.integer("data_bits", 5, 8, false)) l.data_bits = static_cast<std::uint8_t>(*v);
     if (auto v = r.integer("stop_bits", 1, 2, false)) l.stop_bits = static_cast<std::uint8_t>(*v);
     l.echo = r.boolean("echo").value_or(false);
     d_->streaming = r.boolean("streaming").value_or(false);
-    if (const toml::table* a = table_at(r, "address", false)) {
+    if (const toml::table* a = r.table("address", false)) {
       TableReader ar(*a, "line.address", diag_);
       ar.expect({"min", "max", "default"});
       const auto lo = ar.integer("min", 0, 0xFFFF, true);
@@ -358,7 +327,7 @@ class Parser {
   }
 
   void read_framing(TableReader& top) {
-    const toml::table* t = table_at(top, "framing", false);
+    const toml::table* t = top.table("framing", false);
     if (t == nullptr) return;
     TableReader r(*t, "framing", diag_);
     r.expect({"max_frame", "start", "end", "escape", "escaped", "escape_xor"});
@@ -412,7 +381,7 @@ class Parser {
   }
 
   void read_timing(TableReader& top) {
-    const toml::table* t = table_at(top, "timing", false);
+    const toml::table* t = top.table("timing", false);
     if (t == nullptr) return;
     TableReader r(*t, "timing", diag_);
     r.expect({"reply_timeout_ms", "attempts", "comm_timeout_ms", "gap_ms", "confirm_ms", "poll_ms",
@@ -423,7 +392,7 @@ class Parser {
     if (auto e = expr(r, "comm_timeout_ms")) tm.comm_timeout_ms = std::move(*e);
     if (auto e = expr(r, "gap_ms")) tm.gap_ms = std::move(*e);
     if (auto e = expr(r, "confirm_ms")) tm.confirm_ms = std::move(*e);
-    if (const toml::table* p = table_at(r, "poll_ms", false)) {
+    if (const toml::table* p = r.table("poll_ms", false)) {
       TableReader pr(*p, "timing.poll_ms", diag_);
       pr.expect({"min", "max"});
       if (auto v = pr.integer("min", 1, 3'600'000, false)) tm.poll_min_ms = static_cast<double>(*v);
@@ -442,7 +411,7 @@ class Parser {
   // ---- checks and tables -------------------------------------------------------------------
 
   void read_checks(TableReader& top) {
-    const toml::table* t = table_at(top, "check", false);
+    const toml::table* t = top.table("check", false);
     if (t == nullptr) return;
     for (const auto& [k, node] : *t) {
       const std::string name(k.str());
@@ -462,7 +431,7 @@ class Parser {
       Check c;
       c.name = name;
       c.line = line_of_node(&node);
-      if (auto kind = choice(r, "kind", kCheckKindNames, true))
+      if (auto kind = r.choice("kind", kCheckKindNames, true))
         c.kind = static_cast<CheckKind>(*kind);
       const std::int64_t width_default = c.kind == CheckKind::crc ? 2 : 1;
       const auto width = r.integer("width", 1, 4, false).value_or(width_default);
@@ -497,7 +466,7 @@ class Parser {
   }
 
   void read_tables(TableReader& top) {
-    const toml::table* t = table_at(top, "table", false);
+    const toml::table* t = top.table("table", false);
     if (t == nullptr) return;
     for (const auto& [k, v] : *t) {
       const std::string name(k.str());
@@ -581,7 +550,7 @@ class Parser {
         continue;
       }
       o.name = *name;
-      o.type = static_cast<OptionType>(choice(r, "type", kOptionTypeNames, true).value_or(0));
+      o.type = static_cast<OptionType>(r.choice("type", kOptionTypeNames, true).value_or(0));
       o.description = r.string("description", true).value_or("");
       const toml::node* def = r.node("default");
       if (def == nullptr) {
@@ -694,9 +663,9 @@ class Parser {
       const auto name = r.string("name", true);
       if (!name || !declare(r.node("name"), "point.name", *name)) continue;
       p.spec.name = *name;
-      if (auto tb = choice(r, "table", kTableNames, true))
+      if (auto tb = r.choice("table", kTableNames, true))
         p.spec.table = static_cast<drivegate::Table>(*tb);
-      if (auto ty = choice(r, "type", kPointTypeNames, true))
+      if (auto ty = r.choice("type", kPointTypeNames, true))
         p.spec.type = static_cast<PointType>(*ty);
       if (auto s = r.number("scale", -1e9, 1e9, false)) {
         if (*s == 0.0) diag_.error(r.node("scale"), "point.scale", "must not be 0");
@@ -722,7 +691,7 @@ class Parser {
         if (*lo > *hi) diag_.error(r.node("min"), "point.min", "must not exceed max");
         p.spec.limited(*lo, *hi);
       }
-      if (auto acc = choice(r, "access", kAccessNames, false)) {
+      if (auto acc = r.choice("access", kAccessNames, false)) {
         p.spec.write_level = static_cast<PointSpec::WriteLevel>(*acc);
       }
       p.spec.trend = r.boolean("trend").value_or(false);
@@ -880,7 +849,7 @@ class Parser {
   }
 
   void read_frames(TableReader& top) {
-    const toml::table* t = table_at(top, "frame", false);
+    const toml::table* t = top.table("frame", false);
     frames_ = t;
     if (t == nullptr) return;
     for (const auto& [k, v] : *t) {
@@ -930,7 +899,7 @@ class Parser {
       m.name = *name;
       m.summary = r.string("summary", false).value_or("");
       m.direction =
-          static_cast<Direction>(choice(r, "direction", kDirectionNames, true).value_or(0));
+          static_cast<Direction>(r.choice("direction", kDirectionNames, true).value_or(0));
       const auto layout = r.string("layout", false);
       const auto frame = r.string("frame", false);
       const auto body = r.string("body", false);
@@ -990,7 +959,7 @@ class Parser {
       return;
     }
     len.field = static_cast<std::size_t>(f - m.fields.begin());
-    if (auto c = choice(r, "counts", kCountsNames, false))
+    if (auto c = r.choice("counts", kCountsNames, false))
       len.counts = static_cast<Length::Counts>(*c);
     if (auto o = r.integer("offset", -16, 16, false)) len.offset = static_cast<int>(*o);
     // Every layout has a fixed size: the length field holds one value, checked on receipt.
@@ -1264,7 +1233,7 @@ class Parser {
   // ---- behaviour ---------------------------------------------------------------------------
 
   void read_periodic(TableReader& top, const char* key, std::optional<Periodic>& out) {
-    const toml::table* t = table_at(top, key, false);
+    const toml::table* t = top.table(key, false);
     if (t == nullptr) return;
     TableReader r(*t, key, diag_);
     r.expect({"send", "every_ms", "when", "at_ready"});
@@ -1290,14 +1259,15 @@ class Parser {
   }
 
   void read_commands(TableReader& top) {
-    const toml::table* t = table_at(top, "command", false);
+    const toml::table* t = top.table("command", false);
     if (t == nullptr) return;
     for (const auto& [k, v] : *t) {
       const std::string name(k.str());
       const std::string key = "command." + name;
       const auto c = index_of(kCommandNames, name);
       if (!c) {
-        diag_.error(&v, key, "no command '" + name + "' (" + names_list(kCommandNames) + ")");
+        diag_.error(&v, key,
+                    "no command '" + name + "' (" + TableReader::names_text(kCommandNames) + ")");
         continue;
       }
       const auto* a = v.as_array();
@@ -1341,7 +1311,7 @@ class Parser {
   }
 
   void read_setpoint(TableReader& top) {
-    const toml::table* t = table_at(top, "setpoint", false);
+    const toml::table* t = top.table("setpoint", false);
     if (t == nullptr) return;
     TableReader r(*t, "setpoint", diag_);
     r.expect({"min", "max", "invalid", "refuse", "accept", "until", "refuse_on"});
@@ -1377,7 +1347,7 @@ class Parser {
   }
 
   void read_unified(TableReader& top) {
-    const toml::table* t = table_at(top, "unified", false);
+    const toml::table* t = top.table("unified", false);
     if (t == nullptr) return;
     TableReader r(*t, "unified", diag_);
     r.expect({"ready", "speed_rpm", "running", "warning", "native_fault", "stops_run",
@@ -1397,7 +1367,8 @@ class Parser {
     if (s != nullptr) {
       if (const auto f = fault_named(s->get()); f && *f != Fault::none) return f;
     }
-    diag_.error(n, key, "must be a unified fault (" + names_list(kFaultNames) + ", not none)");
+    diag_.error(n, key,
+                "must be a unified fault (" + TableReader::names_text(kFaultNames) + ", not none)");
     return std::nullopt;
   }
 
@@ -1487,7 +1458,7 @@ class Parser {
   }
 
   void read_simulator(TableReader& top) {
-    const toml::table* t = table_at(top, "simulator", false);
+    const toml::table* t = top.table("simulator", false);
     if (t == nullptr) return;
     TableReader r(*t, "simulator", diag_);
     r.expect({"stream", "stream_ms", "nack", "tick", "on"});

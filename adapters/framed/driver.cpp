@@ -19,7 +19,7 @@ FramedDriver::FramedDriver(std::shared_ptr<const Description> d, const DeviceEnv
       codec_(*d_),
       state_(*d_, env.options, env.address),
       poll_interval_(env.poll_interval),
-      writes_([this](const Writes::Entry& e, WriteResult r) { settled(e, r); }) {
+      writes_(completions_, [this](const Writes::Entry& e, WriteResult r) { settled(e, r); }) {
   const Timing& t = d_->timing;
   const Scope s = state_.scope();
   double poll = static_cast<double>(poll_interval_.count());
@@ -200,10 +200,6 @@ void FramedDriver::on_comm_lost(TimePoint now) {
   next_init_ = now;
   next_poll_ = now;
   refresh(now);
-}
-
-void FramedDriver::take_completions(std::vector<Completion>& out) {
-  writes_.take_completions(out);
 }
 
 // After the state changed: derived points, what a write waited for, readiness and the block.

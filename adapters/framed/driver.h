@@ -15,20 +15,17 @@
 
 #include "codec.h"
 #include "description.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
 #include "drivegate/write_ledger.h"
 #include "state.h"
 
 namespace drivegate::framed {
 
-class FramedDriver final : public Driver {
+class FramedDriver final : public DriverBase {
  public:
   FramedDriver(std::shared_ptr<const Description> d, const DeviceEnv& env);
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
   [[nodiscard]] TimePoint wake_at() const override;
@@ -38,7 +35,6 @@ class FramedDriver final : public Driver {
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
 
  private:
   // A write on its way: what it changes, and once chosen, how it is carried out.
@@ -91,9 +87,6 @@ class FramedDriver final : public Driver {
   Codec codec_;
   State state_;
   Millis poll_interval_;
-  std::vector<PointSpec> points_;
-  std::vector<Value> values_;
-  CommonState common_;
   DriverTraits traits_;
   std::uint8_t attempts_ = 3;
   Millis reply_timeout_{100};

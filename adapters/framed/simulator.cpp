@@ -147,8 +147,8 @@ std::string FramedSimulator::control(std::string_view line, TimePoint now) {
   if (w.empty()) return error("empty command");
   if (w[0] == "help" && w.size() == 1) return std::string("commands: ") + kHelp;
   if (w[0] == "state" && w.size() == 1) return state();
-  if (w[0] == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
-    silent_ = w[1] == "on";
+  if (w[0] == "silent" && w.size() == 2 && parse_on_off(w[1])) {
+    silent_ = *parse_on_off(w[1]);
     rx_.clear();
     return std::string("ok silent=") + (silent_ ? "1" : "0");
   }

@@ -14,9 +14,9 @@ Mdriver2400Driver::Mdriver2400Driver(std::uint8_t address, const Settings& setti
       address_(address),
       // The run command is both poll and keep-alive: every min(poll, keep-alive).
       cadence_(poll_interval.count() > 0 ? std::min(poll_interval, settings.keepalive)
-                                         : settings.keepalive),
-      points_(make_points()),
-      values_(points_.size()) {
+                                         : settings.keepalive) {
+  points_ = make_points();
+  values_.resize(points_.size());
   refresh();
 }
 
@@ -57,7 +57,7 @@ Exchange Mdriver2400Driver::run_exchange(std::uint8_t code, TimePoint now) {
 }
 
 std::optional<Exchange> Mdriver2400Driver::next_exchange(TimePoint now) {
-  expire(now);
+  writes_.expire(now);
   if (awaiting_ != Awaiting::nothing) return std::nullopt;
   if (phase_ != Phase::ready) {
     // Section 3 No.1: sent after power-up and resent until the driver answers.
@@ -74,12 +74,12 @@ std::optional<Exchange> Mdriver2400Driver::next_exchange(TimePoint now) {
 TimePoint Mdriver2400Driver::wake_at() const {
   if (phase_ == Phase::ready && !writes_.empty() && !writes_.front().sent) return TimePoint{};
   TimePoint t = next_due_;
-  for (const auto& w : writes_) t = std::min(t, w.deadline);
+  if (const auto deadline = writes_.next_deadline()) t = std::min(t, *deadline);
   return t;
 }
 
 RxVerdict Mdriver2400Driver::on_receive(ByteView rx, TimePoint now) {
-  expire(now);
+  writes_.expire(now);
   const Decoded<Frame> d = decode(rx);
   switch (d.status) {
     case DecodeStatus::incomplete:
@@ -141,7 +141,7 @@ void Mdriver2400Driver::on_comm_lost(TimePoint now) {
   phase_ = Phase::check;
   awaiting_ = Awaiting::nothing;
   next_due_ = now;
-  fail_all();
+  writes_.settle_all(WriteResult::no_response);
   refresh();
 }
 

@@ -6,12 +6,12 @@
 //   driver_writes.cpp  check() and apply(), the writes waiting for the line, their confirmation
 #pragma once
 
-#include <deque>
 #include <optional>
 #include <vector>
 
 #include "codec.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
+#include "drivegate/write_ledger.h"
 #include "settings.h"
 
 namespace drivegate::mdriver {
@@ -31,14 +31,11 @@ inline constexpr std::uint8_t kAttempts = 3;
 inline constexpr Millis kInterFrameGap{10};
 static_assert(kInterFrameGap > 2 * kCharacterTime);
 
-class Mdriver2400Driver final : public Driver {
+class Mdriver2400Driver final : public DriverBase {
  public:
   Mdriver2400Driver(std::uint8_t address, const Settings& settings, Millis poll_interval);
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
   [[nodiscard]] TimePoint wake_at() const override;
@@ -48,7 +45,6 @@ class Mdriver2400Driver final : public Driver {
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
 
  private:
   enum class Phase : std::uint8_t { check, ready, fixed_code_error };
@@ -56,12 +52,11 @@ class Mdriver2400Driver final : public Driver {
   // What a write puts in force once the drive has confirmed it.
   enum class Change : std::uint8_t { run, stop, reset, setpoint };
   struct Pending {
-    Ticket ticket;
-    Change change;
-    std::uint8_t setpoint_code;  // Change::setpoint: the code asked for
-    TimePoint deadline;
-    std::optional<std::uint8_t> sent;  // the D4 that carries it, once on the line
+    Change change = Change::setpoint;
+    std::uint8_t setpoint_code = 0;  // Change::setpoint: the code asked for
+    std::uint8_t sent_code = 0;      // the D4 that carries it, once on the line
   };
+  using Writes = WriteLedger<Pending>;
 
   // driver.cpp
   [[nodiscard]] bool device_error() const;
@@ -77,11 +72,7 @@ class Mdriver2400Driver final : public Driver {
   [[nodiscard]] std::optional<std::uint8_t> code_of(const Pending& w) const;
   std::optional<Exchange> next_write(TimePoint now);
   void confirm(const RunReply& r);
-  void complete(const Pending& w, WriteResult r);
-  void supersede();
   void fail_sent(WriteResult r);
-  void fail_all();
-  void expire(TimePoint now);
 
   Settings settings_;
   std::uint8_t address_;
@@ -95,11 +86,7 @@ class Mdriver2400Driver final : public Driver {
   std::optional<std::uint8_t> setpoint_code_;
   std::optional<RunReply> last_;
   std::optional<std::uint8_t> sent_code_;
-  std::deque<Pending> writes_;  // oldest first; only the first one is ever on the line
-  std::vector<Completion> done_;
-  std::vector<PointSpec> points_;
-  std::vector<Value> values_;
-  CommonState common_;
+  Writes writes_{completions_};  // oldest first; only the first one is ever on the line
 };
 
 }  // namespace drivegate::mdriver

@@ -49,15 +49,8 @@ WriteCheck Mdriver2400Driver::check(std::span<const WriteOp> request) const {
 }
 
 WriteStatus Mdriver2400Driver::apply(const WriteOp& op, Ticket t, TimePoint now) {
-  switch (judge(op, in_force())) {
-    case WriteCheck::ok:
-      break;
-    case WriteCheck::invalid_value:
-      return WriteStatus::invalid_value;
-    case WriteCheck::refused:
-      return WriteStatus::refused;
-  }
-  Pending w{t, Change::setpoint, 0, now + kConfirmDeadline, std::nullopt};
+  if (const auto no = refusal(judge(op, in_force()))) return *no;
+  Pending w;
   if (op.target == WriteOp::Target::setpoint) {
     const std::uint8_t code = *code_for_rpm(op.rpm);  // judge() found it in range
     // Stopped with nothing on its way to the drive: stored, the next run_forward carries it.
@@ -76,16 +69,11 @@ WriteStatus Mdriver2400Driver::apply(const WriteOp& op, Ticket t, TimePoint now)
                                                     : Change::stop;
     // A command decides the code the line carries: what still waits for the line would be
     // overtaken by it at once, so it fails now (the drive never saw it) and costs no frame.
-    supersede();
+    writes_.settle_unsent(WriteResult::no_response);
   }
-  writes_.push_back(w);
+  writes_.push(w, t, now + kConfirmDeadline);
   refresh();
   return WriteStatus::pending;
-}
-
-void Mdriver2400Driver::take_completions(std::vector<Completion>& out) {
-  out.insert(out.end(), done_.begin(), done_.end());
-  done_.clear();
 }
 
 // The code that carries a write, worked out once it is first in line, from what is in force then
@@ -109,14 +97,15 @@ std::optional<std::uint8_t> Mdriver2400Driver::code_of(const Pending& w) const {
 // stopped needs none and is in force at once.
 std::optional<Exchange> Mdriver2400Driver::next_write(TimePoint now) {
   while (!writes_.empty() && !writes_.front().sent) {
-    Pending& w = writes_.front();
-    if (const auto code = code_of(w)) {
-      w.sent = *code;
+    Writes::Entry& e = writes_.front();
+    if (const auto code = code_of(e.job)) {
+      e.sent = true;
+      e.job.sent_code = *code;
       return run_exchange(*code, now);
     }
-    if (w.change == Change::setpoint) setpoint_code_ = w.setpoint_code;
-    complete(w, w.change == Change::setpoint ? WriteResult::ok : WriteResult::refused);
-    writes_.pop_front();
+    const bool stored = e.job.change == Change::setpoint;
+    if (stored) setpoint_code_ = e.job.setpoint_code;
+    writes_.settle_front(stored ? WriteResult::ok : WriteResult::refused);
   }
   refresh();
   return std::nullopt;
@@ -124,14 +113,14 @@ std::optional<Exchange> Mdriver2400Driver::next_write(TimePoint now) {
 
 // A run reply: the write on the line, if any, is in force when R4 echoes the code that carried it.
 void Mdriver2400Driver::confirm(const RunReply& r) {
-  if (writes_.empty() || !writes_.front().sent) return;  // the reply to a keep-alive
-  const Pending w = writes_.front();
-  writes_.pop_front();
+  if (!writes_.front_on_line()) return;  // the reply to a keep-alive
+  const Writes::Entry e = writes_.take_front();
+  const Pending& w = e.job;
   // Section 3 No.2: R4 is the target the driver holds. A run answered with an error code (R7)
   // will not run either: the error keeps the motor stopped until reset.
-  const bool took = r.target_code == *w.sent && !(w.change == Change::run && r.error_code != 0);
+  const bool took = r.target_code == w.sent_code && !(w.change == Change::run && r.error_code != 0);
   if (!took) {
-    complete(w, WriteResult::refused);
+    writes_.settle(e, WriteResult::refused);
     return;
   }
   switch (w.change) {
@@ -146,36 +135,11 @@ void Mdriver2400Driver::confirm(const RunReply& r) {
       setpoint_code_ = w.setpoint_code;
       break;
   }
-  complete(w, WriteResult::ok);
-}
-
-void Mdriver2400Driver::complete(const Pending& w, WriteResult r) {
-  done_.push_back({w.ticket, r});
-}
-
-void Mdriver2400Driver::supersede() {
-  const auto unsent = std::stable_partition(writes_.begin(), writes_.end(),
-                                            [](const Pending& w) { return w.sent.has_value(); });
-  for (auto it = unsent; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
-  writes_.erase(unsent, writes_.end());
+  writes_.settle(e, WriteResult::ok);
 }
 
 void Mdriver2400Driver::fail_sent(WriteResult r) {
-  if (writes_.empty() || !writes_.front().sent) return;
-  complete(writes_.front(), r);
-  writes_.pop_front();
-}
-
-void Mdriver2400Driver::fail_all() {
-  for (const auto& w : writes_) complete(w, WriteResult::no_response);
-  writes_.clear();
-}
-
-void Mdriver2400Driver::expire(TimePoint now) {
-  const auto late = std::stable_partition(writes_.begin(), writes_.end(),
-                                          [now](const Pending& w) { return now < w.deadline; });
-  for (auto it = late; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
-  writes_.erase(late, writes_.end());
+  if (writes_.front_on_line()) writes_.settle_front(r);
 }
 
 }  // namespace drivegate::mdriver

@@ -16,18 +16,6 @@ constexpr const char* kHelp =
     "state | fault <name|code> | clear | silent on|off | corrupt N | eeprom fail|ok | temp N | "
     "info <1..3> N | power-cycle";
 
-// Decimal or 0x-prefixed hex, 0..255.
-std::optional<std::uint8_t> parse_byte(std::string_view s) {
-  if (const auto v = parse_unsigned(s, 0xFF)) return static_cast<std::uint8_t>(*v);
-  return std::nullopt;
-}
-
-std::string hex(std::uint8_t v) {
-  char b[8];
-  std::snprintf(b, sizeof b, "0x%02x", v);
-  return b;
-}
-
 }  // namespace
 
 Mdriver2400Simulator::Mdriver2400Simulator(std::uint8_t address) : address_(address) {
@@ -128,13 +116,15 @@ Bytes Mdriver2400Simulator::on_tick(TimePoint now) {
 
 std::string Mdriver2400Simulator::state() const {
   std::ostringstream s;
-  s << "address=" << hex(address_) << " checked=" << (checked_ ? 1 : 0)
-    << " eeprom=" << (eeprom_ok_ ? "ok" : "fail") << " target=" << hex(target_)
-    << " change=" << hex(change_) << " actual=" << hex(actual_)
-    << " rpm=" << (actual_ == 0 ? 0 : rpm_of_code(actual_)) << " error=" << hex(error_)
-    << " temp=" << unsigned{temp_c_} << " info=" << hex(info_[0]) << "," << hex(info_[1]) << ","
-    << hex(info_[2]) << " silent=" << (silent_ ? "on" : "off") << " corrupt=" << corrupt_
-    << " frames=" << frames_ << " ignored=" << ignored_;
+  s << "address=" << hex(address_, 2, HexCase::lower) << " checked=" << (checked_ ? 1 : 0)
+    << " eeprom=" << (eeprom_ok_ ? "ok" : "fail") << " target=" << hex(target_, 2, HexCase::lower)
+    << " change=" << hex(change_, 2, HexCase::lower)
+    << " actual=" << hex(actual_, 2, HexCase::lower)
+    << " rpm=" << (actual_ == 0 ? 0 : rpm_of_code(actual_))
+    << " error=" << hex(error_, 2, HexCase::lower) << " temp=" << unsigned{temp_c_}
+    << " info=" << hex(info_[0], 2, HexCase::lower) << "," << hex(info_[1], 2, HexCase::lower)
+    << "," << hex(info_[2], 2, HexCase::lower) << " silent=" << (silent_ ? "on" : "off")
+    << " corrupt=" << corrupt_ << " frames=" << frames_ << " ignored=" << ignored_;
   return s.str();
 }
 
@@ -144,7 +134,7 @@ std::string Mdriver2400Simulator::control(std::string_view line, TimePoint now) 
   const std::string& cmd = w[0];
   if (cmd == "state" && w.size() == 1) return state();
   if (cmd == "fault" && w.size() == 2) {
-    std::optional<std::uint8_t> code = parse_byte(w[1]);
+    std::optional<std::uint8_t> code = parse_uint<std::uint8_t>(w[1]);
     if (!code) {
       if (auto e = find_error(w[1])) code = e->code;
     }
@@ -164,18 +154,18 @@ std::string Mdriver2400Simulator::control(std::string_view line, TimePoint now) 
     }
     error_ = *code;
     actual_ = 0;  // every error of the table stops the motor
-    return "ok error=" + hex(error_);
+    return "ok error=" + hex(error_, 2, HexCase::lower);
   }
   if (cmd == "clear" && w.size() == 1) {
     error_ = 0;
     return "ok";
   }
-  if (cmd == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
-    silent_ = w[1] == "on";
+  if (cmd == "silent" && w.size() == 2 && parse_on_off(w[1])) {
+    silent_ = *parse_on_off(w[1]);
     return "ok silent=" + w[1];
   }
   if (cmd == "corrupt" && w.size() == 2) {
-    if (auto n = parse_byte(w[1])) {
+    if (auto n = parse_uint<std::uint8_t>(w[1])) {
       corrupt_ = *n;
       return "ok corrupt=" + std::to_string(corrupt_);
     }
@@ -186,14 +176,14 @@ std::string Mdriver2400Simulator::control(std::string_view line, TimePoint now) 
     return "ok eeprom=" + w[1];
   }
   if (cmd == "temp" && w.size() == 2) {
-    if (auto t = parse_byte(w[1])) {
+    if (auto t = parse_uint<std::uint8_t>(w[1])) {
       temp_c_ = *t;
       return "ok temp=" + std::to_string(temp_c_);
     }
   }
   if (cmd == "info" && w.size() == 3) {
-    const auto i = parse_byte(w[1]);
-    const auto v = parse_byte(w[2]);
+    const auto i = parse_uint<std::uint8_t>(w[1]);
+    const auto v = parse_uint<std::uint8_t>(w[2]);
     if (i && v && *i >= 1 && *i <= 3) {
       info_[*i - 1] = *v;
       return "ok";

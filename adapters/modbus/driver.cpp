@@ -175,15 +175,12 @@ Exchange ModbusDriver::exchange(const Job& j) const {
 
 std::optional<Exchange> ModbusDriver::next_exchange(TimePoint now) {
   last_now_ = now;
-  expire(now);
+  writes_.expire_after(now);
   // The engine asks only once the exchange before ended; one it abandoned without a word still
   // owes its write an answer.
-  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
-  inflight_.reset();
+  fail_inflight();
   if (!writes_.empty()) {
-    Write w = std::move(writes_.front());
-    writes_.pop_front();
-    inflight_ = write_job(w);
+    inflight_ = write_job(writes_.take_front());
     return exchange(*inflight_);
   }
   if (reads_.empty()) {
@@ -244,7 +241,7 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
   inflight_.reset();
   if (job.write) {
     if (exception) {
-      complete(*job.write, WriteResult::refused);
+      writes_.settle(*job.write, WriteResult::refused);
     } else {
       confirm(job, a.pdu);
     }
@@ -311,17 +308,15 @@ Millis ModbusDriver::interval_of(std::size_t point) const {
 
 void ModbusDriver::on_no_reply(TimePoint now) {
   last_now_ = now;
-  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
   if (inflight_ && inflight_->read) on_read_failed(*inflight_->read, std::nullopt);
-  inflight_.reset();
+  fail_inflight();
 }
 
 void ModbusDriver::on_comm_lost(TimePoint now) {
   last_now_ = now;
-  if (inflight_ && inflight_->write) complete(*inflight_->write, WriteResult::no_response);
-  inflight_.reset();
+  fail_inflight();
   // Nothing waiting is sent once the slave answers again: the PLC was told these failed.
-  fail_all();
+  writes_.settle_all(WriteResult::no_response);
   reads_.clear();
   blocks_read_ = 0;
   common_.ready = false;

@@ -19,7 +19,8 @@
 #include <vector>
 
 #include "codec.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
+#include "drivegate/write_ledger.h"
 #include "planner.h"
 #include "profile.h"
 
@@ -34,7 +35,7 @@ struct Timing {
   std::chrono::nanoseconds char_time{0};
 };
 
-class ModbusDriver final : public Driver {
+class ModbusDriver final : public DriverBase {
  public:
   // `address`: 1..247 (Serial Line 2.2).
   // `files_read`: the profile as Driver::files_read says it (settings.h, profile_read).
@@ -42,9 +43,6 @@ class ModbusDriver final : public Driver {
                std::string files_read = {});
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
   [[nodiscard]] TimePoint wake_at() const override;
@@ -55,7 +53,6 @@ class ModbusDriver final : public Driver {
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
   [[nodiscard]] std::string files_read() const override { return files_read_; }
 
   // Which profile point each of points() is.
@@ -66,17 +63,18 @@ class ModbusDriver final : public Driver {
   }
 
  private:
-  // A write, in the slave's terms: the words for a profile point, and what it puts in force.
+  // A write, in the slave's terms: the words for a profile point, and what it puts in force. Its
+  // ticket, and the time it must be on the line by (not by then: failed, and never sent), are the
+  // ledger's.
   enum class Change : std::uint8_t { command, setpoint, point };
   struct Write {
-    Ticket ticket = 0;
     Change change = Change::point;
     std::size_t point = 0;             // profile point written
     std::vector<std::uint16_t> words;  // registers (or, for a coil, {0 or 1})
     Command command = Command::stop;   // Change::command
     std::int32_t rpm = 0;              // Change::setpoint
-    TimePoint send_by{};               // not on the line by then: failed, and never sent
   };
+  using Writes = WriteLedger<Write>;
   // Points polled at one interval, and the blocks that read them.
   struct Group {
     Millis interval{0};
@@ -92,7 +90,7 @@ class ModbusDriver final : public Driver {
   };
   struct Job {
     std::optional<Block> read;
-    std::optional<Write> write;
+    std::optional<Writes::Entry> write;  // out of the ledger while on the line
     std::uint8_t function = 0;
     Bytes pdu;
   };
@@ -116,24 +114,18 @@ class ModbusDriver final : public Driver {
   // driver_writes.cpp
   [[nodiscard]] std::optional<Write> write_of(const WriteOp& op) const;
   [[nodiscard]] WriteCheck judge(const WriteOp& op) const;
-  [[nodiscard]] Job write_job(const Write& w) const;
+  [[nodiscard]] Job write_job(const Writes::Entry& e) const;
   void confirm(const Job& j, ByteView pdu);
   void put_in_force(const Write& w);
-  void complete(const Write& w, WriteResult r);
-  void supersede(std::size_t point);
-  void expire(TimePoint now);
-  void fail_all();
+  void fail_inflight();
 
   Profile profile_;
   std::string files_read_;
   std::uint8_t address_;
   Timing timing_;
   Millis poll_interval_;
-  std::vector<PointSpec> points_;
   std::vector<std::size_t> exposed_;  // points_[i] is profile point exposed_[i]
   std::vector<std::optional<std::size_t>> exposed_index_;  // and back; nothing when bound
-  std::vector<Value> values_;
-  CommonState common_;
 
   std::vector<std::optional<std::vector<std::uint16_t>>> raw_;  // per profile point, last read
   std::vector<Reading> reading_;                                // per profile point
@@ -142,9 +134,8 @@ class ModbusDriver final : public Driver {
   std::vector<std::size_t> state_points_;
   std::vector<Group> groups_;
   std::deque<Block> reads_;
-  std::deque<Write> writes_;
+  Writes writes_{completions_};  // waiting for the line, oldest first
   std::optional<Job> inflight_;
-  std::vector<Completion> completions_;
   TimePoint last_now_{};
   std::size_t blocks_read_ = 0;  // since the last (re)connect
   bool adopting_ = true;

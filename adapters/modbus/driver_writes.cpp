@@ -93,29 +93,28 @@ WriteCheck ModbusDriver::check(std::span<const WriteOp> request) const {
 
 WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   last_now_ = now;
-  expire(now);
+  writes_.expire_after(now);
   adopting_ = false;  // a client decides from now on
   auto w = write_of(op);
   if (!w) return WriteStatus::invalid_value;
-  w->ticket = t;
-  w->send_by = now + send_limit();
   // A newer write to the same point wins: the older one, still waiting for the line, never
   // reaches the slave (a run then a stop in quick succession never starts the motor).
-  supersede(w->point);
-  writes_.push_back(std::move(*w));
+  const std::size_t point = w->point;
+  writes_.settle_if([point](const Writes::Entry& e) { return e.job.point == point; },
+                    WriteResult::no_response);
+  // Not on the line by then, it is failed and never sent: by then the gateway could not have its
+  // answer before its own deadline, and a run the PLC was told failed must not start the motor
+  // later (writes_.expire_after()).
+  writes_.push(std::move(*w), t, now + send_limit());
   return WriteStatus::pending;
 }
 
-void ModbusDriver::take_completions(std::vector<Completion>& out) {
-  out.insert(out.end(), completions_.begin(), completions_.end());
-  completions_.clear();
-}
-
 // FC 05 for a coil, FC 06 for one register where the profile says "single", FC 16 otherwise.
-ModbusDriver::Job ModbusDriver::write_job(const Write& w) const {
+ModbusDriver::Job ModbusDriver::write_job(const Writes::Entry& e) const {
+  const Write& w = e.job;
   const ProfilePoint& p = profile_.points[w.point];
   Job j;
-  j.write = w;
+  j.write = e;
   if (p.table == Table::coil) {
     j.function = fc::write_single_coil;
     j.pdu = {j.function};
@@ -142,11 +141,11 @@ void ModbusDriver::confirm(const Job& j, ByteView pdu) {
   const bool took =
       pdu.size() == 5 && j.pdu.size() >= 5 && std::equal(pdu.begin(), pdu.end(), j.pdu.begin());
   if (!took) {
-    complete(*j.write, WriteResult::refused);
+    writes_.settle(*j.write, WriteResult::refused);
     return;
   }
-  put_in_force(*j.write);
-  complete(*j.write, WriteResult::ok);
+  put_in_force(j.write->job);
+  writes_.settle(*j.write, WriteResult::ok);
 }
 
 void ModbusDriver::put_in_force(const Write& w) {
@@ -167,30 +166,10 @@ void ModbusDriver::put_in_force(const Write& w) {
   }
 }
 
-void ModbusDriver::complete(const Write& w, WriteResult r) {
-  completions_.push_back({w.ticket, r});
-}
-
-void ModbusDriver::supersede(std::size_t point) {
-  const auto older = std::stable_partition(writes_.begin(), writes_.end(),
-                                           [&](const Write& w) { return w.point != point; });
-  for (auto it = older; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
-  writes_.erase(older, writes_.end());
-}
-
-// A write not on the line by its send_by is failed and never sent: by then the gateway could
-// not have its answer before its own deadline, and a run the PLC was told failed must not start
-// the motor later.
-void ModbusDriver::expire(TimePoint now) {
-  const auto late = std::stable_partition(writes_.begin(), writes_.end(),
-                                          [now](const Write& w) { return now <= w.send_by; });
-  for (auto it = late; it != writes_.end(); ++it) complete(*it, WriteResult::no_response);
-  writes_.erase(late, writes_.end());
-}
-
-void ModbusDriver::fail_all() {
-  for (const Write& w : writes_) complete(w, WriteResult::no_response);
-  writes_.clear();
+// The exchange on the line ended without an answer to the write it carried, if any.
+void ModbusDriver::fail_inflight() {
+  if (inflight_ && inflight_->write) writes_.settle(*inflight_->write, WriteResult::no_response);
+  inflight_.reset();
 }
 
 }  // namespace drivegate::modbus_device

@@ -37,20 +37,20 @@ DriverTraits PassthroughDriver::traits() const {
 
 std::optional<Exchange> PassthroughDriver::next_exchange(TimePoint now) {
   last_now_ = now;
-  expire(now);
+  // Not on the line by its send-by: failed, and never sent (as ModbusDriver's writes).
+  queued_.expire_after(now);
   // The engine asks only once the exchange before ended: one it abandoned without a word still
   // owes its client an answer.
   abandon();
   Exchange ex;
   ex.reply = ReplyMode::expected;
   if (!queued_.empty()) {
-    Forward f = std::move(queued_.front());
-    queued_.pop_front();
-    ex.frame = encode(settings_.framing, address_, f.pdu);
+    Forwards::Entry f = queued_.take_front();
+    ex.frame = encode(settings_.framing, address_, f.job.pdu);
     // Any reply, up to the longest frame, must have time to arrive.
     ex.timeout = settings_.reply_timeout + wire_time(char_time_, longest_frame(settings_.framing));
     ex.attempts = 1;
-    inflight_ = InFlight{f.pdu[0], std::move(f)};
+    inflight_ = InFlight{f.job.pdu[0], std::move(f)};
     return ex;
   }
   if (now < probe_due_) return std::nullopt;
@@ -89,7 +89,7 @@ RxVerdict PassthroughDriver::on_receive(ByteView rx, TimePoint now) {
   InFlight done = std::move(*inflight_);
   inflight_.reset();
   common_.ready = true;
-  if (done.forward) complete(*done.forward, WriteResult::ok, a.pdu);
+  if (done.forward) queued_.settle(*done.forward, WriteResult::ok, a.pdu);
   // Neither a forwarded reply nor the probe's is state the gateway keeps.
   return {RxKind::ack, d.consumed};
 }
@@ -102,8 +102,7 @@ void PassthroughDriver::on_no_reply(TimePoint now) {
 void PassthroughDriver::on_comm_lost(TimePoint now) {
   last_now_ = now;
   abandon();
-  for (const Forward& f : queued_) complete(f, WriteResult::no_response);
-  queued_.clear();
+  queued_.settle_all(WriteResult::no_response);
   common_.ready = false;
   probe_due_ = now;
 }
@@ -120,30 +119,15 @@ WriteStatus PassthroughDriver::apply(const WriteOp& op, Ticket t, TimePoint now)
   last_now_ = now;
   const WriteOp one[] = {op};
   if (check(one) != WriteCheck::ok) return WriteStatus::invalid_value;
-  queued_.push_back({t, op.pdu, now + send_limit()});
+  queued_.push({op.pdu}, t, now + send_limit());
   return WriteStatus::pending;
 }
 
-void PassthroughDriver::take_completions(std::vector<Completion>& out) {
-  for (Completion& c : completions_) out.push_back(std::move(c));
-  completions_.clear();
-}
-
-void PassthroughDriver::complete(const Forward& f, WriteResult r, Bytes reply) {
-  completions_.push_back({f.ticket, r, std::move(reply)});
-}
-
 void PassthroughDriver::abandon() {
-  if (inflight_ && inflight_->forward) complete(*inflight_->forward, WriteResult::no_response);
-  inflight_.reset();
-}
-
-// Not on the line by its send_by: failed, and never sent (as ModbusDriver::expire).
-void PassthroughDriver::expire(TimePoint now) {
-  while (!queued_.empty() && now > queued_.front().send_by) {
-    complete(queued_.front(), WriteResult::no_response);
-    queued_.pop_front();
+  if (inflight_ && inflight_->forward) {
+    queued_.settle(*inflight_->forward, WriteResult::no_response);
   }
+  inflight_.reset();
 }
 
 }  // namespace drivegate::modbus_device

@@ -15,26 +15,23 @@
 //     sent, like any write, so nothing the client was told failed reaches the slave later.
 #pragma once
 
-#include <deque>
 #include <optional>
 #include <vector>
 
 #include "codec.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
+#include "drivegate/write_ledger.h"
 #include "settings.h"
 
 namespace drivegate::modbus_device {
 
-class PassthroughDriver final : public Driver {
+class PassthroughDriver final : public DriverBase {
  public:
   // `address`: 1..247 (Serial Line 2.2). `char_time`: one character as the bus runs it.
   PassthroughDriver(std::uint8_t address, PassthroughSettings settings,
                     std::chrono::nanoseconds char_time, Millis poll_interval);
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
   [[nodiscard]] bool forwards() const override { return true; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
@@ -46,35 +43,28 @@ class PassthroughDriver final : public Driver {
   // Only forward parts are taken: the device has no command, setpoint or points of its own.
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
 
  private:
+  // A forwarded request; its ticket and send-by are the ledger's.
   struct Forward {
-    Ticket ticket = 0;
     Bytes pdu;
-    TimePoint send_by{};
   };
+  using Forwards = WriteLedger<Forward>;
   struct InFlight {
     std::uint8_t function = 0;
-    std::optional<Forward> forward;  // nothing: the presence probe
+    std::optional<Forwards::Entry> forward;  // nothing: the presence probe
   };
 
   [[nodiscard]] Millis send_limit() const;
-  void complete(const Forward& f, WriteResult r, Bytes reply = {});
   void abandon();
-  void expire(TimePoint now);
 
   std::uint8_t address_;
   PassthroughSettings settings_;
   std::chrono::nanoseconds char_time_;
   Millis poll_interval_;
-  std::vector<PointSpec> points_;
-  std::vector<Value> values_;
-  CommonState common_;
 
-  std::deque<Forward> queued_;
+  Forwards queued_{completions_};
   std::optional<InFlight> inflight_;
-  std::vector<Completion> completions_;
   TimePoint probe_due_{};
   TimePoint last_now_{};
 };

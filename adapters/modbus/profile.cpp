@@ -13,27 +13,6 @@
 namespace drivegate::modbus_device {
 namespace {
 
-template <std::size_t N>
-std::string names_list(const std::array<std::string_view, N>& names) {
-  std::string out;
-  for (const auto n : names) out += (out.empty() ? "" : ", ") + std::string(n);
-  return out;
-}
-
-// One of `names` at `key`; its index.
-template <std::size_t N>
-std::optional<std::size_t> choice(TableReader& r, Diagnostics& diag, std::string_view key,
-                                  const std::array<std::string_view, N>& names, bool required) {
-  const auto text = r.string(key, required);
-  if (!text) return std::nullopt;
-  for (std::size_t i = 0; i < N; ++i) {
-    if (names[i] == *text) return i;
-  }
-  diag.error(r.node(key), r.qualified(key),
-             "must be one of " + names_list(names) + " (got '" + *text + "')");
-  return std::nullopt;
-}
-
 // Point names are register-map names: snake_case, as every adapter's points.
 bool valid_point_name(std::string_view name) {
   if (name.empty() || name.size() > 48 || !(name[0] >= 'a' && name[0] <= 'z')) return false;
@@ -48,7 +27,6 @@ std::optional<Fault> fault_named(std::string_view name) {
   }
   return std::nullopt;
 }
-
 
 // The line an error names ("SOURCE:LINE: ..."), 0 when it names none.
 unsigned long line_in(const std::string& error, const std::string& source) {
@@ -91,19 +69,8 @@ class Parser {
   }
 
  private:
-  const toml::table* table_at(TableReader& r, std::string_view key, bool required) {
-    const toml::node* n = r.node(key);
-    if (n == nullptr) {
-      if (required) r.missing(key);
-      return nullptr;
-    }
-    const auto* t = n->as_table();
-    if (t == nullptr) diag_.error(n, key, "must be a table");
-    return t;
-  }
-
   void read_identity(TableReader& top) {
-    const toml::table* t = table_at(top, "profile", true);
+    const toml::table* t = top.table("profile", true);
     if (t == nullptr) return;
     TableReader r(*t, "profile", diag_);
     r.expect({"name", "description", "source", "identification"});
@@ -147,21 +114,22 @@ class Parser {
   }
 
   void read_line(TableReader& top) {
-    const toml::table* t = table_at(top, "line", false);
+    const toml::table* t = top.table("line", false);
     if (t == nullptr) return;
     TableReader r(*t, "line", diag_);
     r.expect({"baud", "parity", "stop_bits", "framing"});
     LineSpec& line = profile_.line;
     if (auto b = r.integer("baud", 300, 921600, false)) line.baud = static_cast<std::uint32_t>(*b);
-    if (auto p = choice(r, diag_, "parity", kParityNames, false)) line.parity = static_cast<Parity>(*p);
-    if (auto s = r.integer("stop_bits", 1, 2, false)) line.stop_bits = static_cast<std::uint8_t>(*s);
-    if (auto f = choice(r, diag_, "framing", kFramingNames, false)) {
+    if (auto p = r.choice("parity", kParityNames, false)) line.parity = static_cast<Parity>(*p);
+    if (auto s = r.integer("stop_bits", 1, 2, false))
+      line.stop_bits = static_cast<std::uint8_t>(*s);
+    if (auto f = r.choice("framing", kFramingNames, false)) {
       line.framing = static_cast<Framing>(*f);
     }
   }
 
   void read_modbus(TableReader& top) {
-    const toml::table* t = table_at(top, "modbus", false);
+    const toml::table* t = top.table("modbus", false);
     if (t == nullptr) return;
     TableReader r(*t, "modbus", diag_);
     r.expect({"max_registers", "max_bits", "max_gap", "write", "timeout_ms"});
@@ -172,8 +140,9 @@ class Parser {
     if (auto v = r.integer("max_bits", 1, kMaxReadBits, false)) {
       m.max_bits = static_cast<std::uint16_t>(*v);
     }
-    if (auto v = r.integer("max_gap", 0, kMaxReadRegisters - 1, false)) m.max_gap = static_cast<std::uint16_t>(*v);
-    if (auto w = choice(r, diag_, "write", kWriteFunctionNames, false)) {
+    if (auto v = r.integer("max_gap", 0, kMaxReadRegisters - 1, false))
+      m.max_gap = static_cast<std::uint16_t>(*v);
+    if (auto w = r.choice("write", kWriteFunctionNames, false)) {
       m.write = static_cast<WriteFunction>(*w);
     }
     if (auto v = r.integer("timeout_ms", 10, 10000, false)) {
@@ -213,15 +182,15 @@ class Parser {
     } else {
       ok = false;
     }
-    const auto table = choice(r, diag_, "table", kProfileTableNames, true);
+    const auto table = r.choice("table", kProfileTableNames, true);
     if (table) p.table = static_cast<Table>(*table);
     const auto address = r.integer("address", 0, 65535, true);
     if (address) p.address = static_cast<std::uint16_t>(*address);
-    const auto type = choice(r, diag_, "type", kValueTypeNames, true);
+    const auto type = r.choice("type", kValueTypeNames, true);
     if (type) p.type = static_cast<ValueType>(*type);
     ok = ok && table && address && type;
     if (ok) ok = check_shape(r, p);
-    if (auto w = choice(r, diag_, "word_order", kWordOrderNames, false)) {
+    if (auto w = r.choice("word_order", kWordOrderNames, false)) {
       p.word_order = static_cast<WordOrder>(*w);
       if (ok && p.width() != 2) {
         diag_.error(r.node("word_order"), "point.word_order",
@@ -239,9 +208,12 @@ class Parser {
     p.unit = r.string("unit", false).value_or("");
     p.description = r.string("description", false).value_or("");
     ok = read_access_and_limits(r, p) && ok;
-    if (auto v = r.integer("poll_ms", 10, 3600000, false)) p.poll_ms = static_cast<std::uint32_t>(*v);
-    if (ok) profile_.points.push_back(std::move(p));
-    else had_bad_point_ = true;
+    if (auto v = r.integer("poll_ms", 10, 3600000, false))
+      p.poll_ms = static_cast<std::uint32_t>(*v);
+    if (ok)
+      profile_.points.push_back(std::move(p));
+    else
+      had_bad_point_ = true;
   }
 
   // The type fits the table and the point fits the address space and the device's reads.
@@ -261,8 +233,9 @@ class Parser {
     }
     if (!bit_table && p.width() > profile_.modbus.max_registers) {
       diag_.error(r.node("type"), "point.type",
-                  "takes " + std::to_string(p.width()) + " registers, more than the device reads "
-                  "at once ([modbus] max_registers = " +
+                  "takes " + std::to_string(p.width()) +
+                      " registers, more than the device reads "
+                      "at once ([modbus] max_registers = " +
                       std::to_string(profile_.modbus.max_registers) + ")");
       return false;
     }
@@ -273,7 +246,7 @@ class Parser {
     bool ok = true;
     p.trend = r.boolean("trend").value_or(false);
     p.access = p.writable() ? PointAccess::maintain : PointAccess::read;
-    if (auto a = choice(r, diag_, "access", kPointAccessNames, false)) {
+    if (auto a = r.choice("access", kPointAccessNames, false)) {
       p.access = static_cast<PointAccess>(*a);
       if (!p.writable() && p.access != PointAccess::read) {
         diag_.error(r.node("access"), "point.access",
@@ -370,7 +343,8 @@ class Parser {
     const auto bit = r.integer("bit", 0, 15, p != nullptr && !is_bit);
     if (p == nullptr || (!is_bit && !bit)) return std::nullopt;
     if (is_bit && bit) {
-      diag_.error(r.node("bit"), r.qualified("bit"), "a bit point has no bits but its own: omit bit");
+      diag_.error(r.node("bit"), r.qualified("bit"),
+                  "a bit point has no bits but its own: omit bit");
       return std::nullopt;
     }
     if (!is_bit && p->width() != 1) {
@@ -403,7 +377,7 @@ class Parser {
     if (!fault) {
       diag_.error(&n, r.qualified(key),
                   (s != nullptr ? "unknown fault label '" + s->get() + "'" : "must be a label") +
-                      " (known: " + names_list(kFaultNames) + ")");
+                      " (known: " + TableReader::names_text(kFaultNames) + ")");
     }
     return fault;
   }
@@ -454,19 +428,21 @@ class Parser {
       }
     }
     if (const toml::node* o = r.node("other")) {
-      if (const auto f = fault_label(r, *o, "other")) b.other = *f;
-      else ok = false;
+      if (const auto f = fault_label(r, *o, "other"))
+        b.other = *f;
+      else
+        ok = false;
     }
     if (!ok) return std::nullopt;
     return b;
   }
 
   void read_common(TableReader& top) {
-    const toml::table* t = table_at(top, "common", false);
+    const toml::table* t = top.table("common", false);
     if (t == nullptr) return;
     TableReader r(*t, "common", diag_);
-    r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop",
-              "run_forward", "run_reverse", "reset_fault"});
+    r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward",
+              "run_reverse", "reset_fault"});
     CommonBindings& c = profile_.common;
     c.speed_rpm = register_point(r, "speed_rpm", false);
     c.setpoint_rpm = register_point(r, "setpoint_rpm", true);
@@ -479,8 +455,9 @@ class Parser {
     c.reset_fault = value_binding(r, "reset_fault");
     // A drive that can be started must be stoppable through the same profile.
     if ((c.run_forward || c.run_reverse) && !c.stop && r.node("stop") == nullptr) {
-      diag_.error(t, "common", "run_forward or run_reverse without stop: a profile that can start "
-                               "the drive must say how to stop it");
+      diag_.error(t, "common",
+                  "run_forward or run_reverse without stop: a profile that can start "
+                  "the drive must say how to stop it");
     }
     refuse_own_intervals();
   }
@@ -511,7 +488,6 @@ class Parser {
     }
   }
 
-
   Diagnostics diag_;
   Profile profile_;
   bool had_bad_point_ = false;
@@ -520,9 +496,7 @@ class Parser {
 }  // namespace
 
 bool valid_profile_name(std::string_view name) {
-  return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
-           return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
-         });
+  return valid_file_name(name);
 }
 
 std::optional<std::size_t> Profile::find(std::string_view point) const {

@@ -310,11 +310,6 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
       "raw TABLE ADDRESS WORD... | missing TABLE ADDRESS | refuse TABLE ADDRESS CODE [TIMES] | "
       "mute TABLE ADDRESS on|off | short TABLE ADDRESS on|off | silent on|off | late MS | "
       "every-other on|off | help";
-  const auto on_off = [](const std::string& word) -> std::optional<bool> {
-    if (word == "on") return true;
-    if (word == "off") return false;
-    return std::nullopt;
-  };
   if (w.empty() || w[0] == "help") return "ok " + usage;
   if (w[0] == "state") return state();
   if (w[0] == "fault" && w.size() == 2) {
@@ -354,7 +349,7 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
   }
   if ((w[0] == "mute" || w[0] == "short") && w.size() == 4) {
     const auto key = key_of(w[1], w[2]);
-    const auto on = on_off(w[3]);
+    const auto on = parse_on_off(w[3]);
     if (!key || !on) return "error: " + w[0] + " TABLE ADDRESS on|off";
     std::set<Key>& keys = w[0] == "mute" ? mute_ : short_;
     if (*on) {
@@ -384,13 +379,13 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
     late_ = Millis(*ms);
     return "ok answers " + w[1] + " ms late";
   }
-  if (w[0] == "every-other" && w.size() == 2 && on_off(w[1])) {
-    every_other_ = *on_off(w[1]);
+  if (w[0] == "every-other" && w.size() == 2 && parse_on_off(w[1])) {
+    every_other_ = *parse_on_off(w[1]);
     heard_ = 0;
     return "ok every-other " + w[1];
   }
-  if (w[0] == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
-    silent_ = w[1] == "on";
+  if (w[0] == "silent" && w.size() == 2 && parse_on_off(w[1])) {
+    silent_ = *parse_on_off(w[1]);
     return "ok silent " + w[1];
   }
   return "error: unknown command '" + std::string(line) + "'; " + usage;

@@ -36,10 +36,10 @@ constexpr AgitationTiming kDefaultAgitation{5, 5, 12, 8, 12, 8};
 NidecWasherDriver::NidecWasherDriver(const Settings& settings, Millis poll_interval)
     : settings_(settings),
       poll_interval_(std::clamp(poll_interval, kMinPoll, kMaxPoll)),
-      points_(make_points()),
-      values_(pt::count),
       accel_100ms_(settings.accel_100ms),
       agitation_(kDefaultAgitation) {
+  points_ = make_points();
+  values_.resize(pt::count);
   values_[pt::motion] = std::int64_t{static_cast<std::int64_t>(motion_)};
   values_[pt::accel_time] = seconds_of(accel_100ms_);
   values_[pt::agitation_accel] = seconds_of(agitation_.accel);
@@ -66,7 +66,7 @@ Exchange NidecWasherDriver::exchange(const Request& r) const {
 }
 
 std::optional<Exchange> NidecWasherDriver::next_exchange(TimePoint now) {
-  expire(now);
+  queue_.expire(now);
   if (!common_.ready) {
     // 5.1: the ping goes after every start or reconnect, before anything else; writes wait
     // behind it (and make the engine ask at once: the device has writes pending).
@@ -76,17 +76,15 @@ std::optional<Exchange> NidecWasherDriver::next_exchange(TimePoint now) {
     last_sent_ = now;
     return exchange(make_ping(settings_.platform, settings_.empty_raw_weight));
   }
-  if (const Queued* q = front_to_send()) {
+  if (const Writes::Entry* q = front_to_send()) {
     in_flight_ = InFlight::queued;
-    expected_ = q->request->mode;
+    expected_ = q->job.request->mode;
     last_sent_ = now;
-    Exchange ex = exchange(*q->request);
+    Exchange ex = exchange(*q->job.request);
     // Only the attempts that start before the write's deadline (expire() has kept it, so one at
     // least): an ACK long after it would put in force a write the gateway may have failed.
-    const auto fit = (q->deadline - now + attempt_time(ex.frame.size()) - Millis(1)) /
-                     attempt_time(ex.frame.size());
-    ex.attempts = static_cast<std::uint8_t>(
-        std::clamp<std::int64_t>(fit, 1, std::int64_t{settings_.attempts}));
+    ex.attempts =
+        attempts_before(q->deadline, now, attempt_time(ex.frame.size()), settings_.attempts);
     return ex;
   }
   if (next_poll_ && now < *next_poll_) return std::nullopt;
@@ -134,11 +132,7 @@ void NidecWasherDriver::on_comm_lost(TimePoint now) {
   common_.ready = false;
   in_flight_ = InFlight::none;
   next_poll_.reset();
-  while (!queue_.empty()) {
-    const Queued q = queue_.front();
-    queue_.pop_front();
-    finish(q, WriteResult::no_response);
-  }
+  queue_.settle_all(WriteResult::no_response);
   // Section 7: after 6 s without bus activity the inverter stops the motor by itself.
   common_.speed_rpm = 0;
   set_command(Command::stop);
@@ -151,11 +145,6 @@ void NidecWasherDriver::set_command(Command c) {
 
 void NidecWasherDriver::update_running() {
   common_.running = is_run(common_.command) || common_.speed_rpm != 0;
-}
-
-void NidecWasherDriver::take_completions(std::vector<Completion>& out) {
-  out.insert(out.end(), completions_.begin(), completions_.end());
-  completions_.clear();
 }
 
 }  // namespace drivegate::nidec

@@ -2,26 +2,23 @@
 // (driver_replies.cpp), and Modbus writes judged, queued and confirmed (driver_writes.cpp).
 #pragma once
 
-#include <deque>
 #include <optional>
 #include <vector>
 
 #include "codec.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
+#include "drivegate/write_ledger.h"
 #include "points.h"
 #include "settings.h"
 
 namespace drivegate::nidec {
 
-class NidecWasherDriver final : public Driver {
+class NidecWasherDriver final : public DriverBase {
  public:
   // `poll_interval` is the device's; section 6 wants a frame every second at least.
   NidecWasherDriver(const Settings& settings, Millis poll_interval);
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
   [[nodiscard]] TimePoint wake_at() const override;
@@ -31,15 +28,13 @@ class NidecWasherDriver final : public Driver {
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
 
  private:
   // What a queued write is for: decides how its frame is made and how its ACK completes it.
   enum class Job : std::uint8_t { run, setpoint, stop, reset_fault, action };
+  // Its ticket and deadline are the ledger's.
   struct Queued {
     Job job = Job::action;
-    Ticket ticket = 0;
-    TimePoint deadline{};
     Command command = Command::stop;   // run / stop: the command in force once ACKed
     Motion motion = Motion::rotation;  // run: the motion in force once ACKed
     std::uint16_t rpm = 0;             // setpoint: the setpoint in force once ACKed
@@ -47,6 +42,7 @@ class NidecWasherDriver final : public Driver {
     // in force then (driver_writes.cpp); every other frame when the write is applied.
     std::optional<Request> request;
   };
+  using Writes = WriteLedger<Queued>;
   enum class InFlight : std::uint8_t { none, ping, poll, queued };
 
   // The state a write is judged against: as it is now (judged_now()), or as the parts of a
@@ -75,27 +71,22 @@ class NidecWasherDriver final : public Driver {
   WriteStatus apply_setpoint(std::uint16_t rpm, Ticket t, TimePoint deadline);
   WriteStatus apply_point(std::size_t point, const Value& v, Ticket t, TimePoint deadline);
   WriteStatus apply_action(Action a, Ticket t, TimePoint deadline);
-  WriteStatus enqueue(Queued q);
+  WriteStatus enqueue(Queued q, Ticket t, TimePoint deadline);
   void supersede_motion();
   [[nodiscard]] bool motion_queued() const;
-  const Queued* front_to_send();
-  void expire(TimePoint now);
+  const Writes::Entry* front_to_send();
   void complete_front(const Reply& r);
-  void finish(const Queued& q, WriteResult result);
+  void settled(const Queued& q, WriteResult result);
 
   Settings settings_;
   Millis poll_interval_;
-  std::vector<PointSpec> points_;
-  std::vector<Value> values_;
-  CommonState common_;
 
   // Line
   std::optional<TimePoint> next_poll_;  // empty: at once
   TimePoint last_sent_{};
   InFlight in_flight_ = InFlight::none;
   Mode expected_ = Mode::request;
-  std::deque<Queued> queue_;
-  std::vector<Completion> completions_;
+  Writes queue_{completions_, [this](const Writes::Entry& e, WriteResult r) { settled(e.job, r); }};
 
   // Settings of the next run, written through points: the gateway's, not the drive's.
   Motion motion_ = Motion::rotation;

@@ -32,10 +32,6 @@ double factor_of(std::size_t point) {
   return point == pt::accel_time || is_agitation_time(point) ? 10.0 : 1.0;
 }
 
-WriteStatus status_of(WriteCheck c) {
-  return c == WriteCheck::invalid_value ? WriteStatus::invalid_value : WriteStatus::refused;
-}
-
 }  // namespace
 
 // --- judging ---
@@ -113,7 +109,7 @@ WriteStatus NidecWasherDriver::apply(const WriteOp& op, Ticket t, TimePoint now)
   // The judgement check() made, against what is in force now: a part is taken exactly when
   // check() said it would be, unless an ACK changed the drive's state in between.
   Judged state = judged_now();
-  if (const WriteCheck c = judge(op, state); c != WriteCheck::ok) return status_of(c);
+  if (const auto no = refusal(judge(op, state))) return *no;
   const TimePoint deadline = now + kConfirmTimeout;
   switch (op.target) {
     case WriteOp::Target::command:
@@ -132,32 +128,19 @@ WriteStatus NidecWasherDriver::apply_command(Command c, Ticket t, TimePoint dead
   switch (c) {
     case Command::stop:  // 5.7: closed-loop stop
       supersede_motion();
-      return enqueue({.job = Job::stop,
-                      .ticket = t,
-                      .deadline = deadline,
-                      .command = c,
-                      .request = make_bare(Mode::stop)});
+      return enqueue({.job = Job::stop, .command = c, .request = make_bare(Mode::stop)}, t,
+                     deadline);
     case Command::quick_stop:  // 5.8: brake, open loop, as fast as possible
       supersede_motion();
-      return enqueue({.job = Job::stop,
-                      .ticket = t,
-                      .deadline = deadline,
-                      .command = c,
-                      .request = make_bare(Mode::brake)});
+      return enqueue({.job = Job::stop, .command = c, .request = make_bare(Mode::brake)}, t,
+                     deadline);
     case Command::reset_fault:  // no reset frame: a Request (5.2) asks whether the fault cleared
-      return enqueue({.job = Job::reset_fault,
-                      .ticket = t,
-                      .deadline = deadline,
-                      .request = make_bare(Mode::request)});
+      return enqueue({.job = Job::reset_fault, .request = make_bare(Mode::request)}, t, deadline);
     case Command::run_forward:
     case Command::run_reverse:
       // The frame is made when it reaches the line (front_to_send()).
-      return enqueue({.job = Job::run,
-                      .ticket = t,
-                      .deadline = deadline,
-                      .command = c,
-                      .motion = motion_,
-                      .request = std::nullopt});
+      return enqueue({.job = Job::run, .command = c, .motion = motion_, .request = std::nullopt}, t,
+                     deadline);
   }
   return WriteStatus::invalid_value;
 }
@@ -169,11 +152,8 @@ WriteStatus NidecWasherDriver::apply_setpoint(std::uint16_t rpm, Ticket t, TimeP
     return WriteStatus::done;
   }
   // Otherwise the inverter is to take it: in force once it ACKed the frame that carries it.
-  return enqueue({.job = Job::setpoint,
-                  .ticket = t,
-                  .deadline = deadline,
-                  .rpm = rpm,
-                  .request = std::nullopt});  // made when it reaches the line
+  return enqueue({.job = Job::setpoint, .rpm = rpm, .request = std::nullopt}, t,
+                 deadline);  // made when it reaches the line
 }
 
 WriteStatus NidecWasherDriver::apply_point(std::size_t point, const Value& v, Ticket t,
@@ -231,35 +211,33 @@ WriteStatus NidecWasherDriver::apply_action(Action a, Ticket t, TimePoint deadli
       break;
   }
   values_[pt::action_status] = std::int64_t{static_cast<std::int64_t>(ActionStatus::pending)};
-  return enqueue({.job = Job::action, .ticket = t, .deadline = deadline, .request = r});
+  return enqueue({.job = Job::action, .request = r}, t, deadline);
 }
 
 // --- the queue ---
 
-WriteStatus NidecWasherDriver::enqueue(Queued q) {
-  queue_.push_back(std::move(q));
+WriteStatus NidecWasherDriver::enqueue(Queued q, Ticket t, TimePoint deadline) {
+  queue_.push(std::move(q), t, deadline);
   return WriteStatus::pending;
 }
 
 bool NidecWasherDriver::motion_queued() const {
-  return std::any_of(queue_.begin(), queue_.end(),
-                     [](const Queued& q) { return q.job == Job::run || q.job == Job::setpoint; });
+  return std::any_of(queue_.begin(), queue_.end(), [](const Writes::Entry& e) {
+    return e.job.job == Job::run || e.job.job == Job::setpoint;
+  });
 }
 
 void NidecWasherDriver::supersede_motion() {
   // A stop overtakes the runs and speed changes queued before it that are not on the line right
   // now: they fail (0x0B) and leave what is in force, so the motor is not started only to be
   // stopped. The one on the line may have reached the inverter; the stop follows it.
-  for (auto it = queue_.begin(); it != queue_.end();) {
-    const bool on_line = it == queue_.begin() && in_flight_ == InFlight::queued;
-    if (!on_line && (it->job == Job::run || it->job == Job::setpoint)) {
-      const Queued q = *it;
-      it = queue_.erase(it);
-      finish(q, WriteResult::no_response);
-    } else {
-      ++it;
-    }
-  }
+  const Writes::Entry* on_line =
+      in_flight_ == InFlight::queued && !queue_.empty() ? &queue_.front() : nullptr;
+  queue_.settle_if(
+      [on_line](const Writes::Entry& e) {
+        return &e != on_line && (e.job.job == Job::run || e.job.job == Job::setpoint);
+      },
+      WriteResult::no_response);
 }
 
 std::optional<Request> NidecWasherDriver::run_request(Command c, Motion m,
@@ -281,9 +259,10 @@ std::optional<Request> NidecWasherDriver::run_request(Command c, Motion m,
   return std::nullopt;
 }
 
-const NidecWasherDriver::Queued* NidecWasherDriver::front_to_send() {
+const NidecWasherDriver::Writes::Entry* NidecWasherDriver::front_to_send() {
   while (!queue_.empty()) {
-    Queued& q = queue_.front();
+    Writes::Entry& e = queue_.front();
+    Queued& q = e.job;
     if (!q.request && q.job == Job::run) {
       // At the setpoint in force when the run reaches the line, so that a setpoint stored or
       // confirmed after the run command was written still counts.
@@ -294,66 +273,51 @@ const NidecWasherDriver::Queued* NidecWasherDriver::front_to_send() {
         // The run it was for is no longer in force (a stop or a fault came first): stored, as
         // when written while stopped.
         common_.setpoint_rpm = q.rpm;
-        const Queued stored = q;
-        queue_.pop_front();
-        finish(stored, WriteResult::ok);
+        queue_.settle_front(WriteResult::ok);
         continue;
       }
       // The motion in force again at the new speed: each of those frames carries its target.
       q.request = run_request(common_.command, motion_in_force_, q.rpm);
     }
-    if (q.request) return &q;
+    if (q.request) return &e;
     // judge() keeps every run the frames cannot carry out; should one get here all the same, it
     // is refused rather than sent as something else.
-    const Queued impossible = q;
-    queue_.pop_front();
-    finish(impossible, WriteResult::refused);
+    queue_.settle_front(WriteResult::refused);
   }
   return nullptr;
 }
 
-void NidecWasherDriver::expire(TimePoint now) {
-  for (auto it = queue_.begin(); it != queue_.end();) {
-    if (it->deadline <= now) {
-      const Queued q = *it;
-      it = queue_.erase(it);
-      finish(q, WriteResult::no_response);
-    } else {
-      ++it;
-    }
-  }
-}
-
 void NidecWasherDriver::complete_front(const Reply& r) {
   if (queue_.empty()) return;
-  const Queued q = queue_.front();
-  queue_.pop_front();
+  const Writes::Entry e = queue_.take_front();
+  const Queued& q = e.job;
+  const auto finish = [&](WriteResult result) { queue_.settle(e, result); };
   switch (q.job) {
     case Job::run:
       // Section 8: a faulted inverter does not start, and its ACK carries the Error bits
       // (apply_error() has already taken any run out of force).
-      if (r.error() != 0) return finish(q, WriteResult::refused);
+      if (r.error() != 0) return finish(WriteResult::refused);
       motion_in_force_ = q.motion;
       set_command(q.command);
-      return finish(q, WriteResult::ok);
+      return finish(WriteResult::ok);
     case Job::setpoint:
       // Not taken: the old setpoint stays in force (and the fault stopped the motor).
-      if (r.error() != 0) return finish(q, WriteResult::refused);
+      if (r.error() != 0) return finish(WriteResult::refused);
       common_.setpoint_rpm = q.rpm;
-      return finish(q, WriteResult::ok);
+      return finish(WriteResult::ok);
     case Job::stop:
       // A stop is in force whatever the Error byte says: a fault stops the motor too.
       set_command(q.command);
-      return finish(q, WriteResult::ok);
+      return finish(WriteResult::ok);
     case Job::reset_fault:
-      return finish(q, r.error() == 0 ? WriteResult::ok : WriteResult::refused);
+      return finish(r.error() == 0 ? WriteResult::ok : WriteResult::refused);
     case Job::action:
-      return finish(q, WriteResult::ok);
+      return finish(WriteResult::ok);
   }
 }
 
-void NidecWasherDriver::finish(const Queued& q, WriteResult result) {
-  completions_.push_back({q.ticket, result});
+// Told of every write as it settles, after it left the queue.
+void NidecWasherDriver::settled(const Queued& q, WriteResult result) {
   if (q.job == Job::action) {
     const ActionStatus s =
         result == WriteResult::ok ? ActionStatus::done : ActionStatus::no_response;

@@ -20,12 +20,6 @@ std::optional<long> number(const std::string& s, long max) {
   return std::nullopt;
 }
 
-std::string hex(unsigned v, int width) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%0*X", width, v);
-  return buf;
-}
-
 constexpr const char* kMotionNames[] = {
     "stopped", "cw", "ccw", "agitation", "spin", "free_shaft_spin", "stopping", "braking"};
 
@@ -71,8 +65,8 @@ std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) 
     trip(*bits, now);
     return "ok faults=" + hex(faults_, 2);
   }
-  if (cmd == "silent" && w.size() == 2 && (w[1] == "on" || w[1] == "off")) {
-    silent_ = w[1] == "on";
+  if (cmd == "silent" && w.size() == 2 && parse_on_off(w[1])) {
+    silent_ = *parse_on_off(w[1]);
     rx_.clear();
     return std::string("ok silent=") + (silent_ ? "1" : "0");
   }

@@ -10,11 +10,10 @@
 namespace drivegate::unicla {
 
 EDriveDriver::EDriveDriver(std::uint8_t address, Millis poll_interval, const Settings& settings)
-    : address_(address),
-      poll_interval_(poll_interval),
-      settings_(settings),
-      points_(make_points()),
-      values_(points_.size()) {}
+    : address_(address), poll_interval_(poll_interval), settings_(settings) {
+  points_ = make_points();
+  values_.resize(points_.size());
+}
 
 DriverTraits EDriveDriver::traits() const {
   DriverTraits t;
@@ -183,11 +182,6 @@ void EDriveDriver::on_comm_lost(TimePoint now) {
   status_.reset();
   next_poll_ = std::min(next_poll_, now);
   fail_all();
-}
-
-void EDriveDriver::take_completions(std::vector<Completion>& out) {
-  out.insert(out.end(), completions_.begin(), completions_.end());
-  completions_.clear();
 }
 
 }  // namespace drivegate::unicla

@@ -10,12 +10,12 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <optional>
 #include <vector>
 
 #include "codec.h"
-#include "drivegate/driver.h"
+#include "drivegate/driver_base.h"
+#include "drivegate/write_ledger.h"
 #include "payloads.h"
 #include "settings.h"
 
@@ -41,14 +41,11 @@ inline constexpr std::int32_t kSpeedToleranceRpm = 50;
 static_assert(Settings{}.reply_timeout >
               static_cast<long>(1 + kHeaderSize + kBuildInfoSize + kCrcSize + 1) * kCharacterTime);
 
-class EDriveDriver final : public Driver {
+class EDriveDriver final : public DriverBase {
  public:
   EDriveDriver(std::uint8_t address, Millis poll_interval, const Settings& settings);
 
   [[nodiscard]] DriverTraits traits() const override;
-  [[nodiscard]] const std::vector<PointSpec>& points() const override { return points_; }
-  [[nodiscard]] const std::vector<Value>& values() const override { return values_; }
-  [[nodiscard]] const CommonState& common() const override { return common_; }
 
   std::optional<Exchange> next_exchange(TimePoint now) override;
   [[nodiscard]] TimePoint wake_at() const override;
@@ -58,7 +55,6 @@ class EDriveDriver final : public Driver {
 
   [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
   WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
-  void take_completions(std::vector<Completion>& out) override;
 
  private:
   enum class Phase : std::uint8_t { build_information, running_limits, polling };
@@ -77,19 +73,19 @@ class EDriveDriver final : public Driver {
     std::uint16_t min = 0;
     std::uint16_t max = 0;
   };
-  // A write the drive has not shown it took yet.
+  // A write the drive has not shown it took yet. The ledger keeps the writes it carries out (none:
+  // the undoing of a failed run), its deadline (confirm_timeout after it was applied) and whether
+  // it went out.
   struct Pending {
     Change change = Change::stop;
-    std::uint16_t rpm = 0;        // what Set Run State carries: 0 stops
-    std::vector<Ticket> tickets;  // the writes it carries out (none: the undoing of a failed run)
-    TimePoint deadline{};         // confirm_timeout after it was applied
-    std::uint64_t order = 0;      // when it was applied, across the two kinds of write
-    bool sent = false;
+    std::uint16_t rpm = 0;    // what Set Run State carries: 0 stops
+    std::uint64_t order = 0;  // when it was applied, across the two kinds of write
     // When it went out, for the statuses after it to be judged against.
     bool was_running = false;
     std::int32_t rpm_at_send = 0;
     bool saw_status = false;  // a status came back after it went out
   };
+  using Writes = WriteLedger<Pending>;
 
   // driver.cpp
   Frame request(CommandByte cmd, MessageId id, Bytes payload = {});
@@ -105,31 +101,29 @@ class EDriveDriver final : public Driver {
   [[nodiscard]] bool has_unsent_write() const;
   [[nodiscard]] bool awaiting_confirmation() const;
   [[nodiscard]] TimePoint earliest_deadline() const;
-  Pending make_pending(Change change, std::uint16_t rpm, Ticket t, TimePoint now);
+  Pending make_pending(Change change, std::uint16_t rpm);
+  [[nodiscard]] TimePoint deadline_from(TimePoint now) const;
   bool join(Change change, std::uint16_t rpm, Ticket t);
   WriteStatus apply_setpoint(std::uint16_t rpm, Ticket t, TimePoint now);
   WriteStatus apply_run_state(Change change, std::uint16_t rpm, Ticket t, TimePoint now);
   WriteStatus apply_acknowledge(Ticket t, TimePoint now);
   std::optional<Exchange> next_write(TimePoint now);
-  Exchange send(Pending& w, TimePoint now);
+  Exchange send(Writes::Entry& e, TimePoint now);
   void settle_front();
   void confirm(const Status& s, TimePoint now);
   [[nodiscard]] std::optional<WriteResult> verdict(const Pending& w, const Status& s) const;
   void take_effect(const Pending& w);
   void finish_front(WriteResult r, TimePoint now);
-  void complete(const Pending& w, WriteResult r);
-  void supersede();
+  void settle_ack(WriteResult r);
   void expire(TimePoint now);
   void fail_all();
 
   std::uint8_t address_;
   Millis poll_interval_;
   Settings settings_;
-  std::vector<PointSpec> points_;
-  std::vector<Value> values_;
-  // command and setpoint_rpm are what the drive holds: set when a status confirmed a write, or
-  // when a setpoint is stored while no run is in force; nothing else touches them.
-  CommonState common_;
+  // common_ (DriverBase): its command and setpoint_rpm are what the drive holds, set when a
+  // status confirmed a write, or when a setpoint is stored while no run is in force; nothing else
+  // touches them.
 
   Phase phase_ = Phase::build_information;
   std::uint8_t sequence_ = 0;
@@ -142,10 +136,10 @@ class EDriveDriver final : public Driver {
   std::optional<std::uint8_t> control_enabled_;
   std::optional<Status> status_;
 
-  std::deque<Pending> run_writes_;  // Set Run State, oldest first; only the front is on the line
-  std::optional<Pending> ack_;      // Acknowledge Faults
+  // Set Run State, oldest first; only the front is on the line.
+  Writes run_writes_{completions_};
+  std::optional<Writes::Entry> ack_;  // Acknowledge Faults, settled through run_writes_
   std::uint64_t next_order_ = 0;
-  std::vector<Completion> completions_;
 };
 
 }  // namespace drivegate::unicla

@@ -69,14 +69,7 @@ WriteCheck EDriveDriver::check(std::span<const WriteOp> request) const {
 
 WriteStatus EDriveDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   adopting_ = false;  // a client decides from now on
-  switch (judge(op, in_force())) {
-    case WriteCheck::ok:
-      break;
-    case WriteCheck::invalid_value:
-      return WriteStatus::invalid_value;
-    case WriteCheck::refused:
-      return WriteStatus::refused;
-  }
+  if (const auto no = refusal(judge(op, in_force()))) return *no;
   // judge() let no point through, and a setpoint of 0..65535 only.
   if (op.target == WriteOp::Target::setpoint) {
     return apply_setpoint(static_cast<std::uint16_t>(op.rpm), t, now);
@@ -111,7 +104,9 @@ WriteStatus EDriveDriver::apply_setpoint(std::uint16_t rpm, Ticket t, TimePoint 
   }
   // A run is in force, or a Set Run State ahead of it may yet start or stop the drive: its turn
   // decides (settle_front()).
-  if (!join(Change::speed, rpm, t)) run_writes_.push_back(make_pending(Change::speed, rpm, t, now));
+  if (!join(Change::speed, rpm, t)) {
+    run_writes_.push(make_pending(Change::speed, rpm), t, deadline_from(now));
+  }
   return WriteStatus::pending;
 }
 
@@ -120,38 +115,39 @@ WriteStatus EDriveDriver::apply_run_state(Change change, std::uint16_t rpm, Tick
   if (join(change, rpm, t)) return WriteStatus::pending;
   // A command decides what the drive is to do: a Set Run State not yet confirmed is overtaken by
   // it and fails, in force or not, whether or not it reached the drive.
-  supersede();
-  run_writes_.push_back(make_pending(change, rpm, t, now));
+  run_writes_.settle_all(WriteResult::no_response);
+  run_writes_.push(make_pending(change, rpm), t, deadline_from(now));
   return WriteStatus::pending;
 }
 
 WriteStatus EDriveDriver::apply_acknowledge(Ticket t, TimePoint now) {
   // A second acknowledge overtakes the first with a frame of its own: the condition behind the
   // fault may have gone since the first went out.
-  if (ack_) complete(*ack_, WriteResult::no_response);
-  ack_ = make_pending(Change::acknowledge, 0, t, now);
+  settle_ack(WriteResult::no_response);
+  ack_ = Writes::Entry{make_pending(Change::acknowledge, 0), {t}, deadline_from(now)};
   return WriteStatus::pending;
 }
 
-EDriveDriver::Pending EDriveDriver::make_pending(Change change, std::uint16_t rpm, Ticket t,
-                                                 TimePoint now) {
+EDriveDriver::Pending EDriveDriver::make_pending(Change change, std::uint16_t rpm) {
   Pending w;
   w.change = change;
   w.rpm = rpm;
-  w.tickets = {t};
-  // From when it was applied, not sent: a write queued behind another is decided in time too.
-  w.deadline = now + settings_.confirm_timeout;
   w.order = next_order_++;
   return w;
+}
+
+// From when it was applied, not sent: a write queued behind another is decided in time too.
+TimePoint EDriveDriver::deadline_from(TimePoint now) const {
+  return now + settings_.confirm_timeout;
 }
 
 // A write asking exactly what the last unconfirmed Set Run State asks waits for the same status
 // instead of a frame of its own, and gets the same verdict.
 bool EDriveDriver::join(Change change, std::uint16_t rpm, Ticket t) {
   if (run_writes_.empty()) return false;
-  Pending& last = run_writes_.back();
-  if (last.change != change || last.rpm != rpm) return false;
-  last.tickets.push_back(t);
+  Writes::Entry& last = run_writes_.back();
+  if (last.job.change != change || last.job.rpm != rpm) return false;
+  run_writes_.join(last, t);
   return true;
 }
 
@@ -160,12 +156,11 @@ bool EDriveDriver::has_unsent_write() const {
 }
 
 bool EDriveDriver::awaiting_confirmation() const {
-  return (!run_writes_.empty() && run_writes_.front().sent) || (ack_ && ack_->sent);
+  return run_writes_.front_on_line() || (ack_ && ack_->sent);
 }
 
 TimePoint EDriveDriver::earliest_deadline() const {
-  TimePoint t = TimePoint::max();
-  for (const Pending& w : run_writes_) t = std::min(t, w.deadline);
+  TimePoint t = run_writes_.next_deadline().value_or(TimePoint::max());
   if (ack_) t = std::min(t, ack_->deadline);
   return t;
 }
@@ -174,19 +169,21 @@ TimePoint EDriveDriver::earliest_deadline() const {
 // only once the one before it was decided.
 std::optional<Exchange> EDriveDriver::next_write(TimePoint now) {
   settle_front();
-  Pending* run = !run_writes_.empty() && !run_writes_.front().sent ? &run_writes_.front() : nullptr;
-  Pending* ack = ack_ && !ack_->sent ? &*ack_ : nullptr;
-  if (run != nullptr && ack != nullptr && ack->order < run->order) run = nullptr;
+  Writes::Entry* run =
+      !run_writes_.empty() && !run_writes_.front().sent ? &run_writes_.front() : nullptr;
+  Writes::Entry* ack = ack_ && !ack_->sent ? &*ack_ : nullptr;
+  if (run != nullptr && ack != nullptr && ack->job.order < run->job.order) run = nullptr;
   if (run != nullptr) return send(*run, now);
   if (ack != nullptr) return send(*ack, now);
   return std::nullopt;
 }
 
-Exchange EDriveDriver::send(Pending& w, TimePoint now) {
+Exchange EDriveDriver::send(Writes::Entry& e, TimePoint now) {
+  Pending& w = e.job;
   const Frame f = w.change == Change::acknowledge
                       ? request(CommandByte::write, MessageId::acknowledge_faults)  // "Payload: 0"
                       : request(CommandByte::write, MessageId::set_run_state, encode_speed(w.rpm));
-  w.sent = true;
+  e.sent = true;
   w.was_running = drive_runs();
   w.rpm_at_send = status_ ? status_->rpm : 0;
   // The status read that may confirm it goes out right after it.
@@ -204,19 +201,18 @@ Exchange EDriveDriver::send(Pending& w, TimePoint now) {
 // failed), or at the speed in force, needs no frame: in force at once.
 void EDriveDriver::settle_front() {
   while (!run_writes_.empty()) {
-    const Pending& w = run_writes_.front();
-    if (w.sent || w.change != Change::speed) return;
-    if (is_run(common_.command) && w.rpm != common_.setpoint_rpm) return;
-    common_.setpoint_rpm = w.rpm;
-    complete(w, WriteResult::ok);
-    run_writes_.pop_front();
+    const Writes::Entry& e = run_writes_.front();
+    if (e.sent || e.job.change != Change::speed) return;
+    if (is_run(common_.command) && e.job.rpm != common_.setpoint_rpm) return;
+    common_.setpoint_rpm = e.job.rpm;
+    run_writes_.settle_front(WriteResult::ok);
   }
 }
 
 // A status read after a write went out: the drive took it, refused it, or has not shown yet.
 void EDriveDriver::confirm(const Status& s, TimePoint now) {
-  if (!run_writes_.empty() && run_writes_.front().sent) {
-    Pending& w = run_writes_.front();
+  if (run_writes_.front_on_line()) {
+    Pending& w = run_writes_.front().job;
     w.saw_status = true;
     if (const auto r = verdict(w, s)) {
       if (*r == WriteResult::ok) take_effect(w);
@@ -224,11 +220,8 @@ void EDriveDriver::confirm(const Status& s, TimePoint now) {
     }
   }
   if (ack_ && ack_->sent) {
-    ack_->saw_status = true;
-    if (!is_fault_state(s.op_state)) {
-      complete(*ack_, WriteResult::ok);
-      ack_.reset();
-    }
+    ack_->job.saw_status = true;
+    if (!is_fault_state(s.op_state)) settle_ack(WriteResult::ok);
   }
 }
 
@@ -277,51 +270,36 @@ void EDriveDriver::take_effect(const Pending& w) {
 // with a Set Run State 0 of the driver's own: the drive may have taken it unseen, or may act on it
 // once the fault that refused it clears, and the PLC was told it did not happen.
 void EDriveDriver::finish_front(WriteResult r, TimePoint now) {
-  const Pending w = std::move(run_writes_.front());
-  run_writes_.pop_front();
-  complete(w, r);
-  if (r != WriteResult::ok && w.change == Change::run && !is_run(common_.command)) {
-    Pending undo;
-    undo.change = Change::stop;
-    undo.deadline = now + settings_.confirm_timeout;
-    undo.order = next_order_++;
-    run_writes_.push_front(undo);
+  const Writes::Entry w = run_writes_.take_front();
+  run_writes_.settle(w, r);
+  if (r != WriteResult::ok && w.job.change == Change::run && !is_run(common_.command)) {
+    run_writes_.push_front(make_pending(Change::stop, 0), {}, deadline_from(now));
   }
 }
 
-void EDriveDriver::complete(const Pending& w, WriteResult r) {
-  for (const Ticket t : w.tickets) completions_.push_back({t, r});
-}
-
-void EDriveDriver::supersede() {
-  for (const Pending& w : run_writes_) complete(w, WriteResult::no_response);
-  run_writes_.clear();
+void EDriveDriver::settle_ack(WriteResult r) {
+  if (ack_) run_writes_.settle(*ack_, r);
+  ack_.reset();
 }
 
 // Writes the drive has not shown it took within confirm_timeout fail: "did not take it in time".
+// Only the front is ever on the line: it is decided first (a failed run is undone), then those
+// still waiting.
 void EDriveDriver::expire(TimePoint now) {
-  for (;;) {
-    const auto late = std::find_if(run_writes_.begin(), run_writes_.end(),
-                                   [now](const Pending& w) { return now >= w.deadline; });
-    if (late == run_writes_.end()) break;
-    if (late == run_writes_.begin() && late->sent) {
-      finish_front(WriteResult::no_response, now);
-      continue;
-    }
-    complete(*late, WriteResult::no_response);
-    run_writes_.erase(late);
+  if (run_writes_.front_on_line() && run_writes_.front().deadline <= now) {
+    finish_front(WriteResult::no_response, now);
   }
+  run_writes_.settle_if([now](const Writes::Entry& e) { return !e.sent && e.deadline <= now; },
+                        WriteResult::no_response);
   if (ack_ && now >= ack_->deadline) {
     // Statuses came back and the fault still stands: the drive did not take the acknowledge.
-    complete(*ack_, ack_->saw_status ? WriteResult::refused : WriteResult::no_response);
-    ack_.reset();
+    settle_ack(ack_->job.saw_status ? WriteResult::refused : WriteResult::no_response);
   }
 }
 
 void EDriveDriver::fail_all() {
-  supersede();
-  if (ack_) complete(*ack_, WriteResult::no_response);
-  ack_.reset();
+  run_writes_.settle_all(WriteResult::no_response);
+  settle_ack(WriteResult::no_response);
 }
 
 }  // namespace drivegate::unicla

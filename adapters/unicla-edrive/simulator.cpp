@@ -32,12 +32,6 @@ bool is_fault(OpState s) {
   return is_fault_state(static_cast<std::uint8_t>(s));
 }
 
-std::optional<bool> on_off(std::string_view s) {
-  if (s == "on") return true;
-  if (s == "off") return false;
-  return std::nullopt;
-}
-
 std::string snake(std::string_view label) {
   std::string out;
   for (const char c : label) {
@@ -49,12 +43,6 @@ std::string snake(std::string_view label) {
   }
   while (!out.empty() && out.back() == '_') out.pop_back();
   return out;
-}
-
-std::string hex(std::uint32_t v, int digits) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%0*X", digits, v);
-  return buf;
 }
 
 }  // namespace
@@ -320,7 +308,7 @@ std::string EDriveSimulator::control(std::string_view line, TimePoint /*now*/) {
   }
   if (cmd == "flags" && w.size() == 3) return flags_command(w[1], w[2]);
   if ((cmd == "sticky" || cmd == "control" || cmd == "silent") && w.size() == 2) {
-    const auto b = on_off(w[1]);
+    const auto b = parse_on_off(w[1]);
     if (!b) return std::string("error: expected on or off; ") + kHelp;
     if (cmd == "sticky") sticky_ = *b;
     if (cmd == "control") limits_.control_enabled = *b ? 1 : 0;

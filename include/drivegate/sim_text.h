@@ -1,9 +1,12 @@
-// Reading simulator operator commands (the lines `drivegate sim` passes to control()): words
-// separated by blanks, and numbers in decimal or 0x-prefixed hexadecimal.
+// The text of simulator operator commands (the lines `drivegate sim` passes to control()) and of
+// the state lines they answer with: words separated by blanks, numbers in decimal or 0x-prefixed
+// hexadecimal, on / off, and registers shown in hexadecimal.
 #pragma once
 
 #include <charconv>
 #include <cstdint>
+#include <cstdio>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -35,6 +38,31 @@ inline std::optional<std::uint32_t> parse_unsigned(std::string_view s,
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
   if (s.empty() || ec != std::errc{} || p != s.data() + s.size() || v > max) return std::nullopt;
   return v;
+}
+
+// parse_unsigned() within the range of `T` (a byte, a register), as a `T`.
+template <class T>
+std::optional<T> parse_uint(std::string_view s) {
+  static_assert(std::numeric_limits<T>::max() <= 0xFFFFFFFFu);
+  if (const auto v = parse_unsigned(s, std::numeric_limits<T>::max())) return static_cast<T>(*v);
+  return std::nullopt;
+}
+
+// "on" or "off" (a switch such as `silent on`); nullopt for anything else.
+inline std::optional<bool> parse_on_off(std::string_view s) {
+  if (s == "on") return true;
+  if (s == "off") return false;
+  return std::nullopt;
+}
+
+enum class HexCase : std::uint8_t { upper, lower };
+
+// "0x" and `v` in at least `digits` hexadecimal digits, as a simulator's state line shows a
+// register or a code: hex(0x2A, 4) is "0x002A".
+inline std::string hex(std::uint32_t v, int digits, HexCase letters = HexCase::upper) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, letters == HexCase::upper ? "0x%0*X" : "0x%0*x", digits, v);
+  return buf;
 }
 
 }  // namespace drivegate

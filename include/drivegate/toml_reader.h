@@ -5,6 +5,9 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <array>
+#include <cstddef>
 #include <initializer_list>
 #include <optional>
 #include <set>
@@ -176,6 +179,40 @@ class TableReader {
     return std::nullopt;
   }
 
+  // A table at `key`; nullptr when absent (an error if `required`) or (an error) not a table.
+  const toml::table* table(std::string_view key, bool required) {
+    const toml::node* n = node(key);
+    if (n == nullptr) {
+      if (required) missing(key);
+      return nullptr;
+    }
+    const auto* t = n->as_table();
+    if (t == nullptr) diag_.error(n, qualified(key), "must be a table");
+    return t;
+  }
+
+  // One of `names` at `key`: its index.
+  template <std::size_t N>
+  std::optional<std::size_t> choice(std::string_view key,
+                                    const std::array<std::string_view, N>& names, bool required) {
+    const auto text = string(key, required);
+    if (!text) return std::nullopt;
+    for (std::size_t i = 0; i < N; ++i) {
+      if (names[i] == *text) return i;
+    }
+    diag_.error(node(key), qualified(key),
+                "must be one of " + names_text(names) + " (got '" + *text + "')");
+    return std::nullopt;
+  }
+
+  // "a, b, c": the names a key may take, for an error.
+  template <std::size_t N>
+  static std::string names_text(const std::array<std::string_view, N>& names) {
+    std::string out;
+    for (const auto n : names) out += (out.empty() ? "" : ", ") + std::string(n);
+    return out;
+  }
+
   void missing(std::string_view key) {
     diag_.error(&table_, qualified(key), "required key is missing");
   }
@@ -209,6 +246,14 @@ class TableReader {
   std::set<std::string> seen_;
   std::vector<std::string> known_;
 };
+
+// A name that is also a file's name in a folder of them (a profile, a protocol description):
+// 1..64 characters of a-z, 0-9, '-' and '_'.
+inline bool valid_file_name(std::string_view name) {
+  return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
+  });
+}
 
 // `root[key]` as an array of tables ([[key]]); nullptr when absent or (with an error) not one.
 inline const toml::array* array_of_tables(const toml::table& root, std::string_view key,

@@ -1,16 +1,22 @@
-// The bookkeeping of a driver's writes on their way to the drive: every part apply() answered
-// `pending`, in the order applied, each with the tickets it carries out (a later write the same
-// frame carries out too joins it), its deadline and whether a frame of it went out, beside what
-// the driver itself keeps of it (`Job`); and the outcomes of those settled since the gateway last
-// asked, which take_completions() hands over. Header-only, no clock: time is the `now` given.
+// The bookkeeping of a driver's writes on their way to the drive, one helper for every driver.
+//
+// `Completions`: the outcomes of writes settled since the gateway last asked, which
+// Driver::take_completions() hands over (DriverBase, driver_base.h, keeps one and does that).
+//
+// `WriteLedger<Job>`: every part apply() answered `pending`, in the order applied, each with the
+// tickets it carries out (a later write the same frame carries out too joins it), its deadline and
+// whether a frame of it went out, beside what the driver itself keeps of it (`Job`). Settling an
+// entry removes it and gives its tickets their outcome in the `Completions` it was made with (its
+// own when none is given). A driver that moves the write on the line out of the queue (a request
+// built from it) takes it with take_front() and settles it later with settle(). Header-only, no
+// clock: time is the `now` given.
 //
 //   struct Job { Change change; std::uint16_t rpm; };
-//   WriteLedger<Job> writes_;
+//   WriteLedger<Job> writes_{completions_};
 //   WriteStatus apply(...)  { writes_.push({Change::run, rpm}, ticket, now + kConfirm); ... }
 //   next_exchange(now)      { writes_.expire(now); if (auto* w = writes_.first_unsent()) ... }
 //   on_receive(...)         { if (took) writes_.settle_front(WriteResult::ok); }
 //   on_comm_lost(now)       { writes_.settle_all(WriteResult::no_response); }
-//   take_completions(out)   { writes_.take_completions(out); }
 #pragma once
 
 #include <algorithm>
@@ -21,9 +27,25 @@
 #include <utility>
 #include <vector>
 
+#include "drivegate/bytes.h"
 #include "drivegate/driver.h"
 
 namespace drivegate {
+
+// Outcomes of writes settled since the gateway last asked, in the order they settled.
+class Completions {
+ public:
+  void add(Ticket t, WriteResult r, Bytes reply = {}) { list_.push_back({t, r, std::move(reply)}); }
+  // Driver::take_completions(): appended to `out`, and handed over once.
+  void take(std::vector<Completion>& out) {
+    for (Completion& c : list_) out.push_back(std::move(c));
+    list_.clear();
+  }
+  [[nodiscard]] bool empty() const { return list_.empty(); }
+
+ private:
+  std::vector<Completion> list_;
+};
 
 template <class Job>
 class WriteLedger {
@@ -31,8 +53,8 @@ class WriteLedger {
   struct Entry {
     Job job;
     std::vector<Ticket> tickets;  // none: the driver's own frame (an undo), settled silently
-    TimePoint deadline{};         // settled no_response by expire() at or after it
-    bool sent = false;            // a frame carrying it went out
+    TimePoint deadline{};  // settled no_response by expire() at it, by expire_after() past it
+    bool sent = false;     // a frame carrying it went out
   };
   // Told of every entry as it settles, after it left the queue: the driver's own consequences (a
   // status point, undoing on the drive a write that failed). It must not touch this queue; what it
@@ -41,11 +63,18 @@ class WriteLedger {
 
   WriteLedger() = default;
   explicit WriteLedger(Settled on_settled) : on_settled_(std::move(on_settled)) {}
+  // Outcomes go to `done` (the driver's, which take_completions() hands over).
+  explicit WriteLedger(Completions& done, Settled on_settled = {})
+      : done_(&done), on_settled_(std::move(on_settled)) {}
+  // `done_` may point at `own_`: neither copied nor moved.
+  WriteLedger(const WriteLedger&) = delete;
+  WriteLedger& operator=(const WriteLedger&) = delete;
 
   [[nodiscard]] bool empty() const { return entries_.empty(); }
   [[nodiscard]] std::size_t size() const { return entries_.size(); }
   Entry& front() { return entries_.front(); }
   [[nodiscard]] const Entry& front() const { return entries_.front(); }
+  Entry& back() { return entries_.back(); }
   auto begin() { return entries_.begin(); }
   auto end() { return entries_.end(); }
   [[nodiscard]] auto begin() const { return entries_.begin(); }
@@ -60,6 +89,17 @@ class WriteLedger {
     entries_.push_front({std::move(job), std::move(tickets), deadline, false});
     return entries_.front();
   }
+  // The front entry, out of the queue but not settled: the driver holds it while its frame is on
+  // the line, and settles it with settle(). The queue must not be empty.
+  Entry take_front() {
+    Entry e = std::move(entries_.front());
+    entries_.pop_front();
+    return e;
+  }
+  // An entry taken out of the queue (take_front()), or kept apart by the driver, settles: its
+  // tickets get `r`, and `reply` where the write is a forwarded request (Completion::reply).
+  void settle(const Entry& e, WriteResult r, Bytes reply = {}) { finish(e, r, std::move(reply)); }
+
   // A later write that `e`'s frame carries out as well: it settles with `e`.
   void join(Entry& e, Ticket t) { e.tickets.push_back(t); }
 
@@ -105,6 +145,11 @@ class WriteLedger {
   std::size_t expire(TimePoint now) {
     return settle_if([now](const Entry& e) { return e.deadline <= now; }, WriteResult::no_response);
   }
+  // Entries whose deadline has passed, where the deadline is the last moment a write may still
+  // go out (a send-by): no_response, and never sent.
+  std::size_t expire_after(TimePoint now) {
+    return settle_if([now](const Entry& e) { return e.deadline < now; }, WriteResult::no_response);
+  }
   // The earliest deadline, for wake_at().
   [[nodiscard]] std::optional<TimePoint> next_deadline() const {
     std::optional<TimePoint> t;
@@ -115,21 +160,19 @@ class WriteLedger {
   }
 
   // A part that settles without an entry of its own (a write refused after the fact).
-  void complete(Ticket t, WriteResult r) { completions_.push_back({t, r}); }
-  void take_completions(std::vector<Completion>& out) {
-    out.insert(out.end(), completions_.begin(), completions_.end());
-    completions_.clear();
-  }
-  [[nodiscard]] bool has_completions() const { return !completions_.empty(); }
+  void complete(Ticket t, WriteResult r) { done_->add(t, r); }
+  void take_completions(std::vector<Completion>& out) { done_->take(out); }
+  [[nodiscard]] bool has_completions() const { return !done_->empty(); }
 
  private:
-  void finish(const Entry& e, WriteResult r) {
-    for (const Ticket t : e.tickets) completions_.push_back({t, r});
+  void finish(const Entry& e, WriteResult r, Bytes reply = {}) {
+    for (const Ticket t : e.tickets) done_->add(t, r, reply);
     if (on_settled_) on_settled_(e, r);
   }
 
   std::deque<Entry> entries_;
-  std::vector<Completion> completions_;
+  Completions own_;
+  Completions* done_ = &own_;
   Settled on_settled_;
 };
 

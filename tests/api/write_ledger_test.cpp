@@ -7,6 +7,8 @@
 
 #include <string>
 
+#include "drivegate/driver_base.h"
+
 namespace drivegate {
 namespace {
 
@@ -107,6 +109,67 @@ TEST(WriteLedger, AnUndoWithoutTicketsGoesFirstAndSettlesSilently) {
   w.complete(9, WriteResult::refused);  // settled without an entry of its own
   EXPECT_TRUE(w.has_completions());
   EXPECT_THAT(taken(w), ElementsAre(Is(9, WriteResult::refused)));
+}
+
+TEST(WriteLedger, ASendByDeadlineStillSendsAtItFailsAfterIt) {
+  WriteLedger<Job> w;
+  w.push({"a"}, 1, t0 + 1000ms);
+  w.push({"b"}, 2, t0 + 1001ms);
+  EXPECT_EQ(w.expire_after(t0 + 1000ms), 0u);  // the send-by itself: still sendable
+  EXPECT_EQ(w.expire_after(t0 + 1000ms + std::chrono::nanoseconds(1)), 1u);
+  EXPECT_THAT(taken(w), ElementsAre(Is(1, WriteResult::no_response)));
+  EXPECT_EQ(w.front().job.what, "b");
+}
+
+TEST(WriteLedger, AWriteTakenForTheLineSettlesWhenTheDriverSays) {
+  std::vector<std::string> heard;
+  WriteLedger<Job> w(
+      [&](const WriteLedger<Job>::Entry& e, WriteResult) { heard.push_back(e.job.what); });
+  w.push({"on the line"}, 1, t0 + 1s);
+  w.push({"next"}, 2, t0 + 1s);
+  const auto e = w.take_front();
+  EXPECT_EQ(w.size(), 1u);
+  EXPECT_TRUE(taken(w).empty());     // out of the queue, not settled
+  EXPECT_EQ(w.expire(t0 + 2s), 1u);  // what it holds no longer includes the one taken
+  EXPECT_THAT(taken(w), ElementsAre(Is(2, WriteResult::no_response)));
+  w.settle(e, WriteResult::refused);
+  EXPECT_THAT(taken(w), ElementsAre(Is(1, WriteResult::refused)));
+  EXPECT_THAT(heard, ElementsAre("next", "on the line"));
+}
+
+TEST(WriteLedger, AForwardedRequestSettlesWithTheReplyAsItCame) {
+  WriteLedger<Job> w;
+  w.push({"fc 03"}, 5, t0 + 1s);
+  const auto e = w.take_front();
+  w.settle(e, WriteResult::ok, Bytes{0x83, 0x02});
+  const auto out = taken(w);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].ticket, 5u);
+  EXPECT_EQ(out[0].reply, (Bytes{0x83, 0x02}));
+}
+
+TEST(WriteLedger, TwoLedgersOfOneDriverSettleIntoItsOneList) {
+  Completions done;
+  WriteLedger<Job> runs(done);
+  WriteLedger<Job> acks(done);
+  runs.push({"run"}, 1, t0 + 1s);
+  acks.push({"ack"}, 2, t0 + 1s);
+  acks.settle_front(WriteResult::ok);
+  runs.settle_front(WriteResult::refused);
+  runs.complete(3, WriteResult::no_response);
+  EXPECT_FALSE(done.empty());
+  std::vector<Completion> out;
+  done.take(out);
+  EXPECT_THAT(out, ElementsAre(Is(2, WriteResult::ok), Is(1, WriteResult::refused),
+                               Is(3, WriteResult::no_response)));
+  EXPECT_TRUE(done.empty());
+  EXPECT_FALSE(runs.has_completions());
+}
+
+TEST(Refusal, ApplyAnswersWhatTheJudgementSaid) {
+  EXPECT_FALSE(refusal(WriteCheck::ok).has_value());
+  EXPECT_EQ(refusal(WriteCheck::invalid_value), WriteStatus::invalid_value);
+  EXPECT_EQ(refusal(WriteCheck::refused), WriteStatus::refused);
 }
 
 TEST(AttemptsBefore, OnlyTheAttemptsThatStartBeforeTheDeadlineAndAlwaysOne) {

@@ -6,17 +6,23 @@
 //   - check() has no side effect: the driver publishes the same (common(), values(), wake_at()),
 //     completes nothing, and the line carries the same from then on.
 // An adapter's contract_test.cpp names the states a request may find its driver in and the
-// requests worth trying; the rest is here.
+// requests worth trying, and instantiates the suite WriteContract with them in one line (the
+// tests are in write_contract_test.cpp, which the adapter's test binary compiles); the rest is
+// here.
 //
-//   const auto tally = test::expect_check_is_apply(states(), requests());
-//   EXPECT_TRUE(tally.ended_by_device.empty());
-//   test::expect_check_has_no_side_effects(states(), requests(), /*turns=*/80);
+//   INSTANTIATE_TEST_SUITE_P(Mdriver, WriteContract,
+//                            testing::Values(test::WriteContractCase{
+//                                .name = "mdriver", .states = states, .requests = requests,
+//                                .turns = 60}));
 #pragma once
+
+#include <gtest/gtest.h>
 
 #include <cstdint>
 #include <functional>
 #include <initializer_list>
 #include <memory>
+#include <ostream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -76,6 +82,27 @@ ContractTally expect_check_is_apply(const std::vector<WriteState>& states,
 // same, has completed nothing, and sends the same for `turns` turns of the line.
 void expect_check_has_no_side_effects(const std::vector<WriteState>& states,
                                       const std::vector<Request>& requests, int turns);
+
+// One adapter's case of the suite WriteContract: expect_check_is_apply() and
+// expect_check_has_no_side_effects() on its states and requests.
+struct WriteContractCase {
+  std::string name;
+  std::function<std::vector<WriteState>()> states;
+  std::function<std::vector<Request>()> requests;
+  int turns = 60;  // turns of the line compared after check()
+  // Where the device may fail a part apply() took (an alarm, a lock: a verdict no check() can
+  // give in advance): the states whose names start with one of these. Empty: in none.
+  std::vector<std::string> device_refuses_in;
+  bool device_refuses_anywhere = false;  // in any state (an ACK's error bits)
+  int min_judged = 0;                    // (state, request) pairs judged, at least
+  int min_compared = 0;                  // of which compared with apply()'s outcome, at least
+};
+
+inline void PrintTo(const WriteContractCase& c, std::ostream* os) {
+  *os << c.name;
+}
+
+class WriteContract : public testing::TestWithParam<WriteContractCase> {};
 
 // "setpoint 2000; run_forward; point 3 = 1", for failure messages.
 std::string describe(const Request& request);

@@ -18,6 +18,8 @@
 namespace drivegate::ed3100 {
 namespace {
 
+using test::WriteContract;
+
 // check() judges a request before anything is applied, with no side effect.
 TEST(Ed3100Check, JudgesEveryPartAndTouchesNothing) {
   const auto driver =
@@ -151,17 +153,13 @@ std::vector<test::Request> requests() {
 
 // The drive refuses a write only when locked (exception 04): a verdict no driver can give in
 // advance, after which the later parts are never applied.
-TEST(Ed3100Contract, CheckAcceptsARequestExactlyWhenApplyTakesItsPartsInOrder) {
-  const auto tally = test::expect_check_is_apply(states(), requests());
-  for (const auto& ended : tally.ended_by_device) {
-    EXPECT_EQ(ended.state, "locked") << ended.request;
-  }
-  EXPECT_GT(tally.compared, 150);
-}
-
-TEST(Ed3100Contract, CheckHasNoSideEffects) {
-  test::expect_check_has_no_side_effects(states(), requests(), /*turns=*/100);
-}
+INSTANTIATE_TEST_SUITE_P(Ed3100, WriteContract,
+                         testing::Values(test::WriteContractCase{.name = "ed3100",
+                                                                 .states = states,
+                                                                 .requests = requests,
+                                                                 .turns = 100,
+                                                                 .device_refuses_in = {"locked"},
+                                                                 .min_compared = 151}));
 
 }  // namespace
 }  // namespace drivegate::ed3100

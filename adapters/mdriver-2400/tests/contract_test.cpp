@@ -17,6 +17,8 @@
 namespace drivegate::mdriver {
 namespace {
 
+using test::WriteContract;
+
 using namespace std::chrono_literals;
 
 // A driver from the adapter's own factory, with the default options, and the drive's side played
@@ -121,14 +123,10 @@ std::vector<test::Request> requests() {
 }
 
 // Every part the drive is sent, it takes: a refusal is check()'s to give.
-TEST(MdriverContract, CheckAcceptsARequestExactlyWhenApplyTakesItsPartsInOrder) {
-  const auto tally = test::expect_check_is_apply(states(), requests());
-  EXPECT_TRUE(tally.ended_by_device.empty());
-}
-
-TEST(MdriverContract, CheckHasNoSideEffects) {
-  test::expect_check_has_no_side_effects(states(), requests(), /*turns=*/60);
-}
+INSTANTIATE_TEST_SUITE_P(
+    Mdriver, WriteContract,
+    testing::Values(test::WriteContractCase{
+        .name = "mdriver-2400", .states = states, .requests = requests, .turns = 60}));
 
 TEST(MdriverContract, AWriteNotConfirmedInTimeFailsAtTheDriversOwnDeadline) {
   Hand h;

@@ -20,6 +20,8 @@
 namespace drivegate::unicla {
 namespace {
 
+using test::WriteContract;
+
 using namespace std::chrono_literals;
 
 // A driver from the adapter's own factory with the default options, and the drive's side played
@@ -217,14 +219,10 @@ std::vector<test::Request> requests() {
 }
 
 // The hand-played drive takes every write it is sent: a refusal is check()'s to give.
-TEST(UniclaContract, CheckAcceptsARequestExactlyWhenApplyTakesItsPartsInOrder) {
-  const auto tally = test::expect_check_is_apply(states(), requests());
-  EXPECT_TRUE(tally.ended_by_device.empty());
-}
-
-TEST(UniclaContract, CheckHasNoSideEffects) {
-  test::expect_check_has_no_side_effects(states(), requests(), /*turns=*/250);
-}
+INSTANTIATE_TEST_SUITE_P(
+    Unicla, WriteContract,
+    testing::Values(test::WriteContractCase{
+        .name = "unicla-edrive", .states = states, .requests = requests, .turns = 250}));
 
 TEST(UniclaContract, AWriteNotShownInTimeFailsAtTheDriversOwnDeadline) {
   Hand h;
