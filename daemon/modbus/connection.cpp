@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <boost/asio/post.hpp>
+#include <boost/asio/ssl/error.hpp>
 #include <boost/asio/write.hpp>
 #include <cstring>
 
@@ -58,10 +59,14 @@ void Connection::start() {
   started_ = last_request_ = state_->clock.now();
   if (listener_->tls) {
     tls_context_ = listener_->tls;
-    tls_.emplace(std::move(socket_), *tls_context_);
     handshaking_ = true;
     if (auto deadline = next_deadline()) arm_timer(*deadline);
-    handshake();
+    socket_.native_non_blocking(true, ec);
+    handshake_thread_has_socket_ = true;
+    state_->handshaker->start(socket_.native_handle(), tls_context_,
+                              [self = shared_from_this()](HandshakeResult result) {
+                                self->on_handshake(std::move(result));
+                              });
     return;
   }
   apply_policy();
@@ -69,24 +74,24 @@ void Connection::start() {
   read();
 }
 
-void Connection::handshake() {
-  tls_->async_handshake(
-      asio::ssl::stream_base::server,
-      [self = shared_from_this()](const boost::system::error_code& ec) { self->on_handshake(ec); });
-}
-
-void Connection::on_handshake(const boost::system::error_code& ec) {
-  if (closed_) return;
+void Connection::on_handshake(HandshakeResult result) {
+  handshake_thread_has_socket_ = false;
+  if (closed_) {
+    boost::system::error_code ec;
+    socket_.close(ec);  // close() only shut it down: the handshake thread had it
+    return;
+  }
   handshaking_ = false;
-  if (ec) {
+  SSL* ssl = result.ssl.get();
+  if (result.error || ssl == nullptr) {
     ++listener_->stats.tls_handshake_failures;
     // OpenSSL's reason ("certificate verify failed") says little; the verification result
     // says which check failed, and the subject whose certificate it was.
-    const long verify = SSL_get_verify_result(tls_->native_handle());
-    X509* cert = SSL_get0_peer_certificate(tls_->native_handle());
+    const long verify = ssl != nullptr ? SSL_get_verify_result(ssl) : X509_V_OK;
+    X509* cert = ssl != nullptr ? SSL_get0_peer_certificate(ssl) : nullptr;
     if (const auto held = listener_->handshake_log.admit(state_->clock.now())) {
       state_->log->warn(
-          "modbus: {}: TLS handshake failed: {}{}{}; closing{}", who(), ec.message(),
+          "modbus: {}: TLS handshake failed: {}{}{}; closing{}", who(), result.error.message(),
           verify != X509_V_OK ? std::string(" (") + X509_verify_cert_error_string(verify) + ")"
                               : std::string(),
           cert != nullptr ? ", certificate \"" + certificate_subject(cert) + "\"" : std::string(),
@@ -95,6 +100,7 @@ void Connection::on_handshake(const boost::system::error_code& ec) {
     close();
     return;
   }
+  tls_.emplace(socket_, std::move(result.ssl));
   X509* cert = SSL_get0_peer_certificate(tls_->native_handle());
   role_ = certificate_role(cert);
   subject_ = certificate_subject(cert);
@@ -164,8 +170,10 @@ void Connection::close() {
   if (closed_) return;
   closed_ = true;
   boost::system::error_code ec;
-  tcp().shutdown(asio::ip::tcp::socket::shutdown_both, ec);
-  tcp().close(ec);
+  socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ec);
+  // The handshake thread still reads and writes the descriptor: the shutdown ends its handshake
+  // at once, and on_handshake closes the socket when the thread has handed it back.
+  if (!handshake_thread_has_socket_) socket_.close(ec);
   timer_.cancel();
   // A write already settled but not yet answered cannot be told now; one still with its device
   // is counted when it settles (on_write_done).
@@ -188,11 +196,15 @@ bool Connection::may_read() const {
 void Connection::read() {
   if (!may_read()) return;
   reading_ = true;
-  with_stream([this](auto& stream) {
-    stream.async_read_some(asio::buffer(rx_.data() + rx_len_, rx_.size() - rx_len_),
-                           [self = shared_from_this()](const boost::system::error_code& ec,
-                                                       std::size_t n) { self->on_read(ec, n); });
-  });
+  const auto into = asio::buffer(rx_.data() + rx_len_, rx_.size() - rx_len_);
+  auto done = [self = shared_from_this()](const boost::system::error_code& ec, std::size_t n) {
+    self->on_read(ec, n);
+  };
+  if (tls_) {
+    tls_->async_read_some(into, std::move(done));
+  } else {
+    socket_.async_read_some(into, std::move(done));
+  }
 }
 
 void Connection::on_read(const boost::system::error_code& ec, std::size_t n) {
@@ -446,11 +458,14 @@ void Connection::flush() {
   std::swap(tx_pending_, tx_inflight_);
   tx_pending_.clear();
   writing_ = true;
-  with_stream([this](auto& stream) {
-    asio::async_write(stream, asio::buffer(tx_inflight_),
-                      [self = shared_from_this()](const boost::system::error_code& ec,
-                                                  std::size_t) { self->on_flushed(ec); });
-  });
+  auto done = [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
+    self->on_flushed(ec);
+  };
+  if (tls_) {
+    tls_->async_write(asio::buffer(tx_inflight_), std::move(done));
+  } else {
+    asio::async_write(socket_, asio::buffer(tx_inflight_), std::move(done));
+  }
 }
 
 void Connection::on_flushed(const boost::system::error_code& ec) {

@@ -10,14 +10,17 @@
 // the shared ServerState when a deadline is computed, so new values (Server::set_limits) apply to
 // an open connection, measured from its last request or partial frame as before.
 //
-// On a TLS listener the connection first completes the handshake (the client certificate is
-// verified by OpenSSL against the listener's CA), takes its access level from the certificate's
-// role, and only then reads requests: nothing is read in clear text on a TLS listener.
+// On a TLS listener the connection first has the server's handshake thread complete the
+// handshake (handshaker.h: the client certificate is verified by OpenSSL against the listener's
+// CA, off the event loop), takes its access level from the certificate's role, and only then
+// reads requests, through TLS on its own socket (tls_stream.h): nothing is read in clear text on
+// a TLS listener. While the handshake thread has the socket, the connection only ever shuts it
+// down; it closes it once the thread has handed it back.
 #pragma once
 
 #include <array>
 #include <boost/asio/ip/tcp.hpp>
-#include <boost/asio/ssl/stream.hpp>
+#include <boost/asio/ssl/context.hpp>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -26,6 +29,7 @@
 
 #include "mbap.h"
 #include "server_state.h"
+#include "tls_stream.h"
 
 namespace drivegate::modbus {
 
@@ -73,8 +77,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
     std::array<std::uint8_t, kMaxPduSize> reply{};
   };
 
-  void handshake();
-  void on_handshake(const boost::system::error_code& ec);
+  void on_handshake(HandshakeResult result);
   void apply_policy();
   void read();
   void on_read(const boost::system::error_code& ec, std::size_t n);
@@ -95,23 +98,13 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void on_timer(const boost::system::error_code& ec);
   std::optional<net::TimePoint> next_deadline() const;
 
-  // The byte stream: the TCP socket itself, or TLS over it (the socket then lives in tls_).
-  template <typename F>
-  void with_stream(F&& f) {
-    if (tls_) {
-      f(*tls_);
-    } else {
-      f(socket_);
-    }
-  }
-  boost::asio::ip::tcp::socket& tcp() { return tls_ ? tls_->next_layer() : socket_; }
   std::string who() const;
 
   std::shared_ptr<ServerState> state_;
   std::shared_ptr<ListenerState> listener_;
   boost::asio::ip::tcp::socket socket_;
   std::shared_ptr<boost::asio::ssl::context> tls_context_;  // kept alive for tls_
-  std::optional<boost::asio::ssl::stream<boost::asio::ip::tcp::socket>> tls_;
+  std::optional<TlsStream> tls_;                            // TLS over socket_, once handshaken
   boost::asio::ip::tcp::endpoint peer_;
   Session session_;
   std::optional<std::string> role_;  // the TLS client certificate's role, if it has one
@@ -133,7 +126,8 @@ class Connection : public std::enable_shared_from_this<Connection> {
   net::TimePoint started_;
   std::optional<net::TimePoint> partial_since_;  // a partial frame is buffered since then
 
-  bool handshaking_ = false;    // TLS: no request is read before the handshake completed
+  bool handshaking_ = false;  // TLS: no request is read before the handshake completed
+  bool handshake_thread_has_socket_ = false;  // socket_ is shut down, not closed, until it is back
   bool denial_logged_ = false;  // a write beyond the access level is logged once per connection
   bool reading_ = false;
   bool writing_ = false;

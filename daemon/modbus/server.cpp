@@ -56,8 +56,9 @@ bool make_room(ServerState& state, ListenerState& listener) {
 }
 
 // A TLS listener lets each client address start so many handshakes a second (net/address_rate.h):
-// a handshake costs a private-key signature on the event loop every other client waits on, so
-// a flood from one address is closed at accept instead. Plain listeners have no handshake.
+// a handshake costs a private-key signature on the handshake thread (handshaker.h), which every
+// other TLS client's handshake waits on, so a flood from one address is closed at accept instead.
+// Plain listeners have no handshake.
 bool handshake_allowed(ServerState& state, ListenerState& listener, const asio::ip::address& peer) {
   if (!listener.tls) return true;
   const auto now = state.clock.now();
@@ -170,6 +171,10 @@ std::error_code Server::listen() {
       return ec;
     }
   }
+  if (std::any_of(state_->listeners.begin(), state_->listeners.end(),
+                  [](const Listener& l) { return l->tls != nullptr; })) {
+    state_->handshaker = std::make_unique<Handshaker>(state_->io);
+  }
   for (const auto& l : state_->listeners) {
     const auto bound = l->acceptor->local_endpoint();
     const auto& p = l->options.policy;
@@ -276,6 +281,8 @@ void Server::close() {
   for (const auto& l : state_->listeners) l->acceptor->close();
   const std::vector<Connection*> open(state_->live.begin(), state_->live.end());
   for (Connection* c : open) c->close();
+  // Handshakes still in flight come back aborted, to connections already closed.
+  if (state_->handshaker) state_->handshaker->stop();
 }
 
 }  // namespace drivegate::modbus

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "backend.h"
+#include "handshaker.h"
 #include "net/acceptor.h"
 #include "net/address_rate.h"
 #include "net/clock.h"
@@ -77,6 +78,9 @@ struct ServerState {
   Dispatcher dispatcher;  // shared: single-threaded, and never re-entered (see Connection)
   std::vector<std::shared_ptr<ListenerState>> listeners;
   std::unordered_set<Connection*> live;  // open connections, every listener's
+  // The TLS handshakes' thread, when a listener has TLS: started by Server::listen, stopped and
+  // joined by Server::close.
+  std::unique_ptr<Handshaker> handshaker;
   bool closed = false;
   net::LogThrottle malformed_log;      // frames that are not Modbus TCP
   net::LogThrottle frame_timeout_log;  // partial frames left unfinished
