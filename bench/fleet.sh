@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/fleet.sh [BUILD_DIR]: a fleet of gateways on one broker (issue 29), at several sizes side
+# bench/fleet.sh [BUILD_DIR]: a fleet of gateways on one broker, at several sizes side
 # by side in one run.
 #
 # Each run is tests/e2e/mqtt_fleet_e2e_test.cpp (MqttE2EFleet): N real drivegated processes, each
@@ -17,7 +17,7 @@
 #
 # The test writes its figures (births per second, frame -> host latency, replay rate, CPU and
 # memory of the gateways, the broker and the host) to a report file; this script puts the runs
-# side by side. What each figure is and how it is taken: docs/performance.md, issue 29.
+# side by side. What each figure is and how it is taken: docs/performance.md.
 #
 # Sizes run in SIZES order, each with the default replay_per_s (500), then the largest again with
 # FAST_REPLAY (replay_per_s 5000): what limits the replay when a gateway does not.

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# bench/flood.sh [BUILD_DIR]: issue 24's "no class of client can starve another", measured. A
+# bench/flood.sh [BUILD_DIR]: "no class of client can starve another", measured. A
 # plaintext PLC's Modbus latency while another client floods the daemon, with the limits on and
 # with them off, side by side in one run.
 #
 # Starts TWO drivegated, both pinned to CPU $SERVER_CPU, each polling five simulated drives
 # (bench/lib.sh) and serving a plaintext listener, a TLS listener and [http]:
 #   limited    the defaults: tls_handshakes_per_s = 5 (bursts of 10), [http] requests_per_s = 20
-#   unlimited  tls_handshakes_per_s = 0, requests_per_s = 0: what the daemon did before issue 24
+#   unlimited  tls_handshakes_per_s = 0, requests_per_s = 0: what the daemon did before the limits
 # For ROUNDS rounds, for each daemon, three phases of DURATION s, each measured by dg-loadgen with
 # one connection on the plaintext listener (FC03 16..140 alternating with FC04 0..18, unit 2):
 #   quiet      nothing else

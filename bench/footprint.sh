@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/footprint.sh [BUILD_DIR]: the daemon's RSS and idle CPU (issue 9), with no Modbus TCP load.
+# bench/footprint.sh [BUILD_DIR]: the daemon's RSS and idle CPU, with no Modbus TCP load.
 #   five: the five demo drives, one per bus, each on its own `drivegate sim`
 #   32x4: 32 buses of 4 simulated ed3100 drives each (addresses 1..4 on one sim per bus)
 # CPU is utime+stime of drivegated from /proc/<pid>/stat over SECONDS_EACH seconds, after a

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/framed.sh [BUILD_DIR] [-- ARGS...]: issue 40's described protocols beside the C++ adapters.
+# bench/framed.sh [BUILD_DIR] [-- ARGS...]: the described protocols beside the C++ adapters.
 #
 # Builds dg-framed-bench in BUILD_DIR (configured with -DDRIVEGATE_BENCH=ON -DDRIVEGATE_TESTS=ON:
 # it runs the tests' bus rig) and runs it: for nidec-washer, mdriver-2400 and fdc1, the bus time of

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # bench/history.sh [BUILD_DIR]: what the history (docs/audit.md) costs, side by side with it off
-# in one run (issue 27): 32 buses x 4 simulated ed3100 drives, the daemon with [history] as
+# in one run: 32 buses x 4 simulated ed3100 drives, the daemon with [history] as
 # shipped (2000 events, 600 s of trends) and with `events = 0, trend_seconds = 0`, alternately
 # ROUNDS times on the same simulators. In each window of DURATION s: a writer sends WRITES_PER_S
 # distinct setpoint writes spread over the 128 drives (each one an audit record), while

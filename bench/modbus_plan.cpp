@@ -1,6 +1,6 @@
-// dg-modbus-plan (issue 26): the bus time of one full poll cycle of a Modbus profile, read by its
+// dg-modbus-plan: the bus time of one full poll cycle of a Modbus profile, read by its
 // plan, against the minimum the wire allows for the same points and against one request per point.
-// bench/modbus_plan.sh runs it; docs/performance.md, "Issue 26: Modbus read plans", has the table.
+// bench/modbus_plan.sh runs it; docs/performance.md, "Modbus read plans", has the table.
 //
 // The measured rows run the real bus engine and the modbus adapter's real driver (the descriptor
 // of adapters/modbus/plugin.cpp) against its own simulator serving the profile, on simulated time

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/modbus_plan.sh [BUILD_DIR] [-- ARGS...]: issue 26's read plans against the wire's minimum.
+# bench/modbus_plan.sh [BUILD_DIR] [-- ARGS...]: Modbus read plans against the wire's minimum.
 #
 # Builds dg-modbus-plan in BUILD_DIR (configured with -DDRIVEGATE_BENCH=ON -DDRIVEGATE_TESTS=ON:
 # it runs the tests' bus rig) and runs it: for each shipped profile of the modbus adapter and a

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/mqtt.sh [BUILD_DIR]: the MQTT Sparkplug B northbound of issue 16, on a real broker.
+# bench/mqtt.sh [BUILD_DIR]: the MQTT Sparkplug B northbound, on a real broker.
 #
 # A mosquitto (/usr/sbin/mosquitto) on 127.0.0.1:$MQTT_PORT with its configuration in the work
 # directory, anonymous, no persistence. Two parts (PARTS, default both):

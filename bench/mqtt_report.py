@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""bench/mqtt.sh's arithmetic (issue 16). No dependencies.
+"""bench/mqtt.sh's arithmetic. No dependencies.
 
 mqtt_report.py latency PCAP SUB DEVICE METRIC
     PCAP: `drivegate capture` of the bus (docs/capture.md); SUB: `mosquitto_sub -F '%U %t %x'`

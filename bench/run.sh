@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/run.sh [BUILD_DIR]: the Modbus TCP benchmark of issue 9, in one command.
+# bench/run.sh [BUILD_DIR]: the Modbus TCP benchmark, in one command.
 #
 # Starts a simulated drive for each of the five adapters (`drivegate sim` on ptys), drivegated
 # polling them, and the bare libmodbus server (dg-baseline). Both servers are pinned to CPU

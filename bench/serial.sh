@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/serial.sh [BUILD_DIR]: serial efficiency and command latency (issue 9).
+# bench/serial.sh [BUILD_DIR]: serial efficiency and command latency.
 #
 # For each adapter: one simulated drive in wire-timing mode (each byte takes its character time at
 # the adapter's default baud and framing, replies start TURNAROUND_US after the request's last

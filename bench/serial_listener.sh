@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/serial_listener.sh [BUILD_DIR]: issue 28's figure. drivegated as a Modbus RTU slave on a
+# bench/serial_listener.sh [BUILD_DIR]: the serial listener's figure. drivegated as a Modbus RTU slave on a
 # serial listener, driven by a master that makes a pty behave like the wire
 # (bench/serial_listener_bench.cpp, dg-serial-listener-bench): requests per second against the
 # wire's limit for the same request and reply lengths, and the reply gap after the request.

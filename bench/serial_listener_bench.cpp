@@ -1,4 +1,4 @@
-// dg-serial-listener-bench: the Modbus RTU master of bench/serial_listener.sh (issue 28). It sits
+// dg-serial-listener-bench: the Modbus RTU master of bench/serial_listener.sh. It sits
 // on the master's end of a pseudo-terminal pair whose other end is a drivegated serial listener,
 // and makes the pty behave like the wire (Serial Line 2.5.1.1):
 //

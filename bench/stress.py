@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""bench/stress.py: the figures of issue 23, measured side by side in one run (bench/stress.sh).
+"""bench/stress.py: the write-storm figures, measured side by side in one run (bench/stress.sh).
 
 Write storm. Two ED3100s on one simulated 9600 8E1 line (units 1 and 2, poll_ms 300, one monitor
 each), drive 1 running. Phases of DURATION seconds, for WRITERS in "0 1 4" (each writer one

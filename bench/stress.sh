@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# bench/stress.sh [BUILD_DIR]: the write-storm and rebirth-storm figures of issue 23 and a healthy
+# bench/stress.sh [BUILD_DIR]: the write-storm and rebirth-storm figures and a healthy
 # drive beside a sick neighbour (silent, late, answering every other request), each side by side
 # in one run (bench/stress.py says what is measured). The daemon runs on CPU $SERVER_CPU, the
 # simulated drives, the writers, the broker, the Sparkplug peer and dg-loadgen on CPU $LOAD_CPU.

@@ -2,7 +2,7 @@
 // the bytes the master sends, writes their replies after a turnaround, echoes the master's bytes
 // on a simulated one-wire line, and passes operator lines to their control().
 //
-// Wire-timing mode (issue 9) makes a pty behave like the serial line it stands for: the line is
+// Wire-timing mode makes a pty behave like the serial line it stands for: the line is
 // half duplex, every byte occupies it for one character time (start bit, data bits, parity bit,
 // stop bits at the configured baud), the master's bytes are taken to finish arriving one
 // character time apart after they are read, and a reply starts one turnaround after the last

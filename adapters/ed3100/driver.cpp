@@ -284,7 +284,7 @@ void Ed3100Driver::update_ready() {
 }
 
 std::int32_t Ed3100Driver::rpm_from_hz(double hz) const {
-  // Synchronous speed: rpm = Hz x 120 / poles (issue 3, option `poles`).
+  // Synchronous speed: rpm = Hz x 120 / poles (option `poles`).
   return static_cast<std::int32_t>(std::lround(hz * 120.0 / settings_.poles));
 }
 

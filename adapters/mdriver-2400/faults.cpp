@@ -5,7 +5,7 @@
 namespace drivegate::mdriver {
 namespace {
 
-// Vendor document, モータドライバ エラーコード; unified faults as issue 4 assigns them.
+// Vendor document, モータドライバ エラーコード; unified faults as the adapter's README assigns them.
 constexpr std::array<ErrorCodeInfo, 14> kErrors = {{
     {0x01, "dc_over_voltage", "inverter DC over-voltage", Fault::over_voltage},
     {0x02, "dc_under_voltage", "inverter DC under-voltage", Fault::under_voltage},

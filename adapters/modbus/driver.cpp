@@ -63,7 +63,7 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
       raw_(profile_.points.size()),
       reading_(profile_.points.size()),
       alone_(profile_.points.size(), false) {
-  // Every point not bound to the common block is one of the device's own (issue 26).
+  // Every point not bound to the common block is one of the device's own.
   std::vector<bool> bound(profile_.points.size(), false);
   const CommonBindings& c = profile_.common;
   for (const auto& p : {c.speed_rpm, c.setpoint_rpm}) {

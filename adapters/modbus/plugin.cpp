@@ -1,5 +1,5 @@
 // The modbus plugin descriptor: option schema, line defaults, the two factories and how
-// `drivegate demo` shows the device (the example VFD of issue 26).
+// `drivegate demo` shows the device (the example VFD, profiles/example-vfd.toml).
 #include <memory>
 #include <string>
 

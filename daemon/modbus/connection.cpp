@@ -52,7 +52,7 @@ std::string Connection::who() const {
 
 void Connection::start() {
   boost::system::error_code ec;
-  socket_.set_option(asio::ip::tcp::no_delay(true), ec);  // replies leave at once (issue 9)
+  socket_.set_option(asio::ip::tcp::no_delay(true), ec);  // replies leave at once
   peer_ = socket_.remote_endpoint(ec);
   state_->live.insert(this);  // its listener's acceptor counted it in
   state_->log->debug("modbus: {} connected", who());

@@ -1,4 +1,4 @@
-// The bdSeq of an edge node's latest session, kept across restarts (issue 29; Sparkplug B 3.0,
+// The bdSeq of an edge node's latest session, kept across restarts (Sparkplug B 3.0,
 // 6.4.19 and 7.2: a host pairs an NDEATH with the NBIRTH of the same bdSeq, so a node that began
 // again at 0 after a crash could have its new session taken for the old one's death).
 //

@@ -296,7 +296,7 @@ TEST_F(ConfigTest, MissingFileIsReported) {
   EXPECT_THAT(r.errors.front(), HasSubstr("/nonexistent/drivegate.toml: cannot open"));
 }
 
-// Issue 24: the configuration file must be a regular file of a sane size; a FIFO, a device or a
+// The configuration file must be a regular file of a sane size; a FIFO, a device or a
 // directory is refused at once (never read, never waited on), with what it is.
 TEST_F(ConfigTest, TheFileMustBeARegularFile) {
   char tmpl[] = "/tmp/drivegate-config-XXXXXX";

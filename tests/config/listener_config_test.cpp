@@ -160,7 +160,7 @@ TEST_F(ListenerConfig, MistakesAreNamedWithTheirLine) {
               ElementsAre(AllOf(HasSubstr("listener[0].baudrate"), HasSubstr("unknown key"))));
 }
 
-// Issue 24: each listener's own slots, and the TLS handshake rate; the defaults, the bounds and
+// Each listener's own slots, and the TLS handshake rate; the defaults, the bounds and
 // a handshake rate on a plain listener named with their line.
 TEST_F(ListenerConfig, SlotsAndTheHandshakeRateArePerListener) {
   const auto r = parse(R"([server]
@@ -237,7 +237,7 @@ TEST_F(ListenerConfig, HttpIsOffUnlessAskedForAndItsKeysAreRead) {
 namespace drivegate {
 namespace {
 
-// Issue 28: serial listeners and RTU / ASCII over TCP (docs/serial-listeners.md).
+// Serial listeners and RTU / ASCII over TCP (docs/serial-listeners.md).
 TEST_F(ListenerConfig, ASerialListenerTakesALinesKeysWithTheSerialLinesDefaults) {
   const auto r = parse(R"(
 [[listener]]

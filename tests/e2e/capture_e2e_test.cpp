@@ -236,7 +236,7 @@ TEST_F(Capture, RefusesUnknownBusBadDurationAndLeavesTheBusUntapped) {
   EXPECT_EQ(http_status(http_port_, "/api/v1/capture?bus=" + cases_[0].id + "&seconds=0"), 400);
   EXPECT_EQ(http_status(http_port_, "/api/v1/capture?bus=" + cases_[0].id + "&seconds=301"), 400);
   EXPECT_EQ(http_status(http_port_, "/api/v1/capture?seconds=1"), 400);
-  // The tool's refusal names the bus asked for and the buses the daemon has (issue 24).
+  // The tool's refusal names the bus asked for and the buses the daemon has.
   {
     Child c({(bin_dir() / "drivegate").string(), "capture", "--bus", "nope", "--http",
              "127.0.0.1:" + std::to_string(http_port_)},
@@ -258,7 +258,7 @@ TEST_F(Capture, RefusesUnknownBusBadDurationAndLeavesTheBusUntapped) {
   EXPECT_TRUE(daemon_->process().running());
 }
 
-// Issue 24: captures are bounded. With two streaming, a third is refused at once (503, the
+// Captures are bounded. With two streaming, a third is refused at once (503, the
 // daemon's reason printed, exit 1), the page is served all along, and once one ends the next
 // capture is taken.
 TEST_F(Capture, AThirdCaptureAtOnceIsRefusedAndThePageStaysServed) {
@@ -281,7 +281,7 @@ TEST_F(Capture, AThirdCaptureAtOnceIsRefusedAndThePageStaysServed) {
   }));
 }
 
-// Progress on stderr (issue 24): frames, bytes and the seconds left, at most once a second; by
+// Progress on stderr: frames, bytes and the seconds left, at most once a second; by
 // default only when stderr is a terminal (here it is a file), with --progress anywhere.
 TEST_F(Capture, ShowsProgressOnStderrAtMostOnceASecond) {
   const auto& bus = cases_[0].id;

@@ -144,7 +144,7 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_THAT(sim.out, HasSubstr("no adapter 'no-such-adapter'"));
 }
 
-// Issue 24: GNU command lines. A value after '=' or as the next word, the short options the man
+// GNU command lines. A value after '=' or as the next word, the short options the man
 // pages list, and a mistake named in one line followed by the usage, exit 2.
 TEST(Cli, OptionsTakeTheirValueAfterAnEqualsSignOrAsTheNextWordShortOrLong) {
   TempDir dir;
@@ -410,7 +410,7 @@ TEST(Cli, EventsAndCaptureFindTheDaemonFromItsConfiguration) {
   EXPECT_THAT(bad.out, HasSubstr("bad.toml:2: http.listen: "));
 }
 
-// Issue 24: a port has one owner. `drivegate write` on a line the daemon runs says at once who
+// A port has one owner. `drivegate write` on a line the daemon runs says at once who
 // owns it, instead of sharing the line and timing out (0x0B); with the daemon stopped it works.
 TEST(Cli, WriteOnAPortTheDaemonOwnsNamesTheOwner) {
   TempDir dir;

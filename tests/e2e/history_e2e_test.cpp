@@ -1,4 +1,4 @@
-// What happened, and when, end to end (issue 27, docs/audit.md): the real daemon on a simulated
+// What happened, and when, end to end (docs/audit.md): the real daemon on a simulated
 // nidec-washer, its history read back the ways an engineer reads it (GET /api/v1/events,
 // `drivegate events`, `-f`, the log), after each kind of write: a PLC's on an operate listener,
 // a read-only client's refused one, the failsafe's stop when the PLC goes away, a reload, and the

@@ -1,4 +1,4 @@
-// MQTT Sparkplug B 3.0 northbound end to end (issue 16, "What must be shown"): the real drivegated
+// MQTT Sparkplug B 3.0 northbound end to end: the real drivegated
 // on simulated nidec-washer drives (`drivegate sim` on ptys), a real mosquitto broker on loopback
 // (tests/support/mosquitto.h) and an independent Sparkplug host: tests/mqtt/peer/sparkplug_peer.js,
 // Eclipse Tahu's schema and encoder from npm over MQTT.js (tests/support/sparkplug_peer.h). Nothing
@@ -272,7 +272,7 @@ TEST_F(MqttE2E, KilledDaemonLeavesTheWillNdeathWithTheBirthBdSeq) {
       << broker_log();
 }
 
-// --- 3b. the bdSeq across restarts (issue 29) -----------------------------------------------
+// --- 3b. the bdSeq across restarts -----------------------------------------------
 
 // The bdSeq kept in the state directory: a killed gateway's will and its next birth, a clean
 // stop's NDEATH and the next birth, a file that holds no bdSeq.
@@ -722,7 +722,7 @@ TEST_F(MqttE2E, BirthsWaitForThePrimaryHostAndEndWhenItGoesOffline) {
   expect_seq_consecutive(peer_->history());
 }
 
-// A Sparkplug 2.2 host (issue 29): STATE/<id>, the text ONLINE / OFFLINE, retained; the same
+// A Sparkplug 2.2 host: STATE/<id>, the text ONLINE / OFFLINE, retained; the same
 // session rules as 3.0's.
 TEST_F(MqttE2E, A22PrimaryHostsOnlineAndOfflineTextRuleTheSession) {
   start_daemon("primary_host_id = \"scada\"\nprimary_host_version = \"2.2\"\n");
@@ -825,7 +825,7 @@ TEST_F(MqttE2E, SeqWrapsFrom255To0) {
   EXPECT_GE(n, 254u);
 }
 
-// --- 10. SIGHUP changing [mqtt] (issue 29) ------------------------------------------------------
+// --- 10. SIGHUP changing [mqtt] ------------------------------------------------------
 
 // A changed [mqtt] ends the session cleanly and begins the next without a restart: the NDEATH
 // of the old session, then the births of the new with the next bdSeq; another edge node id is
@@ -906,7 +906,7 @@ TEST_F(MqttE2E, SighupChangingMqttEndsTheSessionAndBeginsTheNext) {
   expect_seq_consecutive(peer_->history());
 }
 
-// --- 11. several brokers (issue 29) --------------------------------------------------------------
+// --- 11. several brokers --------------------------------------------------------------
 
 // brokers = [A, B]: the session is on A; A stops, and the next attempt goes to B, with the next
 // bdSeq and a full rebirth there; A back changes nothing. Modbus is served throughout.
@@ -1009,7 +1009,7 @@ TEST_F(MqttE2E, SeveralBrokersThePrimaryHostOfflineOnOneSendsTheNodeToTheNext) {
   b.peer.publish_text(state, "", true, 1);
 }
 
-// --- 12. store and forward (issue 29) ---------------------------------------------------------
+// --- 12. store and forward ---------------------------------------------------------
 
 // A broker outage while a drive ramps: every change the edge node saw while the broker was away
 // is kept on disk and, once a session is back, published after the births as historical DDATA

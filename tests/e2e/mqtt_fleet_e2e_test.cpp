@@ -1,4 +1,4 @@
-// A fleet on one broker (issue 29): N real drivegated processes (20 unless
+// A fleet on one broker: N real drivegated processes (20 unless
 // DRIVEGATE_FLEET_GATEWAYS says otherwise), each with its own simulated nidec-washer on a pty, its
 // own edge node id and its own state directory, one mosquitto, and one Sparkplug host: Eclipse
 // Tahu's codec over MQTT.js (tests/mqtt/peer/sparkplug_peer.js), whose checks are this file's,

@@ -61,7 +61,7 @@ TEST_F(ReloadE2E, BadConfigIsRefusedAndTheOldOneKeepsServing) {
   EXPECT_EQ(plc_.write(reg::command, {1, 700}), 0);
 }
 
-// --- a reload is a diff, applied with the least disturbance (issue 24) ----------------------
+// --- a reload is a diff, applied with the least disturbance ----------------------
 
 // Two devices on one line, `poll_b` the second one's poll_ms.
 std::string pair_on_one_line(const std::filesystem::path& port, const std::string& adapter,

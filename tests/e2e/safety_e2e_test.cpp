@@ -1,4 +1,4 @@
-// PLC-loss failsafe end to end (issue 8, "Not done until"): the real daemon and a simulated
+// PLC-loss failsafe end to end: the real daemon and a simulated
 // nidec-washer; a Modbus client runs the drive, then goes away. The gateway stops the drive
 // within failsafe_timeout + one poll cycle, status bit 5 (failsafe) latches, a setpoint alone
 // does not restart it, a fresh run command does. Also: on_shutdown = hold, and a reload that

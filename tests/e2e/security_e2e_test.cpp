@@ -380,7 +380,7 @@ TEST_F(SecurityTlsUnlimited, AHandshakeFloodIsNotLoggedLineByLine) {
   EXPECT_EQ(raw_request(plain_, 1, {0x04, 0x00, 0x00, 0x00, 0x01}).size(), 4u);
 }
 
-// Issue 24: with the default limit (5 handshakes a second from one address, bursts of 10), a
+// With the default limit (5 handshakes a second from one address, bursts of 10), a
 // flood from one address reaches the handshake a burst's worth of times; the rest are closed as
 // they are accepted, before any cryptography, said in the journal without a line each; the
 // plain listener's PLC is answered throughout.

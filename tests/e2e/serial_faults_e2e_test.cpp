@@ -1,4 +1,4 @@
-// Serial faults end to end (issue 8): the real daemon against simulated drives while the line
+// Serial faults end to end: the real daemon against simulated drives while the line
 // misbehaves. The port vanishes and returns; noise and truncated frames arrive between good
 // replies; a drive answers late; a reply for another address; a NACK storm; a silent drive
 // beside a good one. Nothing crashes, the counters a PLC reads (input registers 9..18) count it,

@@ -1,4 +1,4 @@
-// drivegate as a Modbus RTU / ASCII slave (issue 28, docs/serial-listeners.md), end to end: the
+// drivegate as a Modbus RTU / ASCII slave (docs/serial-listeners.md), end to end: the
 // real daemon with a simulated nidec-washer behind it, and on a serial listener's line a master
 // nobody here wrote, pymodbus's serial client (tests/e2e/pymodbus_serial_master.py), across a
 // socat pseudo-terminal pair. What it reads is held to what a Modbus TCP client reads of the same

@@ -10,7 +10,7 @@
 // it, its wall time minus the start-up overhead measured on an identical dump before the fault
 // staying under 2 s.
 //
-// The history on the page (issue 27) is checked in a browser that stays open, driven over the
+// The history on the page is checked in a browser that stays open, driven over the
 // DevTools protocol (Browser, below): a drive's sparkline follows its speed when a PLC changes the
 // setpoint, the write shows in the events panel with the PLC's address within 2 s of its answer,
 // the chart opens and closes, the bus has its utilisation trend, a fault is a red row, and

@@ -1,6 +1,6 @@
 // Writes that tell the truth, on the wire: Modbus requests as raw bytes to the real daemon on
 // simulated drives, the exact response bytes, and the registers a PLC reads afterwards
-// (issue 13, "Writes must tell the truth").
+//.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Every write a device is asked for is one audit record (issue 27, daemon/history/command_audit.h)
+// Every write a device is asked for is one audit record (daemon/history/command_audit.h)
 // with the right source and result: a Modbus client's (plain, TLS with a role), an MQTT DCMD's,
 // the failsafe's, shutdown's; accepted, refused at once, refused by the drive, or never
 // answered. And the device's events: fault raised and cleared, comm lost and back, started and

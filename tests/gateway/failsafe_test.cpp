@@ -1,4 +1,4 @@
-// The PLC-loss failsafe of a device (issue 8): armed by the first valid write to command,
+// The PLC-loss failsafe of a device: armed by the first valid write to command,
 // setpoint or heartbeat, tripped by the first tick after the timeout, latched in
 // status bit 5 until a run command is written, and kept: a drive that runs again is stopped again.
 #include <gtest/gtest.h>

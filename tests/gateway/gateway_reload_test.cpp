@@ -134,7 +134,7 @@ TEST_F(GatewayReload, WhereItWasDeclaredDoesNotCount) {
   EXPECT_TRUE(old->buses().empty());
 }
 
-// Issue 24: a neighbour's change on the line leaves a device as it runs, and the line open.
+// A neighbour's change on the line leaves a device as it runs, and the line open.
 TEST_F(GatewayReload, AChangedDeviceStartsAfreshAloneItsNeighboursAndLineKept) {
   auto old = build(config());
   const Device* a1 = old->find("a1");

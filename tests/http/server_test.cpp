@@ -479,7 +479,7 @@ TEST(HttpServer, PastMaxClientsAClientIsClosedAtAccept) {
   EXPECT_EQ(h.stats().refused, 1u);
 }
 
-// Issue 24: captures are bounded. At most max_captures stream at once (the next is answered 503
+// Captures are bounded. At most max_captures stream at once (the next is answered 503
 // with a Retry-After), and a capture's connection has a slot of its own: long captures never
 // keep the status page out, however many are asked for.
 TEST(HttpServer, AThirdCaptureGets503AndCapturesNeverTakeThePagesSlots) {
@@ -523,7 +523,7 @@ TEST(HttpServer, AThirdCaptureGets503AndCapturesNeverTakeThePagesSlots) {
   EXPECT_THAT(fourth.read_to_close(500ms), StartsWith("HTTP/1.1 200"));
 }
 
-// Issue 24: HTTP requests are rate-limited per client address. A client hammering the server on
+// HTTP requests are rate-limited per client address. A client hammering the server on
 // a kept-alive connection gets every answer (paced, never refused: a scraper sees no failed
 // scrape), at the rate it is given; a client from another address is answered at once meanwhile.
 TEST(HttpServer, AHammeringClientIsPacedWhileAnotherAddressIsAnsweredAtOnce) {

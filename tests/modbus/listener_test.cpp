@@ -223,7 +223,7 @@ TEST_F(Tls, CertificatesFromAnotherCaOrExpiredAreRefusedInTheHandshake) {
   EXPECT_EQ(h.with_backend([](test::FakeBackend& b) { return b.reads; }), 1u);
 }
 
-// Issue 24: a handshake flood from one address is closed at accept, before the server signs
+// A handshake flood from one address is closed at accept, before the server signs
 // anything; a plaintext listener beside it, and the same address a moment later, are served.
 TEST_F(Tls, AHandshakeFloodFromOneAddressIsClosedAtAccept) {
   Harness h(with({{.tls = server_files(), .handshakes = {1, 3}}, {}}));
@@ -299,7 +299,7 @@ TEST_F(Tls, MissingOrMismatchedFilesAreNamed) {
   EXPECT_NE(error.find("mismatch"), std::string::npos) << error;
 }
 
-// Issue 24: a TLS file that is a FIFO would block OpenSSL's read forever (at start-up, or at
+// A TLS file that is a FIFO would block OpenSSL's read forever (at start-up, or at
 // SIGHUP on the event loop): refused at once, saying what it is.
 TEST_F(Tls, AFileThatIsNotARegularFileIsRefusedWithoutWaiting) {
   auto files = server_files();

@@ -76,7 +76,7 @@ TEST(Server, ClientCapAcceptsAndClosesTheExtraClient) {
   EXPECT_EQ(late.reply(), kReadReply);
 }
 
-// Issue 8: 10,000 connect / disconnect cycles leak no descriptor.
+// 10,000 connect / disconnect cycles leak no descriptor.
 TEST(Server, TenThousandConnectDisconnectCyclesLeakNoDescriptor) {
   Harness h;
   const std::size_t before = open_descriptors();

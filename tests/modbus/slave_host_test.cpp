@@ -1,6 +1,6 @@
 // SlaveHost (daemon/modbus/slave_host.h) on a manual clock, with a backend whose writes complete
 // when the test says: what goes onto the master's line, and when, for every kind of request the
-// issue names (issue 28, docs/serial-listeners.md). The frames are the serial line codec's.
+// issue names (docs/serial-listeners.md). The frames are the serial line codec's.
 #include "modbus/slave_host.h"
 
 #include <gmock/gmock.h>

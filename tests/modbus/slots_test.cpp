@@ -1,4 +1,4 @@
-// Connection slots per listener (issue 24): read clients cannot take an operate listener's slots,
+// Connection slots per listener: read clients cannot take an operate listener's slots,
 // and a full listener closes its longest-idle read-only client for a newcomer before refusing
 // anyone. Operate and maintain clients never give way.
 #include <gtest/gtest.h>

@@ -650,7 +650,7 @@ TEST_F(EdgeNodeLegacyHost, BirthsWaitForOnlineAndOfflineEndsTheSession) {
   EXPECT_EQ(node_.state(), SessionState::online);
 }
 
-// Store and forward (issue 29): while not online, changes are kept by the DDATA rules, each
+// Store and forward: while not online, changes are kept by the DDATA rules, each
 // metric historical and stamped; replay() publishes them after the births, in this session's seq.
 class EdgeNodeStoreForward : public EdgeNodeTest {
  protected:

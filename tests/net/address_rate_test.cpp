@@ -1,4 +1,4 @@
-// The per-address token bucket behind the TLS handshake and HTTP request limits (issue 24),
+// The per-address token bucket behind the TLS handshake and HTTP request limits,
 // on a clock the test sets.
 #include "net/address_rate.h"
 

@@ -414,7 +414,7 @@ TEST_F(MetricsText, TheStandardProcessMetrics) {
 
 // Each family's HELP and TYPE once, its samples right after them, no series twice: what
 // Prometheus needs to take the scrape at all.
-// Issue 28: each serial listener's counters, by port; the status JSON's serial_listeners entry.
+// Each serial listener's counters, by port; the status JSON's serial_listeners entry.
 TEST_F(MetricsText, SerialListenersCountersByPort) {
   const std::string text = metrics_text(view());
   const std::string port = R"({port="/dev/ttyS\"1"})";

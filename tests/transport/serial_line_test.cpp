@@ -158,7 +158,7 @@ TEST_F(SerialLine, AFailedRs485SwitchClosesThePortAndReportsIt) {
   EXPECT_FALSE(port_.is_open());
 }
 
-// Issue 24: a port has one owner. The lock file of a port another live program holds (here the
+// A port has one owner. The lock file of a port another live program holds (here the
 // test's parent, started before the file was written) refuses the open at once, naming it; the
 // port itself is never opened.
 TEST_F(SerialLine, APortAnotherProgramHoldsIsRefusedNamingIt) {

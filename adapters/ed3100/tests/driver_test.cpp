@@ -13,8 +13,8 @@ namespace {
 
 using test::LateReplyContract;
 
-// Late replies (late_reply_contract.h): timeout_ms 100 (the default), answering 130 ms late in the standard Modbus form, whose reads carry no
-// register echo (issue 23, item 3).
+// Late replies (late_reply_contract.h): timeout_ms 100 (the default), answering 130 ms late in
+// the standard Modbus form, whose reads carry no register echo.
 const test::LateReplyFacts kLate{.id = "ed3100", .late = 130ms, .sim_commands = {"form standard"}};
 INSTANTIATE_TEST_SUITE_P(Ed3100, LateReplyContract, testing::Values(kLate));
 
@@ -73,7 +73,7 @@ TEST(Ed3100Driver, StartupReadsTheParameterThenTheFaultWordAndTheMonitors) {
   EXPECT_EQ(b.count(kReadParam), 1u);
 }
 
-// Issue 24: a drive found running (the gateway restarted, or this device was changed by a
+// A drive found running (the gateway restarted, or this device was changed by a
 // reload) is shown as it runs: the command in force is its commanded direction, the setpoint its
 // speed; nothing is sent to it, and a new setpoint goes to the running drive's 0x2001 at once.
 TEST(Ed3100Driver, ADriveFoundRunningIsShownAsItRunsNeverAsStopped) {

@@ -1,4 +1,4 @@
-// ed3100 end to end (issue 3, "Not done until"): the daemon with an ED3100 at address 31 on a
+// ed3100 end to end: the daemon with an ED3100 at address 31 on a
 // 9600 8E1 line, the simulator answering as the document's examples do, driven from Modbus TCP
 // as a PLC would. The frames on the line are taken from drivegated's trace log and compared with
 // the frames the document prints (adapters/ed3100/README.md, "Golden vectors").

@@ -42,7 +42,7 @@ TEST(Fdc1Driver, StartUpWaitsForTheStreamThenAssertsStopAtOnce) {
   EXPECT_TRUE(b.sim_has("min=0"));
 }
 
-// Issue 24: a compressor found turning on an earlier session's speed frames (the gateway
+// A compressor found turning on an earlier session's speed frames (the gateway
 // restarted, or this device was changed by a reload) is kept turning at the speed it reports and
 // shown so: the first frame is a run at that speed, never the stop above.
 TEST(Fdc1Driver, ACompressorFoundTurningIsKeptTurningNeverStopped) {

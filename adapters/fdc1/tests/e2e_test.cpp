@@ -1,5 +1,5 @@
 // fdc1 end to end: the daemon on a simulated FDC1 controller (a streaming device, 1200 8N1), driven
-// from Modbus TCP as a PLC would (issue 5, "Not done until"), and `drivegate action ... program` on
+// from Modbus TCP as a PLC would, and `drivegate action ... program` on
 // the same simulator with the daemon not running.
 #include "e2e.h"
 

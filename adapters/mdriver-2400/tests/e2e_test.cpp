@@ -1,4 +1,4 @@
-// mdriver-2400 end to end (issue 4, "Not done until"): the daemon drives the simulated compressor
+// mdriver-2400 end to end: the daemon drives the simulated compressor
 // driver from Modbus TCP as a PLC would. The run frames on the line are taken from drivegated's
 // trace log (sum of all bytes = 0x55, adapters/mdriver-2400/README.md "Frames").
 #include "e2e.h"

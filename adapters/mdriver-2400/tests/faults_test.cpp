@@ -10,7 +10,7 @@ namespace drivegate::mdriver {
 namespace {
 
 TEST(MdriverErrors, IssueMappingOfEveryCode) {
-  // Error table of the document, unified as issue 4 assigns.
+  // Error table of the document, unified as the adapter's README assigns.
   const std::vector<std::pair<std::uint8_t, Fault>> expected = {
       {0x00, Fault::none},
       {0x01, Fault::over_voltage},

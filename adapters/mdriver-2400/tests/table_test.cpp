@@ -116,7 +116,7 @@ TEST(MdriverTable, EveryRunningRowIsTheNearestCodeOfItsOwnRpm) {
 }
 
 TEST(MdriverTable, NearestEntryAndLimits) {
-  // Issue 4: 1149 rpm goes out as code 0x40.
+  // 1149 rpm goes out as code 0x40.
   EXPECT_EQ(code_for_rpm(1149), 0x40);
   EXPECT_EQ(code_for_rpm(1150), 0x40);
   EXPECT_EQ(code_for_rpm(1157), 0x40);  // 8 from 1149, 10 from 1167

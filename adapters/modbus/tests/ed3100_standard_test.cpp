@@ -290,7 +290,7 @@ struct WindowBesideTheDrive {
   Simulator* drive_sim = nullptr;
 };
 
-// Issue 26: "a dead slave is 0x0B and comm_lost without stalling another device on the same
+// "A dead slave is 0x0B and comm_lost without stalling another device on the same
 // line (a native adapter's drive on it too)". A pass-through window onto address 20, where nobody
 // answers, shares the ED3100's line with its dedicated adapter; a client keeps forwarding to the
 // window for 10 s. Every request is answered 0x0B (or busy, its queue being full), the window goes

@@ -48,7 +48,7 @@ TEST(ModbusPlugin, TheFactoriesReadTheProfileTheOptionsName) {
   EXPECT_FALSE(drivegate_adapter.create_simulator(sim, error));
 }
 
-// Issue 26: "the bus's own settings must agree" with the profile's [line]. A device on a bus
+// "The bus's own settings must agree" with the profile's [line]. A device on a bus
 // that runs another line is refused when the configuration is loaded, naming both, rather than
 // polled into silence; the daemon's own factory call (gateway.h make_driver) passes the bus.
 TEST(ModbusPlugin, ABusThatDoesNotRunTheProfilesLineIsRefusedNamingBoth) {

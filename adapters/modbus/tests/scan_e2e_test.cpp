@@ -1,4 +1,4 @@
-// `drivegate scan` end to end (issue 26): the real program on one end of a pseudo-terminal pair,
+// `drivegate scan` end to end: the real program on one end of a pseudo-terminal pair,
 // pymodbus's serial slave (tests/support/pymodbus_slave.h) on the other, at an address the scan
 // must find among 1..247, with an identification the scan must report and match to a profile.
 // The snippet it prints is checked by the daemon's own --check-config.

@@ -151,7 +151,7 @@ TEST(UniclaDriver, ABadCrcIsResentIdenticallyAfterTheGap) {
   EXPECT_NE(b.read("status") & kOnline, 0u);
 }
 
-// Issue 24: a compressor found running (the gateway restarted, or this device was changed by a
+// A compressor found running (the gateway restarted, or this device was changed by a
 // reload) is shown as it runs, a run in force at its speed; nothing is sent to it, and a new
 // speed goes out as a speed change of a running compressor.
 TEST(UniclaDriver, ACompressorFoundRunningIsShownAsItRunsNeverAsStopped) {

@@ -1,5 +1,5 @@
 // unicla-edrive end to end: the daemon on simulated eDrives (RS-485, 19200 8N1), driven from
-// Modbus TCP as a PLC would (issue 6, "Not done until"), and two eDrives sharing one line.
+// Modbus TCP as a PLC would, and two eDrives sharing one line.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
