@@ -87,7 +87,8 @@ Value State::point_value(std::size_t point) const {
   const double v = vars_[p.var].num;
   if (!std::isfinite(v)) return std::monostate{};
   if (p.spec.type == PointType::string) return std::monostate{};
-  if (p.spec.scale == 1.0 && p.spec.type != PointType::f32) {
+  const bool is_float = p.spec.type == PointType::f32 || p.spec.type == PointType::f64;
+  if (p.spec.scale == 1.0 && !is_float) {
     return std::int64_t{static_cast<std::int64_t>(std::llround(v))};
   }
   return v;

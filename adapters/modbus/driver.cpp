@@ -21,7 +21,13 @@ PointSpec spec_of(const ProfilePoint& p) {
   s.name = p.name;
   s.table = p.table;
   s.type = served_type(p);
-  s.scale = p.type == ValueType::f32 ? 1.0 : p.scale;  // a float register holds the value
+  // A float register holds the value, a string's hold text.
+  const bool own_value =
+      p.type == ValueType::f32 || p.type == ValueType::f64 || p.type == ValueType::string;
+  s.scale = own_value ? 1.0 : p.scale;
+  s.string_registers = p.type == ValueType::string ? p.registers : 0;
+  s.labels = p.labels;
+  s.bit_labels = p.bit_labels;
   s.unit = p.unit;
   s.description = p.description;
   s.trend = p.trend;

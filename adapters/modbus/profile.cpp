@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "drivegate/toml_reader.h"
+#include "profile_types.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -163,7 +164,8 @@ class Parser {
   void read_point(const toml::table& t) {
     TableReader r(t, "point", diag_);
     r.expect({"name", "table", "address", "type", "word_order", "scale", "unit", "description",
-              "min", "max", "access", "poll_ms", "trend"});
+              "min", "max", "access", "poll_ms", "trend", "registers", "byte_order", "bits",
+              "values"});
     ProfilePoint p;
     p.line = static_cast<std::uint32_t>(t.source().begin.line);
     bool ok = true;
@@ -189,14 +191,13 @@ class Parser {
     const auto type = r.choice("type", kValueTypeNames, true);
     if (type) p.type = static_cast<ValueType>(*type);
     ok = ok && table && address && type;
-    if (ok) ok = check_shape(r, p);
-    if (auto w = r.choice("word_order", kWordOrderNames, false)) {
-      p.word_order = static_cast<WordOrder>(*w);
-      if (ok && p.width() != 2) {
-        diag_.error(r.node("word_order"), "point.word_order",
-                    "applies to the two-register types u32, s32 and f32 only");
-        ok = false;
-      }
+    if (ok) ok = read_registers(r, p, diag_) && check_shape(r, p);
+    if (ok) {
+      ok = read_byte_order(r, p, diag_);
+    } else {
+      r.node("registers");
+      r.node("byte_order");
+      r.node("word_order");
     }
     if (auto s = r.number("scale", -1e9, 1e9, false)) {
       p.scale = *s;
@@ -208,6 +209,12 @@ class Parser {
     p.unit = r.string("unit", false).value_or("");
     p.description = r.string("description", false).value_or("");
     ok = read_access_and_limits(r, p) && ok;
+    if (ok) {
+      ok = check_read_only(r, p, diag_) && read_labels(r, p, diag_);
+    } else {
+      r.node("bits");
+      r.node("values");
+    }
     if (auto v = r.integer("poll_ms", 10, 3600000, false))
       p.poll_ms = static_cast<std::uint32_t>(*v);
     if (ok)
@@ -223,12 +230,13 @@ class Parser {
       diag_.error(r.node("type"), "point.type",
                   bit_table ? "a coil or discrete input is of type bit"
                             : "type bit is for coils and discrete inputs; registers are u16, s16, "
-                              "u32, s32 or f32");
+                              "u32, s32, f32, u64, s64, f64 or string");
       return false;
     }
     if (std::uint32_t{p.address} + p.width() - 1 > 65535) {
       diag_.error(r.node("address"), "point.address",
-                  "a two-register point at 65535 runs past the last register");
+                  "a point of " + std::to_string(p.width()) + " registers at " +
+                      std::to_string(p.address) + " runs past the last register, 65535");
       return false;
     }
     if (!bit_table && p.width() > profile_.modbus.max_registers) {
@@ -317,6 +325,10 @@ class Parser {
     const auto index = point_at(r, key, false, writable);
     if (index && profile_.points[*index].type == ValueType::bit) {
       diag_.error(r.node(key), r.qualified(key), "must name a register point, not a bit");
+      return std::nullopt;
+    }
+    if (index && profile_.points[*index].type == ValueType::string) {
+      diag_.error(r.node(key), r.qualified(key), "must name a number, not a string point");
       return std::nullopt;
     }
     return index;

@@ -20,20 +20,47 @@
 
 namespace drivegate::modbus_device {
 
-// A point's value type on the wire: one register (u16, s16), two (u32, s32, f32, in the point's
-// word order) or one coil / discrete input (bit).
-enum class ValueType : std::uint8_t { u16, s16, u32, s32, f32, bit };
-inline constexpr std::array<std::string_view, 6> kValueTypeNames = {"u16", "s16", "u32",
-                                                                    "s32", "f32", "bit"};
-// Registers (or bits) a value of `type` occupies.
-constexpr std::uint16_t width_of(ValueType type) {
-  return type == ValueType::u32 || type == ValueType::s32 || type == ValueType::f32 ? 2 : 1;
+// A point's value type on the wire: one register (u16, s16), two (u32, s32, f32), four (u64,
+// s64, f64; all in the point's byte order), `registers` of them (string: ASCII, two characters a
+// register) or one coil / discrete input (bit). New types follow the older ones.
+enum class ValueType : std::uint8_t { u16, s16, u32, s32, f32, bit, u64, s64, f64, string };
+inline constexpr std::array<std::string_view, 10> kValueTypeNames = {
+    "u16", "s16", "u32", "s32", "f32", "bit", "u64", "s64", "f64", "string"};
+// Registers (or bits) a value of `type` occupies; a string its own `registers`.
+constexpr std::uint16_t width_of(ValueType type, std::uint16_t registers = 0) {
+  switch (type) {
+    case ValueType::u32:
+    case ValueType::s32:
+    case ValueType::f32:
+      return 2;
+    case ValueType::u64:
+    case ValueType::s64:
+    case ValueType::f64:
+      return 4;
+    case ValueType::string:
+      return registers;
+    default:
+      return 1;
+  }
 }
+// The longest string point, in registers (128 characters).
+inline constexpr std::uint16_t kMaxStringRegisters = 64;
 
-// Two-register values: "big" puts the high word first (the Modbus convention for 32-bit values
-// is none; most drives do this), "little" the low word first.
-enum class WordOrder : std::uint8_t { big, little };
+// How a 32- or 64-bit value lies in its registers, its bytes named a (most significant), b, c,
+// d...: abcd puts the most significant register first, high byte first in each (the default;
+// Modbus itself says nothing of values wider than a register); cdab the least significant
+// register first; badc and dcba the same with the two bytes of each register swapped. A string
+// takes abcd (the first character in a register's high byte) or badc (in its low byte).
+enum class ByteOrder : std::uint8_t { abcd, badc, cdab, dcba };
+inline constexpr std::array<std::string_view, 4> kByteOrderNames = {"abcd", "badc", "cdab", "dcba"};
+// The shorthand of the older profiles: word_order = "big" is abcd, "little" is cdab.
 inline constexpr std::array<std::string_view, 2> kWordOrderNames = {"big", "little"};
+constexpr bool words_reversed(ByteOrder o) {
+  return o == ByteOrder::cdab || o == ByteOrder::dcba;
+}
+constexpr bool bytes_swapped(ByteOrder o) {
+  return o == ByteOrder::badc || o == ByteOrder::dcba;
+}
 
 // Who may write a point through a Modbus listener: nobody (read), an operate or a maintain
 // listener (operate), a maintain listener only (maintain; the default for a writable point).
@@ -63,8 +90,9 @@ struct ProfilePoint {
   Table table = Table::holding;
   std::uint16_t address = 0;  // the protocol address (0-based), as on the wire
   ValueType type = ValueType::u16;
-  WordOrder word_order = WordOrder::big;
-  double scale = 1.0;  // engineering value = raw x scale
+  ByteOrder byte_order = ByteOrder::abcd;
+  std::uint16_t registers = 0;  // a string's, 1..kMaxStringRegisters
+  double scale = 1.0;           // engineering value = raw x scale
   std::string unit;
   std::string description;
   std::optional<double> min;  // engineering limits of a write
@@ -72,9 +100,13 @@ struct ProfilePoint {
   PointAccess access = PointAccess::read;
   std::uint32_t poll_ms = 0;  // 0: the device's poll interval
   bool trend = false;         // kept in the daemon's trends (PointSpec::trend)
-  std::uint32_t line = 0;     // where the point is in the file, for messages
+  // Names of its values (an enumeration) or, with bit_labels, of its bits (a bit field): the
+  // register map, JSON, page and /metrics show them (PointSpec::labels).
+  std::vector<Label> labels;
+  bool bit_labels = false;
+  std::uint32_t line = 0;  // where the point is in the file, for messages
 
-  [[nodiscard]] std::uint16_t width() const { return width_of(type); }
+  [[nodiscard]] std::uint16_t width() const { return width_of(type, registers); }
   [[nodiscard]] bool writable() const { return table == Table::holding || table == Table::coil; }
 };
 
@@ -110,8 +142,8 @@ struct CommonBindings {
 };
 
 struct LineSpec {
-  std::uint32_t baud = 19200;       // Serial Line 2.5.1: 19200 is the required default
-  Parity parity = Parity::even;     // Serial Line 2.5.1: even parity is the default
+  std::uint32_t baud = 19200;    // Serial Line 2.5.1: 19200 is the required default
+  Parity parity = Parity::even;  // Serial Line 2.5.1: even parity is the default
   std::uint8_t stop_bits = 1;
   Framing framing = Framing::rtu;
 };

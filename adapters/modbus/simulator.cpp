@@ -249,20 +249,28 @@ void ModbusSimulator::command(std::uint16_t word) {
 
 std::optional<double> ModbusSimulator::point_value(std::size_t point) const {
   const ProfilePoint& p = profile_.points[point];
+  return raw_of(p, words_of(p)) * p.scale;
+}
+
+std::vector<std::uint16_t> ModbusSimulator::words_of(const ProfilePoint& p) const {
   std::vector<std::uint16_t> words;
   for (std::uint16_t w = 0; w < p.width(); ++w) {
     words.push_back(memory_.at({p.table, static_cast<std::uint16_t>(p.address + w)}));
   }
-  return raw_of(p, words) * p.scale;
+  return words;
 }
 
-void ModbusSimulator::set_point(std::size_t point, double engineering) {
-  const ProfilePoint& p = profile_.points[point];
-  const auto words = words_for(p, engineering);
+void ModbusSimulator::put(const ProfilePoint& p,
+                          const std::optional<std::vector<std::uint16_t>>& words) {
   if (!words) return;
   for (std::uint16_t w = 0; w < p.width(); ++w) {
     memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}] = (*words)[w];
   }
+}
+
+void ModbusSimulator::set_point(std::size_t point, double engineering) {
+  const ProfilePoint& p = profile_.points[point];
+  put(p, words_for(p, engineering));
 }
 
 // The drive behind the registers: the run and fault bits, the fault code, and the actual speed,
@@ -298,7 +306,13 @@ std::string ModbusSimulator::state() const {
     << (running_ ? (reverse_ ? " running reverse" : " running forward") : " stopped") << ", fault "
     << fault_ << (silent_ ? ", silent" : "");
   for (std::size_t i = 0; i < profile_.points.size(); ++i) {
-    s << "\n  " << profile_.points[i].name << " = " << point_value(i).value_or(0);
+    const ProfilePoint& p = profile_.points[i];
+    s << "\n  " << p.name << " = ";
+    if (p.type == ValueType::string) {
+      s << '"' << text_of(p, words_of(p)) << '"';
+    } else {
+      s << point_value(i).value_or(0);
+    }
   }
   return s.str();
 }
@@ -306,7 +320,8 @@ std::string ModbusSimulator::state() const {
 std::string ModbusSimulator::control(std::string_view line, TimePoint) {
   const auto w = split_words(line);
   const std::string usage =
-      "commands: state | fault N (a native fault code; 0 clears) | set POINT VALUE | "
+      "commands: state | fault N (a native fault code; 0 clears) | set POINT VALUE (a string "
+      "point: TEXT) | "
       "raw TABLE ADDRESS WORD... | missing TABLE ADDRESS | refuse TABLE ADDRESS CODE [TIMES] | "
       "mute TABLE ADDRESS on|off | short TABLE ADDRESS on|off | silent on|off | late MS | "
       "every-other on|off | help";
@@ -318,6 +333,20 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
     fault_ = *code;
     drive();
     return "ok fault " + std::to_string(fault_);
+  }
+  if (w[0] == "set" && w.size() >= 3 && profile_.find(w[1]) &&
+      profile_.points[*profile_.find(w[1])].type == ValueType::string) {
+    // The text is the rest of the line, spaces and all.
+    const ProfilePoint& p = profile_.points[*profile_.find(w[1])];
+    std::string_view text = line.substr(line.find(w[1], line.find("set") + 3) + w[1].size());
+    while (!text.empty() && text.front() == ' ') text.remove_prefix(1);
+    const auto words = words_for_text(p, text);
+    if (!words) {
+      return "error: " + w[1] + " takes at most " + std::to_string(2 * p.width()) +
+             " printable ASCII characters";
+    }
+    put(p, words);
+    return "ok " + w[1] + " = \"" + std::string(text) + "\"";
   }
   if (w[0] == "set" && w.size() == 3) {
     const auto point = profile_.find(w[1]);

@@ -55,6 +55,9 @@ class ModbusSimulator final : public Simulator {
   void command(std::uint16_t control_word);
   void drive();  // the status word, the speed and the fault code from the drive's state
   void set_point(std::size_t point, double engineering);
+  // A point's registers as they are, and put in (nothing when `words` is none).
+  [[nodiscard]] std::vector<std::uint16_t> words_of(const ProfilePoint& p) const;
+  void put(const ProfilePoint& p, const std::optional<std::vector<std::uint16_t>>& words);
   [[nodiscard]] std::optional<double> point_value(std::size_t point) const;
   [[nodiscard]] std::string state() const;
 

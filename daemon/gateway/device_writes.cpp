@@ -146,11 +146,11 @@ Outcome Device::validate(const Session& session, Table table, std::uint16_t addr
     if (bits) {
       v = std::int64_t{in[i] != 0 ? 1 : 0};
     } else {
-      std::array<std::uint16_t, 2> swapped{};
+      std::array<std::uint16_t, 4> swapped{};
       auto words = in.subspan(i, count);
       if (session.word_order == WordOrder::little && has_word_order(p->spec)) {
-        swapped = {words[1], words[0]};
-        words = swapped;
+        std::reverse_copy(words.begin(), words.end(), swapped.begin());
+        words = std::span(swapped).first(count);
       }
       // A float register holding NaN or an infinity does not decode: invalid.
       auto decoded = decode_value(p->spec, words);
@@ -196,9 +196,10 @@ Outcome Device::write_points_checked(const Session& session, std::span<const Poi
   for (const PointWrite& w : points) {
     const PointSpec& spec = w.point->spec;
     const bool bits = spec.table == Table::coil;
-    std::array<std::uint16_t, 2> regs{};
+    std::array<std::uint16_t, 4> regs{};
     const std::size_t count = bits ? 1 : spec.register_count();
-    if (count > regs.size()) return Outcome::no_such_point;  // strings are not writable
+    // Strings are not writable.
+    if (spec.type == PointType::string || count > regs.size()) return Outcome::no_such_point;
     // NaN would encode as 0 (and compare unequal to everything below): refused before that.
     if (!finite(w.value)) return Outcome::invalid_value;
     const auto words = std::span(regs).first(count);
@@ -216,7 +217,8 @@ Outcome Device::write_points_checked(const Session& session, std::span<const Poi
       const double step = spec.scale == 0.0 ? 1.0 : spec.scale;
       const double tolerance = spec.type == PointType::f32
                                    ? std::max(1e-6 * std::fabs(asked), 1e-30)
-                                   : 1e-6 * std::fabs(step);
+                               : spec.type == PointType::f64 ? 0.0
+                                                             : 1e-6 * std::fabs(step);
       if (!held || !(std::fabs(as_double(*held) - asked) <= tolerance)) {
         return Outcome::invalid_value;
       }

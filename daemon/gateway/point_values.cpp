@@ -65,7 +65,7 @@ void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
       const auto* i64 = std::get_if<std::int64_t>(&*v);
       const bool marked = row != nullptr && row->unknown && i64 != nullptr && *i64 == *row->unknown;
       out.emplace_back(&p, marked ? Value{} : std::move(*v));
-    } else if (p.spec.type == PointType::f32) {
+    } else if (p.spec.type == PointType::f32 || p.spec.type == PointType::f64) {
       out.emplace_back(&p, Value{});  // NaN or infinite
     }
   }

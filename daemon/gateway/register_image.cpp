@@ -46,13 +46,15 @@ void RegisterImage::copy(Table table, std::uint16_t address, std::span<std::uint
   const auto regs = registers(table);
   std::copy_n(regs.begin() + address, out.size(), out.begin());
   if (order != WordOrder::little) return;
-  // Each register of a 32-bit value shows its partner's word, so a read of half a value (or of a
-  // range cutting one) gives what a little-endian client expects at that address.
+  // Each register of a 32- or 64-bit value shows the word at its mirror place in the value
+  // (a 32-bit value's partner), so a read of part of a value (or of a range cutting one) gives
+  // what a little-endian client expects at that address.
   for (std::size_t i = 0; i < out.size(); ++i) {
     const auto at = static_cast<std::uint16_t>(address + i);
     const MappedPoint* p = map_.at(table, at);
     if (p == nullptr || !has_word_order(p->spec)) continue;
-    out[i] = regs[at == p->address ? at + 1 : at - 1];
+    const std::size_t last = std::size_t{p->address} + p->spec.register_count() - 1;
+    out[i] = regs[last - (at - p->address)];
   }
 }
 

@@ -31,8 +31,9 @@ constexpr std::string_view to_string(AccessLevel a) {
   return kAccessLevelNames.at(static_cast<std::size_t>(a));
 }
 
-// How 32-bit values are laid over two registers for a client: big = high word first (the register
-// map's order), little = low word first. Registers of 16 bits and bits are never reordered.
+// How 32- and 64-bit values are laid over their registers for a client: big = most significant
+// word first (the register map's order), little = least significant first. Registers of 16 bits,
+// strings and bits are never reordered.
 enum class WordOrder : std::uint8_t { big, little };
 inline constexpr std::array<std::string_view, 2> kWordOrderNames = {"big", "little"};
 constexpr std::string_view to_string(WordOrder w) {

@@ -17,6 +17,36 @@ T saturate(double v) {
   return static_cast<T>(std::llround(std::clamp(v, lo, hi)));
 }
 
+double scaled(const PointSpec& spec, const Value& value);
+
+// The 64-bit integers: 2^63 and 2^64 are doubles exactly, and every double below them converts.
+std::int64_t saturate_i64(double v) {
+  constexpr double two63 = 9223372036854775808.0;
+  if (std::isnan(v)) return 0;
+  const double r = std::round(v);
+  if (r >= two63) return std::numeric_limits<std::int64_t>::max();
+  if (r < -two63) return std::numeric_limits<std::int64_t>::min();
+  return static_cast<std::int64_t>(r);
+}
+std::uint64_t saturate_u64(double v) {
+  constexpr double two64 = 18446744073709551616.0;
+  if (std::isnan(v) || v <= 0) return 0;
+  const double r = std::round(v);
+  if (r >= two64) return std::numeric_limits<std::uint64_t>::max();
+  return static_cast<std::uint64_t>(r);
+}
+
+// A 64-bit integer point's value: an integer at scale 1 goes as it is (a u64's bits, see
+// drivegate/point.h), anything else through its engineering value.
+std::uint64_t bits64(const PointSpec& spec, const Value& value) {
+  const auto* i = std::get_if<std::int64_t>(&value);
+  if (i != nullptr && (spec.scale == 1.0 || spec.scale == 0.0)) {
+    return static_cast<std::uint64_t>(*i);
+  }
+  if (spec.type == PointType::u64) return saturate_u64(scaled(spec, value));
+  return static_cast<std::uint64_t>(saturate_i64(scaled(spec, value)));
+}
+
 double scaled(const PointSpec& spec, const Value& value) {
   const double scale = spec.scale == 0.0 ? 1.0 : spec.scale;
   if (const auto* i = std::get_if<std::int64_t>(&value)) {
@@ -30,6 +60,13 @@ double scaled(const PointSpec& spec, const Value& value) {
 void put32(std::uint32_t v, std::span<std::uint16_t> out) {
   out[0] = static_cast<std::uint16_t>(v >> 16);
   out[1] = static_cast<std::uint16_t>(v & 0xFFFF);
+}
+
+// Most significant register first, as put32.
+void put64(std::uint64_t v, std::span<std::uint16_t> out) {
+  for (std::size_t i = 0; i < 4; ++i) {
+    out[i] = static_cast<std::uint16_t>(v >> (16 * (3 - i)));
+  }
 }
 
 }  // namespace
@@ -50,6 +87,13 @@ void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint
       return;
     case PointType::f32:
       put32(std::bit_cast<std::uint32_t>(static_cast<float>(number_of(value))), out);
+      return;
+    case PointType::u64:
+    case PointType::i64:
+      put64(bits64(spec, value), out);
+      return;
+    case PointType::f64:
+      put64(std::bit_cast<std::uint64_t>(number_of(value)), out);
       return;
     case PointType::string: {
       const auto* s = std::get_if<std::string>(&value);
@@ -94,6 +138,15 @@ void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t>
     case PointType::f32:
       put32(std::bit_cast<std::uint32_t>(static_cast<float>(value)), out);
       return;
+    case PointType::u64:
+      put64(static_cast<std::uint64_t>(std::max<std::int64_t>(value, 0)), out);
+      return;
+    case PointType::i64:
+      put64(static_cast<std::uint64_t>(value), out);
+      return;
+    case PointType::f64:
+      put64(std::bit_cast<std::uint64_t>(static_cast<double>(value)), out);
+      return;
     case PointType::string:
       return;
   }
@@ -106,6 +159,10 @@ std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::ui
     return static_cast<double>(raw) * scale;
   };
   const std::uint32_t u32 = in.size() >= 2 ? (std::uint32_t{in[0]} << 16) | in[1] : 0;
+  std::uint64_t u64 = 0;
+  if (in.size() >= 4) {
+    for (std::size_t i = 0; i < 4; ++i) u64 = (u64 << 16) | in[i];
+  }
   switch (spec.type) {
     case PointType::u16:
       return engineering(in[0]);
@@ -119,6 +176,19 @@ std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::ui
       const float f = std::bit_cast<float>(u32);
       if (!std::isfinite(f)) return std::nullopt;
       return static_cast<double>(f);
+    }
+    case PointType::u64:
+      // Beyond an int64_t: the nearest double (the registers keep the exact bits).
+      if (u64 > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
+        return static_cast<double>(u64) * scale;
+      }
+      return engineering(static_cast<std::int64_t>(u64));
+    case PointType::i64:
+      return engineering(static_cast<std::int64_t>(u64));
+    case PointType::f64: {
+      const double d = std::bit_cast<double>(u64);
+      if (!std::isfinite(d)) return std::nullopt;
+      return d;
     }
     case PointType::string:
       return std::nullopt;

@@ -1,5 +1,6 @@
-// Engineering values <-> Modbus registers, per point type and scale. 32-bit values and floats
-// take two registers, high word first; strings two characters a register, first in the high byte.
+// Engineering values <-> Modbus registers, per point type and scale. 32-bit values take two
+// registers and 64-bit values four, most significant first; strings two characters a register,
+// first in the high byte.
 #pragma once
 
 #include <cstdint>
@@ -17,7 +18,7 @@ void encode_value(const PointSpec& spec, const Value& value, std::span<std::uint
 // A value as a number: NaN when it is not known (std::monostate).
 double number_of(const Value& value);
 
-// An integer (already in register units) into a u16 / i16 / u32 / i32 point's registers,
+// An integer (already in register units) into an integer point's registers (u64: below 0 is 0),
 // saturating at the type's limits: what the common block's rows hold.
 void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t> out);
 
@@ -25,10 +26,11 @@ void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t>
 // (a string point is not writable).
 std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::uint16_t> in);
 
-// True for the values laid over two registers as one 32-bit number (u32, i32, f32): the ones a
-// listener's word_order = "little" serves low word first. Strings are never reordered.
+// True for the values laid over several registers as one number (u32, i32, f32, u64, i64, f64):
+// the ones a listener's word_order = "little" serves least significant word first. Strings are
+// never reordered.
 constexpr bool has_word_order(const PointSpec& spec) {
-  return spec.type == PointType::u32 || spec.type == PointType::i32 || spec.type == PointType::f32;
+  return spec.type != PointType::string && registers_of(spec.type) > 1;
 }
 
 }  // namespace drivegate

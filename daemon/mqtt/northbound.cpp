@@ -44,6 +44,8 @@ DataType datatype_of(const PointSpec& spec) {
       return DataType::string;
     case PointType::f32:
       return DataType::float32;
+    case PointType::f64:
+      return DataType::float64;
     default:
       break;
   }
@@ -57,6 +59,10 @@ DataType datatype_of(const PointSpec& spec) {
       return DataType::int64;
     case PointType::i32:
       return DataType::int32;
+    case PointType::u64:
+      return DataType::uint64;
+    case PointType::i64:
+      return DataType::int64;
     default:
       return DataType::float64;
   }
@@ -72,6 +78,12 @@ MetricValue metric_value(DataType type, const Value& v) {
       return {};
     case DataType::uint16:
       return MetricValue{static_cast<std::uint64_t>(as_double(v))};
+    case DataType::uint64:
+      // decode_value gives a u64 beyond an int64_t as a double.
+      if (const auto* i = std::get_if<std::int64_t>(&v)) {
+        return MetricValue{static_cast<std::uint64_t>(*i)};
+      }
+      return MetricValue{static_cast<std::uint64_t>(std::min(as_double(v), 1.8446744073709550e19))};
     case DataType::int16:
     case DataType::int32:
     case DataType::int64:

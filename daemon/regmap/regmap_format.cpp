@@ -180,15 +180,17 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices,
       << c0 << " + address, discrete inputs " << d0 << " + address, input registers " << i0
       << " + address, holding registers " << h0
       << " + address (mbpoll's `-r` is the reference without its table digit: address + 1). "
-         "Coils and discrete inputs are single bits. 32-bit values and floats take two registers; "
-         "engineering value = register x scale. Access is the level a listener (or MQTT's "
+         "Coils and discrete inputs are single bits. 32-bit values and floats take two registers, "
+         "64-bit ones (u64, i64, f64) four, a string two characters a register (the first in "
+         "the high byte); engineering value = register x scale. Access is the level a listener (or MQTT's "
          "`access`) must have to write the point: `operate` or `maintain`; `read` points are "
          "read-only.\n\n";
   if (listeners.empty()) {
     out << "Word order of 32-bit values and floats: big, high word first (mbpoll -B), unless a "
-           "listener's `word_order` says otherwise.\n";
+           "listener's `word_order` says otherwise; 64-bit values the same over four registers.\n";
   } else {
-    out << "Word order of 32-bit values and floats, per listener:\n\n";
+    out << "Word order of 32-bit values and floats (64-bit ones the same over four registers), "
+           "per listener:\n\n";
     for (const auto& l : listeners) {
       out << "- " << md_field(l.listener) << ": " << word_order_text(l.word_order) << "\n";
     }

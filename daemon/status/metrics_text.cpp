@@ -309,8 +309,11 @@ void point_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
                     point->spec, value);
       continue;
     }
-    // A float carries about 7 significant digits, a register times its scale at most 12.
-    const int digits = point->spec.type == PointType::f32 ? 7 : 12;
+    // A float carries about 7 significant digits, a register times its scale at most 12, a
+    // 64-bit value up to 17 (what a double holds).
+    const PointType type = point->spec.type;
+    const bool wide = type == PointType::u64 || type == PointType::i64 || type == PointType::f64;
+    const int digits = type == PointType::f32 ? 7 : wide ? 17 : 12;
     w.sample(name, row.labels, round_significant(s.unit.to_base(number_of(value)), digits), extra);
   }
 }

@@ -13,12 +13,14 @@
 namespace drivegate {
 
 enum class Table : std::uint8_t { coil, discrete, input, holding };
-enum class PointType : std::uint8_t { u16, i16, u32, i32, f32, string };
+// 64-bit values (u64, i64, f64) take four registers; their names follow the older ones so that
+// a type's number never changes.
+enum class PointType : std::uint8_t { u16, i16, u32, i32, f32, string, u64, i64, f64 };
 // Their names in the printed register map, in enum order.
 inline constexpr std::array<std::string_view, 4> kTableNames = {"coil", "discrete", "input",
                                                                 "holding"};
-inline constexpr std::array<std::string_view, 6> kPointTypeNames = {"u16", "i16", "u32",
-                                                                    "i32", "f32", "string"};
+inline constexpr std::array<std::string_view, 9> kPointTypeNames = {
+    "u16", "i16", "u32", "i32", "f32", "string", "u64", "i64", "f64"};
 constexpr std::string_view to_string(Table t) {
   return kTableNames.at(static_cast<std::size_t>(t));
 }
@@ -27,13 +29,18 @@ constexpr std::string_view to_string(PointType t) {
 }
 enum class Access : std::uint8_t { read, read_write };
 
-// Registers a value of `type` takes: 32-bit values and floats two, a string its own count.
+// Registers a value of `type` takes: 32-bit values two, 64-bit ones four, a string its own
+// count.
 constexpr std::uint16_t registers_of(PointType type, std::uint16_t string_registers = 0) {
   switch (type) {
     case PointType::u32:
     case PointType::i32:
     case PointType::f32:
       return 2;
+    case PointType::u64:
+    case PointType::i64:
+    case PointType::f64:
+      return 4;
     case PointType::string:
       return string_registers;
     default:
@@ -52,7 +59,7 @@ struct PointSpec {
   std::string name;  // snake_case, unique within the device
   Table table = Table::input;
   PointType type = PointType::u16;
-  // Engineering value = register value x scale (f32 and string points use 1).
+  // Engineering value = register value x scale (f32, f64 and string points use 1).
   double scale = 1.0;
   std::string unit;         // "rpm", "Hz", "bar", "degC", ... or empty
   std::string description;  // one line for the printed register map
@@ -145,7 +152,10 @@ std::vector<Label> labels_in_order(const Names& names) {
 }
 
 // A point's current engineering value. std::monostate means "not known yet" (served as 0, with
-// the device's data_age and status telling the client how far to trust it).
+// the device's data_age and status telling the client how far to trust it). A u64 point's
+// std::int64_t holds its 64 bits as they are: one below 0 stands for a value of 2^63 or more, so
+// that the registers carry the device's exact bits (decode_value gives such a value back as the
+// nearest double).
 using Value = std::variant<std::monostate, std::int64_t, double, std::string>;
 
 inline double as_double(const Value& v) {

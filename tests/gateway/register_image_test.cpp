@@ -80,5 +80,21 @@ TEST_F(RegisterImageTest, ARangeWithAGapOrPastTheEndIsNotCovered) {
   EXPECT_FALSE(image_.covers(Table::coil, 0, 1));                       // an empty table
 }
 
+TEST(RegisterImage, SixtyFourBitValuesMirrorTheirFourWordsForLittleEndianClients) {
+  RegisterMap map{{PointSpec{.name = "q", .table = Table::input, .type = PointType::u64},
+                   PointSpec{.name = "w", .table = Table::input, .type = PointType::u16}}};
+  RegisterImage image{map};
+  image.refresh_points(std::vector<Value>{std::int64_t{0x1122334455667788}, std::int64_t{7}});
+  std::vector<std::uint16_t> out(5);
+  image.copy(Table::input, kAdapterInputBase, out, WordOrder::big);
+  EXPECT_EQ(out, (std::vector<std::uint16_t>{0x1122, 0x3344, 0x5566, 0x7788, 7}));
+  image.copy(Table::input, kAdapterInputBase, out, WordOrder::little);
+  EXPECT_EQ(out, (std::vector<std::uint16_t>{0x7788, 0x5566, 0x3344, 0x1122, 7}));
+  // Part of the value: each register shows the word at its mirror place.
+  std::vector<std::uint16_t> two(2);
+  image.copy(Table::input, kAdapterInputBase + 1, two, WordOrder::little);
+  EXPECT_EQ(two, (std::vector<std::uint16_t>{0x5566, 0x3344}));
+}
+
 }  // namespace
 }  // namespace drivegate

@@ -50,7 +50,7 @@ TEST(Profile, TheExampleOfTheIssueReadsAsWritten) {
   EXPECT_EQ(current.table, Table::input);
   EXPECT_EQ(current.address, 202);
   EXPECT_EQ(current.type, ValueType::f32);
-  EXPECT_EQ(current.word_order, WordOrder::little);
+  EXPECT_EQ(current.byte_order, ByteOrder::cdab);  // word_order = "little"
   EXPECT_EQ(current.unit, "A");
   EXPECT_EQ(p.points[*p.find("speed_actual")].scale, 0.1);
   const ProfilePoint& reference = p.points[*p.find("speed_reference")];
@@ -124,11 +124,11 @@ TEST(Profile, PointsAreCheckedOneByOne) {
   EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"bit\"\n"),
               ElementsAre(HasSubstr("point.type: type bit is for coils and discrete inputs")));
   EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 65535\ntype = \"u32\"\n"),
-              ElementsAre(HasSubstr("point.address: a two-register point at 65535")));
+              ElementsAre(HasSubstr("point.address: a point of 2 registers at 65535 runs past")));
   EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
                     "word_order = \"little\"\n"),
-              ElementsAre(HasSubstr("p.toml:14: point.word_order: applies to the two-register "
-                                    "types")));
+              ElementsAre(HasSubstr("p.toml:14: point.word_order: applies to the 32- and "
+                                    "64-bit types")));
   EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
                     "access = \"operate\"\n"),
               ElementsAre(HasSubstr("point.access: an input register or discrete input cannot "
