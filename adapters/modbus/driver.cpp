@@ -125,7 +125,7 @@ void ModbusDriver::plan(Group& g) const {
   g.blocks.insert(g.blocks.end(), b.begin(), b.end());
 }
 
-Millis ModbusDriver::inter_frame_gap() const {
+Micros ModbusDriver::inter_frame_gap() const {
   return modbus_device::inter_frame_gap(profile_.line.framing, timing_.char_time);
 }
 
@@ -168,7 +168,7 @@ Exchange ModbusDriver::exchange(const Job& j) const {
   std::size_t reply_bytes = 8;
   if (j.read) reply_bytes = 5 + data_bytes(*j.read);
   if (profile_.line.framing == Framing::ascii) reply_bytes = 2 * reply_bytes + 3;
-  ex.timeout = Millis(profile_.modbus.timeout_ms) + wire_time(timing_.char_time, reply_bytes);
+  ex.timeout = reply_timeout(Millis(profile_.modbus.timeout_ms), timing_.char_time, reply_bytes);
   ex.attempts = timing_.attempts;
   return ex;
 }

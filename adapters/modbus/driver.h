@@ -98,7 +98,7 @@ class ModbusDriver final : public DriverBase {
   // driver.cpp
   void plan(Group& g) const;
   [[nodiscard]] Exchange exchange(const Job& j) const;
-  [[nodiscard]] Millis inter_frame_gap() const;
+  [[nodiscard]] Micros inter_frame_gap() const;
   [[nodiscard]] Millis turn() const;
   [[nodiscard]] Millis send_limit() const;
   [[nodiscard]] Job read_job(const Block& b) const;

@@ -45,6 +45,9 @@ namespace drivegate {
 using Clock = std::chrono::steady_clock;
 using TimePoint = Clock::time_point;
 using Millis = std::chrono::milliseconds;
+// Line silences (the inter-frame gap) are kept to the microsecond: a few characters at 19200 baud
+// are 2 ms, and whole milliseconds would add half of that again to every frame.
+using Micros = std::chrono::microseconds;
 
 enum class ReplyMode : std::uint8_t {
   expected,  // request / reply: wait for on_receive() to return RxKind::reply
@@ -207,7 +210,7 @@ struct DriverTraits {
   // A backstop: the driver's own confirmation deadline should be shorter and fail it first, so
   // that nothing the PLC was told failed is still on its way to the drive.
   Millis write_timeout{3000};
-  Millis inter_frame_gap{0};  // line silence the bus keeps before each frame
+  Micros inter_frame_gap{0};  // line silence the bus keeps before each frame
   // The drive's state (status, faults, speed) comes in several replies that each carry part of it
   // (a profile's blocks): the engine then dates it by Driver::state_read_at() rather than by the
   // last reply, and declares comm_lost once it is older than comm_timeout whatever else the

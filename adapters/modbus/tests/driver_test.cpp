@@ -304,8 +304,8 @@ TEST_F(ModbusDriverTest, CommLostFailsEveryWriteStillWaiting) {
 
 TEST_F(ModbusDriverTest, TimingFollowsTheLine) {
   // At 19200 baud 3.5 characters of 0.573 ms (2.005 ms; the fixed 1.75 ms is for faster lines),
-  // rounded up to whole milliseconds.
-  EXPECT_EQ(d.traits().inter_frame_gap, 3ms);
+  // kept to the microsecond (Serial Line 2.5.1.1).
+  EXPECT_EQ(d.traits().inter_frame_gap, 2006us);  // 3.5 x 572.917 us, to the next microsecond
   EXPECT_GE(d.traits().write_timeout, 3000ms);
   const auto ex = d.next_exchange(now);
   ASSERT_TRUE(ex);
