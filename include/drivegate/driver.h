@@ -271,6 +271,10 @@ class Driver {
   virtual WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) = 0;
   // Outcomes of pending parts since the last call, appended to `out`.
   virtual void take_completions(std::vector<Completion>& out) = 0;
+  // What the driver learned of its device that an operator must hear (a read plan it changed, a
+  // point it can no longer read), one line each, since the last call, appended to `out`: the
+  // gateway logs each as a warning, naming the device, after every driver call.
+  virtual void take_notices(std::vector<std::string>& out) { (void)out; }
 
   // Pass-through (adapters whose devices speak Modbus themselves: adapters/modbus). True when
   // every Modbus request for this device's unit id is to be forwarded to it as it is, rather than
