@@ -96,20 +96,6 @@ Profile parse(const std::filesystem::path& path) {
   return std::get<Profile>(std::move(r));
 }
 
-std::string_view table_name(Table t) {
-  switch (t) {
-    case Table::coil:
-      return "coil";
-    case Table::discrete:
-      return "discrete";
-    case Table::input:
-      return "input";
-    case Table::holding:
-      return "holding";
-  }
-  return "holding";
-}
-
 // --- the profiles ---
 
 // The shipped profiles, by name.
@@ -171,9 +157,10 @@ std::string per_point_profile(const Profile& p) {
     const ProfilePoint& q = p.points[i];
     const unsigned moved = q.address + before[q.table]++;
     if (moved + q.width() > 65536) throw std::runtime_error(p.name + ": no room to spread");
-    o << "\n[[point]]\nname = \"p_" << q.name << "\"\ntable = \"" << table_name(q.table)
-      << "\"\naddress = " << moved << "\ntype = \""
-      << modbus_device::kValueTypeNames.at(static_cast<std::size_t>(q.type)) << "\"\n";
+    o << "\n[[point]]\nname = \"p_" << q.name << "\"\ntable = \""
+      << kProfileTableNames.at(static_cast<std::size_t>(q.table)) << "\"\naddress = " << moved
+      << "\ntype = \"" << modbus_device::kValueTypeNames.at(static_cast<std::size_t>(q.type))
+      << "\"\n";
     if (q.width() == 2) {
       o << "word_order = \""
         << modbus_device::kWordOrderNames.at(static_cast<std::size_t>(q.word_order)) << "\"\n";

@@ -18,23 +18,10 @@ constexpr std::uint8_t kIllegalAddress = 0x02;
 // row: a drive may refuse a register while busy, and one glitch must not shrink the plan.
 constexpr int kRefusalsBeforeSearch = 3;
 
-std::string_view table_name(Table t) {
-  switch (t) {
-    case Table::coil:
-      return "coil";
-    case Table::discrete:
-      return "discrete";
-    case Table::input:
-      return "input";
-    case Table::holding:
-      return "holding";
-  }
-  return "holding";
-}
-
 // "holding 202" or "holding 202..203".
 std::string span_text(Table t, std::uint32_t start, std::uint32_t count) {
-  std::string s = std::string(table_name(t)) + " " + std::to_string(start);
+  std::string s =
+      std::string(kProfileTableNames.at(static_cast<std::size_t>(t))) + " " + std::to_string(start);
   if (count > 1) s += ".." + std::to_string(start + count - 1);
   return s;
 }
