@@ -319,7 +319,9 @@ void BusEngine::on_sent() {
   if (echo_line_) {
     state_ = State::awaiting_echo;
     deadline_ =
-        now + on_wire(exchange_->frame.size() + kEchoSlackChars) + kEchoSlack + network_delay_;
+        now +
+        std::chrono::duration_cast<Millis>(on_wire(exchange_->frame.size() + kEchoSlackChars)) +
+        kEchoSlack + network_delay_;
     advance(now);
   } else {
     after_sent(now);
@@ -337,7 +339,7 @@ void BusEngine::after_sent(TimePoint now) {
   // one-wire line the echo has already shown them leave.
   const auto wire = echo_line_ ? std::chrono::nanoseconds(0) : on_wire(exchange_->frame.size());
   // Behind a serial device server the reply also crosses the network (network_delay_ms).
-  deadline_ = now + exchange_->timeout + network_delay_ + wire;
+  deadline_ = now + exchange_->timeout + network_delay_ + std::chrono::duration_cast<Millis>(wire);
   if (!rx_.empty()) process_rx(*current_, now);
 }
 

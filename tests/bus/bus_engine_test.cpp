@@ -210,15 +210,14 @@ TEST(BusEngine, ASilentReplyIsResentAfterItsTimeoutCountingTheWire) {
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.read(d, Table::input, 13, 2)[1] == 3; }, 1s));
   ASSERT_TRUE(b.rig.run_until([&] { return b.sent(kPoll, 1, from).size() == 4; }, 1s));
   const auto polls = b.sent(kPoll, 1, from);
-  // Three attempts. 2 bytes at 9600 8N1 leave the UART in 2.083 ms (counted exactly, not as whole
-  // milliseconds): the 50 ms wait counts from then, then the line is kept quiet for the guard time
-  // (the timeout again) before the identical frame goes again.
-  const auto wire = character_time(9600, Parity::none, 8, 1) * 2;
-  EXPECT_EQ(polls[1] - polls[0], 100ms + wire);
-  EXPECT_EQ(polls[2] - polls[1], 100ms + wire);
+  // Three attempts. 2 bytes at 9600 8N1 leave the UART in 2.08 ms (counted as 2): the 50 ms wait
+  // counts from then, then the line is kept quiet for the guard time (the timeout again) before
+  // the identical frame goes again.
+  EXPECT_EQ(polls[1] - polls[0], 102ms);
+  EXPECT_EQ(polls[2] - polls[1], 102ms);
   // The device is alone on its line: the turn's timeouts cost nobody else, so its next poll
   // turn comes with no pause for the line time it held (bus_engine.h, "Sick devices").
-  EXPECT_EQ(polls[3] - polls[2], 100ms + wire);
+  EXPECT_EQ(polls[3] - polls[2], 102ms);
   EXPECT_EQ(b.rig.read(d, Table::input, 15, 2)[1], 2);  // retries: 3 attempts, 2 of them resends
 }
 
@@ -236,10 +235,9 @@ TEST(BusEngine, ANetworkDelayLengthensEveryReplyTimeout) {
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.read(d, Table::input, 13, 2)[1] == 3; }, 1s));
   const auto polls = b.sent(kPoll, 1, from);
   ASSERT_GE(polls.size(), 3u);
-  // 2.083 ms on the wire + 50 ms timeout + 30 ms network, and the guard time: 80 ms again.
-  const auto wire = character_time(9600, Parity::none, 8, 1) * 2;
-  EXPECT_EQ(polls[1] - polls[0], 160ms + wire);
-  EXPECT_EQ(polls[2] - polls[1], 160ms + wire);
+  // 2 ms on the wire + 50 ms timeout + 30 ms network, and the guard time: 80 ms again.
+  EXPECT_EQ(polls[1] - polls[0], 162ms);
+  EXPECT_EQ(polls[2] - polls[1], 162ms);
 }
 
 TEST(BusEngine, NacksAndDamagedRepliesAreResentAtOnceWithoutBackOff) {
