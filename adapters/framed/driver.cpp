@@ -96,7 +96,7 @@ Exchange FramedDriver::exchange(std::size_t message, const std::vector<Val>& var
     // guard after it and the gap, each.
     const auto wire = char_time_ * static_cast<long>(ex.frame.size() * (d_->line.echo ? 2 : 1));
     const Millis per =
-        std::chrono::ceil<Millis>(wire) + unanswered_attempt(ex.timeout) + traits_.inter_frame_gap;
+        std::chrono::ceil<Millis>(wire + traits_.inter_frame_gap) + unanswered_attempt(ex.timeout);
     attempts = attempts_before(*deadline, now, per, attempts);
   }
   ex.attempts = attempts;

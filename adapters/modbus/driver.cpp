@@ -14,6 +14,17 @@ namespace {
 // Exception 02, illegal data address (Application Protocol 7): the slave lacks a register the
 // block covers. Any other exception (04 failure, 05 acknowledge, 06 busy...) may pass.
 constexpr std::uint8_t kIllegalAddress = 0x02;
+// A block read before is searched only once the slave refused it with 02 this many times in a
+// row: a drive may refuse a register while busy, and one glitch must not shrink the plan.
+constexpr int kRefusalsBeforeSearch = 3;
+
+// "holding 202" or "holding 202..203".
+std::string span_text(Table t, std::uint32_t start, std::uint32_t count) {
+  std::string s =
+      std::string(kProfileTableNames.at(static_cast<std::size_t>(t))) + " " + std::to_string(start);
+  if (count > 1) s += ".." + std::to_string(start + count - 1);
+  return s;
+}
 
 // The register-map face of a profile point.
 PointSpec spec_of(const ProfilePoint& p) {
@@ -68,7 +79,7 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
       exposed_index_(profile_.points.size()),
       raw_(profile_.points.size()),
       reading_(profile_.points.size()),
-      alone_(profile_.points.size(), false) {
+      refused_(profile_.points.size(), false) {
   // Every point not bound to the common block is one of the device's own.
   std::vector<bool> bound(profile_.points.size(), false);
   const CommonBindings& c = profile_.common;
@@ -113,25 +124,17 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
   }
 }
 
-// The group's blocks: its readable points joined by the planner, those read alone after a
-// refused block one request each.
+// The group's blocks: its points the slave serves, joined by the planner around the registers
+// it refuses.
 void ModbusDriver::plan(Group& g) const {
-  std::vector<std::size_t> joined;
-  g.blocks.clear();
+  std::vector<std::size_t> served;
   for (const std::size_t p : g.points) {
-    if (alone_[p]) {
-      const std::size_t one[] = {p};
-      const auto b = plan_reads(profile_, one);
-      g.blocks.insert(g.blocks.end(), b.begin(), b.end());
-    } else {
-      joined.push_back(p);
-    }
+    if (!refused_[p]) served.push_back(p);
   }
-  const auto b = plan_reads(profile_, joined);
-  g.blocks.insert(g.blocks.end(), b.begin(), b.end());
+  g.blocks = plan_reads(profile_, served, skipped_);
 }
 
-Millis ModbusDriver::inter_frame_gap() const {
+Micros ModbusDriver::inter_frame_gap() const {
   return modbus_device::inter_frame_gap(profile_.line.framing, timing_.char_time);
 }
 
@@ -174,7 +177,7 @@ Exchange ModbusDriver::exchange(const Job& j) const {
   std::size_t reply_bytes = 8;
   if (j.read) reply_bytes = 5 + data_bytes(*j.read);
   if (profile_.line.framing == Framing::ascii) reply_bytes = 2 * reply_bytes + 3;
-  ex.timeout = Millis(profile_.modbus.timeout_ms) + wire_time(timing_.char_time, reply_bytes);
+  ex.timeout = reply_timeout(Millis(profile_.modbus.timeout_ms), timing_.char_time, reply_bytes);
   ex.attempts = timing_.attempts;
   return ex;
 }
@@ -205,6 +208,12 @@ std::optional<Exchange> ModbusDriver::next_exchange(TimePoint now) {
       g.due = now + g.interval;
     }
   }
+  // A search goes first: its block's points are unknown until it is read.
+  if (!searches_.empty()) {
+    inflight_ = read_job(*searches_.front().next());
+    inflight_->probe = true;
+    return exchange(*inflight_);
+  }
   if (reads_.empty()) return std::nullopt;
   inflight_ = read_job(reads_.front());
   reads_.pop_front();
@@ -212,7 +221,7 @@ std::optional<Exchange> ModbusDriver::next_exchange(TimePoint now) {
 }
 
 TimePoint ModbusDriver::wake_at() const {
-  if (!writes_.empty() || !reads_.empty()) return last_now_;
+  if (!writes_.empty() || !reads_.empty() || !searches_.empty()) return last_now_;
   TimePoint next = TimePoint::max();
   for (const Group& g : groups_) {
     if (!g.blocks.empty()) next = std::min(next, g.due);
@@ -254,10 +263,18 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
     return {RxKind::ack, d.consumed};  // an echo says nothing of the drive's state
   }
   if (exception) {
-    on_read_failed(*job.read, a.pdu[1]);
+    if (job.probe && a.pdu[1] == kIllegalAddress) {
+      on_probe(true);
+    } else {
+      // Any other refusal ends the search: the block is read again as planned, and searched
+      // again once it is refused with 02 again.
+      if (job.probe && !searches_.empty()) searches_.pop_front();
+      on_read_failed(*job.read, a.pdu[1]);
+    }
     return {RxKind::ack, d.consumed};
   }
   on_read(*job.read, a.pdu, now);
+  if (job.probe && !searches_.empty()) on_probe(false);
   return {RxKind::reply, d.consumed};
 }
 
@@ -276,27 +293,39 @@ void ModbusDriver::on_read(const Block& b, ByteView pdu, TimePoint now) {
     }
     if (const auto e = exposed_index_[i]) values_[*e] = value_of(p, words);
     raw_[i] = std::move(words);
-    reading_[i] = Reading{now, 0, 0};
+    reading_[i] = Reading{now, 0, 0, 0};
   }
+  served_ = true;
+  refusing_ = false;
   ++blocks_read_;
   update_common();
   adopt();
 }
 
-// A slave that refuses a block with exception 02 (illegal data address) may lack one of its
-// points: the block's points are read one by one from the next cycle on, so one missing register
-// never costs the device its other points. Any other refusal, a point refused alone, and a block
-// left unanswered are a read that failed: its points are asked again at their next cycle, then
-// after 1, 3, 7... cycles sat out (twice the wait each time, at most the comm timeout apart, or
-// every cycle where one is longer), and the device's own points among them are unknown
-// meanwhile. A part of the drive's state that is not read ages the state (state_read_at), which
-// the data age and comm_lost then tell.
+// A slave that refuses a block with exception 02 (illegal data address) may lack a register in
+// it: the block is searched (to_search, GapSearch) from the next exchange on, so one missing
+// register never costs the device its other points. Any other refusal, a block refused with 02
+// that is not searched, and a block left unanswered are a read that failed: its points are
+// asked again at their next cycle, then after 1, 3, 7... cycles sat out (twice the wait each
+// time, at most the comm timeout apart, or every cycle where one is longer), and the device's
+// own points among them are unknown meanwhile. A part of the drive's state that is not read ages
+// the state (state_read_at), which the data age and comm_lost then tell.
 void ModbusDriver::on_read_failed(const Block& b, std::optional<std::uint8_t> code) {
-  if (code == kIllegalAddress && b.points.size() > 1) {
-    for (const std::size_t p : b.points) alone_[p] = true;
-    for (Group& g : groups_) plan(g);
+  const bool illegal = code == kIllegalAddress;
+  for (const std::size_t p : b.points) {
+    if (illegal) ++reading_[p].illegal;
+  }
+  if (illegal && to_search(b)) {
+    for (const std::size_t p : b.points) {
+      if (const auto e = exposed_index_[p]) values_[*e] = Value{};
+    }
+    searches_.emplace_back(profile_, b);
     return;
   }
+  back_off(b);
+}
+
+void ModbusDriver::back_off(const Block& b) {
   for (const std::size_t p : b.points) {
     Reading& r = reading_[p];
     const auto most = std::max<std::int64_t>(timing_.comm_timeout / interval_of(p) - 1, 0);
@@ -307,6 +336,101 @@ void ModbusDriver::on_read_failed(const Block& b, std::optional<std::uint8_t> co
   }
 }
 
+// Searched: a block of a slave not known to refuse everything, not being searched already, that was
+// never read whole (one of its points never read) or was refused with 02 kRefusalsBeforeSearch
+// times in a row.
+bool ModbusDriver::to_search(const Block& b) const {
+  if (refusing_) return false;
+  for (const GapSearch& s : searches_) {
+    if (s.block() == b) return false;
+  }
+  const bool unread =
+      std::any_of(b.points.begin(), b.points.end(), [&](std::size_t p) { return !reading_[p].at; });
+  const bool refused = std::all_of(b.points.begin(), b.points.end(), [&](std::size_t p) {
+    return reading_[p].illegal >= kRefusalsBeforeSearch;
+  });
+  return unread || refused;
+}
+
+void ModbusDriver::on_probe(bool refused) {
+  GapSearch& s = searches_.front();
+  const bool found = !s.refused().empty();
+  s.answered(refused);
+  // Nothing read yet, and a refusal after a part found refused (or a search that found one
+  // and ends): the slave refuses everything. Nothing is skipped.
+  if (!served_ && !s.refused().empty() && ((refused && found) || s.done())) {
+    refusing_ = true;
+    const Block b = s.block();
+    searches_.pop_front();
+    notices_.push_back("the slave refuses every read it was asked (exception 02): " +
+                       span_text(b.table, b.start, b.count) + " is not searched further");
+    back_off(b);
+    return;
+  }
+  if (!s.done()) return;
+  const GapSearch done = std::move(s);
+  searches_.pop_front();
+  learn(done);
+}
+
+void ModbusDriver::learn(const GapSearch& s) {
+  const Table t = s.block().table;
+  for (const GapSearch::Part& part : s.refused()) {
+    for (std::uint32_t a = part.start; a < std::uint32_t{part.start} + part.count; ++a) {
+      skipped_.insert({t, static_cast<std::uint16_t>(a)});
+    }
+    if (!part.point) continue;
+    refused_[*part.point] = true;
+    raw_[*part.point].reset();
+    if (const auto e = exposed_index_[*part.point]) values_[*e] = Value{};
+    notices_.push_back("point " + profile_.points[*part.point].name + " (" +
+                       span_text(t, part.start, part.count) +
+                       ") is refused by the slave (exception 02): unknown from now on");
+  }
+  if (!s.refused().empty()) {
+    plan_changed_ = true;
+    // The cycle under way was of the old plan: every group is read anew by the new one.
+    reads_.clear();
+    for (Group& g : groups_) {
+      plan(g);
+      g.due = last_now_;
+    }
+  }
+  // Once no search is left: the plan as it is now, in one line.
+  if (plan_changed_ && searches_.empty()) {
+    plan_changed_ = false;
+    notices_.push_back(plan_text());
+  }
+}
+
+// "read plan: holding 0..1, input 200; skips holding 202..203 (refused by the slave)".
+std::string ModbusDriver::plan_text() const {
+  std::string s = "read plan:";
+  const char* sep = " ";
+  for (const Group& g : groups_) {
+    for (const Block& b : g.blocks) {
+      s += sep + span_text(b.table, b.start, b.count);
+      sep = ", ";
+    }
+  }
+  if (sep[0] == ' ') s += " nothing";
+  s += "; skips";
+  // Runs of skipped registers, each as one span.
+  sep = " ";
+  for (auto it = skipped_.begin(); it != skipped_.end();) {
+    auto end = std::next(it);
+    std::uint32_t count = 1;
+    while (end != skipped_.end() && end->first == it->first && end->second == it->second + count) {
+      ++end;
+      ++count;
+    }
+    s += sep + span_text(it->first, it->second, count);
+    sep = ", ";
+    it = end;
+  }
+  return s + " (refused by the slave, until drivegated restarts or a reload changes the device)";
+}
+
 Millis ModbusDriver::interval_of(std::size_t point) const {
   const auto own = profile_.points[point].poll_ms;
   return own != 0 ? Millis(own) : poll_interval_;
@@ -314,6 +438,8 @@ Millis ModbusDriver::interval_of(std::size_t point) const {
 
 void ModbusDriver::on_no_reply(TimePoint now) {
   last_now_ = now;
+  // A search whose read goes unanswered ends: begun again once the block is refused again.
+  if (inflight_ && inflight_->probe && !searches_.empty()) searches_.pop_front();
   if (inflight_ && inflight_->read) on_read_failed(*inflight_->read, std::nullopt);
   fail_inflight();
 }
@@ -326,14 +452,13 @@ void ModbusDriver::on_comm_lost(TimePoint now) {
   reads_.clear();
   blocks_read_ = 0;
   common_.ready = false;
-  // A slave that comes back may be another one (replaced, reconfigured): ask it everything again,
-  // and its state is whole again only once every part of it was read anew.
+  // Its state is whole again only once every part of it was read anew. What it refused stays
+  // skipped (a slave that lacked a register still lacks it; one that refused everything was
+  // never searched): a device whose state it refuses goes comm_lost once, not in a loop.
   std::fill(reading_.begin(), reading_.end(), Reading{});
-  std::fill(alone_.begin(), alone_.end(), false);
-  for (Group& g : groups_) {
-    plan(g);
-    g.due = now;
-  }
+  searches_.clear();
+  served_ = false;
+  for (Group& g : groups_) g.due = now;
 }
 
 std::optional<TimePoint> ModbusDriver::state_read_at() const {

@@ -9,6 +9,19 @@
 // (twice the wait each time, at most the comm timeout), its own points unknown meanwhile, never
 // left at their last value.
 //
+// Gaps that heal. A block the slave refuses with exception 02 (illegal data address) may cover a
+// register it does not serve: a gap read through by max_gap, or a point it lacks. A block never
+// read yet is searched at its first such refusal, one read before at its kRefusalsBeforeSearch-th
+// in a row (a drive that refuses while busy is not taken for one that lacks a register):
+// GapSearch finds the refused registers, which are skipped from then on, and the rest of the
+// points are read in the largest blocks that avoid them. A slave that refuses two parts before it
+// answered any read refuses everything (it is failing, or not the device the profile describes):
+// nothing is skipped, the search ends, and none begins again until it answers a read; its blocks
+// are backed off as failed reads, and it goes comm_lost. A point the slave
+// refuses stays unknown; the new plan is logged once (take_notices). What is skipped stays
+// skipped until the driver is made anew (drivegated restarts, or a reload changes the device):
+// comm_lost and a return do not bring it back, so a plan is never learned in a loop.
+//
 //   driver.cpp         the poll plan, the line side, replies into points and the common state
 //   driver_writes.cpp  check() and apply(), the writes waiting for the line, their confirmation
 #pragma once
@@ -21,6 +34,7 @@
 #include "codec.h"
 #include "drivegate/driver_base.h"
 #include "drivegate/write_ledger.h"
+#include "gap_search.h"
 #include "planner.h"
 #include "profile.h"
 
@@ -87,9 +101,11 @@ class ModbusDriver final : public DriverBase {
     std::optional<TimePoint> at;  // its last good read
     int failures = 0;             // reads refused or unanswered in a row
     int skip = 0;                 // cycles of its group it sits out before it is asked again
+    int illegal = 0;              // of those, refused with exception 02
   };
   struct Job {
     std::optional<Block> read;
+    bool probe = false;                  // a read of searches_.front()
     std::optional<Writes::Entry> write;  // out of the ledger while on the line
     std::uint8_t function = 0;
     Bytes pdu;
@@ -98,13 +114,22 @@ class ModbusDriver final : public DriverBase {
   // driver.cpp
   void plan(Group& g) const;
   [[nodiscard]] Exchange exchange(const Job& j) const;
-  [[nodiscard]] Millis inter_frame_gap() const;
+  [[nodiscard]] Micros inter_frame_gap() const;
   [[nodiscard]] Millis turn() const;
   [[nodiscard]] Millis send_limit() const;
   [[nodiscard]] Job read_job(const Block& b) const;
   void on_read(const Block& b, ByteView pdu, TimePoint now);
   // The slave answered `b` with exception `code`, or (nothing) not at all.
   void on_read_failed(const Block& b, std::optional<std::uint8_t> code);
+  // Whether a block refused with exception 02 is to be searched for what the slave refuses.
+  [[nodiscard]] bool to_search(const Block& b) const;
+  // searches_.front()'s read was answered: refused with exception 02, or read.
+  void on_probe(bool refused);
+  // A search is over: what it found refused is skipped, and the plan made anew.
+  void learn(const GapSearch& s);
+  // The refused block's points sit out cycles of their back-off (on_read_failed).
+  void back_off(const Block& b);
+  [[nodiscard]] std::string plan_text() const;
   [[nodiscard]] Millis interval_of(std::size_t point) const;
   void update_common();
   void adopt();
@@ -129,7 +154,12 @@ class ModbusDriver final : public DriverBase {
 
   std::vector<std::optional<std::vector<std::uint16_t>>> raw_;  // per profile point, last read
   std::vector<Reading> reading_;                                // per profile point
-  std::vector<bool> alone_;  // per profile point: read on its own after a refused block
+  Skipped skipped_;                 // registers (and bits) the slave refuses: never read
+  std::vector<bool> refused_;       // per profile point: the slave refuses it, never read
+  std::deque<GapSearch> searches_;  // blocks refused with 02, searched one after the other
+  bool served_ = false;             // a read was answered since the start or comm_lost
+  bool refusing_ = false;           // refuses everything: no search until a read is answered
+  bool plan_changed_ = false;       // not yet logged
   // The profile points the drive's state is made of (speed, run and fault bits, fault code).
   std::vector<std::size_t> state_points_;
   std::vector<Group> groups_;

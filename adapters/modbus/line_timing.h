@@ -19,15 +19,21 @@ constexpr std::size_t longest_frame(Framing f) {
   return f == Framing::rtu ? kLongestRtu : kLongestAscii;
 }
 
-// `bytes` characters on the wire, rounded up to whole milliseconds.
-Millis wire_time(std::chrono::nanoseconds char_time, std::size_t bytes);
+// `bytes` characters on the wire, exactly.
+std::chrono::nanoseconds wire_time(std::chrono::nanoseconds char_time, std::size_t bytes);
+
+// A reply timeout (whole milliseconds, as Exchange::timeout is) that waits `timeout` and the
+// reply's `bytes` characters on the wire: the wire time rounded up once, at the end.
+Millis reply_timeout(Millis timeout, std::chrono::nanoseconds char_time, std::size_t bytes);
 
 // RTU frames are preceded by 3.5 characters of silence, at least a fixed 1.75 ms above 19200
-// baud (Serial Line 2.5.1.1); ASCII frames start with ':' and need none.
-Millis inter_frame_gap(Framing f, std::chrono::nanoseconds char_time);
+// baud (Serial Line 2.5.1.1), rounded up to the next microsecond (never shorter than the
+// specification's); ASCII frames start with ':' and need none.
+Micros inter_frame_gap(Framing f, std::chrono::nanoseconds char_time);
 
 // The most line time one exchange takes whose frames there and back are at most `longest` bytes
-// each: every attempt's wait and the engine's guard after it, the gap and the frames.
+// each: every attempt's wait and the engine's guard after it, the gap and the frames, rounded up
+// to whole milliseconds once (a deadline, not a silence).
 Millis exchange_time(Framing f, std::chrono::nanoseconds char_time, Millis reply_timeout,
                      std::uint8_t attempts, std::size_t longest);
 

@@ -48,7 +48,8 @@ std::optional<Exchange> PassthroughDriver::next_exchange(TimePoint now) {
     Forwards::Entry f = queued_.take_front();
     ex.frame = encode(settings_.framing, address_, f.job.pdu);
     // Any reply, up to the longest frame, must have time to arrive.
-    ex.timeout = settings_.reply_timeout + wire_time(char_time_, longest_frame(settings_.framing));
+    ex.timeout =
+        reply_timeout(settings_.reply_timeout, char_time_, longest_frame(settings_.framing));
     ex.attempts = 1;
     inflight_ = InFlight{f.job.pdu[0], std::move(f)};
     return ex;
@@ -57,7 +58,7 @@ std::optional<Exchange> PassthroughDriver::next_exchange(TimePoint now) {
   probe_due_ = now + poll_interval_;
   ex.frame = encode(settings_.framing, address_, kProbe);
   // The probe's reply is at most 7 bytes (exception: 5), 15 characters in ASCII.
-  ex.timeout = settings_.reply_timeout + wire_time(char_time_, 15);
+  ex.timeout = reply_timeout(settings_.reply_timeout, char_time_, 15);
   ex.attempts = settings_.attempts;
   inflight_ = InFlight{kProbe[0], std::nullopt};
   return ex;

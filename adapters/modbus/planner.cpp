@@ -21,7 +21,8 @@ std::uint8_t read_function(Table table) {
   return fc::read_holding_registers;
 }
 
-std::vector<Block> plan_reads(const Profile& profile, std::span<const std::size_t> points) {
+std::vector<Block> plan_reads(const Profile& profile, std::span<const std::size_t> points,
+                              const Skipped& skipped) {
   std::vector<std::size_t> order(points.begin(), points.end());
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     const ProfilePoint& pa = profile.points[a];
@@ -40,7 +41,10 @@ std::vector<Block> plan_reads(const Profile& profile, std::span<const std::size_
       Block& b = blocks.back();
       const std::uint32_t block_end = std::uint32_t{b.start} + b.count;
       const bool near = p.address >= block_end && p.address - block_end <= profile.modbus.max_gap;
-      if (b.table == p.table && near && end - b.start <= limit) {
+      // The first skipped register at or after the block's end: the gap must not hold it.
+      const auto s = skipped.lower_bound({p.table, static_cast<std::uint16_t>(block_end)});
+      const bool clear = s == skipped.end() || s->first != p.table || s->second >= p.address;
+      if (b.table == p.table && near && clear && end - b.start <= limit) {
         b.count = static_cast<std::uint16_t>(end - b.start);
         b.points.push_back(i);
         continue;

@@ -131,7 +131,7 @@ class BusEngine {
   // The line was busy until `t` (bytes in, or ours leaving): the inter-frame gap counts from it.
   void note_activity(TimePoint t) { last_activity_ = std::max(last_activity_, t); }
   // The next frame may go once the gap after the last activity and any guard time have passed.
-  [[nodiscard]] TimePoint clear_at(Millis gap) const {
+  [[nodiscard]] TimePoint clear_at(Micros gap) const {
     return std::max(last_activity_ + gap, quiet_until_);
   }
   void start_guard(Station& owner, TimePoint now);

@@ -49,7 +49,7 @@ struct LinkPolicy {
   Millis budget{1000};        // most line time one turn of this device may take
   Millis backoff_max{5000};   // longest pause between probes of a silent device
   Millis comm_timeout{6000};  // no good frame for this long: comm_lost
-  Millis inter_frame_gap{0};  // line silence before each of its frames
+  Micros inter_frame_gap{0};  // line silence before each of its frames
   bool streaming = false;     // sends unsolicited frames (alone on its line)
 };
 

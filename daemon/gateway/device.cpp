@@ -131,6 +131,9 @@ void Device::publish(TimePoint now, bool always) {
     completions.clear();
     driver_->take_completions(completions);  // applying a next part may settle at once
   }
+  std::vector<std::string> notices;
+  driver_->take_notices(notices);
+  for (const std::string& n : notices) log_->warn("device {}: {}", config_.name, n);
   log_changes();
   record_changes();
   if (watcher_ && (always || settled)) watcher_();

@@ -45,6 +45,9 @@ namespace drivegate {
 using Clock = std::chrono::steady_clock;
 using TimePoint = Clock::time_point;
 using Millis = std::chrono::milliseconds;
+// Line silences (the inter-frame gap) are kept to the microsecond: a few characters at 19200 baud
+// are 2 ms, and whole milliseconds would add half of that again to every frame.
+using Micros = std::chrono::microseconds;
 
 enum class ReplyMode : std::uint8_t {
   expected,  // request / reply: wait for on_receive() to return RxKind::reply
@@ -207,7 +210,7 @@ struct DriverTraits {
   // A backstop: the driver's own confirmation deadline should be shorter and fail it first, so
   // that nothing the PLC was told failed is still on its way to the drive.
   Millis write_timeout{3000};
-  Millis inter_frame_gap{0};  // line silence the bus keeps before each frame
+  Micros inter_frame_gap{0};  // line silence the bus keeps before each frame
   // The drive's state (status, faults, speed) comes in several replies that each carry part of it
   // (a profile's blocks): the engine then dates it by Driver::state_read_at() rather than by the
   // last reply, and declares comm_lost once it is older than comm_timeout whatever else the
@@ -268,6 +271,10 @@ class Driver {
   virtual WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) = 0;
   // Outcomes of pending parts since the last call, appended to `out`.
   virtual void take_completions(std::vector<Completion>& out) = 0;
+  // What the driver learned of its device that an operator must hear (a read plan it changed, a
+  // point it can no longer read), one line each, since the last call, appended to `out`: the
+  // gateway logs each as a warning, naming the device, after every driver call.
+  virtual void take_notices(std::vector<std::string>& out) { (void)out; }
 
   // Pass-through (adapters whose devices speak Modbus themselves: adapters/modbus). True when
   // every Modbus request for this device's unit id is to be forwarded to it as it is, rather than

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "drivegate/driver.h"
@@ -21,6 +22,10 @@ class DriverBase : public Driver {
   [[nodiscard]] const std::vector<Value>& values() const final { return values_; }
   [[nodiscard]] const CommonState& common() const final { return common_; }
   void take_completions(std::vector<Completion>& out) final { completions_.take(out); }
+  void take_notices(std::vector<std::string>& out) final {
+    out.insert(out.end(), notices_.begin(), notices_.end());
+    notices_.clear();
+  }
 
  protected:
   DriverBase() = default;
@@ -31,6 +36,7 @@ class DriverBase : public Driver {
   std::vector<Value> values_;      // points_'s, same order and size
   CommonState common_;
   Completions completions_;
+  std::vector<std::string> notices_;  // for take_notices(), oldest first
 };
 
 // The status apply() answers for a part its driver's judgement (check()'s, now) would not take:

@@ -87,35 +87,38 @@ TEST(ScanRequests, TheProbeReadsHoldingRegisterZeroInEitherFraming) {
 }
 
 TEST(ScanRequests, RtuKeepsThreeAndAHalfCharactersOfSilenceOrOnePointSevenFiveMs) {
-  // Serial Line 2.5.1.1, in whole milliseconds, rounded up (line_timing.h): 9600 8N1, 3.5 x
-  // 1.042 ms = 3.65 ms; 19200 8E1, 3.5 x 0.573 ms = 2.005 ms; above 19200 baud, the fixed
+  // Serial Line 2.5.1.1, rounded up to the next microsecond (line_timing.h): 9600 8N1, 3.5 x
+  // 1.042 ms = 3.6458 ms; 19200 8E1, 3.5 x 0.573 ms = 2.0052 ms; above 19200 baud, the fixed
   // 1.75 ms (3.5 characters at 115200 would be 0.30 ms). ASCII frames start with ':': none.
   const auto gap = [](std::uint32_t baud, Parity parity, Framing framing) {
     ScanSettings s = settings({1}, framing);
     s.char_time = character_time(baud, parity, 8, 1);
     return Scanner(s).next()->gap;
   };
-  EXPECT_EQ(gap(9600, Parity::none, Framing::rtu), 4ms);
-  EXPECT_EQ(gap(19200, Parity::even, Framing::rtu), 3ms);
-  EXPECT_EQ(gap(115200, Parity::none, Framing::rtu), 2ms);
+  EXPECT_EQ(gap(9600, Parity::none, Framing::rtu), 3646us);
+  EXPECT_EQ(gap(19200, Parity::even, Framing::rtu), 2006us);
+  EXPECT_EQ(gap(115200, Parity::none, Framing::rtu), 1750us);
   EXPECT_EQ(gap(115200, Parity::none, Framing::ascii), 0ms);
 }
 
 TEST(ScanRequests, TheWaitCountsTheRequestAndTheReplyOnTheWire) {
-  // 19200 8E1: 11 bits a character, 0.573 ms. The probe's 8 bytes (4.6 ms, 5 whole), 100 ms for
-  // the slave, its longest reply's 7 bytes (4.0 ms, 5 whole).
+  // 19200 8E1: 11 bits a character, 0.573 ms. The probe's 8 bytes, 100 ms for the slave, its
+  // longest reply's 7 bytes: 108.59 ms, the wire counted exactly.
+  const auto c = character_time(19200, Parity::even, 8, 1);
+  const auto wait = 100ms + 15 * c;
+  const auto probe = 2006us + wait;  // and the gap
   Scanner scan(settings({1, 2, 3}));
-  EXPECT_EQ(scan.next()->wait, 110ms);
-  EXPECT_EQ(scan.probe_time(), 113ms);             // and the 3 ms gap
-  EXPECT_EQ(scan.time_left(), 3 * 113ms + 110ms);  // and the last wait for a late reply
+  EXPECT_EQ(scan.next()->wait, wait);
+  EXPECT_EQ(scan.probe_time(), probe);
+  EXPECT_EQ(scan.time_left(), 3 * probe + wait);  // and the last wait for a late reply
   // At 1200 baud the wire dominates: 8 + 7 characters of 9.17 ms.
   ScanSettings slow = settings({1});
   slow.char_time = character_time(1200, Parity::even, 8, 1);
-  EXPECT_EQ(Scanner(slow).next()->wait, 74ms + 100ms + 65ms);
-  // The whole default range, as `drivegate scan` says up front: 247 x 113 ms = 27.9 s, and one
-  // wait more listening for a late reply to the last probe: 28.0 s.
+  EXPECT_EQ(Scanner(slow).next()->wait, 100ms + 15 * slow.char_time);
+  // The whole default range, as `drivegate scan` says up front: 247 x 110.6 ms = 27.3 s, and one
+  // wait more listening for a late reply to the last probe: 27.4 s.
   std::string error;
-  EXPECT_EQ(Scanner(settings(*parse_addresses("1-247", error))).time_left(), 28021ms);
+  EXPECT_EQ(Scanner(settings(*parse_addresses("1-247", error))).time_left(), 247 * probe + wait);
 }
 
 TEST(ScanJudging, AnyGoodReplyFromTheAddressIsASlaveRegistersOrException) {
@@ -163,7 +166,7 @@ TEST(ScanJudging, ASilentAddressIsAskedOnceAndTheNextFollows) {
   const auto listen = scan.next();
   ASSERT_TRUE(listen);
   EXPECT_TRUE(listen->frame.empty());
-  EXPECT_EQ(listen->wait, 110ms);
+  EXPECT_EQ(listen->wait, 100ms + 15 * character_time(19200, Parity::even, 8, 1));
   scan.on_timeout();
   EXPECT_FALSE(scan.next());
   EXPECT_TRUE(scan.found().empty());
@@ -364,9 +367,11 @@ TEST(ScanIdentity, AFrameThatIsNoIdentificationIsABadReply) {
 
 TEST(ScanIdentity, EveryAddressThatAnswersCostsAtMostItsBoundMore) {
   // One repeated probe, and three identification requests (the basic category's three objects,
-  // one a reply at least) sent twice each: 113 ms + 6 x (3 ms + 5 + 100 + 147 ms on the wire
-  // for the longest reply, 256 bytes).
-  EXPECT_EQ(Scanner(settings({1})).answer_time(), 113ms + 6 * 255ms);
+  // one a reply at least) sent twice each: the probe's 110.6 ms + 6 x (the 2.006 ms gap, the
+  // request's 7 bytes, 100 ms and the longest reply's 256 bytes on the wire).
+  const auto c = character_time(19200, Parity::even, 8, 1);
+  EXPECT_EQ(Scanner(settings({1})).answer_time(),
+            2006us + 100ms + 15 * c + 6 * (2006us + 100ms + (7 + 256) * c));
 }
 
 TEST(DeviceId, TheRequestAndTheManualsExampleReply) {

@@ -104,6 +104,8 @@ class BusRig {
   [[nodiscard]] const std::vector<SimLine::Frame>& sent() const { return line_->sent; }
   [[nodiscard]] const std::vector<SimLine::Frame>& answers() const { return line_->answers; }
   SimLine& line() { return *line_; }
+  // The engine's and the devices' log: a test may add a sink to hear what they say.
+  [[nodiscard]] const std::shared_ptr<spdlog::logger>& log() const { return log_; }
   SimClock& clock() { return clock_; }
   [[nodiscard]] const BusCounters& counters() const { return engine_->counters(); }
   [[nodiscard]] const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }

@@ -10,8 +10,8 @@
 #include <functional>
 #include <vector>
 
-#include "drivegate/simulator.h"
 #include "bus/bus_engine.h"
+#include "drivegate/simulator.h"
 #include "sim_clock.h"
 
 namespace drivegate::test {
@@ -34,7 +34,7 @@ class SimLine final : public BusLine {
   void send(ByteView frame) override;
 
   // Time a device takes to start answering.
-  Millis turnaround{5};
+  std::chrono::nanoseconds turnaround{std::chrono::milliseconds(5)};
   // Bytes from the devices pass through this first (to corrupt or drop them): empty = lost.
   std::function<Bytes(Bytes)> device_filter;
   // Whether the devices hear the master (false: a cut line; the master still hears its echo).

@@ -111,7 +111,8 @@ TEST(ModbusProfileE2E, AnExceptionFromTheSlaveIs0x04AtThePlc) {
     GTEST_SKIP() << "needs socat and python3-pymodbus (tools/deps.sh test)";
   TempDir dir;
   // The slave has no holding 0, the profile's control word: it answers every write there with
-  // exception 02, and reads of it too (the rest of the device is read point by point).
+  // exception 02, and reads of it too (the block holding it is searched: holding 0 is skipped,
+  // and the rest of the device read around it).
   PymodbusSlave slave(dir, {"--unit 7", "--no-control", "--speed 300"});
   Daemon daemon(dir, config(slave.port()), {}, dir / "drivegated.log");
   Plc plc(daemon.port(), 1);

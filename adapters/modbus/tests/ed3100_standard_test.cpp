@@ -247,9 +247,10 @@ TEST(Ed3100StandardProfile, TakesOnlySetpointsThatAreWholeHundredthsOfAHertz) {
 TEST(Ed3100StandardProfile, KeepsTheModbusSilenceNotTheDocuments10Ms) {
   SharedDrive b;
   // Document, "communication material structure": >= 10 ms of silence around a frame; the
-  // profile cannot say so, and the adapter keeps 3.5 characters: 4.01 ms at 9600 8E1, 5 ms.
+  // profile cannot say so, and the adapter keeps 3.5 characters: 4.0104 ms at 9600 8E1, kept to
+  // the next microsecond.
   EXPECT_EQ(b.dedicated_driver->traits().inter_frame_gap, 10ms);
-  EXPECT_EQ(b.standard_driver->traits().inter_frame_gap, 5ms);
+  EXPECT_EQ(b.standard_driver->traits().inter_frame_gap, 4011us);
 }
 
 TEST(Ed3100StandardProfile, NeedsTheDriveToAnswerInTheStandardForm) {

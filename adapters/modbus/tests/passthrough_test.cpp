@@ -11,6 +11,7 @@
 #include "adapter_under_test.h"
 #include "bus_rig.h"
 #include "common_block.h"
+#include "line_timing.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -368,6 +369,63 @@ TEST(PassthroughOptions, AProfileBesidePassthroughIsAnErrorNamingBoth) {
   auto d = drivegate_adapter.create_driver(env, error);
   ASSERT_NE(d, nullptr) << error;
   EXPECT_TRUE(d->forwards());
+}
+
+// The profile device's slave lacks input 203 (half of motor_current): its first block is searched
+// while requests are forwarded to the slave at 9 on the same line. Every frame the master sends
+// keeps 3.5 characters of silence after the line's last byte, and where it follows a reply at
+// once (the search's reads, the forwarded requests, the polls) exactly the driver's gap: 2006 us
+// at 19200 8E1, not 3 ms.
+TEST_F(PassthroughOnTheBus, WhileAPlanHealsForwardedRequestsKeepTheMicrosecondGap) {
+  const auto c = character_time(19200, Parity::even, 8, 1);
+  const auto silence = c * 7 / 2;  // Serial Line 2.5.1.1
+  const auto gap = inter_frame_gap(Framing::rtu, c);
+  ASSERT_EQ(gap, 2006us);
+  rig.line().turnaround = silence;  // the fastest slave the specification allows
+  ASSERT_EQ(rig.simulator(0).control("missing input 203", rig.now()).rfind("ok", 0), 0u);
+  rig.start();
+  ASSERT_TRUE(rig.run_until([&] { return pass.state().ready; }, 3s));
+  std::vector<std::shared_ptr<Forwarded>> forwarded;
+  for (int i = 0; i < 6; ++i) {  // one after the other, as one client's requests go
+    forwarded.push_back(forward({0x03, 0x00, 0x01, 0x00, 0x01}));
+    ASSERT_TRUE(settle(forwarded.back()));
+    EXPECT_EQ(forwarded.back()->outcome, Outcome::ok) << i;
+  }
+  ASSERT_TRUE(rig.run_until([&] { return vfd.online(); }, 3s));
+  rig.run_for(1s);
+  // The search: motor_current alone, refused twice; the forwarded requests among its reads.
+  const Bytes probe = rtu({0x04, 0x00, 0xCA, 0x00, 0x02}, 7);
+  std::size_t first_probe = 0;
+  std::size_t last_probe = 0;
+  std::size_t forwards_between = 0;
+  const auto& sent = rig.sent();
+  for (std::size_t i = 0; i < sent.size(); ++i) {
+    if (sent[i].bytes != probe) continue;
+    if (first_probe == 0) first_probe = i;
+    last_probe = i;
+  }
+  ASSERT_GT(last_probe, first_probe);
+  for (std::size_t i = first_probe; i < last_probe; ++i) forwards_between += sent[i].bytes[0] == 9;
+  EXPECT_GE(forwards_between, 1u);
+  // The silence before every master frame, from the last byte on the line before it.
+  std::vector<std::pair<TimePoint, bool>> ends;  // when a frame's last byte left; from a slave
+  for (const auto& f : sent) ends.emplace_back(f.at + c * static_cast<long>(f.bytes.size()), false);
+  for (const auto& f : rig.answers()) {
+    ends.emplace_back(f.at + c * static_cast<long>(f.bytes.size()), true);
+  }
+  std::sort(ends.begin(), ends.end());
+  std::size_t at_once = 0;
+  for (std::size_t i = 1; i < sent.size(); ++i) {
+    const auto before = std::lower_bound(ends.begin(), ends.end(), std::pair{sent[i].at, false});
+    ASSERT_NE(before, ends.begin());
+    const auto quiet = sent[i].at - std::prev(before)->first;
+    EXPECT_GE(quiet, silence) << "frame " << i;
+    if (std::prev(before)->second && quiet < 3ms) {
+      EXPECT_EQ(quiet, gap) << "frame " << i;
+      ++at_once;
+    }
+  }
+  EXPECT_GE(at_once, 10u);
 }
 
 }  // namespace
