@@ -50,6 +50,20 @@ std::optional<std::int32_t> rpm_of(double speed) {
   return static_cast<std::int32_t>(rpm);
 }
 
+// The unified fault a native code stands for: its entry in the map, or for a bit field the
+// lowest set bit that is named (none when no bit is set); `other` otherwise.
+Fault fault_of(const FaultBinding& b, std::uint32_t native) {
+  if (b.bits.empty()) {
+    const auto it = b.map.find(native);
+    return it != b.map.end() ? it->second : b.other;
+  }
+  if (native == 0) return Fault::none;
+  for (const auto& [bit, fault] : b.bits) {
+    if (((native >> bit) & 1u) != 0) return fault;
+  }
+  return b.other;
+}
+
 }  // namespace
 
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
@@ -348,7 +362,8 @@ std::optional<double> ModbusDriver::engineering(std::optional<std::size_t> point
 
 std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) const {
   if (!b || !raw_[b->point]) return std::nullopt;
-  return (((*raw_[b->point])[0] >> b->bit) & 1u) != 0;
+  // Any of the binding's bits of the point's value (a bit point's value is its bit 0).
+  return (masked(profile_.points[b->point], (*raw_[b->point])[0]) & b->mask()) != 0;
 }
 
 void ModbusDriver::update_common() {
@@ -375,8 +390,7 @@ void ModbusDriver::update_common() {
     if (std::isfinite(raw) && raw == std::trunc(raw) && std::fabs(raw) <= 4294967295.0) {
       const auto native = static_cast<std::uint32_t>(static_cast<std::int64_t>(raw));
       common_.native_fault = native;
-      const auto it = c.fault_code->map.find(native);
-      coded = it != c.fault_code->map.end() ? it->second : c.fault_code->other;
+      coded = fault_of(*c.fault_code, native);
     } else {
       // A code that is not a whole number (a float point reading NaN): no code, but something
       // is wrong, whatever the profile names the codes it does not map.

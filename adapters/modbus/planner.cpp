@@ -39,9 +39,11 @@ std::vector<Block> plan_reads(const Profile& profile, std::span<const std::size_
     if (!blocks.empty()) {
       Block& b = blocks.back();
       const std::uint32_t block_end = std::uint32_t{b.start} + b.count;
-      const bool near = p.address >= block_end && p.address - block_end <= profile.modbus.max_gap;
-      if (b.table == p.table && near && end - b.start <= limit) {
-        b.count = static_cast<std::uint16_t>(end - b.start);
+      // A masked point may share the register of the one before it (profile.h, mask).
+      const bool near = p.address >= block_end ? p.address - block_end <= profile.modbus.max_gap
+                                               : p.address >= b.start;
+      if (b.table == p.table && near && std::max(end, block_end) - b.start <= limit) {
+        b.count = static_cast<std::uint16_t>(std::max(end, block_end) - b.start);
         b.points.push_back(i);
         continue;
       }

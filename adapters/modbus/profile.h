@@ -73,25 +73,41 @@ struct ProfilePoint {
   std::uint32_t poll_ms = 0;  // 0: the device's poll interval
   bool trend = false;         // kept in the daemon's trends (PointSpec::trend)
   std::uint32_t line = 0;     // where the point is in the file, for messages
+  // A u16 register point that is some of its register's bits: value = (raw & mask) >> the
+  // mask's lowest set bit. Read-only; points whose masks do not overlap share a register.
+  std::optional<std::uint16_t> mask;
 
   [[nodiscard]] std::uint16_t width() const { return width_of(type); }
   [[nodiscard]] bool writable() const { return table == Table::holding || table == Table::coil; }
 };
 
-// A bit of a register point: running = { point = "status_word", bit = 2 }.
+// Bits of a register point's value, any of them set meaning true:
+// running = { point = "status_word", bit = 2 } or { ..., any_bit = [0, 1] }. A bit point's
+// binding has the one bit 0 (the point's value).
 struct BitBinding {
-  std::size_t point = 0;  // index into Profile::points
-  std::uint8_t bit = 0;   // 0..15
+  std::size_t point = 0;           // index into Profile::points
+  std::vector<std::uint8_t> bits;  // 0..15, as the profile lists them, at least one
+
+  // The bits as a mask of the point's value.
+  [[nodiscard]] std::uint16_t mask() const {
+    std::uint16_t m = 0;
+    for (const std::uint8_t b : bits) m = static_cast<std::uint16_t>(m | (1u << b));
+    return m;
+  }
 };
-// A value written to a point: stop = { point = "control_word", value = 0x0006 }.
+// A value written to a point: stop = { point = "control_word", value = 0x0006 }; to a coil
+// (FC 05), 0 or 1.
 struct ValueBinding {
   std::size_t point = 0;
   std::uint16_t value = 0;
 };
-// A point's native values named as unified faults; values not in the map are `other`.
+// A point's native values named as unified faults; values not in the map are `other`. Or, for a
+// bit field (`bits`), its bits named: the lowest set bit that is named wins, a value with none of
+// them set but some bit set is `other`, 0 is none.
 struct FaultBinding {
   std::size_t point = 0;
   std::map<std::uint32_t, Fault> map;
+  std::map<std::uint8_t, Fault> bits;  // not empty: the point is a bit field
   Fault other = Fault::other;
 };
 

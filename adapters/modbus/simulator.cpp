@@ -1,5 +1,6 @@
 #include "simulator.h"
 
+#include <bit>
 #include <cmath>
 #include <sstream>
 
@@ -222,26 +223,27 @@ Bytes ModbusSimulator::write(ByteView pdu) {
 
 void ModbusSimulator::store(Table table, std::uint16_t address, std::uint16_t word) {
   memory_[{table, address}] = word;
-  const CommonBindings& c = profile_.common;
-  const ValueBinding* control = c.stop ? &*c.stop : c.run_forward ? &*c.run_forward : nullptr;
-  if (control != nullptr) {
-    const ProfilePoint& p = profile_.points[control->point];
-    if (table == p.table && address == p.address) command(word);
-  }
+  command(table, address, word);
   drive();
 }
 
-// The control word as the profile's drive takes it: its stop, run and reset values.
-void ModbusSimulator::command(std::uint16_t word) {
+// A write of a command's value to its point (a control word's register or a coil) is that
+// command to the drive: a reset, a stop, a run (not while tripped).
+void ModbusSimulator::command(Table table, std::uint16_t address, std::uint16_t word) {
   const CommonBindings& c = profile_.common;
-  if (c.reset_fault && word == c.reset_fault->value) {
+  const auto is = [&](const std::optional<ValueBinding>& b) {
+    if (!b) return false;
+    const ProfilePoint& p = profile_.points[b->point];
+    return p.table == table && p.address == address && b->value == word;
+  };
+  if (is(c.reset_fault)) {
     fault_ = 0;
-  } else if (c.stop && word == c.stop->value) {
+  } else if (is(c.stop)) {
     running_ = false;
-  } else if (c.run_forward && word == c.run_forward->value && fault_ == 0) {
+  } else if (is(c.run_forward) && fault_ == 0) {
     running_ = true;
     reverse_ = false;
-  } else if (c.run_reverse && word == c.run_reverse->value && fault_ == 0) {
+  } else if (is(c.run_reverse) && fault_ == 0) {
     running_ = true;
     reverse_ = true;
   }
@@ -261,7 +263,10 @@ void ModbusSimulator::set_point(std::size_t point, double engineering) {
   const auto words = words_for(p, engineering);
   if (!words) return;
   for (std::uint16_t w = 0; w < p.width(); ++w) {
-    memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}] = (*words)[w];
+    auto& word = memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}];
+    // A masked point is its bits of the register; the other bits are other points'.
+    const std::uint16_t keep = p.mask ? static_cast<std::uint16_t>(~*p.mask) : 0;
+    word = static_cast<std::uint16_t>((word & keep) | (*words)[w]);
   }
 }
 
@@ -269,19 +274,23 @@ void ModbusSimulator::set_point(std::size_t point, double engineering) {
 // which is the reference while running (in the reverse direction negative) and 0 otherwise.
 void ModbusSimulator::drive() {
   const CommonBindings& c = profile_.common;
-  const auto set_bit = [&](const std::optional<BitBinding>& b, bool on) {
+  // The binding's bits cleared, and bit `nth` of its list set when `on` (the last listed where
+  // the list is shorter): running = { any_bit = [0, 1] } shows forward in bit 0, reverse in 1.
+  const auto set_bit = [&](const std::optional<BitBinding>& b, bool on, std::size_t nth = 0) {
     if (!b) return;
     const ProfilePoint& p = profile_.points[b->point];
     auto& word = memory_[{p.table, p.address}];
     if (p.type == ValueType::bit) {
       word = on ? 1 : 0;
-    } else {
-      const auto mask = static_cast<std::uint16_t>(1u << b->bit);
-      word = static_cast<std::uint16_t>(on ? (word | mask) : (word & ~mask));
+      return;
     }
+    const int shift = p.mask ? std::countr_zero(*p.mask) : 0;
+    word = static_cast<std::uint16_t>(word & ~(b->mask() << shift));
+    const std::uint8_t bit = b->bits[std::min(nth, b->bits.size() - 1)];
+    if (on) word = static_cast<std::uint16_t>(word | 1u << (bit + shift));
   };
   if (fault_ != 0) running_ = false;  // a trip stops the output
-  set_bit(c.running, running_);
+  set_bit(c.running, running_, reverse_ ? 1 : 0);
   set_bit(c.fault, fault_ != 0);
   if (c.fault_code)
     set_point(c.fault_code->point, fault_ * profile_.points[c.fault_code->point].scale);

@@ -1,5 +1,6 @@
 // A profile point's registers (or bit) <-> its engineering value: the type, the word order of
-// two-register values and the scale (engineering value = raw x scale). Pure.
+// two-register values, the mask of a point that is some bits of its register, and the scale
+// (engineering value = raw x scale). Pure.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,10 @@
 
 namespace drivegate::modbus_device {
 
+// The bits of register `word` that a masked point is, shifted down to bit 0 (the word itself for
+// a point without a mask).
+std::uint16_t masked(const ProfilePoint& p, std::uint16_t word);
+
 // The raw number `words` hold for `p` (width() words; a bit point's one word is 0 or 1).
 double raw_of(const ProfilePoint& p, std::span<const std::uint16_t> words);
 
@@ -19,9 +24,10 @@ double raw_of(const ProfilePoint& p, std::span<const std::uint16_t> words);
 // a double otherwise.
 Value value_of(const ProfilePoint& p, std::span<const std::uint16_t> words);
 
-// The words that carry engineering value `v` to `p` (width() words, in the point's word order),
-// or nothing when it is not a value of the point (out of its type's range once scaled, not a
-// whole number for an integer type, a bit that is not 0 or 1, NaN or infinite).
+// The words that carry engineering value `v` to `p` (width() words, in the point's word order;
+// for a masked point, the register with the value in the mask's bits and 0 elsewhere), or nothing
+// when it is not a value of the point (out of its type's range once scaled, not a whole number for
+// an integer type, a bit that is not 0 or 1, NaN or infinite).
 std::optional<std::vector<std::uint16_t>> words_for(const ProfilePoint& p, double v);
 
 // The register-map type a point is served as: the width and signedness of its raw value (the

@@ -67,8 +67,8 @@ TEST(Profile, TheExampleOfTheIssueReadsAsWritten) {
   ASSERT_TRUE(c.running && c.fault && c.fault_code && c.stop && c.run_forward && c.run_reverse &&
               c.reset_fault);
   EXPECT_EQ(c.running->point, *p.find("status_word"));
-  EXPECT_EQ(c.running->bit, 2);
-  EXPECT_EQ(c.fault->bit, 3);
+  EXPECT_THAT(c.running->bits, ElementsAre(2));
+  EXPECT_THAT(c.fault->bits, ElementsAre(3));
   EXPECT_EQ(c.fault_code->point, *p.find("fault_number"));
   EXPECT_EQ(c.fault_code->map, (std::map<std::uint32_t, Fault>{
                                    {0, Fault::none},
