@@ -30,6 +30,11 @@ std::optional<Fault> fault_named(std::string_view name) {
   return std::nullopt;
 }
 
+// An integer of one or two registers: a setpoint's or a bit field's type.
+bool is_integer_of_two(ValueType t) {
+  return t == ValueType::u16 || t == ValueType::s16 || t == ValueType::u32 || t == ValueType::s32;
+}
+
 // The line an error names ("SOURCE:LINE: ..."), 0 when it names none.
 unsigned long line_in(const std::string& error, const std::string& source) {
   if (error.compare(0, source.size() + 1, source + ":") != 0) return 0;
@@ -365,7 +370,7 @@ class Parser {
                   "'" + *name + "' must be a one-register holding point or a coil: it is written");
       return std::nullopt;
     }
-    if (use == Use::setpoint && !(p.table == Table::holding && p.type != ValueType::f32)) {
+    if (use == Use::setpoint && !(p.table == Table::holding && is_integer_of_two(p.type))) {
       diag_.error(
           r.node(key), r.qualified(key),
           "'" + *name + "' must be a holding point of type u16, s16, u32 or s32: it is written");
@@ -564,9 +569,11 @@ class Parser {
   // no bit is "none", and a masked point's bits are those of its mask.
   bool fault_bits(TableReader& r, FaultBinding& b) {
     const ProfilePoint& p = profile_.points[b.point];
-    if (p.type == ValueType::f32) {
+    if (!is_integer_of_two(p.type)) {
       diag_.error(r.node("point"), r.qualified("point"),
-                  "'" + p.name + "' is a float: a bit field is an integer point");
+                  "'" + p.name + "' is of type " +
+                      std::string(kValueTypeNames[static_cast<std::size_t>(p.type)]) +
+                      ": a bit field is a point of type u16, s16, u32 or s32");
       r.node("bits");
       return false;
     }

@@ -266,8 +266,8 @@ TEST(Bindings, AFaultBitFieldNamesBitsOfAnIntegerPoint) {
               ElementsAre(HasSubstr("common.fault_code.bits: map (the point's values) or bits "
                                     "(its bits), not both")));
   EXPECT_THAT(code("{ point = \"f\", bits = { 0 = \"other\" } }"),
-              ElementsAre(HasSubstr("common.fault_code.point: 'f' is a float: a bit field is an "
-                                    "integer point")));
+              ElementsAre(HasSubstr("common.fault_code.point: 'f' is of type f32: a bit field is a "
+                                    "point of type u16, s16, u32 or s32")));
   EXPECT_THAT(code("{ point = \"h\", bits = { 4 = \"other\" } }"),
               ElementsAre(HasSubstr("bit 4 is not a bit of 'h' (its mask 0xF000 gives it the "
                                     "bits of 0x000F)")));
