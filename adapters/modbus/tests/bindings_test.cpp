@@ -15,6 +15,7 @@
 #include "common_block.h"
 #include "driver.h"
 #include "profile.h"
+#include "profile_support.h"
 #include "simulator.h"
 
 namespace drivegate::modbus_device {
@@ -22,6 +23,10 @@ namespace {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
+using support::errors_of;
+using support::parsed;
+using support::read_pdu;
+using support::words_pdu;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
@@ -76,22 +81,6 @@ std::string with_trip_bits() {
                   "fault_code = { point = \"fault_number\", map = { 0 = \"none\", 2 = "
                   "\"over_current\" } }\n",
                   kTripBits);
-}
-
-Profile parsed(const std::string& text) {
-  auto r = parse_profile(text, "p.toml");
-  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) {
-    ADD_FAILURE() << ::testing::PrintToString(*errors);
-    return {};
-  }
-  return std::get<Profile>(std::move(r));
-}
-
-std::vector<std::string> errors_of(const std::string& text) {
-  auto r = parse_profile(text, "p.toml");
-  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) return *errors;
-  ADD_FAILURE() << "accepted:\n" << text;
-  return {};
 }
 
 // The least valid profile, and a point of it to add keys to.
@@ -313,20 +302,6 @@ TEST(Bindings, TheSetpointIsAnIntegerHoldingPointOfOneOrTwoRegisters) {
 }
 
 // ---- The driver, by hand: the frames on the wire
-
-std::vector<std::uint8_t> read_pdu(std::uint8_t function, std::uint16_t start,
-                                   std::uint16_t count) {
-  std::vector<std::uint8_t> pdu = {function};
-  put_be16(pdu, start);
-  put_be16(pdu, count);
-  return pdu;
-}
-
-std::vector<std::uint8_t> words_pdu(std::uint8_t function, std::vector<std::uint16_t> words) {
-  std::vector<std::uint8_t> pdu = {function, static_cast<std::uint8_t>(2 * words.size())};
-  for (const std::uint16_t w : words) put_be16(pdu, w);
-  return pdu;
-}
 
 Bytes frame(std::vector<std::uint8_t> pdu) {
   return encode(Framing::rtu, kSlave, pdu);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "example_profile.h"
+#include "profile_support.h"
 
 
 namespace drivegate::modbus_device {
@@ -13,22 +14,8 @@ namespace {
 
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
-
-Profile parsed(const std::string& text) {
-  auto r = parse_profile(text, "p.toml");
-  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) {
-    ADD_FAILURE() << ::testing::PrintToString(*errors);
-    return {};
-  }
-  return std::get<Profile>(std::move(r));
-}
-
-std::vector<std::string> errors_of(const std::string& text) {
-  auto r = parse_profile(text, "p.toml");
-  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) return *errors;
-  ADD_FAILURE() << "accepted:\n" << text;
-  return {};
-}
+using support::errors_of;
+using support::parsed;
 
 // The least valid profile, to which each test adds what it is about.
 const std::string kHead =
