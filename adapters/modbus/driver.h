@@ -73,6 +73,10 @@ class ModbusDriver final : public DriverBase {
     std::vector<std::uint16_t> words;  // registers (or, for a coil, {0 or 1})
     Command command = Command::stop;   // Change::command
     std::int32_t rpm = 0;              // Change::setpoint
+    // A command's values, written in order, each confirmed before the next (`words` is the one
+    // at `step`); the command is in force when the last is.
+    std::vector<std::uint16_t> sequence;
+    std::size_t step = 0;
   };
   using Writes = WriteLedger<Write>;
   // Points polled at one interval, and the blocks that read them.
@@ -120,6 +124,9 @@ class ModbusDriver final : public DriverBase {
   void fail_inflight();
 
   Profile profile_;
+  // rpm = engineering value x factor (the profile's rpm_factor with the device's options).
+  double speed_factor_ = 1.0;
+  double setpoint_factor_ = 1.0;
   std::string files_read_;
   std::uint8_t address_;
   Timing timing_;

@@ -4,6 +4,8 @@
 // when it fails (an exception, no answer, superseded, never sent in time), what was in force
 // stays.
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "driver.h"
 #include "values.h"
@@ -46,14 +48,23 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       if (!b) return std::nullopt;
       w.change = Change::command;
       w.point = b->point;
-      w.words = {b->value};
+      w.sequence = b->sequence;
+      w.words = {w.sequence.front()};
       return w;
     }
     case WriteOp::Target::setpoint: {
       if (!c.setpoint_rpm) return std::nullopt;
       const ProfilePoint& p = profile_.points[*c.setpoint_rpm];
-      const double v = op.rpm;
-      if ((p.min && v < *p.min) || (p.max && v > *p.max)) return std::nullopt;
+      double v = op.rpm;
+      if (!c.setpoint_factor.terms.empty()) {
+        // rpm -> the point's value -> raw, rounded to the point's step (docs/profiles.md,
+        // "[common]"): a float point takes the value as it is.
+        v /= setpoint_factor_;
+        if (p.type != ValueType::f32) v = std::round(v / p.scale) * p.scale;
+      }
+      // The point's range, after the conversion, allowing for a scale's binary fractions.
+      const double slack = 1e-9 * std::max(1.0, std::fabs(v));
+      if ((p.min && v < *p.min - slack) || (p.max && v > *p.max + slack)) return std::nullopt;
       auto words = words_for(p, v);
       if (!words) return std::nullopt;
       w.change = Change::setpoint;
@@ -144,7 +155,25 @@ void ModbusDriver::confirm(const Job& j, ByteView pdu) {
     writes_.settle(*j.write, WriteResult::refused);
     return;
   }
-  put_in_force(j.write->job);
+  const Write& w = j.write->job;
+  if (w.step + 1 < w.sequence.size()) {
+    // A sequence's step the slave took: the register holds it, and the next goes at once, ahead
+    // of the polls, unless a newer write to the same point came meanwhile (a stop during a run):
+    // that one goes instead, and this command is over, not carried out.
+    raw_[w.point] = w.words;
+    const bool overtaken = std::any_of(writes_.begin(), writes_.end(),
+                                       [&](const auto& e) { return e.job.point == w.point; });
+    if (overtaken) {
+      writes_.settle(*j.write, WriteResult::no_response);
+      return;
+    }
+    Write next = w;
+    ++next.step;
+    next.words = {next.sequence[next.step]};
+    writes_.push_front(std::move(next), j.write->tickets, last_now_ + send_limit());
+    return;
+  }
+  put_in_force(w);
   writes_.settle(*j.write, WriteResult::ok);
 }
 

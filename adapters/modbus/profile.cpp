@@ -9,6 +9,8 @@
 #include <utility>
 
 #include "drivegate/toml_reader.h"
+#include "profile_examples.h"
+#include "profile_options.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -49,13 +51,15 @@ class Parser {
     }
     {
       TableReader top(root, "", diag_);
-      top.expect({"profile", "line", "modbus", "point", "common"});
+      top.expect({"profile", "line", "modbus", "options", "point", "common", "example"});
       read_identity(top);
       read_line(top);
       read_modbus(top);
+      bad_option_ = !read_profile_options(root, top, diag_, profile_);
       read_points(root, top);
       check_overlaps();
       read_common(top);
+      read_profile_examples(root, top, diag_, profile_);
     }
     if (!diag_.errors.empty()) {
       // In file order, as a reader fixes them; the file-wide ones (line 0) first.
@@ -312,11 +316,46 @@ class Parser {
     return index;
   }
 
-  // speed_rpm = "speed_actual": a point of a register table.
+  // speed_rpm = "speed_actual" (in rpm), or { point = "output_frequency", rpm_factor = "120 /
+  // motor_poles" }: a point of a register table, and what its engineering value is multiplied by.
+  std::optional<std::size_t> rpm_point(TableReader& common, std::string_view key, bool writable,
+                                       RpmFactor& factor) {
+    const toml::node* n = common.node(key);
+    if (n == nullptr || n->as_string() != nullptr) return register_point(common, key, writable);
+    const toml::table* t = inline_table(common, key);
+    if (t == nullptr) return std::nullopt;
+    TableReader r(*t, "common." + std::string(key), diag_);
+    r.expect({"point", "rpm_factor"});
+    if (r.node("point") == nullptr) r.missing("point");
+    const auto index = register_point(r, "point", writable);
+    if (const auto text = r.string("rpm_factor", false)) {
+      std::string why;
+      if (auto f = parse_rpm_factor(*text, profile_.options, why)) {
+        factor = std::move(*f);
+      } else if (bad_option_) {
+        // An option left out for its own error was reported already.
+        return std::nullopt;
+      } else {
+        diag_.error(r.node("rpm_factor"), r.qualified("rpm_factor"), "'" + *text + "' " + why);
+        return std::nullopt;
+      }
+    }
+    return index;
+  }
+
+  // speed_rpm = "speed_actual": a point of a register table; written (the setpoint), a holding
+  // register point of any width (a two-register one goes with FC 16).
   std::optional<std::size_t> register_point(TableReader& r, std::string_view key, bool writable) {
-    const auto index = point_at(r, key, false, writable);
+    const auto index = point_at(r, key, false, false);
     if (index && profile_.points[*index].type == ValueType::bit) {
       diag_.error(r.node(key), r.qualified(key), "must name a register point, not a bit");
+      return std::nullopt;
+    }
+    if (index && writable && profile_.points[*index].table != Table::holding) {
+      diag_.error(r.node(key), r.qualified(key),
+                  "'" + profile_.points[*index].name +
+                      "' must be a holding register point: it is "
+                      "written");
       return std::nullopt;
     }
     return index;
@@ -359,11 +398,40 @@ class Parser {
     const toml::table* t = inline_table(common, key);
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common." + std::string(key), diag_);
-    r.expect({"point", "value"});
+    r.expect({"point", "value", "sequence"});
     const auto index = point_at(r, "point", true, true);
+    const toml::node* seq = r.node("sequence");
+    if (seq != nullptr && r.node("value") != nullptr) {
+      diag_.error(seq, r.qualified("sequence"), "value or sequence, not both");
+      return std::nullopt;
+    }
+    if (seq != nullptr) {
+      const auto* a = seq->as_array();
+      std::vector<std::uint16_t> values;
+      if (a != nullptr) {
+        for (const toml::node& v : *a) {
+          const auto* i = v.as_integer();
+          if (i == nullptr || i->get() < 0 || i->get() > 65535) {
+            values.clear();
+            break;
+          }
+          values.push_back(static_cast<std::uint16_t>(i->get()));
+        }
+      }
+      if (a == nullptr || values.empty() || values.size() != a->size() ||
+          values.size() > kMaxSequence) {
+        diag_.error(seq, r.qualified("sequence"),
+                    "must be 1.." + std::to_string(kMaxSequence) +
+                        " values 0..65535 written in order, such as [0x047E, 0x047F]");
+        return std::nullopt;
+      }
+      if (!index) return std::nullopt;
+      return ValueBinding{*index, values.back(), std::move(values)};
+    }
     const auto value = r.integer("value", 0, 65535, true);
     if (!index || !value) return std::nullopt;
-    return ValueBinding{*index, static_cast<std::uint16_t>(*value)};
+    const auto v = static_cast<std::uint16_t>(*value);
+    return ValueBinding{*index, v, {v}};
   }
 
   std::optional<Fault> fault_label(TableReader& r, const toml::node& n, std::string_view key) {
@@ -442,10 +510,11 @@ class Parser {
     if (t == nullptr) return;
     TableReader r(*t, "common", diag_);
     r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward",
-              "run_reverse", "reset_fault"});
+              "run_reverse", "reset_fault", "unbound"});
+    read_unbound(r);
     CommonBindings& c = profile_.common;
-    c.speed_rpm = register_point(r, "speed_rpm", false);
-    c.setpoint_rpm = register_point(r, "setpoint_rpm", true);
+    c.speed_rpm = rpm_point(r, "speed_rpm", false, c.speed_factor);
+    c.setpoint_rpm = rpm_point(r, "setpoint_rpm", true, c.setpoint_factor);
     c.running = bit_binding(r, "running");
     c.fault = bit_binding(r, "fault");
     c.fault_code = fault_binding(r);
@@ -460,6 +529,33 @@ class Parser {
                   "the drive must say how to stop it");
     }
     refuse_own_intervals();
+  }
+
+  // unbound = { setpoint_rpm = "why" }: bindings left out on purpose, each with its reason.
+  void read_unbound(TableReader& r) {
+    const toml::node* n = r.node("unbound");
+    if (n == nullptr) return;
+    const auto* t = n->as_table();
+    if (t == nullptr) {
+      diag_.error(n, "common.unbound", "must be a table of binding = \"why it is left out\"");
+      return;
+    }
+    static constexpr std::array<std::string_view, 7> kChecked = {
+        "speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward"};
+    for (const auto& [k, v] : *t) {
+      const std::string key(k.str());
+      const auto* why = v.as_string();
+      if (std::find(kChecked.begin(), kChecked.end(), key) == kChecked.end()) {
+        diag_.error(&v, "common.unbound." + key,
+                    "not a binding the check asks for (" + TableReader::names_text(kChecked) + ")");
+      } else if (why == nullptr || why->get().empty()) {
+        diag_.error(&v, "common.unbound." + key, "must say why it is left out");
+      } else if (r.node(key) != nullptr) {
+        diag_.error(&v, "common.unbound." + key, "is bound: remove one of them");
+      } else {
+        profile_.unbound.emplace(key, why->get());
+      }
+    }
   }
 
   // The common block is the drive's state as of its data age: every point bound to it is polled
@@ -491,6 +587,7 @@ class Parser {
   Diagnostics diag_;
   Profile profile_;
   bool had_bad_point_ = false;
+  bool bad_option_ = false;  // an [options.NAME] left out for its error
 };
 
 }  // namespace
@@ -502,6 +599,13 @@ bool valid_profile_name(std::string_view name) {
 std::optional<std::size_t> Profile::find(std::string_view point) const {
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (points[i].name == point) return i;
+  }
+  return std::nullopt;
+}
+
+std::optional<std::size_t> Profile::find_option(std::string_view option) const {
+  for (std::size_t i = 0; i < options.size(); ++i) {
+    if (options[i].name == option) return i;
   }
   return std::nullopt;
 }

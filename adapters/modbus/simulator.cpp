@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "drivegate/sim_text.h"
+#include "profile_options.h"
 #include "values.h"
 
 namespace drivegate::modbus_device {
@@ -231,12 +232,14 @@ void ModbusSimulator::store(Table table, std::uint16_t address, std::uint16_t wo
   drive();
 }
 
-// The control word as the profile's drive takes it: its stop, run and reset values.
+// The control word as the profile's drive takes it: its stop, run and reset values. A command
+// written as a sequence is its last value: the values before it change nothing here unless one
+// is another command's (ABB's run 0x047E, 0x047F passes through its stop 0x047E). A reset value
+// that is also the stop value does both, as on a drive whose reset word has the run bit clear.
 void ModbusSimulator::command(std::uint16_t word) {
   const CommonBindings& c = profile_.common;
-  if (c.reset_fault && word == c.reset_fault->value) {
-    fault_ = 0;
-  } else if (c.stop && word == c.stop->value) {
+  if (c.reset_fault && word == c.reset_fault->value) fault_ = 0;
+  if (c.stop && word == c.stop->value) {
     running_ = false;
   } else if (c.run_forward && word == c.run_forward->value && fault_ == 0) {
     running_ = true;
@@ -287,8 +290,18 @@ void ModbusSimulator::drive() {
     set_point(c.fault_code->point, fault_ * profile_.points[c.fault_code->point].scale);
   if (c.speed_rpm) {
     double speed = 0;
-    if (running_ && c.setpoint_rpm) speed = point_value(*c.setpoint_rpm).value_or(0);
-    set_point(*c.speed_rpm, reverse_ ? -speed : speed);
+    if (running_ && c.setpoint_rpm) {
+      // The same rpm through both points' factors: reference x its factor / the speed's.
+      speed = point_value(*c.setpoint_rpm).value_or(0) *
+              factor_value(c.setpoint_factor, profile_.options) /
+              factor_value(c.speed_factor, profile_.options);
+      const ProfilePoint& p = profile_.points[*c.speed_rpm];
+      if (p.type != ValueType::f32) speed = std::round(speed / p.scale) * p.scale;
+    }
+    // An unsigned speed cannot say reverse: it shows the magnitude, as such drives do.
+    const ValueType t = profile_.points[*c.speed_rpm].type;
+    const bool is_signed = t != ValueType::u16 && t != ValueType::u32;
+    set_point(*c.speed_rpm, reverse_ && is_signed ? -speed : speed);
   }
 }
 
