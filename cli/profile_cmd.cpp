@@ -3,6 +3,7 @@
 // then the warnings. The modbus adapter's library does the work (profile_check.h); this file
 // reads the command line and the files. Exit 0: clean (warnings allowed unless --strict), 1:
 // errors, 2: usage.
+#include <filesystem>
 #include <iostream>
 
 #include "commands.h"
@@ -41,7 +42,9 @@ int profile(std::span<const std::string> args) {
   bool failed = false;
   for (std::size_t i = 1; i < ops.size(); ++i) {
     std::string error;
-    const auto text = modbus_device::find_profile(ops[i], error);
+    // A file here is a path even without a '/' (a device's option would take it for a name).
+    const bool here = ops[i].find('/') == std::string::npos && std::filesystem::exists(ops[i]);
+    const auto text = modbus_device::find_profile(here ? "./" + ops[i] : ops[i], error);
     if (!text) {
       std::cerr << "drivegate profile: " << error << "\n";
       failed = true;
