@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "line_timing.h"
+#include "profile_options.h"
 #include "rejected.h"
 #include "values.h"
 
@@ -69,6 +70,8 @@ Fault fault_of(const FaultBinding& b, std::uint32_t native) {
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
                            Millis poll_interval, std::string files_read)
     : profile_(std::move(profile)),
+      speed_factor_(factor_value(profile_.common.speed_factor, profile_.options)),
+      setpoint_factor_(factor_value(profile_.common.setpoint_factor, profile_.options)),
       files_read_(std::move(files_read)),
       address_(address),
       timing_(timing),
@@ -97,7 +100,8 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
     if (state[i]) state_points_.push_back(i);
   }
   for (const auto& v : {c.stop, c.run_forward, c.run_reverse, c.reset_fault}) {
-    if (v) bound[v->point] = true;
+    if (!v) continue;
+    for (const std::size_t p : v->points) bound[p] = true;
   }
   for (std::size_t i = 0; i < profile_.points.size(); ++i) {
     if (bound[i]) continue;
@@ -157,9 +161,14 @@ DriverTraits ModbusDriver::traits() const {
   DriverTraits t;
   t.comm_timeout = timing_.comm_timeout;
   t.inter_frame_gap = inter_frame_gap();
-  // A write settles within send_limit() and one turn of its own; a request holds at most two
-  // that need the line (a setpoint, then a command).
-  t.write_timeout = write_backstop(turn(), 2);
+  // A write settles within send_limit() and one turn of its own; a request holds at most a
+  // setpoint and a command, and a command is as many writes as its longest sequence.
+  std::size_t longest = 1;
+  const CommonBindings& c = profile_.common;
+  for (const auto& v : {c.stop, c.run_forward, c.run_reverse, c.reset_fault}) {
+    if (v) longest = std::max(longest, v->sequence.size());
+  }
+  t.write_timeout = write_backstop(turn(), 1 + static_cast<int>(longest));
   t.state_in_parts = !state_points_.empty();
   return t;
 }
@@ -368,7 +377,8 @@ std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) con
 
 void ModbusDriver::update_common() {
   const CommonBindings& c = profile_.common;
-  if (const auto speed = engineering(c.speed_rpm)) {
+  if (auto speed = engineering(c.speed_rpm)) {
+    *speed *= speed_factor_;
     // A speed is a number the common block carries, by the point's own type and signedness; NaN,
     // an infinity or a speed beyond it (2^32 from a float, 4294967295 from a u32) is none.
     const auto rpm = rpm_of(*speed);
@@ -422,7 +432,7 @@ void ModbusDriver::adopt() {
   if (!adopting_ || !common_.ready) return;
   adopting_ = false;
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
-    if (const auto rpm = rpm_of(*reference)) common_.setpoint_rpm = *rpm;
+    if (const auto rpm = rpm_of(*reference * setpoint_factor_)) common_.setpoint_rpm = *rpm;
   }
   if (!common_.running || !common_.faults.empty()) return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;

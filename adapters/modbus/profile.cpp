@@ -10,6 +10,8 @@
 
 #include "drivegate/sim_text.h"
 #include "drivegate/toml_reader.h"
+#include "profile_examples.h"
+#include "profile_options.h"
 #include "values.h"
 
 namespace drivegate::modbus_device {
@@ -56,13 +58,15 @@ class Parser {
     }
     {
       TableReader top(root, "", diag_);
-      top.expect({"profile", "line", "modbus", "point", "common"});
+      top.expect({"profile", "line", "modbus", "options", "point", "common", "example"});
       read_identity(top);
       read_line(top);
       read_modbus(top);
+      bad_option_ = !read_profile_options(root, top, diag_, profile_);
       read_points(root, top);
       check_overlaps();
       read_common(top);
+      read_profile_examples(root, top, diag_, profile_);
     }
     if (!diag_.errors.empty()) {
       // In file order, as a reader fixes them; the file-wide ones (line 0) first.
@@ -341,7 +345,7 @@ class Parser {
 
   // What a binding does with its point: reads it, writes a command's value to it (a
   // one-register holding point or a coil), or writes the setpoint (a holding point of one or two
-  // registers, integer: FC 16 for two).
+  // registers, an integer or f32: FC 16 for two).
   enum class Use : std::uint8_t { read, command, setpoint };
 
   // A point named at `key` of `r`, which must exist and be of a kind `use` can use.
@@ -370,16 +374,45 @@ class Parser {
                   "'" + *name + "' must be a one-register holding point or a coil: it is written");
       return std::nullopt;
     }
-    if (use == Use::setpoint && !(p.table == Table::holding && is_integer_of_two(p.type))) {
-      diag_.error(
-          r.node(key), r.qualified(key),
-          "'" + *name + "' must be a holding point of type u16, s16, u32 or s32: it is written");
+    if (use == Use::setpoint &&
+        !(p.table == Table::holding && (is_integer_of_two(p.type) || p.type == ValueType::f32))) {
+      diag_.error(r.node(key), r.qualified(key),
+                  "'" + *name +
+                      "' must be a holding point of type u16, s16, u32, s32 or f32: it is written");
       return std::nullopt;
     }
     return index;
   }
 
-  // speed_rpm = "speed_actual": a point of a register table.
+  // speed_rpm = "speed_actual" (in rpm), or { point = "output_frequency", rpm_factor = "120 /
+  // motor_poles" }: a point of a register table, and what its engineering value is multiplied by.
+  std::optional<std::size_t> rpm_point(TableReader& common, std::string_view key, Use use,
+                                       RpmFactor& factor) {
+    const toml::node* n = common.node(key);
+    if (n == nullptr || n->as_string() != nullptr) return register_point(common, key, use);
+    const toml::table* t = inline_table(common, key);
+    if (t == nullptr) return std::nullopt;
+    TableReader r(*t, "common." + std::string(key), diag_);
+    r.expect({"point", "rpm_factor"});
+    if (r.node("point") == nullptr) r.missing("point");
+    const auto index = register_point(r, "point", use);
+    if (const auto text = r.string("rpm_factor", false)) {
+      std::string why;
+      if (auto f = parse_rpm_factor(*text, profile_.options, why)) {
+        factor = std::move(*f);
+      } else if (bad_option_) {
+        // An option left out for its own error was reported already.
+        return std::nullopt;
+      } else {
+        diag_.error(r.node("rpm_factor"), r.qualified("rpm_factor"), "'" + *text + "' " + why);
+        return std::nullopt;
+      }
+    }
+    return index;
+  }
+
+  // speed_rpm = "speed_actual": a point of a register table; written (the setpoint), a holding
+  // point of one or two registers (a two-register one goes with FC 16).
   std::optional<std::size_t> register_point(TableReader& r, std::string_view key, Use use) {
     const auto index = point_at(r, key, false, use);
     if (index && profile_.points[*index].type == ValueType::bit) {
@@ -497,14 +530,75 @@ class Parser {
     const toml::table* t = inline_table(common, key);
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common." + std::string(key), diag_);
-    r.expect({"point", "value"});
-    const auto index = point_at(r, "point", true, Use::command);
+    r.expect({"point", "value", "sequence"});
+    const toml::node* seq = r.node("sequence");
+    // A sequence whose items are all tables names its points itself: `point` is then optional.
+    const auto* items = seq != nullptr ? seq->as_array() : nullptr;
+    const bool own_points =
+        items != nullptr && !items->empty() &&
+        std::all_of(items->begin(), items->end(), [](const toml::node& n) { return n.is_table(); });
+    const auto index = point_at(r, "point", !own_points, Use::command);
+    if (seq != nullptr && r.node("value") != nullptr) {
+      diag_.error(seq, r.qualified("sequence"), "value or sequence, not both");
+      return std::nullopt;
+    }
+    if (seq != nullptr) return sequence_binding(r, *seq, index);
     const auto value = r.integer("value", 0, 65535, true);
     if (!index || !value) return std::nullopt;
     if (!command_value_fits(r.node("value"), r.qualified("value"), *index, *value)) {
       return std::nullopt;
     }
-    return ValueBinding{*index, static_cast<std::uint16_t>(*value)};
+    const auto v = static_cast<std::uint16_t>(*value);
+    return ValueBinding{*index, v, {v}, {*index}};
+  }
+
+  // sequence = [0x047E, 0x047F], written to the binding's `point`, or items that name their own:
+  // [{ point = "direction_coil", value = 1 }, { point = "run_coil", value = 1 }] (the two forms
+  // may mix where the binding has a point). Each item's point is one a command can be written to.
+  std::optional<ValueBinding> sequence_binding(TableReader& r, const toml::node& seq,
+                                               std::optional<std::size_t> point) {
+    const std::string usage = "must be 1.." + std::to_string(kMaxSequence) +
+                              " values 0..65535 written in order, such as [0x047E, 0x047F], or "
+                              "tables such as { point = \"run_coil\", value = 1 }";
+    const auto* a = seq.as_array();
+    if (a == nullptr || a->empty() || a->size() > kMaxSequence) {
+      diag_.error(&seq, r.qualified("sequence"), usage);
+      return std::nullopt;
+    }
+    ValueBinding b;
+    bool ok = true;
+    for (const toml::node& item : *a) {
+      std::optional<std::size_t> at = point;
+      std::optional<std::int64_t> value;
+      if (const auto* t = item.as_table()) {
+        TableReader ir(*t, r.qualified("sequence"), diag_);
+        ir.expect({"point", "value"});
+        at = point_at(ir, "point", true, Use::command);
+        value = ir.integer("value", 0, 65535, true);
+        if (at && value &&
+            !command_value_fits(ir.node("value"), ir.qualified("value"), *at, *value)) {
+          ok = false;
+        }
+      } else if (const auto* i = item.as_integer();
+                 i != nullptr && i->get() >= 0 && i->get() <= 65535) {
+        value = i->get();
+        // Without the binding's point (missing or wrong: said already), the item has none.
+        if (at && !command_value_fits(&item, r.qualified("sequence"), *at, *value)) ok = false;
+      } else {
+        diag_.error(&item, r.qualified("sequence"), usage);
+        return std::nullopt;
+      }
+      if (!at || !value) {
+        ok = false;
+        continue;
+      }
+      b.sequence.push_back(static_cast<std::uint16_t>(*value));
+      b.points.push_back(*at);
+    }
+    if (!ok) return std::nullopt;
+    b.point = b.points.back();
+    b.value = b.sequence.back();
+    return b;
   }
 
   std::optional<Fault> fault_label(TableReader& r, const toml::node& n, std::string_view key) {
@@ -650,10 +744,11 @@ class Parser {
     if (t == nullptr) return;
     TableReader r(*t, "common", diag_);
     r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward",
-              "run_reverse", "reset_fault"});
+              "run_reverse", "reset_fault", "unbound"});
+    read_unbound(r);
     CommonBindings& c = profile_.common;
-    c.speed_rpm = register_point(r, "speed_rpm", Use::read);
-    c.setpoint_rpm = register_point(r, "setpoint_rpm", Use::setpoint);
+    c.speed_rpm = rpm_point(r, "speed_rpm", Use::read, c.speed_factor);
+    c.setpoint_rpm = rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor);
     c.running = bit_binding(r, "running");
     c.fault = bit_binding(r, "fault");
     c.fault_code = fault_binding(r);
@@ -670,6 +765,33 @@ class Parser {
     refuse_own_intervals();
   }
 
+  // unbound = { setpoint_rpm = "why" }: bindings left out on purpose, each with its reason.
+  void read_unbound(TableReader& r) {
+    const toml::node* n = r.node("unbound");
+    if (n == nullptr) return;
+    const auto* t = n->as_table();
+    if (t == nullptr) {
+      diag_.error(n, "common.unbound", "must be a table of binding = \"why it is left out\"");
+      return;
+    }
+    static constexpr std::array<std::string_view, 7> kChecked = {
+        "speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward"};
+    for (const auto& [k, v] : *t) {
+      const std::string key(k.str());
+      const auto* why = v.as_string();
+      if (std::find(kChecked.begin(), kChecked.end(), key) == kChecked.end()) {
+        diag_.error(&v, "common.unbound." + key,
+                    "not a binding the check asks for (" + TableReader::names_text(kChecked) + ")");
+      } else if (why == nullptr || why->get().empty()) {
+        diag_.error(&v, "common.unbound." + key, "must say why it is left out");
+      } else if (r.node(key) != nullptr) {
+        diag_.error(&v, "common.unbound." + key, "is bound: remove one of them");
+      } else {
+        profile_.unbound.emplace(key, why->get());
+      }
+    }
+  }
+
   // The common block is the drive's state as of its data age: every point bound to it is polled
   // at the device's poll_ms, so a point of its own interval there is an error.
   void refuse_own_intervals() {
@@ -683,7 +805,8 @@ class Parser {
     for (const auto& [v, key] :
          {std::pair{c.stop, "stop"}, std::pair{c.run_forward, "run_forward"},
           std::pair{c.run_reverse, "run_reverse"}, std::pair{c.reset_fault, "reset_fault"}}) {
-      if (v) bound.emplace_back(v->point, key);
+      if (!v) continue;
+      for (const std::size_t point : v->points) bound.emplace_back(point, key);
     }
     std::vector<bool> told(profile_.points.size(), false);
     for (const auto& [index, key] : bound) {
@@ -699,6 +822,7 @@ class Parser {
   Diagnostics diag_;
   Profile profile_;
   bool had_bad_point_ = false;
+  bool bad_option_ = false;  // an [options.NAME] left out for its error
 };
 
 }  // namespace
@@ -710,6 +834,13 @@ bool valid_profile_name(std::string_view name) {
 std::optional<std::size_t> Profile::find(std::string_view point) const {
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (points[i].name == point) return i;
+  }
+  return std::nullopt;
+}
+
+std::optional<std::size_t> Profile::find_option(std::string_view option) const {
+  for (std::size_t i = 0; i < options.size(); ++i) {
+    if (options[i].name == option) return i;
   }
   return std::nullopt;
 }

@@ -96,10 +96,43 @@ struct BitBinding {
   }
 };
 // A value written to a point: stop = { point = "control_word", value = 0x0006 }; to a coil
-// (FC 05), 0 or 1.
+// (FC 05), 0 or 1. Or values written in order, each confirmed before the next: { point =
+// "control_word", sequence = [0x047E, 0x047F] } (1..kMaxSequence), where an item may be a table
+// naming its own point: { sequence = [{ point = "direction_coil", value = 1 }, { point =
+// "run_coil", value = 1 }] }. `point` and `value` are the last step's: the command the drive ends
+// in.
+inline constexpr std::size_t kMaxSequence = 4;
 struct ValueBinding {
   std::size_t point = 0;
   std::uint16_t value = 0;
+  std::vector<std::uint16_t> sequence;  // what is written, in order; {value} for a single value
+  std::vector<std::size_t> points;      // where each of `sequence` is written
+};
+
+// A device option the profile declares ([options.NAME]) and a device sets in [device.options]:
+// a number within min..max (profile_options.h). `value` is the default until the device's
+// options are applied (apply_options, profile_options.h).
+struct ProfileOption {
+  std::string name;
+  double value = 0;
+  double default_value = 0;
+  double min = 0;
+  double max = 0;
+  std::string unit;
+  std::string description;
+  std::uint32_t line = 0;
+};
+
+// rpm = the point's engineering value x factor, the factor a product and quotient of numbers and
+// options, left to right ("120 / motor_poles"). No terms: 1 (the point is in rpm).
+struct RpmFactor {
+  struct Term {
+    bool divide = false;
+    double number = 1;                  // when no option
+    std::optional<std::size_t> option;  // index into Profile::options
+  };
+  std::vector<Term> terms;
+  std::string text;  // as the profile wrote it
 };
 // A point's native values named as unified faults; values not in the map are `other`. Or, for a
 // bit field (`bits`), its bits named: the lowest set bit that is named wins, a value with none of
@@ -116,6 +149,8 @@ struct FaultBinding {
 struct CommonBindings {
   std::optional<std::size_t> speed_rpm;     // actual speed, scaled to rpm
   std::optional<std::size_t> setpoint_rpm;  // the speed reference, written in rpm
+  RpmFactor speed_factor;                   // speed_rpm's rpm_factor
+  RpmFactor setpoint_factor;                // setpoint_rpm's rpm_factor
   std::optional<BitBinding> running;
   std::optional<BitBinding> fault;
   std::optional<FaultBinding> fault_code;
@@ -126,8 +161,8 @@ struct CommonBindings {
 };
 
 struct LineSpec {
-  std::uint32_t baud = 19200;       // Serial Line 2.5.1: 19200 is the required default
-  Parity parity = Parity::even;     // Serial Line 2.5.1: even parity is the default
+  std::uint32_t baud = 19200;    // Serial Line 2.5.1: 19200 is the required default
+  Parity parity = Parity::even;  // Serial Line 2.5.1: even parity is the default
   std::uint8_t stop_bits = 1;
   Framing framing = Framing::rtu;
 };
@@ -149,6 +184,16 @@ struct ProfileIdentification {
   std::string product_code;  // object 0x01 ProductCode; a trailing '*' matches any rest
 };
 
+// A frame the device's manual prints, and what the profile must make of it ([[example]],
+// profile_examples.h checks it).
+struct ProfileExample {
+  std::string request;  // hex as printed, with address and CRC (RTU) or as ASCII text
+  std::string reply;    // optional for writes
+  std::vector<std::pair<std::string, double>> expect;  // point name, engineering value
+  std::string note;
+  std::uint32_t line = 0;
+};
+
 struct Profile {
   std::string name;
   std::string description;
@@ -156,11 +201,19 @@ struct Profile {
   std::optional<ProfileIdentification> identification;
   LineSpec line;
   ModbusSpec modbus;
+  std::vector<ProfileOption> options;
   std::vector<ProfilePoint> points;
   CommonBindings common;
+  std::vector<ProfileExample> examples;  // the manual's own frames ([[example]])
+  // Common bindings the profile leaves out on purpose, and why ([common] unbound = { setpoint_rpm
+  // = "a % of the range between minimum and maximum frequency" }): `drivegate profile check` does
+  // not warn of them.
+  std::map<std::string, std::string, std::less<>> unbound;
 
   // The index of the point called `name`, if any.
   [[nodiscard]] std::optional<std::size_t> find(std::string_view point) const;
+  // The index of the option called `name`, if any.
+  [[nodiscard]] std::optional<std::size_t> find_option(std::string_view option) const;
 };
 
 // The profile in `text`, or every error found in it, each "SOURCE:LINE: key: what is wrong" as

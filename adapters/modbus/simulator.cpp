@@ -1,10 +1,12 @@
 #include "simulator.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <sstream>
 
 #include "drivegate/sim_text.h"
+#include "profile_options.h"
 #include "values.h"
 
 namespace drivegate::modbus_device {
@@ -227,18 +229,31 @@ void ModbusSimulator::store(Table table, std::uint16_t address, std::uint16_t wo
   drive();
 }
 
-// A write of a command's value to its point (a control word's register or a coil) is that
-// command to the drive: a reset, a stop, a run (not while tripped).
+// A write of a command's last value to its last point (a control word's register or a coil) is
+// that command to the drive: a reset, a stop, a run (not while tripped). A command written as a
+// sequence is its last value: the values before it change nothing here unless one is another
+// command's (ABB's run 0x047E, 0x047F passes through its stop 0x047E); a sequence over several
+// points is that command only while each of its other points holds the last value the sequence
+// gave it (direction coil 1 then run coil 1 is run reverse, not run forward). A reset value that
+// is also the stop value does both, as on a drive whose reset word has the run bit clear.
 void ModbusSimulator::command(Table table, std::uint16_t address, std::uint16_t word) {
   const CommonBindings& c = profile_.common;
   const auto is = [&](const std::optional<ValueBinding>& b) {
     if (!b) return false;
     const ProfilePoint& p = profile_.points[b->point];
-    return p.table == table && p.address == address && b->value == word;
+    if (p.table != table || p.address != address || b->value != word) return false;
+    for (std::size_t i = 0; i < b->points.size(); ++i) {
+      const std::size_t other = b->points[i];
+      const bool last = std::find(b->points.begin() + static_cast<long>(i) + 1, b->points.end(),
+                                  other) == b->points.end();
+      if (other == b->point || !last) continue;
+      const ProfilePoint& o = profile_.points[other];
+      if (memory_[{o.table, o.address}] != b->sequence[i]) return false;
+    }
+    return true;
   };
-  if (is(c.reset_fault)) {
-    fault_ = 0;
-  } else if (is(c.stop)) {
+  if (is(c.reset_fault)) fault_ = 0;
+  if (is(c.stop)) {
     running_ = false;
   } else if (is(c.run_forward) && fault_ == 0) {
     running_ = true;
@@ -296,8 +311,18 @@ void ModbusSimulator::drive() {
     set_point(c.fault_code->point, fault_ * profile_.points[c.fault_code->point].scale);
   if (c.speed_rpm) {
     double speed = 0;
-    if (running_ && c.setpoint_rpm) speed = point_value(*c.setpoint_rpm).value_or(0);
-    set_point(*c.speed_rpm, reverse_ ? -speed : speed);
+    if (running_ && c.setpoint_rpm) {
+      // The same rpm through both points' factors: reference x its factor / the speed's.
+      speed = point_value(*c.setpoint_rpm).value_or(0) *
+              factor_value(c.setpoint_factor, profile_.options) /
+              factor_value(c.speed_factor, profile_.options);
+      const ProfilePoint& p = profile_.points[*c.speed_rpm];
+      if (p.type != ValueType::f32) speed = std::round(speed / p.scale) * p.scale;
+    }
+    // An unsigned speed cannot say reverse: it shows the magnitude, as such drives do.
+    const ValueType t = profile_.points[*c.speed_rpm].type;
+    const bool is_signed = t != ValueType::u16 && t != ValueType::u32;
+    set_point(*c.speed_rpm, reverse_ && is_signed ? -speed : speed);
   }
 }
 

@@ -288,17 +288,81 @@ TEST(Bindings, ACommandToACoilIsZeroOrOne) {
   EXPECT_EQ(p.common.run_forward->point, *p.find("run"));
 }
 
-TEST(Bindings, TheSetpointIsAnIntegerHoldingPointOfOneOrTwoRegisters) {
+TEST(Bindings, TheSetpointIsAHoldingPointOfOneOrTwoRegisters) {
   const auto setpoint = [](const std::string& table, const std::string& type) {
     return kHead + point("r", table, 0, type) + "[common]\nsetpoint_rpm = \"r\"\n";
   };
   EXPECT_EQ(parsed(setpoint("holding", "u32")).common.setpoint_rpm, 0u);
   EXPECT_EQ(parsed(setpoint("holding", "s32")).common.setpoint_rpm, 0u);
-  EXPECT_THAT(errors_of(setpoint("holding", "f32")),
-              ElementsAre(HasSubstr("common.setpoint_rpm: 'r' must be a holding point of type "
-                                    "u16, s16, u32 or s32")));
+  EXPECT_EQ(parsed(setpoint("holding", "f32")).common.setpoint_rpm, 0u);
   EXPECT_THAT(errors_of(setpoint("input", "u32")),
-              ElementsAre(HasSubstr("'r' must be a holding point of type u16, s16, u32 or s32")));
+              ElementsAre(HasSubstr("common.setpoint_rpm: 'r' must be a holding point of type u16, "
+                                    "s16, u32, s32 or f32")));
+  EXPECT_THAT(errors_of(setpoint("coil", "bit")),
+              ElementsAre(HasSubstr("'r' must be a holding point of type u16, s16, u32, s32")));
+}
+
+// run_reverse as a drive with a direction coil and a run coil takes it: direction, then run.
+const std::string kCoilDrive = kHead + point("run_coil", "coil", 0, "bit") +  // 4-8
+                               point("direction_coil", "coil", 1, "bit") +    // 9-13
+                               point("control", "holding", 5, "u16") +        // 14-18
+                               point("state", "input", 6, "u16");             // 19-23
+
+TEST(Bindings, ASequencesItemsMayNameTheirOwnPoints) {
+  const Profile p = parsed(
+      kCoilDrive +
+      "[common]\nstop = { point = \"run_coil\", value = 0 }\n"
+      "run_forward = { sequence = [{ point = \"direction_coil\", value = 0 }, "
+      "{ point = \"run_coil\", value = 1 }] }\n"
+      "run_reverse = { point = \"control\", sequence = [{ point = \"direction_coil\", value = 1 }, "
+      "6, { point = \"run_coil\", value = 1 }] }\n");
+  const CommonBindings& c = p.common;
+  ASSERT_TRUE(c.run_forward && c.run_reverse && c.stop);
+  EXPECT_THAT(c.run_forward->points, ElementsAre(*p.find("direction_coil"), *p.find("run_coil")));
+  EXPECT_THAT(c.run_forward->sequence, ElementsAre(0, 1));
+  EXPECT_EQ(c.run_forward->point, *p.find("run_coil"));  // the last step's
+  EXPECT_EQ(c.run_forward->value, 1);
+  EXPECT_THAT(c.run_reverse->points,
+              ElementsAre(*p.find("direction_coil"), *p.find("control"), *p.find("run_coil")));
+  EXPECT_THAT(c.run_reverse->sequence, ElementsAre(1, 6, 1));
+  EXPECT_THAT(c.stop->points, ElementsAre(*p.find("run_coil")));
+}
+
+TEST(Bindings, ASequenceItemMustNameAPointACommandCanWrite) {
+  const auto run = [](const std::string& binding) {
+    return errors_of(kCoilDrive + "[common]\nstop = { point = \"run_coil\", value = 0 }\n" +
+                     "run_forward = " + binding + "\n");
+  };
+  EXPECT_THAT(run("{ sequence = [{ point = \"nowhere\", value = 1 }] }"),
+              ElementsAre(HasSubstr("p.toml:26: common.run_forward.sequence.point: no point is "
+                                    "called 'nowhere'")));
+  EXPECT_THAT(run("{ sequence = [{ point = \"state\", value = 1 }] }"),
+              ElementsAre(HasSubstr("common.run_forward.sequence.point: 'state' must be a "
+                                    "one-register holding point or a coil")));
+  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 2 }] }"),
+              ElementsAre(HasSubstr("common.run_forward.sequence.value: 'run_coil' is a coil: it "
+                                    "is written 0 or 1 (got 2)")));
+  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\" }] }"),
+              ElementsAre(HasSubstr("common.run_forward.sequence.value: required key is missing")));
+  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 1, spare = 1 }] }"),
+              ElementsAre(HasSubstr("common.run_forward.sequence.spare: unknown key")));
+  // A plain number needs the binding's point.
+  EXPECT_THAT(run("{ sequence = [{ point = \"direction_coil\", value = 0 }, 1] }"),
+              ElementsAre(HasSubstr("common.run_forward.point: required key is missing")));
+  // A plain number to a coil is 0 or 1 too.
+  EXPECT_THAT(run("{ point = \"run_coil\", sequence = [0, 0xFF00] }"),
+              ElementsAre(HasSubstr("common.run_forward.sequence: 'run_coil' is a coil: it is "
+                                    "written 0 or 1 (got 65280)")));
+  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 1 }, \"on\"] }"),
+              ElementsAre(HasSubstr("common.run_forward.point: required key is missing"),
+                          HasSubstr("common.run_forward.sequence: must be 1..4 values 0..65535")));
+  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 1 }, { point = \"run_coil\", "
+                  "value = 0 }, { point = \"run_coil\", value = 1 }, { point = \"run_coil\", "
+                  "value = 0 }, { point = \"run_coil\", value = 1 }] }"),
+              ElementsAre(HasSubstr("common.run_forward.sequence: must be 1..4 values")));
+  EXPECT_THAT(run("{ sequence = [] }"),
+              ElementsAre(HasSubstr("common.run_forward.point: required key is missing"),
+                          HasSubstr("common.run_forward.sequence: must be 1..4 values")));
 }
 
 // ---- The driver, by hand: the frames on the wire
@@ -446,6 +510,57 @@ TEST_F(TripBitsDriver, TheLowestNamedBitSetIsTheFault) {
   EXPECT_EQ(d.common().native_fault, 0x8004u);
 }
 
+// A drive of two coils: run reverse is the direction coil ON, then the run coil ON.
+const std::string kTwoCoils =
+    kCoilDrive +
+    "[common]\nrunning = { point = \"state\", any_bit = [0, 1] }\n"
+    "stop = { point = \"run_coil\", value = 0 }\n"
+    "run_forward = { sequence = [{ point = \"direction_coil\", value = 0 }, "
+    "{ point = \"run_coil\", value = 1 }] }\n"
+    "run_reverse = { sequence = [{ point = \"direction_coil\", value = 1 }, "
+    "{ point = \"run_coil\", value = 1 }] }\n";
+
+TEST(BindingsSequence, EachStepGoesToItsOwnCoilAndAStopOvertakesTheRest) {
+  ModbusDriver d{kSlave, parsed(kTwoCoils), Timing{3, 3000ms, std::chrono::nanoseconds(572917)},
+                 500ms};
+  TimePoint now = TimePoint{} + 10s;
+  const auto sent = [&] {
+    const auto ex = d.next_exchange(now);
+    return ex ? ex->frame : Bytes{};
+  };
+  const WriteOp reverse = WriteOp::of_command(Command::run_reverse);
+  ASSERT_EQ(d.apply(reverse, 1, now), WriteStatus::pending);
+  const Bytes direction_on = frame({0x05, 0x00, 0x01, 0xFF, 0x00});
+  ASSERT_EQ(sent(), direction_on);
+  d.on_receive(direction_on, now);
+  const Bytes run_on = frame({0x05, 0x00, 0x00, 0xFF, 0x00});
+  ASSERT_EQ(sent(), run_on);
+  d.on_receive(run_on, now);
+  EXPECT_EQ(d.common().command, Command::run_reverse);
+  std::vector<Completion> done;
+  d.take_completions(done);
+  ASSERT_EQ(done.size(), 1u);
+  EXPECT_EQ(done[0].result, WriteResult::ok);
+  // Run forward, and a stop while its first step is on the line: the stop writes the run coil,
+  // which the run's second step would, so the run ends at its first step and the stop goes.
+  const WriteOp forward = WriteOp::of_command(Command::run_forward);
+  ASSERT_EQ(d.apply(forward, 2, now), WriteStatus::pending);
+  const Bytes direction_off = frame({0x05, 0x00, 0x01, 0x00, 0x00});
+  ASSERT_EQ(sent(), direction_off);
+  const WriteOp stop = WriteOp::of_command(Command::stop);
+  ASSERT_EQ(d.apply(stop, 3, now), WriteStatus::pending);
+  d.on_receive(direction_off, now);
+  const Bytes run_off = frame({0x05, 0x00, 0x00, 0x00, 0x00});
+  ASSERT_EQ(sent(), run_off);  // never the run coil ON
+  d.on_receive(run_off, now);
+  EXPECT_EQ(d.common().command, Command::stop);
+  done.clear();
+  d.take_completions(done);
+  ASSERT_EQ(done.size(), 2u);
+  EXPECT_EQ(done[0].result, WriteResult::no_response);
+  EXPECT_EQ(done[1].result, WriteResult::ok);
+}
+
 // ---- The simulator serves the bindings
 
 Bytes request(ModbusSimulator& sim, std::vector<std::uint8_t> pdu) {
@@ -493,6 +608,19 @@ TEST(BindingsSimulator, ReverseRunningShowsInTheSecondBit) {
   request(sim, {0x05, 0x00, 0x01, 0xFF, 0x00});
   EXPECT_THAT(sim.control("state", {}), HasSubstr("running reverse"));
   EXPECT_EQ(request(sim, read_pdu(0x03, 10, 1)), frame(words_pdu(0x03, {0x0002})));
+}
+
+TEST(BindingsSimulator, ASequenceOverTwoCoilsIsItsCommandOnlyWhenBothHoldItsValues) {
+  ModbusSimulator sim(kSlave, parsed(kTwoCoils));
+  request(sim, {0x05, 0x00, 0x01, 0xFF, 0x00});  // direction ON: nothing yet
+  EXPECT_THAT(sim.control("state", {}), HasSubstr("stopped"));
+  request(sim, {0x05, 0x00, 0x00, 0xFF, 0x00});  // run ON with direction ON: reverse
+  EXPECT_THAT(sim.control("state", {}), HasSubstr("running reverse"));
+  EXPECT_EQ(request(sim, read_pdu(0x04, 6, 1)), frame(words_pdu(0x04, {0x0002})));
+  request(sim, {0x05, 0x00, 0x00, 0x00, 0x00});  // stop
+  request(sim, {0x05, 0x00, 0x01, 0x00, 0x00});
+  request(sim, {0x05, 0x00, 0x00, 0xFF, 0x00});  // direction OFF, run ON: forward
+  EXPECT_THAT(sim.control("state", {}), HasSubstr("running forward"));
 }
 
 TEST(BindingsSimulator, AFaultCodeBitFieldIsTheNativeCode) {
