@@ -25,7 +25,8 @@ int action(std::span<const std::string> args);
 int capture(std::span<const std::string> args);
 int events(std::span<const std::string> args);
 int dcmd(std::span<const std::string> args);
-int scan(std::span<const std::string> args);  // built with the modbus adapter (DRIVEGATE_SCAN)
+int scan(std::span<const std::string> args);      // built with the modbus adapter (DRIVEGATE_SCAN)
+int profile(std::span<const std::string> args);   // the same (DRIVEGATE_SCAN)
 int protocol(std::span<const std::string> args);  // with the framed adapter (DRIVEGATE_PROTOCOL)
 
 // The options several subcommands share, with one wording wherever they appear.

@@ -111,6 +111,7 @@ constexpr const char* kCommands =
     "             configuration, and its result\n"
 #ifdef DRIVEGATE_SCAN
     "  scan       the Modbus slaves on a serial line, and the configuration for them\n"
+    "  profile    check Modbus device profiles without a configuration\n"
 #endif
 #ifdef DRIVEGATE_PROTOCOL
     "  protocol   check a protocol description: decode and encode frames by hand\n"
@@ -154,6 +155,7 @@ int main(int argc, char** argv) {
     if (command == "dcmd") return drivegate::cli::dcmd(args);
 #ifdef DRIVEGATE_SCAN
     if (command == "scan") return drivegate::cli::scan(args);
+    if (command == "profile") return drivegate::cli::profile(args);
 #endif
 #ifdef DRIVEGATE_PROTOCOL
     if (command == "protocol") return drivegate::cli::protocol(args);

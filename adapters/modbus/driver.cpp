@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "line_timing.h"
+#include "profile_options.h"
 #include "rejected.h"
 #include "values.h"
 
@@ -67,11 +68,27 @@ std::optional<std::int32_t> rpm_of(double speed) {
   return static_cast<std::int32_t>(rpm);
 }
 
+// The unified fault a native code stands for: its entry in the map, or for a bit field the
+// lowest set bit that is named (none when no bit is set); `other` otherwise.
+Fault fault_of(const FaultBinding& b, std::uint32_t native) {
+  if (b.bits.empty()) {
+    const auto it = b.map.find(native);
+    return it != b.map.end() ? it->second : b.other;
+  }
+  if (native == 0) return Fault::none;
+  for (const auto& [bit, fault] : b.bits) {
+    if (((native >> bit) & 1u) != 0) return fault;
+  }
+  return b.other;
+}
+
 }  // namespace
 
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
                            Millis poll_interval, std::string files_read)
     : profile_(std::move(profile)),
+      speed_factor_(factor_value(profile_.common.speed_factor, profile_.options)),
+      setpoint_factor_(factor_value(profile_.common.setpoint_factor, profile_.options)),
       files_read_(std::move(files_read)),
       address_(address),
       timing_(timing),
@@ -100,7 +117,8 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
     if (state[i]) state_points_.push_back(i);
   }
   for (const auto& v : {c.stop, c.run_forward, c.run_reverse, c.reset_fault}) {
-    if (v) bound[v->point] = true;
+    if (!v) continue;
+    for (const std::size_t p : v->points) bound[p] = true;
   }
   for (std::size_t i = 0; i < profile_.points.size(); ++i) {
     if (bound[i]) continue;
@@ -152,9 +170,14 @@ DriverTraits ModbusDriver::traits() const {
   DriverTraits t;
   t.comm_timeout = timing_.comm_timeout;
   t.inter_frame_gap = inter_frame_gap();
-  // A write settles within send_limit() and one turn of its own; a request holds at most two
-  // that need the line (a setpoint, then a command).
-  t.write_timeout = write_backstop(turn(), 2);
+  // A write settles within send_limit() and one turn of its own; a request holds at most a
+  // setpoint and a command, and a command is as many writes as its longest sequence.
+  std::size_t longest = 1;
+  const CommonBindings& c = profile_.common;
+  for (const auto& v : {c.stop, c.run_forward, c.run_reverse, c.reset_fault}) {
+    if (v) longest = std::max(longest, v->sequence.size());
+  }
+  t.write_timeout = write_backstop(turn(), 1 + static_cast<int>(longest));
   t.state_in_parts = !state_points_.empty();
   return t;
 }
@@ -479,12 +502,14 @@ std::optional<double> ModbusDriver::engineering(std::optional<std::size_t> point
 
 std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) const {
   if (!b || !raw_[b->point]) return std::nullopt;
-  return (((*raw_[b->point])[0] >> b->bit) & 1u) != 0;
+  // Any of the binding's bits of the point's value (a bit point's value is its bit 0).
+  return (masked(profile_.points[b->point], (*raw_[b->point])[0]) & b->mask()) != 0;
 }
 
 void ModbusDriver::update_common() {
   const CommonBindings& c = profile_.common;
-  if (const auto speed = engineering(c.speed_rpm)) {
+  if (auto speed = engineering(c.speed_rpm)) {
+    *speed *= speed_factor_;
     // A speed is a number the common block carries, by the point's own type and signedness; NaN,
     // an infinity or a speed beyond it (2^32 from a float, 4294967295 from a u32) is none.
     const auto rpm = rpm_of(*speed);
@@ -506,8 +531,7 @@ void ModbusDriver::update_common() {
     if (std::isfinite(raw) && raw == std::trunc(raw) && std::fabs(raw) <= 4294967295.0) {
       const auto native = static_cast<std::uint32_t>(static_cast<std::int64_t>(raw));
       common_.native_fault = native;
-      const auto it = c.fault_code->map.find(native);
-      coded = it != c.fault_code->map.end() ? it->second : c.fault_code->other;
+      coded = fault_of(*c.fault_code, native);
     } else {
       // A code that is not a whole number (a float point reading NaN): no code, but something
       // is wrong, whatever the profile names the codes it does not map.
@@ -539,7 +563,7 @@ void ModbusDriver::adopt() {
   if (!adopting_ || !common_.ready) return;
   adopting_ = false;
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
-    if (const auto rpm = rpm_of(*reference)) common_.setpoint_rpm = *rpm;
+    if (const auto rpm = rpm_of(*reference * setpoint_factor_)) common_.setpoint_rpm = *rpm;
   }
   if (!common_.running || !common_.faults.empty()) return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;

@@ -26,6 +26,7 @@
 //   driver_writes.cpp  check() and apply(), the writes waiting for the line, their confirmation
 #pragma once
 
+#include <algorithm>
 #include <deque>
 #include <map>
 #include <optional>
@@ -87,6 +88,21 @@ class ModbusDriver final : public DriverBase {
     std::vector<std::uint16_t> words;  // registers (or, for a coil, {0 or 1})
     Command command = Command::stop;   // Change::command
     std::int32_t rpm = 0;              // Change::setpoint
+    // A command's values, written in order, each confirmed before the next (`words` is the one
+    // at `step`); the command is in force when the last is.
+    std::vector<std::uint16_t> sequence;
+    std::vector<std::size_t> points;  // the point of each of `sequence`; `point` is the step's
+    std::size_t step = 0;
+
+    // Whether this write puts a value in `p`.
+    [[nodiscard]] bool writes_to(std::size_t p) const {
+      return p == point || std::find(points.begin(), points.end(), p) != points.end();
+    }
+    // Whether this write and `other` put values in one point: the newer overtakes the older.
+    [[nodiscard]] bool meets(const Write& other) const {
+      return writes_to(other.point) || std::any_of(other.points.begin(), other.points.end(),
+                                                   [this](std::size_t p) { return writes_to(p); });
+    }
   };
   using Writes = WriteLedger<Write>;
   // Points polled at one interval, and the blocks that read them.
@@ -145,6 +161,9 @@ class ModbusDriver final : public DriverBase {
   void fail_inflight();
 
   Profile profile_;
+  // rpm = engineering value x factor (the profile's rpm_factor with the device's options).
+  double speed_factor_ = 1.0;
+  double setpoint_factor_ = 1.0;
   std::string files_read_;
   std::uint8_t address_;
   Timing timing_;

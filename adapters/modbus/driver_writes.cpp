@@ -4,6 +4,8 @@
 // when it fails (an exception, no answer, superseded, never sent in time), what was in force
 // stays.
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "driver.h"
 #include "values.h"
@@ -45,15 +47,25 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       }
       if (!b) return std::nullopt;
       w.change = Change::command;
-      w.point = b->point;
-      w.words = {b->value};
+      w.point = b->points.front();
+      w.points = b->points;
+      w.sequence = b->sequence;
+      w.words = {w.sequence.front()};
       return w;
     }
     case WriteOp::Target::setpoint: {
       if (!c.setpoint_rpm) return std::nullopt;
       const ProfilePoint& p = profile_.points[*c.setpoint_rpm];
-      const double v = op.rpm;
-      if ((p.min && v < *p.min) || (p.max && v > *p.max)) return std::nullopt;
+      double v = op.rpm;
+      if (!c.setpoint_factor.terms.empty()) {
+        // rpm -> the point's value -> raw, rounded to the point's step (docs/profiles.md,
+        // "[common]"): a float point takes the value as it is.
+        v /= setpoint_factor_;
+        if (p.type != ValueType::f32) v = std::round(v / p.scale) * p.scale;
+      }
+      // The point's range, after the conversion, allowing for a scale's binary fractions.
+      const double slack = 1e-9 * std::max(1.0, std::fabs(v));
+      if ((p.min && v < *p.min - slack) || (p.max && v > *p.max + slack)) return std::nullopt;
       auto words = words_for(p, v);
       if (!words) return std::nullopt;
       w.change = Change::setpoint;
@@ -98,9 +110,9 @@ WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   auto w = write_of(op);
   if (!w) return WriteStatus::invalid_value;
   // A newer write to the same point wins: the older one, still waiting for the line, never
-  // reaches the slave (a run then a stop in quick succession never starts the motor).
-  const std::size_t point = w->point;
-  writes_.settle_if([point](const Writes::Entry& e) { return e.job.point == point; },
+  // reaches the slave (a run then a stop in quick succession never starts the motor). A command
+  // whose sequence writes several points meets every write to any of them.
+  writes_.settle_if([&w](const Writes::Entry& e) { return e.job.meets(*w); },
                     WriteResult::no_response);
   // Not on the line by then, it is failed and never sent: by then the gateway could not have its
   // answer before its own deadline, and a run the PLC was told failed must not start the motor
@@ -144,7 +156,26 @@ void ModbusDriver::confirm(const Job& j, ByteView pdu) {
     writes_.settle(*j.write, WriteResult::refused);
     return;
   }
-  put_in_force(j.write->job);
+  const Write& w = j.write->job;
+  if (w.step + 1 < w.sequence.size()) {
+    // A sequence's step the slave took: the register holds it, and the next goes at once, ahead
+    // of the polls, unless a newer write to the same point came meanwhile (a stop during a run):
+    // that one goes instead, and this command is over, not carried out.
+    raw_[w.point] = w.words;
+    const bool overtaken =
+        std::any_of(writes_.begin(), writes_.end(), [&](const auto& e) { return e.job.meets(w); });
+    if (overtaken) {
+      writes_.settle(*j.write, WriteResult::no_response);
+      return;
+    }
+    Write next = w;
+    ++next.step;
+    next.words = {next.sequence[next.step]};
+    next.point = next.points[next.step];
+    writes_.push_front(std::move(next), j.write->tickets, last_now_ + send_limit());
+    return;
+  }
+  put_in_force(w);
   writes_.settle(*j.write, WriteResult::ok);
 }
 

@@ -40,12 +40,14 @@ std::vector<Block> plan_reads(const Profile& profile, std::span<const std::size_
     if (!blocks.empty()) {
       Block& b = blocks.back();
       const std::uint32_t block_end = std::uint32_t{b.start} + b.count;
-      const bool near = p.address >= block_end && p.address - block_end <= profile.modbus.max_gap;
+      // A masked point may share the register of the one before it (profile.h, mask).
+      const bool near = p.address >= block_end ? p.address - block_end <= profile.modbus.max_gap
+                                               : p.address >= b.start;
       // The first skipped register at or after the block's end: the gap must not hold it.
       const auto s = skipped.lower_bound({p.table, static_cast<std::uint16_t>(block_end)});
       const bool clear = s == skipped.end() || s->first != p.table || s->second >= p.address;
-      if (b.table == p.table && near && clear && end - b.start <= limit) {
-        b.count = static_cast<std::uint16_t>(end - b.start);
+      if (b.table == p.table && near && clear && std::max(end, block_end) - b.start <= limit) {
+        b.count = static_cast<std::uint16_t>(std::max(end, block_end) - b.start);
         b.points.push_back(i);
         continue;
       }

@@ -8,6 +8,7 @@
 #include "passthrough.h"
 #include "settings.h"
 #include "simulator.h"
+#include "specialise.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -44,6 +45,8 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 
 constexpr OptionSetting kDemoOptions[] = {{"profile", "example-vfd"}};
 
+const AdapterDescriptor* specialise_device(const Options& options, std::string& error);
+
 }  // namespace
 }  // namespace drivegate::modbus_device
 
@@ -71,4 +74,16 @@ extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivega
              .running_rpm = 1500},
     .actions = nullptr,  // no maintenance actions
     .action_count = 0,
+    // A profile's own options ([options.NAME]) join the schema of its devices.
+    .specialise = &drivegate::modbus_device::specialise_device,
 };
+
+namespace drivegate::modbus_device {
+namespace {
+
+const AdapterDescriptor* specialise_device(const Options& options, std::string& error) {
+  return specialise(drivegate_adapter, options, error);
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device

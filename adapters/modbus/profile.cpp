@@ -8,8 +8,12 @@
 #include <limits>
 #include <utility>
 
+#include "drivegate/sim_text.h"
 #include "drivegate/toml_reader.h"
+#include "profile_examples.h"
+#include "profile_options.h"
 #include "profile_types.h"
+#include "values.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -27,6 +31,11 @@ std::optional<Fault> fault_named(std::string_view name) {
     if (kFaultNames[i] == name) return static_cast<Fault>(i);
   }
   return std::nullopt;
+}
+
+// An integer of one or two registers: a setpoint's or a bit field's type.
+bool is_integer_of_two(ValueType t) {
+  return t == ValueType::u16 || t == ValueType::s16 || t == ValueType::u32 || t == ValueType::s32;
 }
 
 // The line an error names ("SOURCE:LINE: ..."), 0 when it names none.
@@ -50,13 +59,15 @@ class Parser {
     }
     {
       TableReader top(root, "", diag_);
-      top.expect({"profile", "line", "modbus", "point", "common"});
+      top.expect({"profile", "line", "modbus", "options", "point", "common", "example"});
       read_identity(top);
       read_line(top);
       read_modbus(top);
+      bad_option_ = !read_profile_options(root, top, diag_, profile_);
       read_points(root, top);
       check_overlaps();
       read_common(top);
+      read_profile_examples(root, top, diag_, profile_);
     }
     if (!diag_.errors.empty()) {
       // In file order, as a reader fixes them; the file-wide ones (line 0) first.
@@ -165,7 +176,7 @@ class Parser {
     TableReader r(t, "point", diag_);
     r.expect({"name", "table", "address", "type", "word_order", "scale", "unit", "description",
               "min", "max", "access", "poll_ms", "trend", "registers", "byte_order", "bits",
-              "values"});
+              "values", "mask"});
     ProfilePoint p;
     p.line = static_cast<std::uint32_t>(t.source().begin.line);
     bool ok = true;
@@ -215,6 +226,7 @@ class Parser {
       r.node("bits");
       r.node("values");
     }
+    if (ok) ok = read_mask(r, p);
     if (auto v = r.integer("poll_ms", 10, 3600000, false))
       p.poll_ms = static_cast<std::uint32_t>(*v);
     if (ok)
@@ -276,31 +288,77 @@ class Parser {
     return ok;
   }
 
-  // Two points in one table may not share a register (or a bit).
+  // mask = 0xFF00: some bits of a u16 register, read-only, so that a fault code in the high byte
+  // and a state in the low byte are two points. Read-modify-write is not done: a write of some
+  // bits would put back the others as they were read, maybe long ago.
+  bool read_mask(TableReader& r, ProfilePoint& p) {
+    const toml::node* n = r.node("mask");
+    if (n == nullptr) return true;
+    const auto mask = r.integer("mask", 0, 0xFFFF, true);
+    if (!mask) return false;
+    if (*mask == 0) {
+      diag_.error(n, "point.mask", "must not be 0: a mask of no bits reads nothing");
+      return false;
+    }
+    if (p.type != ValueType::u16) {
+      diag_.error(n, "point.mask", "applies to u16 register points only");
+      return false;
+    }
+    if (r.node("access") != nullptr && p.access != PointAccess::read) {
+      diag_.error(r.node("access"), "point.access",
+                  "a masked point is read-only (its register is not read, modified and written "
+                  "back): access is read");
+      return false;
+    }
+    if (p.min || p.max) {
+      diag_.error(r.node(p.min ? "min" : "max"), p.min ? "point.min" : "point.max",
+                  "limits a write: a masked point is read-only");
+      return false;
+    }
+    p.mask = static_cast<std::uint16_t>(*mask);
+    p.access = PointAccess::read;
+    return true;
+  }
+
+  // Two points in one table may not share a register (or a bit), except one-register points
+  // whose masks do not overlap.
   void check_overlaps() {
     std::vector<const ProfilePoint*> sorted;
     for (const auto& p : profile_.points) sorted.push_back(&p);
     std::sort(sorted.begin(), sorted.end(), [](const ProfilePoint* a, const ProfilePoint* b) {
-      return std::tie(a->table, a->address) < std::tie(b->table, b->address);
+      return std::tie(a->table, a->address, a->line) < std::tie(b->table, b->address, b->line);
     });
-    for (std::size_t i = 1; i < sorted.size(); ++i) {
-      const ProfilePoint& a = *sorted[i - 1];
-      const ProfilePoint& b = *sorted[i];
-      if (a.table == b.table && std::uint32_t{a.address} + a.width() > b.address) {
+    for (std::size_t i = 0; i < sorted.size(); ++i) {
+      const ProfilePoint& a = *sorted[i];
+      for (std::size_t j = i + 1; j < sorted.size(); ++j) {
+        const ProfilePoint& b = *sorted[j];
+        if (a.table != b.table || std::uint32_t{a.address} + a.width() <= b.address) break;
+        if (a.mask && b.mask && (*a.mask & *b.mask) == 0) continue;
         const ProfilePoint& later = a.line > b.line ? a : b;
         const ProfilePoint& earlier = a.line > b.line ? b : a;
+        std::string why;
+        if (a.mask && b.mask) {
+          why = ": their masks share bits (" + hex(*a.mask & *b.mask, 4) + ")";
+        } else if (a.mask || b.mask) {
+          why = ": a register is shared only by points whose masks do not overlap";
+        }
         diag_.error_at(static_cast<int>(later.line), "point",
                        "'" + later.name + "' overlaps '" + earlier.name + "' (line " +
                            std::to_string(earlier.line) + ") in the " +
                            std::string(kProfileTableNames[static_cast<std::size_t>(a.table)]) +
-                           " table");
+                           " table" + why);
       }
     }
   }
 
-  // A point named at `key` of `r`, which must exist (and, if `writable`, be written to).
+  // What a binding does with its point: reads it, writes a command's value to it (a
+  // one-register holding point or a coil), or writes the setpoint (a holding point of one or two
+  // registers, an integer or f32: FC 16 for two).
+  enum class Use : std::uint8_t { read, command, setpoint };
+
+  // A point named at `key` of `r`, which must exist and be of a kind `use` can use.
   std::optional<std::size_t> point_at(TableReader& r, std::string_view key, bool required,
-                                      bool writable) {
+                                      Use use) {
     const auto name = r.string(key, required);
     if (!name) return std::nullopt;
     const auto index = profile_.find(*name);
@@ -312,17 +370,59 @@ class Parser {
       return std::nullopt;
     }
     const ProfilePoint& p = profile_.points[*index];
-    if (writable && !(p.table == Table::holding && p.width() == 1)) {
+    if (use == Use::read) return index;
+    if (p.mask) {
       diag_.error(r.node(key), r.qualified(key),
-                  "'" + *name + "' must be a one-register holding point: it is written");
+                  "'" + *name + "' is masked, so read-only: it cannot be written");
+      return std::nullopt;
+    }
+    if (use == Use::command &&
+        !(p.table == Table::coil || (p.table == Table::holding && p.width() == 1))) {
+      diag_.error(r.node(key), r.qualified(key),
+                  "'" + *name + "' must be a one-register holding point or a coil: it is written");
+      return std::nullopt;
+    }
+    if (use == Use::setpoint &&
+        !(p.table == Table::holding && (is_integer_of_two(p.type) || p.type == ValueType::f32))) {
+      diag_.error(r.node(key), r.qualified(key),
+                  "'" + *name +
+                      "' must be a holding point of type u16, s16, u32, s32 or f32: it is written");
       return std::nullopt;
     }
     return index;
   }
 
-  // speed_rpm = "speed_actual": a point of a register table.
-  std::optional<std::size_t> register_point(TableReader& r, std::string_view key, bool writable) {
-    const auto index = point_at(r, key, false, writable);
+  // speed_rpm = "speed_actual" (in rpm), or { point = "output_frequency", rpm_factor = "120 /
+  // motor_poles" }: a point of a register table, and what its engineering value is multiplied by.
+  std::optional<std::size_t> rpm_point(TableReader& common, std::string_view key, Use use,
+                                       RpmFactor& factor) {
+    const toml::node* n = common.node(key);
+    if (n == nullptr || n->as_string() != nullptr) return register_point(common, key, use);
+    const toml::table* t = inline_table(common, key);
+    if (t == nullptr) return std::nullopt;
+    TableReader r(*t, "common." + std::string(key), diag_);
+    r.expect({"point", "rpm_factor"});
+    if (r.node("point") == nullptr) r.missing("point");
+    const auto index = register_point(r, "point", use);
+    if (const auto text = r.string("rpm_factor", false)) {
+      std::string why;
+      if (auto f = parse_rpm_factor(*text, profile_.options, why)) {
+        factor = std::move(*f);
+      } else if (bad_option_) {
+        // An option left out for its own error was reported already.
+        return std::nullopt;
+      } else {
+        diag_.error(r.node("rpm_factor"), r.qualified("rpm_factor"), "'" + *text + "' " + why);
+        return std::nullopt;
+      }
+    }
+    return index;
+  }
+
+  // speed_rpm = "speed_actual": a point of a register table; written (the setpoint), a holding
+  // point of one or two registers (a two-register one goes with FC 16).
+  std::optional<std::size_t> register_point(TableReader& r, std::string_view key, Use use) {
+    const auto index = point_at(r, key, false, use);
     if (index && profile_.points[*index].type == ValueType::bit) {
       diag_.error(r.node(key), r.qualified(key), "must name a register point, not a bit");
       return std::nullopt;
@@ -348,34 +448,169 @@ class Parser {
     const toml::table* t = inline_table(common, key);
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common." + std::string(key), diag_);
-    r.expect({"point", "bit"});
-    const auto index = point_at(r, "point", true, false);
+    r.expect({"point", "bit", "any_bit"});
+    const auto index = point_at(r, "point", true, Use::read);
     const ProfilePoint* p = index ? &profile_.points[*index] : nullptr;
-    const bool is_bit = p != nullptr && p->type == ValueType::bit;
-    const auto bit = r.integer("bit", 0, 15, p != nullptr && !is_bit);
-    if (p == nullptr || (!is_bit && !bit)) return std::nullopt;
-    if (is_bit && bit) {
-      diag_.error(r.node("bit"), r.qualified("bit"),
-                  "a bit point has no bits but its own: omit bit");
+    if (p == nullptr) {
+      r.node("bit");
+      r.node("any_bit");
       return std::nullopt;
     }
-    if (!is_bit && p->width() != 1) {
+    if (p->type == ValueType::bit) {
+      for (const char* k : {"bit", "any_bit"}) {
+        if (r.node(k) != nullptr) {
+          diag_.error(r.node(k), r.qualified(k),
+                      "a bit point has no bits but its own: omit " + std::string(k));
+          return std::nullopt;
+        }
+      }
+      return BitBinding{*index, {0}};
+    }
+    if (p->width() != 1) {
+      r.node("bit");
+      r.node("any_bit");
       diag_.error(r.node("point"), r.qualified("point"),
                   "'" + p->name + "' must be a one-register point (u16, s16) or a bit point");
       return std::nullopt;
     }
-    return BitBinding{*index, static_cast<std::uint8_t>(bit.value_or(0))};
+    auto bits = bits_of(r, *p);
+    if (!bits) return std::nullopt;
+    return BitBinding{*index, std::move(*bits)};
+  }
+
+  // bit = N or any_bit = [N, M, ...]: bits of a one-register point's value (a masked point's
+  // value is its bits shifted down, so a bit must be one of the mask's).
+  std::optional<std::vector<std::uint8_t>> bits_of(TableReader& r, const ProfilePoint& p) {
+    const toml::node* one = r.node("bit");
+    const toml::node* any = r.node("any_bit");
+    if (one != nullptr && any != nullptr) {
+      diag_.error(any, r.qualified("any_bit"), "bit or any_bit, not both");
+      return std::nullopt;
+    }
+    std::vector<std::pair<const toml::node*, std::int64_t>> listed;
+    if (any == nullptr) {
+      const auto bit = r.integer("bit", 0, 15, true);
+      if (!bit) return std::nullopt;
+      listed.emplace_back(one, *bit);
+    } else {
+      const auto* array = any->as_array();
+      if (array == nullptr || array->empty() || array->size() > 16) {
+        diag_.error(any, r.qualified("any_bit"),
+                    "must be a list of 1..16 bit numbers 0..15, such as [0, 1]");
+        return std::nullopt;
+      }
+      for (const toml::node& n : *array) {
+        const auto* i = n.as_integer();
+        if (i == nullptr || i->get() < 0 || i->get() > 15) {
+          diag_.error(&n, r.qualified("any_bit"), "bits are numbers 0..15 of a register");
+          return std::nullopt;
+        }
+        listed.emplace_back(&n, i->get());
+      }
+    }
+    const std::uint16_t value_bits = masked(p, 0xFFFF);
+    std::vector<std::uint8_t> bits;
+    for (const auto& [n, bit] : listed) {
+      const std::string key = any != nullptr ? "any_bit" : "bit";
+      if (std::find(bits.begin(), bits.end(), bit) != bits.end()) {
+        diag_.error(n, r.qualified(key), "bit " + std::to_string(bit) + " is listed twice");
+        return std::nullopt;
+      }
+      if (((value_bits >> bit) & 1u) == 0) {
+        diag_.error(n, r.qualified(key),
+                    "bit " + std::to_string(bit) + " is not a bit of '" + p.name + "' (its mask " +
+                        hex(*p.mask, 4) + " gives it the bits of " + hex(value_bits, 4) + ")");
+        return std::nullopt;
+      }
+      bits.push_back(static_cast<std::uint8_t>(bit));
+    }
+    return bits;
+  }
+
+  // A coil is written ON or OFF (FC 05, Application Protocol 6.5): a command's value is 0 or 1.
+  bool command_value_fits(const toml::node* at, const std::string& key, std::size_t point,
+                          std::int64_t value) {
+    const ProfilePoint& p = profile_.points[point];
+    if (p.table != Table::coil || value <= 1) return true;
+    diag_.error(
+        at, key,
+        "'" + p.name + "' is a coil: it is written 0 or 1 (got " + std::to_string(value) + ")");
+    return false;
   }
 
   std::optional<ValueBinding> value_binding(TableReader& common, std::string_view key) {
     const toml::table* t = inline_table(common, key);
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common." + std::string(key), diag_);
-    r.expect({"point", "value"});
-    const auto index = point_at(r, "point", true, true);
+    r.expect({"point", "value", "sequence"});
+    const toml::node* seq = r.node("sequence");
+    // A sequence whose items are all tables names its points itself: `point` is then optional.
+    const auto* items = seq != nullptr ? seq->as_array() : nullptr;
+    const bool own_points =
+        items != nullptr && !items->empty() &&
+        std::all_of(items->begin(), items->end(), [](const toml::node& n) { return n.is_table(); });
+    const auto index = point_at(r, "point", !own_points, Use::command);
+    if (seq != nullptr && r.node("value") != nullptr) {
+      diag_.error(seq, r.qualified("sequence"), "value or sequence, not both");
+      return std::nullopt;
+    }
+    if (seq != nullptr) return sequence_binding(r, *seq, index);
     const auto value = r.integer("value", 0, 65535, true);
     if (!index || !value) return std::nullopt;
-    return ValueBinding{*index, static_cast<std::uint16_t>(*value)};
+    if (!command_value_fits(r.node("value"), r.qualified("value"), *index, *value)) {
+      return std::nullopt;
+    }
+    const auto v = static_cast<std::uint16_t>(*value);
+    return ValueBinding{*index, v, {v}, {*index}};
+  }
+
+  // sequence = [0x047E, 0x047F], written to the binding's `point`, or items that name their own:
+  // [{ point = "direction_coil", value = 1 }, { point = "run_coil", value = 1 }] (the two forms
+  // may mix where the binding has a point). Each item's point is one a command can be written to.
+  std::optional<ValueBinding> sequence_binding(TableReader& r, const toml::node& seq,
+                                               std::optional<std::size_t> point) {
+    const std::string usage = "must be 1.." + std::to_string(kMaxSequence) +
+                              " values 0..65535 written in order, such as [0x047E, 0x047F], or "
+                              "tables such as { point = \"run_coil\", value = 1 }";
+    const auto* a = seq.as_array();
+    if (a == nullptr || a->empty() || a->size() > kMaxSequence) {
+      diag_.error(&seq, r.qualified("sequence"), usage);
+      return std::nullopt;
+    }
+    ValueBinding b;
+    bool ok = true;
+    for (const toml::node& item : *a) {
+      std::optional<std::size_t> at = point;
+      std::optional<std::int64_t> value;
+      if (const auto* t = item.as_table()) {
+        TableReader ir(*t, r.qualified("sequence"), diag_);
+        ir.expect({"point", "value"});
+        at = point_at(ir, "point", true, Use::command);
+        value = ir.integer("value", 0, 65535, true);
+        if (at && value &&
+            !command_value_fits(ir.node("value"), ir.qualified("value"), *at, *value)) {
+          ok = false;
+        }
+      } else if (const auto* i = item.as_integer();
+                 i != nullptr && i->get() >= 0 && i->get() <= 65535) {
+        value = i->get();
+        // Without the binding's point (missing or wrong: said already), the item has none.
+        if (at && !command_value_fits(&item, r.qualified("sequence"), *at, *value)) ok = false;
+      } else {
+        diag_.error(&item, r.qualified("sequence"), usage);
+        return std::nullopt;
+      }
+      if (!at || !value) {
+        ok = false;
+        continue;
+      }
+      b.sequence.push_back(static_cast<std::uint16_t>(*value));
+      b.points.push_back(*at);
+    }
+    if (!ok) return std::nullopt;
+    b.point = b.points.back();
+    b.value = b.sequence.back();
+    return b;
   }
 
   std::optional<Fault> fault_label(TableReader& r, const toml::node& n, std::string_view key) {
@@ -394,50 +629,117 @@ class Parser {
     return fault;
   }
 
+  struct Labelled {
+    const toml::node* at;
+    std::int64_t key;
+    Fault fault;
+  };
+  // fault_code.map or .bits: `KEY = "label"` pairs, keys decimal or "0x..", 0..`most` (`what`
+  // says what a key is); nothing when any is wrong.
+  std::optional<std::vector<Labelled>> labelled(TableReader& r, std::string_view name,
+                                                std::int64_t most, const std::string& what) {
+    const toml::node* m = r.node(name);
+    const auto* map = m->as_table();
+    if (map == nullptr) {
+      diag_.error(m, r.qualified(name), "must be a table of " + what + " = \"label\"");
+      return std::nullopt;
+    }
+    std::vector<Labelled> out;
+    bool ok = true;
+    for (const auto& [k, v] : *map) {
+      const std::string key(k.str());
+      std::int64_t value = -1;
+      try {
+        std::size_t used = 0;
+        value = std::stoll(key, &used, 0);
+        if (used != key.size()) value = -1;
+      } catch (const std::exception&) {
+        value = -1;
+      }
+      if (value < 0 || value > most) {
+        diag_.error(&v, r.qualified(name), "key '" + key + "' must be " + what);
+        ok = false;
+        continue;
+      }
+      if (const auto f = fault_label(r, v, std::string(name) + "." + key)) {
+        out.push_back({&v, value, *f});
+      } else {
+        ok = false;
+      }
+    }
+    if (!ok) return std::nullopt;
+    return out;
+  }
+
+  // fault_code.bits: the point is a bit field of trips, each bit named; a bit set is a trip, so
+  // no bit is "none", and a masked point's bits are those of its mask.
+  bool fault_bits(TableReader& r, FaultBinding& b) {
+    const ProfilePoint& p = profile_.points[b.point];
+    if (!is_integer_of_two(p.type)) {
+      diag_.error(r.node("point"), r.qualified("point"),
+                  "'" + p.name + "' is of type " +
+                      std::string(kValueTypeNames[static_cast<std::size_t>(p.type)]) +
+                      ": a bit field is a point of type u16, s16, u32 or s32");
+      r.node("bits");
+      return false;
+    }
+    const int width = 16 * p.width();
+    const auto named =
+        labelled(r, "bits", width - 1,
+                 "a bit number 0.." + std::to_string(width - 1) + " of '" + p.name + "'");
+    if (!named) return false;
+    if (named->empty()) {
+      diag_.error(r.node("bits"), r.qualified("bits"), "must name at least one bit");
+      return false;
+    }
+    const std::uint16_t value_bits = masked(p, 0xFFFF);
+    for (const auto& [at, bit, fault] : *named) {
+      if (fault == Fault::none) {
+        diag_.error(at, r.qualified("bits." + std::to_string(bit)),
+                    "a bit set is a trip: none is what no bit set means");
+        return false;
+      }
+      if (p.mask && ((value_bits >> bit) & 1u) == 0) {
+        diag_.error(at, r.qualified("bits"),
+                    "bit " + std::to_string(bit) + " is not a bit of '" + p.name + "' (its mask " +
+                        hex(*p.mask, 4) + " gives it the bits of " + hex(value_bits, 4) + ")");
+        return false;
+      }
+      b.bits[static_cast<std::uint8_t>(bit)] = fault;
+    }
+    return true;
+  }
+
   std::optional<FaultBinding> fault_binding(TableReader& common) {
     const toml::table* t = inline_table(common, "fault_code");
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common.fault_code", diag_);
-    r.expect({"point", "map", "other"});
+    r.expect({"point", "map", "bits", "other"});
     FaultBinding b;
-    const auto index = register_point(r, "point", false);
+    const auto index = register_point(r, "point", Use::read);
     if (!index) {
       if (r.node("point") == nullptr) r.missing("point");
       r.node("map");
+      r.node("bits");
       r.node("other");
       return std::nullopt;
     }
     b.point = *index;
     bool ok = true;
-    if (const toml::node* m = r.node("map")) {
-      const auto* map = m->as_table();
-      if (map == nullptr) {
-        diag_.error(m, "common.fault_code.map", "must be a table of value = \"label\"");
-        ok = false;
-      } else {
-        for (const auto& [k, v] : *map) {
-          const std::string key(k.str());
-          std::int64_t value = -1;
-          try {
-            std::size_t used = 0;
-            value = std::stoll(key, &used, 0);
-            if (used != key.size()) value = -1;
-          } catch (const std::exception&) {
-            value = -1;
-          }
-          if (value < 0 || value > 0xFFFFFFFFLL) {
-            diag_.error(&v, "common.fault_code.map",
-                        "key '" + key + "' must be a native fault value (0, 17, 0x11, ...)");
-            ok = false;
-            continue;
-          }
-          if (const auto f = fault_label(r, v, "map." + key)) {
-            b.map[static_cast<std::uint32_t>(value)] = *f;
-          } else {
-            ok = false;
-          }
-        }
+    if (r.node("map") != nullptr && r.node("bits") != nullptr) {
+      diag_.error(r.node("bits"), r.qualified("bits"),
+                  "map (the point's values) or bits (its bits), not both");
+      ok = false;
+    } else if (r.node("bits") != nullptr) {
+      ok = fault_bits(r, b);
+    } else if (r.node("map") != nullptr) {
+      const auto named =
+          labelled(r, "map", 0xFFFFFFFFLL, "a native fault value (0, 17, 0x11, ...)");
+      if (named) {
+        for (const auto& [at, value, fault] : *named)
+          b.map[static_cast<std::uint32_t>(value)] = fault;
       }
+      ok = named.has_value();
     }
     if (const toml::node* o = r.node("other")) {
       if (const auto f = fault_label(r, *o, "other"))
@@ -454,10 +756,11 @@ class Parser {
     if (t == nullptr) return;
     TableReader r(*t, "common", diag_);
     r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward",
-              "run_reverse", "reset_fault"});
+              "run_reverse", "reset_fault", "unbound"});
+    read_unbound(r);
     CommonBindings& c = profile_.common;
-    c.speed_rpm = register_point(r, "speed_rpm", false);
-    c.setpoint_rpm = register_point(r, "setpoint_rpm", true);
+    c.speed_rpm = rpm_point(r, "speed_rpm", Use::read, c.speed_factor);
+    c.setpoint_rpm = rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor);
     c.running = bit_binding(r, "running");
     c.fault = bit_binding(r, "fault");
     c.fault_code = fault_binding(r);
@@ -474,6 +777,33 @@ class Parser {
     refuse_own_intervals();
   }
 
+  // unbound = { setpoint_rpm = "why" }: bindings left out on purpose, each with its reason.
+  void read_unbound(TableReader& r) {
+    const toml::node* n = r.node("unbound");
+    if (n == nullptr) return;
+    const auto* t = n->as_table();
+    if (t == nullptr) {
+      diag_.error(n, "common.unbound", "must be a table of binding = \"why it is left out\"");
+      return;
+    }
+    static constexpr std::array<std::string_view, 7> kChecked = {
+        "speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward"};
+    for (const auto& [k, v] : *t) {
+      const std::string key(k.str());
+      const auto* why = v.as_string();
+      if (std::find(kChecked.begin(), kChecked.end(), key) == kChecked.end()) {
+        diag_.error(&v, "common.unbound." + key,
+                    "not a binding the check asks for (" + TableReader::names_text(kChecked) + ")");
+      } else if (why == nullptr || why->get().empty()) {
+        diag_.error(&v, "common.unbound." + key, "must say why it is left out");
+      } else if (r.node(key) != nullptr) {
+        diag_.error(&v, "common.unbound." + key, "is bound: remove one of them");
+      } else {
+        profile_.unbound.emplace(key, why->get());
+      }
+    }
+  }
+
   // The common block is the drive's state as of its data age: every point bound to it is polled
   // at the device's poll_ms, so a point of its own interval there is an error.
   void refuse_own_intervals() {
@@ -487,7 +817,8 @@ class Parser {
     for (const auto& [v, key] :
          {std::pair{c.stop, "stop"}, std::pair{c.run_forward, "run_forward"},
           std::pair{c.run_reverse, "run_reverse"}, std::pair{c.reset_fault, "reset_fault"}}) {
-      if (v) bound.emplace_back(v->point, key);
+      if (!v) continue;
+      for (const std::size_t point : v->points) bound.emplace_back(point, key);
     }
     std::vector<bool> told(profile_.points.size(), false);
     for (const auto& [index, key] : bound) {
@@ -503,6 +834,7 @@ class Parser {
   Diagnostics diag_;
   Profile profile_;
   bool had_bad_point_ = false;
+  bool bad_option_ = false;  // an [options.NAME] left out for its error
 };
 
 }  // namespace
@@ -514,6 +846,13 @@ bool valid_profile_name(std::string_view name) {
 std::optional<std::size_t> Profile::find(std::string_view point) const {
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (points[i].name == point) return i;
+  }
+  return std::nullopt;
+}
+
+std::optional<std::size_t> Profile::find_option(std::string_view option) const {
+  for (std::size_t i = 0; i < options.size(); ++i) {
+    if (options[i].name == option) return i;
   }
   return std::nullopt;
 }

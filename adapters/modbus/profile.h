@@ -105,25 +105,74 @@ struct ProfilePoint {
   std::vector<Label> labels;
   bool bit_labels = false;
   std::uint32_t line = 0;  // where the point is in the file, for messages
+  // A u16 register point that is some of its register's bits: value = (raw & mask) >> the
+  // mask's lowest set bit. Read-only; points whose masks do not overlap share a register.
+  std::optional<std::uint16_t> mask;
 
   [[nodiscard]] std::uint16_t width() const { return width_of(type, registers); }
   [[nodiscard]] bool writable() const { return table == Table::holding || table == Table::coil; }
 };
 
-// A bit of a register point: running = { point = "status_word", bit = 2 }.
+// Bits of a register point's value, any of them set meaning true:
+// running = { point = "status_word", bit = 2 } or { ..., any_bit = [0, 1] }. A bit point's
+// binding has the one bit 0 (the point's value).
 struct BitBinding {
-  std::size_t point = 0;  // index into Profile::points
-  std::uint8_t bit = 0;   // 0..15
+  std::size_t point = 0;           // index into Profile::points
+  std::vector<std::uint8_t> bits;  // 0..15, as the profile lists them, at least one
+
+  // The bits as a mask of the point's value.
+  [[nodiscard]] std::uint16_t mask() const {
+    std::uint16_t m = 0;
+    for (const std::uint8_t b : bits) m = static_cast<std::uint16_t>(m | (1u << b));
+    return m;
+  }
 };
-// A value written to a point: stop = { point = "control_word", value = 0x0006 }.
+// A value written to a point: stop = { point = "control_word", value = 0x0006 }; to a coil
+// (FC 05), 0 or 1. Or values written in order, each confirmed before the next: { point =
+// "control_word", sequence = [0x047E, 0x047F] } (1..kMaxSequence), where an item may be a table
+// naming its own point: { sequence = [{ point = "direction_coil", value = 1 }, { point =
+// "run_coil", value = 1 }] }. `point` and `value` are the last step's: the command the drive ends
+// in.
+inline constexpr std::size_t kMaxSequence = 4;
 struct ValueBinding {
   std::size_t point = 0;
   std::uint16_t value = 0;
+  std::vector<std::uint16_t> sequence;  // what is written, in order; {value} for a single value
+  std::vector<std::size_t> points;      // where each of `sequence` is written
 };
-// A point's native values named as unified faults; values not in the map are `other`.
+
+// A device option the profile declares ([options.NAME]) and a device sets in [device.options]:
+// a number within min..max (profile_options.h). `value` is the default until the device's
+// options are applied (apply_options, profile_options.h).
+struct ProfileOption {
+  std::string name;
+  double value = 0;
+  double default_value = 0;
+  double min = 0;
+  double max = 0;
+  std::string unit;
+  std::string description;
+  std::uint32_t line = 0;
+};
+
+// rpm = the point's engineering value x factor, the factor a product and quotient of numbers and
+// options, left to right ("120 / motor_poles"). No terms: 1 (the point is in rpm).
+struct RpmFactor {
+  struct Term {
+    bool divide = false;
+    double number = 1;                  // when no option
+    std::optional<std::size_t> option;  // index into Profile::options
+  };
+  std::vector<Term> terms;
+  std::string text;  // as the profile wrote it
+};
+// A point's native values named as unified faults; values not in the map are `other`. Or, for a
+// bit field (`bits`), its bits named: the lowest set bit that is named wins, a value with none of
+// them set but some bit set is `other`, 0 is none.
 struct FaultBinding {
   std::size_t point = 0;
   std::map<std::uint32_t, Fault> map;
+  std::map<std::uint8_t, Fault> bits;  // not empty: the point is a bit field
   Fault other = Fault::other;
 };
 
@@ -132,6 +181,8 @@ struct FaultBinding {
 struct CommonBindings {
   std::optional<std::size_t> speed_rpm;     // actual speed, scaled to rpm
   std::optional<std::size_t> setpoint_rpm;  // the speed reference, written in rpm
+  RpmFactor speed_factor;                   // speed_rpm's rpm_factor
+  RpmFactor setpoint_factor;                // setpoint_rpm's rpm_factor
   std::optional<BitBinding> running;
   std::optional<BitBinding> fault;
   std::optional<FaultBinding> fault_code;
@@ -165,6 +216,16 @@ struct ProfileIdentification {
   std::string product_code;  // object 0x01 ProductCode; a trailing '*' matches any rest
 };
 
+// A frame the device's manual prints, and what the profile must make of it ([[example]],
+// profile_examples.h checks it).
+struct ProfileExample {
+  std::string request;  // hex as printed, with address and CRC (RTU) or as ASCII text
+  std::string reply;    // optional for writes
+  std::vector<std::pair<std::string, double>> expect;  // point name, engineering value
+  std::string note;
+  std::uint32_t line = 0;
+};
+
 struct Profile {
   std::string name;
   std::string description;
@@ -172,11 +233,19 @@ struct Profile {
   std::optional<ProfileIdentification> identification;
   LineSpec line;
   ModbusSpec modbus;
+  std::vector<ProfileOption> options;
   std::vector<ProfilePoint> points;
   CommonBindings common;
+  std::vector<ProfileExample> examples;  // the manual's own frames ([[example]])
+  // Common bindings the profile leaves out on purpose, and why ([common] unbound = { setpoint_rpm
+  // = "a % of the range between minimum and maximum frequency" }): `drivegate profile check` does
+  // not warn of them.
+  std::map<std::string, std::string, std::less<>> unbound;
 
   // The index of the point called `name`, if any.
   [[nodiscard]] std::optional<std::size_t> find(std::string_view point) const;
+  // The index of the option called `name`, if any.
+  [[nodiscard]] std::optional<std::size_t> find_option(std::string_view option) const;
 };
 
 // The profile in `text`, or every error found in it, each "SOURCE:LINE: key: what is wrong" as

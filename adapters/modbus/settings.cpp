@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string_view>
 
+#include "profile_options.h"
+
 namespace drivegate::modbus_device {
 namespace {
 
@@ -107,6 +109,8 @@ std::optional<Settings> parse_settings(const Options& options, std::string& erro
     return std::nullopt;
   }
   s.profile = std::get<Profile>(std::move(parsed));
+  // The profile's own options ([options.NAME]), as the device sets them.
+  if (!apply_options(s.profile, options, error)) return std::nullopt;
   s.files_read = profile_read(*text);
   s.profile_source = std::move(text->source);
   s.attempts = static_cast<std::uint8_t>(options.integer("attempts"));

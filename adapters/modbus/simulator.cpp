@@ -1,9 +1,12 @@
 #include "simulator.h"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <sstream>
 
 #include "drivegate/sim_text.h"
+#include "profile_options.h"
 #include "values.h"
 
 namespace drivegate::modbus_device {
@@ -222,26 +225,40 @@ Bytes ModbusSimulator::write(ByteView pdu) {
 
 void ModbusSimulator::store(Table table, std::uint16_t address, std::uint16_t word) {
   memory_[{table, address}] = word;
-  const CommonBindings& c = profile_.common;
-  const ValueBinding* control = c.stop ? &*c.stop : c.run_forward ? &*c.run_forward : nullptr;
-  if (control != nullptr) {
-    const ProfilePoint& p = profile_.points[control->point];
-    if (table == p.table && address == p.address) command(word);
-  }
+  command(table, address, word);
   drive();
 }
 
-// The control word as the profile's drive takes it: its stop, run and reset values.
-void ModbusSimulator::command(std::uint16_t word) {
+// A write of a command's last value to its last point (a control word's register or a coil) is
+// that command to the drive: a reset, a stop, a run (not while tripped). A command written as a
+// sequence is its last value: the values before it change nothing here unless one is another
+// command's (ABB's run 0x047E, 0x047F passes through its stop 0x047E); a sequence over several
+// points is that command only while each of its other points holds the last value the sequence
+// gave it (direction coil 1 then run coil 1 is run reverse, not run forward). A reset value that
+// is also the stop value does both, as on a drive whose reset word has the run bit clear.
+void ModbusSimulator::command(Table table, std::uint16_t address, std::uint16_t word) {
   const CommonBindings& c = profile_.common;
-  if (c.reset_fault && word == c.reset_fault->value) {
-    fault_ = 0;
-  } else if (c.stop && word == c.stop->value) {
+  const auto is = [&](const std::optional<ValueBinding>& b) {
+    if (!b) return false;
+    const ProfilePoint& p = profile_.points[b->point];
+    if (p.table != table || p.address != address || b->value != word) return false;
+    for (std::size_t i = 0; i < b->points.size(); ++i) {
+      const std::size_t other = b->points[i];
+      const bool last = std::find(b->points.begin() + static_cast<long>(i) + 1, b->points.end(),
+                                  other) == b->points.end();
+      if (other == b->point || !last) continue;
+      const ProfilePoint& o = profile_.points[other];
+      if (memory_[{o.table, o.address}] != b->sequence[i]) return false;
+    }
+    return true;
+  };
+  if (is(c.reset_fault)) fault_ = 0;
+  if (is(c.stop)) {
     running_ = false;
-  } else if (c.run_forward && word == c.run_forward->value && fault_ == 0) {
+  } else if (is(c.run_forward) && fault_ == 0) {
     running_ = true;
     reverse_ = false;
-  } else if (c.run_reverse && word == c.run_reverse->value && fault_ == 0) {
+  } else if (is(c.run_reverse) && fault_ == 0) {
     running_ = true;
     reverse_ = true;
   }
@@ -264,7 +281,10 @@ void ModbusSimulator::put(const ProfilePoint& p,
                           const std::optional<std::vector<std::uint16_t>>& words) {
   if (!words) return;
   for (std::uint16_t w = 0; w < p.width(); ++w) {
-    memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}] = (*words)[w];
+    auto& word = memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}];
+    // A masked point is its bits of the register; the other bits are other points'.
+    const std::uint16_t keep = p.mask ? static_cast<std::uint16_t>(~*p.mask) : 0;
+    word = static_cast<std::uint16_t>((word & keep) | (*words)[w]);
   }
 }
 
@@ -277,26 +297,40 @@ void ModbusSimulator::set_point(std::size_t point, double engineering) {
 // which is the reference while running (in the reverse direction negative) and 0 otherwise.
 void ModbusSimulator::drive() {
   const CommonBindings& c = profile_.common;
-  const auto set_bit = [&](const std::optional<BitBinding>& b, bool on) {
+  // The binding's bits cleared, and bit `nth` of its list set when `on` (the last listed where
+  // the list is shorter): running = { any_bit = [0, 1] } shows forward in bit 0, reverse in 1.
+  const auto set_bit = [&](const std::optional<BitBinding>& b, bool on, std::size_t nth = 0) {
     if (!b) return;
     const ProfilePoint& p = profile_.points[b->point];
     auto& word = memory_[{p.table, p.address}];
     if (p.type == ValueType::bit) {
       word = on ? 1 : 0;
-    } else {
-      const auto mask = static_cast<std::uint16_t>(1u << b->bit);
-      word = static_cast<std::uint16_t>(on ? (word | mask) : (word & ~mask));
+      return;
     }
+    const int shift = p.mask ? std::countr_zero(*p.mask) : 0;
+    word = static_cast<std::uint16_t>(word & ~(b->mask() << shift));
+    const std::uint8_t bit = b->bits[std::min(nth, b->bits.size() - 1)];
+    if (on) word = static_cast<std::uint16_t>(word | 1u << (bit + shift));
   };
   if (fault_ != 0) running_ = false;  // a trip stops the output
-  set_bit(c.running, running_);
+  set_bit(c.running, running_, reverse_ ? 1 : 0);
   set_bit(c.fault, fault_ != 0);
   if (c.fault_code)
     set_point(c.fault_code->point, fault_ * profile_.points[c.fault_code->point].scale);
   if (c.speed_rpm) {
     double speed = 0;
-    if (running_ && c.setpoint_rpm) speed = point_value(*c.setpoint_rpm).value_or(0);
-    set_point(*c.speed_rpm, reverse_ ? -speed : speed);
+    if (running_ && c.setpoint_rpm) {
+      // The same rpm through both points' factors: reference x its factor / the speed's.
+      speed = point_value(*c.setpoint_rpm).value_or(0) *
+              factor_value(c.setpoint_factor, profile_.options) /
+              factor_value(c.speed_factor, profile_.options);
+      const ProfilePoint& p = profile_.points[*c.speed_rpm];
+      if (p.type != ValueType::f32) speed = std::round(speed / p.scale) * p.scale;
+    }
+    // An unsigned speed cannot say reverse: it shows the magnitude, as such drives do.
+    const ValueType t = profile_.points[*c.speed_rpm].type;
+    const bool is_signed = t != ValueType::u16 && t != ValueType::u32;
+    set_point(*c.speed_rpm, reverse_ && is_signed ? -speed : speed);
   }
 }
 

@@ -52,7 +52,7 @@ class ModbusSimulator final : public Simulator {
   // Whether every address of [start, start + count) of `table` is one the slave has.
   [[nodiscard]] bool holds(Table table, std::uint32_t start, std::uint32_t count) const;
   void store(Table table, std::uint16_t address, std::uint16_t word);
-  void command(std::uint16_t control_word);
+  void command(Table table, std::uint16_t address, std::uint16_t word);
   void drive();  // the status word, the speed and the fault code from the drive's state
   void set_point(std::size_t point, double engineering);
   // A point's registers as they are, and put in (nothing when `words` is none).

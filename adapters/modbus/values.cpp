@@ -55,12 +55,17 @@ bool printable(unsigned char c) {
 
 }  // namespace
 
+std::uint16_t masked(const ProfilePoint& p, std::uint16_t word) {
+  if (!p.mask) return word;
+  return static_cast<std::uint16_t>((word & *p.mask) >> std::countr_zero(*p.mask));
+}
+
 double raw_of(const ProfilePoint& p, std::span<const std::uint16_t> words) {
   switch (p.type) {
     case ValueType::bit:
       return words[0] != 0 ? 1.0 : 0.0;
     case ValueType::u16:
-      return words[0];
+      return masked(p, words[0]);
     case ValueType::s16:
       return static_cast<std::int16_t>(words[0]);
     case ValueType::u32:
@@ -129,7 +134,7 @@ std::optional<std::vector<std::uint16_t>> words_for(const ProfilePoint& p, doubl
       hi = 1;
       break;
     case ValueType::u16:
-      hi = 65535;
+      hi = masked(p, 0xFFFF);
       break;
     case ValueType::s16:
       lo = -32768;
@@ -155,6 +160,11 @@ std::optional<std::vector<std::uint16_t>> words_for(const ProfilePoint& p, doubl
       break;
   }
   if (raw < lo || raw > hi) return std::nullopt;
+  if (p.mask) {
+    const auto word = static_cast<std::uint32_t>(raw) << std::countr_zero(*p.mask);
+    if ((word & ~std::uint32_t{*p.mask}) != 0) return std::nullopt;  // a bit outside the mask
+    return std::vector<std::uint16_t>{static_cast<std::uint16_t>(word)};
+  }
   const auto whole = static_cast<std::int64_t>(raw);
   if (p.width() == 1) {
     return std::vector<std::uint16_t>{static_cast<std::uint16_t>(whole & 0xFFFF)};

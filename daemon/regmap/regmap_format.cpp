@@ -1,6 +1,7 @@
 #include "regmap_format.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <sstream>
 
@@ -106,6 +107,33 @@ std::vector<const MappedPoint*> served(const DeviceRegisters& dev) {
   return dev.forwards ? std::vector<const MappedPoint*>{} : in_reference_order(dev.map);
 }
 
+// A device option's value as JSON: a number, true / false, a string, a list of strings.
+std::string option_json(const OptionValue& v) {
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
+  if (const auto* d = std::get_if<double>(&v)) {
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, *d);
+    return std::string(buf, r.ptr);
+  }
+  if (const auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+  if (const auto* s = std::get_if<std::string>(&v)) return json_string(*s);
+  std::string out = "[";
+  for (const auto& item : std::get<std::vector<std::string>>(v)) {
+    out += (out.size() > 1 ? ", " : "") + json_string(item);
+  }
+  return out + "]";
+}
+
+// The options the device runs with, its adapter's defaults filled in (a profile's own options
+// among them): {"profile": "abb-acs580", "motor_poles": 2, ...}.
+std::string options_json(const DeviceConfig& device) {
+  std::string out = "{";
+  for (const auto& [name, value] : device.options.all()) {
+    out += (out.size() > 1 ? ", " : "") + json_string(name) + ": " + option_json(value);
+  }
+  return out + "}";
+}
+
 std::string to_json(const std::vector<DeviceRegisters>& devices,
                     const std::vector<ServedOn>& listeners) {
   const int digits = reference_digits(devices);
@@ -116,7 +144,8 @@ std::string to_json(const std::vector<DeviceRegisters>& devices,
     out << (d ? ",\n" : "\n") << "  {\"unit_id\": " << int{dev.device->unit_id}
         << ", \"name\": " << json_string(dev.device->name)
         << ", \"adapter\": " << json_string(dev.device->adapter)
-        << (dev.forwards ? ", \"passthrough\": true" : "") << ", \"points\": [";
+        << (dev.forwards ? ", \"passthrough\": true" : "")
+        << ", \"options\": " << options_json(*dev.device) << ", \"points\": [";
     const auto points = served(dev);
     for (std::size_t i = 0; i < points.size(); ++i) {
       const auto& p = *points[i];

@@ -111,6 +111,74 @@ TEST(Cli, TheInstalledExampleNamesEveryAdapterAndItsModbusDeviceIsValid) {
   EXPECT_THAT(r.out, HasSubstr("OK (6 devices on 6 buses"));
 }
 
+// A profile's own options ([options.NAME]) are device options: checked as the configuration's
+// own, naming the file and line, before anything runs.
+constexpr const char* kPolesProfile = R"toml([profile]
+name = "poles"
+source = "a test"
+[options.motor_poles]
+default = 4
+min = 2
+max = 48
+description = "motor poles"
+[[point]]
+name = "reference"
+table = "holding"
+address = 1   # a test's
+type = "u16"
+scale = 0.01
+[common]
+setpoint_rpm = { point = "reference", rpm_factor = "120 / motor_poles" }
+)toml";
+
+TEST(Cli, AProfilesOptionsAreCheckedAsTheConfigurationsOwn) {
+  TempDir dir;
+  std::ofstream(dir / "poles.toml") << kPolesProfile;
+  const auto config = [&](const std::string& option) {
+    std::ofstream(dir / "gw.toml") << "[[bus]]\nname = \"line\"\nport = \"/dev/null\"\n"
+                                   << "[[device]]\nname = \"fan\"\nbus = \"line\"\n"
+                                   << "adapter = \"modbus\"\nunit_id = 1\n[device.options]\n"
+                                   << "profile = \"" << (dir / "poles.toml").string() << "\"\n"
+                                   << option << "\n";
+    return run({drivegated(), "--check-config", (dir / "gw.toml").string(), "--plugin-dir",
+                plugin_dir().string()});
+  };
+  auto r = config("motor_poles = 2");
+  EXPECT_EQ(r.status, 0) << r.out;
+  r = config("motor_poles = 60");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("gw.toml:11: device[0].options.motor_poles"));
+  EXPECT_THAT(r.out, HasSubstr("2..48"));
+  r = config("motor_poles = \"two\"");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("gw.toml:11: device[0].options.motor_poles"));
+  r = config("poles = 2");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("gw.toml:11: device[0].options.poles"));
+  EXPECT_THAT(r.out, HasSubstr("unknown option"));
+}
+
+TEST(Cli, ProfileCheckExitsZeroOneOrTwo) {
+  TempDir dir;
+  std::ofstream(dir / "poles.toml") << kPolesProfile;
+  auto r = run({drivegate(), "profile", "check", (dir / "poles.toml").string()});
+  EXPECT_EQ(r.status, 0) << r.out;  // warnings only: the common block is mostly unbound
+  EXPECT_THAT(r.out, HasSubstr("warning: "));
+  EXPECT_THAT(r.out, HasSubstr("not bound: speed_rpm, running, fault, fault_code, stop, "
+                               "run_forward"));
+  r = run({drivegate(), "profile", "check", "--strict", (dir / "poles.toml").string()});
+  EXPECT_EQ(r.status, 1) << r.out;
+  std::ofstream(dir / "bad.toml") << "[profile]\nname = \"bad\"\n";
+  r = run({drivegate(), "profile", "check", (dir / "bad.toml").string(),
+           (dir / "poles.toml").string()});
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("bad.toml:1: profile.source: required key is missing"));
+  EXPECT_EQ(run({drivegate(), "profile"}).status, 2);
+  EXPECT_EQ(run({drivegate(), "profile", "lint", "x"}).status, 2);
+  EXPECT_EQ(run({drivegate(), "profile", "check"}).status, 2);
+  EXPECT_EQ(run({drivegate(), "profile", "check", "example-vfd"}).status, 0);  // by name
+}
+
 TEST(Cli, CheckConfigNamesFileLineAndKey) {
   TempDir dir;
   std::string text = kConfig;

@@ -22,6 +22,19 @@ std::vector<DeviceRegisters> one_device(const DeviceConfig& cfg) {
 const std::vector<ServedOn> kListeners = {{"0.0.0.0:502", WordOrder::big},
                                           {"127.0.0.1:1503", WordOrder::little}};
 
+// The options a device runs with, a profile's own among them, each as its JSON type.
+TEST(RegmapFormat, JsonSaysTheDevicesOptions) {
+  DeviceConfig cfg{.name = "fan", .adapter = "modbus", .unit_id = 2};
+  cfg.options.set("profile", std::string("abb-acs580"));
+  cfg.options.set("motor_poles", 2.0);
+  cfg.options.set("attempts", std::int64_t{3});
+  cfg.options.set("passthrough", false);
+  const auto json = format_regmap(one_device(cfg), kListeners, RegmapFormat::json);
+  EXPECT_THAT(json, HasSubstr("\"adapter\": \"modbus\", \"options\": {\"attempts\": 3, "
+                              "\"motor_poles\": 2, \"passthrough\": false, \"profile\": "
+                              "\"abb-acs580\"}, \"points\": ["));
+}
+
 TEST(RegmapFormat, JsonHasEveryFieldOfTheSchema) {
   DeviceConfig cfg{.name = "c1", .adapter = "unicla-edrive", .unit_id = 4};
   const auto json = format_regmap(one_device(cfg), kListeners, RegmapFormat::json);

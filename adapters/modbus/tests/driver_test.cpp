@@ -7,11 +7,14 @@
 #include <gtest/gtest.h>
 
 #include "example_profile.h"
+#include "profile_support.h"
 
 namespace drivegate::modbus_device {
 namespace {
 
 using namespace std::chrono_literals;
+using support::read_pdu;
+using support::words_pdu;
 
 constexpr std::uint8_t kSlave = 7;
 
@@ -19,22 +22,6 @@ using shipped::example;
 
 Bytes frame(std::vector<std::uint8_t> pdu, std::uint8_t address = kSlave) {
   return encode(Framing::rtu, address, pdu);
-}
-
-// A read reply PDU carrying `words`.
-std::vector<std::uint8_t> words_pdu(std::uint8_t function, std::vector<std::uint16_t> words) {
-  std::vector<std::uint8_t> pdu = {function, static_cast<std::uint8_t>(2 * words.size())};
-  for (const std::uint16_t w : words) put_be16(pdu, w);
-  return pdu;
-}
-
-// A read request PDU.
-std::vector<std::uint8_t> read_pdu(std::uint8_t function, std::uint16_t start,
-                                   std::uint16_t count) {
-  std::vector<std::uint8_t> pdu = {function};
-  put_be16(pdu, start);
-  put_be16(pdu, count);
-  return pdu;
 }
 
 class ModbusDriverTest : public ::testing::Test {

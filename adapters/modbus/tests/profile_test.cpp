@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "example_profile.h"
+#include "profile_support.h"
 
 
 namespace drivegate::modbus_device {
@@ -13,22 +14,8 @@ namespace {
 
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
-
-Profile parsed(const std::string& text) {
-  auto r = parse_profile(text, "p.toml");
-  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) {
-    ADD_FAILURE() << ::testing::PrintToString(*errors);
-    return {};
-  }
-  return std::get<Profile>(std::move(r));
-}
-
-std::vector<std::string> errors_of(const std::string& text) {
-  auto r = parse_profile(text, "p.toml");
-  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) return *errors;
-  ADD_FAILURE() << "accepted:\n" << text;
-  return {};
-}
+using support::errors_of;
+using support::parsed;
 
 // The least valid profile, to which each test adds what it is about.
 const std::string kHead =
@@ -67,8 +54,8 @@ TEST(Profile, TheExampleOfTheIssueReadsAsWritten) {
   ASSERT_TRUE(c.running && c.fault && c.fault_code && c.stop && c.run_forward && c.run_reverse &&
               c.reset_fault);
   EXPECT_EQ(c.running->point, *p.find("status_word"));
-  EXPECT_EQ(c.running->bit, 2);
-  EXPECT_EQ(c.fault->bit, 3);
+  EXPECT_THAT(c.running->bits, ElementsAre(2));
+  EXPECT_THAT(c.fault->bits, ElementsAre(3));
   EXPECT_EQ(c.fault_code->point, *p.find("fault_number"));
   EXPECT_EQ(c.fault_code->map, (std::map<std::uint32_t, Fault>{
                                    {0, Fault::none},

@@ -17,6 +17,7 @@
 #include "example_profile.h"
 #include "planner.h"
 #include "profile.h"
+#include "profile_examples.h"
 #include "settings.h"
 #include "simulator.h"
 
@@ -155,6 +156,28 @@ TEST(EatonMMax, ItsSimulatorTakesTheManualsFunction10Example) {
   const std::string state = sim.control("state", TimePoint{});
   EXPECT_NE(state.find("running forward"), std::string::npos) << state;
   EXPECT_NE(state.find("speed_setpoint = 100"), std::string::npos) << state;
+}
+
+// The manual's frames are the profile's [[example]]s: the profile agrees with each
+// (profile_examples.h), and its simulator answers each request with the manual's reply.
+TEST(EatonMMax, ItsExamplesAreTheManualsFramesAndItsSimulatorAnswersThem) {
+  const Profile p = shipped_profile("eaton-m-max");
+  ASSERT_EQ(p.examples.size(), 3u);  // p.140 FC 04, p.141 FC 06 and FC 10
+  EXPECT_TRUE(check_examples(p, "eaton-m-max.toml").empty())
+      << ::testing::PrintToString(check_examples(p, "eaton-m-max.toml"));
+  ModbusSimulator sim(kMmxSlave, shipped_profile("eaton-m-max"));
+  ASSERT_EQ(sim.control("set motor_speed 1495", TimePoint{}).rfind("ok", 0), 0u);
+  ASSERT_EQ(sim.control("set motor_current 0.24", TimePoint{}).rfind("ok", 0), 0u);
+  for (const ProfileExample& e : p.examples) {
+    SCOPED_TRACE(e.request);
+    EXPECT_EQ(sim.on_receive(*example_frame(p, e.request), TimePoint{}),
+              *example_frame(p, e.reply));
+  }
+  // The FC 06 example is the frame the driver sends for run reverse.
+  ModbusDriver d = mmx_driver();
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_reverse), 1, now), WriteStatus::pending);
+  EXPECT_EQ(d.next_exchange(now)->frame, *example_frame(p, p.examples[1].request));
 }
 
 TEST(EatonMMax, ItsDriverReadsTheOutputProcessDataIntoTheCommonBlock) {

@@ -1,0 +1,84 @@
+#include "specialise.h"
+
+#include <charconv>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "settings.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+// One specialised descriptor and everything its pointers point into.
+struct Specialised {
+  Profile profile;
+  std::vector<std::string> defaults;
+  std::vector<std::string> descriptions;
+  std::vector<OptionSpec> options;
+  AdapterDescriptor descriptor{};
+};
+
+std::string number_text(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+}  // namespace
+
+const AdapterDescriptor* specialise(const AdapterDescriptor& base, const Options& options,
+                                    std::string& error) {
+  static std::mutex mutex;
+  // Kept for the process's lifetime: the core holds the pointer as long as the device lives, and
+  // a reload may hand it out again. One per profile text (and where it was read from).
+  static std::map<std::string, std::unique_ptr<Specialised>> made;
+  const std::lock_guard lock(mutex);
+  std::string key = "(plain)";
+  std::optional<Profile> profile;
+  if (!options.has("passthrough") || !options.boolean("passthrough")) {
+    std::string why;
+    const std::string name = options.has("profile") ? options.string("profile") : kDefaultProfile;
+    if (auto text = find_profile(name, why)) {
+      auto parsed = parse_profile(text->text, text->source);
+      if (auto* p = std::get_if<Profile>(&parsed); p != nullptr && !p->options.empty()) {
+        key = profile_read(*text);
+        profile = std::move(*p);
+      }
+    }
+  }
+  if (const auto it = made.find(key); it != made.end()) return &it->second->descriptor;
+  auto s = std::make_unique<Specialised>();
+  s->options.assign(base.options, base.options + base.option_count);
+  if (profile) {
+    s->profile = std::move(*profile);
+    for (const ProfileOption& o : s->profile.options) {
+      s->defaults.push_back(number_text(o.default_value));
+      s->descriptions.push_back(o.description + (o.unit.empty() ? "" : " [" + o.unit + "]") +
+                                " (profile " + s->profile.name + ")");
+    }
+    for (std::size_t i = 0; i < s->profile.options.size(); ++i) {
+      const ProfileOption& o = s->profile.options[i];
+      OptionSpec spec{};
+      spec.name = o.name.c_str();
+      spec.type = OptionType::real;
+      spec.default_value = s->defaults[i].c_str();
+      spec.description = s->descriptions[i].c_str();
+      spec.min = o.min;  // min < max: the profile's parser makes sure (min == max is unbounded)
+      spec.max = o.max;
+      s->options.push_back(spec);
+    }
+  }
+  AdapterDescriptor& a = s->descriptor;
+  a = base;
+  a.options = s->options.data();
+  a.option_count = s->options.size();
+  a.specialise = nullptr;  // already one profile's
+  (void)error;
+  const AdapterDescriptor* out = &a;
+  made.emplace(std::move(key), std::move(s));
+  return out;
+}
+
+}  // namespace drivegate::modbus_device

@@ -1,0 +1,199 @@
+// The profile library (adapters/modbus/profiles/): every profile, whoever wrote it, is held to
+// the same bar. `drivegate profile check --strict` finds nothing in it (profile_check.h); its
+// device is made on a bus running its own [line] (a profile whose line the bus refuses fails);
+// and the driver against the simulator of the same profile, on the real bus engine with a
+// simulated clock and line (bus_rig.h), goes online, reads every point, runs each command it
+// binds with running following, and a setpoint written in rpm with the default options reads
+// back as speed_rpm within one raw step of the speed's point.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
+#include "common_block.h"
+#include "profile.h"
+#include "profile_check.h"
+#include "profile_options.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+using namespace std::chrono_literals;
+using namespace test::common_block;
+
+// The shipped library, or the folder DRIVEGATE_LIBRARY_DIR names (to try profiles before they
+// are copied in: `DRIVEGATE_LIBRARY_DIR=/path modbus_adapter_test --gtest_filter='Profiles/*'`).
+std::vector<std::filesystem::path> library(bool shipped = false) {
+  std::vector<std::filesystem::path> out;
+  const char* dir = std::getenv("DRIVEGATE_LIBRARY_DIR");
+  if (shipped || dir == nullptr || *dir == '\0') dir = DRIVEGATE_PROFILE_DIR;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().extension() == ".toml") out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string read(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class Library : public testing::TestWithParam<std::filesystem::path> {};
+
+TEST_P(Library, PassesTheStrictCheck) {
+  const auto report = check_profile(read(GetParam()), GetParam().filename().string());
+  EXPECT_TRUE(report.errors.empty()) << testing::PrintToString(report.errors);
+  EXPECT_TRUE(report.warnings.empty()) << testing::PrintToString(report.warnings);
+}
+
+TEST_P(Library, RunsAgainstItsOwnSimulatorOnItsOwnLine) {
+  auto parsed = parse_profile(read(GetParam()), GetParam().string());
+  ASSERT_TRUE(std::holds_alternative<Profile>(parsed));
+  const Profile& p = std::get<Profile>(parsed);
+  BusConfig line;
+  line.name = "line";
+  line.port = "/dev/null";
+  line.baud = p.line.baud;
+  line.parity = p.line.parity;
+  line.stop_bits = p.line.stop_bits;
+  test::BusRig rig(drivegate_adapter, line);
+  const test::OptionText options = {{"profile", GetParam().string()}};
+  Device& d = rig.add_device("d", 1, options);
+  rig.add_simulator(1, options);
+  rig.start();
+  ASSERT_TRUE(rig.run_until([&] { return d.online(); }, 5s));
+  // Every point of the device's own reads (the common block's are read into it).
+  for (const MappedPoint& mp : d.map().points()) {
+    if (!mp.common()) {
+      EXPECT_FALSE(rig.read(d, mp.spec.name).empty()) << mp.spec.name;
+    }
+  }
+  const CommonBindings& c = p.common;
+  const auto running = [&] { return (rig.value(d, "status") & kRunning) != 0; };
+  // The setpoint: within the reference's range, a speed the drive can show.
+  std::uint16_t rpm = 0;
+  if (c.setpoint_rpm) {
+    const ProfilePoint& ref = p.points[*c.setpoint_rpm];
+    const double f = factor_value(c.setpoint_factor, p.options);
+    double top = ref.max ? *ref.max * f : 1500.0;
+    // A whole number of the reference's raw steps (the form without a factor takes no other).
+    const double step = std::fabs(ref.scale * f);
+    const double want = std::min(1000.0, std::floor(std::fabs(top) / 2));
+    double r = std::floor(want);
+    while (r > 1 && std::fabs(r / step - std::round(r / step)) > 1e-6) --r;
+    rpm = static_cast<std::uint16_t>(r);
+  }
+  for (const auto& [bound, command] : {std::pair{c.run_forward.has_value(), cmd::run_forward},
+                                       std::pair{c.run_reverse.has_value(), cmd::run_reverse}}) {
+    if (!bound) continue;
+    SCOPED_TRACE(command);
+    const std::vector<std::uint16_t> write = c.setpoint_rpm
+                                                 ? std::vector<std::uint16_t>{command, rpm}
+                                                 : std::vector<std::uint16_t>{command};
+    ASSERT_EQ(rig.write_and_wait(d, Table::holding, kCommandRegister, write), Outcome::ok);
+    if (c.running || (c.speed_rpm && c.setpoint_rpm)) {
+      EXPECT_TRUE(rig.run_until(running, 3s));
+    }
+    if (c.setpoint_rpm && c.speed_rpm) {
+      // Within one raw step of the speed's point, in rpm.
+      const ProfilePoint& sp = p.points[*c.speed_rpm];
+      const double step = std::fabs(sp.scale * factor_value(c.speed_factor, p.options));
+      const int want =
+          command == cmd::run_reverse && sp.type != ValueType::u16 && sp.type != ValueType::u32
+              ? -rpm
+              : rpm;
+      EXPECT_TRUE(rig.run_until(
+          [&] {
+            const auto got = static_cast<std::int16_t>(rig.value(d, "speed_rpm"));
+            return std::abs(got - want) <= step + 0.5;
+          },
+          3s))
+          << "speed_rpm " << static_cast<std::int16_t>(rig.value(d, "speed_rpm")) << ", wrote "
+          << want;
+    }
+    ASSERT_EQ(rig.write_and_wait(d, Table::holding, kCommandRegister, {cmd::stop}), Outcome::ok);
+    if (c.running) {
+      EXPECT_TRUE(rig.run_until([&] { return !running(); }, 3s));
+    }
+  }
+  if (c.reset_fault && (c.fault || c.fault_code)) {
+    ASSERT_EQ(rig.simulator().control("fault 1", rig.now()).rfind("ok", 0), 0u);
+    ASSERT_TRUE(rig.run_until([&] { return (rig.value(d, "status") & kFaulted) != 0; }, 3s));
+    ASSERT_EQ(rig.write_and_wait(d, Table::holding, kCommandRegister, {cmd::reset_fault}),
+              Outcome::ok);
+    EXPECT_TRUE(rig.run_until([&] { return (rig.value(d, "status") & kFaulted) == 0; }, 3s));
+  }
+}
+
+// The row of docs/profiles.md's "Library" table for a profile.
+std::string row_of(const std::filesystem::path& file, const Profile& p) {
+  const std::string stem = file.stem().string();
+  const auto dash = stem.find('-');
+  const std::string vendor = stem.substr(0, dash);
+  const CommonBindings& c = p.common;
+  std::string bound;
+  const auto add = [&](bool on, const std::string& what) {
+    if (on) bound += (bound.empty() ? "" : ", ") + what;
+  };
+  add(c.speed_rpm.has_value(), c.speed_factor.terms.empty() ? "speed" : "speed (rpm_factor)");
+  add(c.setpoint_rpm.has_value(),
+      c.setpoint_factor.terms.empty() ? "setpoint" : "setpoint (rpm_factor)");
+  add(c.running.has_value(), "run");
+  add(c.fault.has_value() || c.fault_code.has_value(),
+      c.fault_code && !c.fault_code->map.empty() ? "fault (mapped)" : "fault");
+  std::string commands;
+  for (const auto& [b, name] :
+       {std::pair{&c.stop, "stop"}, std::pair{&c.run_forward, "run_forward"},
+        std::pair{&c.run_reverse, "run_reverse"}, std::pair{&c.reset_fault, "reset_fault"}}) {
+    if (*b) commands += (commands.empty() ? "" : " ") + std::string(name);
+  }
+  add(!commands.empty(), commands);
+  std::string source = p.source;
+  for (char& ch : source) {
+    if (ch == '|') ch = '/';
+  }
+  return "| " + vendor + " | " + p.description + " | `" + file.filename().string() + "` | " +
+         source + " | " + (bound.empty() ? "nothing" : bound) + " |";
+}
+
+// docs/profiles.md lists the library as it is: the table between its markers is made here.
+TEST(LibraryDoc, TheTableInDocsIsTheLibrary) {
+  std::string want;
+  for (const auto& f : library(true)) {
+    auto parsed = parse_profile(read(f), f.string());
+    ASSERT_TRUE(std::holds_alternative<Profile>(parsed)) << f;
+    want += row_of(f, std::get<Profile>(parsed)) + "\n";
+  }
+  const std::string doc =
+      read(std::filesystem::path(DRIVEGATE_PROFILE_DIR) / "../../../docs/profiles.md");
+  const std::string begin = "<!-- library table: made by library_test.cpp -->\n";
+  const std::string header = "| vendor | drive | file | source | bound |\n|---|---|---|---|---|\n";
+  const auto at = doc.find(begin);
+  ASSERT_NE(at, std::string::npos) << "docs/profiles.md has no library table marker";
+  const auto start = at + begin.size();
+  const auto end = doc.find("\n\n", start);
+  const std::string have = doc.substr(start, end == std::string::npos ? end : end + 1 - start);
+  EXPECT_EQ(have, header + want) << "docs/profiles.md's library table should read:\n"
+                                 << header << want;
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, Library, testing::ValuesIn(library()),
+                         [](const testing::TestParamInfo<std::filesystem::path>& param) {
+                           std::string n = param.param.stem().string();
+                           for (char& ch : n) {
+                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                           }
+                           return n;
+                         });
+
+}  // namespace
+}  // namespace drivegate::modbus_device

@@ -1,0 +1,501 @@
+// Device options a profile declares ([options.NAME]), the speed in rpm through them
+// (rpm_factor), and commands written as sequences: parsed, evaluated with numbers worked by hand,
+// and the frames the driver sends for them, by hand and on the bus engine against the simulator.
+#include "profile_options.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "adapter_under_test.h"
+#include "bus_rig.h"
+#include "driver.h"
+#include "plugin/adapter_options.h"
+#include "profile.h"
+#include "settings.h"
+#include "simulator.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+constexpr std::uint8_t kSlave = 7;
+
+// A CiA 402-like drive in Hz: the reference and the output frequency in 0.01 Hz, rpm through
+// the motor's poles; a run passes through "switched on" before "operation enabled".
+constexpr const char* kHzProfile = R"toml(
+[profile]
+name = "hz-drive"
+source = "a test"
+[options.motor_poles]
+default = 4
+min = 2
+max = 48
+description = "motor poles (nameplate)"
+[options.max_frequency_hz]
+default = 50
+min = 10
+max = 400
+unit = "Hz"
+description = "maximum frequency (P1.2)"
+[[point]]
+name = "control_word"
+table = "holding"
+address = 0
+type = "u16"
+[[point]]
+name = "frequency_reference"
+table = "holding"
+address = 1
+type = "u16"
+scale = 0.01
+min = 0
+max = 400
+[[point]]
+name = "status_word"
+table = "holding"
+address = 2
+type = "u16"
+[[point]]
+name = "output_frequency"
+table = "holding"
+address = 3
+type = "s16"
+scale = 0.01
+[common]
+speed_rpm = { point = "output_frequency", rpm_factor = "120 / motor_poles" }
+setpoint_rpm = { point = "frequency_reference", rpm_factor = "120 / motor_poles" }
+running = { point = "status_word", bit = 1 }
+fault = { point = "status_word", bit = 3 }
+stop = { point = "control_word", sequence = [0x0007, 0x0006] }
+run_forward = { point = "control_word", sequence = [0x0006, 0x0007, 0x000F] }
+run_reverse = { point = "control_word", sequence = [0x0006, 0x080F] }
+reset_fault = { point = "control_word", sequence = [0x0080, 0x0006] }
+)toml";
+
+// A drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 / poles / 100).
+constexpr const char* kPercentProfile = R"toml(
+[profile]
+name = "pct-drive"
+source = "a test"
+[options.motor_poles]
+default = 4
+min = 2
+max = 48
+description = "motor poles"
+[options.max_frequency_hz]
+default = 50
+min = 10
+max = 400
+description = "maximum frequency"
+[[point]]
+name = "control_word"
+table = "holding"
+address = 0
+type = "u16"
+[[point]]
+name = "reference"
+table = "holding"
+address = 1
+type = "u16"
+scale = 0.006103515625   # 100 / 16384
+min = 0
+max = 100
+[[point]]
+name = "actual"
+table = "holding"
+address = 2
+type = "u16"
+scale = 0.006103515625
+[common]
+speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
+setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
+stop = { point = "control_word", value = 0 }
+run_forward = { point = "control_word", value = 1 }
+)toml";
+
+Profile parsed(const std::string& text) {
+  auto r = parse_profile(text, "t.toml");
+  if (auto* e = std::get_if<std::vector<std::string>>(&r)) {
+    ADD_FAILURE() << ::testing::PrintToString(*e);
+    return {};
+  }
+  return std::get<Profile>(std::move(r));
+}
+
+std::vector<std::string> errors_of(const std::string& text) {
+  auto r = parse_profile(text, "t.toml");
+  if (auto* e = std::get_if<std::vector<std::string>>(&r)) return *e;
+  return {};
+}
+
+// kHzProfile with `from` replaced by `to`.
+std::string hz_with(const std::string& from, const std::string& to) {
+  std::string s = kHzProfile;
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
+Bytes frame(std::vector<std::uint8_t> pdu) {
+  return encode(Framing::rtu, kSlave, pdu);
+}
+Bytes fc06(std::uint16_t address, std::uint16_t value) {
+  std::vector<std::uint8_t> pdu = {0x06};
+  put_be16(pdu, address);
+  put_be16(pdu, value);
+  return frame(pdu);
+}
+
+ModbusDriver driver_of(Profile p) {
+  return ModbusDriver(kSlave, std::move(p), Timing{3, 3000ms, std::chrono::nanoseconds(572917)},
+                      500ms);
+}
+
+Profile with_options(Profile p, const std::vector<std::pair<std::string, double>>& set) {
+  Options o;
+  for (const auto& [k, v] : set) o.set(k, v);
+  std::string error;
+  EXPECT_TRUE(apply_options(p, o, error)) << error;
+  return p;
+}
+
+std::vector<std::pair<Ticket, WriteResult>> completions(Driver& d) {
+  std::vector<Completion> done;
+  d.take_completions(done);
+  std::vector<std::pair<Ticket, WriteResult>> out;
+  for (const Completion& c : done) out.emplace_back(c.ticket, c.result);
+  return out;
+}
+
+// --- [options.NAME] ---
+
+TEST(ProfileOptions, AreReadWithTheirRangesAndDefaults) {
+  const Profile p = parsed(kHzProfile);
+  ASSERT_EQ(p.options.size(), 2u);
+  const ProfileOption& poles = p.options[*p.find_option("motor_poles")];
+  EXPECT_EQ(poles.value, 4);
+  EXPECT_EQ(poles.min, 2);
+  EXPECT_EQ(poles.max, 48);
+  EXPECT_EQ(p.options[*p.find_option("max_frequency_hz")].unit, "Hz");
+  EXPECT_EQ(options_text(p), "max_frequency_hz = 50 (default), motor_poles = 4 (default)");
+}
+
+TEST(ProfileOptions, BadDeclarationsAreErrorsOnTheirLines) {
+  EXPECT_THAT(errors_of(hz_with("default = 4\n", "default = 50\n")),
+              ElementsAre(HasSubstr("t.toml:6: options.motor_poles.default: must be in min..max")));
+  EXPECT_THAT(errors_of(hz_with("min = 2\nmax = 48", "min = 48\nmax = 2")),
+              ElementsAre(HasSubstr("options.motor_poles.min: must be below max")));
+  EXPECT_THAT(errors_of(hz_with("description = \"motor poles (nameplate)\"\n", "")),
+              ElementsAre(HasSubstr("options.motor_poles.description: required key is missing")));
+  EXPECT_THAT(errors_of(hz_with("[options.motor_poles]", "[options.attempts]")),
+              testing::Contains(HasSubstr("'attempts' is an option of the modbus adapter itself")));
+  EXPECT_THAT(errors_of(hz_with("[options.motor_poles]", "[options.Motor]")),
+              testing::Contains(HasSubstr("snake_case")));
+  EXPECT_THAT(errors_of(hz_with("default = 4\n", "default = \"four\"\n")),
+              ElementsAre(HasSubstr("options.motor_poles.default: must be a number")));
+  EXPECT_THAT(errors_of(hz_with("default = 4\n", "default = nan\n")),
+              ElementsAre(HasSubstr("options.motor_poles.default: must be in")));
+}
+
+TEST(ProfileOptions, ADevicesValuesAreCheckedAgainstTheRange) {
+  Profile p = parsed(kHzProfile);
+  Options o;
+  std::string error;
+  o.set("motor_poles", 60.0);
+  EXPECT_FALSE(apply_options(p, o, error));
+  EXPECT_EQ(error, "option motor_poles: must be a number in 2..48 (got 60)");
+  o.set("motor_poles", std::string("two"));
+  EXPECT_FALSE(apply_options(p, o, error));
+  o.set("motor_poles", 2.0);
+  EXPECT_TRUE(apply_options(p, o, error)) << error;
+  EXPECT_EQ(p.options[*p.find_option("motor_poles")].value, 2);
+}
+
+// --- rpm_factor ---
+
+TEST(RpmFactor, IsAProductAndQuotientOfNumbersAndOptions) {
+  const Profile p = parsed(kPercentProfile);
+  // 50 Hz x 120 / 4 poles / 100 %: 15 rpm per %.
+  EXPECT_DOUBLE_EQ(factor_value(p.common.speed_factor, p.options), 15.0);
+  const Profile hz = parsed(kHzProfile);
+  EXPECT_DOUBLE_EQ(factor_value(hz.common.speed_factor, hz.options), 30.0);
+  EXPECT_DOUBLE_EQ(factor_value(RpmFactor{}, hz.options), 1.0);  // the old form: rpm
+}
+
+TEST(RpmFactor, WhatIsNotOneIsAnErrorThatSaysWhy) {
+  const Profile p = parsed(kHzProfile);
+  const auto why = [&](std::string_view text) {
+    std::string w;
+    EXPECT_FALSE(parse_rpm_factor(text, p.options, w)) << text;
+    return w;
+  };
+  EXPECT_THAT(why(""), HasSubstr("is empty"));
+  EXPECT_THAT(why("   "), HasSubstr("is empty"));
+  EXPECT_THAT(why("0"), HasSubstr("0"));
+  EXPECT_THAT(why("/"), HasSubstr("'/' where a number or an option name belongs"));
+  EXPECT_THAT(why("a/b/"), HasSubstr("names 'a', which is not one of the profile's [options]"));
+  EXPECT_THAT(why("120 / motor_poles /"), HasSubstr("ends in an operator"));
+  EXPECT_THAT(why("motor_poles/0"), HasSubstr("divides by 0"));
+  EXPECT_THAT(why("120 + motor_poles"), HasSubstr("no + or -"));
+  EXPECT_THAT(why("(120 / motor_poles)"), HasSubstr("no parentheses"));
+  EXPECT_THAT(why("120 motor_poles"), HasSubstr("where '*' or '/' belongs"));
+  EXPECT_THAT(why("1.2.3"), HasSubstr("is not a number"));
+  // An option whose range holds 0 could make the factor 0 or divide by it.
+  EXPECT_THAT(errors_of(hz_with("min = 2\nmax = 48", "min = 0\nmax = 48")),
+              testing::Contains(HasSubstr("option motor_poles can be 0 (its range is 0..48): the "
+                                          "factor would divide by 0")));
+  // In the profile: the key's line, the text quoted.
+  EXPECT_THAT(errors_of(hz_with("rpm_factor = \"120 / motor_poles\" }\nsetpoint",
+                                "rpm_factor = \"120 / poles\" }\nsetpoint")),
+              ElementsAre(HasSubstr("common.speed_rpm.rpm_factor: '120 / poles' names 'poles'")));
+}
+
+// 4 poles at 50 Hz: 1500 rpm <-> 50.00 Hz <-> raw 5000 at 0.01 Hz.
+TEST(RpmFactor, ASetpointOf1500RpmAt4PolesIs5000HundredthsOfAHertz) {
+  ModbusDriver d = driver_of(parsed(kHzProfile));
+  const TimePoint now = TimePoint{} + 10s;
+  const WriteOp op = WriteOp::of_setpoint(1500);
+  ASSERT_EQ(d.check(std::span(&op, 1)), WriteCheck::ok);
+  ASSERT_EQ(d.apply(op, 1, now), WriteStatus::pending);
+  EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, 5000));
+  // 1000 rpm is 33.333 Hz: rounded to the point's step, 3333.
+  ModbusDriver e = driver_of(parsed(kHzProfile));
+  ASSERT_EQ(e.apply(WriteOp::of_setpoint(1000), 1, now), WriteStatus::pending);
+  EXPECT_EQ(e.next_exchange(now)->frame, fc06(1, 3333));
+  // Two poles: 1500 rpm is 25.00 Hz.
+  ModbusDriver two = driver_of(with_options(parsed(kHzProfile), {{"motor_poles", 2}}));
+  ASSERT_EQ(two.apply(WriteOp::of_setpoint(1500), 1, now), WriteStatus::pending);
+  EXPECT_EQ(two.next_exchange(now)->frame, fc06(1, 2500));
+}
+
+TEST(RpmFactor, ASetpointBeyondThePointsRangeAfterConversionIsRefused) {
+  // 32767 rpm at 2 poles is 546.12 Hz: above the reference's max of 400 Hz (exception 03).
+  ModbusDriver d = driver_of(with_options(parsed(kHzProfile), {{"motor_poles", 2}}));
+  WriteOp op = WriteOp::of_setpoint(32767);
+  EXPECT_EQ(d.check(std::span(&op, 1)), WriteCheck::invalid_value);
+  // 24000 rpm at 2 poles is 400.00 Hz: the edge, taken.
+  op = WriteOp::of_setpoint(24000);
+  EXPECT_EQ(d.check(std::span(&op, 1)), WriteCheck::ok);
+  op = WriteOp::of_setpoint(24001);
+  EXPECT_EQ(d.check(std::span(&op, 1)), WriteCheck::invalid_value);
+  op = WriteOp::of_setpoint(-1);
+  EXPECT_EQ(d.check(std::span(&op, 1)), WriteCheck::invalid_value);
+}
+
+TEST(RpmFactor, TheSpeedReadsInRpmThroughTheFactor) {
+  ModbusDriver d = driver_of(parsed(kHzProfile));
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_TRUE(d.next_exchange(now));
+  // control 000F, reference 5000, status: running, output 49.83 Hz: 1494.9 rpm -> 1495.
+  std::vector<std::uint8_t> pdu = {0x03, 8};
+  for (const std::uint16_t w : std::initializer_list<std::uint16_t>{0x000F, 5000, 0x0002, 4983})
+    put_be16(pdu, w);
+  ASSERT_EQ(d.on_receive(frame(pdu), now).kind, RxKind::reply);
+  EXPECT_EQ(d.common().speed_rpm, 1495);
+  EXPECT_TRUE(d.common().running);
+  EXPECT_EQ(d.common().setpoint_rpm, 1500);  // adopted: 50.00 Hz x 30
+}
+
+// A % of maximum, 16384 = 100 %: 1500 rpm at 4 poles and 50 Hz is 100 %, raw 16384 (0x4000).
+TEST(RpmFactor, APercentOfMaximumFrequencyWith16384For100Percent) {
+  const TimePoint now = TimePoint{} + 10s;
+  ModbusDriver d = driver_of(parsed(kPercentProfile));
+  ASSERT_EQ(d.apply(WriteOp::of_setpoint(1500), 1, now), WriteStatus::pending);
+  EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, 0x4000));
+  ModbusDriver half = driver_of(parsed(kPercentProfile));
+  ASSERT_EQ(half.apply(WriteOp::of_setpoint(750), 1, now), WriteStatus::pending);
+  EXPECT_EQ(half.next_exchange(now)->frame, fc06(1, 0x2000));
+  // 60 Hz maximum: 1800 rpm is 100 %.
+  ModbusDriver sixty = driver_of(with_options(parsed(kPercentProfile), {{"max_frequency_hz", 60}}));
+  ASSERT_EQ(sixty.apply(WriteOp::of_setpoint(1800), 1, now), WriteStatus::pending);
+  EXPECT_EQ(sixty.next_exchange(now)->frame, fc06(1, 0x4000));
+  // Read: 8192 is 50 %, 750 rpm; 65535 is 399.99 %, 6000 rpm... within range, but at 2 poles
+  // and 400 Hz (120 rpm a %) 48000 rpm: beyond what speed_rpm carries, unknown and a fault.
+  ModbusDriver r = driver_of(parsed(kPercentProfile));
+  ASSERT_TRUE(r.next_exchange(now));
+  std::vector<std::uint8_t> pdu = {0x03, 6};
+  for (const std::uint16_t w : std::initializer_list<std::uint16_t>{1, 0x2000, 0x2000})
+    put_be16(pdu, w);
+  ASSERT_EQ(r.on_receive(frame(pdu), now).kind, RxKind::reply);
+  EXPECT_EQ(r.common().speed_rpm, 750);
+  ModbusDriver fast = driver_of(
+      with_options(parsed(kPercentProfile), {{"motor_poles", 2}, {"max_frequency_hz", 400}}));
+  ASSERT_TRUE(fast.next_exchange(now));
+  pdu = {0x03, 6};
+  for (const std::uint16_t w : std::initializer_list<std::uint16_t>{1, 0, 0xFFFF}) put_be16(pdu, w);
+  ASSERT_EQ(fast.on_receive(frame(pdu), now).kind, RxKind::reply);
+  EXPECT_TRUE(fast.common().speed_unknown);
+  EXPECT_TRUE(fast.common().faults.has(Fault::sensor_fault));
+}
+
+// --- sequence ---
+
+TEST(Sequence, IsReadAndItsLastValueIsTheCommand) {
+  const Profile p = parsed(kHzProfile);
+  ASSERT_TRUE(p.common.run_forward);
+  EXPECT_THAT(p.common.run_forward->sequence, ElementsAre(0x0006, 0x0007, 0x000F));
+  EXPECT_EQ(p.common.run_forward->value, 0x000F);
+  EXPECT_THAT(errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = []")),
+              ElementsAre(HasSubstr("common.run_forward.sequence: must be 1..4 values")));
+  EXPECT_THAT(errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = [1,2,3,4,5]")),
+              ElementsAre(HasSubstr("must be 1..4 values")));
+  EXPECT_THAT(errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = [1, 70000]")),
+              ElementsAre(HasSubstr("must be 1..4 values")));
+  EXPECT_THAT(
+      errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = [1], value = 1")),
+      ElementsAre(HasSubstr("value or sequence, not both")));
+}
+
+// Each value is written and confirmed before the next; the command is answered with the last.
+TEST(Sequence, EachValueIsConfirmedBeforeTheNextAndTheLastAnswersTheCommand) {
+  ModbusDriver d = driver_of(parsed(kHzProfile));
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
+  for (const std::uint16_t v : std::initializer_list<std::uint16_t>{0x0006, 0x0007}) {
+    const Bytes f = fc06(0, v);
+    ASSERT_EQ(d.next_exchange(now)->frame, f);
+    ASSERT_EQ(d.on_receive(f, now).kind, RxKind::ack);
+    EXPECT_TRUE(completions(d).empty());
+    EXPECT_EQ(d.common().command, Command::stop);
+  }
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x000F));
+  ASSERT_EQ(d.on_receive(fc06(0, 0x000F), now).kind, RxKind::ack);
+  EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::ok)));
+  EXPECT_EQ(d.common().command, Command::run_forward);
+}
+
+TEST(Sequence, ARefusalMidSequenceRefusesTheCommandAndSendsNoMore) {
+  ModbusDriver d = driver_of(parsed(kHzProfile));
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
+  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0007));
+  d.on_receive(frame({0x86, 0x04}), now);  // exception 04, slave device failure
+  EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::refused)));
+  EXPECT_EQ(d.common().command, Command::stop);
+  // What comes next is a poll, never the third value.
+  EXPECT_EQ(d.next_exchange(now)->frame[1], 0x03);
+}
+
+TEST(Sequence, NoAnswerMidSequenceIsNoResponseAndSendsNoMore) {
+  ModbusDriver d = driver_of(parsed(kHzProfile));
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_reverse), 1, now), WriteStatus::pending);
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
+  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x080F));
+  d.on_no_reply(now);
+  EXPECT_THAT(completions(d),
+              ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::no_response)));
+  EXPECT_EQ(d.next_exchange(now)->frame[1], 0x03);
+}
+
+// A stop applied while a run's sequence is on the line: the run ends at the step it reached and
+// is not carried out; the stop's sequence goes next, whole.
+TEST(Sequence, AStopDuringARunSequenceOvertakesIt) {
+  ModbusDriver d = driver_of(parsed(kHzProfile));
+  const TimePoint now = TimePoint{} + 10s;
+  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
+  ASSERT_EQ(d.apply(WriteOp::of_command(Command::stop), 2, now), WriteStatus::pending);
+  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
+  EXPECT_THAT(completions(d),
+              ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::no_response)));
+  for (const std::uint16_t v : std::initializer_list<std::uint16_t>{0x0007, 0x0006}) {
+    ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, v));
+    ASSERT_EQ(d.on_receive(fc06(0, v), now).kind, RxKind::ack);
+  }
+  EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(2, WriteResult::ok)));
+  EXPECT_EQ(d.common().command, Command::stop);
+}
+
+// --- on the bus engine, against the profile's simulator ---
+
+struct ProfileFile {
+  explicit ProfileFile(const std::string& text) {
+    dir = std::filesystem::temp_directory_path() / ("dg-popt-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    path = (dir / "hz.toml").string();
+    std::ofstream(path) << text;
+  }
+  ~ProfileFile() { std::filesystem::remove_all(dir); }
+  ProfileFile(const ProfileFile&) = delete;
+  ProfileFile& operator=(const ProfileFile&) = delete;
+  std::filesystem::path dir;
+  std::string path;
+};
+
+const AdapterDescriptor& specialised_for(const std::string& path) {
+  Options o = default_options(drivegate_adapter);
+  o.set("profile", path);
+  std::string error;
+  const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
+  EXPECT_NE(a, nullptr) << error;
+  return a != nullptr ? *a : drivegate_adapter;
+}
+
+TEST(ProfileOptionsOnTheBus, TheSchemaHasTheProfilesOptionsAndTheDeviceItsValues) {
+  ProfileFile f(kHzProfile);
+  const AdapterDescriptor& a = specialised_for(f.path);
+  std::string error;
+  Options o = default_options(a);
+  EXPECT_FALSE(set_option_text(a, o, "motor_poles", "60", error));
+  EXPECT_THAT(error, HasSubstr("2..48"));
+  EXPECT_FALSE(set_option_text(a, o, "motor_poles", "nan", error));
+  EXPECT_FALSE(set_option_text(a, o, "poles", "2", error));
+  test::BusRig rig(a);
+  Device& d = rig.add_device("d", kSlave, {{"profile", f.path}, {"motor_poles", "2"}});
+  rig.add_simulator(kSlave, {{"profile", f.path}, {"motor_poles", "2"}});
+  rig.start();
+  ASSERT_TRUE(rig.run_until([&] { return d.online(); }, 3s));
+  // The common block: command, setpoint (registers 0 and 1 of the register map).
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, 0, {1, 1500}), Outcome::ok);
+  EXPECT_TRUE(rig.run_until([&] { return rig.value(d, "speed_rpm") == 1500; }, 3s));
+  // 1500 rpm at 2 poles is 25.00 Hz: the slave holds 2500 and ran the whole sequence.
+  const std::string state = rig.simulator().control("state", rig.now());
+  EXPECT_THAT(state, HasSubstr("frequency_reference = 25"));
+  EXPECT_THAT(state, HasSubstr("running forward"));
+  EXPECT_THAT(state, HasSubstr("control_word = 15"));
+  // 32767 rpm is 546 Hz at 2 poles, beyond the reference's 400 Hz: exception 03, nothing sent.
+  const std::size_t before = rig.sent().size();
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, 1, {32767}), Outcome::invalid_value);
+  for (std::size_t i = before; i < rig.sent().size(); ++i) EXPECT_NE(rig.sent()[i].bytes[1], 0x06);
+}
+
+// The failsafe stops through the stop sequence: both values on the wire, in order.
+TEST(ProfileOptionsOnTheBus, TheFailsafeStopIsTheStopSequence) {
+  ProfileFile f(kHzProfile);
+  const AdapterDescriptor& a = specialised_for(f.path);
+  test::BusRig rig(a);
+  DeviceConfig c = rig.device_config("d", kSlave, {{"profile", f.path}});
+  c.failsafe.timeout = 500ms;
+  c.failsafe.action = FailsafeAction::stop;
+  Device& d = rig.add_device(c);
+  rig.add_simulator(kSlave, {{"profile", f.path}});
+  rig.start();
+  ASSERT_TRUE(rig.run_until([&] { return d.online(); }, 3s));
+  ASSERT_EQ(rig.write_and_wait(d, Table::holding, 0, {1, 1500}), Outcome::ok);
+  const std::size_t mark = rig.sent().size();
+  ASSERT_TRUE(rig.run_until(
+      [&] {
+        return rig.simulator().control("state", rig.now()).find("stopped") != std::string::npos;
+      },
+      3s));
+  std::vector<Bytes> writes;
+  for (std::size_t i = mark; i < rig.sent().size(); ++i) {
+    if (rig.sent()[i].bytes[1] == 0x06) writes.push_back(rig.sent()[i].bytes);
+  }
+  EXPECT_THAT(writes, ElementsAre(fc06(0, 0x0007), fc06(0, 0x0006)));
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device
