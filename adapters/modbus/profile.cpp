@@ -343,19 +343,11 @@ class Parser {
     return index;
   }
 
-  // speed_rpm = "speed_actual": a point of a register table; written (the setpoint), a holding
-  // register point of any width (a two-register one goes with FC 16).
+  // speed_rpm = "speed_actual": a point of a register table.
   std::optional<std::size_t> register_point(TableReader& r, std::string_view key, bool writable) {
-    const auto index = point_at(r, key, false, false);
+    const auto index = point_at(r, key, false, writable);
     if (index && profile_.points[*index].type == ValueType::bit) {
       diag_.error(r.node(key), r.qualified(key), "must name a register point, not a bit");
-      return std::nullopt;
-    }
-    if (index && writable && profile_.points[*index].table != Table::holding) {
-      diag_.error(r.node(key), r.qualified(key),
-                  "'" + profile_.points[*index].name +
-                      "' must be a holding register point: it is "
-                      "written");
       return std::nullopt;
     }
     return index;
