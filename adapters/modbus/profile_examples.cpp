@@ -100,14 +100,14 @@ void check_read(const Profile& profile, const ProfileExample& e, const Adu& requ
   const std::uint8_t fn = request.pdu[0];
   const Table table = *table_read_by(fn);
   if (request.pdu.size() != 5) {
-    out.push_back("the request is not a read of a start and a quantity");
+    out.emplace_back("the request is not a read of a start and a quantity");
     return;
   }
   const std::uint16_t start = be16(request.pdu[1], request.pdu[2]);
   const std::uint16_t count = be16(request.pdu[3], request.pdu[4]);
   std::optional<Adu> reply;
   if (e.reply.empty()) {
-    out.push_back("a read needs its reply");
+    out.emplace_back("a read needs its reply");
   } else {
     reply = decode_whole(profile, e.reply, false, out);
   }
@@ -161,14 +161,14 @@ void check_write(const Profile& profile, const ProfileExample& e, const Adu& req
   std::vector<std::uint16_t> words;  // what the request writes, register by register
   if (fn == fc::write_multiple_registers) {
     if (pdu.size() < 6 || pdu.size() != 6u + pdu[5] || pdu[5] != 2 * be16(pdu[3], pdu[4])) {
-      out.push_back("the request's counts disagree");
+      out.emplace_back("the request's counts disagree");
       return;
     }
     start = be16(pdu[1], pdu[2]);
     for (std::size_t i = 6; i + 1 < pdu.size(); i += 2) words.push_back(be16(pdu[i], pdu[i + 1]));
   } else {
     if (pdu.size() != 5) {
-      out.push_back("the request is not an address and a value");
+      out.emplace_back("the request is not an address and a value");
       return;
     }
     start = be16(pdu[1], pdu[2]);
@@ -176,7 +176,7 @@ void check_write(const Profile& profile, const ProfileExample& e, const Adu& req
     // FC 05: ON is FF00, OFF 0000 (Application Protocol 6.5).
     if (fn == fc::write_single_coil) {
       if (v != 0xFF00 && v != 0) {
-        out.push_back("a coil is written FF00 or 0000");
+        out.emplace_back("a coil is written FF00 or 0000");
         return;
       }
       v = v != 0 ? 1 : 0;
@@ -222,7 +222,7 @@ void check_write(const Profile& profile, const ProfileExample& e, const Adu& req
   const std::size_t echo = 5;
   if (reply->address != request.address || reply->pdu.size() != echo ||
       !std::equal(reply->pdu.begin(), reply->pdu.end(), request.pdu.begin())) {
-    out.push_back("the reply is not the slave's echo of the request");
+    out.emplace_back("the reply is not the slave's echo of the request");
   }
 }
 
@@ -307,7 +307,10 @@ std::vector<std::string> check_examples(const Profile& profile, const std::strin
   std::vector<std::string> out;
   for (const ProfileExample& e : profile.examples) {
     for (const std::string& why : check_example(profile, e)) {
-      out.push_back(source + ":" + std::to_string(e.line) + ": example: " + why);
+      std::string line = source;
+      line += ":" + std::to_string(e.line) + ": example: ";
+      line += why;
+      out.push_back(std::move(line));
     }
   }
   return out;

@@ -13,12 +13,6 @@ bool is_name_char(char c) {
   return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
 }
 
-std::string number_text(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
 void read_option(const std::string& name, const toml::node& n, Diagnostics& diag,
                  Profile& profile) {
   const std::string key = "options." + name;
@@ -75,6 +69,12 @@ bool can_be_zero(const RpmFactor::Term& t, const std::vector<ProfileOption>& opt
 }
 
 }  // namespace
+
+std::string number_text(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return {buf, r.ptr};
+}
 
 bool valid_option_name(std::string_view name, std::string& why) {
   if (name.empty() || name.size() > 32 || !(name[0] >= 'a' && name[0] <= 'z') ||

@@ -39,6 +39,9 @@ double factor_value(const RpmFactor& factor, const std::vector<ProfileOption>& o
 // the option's range.
 bool apply_options(Profile& profile, const Options& options, std::string& error);
 
+// A number as an option's text: the shortest that reads back the same ("4", "0.01").
+std::string number_text(double v);
+
 // The options in effect, as text: "motor_poles = 2, max_frequency_hz = 50 (default)"; empty
 // without options.
 std::string options_text(const Profile& profile);

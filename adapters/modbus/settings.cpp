@@ -90,6 +90,7 @@ std::string profile_read(const ProfileText& profile) {
 
 std::vector<std::string_view> shipped_profile_names() {
   std::vector<std::string_view> names;
+  names.reserve(std::size(kShippedProfiles));
   for (const ShippedProfile& p : kShippedProfiles) names.push_back(p.name);
   return names;
 }

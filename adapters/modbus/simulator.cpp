@@ -205,7 +205,7 @@ Bytes ModbusSimulator::write(ByteView pdu) {
     }
     if (!holds(table, address, 1)) return exception_pdu(fn, kIllegalAddress);
     store(table, address, table == Table::coil ? (value != 0 ? 1 : 0) : value);
-    return Bytes(pdu.begin(), pdu.end());  // the echo
+    return {pdu.begin(), pdu.end()};  // the echo
   }
   // FC 16: address, quantity, byte count, values (6.12).
   if (pdu.size() < 6) return exception_pdu(fn, kIllegalValue);
@@ -220,7 +220,7 @@ Bytes ModbusSimulator::write(ByteView pdu) {
     store(Table::holding, static_cast<std::uint16_t>(address + i),
           be16(pdu[6 + 2 * i], pdu[7 + 2 * i]));
   }
-  return Bytes(pdu.begin(), pdu.begin() + 5);
+  return {pdu.begin(), pdu.begin() + 5};
 }
 
 void ModbusSimulator::store(Table table, std::uint16_t address, std::uint16_t word) {

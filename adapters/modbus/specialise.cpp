@@ -1,11 +1,11 @@
 #include "specialise.h"
 
-#include <charconv>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <vector>
 
+#include "profile_options.h"
 #include "settings.h"
 
 namespace drivegate::modbus_device {
@@ -19,12 +19,6 @@ struct Specialised {
   std::vector<OptionSpec> options;
   AdapterDescriptor descriptor{};
 };
-
-std::string number_text(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
 
 }  // namespace
 

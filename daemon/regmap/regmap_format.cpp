@@ -113,7 +113,7 @@ std::string option_json(const OptionValue& v) {
   if (const auto* d = std::get_if<double>(&v)) {
     char buf[32];
     const auto r = std::to_chars(buf, buf + sizeof buf, *d);
-    return std::string(buf, r.ptr);
+    return {buf, r.ptr};
   }
   if (const auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
   if (const auto* s = std::get_if<std::string>(&v)) return json_string(*s);

@@ -152,6 +152,9 @@ TEST(Cli, AProfilesOptionsAreCheckedAsTheConfigurationsOwn) {
   r = config("motor_poles = \"two\"");
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_THAT(r.out, HasSubstr("gw.toml:11: device[0].options.motor_poles"));
+  r = config("motor_poles = nan");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("gw.toml:11: device[0].options.motor_poles"));
   r = config("poles = 2");
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_THAT(r.out, HasSubstr("gw.toml:11: device[0].options.poles"));

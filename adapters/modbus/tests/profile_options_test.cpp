@@ -399,6 +399,32 @@ TEST(Sequence, NoAnswerMidSequenceIsNoResponseAndSendsNoMore) {
   EXPECT_EQ(d.next_exchange(now)->frame[1], 0x03);
 }
 
+// The line lost mid-sequence (comm_lost): the command fails, and once the slave answers again
+// nothing of it is sent: the drive stays at the step it confirmed.
+TEST(Sequence, TheLineLostMidSequenceFailsItAndSendsNoMore) {
+  ModbusDriver d = driver_of(parsed(kHzProfile));
+  TimePoint now = TimePoint{} + 10s;
+  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
+  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
+  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0007));
+  now += 3s;
+  d.on_comm_lost(now);
+  EXPECT_THAT(completions(d),
+              ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::no_response)));
+  int polls = 0;
+  for (int i = 0; i < 10; ++i) {
+    if (const auto ex = d.next_exchange(now)) {
+      EXPECT_NE(ex->frame[1], 0x06);  // polls only
+      ++polls;
+      d.on_no_reply(now);
+    }
+    now += 500ms;
+  }
+  EXPECT_GT(polls, 0);
+  EXPECT_EQ(d.common().command, Command::stop);
+}
+
 // A stop applied while a run's sequence is on the line: the run ends at the step it reached and
 // is not carried out; the stop's sequence goes next, whole.
 TEST(Sequence, AStopDuringARunSequenceOvertakesIt) {
