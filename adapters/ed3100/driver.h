@@ -27,16 +27,7 @@ class Ed3100Driver final : public DriverBase {
  public:
   Ed3100Driver(std::uint8_t address, Settings settings, Millis poll_interval);
 
-  [[nodiscard]] DriverTraits traits() const override;
-
-  std::optional<Exchange> next_exchange(TimePoint now) override;
-  [[nodiscard]] TimePoint wake_at() const override;
-  RxVerdict on_receive(ByteView rx, TimePoint now) override;
-  void on_no_reply(TimePoint now) override;
-  void on_comm_lost(TimePoint now) override;
-
-  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
-  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
+  DRIVEGATE_DRIVER_OVERRIDES;
 
  private:
   // What a write puts in force once the drive confirmed it. Its ticket, and the time it must be

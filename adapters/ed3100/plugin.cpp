@@ -4,6 +4,7 @@
 #include <string>
 
 #include "drivegate/adapter.h"
+#include "drivegate/addressed.h"
 #include "driver.h"
 #include "settings.h"
 #include "simulator.h"
@@ -12,19 +13,15 @@ namespace drivegate::ed3100 {
 namespace {
 
 std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
-  auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
-  const auto address = device_address(env.address, error);
-  if (!address) return nullptr;
-  return std::make_unique<Ed3100Driver>(*address, std::move(*settings), env.poll_interval);
+  auto d = addressed(env.options, env.address, error, parse_settings, device_address);
+  if (!d) return nullptr;
+  return std::make_unique<Ed3100Driver>(d->address, std::move(d->settings), env.poll_interval);
 }
 
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
-  const auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
-  const auto address = device_address(env.address, error);
-  if (!address) return nullptr;
-  return std::make_unique<Ed3100Simulator>(*address, settings->sim_reply_form);
+  const auto d = addressed(env.options, env.address, error, parse_settings, device_address);
+  if (!d) return nullptr;
+  return std::make_unique<Ed3100Simulator>(d->address, d->settings.sim_reply_form);
 }
 
 }  // namespace

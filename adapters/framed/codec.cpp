@@ -46,7 +46,7 @@ std::uint64_t get_uint(const Token& t, const std::uint8_t* at) {
 void write_field(const Token& t, double value, std::uint8_t* at) {
   switch (t.encoding) {
     case Encoding::f32: {
-      const float f = static_cast<float>(value);
+      const auto f = static_cast<float>(value);
       put_uint(std::bit_cast<std::uint32_t>(f), t, at);
       return;
     }
@@ -125,7 +125,7 @@ Codec::Codec(const Description& d) : d_(d) {
           break;
         }
         case Token::Kind::check:
-          p.checks.push_back({&t, 0, 0});
+          p.checks.push_back({.token = &t});  // the check and its range: below
           p.first_check = std::min(p.first_check, t.offset);
           break;
       }

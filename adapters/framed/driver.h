@@ -25,16 +25,7 @@ class FramedDriver final : public DriverBase {
  public:
   FramedDriver(std::shared_ptr<const Description> d, const DeviceEnv& env);
 
-  [[nodiscard]] DriverTraits traits() const override;
-
-  std::optional<Exchange> next_exchange(TimePoint now) override;
-  [[nodiscard]] TimePoint wake_at() const override;
-  RxVerdict on_receive(ByteView rx, TimePoint now) override;
-  void on_no_reply(TimePoint now) override;
-  void on_comm_lost(TimePoint now) override;
-
-  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
-  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
+  DRIVEGATE_DRIVER_OVERRIDES;
 
  private:
   // A write on its way: what it changes, and once chosen, how it is carried out.

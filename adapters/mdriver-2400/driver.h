@@ -35,16 +35,7 @@ class Mdriver2400Driver final : public DriverBase {
  public:
   Mdriver2400Driver(std::uint8_t address, const Settings& settings, Millis poll_interval);
 
-  [[nodiscard]] DriverTraits traits() const override;
-
-  std::optional<Exchange> next_exchange(TimePoint now) override;
-  [[nodiscard]] TimePoint wake_at() const override;
-  RxVerdict on_receive(ByteView rx, TimePoint now) override;
-  void on_no_reply(TimePoint now) override;
-  void on_comm_lost(TimePoint now) override;
-
-  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
-  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
+  DRIVEGATE_DRIVER_OVERRIDES;
 
  private:
   enum class Phase : std::uint8_t { check, ready, fixed_code_error };

@@ -5,6 +5,7 @@
 
 #include "codec.h"
 #include "drivegate/adapter.h"
+#include "drivegate/addressed.h"
 #include "driver.h"
 #include "settings.h"
 #include "simulator.h"
@@ -13,19 +14,15 @@ namespace drivegate::mdriver {
 namespace {
 
 std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
-  const auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
-  const auto address = device_address(env.address, *settings, error);
-  if (!address) return nullptr;
-  return std::make_unique<Mdriver2400Driver>(*address, *settings, env.poll_interval);
+  const auto d = addressed(env.options, env.address, error, parse_settings, device_address);
+  if (!d) return nullptr;
+  return std::make_unique<Mdriver2400Driver>(d->address, d->settings, env.poll_interval);
 }
 
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
-  const auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
-  const auto address = device_address(env.address, *settings, error);
-  if (!address) return nullptr;
-  return std::make_unique<Mdriver2400Simulator>(*address);
+  const auto d = addressed(env.options, env.address, error, parse_settings, device_address);
+  if (!d) return nullptr;
+  return std::make_unique<Mdriver2400Simulator>(d->address);
 }
 
 }  // namespace

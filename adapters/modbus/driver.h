@@ -57,17 +57,8 @@ class ModbusDriver final : public DriverBase {
   ModbusDriver(std::uint8_t address, Profile profile, Timing timing, Millis poll_interval,
                std::string files_read = {});
 
-  [[nodiscard]] DriverTraits traits() const override;
-
-  std::optional<Exchange> next_exchange(TimePoint now) override;
-  [[nodiscard]] TimePoint wake_at() const override;
-  RxVerdict on_receive(ByteView rx, TimePoint now) override;
-  void on_no_reply(TimePoint now) override;
-  void on_comm_lost(TimePoint now) override;
+  DRIVEGATE_DRIVER_OVERRIDES;
   [[nodiscard]] std::optional<TimePoint> state_read_at() const override;
-
-  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
-  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
   [[nodiscard]] std::string files_read() const override { return files_read_; }
 
   // Which profile point each of points() is.

@@ -31,18 +31,10 @@ class PassthroughDriver final : public DriverBase {
   PassthroughDriver(std::uint8_t address, PassthroughSettings settings,
                     std::chrono::nanoseconds char_time, Millis poll_interval);
 
-  [[nodiscard]] DriverTraits traits() const override;
+  // check() and apply() take only forward parts: the device has no command, setpoint or points
+  // of its own.
+  DRIVEGATE_DRIVER_OVERRIDES;
   [[nodiscard]] bool forwards() const override { return true; }
-
-  std::optional<Exchange> next_exchange(TimePoint now) override;
-  [[nodiscard]] TimePoint wake_at() const override;
-  RxVerdict on_receive(ByteView rx, TimePoint now) override;
-  void on_no_reply(TimePoint now) override;
-  void on_comm_lost(TimePoint now) override;
-
-  // Only forward parts are taken: the device has no command, setpoint or points of its own.
-  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
-  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
 
  private:
   // A forwarded request; its ticket and send-by are the ledger's.

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "drivegate/adapter.h"
+#include "drivegate/addressed.h"
 #include "driver.h"
 #include "passthrough.h"
 #include "settings.h"
@@ -36,11 +37,9 @@ std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) 
 // A pass-through device's simulator is a slave like any other: it serves the profile its options
 // name (the default one unless --set profile=NAME).
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
-  auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
-  const auto address = device_address(env.address, error);
-  if (!address) return nullptr;
-  return std::make_unique<ModbusSimulator>(*address, std::move(settings->profile));
+  auto d = addressed(env.options, env.address, error, parse_settings, device_address);
+  if (!d) return nullptr;
+  return std::make_unique<ModbusSimulator>(d->address, std::move(d->settings.profile));
 }
 
 constexpr OptionSetting kDemoOptions[] = {{"profile", "example-vfd"}};

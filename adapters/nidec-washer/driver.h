@@ -18,16 +18,7 @@ class NidecWasherDriver final : public DriverBase {
   // `poll_interval` is the device's; section 6 wants a frame every second at least.
   NidecWasherDriver(const Settings& settings, Millis poll_interval);
 
-  [[nodiscard]] DriverTraits traits() const override;
-
-  std::optional<Exchange> next_exchange(TimePoint now) override;
-  [[nodiscard]] TimePoint wake_at() const override;
-  RxVerdict on_receive(ByteView rx, TimePoint now) override;
-  void on_no_reply(TimePoint now) override;
-  void on_comm_lost(TimePoint now) override;
-
-  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
-  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
+  DRIVEGATE_DRIVER_OVERRIDES;
 
  private:
   // What a queued write is for: decides how its frame is made and how its ACK completes it.

@@ -45,16 +45,7 @@ class EDriveDriver final : public DriverBase {
  public:
   EDriveDriver(std::uint8_t address, Millis poll_interval, const Settings& settings);
 
-  [[nodiscard]] DriverTraits traits() const override;
-
-  std::optional<Exchange> next_exchange(TimePoint now) override;
-  [[nodiscard]] TimePoint wake_at() const override;
-  RxVerdict on_receive(ByteView rx, TimePoint now) override;
-  void on_no_reply(TimePoint now) override;
-  void on_comm_lost(TimePoint now) override;
-
-  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override;
-  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override;
+  DRIVEGATE_DRIVER_OVERRIDES;
 
  private:
   enum class Phase : std::uint8_t { build_information, running_limits, polling };

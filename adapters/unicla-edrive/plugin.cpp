@@ -6,6 +6,7 @@
 
 #include "codec.h"
 #include "drivegate/adapter.h"
+#include "drivegate/addressed.h"
 #include "driver.h"
 #include "settings.h"
 #include "simulator.h"
@@ -23,19 +24,15 @@ std::optional<std::uint8_t> device_id(std::uint32_t address, std::string& error)
 }
 
 std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
-  const auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
-  const auto id = device_id(env.address, error);
-  if (!id) return nullptr;
-  return std::make_unique<EDriveDriver>(*id, env.poll_interval, *settings);
+  const auto d = addressed(env.options, env.address, error, parse_settings, device_id);
+  if (!d) return nullptr;
+  return std::make_unique<EDriveDriver>(d->address, env.poll_interval, d->settings);
 }
 
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
-  const auto settings = parse_settings(env.options, error);
-  if (!settings) return nullptr;
-  const auto id = device_id(env.address, error);
-  if (!id) return nullptr;
-  return std::make_unique<EDriveSimulator>(*id, settings->byte_order);
+  const auto d = addressed(env.options, env.address, error, parse_settings, device_id);
+  if (!d) return nullptr;
+  return std::make_unique<EDriveSimulator>(d->address, d->settings.byte_order);
 }
 
 }  // namespace

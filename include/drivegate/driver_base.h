@@ -4,6 +4,9 @@
 // fills these in, and overrides the protocol's part of Driver (traits, the line, the writes).
 // Header-only and compiled into each plugin: the daemon sees Driver alone, so the plugin ABI is
 // Driver's.
+//
+// DRIVEGATE_DRIVER_OVERRIDES declares, in a driver's class, the protocol's part every driver
+// overrides (the line and the writes); a driver adds the optional overrides it has after it.
 #pragma once
 
 #include <optional>
@@ -13,6 +16,17 @@
 #include "drivegate/driver.h"
 #include "drivegate/point.h"
 #include "drivegate/write_ledger.h"
+
+// The overrides every driver declares: traits, the line side, and the two halves of a write.
+#define DRIVEGATE_DRIVER_OVERRIDES                                                 \
+  [[nodiscard]] DriverTraits traits() const override;                              \
+  std::optional<Exchange> next_exchange(TimePoint now) override;                   \
+  [[nodiscard]] TimePoint wake_at() const override;                                \
+  RxVerdict on_receive(ByteView rx, TimePoint now) override;                       \
+  void on_no_reply(TimePoint now) override;                                        \
+  void on_comm_lost(TimePoint now) override;                                       \
+  [[nodiscard]] WriteCheck check(std::span<const WriteOp> request) const override; \
+  WriteStatus apply(const WriteOp& op, Ticket t, TimePoint now) override
 
 namespace drivegate {
 

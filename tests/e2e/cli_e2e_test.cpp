@@ -89,8 +89,10 @@ TEST(Cli, TheInstalledExampleNamesEveryAdapterAndItsModbusDeviceIsValid) {
   for (const auto& f : std::filesystem::directory_iterator(plugin_dir())) {
     const std::string name = f.path().filename().string();
     if (!name.starts_with("drivegate-") || f.path().extension() != ".so") continue;
-    ++plugins;
     const std::string id = name.substr(10, name.size() - 13);
+    // The tests' own plugin (support/test_adapter) is in the build's directory, never installed.
+    if (id == "test-drive") continue;
+    ++plugins;
     EXPECT_THAT(described, HasSubstr(" " + id)) << "etc/drivegate.toml's adapter key lacks " << id;
   }
   EXPECT_GT(plugins, 0u);

@@ -1,8 +1,9 @@
-// What happened, and when, end to end (docs/audit.md): the real daemon on a simulated
-// nidec-washer, its history read back the ways an engineer reads it (GET /api/v1/events,
-// `drivegate events`, `-f`, the log), after each kind of write: a PLC's on an operate listener,
-// a read-only client's refused one, the failsafe's stop when the PLC goes away, a reload, and the
-// shutdown stop. And the trends of /api/v1/trends following the drive.
+// What happened, and when, end to end (docs/audit.md): the real daemon on a simulated test
+// drive (the test plugin, tests/support/test_adapter), its history read back the ways an
+// engineer reads it (GET /api/v1/events, `drivegate events`, `-f`, the log), after each kind of
+// write: a PLC's on an operate listener, a read-only client's refused one, the failsafe's stop
+// when the PLC goes away, a reload, and the shutdown stop. And the trends of /api/v1/trends
+// following the drive.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -16,18 +17,19 @@ using namespace std::chrono_literals;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 
-std::string config(const std::filesystem::path& port, int read_port, int http_port,
-                   int poll_ms) {
+std::string config(const std::filesystem::path& port, int read_port, int http_port, int poll_ms) {
   return "[[listener]]\naddress = \"127.0.0.1:0\"\naccess = \"operate\"\n\n"
-         "[[listener]]\naddress = \"127.0.0.1:" + std::to_string(read_port) +
+         "[[listener]]\naddress = \"127.0.0.1:" +
+         std::to_string(read_port) +
          "\"\naccess = \"read\"\n\n"
-         "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) +
+         "[http]\nlisten = \"127.0.0.1:" +
+         std::to_string(http_port) +
          "\"\nrequests_per_s = 0\n\n"
-         "[[bus]]\nname = \"washer-line\"\nport = \"" + port.string() +
-         "\"\n\n[[device]]\nname = \"washer\"\nbus = \"washer-line\"\nadapter = \"nidec-washer\"\n"
-         "unit_id = 1\npoll_ms = " + std::to_string(poll_ms) +
-         "\nfailsafe_timeout_ms = 1000\nfailsafe_action = \"stop\"\n"
-         "[device.options]\nplatform = 8\n";
+         "[[bus]]\nname = \"drive-line\"\nport = \"" +
+         port.string() +
+         "\"\n\n[[device]]\nname = \"drive\"\nbus = \"drive-line\"\nadapter = \"test-drive\"\n"
+         "unit_id = 1\npoll_ms = " +
+         std::to_string(poll_ms) + "\nfailsafe_timeout_ms = 1000\nfailsafe_action = \"stop\"\n";
 }
 
 // `drivegate events ARGS...` run to its end: its output.
@@ -58,8 +60,8 @@ class HistoryE2E : public ::testing::Test {
   int read_port_ = free_port();
   int http_port_ = free_port();
   std::filesystem::path log_ = dir_ / "drivegated.log";
-  Sim sim_{"nidec-washer", dir_ / "washer"};
-  Daemon daemon_{dir_, config(dir_ / "washer", read_port_, http_port_, 500), {}, log_};
+  Sim sim_{"test-drive", dir_ / "drive"};
+  Daemon daemon_{dir_, config(dir_ / "drive", read_port_, http_port_, 500), {}, log_};
   Plc observer_{daemon_.port()};
 };
 
@@ -77,7 +79,7 @@ TEST_F(HistoryE2E, EveryWriteAndWhatCameOfItIsInTheHistory) {
   // The history through the CLI, oldest first: the PLC's run with its client address, the
   // refusal with why.
   const std::string commands = events_cli(http_port_, {"--kind", "command"});
-  EXPECT_THAT(commands, AllOf(HasSubstr("  command  "), HasSubstr("washer"),
+  EXPECT_THAT(commands, AllOf(HasSubstr("  command  "), HasSubstr("drive"),
                               HasSubstr("from modbus 127.0.0.1:"),
                               HasSubstr("setpoint_rpm=800 command=run_forward: ok"),
                               HasSubstr("on 127.0.0.1:" + std::to_string(read_port_)),
@@ -86,15 +88,19 @@ TEST_F(HistoryE2E, EveryWriteAndWhatCameOfItIsInTheHistory) {
   EXPECT_LT(commands.find("run_forward: ok"), commands.find("denied")) << commands;
 
   // The failsafe stops the drive when the PLC went away: its own command and the trip.
-  ASSERT_TRUE(eventually([&] {
-    return events("?kind=failsafe_tripped").find("\"failsafe_tripped\"") != std::string::npos;
-  }, 5s)) << events("");
-  ASSERT_TRUE(eventually([&] {
-    return events("?kind=command").find("\"source\":\"failsafe\"") != std::string::npos;
-  }, 5s)) << events("?kind=command");
+  ASSERT_TRUE(eventually(
+      [&] {
+        return events("?kind=failsafe_tripped").find("\"failsafe_tripped\"") != std::string::npos;
+      },
+      5s))
+      << events("");
+  ASSERT_TRUE(eventually(
+      [&] { return events("?kind=command").find("\"source\":\"failsafe\"") != std::string::npos; },
+      5s))
+      << events("?kind=command");
   EXPECT_THAT(events("?kind=command&limit=1"),
               AllOf(HasSubstr("\"points\":\"command=stop\""), HasSubstr("\"result\":\"ok\"")));
-  EXPECT_THAT(events("?device=washer&kind=drive_started"), HasSubstr("run_forward"));
+  EXPECT_THAT(events("?device=drive&kind=drive_started"), HasSubstr("run_forward"));
 
   // -f: a write made while it follows shows up within 2 s.
   Child follow({(bin_dir() / "drivegate").string(), "events", "-f", "-n", "1", "--http",
@@ -114,19 +120,22 @@ TEST_F(HistoryE2E, EveryWriteAndWhatCameOfItIsInTheHistory) {
   EXPECT_TRUE(seen) << "drivegate events -f did not show the write within 2 s";
 
   // Trends: the drive's speed and setpoint, once a second.
-  EXPECT_TRUE(eventually([&] {
-    const std::string t = http_get(http_port_, "/api/v1/trends?device=washer").body;
-    return t.find("\"speed_rpm\"") != std::string::npos && t.find("650") != std::string::npos;
-  }, 5s)) << http_get(http_port_, "/api/v1/trends?device=washer").body;
+  EXPECT_TRUE(eventually(
+      [&] {
+        const std::string t = http_get(http_port_, "/api/v1/trends?device=drive").body;
+        return t.find("\"speed_rpm\"") != std::string::npos && t.find("650") != std::string::npos;
+      },
+      5s))
+      << http_get(http_port_, "/api/v1/trends?device=drive").body;
   EXPECT_EQ(http_get(http_port_, "/api/v1/events?kind=nonsense").status, 400);
   EXPECT_EQ(http_get(http_port_, "/api/v1/events?limit=x").status, 400);
 
   // A reload: what changed.
-  std::ofstream(daemon_.config()) << config(dir_ / "washer", read_port_, http_port_, 400);
+  std::ofstream(daemon_.config()) << config(dir_ / "drive", read_port_, http_port_, 400);
   daemon_.process().signal(SIGHUP);
-  EXPECT_TRUE(eventually([&] {
-    return events("?kind=reload").find("device washer changed") != std::string::npos;
-  }, 5s)) << events("?kind=reload");
+  EXPECT_TRUE(eventually(
+      [&] { return events("?kind=reload").find("device drive changed") != std::string::npos; }, 5s))
+      << events("?kind=reload");
 
   // Shutdown stops the running drive: recorded as shutdown's (in the log: its journal stand-in).
   ASSERT_EQ(plc.write(reg::command, {1}), 0);

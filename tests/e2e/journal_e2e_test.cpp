@@ -21,10 +21,10 @@ using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-std::string washer(const std::filesystem::path& port) {
+std::string drive(const std::filesystem::path& port) {
   return "[[bus]]\nname = \"line\"\nport = \"" + port.string() +
-         "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
-         "adapter = \"nidec-washer\"\nunit_id = 1\n[device.options]\nplatform = 8\n";
+         "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\n"
+         "adapter = \"test-drive\"\nunit_id = 1\n";
 }
 
 // `drivegate write` audits its write into the journal, the daemon being stopped. Without journald
@@ -32,12 +32,12 @@ std::string washer(const std::filesystem::path& port) {
 // stderr as well.
 TEST(Journal, DrivegateWritesAuditRecordReachesTheJournalOrStderr) {
   TempDir dir;
-  Sim sim("nidec-washer", dir / "washer");
-  std::ofstream(dir / "drivegate.toml") << washer(dir / "washer");
+  Sim sim("test-drive", dir / "drive");
+  std::ofstream(dir / "drivegate.toml") << drive(dir / "drive");
   const auto write = [&](const std::string& assignment) {
     Child c(
         {(bin_dir() / "drivegate").string(), "write", "--config", (dir / "drivegate.toml").string(),
-         "--device", "washer", "--plugin-dir", plugin_dir().string(), assignment},
+         "--device", "drive", "--plugin-dir", plugin_dir().string(), assignment},
         dir / "stderr");
     const std::string out = c.read_line(20s).value_or("(nothing)");
     EXPECT_EQ(c.wait_exit(20s), 0) << out << "\n" << slurp(dir / "stderr");
@@ -49,7 +49,7 @@ TEST(Journal, DrivegateWritesAuditRecordReachesTheJournalOrStderr) {
     EXPECT_EQ(write("setpoint_rpm=300"), "setpoint_rpm=300: ok");
   }
   const std::string without = slurp(dir / "stderr");
-  EXPECT_THAT(without, AllOf(HasSubstr("write to washer (unit 1) from cli "),
+  EXPECT_THAT(without, AllOf(HasSubstr("write to drive (unit 1) from cli "),
                              HasSubstr(": setpoint_rpm=300: ok, ")))
       << without;
 
@@ -61,12 +61,12 @@ TEST(Journal, DrivegateWritesAuditRecordReachesTheJournalOrStderr) {
   }
   const std::string entry = journald.receive();
   EXPECT_THAT(entry,
-              AllOf(HasSubstr("MESSAGE=write to washer (unit 1) from cli "),
-                    HasSubstr("\nEVENT=command\n"), HasSubstr("\nDEVICE=washer\n"),
+              AllOf(HasSubstr("MESSAGE=write to drive (unit 1) from cli "),
+                    HasSubstr("\nEVENT=command\n"), HasSubstr("\nDEVICE=drive\n"),
                     HasSubstr("\nSOURCE=cli\n"), HasSubstr("\nPOINTS=setpoint_rpm=400\n"),
                     HasSubstr("\nRESULT=ok\n"), HasSubstr("\nSYSLOG_IDENTIFIER=drivegate\n")))
       << entry;
-  EXPECT_THAT(slurp(dir / "stderr"), Not(HasSubstr("write to washer")));
+  EXPECT_THAT(slurp(dir / "stderr"), Not(HasSubstr("write to drive")));
 }
 
 // One RTU frame on a new connection to 127.0.0.1:`port`: the reply's bytes (empty if none came).
@@ -96,7 +96,7 @@ std::vector<std::uint8_t> rtu_once(int port, Bytes frame) {
 // into the summaries the daemon writes as it stops.
 TEST(Journal, AReadOnlyClientConnectingForEveryWriteIsAFewLinesNotOneAConnection) {
   TempDir dir;
-  Sim sim("nidec-washer", dir / "washer");
+  Sim sim("test-drive", dir / "drive");
   const int tcp_port = free_port();
   const int rtu_port = free_port();
   Daemon daemon(dir,
@@ -105,7 +105,7 @@ TEST(Journal, AReadOnlyClientConnectingForEveryWriteIsAFewLinesNotOneAConnection
                     std::to_string(tcp_port) +
                     "\"\naccess = \"read\"\n\n[[listener]]\naddress = \"127.0.0.1:" +
                     std::to_string(rtu_port) + "\"\nframing = \"rtu\"\naccess = \"read\"\n\n" +
-                    washer(dir / "washer"),
+                    drive(dir / "drive"),
                 {}, dir / "drivegated.log");
   Plc plc(daemon.port());
   ASSERT_TRUE(plc.connect());
@@ -129,7 +129,7 @@ TEST(Journal, AReadOnlyClientConnectingForEveryWriteIsAFewLinesNotOneAConnection
   std::size_t rtu_lines = 0;
   std::uint64_t audited = 0;
   const std::regex summary(
-      R"( (\d+) writes? to washer \(unit 1\) from modbus(_rtu_tcp)? 127\.0\.0\.1 on )");
+      R"( (\d+) writes? to drive \(unit 1\) from modbus(_rtu_tcp)? 127\.0\.0\.1 on )");
   std::istringstream in(text);
   for (std::string line; std::getline(in, line);) {
     if (line.find("beyond its access level") != std::string::npos) {
@@ -138,7 +138,7 @@ TEST(Journal, AReadOnlyClientConnectingForEveryWriteIsAFewLinesNotOneAConnection
     std::smatch m;
     if (std::regex_search(line, m, summary)) {
       audited += std::stoull(m[1]);
-    } else if (line.find(" write to washer (unit 1) from modbus") != std::string::npos &&
+    } else if (line.find(" write to drive (unit 1) from modbus") != std::string::npos &&
                line.find(": denied (beyond access read)") != std::string::npos) {
       ++audited;
     }

@@ -1,6 +1,7 @@
-// /metrics end to end: drivegated with [http] on two simulated nidec-washer drives, its Prometheus
-// text checked by Debian's promtool (tools/deps.sh installs `prometheus`) and scraped by a real
-// Prometheus server on loopback, whose query API must agree with what a PLC reads over Modbus.
+// /metrics end to end: drivegated with [http] on two simulated test drives (the test plugin,
+// tests/support/test_adapter), its Prometheus text checked by Debian's promtool (tools/deps.sh
+// installs `prometheus`) and scraped by a real Prometheus server on loopback, whose query API
+// must agree with what a PLC reads over Modbus.
 // Then on every built adapter's simulator at once (as the demo runs them): promtool on their
 // points, units and state sets; Prometheus reading a temperature the simulated drive reports,
 // the command in force and the writes counted; and the Grafana dashboard the package ships
@@ -33,14 +34,14 @@ std::string slurp(const fs::path& file) {
   return text.str();
 }
 
-// Two drives, each on its own simulated line: "washer-a" (unit 1) and "washer-b" (unit 2).
+// Two drives, each on its own simulated line: "drive-a" (unit 1) and "drive-b" (unit 2).
 std::string config(const fs::path& a, const fs::path& b, int http_port) {
   std::string toml;
   int unit = 1;
-  for (const auto& [name, port] : {std::pair{"washer-a", a}, std::pair{"washer-b", b}}) {
+  for (const auto& [name, port] : {std::pair{"drive-a", a}, std::pair{"drive-b", b}}) {
     toml += "[[bus]]\nname = \"line-" + std::string(name) + "\"\nport = \"" + port.string() +
             "\"\n\n[[device]]\nname = \"" + name + "\"\nbus = \"line-" + name +
-            "\"\nadapter = \"nidec-washer\"\nunit_id = " + std::to_string(unit++) +
+            "\"\nadapter = \"test-drive\"\nunit_id = " + std::to_string(unit++) +
             "\npoll_ms = 100\n\n";
   }
   return toml + "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) + "\"\n";
@@ -121,9 +122,9 @@ class MetricsE2E : public ::testing::Test {
  protected:
   MetricsE2E()
       : http_port_(free_port()),
-        sim_a_("nidec-washer", dir_ / "washer-a"),
-        sim_b_("nidec-washer", dir_ / "washer-b"),
-        daemon_(dir_, config(dir_ / "washer-a", dir_ / "washer-b", http_port_), {},
+        sim_a_("test-drive", dir_ / "drive-a"),
+        sim_b_("test-drive", dir_ / "drive-b"),
+        daemon_(dir_, config(dir_ / "drive-a", dir_ / "drive-b", http_port_), {},
                 dir_ / "drivegated.log") {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
@@ -179,8 +180,8 @@ TEST_F(MetricsE2E, PromtoolFindsNothingToLint) {
   const HttpReply r = http_get(http_port_, "/metrics");
   ASSERT_EQ(r.status, 200);
   EXPECT_THAT(r.headers, HasSubstr("Content-Type: text/plain; version=0.0.4; charset=utf-8"));
-  EXPECT_THAT(r.body, HasSubstr("drivegate_device_speed_rpm{device=\"washer-a\""));
-  EXPECT_THAT(r.body, HasSubstr("drivegate_device_speed_rpm{device=\"washer-b\""));
+  EXPECT_THAT(r.body, HasSubstr("drivegate_device_speed_rpm{device=\"drive-a\""));
+  EXPECT_THAT(r.body, HasSubstr("drivegate_device_speed_rpm{device=\"drive-b\""));
   EXPECT_EQ(promtool_complaints(dir_.path(), r.body), "") << "promtool lint complaints";
 }
 
@@ -199,7 +200,7 @@ TEST_F(MetricsE2E, PrometheusScrapesWhatThePlcReads) {
   EXPECT_THAT(targets, HasSubstr("\"lastError\":\"\"")) << targets;
 
   for (const auto& [unit, device, expected] :
-       {std::tuple{1, "washer-a", a}, std::tuple{2, "washer-b", b}}) {
+       {std::tuple{1, "drive-a", a}, std::tuple{2, "drive-b", b}}) {
     const std::string promql = "drivegate_device_speed_rpm{device=\"" + std::string(device) + "\"}";
     std::optional<double> seen;
     EXPECT_TRUE(eventually(

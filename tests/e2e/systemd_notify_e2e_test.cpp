@@ -87,20 +87,20 @@ class SystemdEnvironment {
   SystemdEnvironment& operator=(const SystemdEnvironment&) = delete;
 };
 
-std::string washer(const std::filesystem::path& port) {
+std::string drive(const std::filesystem::path& port) {
   return "[[bus]]\nname = \"line\"\nport = \"" + port.string() +
-         "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\nadapter = \"nidec-washer\"\n"
+         "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\nadapter = \"test-drive\"\n"
          "unit_id = 1\n";
 }
 
 TEST(SystemdNotifyE2E, ReadyWatchdogReloadingAndStopping) {
   TempDir dir;
   NotifySocket systemd(dir / "notify");
-  Sim sim("nidec-washer", dir / "washer");
+  Sim sim("test-drive", dir / "drive");
   std::optional<Daemon> daemon;
   {
     const SystemdEnvironment env(dir / "notify", 400ms);  // WatchdogSec=0.4s: pings every 200 ms
-    daemon.emplace(dir, washer(dir / "washer"));
+    daemon.emplace(dir, drive(dir / "drive"));
   }
 
   ASSERT_TRUE(systemd.await("READY=1")) << systemd.dump();
@@ -157,22 +157,22 @@ int exec_reload(const Daemon& daemon_config, pid_t pid, std::string& output) {
 TEST(SystemdNotifyE2E, ReloadFailsForAFileThatDoesNotValidate) {
   TempDir dir;
   NotifySocket systemd(dir / "notify");
-  Sim sim("nidec-washer", dir / "washer");
+  Sim sim("test-drive", dir / "drive");
   std::optional<Daemon> daemon;
   {
     const SystemdEnvironment env(dir / "notify", 0us);
-    daemon.emplace(dir, washer(dir / "washer"));
+    daemon.emplace(dir, drive(dir / "drive"));
   }
   ASSERT_TRUE(systemd.await("READY=1")) << systemd.dump();
 
-  std::ofstream(daemon->config()) << washer(dir / "washer") << "poll_ms = \"fast\"\n";
+  std::ofstream(daemon->config()) << drive(dir / "drive") << "poll_ms = \"fast\"\n";
   std::string out;
   EXPECT_EQ(exec_reload(*daemon, daemon->process().pid(), out), 1) << out;
   EXPECT_NE(out.find("drivegate.toml:"), std::string::npos) << out;  // names the line
   EXPECT_FALSE(systemd.await("RELOADING=1", 1s)) << "the bad file reached the daemon";
   EXPECT_TRUE(daemon->process().running());
 
-  std::ofstream(daemon->config()) << washer(dir / "washer");
+  std::ofstream(daemon->config()) << drive(dir / "drive");
   out.clear();
   EXPECT_EQ(exec_reload(*daemon, daemon->process().pid(), out), 0) << out;
   EXPECT_TRUE(systemd.await("RELOADING=1")) << systemd.dump();

@@ -1,5 +1,5 @@
 // The descriptor the plugin exports, with the facts of the document every adapter states
-// (tests/support/descriptor_contract.h), and its factories' own rules.
+// (tests/support/descriptor_contract.h: the address range too), and its factories' own rules.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -34,18 +34,15 @@ TEST(Ed3100Plugin, TheFactoriesUseTheOptions) {
   env.options = test::options_of(drivegate_adapter);
   std::string error;
   EXPECT_TRUE(drivegate_adapter.create_driver(env, error)) << error;
-  env.address = 40;
-  EXPECT_FALSE(drivegate_adapter.create_driver(env, error));
-  EXPECT_NE(error.find("address"), std::string::npos);
-  env.address = 31;
   env.options = test::options_of(drivegate_adapter, {{"poles", "5"}});
   EXPECT_FALSE(drivegate_adapter.create_driver(env, error));
   EXPECT_NE(error.find("poles"), std::string::npos);
 
   SimEnv sim{31, test::options_of(drivegate_adapter)};
   EXPECT_TRUE(drivegate_adapter.create_simulator(sim, error)) << error;
-  sim.address = 32;
+  sim.options = test::options_of(drivegate_adapter, {{"poles", "5"}});
   EXPECT_FALSE(drivegate_adapter.create_simulator(sim, error));
+  EXPECT_NE(error.find("poles"), std::string::npos);
 }
 
 }  // namespace

@@ -32,23 +32,6 @@ const test::DescriptorFacts kFacts{.id = "unicla-edrive",
                                    .demo_rpm = 3000};
 INSTANTIATE_TEST_SUITE_P(Unicla, DescriptorContract, testing::Values(kFacts));
 
-TEST(UniclaPlugin, FactoriesRefuseTheMasterAndGlobalAddresses) {
-  for (const std::uint32_t address : {0u, 255u, 256u}) {
-    DeviceEnv env;
-    env.address = address;
-    env.options = test::options_of(drivegate_adapter);
-    std::string error;
-    EXPECT_EQ(drivegate_adapter.create_driver(env, error), nullptr) << address;
-    EXPECT_NE(error.find("address"), std::string::npos);
-    SimEnv sim;
-    sim.address = address;
-    sim.options = env.options;
-    error.clear();
-    EXPECT_EQ(drivegate_adapter.create_simulator(sim, error), nullptr) << address;
-    EXPECT_NE(error.find("address"), std::string::npos);
-  }
-}
-
 TEST(UniclaSettings, FromTheOptions) {
   std::string error;
   const auto defaults = parse_settings(test::options_of(drivegate_adapter), error);

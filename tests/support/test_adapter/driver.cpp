@@ -1,0 +1,173 @@
+// TestDriveDriver: the poll, the writes, and what the bus engine hands back.
+#include "driver.h"
+
+#include <algorithm>
+#include <cstdlib>
+
+namespace drivegate::testdrive {
+namespace {
+
+constexpr Millis kReplyTimeout{100};
+constexpr Millis kCommTimeout{3000};
+constexpr Millis kInterFrameGap{2};
+constexpr Millis kWriteTimeout{3000};
+// The driver fails a write it could not send by then, before the gateway's backstop.
+constexpr Millis kSendBy = kWriteTimeout - kDeadlineMargin;
+constexpr std::uint8_t kAttempts = 3;
+
+Fault unified(std::uint8_t native) {
+  switch (static_cast<NativeFault>(native)) {
+    case NativeFault::none:
+      return Fault::none;
+    case NativeFault::over_current:
+      return Fault::over_current;
+    case NativeFault::stall:
+      return Fault::stall;
+    case NativeFault::over_temperature:
+      return Fault::drive_over_temperature;
+  }
+  return Fault::other;
+}
+
+}  // namespace
+
+TestDriveDriver::TestDriveDriver(std::uint8_t address, Millis poll_interval)
+    : DriverBase({input_point("drive_state", PointType::u16, "",
+                              "the drive's state byte: bit 0 running, bit 1 reverse")}),
+      address_(address),
+      poll_interval_(poll_interval) {}
+
+DriverTraits TestDriveDriver::traits() const {
+  return {kCommTimeout, kWriteTimeout, kInterFrameGap};
+}
+
+Exchange TestDriveDriver::exchange(const Request& r) const {
+  Exchange ex;
+  ex.frame = encode(r);
+  ex.timeout = kReplyTimeout;
+  ex.attempts = kAttempts;
+  return ex;
+}
+
+std::optional<Exchange> TestDriveDriver::next_exchange(TimePoint now) {
+  writes_.expire_after(now);
+  if (Writes::Entry* w = writes_.first_unsent(); w != nullptr && w == &writes_.front()) {
+    w->sent = true;
+    in_flight_ = w->job.request.op;
+    write_on_line_ = true;
+    last_sent_ = now;
+    return exchange(w->job.request);
+  }
+  if (next_poll_ && now < *next_poll_) return std::nullopt;
+  in_flight_ = Op::read;
+  write_on_line_ = false;
+  last_sent_ = now;
+  return exchange({address_, Op::read, 0});
+}
+
+TimePoint TestDriveDriver::wake_at() const {
+  if (!writes_.empty()) return TimePoint::min();
+  return next_poll_.value_or(TimePoint::min());
+}
+
+RxVerdict TestDriveDriver::on_receive(ByteView rx, TimePoint now) {
+  (void)now;
+  const Decoded<Reply> d = decode_reply(rx);
+  if (d.status == DecodeStatus::incomplete) return {RxKind::incomplete, 0};
+  if (d.status == DecodeStatus::bad) return damaged(d);
+  // Only the answer to the request on the line is taken: another address's, or a late answer
+  // to an earlier op, is foreign.
+  if (!in_flight_ || d.frame.address != address_ || d.frame.op != *in_flight_) {
+    return {RxKind::foreign, d.consumed};
+  }
+  if (write_on_line_) {
+    const Command c = writes_.front().job.command;
+    writes_.settle_front(WriteResult::ok);
+    common_.command = c;
+  }
+  apply_reply(d.frame);
+  in_flight_.reset();
+  write_on_line_ = false;
+  next_poll_ = last_sent_ + poll_interval_;
+  return {RxKind::reply, d.consumed};
+}
+
+void TestDriveDriver::apply_reply(const Reply& r) {
+  common_.ready = true;
+  common_.running = (r.state & kStateRunning) != 0;
+  common_.speed_rpm = r.speed_rpm;
+  common_.native_fault = r.fault;
+  common_.faults = {};
+  if (const Fault f = unified(r.fault); f != Fault::none) common_.faults.set(f);
+  values_[0] = std::int64_t{r.state};
+}
+
+void TestDriveDriver::on_no_reply(TimePoint now) {
+  // Every attempt went unanswered: a write on the line failed; the next poll goes at once.
+  if (write_on_line_) writes_.settle_front(WriteResult::no_response);
+  in_flight_.reset();
+  write_on_line_ = false;
+  next_poll_ = now;
+}
+
+void TestDriveDriver::on_comm_lost(TimePoint now) {
+  (void)now;
+  common_.ready = false;
+  common_.speed_rpm = 0;
+  common_.running = false;
+  common_.command = Command::stop;
+  in_flight_.reset();
+  write_on_line_ = false;
+  next_poll_.reset();
+  writes_.settle_all(WriteResult::no_response);
+}
+
+std::optional<Request> TestDriveDriver::run_request(Command c, std::int32_t rpm) const {
+  const auto arg = static_cast<std::uint16_t>(std::abs(rpm));
+  switch (c) {
+    case Command::run_forward:
+      return Request{address_, Op::run_forward, arg};
+    case Command::run_reverse:
+      return Request{address_, Op::run_reverse, arg};
+    case Command::stop:
+    case Command::quick_stop:
+      return Request{address_, Op::stop, 0};
+    case Command::reset_fault:
+      return Request{address_, Op::reset, 0};
+  }
+  return std::nullopt;
+}
+
+WriteCheck TestDriveDriver::check(std::span<const WriteOp> request) const {
+  return check_in_order(
+      request, {common_.command, common_.setpoint_rpm}, [](const WriteOp& op, const Proposed&) {
+        switch (op.target) {
+          case WriteOp::Target::setpoint:
+            return std::abs(op.rpm) <= kMaxRpm ? WriteCheck::ok : WriteCheck::invalid_value;
+          case WriteOp::Target::command:
+            return WriteCheck::ok;
+          case WriteOp::Target::point:  // drive_state is read-only
+          case WriteOp::Target::forward:
+            break;
+        }
+        return WriteCheck::invalid_value;
+      });
+}
+
+WriteStatus TestDriveDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
+  if (const auto no = refusal(check({&op, 1}))) return *no;
+  if (op.target == WriteOp::Target::setpoint) {
+    common_.setpoint_rpm = op.rpm;
+    if (!is_run(common_.command)) return WriteStatus::done;  // carried by the next run
+    const Command c = common_.command;
+    writes_.push({*run_request(c, op.rpm), c}, t, now + kSendBy);
+    return WriteStatus::pending;
+  }
+  // A quick stop stops: the command in force is then stop.
+  const Command c = op.command == Command::quick_stop ? Command::stop : op.command;
+  const Command in_force = c == Command::reset_fault ? common_.command : c;
+  writes_.push({*run_request(c, common_.setpoint_rpm), in_force}, t, now + kSendBy);
+  return WriteStatus::pending;
+}
+
+}  // namespace drivegate::testdrive

@@ -1,0 +1,114 @@
+// TestDriveSimulator: requests in, replies out, and the operator's commands.
+#include "simulator.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <utility>
+
+#include "drivegate/sim_text.h"
+
+namespace drivegate::testdrive {
+namespace {
+
+constexpr const char* kHelp =
+    "state, fault over_current|stall|over_temperature, clear, silent on|off, corrupt N";
+
+constexpr std::array<std::pair<std::string_view, NativeFault>, 3> kFaultNames = {{
+    {"over_current", NativeFault::over_current},
+    {"stall", NativeFault::stall},
+    {"over_temperature", NativeFault::over_temperature},
+}};
+
+}  // namespace
+
+Bytes TestDriveSimulator::on_receive(ByteView rx, TimePoint now) {
+  (void)now;
+  buffer_.insert(buffer_.end(), rx.begin(), rx.end());
+  Bytes out;
+  while (!buffer_.empty()) {
+    const Decoded<Request> d = decode_request(buffer_);
+    if (d.status == DecodeStatus::incomplete) break;
+    buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(d.consumed));
+    if (d.status != DecodeStatus::frame || d.frame.address != address_) continue;
+    Bytes reply = answer(d.frame);
+    out.insert(out.end(), reply.begin(), reply.end());
+  }
+  return out;
+}
+
+Bytes TestDriveSimulator::answer(const Request& r) {
+  switch (r.op) {
+    case Op::read:
+      break;
+    case Op::run_forward:
+    case Op::run_reverse:
+      if (fault_ != NativeFault::none) break;  // a tripped drive does not start
+      state_ = r.op == Op::run_reverse ? (kStateRunning | kStateReverse) : kStateRunning;
+      target_rpm_ = static_cast<std::int16_t>(r.op == Op::run_reverse ? -r.arg : r.arg);
+      break;
+    case Op::stop:
+      state_ = 0;
+      target_rpm_ = 0;
+      break;
+    case Op::reset:
+      fault_ = NativeFault::none;
+      break;
+  }
+  if (silent_) return {};
+  Bytes reply =
+      encode(Reply{address_, r.op, state_, static_cast<std::uint8_t>(fault_), speed_rpm_});
+  if (corrupt_ > 0) {
+    --corrupt_;
+    reply.back() = static_cast<std::uint8_t>(reply.back() + 1);
+  }
+  return reply;
+}
+
+Bytes TestDriveSimulator::on_tick(TimePoint now) {
+  const double seconds = last_tick_ ? std::chrono::duration<double>(now - *last_tick_).count() : 0;
+  last_tick_ = now;
+  const auto step = static_cast<int>(seconds * kRampRpmPerSecond);
+  const int gap = target_rpm_ - speed_rpm_;
+  speed_rpm_ = static_cast<std::int16_t>(speed_rpm_ + std::clamp(gap, -step, step));
+  return {};
+}
+
+std::string TestDriveSimulator::state() const {
+  return "state=" + hex(state_, 2) + " fault=" + std::to_string(static_cast<int>(fault_)) +
+         " speed=" + std::to_string(speed_rpm_) + " target=" + std::to_string(target_rpm_) +
+         " silent=" + (silent_ ? "on" : "off");
+}
+
+std::string TestDriveSimulator::control(std::string_view line, TimePoint now) {
+  (void)now;
+  const auto w = split_words(line);
+  if (w.size() == 1 && w[0] == "state") return state();
+  if (w.size() == 1 && w[0] == "clear") {
+    fault_ = NativeFault::none;
+    return "ok";
+  }
+  if (w.size() == 2 && w[0] == "fault") {
+    for (const auto& [name, code] : kFaultNames) {
+      if (w[1] != name) continue;
+      fault_ = code;
+      state_ = 0;  // a fault stops the motor, at once
+      speed_rpm_ = 0;
+      target_rpm_ = 0;
+      return "ok fault=" + w[1];
+    }
+  }
+  if (w.size() == 2 && w[0] == "silent" && parse_on_off(w[1])) {
+    silent_ = *parse_on_off(w[1]);
+    return "ok silent=" + w[1];
+  }
+  if (w.size() == 2 && w[0] == "corrupt") {
+    if (const auto n = parse_unsigned(w[1], 1000)) {
+      corrupt_ = *n;
+      return "ok corrupt=" + w[1];
+    }
+  }
+  return std::string("error: unknown command '") + std::string(line) + "'; commands: " + kHelp;
+}
+
+}  // namespace drivegate::testdrive

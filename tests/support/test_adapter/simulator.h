@@ -1,0 +1,43 @@
+// The simulated test drive: answers its address's requests (codec.h), ramps at kRampRpmPerSecond
+// to the speed the last run asked for (and to 0 after a stop), stops at once on a fault, and
+// takes operator commands: state, fault NAME, clear, silent on|off, corrupt N (the next N
+// replies with a wrong sum).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "codec.h"
+#include "drivegate/simulator.h"
+
+namespace drivegate::testdrive {
+
+// How fast the simulated motor's speed follows a run or a stop, either way.
+inline constexpr double kRampRpmPerSecond = 2000.0;
+
+class TestDriveSimulator final : public Simulator {
+ public:
+  explicit TestDriveSimulator(std::uint8_t address) : address_(address) {}
+
+  Bytes on_receive(ByteView rx, TimePoint now) override;
+  Bytes on_tick(TimePoint now) override;
+  std::string control(std::string_view line, TimePoint now) override;
+
+ private:
+  Bytes answer(const Request& r);
+  [[nodiscard]] std::string state() const;
+
+  std::uint8_t address_;
+  Bytes buffer_;
+  std::uint8_t state_ = 0;
+  NativeFault fault_ = NativeFault::none;
+  std::int16_t speed_rpm_ = 0;
+  std::int16_t target_rpm_ = 0;
+  std::optional<TimePoint> last_tick_;
+  bool silent_ = false;
+  std::uint32_t corrupt_ = 0;
+};
+
+}  // namespace drivegate::testdrive

@@ -1,0 +1,84 @@
+// The test-drive plugin the core's tests run on: its frames byte for byte, the descriptor
+// contract every adapter passes (the demo device runs at its speed through the real bus engine),
+// and the simulator's answers.
+#include <gtest/gtest.h>
+
+#include "adapter_bench.h"
+#include "adapter_under_test.h"
+#include "codec.h"
+#include "common_block.h"
+#include "descriptor_contract.h"
+#include "simulator.h"
+
+namespace drivegate::testdrive {
+namespace {
+
+using test::DescriptorContract;
+
+const test::DescriptorFacts kFacts{.id = "test-drive",
+                                   .options = {},
+                                   .line = {9600, Parity::none, 8, 1, false},
+                                   .address_min = 1,
+                                   .address_max = 247,
+                                   .default_address = 1,
+                                   .streaming = false,
+                                   .demo_options = {},
+                                   .demo_rpm = 1500};
+INSTANTIATE_TEST_SUITE_P(TestDrive, DescriptorContract, testing::Values(kFacts));
+
+TEST(TestDriveCodec, FramesSumToZero) {
+  // 3C 01 02 05 DC add up to 0x120: the sum byte is 0xE0. 3E 07 03 03 00 FA 24: 0x169, 0x97.
+  EXPECT_EQ(encode(Request{1, Op::run_forward, 1500}), (Bytes{0x3C, 0x01, 0x02, 0x05, 0xDC, 0xE0}));
+  const Bytes reply = encode(Reply{7, Op::run_reverse, 0x03, 0, -1500});
+  EXPECT_EQ(reply, (Bytes{0x3E, 0x07, 0x03, 0x03, 0x00, 0xFA, 0x24, 0x97}));
+  const auto d = decode_reply(reply);
+  ASSERT_EQ(d.status, DecodeStatus::frame);
+  EXPECT_EQ(d.frame, (Reply{7, Op::run_reverse, 0x03, 0, -1500}));
+}
+
+TEST(TestDriveCodec, RefusesWhatIsNotAFrame) {
+  EXPECT_EQ(decode_request(Bytes{0x3C, 0x01}).status, DecodeStatus::incomplete);
+  const auto noise = decode_request(Bytes{0x00, 0x3C});
+  EXPECT_EQ(noise.status, DecodeStatus::bad);
+  EXPECT_EQ(noise.consumed, 1u);
+  const auto bad_sum = decode_request(Bytes{0x3C, 0x01, 0x02, 0x05, 0xDC, 0xE1});
+  EXPECT_EQ(bad_sum.status, DecodeStatus::bad);
+  EXPECT_EQ(bad_sum.error, make_error_code(FrameError::bad_checksum));
+  EXPECT_EQ(bad_sum.consumed, 6u);
+  Bytes unknown_op = {0x3C, 0x01, 0x09, 0x00, 0x00};
+  unknown_op.push_back(sum_byte(unknown_op));
+  EXPECT_EQ(decode_request(unknown_op).error, make_error_code(FrameError::bad_field));
+}
+
+TEST(TestDriveSimulator, AnswersItsAddressAndRampsToTheSpeedAsked) {
+  TestDriveSimulator sim(3);
+  const TimePoint t0{};
+  EXPECT_TRUE(sim.on_receive(encode(Request{4, Op::read, 0}), t0).empty());  // another's
+  EXPECT_EQ(sim.on_receive(encode(Request{3, Op::run_forward, 1000}), t0),
+            encode(Reply{3, Op::run_forward, kStateRunning, 0, 0}));
+  sim.on_tick(t0);
+  sim.on_tick(t0 + Millis(250));  // 2000 rpm/s: 500 rpm on
+  EXPECT_EQ(sim.on_receive(encode(Request{3, Op::read, 0}), t0),
+            encode(Reply{3, Op::read, kStateRunning, 0, 500}));
+  EXPECT_EQ(sim.control("fault stall", t0), "ok fault=stall");
+  EXPECT_EQ(sim.on_receive(encode(Request{3, Op::read, 0}), t0),
+            encode(Reply{3, Op::read, 0, static_cast<std::uint8_t>(NativeFault::stall), 0}));
+  EXPECT_EQ(sim.control("silent on", t0), "ok silent=on");
+  EXPECT_TRUE(sim.on_receive(encode(Request{3, Op::reset, 0}), t0).empty());
+  EXPECT_EQ(sim.control("bogus", t0).rfind("error: ", 0), 0u);
+}
+
+// Through the real bus engine: a setpoint is stored while stopped, a run is in force once the
+// drive answered it, and the common block follows the drive's ramp to the speed asked.
+TEST(TestDriveDriver, RunsAtTheSpeedAsked) {
+  test::AdapterBench b(drivegate_adapter, {});
+  ASSERT_TRUE(b.until_online(Millis(0), Millis(5000)));
+  EXPECT_TRUE(b.stores_without_traffic(900));
+  EXPECT_TRUE(b.run_forward_at(1200));
+  EXPECT_EQ(b.read("command"), test::common_block::cmd::run_forward);
+  EXPECT_EQ(b.read("setpoint_rpm"), 1200u);
+  EXPECT_TRUE(b.until_reads("speed_rpm", 1200, Millis(3000)));
+}
+
+}  // namespace
+}  // namespace drivegate::testdrive
