@@ -665,8 +665,11 @@ class Parser {
       p.spec.name = *name;
       if (auto tb = r.choice("table", kTableNames, true))
         p.spec.table = static_cast<drivegate::Table>(*tb);
-      if (auto ty = r.choice("type", kPointTypeNames, true))
-        p.spec.type = static_cast<PointType>(*ty);
+      // The register map's types up to string: a description's values are not 64 bits wide.
+      constexpr std::array<std::string_view, 6> kTypes = {kPointTypeNames[0], kPointTypeNames[1],
+                                                          kPointTypeNames[2], kPointTypeNames[3],
+                                                          kPointTypeNames[4], kPointTypeNames[5]};
+      if (auto ty = r.choice("type", kTypes, true)) p.spec.type = static_cast<PointType>(*ty);
       if (auto s = r.number("scale", -1e9, 1e9, false)) {
         if (*s == 0.0) diag_.error(r.node("scale"), "point.scale", "must not be 0");
         p.spec.scale = *s;

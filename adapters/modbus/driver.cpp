@@ -502,8 +502,12 @@ std::optional<double> ModbusDriver::engineering(std::optional<std::size_t> point
 
 std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) const {
   if (!b || !raw_[b->point]) return std::nullopt;
-  // Any of the binding's bits of the point's value (a bit point's value is its bit 0).
-  return (masked(profile_.points[b->point], (*raw_[b->point])[0]) & b->mask()) != 0;
+  // Any of the binding's bits of the point's value (a bit point's value is its bit 0), or the
+  // value one of its codes.
+  const std::uint16_t value = masked(profile_.points[b->point], (*raw_[b->point])[0]);
+  if (!b->values.empty())
+    return std::find(b->values.begin(), b->values.end(), value) != b->values.end();
+  return (value & b->mask()) != 0;
 }
 
 void ModbusDriver::update_common() {

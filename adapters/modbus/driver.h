@@ -156,6 +156,7 @@ class ModbusDriver final : public DriverBase {
   [[nodiscard]] std::optional<Write> write_of(const WriteOp& op) const;
   [[nodiscard]] WriteCheck judge(const WriteOp& op) const;
   [[nodiscard]] Job write_job(const Writes::Entry& e) const;
+  static void skip_the_way_in(Write& w);
   void confirm(const Job& j, ByteView pdu);
   void put_in_force(const Write& w);
   void fail_inflight();

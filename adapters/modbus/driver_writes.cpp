@@ -47,9 +47,10 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       }
       if (!b) return std::nullopt;
       w.change = Change::command;
-      w.point = b->points.front();
       w.points = b->points;
       w.sequence = b->sequence;
+      if (w.command != Command::stop && common_.running) skip_the_way_in(w);
+      w.point = w.points.front();
       w.words = {w.sequence.front()};
       return w;
     }
@@ -146,6 +147,26 @@ ModbusDriver::Job ModbusDriver::write_job(const Writes::Entry& e) const {
     for (const std::uint16_t word : w.words) put_be16(j.pdu, word);
   }
   return j;
+}
+
+// A run or reset command's steps on its last step's point are the way into the drive's running
+// state (CiA 402's 6, 7 before 15; ABB's 0x047E before 0x047F): written to a drive that runs,
+// they would take it out of that state first, coasting or ramping the motor down for a moment.
+// While the drive reads as running, only the last of them is written; steps on other points (a
+// direction coil before the run coil) are written as they are. A stop is written whole.
+void ModbusDriver::skip_the_way_in(Write& w) {
+  const std::size_t last = w.points.back();
+  std::vector<std::uint16_t> sequence;
+  std::vector<std::size_t> points;
+  for (std::size_t i = 0; i + 1 < w.sequence.size(); ++i) {
+    if (w.points[i] == last) continue;
+    sequence.push_back(w.sequence[i]);
+    points.push_back(w.points[i]);
+  }
+  sequence.push_back(w.sequence.back());
+  points.push_back(last);
+  w.sequence = std::move(sequence);
+  w.points = std::move(points);
 }
 
 // The slave's echo: FC 05 and 06 repeat the request, FC 16 its address and quantity.

@@ -448,34 +448,76 @@ class Parser {
     const toml::table* t = inline_table(common, key);
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common." + std::string(key), diag_);
-    r.expect({"point", "bit", "any_bit"});
+    r.expect({"point", "bit", "any_bit", "any_value"});
     const auto index = point_at(r, "point", true, Use::read);
     const ProfilePoint* p = index ? &profile_.points[*index] : nullptr;
     if (p == nullptr) {
       r.node("bit");
       r.node("any_bit");
+      r.node("any_value");
       return std::nullopt;
     }
     if (p->type == ValueType::bit) {
-      for (const char* k : {"bit", "any_bit"}) {
+      for (const char* k : {"bit", "any_bit", "any_value"}) {
         if (r.node(k) != nullptr) {
           diag_.error(r.node(k), r.qualified(k),
                       "a bit point has no bits but its own: omit " + std::string(k));
           return std::nullopt;
         }
       }
-      return BitBinding{*index, {0}};
+      return BitBinding{*index, {0}, {}};
     }
     if (p->width() != 1) {
       r.node("bit");
       r.node("any_bit");
+      r.node("any_value");
       diag_.error(r.node("point"), r.qualified("point"),
                   "'" + p->name + "' must be a one-register point (u16, s16) or a bit point");
       return std::nullopt;
     }
+    if (const toml::node* codes = r.node("any_value")) {
+      auto values = values_of(r, *p, codes);
+      if (!values) return std::nullopt;
+      return BitBinding{*index, {}, std::move(*values)};
+    }
     auto bits = bits_of(r, *p);
     if (!bits) return std::nullopt;
-    return BitBinding{*index, std::move(*bits)};
+    return BitBinding{*index, std::move(*bits), {}};
+  }
+
+  // any_value = [N, M, ...]: the state codes of a one-register point's value (a masked point's
+  // value is its bits shifted down) that mean true; neither bit nor any_bit beside it.
+  std::optional<std::vector<std::uint16_t>> values_of(TableReader& r, const ProfilePoint& p,
+                                                      const toml::node* codes) {
+    for (const char* k : {"bit", "any_bit"}) {
+      if (r.node(k) != nullptr) {
+        diag_.error(r.node(k), r.qualified(k), std::string(k) + " or any_value, not both");
+        return std::nullopt;
+      }
+    }
+    const auto* array = codes->as_array();
+    if (array == nullptr || array->empty() || array->size() > 16) {
+      diag_.error(codes, r.qualified("any_value"),
+                  "must be a list of 1..16 values of the point, such as [1, 2]");
+      return std::nullopt;
+    }
+    const std::uint16_t largest = masked(p, 0xFFFF);
+    std::vector<std::uint16_t> values;
+    for (const toml::node& n : *array) {
+      const auto* i = n.as_integer();
+      if (i == nullptr || i->get() < 0 || i->get() > largest) {
+        diag_.error(&n, r.qualified("any_value"),
+                    "values are numbers 0.." + std::to_string(largest) + " of '" + p.name + "'");
+        return std::nullopt;
+      }
+      const auto v = static_cast<std::uint16_t>(i->get());
+      if (std::find(values.begin(), values.end(), v) != values.end()) {
+        diag_.error(&n, r.qualified("any_value"), std::to_string(v) + " is listed twice");
+        return std::nullopt;
+      }
+      values.push_back(v);
+    }
+    return values;
   }
 
   // bit = N or any_bit = [N, M, ...]: bits of a one-register point's value (a masked point's

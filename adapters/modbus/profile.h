@@ -116,9 +116,12 @@ struct ProfilePoint {
 // Bits of a register point's value, any of them set meaning true:
 // running = { point = "status_word", bit = 2 } or { ..., any_bit = [0, 1] }. A bit point's
 // binding has the one bit 0 (the point's value).
+// running = { point = "run_state", any_value = [1, 2] }: true when the point's value (a state
+// code, not bits) is one of `values`; `bits` is then empty.
 struct BitBinding {
-  std::size_t point = 0;           // index into Profile::points
-  std::vector<std::uint8_t> bits;  // 0..15, as the profile lists them, at least one
+  std::size_t point = 0;              // index into Profile::points
+  std::vector<std::uint8_t> bits;     // 0..15, as the profile lists them, at least one
+  std::vector<std::uint16_t> values;  // any_value: the codes that mean true
 
   // The bits as a mask of the point's value.
   [[nodiscard]] std::uint16_t mask() const {

@@ -308,6 +308,24 @@ void ModbusSimulator::drive() {
       return;
     }
     const int shift = p.mask ? std::countr_zero(*p.mask) : 0;
+    if (!b->values.empty()) {
+      // A state code: the nth listed when on; when off, and the code is this binding's, the
+      // first code 0, 1, 2... that is not (another binding of the point keeps its own code).
+      const std::uint16_t field = p.mask ? *p.mask : 0xFFFF;
+      const auto code = static_cast<std::uint16_t>((word & field) >> shift);
+      const auto listed = [&](std::uint16_t v) {
+        return std::find(b->values.begin(), b->values.end(), v) != b->values.end();
+      };
+      std::uint16_t next = code;
+      if (on) {
+        next = b->values[std::min(nth, b->values.size() - 1)];
+      } else if (listed(code)) {
+        next = 0;
+        while (listed(next)) ++next;
+      }
+      word = static_cast<std::uint16_t>((word & ~field) | ((next << shift) & field));
+      return;
+    }
     word = static_cast<std::uint16_t>(word & ~(b->mask() << shift));
     const std::uint8_t bit = b->bits[std::min(nth, b->bits.size() - 1)];
     if (on) word = static_cast<std::uint16_t>(word | 1u << (bit + shift));

@@ -691,5 +691,173 @@ TEST(BindingsOnTheBus, ATripBitFieldIsTheUnifiedFaultAndItsValueTheNativeOne) {
   EXPECT_NE(b.status() & kFaulted, 0u);
 }
 
+// ---- While the drive runs, a run command does not take it out of its running state
+
+// A CiA 402-like drive: the control word at holding 0 (6 shutdown, 7 switch on, 15 enable
+// operation, 0x080F the same in reverse), its state at input 1 as codes (1 running forward, 2
+// reverse, 3 tripped), its speed at input 2. The way into operation is 6, 7, 15; from a
+// running drive, 6 would switch the power stage off and the motor coast.
+const std::string kStateMachine =
+    "[profile]\nname = \"cia\"\nsource = \"a test\"\n"
+    "[[point]]\nname = \"control\"\ntable = \"holding\"\naddress = 0\ntype = \"u16\"\n"
+    "[[point]]\nname = \"state\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
+    "[[point]]\nname = \"speed\"\ntable = \"input\"\naddress = 2\ntype = \"s16\"\n"
+    "[[point]]\nname = \"reference\"\ntable = \"holding\"\naddress = 3\ntype = \"s16\"\n"
+    "[common]\nspeed_rpm = \"speed\"\nsetpoint_rpm = \"reference\"\n"
+    "running = { point = \"state\", any_value = [1, 2] }\n"
+    "fault = { point = \"state\", any_value = [3] }\n"
+    "stop = { point = \"control\", sequence = [0x0007] }\n"
+    "run_forward = { point = \"control\", sequence = [0x0006, 0x0007, 0x000F] }\n"
+    "run_reverse = { point = \"control\", sequence = [0x0006, 0x0007, 0x080F] }\n"
+    "reset_fault = { point = \"control\", sequence = [0x0080, 0x0006] }\n";
+
+// The driver against the simulator of the same profile: every exchange until the driver has
+// nothing to send for a while; the frames it sent (the requests).
+struct AgainstItsSimulator {
+  explicit AgainstItsSimulator(const std::string& text)
+      : d{kSlave, parsed(text), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms},
+        sim{kSlave, parsed(text)} {}
+
+  std::vector<Bytes> pump(std::chrono::milliseconds for_how_long = 1200ms) {
+    std::vector<Bytes> sent;
+    const TimePoint until = now + for_how_long;
+    while (now < until) {
+      const auto ex = d.next_exchange(now);
+      if (!ex) {
+        now += 10ms;
+        continue;
+      }
+      sent.push_back(ex->frame);
+      const Bytes reply = sim.on_receive(ex->frame, now);
+      if (!reply.empty()) d.on_receive(reply, now);
+      now += 5ms;
+    }
+    return sent;
+  }
+  // The writes among them: FC 05, 06 and 16.
+  std::vector<Bytes> writes(std::chrono::milliseconds for_how_long = 1200ms) {
+    std::vector<Bytes> out;
+    for (Bytes& f : pump(for_how_long)) {
+      if (f.size() > 1 && (f[1] == 0x05 || f[1] == 0x06 || f[1] == 0x10)) out.push_back(f);
+    }
+    return out;
+  }
+  void command(Command c) {
+    const WriteOp op = WriteOp::of_command(c);
+    ASSERT_EQ(d.apply(op, ++ticket, now), WriteStatus::pending);
+  }
+
+  ModbusDriver d;
+  ModbusSimulator sim;
+  TimePoint now = TimePoint{} + 10s;
+  Ticket ticket = 0;
+};
+
+Bytes write_control(std::uint16_t value) {
+  return frame({0x06, 0x00, 0x00, static_cast<std::uint8_t>(value >> 8),
+                static_cast<std::uint8_t>(value & 0xFF)});
+}
+
+TEST(BindingsSequence, WhileTheDriveRunsOnlyARunsLastStepOnItsPointIsWritten) {
+  AgainstItsSimulator rig(kStateMachine);
+  rig.pump();
+  ASSERT_TRUE(rig.d.common().ready);
+  ASSERT_FALSE(rig.d.common().running);
+  // Stopped: the whole way in.
+  rig.command(Command::run_forward);
+  EXPECT_THAT(rig.writes(),
+              ElementsAre(write_control(0x0006), write_control(0x0007), write_control(0x000F)));
+  ASSERT_TRUE(rig.d.common().running);
+  // Running forward, reverse: the running state's own word, never 6 (power stage off) first.
+  rig.command(Command::run_reverse);
+  EXPECT_THAT(rig.writes(), ElementsAre(write_control(0x080F)));
+  EXPECT_TRUE(rig.d.common().running);
+  EXPECT_EQ(rig.d.common().command, Command::run_reverse);
+  // A stop is written whole, running or not.
+  rig.command(Command::stop);
+  EXPECT_THAT(rig.writes(), ElementsAre(write_control(0x0007)));
+  EXPECT_FALSE(rig.d.common().running);
+  // Stopped again: the whole way in again.
+  rig.command(Command::run_forward);
+  EXPECT_THAT(rig.writes(),
+              ElementsAre(write_control(0x0006), write_control(0x0007), write_control(0x000F)));
+}
+
+TEST(BindingsSequence, WhileTheDriveRunsStepsOnOtherPointsAreStillWritten) {
+  // The direction coil before the run coil: from a drive running forward, run reverse must
+  // still turn the direction coil ON; only steps on the run coil's own point are the way in.
+  const std::string two_coils_with_state =
+      kCoilDrive +
+      "[common]\nrunning = { point = \"state\", any_bit = [0, 1] }\n"
+      "stop = { point = \"run_coil\", value = 0 }\n"
+      "run_forward = { sequence = [{ point = \"direction_coil\", value = 0 }, "
+      "{ point = \"run_coil\", value = 1 }] }\n"
+      "run_reverse = { sequence = [{ point = \"direction_coil\", value = 1 }, "
+      "{ point = \"run_coil\", value = 1 }] }\n";
+  AgainstItsSimulator rig(two_coils_with_state);
+  rig.pump();
+  rig.command(Command::run_forward);
+  rig.pump();
+  ASSERT_TRUE(rig.d.common().running);
+  rig.command(Command::run_reverse);
+  EXPECT_THAT(rig.writes(), ElementsAre(frame({0x05, 0x00, 0x01, 0xFF, 0x00}),
+                                        frame({0x05, 0x00, 0x00, 0xFF, 0x00})));
+  EXPECT_EQ(rig.d.common().command, Command::run_reverse);
+}
+
+// ---- States as codes: any_value
+
+TEST(Bindings, AnyValueIsOneToSixteenCodesOfAOneRegisterPoint) {
+  const auto text = [](const std::string& binding) {
+    return std::string(
+               "[profile]\nname = \"codes\"\nsource = \"a test\"\n"
+               "[[point]]\nname = \"state\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
+               "[[point]]\nname = \"low\"\ntable = \"input\"\naddress = 2\ntype = \"u16\"\n"
+               "mask = 0x000F\n"
+               "[[point]]\nname = \"wide\"\ntable = \"input\"\naddress = 4\ntype = \"u32\"\n"
+               "[common]\nrunning = ") +
+           binding + "\n";
+  };
+  const auto common = [&](const std::string& binding) { return errors_of(text(binding)); };
+  const Profile p = parsed(text("{ point = \"state\", any_value = [1, 2] }"));
+  ASSERT_TRUE(p.common.running);
+  EXPECT_THAT(p.common.running->values, ElementsAre(1, 2));
+  EXPECT_TRUE(p.common.running->bits.empty());
+  EXPECT_THAT(parsed(text("{ point = \"low\", any_value = [15] }")).common.running->values,
+              ElementsAre(15));
+  EXPECT_THAT(common("{ point = \"low\", any_value = [16] }"),
+              ElementsAre(HasSubstr("p.toml:21: common.running.any_value: values are "
+                                    "numbers 0..15 of 'low'")));
+  EXPECT_THAT(common("{ point = \"state\", any_value = [1, 1] }"),
+              ElementsAre(HasSubstr("common.running.any_value: 1 is listed twice")));
+  EXPECT_THAT(common("{ point = \"state\", any_value = [] }"),
+              ElementsAre(HasSubstr("common.running.any_value: must be a list of 1..16")));
+  EXPECT_THAT(common("{ point = \"state\", any_value = [\"1\"] }"),
+              ElementsAre(HasSubstr("common.running.any_value: values are numbers 0..65535")));
+  EXPECT_THAT(common("{ point = \"state\", bit = 0, any_value = [1] }"),
+              ElementsAre(HasSubstr("common.running.bit: bit or any_value, not both")));
+  EXPECT_THAT(common("{ point = \"wide\", any_value = [1] }"),
+              ElementsAre(HasSubstr("'wide' must be a one-register point")));
+}
+
+TEST(BindingsSimulator, StateCodesFollowTheDriveAndLeaveEachOthersCodeAlone) {
+  AgainstItsSimulator rig(kStateMachine);
+  rig.pump();
+  EXPECT_FALSE(rig.d.common().running);
+  EXPECT_TRUE(rig.d.common().faults.empty());
+  rig.command(Command::run_reverse);
+  rig.pump();
+  EXPECT_TRUE(rig.d.common().running);  // state 2, the second code listed
+  EXPECT_THAT(rig.sim.control("state", rig.now), HasSubstr("running reverse"));
+  rig.sim.control("fault 5", rig.now);
+  rig.pump();
+  EXPECT_FALSE(rig.d.common().running);  // a trip stops the output: state 3
+  EXPECT_FALSE(rig.d.common().faults.empty());
+  rig.sim.control("fault 0", rig.now);
+  rig.pump();
+  EXPECT_TRUE(rig.d.common().faults.empty());  // state 0: neither running nor tripped
+  EXPECT_FALSE(rig.d.common().running);
+}
+
 }  // namespace
 }  // namespace drivegate::modbus_device

@@ -118,13 +118,14 @@ TEST(ProfileTypes, AStringOrSixtyFourBitsCannotBeWhatTheCommonBlockWrites) {
                            "type = \"u64\"\n"  // lines 10-14
                            "[common]\nspeed_rpm = \"serial\"\nsetpoint_rpm = \"total\"\n"
                            "fault_code = { point = \"serial\" }\n";  // lines 15-18
-  EXPECT_THAT(parse_profile(text, "p.toml"),
-              testing::VariantWith<std::vector<std::string>>(ElementsAre(
-                  HasSubstr("p.toml:16: common.speed_rpm: must name a number, not a string"),
-                  HasSubstr("p.toml:17: common.setpoint_rpm: 'total' must be a one-register "
-                            "holding point"),
-                  HasSubstr("p.toml:18: common.fault_code.point: must name a number, not a "
-                            "string"))));
+  EXPECT_THAT(
+      parse_profile(text, "p.toml"),
+      testing::VariantWith<std::vector<std::string>>(ElementsAre(
+          HasSubstr("p.toml:16: common.speed_rpm: must name a number, not a string"),
+          HasSubstr("p.toml:17: common.setpoint_rpm: 'total' must be a holding point of type "
+                    "u16, s16, u32, s32 or f32"),
+          HasSubstr("p.toml:18: common.fault_code.point: must name a number, not a "
+                    "string"))));
 }
 
 TEST(ProfileTypes, LabelsNameBitsAndValues) {
