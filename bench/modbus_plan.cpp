@@ -161,9 +161,11 @@ std::string per_point_profile(const Profile& p) {
       << kProfileTableNames.at(static_cast<std::size_t>(q.table)) << "\"\naddress = " << moved
       << "\ntype = \"" << modbus_device::kValueTypeNames.at(static_cast<std::size_t>(q.type))
       << "\"\n";
-    if (q.width() == 2) {
-      o << "word_order = \""
-        << modbus_device::kWordOrderNames.at(static_cast<std::size_t>(q.word_order)) << "\"\n";
+    if (q.type == modbus_device::ValueType::string) {
+      o << "registers = " << q.width() << "\n";
+    } else if (q.width() > 1) {
+      o << "byte_order = \""
+        << modbus_device::kByteOrderNames.at(static_cast<std::size_t>(q.byte_order)) << "\"\n";
     }
   }
   return o.str();
