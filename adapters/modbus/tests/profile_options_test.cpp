@@ -15,6 +15,7 @@
 #include "driver.h"
 #include "plugin/adapter_options.h"
 #include "profile.h"
+#include "profile_support.h"
 #include "settings.h"
 #include "simulator.h"
 
@@ -22,6 +23,9 @@ namespace drivegate::modbus_device {
 namespace {
 
 using namespace std::chrono_literals;
+using support::completions;
+using support::errors_of;
+using support::parsed;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
@@ -120,21 +124,6 @@ stop = { point = "control_word", value = 0 }
 run_forward = { point = "control_word", value = 1 }
 )toml";
 
-Profile parsed(const std::string& text) {
-  auto r = parse_profile(text, "t.toml");
-  if (auto* e = std::get_if<std::vector<std::string>>(&r)) {
-    ADD_FAILURE() << ::testing::PrintToString(*e);
-    return {};
-  }
-  return std::get<Profile>(std::move(r));
-}
-
-std::vector<std::string> errors_of(const std::string& text) {
-  auto r = parse_profile(text, "t.toml");
-  if (auto* e = std::get_if<std::vector<std::string>>(&r)) return *e;
-  return {};
-}
-
 // kHzProfile with `from` replaced by `to`.
 std::string hz_with(const std::string& from, const std::string& to) {
   std::string s = kHzProfile;
@@ -167,14 +156,6 @@ Profile with_options(Profile p, const std::vector<std::pair<std::string, double>
   return p;
 }
 
-std::vector<std::pair<Ticket, WriteResult>> completions(Driver& d) {
-  std::vector<Completion> done;
-  d.take_completions(done);
-  std::vector<std::pair<Ticket, WriteResult>> out;
-  for (const Completion& c : done) out.emplace_back(c.ticket, c.result);
-  return out;
-}
-
 // --- [options.NAME] ---
 
 TEST(ProfileOptions, AreReadWithTheirRangesAndDefaults) {
@@ -190,7 +171,7 @@ TEST(ProfileOptions, AreReadWithTheirRangesAndDefaults) {
 
 TEST(ProfileOptions, BadDeclarationsAreErrorsOnTheirLines) {
   EXPECT_THAT(errors_of(hz_with("default = 4\n", "default = 50\n")),
-              ElementsAre(HasSubstr("t.toml:6: options.motor_poles.default: must be in min..max")));
+              ElementsAre(HasSubstr("p.toml:6: options.motor_poles.default: must be in min..max")));
   EXPECT_THAT(errors_of(hz_with("min = 2\nmax = 48", "min = 48\nmax = 2")),
               ElementsAre(HasSubstr("options.motor_poles.min: must be below max")));
   EXPECT_THAT(errors_of(hz_with("description = \"motor poles (nameplate)\"\n", "")),

@@ -1,5 +1,6 @@
 // What the modbus adapter's tests share: a profile's text read as a test expects it (accepted, or
-// refused with its errors), and the request and reply PDUs of a read.
+// refused with its errors), the request and reply PDUs of a read, and the write results a driver
+// reports.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "codec.h"
+#include "drivegate/driver.h"
 #include "profile.h"
 
 namespace drivegate::modbus_device::support {
@@ -48,6 +50,15 @@ inline std::vector<std::uint8_t> words_pdu(std::uint8_t function,
   std::vector<std::uint8_t> pdu = {function, static_cast<std::uint8_t>(2 * words.size())};
   for (const std::uint16_t w : words) put_be16(pdu, w);
   return pdu;
+}
+
+// The write results `d` reports, by ticket.
+inline std::vector<std::pair<Ticket, WriteResult>> completions(Driver& d) {
+  std::vector<Completion> done;
+  d.take_completions(done);
+  std::vector<std::pair<Ticket, WriteResult>> out;
+  for (const Completion& c : done) out.emplace_back(c.ticket, c.result);
+  return out;
 }
 
 }  // namespace drivegate::modbus_device::support

@@ -18,6 +18,7 @@
 #include "planner.h"
 #include "profile.h"
 #include "profile_examples.h"
+#include "profile_support.h"
 #include "settings.h"
 #include "simulator.h"
 
@@ -25,6 +26,9 @@ namespace drivegate::modbus_device {
 namespace {
 
 using namespace std::chrono_literals;
+using support::completions;
+using support::read_pdu;
+using support::words_pdu;
 using ::testing::ElementsAre;
 
 Profile shipped_profile(const std::string& name) {
@@ -38,29 +42,6 @@ Profile shipped_profile(const std::string& name) {
 
 Bytes hex(std::initializer_list<std::uint8_t> bytes) {
   return Bytes(bytes);
-}
-
-std::vector<std::uint8_t> read_pdu(std::uint8_t function, std::uint16_t start,
-                                   std::uint16_t count) {
-  std::vector<std::uint8_t> pdu = {function};
-  put_be16(pdu, start);
-  put_be16(pdu, count);
-  return pdu;
-}
-
-std::vector<std::uint8_t> words_pdu(std::uint8_t function, std::vector<std::uint16_t> words) {
-  std::vector<std::uint8_t> pdu = {function, static_cast<std::uint8_t>(2 * words.size())};
-  for (const std::uint16_t w : words) put_be16(pdu, w);
-  return pdu;
-}
-
-// The write results the driver reports, by ticket.
-std::vector<std::pair<Ticket, WriteResult>> completions(Driver& d) {
-  std::vector<Completion> done;
-  d.take_completions(done);
-  std::vector<std::pair<Ticket, WriteResult>> out;
-  for (const Completion& c : done) out.emplace_back(c.ticket, c.result);
-  return out;
 }
 
 // --- every shipped profile ---
