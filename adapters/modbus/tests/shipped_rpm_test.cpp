@@ -21,13 +21,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// The shipped profile `name`; a test failure, and an empty profile, if it is refused.
 Profile shipped_profile(const std::string& name) {
-  auto r = parse_profile(shipped::text(name), name + ".toml");
-  if (auto* errors = std::get_if<std::vector<std::string>>(&r)) {
-    ADD_FAILURE() << ::testing::PrintToString(*errors);
-    return {};
-  }
-  return std::get<Profile>(std::move(r));
+  return support::parsed(shipped::text(name));
 }
 
 ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
