@@ -240,11 +240,16 @@ Cost cost_of(const Line& l, std::size_t requests, std::size_t data_bytes) {
   return k;
 }
 
-// Points of one table, by address: {start, width}.
+// The registers (or bits) of one table the points occupy, by address: {start, width}. Masked
+// points share one register (a fault code in its high byte, a state in its low byte): it is read
+// once, so it is listed once.
 std::map<Table, std::vector<std::pair<unsigned, unsigned>>> by_table(const Profile& p) {
   std::map<Table, std::vector<std::pair<unsigned, unsigned>>> t;
   for (const ProfilePoint& q : p.points) t[q.table].emplace_back(q.address, q.width());
-  for (auto& [table, v] : t) std::sort(v.begin(), v.end());
+  for (auto& [table, v] : t) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  }
   return t;
 }
 
