@@ -299,6 +299,42 @@ TEST(EatonMMax, StopAndResetAreTheControlWordsBits) {
   EXPECT_EQ(d.check(std::span(&beyond, 1)), WriteCheck::invalid_value);
 }
 
+// --- Vacon 100 (DPD00156C and its FBFixed appendix) ---
+
+// FB Speed Reference 2003 (wire 2002) is 0..10000 of the span from the minimum to the maximum
+// frequency (appendix 8.4.10): with the drive's minimum at 10 Hz, 300 rpm (10 Hz at 4 poles) is
+// raw 0 and 900 rpm raw 5000, not the 3000 a span starting at 0 Hz would give.
+TEST(Vacon100, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
+  constexpr std::uint8_t kSlave = 1;
+  const TimePoint now = TimePoint{} + 10s;
+  const auto frame_for = [&](const std::vector<std::pair<std::string, double>>& set,
+                             std::int32_t rpm) {
+    Profile p = shipped_profile("vacon-100");
+    Options o;
+    for (const auto& [k, v] : set) o.set(k, v);
+    std::string error;
+    EXPECT_TRUE(apply_options(p, o, error)) << error;
+    ModbusDriver d(kSlave, p, Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+    const WriteOp op = WriteOp::of_setpoint(rpm);
+    EXPECT_EQ(d.apply(op, 1, now), WriteStatus::pending) << rpm;
+    return d.next_exchange(now)->frame;
+  };
+  const auto fc06 = [](std::uint16_t raw) {
+    return encode(Framing::rtu, kSlave,
+                  std::vector<std::uint8_t>{0x06, 0x07, 0xD2, static_cast<std::uint8_t>(raw >> 8),
+                                            static_cast<std::uint8_t>(raw & 0xFF)});
+  };
+  const std::vector<std::pair<std::string, double>> span = {{"min_frequency_hz", 10},
+                                                            {"max_frequency_hz", 50}};
+  EXPECT_EQ(frame_for(span, 300), fc06(0));
+  EXPECT_EQ(frame_for(span, 900), fc06(5000));
+  EXPECT_EQ(frame_for(span, 900), hex({0x01, 0x06, 0x07, 0xD2, 0x13, 0x88, 0x25, 0xD1}));
+  EXPECT_EQ(frame_for(span, 1500), fc06(10000));
+  // The defaults (0 - 50 Hz): 1500 rpm is the whole span.
+  EXPECT_EQ(frame_for({}, 1500), fc06(10000));
+  EXPECT_EQ(frame_for({}, 750), fc06(5000));
+}
+
 // --- ED3100 answering in the standard form ---
 
 constexpr std::uint8_t kEd3100 = 0x1F;  // the document's examples' address
