@@ -2,7 +2,10 @@
 #include "driver.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <variant>
+#include <vector>
 
 namespace drivegate::testdrive {
 namespace {
@@ -29,13 +32,31 @@ Fault unified(std::uint8_t native) {
   return Fault::other;
 }
 
+// The time accel's arg says, in seconds (100 ms units, codec.h).
+double seconds_of(std::uint16_t accel_100ms) {
+  return accel_100ms / 10.0;
+}
+
+std::vector<PointSpec> make_points() {
+  return {input_point("drive_state", PointType::u16, "",
+                      "the drive's state byte: bit 0 running, bit 1 reverse"),
+          holding_point("accel_time", PointType::u16, "s",
+                        "the drive's time from 0 to 3000 rpm (and back); sent at once, in force "
+                        "once the drive answered")
+              .scaled(0.1)
+              .limited(0.1, 6553.5)};
+}
+
 }  // namespace
 
-TestDriveDriver::TestDriveDriver(std::uint8_t address, Millis poll_interval)
-    : DriverBase({input_point("drive_state", PointType::u16, "",
-                              "the drive's state byte: bit 0 running, bit 1 reverse")}),
+TestDriveDriver::TestDriveDriver(std::uint8_t address, Millis poll_interval, Settings settings)
+    : DriverBase(make_points()),
       address_(address),
-      poll_interval_(poll_interval) {}
+      poll_interval_(poll_interval),
+      settings_(settings) {
+  // A drive starts with its factory accel time (codec.h) until one is written.
+  values_[pt::accel_time] = seconds_of(kDefaultAccel100ms);
+}
 
 DriverTraits TestDriveDriver::traits() const {
   return {kCommTimeout, kWriteTimeout, kInterFrameGap};
@@ -80,16 +101,23 @@ RxVerdict TestDriveDriver::on_receive(ByteView rx, TimePoint now) {
   if (!in_flight_ || d.frame.address != address_ || d.frame.op != *in_flight_) {
     return {RxKind::foreign, d.consumed};
   }
-  if (write_on_line_) {
-    const Command c = writes_.front().job.command;
-    writes_.settle_front(WriteResult::ok);
-    common_.command = c;
-  }
+  // Refused: the request stays on the line, and the bus engine sends it again.
+  if (d.frame.refused) return {RxKind::nack, d.consumed};
+  if (write_on_line_) settle_write(writes_.front().job.request);
   apply_reply(d.frame);
   in_flight_.reset();
   write_on_line_ = false;
   next_poll_ = last_sent_ + poll_interval_;
   return {RxKind::reply, d.consumed};
+}
+
+void TestDriveDriver::settle_write(const Request& sent) {
+  if (sent.op == Op::accel) {
+    values_[pt::accel_time] = seconds_of(sent.arg);
+  } else {
+    common_.command = writes_.front().job.command;
+  }
+  writes_.settle_front(WriteResult::ok);
 }
 
 void TestDriveDriver::apply_reply(const Reply& r) {
@@ -99,7 +127,7 @@ void TestDriveDriver::apply_reply(const Reply& r) {
   common_.native_fault = r.fault;
   common_.faults = {};
   if (const Fault f = unified(r.fault); f != Fault::none) common_.faults.set(f);
-  values_[0] = std::int64_t{r.state};
+  values_[pt::drive_state] = std::int64_t{r.state};
 }
 
 void TestDriveDriver::on_no_reply(TimePoint now) {
@@ -138,24 +166,47 @@ std::optional<Request> TestDriveDriver::run_request(Command c, std::int32_t rpm)
   return std::nullopt;
 }
 
+std::optional<std::uint16_t> TestDriveDriver::accel_of(const Value& v) {
+  if (!std::holds_alternative<std::int64_t>(v) && !std::holds_alternative<double>(v)) {
+    return std::nullopt;
+  }
+  const std::int64_t n = std::llround(as_double(v) * 10.0);
+  if (n < 1 || n > 0xFFFF) return std::nullopt;
+  return static_cast<std::uint16_t>(n);
+}
+
+WriteCheck TestDriveDriver::judge(const WriteOp& op, bool& faulted) const {
+  switch (op.target) {
+    case WriteOp::Target::setpoint:
+      return std::abs(op.rpm) <= kMaxRpm ? WriteCheck::ok : WriteCheck::invalid_value;
+    case WriteOp::Target::command:
+      if (op.command == Command::reset_fault) faulted = false;
+      if (!is_run(op.command)) return WriteCheck::ok;
+      if (op.command == Command::run_reverse && settings_.one_way) {
+        return WriteCheck::invalid_value;  // it cannot turn that way
+      }
+      return faulted ? WriteCheck::refused : WriteCheck::ok;  // a tripped drive does not start
+    case WriteOp::Target::point:
+      if (op.point == pt::accel_time && accel_of(op.value)) return WriteCheck::ok;
+      break;  // drive_state is read-only
+    case WriteOp::Target::forward:
+      break;
+  }
+  return WriteCheck::invalid_value;
+}
+
 WriteCheck TestDriveDriver::check(std::span<const WriteOp> request) const {
-  return check_in_order(
-      request, {common_.command, common_.setpoint_rpm}, [](const WriteOp& op, const Proposed&) {
-        switch (op.target) {
-          case WriteOp::Target::setpoint:
-            return std::abs(op.rpm) <= kMaxRpm ? WriteCheck::ok : WriteCheck::invalid_value;
-          case WriteOp::Target::command:
-            return WriteCheck::ok;
-          case WriteOp::Target::point:  // drive_state is read-only
-          case WriteOp::Target::forward:
-            break;
-        }
-        return WriteCheck::invalid_value;
-      });
+  bool faulted = common_.native_fault != 0;
+  return check_in_order(request, {common_.command, common_.setpoint_rpm},
+                        [&](const WriteOp& op, const Proposed&) { return judge(op, faulted); });
 }
 
 WriteStatus TestDriveDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   if (const auto no = refusal(check({&op, 1}))) return *no;
+  if (op.target == WriteOp::Target::point) {
+    writes_.push({{address_, Op::accel, *accel_of(op.value)}, Command::stop}, t, now + kSendBy);
+    return WriteStatus::pending;
+  }
   if (op.target == WriteOp::Target::setpoint) {
     common_.setpoint_rpm = op.rpm;
     if (!is_run(common_.command)) return WriteStatus::done;  // carried by the next run

@@ -12,7 +12,8 @@ namespace drivegate::testdrive {
 namespace {
 
 constexpr const char* kHelp =
-    "state, fault over_current|stall|over_temperature, clear, silent on|off, corrupt N";
+    "state, fault over_current|stall|over_temperature, clear, silent on|off, corrupt N, "
+    "refuse N";
 
 constexpr std::array<std::pair<std::string_view, NativeFault>, 3> kFaultNames = {{
     {"over_current", NativeFault::over_current},
@@ -38,6 +39,10 @@ Bytes TestDriveSimulator::on_receive(ByteView rx, TimePoint now) {
 }
 
 Bytes TestDriveSimulator::answer(const Request& r) {
+  if (refuse_ > 0 && !silent_) {
+    --refuse_;
+    return encode(refusal(address_, r.op));
+  }
   switch (r.op) {
     case Op::read:
       break;
@@ -54,6 +59,9 @@ Bytes TestDriveSimulator::answer(const Request& r) {
     case Op::reset:
       fault_ = NativeFault::none;
       break;
+    case Op::accel:
+      if (r.arg > 0) accel_100ms_ = r.arg;
+      break;
   }
   if (silent_) return {};
   Bytes reply =
@@ -68,16 +76,17 @@ Bytes TestDriveSimulator::answer(const Request& r) {
 Bytes TestDriveSimulator::on_tick(TimePoint now) {
   const double seconds = last_tick_ ? std::chrono::duration<double>(now - *last_tick_).count() : 0;
   last_tick_ = now;
-  const auto step = static_cast<int>(seconds * kRampRpmPerSecond);
+  const auto step = static_cast<int>(seconds * kMaxRpm * 10.0 / accel_100ms_);
   const int gap = target_rpm_ - speed_rpm_;
   speed_rpm_ = static_cast<std::int16_t>(speed_rpm_ + std::clamp(gap, -step, step));
   return {};
 }
 
 std::string TestDriveSimulator::state() const {
-  return "state=" + hex(state_, 2) + " fault=" + std::to_string(static_cast<int>(fault_)) +
+  return "state=" + hex(state_, 2) + " running=" + ((state_ & kStateRunning) != 0 ? "1" : "0") +
+         " fault=" + std::to_string(static_cast<int>(fault_)) +
          " speed=" + std::to_string(speed_rpm_) + " target=" + std::to_string(target_rpm_) +
-         " silent=" + (silent_ ? "on" : "off");
+         " accel=" + std::to_string(accel_100ms_) + " silent=" + (silent_ ? "on" : "off");
 }
 
 std::string TestDriveSimulator::control(std::string_view line, TimePoint now) {
@@ -102,10 +111,10 @@ std::string TestDriveSimulator::control(std::string_view line, TimePoint now) {
     silent_ = *parse_on_off(w[1]);
     return "ok silent=" + w[1];
   }
-  if (w.size() == 2 && w[0] == "corrupt") {
+  if (w.size() == 2 && (w[0] == "corrupt" || w[0] == "refuse")) {
     if (const auto n = parse_unsigned(w[1], 1000)) {
-      corrupt_ = *n;
-      return "ok corrupt=" + w[1];
+      (w[0] == "corrupt" ? corrupt_ : refuse_) = *n;
+      return "ok " + w[0] + "=" + w[1];
     }
   }
   return std::string("error: unknown command '") + std::string(line) + "'; commands: " + kHelp;
