@@ -49,11 +49,23 @@ std::vector<PointSpec> make_points() {
 
 }  // namespace
 
+Settings parse_settings(const Options& options) {
+  Settings s;
+  s.one_way = options.boolean("one_way");
+  // 100 ms units, rounded to the nearest; the schema's range is what the frame carries.
+  if (const std::int64_t ms = options.integer("accel_time_ms"); ms > 0) {
+    s.accel_100ms =
+        static_cast<std::uint16_t>(std::clamp<std::int64_t>((ms + 50) / 100, 1, 0xFFFF));
+  }
+  return s;
+}
+
 TestDriveDriver::TestDriveDriver(std::uint8_t address, Millis poll_interval, Settings settings)
     : DriverBase(make_points()),
       address_(address),
       poll_interval_(poll_interval),
-      settings_(settings) {
+      settings_(settings),
+      setup_due_(settings.accel_100ms.has_value()) {
   // A drive starts with its factory accel time (codec.h) until one is written.
   values_[pt::accel_time] = seconds_of(kDefaultAccel100ms);
 }
@@ -72,6 +84,12 @@ Exchange TestDriveDriver::exchange(const Request& r) const {
 
 std::optional<Exchange> TestDriveDriver::next_exchange(TimePoint now) {
   writes_.expire_after(now);
+  if (setup_due_) {  // before anything else, each time the drive is reached
+    in_flight_ = Op::accel;
+    write_on_line_ = false;
+    last_sent_ = now;
+    return exchange({address_, Op::accel, *settings_.accel_100ms});
+  }
   if (Writes::Entry* w = writes_.first_unsent(); w != nullptr && w == &writes_.front()) {
     w->sent = true;
     in_flight_ = w->job.request.op;
@@ -87,7 +105,7 @@ std::optional<Exchange> TestDriveDriver::next_exchange(TimePoint now) {
 }
 
 TimePoint TestDriveDriver::wake_at() const {
-  if (!writes_.empty()) return TimePoint::min();
+  if (setup_due_ || !writes_.empty()) return TimePoint::min();
   return next_poll_.value_or(TimePoint::min());
 }
 
@@ -103,7 +121,12 @@ RxVerdict TestDriveDriver::on_receive(ByteView rx, TimePoint now) {
   }
   // Refused: the request stays on the line, and the bus engine sends it again.
   if (d.frame.refused) return {RxKind::nack, d.consumed};
-  if (write_on_line_) settle_write(writes_.front().job.request);
+  if (write_on_line_) {
+    settle_write(writes_.front().job.request);
+  } else if (setup_due_ && *in_flight_ == Op::accel) {
+    setup_due_ = false;
+    values_[pt::accel_time] = seconds_of(*settings_.accel_100ms);
+  }
   apply_reply(d.frame);
   in_flight_.reset();
   write_on_line_ = false;
@@ -114,6 +137,7 @@ RxVerdict TestDriveDriver::on_receive(ByteView rx, TimePoint now) {
 void TestDriveDriver::settle_write(const Request& sent) {
   if (sent.op == Op::accel) {
     values_[pt::accel_time] = seconds_of(sent.arg);
+    if (settings_.accel_100ms) settings_.accel_100ms = sent.arg;  // what a returning drive gets
   } else {
     common_.command = writes_.front().job.command;
   }
@@ -123,6 +147,13 @@ void TestDriveDriver::settle_write(const Request& sent) {
 void TestDriveDriver::apply_reply(const Reply& r) {
   common_.ready = true;
   common_.running = (r.state & kStateRunning) != 0;
+  // A drive running on a run this driver did not send (found running: it was started before
+  // this driver, by another one): the run it turns on is the command in force, at the speed it
+  // turns (the protocol does not say what it was asked).
+  if (common_.running && !is_run(common_.command)) {
+    common_.command = (r.state & kStateReverse) != 0 ? Command::run_reverse : Command::run_forward;
+    common_.setpoint_rpm = std::abs(r.speed_rpm);
+  }
   common_.speed_rpm = r.speed_rpm;
   common_.native_fault = r.fault;
   common_.faults = {};
@@ -131,8 +162,9 @@ void TestDriveDriver::apply_reply(const Reply& r) {
 }
 
 void TestDriveDriver::on_no_reply(TimePoint now) {
-  // Every attempt went unanswered: a write on the line failed; the next poll goes at once.
-  if (write_on_line_) writes_.settle_front(WriteResult::no_response);
+  // Every attempt went unanswered: a write on the line goes again next turn, until it is
+  // answered or its deadline passes (expire_after); the next poll goes at once.
+  if (write_on_line_) writes_.front().sent = false;
   in_flight_.reset();
   write_on_line_ = false;
   next_poll_ = now;
@@ -148,6 +180,7 @@ void TestDriveDriver::on_comm_lost(TimePoint now) {
   write_on_line_ = false;
   next_poll_.reset();
   writes_.settle_all(WriteResult::no_response);
+  setup_due_ = settings_.accel_100ms.has_value();  // a drive back may have lost it
 }
 
 std::optional<Request> TestDriveDriver::run_request(Command c, std::int32_t rpm) const {

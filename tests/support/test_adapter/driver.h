@@ -1,7 +1,7 @@
 // The test-drive driver: polls the drive's state with `read`; a command goes out as run, stop or
-// reset, and accel_time as accel, each in force once the drive's reply to it came; a refusal is
-// resent; a setpoint is stored while the drive is stopped and sent as a run while it turns.
-// Exists for the core's tests (codec.h).
+// reset, and accel_time as accel, each in force once the drive's reply to it came; a refusal, or
+// a turn of attempts unanswered, is resent until the write's deadline; a setpoint is stored while
+// the drive is stopped and sent as a run while it turns. Exists for the core's tests (codec.h).
 #pragma once
 
 #include <array>
@@ -22,13 +22,20 @@ inline constexpr std::size_t accel_time = 1;
 }  // namespace pt
 
 // The device options: the schema the descriptor publishes, and the values the driver uses.
-inline constexpr std::array<OptionSpec, 1> kOptionSchema = {{
+inline constexpr std::array<OptionSpec, 2> kOptionSchema = {{
     {"one_way", OptionType::boolean, "false",
      "the drive turns forward only: a run_reverse is refused as a value it cannot take"},
+    {"accel_time_ms", OptionType::integer, "0",
+     "the accel time the drive is set to each time it is reached (op accel, 100 ms units); 0 "
+     "leaves it at its own",
+     0, 6553500},
 }};
 struct Settings {
-  bool one_way = false;  // the drive turns forward only: run_reverse is refused
+  bool one_way = false;                      // the drive turns forward only: run_reverse is refused
+  std::optional<std::uint16_t> accel_100ms;  // set each time the drive is reached
 };
+// The settings `options` (kOptionSchema's) say.
+Settings parse_settings(const Options& options);
 
 class TestDriveDriver final : public DriverBase {
  public:
@@ -57,6 +64,7 @@ class TestDriveDriver final : public DriverBase {
   Millis poll_interval_;
   Settings settings_;
   Writes writes_{completions_};
+  bool setup_due_;               // settings_.accel_100ms is to be sent before anything else
   std::optional<Op> in_flight_;  // the op of the request on the line
   bool write_on_line_ = false;   // that request is writes_.front()'s
   TimePoint last_sent_{};

@@ -26,7 +26,7 @@ std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) 
   const auto address = address_of(env.address, error);
   if (!address) return nullptr;
   return std::make_unique<TestDriveDriver>(*address, env.poll_interval,
-                                           Settings{env.options.boolean("one_way")});
+                                           parse_settings(env.options));
 }
 
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <utility>
 
 #include "drivegate/sim_text.h"
@@ -39,7 +40,8 @@ Bytes TestDriveSimulator::on_receive(ByteView rx, TimePoint now) {
 }
 
 Bytes TestDriveSimulator::answer(const Request& r) {
-  if (refuse_ > 0 && !silent_) {
+  if (silent_) return {};  // deaf: it neither takes nor answers anything
+  if (refuse_ > 0) {
     --refuse_;
     return encode(refusal(address_, r.op));
   }
@@ -63,7 +65,6 @@ Bytes TestDriveSimulator::answer(const Request& r) {
       if (r.arg > 0) accel_100ms_ = r.arg;
       break;
   }
-  if (silent_) return {};
   Bytes reply =
       encode(Reply{address_, r.op, state_, static_cast<std::uint8_t>(fault_), speed_rpm_});
   if (corrupt_ > 0) {
@@ -76,9 +77,10 @@ Bytes TestDriveSimulator::answer(const Request& r) {
 Bytes TestDriveSimulator::on_tick(TimePoint now) {
   const double seconds = last_tick_ ? std::chrono::duration<double>(now - *last_tick_).count() : 0;
   last_tick_ = now;
-  const auto step = static_cast<int>(seconds * kMaxRpm * 10.0 / accel_100ms_);
-  const int gap = target_rpm_ - speed_rpm_;
-  speed_rpm_ = static_cast<std::int16_t>(speed_rpm_ + std::clamp(gap, -step, step));
+  // The ramp to the rpm, kept exact: a slow one moves less than 1 rpm a tick.
+  const double step = seconds * kMaxRpm * 10.0 / accel_100ms_;
+  ramp_rpm_ += std::clamp(target_rpm_ - ramp_rpm_, -step, step);
+  speed_rpm_ = static_cast<std::int16_t>(std::lround(ramp_rpm_));
   return {};
 }
 
@@ -103,6 +105,7 @@ std::string TestDriveSimulator::control(std::string_view line, TimePoint now) {
       fault_ = code;
       state_ = 0;  // a fault stops the motor, at once
       speed_rpm_ = 0;
+      ramp_rpm_ = 0;
       target_rpm_ = 0;
       return "ok fault=" + w[1];
     }

@@ -1,7 +1,8 @@
 // The simulated test drive: answers its address's requests (codec.h), ramps to the speed the
 // last run asked for (and to 0 after a stop) in its accel time per kMaxRpm, stops at once on a
-// fault, and takes operator commands: state, fault NAME, clear, silent on|off, corrupt N (the
-// next N replies with a wrong sum), refuse N (the next N requests refused, not acted on).
+// fault, and takes operator commands: state, fault NAME, clear, silent on|off (deaf: it takes
+// and answers nothing), corrupt N (the next N replies with a wrong sum), refuse N (the next N
+// requests refused, not acted on).
 #pragma once
 
 #include <cstdint>
@@ -34,7 +35,8 @@ class TestDriveSimulator final : public Simulator {
   Bytes buffer_;
   std::uint8_t state_ = 0;
   NativeFault fault_ = NativeFault::none;
-  std::int16_t speed_rpm_ = 0;
+  std::int16_t speed_rpm_ = 0;  // ramp_rpm_ rounded
+  double ramp_rpm_ = 0;
   std::int16_t target_rpm_ = 0;
   std::uint16_t accel_100ms_ = kDefaultAccel100ms;
   std::optional<TimePoint> last_tick_;

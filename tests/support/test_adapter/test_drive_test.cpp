@@ -103,6 +103,12 @@ TEST(TestDriveSimulator, RefusesTheNextRequestsAndRampsInItsAccelTime) {
   EXPECT_EQ(sim.on_receive(encode(Request{1, Op::read, 0}), t0),
             encode(Reply{1, Op::read, kStateRunning, 0, 500}));
   EXPECT_NE(sim.control("state", t0).find(" running=1 "), std::string::npos);
+  // A slow ramp, 10 rpm/s (300 s to 3000 rpm), moves in ticks of less than 1 rpm.
+  EXPECT_EQ(sim.on_receive(encode(Request{1, Op::accel, 3000}), t0),
+            encode(Reply{1, Op::accel, kStateRunning, 0, 500}));
+  for (int tick = 1; tick <= 40; ++tick) sim.on_tick(t0 + Millis(500 + 50 * tick));
+  EXPECT_EQ(sim.on_receive(encode(Request{1, Op::read, 0}), t0),
+            encode(Reply{1, Op::read, kStateRunning, 0, 520}));
 }
 
 // Through the real bus engine: a setpoint is stored while stopped, a run is in force once the
@@ -115,6 +121,20 @@ TEST(TestDriveDriver, RunsAtTheSpeedAsked) {
   EXPECT_EQ(b.read("command"), test::common_block::cmd::run_forward);
   EXPECT_EQ(b.read("setpoint_rpm"), 1200u);
   EXPECT_TRUE(b.until_reads("speed_rpm", 1200, Millis(3000)));
+}
+
+// A drive found running (started by another master: the run is not this driver's): the run it
+// turns on is in force, at the speed it turned when first seen.
+TEST(TestDriveDriver, ADriveFoundRunningShowsTheRunItTurnsOn) {
+  test::AdapterBench b(drivegate_adapter, {});
+  ASSERT_TRUE(b.until_online());
+  ASSERT_EQ(b.sim->on_receive(encode(Request{1, Op::run_reverse, 700}), b.rig.now()),
+            encode(Reply{1, Op::run_reverse, kStateRunning | kStateReverse, 0, 0}));
+  ASSERT_TRUE(b.until_reads("command", test::common_block::cmd::run_reverse, Millis(2000)));
+  EXPECT_NE(b.status() & test::common_block::kRunning, 0u);
+  const auto setpoint = static_cast<std::int32_t>(b.read("setpoint_rpm"));
+  EXPECT_GT(setpoint, 0);
+  EXPECT_LE(setpoint, 700);
 }
 
 // accel_time (holding 16, 0.1 s): the drive's factory 1.5 s until written; a write goes out as
@@ -132,6 +152,54 @@ TEST(TestDriveDriver, AccelTimeIsSentAndInForceOnceAnswered) {
   EXPECT_TRUE(b.sim_has("accel=25"));
   EXPECT_EQ(b.write("accel_time", {0}), Outcome::invalid_value);
   EXPECT_EQ(b.read("accel_time"), 25u);
+}
+
+// accel_time_ms: the drive is set to it before anything else, and again once it is back after a
+// silence (it may have been powered off).
+TEST(TestDriveDriver, TheConfiguredAccelTimeIsSetEachTimeTheDriveIsReached) {
+  test::AdapterBench b(drivegate_adapter, {.options = {{"accel_time_ms", "120000"}}});
+  ASSERT_TRUE(b.until_online());
+  ASSERT_FALSE(b.frames().empty());
+  EXPECT_EQ(b.frames().front(), encode(Request{1, Op::accel, 1200}));
+  EXPECT_EQ(b.read("accel_time"), 1200u);
+  EXPECT_TRUE(b.sim_has("accel=1200"));
+  EXPECT_EQ(b.count(encode(Request{1, Op::accel, 1200})), 1u);
+  ASSERT_EQ(b.control("silent on"), "ok silent=on");
+  b.rig.run_for(Millis(5000));
+  ASSERT_NE(b.status() & test::common_block::kCommLost, 0u);
+  ASSERT_EQ(b.control("silent off"), "ok silent=off");
+  const TimePoint back = b.rig.now();
+  b.rig.run_for(Millis(6000));
+  ASSERT_NE(b.status() & test::common_block::kOnline, 0u);
+  EXPECT_EQ(b.frames(back).front(), encode(Request{1, Op::accel, 1200}));
+}
+
+// A write the drive does not answer goes again each turn until its deadline (2.8 s: the
+// gateway's 3 s backstop less the margin) or comm_lost, and fails then; one answered in time is
+// in force.
+TEST(TestDriveDriver, AnUnansweredWriteIsResentUntilItsDeadline) {
+  test::AdapterBench b(drivegate_adapter, {});
+  ASSERT_TRUE(b.until_online());
+  ASSERT_EQ(b.control("silent on"), "ok silent=on");
+  const TimePoint asked = b.rig.now();
+  const auto deaf = b.start_write({test::common_block::cmd::run_forward, 900});
+  b.rig.run_for(Millis(1000));
+  ASSERT_EQ(b.control("silent off"), "ok silent=off");
+  b.rig.run_for(Millis(1000));
+  ASSERT_TRUE(deaf->settled());
+  EXPECT_EQ(deaf->result, Outcome::ok);
+  EXPECT_GT(b.count(encode(Request{1, Op::run_forward, 900}), asked), 3u);  // turns of 3
+  EXPECT_EQ(b.read("command"), test::common_block::cmd::run_forward);
+
+  ASSERT_EQ(b.control("silent on"), "ok silent=on");
+  const TimePoint stop_asked = b.rig.now();
+  const auto lost = b.start_write({test::common_block::cmd::stop});
+  b.rig.run_for(Millis(2000));
+  EXPECT_FALSE(lost->settled());
+  b.rig.run_for(Millis(1200));  // its deadline, or comm_lost 3 s after the last reply
+  ASSERT_TRUE(lost->settled());
+  EXPECT_EQ(lost->result, Outcome::no_response);
+  EXPECT_GT(b.count(encode(Request{1, Op::stop, 0}), stop_asked), 3u);
 }
 
 // A refusal is counted as a NACK and the request resent; the write is in force once taken.
