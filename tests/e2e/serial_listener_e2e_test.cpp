@@ -434,14 +434,14 @@ TEST_F(SerialListenerE2E, ASilentDrivesWriteIs0x0BOverTheLineToo) {
 
 // reply_timeout_ms, the master's response timeout: the drive goes silent under a run command, the
 // master hears nothing within it and stops listening, and the write's 0x0B, which comes seconds
-// later (the drive never answered: its write's deadline, 2.8 s, or comm_lost at 3 s), never
+// later (the drive never answered: its write's deadline, 1.8 s), never
 // reaches the line, where it would meet the master's next request. The master's next read is
 // answered as ever.
 TEST_F(SerialListenerE2E, AnAnswerPastTheMastersResponseTimeoutNeverReachesTheLine) {
   start("access = \"operate\"\nreply_timeout_ms = 200\n");
   sim_->control("silent on");
   static_assert(reg::command == 0);
-  // The master listens on past the moment the 0x0B would come (3 s at most), with a wide margin.
+  // The master listens on past the moment the 0x0B would come (1.8 s), with a wide margin.
   auto out = master({"rtu", "1", "0600000001",  // FC 06: command = run_forward
                      "listen", "6000"});
   ASSERT_EQ(out.size(), 2U) << ::testing::PrintToString(out);

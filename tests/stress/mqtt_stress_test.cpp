@@ -277,7 +277,7 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
 //
 // What is right, from daemon/mqtt/northbound.cpp: the device is unchanged, so it is kept as it
 // runs with its queued write (README, SIGHUP), which goes on to be confirmed or to fail at its
-// deadline (2.8 s, tests/support/test_adapter/driver.cpp) as any Modbus write would. Its
+// deadline (1.8 s, tests/support/test_adapter/driver.cpp) as any Modbus write would. Its
 // outcome belongs to the old session: write()'s report holds a weak token of that Northbound
 // (`alive_`), expired once the reload has freed it, and that session's EdgeNode is offline
 // anyway, so the outcome is published nowhere (the audit trail has it). The new edge node never

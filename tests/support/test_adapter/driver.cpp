@@ -13,10 +13,14 @@ namespace {
 constexpr Millis kReplyTimeout{100};
 constexpr Millis kCommTimeout{3000};
 constexpr Millis kInterFrameGap{2};
-constexpr Millis kWriteTimeout{3000};
+// Well inside kCommTimeout: a write to a drive that stopped answering fails before comm_lost.
+constexpr Millis kWriteTimeout{2000};
 // The driver fails a write it could not send by then, before the gateway's backstop.
 constexpr Millis kSendBy = kWriteTimeout - kDeadlineMargin;
 constexpr std::uint8_t kAttempts = 3;
+// A write goes on the line (again) only when its turn of attempts ends by its send-by: none goes
+// out after the gateway told the client it failed.
+constexpr Millis kTurn = kAttempts * kReplyTimeout;
 
 Fault unified(std::uint8_t native) {
   switch (static_cast<NativeFault>(native)) {
@@ -84,6 +88,8 @@ Exchange TestDriveDriver::exchange(const Request& r) const {
 
 std::optional<Exchange> TestDriveDriver::next_exchange(TimePoint now) {
   writes_.expire_after(now);
+  writes_.settle_if([now](const Writes::Entry& e) { return !e.sent && now + kTurn > e.deadline; },
+                    WriteResult::no_response);
   if (setup_due_) {  // before anything else, each time the drive is reached
     in_flight_ = Op::accel;
     write_on_line_ = false;

@@ -174,9 +174,9 @@ TEST(TestDriveDriver, TheConfiguredAccelTimeIsSetEachTimeTheDriveIsReached) {
   EXPECT_EQ(b.frames(back).front(), encode(Request{1, Op::accel, 1200}));
 }
 
-// A write the drive does not answer goes again each turn until its deadline (2.8 s: the
-// gateway's 3 s backstop less the margin) or comm_lost, and fails then; one answered in time is
-// in force.
+// A write the drive does not answer goes again each turn until its deadline (1.8 s: the
+// gateway's 2 s backstop less the margin, before comm_lost at 3 s), and fails then; one answered
+// in time is in force.
 TEST(TestDriveDriver, AnUnansweredWriteIsResentUntilItsDeadline) {
   test::AdapterBench b(drivegate_adapter, {});
   ASSERT_TRUE(b.until_online());
@@ -194,12 +194,35 @@ TEST(TestDriveDriver, AnUnansweredWriteIsResentUntilItsDeadline) {
   ASSERT_EQ(b.control("silent on"), "ok silent=on");
   const TimePoint stop_asked = b.rig.now();
   const auto lost = b.start_write({test::common_block::cmd::stop});
-  b.rig.run_for(Millis(2000));
+  b.rig.run_for(Millis(1700));
   EXPECT_FALSE(lost->settled());
-  b.rig.run_for(Millis(1200));  // its deadline, or comm_lost 3 s after the last reply
+  b.rig.run_for(Millis(500));  // its deadline, or the gateway's backstop at 2 s
+  ASSERT_EQ(b.status() & test::common_block::kCommLost, 0u);
   ASSERT_TRUE(lost->settled());
   EXPECT_EQ(lost->result, Outcome::no_response);
   EXPECT_GT(b.count(encode(Request{1, Op::stop, 0}), stop_asked), 3u);
+  // Nothing of it went out after its send-by (1.8 s) less a turn of attempts (0.3 s) began: the
+  // drive heard again at once would otherwise stop after the client was told it failed.
+  for (const TimePoint t : b.times_of(encode(Request{1, Op::stop, 0}), stop_asked)) {
+    EXPECT_LE(t - stop_asked, Millis(1800)) << "sent after its send-by";
+  }
+}
+
+// A run the client was told failed is never carried out: the drive deaf until the write fails,
+// heard again at once after, never gets it (a resend's attempts never outlast the deadline).
+TEST(TestDriveDriver, ARunTheClientWasToldFailedIsNeverCarriedOut) {
+  test::AdapterBench b(drivegate_adapter, {});
+  ASSERT_TRUE(b.until_online());
+  ASSERT_EQ(b.control("silent on"), "ok silent=on");
+  const auto run = b.start_write({test::common_block::cmd::run_forward, 900});
+  for (int ms = 0; ms < 3000 && !run->settled(); ms += 5) b.rig.run_for(Millis(5));
+  ASSERT_TRUE(run->settled());
+  EXPECT_EQ(run->result, Outcome::no_response);
+  ASSERT_EQ(b.control("silent off"), "ok silent=off");
+  b.rig.run_for(Millis(1000));
+  EXPECT_TRUE(b.sim_has("running=0")) << b.control("state");
+  EXPECT_TRUE(b.sim_has("target=0")) << b.control("state");
+  EXPECT_EQ(b.read("command"), test::common_block::cmd::stop);
 }
 
 // A refusal is counted as a NACK and the request resent; the write is in force once taken.
