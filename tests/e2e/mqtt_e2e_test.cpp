@@ -1015,6 +1015,9 @@ TEST_F(MqttE2E, SeveralBrokersThePrimaryHostOfflineOnOneSendsTheNodeToTheNext) {
 // is kept on disk and, once a session is back, published after the births as historical DDATA
 // with its original time, in order, none twice; live data after it is not historical.
 TEST_F(MqttE2E, ABrokerOutageLosesNoChangeTheyComeBackHistoricalInOrder) {
+  // A ramp of 3 s to 900 rpm (0 to 3000 in 10 s): an outage long enough for the host to be back
+  // on the broker before the edge node's next try, which then finds it there for its births.
+  drive("drive-a").device_extra = "[device.options]\naccel_time_ms = 10000\n";
   const fs::path state = dir_ / "state";
   fs::create_directories(state);
   daemon_args_ = {"--state-dir", state.string()};
