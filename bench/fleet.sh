@@ -3,17 +3,17 @@
 # by side in one run.
 #
 # Each run is tests/e2e/mqtt_fleet_e2e_test.cpp (MqttE2EFleet): N real drivegated processes, each
-# with one simulated nidec-washer on a pty (poll_ms 100, a ramp that gives every poll a new
-# speed, min_interval_ms 0: one DDATA per poll), its own edge node id and state directory; one
-# mosquitto (/usr/sbin/mosquitto, loopback, no persistence); one Sparkplug host (Tahu's codec over
-# MQTT.js, tests/mqtt/peer) that publishes a primary host STATE. Every gateway starts at once;
-# LIVE_S seconds of live data; the broker is stopped for OUTAGE_S seconds while every ramp goes
-# on; the broker back, every gateway reborn and its store replayed; then a half-open outage of
-# HALF_OPEN_S seconds (the gateways reach the broker through the test's proxy, which stops
-# forwarding every connection, new ones too, without closing any: tests/support/fault_proxy.h),
-# each gateway's time to notice it and what the host lost (goal: nothing) and got twice; one
-# gateway killed with -9 and restarted. The run also asserts what the host must see (every change,
-# in order, the will's bdSeq): a failed assertion fails the bench.
+# with one simulated test-drive (tests/support/test_adapter) on a pty (poll_ms 100, a ramp that
+# gives every poll a new speed, min_interval_ms 0: one DDATA per poll), its own edge node id and
+# state directory; one mosquitto (/usr/sbin/mosquitto, loopback, no persistence); one Sparkplug host
+# (Tahu's codec over MQTT.js, tests/mqtt/peer) that publishes a primary host STATE. Every gateway
+# starts at once; LIVE_S seconds of live data; the broker is stopped for OUTAGE_S seconds while
+# every ramp goes on; the broker back, every gateway reborn and its store replayed; then a half-open
+# outage of HALF_OPEN_S seconds (the gateways reach the broker through the test's proxy, which stops
+# forwarding every connection, new ones too, without closing any: tests/support/fault_proxy.h), each
+# gateway's time to notice it and what the host lost (goal: nothing) and got twice; one gateway
+# killed with -9 and restarted. The run also asserts what the host must see (every change, in order,
+# the will's bdSeq): a failed assertion fails the bench.
 #
 # The test writes its figures (births per second, frame -> host latency, replay rate, CPU and
 # memory of the gateways, the broker and the host) to a report file; this script puts the runs

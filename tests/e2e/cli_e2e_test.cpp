@@ -1,5 +1,7 @@
 // The programs' command lines: usage errors exit 2 with a message, configuration errors exit 1
-// naming file and line, and the register map prints what the daemon serves.
+// naming file and line, and the register map prints what the daemon serves. On a drive of the
+// tests' own (test-drive, tests/support/test_adapter); the shipped examples and documents checked
+// here name production adapters, and are checked where those are built.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -32,6 +34,17 @@ std::string drivegate() {
   return (bin_dir() / "drivegate").string();
 }
 
+// The first adapter `toml` names (`adapter = "ID"`) whose plugin is not built, or "".
+std::string unbuilt_adapter_in(const std::string& toml) {
+  const std::string key = "adapter = \"";
+  for (auto at = toml.find(key); at != std::string::npos; at = toml.find(key, at + 1)) {
+    const auto from = at + key.size();
+    const std::string id = toml.substr(from, toml.find('"', from) - from);
+    if (!adapter_built(id)) return id;
+  }
+  return "";
+}
+
 constexpr const char* kConfig = R"([server]
 listen = "127.0.0.1:1502"
 
@@ -40,9 +53,9 @@ name = "line"
 port = "/dev/null"
 
 [[device]]
-name = "washer"
+name = "drive"
 bus = "line"
-adapter = "nidec-washer"
+adapter = "test-drive"
 unit_id = 1
 )";
 
@@ -70,6 +83,9 @@ TEST(Cli, TheDocumentedConfigurationsAreValid) {
   std::ofstream(dir / "readme.toml") << text.substr(start + 8, end - start - 8);
   for (const auto& file :
        {dir / "readme.toml", std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "etc/drivegate.toml"}) {
+    if (const auto id = unbuilt_adapter_in(slurp(file)); !id.empty()) {
+      GTEST_SKIP() << file << " names " << id << ", which is not built";
+    }
     const auto r =
         run({drivegated(), "--check-config", file.string(), "--plugin-dir", plugin_dir().string()});
     EXPECT_EQ(r.status, 0) << file << ": " << r.out;
@@ -134,6 +150,7 @@ setpoint_rpm = { point = "reference", rpm_factor = "120 / motor_poles" }
 )toml";
 
 TEST(Cli, AProfilesOptionsAreCheckedAsTheConfigurationsOwn) {
+  REQUIRE_ADAPTER("modbus");
   TempDir dir;
   std::ofstream(dir / "poles.toml") << kPolesProfile;
   const auto config = [&](const std::string& option) {
@@ -244,7 +261,7 @@ TEST(Cli, CheckConfigNamesFileLineAndKey) {
   const auto r = run({drivegated(), "--check-config", (dir / "bad.toml").string(), "--plugin-dir",
                       plugin_dir().string()});
   EXPECT_EQ(r.status, 1);
-  EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll (device 'washer'): unknown key"));
+  EXPECT_THAT(r.out, HasSubstr("bad.toml:13: device[0].poll (device 'drive'): unknown key"));
 }
 
 TEST(Cli, DaemonRefusesABadConfigWithExitOne) {
@@ -295,7 +312,7 @@ TEST(Cli, OptionsTakeTheirValueAfterAnEqualsSignOrAsTheNextWordShortOrLong) {
            {drivegate(), "regmap", "-fmd", "-p", plugin_dir().string(), "-c", good}}) {
     const auto r = run(argv);
     EXPECT_EQ(r.status, 0) << argv[2] << ": " << r.out;
-    EXPECT_THAT(r.out, HasSubstr("## Unit 1: washer (nidec-washer)")) << argv[2];
+    EXPECT_THAT(r.out, HasSubstr("## Unit 1: drive (test-drive)")) << argv[2];
   }
   const auto version = run({drivegated(), "-V"});
   EXPECT_EQ(version.status, 0);
@@ -440,6 +457,9 @@ TEST(Cli, HelpListsEveryOptionAndTheManPageDocumentsThem) {
 // place): a change to the map or its printing that leaves the printed map behind fails here.
 TEST(Cli, TheRegisterMapInTheDocsIsWhatRegmapPrints) {
   const std::filesystem::path docs = std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "docs";
+  if (const auto id = unbuilt_adapter_in(slurp(docs / "register-map.toml")); !id.empty()) {
+    GTEST_SKIP() << "docs/register-map.toml names " << id << ", which is not built";
+  }
   const auto r = run({drivegate(), "regmap", "--config", (docs / "register-map.toml").string(),
                       "--format", "md", "--plugin-dir", plugin_dir().string()});
   ASSERT_EQ(r.status, 0) << r.out;
@@ -465,13 +485,13 @@ TEST(Cli, RegmapPrintsTheServedMap) {
   const auto r = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
                       "json", "--plugin-dir", plugin_dir().string()});
   EXPECT_EQ(r.status, 0) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("{\"unit_id\": 1, \"name\": \"washer\", \"adapter\": "
-                               "\"nidec-washer\""));
+  EXPECT_THAT(r.out, HasSubstr("{\"unit_id\": 1, \"name\": \"drive\", \"adapter\": "
+                               "\"test-drive\""));
   EXPECT_THAT(r.out, HasSubstr("{\"name\": \"speed_rpm\", \"table\": \"input\", \"address\": 6, "
                                "\"reference\": \"30007\", \"type\": \"i16\""));
   const auto md = run({drivegate(), "regmap", "--config", (dir / "gw.toml").string(), "--format",
                        "md", "--plugin-dir", plugin_dir().string()});
-  EXPECT_THAT(md.out, HasSubstr("## Unit 1: washer (nidec-washer)"));
+  EXPECT_THAT(md.out, HasSubstr("## Unit 1: drive (test-drive)"));
 }
 
 // The tools that ask the running daemon find it where its configuration says: `--config FILE`'s
@@ -480,12 +500,12 @@ TEST(Cli, RegmapPrintsTheServedMap) {
 // "Connection refused" at a default address.
 TEST(Cli, EventsAndCaptureFindTheDaemonFromItsConfiguration) {
   TempDir dir;
-  Sim sim("nidec-washer", dir / "washer");
+  Sim sim("test-drive", dir / "drive");
   const int http_port = free_port();
   const std::string toml = "[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) +
-                           "\"\n\n[[bus]]\nname = \"line\"\nport = \"" + (dir / "washer").string() +
-                           "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
-                           "adapter = \"nidec-washer\"\nunit_id = 1\n";
+                           "\"\n\n[[bus]]\nname = \"line\"\nport = \"" + (dir / "drive").string() +
+                           "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\n"
+                           "adapter = \"test-drive\"\nunit_id = 1\n";
   const std::string file = (dir / "drivegate.toml").string();
   const std::string at = "127.0.0.1:" + std::to_string(http_port);
   {
@@ -539,18 +559,18 @@ TEST(Cli, EventsAndCaptureFindTheDaemonFromItsConfiguration) {
 // owns it, instead of sharing the line and timing out (0x0B); with the daemon stopped it works.
 TEST(Cli, WriteOnAPortTheDaemonOwnsNamesTheOwner) {
   TempDir dir;
-  Sim sim("nidec-washer", dir / "washer");
-  const std::string toml = "[[bus]]\nname = \"line\"\nport = \"" + (dir / "washer").string() +
-                           "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
-                           "adapter = \"nidec-washer\"\nunit_id = 1\n";
+  Sim sim("test-drive", dir / "drive");
+  const std::string toml = "[[bus]]\nname = \"line\"\nport = \"" + (dir / "drive").string() +
+                           "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\n"
+                           "adapter = \"test-drive\"\nunit_id = 1\n";
   Daemon daemon(dir, toml);
   Plc plc(daemon.port());
   ASSERT_TRUE(plc.connect());
   ASSERT_TRUE(
       eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::online) != 0; }, 10s));
   const std::vector<std::string> write = {
-      drivegate(),    "write",  "--config",     daemon.config().string(),
-      "--device",     "washer", "--plugin-dir", plugin_dir().string(),
+      drivegate(),    "write", "--config",     daemon.config().string(),
+      "--device",     "drive", "--plugin-dir", plugin_dir().string(),
       "accel_time=30"};
   const auto asked = std::chrono::steady_clock::now();
   const auto busy = run(write);

@@ -1,9 +1,9 @@
 // `drivegate dcmd` end to end: a Sparkplug command from the command line, through a real
-// mosquitto, to the real daemon's edge node and a simulated nidec-washer, and the result the edge
-// node publishes printed back. The broker, group and edge node ids come from the daemon's own
-// configuration file. The DCMD on the wire is read by the independent peer (Eclipse Tahu's
-// decoder, sparkplug_peer.h), not by drivegate's codec; the drive's answer by the PLC's registers
-// and the simulator.
+// mosquitto, to the real daemon's edge node and a simulated drive of the tests' own (test-drive),
+// and the result the edge node publishes printed back. The broker, group and edge node ids come
+// from the daemon's own configuration file. The DCMD on the wire is read by the independent peer
+// (Eclipse Tahu's decoder, sparkplug_peer.h), not by drivegate's codec; the drive's answer by the
+// PLC's registers and the simulator.
 #include "mqtt_e2e.h"
 
 namespace drivegate::test {
@@ -42,14 +42,14 @@ TEST_F(DcmdE2E, ACommandFromTheToolRunsTheDriveAndItsResultIsPrinted) {
   ASSERT_FALSE(HasFailure());
 
   // A setpoint and a run by its label, one command: ok once the drive confirmed it.
-  const auto run = dcmd({"--device", "washer-a", "setpoint_rpm=600", "command=run_forward"});
+  const auto run = dcmd({"--device", "drive-a", "setpoint_rpm=600", "command=run_forward"});
   EXPECT_EQ(run.status, 0) << run.out << run.err;
-  EXPECT_EQ(run.out, "washer-a: setpoint_rpm,command: ok\n") << run.err;
+  EXPECT_EQ(run.out, "drive-a: setpoint_rpm,command: ok\n") << run.err;
   EXPECT_TRUE(eventually([&] { return speed(1) == 600; }, 10s))
-      << drive("washer-a").sim->control("state");
+      << drive("drive-a").sim->control("state");
   EXPECT_EQ(holding(1, reg::command), 1);
-  // What went on the wire, as Tahu reads it: a DCMD for washer-a with the two metrics, typed.
-  const auto sent = peer_->wait_for([](const Message& m) { return is(m, "DCMD", "washer-a"); }, 1s);
+  // What went on the wire, as Tahu reads it: a DCMD for drive-a with the two metrics, typed.
+  const auto sent = peer_->wait_for([](const Message& m) { return is(m, "DCMD", "drive-a"); }, 1s);
   ASSERT_TRUE(sent.has_value()) << describe(peer_->history());
   ASSERT_EQ(sent->metrics.size(), 2u) << describe(*sent);
   EXPECT_EQ(sent->metrics[0].name, "setpoint_rpm");
@@ -61,18 +61,18 @@ TEST_F(DcmdE2E, ACommandFromTheToolRunsTheDriveAndItsResultIsPrinted) {
 
   // The edge node's refusals are printed as it words them, exit status 1: a value the point
   // cannot hold, a metric it does not have.
-  const auto too_fast = dcmd({"-d", "washer-a", "setpoint_rpm=70000"});
+  const auto too_fast = dcmd({"-d", "drive-a", "setpoint_rpm=70000"});
   EXPECT_EQ(too_fast.status, 1);
-  EXPECT_EQ(too_fast.out, "washer-a: setpoint_rpm: exception 0x03 (illegal data value)\n")
+  EXPECT_EQ(too_fast.out, "drive-a: setpoint_rpm: exception 0x03 (illegal data value)\n")
       << too_fast.err;
-  const auto unknown = dcmd({"-d", "washer-a", "nonsense=1"});
+  const auto unknown = dcmd({"-d", "drive-a", "nonsense=1"});
   EXPECT_EQ(unknown.status, 1);
-  EXPECT_EQ(unknown.out, "washer-a: nonsense: refused: no metric 'nonsense'\n") << unknown.err;
+  EXPECT_EQ(unknown.out, "drive-a: nonsense: refused: no metric 'nonsense'\n") << unknown.err;
   // Neither changed the drive; a stop by label does.
   EXPECT_EQ(speed(1), 600);
-  EXPECT_EQ(dcmd({"-d", "washer-a", "command=stop"}).out, "washer-a: command: ok\n");
+  EXPECT_EQ(dcmd({"-d", "drive-a", "command=stop"}).out, "drive-a: command: ok\n");
   EXPECT_TRUE(eventually([&] { return holding(1, reg::command) == 0; }, 5s));
-  EXPECT_THAT(daemon_log(), HasSubstr("MQTT: DCMD washer-a setpoint_rpm,command"));
+  EXPECT_THAT(daemon_log(), HasSubstr("MQTT: DCMD drive-a setpoint_rpm,command"));
 }
 
 // What the tool can tell before it sends anything, it tells: a value that is no number, boolean
@@ -83,25 +83,25 @@ TEST_F(DcmdE2E, WhatCannotBeSentOrAnsweredIsSaid) {
   start_daemon("commands = true\n");
   wait_births();
   ASSERT_FALSE(HasFailure());
-  const auto label = dcmd({"-d", "washer-a", "command=sideways"});
+  const auto label = dcmd({"-d", "drive-a", "command=sideways"});
   EXPECT_EQ(label.status, 1);
   EXPECT_THAT(label.err, HasSubstr("command: 'sideways' is not a number, true or false or a "
                                    "label of the point"));
-  const auto device = dcmd({"-d", "washer-z", "command=stop"});
+  const auto device = dcmd({"-d", "drive-z", "command=stop"});
   EXPECT_EQ(device.status, 1);
-  EXPECT_THAT(device.err, HasSubstr("no device 'washer-z' in " + daemon_->config().string()));
+  EXPECT_THAT(device.err, HasSubstr("no device 'drive-z' in " + daemon_->config().string()));
 
   std::ofstream(dir_ / "off.toml") << config("commands = false\n");
-  const auto off = dcmd({"-d", "washer-a", "command=stop"}, dir_ / "off.toml");
+  const auto off = dcmd({"-d", "drive-a", "command=stop"}, dir_ / "off.toml");
   EXPECT_EQ(off.status, 1);
   EXPECT_THAT(off.err, HasSubstr("says [mqtt] commands = false: the edge node refuses every DCMD"));
 
-  drive("washer-b").sim->control("silent on");
-  ASSERT_TRUE(wait("DDEATH", "washer-b", 10s).has_value());
-  const auto dead = dcmd({"-d", "washer-b", "-t", "1500", "command=stop"});
+  drive("drive-b").sim->control("silent on");
+  ASSERT_TRUE(wait("DDEATH", "drive-b", 10s).has_value());
+  const auto dead = dcmd({"-d", "drive-b", "-t", "1500", "command=stop"});
   EXPECT_EQ(dead.status, 1);
   EXPECT_EQ(dead.out, "");
-  EXPECT_THAT(dead.err, HasSubstr("washer-b: command: no result within 1500 ms from edge node "
+  EXPECT_THAT(dead.err, HasSubstr("drive-b: command: no result within 1500 ms from edge node "
                                   "plant1/gw01 on " +
                                   broker_->url() +
                                   ": is drivegated connected to this broker, the device born"));
@@ -116,7 +116,7 @@ TEST_F(DcmdE2E, ABrokerThatIsNotThereIsNamed) {
   std::string text = slurp(daemon_->config());
   text.replace(text.find(broker_->url()), broker_->url().size(), nobody);
   std::ofstream(dir_ / "gone.toml") << text;
-  const auto r = dcmd({"-d", "washer-a", "-t", "3000", "command=stop"}, dir_ / "gone.toml");
+  const auto r = dcmd({"-d", "drive-a", "-t", "3000", "command=stop"}, dir_ / "gone.toml");
   EXPECT_EQ(r.status, 1);
   EXPECT_THAT(r.err, HasSubstr("cannot reach the broker: " + nobody + ": "));
   EXPECT_EQ(holding(1, reg::command), 0);

@@ -1,9 +1,9 @@
 // The Sparkplug edge node against an unlucky or hostile network (docs/mqtt.md): the real
-// drivegated on simulated nidec-washer drives, a real mosquitto, an independent Sparkplug host
-// (tests/support/mqtt_e2e.h), and between the daemon and the broker a proxy of the test's own that
-// fails as links fail without closing anything (tests/support/fault_proxy.h: half-open, cut after
-// N bytes, held before the CONNACK). Asserted on what the host receives, what the drive does and
-// what the PLC reads:
+// drivegated on simulated drives of the tests' own (test-drive), a real mosquitto, an independent
+// Sparkplug host (tests/support/mqtt_e2e.h), and between the daemon and the broker a proxy of the
+// test's own that fails as links fail without closing anything (tests/support/fault_proxy.h:
+// half-open, cut after N bytes, held before the CONNACK). Asserted on what the host receives, what
+// the drive does and what the PLC reads:
 //   - no command outside a born session: a DCMD before the births moves nothing;
 //   - nothing lost on a dead link: a half-open link's changes all reach the host, the link is
 //     detected within its bound; a link cut every few kilobytes during a replay loses no record,
@@ -49,9 +49,9 @@ class MqttE2EFaults : public MqttE2E {
     start_daemon("min_interval_ms = 0\n" + mqtt_extra +
                  "\n[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port_) + "\"\n");
   }
-  // Drives whose every poll reads a new speed: 1 rpm a poll at poll_ms 100.
+  // Drives whose every poll reads a new speed: 1 rpm a poll at poll_ms 100 (3000 rpm in 300 s).
   void ramping() {
-    for (auto& d : drives_) d.device_extra = "[device.options]\naccel_time_ms = 120000\n";
+    for (auto& d : drives_) d.device_extra = "[device.options]\naccel_time_ms = 300000\n";
   }
   void run(int unit, int rpm) {
     plc_->unit(unit);
@@ -87,9 +87,9 @@ TEST_F(MqttE2EFaults, ADcmdBeforeTheBirthsMovesNothing) {
   ASSERT_EQ(count("NBIRTH"), 0u);
   const std::string run = R"({"name":"setpoint_rpm","type":"Int16","value":900},)"
                           R"({"name":"command","type":"UInt16","value":1})";
-  dcmd("washer-a", run);
+  dcmd("drive-a", run);
   const std::string refused =
-      "write to washer-a (unit 1) from mqtt drivegate-" + std::string(kEdge) + " on " +
+      "write to drive-a (unit 1) from mqtt drivegate-" + std::string(kEdge) + " on " +
       broker_->url() +
       ": setpoint_rpm=900 command=1: refused (the edge node is not born on this broker: primary "
       "host 'scada' is not online here (no STATE from it yet))";
@@ -99,14 +99,14 @@ TEST_F(MqttE2EFaults, ADcmdBeforeTheBirthsMovesNothing) {
   EXPECT_EQ(holding(1, reg::setpoint), 0);
   EXPECT_EQ(holding(1, reg::command), 0);
   EXPECT_EQ(speed(1), 0);
-  EXPECT_THAT(drive("washer-a").sim->control("state"), HasSubstr("motion=stop"));
+  EXPECT_THAT(drive("drive-a").sim->control("state"), HasSubstr(" target=0 "));
   EXPECT_EQ(count("DDATA"), 0u) << "answered before any birth";
 
   peer_->publish_text("spBv1.0/STATE/scada", state_text(true, unix_ms()), true, 1);
   wait_births();
   ASSERT_FALSE(HasFailure());
-  dcmd("washer-a", run);
-  const auto result = wait_command_result("washer-a");
+  dcmd("drive-a", run);
+  const auto result = wait_command_result("drive-a");
   ASSERT_TRUE(result.has_value());
   EXPECT_EQ(result->second, "ok");
   EXPECT_TRUE(eventually([&] { return speed(1) > 0; }, 10s));
@@ -141,7 +141,7 @@ TEST_F(MqttE2EFaults, AHalfOpenLinkLosesNoChangeAndIsDetectedWithinItsBound) {
   ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_store_records") == 0; }, 15s));
   pump(1500ms);
   const std::uint64_t until = unix_ms() - 1000;
-  const RampSeen r = ramp("washer-a", held_at - 1500, until);
+  const RampSeen r = ramp("drive-a", held_at - 1500, until);
   std::cerr << "ramp: " << r.values << " values, worst gap " << r.worst_gap_ms << " ms, " << r.twice
             << " received twice\n";
   EXPECT_GE(r.values, 40u);
@@ -153,7 +153,7 @@ TEST_F(MqttE2EFaults, AHalfOpenLinkLosesNoChangeAndIsDetectedWithinItsBound) {
   // Live metric timestamps never step back.
   std::uint64_t last = 0;
   for (const auto& msg : peer_->history()) {
-    const Metric* s = is(msg, "DDATA", "washer-a") ? msg.metric("speed_rpm") : nullptr;
+    const Metric* s = is(msg, "DDATA", "drive-a") ? msg.metric("speed_rpm") : nullptr;
     if (s == nullptr || s->has_flag("historical") || !s->timestamp) continue;
     EXPECT_GE(*s->timestamp, last) << "a live timestamp stepped back";
     last = *s->timestamp;
@@ -173,7 +173,7 @@ TEST_F(MqttE2EFaults, ALinkCutEveryFewKilobytesLosesNoReplayedRecord) {
   std::this_thread::sleep_for(8s);
   const double kept_in_outage = m("drivegate_mqtt_store_records");
   EXPECT_GE(kept_in_outage, 100);
-  proxy.cut_after(16'000);  // the births (about 8 KB) and about 100 records
+  proxy.cut_after(10'000);  // the births and some hundred records (test-drive's are small)
   broker_->start();
   ASSERT_TRUE(peer_->wait_for([](const Message& x) { return x.kind == "reconnected"; }, 5s));
   ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_store_records") == 0; }, 60s))
@@ -201,7 +201,7 @@ TEST_F(MqttE2EFaults, ALinkCutEveryFewKilobytesLosesNoReplayedRecord) {
             << records.size() << " distinct\n";
   EXPECT_EQ(static_cast<double>(records.size()), kept) << "kept, but not at the host";
   EXPECT_EQ(m("drivegate_mqtt_store_replayed_total"), kept);
-  for (const char* d : {"washer-a", "washer-b"}) {
+  for (const char* d : {"drive-a", "drive-b"}) {
     const RampSeen r = ramp(d, 0, unix_ms() - 1000);
     EXPECT_LT(r.worst_gap_ms, 1000) << d << ": changes lost";
   }
@@ -296,7 +296,7 @@ TEST_F(MqttE2EFaults, KeptChangesWaitForADriveSlowToAnswerAfterARestart) {
   const double kept = m("drivegate_mqtt_store_records");
   EXPECT_GE(kept, 10);
   EXPECT_EQ(daemon_->stop(), 0);
-  drive("washer-b").sim->control("silent on");
+  drive("drive-b").sim->control("silent on");
   broker_->start();
   ASSERT_TRUE(peer_->wait_for([](const Message& x) { return x.kind == "reconnected"; }, 5s));
   daemon_ = std::make_unique<Daemon>(dir_,
@@ -305,14 +305,14 @@ TEST_F(MqttE2EFaults, KeptChangesWaitForADriveSlowToAnswerAfterARestart) {
                                             std::to_string(http_port_) + "\"\n"),
                                      daemon_args_, dir_ / "drivegated.log");
   ASSERT_TRUE(wait("NBIRTH", {}, 10s).has_value());
-  pump(3s);  // washer-b silent: no DBIRTH, its kept changes wait
-  EXPECT_EQ(count("DBIRTH", "washer-b"), 1u) << "born before the restart only";
-  drive("washer-b").sim->control("silent off");
+  pump(3s);  // drive-b silent: no DBIRTH, its kept changes wait
+  EXPECT_EQ(count("DBIRTH", "drive-b"), 1u) << "born before the restart only";
+  drive("drive-b").sim->control("silent off");
   ASSERT_TRUE(eventually([&] { return m("drivegate_mqtt_store_records") == 0; }, 20s));
   pump(500ms);
   std::size_t historical = 0;
   for (const auto& msg : peer_->history()) {
-    historical += is(msg, "DDATA", "washer-b") && !msg.metrics.empty() &&
+    historical += is(msg, "DDATA", "drive-b") && !msg.metrics.empty() &&
                   msg.metrics.front().has_flag("historical");
   }
   EXPECT_GE(static_cast<double>(historical), kept - 1) << "kept changes dropped";

@@ -1,11 +1,11 @@
 // MQTT over TLS end to end (docs/mqtt.md, `broker = "mqtts://..."` with `ca`, `cert`, `key`): the
-// real drivegated on simulated nidec-washer drives, a real mosquitto broker on loopback with an
-// mqtts listener that requires a client certificate (tests/support/mosquitto.h) and, on the same
-// broker's plain listener, the independent Sparkplug host (tests/support/sparkplug_peer.h). The
-// certificates are made at run time by tests/support/make_certs.sh in the test's own directory:
-// ca (the plant's CA: the broker's server.pem and the client operator.pem), other-ca and otherca
-// (a client certificate from that other CA), and otherhost (a server certificate from ca for
-// other.example).
+// real drivegated on simulated drives of the tests' own (test-drive), a real mosquitto broker on
+// loopback with an mqtts listener that requires a client certificate (tests/support/mosquitto.h)
+// and, on the same broker's plain listener, the independent Sparkplug host
+// (tests/support/sparkplug_peer.h). The certificates are made at run time by
+// tests/support/make_certs.sh in the test's own directory: ca (the plant's CA: the broker's
+// server.pem and the client operator.pem), other-ca and otherca (a client certificate from that
+// other CA), and otherhost (a server certificate from ca for other.example).
 //
 // What is shown: with the right files the daemon gets a session over TLS and the host sees the
 // births and data; a broker that wants a client certificate refuses the daemon without one or with
@@ -194,8 +194,8 @@ class MqttE2ETls : public MqttE2E {
     ASSERT_EQ(made.status, 0) << made.err;
     ASSERT_TRUE(fs::exists(certs_ / "otherca.key"));
     start_broker("server");
-    add_drive("washer-a");
-    add_drive("washer-b");
+    add_drive("drive-a");
+    add_drive("drive-b");
   }
 
   // A broker presenting `server` (make_certs.sh's name) on its mqtts listener, and the peer on
@@ -350,21 +350,21 @@ TEST_F(MqttE2ETls, ClientCertificateFromTheCaGetsASessionWithBirthsAndData) {
   EXPECT_THAT(daemon_log(), HasSubstr("MQTT: connected to " + broker_->tls_url() +
                                       " as drivegate-gw01 (bdSeq 0)"));
 
-  // Out: a PLC runs washer-a; DDATA carries the new speed. In: a DCMD stops it again.
+  // Out: a PLC runs drive-a; DDATA carries the new speed. In: a DCMD stops it again.
   plc_->unit(1);
   ASSERT_EQ(plc_->write(reg::command, {1 /*run_forward*/, 600}), 0);
   ASSERT_TRUE(eventually([&] { return speed(1) == 600; }, 10s)) << speed(1);
   EXPECT_TRUE(peer_
                   ->wait_for(
                       [](const Message& m) {
-                        return is(m, "DDATA", "washer-a") && m.metric("speed_rpm") != nullptr &&
+                        return is(m, "DDATA", "drive-a") && m.metric("speed_rpm") != nullptr &&
                                m.metric("speed_rpm")->value == "600";
                       },
                       5s)
                   .has_value())
       << "no DDATA with speed_rpm 600";
-  dcmd("washer-a", R"({"name":"command","type":"UInt16","value":0})");
-  const auto r = wait_command_result("washer-a");
+  dcmd("drive-a", R"({"name":"command","type":"UInt16","value":0})");
+  const auto r = wait_command_result("drive-a");
   ASSERT_TRUE(r.has_value()) << "the DCMD got no result";
   EXPECT_EQ(r->first, "command");
   EXPECT_EQ(r->second, "ok");

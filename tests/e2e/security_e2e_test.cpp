@@ -1,7 +1,8 @@
 // Listeners with access levels, allow lists, word order and Modbus/TCP Security (TLS with
-// client certificates and roles), end to end: the real drivegated on the nidec-washer simulator,
-// with the clients a plant would use (pymodbus over TLS, mbpoll, libmodbus, raw sockets), and what
-// each of them sees on the wire, plus what the daemon logs about it.
+// client certificates and roles), end to end: the real drivegated on a simulated drive of the
+// tests' own (test-drive, tests/support/test_adapter), with the clients a plant would use (pymodbus
+// over TLS, mbpoll, libmodbus, raw sockets), and what each of them sees on the wire, plus what the
+// daemon logs about it.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -64,9 +65,9 @@ void make_certs(const fs::path& dir) {
 
 // --- configuration ------------------------------------------------------------------------
 
-std::string washer(const fs::path& port) {
+std::string drive(const fs::path& port) {
   return "[[bus]]\nname = \"line\"\nport = \"" + port.string() +
-         "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\nadapter = \"nidec-washer\"\n"
+         "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\nadapter = \"test-drive\"\n"
          "unit_id = 1\npoll_ms = 100\n\n";
 }
 
@@ -217,8 +218,8 @@ std::vector<std::uint16_t> registers(const std::string& line) {
   return out;
 }
 
-// Holding 17: nidec-washer's accel_time (0.1 s), an adapter point: maintain's to write.
-constexpr int kAccelTime = 17;
+// Holding 16: test-drive's accel_time (0.1 s), an adapter point: maintain's to write.
+constexpr int kAccelTime = 16;
 
 // --- TLS ----------------------------------------------------------------------------------
 
@@ -234,7 +235,7 @@ class SecurityTls : public ::testing::Test {
     gateway_ = std::make_unique<Gateway>(dir_,
                                          listener(plain_, "access = \"maintain\"") +
                                              listener(tls_, tls_keys(certs_) + tls_extra()) +
-                                             washer(dir_ / "washer"),
+                                             drive(dir_ / "drive"),
                                          plain_, log_);
     plc_ = std::make_unique<Plc>(plain_);
     ASSERT_TRUE(plc_->connect());
@@ -247,7 +248,7 @@ class SecurityTls : public ::testing::Test {
   TempDir dir_;
   fs::path certs_ = dir_ / "certs";
   fs::path log_ = dir_ / "drivegated.log";
-  Sim sim_{"nidec-washer", dir_ / "washer"};
+  Sim sim_{"test-drive", dir_ / "drive"};
   int plain_ = 0;
   int tls_ = 0;
   std::unique_ptr<Gateway> gateway_;
@@ -278,11 +279,11 @@ TEST_F(SecurityTls, EachCertificateRoleGetsItsAccessLevel) {
   // operator (operate): the setpoint is written and read back; an adapter point is not its.
   EXPECT_EQ(op.ask("write 1 1200"), write_ok());
   EXPECT_EQ(op.ask("read_holding 1 1"), holding({1200}));
-  EXPECT_EQ(op.ask("write 17 66"), write_exception(1));
+  EXPECT_EQ(op.ask("write 16 66"), write_exception(1));
 
   // engineer (maintain): the adapter point too.
-  EXPECT_EQ(engineer.ask("write 17 55"), write_ok());
-  EXPECT_EQ(engineer.ask("read_holding 17 1"), holding({55}));
+  EXPECT_EQ(engineer.ask("write 16 55"), write_ok());
+  EXPECT_EQ(engineer.ask("read_holding 16 1"), holding({55}));
 
   // No role in the certificate: the listener's access, read.
   EXPECT_THAT(registers(norole.ask("read_input 0 1")), ::testing::SizeIs(1));
@@ -302,7 +303,8 @@ TEST_F(SecurityTls, EachCertificateRoleGetsItsAccessLevel) {
   // Each write is one audit record with the certificate's subject and role (docs/audit.md):
   // accepted, refused by the session's level at the gateway, and refused by the server itself.
   EXPECT_THAT(text, HasSubstr("\", role operator: setpoint_rpm=1200: ok, "));
-  EXPECT_THAT(text, HasSubstr("\", role operator: holding 17 = 66: denied (beyond access operate)"));
+  EXPECT_THAT(text,
+              HasSubstr("\", role operator: holding 16 = 66: denied (beyond access operate)"));
   EXPECT_THAT(text, HasSubstr("\", role engineer: accel_time=5.5: ok, "));
   EXPECT_THAT(text, HasSubstr("\", role viewer: pdu 06 00 01 03 e7: denied (beyond access read)"));
   EXPECT_THAT(text, HasSubstr("from modbus_tls 127.0.0.1:"));
@@ -409,11 +411,11 @@ TEST(SecurityKey, WorldReadableKeyIsRefusedAtCheckAndStart) {
   TempDir dir;
   const fs::path certs = dir / "certs";
   ASSERT_NO_FATAL_FAILURE(make_certs(certs));
-  Sim sim{"nidec-washer", dir / "washer"};
+  Sim sim{"test-drive", dir / "drive"};
   const auto ports = free_ports(2);
   const fs::path config = dir / "drivegate.toml";
   std::ofstream(config) << listener(ports[0], "access = \"maintain\"") +
-                               listener(ports[1], tls_keys(certs)) + washer(dir / "washer");
+                               listener(ports[1], tls_keys(certs)) + drive(dir / "drive");
   const std::string key = (certs / "server.key").string();
   const auto check = [&] {
     return run({(bin_dir() / "drivegated").string(), "--check-config", config.string(),
@@ -455,7 +457,7 @@ class SecurityPlain : public ::testing::Test {
         dir_,
         listener(open_, "access = \"maintain\"") + listener(read_only_, "access = \"read\"") +
             listener(not_allowed_, "allow = [\"192.0.2.1\"]\naccess = \"maintain\"") +
-            listener(little_, "word_order = \"little\"") + washer(dir_ / "washer"),
+            listener(little_, "word_order = \"little\"") + drive(dir_ / "drive"),
         open_, log_);
     plc_ = std::make_unique<Plc>(open_);
     ASSERT_TRUE(plc_->connect());
@@ -472,7 +474,7 @@ class SecurityPlain : public ::testing::Test {
 
   TempDir dir_;
   fs::path log_ = dir_ / "drivegated.log";
-  Sim sim_{"nidec-washer", dir_ / "washer"};
+  Sim sim_{"test-drive", dir_ / "drive"};
   int open_ = 0;
   int read_only_ = 0;
   int not_allowed_ = 0;
@@ -536,8 +538,9 @@ TEST_F(SecurityPlain, LittleWordOrderListenerSwapsThe32BitWords) {
   const auto l = little.input(reg::fault_mask, 4);
   ASSERT_TRUE(b.ok());
   ASSERT_TRUE(l.ok());
-  EXPECT_EQ(b.regs, (std::vector<std::uint16_t>{0x0000, 0x0010, 0x0000, 0x0010}));
-  EXPECT_EQ(l.regs, (std::vector<std::uint16_t>{0x0010, 0x0000, 0x0010, 0x0000}));
+  // fault_mask: over_current (bit 4); native_fault: test-drive's over_current, 1.
+  EXPECT_EQ(b.regs, (std::vector<std::uint16_t>{0x0000, 0x0010, 0x0000, 0x0001}));
+  EXPECT_EQ(l.regs, (std::vector<std::uint16_t>{0x0010, 0x0000, 0x0001, 0x0000}));
   // 16-bit registers are never reordered.
   EXPECT_EQ(little.input(reg::status, 2).regs, plc_->input(reg::status, 2).regs);
 }

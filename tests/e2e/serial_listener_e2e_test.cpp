@@ -1,8 +1,9 @@
 // drivegate as a Modbus RTU / ASCII slave (docs/serial-listeners.md), end to end: the
-// real daemon with a simulated nidec-washer behind it, and on a serial listener's line a master
-// nobody here wrote, pymodbus's serial client (tests/e2e/pymodbus_serial_master.py), across a
-// socat pseudo-terminal pair. What it reads is held to what a Modbus TCP client reads of the same
-// drive, what it writes to what the simulated drive shows.
+// real daemon with a simulated drive of the tests' own (test-drive) behind it, and on a serial
+// listener's line a master nobody here wrote, pymodbus's serial client
+// (tests/e2e/pymodbus_serial_master.py), across a socat pseudo-terminal pair. What it reads is held
+// to what a Modbus TCP client reads of the same drive, what it writes to what the simulated drive
+// shows.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -26,24 +27,29 @@ class SerialListenerE2E : public ::testing::Test {
   void start(const std::string& listener, const std::string& device_options = "") {
     if (!have_pymodbus_tools()) GTEST_SKIP() << "socat and python3-pymodbus: tools/deps.sh test";
     make_line();
-    sim_ = std::make_unique<Sim>("nidec-washer", dir_ / "line");
+    sim_ = std::make_unique<Sim>("test-drive", dir_ / "line");
     // The first listener is the TCP one the harness moves to a free port (--listen).
-    toml_ = "[[listener]]\naddress = \"127.0.0.1:502\"\naccess = \"operate\"\n"
-                             "allow = [\"127.0.0.1\"]\n\n"
-                             "[[listener]]\nport = \"" +
-                             (dir_ / "s").string() + "\"\nbaud = 19200\n" + listener +
-                             "\n[[bus]]\nname = \"line\"\nport = \"" + (dir_ / "line").string() +
-                             "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\n"
-                             "adapter = \"nidec-washer\"\nunit_id = 1\n" + device_options;
-    daemon_ = std::make_unique<Daemon>(dir_, toml_, std::vector<std::string>{}, dir_ / "daemon.log");
+    toml_ =
+        "[[listener]]\naddress = \"127.0.0.1:502\"\naccess = \"operate\"\n"
+        "allow = [\"127.0.0.1\"]\n\n"
+        "[[listener]]\nport = \"" +
+        (dir_ / "s").string() + "\"\nbaud = 19200\n" + listener +
+        "\n[[bus]]\nname = \"line\"\nport = \"" + (dir_ / "line").string() +
+        "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\n"
+        "adapter = \"test-drive\"\nunit_id = 1\n" +
+        device_options;
+    daemon_ =
+        std::make_unique<Daemon>(dir_, toml_, std::vector<std::string>{}, dir_ / "daemon.log");
     plc_ = std::make_unique<Plc>(daemon_->port());
     ASSERT_TRUE(plc_->connect());
     ASSERT_TRUE(
         eventually([&] { return (plc_->input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
         << "never online; sim says " << sim_->control("state");
     ASSERT_TRUE(eventually(
-        [&] { return slurp(dir_ / "daemon.log").find("(rtu): ") != std::string::npos ||
-                     slurp(dir_ / "daemon.log").find("(ascii): ") != std::string::npos; },
+        [&] {
+          return slurp(dir_ / "daemon.log").find("(rtu): ") != std::string::npos ||
+                 slurp(dir_ / "daemon.log").find("(ascii): ") != std::string::npos;
+        },
         5s));
   }
   // Runs the master on the line with `steps`; one line of output a step.
@@ -81,12 +87,34 @@ class SerialListenerE2E : public ::testing::Test {
 TEST_F(SerialListenerE2E, AnRtuMasterReadsWritesAndGetsTheExceptionsATcpClientGets) {
   start("access = \"operate\"\n");
   const auto tcp = plc_->input(reg::status, 2);
-  const auto out = master({"read", "1", "input", "0", "2",                  // status, fault_code
-                           "write", "1", std::to_string(reg::setpoint), "600",  // FC 06
-                           "read", "1", "holding", std::to_string(reg::setpoint), "1",
-                           "read", "1", "holding", "9000", "1",             // unmapped
-                           "write", "1", std::to_string(reg::setpoint), "60000",  // out of range
-                           "read", "9", "input", "0", "1"});                // nobody at 9
+  const auto out = master({"read",
+                           "1",
+                           "input",
+                           "0",
+                           "2",  // status, fault_code
+                           "write",
+                           "1",
+                           std::to_string(reg::setpoint),
+                           "600",  // FC 06
+                           "read",
+                           "1",
+                           "holding",
+                           std::to_string(reg::setpoint),
+                           "1",
+                           "read",
+                           "1",
+                           "holding",
+                           "9000",
+                           "1",  // unmapped
+                           "write",
+                           "1",
+                           std::to_string(reg::setpoint),
+                           "60000",  // out of range
+                           "read",
+                           "9",
+                           "input",
+                           "0",
+                           "1"});  // nobody at 9
   ASSERT_EQ(out.size(), 6U) << ::testing::PrintToString(out) << slurp(dir_ / "master.err");
   EXPECT_EQ(out[0], "ok " + std::to_string(tcp.regs[0]) + " " + std::to_string(tcp.regs[1]));
   EXPECT_EQ(out[1], "ok");
@@ -101,14 +129,14 @@ TEST_F(SerialListenerE2E, AnRtuMasterReadsWritesAndGetsTheExceptionsATcpClientGe
   EXPECT_TRUE(eventually(
       [&] {
         const auto state = sim_->control("state");
-        return state.find(" target_rpm=600 ") != std::string::npos &&
-               state.find(" motion=stopped ") == std::string::npos;
+        return state.find(" target=600 ") != std::string::npos &&
+               state.find(" running=1 ") != std::string::npos;
       },
       5s))
       << sim_->control("state");
   EXPECT_THAT(master({"write", "1", "0", "0"}), ElementsAre("ok"));
   EXPECT_TRUE(eventually(
-      [&] { return sim_->control("state").find(" motion=stopped ") != std::string::npos; }, 10s))
+      [&] { return sim_->control("state").find(" running=0 ") != std::string::npos; }, 10s))
       << sim_->control("state");
   // The audit trail names the serial line as the source.
   EXPECT_THAT(log(), HasSubstr("from modbus_serial"));
@@ -119,15 +147,16 @@ TEST_F(SerialListenerE2E, AnRtuMasterReadsWritesAndGetsTheExceptionsATcpClientGe
 TEST_F(SerialListenerE2E, NoiseAndHalfFramesNeverProduceAWrongAnswer) {
   start("access = \"operate\"\n");
   const auto setpoint = std::to_string(reg::setpoint);
-  const auto out = master({"raw", "ff00ff13",              // noise
-                           "sleep", "20",
-                           "read", "1", "holding", setpoint, "1",
-                           "raw", "010600",                // half a write request
-                           "sleep", "20",
-                           "read", "1", "holding", setpoint, "1",
-                           "raw", "0106000104b00000",      // a whole write, its CRC wrong
-                           "sleep", "20",
-                           "read", "1", "holding", setpoint, "1"});
+  const auto out = master({"raw",   "ff00ff13",  // noise
+                           "sleep", "20",       "read",
+                           "1",     "holding",  setpoint,
+                           "1",     "raw",      "010600",  // half a write request
+                           "sleep", "20",       "read",
+                           "1",     "holding",  setpoint,
+                           "1",     "raw",      "0106000104b00000",  // a whole write, its CRC wrong
+                           "sleep", "20",       "read",
+                           "1",     "holding",  setpoint,
+                           "1"});
   ASSERT_EQ(out.size(), 6U) << ::testing::PrintToString(out);
   EXPECT_EQ(out[0], "reply ");
   EXPECT_EQ(out[1], "ok 0");
@@ -144,17 +173,16 @@ TEST_F(SerialListenerE2E, NoiseAndHalfFramesNeverProduceAWrongAnswer) {
 TEST_F(SerialListenerE2E, ABroadcastWriteIsNotAppliedAndFc08CountsTheLine) {
   start("access = \"operate\"\n");
   static_assert(reg::setpoint == 1);
-  const auto out = master({"rtu", "0", "06000104b0",     // broadcast: setpoint_rpm = 1200
-                           "sleep", "50",
-                           "raw", "0103000000010000",    // bad CRC
-                           "sleep", "20",
-                           "rtu", "1", "0800001234",     // return query data
-                           "rtu", "1", "08000e0000",     // server message count
-                           "rtu", "1", "08000f0000",     // server no response count
-                           "rtu", "1", "08000c0000",     // bus communication error count
-                           "rtu", "1", "0800990000",     // not a sub-function
-                           "rtu", "1", "08000a0000",     // clear counters
-                           "rtu", "1", "08000e0000"});
+  const auto out = master({"rtu",        "0",  "06000104b0",  // broadcast: setpoint_rpm = 1200
+                           "sleep",      "50", "raw",        "0103000000010000",  // bad CRC
+                           "sleep",      "20", "rtu",        "1",
+                           "0800001234",                      // return query data
+                           "rtu",        "1",  "08000e0000",  // server message count
+                           "rtu",        "1",  "08000f0000",  // server no response count
+                           "rtu",        "1",  "08000c0000",  // bus communication error count
+                           "rtu",        "1",  "0800990000",  // not a sub-function
+                           "rtu",        "1",  "08000a0000",  // clear counters
+                           "rtu",        "1",  "08000e0000"});
   ASSERT_EQ(out.size(), 9U) << ::testing::PrintToString(out);
   EXPECT_EQ(out[0], "reply ");
   EXPECT_EQ(out[1], "reply ");
@@ -167,7 +195,7 @@ TEST_F(SerialListenerE2E, ABroadcastWriteIsNotAppliedAndFc08CountsTheLine) {
   EXPECT_THAT(out[6], ::testing::StartsWith("reply 018801"));
   EXPECT_THAT(out[7], ::testing::StartsWith("reply 0108000a0000"));
   EXPECT_THAT(out[8], ::testing::StartsWith("reply 0108000e0001"));  // counted from the clear
-  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 0);  // the broadcast moved nothing
+  EXPECT_EQ(plc_->holding(reg::setpoint, 1).regs[0], 0);             // the broadcast moved nothing
   EXPECT_THAT(log(), HasSubstr("broadcast write (function 0x06) refused"));
 }
 
@@ -177,8 +205,20 @@ TEST_F(SerialListenerE2E, MbpollWritesAndReadsTheCommandBlockOverRtu) {
   start("access = \"operate\"\n");
   if (!std::filesystem::exists("/usr/bin/mbpoll")) GTEST_SKIP() << "mbpoll: tools/deps.sh";
   const auto run = [&](const std::vector<std::string>& args) {
-    std::vector<std::string> argv = {"/usr/bin/mbpoll", "-m", "rtu", "-a", "1", "-b", "19200",
-                                     "-P", "none", "-t", "4", "-1", "-o", "1"};
+    std::vector<std::string> argv = {"/usr/bin/mbpoll",
+                                     "-m",
+                                     "rtu",
+                                     "-a",
+                                     "1",
+                                     "-b",
+                                     "19200",
+                                     "-P",
+                                     "none",
+                                     "-t",
+                                     "4",
+                                     "-1",
+                                     "-o",
+                                     "1"};
     argv.insert(argv.end(), args.begin(), args.end());
     Child c(argv, dir_ / "mbpoll.err");
     std::string out;
@@ -203,10 +243,9 @@ TEST_F(SerialListenerE2E, RtuOverTcpServesReadsAndRefusesWritesOnAReadListener) 
         "\"\nframing = \"rtu\"\nallow = [\"127.0.0.1\"]\naccess = \"read\"\n");
   ASSERT_EQ(plc_->write(reg::setpoint, {900}), 0);
   const auto setpoint = std::to_string(reg::setpoint);
-  const auto out = tcp_master(port, {"read", "1", "holding", setpoint, "1",
-                                     "write", "1", setpoint, "300",
-                                     "read", "9", "holding", setpoint, "1",
-                                     "rtu", "1", "0300010001"});  // the same read, raw
+  const auto out = tcp_master(
+      port, {"read", "1", "holding", setpoint, "1", "write", "1", setpoint, "300", "read", "9",
+             "holding", setpoint, "1", "rtu", "1", "0300010001"});  // the same read, raw
   ASSERT_EQ(out.size(), 4U) << ::testing::PrintToString(out) << slurp(dir_ / "master.err");
   EXPECT_EQ(out[0], "ok 900");
   EXPECT_EQ(out[1], "exception 1");
@@ -251,7 +290,7 @@ TEST_F(SerialListenerE2E, RtuOverTcpAnswersAHalfClosedClientsRunThenCloses) {
   append_crc16_modbus(echo);
   EXPECT_EQ(in, echo);
   EXPECT_TRUE(closed) << "the connection was not closed after the reply";
-  EXPECT_THAT(sim_->control("state"), HasSubstr(" target_rpm=800 "));
+  EXPECT_THAT(sim_->control("state"), HasSubstr(" target=800 "));
   EXPECT_TRUE(
       eventually([&] { return (plc_->input(reg::status, 1).regs[0] & reg::running) != 0; }, 5s));
   EXPECT_THAT(log(), HasSubstr("command=run_forward: ok"));
@@ -268,22 +307,22 @@ TEST_F(SerialListenerE2E, ASerialMastersWritesFeedTheFailsafeAndItsSilenceTripsI
   // Run forward at 600, then a heartbeat every 300 ms for 2.4 s: more than twice the timeout.
   std::vector<std::string> steps = {"writes", "1", "0", "1,600"};
   for (int i = 1; i <= 8; ++i) {
-    steps.insert(steps.end(), {"sleep", "300", "write", "1", std::to_string(reg::heartbeat),
-                               std::to_string(i)});
+    steps.insert(steps.end(),
+                 {"sleep", "300", "write", "1", std::to_string(reg::heartbeat), std::to_string(i)});
   }
   const auto out = master(steps);
   ASSERT_EQ(out.size(), 9U) << ::testing::PrintToString(out);
   for (const auto& line : out) EXPECT_EQ(line, "ok");
   const auto state = sim_->control("state");
-  EXPECT_THAT(state, HasSubstr(" target_rpm=600 "));
-  EXPECT_THAT(state, Not(HasSubstr(" motion=stopped "))) << "the failsafe fired while fed";
+  EXPECT_THAT(state, HasSubstr(" target=600 "));
+  EXPECT_THAT(state, HasSubstr(" running=1 ")) << "the failsafe fired while fed";
   EXPECT_EQ(plc_->input(reg::status, 1).regs[0] & kFailsafe, 0);
   // The master goes quiet: stopped within the timeout and a few polls, the bit latched.
   ASSERT_TRUE(eventually(
-      [&] { return sim_->control("state").find(" motion=stopped ") != std::string::npos; }, 5s))
+      [&] { return sim_->control("state").find(" running=0 ") != std::string::npos; }, 5s))
       << sim_->control("state");
-  EXPECT_TRUE(eventually(
-      [&] { return (plc_->input(reg::status, 1).regs[0] & kFailsafe) != 0; }, 3s));
+  EXPECT_TRUE(
+      eventually([&] { return (plc_->input(reg::status, 1).regs[0] & kFailsafe) != 0; }, 3s));
 }
 
 // The master's adapter unplugged and plugged back: the listener says so once, reopens the line
@@ -292,8 +331,8 @@ TEST_F(SerialListenerE2E, ALineUnpluggedAndBackIsReopenedAndLoggedOnce) {
   start("access = \"operate\"\n");
   ASSERT_THAT(master({"read", "1", "input", "0", "1"}), ElementsAre(::testing::StartsWith("ok ")));
   line_.reset();  // both ends of the pair go away
-  ASSERT_TRUE(eventually([&] { return log().find("reopening (logged once") != std::string::npos; },
-                         5s))
+  ASSERT_TRUE(
+      eventually([&] { return log().find("reopening (logged once") != std::string::npos; }, 5s))
       << log();
   std::this_thread::sleep_for(1500ms);  // several reopen attempts fail meanwhile
   EXPECT_EQ(occurrences(log(), "(logged once"), 1U) << log();
@@ -316,8 +355,8 @@ TEST_F(SerialListenerE2E, AReloadAppliesTheNewAccessLevelAtOnce) {
   next.replace(at, std::string("access = \"operate\"").size(), "access = \"read\"");
   std::ofstream(daemon_->config()) << next;
   daemon_->process().signal(SIGHUP);
-  ASSERT_TRUE(eventually([&] { return log().find("configuration reloaded") != std::string::npos; },
-                         10s))
+  ASSERT_TRUE(
+      eventually([&] { return log().find("configuration reloaded") != std::string::npos; }, 10s))
       << log();
   EXPECT_THAT(log(), Not(HasSubstr("takes effect at the next restart")));
   EXPECT_THAT(master({"write", "1", setpoint, "400", "read", "1", "holding", setpoint, "1"}),
@@ -382,11 +421,11 @@ TEST_F(SerialListenerE2E, SerialListenersAreNamedByTheirPortInTheReloadLogAndThe
 TEST_F(SerialListenerE2E, ASilentDrivesWriteIs0x0BOverTheLineToo) {
   start("access = \"operate\"\n");
   sim_->control("silent on");
-  ASSERT_TRUE(eventually(
-      [&] { return (plc_->input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 10s));
+  ASSERT_TRUE(
+      eventually([&] { return (plc_->input(reg::status, 1).regs[0] & reg::comm_lost) != 0; }, 10s));
   const auto setpoint = std::to_string(reg::setpoint);
-  const auto out = master({"write", "1", setpoint, "500", "read", "1", "input",
-                           std::to_string(reg::status), "1"});
+  const auto out = master(
+      {"write", "1", setpoint, "500", "read", "1", "input", std::to_string(reg::status), "1"});
   ASSERT_EQ(out.size(), 2U) << ::testing::PrintToString(out);
   EXPECT_EQ(out[0], "exception 11");
   const std::string tcp_status = std::to_string(plc_->input(reg::status, 1).regs[0]);
@@ -395,14 +434,14 @@ TEST_F(SerialListenerE2E, ASilentDrivesWriteIs0x0BOverTheLineToo) {
 
 // reply_timeout_ms, the master's response timeout: the drive goes silent under a run command, the
 // master hears nothing within it and stops listening, and the write's 0x0B, which comes seconds
-// later (the inverter's ACK never came: adapters/nidec-washer/README.md, "Deadline", 2.5 s), never
+// later (the drive never answered: its write's deadline, 1.8 s), never
 // reaches the line, where it would meet the master's next request. The master's next read is
 // answered as ever.
 TEST_F(SerialListenerE2E, AnAnswerPastTheMastersResponseTimeoutNeverReachesTheLine) {
   start("access = \"operate\"\nreply_timeout_ms = 200\n");
   sim_->control("silent on");
   static_assert(reg::command == 0);
-  // The master listens on past the moment the 0x0B would come (2.5 s), with a wide margin.
+  // The master listens on past the moment the 0x0B would come (1.8 s), with a wide margin.
   auto out = master({"rtu", "1", "0600000001",  // FC 06: command = run_forward
                      "listen", "6000"});
   ASSERT_EQ(out.size(), 2U) << ::testing::PrintToString(out);
@@ -413,8 +452,8 @@ TEST_F(SerialListenerE2E, AnAnswerPastTheMastersResponseTimeoutNeverReachesTheLi
       [&] { return log().find(": command=run_forward: no response") != std::string::npos; }, 10s))
       << log();
   // The master's next requests are answered as ever; FC 08 counts the reply not sent.
-  out = master({"read", "1", "input", std::to_string(reg::status), "1",
-                "rtu", "1", "08000f0000"});  // FC 08: server no response count
+  out = master({"read", "1", "input", std::to_string(reg::status), "1", "rtu", "1",
+                "08000f0000"});  // FC 08: server no response count
   ASSERT_EQ(out.size(), 2U) << ::testing::PrintToString(out);
   EXPECT_THAT(out[0], ::testing::StartsWith("ok "));  // the status word, its CRC good
   EXPECT_THAT(out[1], ::testing::StartsWith("reply 0108000f0001"));  // the one dropped
@@ -427,8 +466,7 @@ TEST_F(SerialListenerE2E, AnAnswerPastTheMastersResponseTimeoutNeverReachesTheLi
 TEST_F(SerialListenerE2E, AReadListenersMasterGetsException01ForAWrite) {
   start("access = \"read\"\n");
   const auto setpoint = std::to_string(reg::setpoint);
-  const auto out =
-      master({"write", "1", setpoint, "600", "read", "1", "holding", setpoint, "1"});
+  const auto out = master({"write", "1", setpoint, "600", "read", "1", "holding", setpoint, "1"});
   ASSERT_EQ(out.size(), 2U) << ::testing::PrintToString(out);
   EXPECT_EQ(out[0], "exception 1");
   EXPECT_EQ(out[1], "ok 0");
@@ -441,10 +479,9 @@ TEST_F(SerialListenerE2E, AReadListenersMasterGetsException01ForAWrite) {
 TEST_F(SerialListenerE2E, AnAsciiMasterReadsAndWrites) {
   start("framing = \"ascii\"\ndata_bits = 8\naccess = \"operate\"\n");
   const auto setpoint = std::to_string(reg::setpoint);
-  const auto out = master(
-      {"write", "1", setpoint, "450", "read", "1", "holding", setpoint, "1", "read", "1",
-       "holding", "9000", "1"},
-      "ascii");
+  const auto out = master({"write", "1", setpoint, "450", "read", "1", "holding", setpoint, "1",
+                           "read", "1", "holding", "9000", "1"},
+                          "ascii");
   ASSERT_EQ(out.size(), 3U) << ::testing::PrintToString(out) << slurp(dir_ / "master.err");
   EXPECT_EQ(out[0], "ok");
   EXPECT_EQ(out[1], "ok 450");

@@ -1,8 +1,8 @@
 // The state directory end to end (docs/security.md, "The state directory"): the real drivegated
-// with store and forward on simulated nidec-washer drives, a real mosquitto and the independent
-// Sparkplug host (tests/support/mqtt_e2e.h). Whatever the directory holds instead of the files the
-// daemon keeps there (FIFOs where it writes), or if it is deleted while the daemon runs, Modbus
-// and HTTP go on being answered and the changes kept during an outage reach the host.
+// with store and forward on simulated drives of the tests' own (test-drive), a real mosquitto and
+// the independent Sparkplug host (tests/support/mqtt_e2e.h). Whatever the directory holds instead
+// of the files the daemon keeps there (FIFOs where it writes), or if it is deleted while the daemon
+// runs, Modbus and HTTP go on being answered and the changes kept during an outage reach the host.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -84,7 +84,7 @@ TEST_F(StateDirE2E, FifosWhereTheDaemonWritesHangNothing) {
   broker_->start();
   ASSERT_TRUE(peer_->wait_for([](const Message& m) { return m.kind == "reconnected"; }, 5s));
   wait_births(15s);
-  EXPECT_TRUE(historical_reached("washer-a", 900)) << "the kept ramp was not sent";
+  EXPECT_TRUE(historical_reached("drive-a", 900)) << "the kept ramp was not sent";
   ASSERT_TRUE(
       eventually([&] { return metric(http_port_, "drivegate_mqtt_store_records") == 0; }, 10s));
   std::this_thread::sleep_for(1500ms);  // past a sync: the cursor written
@@ -127,8 +127,8 @@ TEST_F(StateDirE2E, ADeletedStateDirectoryIsMadeAgainAndNothingKeptIsLost) {
   start();
   wait_births(15s);
   ASSERT_FALSE(HasFailure());
-  EXPECT_TRUE(historical_reached("washer-a", 900)) << "kept before the deletion: lost";
-  EXPECT_TRUE(historical_reached("washer-b", 600)) << "kept after the deletion: lost";
+  EXPECT_TRUE(historical_reached("drive-a", 900)) << "kept before the deletion: lost";
+  EXPECT_TRUE(historical_reached("drive-b", 600)) << "kept after the deletion: lost";
   ASSERT_TRUE(
       eventually([&] { return metric(http_port_, "drivegate_mqtt_store_records") == 0; }, 10s));
   EXPECT_EQ(metric(http_port_, "drivegate_mqtt_store_dropped_total"), 0);

@@ -1,5 +1,5 @@
 // The journal and the history under a flood of writes (docs/audit.md): the real drivegated on a
-// simulated nidec-washer, stormed for six seconds by clients that each open a new connection for
+// simulated drive of the tests' own (test-drive), stormed for six seconds by clients that each open a new connection for
 // every write, accepted (an operate listener) and refused (a read-only listener, and a unit that
 // does not exist). Asserted: the lines the daemon writes stay within a bound, far below one a
 // write; every write is in the audit trail, one by one or counted in a summary, and the summaries
@@ -50,7 +50,7 @@ int write_once(int port, std::uint8_t unit, std::uint16_t address, std::uint16_t
 
 TEST(StressAudit, AFloodOfWritesFromNewConnectionsLeavesTheJournalAndHistoryReadable) {
   TempDir dir;
-  Sim sim("nidec-washer", dir / "washer");
+  Sim sim("test-drive", dir / "drive");
   const int read_port = free_port();
   const int http_port = free_port();
   const std::filesystem::path log = dir / "drivegated.log";
@@ -63,9 +63,9 @@ TEST(StressAudit, AFloodOfWritesFromNewConnectionsLeavesTheJournalAndHistoryRead
       "\"\naccess = \"read\"\n\n[http]\nlisten = \"127.0.0.1:" + std::to_string(http_port) +
       "\"\nrequests_per_s = 0\n\n[history]\nevents = 50\n\n"
       "[[bus]]\nname = \"line\"\nport = \"" +
-      (dir / "washer").string() +
-      "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\nadapter = \"nidec-washer\"\n"
-      "unit_id = 1\npoll_ms = 100\n[device.options]\nplatform = 8\n";
+      (dir / "drive").string() +
+      "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\nadapter = \"test-drive\"\n"
+      "unit_id = 1\npoll_ms = 100\n";
   Daemon daemon(dir, toml, {}, log);
   Plc plc(daemon.port());
   ASSERT_TRUE(plc.connect());
@@ -137,7 +137,7 @@ TEST(StressAudit, AFloodOfWritesFromNewConnectionsLeavesTheJournalAndHistoryRead
   ASSERT_EQ(daemon.stop(), 0);
   const std::string text = slurp(log);
   const std::string storm = text.substr(log_before);
-  const std::regex one(R"( write to (washer \(unit 1\)|unit 9) from modbus 127\.0\.0\.1:)");
+  const std::regex one(R"( write to (drive \(unit 1\)|unit 9) from modbus 127\.0\.0\.1:)");
   const std::regex folded(
       R"( (\d+) writes? to .* from modbus 127\.0\.0\.1 on .*folded into this record)");
   std::uint64_t in_journal = 0;

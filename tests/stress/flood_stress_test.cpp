@@ -31,9 +31,9 @@ namespace {
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 
-std::string washer(const fs::path& port, int http_port, const std::string& more = "") {
+std::string drive(const fs::path& port, int http_port, const std::string& more = "") {
   return "[[bus]]\nname = \"line\"\nport = \"" + port.string() +
-         "\"\n\n[[device]]\nname = \"washer\"\nbus = \"line\"\nadapter = \"nidec-washer\"\n"
+         "\"\n\n[[device]]\nname = \"drive\"\nbus = \"line\"\nadapter = \"test-drive\"\n"
          "unit_id = 1\npoll_ms = 100\n\n[http]\nlisten = \"127.0.0.1:" +
          std::to_string(http_port) + "\"\n" + more;
 }
@@ -161,9 +161,9 @@ void pull(int port, int host, const std::string& target, const Switch& flood,
 // each: a PLC's reads stay within 5x of their p99 without them.
 TEST(StressFlood, SixteenAddressesPullingTheLargestHistoryPageLeaveModbusFast) {
   TempDir dir;
-  Sim sim("nidec-washer", dir / "line");
+  Sim sim("test-drive", dir / "line");
   const int http_port = free_port();
-  Daemon daemon(dir, washer(dir / "line", http_port), {}, dir / "drivegated.log");
+  Daemon daemon(dir, drive(dir / "line", http_port), {}, dir / "drivegated.log");
   Plc plc(daemon.port());
   ASSERT_TRUE(plc.connect());
   ASSERT_TRUE(eventually(
@@ -262,7 +262,7 @@ TEST(StressFlood, AHandshakeFloodFromOneAddressLeavesAPlainClientFast) {
   TempDir dir;
   const fs::path certs = dir / "certs";
   ASSERT_TRUE(make_certs(certs)) << slurp(dir / "make_certs.log");
-  Sim sim("nidec-washer", dir / "line");
+  Sim sim("test-drive", dir / "line");
   const int http_port = free_port();
   const int plain = free_port();
   int tls = free_port();
@@ -273,7 +273,7 @@ TEST(StressFlood, AHandshakeFloodFromOneAddressLeavesAPlainClientFast) {
       "\"\naccess = \"maintain\"\n\n[[listener]]\naddress = \"127.0.0.1:" + std::to_string(tls) +
       "\"\ntls = { cert = " + at("server.pem") + ", key = " + at("server.key") +
       ", ca = " + at("ca.pem") + " }\nroles = { engineer = \"maintain\" }\n";
-  std::ofstream(dir / "drivegate.toml") << washer(dir / "line", http_port) << listeners;
+  std::ofstream(dir / "drivegate.toml") << drive(dir / "line", http_port) << listeners;
   Child daemon({(bin_dir() / "drivegated").string(), "--config", (dir / "drivegate.toml").string(),
                 "--plugin-dir", plugin_dir().string()},
                dir / "drivegated.log");

@@ -1,8 +1,9 @@
 // The promises under attack from the MQTT side (docs/safety.md, docs/mqtt.md): the real
-// drivegated on simulated nidec-washer drives, a real mosquitto and an independent Sparkplug host
-// (tests/support/mqtt_e2e.h), used the way a buggy SCADA script or a hostile client on the broker
-// would: retained commands, oversized ones, NaN, a run while the failsafe holds the drive, a
-// rebirth storm, a STATE from the future. Asserted on what the PLC reads and the drive does.
+// drivegated on simulated drives of the tests' own (test-drive), a real mosquitto and an
+// independent Sparkplug host (tests/support/mqtt_e2e.h), used the way a buggy SCADA script or a
+// hostile client on the broker would: retained commands, oversized ones, NaN, a run while the
+// failsafe holds the drive, a rebirth storm, a STATE from the future. Asserted on what the PLC
+// reads and the drive does.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -51,14 +52,16 @@ class MqttAttack : public MqttE2E {
     return {};
   }
 
-  // The motor as the simulated inverter itself has it (its `state` line), not as the gateway
-  // reports it: what it was told to do (`motion`) and how fast it turns.
+  // The motor as the simulated drive itself has it (its `state` line), not as the gateway
+  // reports it: whether it was told to run (`running`), at what speed (`target`), and how fast it
+  // turns.
   struct SimMotor {
     std::string line;
-    std::string motion;
+    std::string running;
+    int target = -1;
     int speed = -1;
-    [[nodiscard]] bool answered() const { return !motion.empty() && speed >= 0; }
-    [[nodiscard]] bool stopped() const { return motion == "stopped" && speed == 0; }
+    [[nodiscard]] bool answered() const { return !running.empty() && speed >= 0; }
+    [[nodiscard]] bool stopped() const { return running == "0" && target == 0 && speed == 0; }
     [[nodiscard]] std::string what() const { return "sim: " + line; }
   };
   SimMotor sim_motor(const std::string& name) {
@@ -70,8 +73,10 @@ class MqttAttack : public MqttE2E {
       const auto from = at + key.size() + 2;
       return m.line.substr(from, m.line.find(' ', from) - from);
     };
-    m.motion = field("motion");
-    const std::string speed = field("speed_rpm");
+    m.running = field("running");
+    const std::string target = field("target");
+    if (!target.empty()) m.target = std::stoi(target);
+    const std::string speed = field("speed");
     if (!speed.empty()) m.speed = std::stoi(speed);
     return m;
   }
@@ -104,15 +109,15 @@ class MqttAttack : public MqttE2E {
     return m;
   }
 
-  // washer-a (unit 1) turning forward at `rpm`, on the inverter and as the PLC reads it.
+  // drive-a (unit 1) turning forward at `rpm`, on the inverter and as the PLC reads it.
   void expect_turning(int rpm) {
     EXPECT_TRUE(eventually(
         [&] {
-          const SimMotor s = sim_motor("washer-a");
-          return s.motion == "cw" && s.speed == rpm;
+          const SimMotor s = sim_motor("drive-a");
+          return s.running == "1" && s.target == rpm && s.speed == rpm;
         },
         10s))
-        << sim_motor("washer-a").what();
+        << sim_motor("drive-a").what();
     EXPECT_TRUE(eventually(
         [&] {
           const PlcMotor p = plc_motor(1);
@@ -149,8 +154,8 @@ TEST_F(MqttAttack, ARetainedRunIsNeverReplayedAfterThePlcStopped) {
   start_daemon("commands = true\n");
   wait_births();
   ASSERT_FALSE(HasFailure());
-  peer_->publish_retained(device_topic("DCMD", "washer-a"), run_at(800));
-  const auto live = wait_command_result("washer-a");
+  peer_->publish_retained(device_topic("DCMD", "drive-a"), run_at(800));
+  const auto live = wait_command_result("drive-a");
   ASSERT_TRUE(live.has_value());
   EXPECT_EQ(live->second, "ok");  // live: the broker forwarded it without the flag
   ASSERT_TRUE(eventually([&] { return speed(1) == 800; }, 10s));
@@ -201,7 +206,7 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
                   << slurp(dir_ / "peer-b.log") << "--- mosquitto B log:\n"
                   << other->broker.log() << slurp(other->dir / "mosquitto.log.part") << "\n";
       });
-  const std::string topic = device_topic("DCMD", "washer-a");
+  const std::string topic = device_topic("DCMD", "drive-a");
   b.peer.publish_retained(topic, run_at(800));
   brokers_ = {broker_->url(), b.broker.url()};
   start_daemon("commands = true\n");
@@ -209,7 +214,7 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
   ASSERT_FALSE(HasFailure());
   const PlcMotor before = plc_motor(1);
   ASSERT_TRUE(before.stopped()) << before.what();
-  ASSERT_TRUE(sim_motor("washer-a").stopped()) << sim_motor("washer-a").what();
+  ASSERT_TRUE(sim_motor("drive-a").stopped()) << sim_motor("drive-a").what();
   EXPECT_EQ(log_line_with({"retained by the broker"}), "")
       << "a retained command on A, where there is none";
 
@@ -224,7 +229,7 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
   int samples = 0;
   bool ignored = false;
   while (true) {
-    const SimMotor sim = sim_motor("washer-a");
+    const SimMotor sim = sim_motor("drive-a");
     ASSERT_TRUE(sim.answered()) << sim.what();
     ASSERT_TRUE(sim.stopped()) << "the retained run reached the inverter: " << sim.what();
     const PlcMotor plc = plc_motor(1);
@@ -232,20 +237,20 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
     ASSERT_FALSE(plc.running()) << "the PLC reads running: " << plc.what();
     ASSERT_TRUE(plc.stopped()) << plc.what();
     ++samples;
-    ignored = ignored || !log_line_with({"DCMD", "washer-a", "retained by the broker"}).empty();
+    ignored = ignored || !log_line_with({"DCMD", "drive-a", "retained by the broker"}).empty();
     const auto on_b = std::chrono::steady_clock::now() - born_at;
     if ((ignored && on_b >= 3s) || on_b >= 10s) break;
     std::this_thread::sleep_for(50ms);
   }
   EXPECT_GE(samples, 5);  // a window, not one look: 3 s at 50 ms a sample
   EXPECT_TRUE(ignored) << "the retained DCMD did not come with the subscription on B";
-  EXPECT_FALSE(log_line_with({"DCMD", "washer-a", "retained by the broker"}).empty())
+  EXPECT_FALSE(log_line_with({"DCMD", "drive-a", "retained by the broker"}).empty())
       << "the log does not say the retained DCMD was ignored";
   EXPECT_THAT(daemon_log(), HasSubstr("trying " + b.broker.url() + " next"));
   // Born on B with the drive as it is: stopped.
   const auto dbirth =
-      b.peer.wait_for([](const Message& m) { return is(m, "DBIRTH", "washer-a"); }, 10s);
-  ASSERT_TRUE(dbirth.has_value()) << "no DBIRTH of washer-a on B";
+      b.peer.wait_for([](const Message& m) { return is(m, "DBIRTH", "drive-a"); }, 10s);
+  ASSERT_TRUE(dbirth.has_value()) << "no DBIRTH of drive-a on B";
   ASSERT_NE(dbirth->metric("status_running"), nullptr) << describe(*dbirth);
   EXPECT_EQ(dbirth->metric("status_running")->value, "false");
   EXPECT_EQ(dbirth->metric("command")->value, "0");
@@ -257,7 +262,7 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
 
   // A live run on B is carried out: the inverter turns and the PLC reads it.
   b.peer.publish(topic, run_at(600));
-  const auto result = test::wait_command_result(b.peer, "washer-a");
+  const auto result = test::wait_command_result(b.peer, "drive-a");
   ASSERT_TRUE(result.has_value()) << "no result for the live DCMD on B";
   EXPECT_EQ(result->second, "ok");
   expect_turning(600);
@@ -267,12 +272,12 @@ TEST_F(MqttAttack, ARetainedRunOnTheNextBrokerIsNeverCarriedOut) {
 }
 
 // A SIGHUP that changes [mqtt] (here the edge node id) while a DCMD's run is in flight: received
-// and queued on the drive by the old session, not yet confirmed (the inverter is deaf, `silent
+// and queued on the drive by the old session, not yet confirmed (the drive is deaf, `silent
 // on`, so it cannot be), when the reload ends that session and begins the next.
 //
 // What is right, from daemon/mqtt/northbound.cpp: the device is unchanged, so it is kept as it
 // runs with its queued write (README, SIGHUP), which goes on to be confirmed or to fail at its
-// deadline (2.5 s, adapters/nidec-washer/README.md, "Writes") as any Modbus write would. Its
+// deadline (1.8 s, tests/support/test_adapter/driver.cpp) as any Modbus write would. Its
 // outcome belongs to the old session: write()'s report holds a weak token of that Northbound
 // (`alive_`), expired once the reload has freed it, and that session's EdgeNode is offline
 // anyway, so the outcome is published nowhere (the audit trail has it). The new edge node never
@@ -299,19 +304,19 @@ TEST_F(MqttAttack, ASighupChangingMqttWithADcmdInFlightLeavesNoStaleStateNorOrph
   plc_->unit(1);
   ASSERT_EQ(plc_->write(reg::setpoint, {800}), 0);
   ASSERT_TRUE(plc_motor(1).stopped()) << plc_motor(1).what();
-  Sim& sim = *drive("washer-a").sim;
+  Sim& sim = *drive("drive-a").sim;
 
   std::string node = kEdge;
   for (const bool deaf_past_deadline : {false, true}) {
     const std::string next = deaf_past_deadline ? "gw03" : "gw02";
     SCOPED_TRACE(node + " -> " + next + (deaf_past_deadline ? ", deaf past the deadline" : ""));
-    ASSERT_EQ(sim.control("silent on"), "ok silent=1");
+    ASSERT_EQ(sim.control("silent on"), "ok silent=on");
     const std::size_t log_from = daemon_log().size();
     const std::size_t history_from = peer_->history().size();
-    peer_->publish(topic_of("DCMD", node) + "/washer-a",
+    peer_->publish(topic_of("DCMD", node) + "/drive-a",
                    R"({"metrics":[{"name":"command","type":"UInt16","value":1}]})");
     ASSERT_TRUE(eventually(
-        [&] { return !log_line_with({"MQTT: DCMD washer-a command"}, log_from).empty(); }, 10s))
+        [&] { return !log_line_with({"MQTT: DCMD drive-a command"}, log_from).empty(); }, 10s))
         << "the DCMD did not reach the drive's write path";
 
     std::string toml = config("commands = true\n");
@@ -328,10 +333,10 @@ TEST_F(MqttAttack, ASighupChangingMqttWithADcmdInFlightLeavesNoStaleStateNorOrph
     ASSERT_TRUE(born.has_value()) << next << " was not born";
     EXPECT_EQ(born->topic, topic_of("NBIRTH", next));
     const auto dbirth = peer_->wait_for(
-        [&](const Message& m) { return is(m, "DBIRTH", "washer-a") && m.node() == next; }, 10s);
-    ASSERT_TRUE(dbirth.has_value()) << "no DBIRTH of washer-a on " << next;
+        [&](const Message& m) { return is(m, "DBIRTH", "drive-a") && m.node() == next; }, 10s);
+    ASSERT_TRUE(dbirth.has_value()) << "no DBIRTH of drive-a on " << next;
     // The inverter is still deaf: it has taken nothing, and the birth says so.
-    const SimMotor deaf = sim_motor("washer-a");
+    const SimMotor deaf = sim_motor("drive-a");
     EXPECT_TRUE(deaf.stopped()) << deaf.what();
     const PlcMotor plc_deaf = plc_motor(1);
     EXPECT_TRUE(plc_deaf.stopped()) << plc_deaf.what();
@@ -345,14 +350,14 @@ TEST_F(MqttAttack, ASighupChangingMqttWithADcmdInFlightLeavesNoStaleStateNorOrph
 
     // The inverter hears again, at once or once the run's deadline has passed. The audit trail
     // (docs/audit.md) says how the run ended: it is the daemon's answer, published nowhere.
-    const std::string audit = "write to washer-a (unit 1) from mqtt";
+    const std::string audit = "write to drive-a (unit 1) from mqtt";
     if (!deaf_past_deadline) {
-      ASSERT_EQ(sim.control("silent off"), "ok silent=0");
+      ASSERT_EQ(sim.control("silent off"), "ok silent=off");
     }
     ASSERT_TRUE(eventually([&] { return !log_line_with({audit}, log_from).empty(); }, 10s))
         << "the write was never answered";
     if (deaf_past_deadline) {
-      ASSERT_EQ(sim.control("silent off"), "ok silent=0");
+      ASSERT_EQ(sim.control("silent off"), "ok silent=off");
     }
     const std::string line = log_line_with({audit}, log_from);
     const bool applied = line.find("command=run_forward: ok") != std::string::npos;
@@ -365,7 +370,7 @@ TEST_F(MqttAttack, ASighupChangingMqttWithADcmdInFlightLeavesNoStaleStateNorOrph
       EXPECT_TRUE(eventually(
           [&] {
             pump(100ms);
-            const auto v = current_values(peer_->history(), next, "washer-a");
+            const auto v = current_values(peer_->history(), next, "drive-a");
             return v.contains("command") && v.at("command") == "1" &&
                    v.at("status_running") == "true" && v.at("speed_rpm") == "800";
           },
@@ -376,14 +381,14 @@ TEST_F(MqttAttack, ASighupChangingMqttWithADcmdInFlightLeavesNoStaleStateNorOrph
       // Not applied: the motor never moves, and every view says stopped throughout.
       const auto end = std::chrono::steady_clock::now() + 2s;
       while (std::chrono::steady_clock::now() < end) {
-        const SimMotor s = sim_motor("washer-a");
+        const SimMotor s = sim_motor("drive-a");
         ASSERT_TRUE(s.stopped()) << "a run that failed moved the motor: " << s.what();
         const PlcMotor p = plc_motor(1);
         ASSERT_TRUE(p.stopped()) << p.what();
         std::this_thread::sleep_for(50ms);
       }
       pump(300ms);
-      const auto v = current_values(peer_->history(), next, "washer-a");
+      const auto v = current_values(peer_->history(), next, "drive-a");
       EXPECT_EQ(v.at("command"), "0");
       EXPECT_EQ(v.at("status_running"), "false");
       EXPECT_EQ(v.at("speed_rpm"), "0");
@@ -408,11 +413,11 @@ TEST_F(MqttAttack, ASighupChangingMqttWithADcmdInFlightLeavesNoStaleStateNorOrph
 
     // The new node answers a DCMD of its own (the check above is not empty for want of
     // results), and the drive ends stopped.
-    peer_->publish(topic_of("DCMD", next) + "/washer-a",
+    peer_->publish(topic_of("DCMD", next) + "/drive-a",
                    R"({"metrics":[{"name":"command","type":"UInt16","value":0}]})");
     const auto result = peer_->wait_for(
         [&](const Message& m) {
-          return is(m, "DDATA", "washer-a") && m.node() == next &&
+          return is(m, "DDATA", "drive-a") && m.node() == next &&
                  m.metric("Command/Last Result") != nullptr;
         },
         10s);
@@ -420,8 +425,8 @@ TEST_F(MqttAttack, ASighupChangingMqttWithADcmdInFlightLeavesNoStaleStateNorOrph
     EXPECT_EQ(result->metric("Command/Last Result")->value, "ok");
     EXPECT_EQ(result->metric("Command/Last Point")->value, "command");
     EXPECT_TRUE(
-        eventually([&] { return plc_motor(1).stopped() && sim_motor("washer-a").stopped(); }, 10s))
-        << plc_motor(1).what() << "; " << sim_motor("washer-a").what();
+        eventually([&] { return plc_motor(1).stopped() && sim_motor("drive-a").stopped(); }, 10s))
+        << plc_motor(1).what() << "; " << sim_motor("drive-a").what();
     node = next;
   }
   EXPECT_TRUE(daemon_->process().running());
@@ -444,20 +449,20 @@ TEST_F(MqttAttack, OversizedAndNonFiniteCommandsChangeNothing) {
     many += std::string(i ? "," : "") + R"({"name":"setpoint_rpm","type":"Int16","value":)" +
             std::to_string(100 + i) + "}";
   }
-  dcmd("washer-a", many);
-  auto r = wait_command_result("washer-a");
+  dcmd("drive-a", many);
+  auto r = wait_command_result("drive-a");
   ASSERT_TRUE(r.has_value());
   EXPECT_THAT(r->second, StartsWith("refused: 65 metrics"));
 
   for (const char* bad : {"NaN", "Infinity", "-Infinity"}) {
-    dcmd("washer-a", std::string(R"({"name":"setpoint_rpm","type":"Double","value":")") + bad +
-                         "\"}");
-    r = wait_command_result("washer-a");
+    dcmd("drive-a",
+         std::string(R"({"name":"setpoint_rpm","type":"Double","value":")") + bad + "\"}");
+    r = wait_command_result("drive-a");
     ASSERT_TRUE(r.has_value()) << bad;
     EXPECT_EQ(r->second, "exception 0x03 (illegal data value)") << bad;
   }
-  dcmd("washer-a", R"({"name":"heartbeat","type":"Double","value":"NaN"})");
-  r = wait_command_result("washer-a");
+  dcmd("drive-a", R"({"name":"heartbeat","type":"Double","value":"NaN"})");
+  r = wait_command_result("drive-a");
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->second, "exception 0x03 (illegal data value)");
   EXPECT_EQ(holding(1, reg::heartbeat), 0);
@@ -518,8 +523,8 @@ TEST_F(MqttAttack, ARebirthStormPublishesFewBirthsAndModbusKeepsAnswering) {
 // The primary host's STATE stamped in the far future (retained, so it comes at every subscribe)
 // does not make the genuine STATE after it look stale: the births follow the genuine one.
 TEST_F(MqttAttack, AStateFromTheFutureDoesNotWedgeTheSession) {
-  peer_->publish_text("spBv1.0/STATE/scada", R"({"online":false,"timestamp":99999999999999})",
-                      true, 1);
+  peer_->publish_text("spBv1.0/STATE/scada", R"({"online":false,"timestamp":99999999999999})", true,
+                      1);
   start_daemon("primary_host_id = \"scada\"\n");
   ASSERT_TRUE(eventually(
       [&] { return daemon_log().find("ahead of this gateway's clock") != std::string::npos; },
@@ -540,7 +545,7 @@ class MqttAttackFailsafe : public MqttAttack {
     SparkplugPeer::Options o;
     o.stderr_file = dir_ / "peer.log";
     peer_ = std::make_unique<SparkplugPeer>(broker_->port(), o);
-    add_drive("washer-a", "failsafe_timeout_ms = 1000\nfailsafe_action = \"stop\"\n");
+    add_drive("drive-a", "failsafe_timeout_ms = 1000\nfailsafe_action = \"stop\"\n");
   }
 };
 
@@ -557,8 +562,8 @@ TEST_F(MqttAttackFailsafe, AnMqttRunCannotBumpALatchedDrive) {
   ASSERT_TRUE(eventually(
       [&] { return speed(1) == 0 && (input(1, reg::status) & reg::running) == 0; }, 15s));
 
-  dcmd("washer-a", R"({"name":"command","type":"UInt16","value":1})");
-  const auto r = wait_command_result("washer-a");
+  dcmd("drive-a", R"({"name":"command","type":"UInt16","value":1})");
+  const auto r = wait_command_result("drive-a");
   ASSERT_TRUE(r.has_value());
   EXPECT_EQ(r->second, "exception 0x04 (server device failure)");
   EXPECT_TRUE(stays_stopped(1, 2s));

@@ -43,6 +43,14 @@ inline std::filesystem::path plugin_dir() {
   return DRIVEGATE_TEST_PLUGIN_DIR;
 }
 
+// Whether production adapter `id`'s plugin is built: the few core scenarios whose subject is an
+// adapter's own (a profile file, the shipped examples) skip without it; the rest run on test-drive.
+inline bool adapter_built(const std::string& id) {
+  return std::filesystem::exists(plugin_dir() / ("drivegate-" + id + ".so"));
+}
+#define REQUIRE_ADAPTER(id) \
+  if (!::drivegate::test::adapter_built(id)) GTEST_SKIP() << (id) << " is not built"
+
 // The serial port lock files (daemon/transport/port_lock.h) of the programs a test starts go to a
 // directory of the test process's own, not /run/lock: a daemon killed with SIGKILL leaves its
 // lock behind, and the next test must not meet it. Set once, before any child starts, and

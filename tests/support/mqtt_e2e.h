@@ -1,6 +1,7 @@
 // MQTT end-to-end test support: the fixture of the Sparkplug B northbound's end-to-end tests
 // (tests/e2e/mqtt_e2e_test.cpp) and of the attacks on it (tests/stress/mqtt_stress_test.cpp): the
-// real drivegated on simulated nidec-washer drives (`drivegate sim` on ptys), a real mosquitto
+// real drivegated on simulated drives of the tests' own (`drivegate sim test-drive` on ptys,
+// tests/support/test_adapter), a real mosquitto
 // broker on loopback (mosquitto.h) and an independent Sparkplug host, Eclipse Tahu's schema and
 // encoder from npm over MQTT.js (sparkplug_peer.h). Nothing here decodes a payload with
 // drivegate's own code.
@@ -32,7 +33,7 @@ namespace fs = std::filesystem;
 inline constexpr const char* kGroup = "plant1";
 inline constexpr const char* kEdge = "gw01";
 inline constexpr std::uint16_t kFailsafeBit = 1 << 5;
-inline constexpr int kAccelTime = 17;  // nidec-washer holding register accel_time
+inline constexpr int kAccelTime = 16;  // test-drive's holding register accel_time
 
 inline bool executable_in_path(const std::string& name) {
   const char* path = std::getenv("PATH");
@@ -217,8 +218,8 @@ class MqttE2E : public ::testing::Test {
     SparkplugPeer::Options o;
     o.stderr_file = dir_ / "peer.log";
     peer_ = std::make_unique<SparkplugPeer>(broker_->port(), o);
-    add_drive("washer-a");
-    add_drive("washer-b");
+    add_drive("drive-a");
+    add_drive("drive-b");
   }
   void TearDown() override {
     if (HasFailure()) {
@@ -238,7 +239,7 @@ class MqttE2E : public ::testing::Test {
 
   Drive& add_drive(const std::string& name, const std::string& device_extra = "") {
     Drive d{name, static_cast<int>(drives_.size()) + 1, dir_ / name, device_extra, nullptr};
-    d.sim = std::make_unique<Sim>("nidec-washer", d.link);
+    d.sim = std::make_unique<Sim>("test-drive", d.link);
     drives_.push_back(std::move(d));
     return drives_.back();
   }
@@ -254,7 +255,7 @@ class MqttE2E : public ::testing::Test {
     for (const auto& d : drives_) {
       toml += "[[bus]]\nname = \"line-" + d.name + "\"\nport = \"" + d.link.string() +
               "\"\n\n[[device]]\nname = \"" + d.name + "\"\nbus = \"line-" + d.name +
-              "\"\nadapter = \"nidec-washer\"\nunit_id = " + std::to_string(d.unit) +
+              "\"\nadapter = \"test-drive\"\nunit_id = " + std::to_string(d.unit) +
               "\npoll_ms = " + std::to_string(poll_ms_) + "\n" + d.device_extra + "\n";
     }
     std::string broker = "broker = \"" + broker_->url() + "\"";

@@ -4,10 +4,13 @@
 //
 //   request (6 bytes): 0x3C address op arg_hi arg_lo sum
 //   reply   (8 bytes): 0x3E address op state fault speed_hi speed_lo sum
+//   refusal (8 bytes): 0x3F address op 00 00 00 00 sum   (a NAK: the drive did not take it)
 //
 // `sum` makes every byte of the frame add up to 0 (mod 256). Ops: read, run_forward and
-// run_reverse (arg: rpm), stop, reset (the fault). The reply echoes the op and carries the state
-// after it: bit 0 running, bit 1 reverse; the fault code (0 none); the speed in rpm, signed.
+// run_reverse (arg: rpm), stop, reset (the fault), accel (arg: the time from 0 to kMaxRpm, in
+// 100 ms units). The reply echoes the op and carries the state after it: bit 0 running, bit 1
+// reverse; the fault code (0 none); the speed in rpm, signed. A refusal echoes the op and
+// carries nothing: the request was not acted on, and may be sent again.
 #pragma once
 
 #include <cstdint>
@@ -19,14 +22,24 @@ namespace drivegate::testdrive {
 
 inline constexpr std::uint8_t kRequestStart = 0x3C;
 inline constexpr std::uint8_t kReplyStart = 0x3E;
+inline constexpr std::uint8_t kRefusalStart = 0x3F;
 inline constexpr std::size_t kRequestSize = 6;
 inline constexpr std::size_t kReplySize = 8;
 inline constexpr std::uint8_t kStateRunning = 0x01;
 inline constexpr std::uint8_t kStateReverse = 0x02;
 // The fastest the drive turns either way; a run asks for 0..kMaxRpm.
 inline constexpr std::uint16_t kMaxRpm = 3000;
+// The accel time a drive starts with (op accel's arg, 100 ms units): 0 to kMaxRpm in 1.5 s.
+inline constexpr std::uint16_t kDefaultAccel100ms = 15;
 
-enum class Op : std::uint8_t { read = 1, run_forward = 2, run_reverse = 3, stop = 4, reset = 5 };
+enum class Op : std::uint8_t {
+  read = 1,
+  run_forward = 2,
+  run_reverse = 3,
+  stop = 4,
+  reset = 5,
+  accel = 6
+};
 
 // Native fault codes and what the simulator's `fault NAME` sets.
 enum class NativeFault : std::uint8_t {
@@ -49,6 +62,7 @@ struct Reply {
   std::uint8_t state = 0;
   std::uint8_t fault = 0;
   std::int16_t speed_rpm = 0;
+  bool refused = false;  // a refusal (0x3F): the other fields are 0
   friend bool operator==(const Reply&, const Reply&) = default;
 };
 
@@ -58,8 +72,11 @@ std::uint8_t sum_byte(ByteView frame);
 
 Bytes encode(const Request& r);
 Bytes encode(const Reply& r);
+// The refusal of `op` by the drive at `address`.
+Reply refusal(std::uint8_t address, Op op);
 // At the front of `rx`: incomplete until a whole frame is there; noise for a byte that cannot
-// start one (consumed 1); a bad checksum or an unknown op consumes the frame.
+// start one (consumed 1); a bad checksum or an unknown op consumes the frame. A reply is either
+// kind, 0x3E or 0x3F.
 Decoded<Request> decode_request(ByteView rx);
 Decoded<Reply> decode_reply(ByteView rx);
 

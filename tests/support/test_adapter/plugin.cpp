@@ -25,7 +25,8 @@ std::optional<std::uint8_t> address_of(std::uint32_t address, std::string& error
 std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
   const auto address = address_of(env.address, error);
   if (!address) return nullptr;
-  return std::make_unique<TestDriveDriver>(*address, env.poll_interval);
+  return std::make_unique<TestDriveDriver>(*address, env.poll_interval,
+                                           parse_settings(env.options));
 }
 
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
@@ -41,8 +42,8 @@ extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivega
     .api_version = drivegate::kAdapterApiVersion,
     .id = "test-drive",
     .summary = "a made-up drive for drivegate's own tests (never installed)",
-    .options = nullptr,
-    .option_count = 0,
+    .options = drivegate::testdrive::kOptionSchema.data(),
+    .option_count = drivegate::testdrive::kOptionSchema.size(),
     .line = {.baud = 9600,
              .parity = drivegate::Parity::none,
              .data_bits = 8,

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <utility>
 
 #include "drivegate/sim_text.h"
@@ -12,7 +13,8 @@ namespace drivegate::testdrive {
 namespace {
 
 constexpr const char* kHelp =
-    "state, fault over_current|stall|over_temperature, clear, silent on|off, corrupt N";
+    "state, fault over_current|stall|over_temperature, clear, silent on|off, corrupt N, "
+    "refuse N";
 
 constexpr std::array<std::pair<std::string_view, NativeFault>, 3> kFaultNames = {{
     {"over_current", NativeFault::over_current},
@@ -38,6 +40,11 @@ Bytes TestDriveSimulator::on_receive(ByteView rx, TimePoint now) {
 }
 
 Bytes TestDriveSimulator::answer(const Request& r) {
+  if (silent_) return {};  // deaf: it neither takes nor answers anything
+  if (refuse_ > 0) {
+    --refuse_;
+    return encode(refusal(address_, r.op));
+  }
   switch (r.op) {
     case Op::read:
       break;
@@ -54,8 +61,10 @@ Bytes TestDriveSimulator::answer(const Request& r) {
     case Op::reset:
       fault_ = NativeFault::none;
       break;
+    case Op::accel:
+      if (r.arg > 0) accel_100ms_ = r.arg;
+      break;
   }
-  if (silent_) return {};
   Bytes reply =
       encode(Reply{address_, r.op, state_, static_cast<std::uint8_t>(fault_), speed_rpm_});
   if (corrupt_ > 0) {
@@ -68,16 +77,18 @@ Bytes TestDriveSimulator::answer(const Request& r) {
 Bytes TestDriveSimulator::on_tick(TimePoint now) {
   const double seconds = last_tick_ ? std::chrono::duration<double>(now - *last_tick_).count() : 0;
   last_tick_ = now;
-  const auto step = static_cast<int>(seconds * kRampRpmPerSecond);
-  const int gap = target_rpm_ - speed_rpm_;
-  speed_rpm_ = static_cast<std::int16_t>(speed_rpm_ + std::clamp(gap, -step, step));
+  // The ramp to the rpm, kept exact: a slow one moves less than 1 rpm a tick.
+  const double step = seconds * kMaxRpm * 10.0 / accel_100ms_;
+  ramp_rpm_ += std::clamp(target_rpm_ - ramp_rpm_, -step, step);
+  speed_rpm_ = static_cast<std::int16_t>(std::lround(ramp_rpm_));
   return {};
 }
 
 std::string TestDriveSimulator::state() const {
-  return "state=" + hex(state_, 2) + " fault=" + std::to_string(static_cast<int>(fault_)) +
+  return "state=" + hex(state_, 2) + " running=" + ((state_ & kStateRunning) != 0 ? "1" : "0") +
+         " fault=" + std::to_string(static_cast<int>(fault_)) +
          " speed=" + std::to_string(speed_rpm_) + " target=" + std::to_string(target_rpm_) +
-         " silent=" + (silent_ ? "on" : "off");
+         " accel=" + std::to_string(accel_100ms_) + " silent=" + (silent_ ? "on" : "off");
 }
 
 std::string TestDriveSimulator::control(std::string_view line, TimePoint now) {
@@ -94,6 +105,7 @@ std::string TestDriveSimulator::control(std::string_view line, TimePoint now) {
       fault_ = code;
       state_ = 0;  // a fault stops the motor, at once
       speed_rpm_ = 0;
+      ramp_rpm_ = 0;
       target_rpm_ = 0;
       return "ok fault=" + w[1];
     }
@@ -102,10 +114,10 @@ std::string TestDriveSimulator::control(std::string_view line, TimePoint now) {
     silent_ = *parse_on_off(w[1]);
     return "ok silent=" + w[1];
   }
-  if (w.size() == 2 && w[0] == "corrupt") {
+  if (w.size() == 2 && (w[0] == "corrupt" || w[0] == "refuse")) {
     if (const auto n = parse_unsigned(w[1], 1000)) {
-      corrupt_ = *n;
-      return "ok corrupt=" + w[1];
+      (w[0] == "corrupt" ? corrupt_ : refuse_) = *n;
+      return "ok " + w[0] + "=" + w[1];
     }
   }
   return std::string("error: unknown command '") + std::string(line) + "'; commands: " + kHelp;

@@ -1,7 +1,8 @@
-// The simulated test drive: answers its address's requests (codec.h), ramps at kRampRpmPerSecond
-// to the speed the last run asked for (and to 0 after a stop), stops at once on a fault, and
-// takes operator commands: state, fault NAME, clear, silent on|off, corrupt N (the next N
-// replies with a wrong sum).
+// The simulated test drive: answers its address's requests (codec.h), ramps to the speed the
+// last run asked for (and to 0 after a stop) in its accel time per kMaxRpm, stops at once on a
+// fault, and takes operator commands: state, fault NAME, clear, silent on|off (deaf: it takes
+// and answers nothing), corrupt N (the next N replies with a wrong sum), refuse N (the next N
+// requests refused, not acted on).
 #pragma once
 
 #include <cstdint>
@@ -14,8 +15,9 @@
 
 namespace drivegate::testdrive {
 
-// How fast the simulated motor's speed follows a run or a stop, either way.
-inline constexpr double kRampRpmPerSecond = 2000.0;
+// How fast the simulated motor's speed follows a run or a stop, either way, at the drive's
+// factory accel time.
+inline constexpr double kRampRpmPerSecond = kMaxRpm / (kDefaultAccel100ms / 10.0);
 
 class TestDriveSimulator final : public Simulator {
  public:
@@ -33,11 +35,14 @@ class TestDriveSimulator final : public Simulator {
   Bytes buffer_;
   std::uint8_t state_ = 0;
   NativeFault fault_ = NativeFault::none;
-  std::int16_t speed_rpm_ = 0;
+  std::int16_t speed_rpm_ = 0;  // ramp_rpm_ rounded
+  double ramp_rpm_ = 0;
   std::int16_t target_rpm_ = 0;
+  std::uint16_t accel_100ms_ = kDefaultAccel100ms;
   std::optional<TimePoint> last_tick_;
   bool silent_ = false;
   std::uint32_t corrupt_ = 0;
+  std::uint32_t refuse_ = 0;
 };
 
 }  // namespace drivegate::testdrive
