@@ -1,0 +1,119 @@
+// The speed and the setpoint in rpm of shipped profiles whose units come from their manuals' own
+// examples and tables: the frame a setpoint in rpm puts on the line is the manual's frame, and the
+// speed a PLC reads is the manual's value through the profile's rpm_factor at its default options.
+//
+// ENC EDS300 user manual: 7.7.3 p.42 (50 Hz = 1388H at 2001H), Appendix A Table A-4 p.48 (the
+// output frequency monitor in 0.01 Hz). NORD BU 0050 GB-3111: 1.6.3 p.46 (a 50 % setpoint is
+// 2000 hex), 1.5.3.7 p.36 (actual value 1 = actual frequency, 16384 = 100 %); BU 0050 DE-3111
+// p.32 (100 % = maximum frequency P105). Yaskawa V1000 Technical Manual SIEP C710606 16C, C.9
+// p.417 (60.00 Hz written as 1770H).
+#include <gtest/gtest.h>
+
+#include "driver.h"
+#include "example_profile.h"
+#include "profile.h"
+#include "profile_examples.h"
+#include "profile_support.h"
+#include "simulator.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+using namespace std::chrono_literals;
+
+// The shipped profile `name`; a test failure, and an empty profile, if it is refused.
+Profile shipped_profile(const std::string& name) {
+  return support::parsed(shipped::text(name));
+}
+
+ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
+  const Profile p = shipped_profile(name);
+  return ModbusDriver(
+      slave, p, Timing{3, 3000ms, character_time(p.line.baud, p.line.parity, 8, p.line.stop_bits)},
+      500ms);
+}
+
+// The frame the driver sends for a setpoint of `rpm`, or nothing when it refuses it.
+std::optional<Bytes> setpoint_frame(ModbusDriver& d, std::int32_t rpm, TimePoint now) {
+  const WriteOp op = WriteOp::of_setpoint(rpm);
+  if (d.check(std::span(&op, 1)) != WriteCheck::ok) return std::nullopt;
+  if (d.apply(op, 1, now) != WriteStatus::pending) return std::nullopt;
+  const auto ex = d.next_exchange(now);
+  if (!ex) return std::nullopt;
+  return ex->frame;
+}
+
+// The driver's reads answered by the profile's simulator, until every read block was asked.
+void poll_against(ModbusDriver& d, ModbusSimulator& sim, TimePoint& now) {
+  for (int i = 0; i < 32; ++i) {
+    const auto ex = d.next_exchange(now);
+    if (!ex) {
+      now += 100ms;
+      continue;
+    }
+    d.on_receive(sim.on_receive(ex->frame, now), now);
+  }
+}
+
+// --- ENC EDS300 ---
+
+TEST(EncEds300Rpm, A1500RpmSetpointIsTheManuals50HzFrame) {
+  ModbusDriver d = driver_of("enc-eds300", 1);
+  // 7.7.3 "Set 1# inverter specified value to 50Hz": 01 06 20 01 13 88 DE 9C; 1500 rpm is
+  // 50 Hz at the default 4 poles.
+  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+            Bytes({0x01, 0x06, 0x20, 0x01, 0x13, 0x88, 0xDE, 0x9C}));
+}
+
+TEST(EncEds300Rpm, TheOutputFrequencyMonitorReadsAsTheSynchronousSpeed) {
+  ModbusDriver d = driver_of("enc-eds300", 1);
+  ModbusSimulator sim(1, shipped_profile("enc-eds300"));
+  // C-01 (1001H) at 49.50 Hz, raw 4950 in Table A-4's 0.01 Hz: 1485 rpm at 4 poles.
+  ASSERT_EQ(sim.control("set monitor_c01_output_frequency 49.5", TimePoint{}).rfind("ok", 0), 0u);
+  TimePoint now = TimePoint{} + 10s;
+  poll_against(d, sim, now);
+  EXPECT_EQ(d.common().speed_rpm, 1485);
+}
+
+// --- NORD SK 500E ---
+
+TEST(NordSk500eRpm, A750RpmSetpointIsTheManuals50PercentSetpoint) {
+  ModbusDriver d = driver_of("nord-sk500e", 8);
+  // p.46: a 50 % setpoint is 2000 hex; 100 % is P105 (DE p.32), 50 Hz by default: 25 Hz is
+  // 750 rpm at 4 poles. Setpoint 1 is P050[1] (0C81H), written with FC 10H (p.66, p.67).
+  EXPECT_EQ(setpoint_frame(d, 750, TimePoint{} + 10s),
+            encode(Framing::rtu, 8,
+                   std::vector<std::uint8_t>{0x10, 0x0C, 0x81, 0x00, 0x01, 0x02, 0x20, 0x00}));
+}
+
+TEST(NordSk500eRpm, ActualValue1ReadsAsTheSynchronousSpeed) {
+  ModbusDriver d = driver_of("nord-sk500e", 8);
+  ModbusSimulator sim(8, shipped_profile("nord-sk500e"));
+  // p.48's reply: IW1 = 2000 hex, 50 % of P105 (p.36): 25 Hz, 750 rpm at 4 poles.
+  ASSERT_EQ(sim.control("set actual_value_1 50", TimePoint{}).rfind("ok", 0), 0u);
+  TimePoint now = TimePoint{} + 10s;
+  poll_against(d, sim, now);
+  EXPECT_EQ(d.common().speed_rpm, 750);
+}
+
+// --- Yaskawa V1000 ---
+
+TEST(YaskawaV1000Rpm, An1800RpmSetpointWritesTheManuals1770H) {
+  ModbusDriver d = driver_of("yaskawa-v1000", 1);
+  // p.417: 60.00 Hz is 1770H in 0002H; 1800 rpm is 60 Hz at 4 poles. FC 10H, one register.
+  EXPECT_EQ(setpoint_frame(d, 1800, TimePoint{} + 10s),
+            encode(Framing::rtu, 1,
+                   std::vector<std::uint8_t>{0x10, 0x00, 0x02, 0x00, 0x01, 0x02, 0x17, 0x70}));
+  // The manual's own frame (forward run and 60.00 Hz) is the profile's example and checks.
+  const Profile p = shipped_profile("yaskawa-v1000");
+  EXPECT_TRUE(check_examples(p, "yaskawa-v1000.toml").empty())
+      << ::testing::PrintToString(check_examples(p, "yaskawa-v1000.toml"));
+  ModbusSimulator sim(1, p);
+  EXPECT_EQ(sim.on_receive(Bytes({0x01, 0x10, 0x00, 0x01, 0x00, 0x02, 0x04, 0x00, 0x01, 0x17, 0x70,
+                                  0x6D, 0xB7}),
+                           TimePoint{}),
+            Bytes({0x01, 0x10, 0x00, 0x01, 0x00, 0x02, 0x10, 0x08}));
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device
