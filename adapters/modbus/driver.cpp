@@ -87,8 +87,10 @@ Fault fault_of(const FaultBinding& b, std::uint32_t native) {
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
                            Millis poll_interval, std::string files_read)
     : profile_(std::move(profile)),
-      speed_factor_(factor_value(profile_.common.speed_factor, profile_.options)),
-      setpoint_factor_(factor_value(profile_.common.setpoint_factor, profile_.options)),
+      speed_scale_(
+          rpm_scale(profile_.common.speed_factor, profile_.common.speed_offset, profile_.options)),
+      setpoint_scale_(rpm_scale(profile_.common.setpoint_factor, profile_.common.setpoint_offset,
+                                profile_.options)),
       files_read_(std::move(files_read)),
       address_(address),
       timing_(timing),
@@ -513,7 +515,7 @@ std::optional<bool> ModbusDriver::bit_of(const std::optional<BitBinding>& b) con
 void ModbusDriver::update_common() {
   const CommonBindings& c = profile_.common;
   if (auto speed = engineering(c.speed_rpm)) {
-    *speed *= speed_factor_;
+    *speed = speed_scale_.rpm(*speed);
     // A speed is a number the common block carries, by the point's own type and signedness; NaN,
     // an infinity or a speed beyond it (2^32 from a float, 4294967295 from a u32) is none.
     const auto rpm = rpm_of(*speed);
@@ -567,7 +569,7 @@ void ModbusDriver::adopt() {
   if (!adopting_ || !common_.ready) return;
   adopting_ = false;
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
-    if (const auto rpm = rpm_of(*reference * setpoint_factor_)) common_.setpoint_rpm = *rpm;
+    if (const auto rpm = rpm_of(setpoint_scale_.rpm(*reference))) common_.setpoint_rpm = *rpm;
   }
   if (!common_.running || !common_.faults.empty()) return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;

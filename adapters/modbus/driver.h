@@ -153,9 +153,10 @@ class ModbusDriver final : public DriverBase {
   void fail_inflight();
 
   Profile profile_;
-  // rpm = engineering value x factor (the profile's rpm_factor with the device's options).
-  double speed_factor_ = 1.0;
-  double setpoint_factor_ = 1.0;
+  // rpm = engineering value x factor + offset (the profile's rpm_factor and rpm_offset with the
+  // device's options).
+  RpmScale speed_scale_;
+  RpmScale setpoint_scale_;
   std::string files_read_;
   std::uint8_t address_;
   Timing timing_;

@@ -61,7 +61,7 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       if (!c.setpoint_factor.terms.empty()) {
         // rpm -> the point's value -> raw, rounded to the point's step (docs/profiles.md,
         // "[common]"): a float point takes the value as it is.
-        v /= setpoint_factor_;
+        v = setpoint_scale_.value(v);
         if (p.type != ValueType::f32) v = std::round(v / p.scale) * p.scale;
       }
       // The point's range, after the conversion, allowing for a scale's binary fractions.

@@ -393,30 +393,39 @@ class Parser {
   }
 
   // speed_rpm = "speed_actual" (in rpm), or { point = "output_frequency", rpm_factor = "120 /
-  // motor_poles" }: a point of a register table, and what its engineering value is multiplied by.
+  // motor_poles" }: a point of a register table, and what its engineering value is multiplied by;
+  // rpm_offset, beside rpm_factor only, what is added then.
   std::optional<std::size_t> rpm_point(TableReader& common, std::string_view key, Use use,
-                                       RpmFactor& factor) {
+                                       RpmFactor& factor, std::optional<RpmFactor>& offset) {
     const toml::node* n = common.node(key);
     if (n == nullptr || n->as_string() != nullptr) return register_point(common, key, use);
     const toml::table* t = inline_table(common, key);
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common." + std::string(key), diag_);
-    r.expect({"point", "rpm_factor"});
+    r.expect({"point", "rpm_factor", "rpm_offset"});
     if (r.node("point") == nullptr) r.missing("point");
     const auto index = register_point(r, "point", use);
-    if (const auto text = r.string("rpm_factor", false)) {
-      std::string why;
-      if (auto f = parse_rpm_factor(*text, profile_.options, why)) {
-        factor = std::move(*f);
-      } else if (bad_option_) {
-        // An option left out for its own error was reported already.
-        return std::nullopt;
-      } else {
-        diag_.error(r.node("rpm_factor"), r.qualified("rpm_factor"), "'" + *text + "' " + why);
-        return std::nullopt;
-      }
+    const auto factor_text = r.string("rpm_factor", false);
+    const auto offset_text = r.string("rpm_offset", false);
+    if (offset_text && !factor_text) {
+      diag_.error(r.node("rpm_offset"), r.qualified("rpm_offset"),
+                  "goes only with rpm_factor (rpm = value x rpm_factor + rpm_offset)");
+      return std::nullopt;
     }
-    return index;
+    bool ok = true;
+    const auto expression = [&](const std::optional<std::string>& text, const char* name,
+                                auto parse) -> std::optional<RpmFactor> {
+      if (!text) return std::nullopt;
+      std::string why;
+      if (auto e = parse(*text, profile_.options, why)) return e;
+      ok = false;
+      // An option left out for its own error was reported already.
+      if (!bad_option_) diag_.error(r.node(name), r.qualified(name), "'" + *text + "' " + why);
+      return std::nullopt;
+    };
+    if (auto f = expression(factor_text, "rpm_factor", parse_rpm_factor)) factor = std::move(*f);
+    offset = expression(offset_text, "rpm_offset", parse_rpm_offset);
+    return ok ? index : std::nullopt;
   }
 
   // speed_rpm = "speed_actual": a point of a register table; written (the setpoint), a holding
@@ -801,8 +810,9 @@ class Parser {
               "run_reverse", "reset_fault", "unbound"});
     read_unbound(r);
     CommonBindings& c = profile_.common;
-    c.speed_rpm = rpm_point(r, "speed_rpm", Use::read, c.speed_factor);
-    c.setpoint_rpm = rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor);
+    c.speed_rpm = rpm_point(r, "speed_rpm", Use::read, c.speed_factor, c.speed_offset);
+    c.setpoint_rpm =
+        rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor, c.setpoint_offset);
     c.running = bit_binding(r, "running");
     c.fault = bit_binding(r, "fault");
     c.fault_code = fault_binding(r);

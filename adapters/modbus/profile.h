@@ -158,16 +158,29 @@ struct ProfileOption {
   std::uint32_t line = 0;
 };
 
-// rpm = the point's engineering value x factor, the factor a product and quotient of numbers and
-// options, left to right ("120 / motor_poles"). No terms: 1 (the point is in rpm).
+// rpm = the point's engineering value x factor + offset. Each is a product and quotient of terms,
+// left to right ("120 / motor_poles"), a term a number, an option, or the difference of two of
+// them in parentheses ("(max_frequency_hz - min_frequency_hz)"). A factor without terms is 1 (the
+// point is in rpm).
 struct RpmFactor {
-  struct Term {
-    bool divide = false;
+  struct Operand {
     double number = 1;                  // when no option
     std::optional<std::size_t> option;  // index into Profile::options
   };
+  struct Term {
+    bool divide = false;
+    Operand operand;
+    std::optional<Operand> minus;  // (operand - minus)
+  };
   std::vector<Term> terms;
   std::string text;  // as the profile wrote it
+};
+// A factor and an offset with a device's options: a point's engineering value and rpm, both ways.
+struct RpmScale {
+  double factor = 1.0;
+  double offset = 0.0;
+  [[nodiscard]] double rpm(double value) const { return value * factor + offset; }
+  [[nodiscard]] double value(double rpm) const { return (rpm - offset) / factor; }
 };
 // A point's native values named as unified faults; values not in the map are `other`. Or, for a
 // bit field (`bits`), its bits named: the lowest set bit that is named wins, a value with none of
@@ -182,10 +195,12 @@ struct FaultBinding {
 // How the common block maps onto the points. Every binding is optional: what a profile leaves
 // out, the common block shows as unknown (and a command it cannot send is refused with 0x03).
 struct CommonBindings {
-  std::optional<std::size_t> speed_rpm;     // actual speed, scaled to rpm
-  std::optional<std::size_t> setpoint_rpm;  // the speed reference, written in rpm
-  RpmFactor speed_factor;                   // speed_rpm's rpm_factor
-  RpmFactor setpoint_factor;                // setpoint_rpm's rpm_factor
+  std::optional<std::size_t> speed_rpm;      // actual speed, scaled to rpm
+  std::optional<std::size_t> setpoint_rpm;   // the speed reference, written in rpm
+  RpmFactor speed_factor;                    // speed_rpm's rpm_factor
+  RpmFactor setpoint_factor;                 // setpoint_rpm's rpm_factor
+  std::optional<RpmFactor> speed_offset;     // speed_rpm's rpm_offset (only with rpm_factor)
+  std::optional<RpmFactor> setpoint_offset;  // setpoint_rpm's rpm_offset
   std::optional<BitBinding> running;
   std::optional<BitBinding> fault;
   std::optional<FaultBinding> fault_code;

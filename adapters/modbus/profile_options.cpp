@@ -61,13 +61,6 @@ void read_option(const std::string& name, const toml::node& n, Diagnostics& diag
   profile.options.push_back(std::move(o));
 }
 
-// Whether a term can be 0 within its option's range.
-bool can_be_zero(const RpmFactor::Term& t, const std::vector<ProfileOption>& options) {
-  if (!t.option) return t.number == 0.0;
-  const ProfileOption& o = options[*t.option];
-  return o.min <= 0.0 && o.max >= 0.0;
-}
-
 }  // namespace
 
 std::string number_text(double v) {
@@ -106,9 +99,96 @@ bool read_profile_options(const toml::table& root, TableReader& top, Diagnostics
   return diag.errors.size() == errors;
 }
 
-std::optional<RpmFactor> parse_rpm_factor(std::string_view text,
-                                          const std::vector<ProfileOption>& options,
+namespace {
+
+// One operand at `i`: a number or the name of one of `options`; nullopt and `why` otherwise.
+std::optional<RpmFactor::Operand> read_operand(std::string_view text, std::size_t& i,
+                                               const std::vector<ProfileOption>& options,
+                                               std::string& why) {
+  RpmFactor::Operand o;
+  const char c = i < text.size() ? text[i] : '\0';
+  if (c >= 'a' && c <= 'z') {
+    const std::size_t start = i;
+    while (i < text.size() && is_name_char(text[i])) ++i;
+    const std::string name(text.substr(start, i - start));
+    std::size_t index = 0;
+    while (index < options.size() && options[index].name != name) ++index;
+    if (index == options.size()) {
+      std::string known;
+      for (const auto& opt : options) known += (known.empty() ? "" : ", ") + opt.name;
+      why = "names '" + name + "', which is not one of the profile's [options] (" +
+            (known.empty() ? "it declares none" : "declared: " + known) + ")";
+      return std::nullopt;
+    }
+    o.option = index;
+    return o;
+  }
+  if ((c >= '0' && c <= '9') || c == '.') {
+    const std::size_t start = i;
+    while (i < text.size() && ((text[i] >= '0' && text[i] <= '9') || text[i] == '.')) ++i;
+    const auto r = std::from_chars(text.data() + start, text.data() + i, o.number);
+    if (r.ec != std::errc() || r.ptr != text.data() + i || !std::isfinite(o.number)) {
+      why = "'" + std::string(text.substr(start, i - start)) + "' is not a number";
+      return std::nullopt;
+    }
+    return o;
+  }
+  return std::nullopt;  // the caller says what belongs there
+}
+
+const char* const kGrammar =
+    "(a product and quotient of numbers, options and differences of two of them in parentheses: "
+    "no +, no - outside them)";
+const char* const kDifference =
+    "a difference is two option names or numbers, '-' between them, in parentheses "
+    "(\"(max_frequency_hz - min_frequency_hz)\")";
+
+double operand_value(const RpmFactor::Operand& o, const std::vector<ProfileOption>& options) {
+  return o.option ? options[*o.option].value : o.number;
+}
+
+double term_value(const RpmFactor::Term& t, const std::vector<ProfileOption>& options) {
+  const double v = operand_value(t.operand, options);
+  return t.minus ? v - operand_value(*t.minus, options) : v;
+}
+
+// Whether an operand can be 0 within its option's range.
+bool can_be_zero(const RpmFactor::Operand& o, const std::vector<ProfileOption>& options) {
+  if (!o.option) return o.number == 0.0;
+  const ProfileOption& opt = options[*o.option];
+  return opt.min <= 0.0 && opt.max >= 0.0;
+}
+
+// Whether a difference is 0 whatever the options: an option less itself, or two equal numbers.
+bool always_zero(const RpmFactor::Term& t) {
+  return t.minus && t.operand.option == t.minus->option &&
+         (t.operand.option || t.operand.number == t.minus->number);
+}
+
+// The options `e` names, with their values: "max_frequency_hz = 10, min_frequency_hz = 50".
+std::string named_options(const RpmFactor& e, const std::vector<ProfileOption>& options) {
+  std::vector<std::size_t> named;
+  for (const RpmFactor::Term& t : e.terms) {
+    for (const auto* o : {&t.operand, t.minus ? &*t.minus : nullptr}) {
+      if (o != nullptr && o->option &&
+          std::find(named.begin(), named.end(), *o->option) == named.end()) {
+        named.push_back(*o->option);
+      }
+    }
+  }
+  std::string out;
+  for (const std::size_t i : named) {
+    out += (out.empty() ? "" : ", ") + options[i].name + " = " + number_text(options[i].value);
+  }
+  return out;
+}
+
+// A factor's or an offset's text, parsed: what parse_rpm_factor and parse_rpm_offset share. A
+// factor's terms must not be 0; an offset may be 0, but not divide by 0.
+std::optional<RpmFactor> parse_expression(std::string_view text,
+                                          const std::vector<ProfileOption>& options, RpmPart part,
                                           std::string& why) {
+  why.clear();
   RpmFactor f;
   f.text = std::string(text);
   std::size_t i = 0;
@@ -125,64 +205,136 @@ std::optional<RpmFactor> parse_rpm_factor(std::string_view text,
     }
     RpmFactor::Term t;
     t.divide = divide;
-    const char c = text[i];
-    if (c >= 'a' && c <= 'z') {
-      const std::size_t start = i;
-      while (i < text.size() && is_name_char(text[i])) ++i;
-      const std::string name(text.substr(start, i - start));
-      std::size_t index = 0;
-      while (index < options.size() && options[index].name != name) ++index;
-      if (index == options.size()) {
-        std::string known;
-        for (const auto& o : options) known += (known.empty() ? "" : ", ") + o.name;
-        why = "names '" + name + "', which is not one of the profile's [options] (" +
-              (known.empty() ? "it declares none" : "declared: " + known) + ")";
+    if (text[i] == '(') {
+      // (a - b): the one parenthesised form.
+      ++i;
+      skip();
+      auto a = read_operand(text, i, options, why);
+      skip();
+      if (a && i < text.size() && text[i] == '-') {
+        ++i;
+        skip();
+        auto b = read_operand(text, i, options, why);
+        skip();
+        if (b && i < text.size() && text[i] == ')') {
+          ++i;
+          t.operand = *a;
+          t.minus = *b;
+        }
+      }
+      if (!t.minus) {
+        if (why.empty()) {
+          why = std::string("has parentheses around something other than a difference: ") +
+                kDifference;
+        }
         return std::nullopt;
       }
-      t.option = index;
-    } else if ((c >= '0' && c <= '9') || c == '.') {
-      const std::size_t start = i;
-      while (i < text.size() && ((text[i] >= '0' && text[i] <= '9') || text[i] == '.')) ++i;
-      const auto r = std::from_chars(text.data() + start, text.data() + i, t.number);
-      if (r.ec != std::errc() || r.ptr != text.data() + i || !std::isfinite(t.number)) {
-        why = "'" + std::string(text.substr(start, i - start)) + "' is not a number";
+      if (always_zero(t)) {
+        why = "has a difference that is always 0";
+        return std::nullopt;
+      }
+    } else if (auto o = read_operand(text, i, options, why)) {
+      t.operand = *o;
+      const bool zero_matters = part == RpmPart::factor || t.divide;
+      if (zero_matters && can_be_zero(t.operand, options)) {
+        const ProfileOption* opt = t.operand.option ? &options[*t.operand.option] : nullptr;
+        why = opt != nullptr ? "option " + opt->name + " can be 0 (its range is " +
+                                   number_text(opt->min) + ".." + number_text(opt->max) +
+                                   "): the " + (part == RpmPart::factor ? "factor" : "offset") +
+                                   (t.divide ? " would divide by 0" : " would be 0")
+                             : std::string(t.divide ? "divides by 0" : "is 0 with a factor of 0");
         return std::nullopt;
       }
     } else {
-      why = std::string("'") + c +
-            "' where a number or an option name belongs (a product and quotient of numbers and "
-            "options: no + or -, no parentheses)";
-      return std::nullopt;
-    }
-    if (can_be_zero(t, options)) {
-      why = t.option ? "option " + options[*t.option].name + " can be 0 (its range is " +
-                           number_text(options[*t.option].min) + ".." +
-                           number_text(options[*t.option].max) + "): the factor" +
-                           (t.divide ? " would divide by 0" : " would be 0")
-                     : std::string(t.divide ? "divides by 0" : "is 0 with a factor of 0");
+      if (why.empty()) {
+        why = std::string("'") + text[i] + "' where a number or an option name belongs " + kGrammar;
+      }
       return std::nullopt;
     }
     f.terms.push_back(t);
     skip();
-    if (i == text.size()) return f;
+    if (i == text.size()) break;
     if (text[i] != '*' && text[i] != '/') {
-      why = std::string("'") + text[i] +
-            "' where '*' or '/' belongs (a product and quotient of numbers and options: no + or "
-            "-, no parentheses)";
+      why = std::string("'") + text[i] + "' where '*' or '/' belongs " + kGrammar;
       return std::nullopt;
     }
     divide = text[i] == '/';
     ++i;
   }
+  // With the options' defaults: what a device that sets none of them gets.
+  if (std::string problem = rpm_problem(f, part, options); !problem.empty()) {
+    why = problem + " (the options' defaults)";
+    return std::nullopt;
+  }
+  return f;
+}
+
+}  // namespace
+
+std::optional<RpmFactor> parse_rpm_factor(std::string_view text,
+                                          const std::vector<ProfileOption>& options,
+                                          std::string& why) {
+  return parse_expression(text, options, RpmPart::factor, why);
+}
+
+std::optional<RpmFactor> parse_rpm_offset(std::string_view text,
+                                          const std::vector<ProfileOption>& options,
+                                          std::string& why) {
+  return parse_expression(text, options, RpmPart::offset, why);
 }
 
 double factor_value(const RpmFactor& factor, const std::vector<ProfileOption>& options) {
   double v = 1.0;
   for (const RpmFactor::Term& t : factor.terms) {
-    const double x = t.option ? options[*t.option].value : t.number;
+    const double x = term_value(t, options);
     v = t.divide ? v / x : v * x;
   }
   return v;
+}
+
+std::string rpm_problem(const RpmFactor& e, RpmPart part,
+                        const std::vector<ProfileOption>& options) {
+  const double v = factor_value(e, options);
+  const bool ok = part == RpmPart::factor ? std::isfinite(v) && v > 0.0 : std::isfinite(v);
+  if (ok) return {};
+  const std::string with = named_options(e, options);
+  return "is " + (std::isfinite(v) ? number_text(v) : std::string("no number")) +
+         (with.empty() ? "" : " with " + with) +
+         (part == RpmPart::factor ? ": a factor must be above 0" : ": it must be a number");
+}
+
+RpmScale rpm_scale(const RpmFactor& factor, const std::optional<RpmFactor>& offset,
+                   const std::vector<ProfileOption>& options) {
+  return {factor_value(factor, options), offset ? factor_value(*offset, options) : 0.0};
+}
+
+bool check_rpm(const Profile& profile, std::string& error) {
+  const CommonBindings& c = profile.common;
+  const struct {
+    const char* key;
+    bool bound;
+    const RpmFactor& factor;
+    const std::optional<RpmFactor>& offset;
+  } bindings[] = {
+      {"speed_rpm", c.speed_rpm.has_value(), c.speed_factor, c.speed_offset},
+      {"setpoint_rpm", c.setpoint_rpm.has_value(), c.setpoint_factor, c.setpoint_offset}};
+  for (const auto& b : bindings) {
+    if (!b.bound) continue;
+    std::string problem = rpm_problem(b.factor, RpmPart::factor, profile.options);
+    const char* what = "rpm_factor";
+    if (problem.empty() && b.offset) {
+      problem = rpm_problem(*b.offset, RpmPart::offset, profile.options);
+      what = "rpm_offset";
+    }
+    if (!problem.empty()) {
+      const std::string& text =
+          what == std::string_view("rpm_factor") ? b.factor.text : b.offset->text;
+      error = std::string("profile ") + profile.name + ": " + b.key + "'s " + what + " '" + text +
+              "' " + problem + " (the device's options)";
+      return false;
+    }
+  }
+  return true;
 }
 
 bool apply_options(Profile& profile, const Options& options, std::string& error) {
@@ -205,7 +357,7 @@ bool apply_options(Profile& profile, const Options& options, std::string& error)
     }
     o.value = v;
   }
-  return true;
+  return check_rpm(profile, error);
 }
 
 std::string options_text(const Profile& profile) {

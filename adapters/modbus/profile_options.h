@@ -1,8 +1,10 @@
-// A profile's device options ([options.NAME]) and the rpm factors made of them (rpm_factor =
-// "120 / motor_poles"): read from the profile's TOML, the factor's text parsed once and evaluated
-// with a device's values, and a device's [device.options] applied to the profile. Pure.
+// A profile's device options ([options.NAME]) and the rpm factors and offsets made of them
+// (rpm_factor = "120 / motor_poles", rpm_offset = "min_frequency_hz * 120 / motor_poles"): read
+// from the profile's TOML, the texts parsed once and evaluated with a device's values, and a
+// device's [device.options] applied to the profile. Pure.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -23,20 +25,45 @@ bool valid_option_name(std::string_view name, std::string& why);
 bool read_profile_options(const toml::table& root, TableReader& top, Diagnostics& diag,
                           Profile& profile);
 
-// `text` ("max_frequency_hz * 120 / motor_poles / 100") as a factor: numbers and option names of
-// `options` joined by '*' and '/', left to right; nullopt and `why` when it is empty, names an
-// option the profile does not declare, ends in an operator, or can be 0 or divide by 0 within the
-// options' ranges.
+// Which of speed_rpm's and setpoint_rpm's two expressions: rpm = value x factor + offset.
+enum class RpmPart : std::uint8_t { factor, offset };
+
+// `text` ("max_frequency_hz * 120 / motor_poles / 100") as a factor: terms joined by '*' and '/',
+// left to right, a term a number, a name of `options`, or the difference of two of them in
+// parentheses ("(max_frequency_hz - min_frequency_hz)"). nullopt and `why` when it is empty, names
+// an option the profile does not declare, ends in an operator, has anything else in parentheses,
+// a term that can be 0 within its option's range or a difference that is always 0, or is not
+// above 0 with the options' defaults.
 std::optional<RpmFactor> parse_rpm_factor(std::string_view text,
                                           const std::vector<ProfileOption>& options,
                                           std::string& why);
+// The same as an offset ("min_frequency_hz * 120 / motor_poles"): it may be 0 or below, but not
+// divide by 0.
+std::optional<RpmFactor> parse_rpm_offset(std::string_view text,
+                                          const std::vector<ProfileOption>& options,
+                                          std::string& why);
 
-// The factor with the options' values (1 without terms).
+// The expression with the options' values (1 without terms).
 double factor_value(const RpmFactor& factor, const std::vector<ProfileOption>& options);
+
+// What is wrong with the expression's value with the options' values ("is -12 with
+// max_frequency_hz = 10, min_frequency_hz = 50: a factor must be above 0"): a factor must be a
+// number above 0, an offset a number. Empty when nothing is.
+std::string rpm_problem(const RpmFactor& e, RpmPart part,
+                        const std::vector<ProfileOption>& options);
+
+// The factor and offset with the options' values (RpmScale, profile.h).
+RpmScale rpm_scale(const RpmFactor& factor, const std::optional<RpmFactor>& offset,
+                   const std::vector<ProfileOption>& options);
+
+// speed_rpm's and setpoint_rpm's factors above 0 and offsets numbers with the options' values: a
+// device's options may make a difference 0 or negative (max_frequency_hz at or below
+// min_frequency_hz). false and `error` when not.
+bool check_rpm(const Profile& profile, std::string& error);
 
 // The device's values of the profile's options (those `options` carries; the others keep their
 // default): false and `error` ("option motor_poles: ...") for a value that is not a number within
-// the option's range.
+// the option's range, or (check_rpm) options that make a factor 0 or below.
 bool apply_options(Profile& profile, const Options& options, std::string& error);
 
 // A number as an option's text: the shortest that reads back the same ("4", "0.01").

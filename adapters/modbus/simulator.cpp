@@ -338,10 +338,11 @@ void ModbusSimulator::drive() {
   if (c.speed_rpm) {
     double speed = 0;
     if (running_ && c.setpoint_rpm) {
-      // The same rpm through both points' factors: reference x its factor / the speed's.
-      speed = point_value(*c.setpoint_rpm).value_or(0) *
-              factor_value(c.setpoint_factor, profile_.options) /
-              factor_value(c.speed_factor, profile_.options);
+      // The same rpm through both points' factors and offsets: the reference's rpm as the
+      // speed point's value.
+      const double rpm = rpm_scale(c.setpoint_factor, c.setpoint_offset, profile_.options)
+                             .rpm(point_value(*c.setpoint_rpm).value_or(0));
+      speed = rpm_scale(c.speed_factor, c.speed_offset, profile_.options).value(rpm);
       const ProfilePoint& p = profile_.points[*c.speed_rpm];
       if (p.type != ValueType::f32) speed = std::round(speed / p.scale) * p.scale;
     }

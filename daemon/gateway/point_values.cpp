@@ -60,6 +60,8 @@ void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
       out.emplace_back(&p, Value{});
     } else if (bits) {
       out.emplace_back(&p, std::int64_t{regs[0] != 0 ? 1 : 0});
+    } else if (p.spec.type == PointType::string) {
+      out.emplace_back(&p, decode_text(regs));  // a serial number, a drive's name
     } else if (auto v = decode_value(p.spec, regs)) {
       const CommonRow* row = p.row();
       const auto* i64 = std::get_if<std::int64_t>(&*v);

@@ -21,7 +21,8 @@ std::string_view label_of(const PointSpec& spec, const Value& value);
 
 // The common block, then the adapter's points, in the map's order; a point that cannot be read
 // is left out, one whose value is not known is std::monostate (an adapter's point its driver does
-// not know, a common row holding its unknown mark, a float that is not a number). `out` is
+// not know, a common row holding its unknown mark, a float that is not a number); a string point's
+// value is its registers' text (decode_text). `out` is
 // replaced (its capacity kept, for the next device).
 void point_values(Device& device, TimePoint now, std::vector<PointValue>& out);
 

@@ -196,4 +196,15 @@ std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::ui
   return std::nullopt;
 }
 
+std::string decode_text(std::span<const std::uint16_t> in) {
+  std::string s;
+  s.reserve(2 * in.size());
+  for (const std::uint16_t w : in) {
+    s.push_back(static_cast<char>(w >> 8));
+    s.push_back(static_cast<char>(w & 0xFF));
+  }
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return s;
+}
+
 }  // namespace drivegate

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 
 #include "drivegate/point.h"
 
@@ -25,6 +26,11 @@ void encode_integer(PointType type, std::int64_t value, std::span<std::uint16_t>
 // The engineering value a client wrote; nullopt when `in` is not a value of the point's type
 // (a string point is not writable).
 std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::uint16_t> in);
+
+// A string point's registers as text, as encode_value lays it: two characters a register, the
+// first in the high byte, the NULs that pad it dropped from its end. The bytes are the device's:
+// what shows them makes them printable (base/device_text.h).
+std::string decode_text(std::span<const std::uint16_t> in);
 
 // True for the values laid over several registers as one number (u32, i32, f32, u64, i64, f64):
 // the ones a listener's word_order = "little" serves least significant word first. Strings are

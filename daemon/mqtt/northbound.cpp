@@ -10,6 +10,7 @@
 #include <limits>
 #include <utility>
 
+#include "base/device_text.h"
 #include "gateway/point_values.h"
 #include "gateway/value_codec.h"
 #include "mqtt/command_result.h"
@@ -74,7 +75,12 @@ MetricValue metric_value(DataType type, const Value& v) {
     case DataType::boolean:
       return MetricValue{as_double(v) != 0.0};
     case DataType::string:
-      if (const auto* s = std::get_if<std::string>(&v)) return MetricValue{*s};
+      if (const auto* s = std::get_if<std::string>(&v)) {
+        // A string point's text as the status JSON shows it: a protobuf string is UTF-8.
+        std::string text;
+        append_device_text(text, *s);
+        return MetricValue{std::move(text)};
+      }
       return {};
     case DataType::uint16:
       return MetricValue{static_cast<std::uint64_t>(as_double(v))};

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "base/device_text.h"
 #include "gateway/value_codec.h"
 #include "status/metric_units.h"
 #include "status/process_metrics.h"
@@ -252,12 +253,14 @@ void common_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
 }
 
 // The adapters' own points: each with a unit drivegate_device_point_<base unit> (metric_units.h),
-// each with named values drivegate_device_point_state, each bit field drivegate_device_point_flag;
-// a number without a unit (a raw code, a counter of the protocol's) is left to the status JSON.
+// each with named values drivegate_device_point_state, each bit field drivegate_device_point_flag,
+// each string drivegate_device_point_info (its text a label); a number without a unit (a raw code,
+// a counter of the protocol's) is left to the status JSON.
 // Every family gathers every device's points, as the format wants a family's samples together.
 void point_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
   constexpr std::size_t kState = kBaseUnits.size();
   constexpr std::size_t kFlag = kState + 1;
+  constexpr std::size_t kInfo = kState + 2;
   struct Sample {
     std::size_t family;
     std::size_t row;
@@ -269,8 +272,13 @@ void point_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
     const auto& values = rows[r].values;
     for (std::size_t i = 0; i < values.size(); ++i) {
       const PointSpec& spec = values[i].first->spec;
-      if (values[i].first->common() || spec.type == PointType::string) continue;
-      if (!spec.labels.empty()) {
+      if (values[i].first->common()) continue;
+      if (spec.type == PointType::string) {
+        // Its text, while it is known.
+        if (std::holds_alternative<std::string>(values[i].second)) {
+          samples.push_back({kInfo, r, i, {}});
+        }
+      } else if (!spec.labels.empty()) {
         samples.push_back({spec.bit_labels ? kFlag : kState, r, i, {}});
       } else if (const auto unit = metric_unit(spec.unit)) {
         samples.push_back({unit->base, r, i, *unit});
@@ -288,7 +296,12 @@ void point_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
     const auto& [point, value] = row.values[s.value];
     if (k == 0 || samples[k - 1].family != s.family) {
       name = "drivegate_device_point_";
-      if (s.family == kState) {
+      if (s.family == kInfo) {
+        name += "info";
+        help =
+            "adapter points that are text (a serial number, a drive's name): 1, the text in "
+            "label value (printable ASCII, other bytes '?', at most 64 characters)";
+      } else if (s.family == kState) {
         name += "state";
         help = "adapter points with named values: 1 for the name of the value in force";
       } else if (s.family == kFlag) {
@@ -304,6 +317,13 @@ void point_metrics(Writer& w, const std::vector<DeviceRow>& rows) {
     }
     extra.clear();
     append_label(extra, "point", point->spec.name);
+    if (s.family == kInfo) {
+      std::string text;
+      append_device_text(text, std::get<std::string>(value), kMaxLabelText);
+      append_label(extra, "value", text);
+      w.sample(name, row.labels, 1, extra);
+      continue;
+    }
     if (s.family == kState || s.family == kFlag) {
       state_samples(w, name, row.labels, extra, extra.size(), s.family == kState ? "state" : "flag",
                     point->spec, value);

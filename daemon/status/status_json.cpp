@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "base/device_text.h"
 #include "base/json.h"
 #include "status/status_view.h"
 
@@ -26,7 +27,10 @@ void append_json_value(std::string& out, const Value& v) {
       fmt::format_to(std::back_inserter(out), FMT_COMPILE("{:.6g}"), *d);  // as printf's %.6g
     }
   } else if (const auto* s = std::get_if<std::string>(&v)) {
-    append_json_string(out, *s);
+    // A string point's text, whole, as the device gave it but for the bytes JSON cannot carry.
+    std::string text;
+    append_device_text(text, *s);
+    append_json_string(out, text);
   } else {
     out += "null";
   }

@@ -163,6 +163,58 @@ TEST(Cli, AProfilesOptionsAreCheckedAsTheConfigurationsOwn) {
   EXPECT_THAT(r.out, HasSubstr("unknown option"));
 }
 
+// A device whose options make a span of frequencies 0 or negative (the maximum at or below the
+// minimum) has no rpm: a configuration error naming the device's line and what the factor is.
+constexpr const char* kSpanProfile = R"toml([profile]
+name = "span"
+source = "a test"
+[options.min_frequency_hz]
+default = 10
+min = 0
+max = 320
+description = "minimum frequency"
+[options.max_frequency_hz]
+default = 50
+min = 1
+max = 320
+description = "maximum frequency"
+[[point]]
+name = "reference"
+table = "holding"
+address = 1   # a test's
+type = "u16"
+min = 0
+max = 10000
+[common]
+setpoint_rpm = { point = "reference", rpm_factor = "(max_frequency_hz - min_frequency_hz) * 30 / 10000", rpm_offset = "min_frequency_hz * 30" }
+)toml";
+
+TEST(Cli, ADeviceWhoseOptionsMakeTheRpmFactorZeroOrNegativeIsAnError) {
+  TempDir dir;
+  std::ofstream(dir / "span.toml") << kSpanProfile;
+  const auto config = [&](const std::string& options) {
+    std::ofstream(dir / "gw.toml") << "[[bus]]\nname = \"line\"\nport = \"/dev/null\"\n"
+                                   << "[[device]]\nname = \"fan\"\nbus = \"line\"\n"
+                                   << "adapter = \"modbus\"\nunit_id = 1\n[device.options]\n"
+                                   << "profile = \"" << (dir / "span.toml").string() << "\"\n"
+                                   << options << "\n";
+    return run({drivegated(), "--check-config", (dir / "gw.toml").string(), "--plugin-dir",
+                plugin_dir().string()});
+  };
+  auto r = config("min_frequency_hz = 5\nmax_frequency_hz = 60");
+  EXPECT_EQ(r.status, 0) << r.out;
+  r = config("min_frequency_hz = 50\nmax_frequency_hz = 50");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("gw.toml:4: device fan: "));
+  EXPECT_THAT(r.out, HasSubstr("setpoint_rpm's rpm_factor '(max_frequency_hz - min_frequency_hz) "
+                               "* 30 / 10000' is 0 with max_frequency_hz = 50, min_frequency_hz = "
+                               "50: a factor must be above 0"));
+  r = config("min_frequency_hz = 60");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("gw.toml:4: device fan: "));
+  EXPECT_THAT(r.out, HasSubstr("is -0.03 with max_frequency_hz = 50, min_frequency_hz = 60"));
+}
+
 TEST(Cli, ProfileCheckExitsZeroOneOrTwo) {
   TempDir dir;
   std::ofstream(dir / "poles.toml") << kPolesProfile;

@@ -54,20 +54,16 @@ std::unique_ptr<Driver> make_meter(const DeviceEnv& env, std::string&) {
           .named_bits({{"overcurrent", 0}, {"overvoltage", 1}, {"door \"open\"", 4}}),
       string_point("serial", 2, ""),
       holding_point("limit", PointType::u16, "rpm", "").limited(0, 3000),
+      string_point("drive_name", 8, ""),
+      string_point("long_text", 40, ""),
   };
   d->values_ = {20.0 + env.address + 0.4,  // 21.4, 22.4
-                3.5,
-                1.25,
-                std::int64_t{45},
-                50.0,
-                1.5,
-                5.5,
-                std::int64_t{7},
-                std::int64_t{9},
+                3.5, 1.25, std::int64_t{45}, 50.0, 1.5, 5.5, std::int64_t{7}, std::int64_t{9},
                 std::int64_t{3},        // running (the second of its codes)
                 std::int64_t{0b10001},  // overcurrent, door "open"
-                std::string("AB12"),
-                std::int64_t{1200}};
+                std::string("AB12"), std::int64_t{1200},
+                // Quotes, a backslash, a line feed and two bytes beyond ASCII (UTF-8's e-acute).
+                std::string("say \"hi\" \\\n\xC3\xA9!"), std::string(80, 'x')};
   d->common_.ready = true;
   d->common_.running = true;
   d->common_.speed_rpm = 1480;
@@ -149,8 +145,12 @@ class MetricsText : public ::testing::Test {
       v.history = &history_;
     }
     // A serial listener with a quote in its port's name, as label values must survive.
-    SerialListenerView s{.port = "/dev/ttyS\"1", .framing = "rtu", .access = AccessLevel::operate,
-                         .open = true, .bytes_received = 800, .reopens = 2};
+    SerialListenerView s{.port = "/dev/ttyS\"1",
+                         .framing = "rtu",
+                         .access = AccessLevel::operate,
+                         .open = true,
+                         .bytes_received = 800,
+                         .reopens = 2};
     s.counters.bus_messages = 100;
     s.counters.bus_comm_errors = 3;
     s.counters.bus_exception_errors = 4;
@@ -239,10 +239,35 @@ TEST_F(MetricsText, AdapterMeasurementsAreNamedByTheirBaseUnitAndConvertedToIt) 
             "drivegate_device_point_kelvin" + labels(kOne, R"(,point="superheat")") + " 5.5");
   EXPECT_EQ(one("drivegate_device_point_rpm", "limit"),
             "drivegate_device_point_rpm" + labels(kOne, R"(,point="limit")") + " 1200");
-  // No base unit, no unit, a string: not numbers of the metrics.
-  for (const char* point : {"flow", "raw_code", "serial"}) {
+  // No base unit, no unit: not numbers of the metrics.
+  for (const char* point : {"flow", "raw_code"}) {
     EXPECT_THAT(text, Not(HasSubstr("point=\"" + std::string(point) + "\""))) << point;
   }
+}
+
+// A string point is an info gauge, its text a label: printable ASCII, the format's escapes, other
+// bytes '?', at most 64 characters; the status JSON carries the whole text, escaped.
+TEST_F(MetricsText, StringPointsAreInfoGaugesAndJsonStrings) {
+  const std::string text = metrics_text(view());
+  const std::string info = "drivegate_device_point_info";
+  EXPECT_THAT(of_point(text, info, "serial"),
+              ElementsAre(info + labels(kOne, R"(,point="serial",value="AB12")") + " 1",
+                          info + labels(kTwo, R"(,point="serial",value="AB12")") + " 1"));
+  EXPECT_THAT(
+      of_point(text, info, "drive_name"),
+      Contains(info + labels(kOne, R"(,point="drive_name",value="say \"hi\" \\\n??!")") + " 1"));
+  EXPECT_THAT(
+      of_point(text, info, "long_text"),
+      Contains(info +
+               labels(kOne, ",point=\"long_text\",value=\"" + std::string(64, 'x') + "...\"") +
+               " 1"));
+  EXPECT_THAT(family(text, info), Contains("# TYPE " + info + " gauge"));
+  const std::string json = status_json(view());
+  EXPECT_THAT(json, HasSubstr(R"({"name": "serial", "value": "AB12", "unit": ""})"));
+  EXPECT_THAT(json,
+              HasSubstr(R"({"name": "drive_name", "value": "say \"hi\" \\\n??!", "unit": ""})"));
+  EXPECT_THAT(json, HasSubstr("{\"name\": \"long_text\", \"value\": \"" + std::string(80, 'x') +
+                              "\", \"unit\": \"\"}"));
 }
 
 TEST_F(MetricsText, NamedValuesAndBitFieldsAreStateSets) {
@@ -432,12 +457,13 @@ TEST_F(MetricsText, SerialListenersCountersByPort) {
   EXPECT_THAT(family(text, "drivegate_serial_listener_reopens_total"),
               Contains("drivegate_serial_listener_reopens_total" + port + " 2"));
   const std::string json = status_json(view());
-  EXPECT_THAT(json, HasSubstr(R"({"port": "/dev/ttyS\"1", "framing": "rtu", "access": "operate", )"
-                              R"("open": true, "reopens": 2, "bytes_received": 800, "frames": 100, )"
-                              R"("crc_errors": 3, "exceptions": 4, "requests": 90, )"
-                              R"("not_answered": 5, "busy": 0, "overruns": 1, "broken_frames": 6, )"
-                              R"("other_units": 7, "broadcasts": 2, "broadcasts_refused": 2, )"
-                              R"("accepted_then_failed": 0})"));
+  EXPECT_THAT(json,
+              HasSubstr(R"({"port": "/dev/ttyS\"1", "framing": "rtu", "access": "operate", )"
+                        R"("open": true, "reopens": 2, "bytes_received": 800, "frames": 100, )"
+                        R"("crc_errors": 3, "exceptions": 4, "requests": 90, )"
+                        R"("not_answered": 5, "busy": 0, "overruns": 1, "broken_frames": 6, )"
+                        R"("other_units": 7, "broadcasts": 2, "broadcasts_refused": 2, )"
+                        R"("accepted_then_failed": 0})"));
   // None without a serial listener.
   StatusView plain = view();
   plain.serial.clear();

@@ -50,6 +50,8 @@ std::vector<PointValue> one_by_one(Device& device, TimePoint now) {
     }
     if (bits) {
       out.emplace_back(&p, std::int64_t{regs[0] != 0 ? 1 : 0});
+    } else if (p.spec.type == PointType::string) {
+      out.emplace_back(&p, decode_text(regs));
     } else if (auto v = decode_value(p.spec, regs)) {
       out.emplace_back(&p, std::move(*v));
     }
@@ -108,8 +110,8 @@ TEST(PointValues, ATableAtATimeReadsWhatPointByPointReads) {
   std::vector<PointValue> got;
   point_values(device, now, got);
   ASSERT_EQ(got.size(), want.size());
-  // Every point but the string one (decode_value gives no value for strings, read either way).
-  EXPECT_EQ(got.size() + 1, device.map().points().size());
+  // Every point, the string one with its text.
+  EXPECT_EQ(got.size(), device.map().points().size());
   for (std::size_t i = 0; i < got.size(); ++i) {
     EXPECT_EQ(got[i].first, want[i].first) << i;
     EXPECT_EQ(got[i].second, want[i].second) << got[i].first->spec.name;
@@ -124,7 +126,7 @@ TEST(PointValues, ATableAtATimeReadsWhatPointByPointReads) {
     return Value{};
   };
   EXPECT_EQ(by_name("speed_rpm"), Value{std::int64_t{1499}});
-  EXPECT_EQ(by_name("serial"), Value{});
+  EXPECT_EQ(by_name("serial"), Value{std::string("AB12")});
   EXPECT_EQ(by_name("relay"), Value{std::int64_t{1}});
   EXPECT_EQ(by_name("pressure"), Value{3.5});
 }

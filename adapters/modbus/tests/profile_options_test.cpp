@@ -124,6 +124,68 @@ stop = { point = "control_word", value = 0 }
 run_forward = { point = "control_word", value = 1 }
 )toml";
 
+// The Vacon / Eaton M-Max kind: the reference 0..10000 is 0..100 % of the span between the
+// minimum and the maximum frequency, and so is the actual speed. Worked by hand at the defaults
+// (10 Hz .. 50 Hz, 4 poles, 30 rpm a Hz): raw 0 = 10 Hz = 300 rpm, raw 10000 = 50 Hz = 1500 rpm,
+// 0.12 rpm a raw step: raw 5000 = 30 Hz = 900 rpm.
+constexpr const char* kSpanProfile = R"toml(
+[profile]
+name = "span-drive"
+source = "a test"
+[options.motor_poles]
+default = 4
+min = 2
+max = 48
+description = "motor poles"
+[options.min_frequency_hz]
+default = 10
+min = 0
+max = 320
+description = "minimum frequency (P3.3.1.1)"
+[options.max_frequency_hz]
+default = 50
+min = 1
+max = 320
+description = "maximum frequency (P3.3.1.2)"
+[[point]]
+name = "control_word"
+table = "holding"
+address = 0
+type = "u16"
+[[point]]
+name = "speed_reference"
+table = "holding"
+address = 1
+type = "u16"
+min = 0
+max = 10000
+[[point]]
+name = "status_word"
+table = "holding"
+address = 2
+type = "u16"
+[[point]]
+name = "actual_speed"
+table = "holding"
+address = 3
+type = "u16"
+[common]
+speed_rpm = { point = "actual_speed", rpm_factor = "(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / 10000", rpm_offset = "min_frequency_hz * 120 / motor_poles" }
+setpoint_rpm = { point = "speed_reference", rpm_factor = "(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / 10000", rpm_offset = "min_frequency_hz * 120 / motor_poles" }
+running = { point = "status_word", bit = 1 }
+stop = { point = "control_word", value = 0 }
+run_forward = { point = "control_word", value = 1 }
+)toml";
+
+// kSpanProfile with `from` replaced by `to`.
+std::string span_with(const std::string& from, const std::string& to) {
+  std::string s = kSpanProfile;
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) s.replace(at, from.size(), to);
+  return s;
+}
+
 // kHzProfile with `from` replaced by `to`.
 std::string hz_with(const std::string& from, const std::string& to) {
   std::string s = kHzProfile;
@@ -225,8 +287,10 @@ TEST(RpmFactor, WhatIsNotOneIsAnErrorThatSaysWhy) {
   EXPECT_THAT(why("a/b/"), HasSubstr("names 'a', which is not one of the profile's [options]"));
   EXPECT_THAT(why("120 / motor_poles /"), HasSubstr("ends in an operator"));
   EXPECT_THAT(why("motor_poles/0"), HasSubstr("divides by 0"));
-  EXPECT_THAT(why("120 + motor_poles"), HasSubstr("no + or -"));
-  EXPECT_THAT(why("(120 / motor_poles)"), HasSubstr("no parentheses"));
+  EXPECT_THAT(why("120 + motor_poles"), HasSubstr("no +, no - outside them"));
+  EXPECT_THAT(why("120 - motor_poles"), HasSubstr("no +, no - outside them"));
+  EXPECT_THAT(why("(120 / motor_poles)"),
+              HasSubstr("has parentheses around something other than a difference"));
   EXPECT_THAT(why("120 motor_poles"), HasSubstr("where '*' or '/' belongs"));
   EXPECT_THAT(why("1.2.3"), HasSubstr("is not a number"));
   // An option whose range holds 0 could make the factor 0 or divide by it.
@@ -315,6 +379,169 @@ TEST(RpmFactor, APercentOfMaximumFrequencyWith16384For100Percent) {
   ASSERT_EQ(fast.on_receive(frame(pdu), now).kind, RxKind::reply);
   EXPECT_TRUE(fast.common().speed_unknown);
   EXPECT_TRUE(fast.common().faults.has(Fault::sensor_fault));
+}
+
+// --- rpm_offset and a difference ---
+
+TEST(RpmOffset, IsParsedWithTheDifferenceAndEvaluatedWithTheOptions) {
+  const Profile p = parsed(kSpanProfile);
+  ASSERT_TRUE(p.common.setpoint_offset);
+  ASSERT_EQ(p.common.setpoint_factor.terms.size(), 4u);
+  EXPECT_TRUE(p.common.setpoint_factor.terms[0].minus);
+  // (50 - 10) x 120 / 4 / 10000 = 0.12 rpm a step; 10 x 120 / 4 = 300 rpm at raw 0.
+  const RpmScale s = rpm_scale(p.common.setpoint_factor, p.common.setpoint_offset, p.options);
+  EXPECT_DOUBLE_EQ(s.factor, 0.12);
+  EXPECT_DOUBLE_EQ(s.offset, 300.0);
+  EXPECT_DOUBLE_EQ(s.rpm(5000), 900.0);
+  EXPECT_DOUBLE_EQ(s.value(300), 0.0);
+  // 2 poles, 5..60 Hz: (60 - 5) x 60 / 10000 = 0.33 rpm a step, 300 rpm at raw 0.
+  const Profile two =
+      with_options(parsed(kSpanProfile),
+                   {{"motor_poles", 2}, {"min_frequency_hz", 5}, {"max_frequency_hz", 60}});
+  const RpmScale t = rpm_scale(two.common.setpoint_factor, two.common.setpoint_offset, two.options);
+  EXPECT_DOUBLE_EQ(t.factor, 0.33);
+  EXPECT_DOUBLE_EQ(t.offset, 300.0);
+  // Without rpm_offset: none.
+  const Profile hz = parsed(kHzProfile);
+  EXPECT_FALSE(hz.common.setpoint_offset);
+  EXPECT_DOUBLE_EQ(
+      rpm_scale(hz.common.setpoint_factor, hz.common.setpoint_offset, hz.options).offset, 0.0);
+}
+
+TEST(RpmOffset, WhatIsNotOneIsAnErrorOnItsLine) {
+  const Profile p = parsed(kSpanProfile);
+  const auto why = [&](std::string_view text, bool offset = false) {
+    std::string w;
+    EXPECT_FALSE(offset ? parse_rpm_offset(text, p.options, w)
+                        : parse_rpm_factor(text, p.options, w))
+        << text;
+    return w;
+  };
+  const std::string other = "has parentheses around something other than a difference";
+  EXPECT_THAT(why("(max_frequency_hz - min_frequency_hz - 1)"), HasSubstr(other));
+  EXPECT_THAT(why("(max_frequency_hz + min_frequency_hz)"), HasSubstr(other));
+  EXPECT_THAT(why("(max_frequency_hz * 2)"), HasSubstr(other));
+  EXPECT_THAT(why("(max_frequency_hz)"), HasSubstr(other));
+  EXPECT_THAT(why("((max_frequency_hz - min_frequency_hz))"), HasSubstr(other));
+  EXPECT_THAT(why("(max_frequency_hz - )"), HasSubstr(other));
+  EXPECT_THAT(why("(max_frequency_hz - min_frequency_hz"), HasSubstr(other));
+  EXPECT_THAT(why("(max_frequency_hz - (min_frequency_hz - 1))"), HasSubstr(other));
+  EXPECT_THAT(why("(max_frequency_hz - poles)"), HasSubstr("names 'poles'"));
+  EXPECT_THAT(why("(max_frequency_hz - min_frequency_hz) 2"), HasSubstr("where '*' or '/'"));
+  EXPECT_THAT(why("2 (max_frequency_hz - min_frequency_hz)"), HasSubstr("where '*' or '/'"));
+  EXPECT_THAT(why("max_frequency_hz - min_frequency_hz"), HasSubstr("no - outside them"));
+  // Always 0: an option less itself, a number less itself.
+  EXPECT_THAT(why("(motor_poles - motor_poles)"), HasSubstr("a difference that is always 0"));
+  EXPECT_THAT(why("(50 - 50) * 2", true), HasSubstr("a difference that is always 0"));
+  // Two numbers and a number less an option are differences too.
+  std::string w;
+  EXPECT_TRUE(parse_rpm_factor("(60 - 10) * 120 / motor_poles", p.options, w)) << w;
+  EXPECT_TRUE(parse_rpm_offset("(0 - min_frequency_hz) * 120 / motor_poles", p.options, w)) << w;
+  // An offset may be 0 (min_frequency_hz's range holds 0), but not divide by 0.
+  EXPECT_TRUE(parse_rpm_offset("min_frequency_hz * 120 / motor_poles", p.options, w)) << w;
+  EXPECT_THAT(why("120 / min_frequency_hz", true),
+              HasSubstr("option min_frequency_hz can be 0 (its range is 0..320): the offset would "
+                        "divide by 0"));
+  // The options' defaults make the factor 0 or below: the profile's own error.
+  EXPECT_THAT(
+      errors_of(span_with("default = 50\nmin = 1", "default = 10\nmin = 1")),
+      ElementsAre(
+          HasSubstr("p.toml:43: common.speed_rpm.rpm_factor: '(max_frequency_hz - "
+                    "min_frequency_hz) * 120 / motor_poles / 10000' is 0 with max_frequency_hz = "
+                    "10, min_frequency_hz = 10, motor_poles = 4: a factor must be above 0 (the "
+                    "options' defaults)"),
+          HasSubstr("p.toml:44: common.setpoint_rpm.rpm_factor")));
+  EXPECT_THAT(errors_of(span_with("default = 50\nmin = 1", "default = 5\nmin = 1")),
+              testing::Contains(HasSubstr("is -0.015 with max_frequency_hz = 5")));
+  // rpm_offset without rpm_factor, on speed_rpm's line.
+  EXPECT_THAT(
+      errors_of(span_with(
+          "speed\", rpm_factor = \"(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / "
+          "10000\", rpm_offset",
+          "speed\", rpm_offset")),
+      ElementsAre(HasSubstr("p.toml:43: common.speed_rpm.rpm_offset: goes only with rpm_factor")));
+  // A bad offset: its own key and line.
+  EXPECT_THAT(errors_of(span_with("rpm_offset = \"min_frequency_hz * 120 / motor_poles\" }\n"
+                                  "setpoint_rpm",
+                                  "rpm_offset = \"min_frequency_hz + 1\" }\nsetpoint_rpm")),
+              ElementsAre(HasSubstr("p.toml:43: common.speed_rpm.rpm_offset: 'min_frequency_hz "
+                                    "+ 1' '+' where '*' or '/' belongs")));
+}
+
+// A device's options that make the span 0 or negative (maximum at or below minimum frequency)
+// are refused when the device is made, saying which.
+TEST(RpmOffset, ADevicesOptionsThatMakeTheFactorZeroOrNegativeAreRefused) {
+  const auto error_of = [](const std::vector<std::pair<std::string, double>>& set) {
+    Profile p = parsed(kSpanProfile);
+    Options o;
+    for (const auto& [k, v] : set) o.set(k, v);
+    std::string error;
+    EXPECT_FALSE(apply_options(p, o, error));
+    return error;
+  };
+  EXPECT_EQ(error_of({{"max_frequency_hz", 10}}),
+            "profile span-drive: speed_rpm's rpm_factor '(max_frequency_hz - min_frequency_hz) "
+            "* 120 / motor_poles / 10000' is 0 with max_frequency_hz = 10, min_frequency_hz = 10, "
+            "motor_poles = 4: a factor must be above 0 (the device's options)");
+  EXPECT_THAT(error_of({{"min_frequency_hz", 60}}),
+              HasSubstr("is -0.03 with max_frequency_hz = 50, min_frequency_hz = 60"));
+  Profile p = parsed(kSpanProfile);
+  Options o;
+  o.set("min_frequency_hz", 49.0);
+  std::string error;
+  EXPECT_TRUE(apply_options(p, o, error)) << error;
+}
+
+// The golden values worked by hand (kSpanProfile's comment): the frames the driver sends.
+TEST(RpmOffset, TheSetpointIsWrittenAsRpmLessTheOffsetOverTheFactor) {
+  const TimePoint now = TimePoint{} + 10s;
+  const auto frame_for = [&](std::int32_t rpm) {
+    ModbusDriver d = driver_of(parsed(kSpanProfile));
+    EXPECT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
+    return d.next_exchange(now)->frame;
+  };
+  EXPECT_EQ(frame_for(900), fc06(1, 5000));    // 30 Hz
+  EXPECT_EQ(frame_for(300), fc06(1, 0));       // 10 Hz, the minimum
+  EXPECT_EQ(frame_for(1500), fc06(1, 10000));  // 50 Hz, the maximum
+  EXPECT_EQ(frame_for(1000), fc06(1, 5833));   // 700 / 0.12 = 5833.3, rounded
+  // Below the minimum frequency or above the maximum: exception 03, nothing sent.
+  for (const std::int32_t rpm : {200, 299, 1501, 0, -900}) {
+    ModbusDriver d = driver_of(parsed(kSpanProfile));
+    const WriteOp op = WriteOp::of_setpoint(rpm);
+    EXPECT_EQ(d.check(std::span(&op, 1)), WriteCheck::invalid_value) << rpm;
+    EXPECT_EQ(d.apply(op, 1, now), WriteStatus::invalid_value) << rpm;
+    EXPECT_EQ(d.next_exchange(now)->frame[1], 0x03) << rpm;  // a poll, not a write
+  }
+  // 2 poles, 5..60 Hz (60 rpm a Hz): 3600 rpm is 60 Hz, raw 10000; 300 rpm is 5 Hz, raw 0;
+  // 1000 rpm is (1000 - 300) / 0.33 = 2121.2, raw 2121.
+  const Profile two =
+      with_options(parsed(kSpanProfile),
+                   {{"motor_poles", 2}, {"min_frequency_hz", 5}, {"max_frequency_hz", 60}});
+  for (const auto& [rpm, raw] : std::initializer_list<std::pair<std::int32_t, std::uint16_t>>{
+           {3600, 10000}, {300, 0}, {1000, 2121}}) {
+    ModbusDriver d = driver_of(two);
+    ASSERT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
+    EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, raw)) << rpm;
+  }
+}
+
+TEST(RpmOffset, TheSpeedReadsAsTheValueTimesTheFactorPlusTheOffset) {
+  const TimePoint now = TimePoint{} + 10s;
+  const auto read = [&](std::uint16_t reference, std::uint16_t actual) {
+    ModbusDriver d = driver_of(parsed(kSpanProfile));
+    EXPECT_TRUE(d.next_exchange(now));
+    std::vector<std::uint8_t> pdu = {0x03, 8};
+    for (const std::uint16_t w :
+         std::initializer_list<std::uint16_t>{0x0001, reference, 0x0002, actual})
+      put_be16(pdu, w);
+    EXPECT_EQ(d.on_receive(frame(pdu), now).kind, RxKind::reply);
+    return std::pair(d.common().speed_rpm, d.common().setpoint_rpm);
+  };
+  // Actual raw 5000 = 900 rpm; the reference adopted through its own factor and offset.
+  EXPECT_EQ(read(5000, 5000), std::pair(900, 900));
+  EXPECT_EQ(read(0, 0), std::pair(300, 300));
+  EXPECT_EQ(read(10000, 10000), std::pair(1500, 1500));
+  EXPECT_EQ(read(10000, 4999), std::pair(900, 1500));  // 899.88 rounded
 }
 
 // --- sequence ---
@@ -502,6 +729,38 @@ TEST(ProfileOptionsOnTheBus, TheFailsafeStopIsTheStopSequence) {
     if (rig.sent()[i].bytes[1] == 0x06) writes.push_back(rig.sent()[i].bytes);
   }
   EXPECT_THAT(writes, ElementsAre(fc06(0, 0x0007), fc06(0, 0x0006)));
+}
+
+// On the bus engine against the simulator: the PLC writes 900 rpm and run, and the wire carries
+// raw 5000; the simulated drive runs at it and the speed reads 900; 200 rpm is refused with
+// nothing on the wire.
+TEST(RpmOffset, OnTheBusTheSetpointReachesTheWireAsTheSpansRaw) {
+  ProfileFile f(kSpanProfile);
+  const AdapterDescriptor& a = specialised_for(f.path);
+  test::BusRig rig(a);
+  Device& d = rig.add_device("d", kSlave, {{"profile", f.path}});
+  rig.add_simulator(kSlave, {{"profile", f.path}});
+  rig.start();
+  ASSERT_TRUE(rig.run_until([&] { return d.online(); }, 3s));
+  std::size_t mark = rig.sent().size();
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, 0, {1, 900}), Outcome::ok);
+  std::vector<Bytes> writes;
+  for (std::size_t i = mark; i < rig.sent().size(); ++i) {
+    if (rig.sent()[i].bytes[1] != 0x03) writes.push_back(rig.sent()[i].bytes);
+  }
+  EXPECT_THAT(writes, testing::UnorderedElementsAre(fc06(1, 5000), fc06(0, 0x0001)));
+  EXPECT_TRUE(rig.run_until([&] { return rig.value(d, "speed_rpm") == 900; }, 3s));
+  EXPECT_EQ(rig.value(d, "setpoint_rpm"), 900u);
+  EXPECT_THAT(rig.simulator().control("state", rig.now()),
+              testing::AllOf(HasSubstr("running forward"), HasSubstr("speed_reference = 5000"),
+                             HasSubstr("actual_speed = 5000")));
+  // 200 rpm is below the 300 rpm of the minimum frequency: exception 03, nothing sent, the
+  // reference and the setpoint unchanged.
+  mark = rig.sent().size();
+  EXPECT_EQ(rig.write_and_wait(d, Table::holding, 1, {200}), Outcome::invalid_value);
+  for (std::size_t i = mark; i < rig.sent().size(); ++i) EXPECT_EQ(rig.sent()[i].bytes[1], 0x03);
+  EXPECT_EQ(rig.value(d, "setpoint_rpm"), 900u);
+  EXPECT_THAT(rig.simulator().control("state", rig.now()), HasSubstr("speed_reference = 5000"));
 }
 
 }  // namespace

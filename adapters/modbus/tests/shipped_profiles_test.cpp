@@ -18,6 +18,7 @@
 #include "planner.h"
 #include "profile.h"
 #include "profile_examples.h"
+#include "profile_options.h"
 #include "profile_support.h"
 #include "settings.h"
 #include "simulator.h"
@@ -101,7 +102,55 @@ TEST(EatonMMax, TheLineAndTheReadPlanFollowTheManual) {
   EXPECT_EQ(c.run_reverse->value, 0x0003);
   EXPECT_EQ(c.reset_fault->value, 0x0004);
   EXPECT_EQ(p.points[c.stop->point].address, 0x07D0);
-  EXPECT_FALSE(c.setpoint_rpm);  // ID 2003 is a % of the drive's own frequency range
+  // ID 2003 is a % of the span between the minimum and the maximum frequency (p.138).
+  ASSERT_TRUE(c.setpoint_rpm);
+  EXPECT_EQ(p.points[*c.setpoint_rpm].address, 0x07D2);
+  EXPECT_TRUE(c.setpoint_offset);
+}
+
+// ID 2003 is 0 - 10000 over the span from P6.3 to P6.4 (p.138), whose factory settings are
+// 0.00 and 60.00 Hz (p.83): at 4 poles 1800 rpm is 60 Hz, the 2710 hex (100.00 %) of the p.141
+// function 10 example; a device whose drive has other limits says so in its options.
+TEST(EatonMMax, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
+  const TimePoint now = TimePoint{} + 10s;
+  const auto fc06 = [](std::uint16_t raw) {
+    return encode(Framing::rtu, kMmxSlave,
+                  std::vector<std::uint8_t>{0x06, 0x07, 0xD2, static_cast<std::uint8_t>(raw >> 8),
+                                            static_cast<std::uint8_t>(raw & 0xFF)});
+  };
+  const auto driver_with = [](const std::vector<std::pair<std::string, double>>& set) {
+    Profile p = shipped_profile("eaton-m-max");
+    Options o;
+    for (const auto& [k, v] : set) o.set(k, v);
+    std::string error;
+    EXPECT_TRUE(apply_options(p, o, error)) << error;
+    return ModbusDriver(kMmxSlave, p, Timing{3, 3000ms, character_time(9600, Parity::none, 8, 2)},
+                        500ms);
+  };
+  const auto frame_for = [&](ModbusDriver d, std::int32_t rpm) {
+    EXPECT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
+    return d.next_exchange(now)->frame;
+  };
+  const auto refused = [&](ModbusDriver d, std::int32_t rpm) {
+    const WriteOp op = WriteOp::of_setpoint(rpm);
+    EXPECT_EQ(d.apply(op, 1, now), WriteStatus::invalid_value) << rpm;
+    return d.next_exchange(now)->frame[1] != 0x06;  // a poll follows, not a write
+  };
+  // The factory span 0 - 60 Hz.
+  EXPECT_EQ(frame_for(driver_with({}), 1800), fc06(10000));
+  EXPECT_EQ(frame_for(driver_with({}), 1800),
+            hex({0x05, 0x06, 0x07, 0xD2, 0x27, 0x10, 0x33, 0x3F}));
+  EXPECT_EQ(frame_for(driver_with({}), 900), fc06(5000));
+  EXPECT_EQ(frame_for(driver_with({}), 0), fc06(0));
+  EXPECT_TRUE(refused(driver_with({}), 1801));
+  // A drive set to 10 - 50 Hz: 300 rpm is the minimum (raw 0), 900 rpm is half the span.
+  const std::vector<std::pair<std::string, double>> span = {{"min_frequency_hz", 10},
+                                                            {"max_frequency_hz", 50}};
+  EXPECT_EQ(frame_for(driver_with(span), 300), fc06(0));
+  EXPECT_EQ(frame_for(driver_with(span), 900), fc06(5000));
+  EXPECT_EQ(frame_for(driver_with(span), 1500), fc06(10000));
+  EXPECT_TRUE(refused(driver_with(span), 200));
+  EXPECT_TRUE(refused(driver_with(span), 1501));
 }
 
 TEST(EatonMMax, TheManualsReadsAddressTheProfilesSpeedAndCurrent) {
@@ -194,7 +243,8 @@ TEST(EatonMMax, ItsDriverReadsTheOutputProcessDataIntoTheCommonBlock) {
   };
   EXPECT_DOUBLE_EQ(value("motor_current"), 0.24);
   EXPECT_DOUBLE_EQ(value("motor_frequency"), 49.83);
-  EXPECT_DOUBLE_EQ(value("speed_setpoint"), 100.0);
+  // ID 2003 = 10000 (100.00 %) is the factory maximum frequency, 60 Hz (p.83): 1800 rpm at 4 poles.
+  EXPECT_EQ(d.common().setpoint_rpm, 1800);
   // A trip: status bit 3 (FAULT), RUN clear; the error code stays raw (the list is not mapped).
   now += 500ms;
   ASSERT_EQ(sent(), encode(Framing::rtu, kMmxSlave, read_pdu(0x04, 2100, 11)));
@@ -241,9 +291,48 @@ TEST(EatonMMax, StopAndResetAreTheControlWordsBits) {
   EXPECT_EQ(
       d.next_exchange(now)->frame,
       encode(Framing::rtu, kMmxSlave, std::vector<std::uint8_t>{0x06, 0x07, 0xD0, 0x00, 0x04}));
-  // No rpm setpoint: ID 2003 is a percentage, written as the point speed_setpoint.
+  // The rpm setpoint is ID 2003 within P6.3 - P6.4: 1500 rpm (50 Hz) is in the factory span of
+  // 0 - 60 Hz, 1900 rpm (63.3 Hz) beyond it.
   const WriteOp setpoint = WriteOp::of_setpoint(1500);
-  EXPECT_EQ(d.check(std::span(&setpoint, 1)), WriteCheck::invalid_value);
+  EXPECT_EQ(d.check(std::span(&setpoint, 1)), WriteCheck::ok);
+  const WriteOp beyond = WriteOp::of_setpoint(1900);
+  EXPECT_EQ(d.check(std::span(&beyond, 1)), WriteCheck::invalid_value);
+}
+
+// --- Vacon 100 (DPD00156C and its FBFixed appendix) ---
+
+// FB Speed Reference 2003 (wire 2002) is 0..10000 of the span from the minimum to the maximum
+// frequency (appendix 8.4.10): with the drive's minimum at 10 Hz, 300 rpm (10 Hz at 4 poles) is
+// raw 0 and 900 rpm raw 5000, not the 3000 a span starting at 0 Hz would give.
+TEST(Vacon100, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
+  constexpr std::uint8_t kSlave = 1;
+  const TimePoint now = TimePoint{} + 10s;
+  const auto frame_for = [&](const std::vector<std::pair<std::string, double>>& set,
+                             std::int32_t rpm) {
+    Profile p = shipped_profile("vacon-100");
+    Options o;
+    for (const auto& [k, v] : set) o.set(k, v);
+    std::string error;
+    EXPECT_TRUE(apply_options(p, o, error)) << error;
+    ModbusDriver d(kSlave, p, Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+    const WriteOp op = WriteOp::of_setpoint(rpm);
+    EXPECT_EQ(d.apply(op, 1, now), WriteStatus::pending) << rpm;
+    return d.next_exchange(now)->frame;
+  };
+  const auto fc06 = [](std::uint16_t raw) {
+    return encode(Framing::rtu, kSlave,
+                  std::vector<std::uint8_t>{0x06, 0x07, 0xD2, static_cast<std::uint8_t>(raw >> 8),
+                                            static_cast<std::uint8_t>(raw & 0xFF)});
+  };
+  const std::vector<std::pair<std::string, double>> span = {{"min_frequency_hz", 10},
+                                                            {"max_frequency_hz", 50}};
+  EXPECT_EQ(frame_for(span, 300), fc06(0));
+  EXPECT_EQ(frame_for(span, 900), fc06(5000));
+  EXPECT_EQ(frame_for(span, 900), hex({0x01, 0x06, 0x07, 0xD2, 0x13, 0x88, 0x25, 0xD1}));
+  EXPECT_EQ(frame_for(span, 1500), fc06(10000));
+  // The defaults (0 - 50 Hz): 1500 rpm is the whole span.
+  EXPECT_EQ(frame_for({}, 1500), fc06(10000));
+  EXPECT_EQ(frame_for({}, 750), fc06(5000));
 }
 
 // --- ED3100 answering in the standard form ---

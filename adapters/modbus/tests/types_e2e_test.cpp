@@ -10,6 +10,9 @@
 
 #include "e2e.h"
 #include "http_get.h"
+#include "mosquitto.h"
+#include "mqtt_e2e.h"
+#include "sparkplug_peer.h"
 
 namespace drivegate::test {
 namespace {
@@ -178,5 +181,67 @@ TEST(ModbusTypesE2E, APlcReadsTheDevicesExactBitsAndEverySurfaceShowsTheLabels) 
   EXPECT_EQ(daemon.stop(), 0);
 }
 
+// A string point where the native adapters' points go: the status JSON (a JSON string, escaped),
+// /metrics (an info gauge, its text a label) and the Sparkplug DBIRTH and DDATA (a String metric,
+// decoded by Eclipse Tahu's decoder), while a PLC reads the string's registers in the device block.
+TEST(ModbusTypesE2E, AStringPointReachesTheJsonMetricsAndSparkplug) {
+  if (const auto why = missing_dependency()) GTEST_SKIP() << *why;
+  TempDir dir;
+  const auto profile = dir / "types-e2e.toml";
+  std::ofstream(profile) << kProfile;
+  Sim sim("modbus", dir / "tty-a", {"--set", "profile=" + profile.string(), "--address", "1"});
+  // '"', 'A', '\', a line feed, UTF-8's e-acute (C3 A9), ' ', '!', ' ': the slave's bytes.
+  ASSERT_TRUE(ok(sim.control("raw holding 20 0x2241 0x5C0A 0xC3A9 0x2021")));
+  Broker broker(dir);
+  SparkplugPeer::Options po;
+  po.stderr_file = dir / "peer.log";
+  SparkplugPeer peer(broker.port(), po);
+  const int http_port = free_port();
+  Daemon daemon(dir,
+                config((dir / "tty-a").string(), profile.string(), http_port) +
+                    "\n[mqtt]\nbroker = \"" + broker.url() + "\"\ngroup_id = \"" + kGroup +
+                    "\"\nedge_node_id = \"" + kEdge + "\"\n",
+                {}, dir / "drivegated.log");
+  Plc plc(daemon.port(), 1);
+  ASSERT_TRUE(plc.connect());
+  ASSERT_TRUE(
+      eventually([&] { return (plc.input(reg::status, 1).regs.at(0) & reg::online) != 0; }, 10s))
+      << slurp(dir / "drivegated.log");
+  // The text the adapter reads: the bytes that are no printable ASCII as '?', the trailing space
+  // dropped; the PLC reads it NUL-padded, two characters a register (holding 16-19).
+  const std::string shown = "\"A\\??? !";
+  EXPECT_EQ(plc.holding(16, 4).regs, (W{0x2241, 0x5C3F, 0x3F3F, 0x2021}));
+  EXPECT_THAT(http_get(http_port, "/api/v1/status").body,
+              HasSubstr(R"({"name": "serial", "value": "\"A\\??? !", "unit": ""})"));
+  EXPECT_THAT(http_get(http_port, "/metrics").body,
+              HasSubstr(R"(drivegate_device_point_info{device="meter",adapter="modbus",unit="1",)"
+                        R"(bus="line-a",point="serial",value="\"A\\??? !"} 1)"));
+  const auto birth = peer.wait_for_type("DBIRTH", 10s, "meter");
+  ASSERT_TRUE(birth) << describe(peer.history());
+  ASSERT_NE(birth->metric("serial"), nullptr) << describe(*birth);
+  EXPECT_EQ(birth->metric("serial")->type, "String");
+  if (birth->metric("serial")->value != shown) {
+    // Born before the first read of it: the text follows in a DDATA.
+    EXPECT_TRUE(peer.wait_for(
+        [&](const Message& m) {
+          const Metric* serial = m.metric("serial");
+          return m.message_type() == "DDATA" && serial != nullptr && serial->value == shown;
+        },
+        10s))
+        << describe(peer.history());
+  }
+  // A new text goes out in a DDATA.
+  ASSERT_TRUE(ok(sim.control("set serial SN-0042")));
+  const auto data = peer.wait_for(
+      [](const Message& m) {
+        const Metric* serial = m.metric("serial");
+        return m.message_type() == "DDATA" && serial != nullptr && serial->value == "SN-0042";
+      },
+      10s);
+  ASSERT_TRUE(data) << describe(peer.history());
+  EXPECT_EQ(data->metric("serial")->type, "String");
+  EXPECT_EQ(plc.holding(16, 4).regs, (W{0x534E, 0x2D30, 0x3034, 0x3200}));
+  EXPECT_EQ(daemon.stop(), 0);
+}
 }  // namespace
 }  // namespace drivegate::test

@@ -1,0 +1,233 @@
+// A reload while a command's sequence is on the line (ABB Drives' 0x047E then 0x047F): the real
+// modbus driver in devices the gateway builds and replaces, driven through their Station calls
+// (as the bus engine calls them) on a time the test sets, the slave's echoes given by hand. The
+// bus rig runs one gateway and cannot reload; the gateway's reload is hold_for_reload(), then the
+// held writes settle, then adopt() and the old gateway's stop(), as the daemon does.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
+#include <unistd.h>
+
+#include <boost/asio/io_context.hpp>
+#include <filesystem>
+#include <fstream>
+
+#include "adapter_under_test.h"
+#include "bus/station.h"
+#include "gateway/gateway.h"
+#include "plugin/adapter_options.h"
+#include "profile_support.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::ElementsAre;
+
+constexpr std::uint8_t kSlave = 7;
+
+// ABB Drives-like: a run passes through 0x047E (ready to operate) before 0x047F (operating); the
+// stop is 0x047E.
+constexpr const char* kProfile = R"toml(
+[profile]
+name = "seq-drive"
+source = "a test"
+[options.motor_poles]
+default = 4
+min = 2
+max = 48
+description = "motor poles"
+[[point]]
+name = "control_word"
+table = "holding"
+address = 0
+type = "u16"
+[[point]]
+name = "reference"
+table = "holding"
+address = 1
+type = "u16"
+scale = 0.01
+min = 0
+max = 400
+[[point]]
+name = "status_word"
+table = "holding"
+address = 2
+type = "u16"
+[common]
+setpoint_rpm = { point = "reference", rpm_factor = "120 / motor_poles" }
+running = { point = "status_word", bit = 1 }
+stop = { point = "control_word", value = 0x047E }
+run_forward = { point = "control_word", sequence = [0x047E, 0x047F] }
+)toml";
+
+Bytes fc06(std::uint16_t address, std::uint16_t value) {
+  std::vector<std::uint8_t> pdu = {0x06};
+  put_be16(pdu, address);
+  put_be16(pdu, value);
+  return encode(Framing::rtu, kSlave, pdu);
+}
+
+class ReloadMidSequence : public ::testing::Test {
+ protected:
+  ReloadMidSequence() {
+    dir_ = std::filesystem::temp_directory_path() / ("dg-reload-seq-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir_);
+    profile_ = (dir_ / "seq.toml").string();
+    std::ofstream(profile_) << kProfile;
+    plugins_.add(drivegate_adapter);
+  }
+  ~ReloadMidSequence() override { std::filesystem::remove_all(dir_); }
+
+  Config config(double poles) const {
+    Config c;
+    c.path = "drivegate.toml";
+    BusConfig b;
+    b.name = "a";
+    b.port = "/nonexistent/tty-a";  // never opened: the test is the line
+    b.baud = 19200;                 // the profile's [line]: its default
+    b.parity = Parity::even;
+    c.buses.push_back(b);
+    DeviceConfig d;
+    d.name = "drive";
+    d.bus = "a";
+    d.adapter = "modbus";
+    d.unit_id = 1;
+    d.address = kSlave;
+    Options o = default_options(drivegate_adapter);
+    o.set("profile", profile_);
+    std::string error;
+    const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
+    EXPECT_NE(a, nullptr) << error;
+    d.options = default_options(*a);
+    d.options.set("profile", profile_);
+    d.options.set("motor_poles", poles);
+    c.devices.push_back(d);
+    return c;
+  }
+  std::unique_ptr<Gateway> build(const Config& c) {
+    std::vector<std::string> errors;
+    auto gw = Gateway::build(io_, c, plugins_, log_, errors);
+    EXPECT_TRUE(errors.empty()) << errors.front();
+    return gw;
+  }
+  TimePoint at(Millis ms) const { return t0_ + ms; }
+
+  // Every poll the device sends until it is online is answered: control word 0x047E, reference
+  // 0, status 0 (stopped); each frame sent is kept in sent_.
+  void bring_online(Device& d, Millis ms) {
+    for (int i = 0; i < 10 && !d.online(); ++i) {
+      auto ex = d.next_exchange(at(ms), Turn::poll);
+      if (!ex) {
+        d.on_tick(at(ms));
+        continue;
+      }
+      sent_.push_back(ex->frame);
+      ASSERT_EQ(ex->frame[1], 0x03);
+      const std::uint16_t start = static_cast<std::uint16_t>(ex->frame[2] << 8 | ex->frame[3]);
+      const std::uint16_t count = static_cast<std::uint16_t>(ex->frame[4] << 8 | ex->frame[5]);
+      std::vector<std::uint16_t> words(count, 0);
+      if (start == 0 && count > 0) words[0] = 0x047E;
+      d.link().health.frame_good(at(ms));
+      d.on_receive(encode(Framing::rtu, kSlave, support::words_pdu(0x03, words)), at(ms));
+      d.link().health.data_good(at(ms), at(ms));
+      d.on_tick(at(ms));
+    }
+    ASSERT_TRUE(d.online());
+  }
+  // The device's next write on the line, echoed by the slave; nullopt when it has none.
+  std::optional<Bytes> step(Device& d, Millis ms) {
+    auto ex = d.next_exchange(at(ms), Turn::write);
+    if (!ex) return std::nullopt;
+    sent_.push_back(ex->frame);
+    if (ex->frame[1] == 0x06) {
+      d.on_receive(ex->frame, at(ms));  // the echo: confirmed
+    } else {
+      d.on_no_reply(at(ms));
+    }
+    d.on_tick(at(ms));
+    return ex->frame;
+  }
+  // The writes (FC 06) sent from `from` on.
+  std::vector<Bytes> writes_from(std::size_t from) const {
+    std::vector<Bytes> out;
+    for (std::size_t i = from; i < sent_.size(); ++i) {
+      if (sent_[i][1] == 0x06) out.push_back(sent_[i]);
+    }
+    return out;
+  }
+
+  static inline const Session kPlc{AccessLevel::operate, WordOrder::big};
+  std::filesystem::path dir_;
+  std::string profile_;
+  PluginRegistry plugins_;
+  boost::asio::io_context io_;
+  std::shared_ptr<spdlog::logger> log_ =
+      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>());
+  const TimePoint t0_ = Clock::now();
+  std::vector<Bytes> sent_;
+};
+
+// The profile changed (an option): the old sequence's second step should never reach the slave
+// once the reload is asked for; the client's run answered (never left hanging) and not ok; the
+// new device not starting the motor. Disabled because it FAILS: the held device lets its writes
+// in flight settle (Gateway::hold_for_reload), and for the driver a sequence's steps are one
+// write, so 0x047F is sent during the hold and the run answered ok. Ending a sequence at the step
+// it reached needs the driver to hear of the hold (a Driver call the API does not have yet).
+TEST_F(ReloadMidSequence, DISABLED_AChangedDeviceSendsNoStepOfTheOldSequence) {
+  auto old = build(config(4));
+  Device& d = *old->find("drive");
+  bring_online(d, 0ms);
+  std::vector<Outcome> answers;
+  const std::uint16_t run = 1;  // run_forward
+  ASSERT_EQ(d.write(
+                kPlc, Table::holding, 0, std::span(&run, 1),
+                [&](Outcome o) { answers.push_back(o); }, at(10ms)),
+            Outcome::ok);
+  const std::size_t mark = sent_.size();
+  ASSERT_EQ(step(d, 10ms), fc06(0, 0x047E));  // the first step, confirmed
+  EXPECT_TRUE(answers.empty());
+
+  auto next = build(config(2));  // motor_poles 4 -> 2: the device changed
+  old->hold_for_reload(*next);
+  for (int i = 0; i < 5 && old->held_writes() > 0; ++i) step(d, Millis(20 + 10 * i));
+  next->adopt(*old);
+  old->stop();
+  EXPECT_EQ(answers.size(), 1u);
+  EXPECT_THAT(answers, ::testing::Not(ElementsAre(Outcome::ok)));
+  // The new device: online, and whatever it writes, never the run's last step.
+  Device& fresh = *next->find("drive");
+  EXPECT_NE(&fresh, &d);
+  bring_online(fresh, 100ms);
+  for (int i = 0; i < 5; ++i) step(fresh, Millis(110 + 10 * i));
+  EXPECT_THAT(writes_from(mark), ElementsAre(fc06(0, 0x047E)));
+  EXPECT_FALSE(fresh.state().running);
+}
+
+// The profile unchanged: the device moves to the new gateway as it runs, and its sequence runs on
+// to its end: the run is confirmed.
+TEST_F(ReloadMidSequence, AnUnchangedDeviceRunsItsSequenceOn) {
+  auto old = build(config(4));
+  Device& d = *old->find("drive");
+  bring_online(d, 0ms);
+  std::vector<Outcome> answers;
+  const std::uint16_t run = 1;
+  ASSERT_EQ(d.write(
+                kPlc, Table::holding, 0, std::span(&run, 1),
+                [&](Outcome o) { answers.push_back(o); }, at(10ms)),
+            Outcome::ok);
+  const std::size_t mark = sent_.size();
+  ASSERT_EQ(step(d, 10ms), fc06(0, 0x047E));
+  auto next = build(config(4));
+  EXPECT_EQ(old->hold_for_reload(*next), Millis(0));  // kept: nothing to wait for
+  next->adopt(*old);
+  old->stop();
+  EXPECT_EQ(next->find("drive"), &d);
+  EXPECT_EQ(step(d, 20ms), fc06(0, 0x047F));
+  EXPECT_THAT(answers, ElementsAre(Outcome::ok));
+  EXPECT_THAT(writes_from(mark), ElementsAre(fc06(0, 0x047E), fc06(0, 0x047F)));
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device
