@@ -6,7 +6,8 @@
 // output frequency monitor in 0.01 Hz). NORD BU 0050 GB-3111: 1.6.3 p.46 (a 50 % setpoint is
 // 2000 hex), 1.5.3.7 p.36 (actual value 1 = actual frequency, 16384 = 100 %); BU 0050 DE-3111
 // p.32 (100 % = maximum frequency P105). Yaskawa V1000 Technical Manual SIEP C710606 16C, C.9
-// p.417 (60.00 Hz written as 1770H).
+// p.417 (60.00 Hz written as 1770H). Hitachi SJ series P1 User's Guide 14.4.8 p.14-18 (FA-01 and
+// dA-01 at 50.00 Hz = 0000 1388h, register address = register number - 1).
 #include <gtest/gtest.h>
 
 #include "driver.h"
@@ -113,6 +114,34 @@ TEST(YaskawaV1000Rpm, An1800RpmSetpointWritesTheManuals1770H) {
                                   0x6D, 0xB7}),
                            TimePoint{}),
             Bytes({0x01, 0x10, 0x00, 0x01, 0x00, 0x02, 0x10, 0x08}));
+}
+
+// --- Hitachi SJ-P1 ---
+
+TEST(HitachiSjP1Rpm, A1500RpmSetpointWritesTheManuals50HzToFa01) {
+  ModbusDriver d = driver_of("hitachi-sj-p1", 1);
+  // p.14-18: 50.00 Hz is written to FA-01 as 0000 1388h at register address 2AF8h (register
+  // 2AF9h - 1), two registers, high word first; 1500 rpm is 50 Hz at 4 poles. The manual's frame
+  // is FC 17h; the profile writes the same two registers with FC 10h.
+  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+            encode(Framing::rtu, 1,
+                   std::vector<std::uint8_t>{0x10, 0x2A, 0xF8, 0x00, 0x02, 0x04, 0x00, 0x00, 0x13,
+                                             0x88}));
+}
+
+TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
+  ModbusDriver d = driver_of("hitachi-sj-p1", 1);
+  ModbusSimulator sim(1, shipped_profile("hitachi-sj-p1"));
+  // p.14-18's reply: dA-01 (registers 2711h/2712h) = 0000 1388h = 50.00 Hz: 1500 rpm at 4 poles.
+  ASSERT_EQ(sim.control("set output_frequency 50", TimePoint{}).rfind("ok", 0), 0u);
+  TimePoint now = TimePoint{} + 10s;
+  poll_against(d, sim, now);
+  EXPECT_EQ(d.common().speed_rpm, 1500);
+  // The driver asks dA-01 at the register address the manual sends: 2710h, two registers.
+  const Bytes read =
+      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x27, 0x10, 0x00, 0x02});
+  EXPECT_EQ(sim.on_receive(read, now),
+            encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x04, 0x00, 0x00, 0x13, 0x88}));
 }
 
 }  // namespace
