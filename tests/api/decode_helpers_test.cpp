@@ -30,7 +30,9 @@ TEST(TakeDecoded, TakesEachAnswerAndDropsWhatItCoversUntilIncomplete) {
   std::vector<DecodeStatus> seen;
   while (const auto d = take_decoded(rx, [](ByteView b) { return decode(b); })) {
     seen.push_back(d->status);
-    if (d->status == DecodeStatus::frame) EXPECT_EQ(d->frame, 0x1234);
+    if (d->status == DecodeStatus::frame) {
+      EXPECT_EQ(d->frame, 0x1234);
+    }
   }
   EXPECT_EQ(seen,
             (std::vector<DecodeStatus>{DecodeStatus::bad, DecodeStatus::frame, DecodeStatus::bad}));
@@ -97,8 +99,12 @@ TEST(FindFlagged, TheFrameBetweenTheFlagsOrWhatIsBadBeforeAndAroundThem) {
     const Decoded<std::size_t> d = find_flagged(c.rx, 0x7E, 0x7F, 6);
     EXPECT_EQ(d.status, c.status);
     EXPECT_EQ(d.consumed, c.consumed);
-    if (c.status == DecodeStatus::bad) EXPECT_EQ(d.error, c.error);
-    if (c.status == DecodeStatus::frame) EXPECT_EQ(d.frame, c.end);
+    if (c.status == DecodeStatus::bad) {
+      EXPECT_EQ(d.error, c.error);
+    }
+    if (c.status == DecodeStatus::frame) {
+      EXPECT_EQ(d.frame, c.end);
+    }
     const Decoded<Bytes> as = not_a_frame<Bytes>(d);
     if (c.status != DecodeStatus::frame) {
       EXPECT_EQ(as.status, d.status);
