@@ -25,22 +25,25 @@ std::vector<std::uint16_t> words_at(ByteView rx, std::size_t offset, std::size_t
   return out;
 }
 
-}  // namespace
-
-Bytes encode_read(std::uint8_t address, std::uint16_t reg, std::uint16_t count) {
-  Bytes out{address, kFnRead};
+// addr fn reg(2) word(2) CRC(2): a 03 or 06 request, a 06 echo, a 10 reply (document, "Ask
+// frame", "Response frame").
+Bytes fixed_frame(std::uint8_t address, std::uint8_t function, std::uint16_t reg,
+                  std::uint16_t word) {
+  Bytes out{address, function};
   put_be16(out, reg);
-  put_be16(out, count);
+  put_be16(out, word);
   append_crc16_modbus(out);
   return out;
 }
 
+}  // namespace
+
+Bytes encode_read(std::uint8_t address, std::uint16_t reg, std::uint16_t count) {
+  return fixed_frame(address, kFnRead, reg, count);
+}
+
 Bytes encode_write_single(std::uint8_t address, std::uint16_t reg, std::uint16_t value) {
-  Bytes out{address, kFnWriteSingle};
-  put_be16(out, reg);
-  put_be16(out, value);
-  append_crc16_modbus(out);
-  return out;
+  return fixed_frame(address, kFnWriteSingle, reg, value);
 }
 
 Bytes encode_write_multiple(std::uint8_t address, std::uint16_t reg,
@@ -70,11 +73,7 @@ Bytes encode_read_reply(std::uint8_t address, std::uint16_t reg,
 
 Bytes encode_write_multiple_reply(std::uint8_t address, std::uint16_t reg, std::uint16_t count) {
   // "respond frame only return the first six bytes of the asking frame" (document, "10H").
-  Bytes out{address, kFnWriteMultiple};
-  put_be16(out, reg);
-  put_be16(out, count);
-  append_crc16_modbus(out);
-  return out;
+  return fixed_frame(address, kFnWriteMultiple, reg, count);
 }
 
 Bytes encode_exception(std::uint8_t address, std::uint8_t function, std::uint8_t code) {
@@ -166,7 +165,8 @@ Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
     return decoded_frame(standard, std::move(r));
   }
   if (rx.size() < document) return {};
-  if (!crc16_modbus_holds(rx.first(document))) return decoded_bad<Reply>(document, FrameError::bad_checksum);
+  if (!crc16_modbus_holds(rx.first(document)))
+    return decoded_bad<Reply>(document, FrameError::bad_checksum);
   Reply r;
   r.address = rx[0];
   r.function = kFnRead;

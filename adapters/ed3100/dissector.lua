@@ -1,14 +1,9 @@
 -- ed3100: ED3100 variable-frequency drive, Modbus RTU with quirks (specs 001; README "ed3100").
 -- address, function, fields, CRC-16 (init FFFF, poly A001, low byte first). Its 03 reply echoes
 -- the 2-byte register address instead of a byte count; the standard form is accepted too.
-local drivegate = _G.drivegate or { loaded = {} }
-_G.drivegate = drivegate
-if drivegate.loaded["ed3100"] then return end
-drivegate.loaded["ed3100"] = true
-
-local bxor = (bit32 and bit32.bxor) or bit.bxor
-local band = (bit32 and bit32.band) or bit.band
-local rshift = (bit32 and bit32.rshift) or bit.rshift
+local drivegate = _G.drivegate
+if not drivegate.first_load("ed3100") then return end
+local band = drivegate.band
 
 local p = Proto("ed3100", "ED3100 drive Modbus RTU (drivegate ed3100)")
 
@@ -37,41 +32,16 @@ local f = {
 }
 p.fields = { f.address, f.func, f.exception_flag, f.register, f.count, f.byte_count, f.value,
              f.command, f.word, f.exception_code, f.data, f.crc, f.crc_status }
-local e_bad = ProtoExpert.new("ed3100.crc.bad", "Bad CRC", expert.group.CHECKSUM,
-                              expert.severity.ERROR)
-local e_len = ProtoExpert.new("ed3100.length", "Unexpected frame length", expert.group.PROTOCOL,
-                              expert.severity.WARN)
-p.experts = { e_bad, e_len }
-
-local function crc16(tvb, len)
-  local crc = 0xFFFF
-  for i = 0, len - 1 do
-    crc = bxor(crc, tvb(i, 1):uint())
-    for _ = 1, 8 do
-      if band(crc, 1) ~= 0 then crc = bxor(rshift(crc, 1), 0xA001) else crc = rshift(crc, 1) end
-    end
-  end
-  return crc
-end
+local e_bad, e_len = drivegate.experts(p, "ed3100.crc.bad", "Bad CRC",
+                                       "ed3100.length", "Unexpected frame length")
 
 local function words(t, tvb, from, to)
-  local i = from
-  while i + 1 < to do
-    t:add(f.word, tvb(i, 2))
-    i = i + 2
-  end
-  if i < to then t:add(f.data, tvb(i, to - i)) end
+  drivegate.words(t, tvb, from, to, f.word, f.data)
 end
 
 function p.dissector(tvb, pinfo, tree)
-  local len = tvb:len()
-  pinfo.cols.protocol = "ED3100"
-  local t = tree:add(p, tvb())
-  if len < 4 then
-    t:add(f.data, tvb())
-    t:add_proto_expert_info(e_len)
-    return len
-  end
+  local t, len = drivegate.frame_tree(p, "ED3100", tvb, pinfo, tree, 4, f.data, e_len)
+  if not t then return len end
   local to_drive = pinfo.p2p_dir == 0
   t:add(f.address, tvb(0, 1))
   local ft = t:add(f.func, tvb(1, 1))
@@ -127,9 +97,7 @@ function p.dissector(tvb, pinfo, tree)
     t:add(f.data, tvb(2, body - 2))
   end
   pinfo.cols.info = (tvb(0, 1):uint() == 0 and "Broadcast " or "") .. info
-  -- CRC sent low byte first.
-  drivegate.add_checksum(t, pinfo, f.crc, f.crc_status, e_bad, tvb(len - 2, 2),
-                         crc16(tvb, len - 2), true)
+  drivegate.add_crc16_modbus(t, pinfo, f.crc, f.crc_status, e_bad, tvb, len)
   return len
 end
 

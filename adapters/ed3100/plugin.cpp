@@ -28,7 +28,6 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 }  // namespace drivegate::ed3100
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .api_version = drivegate::kAdapterApiVersion,
     .id = "ed3100",
     .summary = "ED3100 variable-frequency drive, Modbus RTU with its 03 reply quirk",
     .options = drivegate::ed3100::kOptionSchema.data(),
@@ -44,11 +43,9 @@ extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivega
     .address_min = 0,
     .address_max = 31,
     .default_address = 1,
-    .streaming = false,  // document, "communication protocol": the drive only ever answers
+    // Not streaming: document, "communication protocol": the drive only ever answers.
     .create_driver = &drivegate::ed3100::create_driver,
     .create_simulator = &drivegate::ed3100::create_simulator,
     // Default options; a typical running speed, 50 Hz at the default 4 poles.
-    .demo = {.options = nullptr, .option_count = 0, .running_rpm = 1500},
-    .actions = nullptr,  // no maintenance actions
-    .action_count = 0,
+    .demo = {.running_rpm = 1500},
 };

@@ -2,6 +2,7 @@
 
 #include <vector>
 
+#include "drivegate/sim_rx.h"
 #include "registers.h"
 
 namespace drivegate::ed3100 {
@@ -60,15 +61,12 @@ Bytes Ed3100Simulator::on_receive(ByteView rx, TimePoint now) {
   last_rx_ = now;
   rx_.insert(rx_.end(), rx.begin(), rx.end());
   Bytes out;
-  while (!rx_.empty()) {
-    const Decoded<Request> d = decode_request(rx_);
-    if (d.status == DecodeStatus::incomplete) break;
-    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(d.consumed));
-    if (d.status == DecodeStatus::bad) continue;  // a drive ignores a frame it cannot check
-    if (d.frame.address != address_ && d.frame.address != kBroadcast) continue;
+  while (const auto d = take_decoded(rx_, [](ByteView b) { return decode_request(b); })) {
+    if (d->status == DecodeStatus::bad) continue;  // a drive ignores a frame it cannot check
+    if (d->frame.address != address_ && d->frame.address != kBroadcast) continue;
     if (silent_) continue;
-    Bytes reply = handle(d.frame);
-    if (d.frame.address == kBroadcast) continue;  // document, "00H: ... not respond"
+    Bytes reply = handle(d->frame);
+    if (d->frame.address == kBroadcast) continue;  // document, "00H: ... not respond"
     const Bytes sent = finish(std::move(reply));
     out.insert(out.end(), sent.begin(), sent.end());
   }

@@ -24,8 +24,7 @@ namespace drivegate::fdc1 {
 // separate RxD (pin 1) and TxD (pin 6): no echo of the master's own bytes.
 inline constexpr LineDefaults kLine{1200, Parity::none, 8, 1, false};
 // One character on that line (8.33 ms): an 8-byte frame takes 67 ms, a 22-byte one 183 ms.
-inline constexpr std::chrono::nanoseconds kCharacterTime =
-    character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits);
+inline constexpr std::chrono::nanoseconds kCharacterTime = character_time(kLine);
 
 // The protocol's timing (constants only: the codec itself keeps no time).
 // OUTPUT: "Every 0'5 s, one of these ... sequences is sent".

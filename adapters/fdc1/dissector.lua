@@ -5,12 +5,9 @@
 --   programming (master, 22 bytes): 72 80 b3..b20 co ce (the same XOR pair over bytes 1..20);
 --     echoed by the controller with bytes 1..2 replaced by 27 80
 --   speed programming (master, 8 bytes): 72 115 minH minL maxH maxL 85 x, x = b1^..^b7
-local drivegate = _G.drivegate or { loaded = {} }
-_G.drivegate = drivegate
-if drivegate.loaded["fdc1"] then return end
-drivegate.loaded["fdc1"] = true
-
-local bxor = (bit32 and bit32.bxor) or bit.bxor
+local drivegate = _G.drivegate
+if not drivegate.first_load("fdc1") then return end
+local bxor = drivegate.bxor
 
 local p = Proto("fdc1", "FDC1 compressor controller (drivegate fdc1)")
 
@@ -46,11 +43,8 @@ local f = {
 p.fields = { f.header, f.b3, f.rpm, f.alarm, f.current, f.restart, f.min_rpm, f.max_rpm, f.fixed,
              f.reserved, f.mode, f.level, f.data, f.checksum_odd, f.checksum_even, f.checksum,
              f.checksum_status }
-local e_bad = ProtoExpert.new("fdc1.checksum.bad", "Bad checksum", expert.group.CHECKSUM,
-                              expert.severity.ERROR)
-local e_unknown = ProtoExpert.new("fdc1.unknown", "Not an FDC1 frame", expert.group.PROTOCOL,
-                                  expert.severity.WARN)
-p.experts = { e_bad, e_unknown }
+local e_bad, e_unknown = drivegate.experts(p, "fdc1.checksum.bad", "Bad checksum",
+                                           "fdc1.unknown", "Not an FDC1 frame")
 
 -- XOR of the odd-numbered and of the even-numbered (1-based) bytes of tvb[0, n).
 local function xor_pair(tvb, n, first0, first1)

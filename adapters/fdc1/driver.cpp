@@ -27,14 +27,7 @@ DriverTraits Fdc1Driver::traits() const {
 
 RxVerdict Fdc1Driver::on_receive(ByteView rx, TimePoint now) {
   const auto d = decode_device(rx);
-  switch (d.status) {
-    case DecodeStatus::incomplete:
-      return {RxKind::incomplete, 0};
-    case DecodeStatus::bad:
-      return damaged(d);
-    case DecodeStatus::frame:
-      break;
-  }
+  if (const auto v = unless_frame(d)) return *v;
   expire(now);
   if (const auto* echo = std::get_if<Echo>(&d.frame)) return on_echo(*echo, d.consumed);
   on_status(std::get<Status>(d.frame), now);

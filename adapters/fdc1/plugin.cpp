@@ -42,16 +42,12 @@ constexpr MaintenanceAction kActions[] = {{
 }  // namespace drivegate::fdc1
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .api_version = drivegate::kAdapterApiVersion,
     .id = "fdc1",
     .summary = "FDC1 12-42 V DC compressor controller, protocol v2 (streaming)",
     .options = drivegate::fdc1::kOptionSchema.data(),
     .option_count = drivegate::fdc1::kOptionSchema.size(),
     .line = drivegate::fdc1::kLine,
-    // The protocol has no address: one controller per line.
-    .address_min = 0,
-    .address_max = 0,
-    .default_address = 0,
+    // The protocol has no address (the default range): one controller per line.
     .streaming = true,  // OUTPUT: transmits every 0.5 s unasked
     .create_driver = &drivegate::fdc1::create_driver,
     .create_simulator = &drivegate::fdc1::create_simulator,

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "drivegate/sim_rx.h"
 #include "drivegate/sim_text.h"
 #include "faults.h"
 #include "program.h"
@@ -34,19 +35,16 @@ Bytes Fdc1Simulator::on_receive(ByteView rx, TimePoint now) {
   if (rx_.empty()) rx_since_ = now;
   rx_.insert(rx_.end(), rx.begin(), rx.end());
   Bytes out;
-  while (!rx_.empty()) {
-    const auto d = decode_master(rx_);
-    if (d.status == DecodeStatus::incomplete) break;
-    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(std::max<std::size_t>(1, d.consumed)));
+  while (const auto d = take_decoded(rx_, [](ByteView b) { return decode_master(b); })) {
     rx_since_ = now;
-    if (d.status == DecodeStatus::bad) {
+    if (d->status == DecodeStatus::bad) {
       ++rejected_;  // INPUT: bad checksums are ignored by the device
       continue;
     }
-    if (const auto* s = std::get_if<Speed>(&d.frame)) {
+    if (const auto* s = std::get_if<Speed>(&d->frame)) {
       handle(*s, now);
     } else {
-      const Bytes echo = handle(std::get<Program>(d.frame));
+      const Bytes echo = handle(std::get<Program>(d->frame));
       out.insert(out.end(), echo.begin(), echo.end());
     }
   }

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <limits>
 
+#include "drivegate/flagged.h"
+
 namespace drivegate::framed {
 namespace {
 
@@ -393,21 +395,12 @@ bool Codec::unstuff(ByteView wire, Bytes& body, FrameError& error) const {
 
 Decoded<Frame> Codec::decode_flagged(Direction dir, ByteView rx) const {
   const std::uint8_t start = *d_.framing.start;
-  const std::uint8_t end_flag = d_.framing.end.value_or(start);
-  if (rx[0] != start) {
-    std::size_t n = 1;
-    while (n < rx.size() && rx[n] != start) ++n;
-    return decoded_bad<Frame>(n, FrameError::bad_header);
-  }
-  std::size_t end = 1;
-  while (end < rx.size() && rx[end] != end_flag) ++end;
-  if (end == rx.size()) {
-    // No end flag yet. Past the longest frame the start flag was not one: drop it.
-    if (rx.size() > d_.framing.max_frame) return decoded_bad<Frame>(1, FrameError::bad_length);
-    return {};
-  }
-  // Two flags in a row: an end and the next start. Drop the first; the second opens a frame.
-  if (end == 1) return decoded_bad<Frame>(1, FrameError::bad_length);
+  // Past the longest frame with no end flag the start flag was not one; two flags in a row are an
+  // end and the next start.
+  const Decoded<std::size_t> at =
+      find_flagged(rx, start, d_.framing.end.value_or(start), d_.framing.max_frame);
+  if (at.status != DecodeStatus::frame) return not_a_frame<Frame>(at);
+  const std::size_t end = at.frame;
   // The frame's bytes live here until the next decode on this thread (Frame::bytes).
   thread_local Bytes body;
   FrameError error = FrameError::ok;

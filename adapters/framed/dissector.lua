@@ -6,17 +6,10 @@
 -- its direction whose size and constants it fits (unstuffed between the flags, where the framing
 -- stuffs); each field is shown by its name, each check verified into
 -- framed_NAME.checksum.status (1 Good, 0 Bad, with an expert error on a mismatch).
-local drivegate = _G.drivegate or { loaded = {} }
-_G.drivegate = drivegate
-drivegate.loaded = drivegate.loaded or {}
-if drivegate.loaded["framed"] then return end
-drivegate.loaded["framed"] = true
-
-local band = (bit32 and bit32.band) or bit.band
-local bor = (bit32 and bit32.bor) or bit.bor
-local bxor = (bit32 and bit32.bxor) or bit.bxor
-local lshift = (bit32 and bit32.lshift) or bit.lshift
-local rshift = (bit32 and bit32.rshift) or bit.rshift
+local drivegate = _G.drivegate
+if not drivegate.first_load("framed") then return end
+local band, bor, bxor = drivegate.band, drivegate.bor, drivegate.bxor
+local lshift, rshift = drivegate.lshift, drivegate.rshift
 
 local function reflect(v, bits)
   local r = 0

@@ -34,9 +34,7 @@ FramedDriver::FramedDriver(std::shared_ptr<const Description> d, const DeviceEnv
   traits_.inter_frame_gap = ms_of(t.gap_ms.num(s), 0, 10'000);
   // The gateway's backstop comes after the driver's own deadline, so that the driver decides.
   traits_.write_timeout = std::max(kWriteTimeoutFloor, confirm_ + Millis(500));
-  char_time_ = env.char_time.count() > 0 ? env.char_time
-                                         : character_time(d_->line.baud, d_->line.parity,
-                                                          d_->line.data_bits, d_->line.stop_bits);
+  char_time_ = env.char_time.count() > 0 ? env.char_time : character_time(d_->line);
   for (const Point& p : d_->points) points_.push_back(p.spec);
   values_.resize(points_.size());
   sent_.assign(d_->field_names.size(), 0.0);
@@ -156,8 +154,7 @@ bool FramedDriver::answers(const Message& reply, const Frame& f) const {
 RxVerdict FramedDriver::on_receive(ByteView rx, TimePoint now) {
   writes_.expire(now);
   const Decoded<Frame> d = codec_.decode(Direction::reply, rx);
-  if (d.status == DecodeStatus::incomplete) return {RxKind::incomplete, 0};
-  if (d.status == DecodeStatus::bad) return damaged(d);
+  if (const auto v = unless_frame(d)) return *v;
   const Message& m = d_->messages[d.frame.message];
   if (m.nack) return {RxKind::nack, d.consumed};  // the engine resends
   const bool awaited = answers(m, d.frame);

@@ -52,7 +52,6 @@ constexpr OptionSetting kDemoOptions[] = {{"protocol", "nidec-washer"}};
 }  // namespace drivegate::framed
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .api_version = drivegate::kAdapterApiVersion,
     .id = "framed",
     .summary = "any serial protocol described in a TOML file (docs/protocols.md)",
     .options = drivegate::framed::kOptionSchema.data(),
@@ -60,16 +59,10 @@ extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivega
     // The description's line, addresses and streaming come with its specialised descriptor; these
     // are only what a device with no usable description would be shown with.
     .line = {9600, drivegate::Parity::none, 8, 1, false},
-    .address_min = 0,
-    .address_max = 0,
-    .default_address = 0,
-    .streaming = false,
     .create_driver = &drivegate::framed::create_driver,
     .create_simulator = &drivegate::framed::create_simulator,
     .demo = {.options = drivegate::framed::kDemoOptions,
              .option_count = std::size(drivegate::framed::kDemoOptions),
              .running_rpm = 800},
-    .actions = nullptr,
-    .action_count = 0,
     .specialise = &drivegate::framed::specialise_device,
 };

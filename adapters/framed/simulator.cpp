@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "drivegate/sim_rx.h"
 #include "drivegate/sim_text.h"
 
 namespace drivegate::framed {
@@ -75,12 +76,10 @@ Bytes FramedSimulator::on_receive(ByteView rx, TimePoint now) {
   if (!rx.empty()) last_byte_ = now;
   rx_.insert(rx_.end(), rx.begin(), rx.end());
   Bytes out;
-  for (;;) {
-    const Decoded<Frame> d = codec_.decode(Direction::request, rx_);
-    if (d.status == DecodeStatus::incomplete) break;
-    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(std::min(d.consumed, rx_.size())));
-    if (d.status == DecodeStatus::bad) {
-      if (d.error == make_error_code(FrameError::bad_checksum) && d_->sim.nack) {
+  const auto decode = [this](ByteView b) { return codec_.decode(Direction::request, b); };
+  while (const auto d = take_decoded(rx_, decode)) {
+    if (d->status == DecodeStatus::bad) {
+      if (d->error == make_error_code(FrameError::bad_checksum) && d_->sim.nack) {
         ++rejected_;
         const Bytes nack = send(*d_->sim.nack, {});
         out.insert(out.end(), nack.begin(), nack.end());
@@ -88,7 +87,7 @@ Bytes FramedSimulator::on_receive(ByteView rx, TimePoint now) {
       continue;
     }
     ++frames_;
-    const Bytes reply = answer(d.frame, now);
+    const Bytes reply = answer(d->frame, now);
     out.insert(out.end(), reply.begin(), reply.end());
   }
   return out;

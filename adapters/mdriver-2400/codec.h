@@ -22,8 +22,7 @@ namespace drivegate::mdriver {
 // (so no echo of our own bytes).
 inline constexpr LineDefaults kLine{2400, Parity::none, 8, 1, false};
 // One character on that line (4.17 ms): the driver's timing choices are counted in these.
-inline constexpr std::chrono::nanoseconds kCharacterTime =
-    character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits);
+inline constexpr std::chrono::nanoseconds kCharacterTime = character_time(kLine);
 
 // Section 2: "checksum (D0~D6 Total 55)": the sum of every byte of the frame is 0x55.
 inline constexpr std::uint8_t kChecksumTotal = 0x55;

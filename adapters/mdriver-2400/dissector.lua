@@ -1,11 +1,8 @@
 -- mdriver-2400: compressor motor driver, 2400 8N1 (specs 002; README "mdriver-2400").
 -- Frame: src dst cmd n data[n+1] cs, n = data length - 1, the sum of ALL bytes including cs is
 -- 0x55 mod 256.
-local drivegate = _G.drivegate or { loaded = {} }
-_G.drivegate = drivegate
-if drivegate.loaded["mdriver-2400"] then return end
-drivegate.loaded["mdriver-2400"] = true
-
+local drivegate = _G.drivegate
+if not drivegate.first_load("mdriver-2400") then return end
 
 local p = Proto("mdriver2400", "Compressor motor driver 2400 (drivegate mdriver-2400)")
 
@@ -35,21 +32,12 @@ local f = {
 }
 p.fields = { f.src, f.dst, f.cmd, f.n, f.data, f.code, f.target, f.change, f.actual, f.reserved,
              f.error, f.ipm, f.info, f.cs, f.cs_status }
-local e_bad = ProtoExpert.new("mdriver2400.checksum.bad", "Bad checksum", expert.group.CHECKSUM,
-                              expert.severity.ERROR)
-local e_len = ProtoExpert.new("mdriver2400.length", "Length byte does not match the frame",
-                              expert.group.PROTOCOL, expert.severity.WARN)
-p.experts = { e_bad, e_len }
+local e_bad, e_len = drivegate.experts(p, "mdriver2400.checksum.bad", "Bad checksum",
+                                       "mdriver2400.length", "Length byte does not match the frame")
 
 function p.dissector(tvb, pinfo, tree)
-  local len = tvb:len()
-  pinfo.cols.protocol = "MDRIVER-2400"
-  local t = tree:add(p, tvb())
-  if len < 6 then
-    t:add(f.data, tvb())
-    t:add_proto_expert_info(e_len)
-    return len
-  end
+  local t, len = drivegate.frame_tree(p, "MDRIVER-2400", tvb, pinfo, tree, 6, f.data, e_len)
+  if not t then return len end
   local to_drive = pinfo.p2p_dir == 0
   t:add(f.src, tvb(0, 1))
   t:add(f.dst, tvb(1, 1))

@@ -81,14 +81,7 @@ TimePoint Mdriver2400Driver::wake_at() const {
 RxVerdict Mdriver2400Driver::on_receive(ByteView rx, TimePoint now) {
   writes_.expire(now);
   const Decoded<Frame> d = decode(rx);
-  switch (d.status) {
-    case DecodeStatus::incomplete:
-      return {RxKind::incomplete, 0};
-    case DecodeStatus::bad:
-      return damaged(d);
-    case DecodeStatus::frame:
-      break;
-  }
+  if (const auto v = unless_frame(d)) return *v;
   const Frame& f = d.frame;
   // Section 2: the driver answers with its own address as source, the master's as destination.
   if (f.src != address_ || f.dst != settings_.master) return {RxKind::foreign, d.consumed};

@@ -29,7 +29,6 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 }  // namespace drivegate::mdriver
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .api_version = drivegate::kAdapterApiVersion,
     .id = "mdriver-2400",
     .summary = "compressor motor driver, sum-0x55 frames (Japanese spec)",
     .options = drivegate::mdriver::kOptionSchema.data(),
@@ -39,11 +38,9 @@ extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivega
     .address_min = 0,
     .address_max = 255,
     .default_address = 0x01,
-    .streaming = false,  // section 2: the driver only ever answers the master
+    // Not streaming: section 2, the driver only ever answers the master.
     .create_driver = &drivegate::mdriver::create_driver,
     .create_simulator = &drivegate::mdriver::create_simulator,
     // Default options; code 0x40 of the conversion table, 1149 rpm.
-    .demo = {.options = nullptr, .option_count = 0, .running_rpm = 1149},
-    .actions = nullptr,  // no maintenance actions
-    .action_count = 0,
+    .demo = {.running_rpm = 1149},
 };

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <vector>
 
+#include "drivegate/sim_rx.h"
 #include "drivegate/sim_text.h"
 #include "faults.h"
 #include "rpm_table.h"
@@ -37,15 +38,12 @@ Bytes Mdriver2400Simulator::on_receive(ByteView rx, TimePoint now) {
   last_rx_ = now;
   buf_.insert(buf_.end(), rx.begin(), rx.end());
   Bytes out;
-  while (!buf_.empty()) {
-    const Decoded<Frame> d = decode(buf_);
-    if (d.status == DecodeStatus::incomplete) break;
-    buf_.erase(buf_.begin(), buf_.begin() + static_cast<long>(d.consumed));
-    if (d.status == DecodeStatus::bad) {
+  while (const auto d = take_decoded(buf_, [](ByteView b) { return decode(b); })) {
+    if (d->status == DecodeStatus::bad) {
       ++ignored_;  // "異常信号": ignored, no return signal
       continue;
     }
-    Bytes reply = handle(d.frame, now);
+    Bytes reply = handle(d->frame, now);
     if (reply.empty() || silent_) continue;
     if (corrupt_ > 0) {
       --corrupt_;

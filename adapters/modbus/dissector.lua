@@ -3,14 +3,9 @@
 -- Protocol V1.1b3, 6.x), CRC-16 (init FFFF, poly A001, low byte first, Serial Line 6.2.2).
 -- ASCII (2.5.2): ':' then address, PDU and LRC as hex characters, CR LF; decoded, then shown as
 -- RTU is. Wireshark's own "modbus" / "mbrtu" names are taken: this protocol is drivegate_modbus.
-local drivegate = _G.drivegate or { loaded = {} }
-_G.drivegate = drivegate
-if drivegate.loaded["modbus"] then return end
-drivegate.loaded["modbus"] = true
-
-local bxor = (bit32 and bit32.bxor) or bit.bxor
-local band = (bit32 and bit32.band) or bit.band
-local rshift = (bit32 and bit32.rshift) or bit.rshift
+local drivegate = _G.drivegate
+if not drivegate.first_load("modbus") then return end
+local band = drivegate.band
 
 local p = Proto("drivegate_modbus", "Modbus serial line (drivegate modbus)")
 
@@ -62,23 +57,8 @@ local f = {
 p.fields = { f.framing, f.address, f.func, f.exception_flag, f.exception_code, f.register,
              f.count, f.write_register, f.write_count, f.byte_count, f.value, f.and_mask,
              f.or_mask, f.word, f.bits, f.mei, f.data, f.crc, f.lrc, f.crc_status }
-local e_bad = ProtoExpert.new("drivegate_modbus.crc.bad", "Bad checksum", expert.group.CHECKSUM,
-                              expert.severity.ERROR)
-local e_len = ProtoExpert.new("drivegate_modbus.length", "Unexpected frame length",
-                              expert.group.PROTOCOL, expert.severity.WARN)
-p.experts = { e_bad, e_len }
-
--- CRC-16 of Serial Line 6.2.2 over tvb[0, len).
-local function crc16(tvb, len)
-  local crc = 0xFFFF
-  for i = 0, len - 1 do
-    crc = bxor(crc, tvb(i, 1):uint())
-    for _ = 1, 8 do
-      if band(crc, 1) ~= 0 then crc = bxor(rshift(crc, 1), 0xA001) else crc = rshift(crc, 1) end
-    end
-  end
-  return crc
-end
+local e_bad, e_len = drivegate.experts(p, "drivegate_modbus.crc.bad", "Bad checksum",
+                                       "drivegate_modbus.length", "Unexpected frame length")
 
 -- LRC of Serial Line 6.2.1: the two's complement of the 8-bit sum of tvb[0, len).
 local function lrc(tvb, len)
@@ -88,12 +68,7 @@ local function lrc(tvb, len)
 end
 
 local function words(t, tvb, from, to)
-  local i = from
-  while i + 1 < to do
-    t:add(f.word, tvb(i, 2))
-    i = i + 2
-  end
-  if i < to then t:add(f.data, tvb(i, to - i)) end
+  drivegate.words(t, tvb, from, to, f.word, f.data)
 end
 
 -- The PDU in tvb[1, body): its fields; the Info column's text.
@@ -220,9 +195,7 @@ function p.dissector(tvb, pinfo, tree)
   t:add(f.address, tvb(0, 1))
   local info = pdu(t, tvb, len - 2, to_drive)
   pinfo.cols.info = (tvb(0, 1):uint() == 0 and "Broadcast " or "") .. info
-  -- CRC sent low byte first.
-  drivegate.add_checksum(t, pinfo, f.crc, f.crc_status, e_bad, tvb(len - 2, 2),
-                         crc16(tvb, len - 2), true)
+  drivegate.add_crc16_modbus(t, pinfo, f.crc, f.crc_status, e_bad, tvb, len)
   return len
 end
 

@@ -50,7 +50,6 @@ const AdapterDescriptor* specialise_device(const Options& options, std::string& 
 }  // namespace drivegate::modbus_device
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .api_version = drivegate::kAdapterApiVersion,
     .id = "modbus",
     .summary = "any Modbus RTU / ASCII slave, described by a profile (docs/profiles.md)",
     .options = drivegate::modbus_device::kOptionSchema.data(),
@@ -65,14 +64,12 @@ extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivega
     .address_min = 1,
     .address_max = 247,
     .default_address = 1,
-    .streaming = false,  // a slave only ever answers
+    // Not streaming: a slave only ever answers.
     .create_driver = &drivegate::modbus_device::create_driver,
     .create_simulator = &drivegate::modbus_device::create_simulator,
     .demo = {.options = drivegate::modbus_device::kDemoOptions,
              .option_count = std::size(drivegate::modbus_device::kDemoOptions),
              .running_rpm = 1500},
-    .actions = nullptr,  // no maintenance actions
-    .action_count = 0,
     // A profile's own options ([options.NAME]) join the schema of its devices.
     .specialise = &drivegate::modbus_device::specialise_device,
 };

@@ -1,10 +1,8 @@
 -- nidec-washer: Nidec washing-machine inverter, spec V07 (specs 000; README "nidec-washer").
 -- Master frame (11 bytes): A5 MODE d1..d8 X; slave frame (7): A5 MODE e1..e4 X, FCT reply (13):
 -- A5 66 e1..e10 X; NACK: 5A 00 FF 00 FF 00 5A. X = XOR of every byte before it.
-local drivegate = _G.drivegate or { loaded = {} }
-_G.drivegate = drivegate
-if drivegate.loaded["nidec-washer"] then return end
-drivegate.loaded["nidec-washer"] = true
+local drivegate = _G.drivegate
+if not drivegate.first_load("nidec-washer") then return end
 
 local p = Proto("nidec_washer", "Nidec washer inverter (drivegate nidec-washer)")
 
@@ -42,23 +40,14 @@ local f = {
 p.fields = { f.header, f.mode, f.data, f.d, f.speed, f.accel, f.platform, f.weight_raw, f.error,
              f.e_general, f.e_ipm, f.e_ov, f.e_stall, f.e_oc, f.e_uv, f.e_phase, f.e_mot, f.e,
              f.checksum, f.checksum_status }
-local e_bad = ProtoExpert.new("nidec_washer.checksum.bad", "Bad checksum", expert.group.CHECKSUM,
-                              expert.severity.ERROR)
-local e_len = ProtoExpert.new("nidec_washer.length", "Unexpected frame length",
-                              expert.group.PROTOCOL, expert.severity.WARN)
-p.experts = { e_bad, e_len }
+local e_bad, e_len = drivegate.experts(p, "nidec_washer.checksum.bad", "Bad checksum",
+                                       "nidec_washer.length", "Unexpected frame length")
 
 local run_modes = { [0x09] = true, [0x0B] = true, [0x0D] = true, [0x1D] = true }
 
 function p.dissector(tvb, pinfo, tree)
-  local len = tvb:len()
-  pinfo.cols.protocol = "NIDEC-WASHER"
-  local t = tree:add(p, tvb())
-  if len < 3 then
-    t:add(f.data, tvb())
-    t:add_proto_expert_info(e_len)
-    return len
-  end
+  local t, len = drivegate.frame_tree(p, "NIDEC-WASHER", tvb, pinfo, tree, 3, f.data, e_len)
+  if not t then return len end
   local header = tvb(0, 1):uint()
   local mode = tvb(1, 1):uint()
   local to_drive = pinfo.p2p_dir == 0

@@ -13,8 +13,7 @@ constexpr Millis kMaxPoll{1000};      // 5.2 / section 6: a frame every second a
 constexpr Millis kMinPoll{10};        // not in the document: below this the line is only polls
 // Not in the document: two characters of line silence before each frame (4.6 ms at 4800 8O1),
 // so that the inverter sees where one frame ends and the next begins.
-constexpr Millis kInterFrameGap = std::chrono::ceil<Millis>(
-    2 * character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits));
+constexpr Millis kInterFrameGap = std::chrono::ceil<Millis>(2 * character_time(kLine));
 // The gateway fails a write still pending after this (0x0B); the driver's own confirmation
 // deadline (driver_writes.cpp) comes before it.
 constexpr Millis kWriteTimeout{3000};
@@ -23,8 +22,7 @@ constexpr Millis kWriteTimeout{3000};
 // (section 3; the engine waits for the echo before it times the reply), the 100 ms reply timeout
 // (section 6) and the engine's guard time after it, and the gap before the next attempt.
 Millis attempt_time(std::size_t bytes) {
-  const auto wire = character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits) *
-                    static_cast<long>(2 * bytes);
+  const auto wire = character_time(kLine) * static_cast<long>(2 * bytes);
   return std::chrono::ceil<Millis>(wire) + unanswered_attempt(kReplyTimeout) + kInterFrameGap;
 }
 
@@ -102,8 +100,7 @@ TimePoint NidecWasherDriver::wake_at() const {
 RxVerdict NidecWasherDriver::on_receive(ByteView rx, TimePoint now) {
   (void)now;
   const Decoded<Reply> d = decode_reply(rx);
-  if (d.status == DecodeStatus::incomplete) return {RxKind::incomplete, 0};
-  if (d.status == DecodeStatus::bad) return damaged(d);
+  if (const auto v = unless_frame(d)) return *v;
   if (d.frame.nack) return {RxKind::nack, d.consumed};  // 5.16: the engine resends
   // Section 2: the inverter only ever answers the frame just sent, so a good frame of another
   // mode is a late answer to an earlier one.

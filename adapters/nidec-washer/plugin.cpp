@@ -33,22 +33,16 @@ constexpr std::array<OptionSetting, 1> kDemoOptions = {{{"platform", "7"}}};
 }  // namespace drivegate::nidec
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .api_version = drivegate::kAdapterApiVersion,
     .id = "nidec-washer",
     .summary = "Nidec washing-machine inverter, Elaraby bus protocol spec V07",
     .options = drivegate::nidec::kOptionSchema.data(),
     .option_count = drivegate::nidec::kOptionSchema.size(),
     .line = drivegate::nidec::kLine,  // section 3: 4800 8O1; section 2: one wire
-    // Section 2: one inverter per wire, no address in the frame.
-    .address_min = 0,
-    .address_max = 0,
-    .default_address = 0,
-    .streaming = false,  // section 2: the inverter only answers the master
+    // Section 2: one inverter per wire, no address in the frame (the default range); not
+    // streaming, the inverter only answers the master.
     .create_driver = &drivegate::nidec::create_driver,
     .create_simulator = &drivegate::nidec::create_simulator,
     .demo = {.options = drivegate::nidec::kDemoOptions.data(),
              .option_count = drivegate::nidec::kDemoOptions.size(),
              .running_rpm = 800},
-    .actions = nullptr,  // no maintenance actions
-    .action_count = 0,
 };

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "drivegate/bytes.h"
+#include "drivegate/sim_rx.h"
 
 namespace drivegate::nidec {
 namespace {
@@ -42,22 +43,19 @@ Bytes NidecWasherSimulator::on_receive(ByteView rx, TimePoint now) {
   }
   rx_.insert(rx_.end(), rx.begin(), rx.end());
   Bytes out;
-  for (;;) {
-    const Decoded<Request> d = decode_request(rx_);
-    if (d.status == DecodeStatus::incomplete) break;
-    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(d.consumed));
-    if (d.status == DecodeStatus::bad && d.error == make_error_code(FrameError::bad_header)) {
+  while (const auto d = take_decoded(rx_, [](ByteView b) { return decode_request(b); })) {
+    if (d->status == DecodeStatus::bad && d->error == make_error_code(FrameError::bad_header)) {
       continue;  // not a frame start: skip to the next A5
     }
     Bytes reply;
-    if (d.status == DecodeStatus::bad || nack_ > 0) {
+    if (d->status == DecodeStatus::bad || nack_ > 0) {
       // 5.16: a wrong checksum, or a mode V07 does not know (0x19 included), gets a NACK.
-      if (d.status == DecodeStatus::frame) --nack_;
+      if (d->status == DecodeStatus::frame) --nack_;
       ++nacks_sent_;
       reply = send(encode_nack());
     } else {
       ++frames_;
-      reply = send(handle(d.frame, now));
+      reply = send(handle(d->frame, now));
     }
     out.insert(out.end(), reply.begin(), reply.end());
   }

@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "drivegate/flagged.h"
+
 namespace drivegate::unicla {
 
 namespace {
@@ -64,21 +66,11 @@ Bytes encode(const Frame& f) {
 }
 
 Decoded<Frame> decode(ByteView rx) {
-  if (rx.empty()) return {};
-  if (rx[0] != kFlag) {
-    std::size_t n = 1;
-    while (n < rx.size() && rx[n] != kFlag) ++n;
-    return decoded_bad<Frame>(n, FrameError::bad_header);
-  }
-  std::size_t end = 1;
-  while (end < rx.size() && rx[end] != kFlag) ++end;
-  if (end == rx.size()) {
-    // No EOF yet. Past the longest possible frame the SOF was not one: drop it.
-    if (rx.size() > kMaxWireSize) return decoded_bad<Frame>(1, FrameError::bad_length);
-    return {};
-  }
-  // "7E 7E": an EOF followed by a SOF. Drop the first flag only: the second opens the next frame.
-  if (end == 1) return decoded_bad<Frame>(1, FrameError::bad_length);
+  // "Start and End of Frame": SOF and EOF are both 7E. Past the longest possible frame without an
+  // EOF the SOF was not one; "7E 7E" is an EOF followed by a SOF, which opens the next frame.
+  const Decoded<std::size_t> at = find_flagged(rx, kFlag, kFlag, kMaxWireSize);
+  if (at.status != DecodeStatus::frame) return not_a_frame<Frame>(at);
+  const std::size_t end = at.frame;
 
   Bytes body;
   body.reserve(end);

@@ -17,8 +17,7 @@ namespace drivegate::unicla {
 // Rate ... Default Value 19200". RS-485 half duplex with a driver-enable line: no echo.
 inline constexpr LineDefaults kLine{19200, Parity::none, 8, 1, false};
 // One character on that line (0.52 ms): the driver's timing choices are counted in these.
-inline constexpr std::chrono::nanoseconds kCharacterTime =
-    character_time(kLine.baud, kLine.parity, kLine.data_bits, kLine.stop_bits);
+inline constexpr std::chrono::nanoseconds kCharacterTime = character_time(kLine);
 
 // "Start and End of Frame": SOF and EOF are both 0x7E.
 inline constexpr std::uint8_t kFlag = 0x7E;

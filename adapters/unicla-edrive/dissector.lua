@@ -3,14 +3,9 @@
 -- (7E -> 7D 5E, 7D -> 7D 5D). Header: source, destination, command (C0 read, C1 write), message
 -- id, sequence, 0, 0, payload size. CRC-16/XMODEM (poly 1021, init 0) over header + payload,
 -- before stuffing, high byte first. Values big-endian (the adapter's default).
-local drivegate = _G.drivegate or { loaded = {} }
-_G.drivegate = drivegate
-if drivegate.loaded["unicla-edrive"] then return end
-drivegate.loaded["unicla-edrive"] = true
-
-local bxor = (bit32 and bit32.bxor) or bit.bxor
-local band = (bit32 and bit32.band) or bit.band
-local lshift = (bit32 and bit32.lshift) or bit.lshift
+local drivegate = _G.drivegate
+if not drivegate.first_load("unicla-edrive") then return end
+local bxor, band, lshift = drivegate.bxor, drivegate.band, drivegate.lshift
 
 local p = Proto("unicla_edrive", "Unicla eDrive compressor (drivegate unicla-edrive)")
 
@@ -60,11 +55,8 @@ local f = {
 local list = {}
 for _, v in pairs(f) do list[#list + 1] = v end
 p.fields = list
-local e_bad = ProtoExpert.new("unicla_edrive.crc.bad", "Bad CRC", expert.group.CHECKSUM,
-                              expert.severity.ERROR)
-local e_frame = ProtoExpert.new("unicla_edrive.framing", "Bad framing or length",
-                                expert.group.PROTOCOL, expert.severity.WARN)
-p.experts = { e_bad, e_frame }
+local e_bad, e_frame = drivegate.experts(p, "unicla_edrive.crc.bad", "Bad CRC",
+                                         "unicla_edrive.framing", "Bad framing or length")
 
 local function crc_xmodem(tvb, len)
   local crc = 0

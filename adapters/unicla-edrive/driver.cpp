@@ -75,14 +75,7 @@ TimePoint EDriveDriver::wake_at() const {
 RxVerdict EDriveDriver::on_receive(ByteView rx, TimePoint now) {
   expire(now);
   const Decoded<Frame> d = decode(rx);
-  switch (d.status) {
-    case DecodeStatus::incomplete:
-      return {RxKind::incomplete, 0};
-    case DecodeStatus::bad:
-      return damaged(d);
-    case DecodeStatus::frame:
-      break;
-  }
+  if (const auto v = unless_frame(d)) return *v;
   const Frame& f = d.frame;
   // The reply is from the device to the master, a read, of the awaited message and sequence
   // ("Sequence Number": "The slave reply will contain this sequence number"). Any other good

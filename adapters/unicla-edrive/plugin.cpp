@@ -39,7 +39,6 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 }  // namespace drivegate::unicla
 
 extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .api_version = drivegate::kAdapterApiVersion,
     .id = "unicla-edrive",
     .summary = "Unicla eDrive compressor, RS-485 interface V16",
     .options = drivegate::unicla::kOptionSchema.data(),
@@ -48,11 +47,9 @@ extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivega
     .address_min = drivegate::unicla::kFirstDeviceId,
     .address_max = drivegate::unicla::kLastDeviceId,
     .default_address = drivegate::unicla::kDefaultDeviceId,
-    .streaming = false,  // "all transfers are required to be master initiated"
+    // Not streaming: "all transfers are required to be master initiated".
     .create_driver = &drivegate::unicla::create_driver,
     .create_simulator = &drivegate::unicla::create_simulator,
     // Default options; half the simulated drive's 6000 rpm running limit.
-    .demo = {.options = nullptr, .option_count = 0, .running_rpm = 3000},
-    .actions = nullptr,  // no maintenance actions
-    .action_count = 0,
+    .demo = {.running_rpm = 3000},
 };

@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "drivegate/sim_rx.h"
 #include "drivegate/sim_text.h"
 #include "labels.h"
 #include "op_state.h"
@@ -102,11 +103,8 @@ Status EDriveSimulator::status() const {
 Bytes EDriveSimulator::on_receive(ByteView rx, TimePoint now) {
   rx_.insert(rx_.end(), rx.begin(), rx.end());
   Bytes out;
-  while (!rx_.empty()) {
-    const Decoded<Frame> d = decode(rx_);
-    if (d.status == DecodeStatus::incomplete) break;
-    if (d.status == DecodeStatus::frame) handle(d.frame, now, out);
-    rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(std::max<std::size_t>(1, d.consumed)));
+  while (const auto d = take_decoded(rx_, [](ByteView b) { return decode(b); })) {
+    if (d->status == DecodeStatus::frame) handle(d->frame, now, out);
   }
   if (rx_.size() > kMaxBuffer) rx_.clear();
   return out;

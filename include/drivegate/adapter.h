@@ -1,10 +1,12 @@
 // The plugin contract. An adapter is a shared object exporting one data-only, versioned
 // descriptor under the C symbol `drivegate_adapter`; the gateway finds it with dlsym, refuses any
 // api_version but its own, validates the device options against `options`, and then only ever
-// calls the two factories. adapters/README.md describes the folder every adapter has.
+// calls the two factories. adapters/README.md describes the folder every adapter has. A
+// descriptor names only what is its adapter's own: the API version, an address range of none,
+// not streaming, no actions and no specialiser are the defaults.
 //
 //   extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-//       .api_version = drivegate::kAdapterApiVersion, .id = "nidec-washer", ...};
+//       .id = "nidec-washer", .summary = ..., .options = ..., ...};
 #pragma once
 
 #include <cstddef>
@@ -66,16 +68,16 @@ struct MaintenanceAction {
 };
 
 struct AdapterDescriptor {
-  std::uint32_t api_version;
+  std::uint32_t api_version = kAdapterApiVersion;  // the version the plugin was compiled against
   const char* id;
   const char* summary;
   const OptionSpec* options;
   std::size_t option_count;
   LineDefaults line;
-  std::uint32_t address_min;  // native address range; {0, 0}: the protocol has no address
-  std::uint32_t address_max;
-  std::uint32_t default_address;
-  bool streaming;  // transmits unsolicited frames: must be the only device on its bus
+  std::uint32_t address_min = 0;  // native address range; {0, 0}: the protocol has no address
+  std::uint32_t address_max = 0;
+  std::uint32_t default_address = 0;
+  bool streaming = false;  // transmits unsolicited frames: must be the only device on its bus
   DriverFactory create_driver;
   SimulatorFactory create_simulator;
   DemoSetup demo;

@@ -97,6 +97,24 @@ RxVerdict damaged(const Decoded<Frame>& d) {
   return {d.error == FrameError::bad_checksum ? RxKind::bad_checksum : RxKind::noise, d.consumed};
 }
 
+// The verdict for what a codec answered when it is not a frame: wait for more bytes when they are
+// incomplete, damaged() when they are bad; nothing for a frame, which the driver reads itself.
+//
+//   const Decoded<Frame> d = decode(rx);
+//   if (const auto v = unless_frame(d)) return *v;
+template <class Frame>
+std::optional<RxVerdict> unless_frame(const Decoded<Frame>& d) {
+  switch (d.status) {
+    case DecodeStatus::incomplete:
+      return RxVerdict{RxKind::incomplete, 0};
+    case DecodeStatus::bad:
+      return damaged(d);
+    case DecodeStatus::frame:
+      break;
+  }
+  return std::nullopt;
+}
+
 // The largest speed the common block's speed_rpm (i16) carries either way; -32768 there means
 // the speed is not known.
 inline constexpr std::int32_t kMaxSpeedRpm = 32767;

@@ -43,5 +43,8 @@ constexpr std::chrono::nanoseconds character_time(std::uint32_t baud, Parity par
   return std::chrono::nanoseconds(bits_per_character(parity, data_bits, stop_bits) *
                                   1'000'000'000ull / std::max<std::uint32_t>(baud, 1));
 }
+constexpr std::chrono::nanoseconds character_time(const LineDefaults& line) {
+  return character_time(line.baud, line.parity, line.data_bits, line.stop_bits);
+}
 
 }  // namespace drivegate

@@ -137,9 +137,7 @@ std::size_t AdapterBench::count(const Bytes& frame, TimePoint from) const {
 }
 
 std::chrono::nanoseconds AdapterBench::on_wire(std::size_t bytes) const {
-  const LineDefaults& line = rig.adapter().line;
-  return character_time(line.baud, line.parity, line.data_bits, line.stop_bits) *
-         static_cast<long>(bytes);
+  return character_time(rig.adapter().line) * static_cast<long>(bytes);
 }
 
 bool AdapterBench::sim_has(std::string_view key_value) {

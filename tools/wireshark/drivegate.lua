@@ -8,14 +8,81 @@
 
 local bxor = (bit32 and bit32.bxor) or bit.bxor
 local band = (bit32 and bit32.band) or bit.band
+local rshift = (bit32 and bit32.rshift) or bit.rshift
 
 -- Shared by the protocol files: one table in the Lua state's globals (a script's own globals
--- may be private to it, so _G is named).
+-- may be private to it, so _G is named). They find it there because this file loads first:
+-- it loads them itself, and Wireshark loads a plugin folder's files in name order, drivegate.lua
+-- before drivegate_<id>.lua.
 local drivegate = _G.drivegate or {}
 _G.drivegate = drivegate
 drivegate.loaded = drivegate.loaded or {}
 drivegate.bxor = bxor
 drivegate.band = band
+drivegate.bor = (bit32 and bit32.bor) or bit.bor
+drivegate.lshift = (bit32 and bit32.lshift) or bit.lshift
+drivegate.rshift = rshift
+
+-- True the first time a protocol file `id` asks: each loads once, however it is found (from the
+-- source tree, installed beside this file, or by Wireshark from its plugin folder).
+function drivegate.first_load(id)
+  if drivegate.loaded[id] then return false end
+  drivegate.loaded[id] = true
+  return true
+end
+
+-- The tree of one frame of `proto`, its name in the Protocol column, and the frame's length; the
+-- tree is nil when the frame is shorter than `min_len` bytes, which are then shown as
+-- `data_field` with the expert `e_short`.
+function drivegate.frame_tree(proto, column, tvb, pinfo, tree, min_len, data_field, e_short)
+  pinfo.cols.protocol = column
+  local t = tree:add(proto, tvb())
+  local len = tvb:len()
+  if len >= min_len then return t, len end
+  t:add(data_field, tvb())
+  t:add_proto_expert_info(e_short)
+  return nil, len
+end
+
+-- The two experts of a protocol's frames, set as `proto`'s: a bad checksum (an error) and a
+-- frame of the wrong length or shape (a warning). Returned in that order.
+function drivegate.experts(proto, bad_abbrev, bad_text, shape_abbrev, shape_text)
+  local e_bad = ProtoExpert.new(bad_abbrev, bad_text, expert.group.CHECKSUM, expert.severity.ERROR)
+  local e_shape = ProtoExpert.new(shape_abbrev, shape_text, expert.group.PROTOCOL,
+                                  expert.severity.WARN)
+  proto.experts = { e_bad, e_shape }
+  return e_bad, e_shape
+end
+
+-- Big-endian 16-bit words of tvb[from, to) as `word_field`, an odd last byte as `data_field`.
+function drivegate.words(t, tvb, from, to, word_field, data_field)
+  local i = from
+  while i + 1 < to do
+    t:add(word_field, tvb(i, 2))
+    i = i + 2
+  end
+  if i < to then t:add(data_field, tvb(i, to - i)) end
+end
+
+-- CRC-16 of Modbus (MODBUS over Serial Line V1.02, 6.2.2: init FFFF, polynomial A001 reflected)
+-- over tvb[0, len).
+local function crc16_modbus(tvb, len)
+  local crc = 0xFFFF
+  for i = 0, len - 1 do
+    crc = bxor(crc, tvb(i, 1):uint())
+    for _ = 1, 8 do
+      if band(crc, 1) ~= 0 then crc = bxor(rshift(crc, 1), 0xA001) else crc = rshift(crc, 1) end
+    end
+  end
+  return crc
+end
+
+-- The Modbus CRC-16 that ends a frame of `len` bytes, verified (drivegate.add_checksum): it
+-- covers every byte before it and is sent low byte first.
+function drivegate.add_crc16_modbus(tree, pinfo, field, status_field, expert_bad, tvb, len)
+  return drivegate.add_checksum(tree, pinfo, field, status_field, expert_bad, tvb(len - 2, 2),
+                                crc16_modbus(tvb, len - 2), true)
+end
 
 -- XOR of the bytes of `tvb` in [from, from + len).
 function drivegate.xor(tvb, from, len)
@@ -43,8 +110,7 @@ function drivegate.add_checksum(tree, pinfo, field, status_field, expert_bad, ra
   return ok
 end
 
-if drivegate.loaded["drivegate"] then return end
-drivegate.loaded["drivegate"] = true
+if not drivegate.first_load("drivegate") then return end
 
 local p = Proto("drivegate", "drivegate capture pseudo-header")
 

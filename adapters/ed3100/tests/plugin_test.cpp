@@ -23,8 +23,6 @@ const test::DescriptorFacts kFacts{.id = "ed3100",
                                    .address_min = 0,
                                    .address_max = 31,
                                    .default_address = 1,
-                                   .streaming = false,
-                                   .demo_options = {},
                                    .demo_rpm = 1500};
 INSTANTIATE_TEST_SUITE_P(Ed3100, DescriptorContract, testing::Values(kFacts));
 

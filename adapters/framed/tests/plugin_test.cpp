@@ -18,7 +18,6 @@ using ::testing::HasSubstr;
 const test::DescriptorFacts kFacts{.id = "framed",
                                    .options = kOptionSchema,
                                    .line = {9600, Parity::none, 8, 1, false},
-                                   .streaming = false,
                                    .demo_options = {{"protocol", "nidec-washer"}},
                                    .demo_rpm = 800};
 INSTANTIATE_TEST_SUITE_P(Framed, DescriptorContract, testing::Values(kFacts));

@@ -22,8 +22,6 @@ const test::DescriptorFacts kFacts{.id = "mdriver-2400",
                                    .address_min = 0,
                                    .address_max = 255,
                                    .default_address = 1,
-                                   .streaming = false,
-                                   .demo_options = {},
                                    .demo_rpm = 1149};
 INSTANTIATE_TEST_SUITE_P(Mdriver, DescriptorContract, testing::Values(kFacts));
 

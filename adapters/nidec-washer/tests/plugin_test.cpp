@@ -25,10 +25,6 @@ using test::DescriptorContract;
 const test::DescriptorFacts kFacts{.id = "nidec-washer",
                                    .options = kOptionSchema,
                                    .line = {4800, Parity::odd, 8, 1, true},
-                                   .address_min = 0,
-                                   .address_max = 0,
-                                   .default_address = 0,
-                                   .streaming = false,
                                    .demo_options = {{"platform", "7"}},
                                    .demo_rpm = 800};
 INSTANTIATE_TEST_SUITE_P(Nidec, DescriptorContract, testing::Values(kFacts));

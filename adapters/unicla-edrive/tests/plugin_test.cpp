@@ -27,8 +27,6 @@ const test::DescriptorFacts kFacts{.id = "unicla-edrive",
                                    .address_min = 1,
                                    .address_max = 254,
                                    .default_address = 1,
-                                   .streaming = false,
-                                   .demo_options = {},
                                    .demo_rpm = 3000};
 INSTANTIATE_TEST_SUITE_P(Unicla, DescriptorContract, testing::Values(kFacts));
 
