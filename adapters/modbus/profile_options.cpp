@@ -275,7 +275,7 @@ std::optional<RpmFactor> parse_expression(std::string_view text,
     divide = text[i] == '/';
     ++i;
   }
-  // With the options' defaults: what a device that sets none of them gets.
+  // With the options' defaults and examples: what a device that sets none of them gets.
   if (std::string problem = rpm_problem(f, part, options); !problem.empty()) {
     why = problem + " (the options' defaults)";
     return std::nullopt;

@@ -33,7 +33,7 @@ enum class RpmPart : std::uint8_t { factor, offset };
 // parentheses ("(max_frequency_hz - min_frequency_hz)"). nullopt and `why` when it is empty, names
 // an option the profile does not declare, ends in an operator, has anything else in parentheses,
 // a term that can be 0 within its option's range or a difference that is always 0, or is not
-// above 0 with the options' defaults.
+// above 0 with the options' defaults (a required option's example).
 std::optional<RpmFactor> parse_rpm_factor(std::string_view text,
                                           const std::vector<ProfileOption>& options,
                                           std::string& why);
