@@ -121,6 +121,7 @@ TEST(EatonMMax, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
   const auto driver_with = [](const std::vector<std::pair<std::string, double>>& set) {
     Profile p = shipped_profile("eaton-m-max");
     Options o;
+    o.set("motor_poles", 4.0);  // required: the motor's nameplate
     for (const auto& [k, v] : set) o.set(k, v);
     std::string error;
     EXPECT_TRUE(apply_options(p, o, error)) << error;
@@ -311,6 +312,7 @@ TEST(Vacon100, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
                              std::int32_t rpm) {
     Profile p = shipped_profile("vacon-100");
     Options o;
+    o.set("motor_poles", 4.0);  // required: the motor's nameplate
     for (const auto& [k, v] : set) o.set(k, v);
     std::string error;
     EXPECT_TRUE(apply_options(p, o, error)) << error;
@@ -330,9 +332,20 @@ TEST(Vacon100, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
   EXPECT_EQ(frame_for(span, 900), fc06(5000));
   EXPECT_EQ(frame_for(span, 900), hex({0x01, 0x06, 0x07, 0xD2, 0x13, 0x88, 0x25, 0xD1}));
   EXPECT_EQ(frame_for(span, 1500), fc06(10000));
-  // The defaults (0 - 50 Hz): 1500 rpm is the whole span.
-  EXPECT_EQ(frame_for({}, 1500), fc06(10000));
-  EXPECT_EQ(frame_for({}, 750), fc06(5000));
+  // A drive set to 0 - 50 Hz: 1500 rpm is the whole span.
+  const std::vector<std::pair<std::string, double>> from_0 = {{"min_frequency_hz", 0},
+                                                              {"max_frequency_hz", 50}};
+  EXPECT_EQ(frame_for(from_0, 1500), fc06(10000));
+  EXPECT_EQ(frame_for(from_0, 750), fc06(5000));
+  // Neither factory value is cited: a device that leaves either out is refused, naming it.
+  Profile p = shipped_profile("vacon-100");
+  Options o;
+  o.set("motor_poles", 4.0);
+  o.set("min_frequency_hz", 0.0);
+  std::string error;
+  EXPECT_FALSE(apply_options(p, o, error));
+  EXPECT_THAT(error, testing::StartsWith("option max_frequency_hz is required and not set: the "
+                                         "drive's maximum frequency"));
 }
 
 // --- ED3100 answering in the standard form ---
