@@ -35,9 +35,12 @@ std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) 
 }
 
 // A pass-through device's simulator is a slave like any other: it serves the profile its options
-// name (the default one unless --set profile=NAME).
+// name (the default one unless --set profile=NAME), a required option not set at its example.
 std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& error) {
-  auto d = addressed(env.options, env.address, error, parse_settings, device_address);
+  const auto parse = [](const Options& options, std::string& why) {
+    return parse_settings(options, why, Unset::example);
+  };
+  auto d = addressed(env.options, env.address, error, parse, device_address);
   if (!d) return nullptr;
   return std::make_unique<ModbusSimulator>(d->address, std::move(d->settings.profile));
 }

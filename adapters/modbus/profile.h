@@ -145,12 +145,15 @@ struct ValueBinding {
 };
 
 // A device option the profile declares ([options.NAME]) and a device sets in [device.options]:
-// a number within min..max (profile_options.h). `value` is the default until the device's
-// options are applied (apply_options, profile_options.h).
+// a number within min..max (profile_options.h). `value` is the default (a required option's
+// example) until the device's options are applied (apply_options, profile_options.h).
 struct ProfileOption {
   std::string name;
   double value = 0;
-  double default_value = 0;
+  double default_value = 0;  // a required option's: its example
+  // No default: the manual cites no factory value, so every device sets it; `example` is what
+  // drivegate sim, profile check, [[example]] frames and the library test use.
+  bool required = false;
   double min = 0;
   double max = 0;
   std::string unit;

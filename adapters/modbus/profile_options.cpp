@@ -27,15 +27,29 @@ void read_option(const std::string& name, const toml::node& n, Diagnostics& diag
     return;
   }
   TableReader r(*t, key, diag);
-  r.expect({"default", "min", "max", "unit", "description"});
+  r.expect({"default", "example", "min", "max", "unit", "description"});
   // Values a drive's parameter takes; beyond a billion a factor would be meaningless anyway.
   constexpr double kLimit = 1e9;
-  const auto def = r.number("default", -kLimit, kLimit, true);
+  const toml::node* has_default = r.node("default");
+  const toml::node* has_example = r.node("example");
+  const char* const given = has_default != nullptr ? "default" : "example";
+  const auto def = r.number(given, -kLimit, kLimit, false);
+  if (has_default != nullptr && has_example != nullptr) {
+    (void)r.number("example", -kLimit, kLimit, false);
+    diag.error(has_example, key + ".example",
+               "and default together: a default is the drive's factory value (cited), an "
+               "example the value of an option every device must set; give one");
+  } else if (has_default == nullptr && has_example == nullptr) {
+    diag.error(&n, key,
+               "needs a default (the drive's factory value, cited) or an example (then every "
+               "device must set the option)");
+  }
   const auto min = r.number("min", -kLimit, kLimit, true);
   const auto max = r.number("max", -kLimit, kLimit, true);
   ProfileOption o;
   o.name = name;
   o.line = static_cast<std::uint32_t>(line_of(n));
+  o.required = has_default == nullptr;
   o.unit = r.string("unit", false).value_or("");
   const auto description = r.string("description", true);
   if (description && description->empty()) {
@@ -43,7 +57,7 @@ void read_option(const std::string& name, const toml::node& n, Diagnostics& diag
                "must say what the option is and where it is set on the drive");
   }
   o.description = description.value_or("");
-  if (!def || !min || !max) return;
+  if (!def || !min || !max || (has_default != nullptr) == (has_example != nullptr)) return;
   if (*min >= *max) {
     // The daemon's option schema takes min == max for "unbounded"; a fixed value is a number.
     diag.error(r.node("min"), key + ".min",
@@ -51,7 +65,7 @@ void read_option(const std::string& name, const toml::node& n, Diagnostics& diag
     return;
   }
   if (*def < *min || *def > *max) {
-    diag.error(r.node("default"), key + ".default",
+    diag.error(r.node(given), key + "." + given,
                "must be in min..max (" + number_text(*min) + ".." + number_text(*max) + ")");
     return;
   }
@@ -261,7 +275,7 @@ std::optional<RpmFactor> parse_expression(std::string_view text,
     divide = text[i] == '/';
     ++i;
   }
-  // With the options' defaults: what a device that sets none of them gets.
+  // With the options' defaults and examples: what a device that sets none of them gets.
   if (std::string problem = rpm_problem(f, part, options); !problem.empty()) {
     why = problem + " (the options' defaults)";
     return std::nullopt;
@@ -337,14 +351,23 @@ bool check_rpm(const Profile& profile, std::string& error) {
   return true;
 }
 
-bool apply_options(Profile& profile, const Options& options, std::string& error) {
+bool apply_options(Profile& profile, const Options& options, std::string& error, Unset unset) {
   for (ProfileOption& o : profile.options) {
-    if (!options.has(o.name)) continue;
-    const OptionValue& value = options.value(o.name);
+    const OptionValue* value = options.has(o.name) ? &options.value(o.name) : nullptr;
+    const auto* d = value != nullptr ? std::get_if<double>(value) : nullptr;
+    if (value == nullptr || (d != nullptr && *d == kUnsetOption)) {
+      if (o.required && unset == Unset::refuse) {
+        error = "option " + o.name + " is required and not set: " + o.description +
+                (o.unit.empty() ? "" : " [" + o.unit + "]") + " (" + number_text(o.min) + ".." +
+                number_text(o.max) + "; set it in [device.options])";
+        return false;
+      }
+      continue;  // the default, or a required option's example
+    }
     double v = 0;
-    if (const auto* d = std::get_if<double>(&value)) {
+    if (d != nullptr) {
       v = *d;
-    } else if (const auto* i = std::get_if<std::int64_t>(&value)) {
+    } else if (const auto* i = std::get_if<std::int64_t>(value)) {
       v = static_cast<double>(*i);
     } else {
       error = "option " + o.name + ": must be a number";
@@ -365,7 +388,11 @@ std::string options_text(const Profile& profile) {
   for (const ProfileOption& o : profile.options) {
     if (!out.empty()) out += ", ";
     out += o.name + " = " + number_text(o.value);
-    if (o.value == o.default_value) out += " (default)";
+    if (o.required) {
+      out += " (required)";
+    } else if (o.value == o.default_value) {
+      out += " (default)";
+    }
   }
   return out;
 }

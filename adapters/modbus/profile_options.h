@@ -33,7 +33,7 @@ enum class RpmPart : std::uint8_t { factor, offset };
 // parentheses ("(max_frequency_hz - min_frequency_hz)"). nullopt and `why` when it is empty, names
 // an option the profile does not declare, ends in an operator, has anything else in parentheses,
 // a term that can be 0 within its option's range or a difference that is always 0, or is not
-// above 0 with the options' defaults.
+// above 0 with the options' defaults (a required option's example).
 std::optional<RpmFactor> parse_rpm_factor(std::string_view text,
                                           const std::vector<ProfileOption>& options,
                                           std::string& why);
@@ -61,16 +61,26 @@ RpmScale rpm_scale(const RpmFactor& factor, const std::optional<RpmFactor>& offs
 // min_frequency_hz). false and `error` when not.
 bool check_rpm(const Profile& profile, std::string& error);
 
+// What a required option ([options.NAME] with an example, no default) a device does not set
+// becomes: a refused device (the driver), or its example (the simulator).
+enum class Unset : std::uint8_t { refuse, example };
+
+// A required option's default in a device's option schema (specialise.h): the daemon's schema
+// gives every option a default, and this one says "not set" (no drive's parameter is near it).
+inline constexpr double kUnsetOption = -1e300;
+
 // The device's values of the profile's options (those `options` carries; the others keep their
 // default): false and `error` ("option motor_poles: ...") for a value that is not a number within
-// the option's range, or (check_rpm) options that make a factor 0 or below.
-bool apply_options(Profile& profile, const Options& options, std::string& error);
+// the option's range, a required option not set (with Unset::refuse: the error names it and its
+// description), or (check_rpm) options that make a factor 0 or below.
+bool apply_options(Profile& profile, const Options& options, std::string& error,
+                   Unset unset = Unset::refuse);
 
 // A number as an option's text: the shortest that reads back the same ("4", "0.01").
 std::string number_text(double v);
 
-// The options in effect, as text: "motor_poles = 2, max_frequency_hz = 50 (default)"; empty
-// without options.
+// The options in effect, as text: "motor_poles = 2 (required), max_frequency_hz = 50 (default)";
+// empty without options.
 std::string options_text(const Profile& profile);
 
 }  // namespace drivegate::modbus_device

@@ -95,7 +95,7 @@ std::vector<std::string_view> shipped_profile_names() {
   return names;
 }
 
-std::optional<Settings> parse_settings(const Options& options, std::string& error) {
+std::optional<Settings> parse_settings(const Options& options, std::string& error, Unset unset) {
   Settings s;
   auto text = find_profile(options.string("profile"), error);
   if (!text) {
@@ -111,7 +111,7 @@ std::optional<Settings> parse_settings(const Options& options, std::string& erro
   }
   s.profile = std::get<Profile>(std::move(parsed));
   // The profile's own options ([options.NAME]), as the device sets them.
-  if (!apply_options(s.profile, options, error)) return std::nullopt;
+  if (!apply_options(s.profile, options, error, unset)) return std::nullopt;
   s.files_read = profile_read(*text);
   s.profile_source = std::move(text->source);
   s.attempts = static_cast<std::uint8_t>(options.integer("attempts"));

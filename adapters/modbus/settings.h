@@ -12,6 +12,7 @@
 #include "drivegate/driver.h"
 #include "drivegate/options.h"
 #include "profile.h"
+#include "profile_options.h"
 
 namespace drivegate::modbus_device {
 
@@ -55,7 +56,9 @@ struct Settings {
 
 // The options as the driver and simulator use them, the profile read and validated: nullopt with
 // `error` naming the option (and the profile's file and line) when they do not make a device.
-std::optional<Settings> parse_settings(const Options& options, std::string& error);
+// `unset`: what a required option the options leave out becomes (profile_options.h).
+std::optional<Settings> parse_settings(const Options& options, std::string& error,
+                                       Unset unset = Unset::refuse);
 
 // Whether the bus runs the line the profile's [line] says (baud, parity, stop bits; RTU's 8 data
 // bits, Serial Line 2.5.1): false with `error` saying both, so that a device on the wrong line is

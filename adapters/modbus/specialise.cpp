@@ -48,9 +48,10 @@ const AdapterDescriptor* specialise(const AdapterDescriptor& base, const Options
   if (profile) {
     s->profile = std::move(*profile);
     for (const ProfileOption& o : s->profile.options) {
-      s->defaults.push_back(number_text(o.default_value));
+      s->defaults.push_back(number_text(o.required ? kUnsetOption : o.default_value));
       s->descriptions.push_back(o.description + (o.unit.empty() ? "" : " [" + o.unit + "]") +
-                                " (profile " + s->profile.name + ")");
+                                " (profile " + s->profile.name + (o.required ? "; required" : "") +
+                                ")");
     }
     for (std::size_t i = 0; i < s->profile.options.size(); ++i) {
       const ProfileOption& o = s->profile.options[i];
@@ -59,8 +60,11 @@ const AdapterDescriptor* specialise(const AdapterDescriptor& base, const Options
       spec.type = OptionType::real;
       spec.default_value = s->defaults[i].c_str();
       spec.description = s->descriptions[i].c_str();
-      spec.min = o.min;  // min < max: the profile's parser makes sure (min == max is unbounded)
-      spec.max = o.max;
+      // min < max: the profile's parser makes sure (min == max is unbounded). A required
+      // option's schema is unbounded, so that its "not set" default is one; the device's value
+      // is then held to min..max when the device is made (apply_options).
+      spec.min = o.required ? 0.0 : o.min;
+      spec.max = o.required ? 0.0 : o.max;
       s->options.push_back(spec);
     }
   }

@@ -3,8 +3,9 @@
 // device is made on a bus running its own [line] (a profile whose line the bus refuses fails);
 // and the driver against the simulator of the same profile, on the real bus engine with a
 // simulated clock and line (bus_rig.h), goes online, reads every point, runs each command it
-// binds with running following, and a setpoint written in rpm with the default options reads
-// back as speed_rpm within one raw step of the speed's point.
+// binds with running following, and a setpoint written in rpm with the default options (a
+// required one at its example) reads back as speed_rpm within one raw step of the speed's point.
+// A device that leaves a required option out is refused, naming it.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -17,6 +18,7 @@
 #include "adapter_under_test.h"
 #include "bus_rig.h"
 #include "common_block.h"
+#include "plugin/adapter_options.h"
 #include "profile.h"
 #include "profile_check.h"
 #include "profile_options.h"
@@ -65,8 +67,18 @@ TEST_P(Library, RunsAgainstItsOwnSimulatorOnItsOwnLine) {
   line.baud = p.line.baud;
   line.parity = p.line.parity;
   line.stop_bits = p.line.stop_bits;
-  test::BusRig rig(drivegate_adapter, line);
-  const test::OptionText options = {{"profile", GetParam().string()}};
+  // The device schema of the profile (its [options] among it), as the daemon makes it; a required
+  // option is set to its example, as an engineer sets it to the drive's value.
+  Options named = default_options(drivegate_adapter);
+  named.set("profile", GetParam().string());
+  std::string error;
+  const AdapterDescriptor* adapter = drivegate_adapter.specialise(named, error);
+  ASSERT_NE(adapter, nullptr) << error;
+  test::BusRig rig(*adapter, line);
+  test::OptionText options = {{"profile", GetParam().string()}};
+  for (const ProfileOption& o : p.options) {
+    if (o.required) options.emplace_back(o.name, number_text(o.default_value));
+  }
   Device& d = rig.add_device("d", 1, options);
   rig.add_simulator(1, options);
   rig.start();
@@ -131,6 +143,37 @@ TEST_P(Library, RunsAgainstItsOwnSimulatorOnItsOwnLine) {
     ASSERT_EQ(rig.write_and_wait(d, Table::holding, kCommandRegister, {cmd::reset_fault}),
               Outcome::ok);
     EXPECT_TRUE(rig.run_until([&] { return (rig.value(d, "status") & kFaulted) == 0; }, 3s));
+  }
+}
+
+// A device that leaves one of the profile's required options out is refused, naming it and its
+// description; with each set to its example it is made.
+TEST_P(Library, RefusesADeviceThatLeavesARequiredOptionOut) {
+  auto parsed = parse_profile(read(GetParam()), GetParam().string());
+  ASSERT_TRUE(std::holds_alternative<Profile>(parsed));
+  const Profile& p = std::get<Profile>(parsed);
+  Options named = default_options(drivegate_adapter);
+  named.set("profile", GetParam().string());
+  std::string error;
+  const AdapterDescriptor* adapter = drivegate_adapter.specialise(named, error);
+  ASSERT_NE(adapter, nullptr) << error;
+  const auto made = [&](const ProfileOption* left_out) {
+    test::OptionText options = {{"profile", GetParam().string()}};
+    for (const ProfileOption& o : p.options) {
+      if (o.required && &o != left_out) options.emplace_back(o.name, number_text(o.default_value));
+    }
+    DeviceEnv env;
+    env.address = 1;
+    env.options = test::options_of(*adapter, options);
+    return adapter->create_driver(env, error) != nullptr;
+  };
+  EXPECT_TRUE(made(nullptr)) << error;
+  for (const ProfileOption& o : p.options) {
+    if (!o.required) continue;
+    EXPECT_FALSE(made(&o)) << o.name;
+    EXPECT_NE(error.find("option " + o.name + " is required and not set: " + o.description),
+              std::string::npos)
+        << error;
   }
 }
 

@@ -56,6 +56,7 @@ TEST(ModbusPlugin, ABusThatDoesNotRunTheProfilesLineIsRefusedNamingBoth) {
   config.name = "mmx";
   config.address = 13;
   config.options = test::options_of(drivegate_adapter, {{"profile", "eaton-m-max"}});
+  config.options.set("motor_poles", 4.0);  // the profile requires it
   BusConfig bus;
   bus.baud = 19200;  // the profile says 9600 8N2 (its manual's factory setting)
   bus.parity = Parity::even;

@@ -121,6 +121,7 @@ TEST(EatonMMax, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
   const auto driver_with = [](const std::vector<std::pair<std::string, double>>& set) {
     Profile p = shipped_profile("eaton-m-max");
     Options o;
+    o.set("motor_poles", 4.0);  // required: the motor's nameplate
     for (const auto& [k, v] : set) o.set(k, v);
     std::string error;
     EXPECT_TRUE(apply_options(p, o, error)) << error;
@@ -311,6 +312,7 @@ TEST(Vacon100, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
                              std::int32_t rpm) {
     Profile p = shipped_profile("vacon-100");
     Options o;
+    o.set("motor_poles", 4.0);  // required: the motor's nameplate
     for (const auto& [k, v] : set) o.set(k, v);
     std::string error;
     EXPECT_TRUE(apply_options(p, o, error)) << error;
@@ -330,9 +332,69 @@ TEST(Vacon100, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
   EXPECT_EQ(frame_for(span, 900), fc06(5000));
   EXPECT_EQ(frame_for(span, 900), hex({0x01, 0x06, 0x07, 0xD2, 0x13, 0x88, 0x25, 0xD1}));
   EXPECT_EQ(frame_for(span, 1500), fc06(10000));
-  // The defaults (0 - 50 Hz): 1500 rpm is the whole span.
-  EXPECT_EQ(frame_for({}, 1500), fc06(10000));
-  EXPECT_EQ(frame_for({}, 750), fc06(5000));
+  // A drive set to 0 - 50 Hz: 1500 rpm is the whole span.
+  const std::vector<std::pair<std::string, double>> from_0 = {{"min_frequency_hz", 0},
+                                                              {"max_frequency_hz", 50}};
+  EXPECT_EQ(frame_for(from_0, 1500), fc06(10000));
+  EXPECT_EQ(frame_for(from_0, 750), fc06(5000));
+  // Neither factory value is cited: a device that leaves either out is refused, naming it.
+  Profile p = shipped_profile("vacon-100");
+  Options o;
+  o.set("motor_poles", 4.0);
+  o.set("min_frequency_hz", 0.0);
+  std::string error;
+  EXPECT_FALSE(apply_options(p, o, error));
+  EXPECT_THAT(error, testing::StartsWith("option max_frequency_hz is required and not set: the "
+                                         "drive's maximum frequency"));
+}
+
+// --- Eaton PowerXL DG1 (MN040010EN) ---
+
+// ID 2003 (wire 2002) is 0..10000 over P1.1 Minimum .. P1.2 Maximum Frequency ([MN2018] p.28),
+// whose factory settings were not read: a device sets both, and the poles. At P1.1 = 10 Hz and
+// P1.2 = 50 Hz, 4 poles: 300 rpm is raw 0, 900 rpm (30 Hz) raw 5000, 1500 rpm raw 10000; 1501
+// rpm is refused with nothing sent. Left out, each is refused by name.
+TEST(EatonDg1, ItsSetpointInRpmSpansP11ToP12AndTheyAreRequired) {
+  constexpr std::uint8_t kSlave = 1;
+  const TimePoint now = TimePoint{} + 10s;
+  const std::vector<std::pair<std::string, double>> span = {
+      {"min_frequency_hz", 10}, {"max_frequency_hz", 50}, {"motor_poles", 4}};
+  const auto driver_with = [](const std::vector<std::pair<std::string, double>>& set) {
+    Profile p = shipped_profile("eaton-dg1");
+    Options o;
+    for (const auto& [k, v] : set) o.set(k, v);
+    std::string error;
+    EXPECT_TRUE(apply_options(p, o, error)) << error;
+    return ModbusDriver(kSlave, p, Timing{3, 3000ms, character_time(19200, Parity::even, 8, 1)},
+                        500ms);
+  };
+  const auto fc06 = [](std::uint16_t raw) {
+    return encode(Framing::rtu, kSlave,
+                  std::vector<std::uint8_t>{0x06, 0x07, 0xD2, static_cast<std::uint8_t>(raw >> 8),
+                                            static_cast<std::uint8_t>(raw & 0xFF)});
+  };
+  const auto frame_for = [&](std::int32_t rpm) {
+    ModbusDriver d = driver_with(span);
+    EXPECT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
+    return d.next_exchange(now)->frame;
+  };
+  EXPECT_EQ(frame_for(300), fc06(0));
+  EXPECT_EQ(frame_for(900), fc06(5000));
+  EXPECT_EQ(frame_for(1500), fc06(10000));
+  ModbusDriver d = driver_with(span);
+  EXPECT_EQ(d.apply(WriteOp::of_setpoint(1501), 1, now), WriteStatus::invalid_value);
+  EXPECT_NE(d.next_exchange(now)->frame[1], 0x06);  // a poll follows, not a write
+  for (std::size_t left_out = 0; left_out < span.size(); ++left_out) {
+    Profile p = shipped_profile("eaton-dg1");
+    Options o;
+    for (std::size_t i = 0; i < span.size(); ++i) {
+      if (i != left_out) o.set(span[i].first, span[i].second);
+    }
+    std::string error;
+    EXPECT_FALSE(apply_options(p, o, error));
+    EXPECT_THAT(error, testing::StartsWith("option " + span[left_out].first +
+                                           " is required and not set: "));
+  }
 }
 
 // --- ED3100 answering in the standard form ---
