@@ -39,7 +39,9 @@
 #include "drivegate/line.h"
 #include "line_timing.h"
 #include "planner.h"
+#include "plugin/adapter_options.h"
 #include "profile.h"
+#include "profile_options.h"
 
 extern "C" const drivegate::AdapterDescriptor drivegate_adapter;  // adapters/modbus/plugin.cpp
 
@@ -346,10 +348,24 @@ Measured measure(const std::filesystem::path& profile, const Line& l, std::size_
   bus.parity = Parity::even;
   bus.data_bits = 8;
   bus.stop_bits = 1;
-  test::BusRig rig(drivegate_adapter, bus);
-  const test::OptionText options = {{"profile", profile.string()}};
-  DeviceConfig config = rig.device_config(
-      "device", kSlave, {{"profile", profile.string()}, {"comm_timeout_ms", kCommTimeoutMs}});
+  // The profile's own device schema (its [options] among the adapter's), as the daemon makes it.
+  Options named = default_options(drivegate_adapter);
+  named.set("profile", profile.string());
+  std::string why;
+  const AdapterDescriptor* adapter = drivegate_adapter.specialise(named, why);
+  if (adapter == nullptr) {
+    m.error = why;
+    return m;
+  }
+  test::BusRig rig(*adapter, bus);
+  // A required option (the manual cites no factory value) at its example, as an engineer sets it.
+  test::OptionText options = {{"profile", profile.string()}};
+  for (const ProfileOption& o : parse(profile).options) {
+    if (o.required) options.emplace_back(o.name, number_text(o.default_value));
+  }
+  test::OptionText with_timeout = options;
+  with_timeout.emplace_back("comm_timeout_ms", kCommTimeoutMs);
+  DeviceConfig config = rig.device_config("device", kSlave, with_timeout);
   config.poll_interval = kPollInterval;
   Device& device = rig.add_device(config);
   rig.add_simulator(kSlave, options);
