@@ -26,6 +26,7 @@ using namespace test::common_block;
 using support::errors_of;
 using support::parsed;
 using support::read_pdu;
+using support::replaced;
 using support::words_pdu;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
@@ -67,13 +68,6 @@ const std::string kDrive =
 const std::string kTripBits =
     "fault_code = { point = \"trips\", bits = { 0 = \"over_current\", 1 = \"over_voltage\", "
     "4 = \"under_voltage\" }, other = \"hardware_fault\" }\n";
-
-std::string replaced(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
 
 std::string with_trip_bits() {
   std::string t = replaced(kDrive, "fault = { point = \"state\", bit = 3 }\n", "");

@@ -179,30 +179,19 @@ run_forward = { point = "control_word", value = 1 }
 
 // kSpanProfile with `from` replaced by `to`.
 std::string span_with(const std::string& from, const std::string& to) {
-  std::string s = kSpanProfile;
-  const auto at = s.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) s.replace(at, from.size(), to);
-  return s;
+  return support::replaced(kSpanProfile, from, to);
 }
 
 // kHzProfile with `from` replaced by `to`.
 std::string hz_with(const std::string& from, const std::string& to) {
-  std::string s = kHzProfile;
-  const auto at = s.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) s.replace(at, from.size(), to);
-  return s;
+  return support::replaced(kHzProfile, from, to);
 }
 
 Bytes frame(std::vector<std::uint8_t> pdu) {
   return encode(Framing::rtu, kSlave, pdu);
 }
 Bytes fc06(std::uint16_t address, std::uint16_t value) {
-  std::vector<std::uint8_t> pdu = {0x06};
-  put_be16(pdu, address);
-  put_be16(pdu, value);
-  return frame(pdu);
+  return support::fc06_frame(kSlave, address, value);
 }
 
 ModbusDriver driver_of(Profile p) {

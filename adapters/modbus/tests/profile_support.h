@@ -35,6 +35,23 @@ inline std::vector<std::string> errors_of(const std::string& text) {
   return {};
 }
 
+// `text` with `from` replaced by `to` (a profile varied for one case); a test failure if `from`
+// is not in it.
+inline std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+// A Write Single Register (FC 06) RTU frame to `slave`: what the slave echoes when it takes it.
+inline Bytes fc06_frame(std::uint8_t slave, std::uint16_t address, std::uint16_t value) {
+  std::vector<std::uint8_t> pdu = {0x06};
+  put_be16(pdu, address);
+  put_be16(pdu, value);
+  return encode(Framing::rtu, slave, pdu);
+}
+
 // A read request PDU.
 inline std::vector<std::uint8_t> read_pdu(std::uint8_t function, std::uint16_t start,
                                           std::uint16_t count) {

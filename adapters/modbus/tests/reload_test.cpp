@@ -63,10 +63,7 @@ run_forward = { point = "control_word", sequence = [0x047E, 0x047F] }
 )toml";
 
 Bytes fc06(std::uint16_t address, std::uint16_t value) {
-  std::vector<std::uint8_t> pdu = {0x06};
-  put_be16(pdu, address);
-  put_be16(pdu, value);
-  return encode(Framing::rtu, kSlave, pdu);
+  return support::fc06_frame(kSlave, address, value);
 }
 
 class ReloadMidSequence : public ::testing::Test {

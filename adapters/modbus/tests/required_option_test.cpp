@@ -73,19 +73,13 @@ stop = { point = "control_word", value = 0 }
 run_forward = { point = "control_word", value = 1 }
 )toml";
 
+// kProfile with `from` replaced by `to`.
 std::string with(const std::string& from, const std::string& to) {
-  std::string s = kProfile;
-  const auto at = s.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) s.replace(at, from.size(), to);
-  return s;
+  return support::replaced(kProfile, from, to);
 }
 
 Bytes fc06(std::uint16_t address, std::uint16_t value) {
-  std::vector<std::uint8_t> pdu = {0x06};
-  put_be16(pdu, address);
-  put_be16(pdu, value);
-  return encode(Framing::rtu, kSlave, pdu);
+  return support::fc06_frame(kSlave, address, value);
 }
 
 struct ProfileFile {
