@@ -106,7 +106,7 @@ TEST(Cli, TheInstalledExampleNamesEveryAdapterAndItsModbusDeviceIsValid) {
     const std::string name = f.path().filename().string();
     if (!name.starts_with("drivegate-") || f.path().extension() != ".so") continue;
     const std::string id = name.substr(10, name.size() - 13);
-    // The tests' own plugin (support/test_adapter) is in the build's directory, never installed.
+    // The tests' own plugin (support/test_adapter) is in their directory, never installed.
     if (id == "test-drive") continue;
     ++plugins;
     EXPECT_THAT(described, HasSubstr(" " + id)) << "etc/drivegate.toml's adapter key lacks " << id;
