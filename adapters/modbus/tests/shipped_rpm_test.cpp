@@ -7,13 +7,16 @@
 // 2000 hex), 1.5.3.7 p.36 (actual value 1 = actual frequency, 16384 = 100 %); BU 0050 DE-3111
 // p.32 (100 % = maximum frequency P105). Yaskawa V1000 Technical Manual SIEP C710606 16C, C.9
 // p.417 (60.00 Hz written as 1770H). Hitachi SJ series P1 User's Guide 14.4.8 p.14-18 (FA-01 and
-// dA-01 at 50.00 Hz = 0000 1388h, register address = register number - 1).
+// dA-01 at 50.00 Hz = 0000 1388h, register address = register number - 1). Inovance MD500 Series
+// General-Purpose AC Drive User Manual p.110 (1000H = 2710H is 100.00 % of F0-10, 50 Hz with
+// F0-10 = 50 Hz: the frame 01 06 10 00 27 10 97 36).
 #include <gtest/gtest.h>
 
 #include "driver.h"
 #include "example_profile.h"
 #include "profile.h"
 #include "profile_examples.h"
+#include "profile_options.h"
 #include "profile_support.h"
 #include "simulator.h"
 
@@ -27,11 +30,14 @@ Profile shipped_profile(const std::string& name) {
   return support::parsed(shipped::text(name));
 }
 
-ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
-  const Profile p = shipped_profile(name);
+ModbusDriver driver_of(const Profile& p, std::uint8_t slave) {
   return ModbusDriver(
       slave, p, Timing{3, 3000ms, character_time(p.line.baud, p.line.parity, 8, p.line.stop_bits)},
       500ms);
+}
+
+ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
+  return driver_of(shipped_profile(name), slave);
 }
 
 // The frame the driver sends for a setpoint of `rpm`, or nothing when it refuses it.
@@ -142,6 +148,29 @@ TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
       encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x27, 0x10, 0x00, 0x02});
   EXPECT_EQ(sim.on_receive(read, now),
             encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x04, 0x00, 0x00, 0x13, 0x88}));
+}
+
+// --- Inovance MD500 ---
+
+TEST(InovanceMd500Rpm, A1500RpmSetpointIsTheManuals100PercentFrame) {
+  ModbusDriver d = driver_of("inovance-md500", 1);
+  // p.110: "Suppose that F0-10 = 50 Hz", 2710H (10000 = 100.00 %) written to 1000H is 50 Hz,
+  // sent as 01 06 10 00 27 10 97 36. F0-10 is a required option; its example is that 50 Hz, and
+  // 1500 rpm is 50 Hz at the example's 4 poles.
+  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+            Bytes({0x01, 0x06, 0x10, 0x00, 0x27, 0x10, 0x97, 0x36}));
+}
+
+TEST(InovanceMd500Rpm, TheSetpointFollowsTheMaximumFrequencyTheDeviceSets) {
+  // The same 1500 rpm with F0-10 = 100 Hz (set in [device.options]) is 50.00 % of F0-10: 1388H.
+  Profile p = shipped_profile("inovance-md500");
+  Options o;
+  o.set("max_frequency_hz", 100.0);
+  o.set("motor_poles", 4.0);
+  std::string error;
+  ASSERT_TRUE(apply_options(p, o, error)) << error;
+  ModbusDriver d = driver_of(p, 1);
+  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s), support::fc06_frame(1, 0x1000, 0x1388));
 }
 
 }  // namespace
