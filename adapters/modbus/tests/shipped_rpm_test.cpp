@@ -1,19 +1,23 @@
 // The speed and the setpoint in rpm of shipped profiles whose units come from their manuals' own
 // examples and tables: the frame a setpoint in rpm puts on the line is the manual's frame, and the
-// speed a PLC reads is the manual's value through the profile's rpm_factor at its default options.
+// speed a PLC reads is the manual's value through the profile's rpm_factor at its default (or a
+// required option's example) options, or at the options a test gives the device.
 //
 // ENC EDS300 user manual: 7.7.3 p.42 (50 Hz = 1388H at 2001H), Appendix A Table A-4 p.48 (the
 // output frequency monitor in 0.01 Hz). NORD BU 0050 GB-3111: 1.6.3 p.46 (a 50 % setpoint is
 // 2000 hex), 1.5.3.7 p.36 (actual value 1 = actual frequency, 16384 = 100 %); BU 0050 DE-3111
 // p.32 (100 % = maximum frequency P105). Yaskawa V1000 Technical Manual SIEP C710606 16C, C.9
 // p.417 (60.00 Hz written as 1770H). Hitachi SJ series P1 User's Guide 14.4.8 p.14-18 (FA-01 and
-// dA-01 at 50.00 Hz = 0000 1388h, register address = register number - 1).
+// dA-01 at 50.00 Hz = 0000 1388h, register address = register number - 1). Danfoss VLT Micro
+// Drive FC 51 Design Guide MG02K202 8.11.3 p.88 (16384 = 100 %, 0 % = 3-02 and 100 % = 3-03 with
+// 3-00 = min-max; MAV scaled as the reference).
 #include <gtest/gtest.h>
 
 #include "driver.h"
 #include "example_profile.h"
 #include "profile.h"
 #include "profile_examples.h"
+#include "profile_options.h"
 #include "profile_support.h"
 #include "simulator.h"
 
@@ -27,11 +31,25 @@ Profile shipped_profile(const std::string& name) {
   return support::parsed(shipped::text(name));
 }
 
-ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
-  const Profile p = shipped_profile(name);
+// The shipped profile `name` with a device's `options` applied (required ones included).
+Profile shipped_with(const std::string& name,
+                     const std::vector<std::pair<std::string, double>>& options) {
+  Profile p = shipped_profile(name);
+  Options o;
+  for (const auto& [k, v] : options) o.set(k, v);
+  std::string error;
+  EXPECT_TRUE(apply_options(p, o, error)) << error;
+  return p;
+}
+
+ModbusDriver driver_of(const Profile& p, std::uint8_t slave) {
   return ModbusDriver(
       slave, p, Timing{3, 3000ms, character_time(p.line.baud, p.line.parity, 8, p.line.stop_bits)},
       500ms);
+}
+
+ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
+  return driver_of(shipped_profile(name), slave);
 }
 
 // The frame the driver sends for a setpoint of `rpm`, or nothing when it refuses it.
@@ -142,6 +160,55 @@ TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
       encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x27, 0x10, 0x00, 0x02});
   EXPECT_EQ(sim.on_receive(read, now),
             encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x04, 0x00, 0x00, 0x13, 0x88}));
+}
+
+// --- Danfoss FC 51 ---
+
+TEST(DanfossFc51Rpm, The100PercentReferenceIs3_03) {
+  // p.88: 16384 (4000 hex) = 100 % = 3-03 Maximum Reference; at the examples (3-02 = 0 Hz,
+  // 3-03 = 50 Hz, 4 poles) 1500 rpm is 50 Hz, 100 %; 750 rpm is 2000 hex. REF is register 50010,
+  // address 50009 (C359h), written with FC 06.
+  ModbusDriver d = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x4000));
+  ModbusDriver half = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(half, 750, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x2000));
+  // Outside 3-02 .. 3-03 (3-00 = min-max) nothing is sent.
+  ModbusDriver over = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(over, 1501, TimePoint{} + 10s), std::nullopt);
+  ModbusDriver under = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(under, -30, TimePoint{} + 10s), std::nullopt);
+}
+
+TEST(DanfossFc51Rpm, TheReferenceSpans3_02To3_03) {
+  // 3-02 = 10 Hz, 3-03 = 60 Hz, 4 poles: 0 % is 300 rpm, 100 % 1800 rpm; 1050 rpm (35 Hz) is
+  // half the span, 2000 hex; 300 rpm is 0.
+  const Profile p =
+      shipped_with("danfoss-fc51",
+                   {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
+  ModbusDriver d = driver_of(p, 1);
+  EXPECT_EQ(setpoint_frame(d, 1050, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x2000));
+  ModbusDriver low = driver_of(p, 1);
+  EXPECT_EQ(setpoint_frame(low, 300, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x0000));
+  ModbusDriver below = driver_of(p, 1);
+  EXPECT_EQ(setpoint_frame(below, 290, TimePoint{} + 10s), std::nullopt);
+}
+
+TEST(DanfossFc51Rpm, MavReadsAsTheSynchronousSpeedOverTheSameSpan) {
+  // p.88: MAV is scaled as the reference. MAV = 2000 hex (50 %) with 3-02 = 10 Hz, 3-03 = 60 Hz:
+  // 35 Hz, 1050 rpm at 4 poles; the register a PLC reads is 50210 (address C421h).
+  const Profile p =
+      shipped_with("danfoss-fc51",
+                   {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
+  ModbusDriver d = driver_of(p, 1);
+  ModbusSimulator sim(1, p);
+  ASSERT_EQ(sim.control("set main_actual_value 50", TimePoint{}).rfind("ok", 0), 0u);
+  TimePoint now = TimePoint{} + 10s;
+  poll_against(d, sim, now);
+  EXPECT_EQ(d.common().speed_rpm, 1050);
+  EXPECT_EQ(
+      sim.on_receive(
+          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}), now),
+      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
 }
 
 }  // namespace
