@@ -10,7 +10,9 @@
 // p.417 (60.00 Hz written as 1770H). Hitachi SJ series P1 User's Guide 14.4.8 p.14-18 (FA-01 and
 // dA-01 at 50.00 Hz = 0000 1388h, register address = register number - 1). Danfoss VLT Micro
 // Drive FC 51 Design Guide MG02K202 8.11.3 p.88 (16384 = 100 %, 0 % = 3-02 and 100 % = 3-03 with
-// 3-00 = min-max; MAV scaled as the reference).
+// 3-00 = min-max; MAV scaled as the reference). Eaton MN040010EN: May 2014 p.15 Startup Test
+// (FB Speed reference 42002 = 5000 = 50.00 %, "The Actual value is 5000"), June 2018 pp.28, 134
+// (0 = minimum frequency P1.1, 10000 = maximum frequency P1.2, reference and actual speed).
 #include <gtest/gtest.h>
 
 #include "driver.h"
@@ -209,6 +211,39 @@ TEST(DanfossFc51Rpm, MavReadsAsTheSynchronousSpeedOverTheSameSpan) {
       sim.on_receive(
           encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}), now),
       encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
+}
+
+// --- Eaton PowerXL DG1 ---
+
+TEST(EatonDg1Rpm, TheStartupTests50PercentReferenceIsHalfTheSpan) {
+  // p.15: "Set FB Speed reference (Modbus Address 42002) value to 5000 (=50.00%)": at the
+  // examples (P1.1 = 0, P1.2 = 50 Hz, 4 poles) 750 rpm; written with FC 06 at 2002 (07D2h).
+  ModbusDriver d = driver_of("eaton-dg1", 1);
+  EXPECT_EQ(setpoint_frame(d, 750, TimePoint{} + 10s), support::fc06_frame(1, 0x07D2, 5000));
+  // P1.1 = 10 Hz, P1.2 = 60 Hz: 50 % is 35 Hz, 1050 rpm.
+  ModbusDriver span = driver_of(
+      shipped_with("eaton-dg1",
+                   {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}}),
+      1);
+  EXPECT_EQ(setpoint_frame(span, 1050, TimePoint{} + 10s), support::fc06_frame(1, 0x07D2, 5000));
+}
+
+TEST(EatonDg1Rpm, TheActualSpeedReadsAsTheSynchronousSpeedOverTheSameSpan) {
+  // p.15: "The Actual value is 5000" (ID 2103, input register address 2102 = 0836h); p.134: the
+  // actual value 0..10000 spans the set minimum .. maximum frequency. P1.1 = 10 Hz, P1.2 =
+  // 60 Hz: 35 Hz, 1050 rpm at 4 poles.
+  const Profile p = shipped_with(
+      "eaton-dg1", {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}});
+  ModbusDriver d = driver_of(p, 1);
+  ModbusSimulator sim(1, p);
+  ASSERT_EQ(sim.control("set fb_actual_speed 50", TimePoint{}).rfind("ok", 0), 0u);
+  TimePoint now = TimePoint{} + 10s;
+  poll_against(d, sim, now);
+  EXPECT_EQ(d.common().speed_rpm, 1050);
+  EXPECT_EQ(
+      sim.on_receive(
+          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x08, 0x36, 0x00, 0x01}), now),
+      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x02, 0x13, 0x88}));
 }
 
 }  // namespace
