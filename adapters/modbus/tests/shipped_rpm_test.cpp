@@ -164,6 +164,21 @@ TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
             encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x04, 0x00, 0x00, 0x13, 0x88}));
 }
 
+// What a PLC sees of a profile's speed: the speed in rpm the driver reads once the profile's
+// simulator holds `set` ("set POINT VALUE"), and the simulator's reply to the RTU read `read`.
+struct SpeedSeen {
+  std::int32_t rpm = 0;
+  Bytes reply;
+};
+SpeedSeen speed_seen(const Profile& p, const std::string& set, const Bytes& read) {
+  ModbusDriver d = driver_of(p, 1);
+  ModbusSimulator sim(1, p);
+  EXPECT_EQ(sim.control(set, TimePoint{}).rfind("ok", 0), 0u) << set;
+  TimePoint now = TimePoint{} + 10s;
+  poll_against(d, sim, now);
+  return {d.common().speed_rpm, sim.on_receive(read, now)};
+}
+
 // --- Danfoss FC 51 ---
 
 TEST(DanfossFc51Rpm, The100PercentReferenceIs3_03) {
@@ -201,16 +216,11 @@ TEST(DanfossFc51Rpm, MavReadsAsTheSynchronousSpeedOverTheSameSpan) {
   const Profile p =
       shipped_with("danfoss-fc51",
                    {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
-  ModbusDriver d = driver_of(p, 1);
-  ModbusSimulator sim(1, p);
-  ASSERT_EQ(sim.control("set main_actual_value 50", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 1050);
-  EXPECT_EQ(
-      sim.on_receive(
-          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}), now),
-      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
+  const SpeedSeen seen =
+      speed_seen(p, "set main_actual_value 50",
+                 encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}));
+  EXPECT_EQ(seen.rpm, 1050);
+  EXPECT_EQ(seen.reply, encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
 }
 
 // --- Eaton PowerXL DG1 ---
@@ -234,16 +244,11 @@ TEST(EatonDg1Rpm, TheActualSpeedReadsAsTheSynchronousSpeedOverTheSameSpan) {
   // 60 Hz: 35 Hz, 1050 rpm at 4 poles.
   const Profile p = shipped_with(
       "eaton-dg1", {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}});
-  ModbusDriver d = driver_of(p, 1);
-  ModbusSimulator sim(1, p);
-  ASSERT_EQ(sim.control("set fb_actual_speed 50", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 1050);
-  EXPECT_EQ(
-      sim.on_receive(
-          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x08, 0x36, 0x00, 0x01}), now),
-      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x02, 0x13, 0x88}));
+  const SpeedSeen seen =
+      speed_seen(p, "set fb_actual_speed 50",
+                 encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x08, 0x36, 0x00, 0x01}));
+  EXPECT_EQ(seen.rpm, 1050);
+  EXPECT_EQ(seen.reply, encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x02, 0x13, 0x88}));
 }
 
 }  // namespace
