@@ -1,6 +1,7 @@
 // The speed and the setpoint in rpm of shipped profiles whose units come from their manuals' own
 // examples and tables: the frame a setpoint in rpm puts on the line is the manual's frame, and the
-// speed a PLC reads is the manual's value through the profile's rpm_factor at its default options.
+// speed a PLC reads is the manual's value through the profile's rpm_factor at its default (or a
+// required option's example) options, or at the options a test gives the device.
 //
 // ENC EDS300 user manual: 7.7.3 p.42 (50 Hz = 1388H at 2001H), Appendix A Table A-4 p.48 (the
 // output frequency monitor in 0.01 Hz). NORD BU 0050 GB-3111: 1.6.3 p.46 (a 50 % setpoint is
@@ -9,7 +10,11 @@
 // p.417 (60.00 Hz written as 1770H). Hitachi SJ series P1 User's Guide 14.4.8 p.14-18 (FA-01 and
 // dA-01 at 50.00 Hz = 0000 1388h, register address = register number - 1). Inovance MD500 Series
 // General-Purpose AC Drive User Manual p.110 (1000H = 2710H is 100.00 % of F0-10, 50 Hz with
-// F0-10 = 50 Hz: the frame 01 06 10 00 27 10 97 36).
+// F0-10 = 50 Hz: the frame 01 06 10 00 27 10 97 36). Danfoss VLT Micro Drive FC 51 Design Guide
+// MG02K202 8.11.3 p.88 (16384 = 100 %, 0 % = 3-02 and 100 % = 3-03 with 3-00 = min-max; MAV
+// scaled as the reference). Eaton MN040010EN: May 2014 p.15 Startup Test (FB Speed reference
+// 42002 = 5000 = 50.00 %, "The Actual value is 5000"), June 2018 pp.28, 134 (0 = minimum
+// frequency P1.1, 10000 = maximum frequency P1.2, reference and actual speed).
 #include <gtest/gtest.h>
 
 #include "driver.h"
@@ -28,6 +33,17 @@ using namespace std::chrono_literals;
 // The shipped profile `name`; a test failure, and an empty profile, if it is refused.
 Profile shipped_profile(const std::string& name) {
   return support::parsed(shipped::text(name));
+}
+
+// The shipped profile `name` with a device's `options` applied (required ones included).
+Profile shipped_with(const std::string& name,
+                     const std::vector<std::pair<std::string, double>>& options) {
+  Profile p = shipped_profile(name);
+  Options o;
+  for (const auto& [k, v] : options) o.set(k, v);
+  std::string error;
+  EXPECT_TRUE(apply_options(p, o, error)) << error;
+  return p;
 }
 
 ModbusDriver driver_of(const Profile& p, std::uint8_t slave) {
@@ -163,14 +179,96 @@ TEST(InovanceMd500Rpm, A1500RpmSetpointIsTheManuals100PercentFrame) {
 
 TEST(InovanceMd500Rpm, TheSetpointFollowsTheMaximumFrequencyTheDeviceSets) {
   // The same 1500 rpm with F0-10 = 100 Hz (set in [device.options]) is 50.00 % of F0-10: 1388H.
-  Profile p = shipped_profile("inovance-md500");
-  Options o;
-  o.set("max_frequency_hz", 100.0);
-  o.set("motor_poles", 4.0);
-  std::string error;
-  ASSERT_TRUE(apply_options(p, o, error)) << error;
-  ModbusDriver d = driver_of(p, 1);
+  ModbusDriver d = driver_of(
+      shipped_with("inovance-md500", {{"max_frequency_hz", 100.0}, {"motor_poles", 4.0}}), 1);
   EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s), support::fc06_frame(1, 0x1000, 0x1388));
+}
+
+// What a PLC sees of a profile's speed: the speed in rpm the driver reads once the profile's
+// simulator holds `set` ("set POINT VALUE"), and the simulator's reply to the RTU read `read`.
+struct SpeedSeen {
+  std::int32_t rpm = 0;
+  Bytes reply;
+};
+SpeedSeen speed_seen(const Profile& p, const std::string& set, const Bytes& read) {
+  ModbusDriver d = driver_of(p, 1);
+  ModbusSimulator sim(1, p);
+  EXPECT_EQ(sim.control(set, TimePoint{}).rfind("ok", 0), 0u) << set;
+  TimePoint now = TimePoint{} + 10s;
+  poll_against(d, sim, now);
+  return {d.common().speed_rpm, sim.on_receive(read, now)};
+}
+
+// --- Danfoss FC 51 ---
+
+TEST(DanfossFc51Rpm, The100PercentReferenceIs3_03) {
+  // p.88: 16384 (4000 hex) = 100 % = 3-03 Maximum Reference; at the examples (3-02 = 0 Hz,
+  // 3-03 = 50 Hz, 4 poles) 1500 rpm is 50 Hz, 100 %; 750 rpm is 2000 hex. REF is register 50010,
+  // address 50009 (C359h), written with FC 06.
+  ModbusDriver d = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x4000));
+  ModbusDriver half = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(half, 750, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x2000));
+  // Outside 3-02 .. 3-03 (3-00 = min-max) nothing is sent.
+  ModbusDriver over = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(over, 1501, TimePoint{} + 10s), std::nullopt);
+  ModbusDriver under = driver_of("danfoss-fc51", 1);
+  EXPECT_EQ(setpoint_frame(under, -30, TimePoint{} + 10s), std::nullopt);
+}
+
+TEST(DanfossFc51Rpm, TheReferenceSpans3_02To3_03) {
+  // 3-02 = 10 Hz, 3-03 = 60 Hz, 4 poles: 0 % is 300 rpm, 100 % 1800 rpm; 1050 rpm (35 Hz) is
+  // half the span, 2000 hex; 300 rpm is 0.
+  const Profile p =
+      shipped_with("danfoss-fc51",
+                   {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
+  ModbusDriver d = driver_of(p, 1);
+  EXPECT_EQ(setpoint_frame(d, 1050, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x2000));
+  ModbusDriver low = driver_of(p, 1);
+  EXPECT_EQ(setpoint_frame(low, 300, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x0000));
+  ModbusDriver below = driver_of(p, 1);
+  EXPECT_EQ(setpoint_frame(below, 290, TimePoint{} + 10s), std::nullopt);
+}
+
+TEST(DanfossFc51Rpm, MavReadsAsTheSynchronousSpeedOverTheSameSpan) {
+  // p.88: MAV is scaled as the reference. MAV = 2000 hex (50 %) with 3-02 = 10 Hz, 3-03 = 60 Hz:
+  // 35 Hz, 1050 rpm at 4 poles; the register a PLC reads is 50210 (address C421h).
+  const Profile p =
+      shipped_with("danfoss-fc51",
+                   {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
+  const SpeedSeen seen =
+      speed_seen(p, "set main_actual_value 50",
+                 encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}));
+  EXPECT_EQ(seen.rpm, 1050);
+  EXPECT_EQ(seen.reply, encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
+}
+
+// --- Eaton PowerXL DG1 ---
+
+TEST(EatonDg1Rpm, TheStartupTests50PercentReferenceIsHalfTheSpan) {
+  // p.15: "Set FB Speed reference (Modbus Address 42002) value to 5000 (=50.00%)": at the
+  // examples (P1.1 = 0, P1.2 = 50 Hz, 4 poles) 750 rpm; written with FC 06 at 2002 (07D2h).
+  ModbusDriver d = driver_of("eaton-dg1", 1);
+  EXPECT_EQ(setpoint_frame(d, 750, TimePoint{} + 10s), support::fc06_frame(1, 0x07D2, 5000));
+  // P1.1 = 10 Hz, P1.2 = 60 Hz: 50 % is 35 Hz, 1050 rpm.
+  ModbusDriver span = driver_of(
+      shipped_with("eaton-dg1",
+                   {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}}),
+      1);
+  EXPECT_EQ(setpoint_frame(span, 1050, TimePoint{} + 10s), support::fc06_frame(1, 0x07D2, 5000));
+}
+
+TEST(EatonDg1Rpm, TheActualSpeedReadsAsTheSynchronousSpeedOverTheSameSpan) {
+  // p.15: "The Actual value is 5000" (ID 2103, input register address 2102 = 0836h); p.134: the
+  // actual value 0..10000 spans the set minimum .. maximum frequency. P1.1 = 10 Hz, P1.2 =
+  // 60 Hz: 35 Hz, 1050 rpm at 4 poles.
+  const Profile p = shipped_with(
+      "eaton-dg1", {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}});
+  const SpeedSeen seen =
+      speed_seen(p, "set fb_actual_speed 50",
+                 encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x08, 0x36, 0x00, 0x01}));
+  EXPECT_EQ(seen.rpm, 1050);
+  EXPECT_EQ(seen.reply, encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x02, 0x13, 0x88}));
 }
 
 }  // namespace
