@@ -368,7 +368,7 @@ Bytes frame(std::vector<std::uint8_t> pdu) {
 class BindingsDriver : public ::testing::Test {
  protected:
   explicit BindingsDriver(const std::string& text = kDrive)
-      : d{kSlave, parsed(text), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms} {}
+      : d{support::driver_of(kSlave, parsed(text))} {}
 
   Bytes sent() {
     const auto ex = d.next_exchange(now);
@@ -515,8 +515,7 @@ const std::string kTwoCoils =
     "{ point = \"run_coil\", value = 1 }] }\n";
 
 TEST(BindingsSequence, EachStepGoesToItsOwnCoilAndAStopOvertakesTheRest) {
-  ModbusDriver d{kSlave, parsed(kTwoCoils), Timing{3, 3000ms, std::chrono::nanoseconds(572917)},
-                 500ms};
+  ModbusDriver d = support::driver_of(kSlave, parsed(kTwoCoils));
   TimePoint now = TimePoint{} + 10s;
   const auto sent = [&] {
     const auto ex = d.next_exchange(now);
@@ -709,8 +708,7 @@ const std::string kStateMachine =
 // nothing to send for a while; the frames it sent (the requests).
 struct AgainstItsSimulator {
   explicit AgainstItsSimulator(const std::string& text)
-      : d{kSlave, parsed(text), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms},
-        sim{kSlave, parsed(text)} {}
+      : d{support::driver_of(kSlave, parsed(text))}, sim{kSlave, parsed(text)} {}
 
   std::vector<Bytes> pump(std::chrono::milliseconds for_how_long = 1200ms) {
     std::vector<Bytes> sent;

@@ -27,7 +27,7 @@ Bytes frame(std::vector<std::uint8_t> pdu, std::uint8_t address = kSlave) {
 class ModbusDriverTest : public ::testing::Test {
  protected:
   // 19200 baud, 8E1: 11 bits a character.
-  ModbusDriver d{kSlave, example(), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms};
+  ModbusDriver d = support::driver_of(kSlave, example());
   TimePoint now = TimePoint{} + 10s;
 
   // The next frame the driver sends.

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "driver.h"
+#include "profile_support.h"
 #include "simulator.h"
 
 namespace drivegate::modbus_device {
@@ -69,7 +70,7 @@ Bytes frame(std::vector<std::uint8_t> pdu) {
 
 class ModbusDriverTypesTest : public ::testing::Test {
  protected:
-  ModbusDriver d{kSlave, profile(), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms};
+  ModbusDriver d = support::driver_of(kSlave, profile());
   TimePoint now = TimePoint{} + 10s;
 
   Bytes sent() {
@@ -198,7 +199,7 @@ TEST(ModbusTypesRoundTrip, EveryOrderThroughFc03AndFc04) {
   for (const auto& [name, value] : points) {
     ASSERT_EQ(sim.control("set " + name + " " + value, TimePoint{}).rfind("ok", 0), 0u) << name;
   }
-  ModbusDriver d{kSlave, p, Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms};
+  ModbusDriver d = support::driver_of(kSlave, p);
   TimePoint now = TimePoint{} + 10s;
   bool saw_fc03 = false;
   bool saw_fc04 = false;

@@ -25,104 +25,14 @@ namespace {
 using namespace std::chrono_literals;
 using support::completions;
 using support::errors_of;
+using support::kHzProfile;
+using support::kPercentProfile;
 using support::parsed;
+using support::with_options;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
 constexpr std::uint8_t kSlave = 7;
-
-// A CiA 402-like drive in Hz: the reference and the output frequency in 0.01 Hz, rpm through
-// the motor's poles; a run passes through "switched on" before "operation enabled".
-constexpr const char* kHzProfile = R"toml(
-[profile]
-name = "hz-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles (nameplate)"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-unit = "Hz"
-description = "maximum frequency (P1.2)"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "frequency_reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.01
-min = 0
-max = 400
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[[point]]
-name = "output_frequency"
-table = "holding"
-address = 3
-type = "s16"
-scale = 0.01
-[common]
-speed_rpm = { point = "output_frequency", rpm_factor = "120 / motor_poles" }
-setpoint_rpm = { point = "frequency_reference", rpm_factor = "120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-fault = { point = "status_word", bit = 3 }
-stop = { point = "control_word", sequence = [0x0007, 0x0006] }
-run_forward = { point = "control_word", sequence = [0x0006, 0x0007, 0x000F] }
-run_reverse = { point = "control_word", sequence = [0x0006, 0x080F] }
-reset_fault = { point = "control_word", sequence = [0x0080, 0x0006] }
-)toml";
-
-// A drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 / poles / 100).
-constexpr const char* kPercentProfile = R"toml(
-[profile]
-name = "pct-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-description = "maximum frequency"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.006103515625   # 100 / 16384
-min = 0
-max = 100
-[[point]]
-name = "actual"
-table = "holding"
-address = 2
-type = "u16"
-scale = 0.006103515625
-[common]
-speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
 
 // The Vacon / Eaton M-Max kind: the reference 0..10000 is 0..100 % of the span between the
 // minimum and the maximum frequency, and so is the actual speed. Worked by hand at the defaults
@@ -195,16 +105,7 @@ Bytes fc06(std::uint16_t address, std::uint16_t value) {
 }
 
 ModbusDriver driver_of(Profile p) {
-  return ModbusDriver(kSlave, std::move(p), Timing{3, 3000ms, std::chrono::nanoseconds(572917)},
-                      500ms);
-}
-
-Profile with_options(Profile p, const std::vector<std::pair<std::string, double>>& set) {
-  Options o;
-  for (const auto& [k, v] : set) o.set(k, v);
-  std::string error;
-  EXPECT_TRUE(apply_options(p, o, error)) << error;
-  return p;
+  return support::driver_of(kSlave, std::move(p));
 }
 
 // --- [options.NAME] ---

@@ -26,41 +26,14 @@ using ::testing::ElementsAre;
 
 constexpr std::uint8_t kSlave = 7;
 
-// ABB Drives-like: a run passes through 0x047E (ready to operate) before 0x047F (operating); the
-// stop is 0x047E.
-constexpr const char* kProfile = R"toml(
-[profile]
-name = "seq-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.01
-min = 0
-max = 400
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[common]
-setpoint_rpm = { point = "reference", rpm_factor = "120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-stop = { point = "control_word", value = 0x047E }
-run_forward = { point = "control_word", sequence = [0x047E, 0x047F] }
-)toml";
+// The drive in Hz (support::kHzProfile) with ABB Drives-like commands: a run passes through
+// 0x047E (ready to operate) before 0x047F (operating); the stop is 0x047E.
+const std::string kProfile = support::replaced(
+    support::replaced(support::kHzProfile, "name = \"hz-drive\"", "name = \"seq-drive\""),
+    "stop = { point = \"control_word\", sequence = [0x0007, 0x0006] }\n"
+    "run_forward = { point = \"control_word\", sequence = [0x0006, 0x0007, 0x000F] }\n",
+    "stop = { point = \"control_word\", value = 0x047E }\n"
+    "run_forward = { point = \"control_word\", sequence = [0x047E, 0x047F] }\n");
 
 Bytes fc06(std::uint16_t address, std::uint16_t value) {
   return support::fc06_frame(kSlave, address, value);

@@ -24,54 +24,23 @@ namespace {
 
 using namespace std::chrono_literals;
 using support::errors_of;
+using support::kPercentProfile;
 using support::parsed;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
 constexpr std::uint8_t kSlave = 7;
 
-// A drive in % of its maximum frequency, 16384 = 100 %: rpm = % x max_frequency_hz x 120 /
-// motor_poles / 100. The maximum frequency's factory value is not cited, so it is required.
-constexpr const char* kProfile = R"toml(
-[profile]
-name = "req-drive"
-source = "a test"
-[options.max_frequency_hz]
-min = 1
-max = 400
-example = 50
-unit = "Hz"
-description = "maximum frequency P105 of the active parameter set: set it to the drive's P105"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.006103515625   # 100 / 16384
-min = 0
-max = 100
-[[point]]
-name = "actual"
-table = "holding"
-address = 2
-type = "u16"
-scale = 0.006103515625
-[common]
-speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
+// The drive in % of its maximum frequency (support::kPercentProfile: 16384 = 100 %, rpm = % x
+// max_frequency_hz x 120 / motor_poles / 100), but the maximum frequency's factory value is not
+// cited, so it is required.
+const std::string kProfile = support::replaced(
+    support::replaced(kPercentProfile, "name = \"pct-drive\"", "name = \"req-drive\""),
+    "[options.max_frequency_hz]\ndefault = 50\nmin = 10\nmax = 400\ndescription = \"maximum "
+    "frequency\"\n",
+    "[options.max_frequency_hz]\nmin = 1\nmax = 400\nexample = 50\nunit = \"Hz\"\n"
+    "description = \"maximum frequency P105 of the active parameter set: set it to the drive's "
+    "P105\"\n");
 
 // kProfile with `from` replaced by `to`.
 std::string with(const std::string& from, const std::string& to) {
@@ -116,10 +85,10 @@ TEST(RequiredOption, IsReadWithItsExampleAndShownRequired) {
 
 TEST(RequiredOption, DefaultAndExampleTogetherOrNeitherAreErrorsOnTheirLines) {
   EXPECT_THAT(errors_of(with("example = 50\n", "example = 50\ndefault = 50\n")),
-              ElementsAre(HasSubstr("p.toml:8: options.max_frequency_hz.example: and default "
+              ElementsAre(HasSubstr("p.toml:13: options.max_frequency_hz.example: and default "
                                     "together")));
   EXPECT_THAT(errors_of(with("example = 50\n", "")),
-              ElementsAre(HasSubstr("p.toml:5: options.max_frequency_hz: needs a default (the "
+              ElementsAre(HasSubstr("p.toml:10: options.max_frequency_hz: needs a default (the "
                                     "drive's factory value, cited) or an example")));
   EXPECT_THAT(errors_of(with("example = 50\n", "example = 500\n")),
               ElementsAre(HasSubstr("options.max_frequency_hz.example: must be in min..max "

@@ -28,14 +28,14 @@ Profile shipped_profile(const std::string& name) {
 }
 
 ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
-  const Profile p = shipped_profile(name);
-  return ModbusDriver(
-      slave, p, Timing{3, 3000ms, character_time(p.line.baud, p.line.parity, 8, p.line.stop_bits)},
-      500ms);
+  return support::driver_at_its_line(slave, shipped_profile(name));
 }
 
-// The frame the driver sends for a setpoint of `rpm`, or nothing when it refuses it.
-std::optional<Bytes> setpoint_frame(ModbusDriver& d, std::int32_t rpm, TimePoint now) {
+// The frame the driver of the shipped profile `name` sends for a setpoint of `rpm`, or nothing
+// when it refuses it.
+std::optional<Bytes> setpoint_frame(const std::string& name, std::uint8_t slave, std::int32_t rpm) {
+  ModbusDriver d = driver_of(name, slave);
+  const TimePoint now = TimePoint{} + 10s;
   const WriteOp op = WriteOp::of_setpoint(rpm);
   if (d.check(std::span(&op, 1)) != WriteCheck::ok) return std::nullopt;
   if (d.apply(op, 1, now) != WriteStatus::pending) return std::nullopt;
@@ -44,8 +44,14 @@ std::optional<Bytes> setpoint_frame(ModbusDriver& d, std::int32_t rpm, TimePoint
   return ex->frame;
 }
 
-// The driver's reads answered by the profile's simulator, until every read block was asked.
-void poll_against(ModbusDriver& d, ModbusSimulator& sim, TimePoint& now) {
+// The speed in rpm the driver of the shipped profile `name` reads once its simulator was told
+// `control` (a `set POINT VALUE`), its reads answered until every read block was asked; `sim`
+// is that simulator, `now` the time after the last read.
+std::int32_t speed_read(const std::string& name, std::uint8_t slave, const std::string& control,
+                        ModbusSimulator& sim, TimePoint& now) {
+  ModbusDriver d = driver_of(name, slave);
+  EXPECT_EQ(sim.control(control, TimePoint{}).rfind("ok", 0), 0u) << control;
+  now = TimePoint{} + 10s;
   for (int i = 0; i < 32; ++i) {
     const auto ex = d.next_exchange(now);
     if (!ex) {
@@ -54,55 +60,48 @@ void poll_against(ModbusDriver& d, ModbusSimulator& sim, TimePoint& now) {
     }
     d.on_receive(sim.on_receive(ex->frame, now), now);
   }
+  return d.common().speed_rpm;
+}
+std::int32_t speed_read(const std::string& name, std::uint8_t slave, const std::string& control) {
+  ModbusSimulator sim(slave, shipped_profile(name));
+  TimePoint now;
+  return speed_read(name, slave, control, sim, now);
 }
 
 // --- ENC EDS300 ---
 
 TEST(EncEds300Rpm, A1500RpmSetpointIsTheManuals50HzFrame) {
-  ModbusDriver d = driver_of("enc-eds300", 1);
   // 7.7.3 "Set 1# inverter specified value to 50Hz": 01 06 20 01 13 88 DE 9C; 1500 rpm is
   // 50 Hz at the default 4 poles.
-  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("enc-eds300", 1, 1500),
             Bytes({0x01, 0x06, 0x20, 0x01, 0x13, 0x88, 0xDE, 0x9C}));
 }
 
 TEST(EncEds300Rpm, TheOutputFrequencyMonitorReadsAsTheSynchronousSpeed) {
-  ModbusDriver d = driver_of("enc-eds300", 1);
-  ModbusSimulator sim(1, shipped_profile("enc-eds300"));
   // C-01 (1001H) at 49.50 Hz, raw 4950 in Table A-4's 0.01 Hz: 1485 rpm at 4 poles.
-  ASSERT_EQ(sim.control("set monitor_c01_output_frequency 49.5", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 1485);
+  EXPECT_EQ(speed_read("enc-eds300", 1, "set monitor_c01_output_frequency 49.5"), 1485);
 }
 
 // --- NORD SK 500E ---
 
 TEST(NordSk500eRpm, A750RpmSetpointIsTheManuals50PercentSetpoint) {
-  ModbusDriver d = driver_of("nord-sk500e", 8);
   // p.46: a 50 % setpoint is 2000 hex; 100 % is P105 (DE p.32), 50 Hz by default: 25 Hz is
   // 750 rpm at 4 poles. Setpoint 1 is P050[1] (0C81H), written with FC 10H (p.66, p.67).
-  EXPECT_EQ(setpoint_frame(d, 750, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("nord-sk500e", 8, 750),
             encode(Framing::rtu, 8,
                    std::vector<std::uint8_t>{0x10, 0x0C, 0x81, 0x00, 0x01, 0x02, 0x20, 0x00}));
 }
 
 TEST(NordSk500eRpm, ActualValue1ReadsAsTheSynchronousSpeed) {
-  ModbusDriver d = driver_of("nord-sk500e", 8);
-  ModbusSimulator sim(8, shipped_profile("nord-sk500e"));
   // p.48's reply: IW1 = 2000 hex, 50 % of P105 (p.36): 25 Hz, 750 rpm at 4 poles.
-  ASSERT_EQ(sim.control("set actual_value_1 50", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 750);
+  EXPECT_EQ(speed_read("nord-sk500e", 8, "set actual_value_1 50"), 750);
 }
 
 // --- Yaskawa V1000 ---
 
 TEST(YaskawaV1000Rpm, An1800RpmSetpointWritesTheManuals1770H) {
-  ModbusDriver d = driver_of("yaskawa-v1000", 1);
   // p.417: 60.00 Hz is 1770H in 0002H; 1800 rpm is 60 Hz at 4 poles. FC 10H, one register.
-  EXPECT_EQ(setpoint_frame(d, 1800, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("yaskawa-v1000", 1, 1800),
             encode(Framing::rtu, 1,
                    std::vector<std::uint8_t>{0x10, 0x00, 0x02, 0x00, 0x01, 0x02, 0x17, 0x70}));
   // The manual's own frame (forward run and 60.00 Hz) is the profile's example and checks.
@@ -119,24 +118,20 @@ TEST(YaskawaV1000Rpm, An1800RpmSetpointWritesTheManuals1770H) {
 // --- Hitachi SJ-P1 ---
 
 TEST(HitachiSjP1Rpm, A1500RpmSetpointWritesTheManuals50HzToFa01) {
-  ModbusDriver d = driver_of("hitachi-sj-p1", 1);
   // p.14-18: 50.00 Hz is written to FA-01 as 0000 1388h at register address 2AF8h (register
   // 2AF9h - 1), two registers, high word first; 1500 rpm is 50 Hz at 4 poles. The manual's frame
   // is FC 17h; the profile writes the same two registers with FC 10h.
-  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("hitachi-sj-p1", 1, 1500),
             encode(Framing::rtu, 1,
                    std::vector<std::uint8_t>{0x10, 0x2A, 0xF8, 0x00, 0x02, 0x04, 0x00, 0x00, 0x13,
                                              0x88}));
 }
 
 TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
-  ModbusDriver d = driver_of("hitachi-sj-p1", 1);
   ModbusSimulator sim(1, shipped_profile("hitachi-sj-p1"));
+  TimePoint now;
   // p.14-18's reply: dA-01 (registers 2711h/2712h) = 0000 1388h = 50.00 Hz: 1500 rpm at 4 poles.
-  ASSERT_EQ(sim.control("set output_frequency 50", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 1500);
+  EXPECT_EQ(speed_read("hitachi-sj-p1", 1, "set output_frequency 50", sim, now), 1500);
   // The driver asks dA-01 at the register address the manual sends: 2710h, two registers.
   const Bytes read =
       encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x27, 0x10, 0x00, 0x02});
