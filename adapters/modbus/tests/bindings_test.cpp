@@ -23,11 +23,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
-using support::errors_of;
-using support::parsed;
-using support::read_pdu;
-using support::replaced;
-using support::words_pdu;
+using namespace support;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
@@ -365,15 +361,9 @@ Bytes frame(std::vector<std::uint8_t> pdu) {
   return encode(Framing::rtu, kSlave, pdu);
 }
 
-class BindingsDriver : public ::testing::Test {
+class BindingsDriver : public DriverAtHand {
  protected:
-  explicit BindingsDriver(const std::string& text = kDrive)
-      : d{support::driver_of(kSlave, parsed(text))} {}
-
-  Bytes sent() {
-    const auto ex = d.next_exchange(now);
-    return ex ? ex->frame : Bytes{};
-  }
+  explicit BindingsDriver(const std::string& text = kDrive) : DriverAtHand(kSlave, parsed(text)) {}
   void answer(const Bytes& wire) { EXPECT_NE(d.on_receive(wire, now).kind, RxKind::foreign); }
 
   // One poll cycle: the coils, the trip bits, the speed, the reference, and the status and
@@ -401,9 +391,6 @@ class BindingsDriver : public ::testing::Test {
     static const Value none;
     return none;
   }
-
-  ModbusDriver d;
-  TimePoint now = TimePoint{} + 10s;
 };
 
 TEST_F(BindingsDriver, MaskedPointsShareARegisterReadOnce) {
@@ -624,27 +611,9 @@ TEST(BindingsSimulator, AFaultCodeBitFieldIsTheNativeCode) {
 
 // ---- On the bus engine: what a PLC reads
 
-class ProfileFile {
- public:
-  explicit ProfileFile(const std::string& text)
-      : dir_(std::filesystem::temp_directory_path() /
-             ("dg-bind-" + std::to_string(::getpid()) + "-" + std::to_string(++count_))) {
-    std::filesystem::create_directories(dir_);
-    std::ofstream(path()) << text;
-  }
-  ~ProfileFile() { std::filesystem::remove_all(dir_); }
-  ProfileFile(const ProfileFile&) = delete;
-  ProfileFile& operator=(const ProfileFile&) = delete;
-  [[nodiscard]] std::string path() const { return (dir_ / "bind.toml").string(); }
-
- private:
-  static inline int count_ = 0;
-  std::filesystem::path dir_;
-};
-
 TEST(BindingsOnTheBus, ThePlcRunsTheDriveThroughItsCoilAndReadsItsMaskedFault) {
   const ProfileFile file(kDrive);
-  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path()}}});
+  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path}}});
   ASSERT_TRUE(b.until_online());
   ASSERT_TRUE(b.run_forward_at(1200));
   EXPECT_TRUE(b.until_reads("speed_rpm", 1200, 2000ms));
@@ -676,7 +645,7 @@ TEST(BindingsOnTheBus, ThePlcRunsTheDriveThroughItsCoilAndReadsItsMaskedFault) {
 
 TEST(BindingsOnTheBus, ATripBitFieldIsTheUnifiedFaultAndItsValueTheNativeOne) {
   const ProfileFile file(with_trip_bits());
-  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path()}}});
+  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path}}});
   ASSERT_TRUE(b.until_online());
   ASSERT_THAT(b.control("fault 6"), HasSubstr("ok"));  // bits 1 and 2
   EXPECT_TRUE(b.until_reads("fault_code", static_cast<std::uint32_t>(Fault::over_voltage), 2000ms));

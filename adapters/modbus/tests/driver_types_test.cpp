@@ -68,15 +68,9 @@ Bytes frame(std::vector<std::uint8_t> pdu) {
   return encode(Framing::rtu, kSlave, pdu);
 }
 
-class ModbusDriverTypesTest : public ::testing::Test {
+class ModbusDriverTypesTest : public support::DriverAtHand {
  protected:
-  ModbusDriver d = support::driver_of(kSlave, profile());
-  TimePoint now = TimePoint{} + 10s;
-
-  Bytes sent() {
-    const auto ex = d.next_exchange(now);
-    return ex ? ex->frame : Bytes{};
-  }
+  ModbusDriverTypesTest() : DriverAtHand(kSlave, profile()) {}
   std::size_t index(std::string_view name) {
     for (std::size_t i = 0; i < d.points().size(); ++i) {
       if (d.points()[i].name == name) return i;

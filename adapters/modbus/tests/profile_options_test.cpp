@@ -23,12 +23,7 @@ namespace drivegate::modbus_device {
 namespace {
 
 using namespace std::chrono_literals;
-using support::completions;
-using support::errors_of;
-using support::kHzProfile;
-using support::kPercentProfile;
-using support::parsed;
-using support::with_options;
+using namespace support;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
@@ -195,20 +190,12 @@ TEST(RpmFactor, WhatIsNotOneIsAnErrorThatSaysWhy) {
 
 // 4 poles at 50 Hz: 1500 rpm <-> 50.00 Hz <-> raw 5000 at 0.01 Hz.
 TEST(RpmFactor, ASetpointOf1500RpmAt4PolesIs5000HundredthsOfAHertz) {
-  ModbusDriver d = driver_of(parsed(kHzProfile));
-  const TimePoint now = TimePoint{} + 10s;
-  const WriteOp op = WriteOp::of_setpoint(1500);
-  ASSERT_EQ(d.check(std::span(&op, 1)), WriteCheck::ok);
-  ASSERT_EQ(d.apply(op, 1, now), WriteStatus::pending);
-  EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, 5000));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kHzProfile)), 1500), fc06(1, 5000));
   // 1000 rpm is 33.333 Hz: rounded to the point's step, 3333.
-  ModbusDriver e = driver_of(parsed(kHzProfile));
-  ASSERT_EQ(e.apply(WriteOp::of_setpoint(1000), 1, now), WriteStatus::pending);
-  EXPECT_EQ(e.next_exchange(now)->frame, fc06(1, 3333));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kHzProfile)), 1000), fc06(1, 3333));
   // Two poles: 1500 rpm is 25.00 Hz.
-  ModbusDriver two = driver_of(with_options(parsed(kHzProfile), {{"motor_poles", 2}}));
-  ASSERT_EQ(two.apply(WriteOp::of_setpoint(1500), 1, now), WriteStatus::pending);
-  EXPECT_EQ(two.next_exchange(now)->frame, fc06(1, 2500));
+  const Profile two = with_options(parsed(kHzProfile), {{"motor_poles", 2}});
+  EXPECT_EQ(setpoint_frame(driver_of(two), 1500), fc06(1, 2500));
 }
 
 TEST(RpmFactor, ASetpointBeyondThePointsRangeAfterConversionIsRefused) {
@@ -242,16 +229,11 @@ TEST(RpmFactor, TheSpeedReadsInRpmThroughTheFactor) {
 // A % of maximum, 16384 = 100 %: 1500 rpm at 4 poles and 50 Hz is 100 %, raw 16384 (0x4000).
 TEST(RpmFactor, APercentOfMaximumFrequencyWith16384For100Percent) {
   const TimePoint now = TimePoint{} + 10s;
-  ModbusDriver d = driver_of(parsed(kPercentProfile));
-  ASSERT_EQ(d.apply(WriteOp::of_setpoint(1500), 1, now), WriteStatus::pending);
-  EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, 0x4000));
-  ModbusDriver half = driver_of(parsed(kPercentProfile));
-  ASSERT_EQ(half.apply(WriteOp::of_setpoint(750), 1, now), WriteStatus::pending);
-  EXPECT_EQ(half.next_exchange(now)->frame, fc06(1, 0x2000));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kPercentProfile)), 1500), fc06(1, 0x4000));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kPercentProfile)), 750), fc06(1, 0x2000));
   // 60 Hz maximum: 1800 rpm is 100 %.
-  ModbusDriver sixty = driver_of(with_options(parsed(kPercentProfile), {{"max_frequency_hz", 60}}));
-  ASSERT_EQ(sixty.apply(WriteOp::of_setpoint(1800), 1, now), WriteStatus::pending);
-  EXPECT_EQ(sixty.next_exchange(now)->frame, fc06(1, 0x4000));
+  const Profile sixty = with_options(parsed(kPercentProfile), {{"max_frequency_hz", 60}});
+  EXPECT_EQ(setpoint_frame(driver_of(sixty), 1800), fc06(1, 0x4000));
   // Read: 8192 is 50 %, 750 rpm; 65535 is 399.99 %, 6000 rpm... within range, but at 2 poles
   // and 400 Hz (120 rpm a %) 48000 rpm: beyond what speed_rpm carries, unknown and a fault.
   ModbusDriver r = driver_of(parsed(kPercentProfile));
@@ -385,10 +367,8 @@ TEST(RpmOffset, ADevicesOptionsThatMakeTheFactorZeroOrNegativeAreRefused) {
 // The golden values worked by hand (kSpanProfile's comment): the frames the driver sends.
 TEST(RpmOffset, TheSetpointIsWrittenAsRpmLessTheOffsetOverTheFactor) {
   const TimePoint now = TimePoint{} + 10s;
-  const auto frame_for = [&](std::int32_t rpm) {
-    ModbusDriver d = driver_of(parsed(kSpanProfile));
-    EXPECT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
-    return d.next_exchange(now)->frame;
+  const auto frame_for = [](std::int32_t rpm) {
+    return setpoint_frame(driver_of(parsed(kSpanProfile)), rpm);
   };
   EXPECT_EQ(frame_for(900), fc06(1, 5000));    // 30 Hz
   EXPECT_EQ(frame_for(300), fc06(1, 0));       // 10 Hz, the minimum
@@ -409,9 +389,7 @@ TEST(RpmOffset, TheSetpointIsWrittenAsRpmLessTheOffsetOverTheFactor) {
                    {{"motor_poles", 2}, {"min_frequency_hz", 5}, {"max_frequency_hz", 60}});
   for (const auto& [rpm, raw] : std::initializer_list<std::pair<std::int32_t, std::uint16_t>>{
            {3600, 10000}, {300, 0}, {1000, 2121}}) {
-    ModbusDriver d = driver_of(two);
-    ASSERT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
-    EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, raw)) << rpm;
+    EXPECT_EQ(setpoint_frame(driver_of(two), rpm), fc06(1, raw)) << rpm;
   }
 }
 
@@ -544,31 +522,8 @@ TEST(Sequence, AStopDuringARunSequenceOvertakesIt) {
 
 // --- on the bus engine, against the profile's simulator ---
 
-struct ProfileFile {
-  explicit ProfileFile(const std::string& text) {
-    dir = std::filesystem::temp_directory_path() / ("dg-popt-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    path = (dir / "hz.toml").string();
-    std::ofstream(path) << text;
-  }
-  ~ProfileFile() { std::filesystem::remove_all(dir); }
-  ProfileFile(const ProfileFile&) = delete;
-  ProfileFile& operator=(const ProfileFile&) = delete;
-  std::filesystem::path dir;
-  std::string path;
-};
-
-const AdapterDescriptor& specialised_for(const std::string& path) {
-  Options o = default_options(drivegate_adapter);
-  o.set("profile", path);
-  std::string error;
-  const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
-  EXPECT_NE(a, nullptr) << error;
-  return a != nullptr ? *a : drivegate_adapter;
-}
-
 TEST(ProfileOptionsOnTheBus, TheSchemaHasTheProfilesOptionsAndTheDeviceItsValues) {
-  ProfileFile f(kHzProfile);
+  const ProfileFile f(kHzProfile, "hz.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   std::string error;
   Options o = default_options(a);
@@ -597,7 +552,7 @@ TEST(ProfileOptionsOnTheBus, TheSchemaHasTheProfilesOptionsAndTheDeviceItsValues
 
 // The failsafe stops through the stop sequence: both values on the wire, in order.
 TEST(ProfileOptionsOnTheBus, TheFailsafeStopIsTheStopSequence) {
-  ProfileFile f(kHzProfile);
+  const ProfileFile f(kHzProfile, "hz.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   test::BusRig rig(a);
   DeviceConfig c = rig.device_config("d", kSlave, {{"profile", f.path}});
@@ -625,7 +580,7 @@ TEST(ProfileOptionsOnTheBus, TheFailsafeStopIsTheStopSequence) {
 // raw 5000; the simulated drive runs at it and the speed reads 900; 200 rpm is refused with
 // nothing on the wire.
 TEST(RpmOffset, OnTheBusTheSetpointReachesTheWireAsTheSpansRaw) {
-  ProfileFile f(kSpanProfile);
+  const ProfileFile f(kSpanProfile, "hz.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   test::BusRig rig(a);
   Device& d = rig.add_device("d", kSlave, {{"profile", f.path}});

@@ -6,16 +6,21 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <fstream>
+#include <optional>
 #include <string>
 #include <utility>
 #include <variant>
 #include <vector>
 
+#include "adapter_under_test.h"
 #include "codec.h"
 #include "drivegate/driver.h"
 #include "driver.h"
+#include "plugin/adapter_options.h"
 #include "profile.h"
 #include "profile_options.h"
+#include "temp_dir.h"
 
 namespace drivegate::modbus_device::support {
 
@@ -155,6 +160,63 @@ inline ModbusDriver driver_of(std::uint8_t slave, Profile p) {
 inline ModbusDriver driver_at_its_line(std::uint8_t slave, Profile p) {
   const Timing t{3, Millis(3000), character_time(p.line.baud, p.line.parity, 8, p.line.stop_bits)};
   return ModbusDriver(slave, std::move(p), t, Millis(500));
+}
+
+// The frame `d` sends for a setpoint of `rpm` at `now`, or nothing when it refuses it.
+inline std::optional<Bytes> setpoint_frame(ModbusDriver& d, std::int32_t rpm,
+                                           TimePoint now = TimePoint{} + std::chrono::seconds(10)) {
+  const WriteOp op = WriteOp::of_setpoint(rpm);
+  if (d.check(std::span(&op, 1)) != WriteCheck::ok) return std::nullopt;
+  if (d.apply(op, 1, now) != WriteStatus::pending) return std::nullopt;
+  const auto ex = d.next_exchange(now);
+  if (!ex) return std::nullopt;
+  return ex->frame;
+}
+inline std::optional<Bytes> setpoint_frame(ModbusDriver&& d, std::int32_t rpm) {
+  return setpoint_frame(d, rpm);
+}
+
+// A driver of a profile driven by hand at a time the test sets: the frame it sends next, and
+// what it makes of a reply.
+class DriverAtHand : public ::testing::Test {
+ protected:
+  DriverAtHand(std::uint8_t slave, Profile p) : d{driver_of(slave, std::move(p))} {}
+
+  // The next frame the driver sends; none when it has nothing to send.
+  Bytes sent() {
+    const auto ex = d.next_exchange(now);
+    return ex ? ex->frame : Bytes{};
+  }
+
+  ModbusDriver d;
+  TimePoint now = TimePoint{} + std::chrono::seconds(10);
+};
+
+// A profile's text in a file of its own (`file` in a temporary directory of its own, removed
+// with it), for what reads a profile by its path: the adapter's descriptor for it, the daemon.
+class ProfileFile {
+ public:
+  explicit ProfileFile(const std::string& text, const std::string& file = "p.toml")
+      : path((dir_ / file).string()) {
+    std::ofstream(path) << text;
+  }
+
+ private:
+  test::TempDir dir_;
+
+ public:
+  const std::string path;
+};
+
+// The adapter's descriptor for the profile at `path` (its options in the schema); a test failure,
+// and the plain descriptor, if it is refused.
+inline const AdapterDescriptor& specialised_for(const std::string& path) {
+  Options o = default_options(drivegate_adapter);
+  o.set("profile", path);
+  std::string error;
+  const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
+  EXPECT_NE(a, nullptr) << error;
+  return a != nullptr ? *a : drivegate_adapter;
 }
 
 // `text` with `from` replaced by `to` (a profile varied for one case); a test failure if `from`

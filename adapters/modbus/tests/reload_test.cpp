@@ -41,14 +41,7 @@ Bytes fc06(std::uint16_t address, std::uint16_t value) {
 
 class ReloadMidSequence : public ::testing::Test {
  protected:
-  ReloadMidSequence() {
-    dir_ = std::filesystem::temp_directory_path() / ("dg-reload-seq-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir_);
-    profile_ = (dir_ / "seq.toml").string();
-    std::ofstream(profile_) << kProfile;
-    plugins_.add(drivegate_adapter);
-  }
-  ~ReloadMidSequence() override { std::filesystem::remove_all(dir_); }
+  ReloadMidSequence() { plugins_.add(drivegate_adapter); }
 
   Config config(double poles) const {
     Config c;
@@ -65,13 +58,8 @@ class ReloadMidSequence : public ::testing::Test {
     d.adapter = "modbus";
     d.unit_id = 1;
     d.address = kSlave;
-    Options o = default_options(drivegate_adapter);
-    o.set("profile", profile_);
-    std::string error;
-    const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
-    EXPECT_NE(a, nullptr) << error;
-    d.options = default_options(*a);
-    d.options.set("profile", profile_);
+    d.options = default_options(support::specialised_for(file_.path));
+    d.options.set("profile", file_.path);
     d.options.set("motor_poles", poles);
     c.devices.push_back(d);
     return c;
@@ -129,8 +117,7 @@ class ReloadMidSequence : public ::testing::Test {
   }
 
   static inline const Session kPlc{AccessLevel::operate, WordOrder::big};
-  std::filesystem::path dir_;
-  std::string profile_;
+  const support::ProfileFile file_{kProfile, "seq.toml"};
   PluginRegistry plugins_;
   boost::asio::io_context io_;
   std::shared_ptr<spdlog::logger> log_ =

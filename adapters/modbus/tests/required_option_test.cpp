@@ -23,9 +23,7 @@ namespace drivegate::modbus_device {
 namespace {
 
 using namespace std::chrono_literals;
-using support::errors_of;
-using support::kPercentProfile;
-using support::parsed;
+using namespace support;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
@@ -49,29 +47,6 @@ std::string with(const std::string& from, const std::string& to) {
 
 Bytes fc06(std::uint16_t address, std::uint16_t value) {
   return support::fc06_frame(kSlave, address, value);
-}
-
-struct ProfileFile {
-  ProfileFile() {
-    dir = std::filesystem::temp_directory_path() / ("dg-req-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    path = (dir / "req.toml").string();
-    std::ofstream(path) << kProfile;
-  }
-  ~ProfileFile() { std::filesystem::remove_all(dir); }
-  ProfileFile(const ProfileFile&) = delete;
-  ProfileFile& operator=(const ProfileFile&) = delete;
-  std::filesystem::path dir;
-  std::string path;
-};
-
-const AdapterDescriptor& specialised_for(const std::string& path) {
-  Options o = default_options(drivegate_adapter);
-  o.set("profile", path);
-  std::string error;
-  const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
-  EXPECT_NE(a, nullptr) << error;
-  return a != nullptr ? *a : drivegate_adapter;
 }
 
 TEST(RequiredOption, IsReadWithItsExampleAndShownRequired) {
@@ -125,7 +100,7 @@ TEST(RequiredOption, ADeviceThatLeavesItOutIsRefusedNamingItAndItsDescription) {
 // The daemon's own path: the configuration loads (the option is the profile's), and building the
 // gateway refuses the device at its line, naming the option and what to set it to.
 TEST(RequiredOption, TheDaemonRefusesTheDeviceAtItsLine) {
-  ProfileFile f;
+  const ProfileFile f(kProfile, "req.toml");
   PluginRegistry plugins;
   plugins.add(drivegate_adapter);
   const auto config = [&](const std::string& options) {
@@ -165,7 +140,7 @@ TEST(RequiredOption, TheDaemonRefusesTheDeviceAtItsLine) {
 // 50 % = raw 8192 (the example's 50 Hz would send 60 % = 9830). The simulator, given nothing,
 // runs at its example and still answers.
 TEST(RequiredOption, OnTheBusTheDevicesValueIsOnTheWire) {
-  ProfileFile f;
+  const ProfileFile f(kProfile, "req.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   test::BusRig rig(a);
   Device& d = rig.add_device("d", kSlave, {{"profile", f.path}, {"max_frequency_hz", "60"}});

@@ -34,14 +34,7 @@ ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
 // The frame the driver of the shipped profile `name` sends for a setpoint of `rpm`, or nothing
 // when it refuses it.
 std::optional<Bytes> setpoint_frame(const std::string& name, std::uint8_t slave, std::int32_t rpm) {
-  ModbusDriver d = driver_of(name, slave);
-  const TimePoint now = TimePoint{} + 10s;
-  const WriteOp op = WriteOp::of_setpoint(rpm);
-  if (d.check(std::span(&op, 1)) != WriteCheck::ok) return std::nullopt;
-  if (d.apply(op, 1, now) != WriteStatus::pending) return std::nullopt;
-  const auto ex = d.next_exchange(now);
-  if (!ex) return std::nullopt;
-  return ex->frame;
+  return support::setpoint_frame(driver_of(name, slave), rpm);
 }
 
 // The speed in rpm the driver of the shipped profile `name` reads once its simulator was told
