@@ -5,10 +5,6 @@
 // wire), served by the simulator, and run on the bus engine as a PLC reads the common block.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <filesystem>
-#include <fstream>
 
 #include "adapter_bench.h"
 #include "adapter_under_test.h"
