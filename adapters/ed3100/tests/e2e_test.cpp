@@ -63,9 +63,7 @@ class Ed3100E2E : public ::testing::Test {
         daemon_(dir_, config(dir_ / "ed"), {"--log-level", "trace"}, dir_ / "drivegated.log") {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
+    ASSERT_TRUE(comes_online(plc_)) << "never online; sim says " << sim_.control("state");
   }
   Wire frames() { return read_wire(dir_ / "drivegated.log", kBus); }
   // True once `frame` has been sent (and, if given, `reply` received) on the line.
@@ -193,8 +191,7 @@ TEST_F(Ed3100E2E, SilentDriveIsCommLostWritesGet0x0BAndItComesBack) {
   EXPECT_EQ(plc_.write(ed::param_00_06, {1}), 0x0B);
 
   EXPECT_EQ(sim_.control("silent off"), "ok silent=off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  ASSERT_TRUE(comes_online(plc_));
   EXPECT_EQ(plc_.input(reg::fault_code, 1).regs[0], 0);
   EXPECT_EQ(plc_.holding(ed::param_00_06, 1).regs[0], 0x1088);  // read again on reconnect
   EXPECT_EQ(plc_.write(ed::frequency_setpoint, {4232}), 0);

@@ -69,9 +69,7 @@ class Fdc1E2E : public ::testing::TestWithParam<ProtocolAdapter> {
   void SetUp() override {
     ASSERT_EQ(sim_.control("window " + std::to_string(kWindowS)), "ok");
     ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
+    ASSERT_TRUE(comes_online(plc_)) << "never online; sim says " << sim_.control("state");
   }
   std::string state() { return sim_.control("state"); }
   void run_at_2000() {
@@ -216,8 +214,7 @@ TEST_P(Fdc1E2E, CommLostAfterStaleMsWhenTheStreamStops) {
 
   // The stream returns: online again, and the run in force is sent again at once.
   sim_.control("silent off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 5s));
+  ASSERT_TRUE(comes_online(plc_, 5s));
   EXPECT_EQ(plc_.input(reg::fault_code, 1).regs[0], 0);
 }
 
@@ -234,9 +231,7 @@ TEST_P(Fdc1E2E, AReloadAddingALineLeavesTheRunningCompressorAlone) {
          "unit_id = 2\n[device.options]\nslave_mode = true\n";
   daemon_.process().signal(SIGHUP);
   plc_.unit(2);
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-      << "the added compressor never came online";
+  ASSERT_TRUE(comes_online(plc_)) << "the added compressor never came online";
 
   plc_.unit(1);
   const auto until = std::chrono::steady_clock::now() + 2s;  // four stream periods

@@ -54,9 +54,7 @@ class MDriverE2E : public ::testing::TestWithParam<ProtocolAdapter> {
                 dir_ / "drivegated.log") {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
+    ASSERT_TRUE(comes_online(plc_)) << "never online; sim says " << sim_.control("state");
   }
   std::vector<std::string> frames() { return wire().tx; }
   Wire wire() { return read_wire(dir_ / "drivegated.log", kBus); }

@@ -33,9 +33,7 @@ class NidecE2E : public ::testing::TestWithParam<ProtocolAdapter> {
       : sim_("nidec-washer", dir_ / "washer"), daemon_(dir_, config(dir_ / "washer", GetParam())) {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
+    ASSERT_TRUE(comes_online(plc_)) << "never online; sim says " << sim_.control("state");
   }
   TempDir dir_;
   Sim sim_;
@@ -93,8 +91,7 @@ TEST_P(NidecE2E, SilentDriveIsCommLostAndWritesGet0x0B) {
   EXPECT_EQ(plc_.write(reg::command, {1, 800}), 0x0B);
   // It is still probed, and comes back by itself.
   sim_.control("silent off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  ASSERT_TRUE(comes_online(plc_));
   EXPECT_EQ(plc_.write(reg::command, {1, 500}), 0);
 }
 

@@ -69,9 +69,7 @@ class EDriveE2E : public ::testing::Test {
         daemon_(dir_, bus(dir_ / "edrive") + device("edrive", 1, 1)) {}
   void SetUp() override {
     ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << state();
+    ASSERT_TRUE(comes_online(plc_)) << "never online; sim says " << state();
   }
   std::string state() { return sim_.control("state"); }
   TempDir dir_;
@@ -193,8 +191,7 @@ TEST_F(EDriveE2E, SilentDriveIsCommLostAndComesBack) {
   EXPECT_GT(r.u32(reg::timeouts), 0u);
   EXPECT_EQ(plc_.write(reg::command, {1, 3000}), 0x0B);
   sim_.control("silent off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  ASSERT_TRUE(comes_online(plc_));
   EXPECT_EQ(plc_.write(reg::command, {1, 3000}), 0);
 }
 
@@ -215,9 +212,7 @@ class TwoEDrivesE2E : public ::testing::Test {
     ASSERT_TRUE(left_.connect());
     ASSERT_TRUE(right_.connect());
     for (Plc* plc : {&left_, &right_}) {
-      ASSERT_TRUE(
-          eventually([&] { return (plc->input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-          << sim_.control("state");
+      ASSERT_TRUE(comes_online(*plc)) << sim_.control("state");
     }
   }
   // Samples the left drive's data age every 20 ms for `span`; returns the largest, and the
@@ -276,8 +271,7 @@ TEST_F(TwoEDrivesE2E, ASilentDriveKeepsTheOthersDataFresh) {
   EXPECT_EQ(left_.write(reg::command, {1, 3000}), 0);
   // The silent one answers again and comes back.
   sim_.control("@2 silent off");
-  EXPECT_TRUE(
-      eventually([&] { return (right_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  EXPECT_TRUE(comes_online(right_));
 }
 
 }  // namespace
