@@ -8,6 +8,7 @@
 
 #include <algorithm>
 
+#include "drive_e2e.h"
 #include "e2e_adapters.h"
 #include "protocol_adapters.h"
 
@@ -61,26 +62,21 @@ long field(const std::string& state, const std::string& key) {
   return std::stol(padded.substr(at + key.size() + 2));
 }
 
-class Fdc1E2E : public ::testing::TestWithParam<ProtocolAdapter> {
+class Fdc1E2E : public DriveE2E<::testing::TestWithParam<ProtocolAdapter>> {
  protected:
   Fdc1E2E()
-      : sim_("fdc1", dir_ / "fdc1", {"--set", "slave_mode=true"}),
-        daemon_(dir_, config(dir_ / "fdc1", true, GetParam())) {}
+      : DriveE2E("fdc1", "fdc1", {"--set", "slave_mode=true"},
+                 [](const std::filesystem::path& port) { return config(port, true, GetParam()); }) {
+  }
   void SetUp() override {
     ASSERT_EQ(sim_.control("window " + std::to_string(kWindowS)), "ok");
-    ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(comes_online(plc_)) << "never online; sim says " << sim_.control("state");
+    DriveE2E::SetUp();
   }
-  std::string state() { return sim_.control("state"); }
   void run_at_2000() {
     ASSERT_EQ(plc_.write(reg::command, {1 /*run_forward*/, 2000}), 0) << state();
     ASSERT_TRUE(eventually([&] { return plc_.input(reg::speed, 1).regs[0] == 2000; }, 10s))
         << state();
   }
-  TempDir dir_;
-  Sim sim_;
-  Daemon daemon_;
-  Plc plc_{daemon_.port()};
 };
 
 TEST_P(Fdc1E2E, RunsAt2000InSlaveModePastTheRefreshWindow) {

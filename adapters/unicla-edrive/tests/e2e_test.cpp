@@ -7,6 +7,7 @@
 #include <bit>
 #include <iostream>
 
+#include "drive_e2e.h"
 #include "e2e.h"
 #include "e2e_adapters.h"
 
@@ -62,20 +63,12 @@ std::string text(const Plc::Read& r) {
   return s;
 }
 
-class EDriveE2E : public ::testing::Test {
+class EDriveE2E : public DriveE2E<> {
  protected:
   EDriveE2E()
-      : sim_("unicla-edrive", dir_ / "edrive"),
-        daemon_(dir_, bus(dir_ / "edrive") + device("edrive", 1, 1)) {}
-  void SetUp() override {
-    ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(comes_online(plc_)) << "never online; sim says " << state();
-  }
-  std::string state() { return sim_.control("state"); }
-  TempDir dir_;
-  Sim sim_;
-  Daemon daemon_;
-  Plc plc_{daemon_.port()};
+      : DriveE2E("unicla-edrive", "edrive", {}, [](const std::filesystem::path& port) {
+          return bus(port) + device("edrive", 1, 1);
+        }) {}
 };
 
 TEST_F(EDriveE2E, ReadsPressuresAndTemperaturesAsFloats) {
