@@ -7,13 +7,19 @@
 //   using test::DescriptorContract;
 //   const test::DescriptorFacts kFacts{.id = "fdc1", .options = kOptionSchema, ...};
 //   INSTANTIATE_TEST_SUITE_P(Fdc1, DescriptorContract, testing::Values(kFacts));
+//
+// Beside it, what each adapter's tests of its options ask in the same words: the settings its
+// parse_settings makes of options over the schema's defaults, and the values refused.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <optional>
 #include <ostream>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 
 #include "bus_rig.h"
@@ -39,5 +45,39 @@ inline void PrintTo(const DescriptorFacts& f, std::ostream* os) {
 }
 
 class DescriptorContract : public testing::TestWithParam<DescriptorFacts> {};
+
+// The settings `parse` makes of `set` over the adapter's schema defaults; a test failure, and
+// default settings, if it refuses them.
+template <class Settings>
+Settings settings_of(const AdapterDescriptor& adapter,
+                     std::optional<Settings> (*parse)(const Options&, std::string&),
+                     const OptionText& set = {}) {
+  std::string error;
+  std::optional<Settings> settings = parse(options_of(adapter, set), error);
+  EXPECT_TRUE(settings.has_value()) << error;
+  return settings.value_or(Settings{});
+}
+
+// Each of `values`, alone, is kept out by the adapter's schema (what no frame can carry).
+inline void expect_schema_refuses(const AdapterDescriptor& adapter, const OptionText& values) {
+  for (const auto& value : values) {
+    EXPECT_THROW(options_of(adapter, {value}), std::invalid_argument)
+        << value.first << " = " << value.second;
+  }
+}
+
+// Each of `values`, alone, passes the schema and is refused by `parse` with an error that names
+// the option.
+template <class Settings>
+void expect_settings_refuse(const AdapterDescriptor& adapter,
+                            std::optional<Settings> (*parse)(const Options&, std::string&),
+                            const OptionText& values) {
+  for (const auto& value : values) {
+    std::string error;
+    EXPECT_FALSE(parse(options_of(adapter, {value}), error))
+        << value.first << " = " << value.second;
+    EXPECT_NE(error.find(value.first), std::string::npos) << error;
+  }
+}
 
 }  // namespace drivegate::test

@@ -467,4 +467,11 @@ inline constexpr std::uint16_t online = 1 << 0, running = 1 << 1, fault = 1 << 2
                                comm_lost = 1 << 4;
 }  // namespace reg
 
+// Whether the device `plc` talks to (its unit) reads online in the common block's status within
+// `timeout`.
+inline bool comes_online(Plc& plc, std::chrono::milliseconds timeout = std::chrono::seconds(10)) {
+  return eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; },
+                    timeout);
+}
+
 }  // namespace drivegate::test

@@ -40,17 +40,20 @@ struct WriteState {
   std::function<std::unique_ptr<DriverByHand>()> make;
 };
 
-// A state for each (state, name): a default-made `Hand` brought into it by `bring(hand, state)`.
+// A state for each of `State`'s enumerators in their order from 0, named by `names` in the same
+// order: a default-made `Hand` brought into it by `bring(hand, state)`.
 template <class Hand, class State>
-std::vector<WriteState> write_states(std::initializer_list<std::pair<State, const char*>> states,
-                                     void (*bring)(Hand&, State)) {
+std::vector<WriteState> write_states(void (*bring)(Hand&, State),
+                                     std::initializer_list<const char*> names) {
   std::vector<WriteState> out;
-  for (const auto& [state, name] : states) {
-    out.push_back({name, [bring, s = state]() -> std::unique_ptr<DriverByHand> {
-                     auto h = std::make_unique<Hand>();
-                     bring(*h, s);
-                     return h;
-                   }});
+  int index = 0;
+  for (const char* name : names) {
+    out.push_back(
+        {name, [bring, s = static_cast<State>(index++)]() -> std::unique_ptr<DriverByHand> {
+           auto h = std::make_unique<Hand>();
+           bring(*h, s);
+           return h;
+         }});
   }
   return out;
 }

@@ -120,13 +120,8 @@ void bring(Hand& h, State s) {
 }
 
 std::vector<test::WriteState> states() {
-  return test::write_states<Hand>({{State::not_ready, "not ready"},
-                                   {State::stopped, "stopped"},
-                                   {State::stored, "setpoint stored"},
-                                   {State::running, "running"},
-                                   {State::tripped, "tripped"},
-                                   {State::locked, "locked"}},
-                                  bring);
+  return test::write_states<Hand>(
+      bring, {"not ready", "stopped", "setpoint stored", "running", "tripped", "locked"});
 }
 
 // The common block's requests, and the adapter's own holding points: the reference, a

@@ -9,6 +9,7 @@
 #include <bit>
 #include <sstream>
 
+#include "drive_e2e.h"
 #include "e2e.h"
 #include "e2e_adapters.h"
 #include "trace_log.h"
@@ -56,17 +57,11 @@ std::int16_t i16(std::uint16_t v) {
   return static_cast<std::int16_t>(v);
 }
 
-class Ed3100E2E : public ::testing::Test {
+class Ed3100E2E : public DriveE2E<> {
  protected:
   Ed3100E2E()
-      : sim_("ed3100", dir_ / "ed", {"--address", "31"}),
-        daemon_(dir_, config(dir_ / "ed"), {"--log-level", "trace"}, dir_ / "drivegated.log") {}
-  void SetUp() override {
-    ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
-  }
+      : DriveE2E("ed3100", "ed", {"--address", "31"}, config, {"--log-level", "trace"},
+                 "drivegated.log") {}
   Wire frames() { return read_wire(dir_ / "drivegated.log", kBus); }
   // True once `frame` has been sent (and, if given, `reply` received) on the line.
   bool seen(const std::string& frame, const std::string& reply = "") {
@@ -75,11 +70,6 @@ class Ed3100E2E : public ::testing::Test {
            w.rx.find(reply) != std::string::npos;
   }
   std::int16_t speed() { return i16(plc_.input(reg::speed, 1).regs[0]); }
-
-  TempDir dir_;
-  Sim sim_;
-  Daemon daemon_;
-  Plc plc_{daemon_.port()};
 };
 
 TEST_F(Ed3100E2E, ReadsTheOutputFrequencyInTheDocumentsOwnFrames) {
@@ -193,8 +183,7 @@ TEST_F(Ed3100E2E, SilentDriveIsCommLostWritesGet0x0BAndItComesBack) {
   EXPECT_EQ(plc_.write(ed::param_00_06, {1}), 0x0B);
 
   EXPECT_EQ(sim_.control("silent off"), "ok silent=off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  ASSERT_TRUE(comes_online(plc_));
   EXPECT_EQ(plc_.input(reg::fault_code, 1).regs[0], 0);
   EXPECT_EQ(plc_.holding(ed::param_00_06, 1).regs[0], 0x1088);  // read again on reconnect
   EXPECT_EQ(plc_.write(ed::frequency_setpoint, {4232}), 0);

@@ -6,13 +6,14 @@
 
 #include "adapter_under_test.h"
 #include "bus_rig.h"
+#include "descriptor_contract.h"
 #include "points.h"
 
 namespace drivegate::ed3100 {
 namespace {
 
-std::optional<Settings> settings(const test::OptionText& text, std::string& error) {
-  return parse_settings(test::options_of(drivegate_adapter, text), error);
+Settings settings(const test::OptionText& text) {
+  return test::settings_of(drivegate_adapter, parse_settings, text);
 }
 
 TEST(Ed3100Settings, ParametersAreTheirAddress) {
@@ -33,57 +34,47 @@ TEST(Ed3100Settings, Monitors) {
 }
 
 TEST(Ed3100Settings, TheDefaultsMakeADevice) {
+  const Settings s = settings({});
+  EXPECT_EQ(s.poles, 4);
+  ASSERT_EQ(s.monitors.size(), 4u);
+  EXPECT_EQ(s.speed_monitor, 0u);
+  EXPECT_EQ(s.monitors[0].unit, "Hz");
+  EXPECT_TRUE(s.parameters.empty());
+  EXPECT_EQ(s.frame_gap, Millis(10));
+  EXPECT_EQ(s.timeout, Millis(100));
+  EXPECT_EQ(s.attempts, 3);
+  EXPECT_EQ(s.comm_timeout, Millis(3000));
+  EXPECT_EQ(s.reset_register, 0x2002);
+  EXPECT_EQ(s.reset_value, 0x0002);
+  EXPECT_EQ(s.sim_reply_form, ReadForm::document);
   std::string error;
-  const auto s = settings({}, error);
-  ASSERT_TRUE(s) << error;
-  EXPECT_EQ(s->poles, 4);
-  ASSERT_EQ(s->monitors.size(), 4u);
-  EXPECT_EQ(s->speed_monitor, 0u);
-  EXPECT_EQ(s->monitors[0].unit, "Hz");
-  EXPECT_TRUE(s->parameters.empty());
-  EXPECT_EQ(s->frame_gap, Millis(10));
-  EXPECT_EQ(s->timeout, Millis(100));
-  EXPECT_EQ(s->attempts, 3);
-  EXPECT_EQ(s->comm_timeout, Millis(3000));
-  EXPECT_EQ(s->reset_register, 0x2002);
-  EXPECT_EQ(s->reset_value, 0x0002);
-  EXPECT_EQ(s->sim_reply_form, ReadForm::document);
   EXPECT_EQ(device_address(31, error), 31);
   EXPECT_EQ(device_address(0, error), 0);  // the broadcast
 }
 
 TEST(Ed3100Settings, TheSpeedMonitorIsAddedWhenNotListed) {
-  std::string error;
-  const auto s = settings({{"monitors", "0D02:V"}}, error);
-  ASSERT_TRUE(s) << error;
-  ASSERT_EQ(s->monitors.size(), 2u);
-  EXPECT_EQ(s->monitors[s->speed_monitor].reg, 0x0D00);
-  EXPECT_EQ(s->monitors[s->speed_monitor].unit, "Hz");
+  const Settings s = settings({{"monitors", "0D02:V"}});
+  ASSERT_EQ(s.monitors.size(), 2u);
+  EXPECT_EQ(s.monitors[s.speed_monitor].reg, 0x0D00);
+  EXPECT_EQ(s.monitors[s.speed_monitor].unit, "Hz");
 }
 
 TEST(Ed3100Settings, OptionsThatDoNotMakeADeviceAreNamed) {
   std::string error;
   EXPECT_FALSE(device_address(32, error));
   EXPECT_NE(error.find("address"), std::string::npos);
-  EXPECT_FALSE(settings({{"poles", "3"}}, error));
-  EXPECT_NE(error.find("poles"), std::string::npos);
-  EXPECT_FALSE(settings({{"parameters", "00-06,00-06"}}, error));
-  EXPECT_NE(error.find("parameters"), std::string::npos);
-  EXPECT_FALSE(settings({{"parameters", "0D-00"}}, error));
-  EXPECT_NE(error.find("parameters"), std::string::npos);
-  EXPECT_FALSE(settings({{"monitors", "0E01"}}, error));
-  EXPECT_NE(error.find("monitors"), std::string::npos);
-  EXPECT_FALSE(settings({{"monitors", "0D01,0d01:A"}}, error));
-  EXPECT_NE(error.find("monitors"), std::string::npos);
-  EXPECT_FALSE(settings({{"speed_monitor", "0D29"}}, error));
-  EXPECT_NE(error.find("speed_monitor"), std::string::npos);
+  test::expect_settings_refuse(drivegate_adapter, parse_settings,
+                               {{"poles", "3"},
+                                {"parameters", "00-06,00-06"},
+                                {"parameters", "0D-00"},
+                                {"monitors", "0E01"},
+                                {"monitors", "0D01,0d01:A"},
+                                {"speed_monitor", "0D29"}});
 }
 
 TEST(Ed3100Points, TableLayout) {
-  std::string error;
-  const auto s = settings({{"parameters", "00-06,0A-01"}}, error);
-  ASSERT_TRUE(s) << error;
-  const auto pts = make_points(*s);
+  const Settings s = settings({{"parameters", "00-06,0A-01"}});
+  const auto pts = make_points(s);
   ASSERT_EQ(pts.size(), pt::count + 3 * 4 + 2);
   EXPECT_EQ(pts[pt::drive_fault_code].name, "drive_fault_code");
   EXPECT_EQ(pts[pt::state_word].bit_labels, true);
@@ -97,10 +88,10 @@ TEST(Ed3100Points, TableLayout) {
   EXPECT_EQ(pts[pt::monitor_value(0)].unit, "Hz");
   EXPECT_EQ(pts[pt::monitor_raw(0)].name, "monitor_0d00_raw");
   EXPECT_EQ(pts[pt::monitor_format(3)].name, "monitor_0d03_format");
-  EXPECT_EQ(pts[pt::parameter(*s, 0)].name, "param_00_06");
-  EXPECT_EQ(pts[pt::parameter(*s, 1)].name, "param_0a_01");
-  EXPECT_EQ(pts[pt::parameter(*s, 1)].table, Table::holding);
-  EXPECT_EQ(pts[pt::parameter(*s, 1)].max, 65535);
+  EXPECT_EQ(pts[pt::parameter(s, 0)].name, "param_00_06");
+  EXPECT_EQ(pts[pt::parameter(s, 1)].name, "param_0a_01");
+  EXPECT_EQ(pts[pt::parameter(s, 1)].table, Table::holding);
+  EXPECT_EQ(pts[pt::parameter(s, 1)].max, 65535);
 }
 
 }  // namespace

@@ -40,26 +40,22 @@ Buffer echo_of(Buffer frame) {
   return frame;
 }
 
-void expect_device(const Buffer& wire, const DeviceFrame& want) {
+// `wire` decodes as `want` however it is split between two reads.
+template <class Frame>
+void expect_decoded(const Buffer& wire, const Frame& want, Decoded<Frame> (*decode)(ByteView)) {
   for (std::size_t split = 0; split <= wire.size(); ++split) {
     SCOPED_TRACE(split);
-    const auto d =
-        test::feed_split<DeviceFrame>(wire, split, [](ByteView rx) { return decode_device(rx); });
+    const auto d = test::feed_split<Frame>(wire, split, decode);
     ASSERT_EQ(d.status, DecodeStatus::frame);
     EXPECT_EQ(d.consumed, wire.size());
     EXPECT_EQ(d.frame, want);
   }
 }
-
+void expect_device(const Buffer& wire, const DeviceFrame& want) {
+  expect_decoded(wire, want, decode_device);
+}
 void expect_master(const Buffer& wire, const MasterFrame& want) {
-  for (std::size_t split = 0; split <= wire.size(); ++split) {
-    SCOPED_TRACE(split);
-    const auto d =
-        test::feed_split<MasterFrame>(wire, split, [](ByteView rx) { return decode_master(rx); });
-    ASSERT_EQ(d.status, DecodeStatus::frame);
-    EXPECT_EQ(d.consumed, wire.size());
-    EXPECT_EQ(d.frame, want);
-  }
+  expect_decoded(wire, want, decode_master);
 }
 
 TEST(Fdc1Codec, SpeedGoldenVectorFromSpecsReadme) {

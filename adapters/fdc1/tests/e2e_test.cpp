@@ -8,6 +8,7 @@
 
 #include <algorithm>
 
+#include "drive_e2e.h"
 #include "e2e_adapters.h"
 #include "protocol_adapters.h"
 
@@ -61,28 +62,21 @@ long field(const std::string& state, const std::string& key) {
   return std::stol(padded.substr(at + key.size() + 2));
 }
 
-class Fdc1E2E : public ::testing::TestWithParam<ProtocolAdapter> {
+class Fdc1E2E : public DriveE2E<::testing::TestWithParam<ProtocolAdapter>> {
  protected:
   Fdc1E2E()
-      : sim_("fdc1", dir_ / "fdc1", {"--set", "slave_mode=true"}),
-        daemon_(dir_, config(dir_ / "fdc1", true, GetParam())) {}
+      : DriveE2E("fdc1", "fdc1", {"--set", "slave_mode=true"},
+                 [](const std::filesystem::path& port) { return config(port, true, GetParam()); }) {
+  }
   void SetUp() override {
     ASSERT_EQ(sim_.control("window " + std::to_string(kWindowS)), "ok");
-    ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
+    DriveE2E::SetUp();
   }
-  std::string state() { return sim_.control("state"); }
   void run_at_2000() {
     ASSERT_EQ(plc_.write(reg::command, {1 /*run_forward*/, 2000}), 0) << state();
     ASSERT_TRUE(eventually([&] { return plc_.input(reg::speed, 1).regs[0] == 2000; }, 10s))
         << state();
   }
-  TempDir dir_;
-  Sim sim_;
-  Daemon daemon_;
-  Plc plc_{daemon_.port()};
 };
 
 TEST_P(Fdc1E2E, RunsAt2000InSlaveModePastTheRefreshWindow) {
@@ -216,8 +210,7 @@ TEST_P(Fdc1E2E, CommLostAfterStaleMsWhenTheStreamStops) {
 
   // The stream returns: online again, and the run in force is sent again at once.
   sim_.control("silent off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 5s));
+  ASSERT_TRUE(comes_online(plc_, 5s));
   EXPECT_EQ(plc_.input(reg::fault_code, 1).regs[0], 0);
 }
 
@@ -234,9 +227,7 @@ TEST_P(Fdc1E2E, AReloadAddingALineLeavesTheRunningCompressorAlone) {
          "unit_id = 2\n[device.options]\nslave_mode = true\n";
   daemon_.process().signal(SIGHUP);
   plc_.unit(2);
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-      << "the added compressor never came online";
+  ASSERT_TRUE(comes_online(plc_)) << "the added compressor never came online";
 
   plc_.unit(1);
   const auto until = std::chrono::steady_clock::now() + 2s;  // four stream periods

@@ -46,9 +46,7 @@ TEST_F(FramedE2E, TheDescribedSimulatorRunsAndStops) {
   Daemon daemon(dir_, config(dir_ / "washer", "nidec-washer"));
   Plc plc(daemon.port());
   ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(
-      eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-      << sim.control("state");
+  ASSERT_TRUE(comes_online(plc)) << sim.control("state");
   ASSERT_EQ(plc.write(reg::command, {1 /*run_forward*/, 800}), 0) << sim.control("state");
   ASSERT_TRUE(eventually([&] { return plc.input(reg::speed, 1).regs[0] == 800; }, 10s))
       << sim.control("state");
@@ -77,7 +75,8 @@ TEST_F(FramedE2E, ADescriptionByPathIsCheckedWithTheConfiguration) {
   EXPECT_EQ(check.wait_exit(10s), 1);
   const std::string err = slurp(dir_ / "check.err");
   EXPECT_THAT(err, ::testing::HasSubstr(
-                       "drivegate.toml:11: device[0].options (device 'washer'): option protocol: " + file.string() +
+                       "drivegate.toml:11: device[0].options (device 'washer'): option protocol: " +
+                       file.string() +
                        ": message: a description needs at least "
                        "one [[message]]; "));
   EXPECT_THAT(

@@ -108,12 +108,8 @@ void bring(Hand& h, State s) {
 }
 
 std::vector<test::WriteState> states() {
-  return test::write_states<Hand>({{State::not_ready, "not ready"},
-                                   {State::stopped, "stopped"},
-                                   {State::stored, "setpoint stored"},
-                                   {State::running, "running"},
-                                   {State::tripped, "tripped"}},
-                                  bring);
+  return test::write_states<Hand>(
+      bring, {"not ready", "stopped", "setpoint stored", "running", "tripped"});
 }
 
 std::vector<test::Request> requests() {

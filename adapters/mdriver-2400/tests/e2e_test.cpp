@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <sstream>
 
+#include "drive_e2e.h"
 #include "e2e_adapters.h"
 #include "protocol_adapters.h"
 #include "trace_log.h"
@@ -46,26 +47,16 @@ std::string config(const std::filesystem::path& port, int poll_ms, const Protoco
          "\"\nunit_id = 1\npoll_ms = " + std::to_string(poll_ms) + "\n" + device_adapter(a);
 }
 
-class MDriverE2E : public ::testing::TestWithParam<ProtocolAdapter> {
+class MDriverE2E : public DriveE2E<::testing::TestWithParam<ProtocolAdapter>> {
  protected:
   explicit MDriverE2E(int poll_ms = 500)
-      : sim_("mdriver-2400", dir_ / "compressor"),
-        daemon_(dir_, config(dir_ / "compressor", poll_ms, GetParam()), {"--log-level", "trace"},
-                dir_ / "drivegated.log") {}
-  void SetUp() override {
-    ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
-  }
+      : DriveE2E(
+            "mdriver-2400", "compressor", {},
+            [=](const std::filesystem::path& port) { return config(port, poll_ms, GetParam()); },
+            {"--log-level", "trace"}, "drivegated.log") {}
   std::vector<std::string> frames() { return wire().tx; }
   Wire wire() { return read_wire(dir_ / "drivegated.log", kBus); }
   std::uint16_t in(int address) { return plc_.input(address, 1).regs[0]; }
-
-  TempDir dir_;
-  Sim sim_;
-  Daemon daemon_;
-  Plc plc_{daemon_.port()};
 };
 
 TEST_P(MDriverE2E, StartsWithTheFixedCodeCheck) {

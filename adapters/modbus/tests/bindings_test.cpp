@@ -5,10 +5,6 @@
 // wire), served by the simulator, and run on the bus engine as a PLC reads the common block.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <filesystem>
-#include <fstream>
 
 #include "adapter_bench.h"
 #include "adapter_under_test.h"
@@ -23,11 +19,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using namespace test::common_block;
-using support::errors_of;
-using support::parsed;
-using support::read_pdu;
-using support::replaced;
-using support::words_pdu;
+using namespace support;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
@@ -365,15 +357,9 @@ Bytes frame(std::vector<std::uint8_t> pdu) {
   return encode(Framing::rtu, kSlave, pdu);
 }
 
-class BindingsDriver : public ::testing::Test {
+class BindingsDriver : public DriverAtHand {
  protected:
-  explicit BindingsDriver(const std::string& text = kDrive)
-      : d{kSlave, parsed(text), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms} {}
-
-  Bytes sent() {
-    const auto ex = d.next_exchange(now);
-    return ex ? ex->frame : Bytes{};
-  }
+  explicit BindingsDriver(const std::string& text = kDrive) : DriverAtHand(kSlave, parsed(text)) {}
   void answer(const Bytes& wire) { EXPECT_NE(d.on_receive(wire, now).kind, RxKind::foreign); }
 
   // One poll cycle: the coils, the trip bits, the speed, the reference, and the status and
@@ -401,9 +387,6 @@ class BindingsDriver : public ::testing::Test {
     static const Value none;
     return none;
   }
-
-  ModbusDriver d;
-  TimePoint now = TimePoint{} + 10s;
 };
 
 TEST_F(BindingsDriver, MaskedPointsShareARegisterReadOnce) {
@@ -515,8 +498,7 @@ const std::string kTwoCoils =
     "{ point = \"run_coil\", value = 1 }] }\n";
 
 TEST(BindingsSequence, EachStepGoesToItsOwnCoilAndAStopOvertakesTheRest) {
-  ModbusDriver d{kSlave, parsed(kTwoCoils), Timing{3, 3000ms, std::chrono::nanoseconds(572917)},
-                 500ms};
+  ModbusDriver d = support::driver_of(kSlave, parsed(kTwoCoils));
   TimePoint now = TimePoint{} + 10s;
   const auto sent = [&] {
     const auto ex = d.next_exchange(now);
@@ -625,27 +607,9 @@ TEST(BindingsSimulator, AFaultCodeBitFieldIsTheNativeCode) {
 
 // ---- On the bus engine: what a PLC reads
 
-class ProfileFile {
- public:
-  explicit ProfileFile(const std::string& text)
-      : dir_(std::filesystem::temp_directory_path() /
-             ("dg-bind-" + std::to_string(::getpid()) + "-" + std::to_string(++count_))) {
-    std::filesystem::create_directories(dir_);
-    std::ofstream(path()) << text;
-  }
-  ~ProfileFile() { std::filesystem::remove_all(dir_); }
-  ProfileFile(const ProfileFile&) = delete;
-  ProfileFile& operator=(const ProfileFile&) = delete;
-  [[nodiscard]] std::string path() const { return (dir_ / "bind.toml").string(); }
-
- private:
-  static inline int count_ = 0;
-  std::filesystem::path dir_;
-};
-
 TEST(BindingsOnTheBus, ThePlcRunsTheDriveThroughItsCoilAndReadsItsMaskedFault) {
   const ProfileFile file(kDrive);
-  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path()}}});
+  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path}}});
   ASSERT_TRUE(b.until_online());
   ASSERT_TRUE(b.run_forward_at(1200));
   EXPECT_TRUE(b.until_reads("speed_rpm", 1200, 2000ms));
@@ -677,7 +641,7 @@ TEST(BindingsOnTheBus, ThePlcRunsTheDriveThroughItsCoilAndReadsItsMaskedFault) {
 
 TEST(BindingsOnTheBus, ATripBitFieldIsTheUnifiedFaultAndItsValueTheNativeOne) {
   const ProfileFile file(with_trip_bits());
-  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path()}}});
+  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path}}});
   ASSERT_TRUE(b.until_online());
   ASSERT_THAT(b.control("fault 6"), HasSubstr("ok"));  // bits 1 and 2
   EXPECT_TRUE(b.until_reads("fault_code", static_cast<std::uint32_t>(Fault::over_voltage), 2000ms));
@@ -709,8 +673,7 @@ const std::string kStateMachine =
 // nothing to send for a while; the frames it sent (the requests).
 struct AgainstItsSimulator {
   explicit AgainstItsSimulator(const std::string& text)
-      : d{kSlave, parsed(text), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms},
-        sim{kSlave, parsed(text)} {}
+      : d{support::driver_of(kSlave, parsed(text))}, sim{kSlave, parsed(text)} {}
 
   std::vector<Bytes> pump(std::chrono::milliseconds for_how_long = 1200ms) {
     std::vector<Bytes> sent;

@@ -24,18 +24,9 @@ Bytes frame(std::vector<std::uint8_t> pdu, std::uint8_t address = kSlave) {
   return encode(Framing::rtu, address, pdu);
 }
 
-class ModbusDriverTest : public ::testing::Test {
+class ModbusDriverTest : public support::DriverAtHand {
  protected:
-  // 19200 baud, 8E1: 11 bits a character.
-  ModbusDriver d{kSlave, example(), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms};
-  TimePoint now = TimePoint{} + 10s;
-
-  // The next frame the driver sends.
-  Bytes sent() {
-    const auto ex = d.next_exchange(now);
-    if (!ex) return {};
-    return ex->frame;
-  }
+  ModbusDriverTest() : DriverAtHand(kSlave, example()) {}
   RxVerdict answer(const Bytes& wire) { return d.on_receive(wire, now); }
 
   // One poll cycle of the example's four blocks, with these registers.

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "driver.h"
+#include "profile_support.h"
 #include "simulator.h"
 
 namespace drivegate::modbus_device {
@@ -67,15 +68,9 @@ Bytes frame(std::vector<std::uint8_t> pdu) {
   return encode(Framing::rtu, kSlave, pdu);
 }
 
-class ModbusDriverTypesTest : public ::testing::Test {
+class ModbusDriverTypesTest : public support::DriverAtHand {
  protected:
-  ModbusDriver d{kSlave, profile(), Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms};
-  TimePoint now = TimePoint{} + 10s;
-
-  Bytes sent() {
-    const auto ex = d.next_exchange(now);
-    return ex ? ex->frame : Bytes{};
-  }
+  ModbusDriverTypesTest() : DriverAtHand(kSlave, profile()) {}
   std::size_t index(std::string_view name) {
     for (std::size_t i = 0; i < d.points().size(); ++i) {
       if (d.points()[i].name == name) return i;
@@ -198,7 +193,7 @@ TEST(ModbusTypesRoundTrip, EveryOrderThroughFc03AndFc04) {
   for (const auto& [name, value] : points) {
     ASSERT_EQ(sim.control("set " + name + " " + value, TimePoint{}).rfind("ok", 0), 0u) << name;
   }
-  ModbusDriver d{kSlave, p, Timing{3, 3000ms, std::chrono::nanoseconds(572917)}, 500ms};
+  ModbusDriver d = support::driver_of(kSlave, p);
   TimePoint now = TimePoint{} + 10s;
   bool saw_fc03 = false;
   bool saw_fc04 = false;

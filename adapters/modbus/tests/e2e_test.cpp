@@ -59,9 +59,7 @@ TEST(ModbusProfileE2E, APlcReadsThePymodbusSlavesRegistersAndItsWritesReachThem)
   Daemon daemon(dir, config(slave.port()), {}, dir / "drivegated.log");
   Plc plc(daemon.port(), 1);
   ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(
-      eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-      << slurp(dir / "drivegated.log") << slurp(dir / "slave.err");
+  ASSERT_TRUE(comes_online(plc)) << slurp(dir / "drivegated.log") << slurp(dir / "slave.err");
 
   // The map: speed 15000 x 0.1; the run and fault bits; native 2 = over_current (4) by the map.
   const auto block = plc.input(0, 8);
@@ -117,9 +115,7 @@ TEST(ModbusProfileE2E, AnExceptionFromTheSlaveIs0x04AtThePlc) {
   Daemon daemon(dir, config(slave.port()), {}, dir / "drivegated.log");
   Plc plc(daemon.port(), 1);
   ASSERT_TRUE(plc.connect());
-  ASSERT_TRUE(
-      eventually([&] { return (plc.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-      << slurp(dir / "drivegated.log");
+  ASSERT_TRUE(comes_online(plc)) << slurp(dir / "drivegated.log");
   EXPECT_TRUE(eventually(
       [&] { return static_cast<std::int16_t>(plc.input(reg::speed, 1).regs[0]) == 30; }, 5s));
   EXPECT_EQ(plc.write(reg::command, {1}), 4);

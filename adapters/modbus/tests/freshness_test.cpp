@@ -4,16 +4,14 @@
 // never leaving the last value in force under a fresh data age; a bound speed that is not a
 // number is unknown (speed_rpm -32768) and a fault, by the point's own type and signedness.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <string>
 
 #include "adapter_bench.h"
 #include "adapter_under_test.h"
 #include "common_block.h"
+#include "profile_support.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -102,27 +100,21 @@ TEST(ModbusFreshness, AnOwnPointWhoseBlockIsRefusedIsUnknownUntilReadAgain) {
 
 // A profile whose speed is a float, or a u32, on holding 10, and no run bit: running is then a
 // speed that is not 0.
-std::filesystem::path speed_profile(const std::string& type) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("dg-speed-" + type + "-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto file = dir / "speed.toml";
-  std::ofstream(file) << "[profile]\nname = \"speed\"\nsource = \"a test\"\n"
-                         "[[point]]\nname = \"status_word\"\ntable = \"holding\"\naddress = 0\n"
-                         "type = \"u16\"\n"
-                         "[[point]]\nname = \"speed\"\ntable = \"holding\"\naddress = 10\n"
-                         "type = \"" +
-                             type +
-                             "\"\n"
-                             "[common]\nspeed_rpm = \"speed\"\n";
-  return file;
+std::string speed_profile(const std::string& type) {
+  return "[profile]\nname = \"speed\"\nsource = \"a test\"\n"
+         "[[point]]\nname = \"status_word\"\ntable = \"holding\"\naddress = 0\n"
+         "type = \"u16\"\n"
+         "[[point]]\nname = \"speed\"\ntable = \"holding\"\naddress = 10\n"
+         "type = \"" +
+         type +
+         "\"\n"
+         "[common]\nspeed_rpm = \"speed\"\n";
 }
 
 struct SpeedBench {
   explicit SpeedBench(const std::string& type)
-      : file(speed_profile(type)),
-        b(drivegate_adapter, {.options = {{"profile", file.string()}}}) {}
-  ~SpeedBench() { std::filesystem::remove_all(file.parent_path()); }
+      : file(speed_profile(type), "speed.toml"),
+        b(drivegate_adapter, {.options = {{"profile", file.path}}}) {}
   // The speed the PLC reads once the slave holds `high` `low` (high word first).
   std::int32_t speed_for(std::uint16_t high, std::uint16_t low) {
     const std::string words = std::to_string(high) + " " + std::to_string(low);
@@ -130,7 +122,7 @@ struct SpeedBench {
     b.rig.run_for(1200ms);  // two cycles
     return b.read_i16("speed_rpm");
   }
-  std::filesystem::path file;
+  support::ProfileFile file;
   test::AdapterBench b;
 };
 

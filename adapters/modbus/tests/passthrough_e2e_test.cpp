@@ -109,9 +109,7 @@ class PassthroughE2E : public ::testing::Test {
                                        std::vector<std::string>{}, dir_ / "daemon.log");
     plc_ = std::make_unique<Plc>(daemon_->port(), 1);
     ASSERT_TRUE(plc_->connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_->input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << log();
+    ASSERT_TRUE(comes_online(*plc_)) << log();
     // The meters window answers (the profile slave's status word, holding 100).
     ASSERT_TRUE(eventually(
         [&] {

@@ -5,10 +5,6 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <filesystem>
-#include <fstream>
 
 #include "adapter_under_test.h"
 #include "bus_rig.h"
@@ -23,106 +19,11 @@ namespace drivegate::modbus_device {
 namespace {
 
 using namespace std::chrono_literals;
-using support::completions;
-using support::errors_of;
-using support::parsed;
+using namespace support;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
 constexpr std::uint8_t kSlave = 7;
-
-// A CiA 402-like drive in Hz: the reference and the output frequency in 0.01 Hz, rpm through
-// the motor's poles; a run passes through "switched on" before "operation enabled".
-constexpr const char* kHzProfile = R"toml(
-[profile]
-name = "hz-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles (nameplate)"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-unit = "Hz"
-description = "maximum frequency (P1.2)"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "frequency_reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.01
-min = 0
-max = 400
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[[point]]
-name = "output_frequency"
-table = "holding"
-address = 3
-type = "s16"
-scale = 0.01
-[common]
-speed_rpm = { point = "output_frequency", rpm_factor = "120 / motor_poles" }
-setpoint_rpm = { point = "frequency_reference", rpm_factor = "120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-fault = { point = "status_word", bit = 3 }
-stop = { point = "control_word", sequence = [0x0007, 0x0006] }
-run_forward = { point = "control_word", sequence = [0x0006, 0x0007, 0x000F] }
-run_reverse = { point = "control_word", sequence = [0x0006, 0x080F] }
-reset_fault = { point = "control_word", sequence = [0x0080, 0x0006] }
-)toml";
-
-// A drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 / poles / 100).
-constexpr const char* kPercentProfile = R"toml(
-[profile]
-name = "pct-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-description = "maximum frequency"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.006103515625   # 100 / 16384
-min = 0
-max = 100
-[[point]]
-name = "actual"
-table = "holding"
-address = 2
-type = "u16"
-scale = 0.006103515625
-[common]
-speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
 
 // The Vacon / Eaton M-Max kind: the reference 0..10000 is 0..100 % of the span between the
 // minimum and the maximum frequency, and so is the actual speed. Worked by hand at the defaults
@@ -195,16 +96,7 @@ Bytes fc06(std::uint16_t address, std::uint16_t value) {
 }
 
 ModbusDriver driver_of(Profile p) {
-  return ModbusDriver(kSlave, std::move(p), Timing{3, 3000ms, std::chrono::nanoseconds(572917)},
-                      500ms);
-}
-
-Profile with_options(Profile p, const std::vector<std::pair<std::string, double>>& set) {
-  Options o;
-  for (const auto& [k, v] : set) o.set(k, v);
-  std::string error;
-  EXPECT_TRUE(apply_options(p, o, error)) << error;
-  return p;
+  return support::driver_of(kSlave, std::move(p));
 }
 
 // --- [options.NAME] ---
@@ -294,20 +186,12 @@ TEST(RpmFactor, WhatIsNotOneIsAnErrorThatSaysWhy) {
 
 // 4 poles at 50 Hz: 1500 rpm <-> 50.00 Hz <-> raw 5000 at 0.01 Hz.
 TEST(RpmFactor, ASetpointOf1500RpmAt4PolesIs5000HundredthsOfAHertz) {
-  ModbusDriver d = driver_of(parsed(kHzProfile));
-  const TimePoint now = TimePoint{} + 10s;
-  const WriteOp op = WriteOp::of_setpoint(1500);
-  ASSERT_EQ(d.check(std::span(&op, 1)), WriteCheck::ok);
-  ASSERT_EQ(d.apply(op, 1, now), WriteStatus::pending);
-  EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, 5000));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kHzProfile)), 1500), fc06(1, 5000));
   // 1000 rpm is 33.333 Hz: rounded to the point's step, 3333.
-  ModbusDriver e = driver_of(parsed(kHzProfile));
-  ASSERT_EQ(e.apply(WriteOp::of_setpoint(1000), 1, now), WriteStatus::pending);
-  EXPECT_EQ(e.next_exchange(now)->frame, fc06(1, 3333));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kHzProfile)), 1000), fc06(1, 3333));
   // Two poles: 1500 rpm is 25.00 Hz.
-  ModbusDriver two = driver_of(with_options(parsed(kHzProfile), {{"motor_poles", 2}}));
-  ASSERT_EQ(two.apply(WriteOp::of_setpoint(1500), 1, now), WriteStatus::pending);
-  EXPECT_EQ(two.next_exchange(now)->frame, fc06(1, 2500));
+  const Profile two = with_options(parsed(kHzProfile), {{"motor_poles", 2}});
+  EXPECT_EQ(setpoint_frame(driver_of(two), 1500), fc06(1, 2500));
 }
 
 TEST(RpmFactor, ASetpointBeyondThePointsRangeAfterConversionIsRefused) {
@@ -341,16 +225,11 @@ TEST(RpmFactor, TheSpeedReadsInRpmThroughTheFactor) {
 // A % of maximum, 16384 = 100 %: 1500 rpm at 4 poles and 50 Hz is 100 %, raw 16384 (0x4000).
 TEST(RpmFactor, APercentOfMaximumFrequencyWith16384For100Percent) {
   const TimePoint now = TimePoint{} + 10s;
-  ModbusDriver d = driver_of(parsed(kPercentProfile));
-  ASSERT_EQ(d.apply(WriteOp::of_setpoint(1500), 1, now), WriteStatus::pending);
-  EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, 0x4000));
-  ModbusDriver half = driver_of(parsed(kPercentProfile));
-  ASSERT_EQ(half.apply(WriteOp::of_setpoint(750), 1, now), WriteStatus::pending);
-  EXPECT_EQ(half.next_exchange(now)->frame, fc06(1, 0x2000));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kPercentProfile)), 1500), fc06(1, 0x4000));
+  EXPECT_EQ(setpoint_frame(driver_of(parsed(kPercentProfile)), 750), fc06(1, 0x2000));
   // 60 Hz maximum: 1800 rpm is 100 %.
-  ModbusDriver sixty = driver_of(with_options(parsed(kPercentProfile), {{"max_frequency_hz", 60}}));
-  ASSERT_EQ(sixty.apply(WriteOp::of_setpoint(1800), 1, now), WriteStatus::pending);
-  EXPECT_EQ(sixty.next_exchange(now)->frame, fc06(1, 0x4000));
+  const Profile sixty = with_options(parsed(kPercentProfile), {{"max_frequency_hz", 60}});
+  EXPECT_EQ(setpoint_frame(driver_of(sixty), 1800), fc06(1, 0x4000));
   // Read: 8192 is 50 %, 750 rpm; 65535 is 399.99 %, 6000 rpm... within range, but at 2 poles
   // and 400 Hz (120 rpm a %) 48000 rpm: beyond what speed_rpm carries, unknown and a fault.
   ModbusDriver r = driver_of(parsed(kPercentProfile));
@@ -484,10 +363,8 @@ TEST(RpmOffset, ADevicesOptionsThatMakeTheFactorZeroOrNegativeAreRefused) {
 // The golden values worked by hand (kSpanProfile's comment): the frames the driver sends.
 TEST(RpmOffset, TheSetpointIsWrittenAsRpmLessTheOffsetOverTheFactor) {
   const TimePoint now = TimePoint{} + 10s;
-  const auto frame_for = [&](std::int32_t rpm) {
-    ModbusDriver d = driver_of(parsed(kSpanProfile));
-    EXPECT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
-    return d.next_exchange(now)->frame;
+  const auto frame_for = [](std::int32_t rpm) {
+    return setpoint_frame(driver_of(parsed(kSpanProfile)), rpm);
   };
   EXPECT_EQ(frame_for(900), fc06(1, 5000));    // 30 Hz
   EXPECT_EQ(frame_for(300), fc06(1, 0));       // 10 Hz, the minimum
@@ -508,9 +385,7 @@ TEST(RpmOffset, TheSetpointIsWrittenAsRpmLessTheOffsetOverTheFactor) {
                    {{"motor_poles", 2}, {"min_frequency_hz", 5}, {"max_frequency_hz", 60}});
   for (const auto& [rpm, raw] : std::initializer_list<std::pair<std::int32_t, std::uint16_t>>{
            {3600, 10000}, {300, 0}, {1000, 2121}}) {
-    ModbusDriver d = driver_of(two);
-    ASSERT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
-    EXPECT_EQ(d.next_exchange(now)->frame, fc06(1, raw)) << rpm;
+    EXPECT_EQ(setpoint_frame(driver_of(two), rpm), fc06(1, raw)) << rpm;
   }
 }
 
@@ -643,31 +518,8 @@ TEST(Sequence, AStopDuringARunSequenceOvertakesIt) {
 
 // --- on the bus engine, against the profile's simulator ---
 
-struct ProfileFile {
-  explicit ProfileFile(const std::string& text) {
-    dir = std::filesystem::temp_directory_path() / ("dg-popt-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    path = (dir / "hz.toml").string();
-    std::ofstream(path) << text;
-  }
-  ~ProfileFile() { std::filesystem::remove_all(dir); }
-  ProfileFile(const ProfileFile&) = delete;
-  ProfileFile& operator=(const ProfileFile&) = delete;
-  std::filesystem::path dir;
-  std::string path;
-};
-
-const AdapterDescriptor& specialised_for(const std::string& path) {
-  Options o = default_options(drivegate_adapter);
-  o.set("profile", path);
-  std::string error;
-  const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
-  EXPECT_NE(a, nullptr) << error;
-  return a != nullptr ? *a : drivegate_adapter;
-}
-
 TEST(ProfileOptionsOnTheBus, TheSchemaHasTheProfilesOptionsAndTheDeviceItsValues) {
-  ProfileFile f(kHzProfile);
+  const ProfileFile f(kHzProfile, "hz.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   std::string error;
   Options o = default_options(a);
@@ -696,7 +548,7 @@ TEST(ProfileOptionsOnTheBus, TheSchemaHasTheProfilesOptionsAndTheDeviceItsValues
 
 // The failsafe stops through the stop sequence: both values on the wire, in order.
 TEST(ProfileOptionsOnTheBus, TheFailsafeStopIsTheStopSequence) {
-  ProfileFile f(kHzProfile);
+  const ProfileFile f(kHzProfile, "hz.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   test::BusRig rig(a);
   DeviceConfig c = rig.device_config("d", kSlave, {{"profile", f.path}});
@@ -724,7 +576,7 @@ TEST(ProfileOptionsOnTheBus, TheFailsafeStopIsTheStopSequence) {
 // raw 5000; the simulated drive runs at it and the speed reads 900; 200 rpm is refused with
 // nothing on the wire.
 TEST(RpmOffset, OnTheBusTheSetpointReachesTheWireAsTheSpansRaw) {
-  ProfileFile f(kSpanProfile);
+  const ProfileFile f(kSpanProfile, "hz.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   test::BusRig rig(a);
   Device& d = rig.add_device("d", kSlave, {{"profile", f.path}});

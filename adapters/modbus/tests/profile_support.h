@@ -1,21 +1,124 @@
 // What the modbus adapter's tests share: a profile's text read as a test expects it (accepted, or
-// refused with its errors), the request and reply PDUs of a read, and the write results a driver
-// reports.
+// refused with its errors), with a device's options, a driver of it, the request and reply PDUs
+// of a read, and the write results a driver reports.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <fstream>
+#include <optional>
 #include <string>
 #include <utility>
 #include <variant>
 #include <vector>
 
+#include "adapter_under_test.h"
 #include "codec.h"
 #include "drivegate/driver.h"
+#include "driver.h"
+#include "plugin/adapter_options.h"
 #include "profile.h"
+#include "profile_options.h"
+#include "temp_dir.h"
 
 namespace drivegate::modbus_device::support {
+
+// Test profiles of more than one file (profile_options_test.cpp, required_option_test.cpp,
+// reload_test.cpp vary them).
+
+// A CiA 402-like drive in Hz: the reference and the output frequency in 0.01 Hz, rpm through
+// the motor's poles; a run passes through "switched on" before "operation enabled".
+inline constexpr const char* kHzProfile = R"toml(
+[profile]
+name = "hz-drive"
+source = "a test"
+[options.motor_poles]
+default = 4
+min = 2
+max = 48
+description = "motor poles (nameplate)"
+[options.max_frequency_hz]
+default = 50
+min = 10
+max = 400
+unit = "Hz"
+description = "maximum frequency (P1.2)"
+[[point]]
+name = "control_word"
+table = "holding"
+address = 0
+type = "u16"
+[[point]]
+name = "frequency_reference"
+table = "holding"
+address = 1
+type = "u16"
+scale = 0.01
+min = 0
+max = 400
+[[point]]
+name = "status_word"
+table = "holding"
+address = 2
+type = "u16"
+[[point]]
+name = "output_frequency"
+table = "holding"
+address = 3
+type = "s16"
+scale = 0.01
+[common]
+speed_rpm = { point = "output_frequency", rpm_factor = "120 / motor_poles" }
+setpoint_rpm = { point = "frequency_reference", rpm_factor = "120 / motor_poles" }
+running = { point = "status_word", bit = 1 }
+fault = { point = "status_word", bit = 3 }
+stop = { point = "control_word", sequence = [0x0007, 0x0006] }
+run_forward = { point = "control_word", sequence = [0x0006, 0x0007, 0x000F] }
+run_reverse = { point = "control_word", sequence = [0x0006, 0x080F] }
+reset_fault = { point = "control_word", sequence = [0x0080, 0x0006] }
+)toml";
+
+// A drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 / poles / 100).
+inline constexpr const char* kPercentProfile = R"toml(
+[profile]
+name = "pct-drive"
+source = "a test"
+[options.motor_poles]
+default = 4
+min = 2
+max = 48
+description = "motor poles"
+[options.max_frequency_hz]
+default = 50
+min = 10
+max = 400
+description = "maximum frequency"
+[[point]]
+name = "control_word"
+table = "holding"
+address = 0
+type = "u16"
+[[point]]
+name = "reference"
+table = "holding"
+address = 1
+type = "u16"
+scale = 0.006103515625   # 100 / 16384
+min = 0
+max = 100
+[[point]]
+name = "actual"
+table = "holding"
+address = 2
+type = "u16"
+scale = 0.006103515625
+[common]
+speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
+setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
+stop = { point = "control_word", value = 0 }
+run_forward = { point = "control_word", value = 1 }
+)toml";
 
 // The profile in `text` (file "p.toml"); a test failure, and an empty profile, if it is refused.
 inline Profile parsed(const std::string& text) {
@@ -33,6 +136,87 @@ inline std::vector<std::string> errors_of(const std::string& text) {
   if (auto* errors = std::get_if<std::vector<std::string>>(&r)) return *errors;
   ADD_FAILURE() << "accepted:\n" << text;
   return {};
+}
+
+// `p` with a device's options `set` applied; a test failure if they are refused.
+inline Profile with_options(Profile p, const std::vector<std::pair<std::string, double>>& set) {
+  Options o;
+  for (const auto& [k, v] : set) o.set(k, v);
+  std::string error;
+  EXPECT_TRUE(apply_options(p, o, error)) << error;
+  return p;
+}
+
+// 3 attempts, comm lost after 3 s, at 19200 baud 8E1 (11 bits a character: 572.917 us).
+inline constexpr Timing kTiming{3, Millis(3000), std::chrono::nanoseconds(572917)};
+
+// The driver of `p` for `slave` on kTiming, polling every 500 ms.
+inline ModbusDriver driver_of(std::uint8_t slave, Profile p) {
+  return ModbusDriver(slave, std::move(p), kTiming, Millis(500));
+}
+
+// The driver of `p` for `slave` timed at the line its [line] states, as the daemon times it;
+// polling every 500 ms.
+inline ModbusDriver driver_at_its_line(std::uint8_t slave, Profile p) {
+  const Timing t{3, Millis(3000), character_time(p.line.baud, p.line.parity, 8, p.line.stop_bits)};
+  return ModbusDriver(slave, std::move(p), t, Millis(500));
+}
+
+// The frame `d` sends for a setpoint of `rpm` at `now`, or nothing when it refuses it.
+inline std::optional<Bytes> setpoint_frame(ModbusDriver& d, std::int32_t rpm,
+                                           TimePoint now = TimePoint{} + std::chrono::seconds(10)) {
+  const WriteOp op = WriteOp::of_setpoint(rpm);
+  if (d.check(std::span(&op, 1)) != WriteCheck::ok) return std::nullopt;
+  if (d.apply(op, 1, now) != WriteStatus::pending) return std::nullopt;
+  const auto ex = d.next_exchange(now);
+  if (!ex) return std::nullopt;
+  return ex->frame;
+}
+inline std::optional<Bytes> setpoint_frame(ModbusDriver&& d, std::int32_t rpm) {
+  return setpoint_frame(d, rpm);
+}
+
+// A driver of a profile driven by hand at a time the test sets: the frame it sends next, and
+// what it makes of a reply.
+class DriverAtHand : public ::testing::Test {
+ protected:
+  DriverAtHand(std::uint8_t slave, Profile p) : d{driver_of(slave, std::move(p))} {}
+
+  // The next frame the driver sends; none when it has nothing to send.
+  Bytes sent() {
+    const auto ex = d.next_exchange(now);
+    return ex ? ex->frame : Bytes{};
+  }
+
+  ModbusDriver d;
+  TimePoint now = TimePoint{} + std::chrono::seconds(10);
+};
+
+// A profile's text in a file of its own (`file` in a temporary directory of its own, removed
+// with it), for what reads a profile by its path: the adapter's descriptor for it, the daemon.
+class ProfileFile {
+ public:
+  explicit ProfileFile(const std::string& text, const std::string& file = "p.toml")
+      : path((dir_ / file).string()) {
+    std::ofstream(path) << text;
+  }
+
+ private:
+  test::TempDir dir_;
+
+ public:
+  const std::string path;
+};
+
+// The adapter's descriptor for the profile at `path` (its options in the schema); a test failure,
+// and the plain descriptor, if it is refused.
+inline const AdapterDescriptor& specialised_for(const std::string& path) {
+  Options o = default_options(drivegate_adapter);
+  o.set("profile", path);
+  std::string error;
+  const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
+  EXPECT_NE(a, nullptr) << error;
+  return a != nullptr ? *a : drivegate_adapter;
 }
 
 // `text` with `from` replaced by `to` (a profile varied for one case); a test failure if `from`

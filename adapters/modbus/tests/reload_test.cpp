@@ -6,11 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
-#include <unistd.h>
 
 #include <boost/asio/io_context.hpp>
-#include <filesystem>
-#include <fstream>
 
 #include "adapter_under_test.h"
 #include "bus/station.h"
@@ -26,41 +23,14 @@ using ::testing::ElementsAre;
 
 constexpr std::uint8_t kSlave = 7;
 
-// ABB Drives-like: a run passes through 0x047E (ready to operate) before 0x047F (operating); the
-// stop is 0x047E.
-constexpr const char* kProfile = R"toml(
-[profile]
-name = "seq-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.01
-min = 0
-max = 400
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[common]
-setpoint_rpm = { point = "reference", rpm_factor = "120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-stop = { point = "control_word", value = 0x047E }
-run_forward = { point = "control_word", sequence = [0x047E, 0x047F] }
-)toml";
+// The drive in Hz (support::kHzProfile) with ABB Drives-like commands: a run passes through
+// 0x047E (ready to operate) before 0x047F (operating); the stop is 0x047E.
+const std::string kProfile = support::replaced(
+    support::replaced(support::kHzProfile, "name = \"hz-drive\"", "name = \"seq-drive\""),
+    "stop = { point = \"control_word\", sequence = [0x0007, 0x0006] }\n"
+    "run_forward = { point = \"control_word\", sequence = [0x0006, 0x0007, 0x000F] }\n",
+    "stop = { point = \"control_word\", value = 0x047E }\n"
+    "run_forward = { point = \"control_word\", sequence = [0x047E, 0x047F] }\n");
 
 Bytes fc06(std::uint16_t address, std::uint16_t value) {
   return support::fc06_frame(kSlave, address, value);
@@ -68,14 +38,7 @@ Bytes fc06(std::uint16_t address, std::uint16_t value) {
 
 class ReloadMidSequence : public ::testing::Test {
  protected:
-  ReloadMidSequence() {
-    dir_ = std::filesystem::temp_directory_path() / ("dg-reload-seq-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir_);
-    profile_ = (dir_ / "seq.toml").string();
-    std::ofstream(profile_) << kProfile;
-    plugins_.add(drivegate_adapter);
-  }
-  ~ReloadMidSequence() override { std::filesystem::remove_all(dir_); }
+  ReloadMidSequence() { plugins_.add(drivegate_adapter); }
 
   Config config(double poles) const {
     Config c;
@@ -92,13 +55,8 @@ class ReloadMidSequence : public ::testing::Test {
     d.adapter = "modbus";
     d.unit_id = 1;
     d.address = kSlave;
-    Options o = default_options(drivegate_adapter);
-    o.set("profile", profile_);
-    std::string error;
-    const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
-    EXPECT_NE(a, nullptr) << error;
-    d.options = default_options(*a);
-    d.options.set("profile", profile_);
+    d.options = default_options(support::specialised_for(file_.path));
+    d.options.set("profile", file_.path);
     d.options.set("motor_poles", poles);
     c.devices.push_back(d);
     return c;
@@ -156,8 +114,7 @@ class ReloadMidSequence : public ::testing::Test {
   }
 
   static inline const Session kPlc{AccessLevel::operate, WordOrder::big};
-  std::filesystem::path dir_;
-  std::string profile_;
+  const support::ProfileFile file_{kProfile, "seq.toml"};
   PluginRegistry plugins_;
   boost::asio::io_context io_;
   std::shared_ptr<spdlog::logger> log_ =

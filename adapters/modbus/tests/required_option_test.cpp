@@ -5,11 +5,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
-#include <unistd.h>
 
 #include <boost/asio/io_context.hpp>
-#include <filesystem>
-#include <fstream>
 
 #include "adapter_under_test.h"
 #include "bus_rig.h"
@@ -23,55 +20,22 @@ namespace drivegate::modbus_device {
 namespace {
 
 using namespace std::chrono_literals;
-using support::errors_of;
-using support::parsed;
+using namespace support;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
 constexpr std::uint8_t kSlave = 7;
 
-// A drive in % of its maximum frequency, 16384 = 100 %: rpm = % x max_frequency_hz x 120 /
-// motor_poles / 100. The maximum frequency's factory value is not cited, so it is required.
-constexpr const char* kProfile = R"toml(
-[profile]
-name = "req-drive"
-source = "a test"
-[options.max_frequency_hz]
-min = 1
-max = 400
-example = 50
-unit = "Hz"
-description = "maximum frequency P105 of the active parameter set: set it to the drive's P105"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.006103515625   # 100 / 16384
-min = 0
-max = 100
-[[point]]
-name = "actual"
-table = "holding"
-address = 2
-type = "u16"
-scale = 0.006103515625
-[common]
-speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
+// The drive in % of its maximum frequency (support::kPercentProfile: 16384 = 100 %, rpm = % x
+// max_frequency_hz x 120 / motor_poles / 100), but the maximum frequency's factory value is not
+// cited, so it is required.
+const std::string kProfile = support::replaced(
+    support::replaced(kPercentProfile, "name = \"pct-drive\"", "name = \"req-drive\""),
+    "[options.max_frequency_hz]\ndefault = 50\nmin = 10\nmax = 400\ndescription = \"maximum "
+    "frequency\"\n",
+    "[options.max_frequency_hz]\nmin = 1\nmax = 400\nexample = 50\nunit = \"Hz\"\n"
+    "description = \"maximum frequency P105 of the active parameter set: set it to the drive's "
+    "P105\"\n");
 
 // kProfile with `from` replaced by `to`.
 std::string with(const std::string& from, const std::string& to) {
@@ -80,29 +44,6 @@ std::string with(const std::string& from, const std::string& to) {
 
 Bytes fc06(std::uint16_t address, std::uint16_t value) {
   return support::fc06_frame(kSlave, address, value);
-}
-
-struct ProfileFile {
-  ProfileFile() {
-    dir = std::filesystem::temp_directory_path() / ("dg-req-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    path = (dir / "req.toml").string();
-    std::ofstream(path) << kProfile;
-  }
-  ~ProfileFile() { std::filesystem::remove_all(dir); }
-  ProfileFile(const ProfileFile&) = delete;
-  ProfileFile& operator=(const ProfileFile&) = delete;
-  std::filesystem::path dir;
-  std::string path;
-};
-
-const AdapterDescriptor& specialised_for(const std::string& path) {
-  Options o = default_options(drivegate_adapter);
-  o.set("profile", path);
-  std::string error;
-  const AdapterDescriptor* a = drivegate_adapter.specialise(o, error);
-  EXPECT_NE(a, nullptr) << error;
-  return a != nullptr ? *a : drivegate_adapter;
 }
 
 TEST(RequiredOption, IsReadWithItsExampleAndShownRequired) {
@@ -116,10 +57,10 @@ TEST(RequiredOption, IsReadWithItsExampleAndShownRequired) {
 
 TEST(RequiredOption, DefaultAndExampleTogetherOrNeitherAreErrorsOnTheirLines) {
   EXPECT_THAT(errors_of(with("example = 50\n", "example = 50\ndefault = 50\n")),
-              ElementsAre(HasSubstr("p.toml:8: options.max_frequency_hz.example: and default "
+              ElementsAre(HasSubstr("p.toml:13: options.max_frequency_hz.example: and default "
                                     "together")));
   EXPECT_THAT(errors_of(with("example = 50\n", "")),
-              ElementsAre(HasSubstr("p.toml:5: options.max_frequency_hz: needs a default (the "
+              ElementsAre(HasSubstr("p.toml:10: options.max_frequency_hz: needs a default (the "
                                     "drive's factory value, cited) or an example")));
   EXPECT_THAT(errors_of(with("example = 50\n", "example = 500\n")),
               ElementsAre(HasSubstr("options.max_frequency_hz.example: must be in min..max "
@@ -156,7 +97,7 @@ TEST(RequiredOption, ADeviceThatLeavesItOutIsRefusedNamingItAndItsDescription) {
 // The daemon's own path: the configuration loads (the option is the profile's), and building the
 // gateway refuses the device at its line, naming the option and what to set it to.
 TEST(RequiredOption, TheDaemonRefusesTheDeviceAtItsLine) {
-  ProfileFile f;
+  const ProfileFile f(kProfile, "req.toml");
   PluginRegistry plugins;
   plugins.add(drivegate_adapter);
   const auto config = [&](const std::string& options) {
@@ -196,7 +137,7 @@ TEST(RequiredOption, TheDaemonRefusesTheDeviceAtItsLine) {
 // 50 % = raw 8192 (the example's 50 Hz would send 60 % = 9830). The simulator, given nothing,
 // runs at its example and still answers.
 TEST(RequiredOption, OnTheBusTheDevicesValueIsOnTheWire) {
-  ProfileFile f;
+  const ProfileFile f(kProfile, "req.toml");
   const AdapterDescriptor& a = specialised_for(f.path);
   test::BusRig rig(a);
   Device& d = rig.add_device("d", kSlave, {{"profile", f.path}, {"max_frequency_hz", "60"}});

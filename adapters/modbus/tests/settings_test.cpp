@@ -2,13 +2,12 @@
 #include "settings.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
 #include <fstream>
 
 #include "adapter_under_test.h"
 #include "bus_rig.h"
+#include "profile_support.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -24,25 +23,25 @@ TEST(ModbusSettings, TheShippedExampleIsFoundByName) {
 }
 
 TEST(ModbusSettings, APathIsReadAndItsErrorsNameItsLines) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("dg-profile-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto file = dir / "bad.toml";
-  std::ofstream(file) << "[profile]\nname = \"bad\"\nsource = \"m\"\n[[point]]\nname = \"a\"\n"
-                         "table = \"input\"\naddress = 1\ntype = \"u16\"\n[common]\n"
-                         "running = { point = \"a\", bit = 16 }\nspeed_rpm = \"b\"\n";
+  const support::ProfileFile bad(
+      "[profile]\nname = \"bad\"\nsource = \"m\"\n[[point]]\nname = \"a\"\n"
+      "table = \"input\"\naddress = 1\ntype = \"u16\"\n[common]\n"
+      "running = { point = \"a\", bit = 16 }\nspeed_rpm = \"b\"\n",
+      "bad.toml");
+  const std::string& file = bad.path;
   std::string error;
-  const auto s = parse_settings(
-      test::options_of(drivegate_adapter, {{"profile", file.string()}}), error);
+  const auto s = parse_settings(test::options_of(drivegate_adapter, {{"profile", file}}), error);
   EXPECT_FALSE(s);
   // Every error, each with the file and its line, in file order, in one line.
-  EXPECT_NE(error.find("option profile: " + file.string() + ":10: common.running.bit: must be in "
-                       "0..15 (got 16); " + file.string() + ":11: common.speed_rpm: no point is "
+  EXPECT_NE(error.find("option profile: " + file +
+                       ":10: common.running.bit: must be in "
+                       "0..15 (got 16); " +
+                       file +
+                       ":11: common.speed_rpm: no point is "
                        "called 'b'"),
             std::string::npos)
       << error;
   EXPECT_EQ(error.find('\n'), std::string::npos);
-  std::filesystem::remove_all(dir);
 }
 
 // The driver says which profile it read and a fingerprint of its text (Driver::files_read): the
@@ -51,27 +50,24 @@ TEST(ModbusSettings, TheDriverSaysWhichProfileItReadAndItsContent) {
   std::string error;
   const auto shipped = find_profile("example-vfd", error);
   ASSERT_TRUE(shipped) << error;
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("dg-profile-read-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto file = dir / "vfd.toml";
-  std::ofstream(file) << shipped->text;
+  const support::ProfileFile vfd(shipped->text, "vfd.toml");
+  const std::string& file = vfd.path;
   const auto driver_of = [&] {
     DeviceEnv env;
     env.address = 1;
-    env.options = test::options_of(drivegate_adapter, {{"profile", file.string()}});
+    env.options = test::options_of(drivegate_adapter, {{"profile", file}});
     std::string why;
     auto d = drivegate_adapter.create_driver(env, why);
     EXPECT_TRUE(d) << why;
     return d ? d->files_read() : std::string();
   };
   const std::string first = driver_of();
-  EXPECT_EQ(first.rfind("profile " + file.string() + " (content ", 0), 0u) << first;
+  EXPECT_EQ(first.rfind("profile " + file + " (content ", 0), 0u) << first;
   EXPECT_EQ(driver_of(), first);  // read again, unchanged: the same
   std::ofstream(file) << shipped->text << "\n# an edit that changes nothing else\n";
   const std::string edited = driver_of();
   EXPECT_NE(edited, first);
-  EXPECT_EQ(edited.rfind("profile " + file.string() + " (content ", 0), 0u) << edited;
+  EXPECT_EQ(edited.rfind("profile " + file + " (content ", 0), 0u) << edited;
   // A pass-through device reads no file.
   DeviceEnv pass;
   pass.address = 1;
@@ -80,7 +76,6 @@ TEST(ModbusSettings, TheDriverSaysWhichProfileItReadAndItsContent) {
   auto p = drivegate_adapter.create_driver(pass, why);
   ASSERT_TRUE(p) << why;
   EXPECT_EQ(p->files_read(), "");
-  std::filesystem::remove_all(dir);
 }
 
 TEST(ModbusSettings, NamesThatAreNotNamesAndFilesThatAreNotFilesAreRefused) {
@@ -97,8 +92,7 @@ TEST(ModbusSettings, NamesThatAreNotNamesAndFilesThatAreNotFilesAreRefused) {
 TEST(ModbusSettings, TheOptionsReachTheSettings) {
   std::string error;
   const auto s = parse_settings(
-      test::options_of(drivegate_adapter, {{"attempts", "5"}, {"comm_timeout_ms", "9000"}}),
-      error);
+      test::options_of(drivegate_adapter, {{"attempts", "5"}, {"comm_timeout_ms", "9000"}}), error);
   ASSERT_TRUE(s) << error;
   EXPECT_EQ(s->attempts, 5);
   EXPECT_EQ(s->comm_timeout, Millis(9000));

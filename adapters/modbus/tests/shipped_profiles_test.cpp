@@ -29,6 +29,7 @@ namespace {
 using namespace std::chrono_literals;
 using support::completions;
 using support::read_pdu;
+using support::with_options;
 using support::words_pdu;
 using ::testing::ElementsAre;
 
@@ -74,8 +75,7 @@ constexpr std::uint8_t kMmxSlave = 5;  // the address of every example on p.140 
 
 // 9600 baud, no parity, 2 stop bits: 11 bits a character.
 ModbusDriver mmx_driver() {
-  return ModbusDriver(kMmxSlave, shipped_profile("eaton-m-max"),
-                      Timing{3, 3000ms, character_time(9600, Parity::none, 8, 2)}, 500ms);
+  return support::driver_at_its_line(kMmxSlave, shipped_profile("eaton-m-max"));
 }
 
 TEST(EatonMMax, TheLineAndTheReadPlanFollowTheManual) {
@@ -118,15 +118,10 @@ TEST(EatonMMax, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
                   std::vector<std::uint8_t>{0x06, 0x07, 0xD2, static_cast<std::uint8_t>(raw >> 8),
                                             static_cast<std::uint8_t>(raw & 0xFF)});
   };
-  const auto driver_with = [](const std::vector<std::pair<std::string, double>>& set) {
-    Profile p = shipped_profile("eaton-m-max");
-    Options o;
-    o.set("motor_poles", 4.0);  // required: the motor's nameplate
-    for (const auto& [k, v] : set) o.set(k, v);
-    std::string error;
-    EXPECT_TRUE(apply_options(p, o, error)) << error;
-    return ModbusDriver(kMmxSlave, p, Timing{3, 3000ms, character_time(9600, Parity::none, 8, 2)},
-                        500ms);
+  const auto driver_with = [](std::vector<std::pair<std::string, double>> set) {
+    set.insert(set.begin(), {"motor_poles", 4.0});  // required: the motor's nameplate
+    return support::driver_at_its_line(kMmxSlave,
+                                       with_options(shipped_profile("eaton-m-max"), set));
   };
   const auto frame_for = [&](ModbusDriver d, std::int32_t rpm) {
     EXPECT_EQ(d.apply(WriteOp::of_setpoint(rpm), 1, now), WriteStatus::pending) << rpm;
@@ -310,13 +305,10 @@ TEST(Vacon100, ItsSetpointInRpmSpansTheMinimumToTheMaximumFrequency) {
   const TimePoint now = TimePoint{} + 10s;
   const auto frame_for = [&](const std::vector<std::pair<std::string, double>>& set,
                              std::int32_t rpm) {
-    Profile p = shipped_profile("vacon-100");
-    Options o;
-    o.set("motor_poles", 4.0);  // required: the motor's nameplate
-    for (const auto& [k, v] : set) o.set(k, v);
-    std::string error;
-    EXPECT_TRUE(apply_options(p, o, error)) << error;
-    ModbusDriver d(kSlave, p, Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+    auto all = set;
+    all.insert(all.begin(), {"motor_poles", 4.0});  // required: the motor's nameplate
+    ModbusDriver d =
+        support::driver_at_its_line(kSlave, with_options(shipped_profile("vacon-100"), all));
     const WriteOp op = WriteOp::of_setpoint(rpm);
     EXPECT_EQ(d.apply(op, 1, now), WriteStatus::pending) << rpm;
     return d.next_exchange(now)->frame;
@@ -360,13 +352,7 @@ TEST(EatonDg1, ItsSetpointInRpmSpansP11ToP12AndTheyAreRequired) {
   const std::vector<std::pair<std::string, double>> span = {
       {"min_frequency_hz", 10}, {"max_frequency_hz", 50}, {"motor_poles", 4}};
   const auto driver_with = [](const std::vector<std::pair<std::string, double>>& set) {
-    Profile p = shipped_profile("eaton-dg1");
-    Options o;
-    for (const auto& [k, v] : set) o.set(k, v);
-    std::string error;
-    EXPECT_TRUE(apply_options(p, o, error)) << error;
-    return ModbusDriver(kSlave, p, Timing{3, 3000ms, character_time(19200, Parity::even, 8, 1)},
-                        500ms);
+    return support::driver_at_its_line(kSlave, with_options(shipped_profile("eaton-dg1"), set));
   };
   const auto fc06 = [](std::uint16_t raw) {
     return encode(Framing::rtu, kSlave,
@@ -431,8 +417,7 @@ TEST(Ed3100Standard, TheProfileReadsThreeTwoWordBlocks) {
 }
 
 TEST(Ed3100Standard, TheDocumentsMonitorExampleInTheStandardFormIs42_28Hz) {
-  ModbusDriver d(kEd3100, shipped_profile("ed3100-standard"),
-                 Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+  ModbusDriver d = support::driver_at_its_line(kEd3100, shipped_profile("ed3100-standard"));
   const TimePoint now = TimePoint{} + 10s;
   ASSERT_EQ(d.next_exchange(now)->frame, encode(Framing::rtu, kEd3100, read_pdu(0x03, 0x0D00, 2)));
   // The document's monitor reply 1F 03 0D 00 10 84 41 48 47 D5, in the standard form
@@ -447,8 +432,7 @@ TEST(Ed3100Standard, TheDocumentsMonitorExampleInTheStandardFormIs42_28Hz) {
 }
 
 TEST(Ed3100Standard, TheDocumentsOwnFormIsNoReplyToTheProfile) {
-  ModbusDriver d(kEd3100, shipped_profile("ed3100-standard"),
-                 Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+  ModbusDriver d = support::driver_at_its_line(kEd3100, shipped_profile("ed3100-standard"));
   const TimePoint now = TimePoint{} + 10s;
   ASSERT_TRUE(d.next_exchange(now));
   // The document's own reply (register echoed where the byte count belongs): a standard master
@@ -461,8 +445,7 @@ TEST(Ed3100Standard, TheDocumentsOwnFormIsNoReplyToTheProfile) {
 }
 
 TEST(Ed3100Standard, AStopIsTheDocumentsStopFrame) {
-  ModbusDriver d(kEd3100, shipped_profile("ed3100-standard"),
-                 Timing{3, 3000ms, character_time(9600, Parity::even, 8, 1)}, 500ms);
+  ModbusDriver d = support::driver_at_its_line(kEd3100, shipped_profile("ed3100-standard"));
   const TimePoint now = TimePoint{} + 10s;
   const WriteOp stop = WriteOp::of_command(Command::stop);
   ASSERT_EQ(d.apply(stop, 1, now), WriteStatus::pending);

@@ -38,36 +38,26 @@ Profile shipped_profile(const std::string& name) {
 // The shipped profile `name` with a device's `options` applied (required ones included).
 Profile shipped_with(const std::string& name,
                      const std::vector<std::pair<std::string, double>>& options) {
-  Profile p = shipped_profile(name);
-  Options o;
-  for (const auto& [k, v] : options) o.set(k, v);
-  std::string error;
-  EXPECT_TRUE(apply_options(p, o, error)) << error;
-  return p;
+  return support::with_options(shipped_profile(name), options);
 }
 
-ModbusDriver driver_of(const Profile& p, std::uint8_t slave) {
-  return ModbusDriver(
-      slave, p, Timing{3, 3000ms, character_time(p.line.baud, p.line.parity, 8, p.line.stop_bits)},
-      500ms);
+// The frame the driver of `p` (or of the shipped profile `name`) sends for a setpoint of `rpm`,
+// or nothing when it refuses it.
+std::optional<Bytes> setpoint_frame(const Profile& p, std::uint8_t slave, std::int32_t rpm) {
+  return support::setpoint_frame(support::driver_at_its_line(slave, p), rpm);
+}
+std::optional<Bytes> setpoint_frame(const std::string& name, std::uint8_t slave, std::int32_t rpm) {
+  return setpoint_frame(shipped_profile(name), slave, rpm);
 }
 
-ModbusDriver driver_of(const std::string& name, std::uint8_t slave) {
-  return driver_of(shipped_profile(name), slave);
-}
-
-// The frame the driver sends for a setpoint of `rpm`, or nothing when it refuses it.
-std::optional<Bytes> setpoint_frame(ModbusDriver& d, std::int32_t rpm, TimePoint now) {
-  const WriteOp op = WriteOp::of_setpoint(rpm);
-  if (d.check(std::span(&op, 1)) != WriteCheck::ok) return std::nullopt;
-  if (d.apply(op, 1, now) != WriteStatus::pending) return std::nullopt;
-  const auto ex = d.next_exchange(now);
-  if (!ex) return std::nullopt;
-  return ex->frame;
-}
-
-// The driver's reads answered by the profile's simulator, until every read block was asked.
-void poll_against(ModbusDriver& d, ModbusSimulator& sim, TimePoint& now) {
+// The speed in rpm the driver of `p` (or of the shipped profile `name`) reads once its simulator
+// was told `control` (a `set POINT VALUE`), its reads answered until every read block was asked;
+// `sim` is that simulator, `now` the time after the last read.
+std::int32_t speed_read(const Profile& p, std::uint8_t slave, const std::string& control,
+                        ModbusSimulator& sim, TimePoint& now) {
+  ModbusDriver d = support::driver_at_its_line(slave, p);
+  EXPECT_EQ(sim.control(control, TimePoint{}).rfind("ok", 0), 0u) << control;
+  now = TimePoint{} + 10s;
   for (int i = 0; i < 32; ++i) {
     const auto ex = d.next_exchange(now);
     if (!ex) {
@@ -76,55 +66,51 @@ void poll_against(ModbusDriver& d, ModbusSimulator& sim, TimePoint& now) {
     }
     d.on_receive(sim.on_receive(ex->frame, now), now);
   }
+  return d.common().speed_rpm;
+}
+std::int32_t speed_read(const Profile& p, std::uint8_t slave, const std::string& control) {
+  ModbusSimulator sim(slave, p);
+  TimePoint now;
+  return speed_read(p, slave, control, sim, now);
+}
+std::int32_t speed_read(const std::string& name, std::uint8_t slave, const std::string& control) {
+  return speed_read(shipped_profile(name), slave, control);
 }
 
 // --- ENC EDS300 ---
 
 TEST(EncEds300Rpm, A1500RpmSetpointIsTheManuals50HzFrame) {
-  ModbusDriver d = driver_of("enc-eds300", 1);
   // 7.7.3 "Set 1# inverter specified value to 50Hz": 01 06 20 01 13 88 DE 9C; 1500 rpm is
   // 50 Hz at the default 4 poles.
-  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("enc-eds300", 1, 1500),
             Bytes({0x01, 0x06, 0x20, 0x01, 0x13, 0x88, 0xDE, 0x9C}));
 }
 
 TEST(EncEds300Rpm, TheOutputFrequencyMonitorReadsAsTheSynchronousSpeed) {
-  ModbusDriver d = driver_of("enc-eds300", 1);
-  ModbusSimulator sim(1, shipped_profile("enc-eds300"));
   // C-01 (1001H) at 49.50 Hz, raw 4950 in Table A-4's 0.01 Hz: 1485 rpm at 4 poles.
-  ASSERT_EQ(sim.control("set monitor_c01_output_frequency 49.5", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 1485);
+  EXPECT_EQ(speed_read("enc-eds300", 1, "set monitor_c01_output_frequency 49.5"), 1485);
 }
 
 // --- NORD SK 500E ---
 
 TEST(NordSk500eRpm, A750RpmSetpointIsTheManuals50PercentSetpoint) {
-  ModbusDriver d = driver_of("nord-sk500e", 8);
   // p.46: a 50 % setpoint is 2000 hex; 100 % is P105 (DE p.32), 50 Hz by default: 25 Hz is
   // 750 rpm at 4 poles. Setpoint 1 is P050[1] (0C81H), written with FC 10H (p.66, p.67).
-  EXPECT_EQ(setpoint_frame(d, 750, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("nord-sk500e", 8, 750),
             encode(Framing::rtu, 8,
                    std::vector<std::uint8_t>{0x10, 0x0C, 0x81, 0x00, 0x01, 0x02, 0x20, 0x00}));
 }
 
 TEST(NordSk500eRpm, ActualValue1ReadsAsTheSynchronousSpeed) {
-  ModbusDriver d = driver_of("nord-sk500e", 8);
-  ModbusSimulator sim(8, shipped_profile("nord-sk500e"));
   // p.48's reply: IW1 = 2000 hex, 50 % of P105 (p.36): 25 Hz, 750 rpm at 4 poles.
-  ASSERT_EQ(sim.control("set actual_value_1 50", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 750);
+  EXPECT_EQ(speed_read("nord-sk500e", 8, "set actual_value_1 50"), 750);
 }
 
 // --- Yaskawa V1000 ---
 
 TEST(YaskawaV1000Rpm, An1800RpmSetpointWritesTheManuals1770H) {
-  ModbusDriver d = driver_of("yaskawa-v1000", 1);
   // p.417: 60.00 Hz is 1770H in 0002H; 1800 rpm is 60 Hz at 4 poles. FC 10H, one register.
-  EXPECT_EQ(setpoint_frame(d, 1800, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("yaskawa-v1000", 1, 1800),
             encode(Framing::rtu, 1,
                    std::vector<std::uint8_t>{0x10, 0x00, 0x02, 0x00, 0x01, 0x02, 0x17, 0x70}));
   // The manual's own frame (forward run and 60.00 Hz) is the profile's example and checks.
@@ -141,24 +127,21 @@ TEST(YaskawaV1000Rpm, An1800RpmSetpointWritesTheManuals1770H) {
 // --- Hitachi SJ-P1 ---
 
 TEST(HitachiSjP1Rpm, A1500RpmSetpointWritesTheManuals50HzToFa01) {
-  ModbusDriver d = driver_of("hitachi-sj-p1", 1);
   // p.14-18: 50.00 Hz is written to FA-01 as 0000 1388h at register address 2AF8h (register
   // 2AF9h - 1), two registers, high word first; 1500 rpm is 50 Hz at 4 poles. The manual's frame
   // is FC 17h; the profile writes the same two registers with FC 10h.
-  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("hitachi-sj-p1", 1, 1500),
             encode(Framing::rtu, 1,
                    std::vector<std::uint8_t>{0x10, 0x2A, 0xF8, 0x00, 0x02, 0x04, 0x00, 0x00, 0x13,
                                              0x88}));
 }
 
 TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
-  ModbusDriver d = driver_of("hitachi-sj-p1", 1);
   ModbusSimulator sim(1, shipped_profile("hitachi-sj-p1"));
+  TimePoint now;
   // p.14-18's reply: dA-01 (registers 2711h/2712h) = 0000 1388h = 50.00 Hz: 1500 rpm at 4 poles.
-  ASSERT_EQ(sim.control("set output_frequency 50", TimePoint{}).rfind("ok", 0), 0u);
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  EXPECT_EQ(d.common().speed_rpm, 1500);
+  EXPECT_EQ(speed_read(shipped_profile("hitachi-sj-p1"), 1, "set output_frequency 50", sim, now),
+            1500);
   // The driver asks dA-01 at the register address the manual sends: 2710h, two registers.
   const Bytes read =
       encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x27, 0x10, 0x00, 0x02});
@@ -169,34 +152,19 @@ TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
 // --- Inovance MD500 ---
 
 TEST(InovanceMd500Rpm, A1500RpmSetpointIsTheManuals100PercentFrame) {
-  ModbusDriver d = driver_of("inovance-md500", 1);
   // p.110: "Suppose that F0-10 = 50 Hz", 2710H (10000 = 100.00 %) written to 1000H is 50 Hz,
   // sent as 01 06 10 00 27 10 97 36. F0-10 is a required option; its example is that 50 Hz, and
   // 1500 rpm is 50 Hz at the example's 4 poles.
-  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s),
+  EXPECT_EQ(setpoint_frame("inovance-md500", 1, 1500),
             Bytes({0x01, 0x06, 0x10, 0x00, 0x27, 0x10, 0x97, 0x36}));
 }
 
 TEST(InovanceMd500Rpm, TheSetpointFollowsTheMaximumFrequencyTheDeviceSets) {
   // The same 1500 rpm with F0-10 = 100 Hz (set in [device.options]) is 50.00 % of F0-10: 1388H.
-  ModbusDriver d = driver_of(
-      shipped_with("inovance-md500", {{"max_frequency_hz", 100.0}, {"motor_poles", 4.0}}), 1);
-  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s), support::fc06_frame(1, 0x1000, 0x1388));
-}
-
-// What a PLC sees of a profile's speed: the speed in rpm the driver reads once the profile's
-// simulator holds `set` ("set POINT VALUE"), and the simulator's reply to the RTU read `read`.
-struct SpeedSeen {
-  std::int32_t rpm = 0;
-  Bytes reply;
-};
-SpeedSeen speed_seen(const Profile& p, const std::string& set, const Bytes& read) {
-  ModbusDriver d = driver_of(p, 1);
-  ModbusSimulator sim(1, p);
-  EXPECT_EQ(sim.control(set, TimePoint{}).rfind("ok", 0), 0u) << set;
-  TimePoint now = TimePoint{} + 10s;
-  poll_against(d, sim, now);
-  return {d.common().speed_rpm, sim.on_receive(read, now)};
+  EXPECT_EQ(setpoint_frame(
+                shipped_with("inovance-md500", {{"max_frequency_hz", 100.0}, {"motor_poles", 4.0}}),
+                1, 1500),
+            support::fc06_frame(1, 0x1000, 0x1388));
 }
 
 // --- Danfoss FC 51 ---
@@ -205,70 +173,69 @@ TEST(DanfossFc51Rpm, The100PercentReferenceIs3_03) {
   // p.88: 16384 (4000 hex) = 100 % = 3-03 Maximum Reference; at the examples (3-02 = 0 Hz,
   // 3-03 = 50 Hz, 4 poles) 1500 rpm is 50 Hz, 100 %; 750 rpm is 2000 hex. REF is register 50010,
   // address 50009 (C359h), written with FC 06.
-  ModbusDriver d = driver_of("danfoss-fc51", 1);
-  EXPECT_EQ(setpoint_frame(d, 1500, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x4000));
-  ModbusDriver half = driver_of("danfoss-fc51", 1);
-  EXPECT_EQ(setpoint_frame(half, 750, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x2000));
+  EXPECT_EQ(setpoint_frame("danfoss-fc51", 1, 1500), support::fc06_frame(1, 0xC359, 0x4000));
+  EXPECT_EQ(setpoint_frame("danfoss-fc51", 1, 750), support::fc06_frame(1, 0xC359, 0x2000));
   // Outside 3-02 .. 3-03 (3-00 = min-max) nothing is sent.
-  ModbusDriver over = driver_of("danfoss-fc51", 1);
-  EXPECT_EQ(setpoint_frame(over, 1501, TimePoint{} + 10s), std::nullopt);
-  ModbusDriver under = driver_of("danfoss-fc51", 1);
-  EXPECT_EQ(setpoint_frame(under, -30, TimePoint{} + 10s), std::nullopt);
+  EXPECT_EQ(setpoint_frame("danfoss-fc51", 1, 1501), std::nullopt);
+  EXPECT_EQ(setpoint_frame("danfoss-fc51", 1, -30), std::nullopt);
+}
+
+// 3-02 = 10 Hz, 3-03 = 60 Hz, 4 poles: 0 % is 300 rpm, 100 % 1800 rpm.
+Profile fc51_10_to_60_hz() {
+  return shipped_with(
+      "danfoss-fc51",
+      {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
 }
 
 TEST(DanfossFc51Rpm, TheReferenceSpans3_02To3_03) {
-  // 3-02 = 10 Hz, 3-03 = 60 Hz, 4 poles: 0 % is 300 rpm, 100 % 1800 rpm; 1050 rpm (35 Hz) is
-  // half the span, 2000 hex; 300 rpm is 0.
-  const Profile p =
-      shipped_with("danfoss-fc51",
-                   {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
-  ModbusDriver d = driver_of(p, 1);
-  EXPECT_EQ(setpoint_frame(d, 1050, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x2000));
-  ModbusDriver low = driver_of(p, 1);
-  EXPECT_EQ(setpoint_frame(low, 300, TimePoint{} + 10s), support::fc06_frame(1, 0xC359, 0x0000));
-  ModbusDriver below = driver_of(p, 1);
-  EXPECT_EQ(setpoint_frame(below, 290, TimePoint{} + 10s), std::nullopt);
+  // 1050 rpm (35 Hz) is half the span, 2000 hex; 300 rpm is 0; below 3-02 nothing is sent.
+  const Profile p = fc51_10_to_60_hz();
+  EXPECT_EQ(setpoint_frame(p, 1, 1050), support::fc06_frame(1, 0xC359, 0x2000));
+  EXPECT_EQ(setpoint_frame(p, 1, 300), support::fc06_frame(1, 0xC359, 0x0000));
+  EXPECT_EQ(setpoint_frame(p, 1, 290), std::nullopt);
 }
 
 TEST(DanfossFc51Rpm, MavReadsAsTheSynchronousSpeedOverTheSameSpan) {
   // p.88: MAV is scaled as the reference. MAV = 2000 hex (50 %) with 3-02 = 10 Hz, 3-03 = 60 Hz:
   // 35 Hz, 1050 rpm at 4 poles; the register a PLC reads is 50210 (address C421h).
-  const Profile p =
-      shipped_with("danfoss-fc51",
-                   {{"min_reference_hz", 10.0}, {"max_reference_hz", 60.0}, {"motor_poles", 4.0}});
-  const SpeedSeen seen =
-      speed_seen(p, "set main_actual_value 50",
-                 encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}));
-  EXPECT_EQ(seen.rpm, 1050);
-  EXPECT_EQ(seen.reply, encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
+  const Profile p = fc51_10_to_60_hz();
+  ModbusSimulator sim(1, p);
+  TimePoint now;
+  EXPECT_EQ(speed_read(p, 1, "set main_actual_value 50", sim, now), 1050);
+  EXPECT_EQ(
+      sim.on_receive(
+          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}), now),
+      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
 }
 
 // --- Eaton PowerXL DG1 ---
 
+// P1.1 = 10 Hz, P1.2 = 60 Hz, 4 poles.
+Profile dg1_10_to_60_hz() {
+  return shipped_with(
+      "eaton-dg1", {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}});
+}
+
 TEST(EatonDg1Rpm, TheStartupTests50PercentReferenceIsHalfTheSpan) {
   // p.15: "Set FB Speed reference (Modbus Address 42002) value to 5000 (=50.00%)": at the
   // examples (P1.1 = 0, P1.2 = 50 Hz, 4 poles) 750 rpm; written with FC 06 at 2002 (07D2h).
-  ModbusDriver d = driver_of("eaton-dg1", 1);
-  EXPECT_EQ(setpoint_frame(d, 750, TimePoint{} + 10s), support::fc06_frame(1, 0x07D2, 5000));
+  EXPECT_EQ(setpoint_frame("eaton-dg1", 1, 750), support::fc06_frame(1, 0x07D2, 5000));
   // P1.1 = 10 Hz, P1.2 = 60 Hz: 50 % is 35 Hz, 1050 rpm.
-  ModbusDriver span = driver_of(
-      shipped_with("eaton-dg1",
-                   {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}}),
-      1);
-  EXPECT_EQ(setpoint_frame(span, 1050, TimePoint{} + 10s), support::fc06_frame(1, 0x07D2, 5000));
+  EXPECT_EQ(setpoint_frame(dg1_10_to_60_hz(), 1, 1050), support::fc06_frame(1, 0x07D2, 5000));
 }
 
 TEST(EatonDg1Rpm, TheActualSpeedReadsAsTheSynchronousSpeedOverTheSameSpan) {
   // p.15: "The Actual value is 5000" (ID 2103, input register address 2102 = 0836h); p.134: the
   // actual value 0..10000 spans the set minimum .. maximum frequency. P1.1 = 10 Hz, P1.2 =
   // 60 Hz: 35 Hz, 1050 rpm at 4 poles.
-  const Profile p = shipped_with(
-      "eaton-dg1", {{"min_frequency_hz", 10.0}, {"max_frequency_hz", 60.0}, {"motor_poles", 4.0}});
-  const SpeedSeen seen =
-      speed_seen(p, "set fb_actual_speed 50",
-                 encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x08, 0x36, 0x00, 0x01}));
-  EXPECT_EQ(seen.rpm, 1050);
-  EXPECT_EQ(seen.reply, encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x02, 0x13, 0x88}));
+  const Profile p = dg1_10_to_60_hz();
+  ModbusSimulator sim(1, p);
+  TimePoint now;
+  EXPECT_EQ(speed_read(p, 1, "set fb_actual_speed 50", sim, now), 1050);
+  EXPECT_EQ(
+      sim.on_receive(
+          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x08, 0x36, 0x00, 0x01}), now),
+      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x02, 0x13, 0x88}));
 }
 
 }  // namespace

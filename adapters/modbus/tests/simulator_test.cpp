@@ -1,15 +1,12 @@
 // The example VFD's device and its simulator on the real bus engine with a simulated clock and
 // line (tests/support/adapter_bench.h): what a PLC reads and what its writes do to the drive.
 #include <gtest/gtest.h>
-#include <unistd.h>
-
-#include <filesystem>
-#include <fstream>
 
 #include "adapter_bench.h"
 #include "adapter_under_test.h"
 #include "common_block.h"
 #include "late_reply_contract.h"
+#include "profile_support.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -73,20 +70,18 @@ TEST(ModbusOnTheBus, AnExceptionFromTheSlaveIs0x04AtThePlc) {
 // A profile's access per point reaches the register map: operate opens a holding register to an
 // operate client, read keeps one read-only for everyone, and the default is maintain's.
 TEST(ModbusOnTheBus, APointsAccessInTheProfileIsTheAccessAtThePlc) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("dg-access-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto file = dir / "access.toml";
-  std::ofstream(file) << "[profile]\nname = \"access\"\nsource = \"a test\"\n"
-                         "[[point]]\nname = \"trim\"\ntable = \"holding\"\naddress = 10\n"
-                         "type = \"u16\"\naccess = \"operate\"\n"
-                         "[[point]]\nname = \"limit\"\ntable = \"holding\"\naddress = 11\n"
-                         "type = \"u16\"\n"
-                         "[[point]]\nname = \"serial\"\ntable = \"holding\"\naddress = 12\n"
-                         "type = \"u16\"\naccess = \"read\"\n";
+  const support::ProfileFile file(
+      "[profile]\nname = \"access\"\nsource = \"a test\"\n"
+      "[[point]]\nname = \"trim\"\ntable = \"holding\"\naddress = 10\n"
+      "type = \"u16\"\naccess = \"operate\"\n"
+      "[[point]]\nname = \"limit\"\ntable = \"holding\"\naddress = 11\n"
+      "type = \"u16\"\n"
+      "[[point]]\nname = \"serial\"\ntable = \"holding\"\naddress = 12\n"
+      "type = \"u16\"\naccess = \"read\"\n",
+      "access.toml");
   test::BusRig rig(drivegate_adapter);
-  Device& d = rig.add_device("d", 7, {{"profile", file.string()}});
-  rig.add_simulator(7, {{"profile", file.string()}});
+  Device& d = rig.add_device("d", 7, {{"profile", file.path}});
+  rig.add_simulator(7, {{"profile", file.path}});
   rig.start();
   ASSERT_TRUE(rig.run_until([&] { return d.online(); }, 3s));
   const auto at = [&](std::string_view name) { return d.map().find(name)->address; };
@@ -97,7 +92,6 @@ TEST(ModbusOnTheBus, APointsAccessInTheProfileIsTheAccessAtThePlc) {
   EXPECT_EQ(rig.write_and_wait(d, Table::holding, at("serial"), {5}, 3s),
             Outcome::no_such_point);  // read-only even for maintain: exception 02
   EXPECT_EQ(rig.read(d, Table::holding, at("serial"), 1).size(), 1u);  // and still read
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

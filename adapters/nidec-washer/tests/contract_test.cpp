@@ -212,11 +212,7 @@ void enter(Hand& h, State state) {
 }
 
 std::vector<test::WriteState> states() {
-  return test::write_states<Hand>({{State::idle, "idle"},
-                                   {State::faulted, "faulted"},
-                                   {State::forced_brake, "forced brake"},
-                                   {State::spinning, "spinning"}},
-                                  enter);
+  return test::write_states<Hand>(enter, {"idle", "faulted", "forced brake", "spinning"});
 }
 
 // A part whose ACK carries Error bits ends the request there, as it ends it at the gateway: the

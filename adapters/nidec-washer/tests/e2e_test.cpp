@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "drive_e2e.h"
 #include "e2e_adapters.h"
 #include "protocol_adapters.h"
 
@@ -27,20 +28,11 @@ std::string config(const std::filesystem::path& port, const ProtocolAdapter& a) 
          device_adapter(a, "platform = 8\n");
 }
 
-class NidecE2E : public ::testing::TestWithParam<ProtocolAdapter> {
+class NidecE2E : public DriveE2E<::testing::TestWithParam<ProtocolAdapter>> {
  protected:
   NidecE2E()
-      : sim_("nidec-washer", dir_ / "washer"), daemon_(dir_, config(dir_ / "washer", GetParam())) {}
-  void SetUp() override {
-    ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << sim_.control("state");
-  }
-  TempDir dir_;
-  Sim sim_;
-  Daemon daemon_;
-  Plc plc_{daemon_.port()};
+      : DriveE2E("nidec-washer", "washer", {},
+                 [](const std::filesystem::path& port) { return config(port, GetParam()); }) {}
 };
 
 TEST_P(NidecE2E, RunsForwardReadsLiveSpeedAndStops) {
@@ -93,8 +85,7 @@ TEST_P(NidecE2E, SilentDriveIsCommLostAndWritesGet0x0B) {
   EXPECT_EQ(plc_.write(reg::command, {1, 800}), 0x0B);
   // It is still probed, and comes back by itself.
   sim_.control("silent off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  ASSERT_TRUE(comes_online(plc_));
   EXPECT_EQ(plc_.write(reg::command, {1, 500}), 0);
 }
 

@@ -30,37 +30,32 @@ const test::DescriptorFacts kFacts{.id = "nidec-washer",
 INSTANTIATE_TEST_SUITE_P(Nidec, DescriptorContract, testing::Values(kFacts));
 
 TEST(NidecPlugin, SettingsFromTheOptions) {
-  std::string error;
-  const auto defaults = parse_settings(test::options_of(drivegate_adapter), error);
-  ASSERT_TRUE(defaults.has_value()) << error;
-  EXPECT_EQ(defaults->platform, 7);
-  EXPECT_EQ(defaults->empty_raw_weight, 0);
-  EXPECT_EQ(defaults->accel_100ms, 30);
-  EXPECT_EQ(defaults->attempts, 3);
-  const auto set = parse_settings(test::options_of(drivegate_adapter, {{"platform", "8"},
-                                                                       {"empty_raw_weight", "300"},
-                                                                       {"accel_time_ms", "6553500"},
-                                                                       {"attempts", "20"}}),
-                                  error);
-  ASSERT_TRUE(set.has_value()) << error;
-  EXPECT_EQ(set->platform, 8);
-  EXPECT_EQ(set->empty_raw_weight, 300);
-  EXPECT_EQ(set->accel_100ms, 65535);
-  EXPECT_EQ(set->attempts, 20);
+  const Settings defaults = test::settings_of(drivegate_adapter, parse_settings);
+  EXPECT_EQ(defaults.platform, 7);
+  EXPECT_EQ(defaults.empty_raw_weight, 0);
+  EXPECT_EQ(defaults.accel_100ms, 30);
+  EXPECT_EQ(defaults.attempts, 3);
+  const Settings set = test::settings_of(drivegate_adapter, parse_settings,
+                                         {{"platform", "8"},
+                                          {"empty_raw_weight", "300"},
+                                          {"accel_time_ms", "6553500"},
+                                          {"attempts", "20"}});
+  EXPECT_EQ(set.platform, 8);
+  EXPECT_EQ(set.empty_raw_weight, 300);
+  EXPECT_EQ(set.accel_100ms, 65535);
+  EXPECT_EQ(set.attempts, 20);
   // 5.3: 100 ms units, rounded to the nearest.
-  EXPECT_EQ(parse_settings(test::options_of(drivegate_adapter, {{"accel_time_ms", "149"}}), error)
-                ->accel_100ms,
-            1);
-  EXPECT_EQ(parse_settings(test::options_of(drivegate_adapter, {{"accel_time_ms", "150"}}), error)
-                ->accel_100ms,
-            2);
+  EXPECT_EQ(
+      test::settings_of(drivegate_adapter, parse_settings, {{"accel_time_ms", "149"}}).accel_100ms,
+      1);
+  EXPECT_EQ(
+      test::settings_of(drivegate_adapter, parse_settings, {{"accel_time_ms", "150"}}).accel_100ms,
+      2);
   // The schema keeps out what a frame cannot carry.
-  EXPECT_THROW(test::options_of(drivegate_adapter, {{"platform", "256"}}), std::invalid_argument);
-  EXPECT_THROW(test::options_of(drivegate_adapter, {{"empty_raw_weight", "65536"}}),
-               std::invalid_argument);
-  EXPECT_THROW(test::options_of(drivegate_adapter, {{"accel_time_ms", "6553501"}}),
-               std::invalid_argument);
-  EXPECT_THROW(test::options_of(drivegate_adapter, {{"attempts", "0"}}), std::invalid_argument);
+  test::expect_schema_refuses(drivegate_adapter, {{"platform", "256"},
+                                                  {"empty_raw_weight", "65536"},
+                                                  {"accel_time_ms", "6553501"},
+                                                  {"attempts", "0"}});
 }
 
 TEST(NidecPlugin, PointsAreAFixedTableWithLabels) {

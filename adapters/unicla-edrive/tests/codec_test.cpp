@@ -148,16 +148,22 @@ TEST(UniclaCodec, BadChecksum) {
   EXPECT_EQ(d.consumed, 11u);  // the closing flag may open the next frame
 }
 
+// `wire` decodes as one bad frame (`error`, its first `consumed` bytes), then drive 01's status
+// read whole.
+void expect_bad_then_status_read(const Buffer& wire, FrameError error, std::size_t consumed) {
+  auto d = decode(wire);
+  ASSERT_EQ(d.status, DecodeStatus::bad);
+  EXPECT_EQ(d.error, error);
+  EXPECT_EQ(d.consumed, consumed);
+  d = decode(ByteView(wire).subspan(consumed));
+  ASSERT_EQ(d.status, DecodeStatus::frame);
+  EXPECT_EQ(d.frame, status_read(0x01, 0x36));
+}
+
 TEST(UniclaCodec, NoiseBeforeAGoodFrame) {
   const Buffer wire = {0x13, 0x00, 0xFF, 0x7E, 0x00, 0x01, 0xC0, 0x01,
                        0x36, 0x00, 0x00, 0x00, 0xA7, 0x70, 0x7E};
-  auto d = decode(wire);
-  ASSERT_EQ(d.status, DecodeStatus::bad);
-  EXPECT_EQ(d.error, FrameError::bad_header);
-  EXPECT_EQ(d.consumed, 3u);
-  d = decode(ByteView(wire).subspan(3));
-  ASSERT_EQ(d.status, DecodeStatus::frame);
-  EXPECT_EQ(d.frame, status_read(0x01, 0x36));
+  expect_bad_then_status_read(wire, FrameError::bad_header, 3);
 }
 
 TEST(UniclaCodec, NoiseWithoutFlagIsDroppedWhole) {
@@ -182,13 +188,7 @@ TEST(UniclaCodec, TruncatedFrameThenGoodFrame) {
   // A frame cut short (its tail lost), followed by a whole one.
   const Buffer wire = {0x7E, 0x01, 0x00, 0xC0, 0x7E, 0x00, 0x01, 0xC0,
                        0x01, 0x36, 0x00, 0x00, 0x00, 0xA7, 0x70, 0x7E};
-  auto d = decode(wire);
-  ASSERT_EQ(d.status, DecodeStatus::bad);
-  EXPECT_EQ(d.error, FrameError::bad_length);
-  EXPECT_EQ(d.consumed, 4u);
-  d = decode(ByteView(wire).subspan(4));
-  ASSERT_EQ(d.status, DecodeStatus::frame);
-  EXPECT_EQ(d.frame, status_read(0x01, 0x36));
+  expect_bad_then_status_read(wire, FrameError::bad_length, 4);
 }
 
 TEST(UniclaCodec, PayloadSizeFieldMismatch) {

@@ -203,13 +203,8 @@ void bring(Hand& h, State s) {
 }
 
 std::vector<test::WriteState> states() {
-  return test::write_states<Hand>({{State::not_ready, "not ready"},
-                                   {State::stopped, "stopped"},
-                                   {State::stored, "setpoint stored"},
-                                   {State::running, "running"},
-                                   {State::tripped, "tripped"},
-                                   {State::control_off, "control off"}},
-                                  bring);
+  return test::write_states<Hand>(
+      bring, {"not ready", "stopped", "setpoint stored", "running", "tripped", "control off"});
 }
 
 std::vector<test::Request> requests() {

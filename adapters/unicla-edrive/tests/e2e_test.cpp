@@ -7,6 +7,7 @@
 #include <bit>
 #include <iostream>
 
+#include "drive_e2e.h"
 #include "e2e.h"
 #include "e2e_adapters.h"
 
@@ -62,22 +63,12 @@ std::string text(const Plc::Read& r) {
   return s;
 }
 
-class EDriveE2E : public ::testing::Test {
+class EDriveE2E : public DriveE2E<> {
  protected:
   EDriveE2E()
-      : sim_("unicla-edrive", dir_ / "edrive"),
-        daemon_(dir_, bus(dir_ / "edrive") + device("edrive", 1, 1)) {}
-  void SetUp() override {
-    ASSERT_TRUE(plc_.connect());
-    ASSERT_TRUE(
-        eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-        << "never online; sim says " << state();
-  }
-  std::string state() { return sim_.control("state"); }
-  TempDir dir_;
-  Sim sim_;
-  Daemon daemon_;
-  Plc plc_{daemon_.port()};
+      : DriveE2E("unicla-edrive", "edrive", {}, [](const std::filesystem::path& port) {
+          return bus(port) + device("edrive", 1, 1);
+        }) {}
 };
 
 TEST_F(EDriveE2E, ReadsPressuresAndTemperaturesAsFloats) {
@@ -193,8 +184,7 @@ TEST_F(EDriveE2E, SilentDriveIsCommLostAndComesBack) {
   EXPECT_GT(r.u32(reg::timeouts), 0u);
   EXPECT_EQ(plc_.write(reg::command, {1, 3000}), 0x0B);
   sim_.control("silent off");
-  ASSERT_TRUE(
-      eventually([&] { return (plc_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  ASSERT_TRUE(comes_online(plc_));
   EXPECT_EQ(plc_.write(reg::command, {1, 3000}), 0);
 }
 
@@ -215,9 +205,7 @@ class TwoEDrivesE2E : public ::testing::Test {
     ASSERT_TRUE(left_.connect());
     ASSERT_TRUE(right_.connect());
     for (Plc* plc : {&left_, &right_}) {
-      ASSERT_TRUE(
-          eventually([&] { return (plc->input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s))
-          << sim_.control("state");
+      ASSERT_TRUE(comes_online(*plc)) << sim_.control("state");
     }
   }
   // Samples the left drive's data age every 20 ms for `span`; returns the largest, and the
@@ -276,8 +264,7 @@ TEST_F(TwoEDrivesE2E, ASilentDriveKeepsTheOthersDataFresh) {
   EXPECT_EQ(left_.write(reg::command, {1, 3000}), 0);
   // The silent one answers again and comes back.
   sim_.control("@2 silent off");
-  EXPECT_TRUE(
-      eventually([&] { return (right_.input(reg::status, 1).regs[0] & reg::online) != 0; }, 10s));
+  EXPECT_TRUE(comes_online(right_));
 }
 
 }  // namespace

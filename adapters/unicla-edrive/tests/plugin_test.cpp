@@ -31,35 +31,29 @@ const test::DescriptorFacts kFacts{.id = "unicla-edrive",
 INSTANTIATE_TEST_SUITE_P(Unicla, DescriptorContract, testing::Values(kFacts));
 
 TEST(UniclaSettings, FromTheOptions) {
-  std::string error;
-  const auto defaults = parse_settings(test::options_of(drivegate_adapter), error);
-  ASSERT_TRUE(defaults.has_value()) << error;
-  EXPECT_EQ(defaults->byte_order, ByteOrder::big);
-  EXPECT_EQ(defaults->attempts, 3);
-  EXPECT_EQ(defaults->reply_timeout, 100ms);
-  EXPECT_EQ(defaults->confirm_timeout, 2000ms);
+  const Settings defaults = test::settings_of(drivegate_adapter, parse_settings);
+  EXPECT_EQ(defaults.byte_order, ByteOrder::big);
+  EXPECT_EQ(defaults.attempts, 3);
+  EXPECT_EQ(defaults.reply_timeout, 100ms);
+  EXPECT_EQ(defaults.confirm_timeout, 2000ms);
   // The schema's defaults are the ones Settings states.
-  EXPECT_EQ(defaults->reply_timeout, Settings{}.reply_timeout);
-  EXPECT_EQ(defaults->confirm_timeout, Settings{}.confirm_timeout);
-  EXPECT_EQ(defaults->attempts, Settings{}.attempts);
+  EXPECT_EQ(defaults.reply_timeout, Settings{}.reply_timeout);
+  EXPECT_EQ(defaults.confirm_timeout, Settings{}.confirm_timeout);
+  EXPECT_EQ(defaults.attempts, Settings{}.attempts);
 
-  const auto set =
-      parse_settings(test::options_of(drivegate_adapter, {{"byte_order", "little"},
-                                                          {"retries", "0"},
-                                                          {"reply_timeout_ms", "250"},
-                                                          {"confirm_timeout_ms", "1000"}}),
-                     error);
-  ASSERT_TRUE(set.has_value()) << error;
-  EXPECT_EQ(set->byte_order, ByteOrder::little);
-  EXPECT_EQ(set->attempts, 1);
-  EXPECT_EQ(set->reply_timeout, 250ms);
-  EXPECT_EQ(set->confirm_timeout, 1000ms);
+  const Settings set = test::settings_of(drivegate_adapter, parse_settings,
+                                         {{"byte_order", "little"},
+                                          {"retries", "0"},
+                                          {"reply_timeout_ms", "250"},
+                                          {"confirm_timeout_ms", "1000"}});
+  EXPECT_EQ(set.byte_order, ByteOrder::little);
+  EXPECT_EQ(set.attempts, 1);
+  EXPECT_EQ(set.reply_timeout, 250ms);
+  EXPECT_EQ(set.confirm_timeout, 1000ms);
   // The schema keeps out what the protocol cannot do.
-  EXPECT_THROW(test::options_of(drivegate_adapter, {{"byte_order", "middle"}}),
-               std::invalid_argument);
-  EXPECT_THROW(test::options_of(drivegate_adapter, {{"retries", "6"}}), std::invalid_argument);
-  EXPECT_THROW(test::options_of(drivegate_adapter, {{"confirm_timeout_ms", "100"}}),
-               std::invalid_argument);
+  test::expect_schema_refuses(
+      drivegate_adapter,
+      {{"byte_order", "middle"}, {"retries", "6"}, {"confirm_timeout_ms", "100"}});
 }
 
 TEST(UniclaSettings, TraitsFollowTheOptions) {
