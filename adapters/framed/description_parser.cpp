@@ -13,17 +13,11 @@
 namespace drivegate::framed {
 
 std::optional<std::size_t> Description::message(std::string_view wanted) const {
-  for (std::size_t i = 0; i < messages.size(); ++i) {
-    if (messages[i].name == wanted) return i;
-  }
-  return std::nullopt;
+  return index_of(messages, wanted);
 }
 
 std::optional<std::size_t> Description::var(std::string_view wanted) const {
-  for (std::size_t i = 0; i < vars.size(); ++i) {
-    if (vars[i].name == wanted) return i;
-  }
-  return std::nullopt;
+  return index_of(vars, wanted);
 }
 
 bool valid_protocol_name(std::string_view name) {
@@ -277,13 +271,7 @@ class Parser {
     if (t == nullptr) return;
     TableReader r(*t, "protocol", diag_);
     r.expect({"name", "summary", "document", "demo_rpm"});
-    if (auto name = r.string("name", true)) {
-      if (!valid_protocol_name(*name)) {
-        diag_.error(r.node("name"), "protocol.name",
-                    "must be 1..64 characters of a-z, 0-9, '-' and '_' (got '" + *name + "')");
-      }
-      d_->name = *name;
-    }
+    if (auto name = r.file_name("name")) d_->name = *name;
     d_->summary = r.string("summary", true).value_or("");
     // Where every byte comes from: a description without it cannot be checked against anything.
     d_->document = r.string("document", true).value_or("");
