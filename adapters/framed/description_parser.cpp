@@ -522,8 +522,7 @@ class Parser {
     for (const toml::node& n : *a) {
       const auto& t = *n.as_table();
       TableReader r(t, "option", diag_);
-      r.expect({"name", "type", "default", "min", "max", "choices", "description"});
-      seen(r, {"name", "type", "default", "min", "max", "choices", "description"});
+      expect_read(r, {"name", "type", "default", "min", "max", "choices", "description"});
       Option o;
       o.line = line_of_node(&t);
       const auto name = r.string("name", true);
@@ -574,8 +573,7 @@ class Parser {
     for (const toml::node& n : *a) {
       const auto& t = *n.as_table();
       TableReader r(t, "state", diag_);
-      r.expect({"name", "initial", "comm_lost", "description"});
-      seen(r, {"name", "initial", "comm_lost", "description"});
+      expect_read(r, {"name", "initial", "comm_lost", "description"});
       const auto name = r.string("name", true);
       if (!name || !declare(r.node("name"), "state.name", *name)) continue;
       Var v;
@@ -627,9 +625,11 @@ class Parser {
     }
   }
 
-  // Marks every key of `r` as read: an entry given up early does not also report its keys.
-  static void seen(TableReader& r, std::initializer_list<const char*> keys) {
-    for (const char* k : keys) r.node(k);
+  // Declares the keys `r` may have and marks each as read: an entry given up early does not also
+  // report its keys.
+  static void expect_read(TableReader& r, std::initializer_list<std::string_view> keys) {
+    r.expect(keys);
+    for (const auto k : keys) r.node(k);
   }
 
   void read_points(const toml::table& root, TableReader& top) {
@@ -640,12 +640,9 @@ class Parser {
       const auto& t = *n.as_table();
       const std::string key = "point";
       TableReader r(t, key, diag_);
-      r.expect({"name", "table", "type", "scale", "unit", "description", "labels", "bit_labels",
-                "min", "max", "access", "trend", "registers", "initial", "value", "on_write",
-                "status", "comm_lost"});
-      seen(r, {"name", "table", "type", "scale", "unit", "description", "labels", "bit_labels",
-               "min", "max", "access", "trend", "registers", "initial", "value", "on_write",
-               "status", "comm_lost"});
+      expect_read(r, {"name", "table", "type", "scale", "unit", "description", "labels",
+                      "bit_labels", "min", "max", "access", "trend", "registers", "initial",
+                      "value", "on_write", "status", "comm_lost"});
       Point p;
       p.line = line_of_node(&t);
       const auto name = r.string("name", true);
@@ -872,12 +869,9 @@ class Parser {
     for (const toml::node& n : *a) {
       const auto& t = *n.as_table();
       TableReader r(t, "message", diag_);
-      r.expect({"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
-                "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
-                "timeout_ms", "attempts"});
-      seen(r, {"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
-               "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
-               "timeout_ms", "attempts"});
+      expect_read(r, {"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
+                      "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
+                      "timeout_ms", "attempts"});
       Message m;
       m.line = line_of_node(&t);
       const auto name = r.string("name", true);
