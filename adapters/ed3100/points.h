@@ -12,15 +12,17 @@ namespace drivegate::ed3100 {
 
 // Index of each fixed point in points() / values(); the monitors' and parameters' follow.
 namespace pt {
-inline constexpr std::size_t drive_fault_code = 0;     // 0x0E01 word 1, raw
-inline constexpr std::size_t state_word = 1;           // 0x0E01 word 2, raw
-inline constexpr std::size_t running = 2;              // state bit 4
-inline constexpr std::size_t direction = 3;            // state bit 1
-inline constexpr std::size_t commanded_direction = 4;  // state bit 3
-inline constexpr std::size_t accelerating = 5;         // state bit 10
-inline constexpr std::size_t decelerating = 6;         // state bit 11
-inline constexpr std::size_t frequency_setpoint = 7;   // holding: the reference for 0x2001
-inline constexpr std::size_t count = 8;                // fixed points
+enum : std::size_t {
+  drive_fault_code,     // 0x0E01 word 1, raw
+  state_word,           // 0x0E01 word 2, raw
+  running,              // state bit 4
+  direction,            // state bit 1
+  commanded_direction,  // state bit 3
+  accelerating,         // state bit 10
+  decelerating,         // state bit 11
+  frequency_setpoint,   // holding: the reference for 0x2001
+  count,                // fixed points
+};
 
 // Per monitor m: its scaled value, its raw value, its format word.
 inline constexpr std::size_t kPerMonitor = 3;

@@ -16,9 +16,7 @@ class Ed3100Simulator final : public Simulator {
  public:
   Ed3100Simulator(std::uint8_t address, ReadForm form);
 
-  Bytes on_receive(ByteView rx, TimePoint now) override;
-  Bytes on_tick(TimePoint now) override;
-  std::string control(std::string_view line, TimePoint now) override;
+  DRIVEGATE_SIMULATOR_OVERRIDES;
 
  private:
   Bytes handle(const Request& r);

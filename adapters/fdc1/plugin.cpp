@@ -39,22 +39,19 @@ constexpr MaintenanceAction kActions[] = {{
 }};
 
 }  // namespace
-}  // namespace drivegate::fdc1
 
-extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .id = "fdc1",
-    .summary = "FDC1 12-42 V DC compressor controller, protocol v2 (streaming)",
-    .options = drivegate::fdc1::kOptionSchema.data(),
-    .option_count = drivegate::fdc1::kOptionSchema.size(),
-    .line = drivegate::fdc1::kLine,
-    // The protocol has no address (the default range): one controller per line.
-    .streaming = true,  // OUTPUT: transmits every 0.5 s unasked
-    .create_driver = &drivegate::fdc1::create_driver,
-    .create_simulator = &drivegate::fdc1::create_simulator,
-    // INPUT, Programming speed: 1500..3500 rpm; the specs README's example range starts at 2000.
-    .demo = {.options = drivegate::fdc1::kDemoOptions,
-             .option_count = std::size(drivegate::fdc1::kDemoOptions),
-             .running_rpm = 2000},
-    .actions = drivegate::fdc1::kActions,
-    .action_count = std::size(drivegate::fdc1::kActions),
-};
+extern "C" DRIVEGATE_EXPORT constinit const AdapterDescriptor drivegate_adapter = describe(
+    {
+        .id = "fdc1",
+        .summary = "FDC1 12-42 V DC compressor controller, protocol v2 (streaming)",
+        .line = kLine,
+        // The protocol has no address (the default range): one controller per line.
+        .streaming = true,  // OUTPUT: transmits every 0.5 s unasked
+        .create_driver = &create_driver,
+        .create_simulator = &create_simulator,
+        // INPUT, Programming speed: 1500..3500 rpm; the specs README's example starts at 2000.
+        .demo = demo_setup(kDemoOptions, 2000),
+    },
+    kOptionSchema, kActions);
+
+}  // namespace drivegate::fdc1

@@ -18,30 +18,32 @@ namespace drivegate::fdc1 {
 // Index of each point in points() / values().
 namespace pt {
 // The streamed status (OUTPUT): always present.
-inline constexpr std::size_t motor_on = 0;
-inline constexpr std::size_t current_a = 1;
-inline constexpr std::size_t restart_s = 2;
-inline constexpr std::size_t alarm_code = 3;
-inline constexpr std::size_t alarm_latched = 4;
-inline constexpr std::size_t sent_speed_rpm = 5;
-// Programming (INPUT, "Programming mode + parameters"): points() ends before prog_min_rpm
-// without it. prog_min_rpm..prog_nominal_v are the frame's fields, in this order.
-inline constexpr std::size_t prog_min_rpm = 6;
-inline constexpr std::size_t prog_max_rpm = 7;
-inline constexpr std::size_t prog_mode = 8;
-inline constexpr std::size_t prog_cut_out_12v = 9;
-inline constexpr std::size_t prog_cut_in_12v = 10;
-inline constexpr std::size_t prog_cut_out_24v = 11;
-inline constexpr std::size_t prog_cut_in_24v = 12;
-inline constexpr std::size_t prog_cut_out_42v = 13;
-inline constexpr std::size_t prog_cut_in_42v = 14;
-inline constexpr std::size_t prog_cut_out_special = 15;
-inline constexpr std::size_t prog_cut_in_special = 16;
-inline constexpr std::size_t prog_nominal_v = 17;
-inline constexpr std::size_t prog_commit = 18;
-inline constexpr std::size_t prog_status = 19;
-inline constexpr std::size_t prog_message = 20;
-inline constexpr std::size_t count = 21;
+enum : std::size_t {
+  motor_on,
+  current_a,
+  restart_s,
+  alarm_code,
+  alarm_latched,
+  sent_speed_rpm,
+  // Programming (INPUT, "Programming mode + parameters"): points() ends before prog_min_rpm
+  // without it. prog_min_rpm..prog_nominal_v are the frame's fields, in this order.
+  prog_min_rpm,
+  prog_max_rpm,
+  prog_mode,
+  prog_cut_out_12v,
+  prog_cut_in_12v,
+  prog_cut_out_24v,
+  prog_cut_in_24v,
+  prog_cut_out_42v,
+  prog_cut_in_42v,
+  prog_cut_out_special,
+  prog_cut_in_special,
+  prog_nominal_v,
+  prog_commit,
+  prog_status,
+  prog_message,
+  count,
+};
 }  // namespace pt
 
 // The maintenance action's names (AdapterDescriptor::actions): the prefix of its parameters, the

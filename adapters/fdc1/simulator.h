@@ -22,9 +22,7 @@ class Fdc1Simulator final : public Simulator {
  public:
   explicit Fdc1Simulator(const Settings& settings);
 
-  Bytes on_receive(ByteView rx, TimePoint now) override;
-  Bytes on_tick(TimePoint now) override;
-  std::string control(std::string_view line, TimePoint now) override;
+  DRIVEGATE_SIMULATOR_OVERRIDES;
 
  private:
   void handle(const Speed& s, TimePoint now);

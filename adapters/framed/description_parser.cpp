@@ -13,17 +13,11 @@
 namespace drivegate::framed {
 
 std::optional<std::size_t> Description::message(std::string_view wanted) const {
-  for (std::size_t i = 0; i < messages.size(); ++i) {
-    if (messages[i].name == wanted) return i;
-  }
-  return std::nullopt;
+  return index_of(messages, wanted);
 }
 
 std::optional<std::size_t> Description::var(std::string_view wanted) const {
-  for (std::size_t i = 0; i < vars.size(); ++i) {
-    if (vars[i].name == wanted) return i;
-  }
-  return std::nullopt;
+  return index_of(vars, wanted);
 }
 
 bool valid_protocol_name(std::string_view name) {
@@ -277,13 +271,7 @@ class Parser {
     if (t == nullptr) return;
     TableReader r(*t, "protocol", diag_);
     r.expect({"name", "summary", "document", "demo_rpm"});
-    if (auto name = r.string("name", true)) {
-      if (!valid_protocol_name(*name)) {
-        diag_.error(r.node("name"), "protocol.name",
-                    "must be 1..64 characters of a-z, 0-9, '-' and '_' (got '" + *name + "')");
-      }
-      d_->name = *name;
-    }
+    if (auto name = r.file_name("name")) d_->name = *name;
     d_->summary = r.string("summary", true).value_or("");
     // Where every byte comes from: a description without it cannot be checked against anything.
     d_->document = r.string("document", true).value_or("");
@@ -534,8 +522,7 @@ class Parser {
     for (const toml::node& n : *a) {
       const auto& t = *n.as_table();
       TableReader r(t, "option", diag_);
-      r.expect({"name", "type", "default", "min", "max", "choices", "description"});
-      seen(r, {"name", "type", "default", "min", "max", "choices", "description"});
+      expect_read(r, {"name", "type", "default", "min", "max", "choices", "description"});
       Option o;
       o.line = line_of_node(&t);
       const auto name = r.string("name", true);
@@ -586,8 +573,7 @@ class Parser {
     for (const toml::node& n : *a) {
       const auto& t = *n.as_table();
       TableReader r(t, "state", diag_);
-      r.expect({"name", "initial", "comm_lost", "description"});
-      seen(r, {"name", "initial", "comm_lost", "description"});
+      expect_read(r, {"name", "initial", "comm_lost", "description"});
       const auto name = r.string("name", true);
       if (!name || !declare(r.node("name"), "state.name", *name)) continue;
       Var v;
@@ -639,9 +625,11 @@ class Parser {
     }
   }
 
-  // Marks every key of `r` as read: an entry given up early does not also report its keys.
-  static void seen(TableReader& r, std::initializer_list<const char*> keys) {
-    for (const char* k : keys) r.node(k);
+  // Declares the keys `r` may have and marks each as read: an entry given up early does not also
+  // report its keys.
+  static void expect_read(TableReader& r, std::initializer_list<std::string_view> keys) {
+    r.expect(keys);
+    for (const auto k : keys) r.node(k);
   }
 
   void read_points(const toml::table& root, TableReader& top) {
@@ -652,12 +640,9 @@ class Parser {
       const auto& t = *n.as_table();
       const std::string key = "point";
       TableReader r(t, key, diag_);
-      r.expect({"name", "table", "type", "scale", "unit", "description", "labels", "bit_labels",
-                "min", "max", "access", "trend", "registers", "initial", "value", "on_write",
-                "status", "comm_lost"});
-      seen(r, {"name", "table", "type", "scale", "unit", "description", "labels", "bit_labels",
-               "min", "max", "access", "trend", "registers", "initial", "value", "on_write",
-               "status", "comm_lost"});
+      expect_read(r, {"name", "table", "type", "scale", "unit", "description", "labels",
+                      "bit_labels", "min", "max", "access", "trend", "registers", "initial",
+                      "value", "on_write", "status", "comm_lost"});
       Point p;
       p.line = line_of_node(&t);
       const auto name = r.string("name", true);
@@ -884,12 +869,9 @@ class Parser {
     for (const toml::node& n : *a) {
       const auto& t = *n.as_table();
       TableReader r(t, "message", diag_);
-      r.expect({"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
-                "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
-                "timeout_ms", "attempts"});
-      seen(r, {"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
-               "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
-               "timeout_ms", "attempts"});
+      expect_read(r, {"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
+                      "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
+                      "timeout_ms", "attempts"});
       Message m;
       m.line = line_of_node(&t);
       const auto name = r.string("name", true);

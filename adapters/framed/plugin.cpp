@@ -10,9 +10,10 @@
 #include "simulator.h"
 #include "specialise.h"
 
-extern "C" DRIVEGATE_EXPORT const drivegate::AdapterDescriptor drivegate_adapter;
-
 namespace drivegate::framed {
+
+extern "C" DRIVEGATE_EXPORT const AdapterDescriptor drivegate_adapter;
+
 namespace {
 
 // The description the options name, for a device at `address`: nullptr and `error` when there
@@ -49,20 +50,19 @@ const AdapterDescriptor* specialise_device(const Options& options, std::string& 
 constexpr OptionSetting kDemoOptions[] = {{"protocol", "nidec-washer"}};
 
 }  // namespace
-}  // namespace drivegate::framed
 
-extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .id = "framed",
-    .summary = "any serial protocol described in a TOML file (docs/protocols.md)",
-    .options = drivegate::framed::kOptionSchema.data(),
-    .option_count = drivegate::framed::kOptionSchema.size(),
-    // The description's line, addresses and streaming come with its specialised descriptor; these
-    // are only what a device with no usable description would be shown with.
-    .line = {9600, drivegate::Parity::none, 8, 1, false},
-    .create_driver = &drivegate::framed::create_driver,
-    .create_simulator = &drivegate::framed::create_simulator,
-    .demo = {.options = drivegate::framed::kDemoOptions,
-             .option_count = std::size(drivegate::framed::kDemoOptions),
-             .running_rpm = 800},
-    .specialise = &drivegate::framed::specialise_device,
-};
+extern "C" DRIVEGATE_EXPORT constinit const AdapterDescriptor drivegate_adapter = describe(
+    {
+        .id = "framed",
+        .summary = "any serial protocol described in a TOML file (docs/protocols.md)",
+        // The description's line, addresses and streaming come with its specialised descriptor;
+        // these are only what a device with no usable description would be shown with.
+        .line = {9600, Parity::none, 8, 1, false},
+        .create_driver = &create_driver,
+        .create_simulator = &create_simulator,
+        .demo = demo_setup(kDemoOptions, 800),
+        .specialise = &specialise_device,
+    },
+    kOptionSchema);
+
+}  // namespace drivegate::framed

@@ -21,9 +21,7 @@ class FramedSimulator final : public Simulator {
  public:
   FramedSimulator(std::shared_ptr<const Description> d, const SimEnv& env);
 
-  Bytes on_receive(ByteView rx, TimePoint now) override;
-  Bytes on_tick(TimePoint now) override;
-  std::string control(std::string_view line, TimePoint now) override;
+  DRIVEGATE_SIMULATOR_OVERRIDES;
 
  private:
   Bytes answer(const Frame& request, TimePoint now);

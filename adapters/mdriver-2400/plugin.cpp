@@ -26,21 +26,22 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 }
 
 }  // namespace
-}  // namespace drivegate::mdriver
 
-extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .id = "mdriver-2400",
-    .summary = "compressor motor driver, sum-0x55 frames (Japanese spec)",
-    .options = drivegate::mdriver::kOptionSchema.data(),
-    .option_count = drivegate::mdriver::kOptionSchema.size(),
-    .line = drivegate::mdriver::kLine,
-    // Section 2: one-byte addresses; section 3: slave (driver) address [01].
-    .address_min = 0,
-    .address_max = 255,
-    .default_address = 0x01,
-    // Not streaming: section 2, the driver only ever answers the master.
-    .create_driver = &drivegate::mdriver::create_driver,
-    .create_simulator = &drivegate::mdriver::create_simulator,
-    // Default options; code 0x40 of the conversion table, 1149 rpm.
-    .demo = {.running_rpm = 1149},
-};
+extern "C" DRIVEGATE_EXPORT constinit const AdapterDescriptor drivegate_adapter = describe(
+    {
+        .id = "mdriver-2400",
+        .summary = "compressor motor driver, sum-0x55 frames (Japanese spec)",
+        .line = kLine,
+        // Section 2: one-byte addresses; section 3: slave (driver) address [01].
+        .address_min = 0,
+        .address_max = 255,
+        .default_address = 0x01,
+        // Not streaming: section 2, the driver only ever answers the master.
+        .create_driver = &create_driver,
+        .create_simulator = &create_simulator,
+        // Default options; code 0x40 of the conversion table, 1149 rpm.
+        .demo = {.running_rpm = 1149},
+    },
+    kOptionSchema);
+
+}  // namespace drivegate::mdriver

@@ -12,17 +12,19 @@ namespace drivegate::mdriver {
 
 // Index of each point in points() / values().
 namespace pt {
-inline constexpr std::size_t target_code = 0;
-inline constexpr std::size_t target_rpm = 1;
-inline constexpr std::size_t actual_code = 2;
-inline constexpr std::size_t error_code = 3;
-inline constexpr std::size_t ipm_temperature = 4;
-inline constexpr std::size_t info_1 = 5;
-inline constexpr std::size_t info_2 = 6;
-inline constexpr std::size_t info_3 = 7;
-inline constexpr std::size_t sent_code = 8;
-inline constexpr std::size_t fixed_code_state = 9;
-inline constexpr std::size_t count = 10;
+enum : std::size_t {
+  target_code,
+  target_rpm,
+  actual_code,
+  error_code,
+  ipm_temperature,
+  info_1,
+  info_2,
+  info_3,
+  sent_code,
+  fixed_code_state,
+  count,
+};
 }  // namespace pt
 
 // Values of the fixed_code_state point.

@@ -17,9 +17,7 @@ class Mdriver2400Simulator final : public Simulator {
  public:
   explicit Mdriver2400Simulator(std::uint8_t address);
 
-  Bytes on_receive(ByteView rx, TimePoint now) override;
-  Bytes on_tick(TimePoint now) override;
-  std::string control(std::string_view line, TimePoint now) override;
+  DRIVEGATE_SIMULATOR_OVERRIDES;
 
   // Section 3 No.2: 360 rpm/s = 20 codes of 18 rpm a second: one code every 50 ms.
   static constexpr Millis kRampStep{50};

@@ -25,7 +25,7 @@ struct Block {
   friend bool operator==(const Block&, const Block&) = default;
 };
 
-// The function code that reads `table`.
+// The function code that reads `table` (Application Protocol 6.1 - 6.4).
 std::uint8_t read_function(Table table);
 
 // The data bytes a read reply to `b` carries: its bits packed eight a byte, or two a register

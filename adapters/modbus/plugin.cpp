@@ -12,6 +12,9 @@
 #include "specialise.h"
 
 namespace drivegate::modbus_device {
+
+extern "C" DRIVEGATE_EXPORT const AdapterDescriptor drivegate_adapter;
+
 namespace {
 
 std::unique_ptr<Driver> create_driver(const DeviceEnv& env, std::string& error) {
@@ -47,42 +50,30 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 
 constexpr OptionSetting kDemoOptions[] = {{"profile", "example-vfd"}};
 
-const AdapterDescriptor* specialise_device(const Options& options, std::string& error);
-
-}  // namespace
-}  // namespace drivegate::modbus_device
-
-extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .id = "modbus",
-    .summary = "any Modbus RTU / ASCII slave, described by a profile (docs/profiles.md)",
-    .options = drivegate::modbus_device::kOptionSchema.data(),
-    .option_count = drivegate::modbus_device::kOptionSchema.size(),
-    // Serial Line 2.5.1: 19200 baud and even parity are the defaults every device must offer.
-    .line = {.baud = 19200,
-             .parity = drivegate::Parity::even,
-             .data_bits = 8,
-             .stop_bits = 1,
-             .echo = false},
-    // Serial Line 2.2: 1..247 are slaves (0, the broadcast, is never polled).
-    .address_min = 1,
-    .address_max = 247,
-    .default_address = 1,
-    // Not streaming: a slave only ever answers.
-    .create_driver = &drivegate::modbus_device::create_driver,
-    .create_simulator = &drivegate::modbus_device::create_simulator,
-    .demo = {.options = drivegate::modbus_device::kDemoOptions,
-             .option_count = std::size(drivegate::modbus_device::kDemoOptions),
-             .running_rpm = 1500},
-    // A profile's own options ([options.NAME]) join the schema of its devices.
-    .specialise = &drivegate::modbus_device::specialise_device,
-};
-
-namespace drivegate::modbus_device {
-namespace {
-
 const AdapterDescriptor* specialise_device(const Options& options, std::string& error) {
   return specialise(drivegate_adapter, options, error);
 }
 
 }  // namespace
+
+extern "C" DRIVEGATE_EXPORT constinit const AdapterDescriptor drivegate_adapter = describe(
+    {
+        .id = "modbus",
+        .summary = "any Modbus RTU / ASCII slave, described by a profile (docs/profiles.md)",
+        // Serial Line 2.5.1: 19200 baud and even parity are the defaults every device must offer.
+        .line =
+            {.baud = 19200, .parity = Parity::even, .data_bits = 8, .stop_bits = 1, .echo = false},
+        // Serial Line 2.2: 1..247 are slaves (0, the broadcast, is never polled).
+        .address_min = 1,
+        .address_max = 247,
+        .default_address = 1,
+        // Not streaming: a slave only ever answers.
+        .create_driver = &create_driver,
+        .create_simulator = &create_simulator,
+        .demo = demo_setup(kDemoOptions, 1500),
+        // A profile's own options ([options.NAME]) join the schema of its devices.
+        .specialise = &specialise_device,
+    },
+    kOptionSchema);
+
 }  // namespace drivegate::modbus_device

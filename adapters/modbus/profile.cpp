@@ -86,14 +86,8 @@ class Parser {
     if (t == nullptr) return;
     TableReader r(*t, "profile", diag_);
     r.expect({"name", "description", "source", "identification"});
-    if (auto name = r.string("name", true)) {
-      // Found by name in the profile folders: a file name's safe set ("example-vfd").
-      if (!valid_profile_name(*name)) {
-        diag_.error(r.node("name"), "profile.name",
-                    "must be 1..64 characters of a-z, 0-9, '-' and '_' (got '" + *name + "')");
-      }
-      profile_.name = *name;
-    }
+    // Found by name in the profile folders: a file name's safe set ("example-vfd").
+    if (auto name = r.file_name("name")) profile_.name = *name;
     profile_.description = r.string("description", false).value_or("");
     // Where every address comes from: a profile without it cannot be checked against anything.
     profile_.source = r.string("source", true).value_or("");
@@ -896,17 +890,11 @@ bool valid_profile_name(std::string_view name) {
 }
 
 std::optional<std::size_t> Profile::find(std::string_view point) const {
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (points[i].name == point) return i;
-  }
-  return std::nullopt;
+  return index_of(points, point);
 }
 
 std::optional<std::size_t> Profile::find_option(std::string_view option) const {
-  for (std::size_t i = 0; i < options.size(); ++i) {
-    if (options[i].name == option) return i;
-  }
-  return std::nullopt;
+  return index_of(options, option);
 }
 
 std::variant<Profile, std::vector<std::string>> parse_profile(std::string_view text,

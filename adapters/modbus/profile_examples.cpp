@@ -5,6 +5,7 @@
 
 #include "codec.h"
 #include "drivegate/crc.h"
+#include "planner.h"
 #include "values.h"
 
 namespace drivegate::modbus_device {
@@ -41,20 +42,12 @@ std::string number_text(double v) {
   return b;
 }
 
-// The table a read function reads (Application Protocol 6.1 - 6.4).
+// The table a read function reads: the one read_function() reads with it.
 std::optional<Table> table_read_by(std::uint8_t function) {
-  switch (function) {
-    case fc::read_coils:
-      return Table::coil;
-    case fc::read_discrete_inputs:
-      return Table::discrete;
-    case fc::read_holding_registers:
-      return Table::holding;
-    case fc::read_input_registers:
-      return Table::input;
-    default:
-      return std::nullopt;
+  for (const Table t : {Table::coil, Table::discrete, Table::input, Table::holding}) {
+    if (read_function(t) == function) return t;
   }
+  return std::nullopt;
 }
 
 // The same number, allowing for the binary fractions of a scale (14.95 is 1495 x 0.01).

@@ -24,9 +24,7 @@ class ModbusSimulator final : public Simulator {
  public:
   ModbusSimulator(std::uint8_t address, Profile profile);
 
-  Bytes on_receive(ByteView rx, TimePoint now) override;
-  Bytes on_tick(TimePoint now) override;
-  std::string control(std::string_view line, TimePoint now) override;
+  DRIVEGATE_SIMULATOR_OVERRIDES;
 
  private:
   using Key = std::pair<Table, std::uint16_t>;

@@ -30,19 +30,18 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 constexpr std::array<OptionSetting, 1> kDemoOptions = {{{"platform", "7"}}};
 
 }  // namespace
-}  // namespace drivegate::nidec
 
-extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .id = "nidec-washer",
-    .summary = "Nidec washing-machine inverter, Elaraby bus protocol spec V07",
-    .options = drivegate::nidec::kOptionSchema.data(),
-    .option_count = drivegate::nidec::kOptionSchema.size(),
-    .line = drivegate::nidec::kLine,  // section 3: 4800 8O1; section 2: one wire
-    // Section 2: one inverter per wire, no address in the frame (the default range); not
-    // streaming, the inverter only answers the master.
-    .create_driver = &drivegate::nidec::create_driver,
-    .create_simulator = &drivegate::nidec::create_simulator,
-    .demo = {.options = drivegate::nidec::kDemoOptions.data(),
-             .option_count = drivegate::nidec::kDemoOptions.size(),
-             .running_rpm = 800},
-};
+extern "C" DRIVEGATE_EXPORT constinit const AdapterDescriptor drivegate_adapter = describe(
+    {
+        .id = "nidec-washer",
+        .summary = "Nidec washing-machine inverter, Elaraby bus protocol spec V07",
+        .line = kLine,  // section 3: 4800 8O1; section 2: one wire
+        // Section 2: one inverter per wire, no address in the frame (the default range); not
+        // streaming, the inverter only answers the master.
+        .create_driver = &create_driver,
+        .create_simulator = &create_simulator,
+        .demo = demo_setup(kDemoOptions, 800),
+    },
+    kOptionSchema);
+
+}  // namespace drivegate::nidec

@@ -49,31 +49,33 @@ inline constexpr std::array<std::string_view, 4> kActionStatusNames = {"idle", "
 
 // Indices into points() / values().
 namespace pt {
-inline constexpr std::size_t motion = 0;
-inline constexpr std::size_t accel_time = 1;
-inline constexpr std::size_t agitation_accel = 2;
-inline constexpr std::size_t agitation_decel = 3;
-inline constexpr std::size_t agitation_cw_on = 4;
-inline constexpr std::size_t agitation_cw_off = 5;
-inline constexpr std::size_t agitation_ccw_on = 6;
-inline constexpr std::size_t agitation_ccw_off = 7;
-inline constexpr std::size_t action = 8;
-inline constexpr std::size_t action_status = 9;
-inline constexpr std::size_t inverter_version = 10;
-inline constexpr std::size_t platform = 11;
-inline constexpr std::size_t error_bits = 12;
-inline constexpr std::size_t weight = 13;
-inline constexpr std::size_t raw_weight = 14;
-inline constexpr std::size_t dc_bus_voltage = 15;
-inline constexpr std::size_t forced_brake = 16;
-inline constexpr std::size_t fabric_raw = 17;
-inline constexpr std::size_t fct_error = 18;
-inline constexpr std::size_t fct_speed_rpm = 19;
-inline constexpr std::size_t fct_ipm_temperature = 20;
-inline constexpr std::size_t fct_ipm_model_bus_volt_high = 21;
-inline constexpr std::size_t fct_bus_volt_low = 22;
-inline constexpr std::size_t fct_phase_current = 23;
-inline constexpr std::size_t count = 24;
+enum : std::size_t {
+  motion,
+  accel_time,
+  agitation_accel,
+  agitation_decel,
+  agitation_cw_on,
+  agitation_cw_off,
+  agitation_ccw_on,
+  agitation_ccw_off,
+  action,
+  action_status,
+  inverter_version,
+  platform,
+  error_bits,
+  weight,
+  raw_weight,
+  dc_bus_voltage,
+  forced_brake,
+  fabric_raw,
+  fct_error,
+  fct_speed_rpm,
+  fct_ipm_temperature,
+  fct_ipm_model_bus_volt_high,
+  fct_bus_volt_low,
+  fct_phase_current,
+  count,
+};
 }  // namespace pt
 
 // The seconds a time point shows for a field of 100 ms units (5.3 accel, 5.5 agitation).

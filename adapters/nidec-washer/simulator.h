@@ -18,9 +18,7 @@ class NidecWasherSimulator final : public Simulator {
   // weight come with the ping (5.1), so no device option concerns the inverter's side.
   NidecWasherSimulator() = default;
 
-  Bytes on_receive(ByteView rx, TimePoint now) override;
-  Bytes on_tick(TimePoint now) override;
-  std::string control(std::string_view line, TimePoint now) override;
+  DRIVEGATE_SIMULATOR_OVERRIDES;
 
  private:
   enum class Motion : std::uint8_t {

@@ -36,20 +36,21 @@ std::unique_ptr<Simulator> create_simulator(const SimEnv& env, std::string& erro
 }
 
 }  // namespace
-}  // namespace drivegate::unicla
 
-extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-    .id = "unicla-edrive",
-    .summary = "Unicla eDrive compressor, RS-485 interface V16",
-    .options = drivegate::unicla::kOptionSchema.data(),
-    .option_count = drivegate::unicla::kOptionSchema.size(),
-    .line = drivegate::unicla::kLine,
-    .address_min = drivegate::unicla::kFirstDeviceId,
-    .address_max = drivegate::unicla::kLastDeviceId,
-    .default_address = drivegate::unicla::kDefaultDeviceId,
-    // Not streaming: "all transfers are required to be master initiated".
-    .create_driver = &drivegate::unicla::create_driver,
-    .create_simulator = &drivegate::unicla::create_simulator,
-    // Default options; half the simulated drive's 6000 rpm running limit.
-    .demo = {.running_rpm = 3000},
-};
+extern "C" DRIVEGATE_EXPORT constinit const AdapterDescriptor drivegate_adapter = describe(
+    {
+        .id = "unicla-edrive",
+        .summary = "Unicla eDrive compressor, RS-485 interface V16",
+        .line = kLine,
+        .address_min = kFirstDeviceId,
+        .address_max = kLastDeviceId,
+        .default_address = kDefaultDeviceId,
+        // Not streaming: "all transfers are required to be master initiated".
+        .create_driver = &create_driver,
+        .create_simulator = &create_simulator,
+        // Default options; half the simulated drive's 6000 rpm running limit.
+        .demo = {.running_rpm = 3000},
+    },
+    kOptionSchema);
+
+}  // namespace drivegate::unicla

@@ -17,9 +17,7 @@ class EDriveSimulator final : public Simulator {
  public:
   EDriveSimulator(std::uint8_t address, ByteOrder order);
 
-  Bytes on_receive(ByteView rx, TimePoint now) override;
-  Bytes on_tick(TimePoint now) override;
-  std::string control(std::string_view line, TimePoint now) override;
+  DRIVEGATE_SIMULATOR_OVERRIDES;
 
   // For tests: the status it would report now.
   [[nodiscard]] Status status() const;

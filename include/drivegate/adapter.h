@@ -3,15 +3,19 @@
 // api_version but its own, validates the device options against `options`, and then only ever
 // calls the two factories. adapters/README.md describes the folder every adapter has. A
 // descriptor names only what is its adapter's own: the API version, an address range of none,
-// not streaming, no actions and no specialiser are the defaults.
+// not streaming, no actions and no specialiser are the defaults; describe() and demo_setup() take
+// each array's pointer and size from the array.
 //
-//   extern "C" DRIVEGATE_EXPORT constinit const drivegate::AdapterDescriptor drivegate_adapter = {
-//       .id = "nidec-washer", .summary = ..., .options = ..., ...};
+//   namespace drivegate::nidec {
+//   extern "C" DRIVEGATE_EXPORT constinit const AdapterDescriptor drivegate_adapter = describe(
+//       {.id = "nidec-washer", .summary = ..., .line = ..., ...}, kOptionSchema);
+//   }
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "drivegate/driver.h"
@@ -54,6 +58,11 @@ struct DemoSetup {
   std::int32_t running_rpm = 1000;
 };
 
+// A demo that sets `options`, each written once: `.demo = demo_setup(kDemoOptions, 2000)`.
+constexpr DemoSetup demo_setup(std::span<const OptionSetting> options, std::int32_t running_rpm) {
+  return {.options = options.data(), .option_count = options.size(), .running_rpm = running_rpm};
+}
+
 // A maintenance action, run with the daemon stopped: `drivegate action --config FILE --device
 // NAME ACTION key=value...` writes maintenance point `<parameter_prefix><key>` for each key, in
 // order, then 1 to `commit_point`, which carries the action out; when the drive or the driver's
@@ -71,8 +80,8 @@ struct AdapterDescriptor {
   std::uint32_t api_version = kAdapterApiVersion;  // the version the plugin was compiled against
   const char* id;
   const char* summary;
-  const OptionSpec* options;
-  std::size_t option_count;
+  const OptionSpec* options = nullptr;  // describe() sets both from the adapter's schema
+  std::size_t option_count = 0;
   LineDefaults line;
   std::uint32_t address_min = 0;  // native address range; {0, 0}: the protocol has no address
   std::uint32_t address_max = 0;
@@ -85,5 +94,17 @@ struct AdapterDescriptor {
   std::size_t action_count = 0;
   Specialiser specialise = nullptr;  // none for most adapters
 };
+
+// A plugin's descriptor with each array's pointer and size taken from the array, so the two
+// cannot disagree: `describe({.id = ..., ...}, kOptionSchema)`, and `kActions` after it for an
+// adapter with maintenance actions.
+constexpr AdapterDescriptor describe(AdapterDescriptor d, std::span<const OptionSpec> schema,
+                                     std::span<const MaintenanceAction> actions = {}) {
+  d.options = schema.data();
+  d.option_count = schema.size();
+  d.actions = actions.data();
+  d.action_count = actions.size();
+  return d;
+}
 
 }  // namespace drivegate

@@ -1,12 +1,21 @@
 // A simulated device: the other end of an adapter's protocol, for commissioning before hardware
 // arrives and for the gateway's own end-to-end tests. Like a Driver it does no I/O; `drivegate
 // sim` hosts it on a pseudo-terminal (or a real port) and owns echo, turnaround and wire timing.
+//
+// DRIVEGATE_SIMULATOR_OVERRIDES declares, in a simulator's class, the three overrides every
+// simulator has; it adds what else it has after it.
 #pragma once
 
 #include <string>
 #include <string_view>
 
 #include "drivegate/driver.h"
+
+// The overrides every simulator declares: the master's bytes, time passing, the operator.
+#define DRIVEGATE_SIMULATOR_OVERRIDES                    \
+  Bytes on_receive(ByteView rx, TimePoint now) override; \
+  Bytes on_tick(TimePoint now) override;                 \
+  std::string control(std::string_view line, TimePoint now) override
 
 namespace drivegate {
 

@@ -96,6 +96,14 @@ inline int line_of(const toml::node& n) {
 }
 
 // Reads the keys of one table, refusing the unknown ones.
+// A name that is also a file's name in a folder of them (a profile, a protocol description):
+// 1..64 characters of a-z, 0-9, '-' and '_'.
+inline bool valid_file_name(std::string_view name) {
+  return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
+  });
+}
+
 class TableReader {
  public:
   TableReader(const toml::table& table, std::string prefix, Diagnostics& diag)
@@ -125,6 +133,17 @@ class TableReader {
     if (const auto* s = n->as_string()) return s->get();
     diag_.error(n, qualified(key), "must be a string");
     return std::nullopt;
+  }
+
+  // A required string that is also a file's name (valid_file_name); one that is not is returned
+  // too, with an error.
+  std::optional<std::string> file_name(std::string_view key) {
+    auto name = string(key, true);
+    if (name && !valid_file_name(*name)) {
+      diag_.error(node(key), qualified(key),
+                  "must be 1..64 characters of a-z, 0-9, '-' and '_' (got '" + *name + "')");
+    }
+    return name;
   }
 
   std::optional<std::int64_t> integer(std::string_view key, std::int64_t min, std::int64_t max,
@@ -247,12 +266,14 @@ class TableReader {
   std::vector<std::string> known_;
 };
 
-// A name that is also a file's name in a folder of them (a profile, a protocol description):
-// 1..64 characters of a-z, 0-9, '-' and '_'.
-inline bool valid_file_name(std::string_view name) {
-  return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
-  });
+// The index of the entry named `name` in a list a file declares (a profile's points, a
+// description's messages: each with a `name`); nothing when there is none.
+template <class Entries>
+std::optional<std::size_t> index_of(const Entries& entries, std::string_view name) {
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (entries[i].name == name) return i;
+  }
+  return std::nullopt;
 }
 
 // `root[key]` as an array of tables ([[key]]); nullptr when absent or (with an error) not one.
