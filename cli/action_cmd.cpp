@@ -108,6 +108,7 @@ int action(std::span<const std::string> args) {
   }
   if (params.empty()) return cli.usage_error("no parameters given for action '" + name + "'");
   std::vector<Assignment> writes;
+  writes.reserve(params.size() + 1);
   for (const auto& p : params) writes.push_back({a->parameter_prefix + p.point, p.value});
   writes.push_back({a->commit_point, "1"});
   return run_point_writes(

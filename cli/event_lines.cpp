@@ -57,7 +57,7 @@ bool entry(Reader& r, std::uint64_t& seq, std::string& line) {
 }  // namespace
 
 std::string utc_time(std::int64_t unix_ms) {
-  const std::time_t secs = static_cast<std::time_t>(unix_ms / 1000);
+  const auto secs = static_cast<std::time_t>(unix_ms / 1000);
   std::tm tm{};
   gmtime_r(&secs, &tm);
   char buf[64];  // room for any int the format may be given

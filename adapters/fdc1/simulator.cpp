@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -113,11 +114,11 @@ Status Fdc1Simulator::status() const {
   Status s;
   s.motor_on = motor_on_;
   if (motor_on_) {
-    s.rpm = static_cast<std::uint16_t>(rpm_ + 0.5);
-    s.word = static_cast<std::uint16_t>(rpm_ * kAmpsPerRpm * kCurrentScale + 0.5);
+    s.rpm = static_cast<std::uint16_t>(std::lround(rpm_));
+    s.word = static_cast<std::uint16_t>(std::lround(rpm_ * kAmpsPerRpm * kCurrentScale));
   } else {
     s.alarm = alarm_;
-    s.word = static_cast<std::uint16_t>(std::min(65535.0, restart_left_s_ * kRestartScale + 0.5));
+    s.word = static_cast<std::uint16_t>(std::min(65535L, std::lround(restart_left_s_ * kRestartScale)));
   }
   return s;
 }
@@ -155,9 +156,9 @@ std::string Fdc1Simulator::state(TimePoint now) const {
   char amps[16];
   std::snprintf(amps, sizeof amps, "%.2f", motor_on_ ? rpm_ * kAmpsPerRpm : 0.0);
   const auto age = std::chrono::duration_cast<Millis>(now - last_speed_).count();
-  o << "motor=" << (motor_on_ ? "on" : "off") << " rpm=" << static_cast<int>(rpm_ + 0.5)
+  o << "motor=" << (motor_on_ ? "on" : "off") << " rpm=" << std::lround(rpm_)
     << " target=" << static_cast<int>(target_rpm()) << " current_a=" << amps
-    << " alarm=" << int{alarm_} << " restart_s=" << static_cast<int>(restart_left_s_ + 0.5)
+    << " alarm=" << int{alarm_} << " restart_s=" << std::lround(restart_left_s_)
     << " mode=" << int{mode_} << " slave=" << (is_slave(mode_) ? 1 : 0) << " min=" << speed_.min_rpm
     << " max=" << speed_.max_rpm << " speed_age_ms=" << age
     << " watchdog=" << (watchdog_tripped_ ? 1 : 0)

@@ -446,8 +446,8 @@ class Parser {
       } else if (c.kind == CheckKind::lrc && width != 1) {
         diag_.error(ct, key + ".width", "an LRC is one byte");
       }
-      if (auto v = r.integer("from", -kMaxFrame, kMaxFrame, false)) c.from = static_cast<int>(*v);
-      if (auto v = r.integer("to", -kMaxFrame, kMaxFrame, false)) c.to = static_cast<int>(*v);
+      if (auto v = r.integer("from", -static_cast<std::int64_t>(kMaxFrame), kMaxFrame, false)) c.from = static_cast<int>(*v);
+      if (auto v = r.integer("to", -static_cast<std::int64_t>(kMaxFrame), kMaxFrame, false)) c.to = static_cast<int>(*v);
       if (auto v = r.integer("step", 1, 8, false)) c.step = static_cast<std::uint8_t>(*v);
       d_->checks.push_back(std::move(c));
     }
@@ -583,7 +583,7 @@ class Parser {
       (void)r.string("description", false);
       r.node("initial");  // read in compile_points(), once every name is known
       r.node("comm_lost");
-      pending_state_.push_back({d_->vars.size(), &t});
+      pending_state_.emplace_back(d_->vars.size(), &t);
       d_->vars.push_back(std::move(v));
     }
   }
@@ -1099,7 +1099,7 @@ class Parser {
             diag_.error(&item, key + ".echo", "must name fields of the layout");
             continue;
           }
-          m.echo.push_back({static_cast<std::size_t>(f - m.fields.begin()), f->global});
+          m.echo.emplace_back(static_cast<std::size_t>(f - m.fields.begin()), f->global);
         }
       }
       Context own;

@@ -22,7 +22,7 @@ FramedDriver::FramedDriver(std::shared_ptr<const Description> d, const DeviceEnv
       writes_(completions_, [this](const Writes::Entry& e, WriteResult r) { settled(e, r); }) {
   const Timing& t = d_->timing;
   const Scope s = state_.scope();
-  double poll = static_cast<double>(poll_interval_.count());
+  auto poll = static_cast<double>(poll_interval_.count());
   if (t.poll_min_ms) poll = std::max(poll, *t.poll_min_ms);
   if (t.poll_max_ms) poll = std::min(poll, *t.poll_max_ms);
   poll_interval_ = Millis(static_cast<std::int64_t>(poll));

@@ -167,7 +167,7 @@ WriteStatus FramedDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
     case WriteOp::Target::forward:
       return WriteStatus::invalid_value;
   }
-  writes_.push(std::move(job), t, deadline);
+  writes_.push(job, t, deadline);
   return WriteStatus::pending;
 }
 

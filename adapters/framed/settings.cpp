@@ -43,6 +43,7 @@ std::optional<std::string> read_file(const std::filesystem::path& path, std::str
 
 std::vector<std::string_view> shipped_names() {
   std::vector<std::string_view> out;
+  out.reserve(std::size(kShippedProtocols));
   for (const auto& s : kShippedProtocols) out.push_back(s.name);
   return out;
 }

@@ -217,7 +217,7 @@ WriteStatus NidecWasherDriver::apply_action(Action a, Ticket t, TimePoint deadli
 // --- the queue ---
 
 WriteStatus NidecWasherDriver::enqueue(Queued q, Ticket t, TimePoint deadline) {
-  queue_.push(std::move(q), t, deadline);
+  queue_.push(q, t, deadline);
   return WriteStatus::pending;
 }
 

@@ -83,7 +83,7 @@ std::filesystem::path resolve_state_dir(const std::filesystem::path& option,
   if (!option.empty()) return option;
   if (state_directory == nullptr) return {};
   const std::string_view v(state_directory);
-  return std::filesystem::path(std::string(v.substr(0, v.find(':'))));
+  return {std::string(v.substr(0, v.find(':')))};
 }
 
 }  // namespace drivegate

@@ -146,6 +146,7 @@ inline PointSpec string_point(std::string name, std::uint16_t registers, std::st
 template <class Names>
 std::vector<Label> labels_in_order(const Names& names) {
   std::vector<Label> out;
+  out.reserve(std::size(names));
   std::uint32_t value = 0;
   for (const auto& n : names) out.push_back({std::string(n), value++});
   return out;
