@@ -73,10 +73,10 @@ bool ParsedArgs::has(std::string_view long_name) const {
 
 std::optional<std::string> ParsedArgs::value(std::string_view long_name) const {
   check_known(long_name);
-  for (auto g = given_.rbegin(); g != given_.rend(); ++g) {
-    if (long_name == g->option->long_name) return g->value;
-  }
-  return std::nullopt;
+  const auto g = std::find_if(given_.rbegin(), given_.rend(),
+                              [&](const Given& x) { return long_name == x.option->long_name; });
+  if (g == given_.rend()) return std::nullopt;
+  return g->value;
 }
 
 std::vector<std::string> ParsedArgs::values(std::string_view long_name) const {
@@ -91,12 +91,11 @@ std::vector<std::string> ParsedArgs::values(std::string_view long_name) const {
 std::optional<std::string_view> ParsedArgs::last_of(
     std::initializer_list<std::string_view> long_names) const {
   for (const auto name : long_names) check_known(name);
-  for (auto g = given_.rbegin(); g != given_.rend(); ++g) {
-    for (const auto name : long_names) {
-      if (name == g->option->long_name) return name;
-    }
-  }
-  return std::nullopt;
+  const auto g = std::find_if(given_.rbegin(), given_.rend(), [&](const Given& x) {
+    return std::find(long_names.begin(), long_names.end(), x.option->long_name) != long_names.end();
+  });
+  if (g == given_.rend()) return std::nullopt;
+  return std::string_view(g->option->long_name);
 }
 
 CommandLine::CommandLine(std::string program, std::span<const Option> options,
@@ -149,6 +148,7 @@ ParsedArgs CommandLine::parse(std::span<const std::string> args, OperandOrder or
   storage.push_back(program_);
   storage.insert(storage.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(storage.size() + 1);
   for (auto& s : storage) argv.push_back(s.data());
   argv.push_back(nullptr);
   const int argc = static_cast<int>(storage.size());

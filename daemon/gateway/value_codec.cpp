@@ -12,8 +12,8 @@ namespace {
 template <class T>
 T saturate(double v) {
   if (std::isnan(v)) return 0;
-  const double lo = static_cast<double>(std::numeric_limits<T>::min());
-  const double hi = static_cast<double>(std::numeric_limits<T>::max());
+  const auto lo = static_cast<double>(std::numeric_limits<T>::min());
+  const auto hi = static_cast<double>(std::numeric_limits<T>::max());
   return static_cast<T>(std::llround(std::clamp(v, lo, hi)));
 }
 
@@ -173,7 +173,7 @@ std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::ui
     case PointType::i32:
       return engineering(static_cast<std::int32_t>(u32));
     case PointType::f32: {
-      const float f = std::bit_cast<float>(u32);
+      const auto f = std::bit_cast<float>(u32);
       if (!std::isfinite(f)) return std::nullopt;
       return static_cast<double>(f);
     }
@@ -186,7 +186,7 @@ std::optional<Value> decode_value(const PointSpec& spec, std::span<const std::ui
     case PointType::i64:
       return engineering(static_cast<std::int64_t>(u64));
     case PointType::f64: {
-      const double d = std::bit_cast<double>(u64);
+      const auto d = std::bit_cast<double>(u64);
       if (!std::isfinite(d)) return std::nullopt;
       return d;
     }

@@ -101,6 +101,7 @@ class CommandFold {
     std::uint8_t unit = 0;
     std::string points;
     Outcome result = Outcome::ok;
+    // NOLINTNEXTLINE(modernize-use-nullptr): clang-tidy 14 flags a defaulted <=> itself
     auto operator<=>(const Key&) const = default;
   };
   using ClientKey = std::tuple<SourceKind, std::string, std::string>;

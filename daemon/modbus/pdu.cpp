@@ -280,11 +280,10 @@ std::size_t Dispatcher::complete(const Session& session, std::uint8_t unit,
   switch (static_cast<Function>(fc)) {
     case Function::write_single_coil:
     case Function::write_single_register:
-      std::copy_n(request.begin(), 5, out.begin());  // 6.5 / 6.6: the response echoes the request
-      return 5;
     case Function::write_multiple_coils:
     case Function::write_multiple_registers:
-      std::copy_n(request.begin(), 5, out.begin());  // 6.11 / 6.12: fc, start, quantity
+      // 6.5 / 6.6: the response echoes the request; 6.11 / 6.12: fc, start, quantity.
+      std::copy_n(request.begin(), 5, out.begin());
       return 5;
     case Function::read_write_registers:
       return read_registers_response(unit, Table::holding, get16(request, 1), get16(request, 3), fc,

@@ -120,7 +120,7 @@ std::string certificate_subject(X509* certificate) {
                      XN_FLAG_ONELINE & ~ASN1_STRFLGS_ESC_MSB);
   char* text = nullptr;
   const long n = BIO_get_mem_data(bio.get(), &text);
-  return std::string(text, static_cast<std::size_t>(n));
+  return {text, static_cast<std::size_t>(n)};
 }
 
 }  // namespace drivegate::modbus

@@ -91,6 +91,8 @@ SslPtr new_socket_ssl(SSL_CTX* context, int fd) {
   if (!ssl) return nullptr;
   BIO* bio = BIO_new(method);
   if (bio == nullptr) return nullptr;
+  // The BIO's data is the socket's descriptor itself, not a pointer (socket_method() reads it).
+  // NOLINTNEXTLINE(performance-no-int-to-ptr)
   BIO_set_data(bio, reinterpret_cast<void*>(static_cast<std::intptr_t>(fd)));
   SSL_set_bio(ssl.get(), bio, bio);  // the SSL owns the BIO (one reference for both ends)
   // A write retried after WANT_WRITE passes the rest of the same buffer.

@@ -1,7 +1,7 @@
 #include "transport/port_lock.h"
 
 #include <fcntl.h>
-#include <signal.h>
+#include <signal.h>  // NOLINT(modernize-deprecated-headers): POSIX kill(), not in <csignal>
 #include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <unistd.h>
