@@ -77,6 +77,23 @@ std::int32_t speed_read(const std::string& name, std::uint8_t slave, const std::
   return speed_read(shipped_profile(name), slave, control);
 }
 
+// What a PLC and the line see of `p`'s speed at unit 1: the rpm its driver reads once the
+// simulator was told `control`, and the simulator's reply to the RTU read `read_pdu` then.
+struct SpeedSeen {
+  std::int32_t rpm = 0;
+  Bytes reply;
+};
+SpeedSeen speed_seen(const Profile& p, const std::string& control,
+                     const std::vector<std::uint8_t>& read_pdu) {
+  ModbusSimulator sim(1, p);
+  TimePoint now;
+  const std::int32_t rpm = speed_read(p, 1, control, sim, now);
+  return {rpm, sim.on_receive(encode(Framing::rtu, 1, read_pdu), now)};
+}
+Bytes rtu(const std::vector<std::uint8_t>& pdu) {
+  return encode(Framing::rtu, 1, pdu);
+}
+
 // --- ENC EDS300 ---
 
 TEST(EncEds300Rpm, A1500RpmSetpointIsTheManuals50HzFrame) {
@@ -137,16 +154,12 @@ TEST(HitachiSjP1Rpm, A1500RpmSetpointWritesTheManuals50HzToFa01) {
 }
 
 TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {
-  ModbusSimulator sim(1, shipped_profile("hitachi-sj-p1"));
-  TimePoint now;
-  // p.14-18's reply: dA-01 (registers 2711h/2712h) = 0000 1388h = 50.00 Hz: 1500 rpm at 4 poles.
-  EXPECT_EQ(speed_read(shipped_profile("hitachi-sj-p1"), 1, "set output_frequency 50", sim, now),
-            1500);
-  // The driver asks dA-01 at the register address the manual sends: 2710h, two registers.
-  const Bytes read =
-      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x27, 0x10, 0x00, 0x02});
-  EXPECT_EQ(sim.on_receive(read, now),
-            encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x04, 0x00, 0x00, 0x13, 0x88}));
+  // p.14-18's reply: dA-01 (registers 2711h/2712h) = 0000 1388h = 50.00 Hz: 1500 rpm at 4 poles;
+  // the driver asks dA-01 at the register address the manual sends: 2710h, two registers.
+  const SpeedSeen seen = speed_seen(shipped_profile("hitachi-sj-p1"), "set output_frequency 50",
+                                    {0x03, 0x27, 0x10, 0x00, 0x02});
+  EXPECT_EQ(seen.rpm, 1500);
+  EXPECT_EQ(seen.reply, rtu({0x03, 0x04, 0x00, 0x00, 0x13, 0x88}));
 }
 
 // --- Inovance MD500 ---
@@ -198,14 +211,10 @@ TEST(DanfossFc51Rpm, TheReferenceSpans3_02To3_03) {
 TEST(DanfossFc51Rpm, MavReadsAsTheSynchronousSpeedOverTheSameSpan) {
   // p.88: MAV is scaled as the reference. MAV = 2000 hex (50 %) with 3-02 = 10 Hz, 3-03 = 60 Hz:
   // 35 Hz, 1050 rpm at 4 poles; the register a PLC reads is 50210 (address C421h).
-  const Profile p = fc51_10_to_60_hz();
-  ModbusSimulator sim(1, p);
-  TimePoint now;
-  EXPECT_EQ(speed_read(p, 1, "set main_actual_value 50", sim, now), 1050);
-  EXPECT_EQ(
-      sim.on_receive(
-          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0xC4, 0x21, 0x00, 0x01}), now),
-      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x03, 0x02, 0x20, 0x00}));
+  const SpeedSeen seen =
+      speed_seen(fc51_10_to_60_hz(), "set main_actual_value 50", {0x03, 0xC4, 0x21, 0x00, 0x01});
+  EXPECT_EQ(seen.rpm, 1050);
+  EXPECT_EQ(seen.reply, rtu({0x03, 0x02, 0x20, 0x00}));
 }
 
 // --- Eaton PowerXL DG1 ---
@@ -228,14 +237,10 @@ TEST(EatonDg1Rpm, TheActualSpeedReadsAsTheSynchronousSpeedOverTheSameSpan) {
   // p.15: "The Actual value is 5000" (ID 2103, input register address 2102 = 0836h); p.134: the
   // actual value 0..10000 spans the set minimum .. maximum frequency. P1.1 = 10 Hz, P1.2 =
   // 60 Hz: 35 Hz, 1050 rpm at 4 poles.
-  const Profile p = dg1_10_to_60_hz();
-  ModbusSimulator sim(1, p);
-  TimePoint now;
-  EXPECT_EQ(speed_read(p, 1, "set fb_actual_speed 50", sim, now), 1050);
-  EXPECT_EQ(
-      sim.on_receive(
-          encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x08, 0x36, 0x00, 0x01}), now),
-      encode(Framing::rtu, 1, std::vector<std::uint8_t>{0x04, 0x02, 0x13, 0x88}));
+  const SpeedSeen seen =
+      speed_seen(dg1_10_to_60_hz(), "set fb_actual_speed 50", {0x04, 0x08, 0x36, 0x00, 0x01});
+  EXPECT_EQ(seen.rpm, 1050);
+  EXPECT_EQ(seen.reply, rtu({0x04, 0x02, 0x13, 0x88}));
 }
 
 }  // namespace
