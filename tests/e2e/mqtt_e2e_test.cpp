@@ -690,16 +690,12 @@ TEST_F(MqttE2E, BirthsWaitForThePrimaryHostAndEndWhenItGoesOffline) {
                                      std::chrono::system_clock::now().time_since_epoch())
                                      .count());
   const std::string state = "spBv1.0/STATE/scada";
-  auto state_text = [](bool online, std::uint64_t ts) {
-    return std::string(R"({"online":)") + (online ? "true" : "false") + R"(,"timestamp":)" +
-           std::to_string(ts) + "}";
-  };
-  peer_->publish_text(state, state_text(true, t0), true, 1);
+  peer_->publish_text(state, host_state(true, t0), true, 1);
   const Births first = wait_births(5s);
   ASSERT_FALSE(HasFailure());
   const auto bd1 = first.node.metric("bdSeq")->as_uint();
 
-  peer_->publish_text(state, state_text(false, t0 + 1), true, 1);
+  peer_->publish_text(state, host_state(false, t0 + 1), true, 1);
   const auto death = wait("NDEATH", {}, 5s);
   ASSERT_TRUE(death.has_value()) << "no NDEATH when the primary host went offline";
   EXPECT_EQ(death->metric("bdSeq")->as_uint(), bd1);
@@ -708,7 +704,7 @@ TEST_F(MqttE2E, BirthsWaitForThePrimaryHostAndEndWhenItGoesOffline) {
   EXPECT_EQ(count("NBIRTH"), 1u);
   EXPECT_EQ(count("NDEATH"), 1u) << "the will came on top of the published NDEATH";
 
-  peer_->publish_text(state, state_text(true, t0 + 2), true, 1);
+  peer_->publish_text(state, host_state(true, t0 + 2), true, 1);
   const Births second = wait_births(5s);
   ASSERT_FALSE(HasFailure());
   const auto bd2 = second.node.metric("bdSeq")->as_uint();
@@ -716,7 +712,7 @@ TEST_F(MqttE2E, BirthsWaitForThePrimaryHostAndEndWhenItGoesOffline) {
   EXPECT_EQ(second.node.seq, 0u);
 
   // A stale offline (older timestamp) is ignored.
-  peer_->publish_text(state, state_text(false, t0), true, 1);
+  peer_->publish_text(state, host_state(false, t0), true, 1);
   pump(1500ms);
   EXPECT_EQ(count("NDEATH"), 1u) << "a stale STATE offline ended the session";
   expect_seq_consecutive(peer_->history());

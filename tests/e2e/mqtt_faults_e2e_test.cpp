@@ -32,11 +32,6 @@ std::uint64_t unix_ms() {
                                         .count());
 }
 
-std::string state_text(bool online, std::uint64_t ts) {
-  return std::string(R"({"online":)") + (online ? "true" : "false") + R"(,"timestamp":)" +
-         std::to_string(ts) + "}";
-}
-
 class MqttE2EFaults : public MqttE2E {
  protected:
   // The daemon on `broker_url`, keeping what it cannot send in a state directory, with [http] for
@@ -102,7 +97,7 @@ TEST_F(MqttE2EFaults, ADcmdBeforeTheBirthsMovesNothing) {
   EXPECT_THAT(drive("drive-a").sim->control("state"), HasSubstr(" target=0 "));
   EXPECT_EQ(count("DDATA"), 0u) << "answered before any birth";
 
-  peer_->publish_text("spBv1.0/STATE/scada", state_text(true, unix_ms()), true, 1);
+  peer_->publish_text("spBv1.0/STATE/scada", host_state(true, unix_ms()), true, 1);
   wait_births();
   ASSERT_FALSE(HasFailure());
   dcmd("drive-a", run);
@@ -246,13 +241,13 @@ TEST_F(MqttE2EFaults, EachBrokersStateIsItsOwnSequenceTheNodeIsBornOnTheNext) {
   OtherBroker b(dir_ / "peer-b.log");
   const std::string state = "spBv1.0/STATE/scada";
   const std::uint64_t t = unix_ms();
-  peer_->publish_text(state, state_text(true, t), true, 1);
-  b.peer.publish_text(state, state_text(true, t - 1000), true, 1);
+  peer_->publish_text(state, host_state(true, t), true, 1);
+  b.peer.publish_text(state, host_state(true, t - 1000), true, 1);
   brokers_ = {broker_->url(), b.broker.url()};
   start_daemon("primary_host_id = \"scada\"\n");
   wait_births();
   ASSERT_FALSE(HasFailure());
-  peer_->publish_text(state, state_text(false, t), true, 1);  // the host's will on A
+  peer_->publish_text(state, host_state(false, t), true, 1);  // the host's will on A
   ASSERT_TRUE(wait("NDEATH", {}, 5s).has_value());
   const auto born = b.peer.wait_for([](const Message& x) { return is(x, "NBIRTH"); }, 15s);
   EXPECT_TRUE(born.has_value()) << "stranded on B: its ONLINE taken for older than A's\n"
@@ -267,14 +262,14 @@ TEST_F(MqttE2EFaults, EachBrokersStateIsItsOwnSequenceTheNodeIsBornOnTheNext) {
 // timestamp has passed.
 TEST_F(MqttE2EFaults, AForgedOfflineCannotHoldTheNodeOfflinePastTheHostsNextOnline) {
   const std::string state = "spBv1.0/STATE/scada";
-  peer_->publish_text(state, state_text(true, unix_ms()), true, 1);
+  peer_->publish_text(state, host_state(true, unix_ms()), true, 1);
   start_daemon("primary_host_id = \"scada\"\n");
   wait_births();
   ASSERT_FALSE(HasFailure());
-  peer_->publish_text(state, state_text(false, unix_ms() + 290'000), true, 1);  // forged
+  peer_->publish_text(state, host_state(false, unix_ms() + 290'000), true, 1);  // forged
   ASSERT_TRUE(wait("NDEATH", {}, 5s).has_value());
   pump(2s);  // reconnected, the forged STATE delivered again as the retained one
-  peer_->publish_text(state, state_text(true, unix_ms()), true, 1);  // the host's answer
+  peer_->publish_text(state, host_state(true, unix_ms()), true, 1);  // the host's answer
   const auto reborn = wait("NBIRTH", {}, 10s);
   EXPECT_TRUE(reborn.has_value()) << "held offline by a forged STATE\n" << daemon_log();
   peer_->publish_text(state, "", true, 1);

@@ -29,9 +29,7 @@ class StateDirE2E : public MqttE2E {
   // The primary host says it is online (Sparkplug 3.0 STATE, retained, QoS 1): a node configured
   // with primary_host_id births only after it, so the host is subscribed before the births come.
   void announce_host() {
-    peer_->publish_text("spBv1.0/STATE/scada", R"({"online":true,"timestamp":)" +
-                                                   std::to_string(++host_timestamp_) + "}",
-                        true, 1);
+    peer_->publish_text("spBv1.0/STATE/scada", host_state(true, ++host_timestamp_), true, 1);
   }
   // The PLC runs `unit` up to `rpm` and waits for the drive to get there.
   void ramp(int unit, int rpm) {

@@ -44,6 +44,12 @@
 
 namespace drivegate::test {
 
+// A Sparkplug 3.0 primary host's STATE payload: {"online":true|false,"timestamp":MS}.
+inline std::string host_state(bool online, std::uint64_t timestamp_ms) {
+  return std::string(R"({"online":)") + (online ? "true" : "false") + R"(,"timestamp":)" +
+         std::to_string(timestamp_ms) + "}";
+}
+
 inline std::filesystem::path peer_dir() {
   return DRIVEGATE_TEST_PEER_DIR;
 }
