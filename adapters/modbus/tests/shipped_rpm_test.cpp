@@ -68,13 +68,11 @@ std::int32_t speed_read(const Profile& p, std::uint8_t slave, const std::string&
   }
   return d.common().speed_rpm;
 }
-std::int32_t speed_read(const Profile& p, std::uint8_t slave, const std::string& control) {
+std::int32_t speed_read(const std::string& name, std::uint8_t slave, const std::string& control) {
+  const Profile p = shipped_profile(name);
   ModbusSimulator sim(slave, p);
   TimePoint now;
   return speed_read(p, slave, control, sim, now);
-}
-std::int32_t speed_read(const std::string& name, std::uint8_t slave, const std::string& control) {
-  return speed_read(shipped_profile(name), slave, control);
 }
 
 // What a PLC and the line see of `p`'s speed at unit 1: the rpm its driver reads once the
