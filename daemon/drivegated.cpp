@@ -54,9 +54,7 @@ int check_config(const std::filesystem::path& file, const std::filesystem::path&
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   auto parsed = drivegate::parse_daemon_args(args);
   if (const auto* error = std::get_if<std::string>(&parsed)) {
@@ -78,12 +76,21 @@ int main(int argc, char** argv) {
   }
   a.options.state_dir =
       drivegate::resolve_state_dir(a.options.state_dir, std::getenv("STATE_DIRECTORY"));
+  drivegate::Daemon daemon(std::move(a.options), drivegate::make_logger("drivegated", a.log_level));
+  return daemon.run();
+}
+
+}  // namespace
+
+// Whatever throws, from reading the arguments to the event loop's last handler, ends here: a
+// message on stderr (the journal) and exit status 1, for systemd to restart the service.
+int main(int argc, char** argv) {
   try {
-    drivegate::Daemon daemon(std::move(a.options),
-                             drivegate::make_logger("drivegated", a.log_level));
-    return daemon.run();
+    return run(argc, argv);
   } catch (const std::exception& e) {
     std::cerr << "drivegated: fatal: " << e.what() << "\n";
-    return 1;
+  } catch (...) {
+    std::cerr << "drivegated: fatal: an unknown exception\n";
   }
+  return 1;
 }

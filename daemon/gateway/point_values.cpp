@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <optional>
+#include <span>
 
 #include "gateway/value_codec.h"
 
@@ -15,6 +17,36 @@ std::string_view label_of(const PointSpec& spec, const Value& value) {
                                [&](const Label& l) { return l.value == *i; });
   return it != spec.labels.end() ? std::string_view(it->name) : std::string_view();
 }
+
+namespace {
+
+bool is_bit(Table t) {
+  return t == Table::coil || t == Table::discrete;
+}
+
+// What a point shows: its registers' value; Value{} where it is unknown (an adapter's point its
+// driver does not know, whatever its registers hold; a common row holding its unknown mark; a
+// float that is not a number); nothing where the registers cannot be read as its type.
+std::optional<Value> value_of(const MappedPoint& p, std::span<const std::uint16_t> regs,
+                              const std::vector<Value>& driver_values) {
+  if (p.source == PointSource::adapter && p.index < driver_values.size() &&
+      std::holds_alternative<std::monostate>(driver_values[p.index])) {
+    return Value{};
+  }
+  if (is_bit(p.spec.table)) return Value{std::int64_t{regs[0] != 0 ? 1 : 0}};
+  if (p.spec.type == PointType::string) return decode_text(regs);  // a serial number, a name
+  auto v = decode_value(p.spec, regs);
+  if (!v) {  // a float that is NaN or infinite is unknown; other types always decode
+    if (p.spec.type == PointType::f32 || p.spec.type == PointType::f64) return Value{};
+    return std::nullopt;
+  }
+  const CommonRow* row = p.row();
+  const auto* i64 = std::get_if<std::int64_t>(&*v);
+  if (row != nullptr && row->unknown && i64 != nullptr && *i64 == *row->unknown) return Value{};
+  return v;
+}
+
+}  // namespace
 
 void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
   static const Session kReader{AccessLevel::read, WordOrder::big};
@@ -48,27 +80,10 @@ void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
   const std::vector<Value>& values = device.driver().values();
   for (const MappedPoint& p : map.points()) {
     const auto i = static_cast<std::size_t>(p.spec.table);
-    const bool bits = p.spec.table == Table::coil || p.spec.table == Table::discrete;
-    const std::size_t count = bits ? 1 : p.spec.register_count();
+    const std::size_t count = is_bit(p.spec.table) ? 1 : p.spec.register_count();
     if (std::size_t{p.address} + count > image[i].size() || !readable[i][p.address]) continue;
-    const std::span<const std::uint16_t> regs = std::span(image[i]).subspan(p.address, count);
-    // What the registers cannot say: an adapter's point its driver does not know, a common row
-    // holding its unknown mark, a float that is not a number.
-    const bool unknown_to_driver = p.source == PointSource::adapter && p.index < values.size() &&
-                                   std::holds_alternative<std::monostate>(values[p.index]);
-    if (unknown_to_driver) {
-      out.emplace_back(&p, Value{});
-    } else if (bits) {
-      out.emplace_back(&p, std::int64_t{regs[0] != 0 ? 1 : 0});
-    } else if (p.spec.type == PointType::string) {
-      out.emplace_back(&p, decode_text(regs));  // a serial number, a drive's name
-    } else if (auto v = decode_value(p.spec, regs)) {
-      const CommonRow* row = p.row();
-      const auto* i64 = std::get_if<std::int64_t>(&*v);
-      const bool marked = row != nullptr && row->unknown && i64 != nullptr && *i64 == *row->unknown;
-      out.emplace_back(&p, marked ? Value{} : std::move(*v));
-    } else if (p.spec.type == PointType::f32 || p.spec.type == PointType::f64) {
-      out.emplace_back(&p, Value{});  // NaN or infinite
+    if (auto v = value_of(p, std::span(image[i]).subspan(p.address, count), values)) {
+      out.emplace_back(&p, std::move(*v));
     }
   }
 }
