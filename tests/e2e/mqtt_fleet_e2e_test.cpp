@@ -196,8 +196,7 @@ class MqttE2EFleet : public ::testing::Test {
   // connect. The nodes wait for it before their births.
   void announce_host() {
     const auto ms = static_cast<std::uint64_t>(unix_now() * 1000);
-    host_->publish_text(std::string("spBv1.0/STATE/") + kHost,
-                        R"({"online":true,"timestamp":)" + std::to_string(ms) + "}", true, 1);
+    host_->publish_text(std::string("spBv1.0/STATE/") + kHost, host_state(true, ms), true, 1);
   }
   // Reads what the host prints for `d` (into history()); says the host is online again when its
   // broker comes back.

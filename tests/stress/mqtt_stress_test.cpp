@@ -523,8 +523,7 @@ TEST_F(MqttAttack, ARebirthStormPublishesFewBirthsAndModbusKeepsAnswering) {
 // The primary host's STATE stamped in the far future (retained, so it comes at every subscribe)
 // does not make the genuine STATE after it look stale: the births follow the genuine one.
 TEST_F(MqttAttack, AStateFromTheFutureDoesNotWedgeTheSession) {
-  peer_->publish_text("spBv1.0/STATE/scada", R"({"online":false,"timestamp":99999999999999})", true,
-                      1);
+  peer_->publish_text("spBv1.0/STATE/scada", host_state(false, 99999999999999), true, 1);
   start_daemon("primary_host_id = \"scada\"\n");
   ASSERT_TRUE(eventually(
       [&] { return daemon_log().find("ahead of this gateway's clock") != std::string::npos; },
@@ -532,8 +531,7 @@ TEST_F(MqttAttack, AStateFromTheFutureDoesNotWedgeTheSession) {
   const auto now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
                           std::chrono::system_clock::now().time_since_epoch())
                           .count();
-  peer_->publish_text("spBv1.0/STATE/scada",
-                      R"({"online":true,"timestamp":)" + std::to_string(now_ms) + "}", true, 1);
+  peer_->publish_text("spBv1.0/STATE/scada", host_state(true, now_ms), true, 1);
   wait_births();
 }
 
