@@ -3,10 +3,12 @@
 // of a read, and the write results a driver reports.
 #pragma once
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <fstream>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <utility>
@@ -120,6 +122,14 @@ stop = { point = "control_word", value = 0 }
 run_forward = { point = "control_word", value = 1 }
 )toml";
 
+// A profile's [[point]] `name` in `table` at `address`, of `type`, with the keys in `more` (five
+// lines and those of `more`).
+inline std::string point(const std::string& name, const std::string& table, int address,
+                         const std::string& type, const std::string& more = "") {
+  return "[[point]]\nname = \"" + name + "\"\ntable = \"" + table +
+         "\"\naddress = " + std::to_string(address) + "\ntype = \"" + type + "\"\n" + more;
+}
+
 // The profile in `text` (file "p.toml"); a test failure, and an empty profile, if it is refused.
 inline Profile parsed(const std::string& text) {
   auto r = parse_profile(text, "p.toml");
@@ -136,6 +146,24 @@ inline std::vector<std::string> errors_of(const std::string& text) {
   if (auto* errors = std::get_if<std::vector<std::string>>(&r)) return *errors;
   ADD_FAILURE() << "accepted:\n" << text;
   return {};
+}
+
+// A profile refused: the text a test's reader takes, and what each of its errors says, in order.
+struct Refused {
+  std::string text;
+  std::vector<std::string> errors;  // each error contains the one at its place
+};
+
+// Each case's text, read by `errors_of` (which makes a profile of it), refused with as many errors
+// as the case lists, each containing its own.
+template <class ErrorsOf>
+void expect_refused(const ErrorsOf& errors_of, std::initializer_list<Refused> cases) {
+  for (const Refused& c : cases) {
+    SCOPED_TRACE(c.text);
+    std::vector<::testing::Matcher<std::string>> each;
+    for (const std::string& e : c.errors) each.push_back(::testing::HasSubstr(e));
+    EXPECT_THAT(errors_of(c.text), ::testing::ElementsAreArray(each));
+  }
 }
 
 // `p` with a device's options `set` applied; a test failure if they are refused.
