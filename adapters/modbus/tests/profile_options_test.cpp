@@ -25,58 +25,11 @@ using ::testing::HasSubstr;
 
 constexpr std::uint8_t kSlave = 7;
 
-// The Vacon / Eaton M-Max kind: the reference 0..10000 is 0..100 % of the span between the
-// minimum and the maximum frequency, and so is the actual speed. Worked by hand at the defaults
-// (10 Hz .. 50 Hz, 4 poles, 30 rpm a Hz): raw 0 = 10 Hz = 300 rpm, raw 10000 = 50 Hz = 1500 rpm,
-// 0.12 rpm a raw step: raw 5000 = 30 Hz = 900 rpm.
-constexpr const char* kSpanProfile = R"toml(
-[profile]
-name = "span-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[options.min_frequency_hz]
-default = 10
-min = 0
-max = 320
-description = "minimum frequency (P3.3.1.1)"
-[options.max_frequency_hz]
-default = 50
-min = 1
-max = 320
-description = "maximum frequency (P3.3.1.2)"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "speed_reference"
-table = "holding"
-address = 1
-type = "u16"
-min = 0
-max = 10000
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[[point]]
-name = "actual_speed"
-table = "holding"
-address = 3
-type = "u16"
-[common]
-speed_rpm = { point = "actual_speed", rpm_factor = "(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / 10000", rpm_offset = "min_frequency_hz * 120 / motor_poles" }
-setpoint_rpm = { point = "speed_reference", rpm_factor = "(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / 10000", rpm_offset = "min_frequency_hz * 120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
+// span-drive (profiles/span-drive.toml), the Vacon / Eaton M-Max kind: the reference 0..10000
+// is 0..100 % of the span between the minimum and the maximum frequency, and so is the actual
+// speed. Worked by hand at the defaults (10 Hz .. 50 Hz, 4 poles, 30 rpm a Hz): raw 0 = 10 Hz =
+// 300 rpm, raw 10000 = 50 Hz = 1500 rpm, 0.12 rpm a raw step: raw 5000 = 30 Hz = 900 rpm.
+const std::string kSpanProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "span-drive");
 
 // kSpanProfile with `from` replaced by `to`.
 std::string span_with(const std::string& from, const std::string& to) {

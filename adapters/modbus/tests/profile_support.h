@@ -19,6 +19,7 @@
 #include "codec.h"
 #include "drivegate/driver.h"
 #include "driver.h"
+#include "example_profile.h"
 #include "plugin/adapter_options.h"
 #include "profile.h"
 #include "profile_options.h"
@@ -27,100 +28,16 @@
 namespace drivegate::modbus_device::support {
 
 // Test profiles of more than one file (profile_options_test.cpp, required_option_test.cpp,
-// reload_test.cpp vary them).
+// reload_test.cpp vary them), profiles/<name>.toml beside this file: a line an error names is
+// that file's line.
 
-// A CiA 402-like drive in Hz: the reference and the output frequency in 0.01 Hz, rpm through
-// the motor's poles; a run passes through "switched on" before "operation enabled".
-inline constexpr const char* kHzProfile = R"toml(
-[profile]
-name = "hz-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles (nameplate)"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-unit = "Hz"
-description = "maximum frequency (P1.2)"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "frequency_reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.01
-min = 0
-max = 400
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[[point]]
-name = "output_frequency"
-table = "holding"
-address = 3
-type = "s16"
-scale = 0.01
-[common]
-speed_rpm = { point = "output_frequency", rpm_factor = "120 / motor_poles" }
-setpoint_rpm = { point = "frequency_reference", rpm_factor = "120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-fault = { point = "status_word", bit = 3 }
-stop = { point = "control_word", sequence = [0x0007, 0x0006] }
-run_forward = { point = "control_word", sequence = [0x0006, 0x0007, 0x000F] }
-run_reverse = { point = "control_word", sequence = [0x0006, 0x080F] }
-reset_fault = { point = "control_word", sequence = [0x0080, 0x0006] }
-)toml";
+// hz-drive: a CiA 402-like drive in Hz, the reference and the output frequency in 0.01 Hz, rpm
+// through the motor's poles; a run passes through "switched on" before "operation enabled".
+inline const std::string kHzProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "hz-drive");
 
-// A drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 / poles / 100).
-inline constexpr const char* kPercentProfile = R"toml(
-[profile]
-name = "pct-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-description = "maximum frequency"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.006103515625   # 100 / 16384
-min = 0
-max = 100
-[[point]]
-name = "actual"
-table = "holding"
-address = 2
-type = "u16"
-scale = 0.006103515625
-[common]
-speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
+// pct-drive: a drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 /
+// motor_poles / 100).
+inline const std::string kPercentProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "pct-drive");
 
 // A profile's [[point]] `name` in `table` at `address`, of `type`, with the keys in `more` (five
 // lines and those of `more`).
