@@ -26,6 +26,12 @@ std::shared_ptr<const Description> parsed(const std::string& body) {
   return std::get<std::shared_ptr<const Description>>(r);
 }
 
+// A request message `name` of `layout`, as a description's [[message]].
+std::string request(const std::string& name, const std::string& layout) {
+  return "[[message]]\nname = \"" + name + "\"\ndirection = \"request\"\nlayout = \"" + layout +
+         "\"\n";
+}
+
 // The bytes of message `m` from `values`, through the description's own codec.
 Bytes encode(const Description& d, const std::string& m, std::vector<double> values = {}) {
   return Codec(d).encode(*d.message(m), values);
@@ -33,105 +39,48 @@ Bytes encode(const Description& d, const std::string& m, std::vector<double> val
 
 const std::string kDigits = "31 32 33 34 35 36 37 38 39";  // "123456789"
 
+// CRC-16/MODBUS's parameters: Modbus RTU's CRC, sent low byte first.
+const std::string kModbusCrc =
+    "poly = 0x8005\ninit = 0xFFFF\nreflect_in = true\nreflect_out = true\norder = \"little\"\n";
+
+// A CRC by its parameters (the keys of a [check] of kind "crc" but kind) and its catalogue check
+// value, over "123456789", as the description sends it.
+struct Crc {
+  const char* name;
+  std::string parameters;
+  const char* check;
+};
+
 TEST(Checks, EveryCrcByItsParametersGivesItsCatalogueValue) {
-  // CRC-8/SMBUS F4, CRC-16/XMODEM 31C3, CRC-16/MODBUS 4B37 (low byte first), CRC-16/KERMIT 2189
-  // (reflected, low byte first), CRC-32 CBF43926, CRC-32/BZIP2 FC891918.
-  const auto d = parsed(R"(
-[check.smbus]
-kind = "crc"
-width = 1
-poly = 0x07
-[check.xmodem]
-kind = "crc"
-poly = 0x1021
-[check.modbus]
-kind = "crc"
-poly = 0x8005
-init = 0xFFFF
-reflect_in = true
-reflect_out = true
-order = "little"
-[check.kermit]
-kind = "crc"
-poly = 0x1021
-reflect_in = true
-reflect_out = true
-order = "little"
-[check.crc32]
-kind = "crc"
-width = 4
-poly = 0x04C11DB7
-init = 0xFFFFFFFF
-reflect_in = true
-reflect_out = true
-xor_out = 0xFFFFFFFF
-[check.bzip2]
-kind = "crc"
-width = 4
-poly = 0x04C11DB7
-init = 0xFFFFFFFF
-xor_out = 0xFFFFFFFF
-[[message]]
-name = "a"
-direction = "request"
-layout = "31 32 33 34 35 36 37 38 39 c:smbus"
-[[message]]
-name = "b"
-direction = "request"
-layout = "31 32 33 34 35 36 37 38 39 c:xmodem"
-[[message]]
-name = "c"
-direction = "request"
-layout = "31 32 33 34 35 36 37 38 39 c:modbus"
-[[message]]
-name = "d"
-direction = "request"
-layout = "31 32 33 34 35 36 37 38 39 c:kermit"
-[[message]]
-name = "e"
-direction = "request"
-layout = "31 32 33 34 35 36 37 38 39 c:crc32"
-[[message]]
-name = "f"
-direction = "request"
-layout = "31 32 33 34 35 36 37 38 39 c:bzip2"
-)");
-  ASSERT_NE(d, nullptr);
-  EXPECT_EQ(encode(*d, "a"), hex(kDigits + " F4"));
-  EXPECT_EQ(encode(*d, "b"), hex(kDigits + " 31 C3"));
-  EXPECT_EQ(encode(*d, "c"), hex(kDigits + " 37 4B"));
-  EXPECT_EQ(encode(*d, "d"), hex(kDigits + " 89 21"));
-  EXPECT_EQ(encode(*d, "e"), hex(kDigits + " CB F4 39 26"));
-  EXPECT_EQ(encode(*d, "f"), hex(kDigits + " FC 89 19 18"));
+  const Crc crcs[] = {
+      {"CRC-8/SMBUS", "width = 1\npoly = 0x07\n", "F4"},
+      {"CRC-16/XMODEM", "poly = 0x1021\n", "31 C3"},
+      {"CRC-16/MODBUS", kModbusCrc, "37 4B"},  // 4B37, low byte first
+      {"CRC-16/KERMIT",
+       "poly = 0x1021\nreflect_in = true\nreflect_out = true\norder = \"little\"\n",
+       "89 21"},  // 2189, reflected, low byte first
+      {"CRC-32",
+       "width = 4\npoly = 0x04C11DB7\ninit = 0xFFFFFFFF\nreflect_in = true\nreflect_out = true\n"
+       "xor_out = 0xFFFFFFFF\n",
+       "CB F4 39 26"},
+      {"CRC-32/BZIP2", "width = 4\npoly = 0x04C11DB7\ninit = 0xFFFFFFFF\nxor_out = 0xFFFFFFFF\n",
+       "FC 89 19 18"},
+  };
+  for (const Crc& c : crcs) {
+    SCOPED_TRACE(c.name);
+    const auto d =
+        parsed("[check.c]\nkind = \"crc\"\n" + c.parameters + request("m", kDigits + " c:c"));
+    ASSERT_NE(d, nullptr);
+    EXPECT_EQ(encode(*d, "m"), hex(kDigits + " " + c.check));
+  }
 }
 
 TEST(Checks, ModbusRtuLrcAndTwosComplement) {
-  const auto d = parsed(R"(
-[check.crc]
-kind = "crc"
-poly = 0x8005
-init = 0xFFFF
-reflect_in = true
-reflect_out = true
-order = "little"
-[check.lrc]
-kind = "lrc"
-[check.neg]
-kind = "twos_complement"
-width = 2
-[[message]]
-name = "write"
-direction = "request"
-layout = "address:u8 06 register:u16 value:u16 crc:crc"
-[[message]]
-name = "ascii"
-direction = "request"
-layout = "01 03 00 00 00 0A lrc:lrc"
-[[message]]
-name = "neg"
-direction = "request"
-layout = "01 02 03 s:neg"
-)");
+  const auto d =
+      parsed("[check.crc]\nkind = \"crc\"\n" + kModbusCrc + "[check.lrc]\nkind = \"lrc\"\n" +
+             "[check.neg]\nkind = \"twos_complement\"\nwidth = 2\n" +
+             request("write", "address:u8 06 register:u16 value:u16 crc:crc") +
+             request("ascii", "01 03 00 00 00 0A lrc:lrc") + request("neg", "01 02 03 s:neg"));
   ASSERT_NE(d, nullptr);
   // shared/specs/README.md, ed3100: the stop write, Modbus RTU's CRC low byte first.
   EXPECT_EQ(encode(*d, "write", {0x1F, 0x2000, 0x0001}), hex("1F 06 20 00 00 01 40 74"));
@@ -218,14 +167,8 @@ TEST(Framings, DamagedFlaggedFramesCostOneFrameNotTheNext) {
 }
 
 TEST(Encodings, BcdFloatsAndSignedInEitherOrder) {
-  const auto d = parsed(R"(
-[check.x]
-kind = "xor"
-[[message]]
-name = "m"
-direction = "request"
-layout = "AA b:bcd2 f:f32 g:f32le s:i16 t:i16le u:u24 x:x"
-)");
+  const auto d = parsed("[check.x]\nkind = \"xor\"\n" +
+                        request("m", "AA b:bcd2 f:f32 g:f32le s:i16 t:i16le u:u24 x:x"));
   ASSERT_NE(d, nullptr);
   const Bytes wire = encode(*d, "m", {1234, 1.5, 1.5, -2, -2, 0x123456});
   ASSERT_EQ(wire.size(), 19u);

@@ -69,13 +69,8 @@ std::string with_trip_bits() {
                   kTripBits);
 }
 
-// The least valid profile, and a point of it to add keys to.
+// The least valid profile, to which each test adds its points (support::point).
 const std::string kHead = "[profile]\nname = \"t\"\nsource = \"a manual\"\n";  // lines 1-3
-std::string point(const std::string& name, const std::string& table, int address,
-                  const std::string& type, const std::string& more = "") {
-  return "[[point]]\nname = \"" + name + "\"\ntable = \"" + table +
-         "\"\naddress = " + std::to_string(address) + "\ntype = \"" + type + "\"\n" + more;
-}
 
 // ---- The profile
 
@@ -106,26 +101,26 @@ TEST(Bindings, TheDriveReadsAsWritten) {
 
 TEST(Bindings, MasksThatOverlapAreRefusedWithTheLaterLine) {
   // Lines 4-9 and 10-15.
-  EXPECT_THAT(errors_of(kHead + point("a", "holding", 5, "u16", "mask = 0x0FF0\n") +
-                        point("b", "holding", 5, "u16", "mask = 0x0F00\n")),
-              ElementsAre(HasSubstr("p.toml:10: point: 'b' overlaps 'a' (line 4) in the holding "
-                                    "table: their masks share bits (0x0F00)")));
-  // A masked point and a whole register may not share it.
-  EXPECT_THAT(errors_of(kHead + point("a", "holding", 5, "u16", "mask = 0x00FF\n") +
-                        point("b", "holding", 5, "u16")),
-              ElementsAre(HasSubstr("p.toml:10: point: 'b' overlaps 'a' (line 4) in the holding "
-                                    "table: a register is shared only by points whose masks do "
-                                    "not overlap")));
-  // Nor a two-register point over the masked one's register.
-  EXPECT_THAT(errors_of(kHead + point("a", "input", 6, "u16", "mask = 0x00FF\n") +
-                        point("b", "input", 5, "u32")),
-              ElementsAre(HasSubstr("p.toml:10: point: 'b' overlaps 'a' (line 4)")));
-  // Three on one register: the first and the last overlap, the middle one overlaps neither.
-  EXPECT_THAT(errors_of(kHead + point("a", "holding", 5, "u16", "mask = 0xFF00\n") +
-                        point("b", "holding", 5, "u16", "mask = 0x000F\n") +
-                        point("c", "holding", 5, "u16", "mask = 0x0100\n")),
-              ElementsAre(HasSubstr("p.toml:16: point: 'c' overlaps 'a' (line 4) in the holding "
-                                    "table: their masks share bits (0x0100)")));
+  expect_refused(
+      errors_of,
+      {{kHead + point("a", "holding", 5, "u16", "mask = 0x0FF0\n") +
+            point("b", "holding", 5, "u16", "mask = 0x0F00\n"),
+        {"p.toml:10: point: 'b' overlaps 'a' (line 4) in the holding table: their masks share bits "
+         "(0x0F00)"}},
+       // A masked point and a whole register may not share it.
+       {kHead + point("a", "holding", 5, "u16", "mask = 0x00FF\n") +
+            point("b", "holding", 5, "u16"),
+        {"p.toml:10: point: 'b' overlaps 'a' (line 4) in the holding table: a register is shared "
+         "only by points whose masks do not overlap"}},
+       // Nor a two-register point over the masked one's register.
+       {kHead + point("a", "input", 6, "u16", "mask = 0x00FF\n") + point("b", "input", 5, "u32"),
+        {"p.toml:10: point: 'b' overlaps 'a' (line 4)"}},
+       // Three on one register: the first and the last overlap, the middle one overlaps neither.
+       {kHead + point("a", "holding", 5, "u16", "mask = 0xFF00\n") +
+            point("b", "holding", 5, "u16", "mask = 0x000F\n") +
+            point("c", "holding", 5, "u16", "mask = 0x0100\n"),
+        {"p.toml:16: point: 'c' overlaps 'a' (line 4) in the holding table: their masks share bits "
+         "(0x0100)"}}});
   // Disjoint masks share the register; another table's register 5 is another register.
   const Profile p =
       parsed(kHead + point("a", "holding", 5, "u16", "mask = 0xFF00\n") +
@@ -135,79 +130,72 @@ TEST(Bindings, MasksThatOverlapAreRefusedWithTheLaterLine) {
 }
 
 TEST(Bindings, AMaskIsSomeBitsOfAU16ThatIsReadOnly) {
-  const auto one = [](const std::string& type, const std::string& more,
-                      const std::string& table = "holding") {
-    return errors_of(kHead + point("a", table, 5, type, more));
+  // The profile of one point `a` of `type` with `more` in it.
+  const auto masked = [](const std::string& type, const std::string& more,
+                         const std::string& table = "holding") {
+    return kHead + point("a", table, 5, type, more);
   };
-  EXPECT_THAT(one("u16", "mask = 0\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.mask: must not be 0: a mask of no bits "
-                                    "reads nothing")));
-  EXPECT_THAT(one("u16", "mask = 0x10000\n"),
-              ElementsAre(HasSubstr("point.mask: must be in 0..65535")));
-  EXPECT_THAT(one("u16", "mask = -1\n"), ElementsAre(HasSubstr("point.mask: must be in 0..65535")));
-  EXPECT_THAT(one("u16", "mask = \"0xFF00\"\n"),
-              ElementsAre(HasSubstr("point.mask: must be an integer")));
-  EXPECT_THAT(one("s16", "mask = 0xFF00\n"),
-              ElementsAre(HasSubstr("point.mask: applies to u16 register points only")));
-  EXPECT_THAT(one("u32", "mask = 0xFF00\n"),
-              ElementsAre(HasSubstr("point.mask: applies to u16 register points only")));
-  EXPECT_THAT(one("bit", "mask = 1\n", "coil"),
-              ElementsAre(HasSubstr("point.mask: applies to u16 register points only")));
-  // Read-modify-write is not done: a masked point is never written.
-  EXPECT_THAT(one("u16", "mask = 0xFF00\naccess = \"operate\"\n"),
-              ElementsAre(HasSubstr("p.toml:10: point.access: a masked point is read-only")));
-  EXPECT_THAT(one("u16", "mask = 0xFF00\naccess = \"maintain\"\n"),
-              ElementsAre(HasSubstr("point.access: a masked point is read-only")));
-  EXPECT_THAT(one("u16", "mask = 0xFF00\nmax = 3\n"),
-              ElementsAre(HasSubstr("point.max: limits a write: a masked point is read-only")));
-  EXPECT_EQ(parsed(kHead + point("a", "holding", 5, "u16", "mask = 0xFF00\naccess = \"read\"\n"))
-                .points.at(0)
-                .access,
+  expect_refused(
+      errors_of,
+      {{masked("u16", "mask = 0\n"),
+        {"p.toml:9: point.mask: must not be 0: a mask of no bits reads nothing"}},
+       {masked("u16", "mask = 0x10000\n"), {"point.mask: must be in 0..65535"}},
+       {masked("u16", "mask = -1\n"), {"point.mask: must be in 0..65535"}},
+       {masked("u16", "mask = \"0xFF00\"\n"), {"point.mask: must be an integer"}},
+       {masked("s16", "mask = 0xFF00\n"), {"point.mask: applies to u16 register points only"}},
+       {masked("u32", "mask = 0xFF00\n"), {"point.mask: applies to u16 register points only"}},
+       {masked("bit", "mask = 1\n", "coil"), {"point.mask: applies to u16 register points only"}},
+       // Read-modify-write is not done: a masked point is never written.
+       {masked("u16", "mask = 0xFF00\naccess = \"operate\"\n"),
+        {"p.toml:10: point.access: a masked point is read-only"}},
+       {masked("u16", "mask = 0xFF00\naccess = \"maintain\"\n"),
+        {"point.access: a masked point is read-only"}},
+       {masked("u16", "mask = 0xFF00\nmax = 3\n"),
+        {"point.max: limits a write: a masked point is read-only"}}});
+  EXPECT_EQ(parsed(masked("u16", "mask = 0xFF00\naccess = \"read\"\n")).points.at(0).access,
             PointAccess::read);
   // Nor written by a binding.
-  EXPECT_THAT(errors_of(kHead + point("a", "holding", 5, "u16", "mask = 0x00FF\n") +
-                        "[common]\nstop = { point = \"a\", value = 0 }\n"),
-              ElementsAre(HasSubstr("p.toml:11: common.stop.point: 'a' is masked, so read-only")));
-  EXPECT_THAT(errors_of(kHead + point("a", "holding", 5, "u16", "mask = 0x00FF\n") +
-                        "[common]\nsetpoint_rpm = \"a\"\n"),
-              ElementsAre(HasSubstr("common.setpoint_rpm: 'a' is masked, so read-only")));
+  expect_refused(errors_of, {{masked("u16", "mask = 0x00FF\n") +
+                                  "[common]\nstop = { point = \"a\", value = 0 }\n",
+                              {"p.toml:11: common.stop.point: 'a' is masked, so read-only"}},
+                             {masked("u16", "mask = 0x00FF\n") + "[common]\nsetpoint_rpm = \"a\"\n",
+                              {"common.setpoint_rpm: 'a' is masked, so read-only"}}});
+}
+
+// The errors of `head` whose [common] block binds `key` as a case says.
+auto bound(const std::string& head, const std::string& key) {
+  return [=](const std::string& binding) {
+    return errors_of(head + "[common]\n" + key + " = " + binding + "\n");
+  };
 }
 
 TEST(Bindings, AnyBitIsOneToSixteenBitsOfTheRegister) {
   const std::string head = kHead + point("s", "holding", 5, "u16");  // lines 4-8
-  const auto running = [&](const std::string& binding) {
-    return errors_of(head + "[common]\nrunning = " + binding + "\n");
-  };
-  EXPECT_THAT(running("{ point = \"s\", any_bit = [0, 16] }"),
-              ElementsAre(HasSubstr("p.toml:10: common.running.any_bit: bits are numbers 0..15 "
-                                    "of a register")));
-  EXPECT_THAT(running("{ point = \"s\", any_bit = [-1] }"),
-              ElementsAre(HasSubstr("common.running.any_bit: bits are numbers 0..15")));
-  EXPECT_THAT(running("{ point = \"s\", any_bit = [1.0] }"),
-              ElementsAre(HasSubstr("common.running.any_bit: bits are numbers 0..15")));
-  EXPECT_THAT(
-      running("{ point = \"s\", any_bit = [] }"),
-      ElementsAre(HasSubstr("common.running.any_bit: must be a list of 1..16 bit numbers")));
-  EXPECT_THAT(
-      running("{ point = \"s\", any_bit = 1 }"),
-      ElementsAre(HasSubstr("common.running.any_bit: must be a list of 1..16 bit numbers")));
-  EXPECT_THAT(running("{ point = \"s\", any_bit = [2, 2] }"),
-              ElementsAre(HasSubstr("common.running.any_bit: bit 2 is listed twice")));
-  EXPECT_THAT(running("{ point = \"s\", bit = 1, any_bit = [0, 1] }"),
-              ElementsAre(HasSubstr("common.running.any_bit: bit or any_bit, not both")));
-  EXPECT_THAT(running("{ point = \"s\", any_bit = [0, 1], spare = 1 }"),
-              ElementsAre(HasSubstr("common.running.spare: unknown key")));
+  expect_refused(
+      bound(head, "running"),
+      {{"{ point = \"s\", any_bit = [0, 16] }",
+        {"p.toml:10: common.running.any_bit: bits are numbers 0..15 of a register"}},
+       {"{ point = \"s\", any_bit = [-1] }", {"common.running.any_bit: bits are numbers 0..15"}},
+       {"{ point = \"s\", any_bit = [1.0] }", {"common.running.any_bit: bits are numbers 0..15"}},
+       {"{ point = \"s\", any_bit = [] }",
+        {"common.running.any_bit: must be a list of 1..16 bit numbers"}},
+       {"{ point = \"s\", any_bit = 1 }",
+        {"common.running.any_bit: must be a list of 1..16 bit numbers"}},
+       {"{ point = \"s\", any_bit = [2, 2] }", {"common.running.any_bit: bit 2 is listed twice"}},
+       {"{ point = \"s\", bit = 1, any_bit = [0, 1] }",
+        {"common.running.any_bit: bit or any_bit, not both"}},
+       {"{ point = \"s\", any_bit = [0, 1], spare = 1 }", {"common.running.spare: unknown key"}}});
   // A bit point has only its own bit.
   EXPECT_THAT(errors_of(head + point("b", "discrete", 1, "bit") +
                         "[common]\nfault = { point = \"b\", any_bit = [0] }\n"),
               ElementsAre(HasSubstr("common.fault.any_bit: a bit point has no bits but its own")));
   // A masked point's bits are its value's: 0..7 of a high byte, not the register's 8..15.
   const std::string high = kHead + point("h", "holding", 5, "u16", "mask = 0xFF00\n");
-  EXPECT_THAT(errors_of(high + "[common]\nfault = { point = \"h\", any_bit = [0, 8] }\n"),
-              ElementsAre(HasSubstr("common.fault.any_bit: bit 8 is not a bit of 'h' (its mask "
-                                    "0xFF00 gives it the bits of 0x00FF)")));
-  EXPECT_THAT(errors_of(high + "[common]\nfault = { point = \"h\", bit = 9 }\n"),
-              ElementsAre(HasSubstr("common.fault.bit: bit 9 is not a bit of 'h'")));
+  expect_refused(errors_of, {{high + "[common]\nfault = { point = \"h\", any_bit = [0, 8] }\n",
+                              {"common.fault.any_bit: bit 8 is not a bit of 'h' (its mask 0xFF00 "
+                               "gives it the bits of 0x00FF)"}},
+                             {high + "[common]\nfault = { point = \"h\", bit = 9 }\n",
+                              {"common.fault.bit: bit 9 is not a bit of 'h'"}}});
   EXPECT_THAT(
       parsed(high + "[common]\nfault = { point = \"h\", any_bit = [7, 0] }\n").common.fault->bits,
       ElementsAre(7, 0));
@@ -218,34 +206,28 @@ TEST(Bindings, AFaultBitFieldNamesBitsOfAnIntegerPoint) {
                            point("f", "input", 6, "f32") +                     // 9-13
                            point("w", "input", 8, "u32") +                     // 14-18
                            point("h", "input", 10, "u16", "mask = 0xF000\n");  // 19-24
-  const auto code = [&](const std::string& binding) {
-    return errors_of(head + "[common]\nfault_code = " + binding + "\n");
-  };
-  EXPECT_THAT(code("{ point = \"t\", bits = { 16 = \"over_current\" } }"),
-              ElementsAre(HasSubstr("p.toml:26: common.fault_code.bits: key '16' must be a bit "
-                                    "number 0..15 of 't'")));
-  EXPECT_THAT(code("{ point = \"t\", bits = { x = \"over_current\" } }"),
-              ElementsAre(HasSubstr("key 'x' must be a bit number 0..15 of 't'")));
-  EXPECT_THAT(code("{ point = \"t\", bits = { 0 = \"none\" } }"),
-              ElementsAre(HasSubstr("common.fault_code.bits.0: a bit set is a trip: none is what "
-                                    "no bit set means")));
-  EXPECT_THAT(code("{ point = \"t\", bits = { 0 = \"overcurrent\" } }"),
-              ElementsAre(HasSubstr("unknown fault label 'overcurrent'")));
-  EXPECT_THAT(code("{ point = \"t\", bits = { 0 = \"comm_lost\" } }"),
-              ElementsAre(HasSubstr("comm_lost is the gateway's own fault")));
-  EXPECT_THAT(code("{ point = \"t\", bits = {} }"),
-              ElementsAre(HasSubstr("common.fault_code.bits: must name at least one bit")));
-  EXPECT_THAT(code("{ point = \"t\", bits = [0, 1] }"),
-              ElementsAre(HasSubstr("common.fault_code.bits: must be a table of a bit number")));
-  EXPECT_THAT(code("{ point = \"t\", map = { 1 = \"other\" }, bits = { 0 = \"other\" } }"),
-              ElementsAre(HasSubstr("common.fault_code.bits: map (the point's values) or bits "
-                                    "(its bits), not both")));
-  EXPECT_THAT(code("{ point = \"f\", bits = { 0 = \"other\" } }"),
-              ElementsAre(HasSubstr("common.fault_code.point: 'f' is of type f32: a bit field is a "
-                                    "point of type u16, s16, u32 or s32")));
-  EXPECT_THAT(code("{ point = \"h\", bits = { 4 = \"other\" } }"),
-              ElementsAre(HasSubstr("bit 4 is not a bit of 'h' (its mask 0xF000 gives it the "
-                                    "bits of 0x000F)")));
+  const auto code = bound(head, "fault_code");
+  expect_refused(
+      code,
+      {{"{ point = \"t\", bits = { 16 = \"over_current\" } }",
+        {"p.toml:26: common.fault_code.bits: key '16' must be a bit number 0..15 of 't'"}},
+       {"{ point = \"t\", bits = { x = \"over_current\" } }",
+        {"key 'x' must be a bit number 0..15 of 't'"}},
+       {"{ point = \"t\", bits = { 0 = \"none\" } }",
+        {"common.fault_code.bits.0: a bit set is a trip: none is what no bit set means"}},
+       {"{ point = \"t\", bits = { 0 = \"overcurrent\" } }", {"unknown fault label 'overcurrent'"}},
+       {"{ point = \"t\", bits = { 0 = \"comm_lost\" } }",
+        {"comm_lost is the gateway's own fault"}},
+       {"{ point = \"t\", bits = {} }", {"common.fault_code.bits: must name at least one bit"}},
+       {"{ point = \"t\", bits = [0, 1] }",
+        {"common.fault_code.bits: must be a table of a bit number"}},
+       {"{ point = \"t\", map = { 1 = \"other\" }, bits = { 0 = \"other\" } }",
+        {"common.fault_code.bits: map (the point's values) or bits (its bits), not both"}},
+       {"{ point = \"f\", bits = { 0 = \"other\" } }",
+        {"common.fault_code.point: 'f' is of type f32: a bit field is a point of type u16, s16, "
+         "u32 or s32"}},
+       {"{ point = \"h\", bits = { 4 = \"other\" } }",
+        {"bit 4 is not a bit of 'h' (its mask 0xF000 gives it the bits of 0x000F)"}}});
   // A two-register bit field has 32 bits.
   EXPECT_EQ(parsed(head + "[common]\nfault_code = { point = \"w\", bits = { 31 = \"other\" } }\n")
                 .common.fault_code->bits.at(31),
@@ -260,14 +242,13 @@ TEST(Bindings, ACommandToACoilIsZeroOrOne) {
   const auto common = [&](const std::string& body) {
     return errors_of(head + "[common]\n" + body);
   };
-  EXPECT_THAT(common("stop = { point = \"run\", value = 2 }\n"),
-              ElementsAre(HasSubstr("p.toml:15: common.stop.value: 'run' is a coil: it is "
-                                    "written 0 or 1 (got 2)")));
-  EXPECT_THAT(common("stop = { point = \"run\", value = 0xFF00 }\n"),
-              ElementsAre(HasSubstr("'run' is a coil: it is written 0 or 1 (got 65280)")));
-  EXPECT_THAT(common("stop = { point = \"di\", value = 0 }\n"),
-              ElementsAre(HasSubstr("common.stop.point: 'di' must be a one-register holding "
-                                    "point or a coil")));
+  expect_refused(common,
+                 {{"stop = { point = \"run\", value = 2 }\n",
+                   {"p.toml:15: common.stop.value: 'run' is a coil: it is written 0 or 1 (got 2)"}},
+                  {"stop = { point = \"run\", value = 0xFF00 }\n",
+                   {"'run' is a coil: it is written 0 or 1 (got 65280)"}},
+                  {"stop = { point = \"di\", value = 0 }\n",
+                   {"common.stop.point: 'di' must be a one-register holding point or a coil"}}});
   const Profile p = parsed(head +
                            "[common]\nstop = { point = \"run\", value = 0 }\n"
                            "run_forward = { point = \"run\", value = 1 }\n");
@@ -281,11 +262,11 @@ TEST(Bindings, TheSetpointIsAHoldingPointOfOneOrTwoRegisters) {
   EXPECT_EQ(parsed(setpoint("holding", "u32")).common.setpoint_rpm, 0u);
   EXPECT_EQ(parsed(setpoint("holding", "s32")).common.setpoint_rpm, 0u);
   EXPECT_EQ(parsed(setpoint("holding", "f32")).common.setpoint_rpm, 0u);
-  EXPECT_THAT(errors_of(setpoint("input", "u32")),
-              ElementsAre(HasSubstr("common.setpoint_rpm: 'r' must be a holding point of type u16, "
-                                    "s16, u32, s32 or f32")));
-  EXPECT_THAT(errors_of(setpoint("coil", "bit")),
-              ElementsAre(HasSubstr("'r' must be a holding point of type u16, s16, u32, s32")));
+  expect_refused(
+      errors_of,
+      {{setpoint("input", "u32"),
+        {"common.setpoint_rpm: 'r' must be a holding point of type u16, s16, u32, s32 or f32"}},
+       {setpoint("coil", "bit"), {"'r' must be a holding point of type u16, s16, u32, s32"}}});
 }
 
 // run_reverse as a drive with a direction coil and a run coil takes it: direction, then run.
@@ -319,36 +300,35 @@ TEST(Bindings, ASequenceItemMustNameAPointACommandCanWrite) {
     return errors_of(kCoilDrive + "[common]\nstop = { point = \"run_coil\", value = 0 }\n" +
                      "run_forward = " + binding + "\n");
   };
-  EXPECT_THAT(run("{ sequence = [{ point = \"nowhere\", value = 1 }] }"),
-              ElementsAre(HasSubstr("p.toml:26: common.run_forward.sequence.point: no point is "
-                                    "called 'nowhere'")));
-  EXPECT_THAT(run("{ sequence = [{ point = \"state\", value = 1 }] }"),
-              ElementsAre(HasSubstr("common.run_forward.sequence.point: 'state' must be a "
-                                    "one-register holding point or a coil")));
-  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 2 }] }"),
-              ElementsAre(HasSubstr("common.run_forward.sequence.value: 'run_coil' is a coil: it "
-                                    "is written 0 or 1 (got 2)")));
-  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\" }] }"),
-              ElementsAre(HasSubstr("common.run_forward.sequence.value: required key is missing")));
-  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 1, spare = 1 }] }"),
-              ElementsAre(HasSubstr("common.run_forward.sequence.spare: unknown key")));
-  // A plain number needs the binding's point.
-  EXPECT_THAT(run("{ sequence = [{ point = \"direction_coil\", value = 0 }, 1] }"),
-              ElementsAre(HasSubstr("common.run_forward.point: required key is missing")));
-  // A plain number to a coil is 0 or 1 too.
-  EXPECT_THAT(run("{ point = \"run_coil\", sequence = [0, 0xFF00] }"),
-              ElementsAre(HasSubstr("common.run_forward.sequence: 'run_coil' is a coil: it is "
-                                    "written 0 or 1 (got 65280)")));
-  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 1 }, \"on\"] }"),
-              ElementsAre(HasSubstr("common.run_forward.point: required key is missing"),
-                          HasSubstr("common.run_forward.sequence: must be 1..4 values 0..65535")));
-  EXPECT_THAT(run("{ sequence = [{ point = \"run_coil\", value = 1 }, { point = \"run_coil\", "
-                  "value = 0 }, { point = \"run_coil\", value = 1 }, { point = \"run_coil\", "
-                  "value = 0 }, { point = \"run_coil\", value = 1 }] }"),
-              ElementsAre(HasSubstr("common.run_forward.sequence: must be 1..4 values")));
-  EXPECT_THAT(run("{ sequence = [] }"),
-              ElementsAre(HasSubstr("common.run_forward.point: required key is missing"),
-                          HasSubstr("common.run_forward.sequence: must be 1..4 values")));
+  expect_refused(
+      run,
+      {{"{ sequence = [{ point = \"nowhere\", value = 1 }] }",
+        {"p.toml:26: common.run_forward.sequence.point: no point is called 'nowhere'"}},
+       {"{ sequence = [{ point = \"state\", value = 1 }] }",
+        {"common.run_forward.sequence.point: 'state' must be a one-register holding point or a "
+         "coil"}},
+       {"{ sequence = [{ point = \"run_coil\", value = 2 }] }",
+        {"common.run_forward.sequence.value: 'run_coil' is a coil: it is written 0 or 1 (got 2)"}},
+       {"{ sequence = [{ point = \"run_coil\" }] }",
+        {"common.run_forward.sequence.value: required key is missing"}},
+       {"{ sequence = [{ point = \"run_coil\", value = 1, spare = 1 }] }",
+        {"common.run_forward.sequence.spare: unknown key"}},
+       // A plain number needs the binding's point.
+       {"{ sequence = [{ point = \"direction_coil\", value = 0 }, 1] }",
+        {"common.run_forward.point: required key is missing"}},
+       // A plain number to a coil is 0 or 1 too.
+       {"{ point = \"run_coil\", sequence = [0, 0xFF00] }",
+        {"common.run_forward.sequence: 'run_coil' is a coil: it is written 0 or 1 (got 65280)"}},
+       {"{ sequence = [{ point = \"run_coil\", value = 1 }, \"on\"] }",
+        {"common.run_forward.point: required key is missing",
+         "common.run_forward.sequence: must be 1..4 values 0..65535"}},
+       {"{ sequence = [{ point = \"run_coil\", value = 1 }, { point = \"run_coil\", "
+        "value = 0 }, { point = \"run_coil\", value = 1 }, { point = \"run_coil\", "
+        "value = 0 }, { point = \"run_coil\", value = 1 }] }",
+        {"common.run_forward.sequence: must be 1..4 values"}},
+       {"{ sequence = [] }",
+        {"common.run_forward.point: required key is missing",
+         "common.run_forward.sequence: must be 1..4 values"}}});
 }
 
 // ---- The driver, by hand: the frames on the wire
@@ -743,15 +723,7 @@ TEST(BindingsSequence, WhileTheDriveRunsOnlyARunsLastStepOnItsPointIsWritten) {
 TEST(BindingsSequence, WhileTheDriveRunsStepsOnOtherPointsAreStillWritten) {
   // The direction coil before the run coil: from a drive running forward, run reverse must
   // still turn the direction coil ON; only steps on the run coil's own point are the way in.
-  const std::string two_coils_with_state =
-      kCoilDrive +
-      "[common]\nrunning = { point = \"state\", any_bit = [0, 1] }\n"
-      "stop = { point = \"run_coil\", value = 0 }\n"
-      "run_forward = { sequence = [{ point = \"direction_coil\", value = 0 }, "
-      "{ point = \"run_coil\", value = 1 }] }\n"
-      "run_reverse = { sequence = [{ point = \"direction_coil\", value = 1 }, "
-      "{ point = \"run_coil\", value = 1 }] }\n";
-  AgainstItsSimulator rig(two_coils_with_state);
+  AgainstItsSimulator rig(kTwoCoils);
   rig.pump();
   rig.command(Command::run_forward);
   rig.pump();
@@ -782,19 +754,18 @@ TEST(Bindings, AnyValueIsOneToSixteenCodesOfAOneRegisterPoint) {
   EXPECT_TRUE(p.common.running->bits.empty());
   EXPECT_THAT(parsed(text("{ point = \"low\", any_value = [15] }")).common.running->values,
               ElementsAre(15));
-  EXPECT_THAT(common("{ point = \"low\", any_value = [16] }"),
-              ElementsAre(HasSubstr("p.toml:21: common.running.any_value: values are "
-                                    "numbers 0..15 of 'low'")));
-  EXPECT_THAT(common("{ point = \"state\", any_value = [1, 1] }"),
-              ElementsAre(HasSubstr("common.running.any_value: 1 is listed twice")));
-  EXPECT_THAT(common("{ point = \"state\", any_value = [] }"),
-              ElementsAre(HasSubstr("common.running.any_value: must be a list of 1..16")));
-  EXPECT_THAT(common("{ point = \"state\", any_value = [\"1\"] }"),
-              ElementsAre(HasSubstr("common.running.any_value: values are numbers 0..65535")));
-  EXPECT_THAT(common("{ point = \"state\", bit = 0, any_value = [1] }"),
-              ElementsAre(HasSubstr("common.running.bit: bit or any_value, not both")));
-  EXPECT_THAT(common("{ point = \"wide\", any_value = [1] }"),
-              ElementsAre(HasSubstr("'wide' must be a one-register point")));
+  expect_refused(
+      common, {{"{ point = \"low\", any_value = [16] }",
+                {"p.toml:21: common.running.any_value: values are numbers 0..15 of 'low'"}},
+               {"{ point = \"state\", any_value = [1, 1] }",
+                {"common.running.any_value: 1 is listed twice"}},
+               {"{ point = \"state\", any_value = [] }",
+                {"common.running.any_value: must be a list of 1..16"}},
+               {"{ point = \"state\", any_value = [\"1\"] }",
+                {"common.running.any_value: values are numbers 0..65535"}},
+               {"{ point = \"state\", bit = 0, any_value = [1] }",
+                {"common.running.bit: bit or any_value, not both"}},
+               {"{ point = \"wide\", any_value = [1] }", {"'wide' must be a one-register point"}}});
 }
 
 TEST(BindingsSimulator, StateCodesFollowTheDriveAndLeaveEachOthersCodeAlone) {

@@ -103,43 +103,49 @@ TEST_F(ModbusDriverTest, FaultsFollowTheFaultBitAndTheMap) {
   EXPECT_TRUE(d.common().faults.empty());
 }
 
-TEST_F(ModbusDriverTest, ARunIsInForceOnlyOnceTheSlaveEchoedIt) {
+// A command written as FC 06 to the control word (holding 0) and what the slave answers: the
+// write's result and the command in force after it.
+struct CommandReply {
+  const char* name;
+  Command command;
+  std::uint16_t control;  // the value on the wire
+  Bytes reply;
+  WriteResult result;
+  Command in_force;
+};
+
+class ModbusDriverCommandTest : public ModbusDriverTest,
+                                public ::testing::WithParamInterface<CommandReply> {};
+
+// A command is in force only once the slave echoed it: before, and after any other answer, the
+// drive is still stopped.
+TEST_P(ModbusDriverCommandTest, IsInForceOnlyOnceTheSlaveEchoedIt) {
+  const CommandReply& c = GetParam();
   cycle(0, 0, 0);
-  const WriteOp run = WriteOp::of_command(Command::run_forward);
-  ASSERT_EQ(d.check(std::span(&run, 1)), WriteCheck::ok);
-  ASSERT_EQ(d.apply(run, 1, now), WriteStatus::pending);
+  const WriteOp op = WriteOp::of_command(c.command);
+  ASSERT_EQ(d.check(std::span(&op, 1)), WriteCheck::ok);
+  ASSERT_EQ(d.apply(op, 1, now), WriteStatus::pending);
   EXPECT_EQ(d.common().command, Command::stop);
-  // FC 06 to the control word (holding 0): 0x000F.
-  const Bytes request = frame({0x06, 0x00, 0x00, 0x00, 0x0F});
-  ASSERT_EQ(sent(), request);
-  EXPECT_EQ(answer(request).kind, RxKind::ack);  // the echo: no state in it
-  EXPECT_THAT(completions(), ::testing::ElementsAre(
-                                 ::testing::FieldsAre(1u, WriteResult::ok, ::testing::IsEmpty())));
-  EXPECT_EQ(d.common().command, Command::run_forward);
+  ASSERT_EQ(sent(), support::fc06_frame(kSlave, 0, c.control));
+  EXPECT_EQ(answer(c.reply).kind, RxKind::ack);  // a write's reply holds no state
+  EXPECT_THAT(completions(),
+              ::testing::ElementsAre(::testing::FieldsAre(1u, c.result, ::testing::IsEmpty())));
+  EXPECT_EQ(d.common().command, c.in_force);
 }
 
-TEST_F(ModbusDriverTest, AnEchoOfAnotherValueIsNoConfirmation) {
-  cycle(0, 0, 0);
-  const WriteOp run = WriteOp::of_command(Command::run_forward);
-  ASSERT_EQ(d.apply(run, 3, now), WriteStatus::pending);
-  ASSERT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x00, 0x0F}));
-  // The slave says it holds 0x0006 in the control word: it did not take the run.
-  EXPECT_EQ(answer(frame({0x06, 0x00, 0x00, 0x00, 0x06})).kind, RxKind::ack);
-  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(3u, WriteResult::refused,
-                                                                         ::testing::IsEmpty())));
-  EXPECT_EQ(d.common().command, Command::stop);
-}
-
-TEST_F(ModbusDriverTest, AnExceptionRefusesTheWriteAndChangesNothing) {
-  cycle(0, 0, 0);
-  const WriteOp run = WriteOp::of_command(Command::run_reverse);
-  ASSERT_EQ(d.apply(run, 4, now), WriteStatus::pending);
-  ASSERT_EQ(sent(), frame({0x06, 0x00, 0x00, 0x08, 0x0F}));
-  EXPECT_EQ(answer(frame({0x86, 0x04})).kind, RxKind::ack);
-  EXPECT_THAT(completions(), ::testing::ElementsAre(::testing::FieldsAre(4u, WriteResult::refused,
-                                                                         ::testing::IsEmpty())));
-  EXPECT_EQ(d.common().command, Command::stop);
-}
+INSTANTIATE_TEST_SUITE_P(
+    , ModbusDriverCommandTest,
+    ::testing::Values(
+        // The echo of the run (0x000F).
+        CommandReply{"RunEchoed", Command::run_forward, 0x000F,
+                     frame({0x06, 0x00, 0x00, 0x00, 0x0F}), WriteResult::ok, Command::run_forward},
+        // The slave says it holds 0x0006 in the control word: it did not take the run.
+        CommandReply{"AnEchoOfAnotherValue", Command::run_forward, 0x000F,
+                     frame({0x06, 0x00, 0x00, 0x00, 0x06}), WriteResult::refused, Command::stop},
+        // Exception 04 to the run reverse (0x080F): refused, and nothing changes.
+        CommandReply{"AnException", Command::run_reverse, 0x080F, frame({0x86, 0x04}),
+                     WriteResult::refused, Command::stop}),
+    [](const ::testing::TestParamInfo<CommandReply>& i) { return std::string(i.param.name); });
 
 TEST_F(ModbusDriverTest, SetpointsAreWrittenInTheReferencesUnitsWithinItsLimits) {
   cycle(0, 0, 0);

@@ -18,51 +18,13 @@ using namespace std::chrono_literals;
 constexpr std::uint8_t kSlave = 3;
 
 // write = "single": one-register writes go as FC 06, wider ones cannot.
-constexpr const char* kProfile = R"([profile]
-name = "types"
-source = "this test"
-[modbus]
-write = "single"
-[[point]]
-name = "total"
-table = "holding"
-address = 0
-type = "u64"
-byte_order = "dcba"
-[[point]]
-name = "limit"
-table = "holding"
-address = 4
-type = "s32"
-byte_order = "badc"
-[[point]]
-name = "mode"
-table = "holding"
-address = 6
-type = "u16"
-values = { 0 = "off", 2 = "auto" }
-[[point]]
-name = "name"
-table = "holding"
-address = 7
-type = "string"
-registers = 2
-[[point]]
-name = "state"
-table = "input"
-address = 0
-type = "u16"
-bits = { 0 = "ready", 3 = "fault" }
-)";
-
-Profile profile() {
-  auto r = parse_profile(kProfile, "types.toml");
-  if (auto* e = std::get_if<std::vector<std::string>>(&r)) {
-    ADD_FAILURE() << ::testing::PrintToString(*e);
-    return {};
-  }
-  return std::get<Profile>(std::move(r));
-}
+const std::string kProfile =
+    "[profile]\nname = \"types\"\nsource = \"this test\"\n[modbus]\nwrite = \"single\"\n" +
+    support::point("total", "holding", 0, "u64", "byte_order = \"dcba\"\n") +
+    support::point("limit", "holding", 4, "s32", "byte_order = \"badc\"\n") +
+    support::point("mode", "holding", 6, "u16", "values = { 0 = \"off\", 2 = \"auto\" }\n") +
+    support::point("name", "holding", 7, "string", "registers = 2\n") +
+    support::point("state", "input", 0, "u16", "bits = { 0 = \"ready\", 3 = \"fault\" }\n");
 
 Bytes frame(std::vector<std::uint8_t> pdu) {
   return encode(Framing::rtu, kSlave, pdu);
@@ -70,7 +32,7 @@ Bytes frame(std::vector<std::uint8_t> pdu) {
 
 class ModbusDriverTypesTest : public support::DriverAtHand {
  protected:
-  ModbusDriverTypesTest() : DriverAtHand(kSlave, profile()) {}
+  ModbusDriverTypesTest() : DriverAtHand(kSlave, support::parsed(kProfile)) {}
   std::size_t index(std::string_view name) {
     for (std::size_t i = 0; i < d.points().size(); ++i) {
       if (d.points()[i].name == name) return i;

@@ -25,58 +25,11 @@ using ::testing::HasSubstr;
 
 constexpr std::uint8_t kSlave = 7;
 
-// The Vacon / Eaton M-Max kind: the reference 0..10000 is 0..100 % of the span between the
-// minimum and the maximum frequency, and so is the actual speed. Worked by hand at the defaults
-// (10 Hz .. 50 Hz, 4 poles, 30 rpm a Hz): raw 0 = 10 Hz = 300 rpm, raw 10000 = 50 Hz = 1500 rpm,
-// 0.12 rpm a raw step: raw 5000 = 30 Hz = 900 rpm.
-constexpr const char* kSpanProfile = R"toml(
-[profile]
-name = "span-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[options.min_frequency_hz]
-default = 10
-min = 0
-max = 320
-description = "minimum frequency (P3.3.1.1)"
-[options.max_frequency_hz]
-default = 50
-min = 1
-max = 320
-description = "maximum frequency (P3.3.1.2)"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "speed_reference"
-table = "holding"
-address = 1
-type = "u16"
-min = 0
-max = 10000
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[[point]]
-name = "actual_speed"
-table = "holding"
-address = 3
-type = "u16"
-[common]
-speed_rpm = { point = "actual_speed", rpm_factor = "(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / 10000", rpm_offset = "min_frequency_hz * 120 / motor_poles" }
-setpoint_rpm = { point = "speed_reference", rpm_factor = "(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / 10000", rpm_offset = "min_frequency_hz * 120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
+// span-drive (profiles/span-drive.toml), the Vacon / Eaton M-Max kind: the reference 0..10000
+// is 0..100 % of the span between the minimum and the maximum frequency, and so is the actual
+// speed. Worked by hand at the defaults (10 Hz .. 50 Hz, 4 poles, 30 rpm a Hz): raw 0 = 10 Hz =
+// 300 rpm, raw 10000 = 50 Hz = 1500 rpm, 0.12 rpm a raw step: raw 5000 = 30 Hz = 900 rpm.
+const std::string kSpanProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "span-drive");
 
 // kSpanProfile with `from` replaced by `to`.
 std::string span_with(const std::string& from, const std::string& to) {
@@ -113,20 +66,20 @@ TEST(ProfileOptions, AreReadWithTheirRangesAndDefaults) {
 }
 
 TEST(ProfileOptions, BadDeclarationsAreErrorsOnTheirLines) {
-  EXPECT_THAT(errors_of(hz_with("default = 4\n", "default = 50\n")),
-              ElementsAre(HasSubstr("p.toml:6: options.motor_poles.default: must be in min..max")));
-  EXPECT_THAT(errors_of(hz_with("min = 2\nmax = 48", "min = 48\nmax = 2")),
-              ElementsAre(HasSubstr("options.motor_poles.min: must be below max")));
-  EXPECT_THAT(errors_of(hz_with("description = \"motor poles (nameplate)\"\n", "")),
-              ElementsAre(HasSubstr("options.motor_poles.description: required key is missing")));
+  expect_refused(errors_of, {{hz_with("default = 4\n", "default = 50\n"),
+                              {"p.toml:6: options.motor_poles.default: must be in min..max"}},
+                             {hz_with("min = 2\nmax = 48", "min = 48\nmax = 2"),
+                              {"options.motor_poles.min: must be below max"}},
+                             {hz_with("description = \"motor poles (nameplate)\"\n", ""),
+                              {"options.motor_poles.description: required key is missing"}}});
   EXPECT_THAT(errors_of(hz_with("[options.motor_poles]", "[options.attempts]")),
               testing::Contains(HasSubstr("'attempts' is an option of the modbus adapter itself")));
   EXPECT_THAT(errors_of(hz_with("[options.motor_poles]", "[options.Motor]")),
               testing::Contains(HasSubstr("snake_case")));
-  EXPECT_THAT(errors_of(hz_with("default = 4\n", "default = \"four\"\n")),
-              ElementsAre(HasSubstr("options.motor_poles.default: must be a number")));
-  EXPECT_THAT(errors_of(hz_with("default = 4\n", "default = nan\n")),
-              ElementsAre(HasSubstr("options.motor_poles.default: must be in")));
+  expect_refused(errors_of, {{hz_with("default = 4\n", "default = \"four\"\n"),
+                              {"options.motor_poles.default: must be a number"}},
+                             {hz_with("default = 4\n", "default = nan\n"),
+                              {"options.motor_poles.default: must be in"}}});
 }
 
 TEST(ProfileOptions, ADevicesValuesAreCheckedAgainstTheRange) {
@@ -322,18 +275,19 @@ TEST(RpmOffset, WhatIsNotOneIsAnErrorOnItsLine) {
   EXPECT_THAT(errors_of(span_with("default = 50\nmin = 1", "default = 5\nmin = 1")),
               testing::Contains(HasSubstr("is -0.015 with max_frequency_hz = 5")));
   // rpm_offset without rpm_factor, on speed_rpm's line.
-  EXPECT_THAT(
-      errors_of(span_with(
-          "speed\", rpm_factor = \"(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / "
-          "10000\", rpm_offset",
-          "speed\", rpm_offset")),
-      ElementsAre(HasSubstr("p.toml:43: common.speed_rpm.rpm_offset: goes only with rpm_factor")));
-  // A bad offset: its own key and line.
-  EXPECT_THAT(errors_of(span_with("rpm_offset = \"min_frequency_hz * 120 / motor_poles\" }\n"
-                                  "setpoint_rpm",
-                                  "rpm_offset = \"min_frequency_hz + 1\" }\nsetpoint_rpm")),
-              ElementsAre(HasSubstr("p.toml:43: common.speed_rpm.rpm_offset: 'min_frequency_hz "
-                                    "+ 1' '+' where '*' or '/' belongs")));
+  expect_refused(
+      errors_of,
+      {{span_with(
+            "speed\", rpm_factor = \"(max_frequency_hz - min_frequency_hz) * 120 / motor_poles / "
+            "10000\", rpm_offset",
+            "speed\", rpm_offset"),
+        {"p.toml:43: common.speed_rpm.rpm_offset: goes only with rpm_factor"}},
+       // A bad offset: its own key and line.
+       {span_with("rpm_offset = \"min_frequency_hz * 120 / motor_poles\" }\n"
+                  "setpoint_rpm",
+                  "rpm_offset = \"min_frequency_hz + 1\" }\nsetpoint_rpm"),
+        {"p.toml:43: common.speed_rpm.rpm_offset: 'min_frequency_hz + 1' '+' where '*' or '/' "
+         "belongs"}}});
 }
 
 // A device's options that make the span 0 or negative (maximum at or below minimum frequency)
@@ -410,76 +364,83 @@ TEST(RpmOffset, TheSpeedReadsAsTheValueTimesTheFactorPlusTheOffset) {
 
 // --- sequence ---
 
-TEST(Sequence, IsReadAndItsLastValueIsTheCommand) {
+// The hz drive's driver, driven by hand through its command sequences: every value goes to the
+// control word (holding 0) by FC 06.
+class Sequence : public DriverAtHand {
+ protected:
+  Sequence() : DriverAtHand(kSlave, parsed(kHzProfile)) {}
+
+  // `c` applied as write `ticket`: pending.
+  void apply(Command c, Ticket ticket = 1) {
+    EXPECT_EQ(d.apply(WriteOp::of_command(c), ticket, now), WriteStatus::pending);
+  }
+  // The slave echoes the write of `value`: it took it.
+  void echo(std::uint16_t value) { EXPECT_EQ(d.on_receive(fc06(0, value), now).kind, RxKind::ack); }
+  // The driver sends each of `values` in turn, and the slave echoes each.
+  void confirmed(std::initializer_list<std::uint16_t> values) {
+    for (const std::uint16_t v : values) {
+      ASSERT_EQ(sent(), fc06(0, v));
+      echo(v);
+    }
+  }
+};
+
+TEST_F(Sequence, IsReadAndItsLastValueIsTheCommand) {
   const Profile p = parsed(kHzProfile);
   ASSERT_TRUE(p.common.run_forward);
   EXPECT_THAT(p.common.run_forward->sequence, ElementsAre(0x0006, 0x0007, 0x000F));
   EXPECT_EQ(p.common.run_forward->value, 0x000F);
-  EXPECT_THAT(errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = []")),
-              ElementsAre(HasSubstr("common.run_forward.sequence: must be 1..4 values")));
-  EXPECT_THAT(errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = [1,2,3,4,5]")),
-              ElementsAre(HasSubstr("must be 1..4 values")));
-  EXPECT_THAT(errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = [1, 70000]")),
-              ElementsAre(HasSubstr("must be 1..4 values")));
-  EXPECT_THAT(
-      errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", "sequence = [1], value = 1")),
-      ElementsAre(HasSubstr("value or sequence, not both")));
+  // The run's sequence written as `sequence`.
+  const auto run_forward = [](const std::string& sequence) {
+    return errors_of(hz_with("sequence = [0x0006, 0x0007, 0x000F]", sequence));
+  };
+  expect_refused(run_forward,
+                 {{"sequence = []", {"common.run_forward.sequence: must be 1..4 values"}},
+                  {"sequence = [1,2,3,4,5]", {"must be 1..4 values"}},
+                  {"sequence = [1, 70000]", {"must be 1..4 values"}},
+                  {"sequence = [1], value = 1", {"value or sequence, not both"}}});
 }
 
 // Each value is written and confirmed before the next; the command is answered with the last.
-TEST(Sequence, EachValueIsConfirmedBeforeTheNextAndTheLastAnswersTheCommand) {
-  ModbusDriver d = driver_of(parsed(kHzProfile));
-  const TimePoint now = TimePoint{} + 10s;
-  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
+TEST_F(Sequence, EachValueIsConfirmedBeforeTheNextAndTheLastAnswersTheCommand) {
+  apply(Command::run_forward);
   for (const std::uint16_t v : std::initializer_list<std::uint16_t>{0x0006, 0x0007}) {
-    const Bytes f = fc06(0, v);
-    ASSERT_EQ(d.next_exchange(now)->frame, f);
-    ASSERT_EQ(d.on_receive(f, now).kind, RxKind::ack);
+    confirmed({v});
     EXPECT_TRUE(completions(d).empty());
     EXPECT_EQ(d.common().command, Command::stop);
   }
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x000F));
-  ASSERT_EQ(d.on_receive(fc06(0, 0x000F), now).kind, RxKind::ack);
+  confirmed({0x000F});
   EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::ok)));
   EXPECT_EQ(d.common().command, Command::run_forward);
 }
 
-TEST(Sequence, ARefusalMidSequenceRefusesTheCommandAndSendsNoMore) {
-  ModbusDriver d = driver_of(parsed(kHzProfile));
-  const TimePoint now = TimePoint{} + 10s;
-  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
-  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0007));
+TEST_F(Sequence, ARefusalMidSequenceRefusesTheCommandAndSendsNoMore) {
+  apply(Command::run_forward);
+  confirmed({0x0006});
+  ASSERT_EQ(sent(), fc06(0, 0x0007));
   d.on_receive(frame({0x86, 0x04}), now);  // exception 04, slave device failure
   EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::refused)));
   EXPECT_EQ(d.common().command, Command::stop);
   // What comes next is a poll, never the third value.
-  EXPECT_EQ(d.next_exchange(now)->frame[1], 0x03);
+  EXPECT_EQ(sent()[1], 0x03);
 }
 
-TEST(Sequence, NoAnswerMidSequenceIsNoResponseAndSendsNoMore) {
-  ModbusDriver d = driver_of(parsed(kHzProfile));
-  const TimePoint now = TimePoint{} + 10s;
-  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_reverse), 1, now), WriteStatus::pending);
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
-  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x080F));
+TEST_F(Sequence, NoAnswerMidSequenceIsNoResponseAndSendsNoMore) {
+  apply(Command::run_reverse);
+  confirmed({0x0006});
+  ASSERT_EQ(sent(), fc06(0, 0x080F));
   d.on_no_reply(now);
   EXPECT_THAT(completions(d),
               ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::no_response)));
-  EXPECT_EQ(d.next_exchange(now)->frame[1], 0x03);
+  EXPECT_EQ(sent()[1], 0x03);
 }
 
 // The line lost mid-sequence (comm_lost): the command fails, and once the slave answers again
 // nothing of it is sent: the drive stays at the step it confirmed.
-TEST(Sequence, TheLineLostMidSequenceFailsItAndSendsNoMore) {
-  ModbusDriver d = driver_of(parsed(kHzProfile));
-  TimePoint now = TimePoint{} + 10s;
-  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
-  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0007));
+TEST_F(Sequence, TheLineLostMidSequenceFailsItAndSendsNoMore) {
+  apply(Command::run_forward);
+  confirmed({0x0006});
+  ASSERT_EQ(sent(), fc06(0, 0x0007));
   now += 3s;
   d.on_comm_lost(now);
   EXPECT_THAT(completions(d),
@@ -499,19 +460,14 @@ TEST(Sequence, TheLineLostMidSequenceFailsItAndSendsNoMore) {
 
 // A stop applied while a run's sequence is on the line: the run ends at the step it reached and
 // is not carried out; the stop's sequence goes next, whole.
-TEST(Sequence, AStopDuringARunSequenceOvertakesIt) {
-  ModbusDriver d = driver_of(parsed(kHzProfile));
-  const TimePoint now = TimePoint{} + 10s;
-  ASSERT_EQ(d.apply(WriteOp::of_command(Command::run_forward), 1, now), WriteStatus::pending);
-  ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, 0x0006));
-  ASSERT_EQ(d.apply(WriteOp::of_command(Command::stop), 2, now), WriteStatus::pending);
-  ASSERT_EQ(d.on_receive(fc06(0, 0x0006), now).kind, RxKind::ack);
+TEST_F(Sequence, AStopDuringARunSequenceOvertakesIt) {
+  apply(Command::run_forward);
+  ASSERT_EQ(sent(), fc06(0, 0x0006));
+  apply(Command::stop, 2);
+  echo(0x0006);
   EXPECT_THAT(completions(d),
               ElementsAre(std::pair<Ticket, WriteResult>(1, WriteResult::no_response)));
-  for (const std::uint16_t v : std::initializer_list<std::uint16_t>{0x0007, 0x0006}) {
-    ASSERT_EQ(d.next_exchange(now)->frame, fc06(0, v));
-    ASSERT_EQ(d.on_receive(fc06(0, v), now).kind, RxKind::ack);
-  }
+  confirmed({0x0007, 0x0006});
   EXPECT_THAT(completions(d), ElementsAre(std::pair<Ticket, WriteResult>(2, WriteResult::ok)));
   EXPECT_EQ(d.common().command, Command::stop);
 }

@@ -3,10 +3,12 @@
 // of a read, and the write results a driver reports.
 #pragma once
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <fstream>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <utility>
@@ -17,6 +19,7 @@
 #include "codec.h"
 #include "drivegate/driver.h"
 #include "driver.h"
+#include "example_profile.h"
 #include "plugin/adapter_options.h"
 #include "profile.h"
 #include "profile_options.h"
@@ -25,100 +28,24 @@
 namespace drivegate::modbus_device::support {
 
 // Test profiles of more than one file (profile_options_test.cpp, required_option_test.cpp,
-// reload_test.cpp vary them).
+// reload_test.cpp vary them), profiles/<name>.toml beside this file: a line an error names is
+// that file's line.
 
-// A CiA 402-like drive in Hz: the reference and the output frequency in 0.01 Hz, rpm through
-// the motor's poles; a run passes through "switched on" before "operation enabled".
-inline constexpr const char* kHzProfile = R"toml(
-[profile]
-name = "hz-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles (nameplate)"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-unit = "Hz"
-description = "maximum frequency (P1.2)"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "frequency_reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.01
-min = 0
-max = 400
-[[point]]
-name = "status_word"
-table = "holding"
-address = 2
-type = "u16"
-[[point]]
-name = "output_frequency"
-table = "holding"
-address = 3
-type = "s16"
-scale = 0.01
-[common]
-speed_rpm = { point = "output_frequency", rpm_factor = "120 / motor_poles" }
-setpoint_rpm = { point = "frequency_reference", rpm_factor = "120 / motor_poles" }
-running = { point = "status_word", bit = 1 }
-fault = { point = "status_word", bit = 3 }
-stop = { point = "control_word", sequence = [0x0007, 0x0006] }
-run_forward = { point = "control_word", sequence = [0x0006, 0x0007, 0x000F] }
-run_reverse = { point = "control_word", sequence = [0x0006, 0x080F] }
-reset_fault = { point = "control_word", sequence = [0x0080, 0x0006] }
-)toml";
+// hz-drive: a CiA 402-like drive in Hz, the reference and the output frequency in 0.01 Hz, rpm
+// through the motor's poles; a run passes through "switched on" before "operation enabled".
+inline const std::string kHzProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "hz-drive");
 
-// A drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 / poles / 100).
-inline constexpr const char* kPercentProfile = R"toml(
-[profile]
-name = "pct-drive"
-source = "a test"
-[options.motor_poles]
-default = 4
-min = 2
-max = 48
-description = "motor poles"
-[options.max_frequency_hz]
-default = 50
-min = 10
-max = 400
-description = "maximum frequency"
-[[point]]
-name = "control_word"
-table = "holding"
-address = 0
-type = "u16"
-[[point]]
-name = "reference"
-table = "holding"
-address = 1
-type = "u16"
-scale = 0.006103515625   # 100 / 16384
-min = 0
-max = 100
-[[point]]
-name = "actual"
-table = "holding"
-address = 2
-type = "u16"
-scale = 0.006103515625
-[common]
-speed_rpm = { point = "actual", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-setpoint_rpm = { point = "reference", rpm_factor = "max_frequency_hz * 120 / motor_poles / 100" }
-stop = { point = "control_word", value = 0 }
-run_forward = { point = "control_word", value = 1 }
-)toml";
+// pct-drive: a drive in % of its maximum, 16384 = 100 % (rpm = % x max_frequency_hz x 120 /
+// motor_poles / 100).
+inline const std::string kPercentProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "pct-drive");
+
+// A profile's [[point]] `name` in `table` at `address`, of `type`, with the keys in `more` (five
+// lines and those of `more`).
+inline std::string point(const std::string& name, const std::string& table, int address,
+                         const std::string& type, const std::string& more = "") {
+  return "[[point]]\nname = \"" + name + "\"\ntable = \"" + table +
+         "\"\naddress = " + std::to_string(address) + "\ntype = \"" + type + "\"\n" + more;
+}
 
 // The profile in `text` (file "p.toml"); a test failure, and an empty profile, if it is refused.
 inline Profile parsed(const std::string& text) {
@@ -136,6 +63,24 @@ inline std::vector<std::string> errors_of(const std::string& text) {
   if (auto* errors = std::get_if<std::vector<std::string>>(&r)) return *errors;
   ADD_FAILURE() << "accepted:\n" << text;
   return {};
+}
+
+// A profile refused: the text a test's reader takes, and what each of its errors says, in order.
+struct Refused {
+  std::string text;
+  std::vector<std::string> errors;  // each error contains the one at its place
+};
+
+// Each case's text, read by `errors_of` (which makes a profile of it), refused with as many errors
+// as the case lists, each containing its own.
+template <class ErrorsOf>
+void expect_refused(const ErrorsOf& errors_of, std::initializer_list<Refused> cases) {
+  for (const Refused& c : cases) {
+    SCOPED_TRACE(c.text);
+    std::vector<::testing::Matcher<std::string>> each;
+    for (const std::string& e : c.errors) each.push_back(::testing::HasSubstr(e));
+    EXPECT_THAT(errors_of(c.text), ::testing::ElementsAreArray(each));
+  }
 }
 
 // `p` with a device's options `set` applied; a test failure if they are refused.

@@ -8,18 +8,18 @@
 #include "example_profile.h"
 #include "profile_support.h"
 
-
 namespace drivegate::modbus_device {
 namespace {
 
+using support::errors_of;
+using support::expect_refused;
+using support::parsed;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
-using support::errors_of;
-using support::parsed;
 
 // The least valid profile, to which each test adds what it is about.
 const std::string kHead =
-    "[profile]\nname = \"t\"\nsource = \"a manual\"\n"              // lines 1-3
+    "[profile]\nname = \"t\"\nsource = \"a manual\"\n"  // lines 1-3
     "[[point]]\nname = \"status\"\ntable = \"holding\"\naddress = 10\ntype = \"u16\"\n";  // 4-8
 
 TEST(Profile, TheExampleOfTheIssueReadsAsWritten) {
@@ -57,11 +57,11 @@ TEST(Profile, TheExampleOfTheIssueReadsAsWritten) {
   EXPECT_THAT(c.running->bits, ElementsAre(2));
   EXPECT_THAT(c.fault->bits, ElementsAre(3));
   EXPECT_EQ(c.fault_code->point, *p.find("fault_number"));
-  EXPECT_EQ(c.fault_code->map, (std::map<std::uint32_t, Fault>{
-                                   {0, Fault::none},
-                                   {2, Fault::over_current},
-                                   {3, Fault::over_voltage},
-                                   {5, Fault::drive_over_temperature}}));
+  EXPECT_EQ(c.fault_code->map,
+            (std::map<std::uint32_t, Fault>{{0, Fault::none},
+                                            {2, Fault::over_current},
+                                            {3, Fault::over_voltage},
+                                            {5, Fault::drive_over_temperature}}));
   EXPECT_EQ(c.fault_code->other, Fault::other);
   EXPECT_EQ(c.stop->value, 0x0006);
   EXPECT_EQ(c.run_forward->value, 0x000F);
@@ -84,50 +84,46 @@ TEST(Profile, SyntaxErrorsNameTheLine) {
 }
 
 TEST(Profile, WhatIsMissingOrUnknownIsNamed) {
-  EXPECT_THAT(errors_of("[profile]\nname = \"t\"\n"),
-              ElementsAre(HasSubstr("p.toml: point: a profile needs at least one [[point]]"),
-                          HasSubstr("p.toml:1: profile.source: required key is missing")));
-  EXPECT_THAT(errors_of(kHead + "colour = \"red\"\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.colour: unknown key")));
-  EXPECT_THAT(errors_of(kHead + "[line]\nparity = \"mark\"\n"),
-              ElementsAre(HasSubstr("p.toml:10: line.parity: must be one of none, even, odd "
-                                    "(got 'mark')")));
-  EXPECT_THAT(errors_of(kHead + "[modbus]\nmax_registers = 126\n"),
-              ElementsAre(HasSubstr("p.toml:10: modbus.max_registers: must be in 1..125")));
+  expect_refused(errors_of,
+                 {{"[profile]\nname = \"t\"\n",
+                   {"p.toml: point: a profile needs at least one [[point]]",
+                    "p.toml:1: profile.source: required key is missing"}},
+                  {kHead + "colour = \"red\"\n", {"p.toml:9: point.colour: unknown key"}},
+                  {kHead + "[line]\nparity = \"mark\"\n",
+                   {"p.toml:10: line.parity: must be one of none, even, odd (got 'mark')"}},
+                  {kHead + "[modbus]\nmax_registers = 126\n",
+                   {"p.toml:10: modbus.max_registers: must be in 1..125"}}});
 }
 
 TEST(Profile, PointsAreCheckedOneByOne) {
   const auto point = [](const std::string& body) {
     return errors_of(kHead + "[[point]]\n" + body);  // the point starts on line 9
   };
-  EXPECT_THAT(point("name = \"Speed\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"),
-              ElementsAre(HasSubstr("p.toml:10: point.name: must be snake_case")));
-  EXPECT_THAT(point("name = \"status\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"),
-              ElementsAre(HasSubstr("p.toml:10: point.name: 'status' is defined twice (first "
-                                    "on line 4)")));
-  EXPECT_THAT(point("name = \"run\"\ntable = \"coil\"\naddress = 1\ntype = \"u16\"\n"),
-              ElementsAre(HasSubstr("p.toml:13: point.type: a coil or discrete input is of type "
-                                    "bit")));
-  EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"bit\"\n"),
-              ElementsAre(HasSubstr("point.type: type bit is for coils and discrete inputs")));
-  EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 65535\ntype = \"u32\"\n"),
-              ElementsAre(HasSubstr("point.address: a point of 2 registers at 65535 runs past")));
-  EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
-                    "word_order = \"little\"\n"),
-              ElementsAre(HasSubstr("p.toml:14: point.word_order: applies to the 32- and "
-                                    "64-bit types")));
-  EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
-                    "access = \"operate\"\n"),
-              ElementsAre(HasSubstr("point.access: an input register or discrete input cannot "
-                                    "be written")));
-  EXPECT_THAT(point("name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\nmax = 5\n"),
-              ElementsAre(HasSubstr("point.max: limits a write")));
-  EXPECT_THAT(point("name = \"a\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\nmin = 5\n"
-                    "max = 4\n"),
-              ElementsAre(HasSubstr("point.min: is above point.max")));
-  EXPECT_THAT(point("name = \"a\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\n"
-                    "scale = 0\n"),
-              ElementsAre(HasSubstr("point.scale: must not be 0")));
+  expect_refused(point,
+                 {{"name = \"Speed\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n",
+                   {"p.toml:10: point.name: must be snake_case"}},
+                  {"name = \"status\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n",
+                   {"p.toml:10: point.name: 'status' is defined twice (first on line 4)"}},
+                  {"name = \"run\"\ntable = \"coil\"\naddress = 1\ntype = \"u16\"\n",
+                   {"p.toml:13: point.type: a coil or discrete input is of type bit"}},
+                  {"name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"bit\"\n",
+                   {"point.type: type bit is for coils and discrete inputs"}},
+                  {"name = \"a\"\ntable = \"input\"\naddress = 65535\ntype = \"u32\"\n",
+                   {"point.address: a point of 2 registers at 65535 runs past"}},
+                  {"name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
+                   "word_order = \"little\"\n",
+                   {"p.toml:14: point.word_order: applies to the 32- and 64-bit types"}},
+                  {"name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\n"
+                   "access = \"operate\"\n",
+                   {"point.access: an input register or discrete input cannot be written"}},
+                  {"name = \"a\"\ntable = \"input\"\naddress = 1\ntype = \"u16\"\nmax = 5\n",
+                   {"point.max: limits a write"}},
+                  {"name = \"a\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\nmin = 5\n"
+                   "max = 4\n",
+                   {"point.min: is above point.max"}},
+                  {"name = \"a\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\n"
+                   "scale = 0\n",
+                   {"point.scale: must not be 0"}}});
 }
 
 TEST(Profile, OverlappingPointsNameBoth) {
@@ -149,37 +145,40 @@ TEST(Profile, APointLargerThanTheDevicesReadIsRefused) {
 }
 
 TEST(Profile, CommonBindingsMustNameRealPointsAndBits) {
-  const auto common = [](const std::string& body) { return errors_of(kHead + "[common]\n" + body); };
-  EXPECT_THAT(common("speed_rpm = \"speed\"\n"),
-              ElementsAre(HasSubstr("p.toml:10: common.speed_rpm: no point is called 'speed'")));
-  EXPECT_THAT(common("running = { point = \"status\", bit = 16 }\n"),
-              ElementsAre(HasSubstr("common.running.bit: must be in 0..15 (got 16)")));
-  EXPECT_THAT(common("running = { point = \"status\" }\n"),
-              ElementsAre(HasSubstr("common.running.bit: required key is missing")));
-  EXPECT_THAT(errors_of(kHead + "[[point]]\nname = \"word\"\ntable = \"input\"\naddress = 1\n"
-                                "type = \"u32\"\n[common]\nfault = { point = \"word\", bit = 1 }\n"),
-              ElementsAre(HasSubstr("common.fault.point: 'word' must be a one-register point")));
-  EXPECT_THAT(common("running = \"status\"\n"),
-              ElementsAre(HasSubstr("common.running: must be an inline table")));
-  EXPECT_THAT(common("fault_code = { point = \"status\", map = { 1 = \"overcurrent\" } }\n"),
-              ElementsAre(HasSubstr("unknown fault label 'overcurrent' (known: none, ")));
-  EXPECT_THAT(common("fault_code = { point = \"status\", map = { 1 = \"comm_lost\" } }\n"),
-              ElementsAre(HasSubstr("comm_lost is the gateway's own fault")));
-  EXPECT_THAT(common("fault_code = { point = \"status\", map = { one = \"other\" } }\n"),
-              ElementsAre(HasSubstr("key 'one' must be a native fault value")));
-  EXPECT_THAT(common("stop = { point = \"status\", value = 70000 }\n"),
-              ElementsAre(HasSubstr("common.stop.value: must be in 0..65535")));
-  EXPECT_THAT(common("run_forward = { point = \"status\", value = 1 }\n"),
-              ElementsAre(HasSubstr("run_forward or run_reverse without stop")));
+  const auto common = [](const std::string& body) {
+    return errors_of(kHead + "[common]\n" + body);
+  };
+  expect_refused(
+      common,
+      {{"speed_rpm = \"speed\"\n", {"p.toml:10: common.speed_rpm: no point is called 'speed'"}},
+       {"running = { point = \"status\", bit = 16 }\n",
+        {"common.running.bit: must be in 0..15 (got 16)"}},
+       {"running = { point = \"status\" }\n", {"common.running.bit: required key is missing"}}});
+  EXPECT_THAT(
+      errors_of(kHead + "[[point]]\nname = \"word\"\ntable = \"input\"\naddress = 1\n"
+                        "type = \"u32\"\n[common]\nfault = { point = \"word\", bit = 1 }\n"),
+      ElementsAre(HasSubstr("common.fault.point: 'word' must be a one-register point")));
+  expect_refused(common, {{"running = \"status\"\n", {"common.running: must be an inline table"}},
+                          {"fault_code = { point = \"status\", map = { 1 = \"overcurrent\" } }\n",
+                           {"unknown fault label 'overcurrent' (known: none, "}},
+                          {"fault_code = { point = \"status\", map = { 1 = \"comm_lost\" } }\n",
+                           {"comm_lost is the gateway's own fault"}},
+                          {"fault_code = { point = \"status\", map = { one = \"other\" } }\n",
+                           {"key 'one' must be a native fault value"}},
+                          {"stop = { point = \"status\", value = 70000 }\n",
+                           {"common.stop.value: must be in 0..65535"}},
+                          {"run_forward = { point = \"status\", value = 1 }\n",
+                           {"run_forward or run_reverse without stop"}}});
   // A command is written: the point must be a holding register.
-  EXPECT_THAT(errors_of(kHead +
-                        "[[point]]\nname = \"state\"\ntable = \"input\"\naddress = 1\n"
+  EXPECT_THAT(
+      errors_of(kHead + "[[point]]\nname = \"state\"\ntable = \"input\"\naddress = 1\n"
                         "type = \"u16\"\n[common]\nstop = { point = \"state\", value = 0 }\n"),
-              ElementsAre(HasSubstr("common.stop.point: 'state' must be a one-register holding "
-                                    "point")));
+      ElementsAre(HasSubstr("common.stop.point: 'state' must be a one-register holding "
+                            "point")));
   // Hex keys in the fault map are native values too.
-  const Profile p = parsed(kHead + "[common]\nfault_code = { point = \"status\", map = "
-                                   "{ \"0x11\" = \"over_current\" } }\n");
+  const Profile p = parsed(kHead +
+                           "[common]\nfault_code = { point = \"status\", map = "
+                           "{ \"0x11\" = \"over_current\" } }\n");
   ASSERT_TRUE(p.common.fault_code);
   EXPECT_EQ(p.common.fault_code->map.at(0x11), Fault::over_current);
 }
@@ -188,13 +187,13 @@ TEST(Profile, CommonBindingsMustNameRealPointsAndBits) {
 // poll interval of its own (a status word read hourly would show a running drive stopped).
 TEST(Profile, APointBoundToTheCommonBlockHasNoPollIntervalOfItsOwn) {
   const std::string slow = kHead + "poll_ms = 3600000\n";  // the status word, line 9
-  EXPECT_THAT(errors_of(slow + "[common]\nrunning = { point = \"status\", bit = 2 }\n"
-                               "fault = { point = \"status\", bit = 3 }\n"),
-              ElementsAre(HasSubstr("p.toml:4: point.poll_ms: 'status' is bound to the common "
-                                    "block (common.running), which is polled at the device's "
-                                    "poll_ms: remove poll_ms")));
-  EXPECT_THAT(errors_of(slow + "[common]\nstop = { point = \"status\", value = 6 }\n"),
-              ElementsAre(HasSubstr("(common.stop)")));
+  expect_refused(
+      errors_of,
+      {{slow + "[common]\nrunning = { point = \"status\", bit = 2 }\n"
+               "fault = { point = \"status\", bit = 3 }\n",
+        {"p.toml:4: point.poll_ms: 'status' is bound to the common block (common.running), which "
+         "is polled at the device's poll_ms: remove poll_ms"}},
+       {slow + "[common]\nstop = { point = \"status\", value = 6 }\n", {"(common.stop)"}}});
   // A point of the device's own keeps its interval.
   const Profile p = parsed(slow);
   EXPECT_EQ(p.points[0].poll_ms, 3600000u);

@@ -4,11 +4,13 @@
 #include <gtest/gtest.h>
 
 #include "profile.h"
+#include "profile_support.h"
 
 namespace drivegate::modbus_device {
 namespace {
 
 using ::testing::ElementsAre;
+using ::testing::FieldsAre;
 using ::testing::HasSubstr;
 
 const std::string kHead = "[profile]\nname = \"t\"\nsource = \"a manual\"\n";  // lines 1-3
@@ -66,14 +68,13 @@ TEST(ProfileTypes, ByteOrdersAndTheirShorthand) {
   EXPECT_EQ(order("f64", "word_order = \"little\""), ByteOrder::cdab);
   EXPECT_EQ(order("s64", "word_order = \"big\""), ByteOrder::abcd);
   const std::string u32 = "table = \"holding\"\naddress = 1\ntype = \"u32\"\n";  // lines 5-7
-  EXPECT_THAT(errors(u32 + "byte_order = \"abcd\"\nword_order = \"big\"\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.word_order: is the shorthand of byte_order "
-                                    "(big = abcd, little = cdab): give one of them")));
-  EXPECT_THAT(errors(u32 + "byte_order = \"bacd\"\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.byte_order: ")));
-  EXPECT_THAT(errors("table = \"holding\"\naddress = 1\ntype = \"s16\"\nbyte_order = \"badc\"\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.byte_order: applies to the 32- and 64-bit "
-                                    "types")));
+  support::expect_refused(
+      errors, {{u32 + "byte_order = \"abcd\"\nword_order = \"big\"\n",
+                {"p.toml:9: point.word_order: is the shorthand of byte_order (big = abcd, "
+                 "little = cdab): give one of them"}},
+               {u32 + "byte_order = \"bacd\"\n", {"p.toml:8: point.byte_order: "}},
+               {"table = \"holding\"\naddress = 1\ntype = \"s16\"\nbyte_order = \"badc\"\n",
+                {"p.toml:8: point.byte_order: applies to the 32- and 64-bit types"}}});
 }
 
 TEST(ProfileTypes, StringsHaveRegistersAndAreReadOnly) {
@@ -86,22 +87,20 @@ TEST(ProfileTypes, StringsHaveRegistersAndAreReadOnly) {
                 .byte_order,
             ByteOrder::badc);
   const std::string s = "table = \"holding\"\naddress = 1\ntype = \"string\"\n";  // lines 5-7
-  EXPECT_THAT(errors(s), ElementsAre(HasSubstr("p.toml:4: point.registers: required key is "
-                                               "missing")));
-  EXPECT_THAT(errors(s + "registers = 65\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.registers: must be in 1..64 (got 65)")));
-  EXPECT_THAT(errors(s + "registers = 0\n"), ElementsAre(HasSubstr("must be in 1..64 (got 0)")));
-  EXPECT_THAT(errors(s + "registers = 2\naccess = \"operate\"\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.access: a string point is read-only")));
-  EXPECT_THAT(errors(s + "registers = 2\nmax = 3\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.max: a string point is read-only")));
-  EXPECT_THAT(errors(s + "registers = 2\nbyte_order = \"cdab\"\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.byte_order: a string takes byte_order "
-                                    "\"abcd\"")));
-  EXPECT_THAT(errors(s + "registers = 2\nword_order = \"big\"\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.word_order: a string takes byte_order")));
-  EXPECT_THAT(errors("table = \"holding\"\naddress = 1\ntype = \"u16\"\nregisters = 2\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.registers: is a string point's length")));
+  support::expect_refused(
+      errors,
+      {{s, {"p.toml:4: point.registers: required key is missing"}},
+       {s + "registers = 65\n", {"p.toml:8: point.registers: must be in 1..64 (got 65)"}},
+       {s + "registers = 0\n", {"must be in 1..64 (got 0)"}},
+       {s + "registers = 2\naccess = \"operate\"\n",
+        {"p.toml:9: point.access: a string point is read-only"}},
+       {s + "registers = 2\nmax = 3\n", {"p.toml:9: point.max: a string point is read-only"}},
+       {s + "registers = 2\nbyte_order = \"cdab\"\n",
+        {"p.toml:9: point.byte_order: a string takes byte_order \"abcd\""}},
+       {s + "registers = 2\nword_order = \"big\"\n",
+        {"p.toml:9: point.word_order: a string takes byte_order"}},
+       {"table = \"holding\"\naddress = 1\ntype = \"u16\"\nregisters = 2\n",
+        {"p.toml:8: point.registers: is a string point's length"}}});
   // 64 registers, more than a device that reads 60 at once.
   EXPECT_THAT(parse_profile(kHead + "[modbus]\nmax_registers = 60\n[[point]]\nname = \"p\"\n" + s +
                                 "registers = 64\n",
@@ -133,25 +132,20 @@ TEST(ProfileTypes, LabelsNameBitsAndValues) {
       "table = \"holding\"\naddress = 1\ntype = \"u16\"\n"
       "bits = { 0 = \"ready\", 1 = \"running\", 3 = \"fault\", 15 = \"warning\" }\n");
   EXPECT_TRUE(bits.bit_labels);
-  ASSERT_EQ(bits.labels.size(), 4u);
-  EXPECT_EQ(bits.labels[2].name, "fault");
-  EXPECT_EQ(bits.labels[2].value, 3u);
-  EXPECT_EQ(bits.labels[3].value, 15u);
+  EXPECT_THAT(bits.labels, ElementsAre(FieldsAre("ready", 0u), FieldsAre("running", 1u),
+                                       FieldsAre("fault", 3u), FieldsAre("warning", 15u)));
   // Keys decimal or "0x.." in any order; labels in value order.
   const ProfilePoint values = point(
       "table = \"input\"\naddress = 1\ntype = \"u32\"\n"
       "values = { \"0x11\" = \"undervoltage\", 0 = \"none\", 2 = \"overcurrent\" }\n");
   EXPECT_FALSE(values.bit_labels);
-  ASSERT_EQ(values.labels.size(), 3u);
-  EXPECT_EQ(values.labels[0].name, "none");
-  EXPECT_EQ(values.labels[2].value, 0x11u);
-  EXPECT_EQ(values.labels[2].name, "undervoltage");
+  EXPECT_THAT(values.labels, ElementsAre(FieldsAre("none", 0u), FieldsAre("overcurrent", 2u),
+                                         FieldsAre("undervoltage", 0x11u)));
   // A bit field of 64 bits; "010" is ten, never octal.
   const ProfilePoint wide = point(
       "table = \"input\"\naddress = 1\ntype = \"u64\"\n"
       "bits = { 63 = \"top\", \"010\" = \"ten\" }\n");
-  EXPECT_EQ(wide.labels[0].value, 10u);
-  EXPECT_EQ(wide.labels[1].value, 63u);
+  EXPECT_THAT(wide.labels, ElementsAre(FieldsAre("ten", 10u), FieldsAre("top", 63u)));
   // The values of a bit point.
   EXPECT_EQ(point("table = \"coil\"\naddress = 1\ntype = \"bit\"\n"
                   "values = { 0 = \"local\", 1 = \"remote\" }\n")
@@ -161,56 +155,44 @@ TEST(ProfileTypes, LabelsNameBitsAndValues) {
 
 TEST(ProfileTypes, BadLabelsNameTheLine) {
   const std::string u16 = "table = \"input\"\naddress = 1\ntype = \"u16\"\n";  // lines 5-7
-  EXPECT_THAT(errors(u16 + "bits = { 16 = \"beyond\" }\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.bits: key '16' must be a bit number 0..15 "
-                                    "of this u16")));
-  EXPECT_THAT(errors("table = \"input\"\naddress = 1\ntype = \"u32\"\nbits = { 32 = \"x\" }\n"),
-              ElementsAre(HasSubstr("key '32' must be a bit number 0..31 of this u32")));
-  EXPECT_THAT(errors(u16 + "values = { 65536 = \"big\" }\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.values: key '65536' must be a value "
-                                    "0..65535")));
-  EXPECT_THAT(errors("table = \"input\"\naddress = 1\ntype = \"s16\"\n"
-                     "values = { 32768 = \"big\" }\n"),
-              ElementsAre(HasSubstr("must be a value 0..32767 of this s16")));
-  EXPECT_THAT(errors(u16 + "values = { \"0x11\" = \"a\", 17 = \"b\" }\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.values: key '17' is 17, named already "
-                                    "('a')")));
-  EXPECT_THAT(errors(u16 + "values = { 1 = \"a\", 2 = \"a\" }\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.values.2: 'a' names 1 already")));
-  EXPECT_THAT(errors(u16 + "values = { 1 = \"Fault\" }\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.values.1: must be a name of 1..40 "
-                                    "characters of a-z, 0-9 and '_' (got 'Fault')")));
-  EXPECT_THAT(errors(u16 + "values = { 1 = \"" + std::string(41, 'a') + "\" }\n"),
-              ElementsAre(HasSubstr("must be a name of 1..40 characters")));
-  EXPECT_THAT(errors(u16 + "values = { 1 = \"\" }\n"),
-              ElementsAre(HasSubstr("must be a name of 1..40 characters")));
-  EXPECT_THAT(errors(u16 + "values = { 1 = 2 }\n"),
-              ElementsAre(HasSubstr("must be a name of 1..40 characters")));
-  EXPECT_THAT(errors(u16 + "values = { x1 = \"a\" }\n"),
-              ElementsAre(HasSubstr("key 'x1' must be a value")));
-  EXPECT_THAT(errors(u16 + "values = { \"-1\" = \"a\" }\n"),
-              ElementsAre(HasSubstr("key '-1' must be a value")));
-  EXPECT_THAT(errors(u16 + "values = {}\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.values: must be a table such as")));
-  EXPECT_THAT(errors(u16 + "values = [\"a\"]\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.values: must be a table such as")));
-  EXPECT_THAT(errors(u16 + "bits = { 0 = \"a\" }\nvalues = { 0 = \"b\" }\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.values: a point has bits or values, not "
-                                    "both")));
-  EXPECT_THAT(errors(u16 + "scale = 0.1\nvalues = { 0 = \"a\" }\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.values: names raw values: a labelled point "
-                                    "has scale 1")));
-  EXPECT_THAT(errors("table = \"input\"\naddress = 1\ntype = \"f32\"\nvalues = { 0 = \"a\" }\n"),
-              ElementsAre(HasSubstr("p.toml:8: point.values: names the values or bits of an "
-                                    "integer point, not of a f32")));
-  EXPECT_THAT(errors("table = \"input\"\naddress = 1\ntype = \"f64\"\nbits = { 0 = \"a\" }\n"),
-              ElementsAre(HasSubstr("not of a f64")));
-  EXPECT_THAT(errors("table = \"input\"\naddress = 1\ntype = \"string\"\nregisters = 2\n"
-                     "values = { 0 = \"a\" }\n"),
-              ElementsAre(HasSubstr("p.toml:9: point.values: names the values or bits of an "
-                                    "integer point, not of a string")));
-  EXPECT_THAT(errors("table = \"coil\"\naddress = 1\ntype = \"bit\"\nbits = { 0 = \"a\" }\n"),
-              ElementsAre(HasSubstr("a bit point has no bits but its own")));
+  support::expect_refused(
+      errors,
+      {{u16 + "bits = { 16 = \"beyond\" }\n",
+        {"p.toml:8: point.bits: key '16' must be a bit number 0..15 of this u16"}},
+       {"table = \"input\"\naddress = 1\ntype = \"u32\"\nbits = { 32 = \"x\" }\n",
+        {"key '32' must be a bit number 0..31 of this u32"}},
+       {u16 + "values = { 65536 = \"big\" }\n",
+        {"p.toml:8: point.values: key '65536' must be a value 0..65535"}},
+       {"table = \"input\"\naddress = 1\ntype = \"s16\"\n"
+        "values = { 32768 = \"big\" }\n",
+        {"must be a value 0..32767 of this s16"}},
+       {u16 + "values = { \"0x11\" = \"a\", 17 = \"b\" }\n",
+        {"p.toml:8: point.values: key '17' is 17, named already ('a')"}},
+       {u16 + "values = { 1 = \"a\", 2 = \"a\" }\n",
+        {"p.toml:8: point.values.2: 'a' names 1 already"}},
+       {u16 + "values = { 1 = \"Fault\" }\n",
+        {"p.toml:8: point.values.1: must be a name of 1..40 characters of a-z, 0-9 and '_' (got "
+         "'Fault')"}},
+       {u16 + "values = { 1 = \"" + std::string(41, 'a') + "\" }\n",
+        {"must be a name of 1..40 characters"}},
+       {u16 + "values = { 1 = \"\" }\n", {"must be a name of 1..40 characters"}},
+       {u16 + "values = { 1 = 2 }\n", {"must be a name of 1..40 characters"}},
+       {u16 + "values = { x1 = \"a\" }\n", {"key 'x1' must be a value"}},
+       {u16 + "values = { \"-1\" = \"a\" }\n", {"key '-1' must be a value"}},
+       {u16 + "values = {}\n", {"p.toml:8: point.values: must be a table such as"}},
+       {u16 + "values = [\"a\"]\n", {"p.toml:8: point.values: must be a table such as"}},
+       {u16 + "bits = { 0 = \"a\" }\nvalues = { 0 = \"b\" }\n",
+        {"p.toml:9: point.values: a point has bits or values, not both"}},
+       {u16 + "scale = 0.1\nvalues = { 0 = \"a\" }\n",
+        {"p.toml:9: point.values: names raw values: a labelled point has scale 1"}},
+       {"table = \"input\"\naddress = 1\ntype = \"f32\"\nvalues = { 0 = \"a\" }\n",
+        {"p.toml:8: point.values: names the values or bits of an integer point, not of a f32"}},
+       {"table = \"input\"\naddress = 1\ntype = \"f64\"\nbits = { 0 = \"a\" }\n", {"not of a f64"}},
+       {"table = \"input\"\naddress = 1\ntype = \"string\"\nregisters = 2\n"
+        "values = { 0 = \"a\" }\n",
+        {"p.toml:9: point.values: names the values or bits of an integer point, not of a string"}},
+       {"table = \"coil\"\naddress = 1\ntype = \"bit\"\nbits = { 0 = \"a\" }\n",
+        {"a bit point has no bits but its own"}}});
 }
 
 }  // namespace

@@ -56,17 +56,16 @@ TEST(RequiredOption, IsReadWithItsExampleAndShownRequired) {
 }
 
 TEST(RequiredOption, DefaultAndExampleTogetherOrNeitherAreErrorsOnTheirLines) {
-  EXPECT_THAT(errors_of(with("example = 50\n", "example = 50\ndefault = 50\n")),
-              ElementsAre(HasSubstr("p.toml:13: options.max_frequency_hz.example: and default "
-                                    "together")));
-  EXPECT_THAT(errors_of(with("example = 50\n", "")),
-              ElementsAre(HasSubstr("p.toml:10: options.max_frequency_hz: needs a default (the "
-                                    "drive's factory value, cited) or an example")));
-  EXPECT_THAT(errors_of(with("example = 50\n", "example = 500\n")),
-              ElementsAre(HasSubstr("options.max_frequency_hz.example: must be in min..max "
-                                    "(1..400)")));
-  EXPECT_THAT(errors_of(with("example = 50\n", "example = \"50\"\n")),
-              ElementsAre(HasSubstr("options.max_frequency_hz.example: must be a number")));
+  expect_refused(errors_of,
+                 {{with("example = 50\n", "example = 50\ndefault = 50\n"),
+                   {"p.toml:13: options.max_frequency_hz.example: and default together"}},
+                  {with("example = 50\n", ""),
+                   {"p.toml:10: options.max_frequency_hz: needs a default (the drive's factory "
+                    "value, cited) or an example"}},
+                  {with("example = 50\n", "example = 500\n"),
+                   {"options.max_frequency_hz.example: must be in min..max (1..400)"}},
+                  {with("example = 50\n", "example = \"50\"\n"),
+                   {"options.max_frequency_hz.example: must be a number"}}});
 }
 
 TEST(RequiredOption, ADeviceThatLeavesItOutIsRefusedNamingItAndItsDescription) {

@@ -75,6 +75,11 @@ std::int32_t speed_read(const std::string& name, std::uint8_t slave, const std::
   return speed_read(p, slave, control, sim, now);
 }
 
+// The RTU frame of `pdu` to `slave`.
+Bytes rtu(const std::vector<std::uint8_t>& pdu, std::uint8_t slave = 1) {
+  return encode(Framing::rtu, slave, pdu);
+}
+
 // What a PLC and the line see of `p`'s speed at unit 1: the rpm its driver reads once the
 // simulator was told `control`, and the simulator's reply to the RTU read `read_pdu` then.
 struct SpeedSeen {
@@ -86,10 +91,7 @@ SpeedSeen speed_seen(const Profile& p, const std::string& control,
   ModbusSimulator sim(1, p);
   TimePoint now;
   const std::int32_t rpm = speed_read(p, 1, control, sim, now);
-  return {rpm, sim.on_receive(encode(Framing::rtu, 1, read_pdu), now)};
-}
-Bytes rtu(const std::vector<std::uint8_t>& pdu) {
-  return encode(Framing::rtu, 1, pdu);
+  return {rpm, sim.on_receive(rtu(read_pdu), now)};
 }
 
 // --- ENC EDS300 ---
@@ -112,8 +114,7 @@ TEST(NordSk500eRpm, A750RpmSetpointIsTheManuals50PercentSetpoint) {
   // p.46: a 50 % setpoint is 2000 hex; 100 % is P105 (DE p.32), 50 Hz by default: 25 Hz is
   // 750 rpm at 4 poles. Setpoint 1 is P050[1] (0C81H), written with FC 10H (p.66, p.67).
   EXPECT_EQ(setpoint_frame("nord-sk500e", 8, 750),
-            encode(Framing::rtu, 8,
-                   std::vector<std::uint8_t>{0x10, 0x0C, 0x81, 0x00, 0x01, 0x02, 0x20, 0x00}));
+            rtu({0x10, 0x0C, 0x81, 0x00, 0x01, 0x02, 0x20, 0x00}, 8));
 }
 
 TEST(NordSk500eRpm, ActualValue1ReadsAsTheSynchronousSpeed) {
@@ -126,8 +127,7 @@ TEST(NordSk500eRpm, ActualValue1ReadsAsTheSynchronousSpeed) {
 TEST(YaskawaV1000Rpm, An1800RpmSetpointWritesTheManuals1770H) {
   // p.417: 60.00 Hz is 1770H in 0002H; 1800 rpm is 60 Hz at 4 poles. FC 10H, one register.
   EXPECT_EQ(setpoint_frame("yaskawa-v1000", 1, 1800),
-            encode(Framing::rtu, 1,
-                   std::vector<std::uint8_t>{0x10, 0x00, 0x02, 0x00, 0x01, 0x02, 0x17, 0x70}));
+            rtu({0x10, 0x00, 0x02, 0x00, 0x01, 0x02, 0x17, 0x70}));
   // The manual's own frame (forward run and 60.00 Hz) is the profile's example and checks.
   const Profile p = shipped_profile("yaskawa-v1000");
   EXPECT_TRUE(check_examples(p, "yaskawa-v1000.toml").empty())
@@ -146,9 +146,7 @@ TEST(HitachiSjP1Rpm, A1500RpmSetpointWritesTheManuals50HzToFa01) {
   // 2AF9h - 1), two registers, high word first; 1500 rpm is 50 Hz at 4 poles. The manual's frame
   // is FC 17h; the profile writes the same two registers with FC 10h.
   EXPECT_EQ(setpoint_frame("hitachi-sj-p1", 1, 1500),
-            encode(Framing::rtu, 1,
-                   std::vector<std::uint8_t>{0x10, 0x2A, 0xF8, 0x00, 0x02, 0x04, 0x00, 0x00, 0x13,
-                                             0x88}));
+            rtu({0x10, 0x2A, 0xF8, 0x00, 0x02, 0x04, 0x00, 0x00, 0x13, 0x88}));
 }
 
 TEST(HitachiSjP1Rpm, Da01ReadsAsTheSynchronousSpeed) {

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
+#include <optional>
 
 namespace drivegate::modbus_device {
 namespace {
@@ -48,17 +50,28 @@ struct Golden {
   W words;
 };
 
+// The registers of one value in each byte order (`golden`): each of `types` reads them as `read`
+// and, given the value `written` (one a double holds exactly), writes it as them.
+void expect_in_each_order(std::initializer_list<ValueType> types, const Golden (&golden)[4],
+                          const Value& read, std::optional<double> written) {
+  for (const auto& [order, words] : golden) {
+    SCOPED_TRACE(kByteOrderNames[static_cast<std::size_t>(order)]);
+    for (const ValueType type : types) {
+      EXPECT_EQ(value_of(of(type, 1, order), words), read);
+      if (written) {
+        EXPECT_EQ(words_for(of(type, 1, order), *written), words);
+      }
+    }
+  }
+}
+
 TEST(ProfileValues, ThirtyTwoBitsInEachByteOrder) {
   const Golden golden[] = {{ByteOrder::abcd, {0x1122, 0x3344}},
                            {ByteOrder::badc, {0x2211, 0x4433}},
                            {ByteOrder::cdab, {0x3344, 0x1122}},
                            {ByteOrder::dcba, {0x4433, 0x2211}}};
-  for (const auto& [order, words] : golden) {
-    SCOPED_TRACE(kByteOrderNames[static_cast<std::size_t>(order)]);
-    EXPECT_EQ(value_of(of(ValueType::u32, 1, order), words), Value(std::int64_t{0x11223344}));
-    EXPECT_EQ(words_for(of(ValueType::u32, 1, order), 0x11223344), words);
-    EXPECT_EQ(value_of(of(ValueType::s32, 1, order), words), Value(std::int64_t{0x11223344}));
-  }
+  expect_in_each_order({ValueType::u32, ValueType::s32}, golden, Value(std::int64_t{0x11223344}),
+                       0x11223344);
   // -2 as s32 is FF FF FF FE: badc = FF FF FE FF, dcba = FE FF FF FF.
   EXPECT_EQ(words_for(of(ValueType::s32, 1, ByteOrder::badc), -2), (W{0xFFFF, 0xFEFF}));
   EXPECT_EQ(words_for(of(ValueType::s32, 1, ByteOrder::dcba), -2), (W{0xFEFF, 0xFFFF}));
@@ -69,11 +82,7 @@ TEST(ProfileValues, ThirtyTwoBitsInEachByteOrder) {
                         {ByteOrder::badc, {0x4841, 0x0000}},
                         {ByteOrder::cdab, {0x0000, 0x4148}},
                         {ByteOrder::dcba, {0x0000, 0x4841}}};
-  for (const auto& [order, words] : f32) {
-    SCOPED_TRACE(kByteOrderNames[static_cast<std::size_t>(order)]);
-    EXPECT_EQ(value_of(of(ValueType::f32, 1, order), words), Value(12.5));
-    EXPECT_EQ(words_for(of(ValueType::f32, 1, order), 12.5), words);
-  }
+  expect_in_each_order({ValueType::f32}, f32, Value(12.5), 12.5);
 }
 
 // 0x1122334455667788 (a = 0x11): abcd = 11 22 33 44 55 66 77 88, badc = 22 11 44 33 66 55 88
@@ -83,34 +92,22 @@ TEST(ProfileValues, SixtyFourBitsInEachByteOrder) {
                            {ByteOrder::badc, {0x2211, 0x4433, 0x6655, 0x8877}},
                            {ByteOrder::cdab, {0x7788, 0x5566, 0x3344, 0x1122}},
                            {ByteOrder::dcba, {0x8877, 0x6655, 0x4433, 0x2211}}};
-  for (const auto& [order, words] : golden) {
-    SCOPED_TRACE(kByteOrderNames[static_cast<std::size_t>(order)]);
-    // Beyond 2^53: the value keeps every bit.
-    EXPECT_EQ(value_of(of(ValueType::u64, 1, order), words),
-              Value(std::int64_t{0x1122334455667788}));
-    EXPECT_EQ(value_of(of(ValueType::s64, 1, order), words),
-              Value(std::int64_t{0x1122334455667788}));
-  }
+  // Beyond 2^53: the value read keeps every bit (a double written would not).
+  expect_in_each_order({ValueType::u64, ValueType::s64}, golden,
+                       Value(std::int64_t{0x1122334455667788}), std::nullopt);
   // 2^53 - 1 = 00 1F FF FF FF FF FF FF, written in each order.
   const Golden max[] = {{ByteOrder::abcd, {0x001F, 0xFFFF, 0xFFFF, 0xFFFF}},
                         {ByteOrder::badc, {0x1F00, 0xFFFF, 0xFFFF, 0xFFFF}},
                         {ByteOrder::cdab, {0xFFFF, 0xFFFF, 0xFFFF, 0x001F}},
                         {ByteOrder::dcba, {0xFFFF, 0xFFFF, 0xFFFF, 0x1F00}}};
-  for (const auto& [order, words] : max) {
-    SCOPED_TRACE(kByteOrderNames[static_cast<std::size_t>(order)]);
-    EXPECT_EQ(words_for(of(ValueType::u64, 1, order), 9007199254740991.0), words);
-    EXPECT_EQ(value_of(of(ValueType::u64, 1, order), words), Value(std::int64_t{9007199254740991}));
-  }
+  expect_in_each_order({ValueType::u64}, max, Value(std::int64_t{9007199254740991}),
+                       9007199254740991.0);
   // 1.5 = 3F F8 00 00 00 00 00 00.
   const Golden f64[] = {{ByteOrder::abcd, {0x3FF8, 0, 0, 0}},
                         {ByteOrder::badc, {0xF83F, 0, 0, 0}},
                         {ByteOrder::cdab, {0, 0, 0, 0x3FF8}},
                         {ByteOrder::dcba, {0, 0, 0, 0xF83F}}};
-  for (const auto& [order, words] : f64) {
-    SCOPED_TRACE(kByteOrderNames[static_cast<std::size_t>(order)]);
-    EXPECT_EQ(value_of(of(ValueType::f64, 1, order), words), Value(1.5));
-    EXPECT_EQ(words_for(of(ValueType::f64, 1, order), 1.5), words);
-  }
+  expect_in_each_order({ValueType::f64}, f64, Value(1.5), 1.5);
   // -1 as s64 is all ones; as s64 -2 = FF..FE.
   EXPECT_EQ(words_for(of(ValueType::s64), -2), (W{0xFFFF, 0xFFFF, 0xFFFF, 0xFFFE}));
   EXPECT_EQ(value_of(of(ValueType::s64), W{0xFFFF, 0xFFFF, 0xFFFF, 0xFFFE}),
