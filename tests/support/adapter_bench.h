@@ -100,4 +100,21 @@ struct AdapterBench {
   Simulator* sim = nullptr;
 };
 
+// The fixture of an adapter's tests that begin with its drive online and the line idle: `b`, the
+// adapter's own bench (adapters/<id>/tests/bench.h) made with its default setup, and
+// `Bench::ready()` held before each test. A test that begins otherwise (other options, before the
+// handshake) makes its own bench in a suite of its own.
+//
+//   using NidecWrites = test::ReadyBench<Bench>;
+//   TEST_F(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
+//     b.control("silent on");
+//     ...
+template <class Bench>
+class ReadyBench : public testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(b.ready()); }
+
+  Bench b;
+};
+
 }  // namespace drivegate::test

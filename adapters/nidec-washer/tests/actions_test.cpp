@@ -15,9 +15,9 @@ constexpr std::uint32_t status_of(ActionStatus s) {
   return static_cast<std::uint32_t>(s);
 }
 
-TEST(NidecActions, VoltageDetection_5_9) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+using NidecActions = test::ReadyBench<Bench>;
+
+TEST_F(NidecActions, VoltageDetection_5_9) {
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::idle));
   const TimePoint asked = b.rig.now();
   const auto w = b.start_write("action", {value_of(Action::voltage_detection)});
@@ -30,9 +30,7 @@ TEST(NidecActions, VoltageDetection_5_9) {
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::done));
 }
 
-TEST(NidecActions, WeightDetectionTakes35s_5_10) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, WeightDetectionTakes35s_5_10) {
   EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Outcome::ok);
   EXPECT_EQ(b.read("raw_weight"), 0u);  // 5.10: 0 until detected
   EXPECT_EQ(b.read("weight"), 0u);
@@ -42,9 +40,7 @@ TEST(NidecActions, WeightDetectionTakes35s_5_10) {
   EXPECT_EQ(b.read("raw_weight"), 1700u);
 }
 
-TEST(NidecActions, FabricDetectionIsKeptRaw_5_11) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, FabricDetectionIsKeptRaw_5_11) {
   b.control("fabric 3");
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write("action", {value_of(Action::fabric_detection)}), Outcome::ok);
@@ -53,8 +49,7 @@ TEST(NidecActions, FabricDetectionIsKeptRaw_5_11) {
   EXPECT_EQ(b.read("fabric_raw"), 0x00030000u);
 }
 
-TEST(NidecActions, ForcedBrakeBlocksAndStopsMotion_5_13) {
-  Bench b;
+TEST_F(NidecActions, ForcedBrakeBlocksAndStopsMotion_5_13) {
   ASSERT_TRUE(b.running_at(800));
   TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_enable)}), Outcome::ok);
@@ -75,9 +70,7 @@ TEST(NidecActions, ForcedBrakeBlocksAndStopsMotion_5_13) {
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
-TEST(NidecActions, FctTest_5_15) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, FctTest_5_15) {
   b.control("fault stall");
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write("action", {value_of(Action::fct_test)}), Outcome::ok);
@@ -92,9 +85,7 @@ TEST(NidecActions, FctTest_5_15) {
   EXPECT_EQ(b.read("native_fault"), 0u);
 }
 
-TEST(NidecActions, PingAgainOnRequest_5_1) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, PingAgainOnRequest_5_1) {
   b.control("version 0x0203");
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write("action", {value_of(Action::ping)}), Outcome::ok);
@@ -109,9 +100,7 @@ TEST(NidecActions, PingAgainOnRequest_5_1) {
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::done));
 }
 
-TEST(NidecActions, AnUnansweredActionIsNoResponse) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, AnUnansweredActionIsNoResponse) {
   b.control("silent on");
   EXPECT_EQ(b.write("action", {value_of(Action::voltage_detection)}), Outcome::no_response);
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::no_response));
