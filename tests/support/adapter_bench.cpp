@@ -50,6 +50,21 @@ testing::AssertionResult AdapterBench::stores_without_traffic(std::uint16_t rpm)
   return testing::AssertionSuccess();
 }
 
+testing::AssertionResult AdapterBench::not_yet_in_force(const WriteOutcome& w,
+                                                        std::string_view point,
+                                                        std::uint32_t in_force) {
+  if (w.settled()) {
+    return testing::AssertionFailure() << "settled " << static_cast<int>(*w.result);
+  }
+  if (read(point) != in_force) {
+    return testing::AssertionFailure() << point << " reads " << read(point) << ", not " << in_force;
+  }
+  if ((status() & common_block::kCommandPending) == 0) {
+    return testing::AssertionFailure() << "the command-pending bit is clear";
+  }
+  return testing::AssertionSuccess();
+}
+
 std::optional<Outcome> AdapterBench::write(std::vector<std::uint16_t> values,
                                            std::uint16_t address) {
   return rig.write_and_wait(*drive, Table::holding, address, std::move(values));

@@ -51,6 +51,11 @@ struct AdapterBench {
   // written, no frame, and setpoint_rpm reads it at once.
   testing::AssertionResult stores_without_traffic(std::uint16_t rpm);
 
+  // A write the drive has not confirmed yet has nothing of it in force: it is not settled, `point`
+  // still reads `in_force`, and the status's command-pending bit is set.
+  testing::AssertionResult not_yet_in_force(const WriteOutcome& w, std::string_view point,
+                                            std::uint32_t in_force);
+
   // Writes as the Modbus server makes them: holding registers from `address` on (the common
   // block's command unless told), waited for or left running.
   std::optional<Outcome> write(std::vector<std::uint16_t> values,

@@ -16,9 +16,7 @@ TEST_F(Fdc1Writes, ASetpointWhileStoppedIsStoredThenTheRunIsInForceOnceTheMotorR
   EXPECT_TRUE(b.stores_without_traffic(2000));
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});
-  EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the stream shows it
-  EXPECT_NE(b.read("status") & kCommandPending, 0u);
+  EXPECT_TRUE(b.not_yet_in_force(*run, "command", cmd::stop));  // until the stream shows it
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.sent().size() > before; }, 100ms));
   EXPECT_EQ(b.rig.sent().back().bytes, kRun2000);
   EXPECT_EQ(b.rig.sent().back().at, asked);  // at once: the line was free

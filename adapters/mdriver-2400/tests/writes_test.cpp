@@ -15,9 +15,7 @@ TEST_F(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
   EXPECT_TRUE(b.stores_without_traffic(1149));
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});
-  EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the drive confirmed it
-  EXPECT_NE(b.read("status") & kCommandPending, 0u);
+  EXPECT_TRUE(b.not_yet_in_force(*run, "command", cmd::stop));  // until the drive confirmed it
   EXPECT_EQ(b.rig.wait(run), Outcome::ok);
   // At once (the line was idle), not at the next poll.
   const auto runs = b.times_of(kRun1149, asked);

@@ -32,9 +32,7 @@ TEST_F(UniclaWrites, ASetpointWhileStoppedIsStoredThenTheRunGoesOutAndIsConfirme
   const std::uint8_t seq = static_cast<std::uint8_t>(b.last_sequence() + 1);
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});
-  EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the drive showed it
-  EXPECT_TRUE(pending_bit(b));
+  EXPECT_TRUE(b.not_yet_in_force(*run, "command", cmd::stop));  // until the drive showed it
   EXPECT_EQ(b.rig.wait(run), Outcome::ok);
   EXPECT_FALSE(pending_bit(b));
   const auto sent = b.sent(asked);
