@@ -51,6 +51,12 @@ struct AdapterBench {
   // written, no frame, and setpoint_rpm reads it at once.
   testing::AssertionResult stores_without_traffic(std::uint16_t rpm);
 
+  // From stopped: `rpm` stored without traffic, then "run forward" written goes on the line as
+  // `frame` once, within `within` of the write (the line was idle: not at the next poll); it is
+  // not in force until the drive confirmed it, then it is: command run_forward, running, nothing
+  // pending.
+  testing::AssertionResult runs_from_stopped(std::uint16_t rpm, const Bytes& frame,
+                                             std::chrono::nanoseconds within);
   // A write the drive has not confirmed yet has nothing of it in force: it is not settled, `point`
   // still reads `in_force`, and the status's command-pending bit is set.
   testing::AssertionResult not_yet_in_force(const WriteOutcome& w, std::string_view point,

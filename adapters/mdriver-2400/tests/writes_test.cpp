@@ -12,17 +12,7 @@ namespace {
 using MdriverWrites = test::ReadyBench<Bench>;
 
 TEST_F(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
-  EXPECT_TRUE(b.stores_without_traffic(1149));
-  const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({cmd::run_forward});
-  EXPECT_TRUE(b.not_yet_in_force(*run, "command", cmd::stop));  // until the drive confirmed it
-  EXPECT_EQ(b.rig.wait(run), Outcome::ok);
-  // At once (the line was idle), not at the next poll.
-  const auto runs = b.times_of(kRun1149, asked);
-  ASSERT_EQ(runs.size(), 1u);
-  EXPECT_LE(runs[0] - asked, kInterFrameGap);
-  EXPECT_EQ(b.read("command"), cmd::run_forward);
-  EXPECT_NE(b.read("status") & kRunning, 0u);
+  EXPECT_TRUE(b.runs_from_stopped(1149, kRun1149, kInterFrameGap));  // in force once echoed
   b.rig.run_for(4s);  // 0x1C..0x40 at 20 codes a second
   EXPECT_EQ(b.read("speed_rpm"), 1149u);
   EXPECT_EQ(b.read("actual_code"), 0x40u);
