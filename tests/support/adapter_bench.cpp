@@ -50,6 +50,49 @@ testing::AssertionResult AdapterBench::stores_without_traffic(std::uint16_t rpm)
   return testing::AssertionSuccess();
 }
 
+testing::AssertionResult AdapterBench::runs_from_stopped(std::uint16_t rpm, const Bytes& frame,
+                                                         std::chrono::nanoseconds within) {
+  if (auto stored = stores_without_traffic(rpm); !stored) return stored;
+  const TimePoint asked = rig.now();
+  const auto run = start_write({common_block::cmd::run_forward});
+  if (auto waits = not_yet_in_force(*run, "command", common_block::cmd::stop); !waits) {
+    return waits << " (the run before the drive confirmed it)";
+  }
+  if (const auto result = rig.wait(run); result != Outcome::ok) {
+    return testing::AssertionFailure()
+           << "the run ended " << (result ? static_cast<int>(*result) : -1) << " (-1: never)";
+  }
+  const std::vector<TimePoint> sent = times_of(frame, asked);
+  if (sent.size() != 1) {
+    return testing::AssertionFailure() << "the run frame went out " << sent.size() << " times";
+  }
+  if (sent[0] - asked > within) {
+    return testing::AssertionFailure()
+           << "the run frame went out " << (sent[0] - asked).count() << " ns after the write";
+  }
+  if (read("command") != common_block::cmd::run_forward ||
+      (status() & common_block::kRunning) == 0 || (status() & common_block::kCommandPending) != 0) {
+    return testing::AssertionFailure()
+           << "once confirmed: command " << read("command") << ", status " << status();
+  }
+  return testing::AssertionSuccess();
+}
+
+testing::AssertionResult AdapterBench::not_yet_in_force(const WriteOutcome& w,
+                                                        std::string_view point,
+                                                        std::uint32_t in_force) {
+  if (w.settled()) {
+    return testing::AssertionFailure() << "settled " << static_cast<int>(*w.result);
+  }
+  if (read(point) != in_force) {
+    return testing::AssertionFailure() << point << " reads " << read(point) << ", not " << in_force;
+  }
+  if ((status() & common_block::kCommandPending) == 0) {
+    return testing::AssertionFailure() << "the command-pending bit is clear";
+  }
+  return testing::AssertionSuccess();
+}
+
 std::optional<Outcome> AdapterBench::write(std::vector<std::uint16_t> values,
                                            std::uint16_t address) {
   return rig.write_and_wait(*drive, Table::holding, address, std::move(values));

@@ -51,6 +51,17 @@ struct AdapterBench {
   // written, no frame, and setpoint_rpm reads it at once.
   testing::AssertionResult stores_without_traffic(std::uint16_t rpm);
 
+  // From stopped: `rpm` stored without traffic, then "run forward" written goes on the line as
+  // `frame` once, within `within` of the write (the line was idle: not at the next poll); it is
+  // not in force until the drive confirmed it, then it is: command run_forward, running, nothing
+  // pending.
+  testing::AssertionResult runs_from_stopped(std::uint16_t rpm, const Bytes& frame,
+                                             std::chrono::nanoseconds within);
+  // A write the drive has not confirmed yet has nothing of it in force: it is not settled, `point`
+  // still reads `in_force`, and the status's command-pending bit is set.
+  testing::AssertionResult not_yet_in_force(const WriteOutcome& w, std::string_view point,
+                                            std::uint32_t in_force);
+
   // Writes as the Modbus server makes them: holding registers from `address` on (the common
   // block's command unless told), waited for or left running.
   std::optional<Outcome> write(std::vector<std::uint16_t> values,
@@ -98,6 +109,23 @@ struct AdapterBench {
   BusRig rig;
   Device* drive = nullptr;
   Simulator* sim = nullptr;
+};
+
+// The fixture of an adapter's tests that begin with its drive online and the line idle: `b`, the
+// adapter's own bench (adapters/<id>/tests/bench.h) made with its default setup, and
+// `Bench::ready()` held before each test. A test that begins otherwise (other options, before the
+// handshake) makes its own bench in a suite of its own.
+//
+//   using NidecWrites = test::ReadyBench<Bench>;
+//   TEST_F(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
+//     b.control("silent on");
+//     ...
+template <class Bench>
+class ReadyBench : public testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(b.ready()); }
+
+  Bench b;
 };
 
 }  // namespace drivegate::test

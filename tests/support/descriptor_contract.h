@@ -21,11 +21,19 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "bus_rig.h"
 #include "drivegate/adapter.h"
 
 namespace drivegate::test {
+
+// An option value the schema takes and the adapter's settings refuse, and what the refusal says.
+struct RefusedOption {
+  std::string name;
+  std::string value;
+  std::string error;  // found in the error of both factories
+};
 
 struct DescriptorFacts {
   std::string_view id;
@@ -37,7 +45,8 @@ struct DescriptorFacts {
   bool streaming = false;
   OptionText demo_options;  // exactly these, in this order
   std::int32_t demo_rpm = 0;
-  std::size_t action_count = 0;  // maintenance actions (`drivegate action`)
+  std::size_t action_count = 0;        // maintenance actions (`drivegate action`)
+  std::vector<RefusedOption> refused;  // neither factory makes anything of each
 };
 
 inline void PrintTo(const DescriptorFacts& f, std::ostream* os) {

@@ -87,6 +87,27 @@ TEST_P(DescriptorContract, TheFactoriesTakeTheAddressRangeAndNothingOutsideIt) {
   }
 }
 
+// An option the schema takes and the settings refuse makes neither a device nor a simulator, at
+// the default address, and both factories say why.
+TEST_P(DescriptorContract, TheFactoriesRefuseWhatTheSettingsRefuseSayingWhy) {
+  const AdapterDescriptor& a = drivegate_adapter;
+  for (const RefusedOption& r : GetParam().refused) {
+    SCOPED_TRACE(r.name + " = " + r.value);
+    DeviceEnv env;
+    env.address = a.default_address;
+    env.options = options_of(a, {{r.name, r.value}});
+    std::string error;
+    EXPECT_EQ(a.create_driver(env, error), nullptr);
+    EXPECT_NE(error.find(r.error), std::string::npos) << error;
+    SimEnv sim;
+    sim.address = a.default_address;
+    sim.options = env.options;
+    error.clear();
+    EXPECT_EQ(a.create_simulator(sim, error), nullptr);
+    EXPECT_NE(error.find(r.error), std::string::npos) << error;
+  }
+}
+
 TEST_P(DescriptorContract, TheDemoHasTheAdaptersOwnOptionsAndSpeed) {
   const DemoSetup& demo = drivegate_adapter.demo;
   const DescriptorFacts& f = GetParam();

@@ -236,6 +236,15 @@ inline int free_port() {
   return ntohs(a.sin_port);
 }
 
+// Two Modbus TCP listeners, as a configuration's first lines: the one the harness moves to a free
+// port (Daemon's --listen), where a client may maintain, and one on `read_port` where a client
+// may only read.
+inline std::string maintain_and_read_listeners(int read_port) {
+  return "[[listener]]\naddress = \"127.0.0.1:1\"\naccess = \"maintain\"\n\n"
+         "[[listener]]\naddress = \"127.0.0.1:" +
+         std::to_string(read_port) + "\"\naccess = \"read\"\n\n";
+}
+
 // libmodbus's Modbus TCP client, as a PLC would talk to the gateway.
 class Plc {
  public:

@@ -31,6 +31,35 @@ std::optional<WriteCheck> applied(DriverByHand& h, const Request& request) {
 
 }  // namespace
 
+testing::AssertionResult runs_forward(DriverByHand& h) {
+  const WriteStatus s = h.apply(WriteOp::of_command(Command::run_forward));
+  if (s != WriteStatus::pending) {
+    return testing::AssertionFailure() << "apply said " << static_cast<int>(s) << ", not pending";
+  }
+  const auto r = h.settle(h.ticket);
+  if (r != WriteResult::ok) {
+    return testing::AssertionFailure()
+           << "settled " << (r ? static_cast<int>(*r) : -1) << " (-1: never), not ok";
+  }
+  if (h.d->common().command != Command::run_forward) {
+    return testing::AssertionFailure() << "command in force is not run_forward";
+  }
+  return testing::AssertionSuccess();
+}
+
+void expect_fails_at_own_deadline(DriverByHand& h, TimePoint applied, Millis deadline) {
+  EXPECT_LE(h.d->wake_at(), applied + deadline);
+  EXPECT_TRUE(h.completions().empty());
+  (void)h.d->next_exchange(applied + deadline - Millis(1));
+  EXPECT_TRUE(h.completions().empty());
+  (void)h.d->next_exchange(applied + deadline);
+  const auto c = h.completions();
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].ticket, h.ticket);
+  EXPECT_EQ(c[0].result, WriteResult::no_response);
+  EXPECT_LT(deadline, h.d->traits().write_timeout);
+}
+
 ContractTally expect_check_is_apply(const std::vector<WriteState>& states,
                                     const std::vector<Request>& requests) {
   ContractTally tally;

@@ -58,6 +58,15 @@ std::vector<WriteState> write_states(void (*bring)(Hand&, State),
   return out;
 }
 
+// For a state's bring(): "run forward" applied as the gateway applies it (pending), confirmed by
+// the device (settled ok) and in force; or what was not.
+testing::AssertionResult runs_forward(DriverByHand& h);
+
+// The part applied last (h.ticket at `applied`), on the line and never answered, fails with
+// no_response at the driver's own `deadline` and not a moment before: before the gateway's
+// write_timeout would.
+void expect_fails_at_own_deadline(DriverByHand& h, TimePoint applied, Millis deadline);
+
 // What a PLC writing holding registers command and setpoint_rpm can ask: every command alone, and
 // each setpoint alone and before every command.
 std::vector<Request> command_requests(std::initializer_list<std::int32_t> setpoints);

@@ -46,9 +46,10 @@ struct Bench : test::AdapterBench {
 
   // Online, and the first poll cycle (the monitors after the fault word) is in: the line is idle.
   [[nodiscard]] bool ready() { return until_online(200ms); }
-  // "Run forward at `rpm`" in one request, as a PLC writes it, and the ramp to that speed.
+  // From ready (test::ReadyBench): "run forward at `rpm`" in one request, as a PLC writes it,
+  // and the ramp to that speed.
   [[nodiscard]] bool running_at(std::int32_t rpm) {
-    return ready() && run_forward_at(static_cast<std::uint16_t>(rpm)) &&
+    return run_forward_at(static_cast<std::uint16_t>(rpm)) &&
            rig.run_until([&] { return read_i16("speed_rpm") == rpm; }, 3s);
   }
 

@@ -114,9 +114,7 @@ void bring(Hand& h, State s) {
   }
   ASSERT_EQ(h.apply(WriteOp::of_setpoint(1500)), WriteStatus::done);
   if (s == State::stored) return;
-  ASSERT_EQ(h.apply(WriteOp::of_command(Command::run_forward)), WriteStatus::pending);
-  ASSERT_EQ(h.settle(h.ticket), WriteResult::ok);
-  ASSERT_EQ(h.d->common().command, Command::run_forward);
+  ASSERT_TRUE(test::runs_forward(h));
 }
 
 std::vector<test::WriteState> states() {

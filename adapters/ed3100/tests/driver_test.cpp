@@ -20,9 +20,9 @@ INSTANTIATE_TEST_SUITE_P(Ed3100, LateReplyContract, testing::Values(kLate));
 
 const TimePoint kStart = TimePoint{} + std::chrono::hours(1);  // the rig's clock at start()
 
-TEST(Ed3100Driver, StartupReadsTheParameterThenTheFaultWordAndTheMonitors) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+using Ed3100Driver = test::ReadyBench<Bench>;
+
+TEST_F(Ed3100Driver, StartupReadsTheParameterThenTheFaultWordAndTheMonitors) {
   // The start-up read of 00-06 is the document's own frame; then 0x0E01 and the monitors, sent
   // with 00 00 as the document prints them.
   const auto f = b.frames();
@@ -76,7 +76,7 @@ TEST(Ed3100Driver, StartupReadsTheParameterThenTheFaultWordAndTheMonitors) {
 // A drive found running (the gateway restarted, or this device was changed by a
 // reload) is shown as it runs: the command in force is its commanded direction, the setpoint its
 // speed; nothing is sent to it, and a new setpoint goes to the running drive's 0x2001 at once.
-TEST(Ed3100Driver, ADriveFoundRunningIsShownAsItRunsNeverAsStopped) {
+TEST(Ed3100DriverFromPowerOn, ADriveFoundRunningIsShownAsItRunsNeverAsStopped) {
   Bench b;
   ASSERT_EQ(b.control("run reverse 2500").rfind("ok", 0), 0u);  // 25.00 Hz, started at its keypad
   ASSERT_TRUE(b.ready());
@@ -93,9 +93,7 @@ TEST(Ed3100Driver, ADriveFoundRunningIsShownAsItRunsNeverAsStopped) {
   EXPECT_TRUE(b.sim_has("running=1"));
 }
 
-TEST(Ed3100Driver, ASilentDriveIsResentToThenCommLostThenStartsUpAgain) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(Ed3100Driver, ASilentDriveIsResentToThenCommLostThenStartsUpAgain) {
   b.control("silent on");
   const TimePoint from = b.rig.now();
   EXPECT_EQ(b.write({cmd::stop}), Outcome::no_response);
@@ -131,9 +129,7 @@ TEST(Ed3100Driver, ASilentDriveIsResentToThenCommLostThenStartsUpAgain) {
   EXPECT_EQ(b.read("fault_code"), 0u);
 }
 
-TEST(Ed3100Driver, ABadChecksumIsResentIdenticallyAtOnce) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(Ed3100Driver, ABadChecksumIsResentIdenticallyAtOnce) {
   ASSERT_EQ(b.control("corrupt 1"), "ok corrupt=1");
   const TimePoint from = b.rig.now();
   b.rig.run_for(500ms);
@@ -153,7 +149,7 @@ TEST(Ed3100Driver, ABadChecksumIsResentIdenticallyAtOnce) {
   EXPECT_EQ(b.status(), kOnline);  // one bad CRC is not a lost drive
 }
 
-TEST(Ed3100Driver, StandardFormRepliesAreAccepted) {
+TEST(Ed3100DriverFromPowerOn, StandardFormRepliesAreAccepted) {
   Bench b({{"parameters", "00-06"}, {"sim_reply_form", "standard"}});
   ASSERT_TRUE(b.ready());
   // A byte count (02) where the document's form echoes the register.
@@ -168,7 +164,7 @@ TEST(Ed3100Driver, StandardFormRepliesAreAccepted) {
   EXPECT_EQ(b.read("bad_checksum"), 0u);
 }
 
-TEST(Ed3100Driver, NoiseAndForeignFramesBeforeTheReplyAreSkipped) {
+TEST(Ed3100DriverFromPowerOn, NoiseAndForeignFramesBeforeTheReplyAreSkipped) {
   Bench b;
   // Before every reply two bytes of noise; before the parameter's, a good reply from drive 05
   // and one from this drive naming another register.
@@ -195,9 +191,7 @@ TEST(Ed3100Driver, NoiseAndForeignFramesBeforeTheReplyAreSkipped) {
   EXPECT_EQ(b.count(kReadParam), 1u);
 }
 
-TEST(Ed3100Driver, ATripIsFaultOtherWithTheRawCode) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(Ed3100Driver, ATripIsFaultOtherWithTheRawCode) {
   ASSERT_EQ(b.control("fault 0x12"), "ok fault=0x0012");
   ASSERT_TRUE(b.rig.run_until([&] { return (b.status() & kFaulted) != 0; }, 1s));
   // The fault code table is not legible (specs README): every code is `other`, raw beside it.
@@ -217,7 +211,7 @@ TEST(Ed3100Driver, ATripIsFaultOtherWithTheRawCode) {
 // Address 0 reaches every drive and none answers (document, "00H"): nothing is polled, a write
 // goes out once without waiting for a reply and counts as taken, and the device never goes
 // comm_lost.
-TEST(Ed3100Driver, TheBroadcastAddressIsNeverPolledAndItsWritesAreUnanswered) {
+TEST(Ed3100DriverFromPowerOn, TheBroadcastAddressIsNeverPolledAndItsWritesAreUnanswered) {
   test::BusRig rig(drivegate_adapter);
   Device& all = rig.add_device("all", 0);
   Simulator& sim = rig.add_simulator(0x1F);

@@ -31,11 +31,12 @@ struct Bench : test::AdapterBench {
       : AdapterBench(drivegate_adapter, setup) {}
 
   // Online (a first status heard), then the line idle again after the start-up frame.
-  [[nodiscard]] bool heard() { return until_online(100ms); }
-  // Heard, then "run at `rpm`" in one request, as a PLC writes it, confirmed by the stream, and
-  // the ramp given time to reach `rpm` (1000 rpm/s from 1500 in the simulator).
-  [[nodiscard]] bool run_at(std::uint16_t rpm) {
-    if (!heard() || !run_forward_at(rpm)) return false;
+  [[nodiscard]] bool ready() { return until_online(100ms); }
+  // From ready (test::ReadyBench): "run at `rpm`" in one request, as a PLC writes it, confirmed
+  // by the stream, and the ramp given time to reach `rpm` (1000 rpm/s from 1500 in the
+  // simulator).
+  [[nodiscard]] bool running_at(std::uint16_t rpm) {
+    if (!run_forward_at(rpm)) return false;
     rig.run_for(3s);
     return read("speed_rpm") == rpm;
   }

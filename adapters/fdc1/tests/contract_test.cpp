@@ -186,9 +186,7 @@ void bring(Hand& h, State s) {
   }
   ASSERT_EQ(h.apply(WriteOp::of_setpoint(2000)), WriteStatus::done);
   if (s == State::stored) return;
-  ASSERT_EQ(h.apply(WriteOp::of_command(Command::run_forward)), WriteStatus::pending);
-  ASSERT_EQ(h.settle(h.ticket), WriteResult::ok);
-  ASSERT_EQ(h.d->common().command, Command::run_forward);
+  ASSERT_TRUE(test::runs_forward(h));
   if (s == State::running) return;
   h.alarm = 64;  // motor overload: the controller stops and will retry
   h.step();

@@ -12,7 +12,7 @@
 namespace drivegate::fdc1 {
 namespace {
 
-TEST(Fdc1Driver, TraitsFollowTheOptions) {
+TEST(Fdc1DriverFromPowerOn, TraitsFollowTheOptions) {
   Bench b({.options = {{"slave_mode", "true"}, {"stale_ms", "3000"}, {"confirm_ms", "8000"}}});
   const DriverTraits t = b.drive->driver().traits();
   EXPECT_EQ(t.comm_timeout, 3000ms);
@@ -22,10 +22,10 @@ TEST(Fdc1Driver, TraitsFollowTheOptions) {
   EXPECT_EQ(b.drive->map().find("prog_commit"), nullptr);
 }
 
-TEST(Fdc1Driver, StartUpWaitsForTheStreamThenAssertsStopAtOnce) {
+TEST(Fdc1DriverFromPowerOn, StartUpWaitsForTheStreamThenAssertsStopAtOnce) {
   Bench b;
   EXPECT_EQ(b.read("status") & kOnline, 0u);
-  ASSERT_TRUE(b.heard());
+  ASSERT_TRUE(b.ready());
   // Nothing before the controller is heard; then the stop in force (INPUT speed, SLAVE MODE:
   // minimum 0 stops) as soon as the first status has arrived (8 bytes on the wire).
   ASSERT_EQ(b.rig.sent().size(), 1u);
@@ -45,10 +45,10 @@ TEST(Fdc1Driver, StartUpWaitsForTheStreamThenAssertsStopAtOnce) {
 // A compressor found turning on an earlier session's speed frames (the gateway
 // restarted, or this device was changed by a reload) is kept turning at the speed it reports and
 // shown so: the first frame is a run at that speed, never the stop above.
-TEST(Fdc1Driver, ACompressorFoundTurningIsKeptTurningNeverStopped) {
+TEST(Fdc1DriverFromPowerOn, ACompressorFoundTurningIsKeptTurningNeverStopped) {
   Bench b;
   ASSERT_EQ(b.control("run 2500"), "ok");
-  ASSERT_TRUE(b.heard());
+  ASSERT_TRUE(b.ready());
   ASSERT_EQ(b.rig.sent().size(), 1u);
   EXPECT_EQ(b.rig.sent()[0].bytes, kRun2500);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
@@ -62,10 +62,10 @@ TEST(Fdc1Driver, ACompressorFoundTurningIsKeptTurningNeverStopped) {
   EXPECT_TRUE(b.sim_has("motor=off"));
 }
 
+using Fdc1Driver = test::ReadyBench<Bench>;
+
 // After a comm_lost the gateway's own order stands: what it last told the controller.
-TEST(Fdc1Driver, AfterCommLostAStoppedOrderIsNotAdopted) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Driver, AfterCommLostAStoppedOrderIsNotAdopted) {
   b.control("silent on");
   ASSERT_TRUE(b.rig.run_until([&] { return (b.read("status") & kCommLost) != 0; }, 3s));
   ASSERT_EQ(b.control("run 3000"), "ok");  // someone else ran it meanwhile
@@ -77,9 +77,9 @@ TEST(Fdc1Driver, AfterCommLostAStoppedOrderIsNotAdopted) {
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(Fdc1Driver, OutsideSlaveModeTheLineOnlyMonitors) {
+TEST(Fdc1DriverFromPowerOn, OutsideSlaveModeTheLineOnlyMonitors) {
   Bench b({.options = {}});
-  ASSERT_TRUE(b.heard());
+  ASSERT_TRUE(b.ready());
   b.rig.run_for(5s);
   EXPECT_TRUE(b.rig.sent().empty());
   EXPECT_NE(b.read("status") & kOnline, 0u);
@@ -96,9 +96,8 @@ TEST(Fdc1Driver, OutsideSlaveModeTheLineOnlyMonitors) {
   EXPECT_EQ(b.read("command"), cmd::stop);  // the gateway commanded nothing
 }
 
-TEST(Fdc1Driver, TheRefreshKeepsTheMotorRunningPastTheWatchdog) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Driver, TheRefreshKeepsTheMotorRunningPastTheWatchdog) {
+  ASSERT_TRUE(b.running_at(2000));
   const auto runs = b.times_of(kRun2000);
   ASSERT_EQ(runs.size(), 1u);
   b.rig.run_for(181s);  // three watchdog windows
@@ -113,10 +112,11 @@ TEST(Fdc1Driver, TheRefreshKeepsTheMotorRunningPastTheWatchdog) {
   EXPECT_TRUE(b.sim_has("watchdog=0"));
 }
 
-TEST(Fdc1Driver, ARefreshEveryFewSecondsOutlastsAShortenedWindow) {
+TEST(Fdc1DriverFromPowerOn, ARefreshEveryFewSecondsOutlastsAShortenedWindow) {
   Bench b({.options = {{"slave_mode", "true"}, {"refresh_s", "2"}}});
   ASSERT_EQ(b.control("window 5"), "ok");
-  ASSERT_TRUE(b.run_at(2000));
+  ASSERT_TRUE(b.ready());
+  ASSERT_TRUE(b.running_at(2000));
   b.rig.run_for(20s);
   EXPECT_TRUE(b.sim_has("motor=on"));
   const auto refreshes = b.times_of(kRun2000);
@@ -124,9 +124,8 @@ TEST(Fdc1Driver, ARefreshEveryFewSecondsOutlastsAShortenedWindow) {
   EXPECT_EQ(refreshes.back() - refreshes[refreshes.size() - 2], 2s);
 }
 
-TEST(Fdc1Driver, TheStreamAsAPlcReadsIt) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Driver, TheStreamAsAPlcReadsIt) {
+  ASSERT_TRUE(b.running_at(2000));
   EXPECT_EQ(b.read("motor_on"), 1u);
   EXPECT_EQ(b.read("current_a"), 2400u);  // 2000 rpm x 0.0012 A/rpm, in mA
   EXPECT_EQ(b.read("restart_s"), 0u);
@@ -142,9 +141,7 @@ TEST(Fdc1Driver, TheStreamAsAPlcReadsIt) {
   EXPECT_EQ(b.read("sent_speed_rpm"), 0u);
 }
 
-TEST(Fdc1Driver, AlarmsBecomeUnifiedFaultsWithTheRawCode) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Driver, AlarmsBecomeUnifiedFaultsWithTheRawCode) {
   const auto show = [&](const char* command) {
     EXPECT_EQ(b.control(command), "ok");
     b.rig.run_for(1s);
@@ -172,9 +169,8 @@ TEST(Fdc1Driver, AlarmsBecomeUnifiedFaultsWithTheRawCode) {
 
 // The run in force is re-asserted when the stream comes back (docs/safety.md counts on it): the
 // controller may have stopped on its own watchdog meanwhile.
-TEST(Fdc1Driver, CommLostThenTheStartUpSendsTheOrderInForceAgain) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Driver, CommLostThenTheStartUpSendsTheOrderInForceAgain) {
+  ASSERT_TRUE(b.running_at(2000));
   b.control("silent on");
   const TimePoint silent = b.rig.now();
   ASSERT_TRUE(b.rig.run_until([&] { return (b.read("status") & kCommLost) != 0; }, 3s));
@@ -193,9 +189,7 @@ TEST(Fdc1Driver, CommLostThenTheStartUpSendsTheOrderInForceAgain) {
   EXPECT_EQ(b.read("speed_rpm"), 2000u);
 }
 
-TEST(Fdc1Driver, NoiseAndBadChecksumsInTheStreamCostFramesNotTheLink) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Driver, NoiseAndBadChecksumsInTheStreamCostFramesNotTheLink) {
   b.control("noise 7");
   b.rig.run_for(500ms);
   b.control("corrupt 2");

@@ -84,7 +84,7 @@ TEST(Fdc1ProgramAction, OnlyInMaintenanceOrByOption) {
 
 TEST(Fdc1ProgramAction, AValidProgramIsSentAndConfirmedByTheEcho) {
   Maintenance m;
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   EXPECT_TRUE(m.rig.sent().empty());  // outside slave mode nothing else is ever sent
   EXPECT_EQ(m.program_status(), ProgStatus::invalid);
   EXPECT_EQ(m.message(), "prog_min_rpm is not set");
@@ -114,7 +114,7 @@ TEST(Fdc1ProgramAction, AValidProgramIsSentAndConfirmedByTheEcho) {
 
 TEST(Fdc1ProgramAction, TheActionAsTheToolRunsIt) {
   Maintenance m;
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   EXPECT_EQ(m.action(kStandard), Outcome::ok);
   EXPECT_EQ(m.rig.sent().back().bytes, kProgramStandard);
   EXPECT_TRUE(m.sim_has("programs=1"));
@@ -122,7 +122,7 @@ TEST(Fdc1ProgramAction, TheActionAsTheToolRunsIt) {
 
 TEST(Fdc1ProgramAction, AViolatedLimitIsInvalidNamedAndNothingIsSent) {
   Maintenance m;
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   auto params = kStandard;
   params[3].second = 13;  // cut_out_12v 13 V, not below cut_in_12v 12.5 V
   EXPECT_EQ(m.action(params), Outcome::invalid_value);
@@ -141,7 +141,7 @@ TEST(Fdc1ProgramAction, AViolatedLimitIsInvalidNamedAndNothingIsSent) {
 
 TEST(Fdc1ProgramAction, AFieldNeverWrittenIsInvalidAndNamed) {
   Maintenance m;
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   EXPECT_EQ(m.write_point("prog_commit", 1), Outcome::invalid_value);
   EXPECT_EQ(m.message(), "prog_min_rpm is not set");
   auto special = kStandard;
@@ -153,7 +153,7 @@ TEST(Fdc1ProgramAction, AFieldNeverWrittenIsInvalidAndNamed) {
 
 TEST(Fdc1ProgramAction, AValueOutsideThePointsLimitsIsRefusedByTheGateway) {
   Maintenance m;
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   EXPECT_EQ(m.write_point("prog_min_rpm", 1499), Outcome::invalid_value);
   EXPECT_EQ(m.write_point("prog_mode", 256), Outcome::invalid_value);
   EXPECT_EQ(m.write_point("prog_commit", 0), Outcome::invalid_value);
@@ -164,7 +164,7 @@ TEST(Fdc1ProgramAction, AValueOutsideThePointsLimitsIsRefusedByTheGateway) {
 // nothing and sends nothing.
 TEST(Fdc1ProgramAction, OneRequestOfFieldsAndCommitIsAllOrNothing) {
   Maintenance m;
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   // prog_min_rpm .. prog_commit: the standard fields, the (unused) special ones, the commit.
   std::vector<double> all = {2000, 3000, 2, 10.5, 12.5, 21, 25, 36, 44, 0, 0, 0, 1};
   all[8] = 46;  // cut_in_42v must be below 46 V
@@ -179,7 +179,7 @@ TEST(Fdc1ProgramAction, OneRequestOfFieldsAndCommitIsAllOrNothing) {
 
 TEST(Fdc1ProgramAction, AMismatchedEchoIsRefused) {
   Maintenance m;
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   m.control("mangle 1");
   EXPECT_EQ(m.action(kStandard), Outcome::refused);
   EXPECT_EQ(m.program_status(), ProgStatus::refused);
@@ -193,7 +193,7 @@ TEST(Fdc1ProgramAction, AMismatchedEchoIsRefused) {
 TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
   {
     Maintenance m;  // budget_ms 1000: one attempt of 2 s
-    ASSERT_TRUE(m.heard());
+    ASSERT_TRUE(m.ready());
     m.control("deaf on");
     const TimePoint asked = m.rig.now();
     EXPECT_EQ(m.action(kStandard), Outcome::no_response);
@@ -204,7 +204,7 @@ TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
   }
   {
     Maintenance m(5000ms);  // room for both attempts
-    ASSERT_TRUE(m.heard());
+    ASSERT_TRUE(m.ready());
     m.control("deaf on");
     const TimePoint asked = m.rig.now();
     EXPECT_EQ(m.action(kStandard), Outcome::no_response);
@@ -222,7 +222,7 @@ TEST(Fdc1ProgramAction, NoEchoIsNoResponseAfterAsManyAttemptsAsTheBudgetHolds) {
 // the late echo counted as a frame for nobody, and the status stream goes on.
 TEST(Fdc1ProgramAction, AnEchoAfterItsTimeoutIsNeverTakenForTheConfirmation) {
   Maintenance m;  // budget_ms 1000: one attempt of 2 s
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   m.rig.line().turnaround = kEchoTimeout + 500ms;
   EXPECT_EQ(m.action(kStandard), Outcome::no_response);
   EXPECT_EQ(m.program_status(), ProgStatus::no_response);
@@ -236,7 +236,7 @@ TEST(Fdc1ProgramAction, AnEchoAfterItsTimeoutIsNeverTakenForTheConfirmation) {
 
 TEST(Fdc1ProgramAction, ACorruptedEchoIsSentAgainWhenTheBudgetHoldsIt) {
   Maintenance m(5000ms);
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   for (const auto& [key, value] : kStandard) {
     ASSERT_EQ(m.write_point("prog_" + key, value), Outcome::ok);
   }
@@ -256,7 +256,7 @@ TEST(Fdc1ProgramAction, RefusedWhileTheControllerIsNotStreamingOrBusy) {
   }
   EXPECT_EQ(m.message(), "the controller is not streaming");
   EXPECT_EQ(m.write_point("prog_commit", 1), Outcome::refused);
-  ASSERT_TRUE(m.heard());
+  ASSERT_TRUE(m.ready());
   EXPECT_EQ(m.message(), "");
   const auto first = m.start_point_write("prog_commit", {1});
   const auto second = m.start_point_write("prog_commit", {1});  // one at a time

@@ -9,16 +9,14 @@
 namespace drivegate::fdc1 {
 namespace {
 
-TEST(Fdc1Writes, ASetpointWhileStoppedIsStoredThenTheRunIsInForceOnceTheMotorRuns) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+using Fdc1Writes = test::ReadyBench<Bench>;
+
+TEST_F(Fdc1Writes, ASetpointWhileStoppedIsStoredThenTheRunIsInForceOnceTheMotorRuns) {
   const auto before = b.rig.sent().size();
   EXPECT_TRUE(b.stores_without_traffic(2000));
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});
-  EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the stream shows it
-  EXPECT_NE(b.read("status") & kCommandPending, 0u);
+  EXPECT_TRUE(b.not_yet_in_force(*run, "command", cmd::stop));  // until the stream shows it
   ASSERT_TRUE(b.rig.run_until([&] { return b.rig.sent().size() > before; }, 100ms));
   EXPECT_EQ(b.rig.sent().back().bytes, kRun2000);
   EXPECT_EQ(b.rig.sent().back().at, asked);  // at once: the line was free
@@ -35,9 +33,7 @@ TEST(Fdc1Writes, ASetpointWhileStoppedIsStoredThenTheRunIsInForceOnceTheMotorRun
   EXPECT_EQ(b.read("sent_speed_rpm"), 2000u);
 }
 
-TEST(Fdc1Writes, SetpointAndRunInOneRequestRunAtThatSpeed) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Writes, SetpointAndRunInOneRequestRunAtThatSpeed) {
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::run_forward, 2500}), Outcome::ok);
   EXPECT_EQ(b.frames(asked), std::vector<Bytes>{kRun2500});
@@ -46,9 +42,8 @@ TEST(Fdc1Writes, SetpointAndRunInOneRequestRunAtThatSpeed) {
   EXPECT_TRUE(b.sim_has("min=2500"));
 }
 
-TEST(Fdc1Writes, ASetpointWhileRunningIsInForceOnceTheStreamShowsTheSpeed) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, ASetpointWhileRunningIsInForceOnceTheStreamShowsTheSpeed) {
+  ASSERT_TRUE(b.running_at(2000));
   const TimePoint asked = b.rig.now();
   const auto w = b.start_write({3000}, kSetpointRegister);
   EXPECT_FALSE(w->settled());
@@ -63,11 +58,12 @@ TEST(Fdc1Writes, ASetpointWhileRunningIsInForceOnceTheStreamShowsTheSpeed) {
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
-TEST(Fdc1Writes, StopAndQuickStopSendSpeedZero) {
+TEST(Fdc1WritesFromPowerOn, StopAndQuickStopSendSpeedZero) {
   for (const std::uint16_t c : {cmd::stop, cmd::quick_stop}) {
     SCOPED_TRACE(c);
     Bench b;
-    ASSERT_TRUE(b.run_at(2500));
+    ASSERT_TRUE(b.ready());
+    ASSERT_TRUE(b.running_at(2500));
     const TimePoint asked = b.rig.now();
     const auto w = b.start_write({c});
     b.rig.run_for(1ms);
@@ -81,9 +77,7 @@ TEST(Fdc1Writes, StopAndQuickStopSendSpeedZero) {
   }
 }
 
-TEST(Fdc1Writes, WritesTheControllerCannotDoChangeNothing) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Writes, WritesTheControllerCannotDoChangeNothing) {
   const auto before = b.rig.sent().size();
   // One direction, and no fault reset in the protocol.
   EXPECT_EQ(b.start_write({cmd::run_reverse})->result, Outcome::invalid_value);
@@ -102,7 +96,7 @@ TEST(Fdc1Writes, WritesTheControllerCannotDoChangeNothing) {
 
 // A PLC that starts the compressor as the gateway comes up is not told no: the run waits for the
 // stream, goes out as the start-up frame, and is confirmed from the stream.
-TEST(Fdc1Writes, ARunBeforeTheControllerIsHeardWaitsForTheStream) {
+TEST(Fdc1WritesFromPowerOn, ARunBeforeTheControllerIsHeardWaitsForTheStream) {
   Bench b;
   const auto w = b.start_write({cmd::run_forward, 2000});
   EXPECT_FALSE(w->settled());
@@ -116,7 +110,7 @@ TEST(Fdc1Writes, ARunBeforeTheControllerIsHeardWaitsForTheStream) {
 // ...and a controller never heard answers 0x0B once it is declared lost (stale_ms), not a
 // refusal. The run it was told failed is not in force: when the controller appears hours later,
 // the start-up asserts stop, not the run.
-TEST(Fdc1Writes, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
+TEST(Fdc1WritesFromPowerOn, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
   Bench b;
   b.control("silent on");
   const TimePoint asked = b.rig.now();
@@ -127,15 +121,13 @@ TEST(Fdc1Writes, ARunToAControllerNeverHeardIsNoResponseAndNotKept) {
   EXPECT_EQ(b.read("status") & kRunning, 0u);
   b.rig.run_for(1h);
   b.control("silent off");
-  ASSERT_TRUE(b.heard());
+  ASSERT_TRUE(b.ready());
   EXPECT_EQ(b.frames(), std::vector<Bytes>{kStopFrame});
   b.rig.run_for(3s);
   EXPECT_EQ(b.read("motor_on"), 0u);
 }
 
-TEST(Fdc1Writes, ANewCommandSupersedesOneNotYetSent) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Writes, ANewCommandSupersedesOneNotYetSent) {
   ASSERT_EQ(b.write({2000}, kSetpointRegister), Outcome::ok);
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});  // from one client...
@@ -147,9 +139,8 @@ TEST(Fdc1Writes, ANewCommandSupersedesOneNotYetSent) {
 }
 
 // Two clients, the same direction: one frame carries both, and both are in force with it.
-TEST(Fdc1Writes, ASpeedChangeAndARunFromAnotherClientWaitTogether) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, ASpeedChangeAndARunFromAnotherClientWaitTogether) {
+  ASSERT_TRUE(b.running_at(2000));
   const TimePoint asked = b.rig.now();
   const auto faster = b.start_write({3000}, kSetpointRegister);
   const auto run = b.start_write({cmd::run_forward});
@@ -162,9 +153,8 @@ TEST(Fdc1Writes, ASpeedChangeAndARunFromAnotherClientWaitTogether) {
 
 // Two clients, two speeds: each goes on the line in the order asked (the gateway hands a driver
 // one write at a time), each is confirmed, and the later is in force.
-TEST(Fdc1Writes, TwoSpeedsFromTwoClientsGoOutInTheOrderAsked) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, TwoSpeedsFromTwoClientsGoOutInTheOrderAsked) {
+  ASSERT_TRUE(b.running_at(2000));
   const TimePoint asked = b.rig.now();
   const auto first = b.start_write({2500}, kSetpointRegister);
   const auto second = b.start_write({3000}, kSetpointRegister);
@@ -175,9 +165,8 @@ TEST(Fdc1Writes, TwoSpeedsFromTwoClientsGoOutInTheOrderAsked) {
 }
 
 // A setpoint written while a stop is on its way is stored with the stop, once the motor is off.
-TEST(Fdc1Writes, ASetpointWhileAStopIsOnItsWayIsStoredWithIt) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, ASetpointWhileAStopIsOnItsWayIsStoredWithIt) {
+  ASSERT_TRUE(b.running_at(2000));
   const TimePoint asked = b.rig.now();
   const auto stop = b.start_write({cmd::stop});
   const auto setpoint = b.start_write({2500}, kSetpointRegister);
@@ -195,9 +184,8 @@ TEST(Fdc1Writes, ASetpointWhileAStopIsOnItsWayIsStoredWithIt) {
 
 // A PLC writes setpoint and run_forward in one request every cycle: while running, the setpoint
 // is a speed change confirmed at the new speed, and the run that follows it is held already.
-TEST(Fdc1Writes, SetpointAndRunTogetherWhileRunningTakeOneFrame) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, SetpointAndRunTogetherWhileRunningTakeOneFrame) {
+  ASSERT_TRUE(b.running_at(2000));
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::run_forward, 2500}), Outcome::ok);
   EXPECT_NEAR(b.read("speed_rpm"), 2500, 100);  // confirmed at the new speed, not before
@@ -214,9 +202,8 @@ TEST(Fdc1Writes, SetpointAndRunTogetherWhileRunningTakeOneFrame) {
 
 // --- truthful writes: what the controller did not take is not in force ---
 
-TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
+  ASSERT_TRUE(b.running_at(2000));
   const TimePoint asked = b.rig.now();
   // Setpoint 3000 rpm with run_reverse: the setpoint alone would go on the line.
   EXPECT_EQ(b.start_write({cmd::run_reverse, 3000})->result, Outcome::invalid_value);
@@ -232,7 +219,7 @@ TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
   // Stopped, without a setpoint: the run is refused, and the setpoint before it in the same
   // request is not stored either.
   Bench fresh;
-  ASSERT_TRUE(fresh.heard());
+  ASSERT_TRUE(fresh.ready());
   const auto before = fresh.rig.sent().size();
   EXPECT_EQ(fresh.start_write({cmd::run_reverse, 2000})->result, Outcome::invalid_value);
   EXPECT_EQ(fresh.read("setpoint_rpm"), 0u);
@@ -240,9 +227,8 @@ TEST(Fdc1Writes, ARequestWithAnInvalidPartChangesNothing) {
 }
 
 // The controller's receiver is cut (`deaf on`): it keeps streaming, at 2000 rpm.
-TEST(Fdc1Writes, ASetpointWhileRunningThatTheControllerDoesNotTakeLeavesTheOldOne) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, ASetpointWhileRunningThatTheControllerDoesNotTakeLeavesTheOldOne) {
+  ASSERT_TRUE(b.running_at(2000));
   ASSERT_EQ(b.control("deaf on"), "ok");
   const TimePoint asked = b.rig.now();
   const auto w = b.start_write({3000}, kSetpointRegister);
@@ -265,9 +251,8 @@ TEST(Fdc1Writes, ASetpointWhileRunningThatTheControllerDoesNotTakeLeavesTheOldOn
   EXPECT_TRUE(b.sim_has("min=2000"));
 }
 
-TEST(Fdc1Writes, ASpeedChangeDuringAnAlarmIsRefusedAndTheOldOneStays) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, ASpeedChangeDuringAnAlarmIsRefusedAndTheOldOneStays) {
+  ASSERT_TRUE(b.running_at(2000));
   ASSERT_EQ(b.control("fault overload"), "ok");
   ASSERT_TRUE(b.next_status());
   EXPECT_EQ(b.read("motor_on"), 0u);
@@ -282,9 +267,7 @@ TEST(Fdc1Writes, ASpeedChangeDuringAnAlarmIsRefusedAndTheOldOneStays) {
   EXPECT_EQ(b.read("speed_rpm"), 2000u);
 }
 
-TEST(Fdc1Writes, ARunTheControllerRefusesIsTheExceptionAndStopStaysInForce) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Writes, ARunTheControllerRefusesIsTheExceptionAndStopStaysInForce) {
   ASSERT_EQ(b.control("fault battery"), "ok");
   ASSERT_TRUE(b.next_status());
   const TimePoint asked = b.rig.now();
@@ -301,9 +284,8 @@ TEST(Fdc1Writes, ARunTheControllerRefusesIsTheExceptionAndStopStaysInForce) {
   EXPECT_TRUE(b.sim_has("motor=off"));
 }
 
-TEST(Fdc1Writes, AStopTheStreamNeverShowsIsNoResponseAndTheRunStaysInForce) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, AStopTheStreamNeverShowsIsNoResponseAndTheRunStaysInForce) {
+  ASSERT_TRUE(b.running_at(2000));
   ASSERT_EQ(b.control("deaf on"), "ok");
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::stop}), Outcome::no_response);
@@ -314,9 +296,7 @@ TEST(Fdc1Writes, AStopTheStreamNeverShowsIsNoResponseAndTheRunStaysInForce) {
   EXPECT_EQ(b.read("speed_rpm"), 2000u);
 }
 
-TEST(Fdc1Writes, ARunNotShownWithinConfirmMsIsNoResponseAndIsUndone) {
-  Bench b;
-  ASSERT_TRUE(b.heard());
+TEST_F(Fdc1Writes, ARunNotShownWithinConfirmMsIsNoResponseAndIsUndone) {
   ASSERT_EQ(b.control("delay 10"), "ok");  // 10 s until the next start, no alarm
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::run_forward, 2000}), Outcome::no_response);
@@ -332,9 +312,8 @@ TEST(Fdc1Writes, ARunNotShownWithinConfirmMsIsNoResponseAndIsUndone) {
 
 // The controller goes silent with a speed change on the wire: it takes the new speed unheard,
 // the PLC gets 0x0B, and when the stream returns the start-up puts it back on what is in force.
-TEST(Fdc1Writes, CommLostFailsTheWriteAndTheStartUpRestoresWhatIsInForce) {
-  Bench b;
-  ASSERT_TRUE(b.run_at(2000));
+TEST_F(Fdc1Writes, CommLostFailsTheWriteAndTheStartUpRestoresWhatIsInForce) {
+  ASSERT_TRUE(b.running_at(2000));
   b.control("silent on");
   EXPECT_EQ(b.write({2500}, kSetpointRegister), Outcome::no_response);
   EXPECT_NE(b.read("status") & kCommLost, 0u);
@@ -343,7 +322,7 @@ TEST(Fdc1Writes, CommLostFailsTheWriteAndTheStartUpRestoresWhatIsInForce) {
   EXPECT_TRUE(b.sim_has("min=2500"));  // it did take it, unheard
   b.control("silent off");
   const TimePoint back = b.rig.now();
-  ASSERT_TRUE(b.heard());
+  ASSERT_TRUE(b.ready());
   EXPECT_EQ(b.frames(back), std::vector<Bytes>{kRun2000});
   b.rig.run_for(2s);
   EXPECT_EQ(b.read("speed_rpm"), 2000u);

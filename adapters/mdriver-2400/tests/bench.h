@@ -42,9 +42,10 @@ struct Bench : test::AdapterBench {
 
   // Online, and the first run reply (the status) is in: the line is idle.
   [[nodiscard]] bool ready() { return until_online(200ms); }
-  // "Run at 1149 rpm" in one request, as a PLC writes it, confirmed, then a second of ramp.
+  // From ready (test::ReadyBench): "run at 1149 rpm" in one request, as a PLC writes it,
+  // confirmed, then a second of ramp.
   [[nodiscard]] bool running_at_1149() {
-    if (!ready() || !run_forward_at(1149)) return false;
+    if (!run_forward_at(1149)) return false;
     rig.run_for(1s);
     return true;
   }

@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 
 #include "bench.h"
-#include "late_reply_contract.h"
 #include "faults.h"
+#include "late_reply_contract.h"
 
 namespace drivegate::mdriver {
 namespace {
@@ -18,7 +18,7 @@ using test::LateReplyContract;
 const test::LateReplyFacts kLate{.id = "mdriver-2400", .late = 260ms};
 INSTANTIATE_TEST_SUITE_P(Mdriver2400, LateReplyContract, testing::Values(kLate));
 
-TEST(MdriverDriver, StartsWithTheFixedCodeCheckThenPollsWithTheStopCode) {
+TEST(MdriverDriverFromPowerOn, StartsWithTheFixedCodeCheckThenPollsWithTheStopCode) {
   Bench b;
   EXPECT_EQ(b.read("status") & kOnline, 0u);
   ASSERT_TRUE(b.ready());
@@ -39,7 +39,7 @@ TEST(MdriverDriver, StartsWithTheFixedCodeCheckThenPollsWithTheStopCode) {
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(MdriverDriver, ChecksUntilAnsweredThenPolls) {
+TEST(MdriverDriverFromPowerOn, ChecksUntilAnsweredThenPolls) {
   Bench b;
   b.control("silent on");
   b.rig.run_for(3s);
@@ -54,7 +54,7 @@ TEST(MdriverDriver, ChecksUntilAnsweredThenPolls) {
   EXPECT_EQ(b.last(), kRunStop);
 }
 
-TEST(MdriverDriver, TheRunCommandIsTheKeepAliveAtTheShorterOfPollAndKeepAlive) {
+TEST(MdriverDriverFromPowerOn, TheRunCommandIsTheKeepAliveAtTheShorterOfPollAndKeepAlive) {
   const auto spacing = [](const Bench& b, TimePoint from) {
     const auto t = b.times_of(kRunStop, from);
     std::vector<Millis> out;
@@ -88,9 +88,9 @@ TEST(MdriverDriver, TheRunCommandIsTheKeepAliveAtTheShorterOfPollAndKeepAlive) {
   EXPECT_TRUE(idle.sim_has("error=0x00"));
 }
 
-TEST(MdriverDriver, EveryErrorCodeMapsIntoFaultsAndNativeFault) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+using MdriverDriver = test::ReadyBench<Bench>;
+
+TEST_F(MdriverDriver, EveryErrorCodeMapsIntoFaultsAndNativeFault) {
   for (const auto& e : error_codes()) {
     SCOPED_TRACE(std::string(e.name));
     b.control("fault " + std::to_string(e.code));
@@ -105,8 +105,7 @@ TEST(MdriverDriver, EveryErrorCodeMapsIntoFaultsAndNativeFault) {
   }
 }
 
-TEST(MdriverDriver, OverTemperatureTripsAndResetFaultClearsIt) {
-  Bench b;
+TEST_F(MdriverDriver, OverTemperatureTripsAndResetFaultClearsIt) {
   ASSERT_TRUE(b.running_at_1149());
   b.rig.run_for(2s);
   b.control("fault ipm_over_temperature");
@@ -135,7 +134,7 @@ TEST(MdriverDriver, OverTemperatureTripsAndResetFaultClearsIt) {
   EXPECT_EQ(b.frames(again).at(0), kRun1149);
 }
 
-TEST(MdriverDriver, AFailedFixedCodeCheckIsAHardwareFaultAndNotReady) {
+TEST(MdriverDriverFromPowerOn, AFailedFixedCodeCheckIsAHardwareFaultAndNotReady) {
   Bench b;
   b.control("eeprom fail");
   b.rig.run_for(3s);
@@ -154,9 +153,7 @@ TEST(MdriverDriver, AFailedFixedCodeCheckIsAHardwareFaultAndNotReady) {
   EXPECT_EQ(b.last(), kRunStop);
 }
 
-TEST(MdriverDriver, ABadChecksumIsResentIdenticallyAtOnce) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(MdriverDriver, ABadChecksumIsResentIdenticallyAtOnce) {
   ASSERT_EQ(b.write({1149}, kSetpointRegister), Outcome::ok);
   b.control("corrupt 1");
   const TimePoint asked = b.rig.now();
@@ -172,8 +169,7 @@ TEST(MdriverDriver, ABadChecksumIsResentIdenticallyAtOnce) {
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
-TEST(MdriverDriver, SilenceIsResentThreeTimesThenCommLostRedoesTheCheck) {
-  Bench b;
+TEST_F(MdriverDriver, SilenceIsResentThreeTimesThenCommLostRedoesTheCheck) {
   ASSERT_TRUE(b.running_at_1149());
   b.control("silent on");
   const TimePoint from = b.rig.now();
@@ -200,9 +196,7 @@ TEST(MdriverDriver, SilenceIsResentThreeTimesThenCommLostRedoesTheCheck) {
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
 }
 
-TEST(MdriverDriver, APowerCycledDriverIsCheckedAgain) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(MdriverDriver, APowerCycledDriverIsCheckedAgain) {
   b.control("power-cycle");  // forgets the check: ignores run data until checked again
   ASSERT_TRUE(b.rig.run_until([&] { return b.count(kCheck) == 2 && b.drive->online(); }, 15s));
   b.rig.run_for(1s);
@@ -211,7 +205,7 @@ TEST(MdriverDriver, APowerCycledDriverIsCheckedAgain) {
   EXPECT_TRUE(b.sim_has("checked=1"));
 }
 
-TEST(MdriverDriver, NoiseAndOtherDriversFramesAreSkipped) {
+TEST(MdriverDriverFromPowerOn, NoiseAndOtherDriversFramesAreSkipped) {
   Bench b;
   // Before every answer: three bytes of garbage and another driver's echo (address 02).
   Bytes junk{0xFF, 0xFF, 0x33};
@@ -229,7 +223,7 @@ TEST(MdriverDriver, NoiseAndOtherDriversFramesAreSkipped) {
   EXPECT_EQ(b.read("timeouts"), 0u);
 }
 
-TEST(MdriverDriver, AddressesAreConfigurable) {
+TEST(MdriverDriverFromPowerOn, AddressesAreConfigurable) {
   Bench b({.options = {{"master_address", "16"}}, .address = 0x22});
   ASSERT_TRUE(b.ready());
   EXPECT_EQ(b.frames().at(0), (Bytes{0x10, 0x22, 0x00, 0x03, 0x01, 0x12, 0x00, 0x06, 0x07}));

@@ -9,22 +9,10 @@
 namespace drivegate::mdriver {
 namespace {
 
-TEST(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
-  EXPECT_TRUE(b.stores_without_traffic(1149));
-  const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({cmd::run_forward});
-  EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the drive confirmed it
-  EXPECT_NE(b.read("status") & kCommandPending, 0u);
-  EXPECT_EQ(b.rig.wait(run), Outcome::ok);
-  // At once (the line was idle), not at the next poll.
-  const auto runs = b.times_of(kRun1149, asked);
-  ASSERT_EQ(runs.size(), 1u);
-  EXPECT_LE(runs[0] - asked, kInterFrameGap);
-  EXPECT_EQ(b.read("command"), cmd::run_forward);
-  EXPECT_NE(b.read("status") & kRunning, 0u);
+using MdriverWrites = test::ReadyBench<Bench>;
+
+TEST_F(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
+  EXPECT_TRUE(b.runs_from_stopped(1149, kRun1149, kInterFrameGap));  // in force once echoed
   b.rig.run_for(4s);  // 0x1C..0x40 at 20 codes a second
   EXPECT_EQ(b.read("speed_rpm"), 1149u);
   EXPECT_EQ(b.read("actual_code"), 0x40u);
@@ -34,7 +22,7 @@ TEST(MdriverWrites, ASetpointWhileStoppedIsStoredThenRunGoesOutAsCode40) {
   EXPECT_EQ(b.last(), kRun1149);  // the keep-alive carries the target in force
 }
 
-TEST(MdriverWrites, ContinuousModeSendsFF) {
+TEST(MdriverWritesFromPowerOn, ContinuousModeSendsFF) {
   Bench b({.options = {{"mode", "continuous"}}});
   ASSERT_TRUE(b.ready());
   const TimePoint asked = b.rig.now();
@@ -42,8 +30,7 @@ TEST(MdriverWrites, ContinuousModeSendsFF) {
   EXPECT_EQ(b.frames(asked).at(0), kRun1149Continuous);
 }
 
-TEST(MdriverWrites, ASetpointWhileRunningIsInForceOnceTheDriveEchoedIt) {
-  Bench b;
+TEST_F(MdriverWrites, ASetpointWhileRunningIsInForceOnceTheDriveEchoedIt) {
   ASSERT_TRUE(b.running_at_1149());
   const auto w = b.start_write({504}, kSetpointRegister);
   EXPECT_FALSE(w->settled());
@@ -58,9 +45,7 @@ TEST(MdriverWrites, ASetpointWhileRunningIsInForceOnceTheDriveEchoedIt) {
   EXPECT_EQ(b.last(), kRun504);
 }
 
-TEST(MdriverWrites, SetpointRangeAndNearestEntry) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(MdriverWrites, SetpointRangeAndNearestEntry) {
   // Section 3 No.2: nothing under 504 rpm; the table ends at 2856 rpm.
   EXPECT_EQ(b.write({503}, kSetpointRegister), Outcome::invalid_value);
   EXPECT_EQ(b.write({0}, kSetpointRegister), Outcome::invalid_value);
@@ -73,8 +58,7 @@ TEST(MdriverWrites, SetpointRangeAndNearestEntry) {
   EXPECT_EQ(b.read("setpoint_rpm"), 1167u);  // the nearest entry, 0x41
 }
 
-TEST(MdriverWrites, StopQuickStopAndReverse) {
-  Bench b;
+TEST_F(MdriverWrites, StopQuickStopAndReverse) {
   ASSERT_TRUE(b.running_at_1149());
   const auto before = b.rig.sent().size();
   EXPECT_EQ(b.start_write({cmd::run_reverse})->result,
@@ -95,7 +79,7 @@ TEST(MdriverWrites, StopQuickStopAndReverse) {
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
 }
 
-TEST(MdriverWrites, CommandsAreRefusedBeforeTheCheckAndARunWithoutSetpoint) {
+TEST(MdriverWritesFromPowerOn, CommandsAreRefusedBeforeTheCheckAndARunWithoutSetpoint) {
   Bench b;
   EXPECT_EQ(b.start_write({cmd::stop})->result, Outcome::refused);
   EXPECT_EQ(b.start_write({1149}, kSetpointRegister)->result, Outcome::ok);  // stored
@@ -110,9 +94,7 @@ TEST(MdriverWrites, CommandsAreRefusedBeforeTheCheckAndARunWithoutSetpoint) {
   EXPECT_EQ(fresh.read("command"), cmd::stop);
 }
 
-TEST(MdriverWrites, ACommandWrittenOverAnotherNotYetSentSupersedesIt) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(MdriverWrites, ACommandWrittenOverAnotherNotYetSentSupersedesIt) {
   ASSERT_EQ(b.write({1149}, kSetpointRegister), Outcome::ok);
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});  // from one client...
@@ -125,8 +107,7 @@ TEST(MdriverWrites, ACommandWrittenOverAnotherNotYetSentSupersedesIt) {
 
 // --- truthful writes: what the drive did not take is not in force ---
 
-TEST(MdriverWrites, ARequestWithAnInvalidPartChangesNothing) {
-  Bench b;
+TEST_F(MdriverWrites, ARequestWithAnInvalidPartChangesNothing) {
   ASSERT_TRUE(b.running_at_1149());
   // Setpoint 600 rpm (code 0x21) with run_reverse: the setpoint alone would go on the line.
   const auto before = b.rig.sent().size();
@@ -149,8 +130,7 @@ TEST(MdriverWrites, ARequestWithAnInvalidPartChangesNothing) {
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
 }
 
-TEST(MdriverWrites, ASetpointTheDriveDoesNotAnswerLeavesTheOldOneInForce) {
-  Bench b;
+TEST_F(MdriverWrites, ASetpointTheDriveDoesNotAnswerLeavesTheOldOneInForce) {
   ASSERT_TRUE(b.running_at_1149());
   b.control("silent on");
   const TimePoint asked = b.rig.now();
@@ -169,8 +149,7 @@ TEST(MdriverWrites, ASetpointTheDriveDoesNotAnswerLeavesTheOldOneInForce) {
   EXPECT_EQ(b.read("setpoint_rpm"), 1149u);
 }
 
-TEST(MdriverWrites, ASetpointTheDriveDoesNotTakeIsRefusedAndTheOldOneStays) {
-  Bench b;
+TEST_F(MdriverWrites, ASetpointTheDriveDoesNotTakeIsRefusedAndTheOldOneStays) {
   ASSERT_TRUE(b.running_at_1149());
   // The drive answers 504 rpm (0x1C) with the target it holds, 0x40.
   b.rig.line().device_filter = [](Bytes a) {
@@ -183,8 +162,7 @@ TEST(MdriverWrites, ASetpointTheDriveDoesNotTakeIsRefusedAndTheOldOneStays) {
   EXPECT_EQ(b.last(), kRun1149);
 }
 
-TEST(MdriverWrites, ACommandTheDriveRefusesIsTheExceptionAndTheRunStaysInForce) {
-  Bench b;
+TEST_F(MdriverWrites, ACommandTheDriveRefusesIsTheExceptionAndTheRunStaysInForce) {
   ASSERT_TRUE(b.running_at_1149());
   // The drive answers the stop code with another target than the one sent.
   b.rig.line().device_filter = [](Bytes a) {
@@ -201,9 +179,7 @@ TEST(MdriverWrites, ACommandTheDriveRefusesIsTheExceptionAndTheRunStaysInForce) 
   EXPECT_EQ(sent[1], kRun1149);  // the keep-alive carries the run in force
 }
 
-TEST(MdriverWrites, ARunAnsweredWithAnErrorIsRefusedAndNotInForce) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(MdriverWrites, ARunAnsweredWithAnErrorIsRefusedAndNotInForce) {
   ASSERT_EQ(b.write({1149}, kSetpointRegister), Outcome::ok);
   // The drive takes the target (R4 echoes it) but answers with error 0x04 (stall) latched.
   bool once = true;
@@ -220,9 +196,7 @@ TEST(MdriverWrites, ARunAnsweredWithAnErrorIsRefusedAndNotInForce) {
   EXPECT_EQ(b.read("status") & kRunning, 0u);
 }
 
-TEST(MdriverWrites, ARunThatGotNoAnswerIsNotInForce) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(MdriverWrites, ARunThatGotNoAnswerIsNotInForce) {
   ASSERT_EQ(b.write({1149}, kSetpointRegister), Outcome::ok);
   b.control("silent on");
   const TimePoint asked = b.rig.now();

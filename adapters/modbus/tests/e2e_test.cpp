@@ -4,13 +4,14 @@
 // is the slave's registers scaled and mapped; what it writes reaches the slave's registers, and
 // only what the slave took is answered ok; a slave that is not there is comm_lost and 0x0B without
 // holding up the one that is.
+#include "e2e.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <filesystem>
 #include <string>
 
-#include "e2e.h"
 #include "e2e_adapters.h"
 #include "pymodbus_slave.h"
 
@@ -126,11 +127,7 @@ TEST(ModbusProfileE2E, AnExceptionFromTheSlaveIs0x04AtThePlc) {
 // Pass-through: unit 3 is a window onto the slave at 7, unit 4 onto 9 where nobody answers;
 // a second listener may only read.
 std::string passthrough_config(const std::filesystem::path& port, int read_port) {
-  return "[[listener]]\naddress = \"127.0.0.1:1\"\naccess = \"maintain\"\n\n"
-         "[[listener]]\naddress = \"127.0.0.1:" +
-         std::to_string(read_port) +
-         "\"\naccess = \"read\"\n\n"
-         "[[bus]]\nname = \"line-a\"\nport = \"" +
+  return maintain_and_read_listeners(read_port) + "[[bus]]\nname = \"line-a\"\nport = \"" +
          port.string() +
          "\"\nbaud = 19200\nparity = \"even\"\n\n"
          "[[device]]\nname = \"window\"\nbus = \"line-a\"\nadapter = \"modbus\"\nunit_id = 3\n"

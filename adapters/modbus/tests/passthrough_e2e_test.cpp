@@ -36,14 +36,8 @@ bool have_adapter(const std::string& id) {
   return std::filesystem::exists(plugin_dir() / ("drivegate-" + id + ".so"));
 }
 
-// The first listener is the TCP one the harness moves to a free port (--listen): maintain.
 std::string config(const std::filesystem::path& dir, int read_port) {
-  return "[[listener]]\naddress = \"127.0.0.1:1\"\naccess = \"maintain\"\n\n"
-         "[[listener]]\naddress = \"127.0.0.1:" +
-         std::to_string(read_port) +
-         "\"\naccess = \"read\"\n\n"
-         "[[listener]]\nport = \"" +
-         (dir / "s").string() +
+  return maintain_and_read_listeners(read_port) + "[[listener]]\nport = \"" + (dir / "s").string() +
          "\"\nbaud = 19200\nframing = \"ascii\"\ndata_bits = 8\naccess = \"read\"\n\n"
          "[[bus]]\nname = \"drives\"\nport = \"" +
          (dir / "ed").string() +

@@ -15,9 +15,24 @@ constexpr std::uint32_t status_of(ActionStatus s) {
   return static_cast<std::uint32_t>(s);
 }
 
-TEST(NidecActions, VoltageDetection_5_9) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+// `action` written to holding point `action` as a PLC writes it: taken, and `frame` the first the
+// master sent after the write.
+testing::AssertionResult sends(Bench& b, Action action, const Bytes& frame) {
+  const TimePoint asked = b.rig.now();
+  if (const auto result = b.write("action", {value_of(action)}); result != Outcome::ok) {
+    return testing::AssertionFailure()
+           << "the action ended " << (result ? static_cast<int>(*result) : -1) << " (-1: never)";
+  }
+  const std::vector<Bytes> sent = b.frames(asked);
+  if (sent.empty() || sent[0] != frame) {
+    return testing::AssertionFailure() << "the first frame after the write is not the action's";
+  }
+  return testing::AssertionSuccess();
+}
+
+using NidecActions = test::ReadyBench<Bench>;
+
+TEST_F(NidecActions, VoltageDetection_5_9) {
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::idle));
   const TimePoint asked = b.rig.now();
   const auto w = b.start_write("action", {value_of(Action::voltage_detection)});
@@ -30,9 +45,7 @@ TEST(NidecActions, VoltageDetection_5_9) {
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::done));
 }
 
-TEST(NidecActions, WeightDetectionTakes35s_5_10) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, WeightDetectionTakes35s_5_10) {
   EXPECT_EQ(b.write("action", {value_of(Action::weight_detection)}), Outcome::ok);
   EXPECT_EQ(b.read("raw_weight"), 0u);  // 5.10: 0 until detected
   EXPECT_EQ(b.read("weight"), 0u);
@@ -42,46 +55,33 @@ TEST(NidecActions, WeightDetectionTakes35s_5_10) {
   EXPECT_EQ(b.read("raw_weight"), 1700u);
 }
 
-TEST(NidecActions, FabricDetectionIsKeptRaw_5_11) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, FabricDetectionIsKeptRaw_5_11) {
   b.control("fabric 3");
-  const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::fabric_detection)}), Outcome::ok);
-  EXPECT_EQ(b.frames(asked).at(0),
-            (Bytes{0xA5, 0x2D, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x88}));
+  EXPECT_TRUE(sends(b, Action::fabric_detection,
+                    Bytes{0xA5, 0x2D, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x88}));
   EXPECT_EQ(b.read("fabric_raw"), 0x00030000u);
 }
 
-TEST(NidecActions, ForcedBrakeBlocksAndStopsMotion_5_13) {
-  Bench b;
+TEST_F(NidecActions, ForcedBrakeBlocksAndStopsMotion_5_13) {
   ASSERT_TRUE(b.running_at(800));
-  TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_enable)}), Outcome::ok);
-  EXPECT_EQ(b.frames(asked).at(0),
-            (Bytes{0xA5, 0x1B, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBF}));
+  EXPECT_TRUE(sends(b, Action::forced_brake_enable,
+                    Bytes{0xA5, 0x1B, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBF}));
   EXPECT_EQ(b.read("forced_brake"), 1u);
   // 5.13: the motor is held stopped: no run is in force, and none is taken.
   EXPECT_EQ(b.read("command"), cmd::stop);
   const std::size_t before = b.rig.sent().size();
   EXPECT_EQ(b.start_write({cmd::run_forward})->result, Outcome::refused);
   EXPECT_EQ(b.rig.sent().size(), before);
-  asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::forced_brake_disable)}), Outcome::ok);
-  EXPECT_EQ(b.frames(asked).at(0),
-            (Bytes{0xA5, 0x1B, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBE}));
+  EXPECT_TRUE(sends(b, Action::forced_brake_disable,
+                    Bytes{0xA5, 0x1B, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xBE}));
   EXPECT_EQ(b.read("forced_brake"), 0u);
   EXPECT_EQ(b.write({cmd::run_forward}), Outcome::ok);
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
-TEST(NidecActions, FctTest_5_15) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, FctTest_5_15) {
   b.control("fault stall");
-  const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::fct_test)}), Outcome::ok);
-  EXPECT_EQ(b.frames(asked).at(0), kFct);
+  EXPECT_TRUE(sends(b, Action::fct_test, kFct));
   EXPECT_EQ(b.read("fct_error"), 0x0008u);
   EXPECT_EQ(b.read("fct_speed_rpm"), 0u);
   EXPECT_EQ(b.read("fct_ipm_temperature"), 45u);
@@ -92,13 +92,9 @@ TEST(NidecActions, FctTest_5_15) {
   EXPECT_EQ(b.read("native_fault"), 0u);
 }
 
-TEST(NidecActions, PingAgainOnRequest_5_1) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, PingAgainOnRequest_5_1) {
   b.control("version 0x0203");
-  const TimePoint asked = b.rig.now();
-  EXPECT_EQ(b.write("action", {value_of(Action::ping)}), Outcome::ok);
-  EXPECT_EQ(b.frames(asked).at(0), kPing7);
+  EXPECT_TRUE(sends(b, Action::ping, kPing7));
   EXPECT_EQ(b.read("inverter_version"), 0x0203u);
   // `none` is taken without traffic; the gateway keeps values the table does not name.
   const std::size_t before = b.rig.sent().size();
@@ -109,9 +105,7 @@ TEST(NidecActions, PingAgainOnRequest_5_1) {
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::done));
 }
 
-TEST(NidecActions, AnUnansweredActionIsNoResponse) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecActions, AnUnansweredActionIsNoResponse) {
   b.control("silent on");
   EXPECT_EQ(b.write("action", {value_of(Action::voltage_detection)}), Outcome::no_response);
   EXPECT_EQ(b.read("action_status"), status_of(ActionStatus::no_response));

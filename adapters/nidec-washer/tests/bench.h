@@ -32,9 +32,9 @@ struct Bench : test::AdapterBench {
 
   // Online: the ping (5.1) is answered and the line is idle.
   [[nodiscard]] bool ready() { return until_online(0ms, 1s); }
-  // "Run forward at `rpm`" in one request, as a PLC writes it, confirmed, then the 3.0 s ramp.
+  // From ready (test::ReadyBench): "run forward at `rpm`" in one request, as a PLC writes it,
+  // confirmed, then the 3.0 s ramp.
   [[nodiscard]] bool running_at(std::uint16_t rpm, std::uint16_t command = cmd::run_forward) {
-    if (!drive->online() && !ready()) return false;
     if (write({command, rpm}) != Outcome::ok) return false;
     rig.run_for(4s);
     return read("speed_rpm") == rpm;

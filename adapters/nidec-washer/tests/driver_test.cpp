@@ -18,7 +18,7 @@ using test::LateReplyContract;
 const test::LateReplyFacts kLate{.id = "nidec-washer", .late = 130ms};
 INSTANTIATE_TEST_SUITE_P(NidecWasher, LateReplyContract, testing::Values(kLate));
 
-TEST(NidecDriver, PingsFirstThenPollsEvery500ms_5_1_section6) {
+TEST(NidecDriverFromPowerOn, PingsFirstThenPollsEvery500ms_5_1_section6) {
   Bench b;
   const TimePoint t0 = b.rig.now();
   b.rig.run_for(1900ms);
@@ -40,7 +40,7 @@ TEST(NidecDriver, PingsFirstThenPollsEvery500ms_5_1_section6) {
   EXPECT_EQ(b.drive->driver().traits().comm_timeout, 6000ms);  // section 6
 }
 
-TEST(NidecDriver, OptionsShapeThePingTheAccelTimeAndTheResends_5_1_section6) {
+TEST(NidecDriverFromPowerOn, OptionsShapeThePingTheAccelTimeAndTheResends_5_1_section6) {
   // Section 6: a frame every second at least, whatever the device's poll interval says.
   Bench b({.options = {{"platform", "8"},
                        {"empty_raw_weight", "300"},
@@ -71,7 +71,7 @@ TEST(NidecDriver, OptionsShapeThePingTheAccelTimeAndTheResends_5_1_section6) {
   EXPECT_EQ(b.read("retries"), 3u);  // then a new turn, the same poll (section 6)
 }
 
-TEST(NidecDriver, ACommandBeforeTheHandshakeWaitsForThePing_5_1) {
+TEST(NidecDriverFromPowerOn, ACommandBeforeTheHandshakeWaitsForThePing_5_1) {
   Bench b;
   // The ping is waiting for its inter-frame gap: nothing has been answered yet.
   ASSERT_EQ(b.status() & kOnline, 0u);
@@ -85,9 +85,9 @@ TEST(NidecDriver, ACommandBeforeTheHandshakeWaitsForThePing_5_1) {
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
-TEST(NidecDriver, ANackIsResentIdentically_5_16) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+using NidecDriver = test::ReadyBench<Bench>;
+
+TEST_F(NidecDriver, ANackIsResentIdentically_5_16) {
   b.control("nack 1");
   const TimePoint from = b.rig.now();
   EXPECT_EQ(b.write({cmd::stop}), Outcome::ok);
@@ -102,9 +102,7 @@ TEST(NidecDriver, ANackIsResentIdentically_5_16) {
   EXPECT_EQ(b.read("timeouts"), 0u);
 }
 
-TEST(NidecDriver, ABadChecksumIsResent_4_2) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecDriver, ABadChecksumIsResent_4_2) {
   b.control("corrupt 2");
   const TimePoint from = b.rig.now();
   EXPECT_EQ(b.write({cmd::stop}), Outcome::ok);
@@ -113,9 +111,7 @@ TEST(NidecDriver, ABadChecksumIsResent_4_2) {
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(NidecDriver, NoiseAndStaleRepliesAreDropped_section2) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecDriver, NoiseAndStaleRepliesAreDropped_section2) {
   // Noise before every reply, and a stale brake ACK: each poll's own ACK still completes it.
   const Bytes stale = encode_reply(Mode::brake, {0, 0, 0, 0});
   const Bytes noise = {0x00, 0x13};
@@ -137,9 +133,7 @@ TEST(NidecDriver, NoiseAndStaleRepliesAreDropped_section2) {
   EXPECT_NE(b.status() & kOnline, 0u);
 }
 
-TEST(NidecDriver, ASilentInverterIsResentToThenTheWriteFailsThenCommLost_section6) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecDriver, ASilentInverterIsResentToThenTheWriteFailsThenCommLost_section6) {
   b.control("silent on");
   const TimePoint t0 = b.rig.now();
   const auto w = b.start_write({cmd::stop});
@@ -176,9 +170,7 @@ TEST(NidecDriver, ASilentInverterIsResentToThenTheWriteFailsThenCommLost_section
 // the engine's back-off of a silent device, 1 s then 2 s (poll_ms doubling). Twelve sends in
 // the 6 s before comm_lost, and no silence on the wire near the 6 s after which the inverter
 // stops by itself (section 7).
-TEST(NidecDriver, ASilentInverterIsResentAtTheCadenceTheReadmeStates_section6) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecDriver, ASilentInverterIsResentAtTheCadenceTheReadmeStates_section6) {
   ASSERT_TRUE(b.after_next_poll());
   b.control("silent on");
   const TimePoint t0 = b.rig.now();
@@ -202,8 +194,7 @@ TEST(NidecDriver, ASilentInverterIsResentAtTheCadenceTheReadmeStates_section6) {
   EXPECT_GE(lost - t0, 6s);
 }
 
-TEST(NidecDriver, CommLostStopsAndDoesNotResumeMotion_section7) {
-  Bench b;
+TEST_F(NidecDriver, CommLostStopsAndDoesNotResumeMotion_section7) {
   ASSERT_TRUE(b.running_at(800));
   b.control("silent on");
   ASSERT_TRUE(b.rig.run_until([&] { return (b.status() & kCommLost) != 0; }, 7s));
@@ -222,9 +213,7 @@ TEST(NidecDriver, CommLostStopsAndDoesNotResumeMotion_section7) {
   EXPECT_TRUE(b.sim_has("motion=stopped"));
 }
 
-TEST(NidecDriver, WritesWhileCommLostAre0x0BAndFailWhatWasQueued) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecDriver, WritesWhileCommLostAre0x0BAndFailWhatWasQueued) {
   b.control("silent on");
   b.rig.run_for(5500ms);
   ASSERT_EQ(b.status() & kCommLost, 0u);
@@ -236,9 +225,7 @@ TEST(NidecDriver, WritesWhileCommLostAre0x0BAndFailWhatWasQueued) {
   EXPECT_EQ(b.read("setpoint_rpm"), 0u);
 }
 
-TEST(NidecDriver, FaultsReachTheCommonBlockAndClearAfter4s_section8) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecDriver, FaultsReachTheCommonBlockAndClearAfter4s_section8) {
   b.control("fault 0x18");  // stall + over-current
   ASSERT_TRUE(b.after_next_poll());
   EXPECT_EQ(b.read("native_fault"), 0x18u);
@@ -254,9 +241,7 @@ TEST(NidecDriver, FaultsReachTheCommonBlockAndClearAfter4s_section8) {
   EXPECT_EQ(b.write({cmd::run_forward, 800}), Outcome::ok);
 }
 
-TEST(NidecDriver, SpeedFollowsTheRampAndIsUnsigned_5_4) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecDriver, SpeedFollowsTheRampAndIsUnsigned_5_4) {
   ASSERT_EQ(b.write({cmd::run_reverse, 800}), Outcome::ok);
   b.rig.run_for(1600ms);  // half way up the 3.0 s ramp
   EXPECT_NEAR(b.read("speed_rpm"), 400, 60);

@@ -8,32 +8,17 @@
 namespace drivegate::nidec {
 namespace {
 
-TEST(NidecWrites, ASetpointWhileStoppedIsStoredThenRunForwardIsCw_5_3) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
-  EXPECT_TRUE(b.stores_without_traffic(800));
-  const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({cmd::run_forward});
-  EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the inverter ACKed it
-  EXPECT_NE(b.status() & kCommandPending, 0u);
-  EXPECT_EQ(b.rig.wait(run), Outcome::ok);
-  // At once (the line was idle), not at the next poll.
-  const auto runs = b.times_of(kCw800, asked);
-  ASSERT_EQ(runs.size(), 1u);
-  EXPECT_LE(runs[0] - asked, 5ms);
-  EXPECT_EQ(b.read("command"), cmd::run_forward);
-  EXPECT_NE(b.status() & kRunning, 0u);
-  EXPECT_EQ(b.status() & kCommandPending, 0u);
-  b.rig.run_for(4s);  // 3.0 s accel
+using NidecWrites = test::ReadyBench<Bench>;
+
+TEST_F(NidecWrites, ASetpointWhileStoppedIsStoredThenRunForwardIsCw_5_3) {
+  EXPECT_TRUE(b.runs_from_stopped(800, kCw800, 5ms));  // in force once the inverter ACKed it
+  b.rig.run_for(4s);                                   // 3.0 s accel
   EXPECT_EQ(b.read("speed_rpm"), 800u);
   EXPECT_EQ(b.read("setpoint_rpm"), 800u);
   EXPECT_EQ(b.last(), kPoll);  // the motion runs on; polls keep the line alive
 }
 
-TEST(NidecWrites, RunReverseIsCcw_5_4) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecWrites, RunReverseIsCcw_5_4) {
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::run_reverse, 800}), Outcome::ok);
   EXPECT_EQ(b.frames(asked).at(0), kCcw800);
@@ -41,9 +26,7 @@ TEST(NidecWrites, RunReverseIsCcw_5_4) {
   EXPECT_TRUE(b.sim_has("motion=ccw"));
 }
 
-TEST(NidecWrites, MotionChoosesSpinAgitationOrFreeShaft_5_5_5_6_5_14) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecWrites, MotionChoosesSpinAgitationOrFreeShaft_5_5_5_6_5_14) {
   EXPECT_EQ(b.write("motion", {1}), Outcome::ok);  // spin
   EXPECT_EQ(b.read("motion"), 1u);
   // 5.6 has no direction.
@@ -81,9 +64,7 @@ TEST(NidecWrites, MotionChoosesSpinAgitationOrFreeShaft_5_5_5_6_5_14) {
   EXPECT_EQ(b.read("motion"), 3u);
 }
 
-TEST(NidecWrites, AgitationTimingPoints_5_5) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecWrites, AgitationTimingPoints_5_5) {
   EXPECT_EQ(b.write("motion", {2}), Outcome::ok);
   // accel 0.3 s, decel 0.4 s, CW on 2.0 s, off 1.0 s, CCW on 2.5 s, off 25.5 s, in one request.
   EXPECT_EQ(b.write("agitation_accel", {3, 4, 20, 10, 25, 255}), Outcome::ok);
@@ -97,8 +78,7 @@ TEST(NidecWrites, AgitationTimingPoints_5_5) {
   EXPECT_EQ(b.read("agitation_ccw_on"), 25u);
 }
 
-TEST(NidecWrites, ASetpointWhileRunningIsInForceOnceTheInverterAckedIt_5_3) {
-  Bench b;
+TEST_F(NidecWrites, ASetpointWhileRunningIsInForceOnceTheInverterAckedIt_5_3) {
   ASSERT_TRUE(b.running_at(800));
   const auto w = b.start_write({1000}, kSetpointRegister);
   EXPECT_FALSE(w->settled());
@@ -120,8 +100,7 @@ TEST(NidecWrites, ASetpointWhileRunningIsInForceOnceTheInverterAckedIt_5_3) {
   EXPECT_EQ(b.read("setpoint_rpm"), 1000u);
 }
 
-TEST(NidecWrites, StopAndQuickStop_5_7_5_8) {
-  Bench b;
+TEST_F(NidecWrites, StopAndQuickStop_5_7_5_8) {
   ASSERT_TRUE(b.running_at(800));
   TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::quick_stop}), Outcome::ok);
@@ -138,9 +117,7 @@ TEST(NidecWrites, StopAndQuickStop_5_7_5_8) {
   EXPECT_EQ(b.read("setpoint_rpm"), 800u);
 }
 
-TEST(NidecWrites, ResetFaultAsksWhetherTheFaultCleared_section8) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecWrites, ResetFaultAsksWhetherTheFaultCleared_section8) {
   b.control("fault general");  // section 8: kept until power off
   b.rig.run_for(5s);
   TimePoint asked = b.rig.now();
@@ -158,8 +135,7 @@ TEST(NidecWrites, ResetFaultAsksWhetherTheFaultCleared_section8) {
 
 // --- truthful writes: what the inverter did not take is not in force ---
 
-TEST(NidecWrites, ARequestWithAnInvalidPartChangesNothing) {
-  Bench b;
+TEST_F(NidecWrites, ARequestWithAnInvalidPartChangesNothing) {
   ASSERT_TRUE(b.running_at(800));
   ASSERT_EQ(b.write("motion", {1}), Outcome::ok);  // spin, for the next run
   // Setpoint 1000 with run_reverse: spin has no direction. The setpoint alone would have gone on
@@ -187,8 +163,7 @@ TEST(NidecWrites, ARequestWithAnInvalidPartChangesNothing) {
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(NidecWrites, ASetpointTheInverterRefusesLeavesTheOldOne_section8) {
-  Bench b;
+TEST_F(NidecWrites, ASetpointTheInverterRefusesLeavesTheOldOne_section8) {
   ASSERT_TRUE(b.running_at(800));
   ASSERT_TRUE(b.after_next_poll());
   // A stall between two polls: the driver does not know yet, so the new speed goes on the line
@@ -203,8 +178,7 @@ TEST(NidecWrites, ASetpointTheInverterRefusesLeavesTheOldOne_section8) {
   EXPECT_EQ(b.read("native_fault"), 0x08u);
 }
 
-TEST(NidecWrites, ASetpointTheInverterNeverAnsweredLeavesTheOldOne_section6) {
-  Bench b;
+TEST_F(NidecWrites, ASetpointTheInverterNeverAnsweredLeavesTheOldOne_section6) {
   ASSERT_TRUE(b.running_at(800));
   ASSERT_TRUE(b.after_next_poll());
   b.control("nack 100");  // every frame refused at protocol level (5.16)
@@ -223,8 +197,7 @@ TEST(NidecWrites, ASetpointTheInverterNeverAnsweredLeavesTheOldOne_section6) {
   EXPECT_EQ(b.read("speed_rpm"), 800u);
 }
 
-TEST(NidecWrites, ACommandTheInverterRefusesIsTheExceptionAndCommandReadsWhatIsInForce) {
-  Bench b;
+TEST_F(NidecWrites, ACommandTheInverterRefusesIsTheExceptionAndCommandReadsWhatIsInForce) {
   ASSERT_TRUE(b.running_at(800));
   // A stop NACKed until it fails: the motor runs on, and so does run_forward.
   ASSERT_TRUE(b.after_next_poll());
@@ -254,9 +227,7 @@ TEST(NidecWrites, ACommandTheInverterRefusesIsTheExceptionAndCommandReadsWhatIsI
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
   b.control("silent on");
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::run_forward, 800}), Outcome::no_response);
@@ -271,9 +242,7 @@ TEST(NidecWrites, ARunNotConfirmedIsNeverSentAfterTheFailure) {
   EXPECT_TRUE(b.sim_has("motion=stopped"));
 }
 
-TEST(NidecWrites, AStopOvertakesARunNotYetOnTheLine) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecWrites, AStopOvertakesARunNotYetOnTheLine) {
   ASSERT_EQ(b.write({800}, kSetpointRegister), Outcome::ok);
   // While a poll is on the line, a run from one client and a stop from another.
   ASSERT_TRUE(b.next_poll_on_the_line());
@@ -286,8 +255,7 @@ TEST(NidecWrites, AStopOvertakesARunNotYetOnTheLine) {
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(NidecWrites, ASetpointQueuedBehindAStopIsStoredNotSent) {
-  Bench b;
+TEST_F(NidecWrites, ASetpointQueuedBehindAStopIsStoredNotSent) {
   ASSERT_TRUE(b.running_at(800));
   // While a poll is on the line: a stop, then a new speed for the run in force now.
   ASSERT_TRUE(b.next_poll_on_the_line());
@@ -303,9 +271,7 @@ TEST(NidecWrites, ASetpointQueuedBehindAStopIsStoredNotSent) {
   EXPECT_TRUE(b.sim_has("motion=stopping"));
 }
 
-TEST(NidecWrites, ASetpointWrittenWhileARunIsOnItsWayIsSentAfterIt) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(NidecWrites, ASetpointWrittenWhileARunIsOnItsWayIsSentAfterIt) {
   ASSERT_EQ(b.write({800}, kSetpointRegister), Outcome::ok);
   ASSERT_TRUE(b.next_poll_on_the_line());
   const std::size_t mark = b.rig.sent().size();

@@ -73,9 +73,10 @@ struct Bench : test::AdapterBench {
 
   // Online: build information, limits and the first status are in, and the line is idle.
   [[nodiscard]] bool ready() { return until_online(100ms); }
-  // "Run at `rpm`" in one request, as a PLC writes it, confirmed, then the ramp to that speed.
+  // From ready (test::ReadyBench): "run at `rpm`" in one request, as a PLC writes it, confirmed,
+  // then the ramp to that speed.
   [[nodiscard]] bool running_at(std::uint16_t rpm) {
-    return ready() && run_forward_at(rpm) && until_reads("speed_rpm", rpm, 10s);
+    return run_forward_at(rpm) && until_reads("speed_rpm", rpm, 10s);
   }
 
   // Frames the master sent from `from` on, resends included, with message id `msg` if given.

@@ -12,8 +12,9 @@ namespace {
 
 using test::LateReplyContract;
 
-// Late replies (late_reply_contract.h): reply_timeout_ms 100 (the default), answered 130 ms late; the sequence numbers alone would
-// not catch a reply that comes in the next read's window with the next number.
+// Late replies (late_reply_contract.h): reply_timeout_ms 100 (the default), answered 130 ms late;
+// the sequence numbers alone would not catch a reply that comes in the next read's window with the
+// next number.
 const test::LateReplyFacts kLate{.id = "unicla-edrive", .late = 130ms};
 INSTANTIATE_TEST_SUITE_P(UniclaEdrive, LateReplyContract, testing::Values(kLate));
 
@@ -22,9 +23,9 @@ const Bytes kBuildRead1 = {0x7E, 0x00, 0x01, 0xC0, 0x02, 0x01, 0x00, 0x00, 0x00,
 const Bytes kLimitsRead2 = {0x7E, 0x00, 0x01, 0xC0, 0x03, 0x02, 0x00, 0x00, 0x00, 0x05, 0xEB, 0x7E};
 const Bytes kStatusRead3 = {0x7E, 0x00, 0x01, 0xC0, 0x01, 0x03, 0x00, 0x00, 0x00, 0x37, 0xDC, 0x7E};
 
-TEST(UniclaDriver, StartUpReadsBuildThenLimitsThenPollsStatus) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+using UniclaDriver = test::ReadyBench<Bench>;
+
+TEST_F(UniclaDriver, StartUpReadsBuildThenLimitsThenPollsStatus) {
   const auto sent = b.sent();
   ASSERT_GE(sent.size(), 3u);
   // Sequence numbers from 1; each read as soon as the one before was answered, after the gap.
@@ -61,9 +62,7 @@ TEST(UniclaDriver, StartUpReadsBuildThenLimitsThenPollsStatus) {
   EXPECT_EQ(b.read("setpoint_rpm"), 0u);
 }
 
-TEST(UniclaDriver, PollsStatusAtThePollInterval) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaDriver, PollsStatusAtThePollInterval) {
   const TimePoint from = b.rig.now();
   b.rig.run_for(5s);
   const auto polls = b.sent(from);
@@ -82,7 +81,7 @@ TEST(UniclaDriver, PollsStatusAtThePollInterval) {
   EXPECT_EQ(b.read("retries"), 0u);
 }
 
-TEST(UniclaDriver, PollIntervalIsTheDevicesOwn) {
+TEST(UniclaDriverFromPowerOn, PollIntervalIsTheDevicesOwn) {
   Bench b({.poll = 200ms});
   ASSERT_TRUE(b.ready());
   const TimePoint from = b.rig.now();
@@ -92,7 +91,7 @@ TEST(UniclaDriver, PollIntervalIsTheDevicesOwn) {
   for (std::size_t i = 1; i < polls.size(); ++i) EXPECT_EQ(polls[i].at - polls[i - 1].at, 200ms);
 }
 
-TEST(UniclaDriver, PointsCarryTypesUnitsAndLabels) {
+TEST(UniclaDriverFromPowerOn, PointsCarryTypesUnitsAndLabels) {
   Bench b;
   const auto& p = b.drive->driver().points();
   ASSERT_EQ(p.size(), pt::count);
@@ -132,9 +131,7 @@ TEST(UniclaDriver, PointsCarryTypesUnitsAndLabels) {
   EXPECT_EQ(b.drive->map().find("model")->address, 63);
 }
 
-TEST(UniclaDriver, ABadCrcIsResentIdenticallyAfterTheGap) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaDriver, ABadCrcIsResentIdenticallyAfterTheGap) {
   b.control("corrupt 1");
   const TimePoint from = b.rig.now();
   const std::size_t answered = b.rig.answers().size();
@@ -154,7 +151,7 @@ TEST(UniclaDriver, ABadCrcIsResentIdenticallyAfterTheGap) {
 // A compressor found running (the gateway restarted, or this device was changed by a
 // reload) is shown as it runs, a run in force at its speed; nothing is sent to it, and a new
 // speed goes out as a speed change of a running compressor.
-TEST(UniclaDriver, ACompressorFoundRunningIsShownAsItRunsNeverAsStopped) {
+TEST(UniclaDriverFromPowerOn, ACompressorFoundRunningIsShownAsItRunsNeverAsStopped) {
   Bench b;
   ASSERT_EQ(b.control("run 3000").rfind("ok", 0), 0u);
   ASSERT_TRUE(b.ready());
@@ -170,9 +167,7 @@ TEST(UniclaDriver, ACompressorFoundRunningIsShownAsItRunsNeverAsStopped) {
   EXPECT_TRUE(b.sim_has("target=3500"));
 }
 
-TEST(UniclaDriver, ASilentReadIsTriedThreeTimesEachAfterTheReplyTimeout) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaDriver, ASilentReadIsTriedThreeTimesEachAfterTheReplyTimeout) {
   b.control("silent on");
   const TimePoint from = b.rig.now();
   ASSERT_TRUE(b.rig.run_until([&] { return b.read("timeouts") == 3; }, 1s));
@@ -193,7 +188,7 @@ TEST(UniclaDriver, ASilentReadIsTriedThreeTimesEachAfterTheReplyTimeout) {
   EXPECT_EQ(sent[3].at - sent[0].at, 3 * 206ms);
 }
 
-TEST(UniclaDriver, RetriesAndReplyTimeoutFollowTheOptions) {
+TEST(UniclaDriverFromPowerOn, RetriesAndReplyTimeoutFollowTheOptions) {
   Bench b({.options = {{"retries", "0"}, {"reply_timeout_ms", "250"}}});
   ASSERT_TRUE(b.ready());
   b.control("silent on");
@@ -212,9 +207,7 @@ TEST(UniclaDriver, RetriesAndReplyTimeoutFollowTheOptions) {
 // Good frames that are not the awaited reply: a reply to an earlier sequence, another drive's,
 // one for another master address. Each is counted foreign, the read is resent, and the real
 // reply is taken.
-TEST(UniclaDriver, RepliesThatAreNotTheAwaitedOneAreForeign) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaDriver, RepliesThatAreNotTheAwaitedOneAreForeign) {
   int changed = 0;
   b.rig.line().device_filter = [&changed](Bytes bytes) {
     Frame f = decoded(bytes);
@@ -245,9 +238,7 @@ TEST(UniclaDriver, RepliesThatAreNotTheAwaitedOneAreForeign) {
 }
 
 // A checked frame whose payload is shorter than a status: not the reply, and not counted good.
-TEST(UniclaDriver, AShortStatusPayloadIsNotAReply) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaDriver, AShortStatusPayloadIsNotAReply) {
   bool once = true;
   b.rig.line().device_filter = [&once](Bytes bytes) {
     Frame f = decoded(bytes);
@@ -264,9 +255,7 @@ TEST(UniclaDriver, AShortStatusPayloadIsNotAReply) {
   EXPECT_EQ(b.read("frames_good"), good + 1);  // only the resent read's reply
 }
 
-TEST(UniclaDriver, CommLostRedoesStartUpAndComesBack) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaDriver, CommLostRedoesStartUpAndComesBack) {
   b.control("silent on");
   ASSERT_TRUE(b.rig.run_until([&] { return b.drive->comm_lost(); }, 10s));
   // No good frame for comm_timeout: max(3 s, 4 x 500 ms + 3 x 100 ms).
@@ -292,7 +281,7 @@ TEST(UniclaDriver, CommLostRedoesStartUpAndComesBack) {
   EXPECT_EQ(b.read("fault_code"), 0u);
 }
 
-TEST(UniclaDriver, LittleEndianFloatsFollowTheOption) {
+TEST(UniclaDriverFromPowerOn, LittleEndianFloatsFollowTheOption) {
   Bench b({.options = {{"byte_order", "little"}}, .address = 3});
   ASSERT_TRUE(b.ready());
   EXPECT_FLOAT_EQ(b.read_f32("suction_pressure"), 4.5F);
@@ -307,9 +296,7 @@ TEST(UniclaDriver, LittleEndianFloatsFollowTheOption) {
   EXPECT_EQ(mismatched.read("limit_max_speed"), 6000u);
 }
 
-TEST(UniclaDriver, FaultsAndWarningsAsAPlcReadsThem) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaDriver, FaultsAndWarningsAsAPlcReadsThem) {
   b.control("fault overvoltage");
   b.rig.run_for(600ms);
   EXPECT_NE(b.read("status") & kFaulted, 0u);

@@ -18,36 +18,21 @@ std::vector<Sent> writes(const Bench& b, TimePoint from) {
   return out;
 }
 
-// The status bit that says a write is in flight.
-bool pending_bit(Bench& b) {
-  return (b.read("status") & kCommandPending) != 0;
-}
+using UniclaWrites = test::ReadyBench<Bench>;
 
-TEST(UniclaWrites, ASetpointWhileStoppedIsStoredThenTheRunGoesOutAndIsConfirmed) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
-  EXPECT_TRUE(b.stores_without_traffic(3000));
-  EXPECT_EQ(b.read("command"), cmd::stop);
-
+TEST_F(UniclaWrites, ASetpointWhileStoppedIsStoredThenTheRunGoesOutAndIsConfirmed) {
   const std::uint8_t seq = static_cast<std::uint8_t>(b.last_sequence() + 1);
   const TimePoint asked = b.rig.now();
-  const auto run = b.start_write({cmd::run_forward});
-  EXPECT_FALSE(run->settled());
-  EXPECT_EQ(b.read("command"), cmd::stop);  // not in force before the drive showed it
-  EXPECT_TRUE(pending_bit(b));
-  EXPECT_EQ(b.rig.wait(run), Outcome::ok);
-  EXPECT_FALSE(pending_bit(b));
+  // At once (the line was idle): Set Run State 3000 = 0B B8, in force once the drive showed it.
+  EXPECT_TRUE(b.runs_from_stopped(3000, run_state_frame(0x01, seq, 3000), kInterFrameGap));
   const auto sent = b.sent(asked);
   ASSERT_GE(sent.size(), 2u);
-  // At once (the line was idle): Set Run State 3000 = 0B B8, then the status read that confirms.
   EXPECT_EQ(sent[0].bytes, run_state_frame(0x01, seq, 3000));
-  EXPECT_LE(sent[0].at - asked, kInterFrameGap);
+  // Then the status read that confirmed it.
   EXPECT_EQ(sent[1].bytes, master_frame(0x01, kRead, kStatus, static_cast<std::uint8_t>(seq + 1)));
   EXPECT_GE(sent[1].at - sent[0].at, kInterFrameGap);
   EXPECT_LE(sent[1].at - sent[0].at, kInterFrameGap + b.on_wire(sent[0].bytes.size()));
-  EXPECT_EQ(b.read("command"), cmd::run_forward);
   EXPECT_EQ(b.read("setpoint_rpm"), 3000u);
-  EXPECT_NE(b.read("status") & kRunning, 0u);
   EXPECT_EQ(b.read("op_state"), kStarting);
 
   ASSERT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") == 3000; }, 5s));
@@ -70,7 +55,7 @@ TEST(UniclaWrites, ASetpointWhileStoppedIsStoredThenTheRunGoesOutAndIsConfirmed)
 
 // "Examples / Set Run State on Device Id 0x01": Command Speed to 1000RPM. With the sequence of the
 // "CRC Example", 0x36, the CRC is 34 CC (README.md, "Frames", and codec_test.cpp).
-TEST(UniclaWrites, TheDocumentsSetRunStateExampleOnTheWire) {
+TEST(UniclaWritesFromPowerOn, TheDocumentsSetRunStateExampleOnTheWire) {
   Bench b;
   b.control("limits 1000 6000");
   ASSERT_TRUE(b.ready());
@@ -85,8 +70,7 @@ TEST(UniclaWrites, TheDocumentsSetRunStateExampleOnTheWire) {
                                0x34, 0xCC, 0x7E}));
 }
 
-TEST(UniclaWrites, ASpeedChangeWhileRunningIsInForceOnceTheSpeedShowsIt) {
-  Bench b;
+TEST_F(UniclaWrites, ASpeedChangeWhileRunningIsInForceOnceTheSpeedShowsIt) {
   ASSERT_TRUE(b.running_at(3000));
   const TimePoint asked = b.rig.now();
   const auto w = b.start_write({4500}, kSetpointRegister);
@@ -107,8 +91,7 @@ TEST(UniclaWrites, ASpeedChangeWhileRunningIsInForceOnceTheSpeedShowsIt) {
 
 // A PLC writes "setpoint, run_forward" in one request. While running, the setpoint goes out and
 // is confirmed, then the run finds the drive running at it: one frame for the request.
-TEST(UniclaWrites, SetpointAndRunTogetherWhileRunningCostOneFrame) {
-  Bench b;
+TEST_F(UniclaWrites, SetpointAndRunTogetherWhileRunningCostOneFrame) {
   ASSERT_TRUE(b.running_at(3000));
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::run_forward, 4500}), Outcome::ok);
@@ -124,8 +107,7 @@ TEST(UniclaWrites, SetpointAndRunTogetherWhileRunningCostOneFrame) {
   EXPECT_TRUE(writes(b, again).empty());
 }
 
-TEST(UniclaWrites, SetpointZeroWhileRunningIsAStop) {
-  Bench b;
+TEST_F(UniclaWrites, SetpointZeroWhileRunningIsAStop) {
   ASSERT_TRUE(b.running_at(3000));
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({0}, kSetpointRegister), Outcome::ok);
@@ -137,8 +119,7 @@ TEST(UniclaWrites, SetpointZeroWhileRunningIsAStop) {
   EXPECT_EQ(b.write({cmd::run_forward}), Outcome::invalid_value);  // nothing to run at
 }
 
-TEST(UniclaWrites, QuickStopIsAPlainStop) {
-  Bench b;
+TEST_F(UniclaWrites, QuickStopIsAPlainStop) {
   ASSERT_TRUE(b.running_at(3000));
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::quick_stop}), Outcome::ok);
@@ -148,15 +129,13 @@ TEST(UniclaWrites, QuickStopIsAPlainStop) {
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(UniclaWrites, AStopAlwaysGoesOnTheLine) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaWrites, AStopAlwaysGoesOnTheLine) {
   const TimePoint asked = b.rig.now();
   EXPECT_EQ(b.write({cmd::stop}), Outcome::ok);  // stopped already: told again all the same
   ASSERT_EQ(writes(b, asked).size(), 1u);
 }
 
-TEST(UniclaWrites, OutOfLimitsAndImpossibleWritesAreRefusedWithoutAFrame) {
+TEST(UniclaWritesFromPowerOn, OutOfLimitsAndImpossibleWritesAreRefusedWithoutAFrame) {
   Bench b;
   // Before the running limits are read a speed cannot be judged.
   EXPECT_EQ(b.start_write({3000}, kSetpointRegister)->result, Outcome::refused);
@@ -186,8 +165,7 @@ TEST(UniclaWrites, OutOfLimitsAndImpossibleWritesAreRefusedWithoutAFrame) {
   EXPECT_EQ(b.read("setpoint_rpm"), 1500u);
 }
 
-TEST(UniclaWrites, AMotorFaultRefusesARunAndResetFaultClearsIt) {
-  Bench b;
+TEST_F(UniclaWrites, AMotorFaultRefusesARunAndResetFaultClearsIt) {
   ASSERT_TRUE(b.running_at(3000));
   b.control("fault motor");  // Fault - Motor + ST Motor Control - Over Current
   b.rig.run_for(600ms);
@@ -217,9 +195,7 @@ TEST(UniclaWrites, AMotorFaultRefusesARunAndResetFaultClearsIt) {
   EXPECT_NE(b.read("status") & kRunning, 0u);
 }
 
-TEST(UniclaWrites, AnAcknowledgeThatDoesNotClearIsRefusedAtTheDeadline) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaWrites, AnAcknowledgeThatDoesNotClearIsRefusedAtTheDeadline) {
   b.control("sticky on");
   b.control("fault pressure");
   b.rig.run_for(600ms);
@@ -232,7 +208,7 @@ TEST(UniclaWrites, AnAcknowledgeThatDoesNotClearIsRefusedAtTheDeadline) {
   EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::process_limit));
 }
 
-TEST(UniclaWrites, ControlDisabledRefusesWritesWithoutAFrame) {
+TEST(UniclaWritesFromPowerOn, ControlDisabledRefusesWritesWithoutAFrame) {
   Bench b;
   b.control("control off");
   ASSERT_TRUE(b.ready());
@@ -248,8 +224,7 @@ TEST(UniclaWrites, ControlDisabledRefusesWritesWithoutAFrame) {
 }
 
 // Two clients: the second write comes while the first is still unconfirmed.
-TEST(UniclaWrites, AStopOvertakesAnUnconfirmedSpeedChange) {
-  Bench b;
+TEST_F(UniclaWrites, AStopOvertakesAnUnconfirmedSpeedChange) {
   ASSERT_TRUE(b.running_at(3000));
   const TimePoint asked = b.rig.now();
   const auto speed = b.start_write({4500}, kSetpointRegister);
@@ -271,9 +246,7 @@ TEST(UniclaWrites, AStopOvertakesAnUnconfirmedSpeedChange) {
   EXPECT_EQ(b.read("setpoint_rpm"), 2000u);
 }
 
-TEST(UniclaWrites, ASetpointBehindAnUnconfirmedRunWaitsItsTurn) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaWrites, ASetpointBehindAnUnconfirmedRunWaitsItsTurn) {
   ASSERT_EQ(b.write({3000}, kSetpointRegister), Outcome::ok);
   const TimePoint asked = b.rig.now();
   const auto run = b.start_write({cmd::run_forward});
@@ -290,8 +263,7 @@ TEST(UniclaWrites, ASetpointBehindAnUnconfirmedRunWaitsItsTurn) {
   EXPECT_EQ(b.read("command"), cmd::run_forward);
 }
 
-TEST(UniclaWrites, TheSameWriteFromTwoClientsSharesOneFrame) {
-  Bench b;
+TEST_F(UniclaWrites, TheSameWriteFromTwoClientsSharesOneFrame) {
   ASSERT_TRUE(b.running_at(3000));
   const TimePoint asked = b.rig.now();
   const auto one = b.start_write({cmd::stop});
@@ -305,9 +277,7 @@ TEST(UniclaWrites, TheSameWriteFromTwoClientsSharesOneFrame) {
 
 // The issue's own example: FC 0x10 writing command = run_reverse and setpoint_rpm = 1500 to an
 // eDrive answered 0x03 and left the setpoint at 1500.
-TEST(UniclaWrites, TheIssuesExampleRunReverseWithASetpointChangesNothing) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaWrites, TheIssuesExampleRunReverseWithASetpointChangesNothing) {
   ASSERT_EQ(b.write({3000}, kSetpointRegister), Outcome::ok);
   const std::size_t before = b.rig.sent().size();
   const TimePoint asked = b.rig.now();
@@ -321,8 +291,7 @@ TEST(UniclaWrites, TheIssuesExampleRunReverseWithASetpointChangesNothing) {
   EXPECT_TRUE(b.sim_has("target=0"));
 }
 
-TEST(UniclaWrites, ARequestWithAnInvalidOrRefusedPartChangesNothing) {
-  Bench b;
+TEST_F(UniclaWrites, ARequestWithAnInvalidOrRefusedPartChangesNothing) {
   ASSERT_TRUE(b.running_at(3000));
   const TimePoint asked = b.rig.now();
   const std::size_t before = b.rig.sent().size();
@@ -346,8 +315,7 @@ TEST(UniclaWrites, ARequestWithAnInvalidOrRefusedPartChangesNothing) {
   EXPECT_EQ(fresh.read("command"), cmd::stop);
 }
 
-TEST(UniclaWrites, ASetpointTheDriveDoesNotTakeLeavesTheOldOneInForce) {
-  Bench b;
+TEST_F(UniclaWrites, ASetpointTheDriveDoesNotTakeLeavesTheOldOneInForce) {
   ASSERT_TRUE(b.running_at(3000));
   // The drive's own limits change behind the gateway's back: it now ignores 5000.
   b.control("limits 1500 4000");
@@ -383,9 +351,7 @@ TEST(UniclaWrites, ASetpointTheDriveDoesNotTakeLeavesTheOldOneInForce) {
   EXPECT_EQ(writes(b, asked).size(), 1u);  // nothing undone: a speed change is never retried
 }
 
-TEST(UniclaWrites, ARunTheDriveRefusesIsTheExceptionAndIsUndone) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaWrites, ARunTheDriveRefusesIsTheExceptionAndIsUndone) {
   ASSERT_EQ(b.write({3000}, kSetpointRegister), Outcome::ok);
   b.control("fault 12");  // Locked: no run
   b.rig.run_for(600ms);
@@ -409,9 +375,7 @@ TEST(UniclaWrites, ARunTheDriveRefusesIsTheExceptionAndIsUndone) {
   EXPECT_EQ(b.read("command"), cmd::stop);
 }
 
-TEST(UniclaWrites, ARunTheDriveIgnoresIsNotInForceAndIsUndone) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaWrites, ARunTheDriveIgnoresIsNotInForceAndIsUndone) {
   ASSERT_EQ(b.write({3000}, kSetpointRegister), Outcome::ok);
   b.control("control off");  // the drive now ignores every write; the gateway cannot know
   const TimePoint asked = b.rig.now();
@@ -425,9 +389,7 @@ TEST(UniclaWrites, ARunTheDriveIgnoresIsNotInForceAndIsUndone) {
   EXPECT_LE(sent[1].at - (asked + 2000ms), kInterFrameGap + 50ms);
 }
 
-TEST(UniclaWrites, AWriteToADriveThatFallsSilentFailsAndCommLostRefusesTheNext) {
-  Bench b;
-  ASSERT_TRUE(b.ready());
+TEST_F(UniclaWrites, AWriteToADriveThatFallsSilentFailsAndCommLostRefusesTheNext) {
   ASSERT_EQ(b.write({3000}, kSetpointRegister), Outcome::ok);
   b.control("silent on");
   const TimePoint asked = b.rig.now();
