@@ -9,6 +9,7 @@
 local bxor = (bit32 and bit32.bxor) or bit.bxor
 local band = (bit32 and bit32.band) or bit.band
 local rshift = (bit32 and bit32.rshift) or bit.rshift
+local lshift = (bit32 and bit32.lshift) or bit.lshift
 
 -- Shared by the protocol files: one table in the Lua state's globals (a script's own globals
 -- may be private to it, so _G is named). They find it there because this file loads first:
@@ -20,7 +21,7 @@ drivegate.loaded = drivegate.loaded or {}
 drivegate.bxor = bxor
 drivegate.band = band
 drivegate.bor = (bit32 and bit32.bor) or bit.bor
-drivegate.lshift = (bit32 and bit32.lshift) or bit.lshift
+drivegate.lshift = lshift
 drivegate.rshift = rshift
 
 -- True the first time a protocol file `id` asks: each loads once, however it is found (from the
@@ -29,6 +30,45 @@ function drivegate.first_load(id)
   if drivegate.loaded[id] then return false end
   drivegate.loaded[id] = true
   return true
+end
+
+-- The ProtoField constructors that take a display base; a row of one of them is shown in decimal
+-- unless it says otherwise.
+local integer_types = { uint8 = true, uint16 = true, uint24 = true, uint32 = true, int8 = true,
+                        int16 = true, int32 = true }
+
+-- `proto`'s fields, from rows { key, type, label, base, values, mask }: `type` names the
+-- ProtoField constructor (uint8, bytes, float, bool...); the field's filter is `abbrev.<key>`, or
+-- `abbrev.<filter>` where the row has one; an integer is shown in base.DEC unless the row says
+-- otherwise. A row of type "bits" is one flag per bit of a byte, bit 0 first: its `flags` are
+-- { name, label } each, filtered as `abbrev.<filter or key>.<name>`; its key gets the list of them
+-- (drivegate.add_bits). Sets proto.fields; returns key -> field.
+function drivegate.fields(proto, abbrev, rows)
+  local f, all = {}, {}
+  for _, r in ipairs(rows) do
+    local key, type, label = r[1], r[2], r[3]
+    local filter = abbrev .. "." .. (r.filter or key)
+    if type == "bits" then
+      f[key] = {}
+      for i, flag in ipairs(r.flags) do
+        local pf = ProtoField.bool(filter .. "." .. flag[1], flag[2], 8, nil, lshift(1, i - 1))
+        f[key][i] = pf
+        all[#all + 1] = pf
+      end
+    else
+      local display = r[4]
+      if display == nil and integer_types[type] then display = base.DEC end
+      f[key] = ProtoField[type](filter, label, display, r[5], r[6])
+      all[#all + 1] = f[key]
+    end
+  end
+  proto.fields = all
+  return f
+end
+
+-- Each flag of a "bits" row (drivegate.fields) under `tree`, over the byte `range`.
+function drivegate.add_bits(tree, flags, range)
+  for _, flag in ipairs(flags) do tree:add(flag, range) end
 end
 
 -- The tree of one frame of `proto`, its name in the Protocol column, and the frame's length; the
@@ -62,6 +102,15 @@ function drivegate.words(t, tvb, from, to, word_field, data_field)
     i = i + 2
   end
   if i < to then t:add(data_field, tvb(i, to - i)) end
+end
+
+-- A Modbus request's start address and quantity (MODBUS Application Protocol V1.1b3, 6.x: the
+-- two words after the function code, tvb[2, 6)) as `start_field` and `quantity_field`; the Info
+-- column's text of them, `format` given the two.
+function drivegate.start_quantity(tree, tvb, start_field, quantity_field, format)
+  tree:add(start_field, tvb(2, 2))
+  tree:add(quantity_field, tvb(4, 2))
+  return string.format(format, tvb(2, 2):uint(), tvb(4, 2):uint())
 end
 
 -- CRC-16 of Modbus (MODBUS over Serial Line V1.02, 6.2.2: init FFFF, polynomial A001 reflected)
@@ -115,25 +164,25 @@ if not drivegate.first_load("drivegate") then return end
 local p = Proto("drivegate", "drivegate capture pseudo-header")
 
 local directions = { [0] = "gateway -> drive", [1] = "drive -> gateway" }
-local f = {
-  version   = ProtoField.uint8("drivegate.version", "Version", base.DEC),
-  direction = ProtoField.uint8("drivegate.direction", "Direction", base.DEC, directions),
-  flags     = ProtoField.uint8("drivegate.flags", "Flags", base.HEX),
-  bad       = ProtoField.bool("drivegate.flags.bad_checksum", "Bad checksum (station's verdict)", 8, nil, 0x01),
-  noise     = ProtoField.bool("drivegate.flags.noise", "Noise (not a frame)", 8, nil, 0x02),
-  nack      = ProtoField.bool("drivegate.flags.nack", "NACK", 8, nil, 0x04),
-  foreign   = ProtoField.bool("drivegate.flags.foreign", "Foreign (not for us)", 8, nil, 0x08),
-  echo      = ProtoField.bool("drivegate.flags.echo", "Echo mismatch", 8, nil, 0x10),
-  retry     = ProtoField.bool("drivegate.flags.retry", "Resend", 8, nil, 0x20),
-  unit      = ProtoField.uint8("drivegate.unit_id", "Unit id", base.DEC),
-  adapter_len = ProtoField.uint8("drivegate.adapter_len", "Adapter id length", base.DEC),
-  adapter   = ProtoField.string("drivegate.adapter", "Adapter id"),
-  device_len = ProtoField.uint8("drivegate.device_len", "Device name length", base.DEC),
-  device    = ProtoField.string("drivegate.device", "Device"),
-  noise_data = ProtoField.bytes("drivegate.noise_data", "Noise"),
-}
-p.fields = { f.version, f.direction, f.flags, f.bad, f.noise, f.nack, f.foreign, f.echo, f.retry,
-             f.unit, f.adapter_len, f.adapter, f.device_len, f.device, f.noise_data }
+local f = drivegate.fields(p, "drivegate", {
+  { "version", "uint8", "Version" },
+  { "direction", "uint8", "Direction", base.DEC, directions },
+  { "flags", "uint8", "Flags", base.HEX },
+  { "flag_bits", "bits", filter = "flags", flags = {
+    { "bad_checksum", "Bad checksum (station's verdict)" },
+    { "noise", "Noise (not a frame)" },
+    { "nack", "NACK" },
+    { "foreign", "Foreign (not for us)" },
+    { "echo", "Echo mismatch" },
+    { "retry", "Resend" },
+  } },
+  { "unit", "uint8", "Unit id", filter = "unit_id" },
+  { "adapter_len", "uint8", "Adapter id length" },
+  { "adapter", "string", "Adapter id" },
+  { "device_len", "uint8", "Device name length" },
+  { "device", "string", "Device" },
+  { "noise_data", "bytes", "Noise" },
+})
 
 local e_short = ProtoExpert.new("drivegate.short", "Truncated pseudo-header",
                                 expert.group.MALFORMED, expert.severity.ERROR)
@@ -164,10 +213,7 @@ function p.dissector(tvb, pinfo, tree)
   local dir = tvb(1, 1):uint()
   t:add(f.direction, tvb(1, 1))
   local flags = tvb(2, 1):uint()
-  local ft = t:add(f.flags, tvb(2, 1))
-  for _, b in ipairs({ f.bad, f.noise, f.nack, f.foreign, f.echo, f.retry }) do
-    ft:add(b, tvb(2, 1))
-  end
+  drivegate.add_bits(t:add(f.flags, tvb(2, 1)), f.flag_bits, tvb(2, 1))
   t:add(f.unit, tvb(3, 1))
   local alen = tvb(4, 1):uint()
   t:add(f.adapter_len, tvb(4, 1))
