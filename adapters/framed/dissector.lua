@@ -57,20 +57,9 @@ end
 -- The bytes between the flags, unstuffed: a ByteArray, or nil and why.
 local function unstuff(p, tvb)
   local f = p.framing
-  local len = tvb:len()
-  if len < 2 or tvb(0, 1):uint() ~= f.start then return nil, "no start flag" end
-  local out = ByteArray.new()
-  local i = 1
-  while i < len - 1 do
-    local b = tvb(i, 1):uint()
-    if f.escape and b == f.escape then
-      if i + 1 >= len - 1 then return nil, "an escape at the end" end
-      b = bxor(tvb(i + 1, 1):uint(), f.escape_xor)
-      i = i + 1
-    end
-    out:append(ByteArray.new(string.format("%02x", b)))
-    i = i + 1
-  end
+  if tvb:len() < 2 or tvb(0, 1):uint() ~= f.start then return nil, "no start flag" end
+  local out = drivegate.unstuff(tvb, f.escape, f.escape_xor)
+  if not out then return nil, "an escape at the end" end
   return out
 end
 

@@ -105,28 +105,15 @@ function p.dissector(tvb, pinfo, tree)
     return len
   end
   t:add(f.sof, tvb(0, 1))
-  -- Unstuff what lies between the flags into a tvb of its own.
-  local raw = ByteArray.new()
-  local i = 1
-  local broken = false
-  while i < len - 1 do
-    local b = tvb(i, 1):uint()
-    if b == 0x7D then
-      if i + 1 >= len - 1 then broken = true break end
-      b = bxor(tvb(i + 1, 1):uint(), 0x20)
-      i = i + 2
-    else
-      i = i + 1
-    end
-    raw:append(ByteArray.new(string.format("%02x", b)))
-  end
+  -- Unstuff what lies between the flags (7D 5E: 7E, 7D 5D: 7D) into a tvb of its own.
+  local raw = drivegate.unstuff(tvb, 0x7D, 0x20)
   t:add(f.eof, tvb(len - 1, 1))
-  local n = raw:len()
-  if broken or n < 10 then
+  if not raw or raw:len() < 10 then
     t:add_proto_expert_info(e_frame)
     pinfo.cols.info = "Short frame"
     return len
   end
+  local n = raw:len()
   local u = raw:tvb("Unstuffed frame")
   local ht = t:add(f.header, u(0, 8))
   ht:add(f.source, u(0, 1))

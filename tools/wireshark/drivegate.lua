@@ -113,6 +113,26 @@ function drivegate.start_quantity(tree, tvb, start_field, quantity_field, format
   return string.format(format, tvb(2, 2):uint(), tvb(4, 2):uint())
 end
 
+-- The bytes of tvb[1, len - 1), between a frame's two flags, unstuffed: an `escape` byte and the
+-- one after it stand for that one XOR `escape_xor` (a nil `escape`: nothing is stuffed). A
+-- ByteArray, or nil when the byte before the end flag is an escape.
+function drivegate.unstuff(tvb, escape, escape_xor)
+  local len = tvb:len()
+  local out = ByteArray.new()
+  local i = 1
+  while i < len - 1 do
+    local b = tvb(i, 1):uint()
+    if b == escape then
+      if i + 1 >= len - 1 then return nil end
+      b = bxor(tvb(i + 1, 1):uint(), escape_xor)
+      i = i + 1
+    end
+    out:append(ByteArray.new(string.format("%02x", b)))
+    i = i + 1
+  end
+  return out
+end
+
 -- CRC-16 of Modbus (MODBUS over Serial Line V1.02, 6.2.2: init FFFF, polynomial A001 reflected)
 -- over tvb[0, len).
 local function crc16_modbus(tvb, len)
