@@ -4,7 +4,7 @@
 --   tshark -X lua_script:tools/wireshark/drivegate.lua -r bus.pcap
 --
 -- This file loads every adapter's dissector (adapters/<id>/dissector.lua, or drivegate_<id>.lua
--- beside it once installed); see README.md.
+-- beside it in a plugin folder, the build's or installed); see README.md.
 
 local bxor = (bit32 and bit32.bxor) or bit.bxor
 local band = (bit32 and bit32.band) or bit.band
@@ -285,9 +285,11 @@ end
 DissectorTable.get("wtap_encap"):add(wtap.USER0, p)
 
 -- The adapters' dissectors, found by a rule, never listed: in the source tree (this file is
--- tools/wireshark/drivegate.lua) every adapters/<id>/dissector.lua; installed, every
--- drivegate_<id>.lua beside this file (unless Wireshark loads them itself from its plugin
--- folder). Each loads once, however it is found.
+-- tools/wireshark/drivegate.lua) every adapters/<id>/dissector.lua; then every drivegate_*.lua
+-- beside this file: a plugin folder (the build's build/wireshark/, or installed) holds each
+-- adapter's as drivegate_<id>.lua and each described protocol's data as
+-- drivegate_framed_<NAME>.lua, unless Wireshark loads them itself from its plugin folder. Each
+-- loads once, however it is found.
 local here = (debug and debug.getinfo(1, "S").source or ""):match("^@(.*[/\\])") or ""
 local function load(path)
   local fh = io.open(path, "r")
@@ -305,9 +307,11 @@ local function entries(dir, ext)
   return names
 end
 if here ~= "" then
-  local adapters_dir = here .. "../../adapters"
-  for _, id in ipairs(entries(adapters_dir)) do
-    load(adapters_dir .. "/" .. id .. "/dissector.lua")
+  if here:match("tools[/\\]wireshark[/\\]$") then
+    local adapters_dir = here .. "../../adapters"
+    for _, id in ipairs(entries(adapters_dir)) do
+      load(adapters_dir .. "/" .. id .. "/dissector.lua")
+    end
   end
   for _, name in ipairs(entries(here, ".lua")) do
     if name:match("^drivegate_.+%.lua$") then load(here .. name) end
