@@ -26,30 +26,36 @@ local f = drivegate.fields(p, "unicla_edrive", {
   { "size", "uint8", "Payload size", filter = "payload_size" },
   { "payload", "bytes", "Payload" },
   { "speed", "uint16", "Speed (rpm, 0 = stop)" },
-  { "suction_pressure", "float", "Suction pressure (bar-a)" },
-  { "discharge_pressure", "float", "Discharge pressure (bar-a)" },
-  { "suction_temperature", "float", "Suction temperature (degC)" },
-  { "discharge_temperature", "float", "Discharge temperature (degC)" },
-  { "suction_superheat", "float", "Suction superheat (K)" },
-  { "discharge_superheat", "float", "Discharge superheat (K)" },
-  { "rpm", "uint16", "Speed (rpm)" },
-  { "volts", "uint16", "Voltage (V)" },
-  { "watts", "uint16", "Power (W)" },
-  { "torque", "uint16", "Torque (Nm)" },
-  { "op_state", "uint8", "Operating state" },
-  { "control_mode", "uint8", "Control mode" },
-  { "demand", "uint8", "Demand (%)" },
-  { "remote_enable", "uint8", "Remote enable" },
-  { "anti_short", "uint8", "Anti-short cycle" },
-  { "motor_temperature", "float", "Motor temperature (degC)" },
-  { "switch_temperature", "float", "Switch temperature (degC)" },
-  { "compressor_run", "uint16", "Compressor run safety flags", base.HEX,
-    filter = "compressor_run_flags" },
-  { "compressor_start", "uint16", "Compressor start safety flags", base.HEX,
-    filter = "compressor_start_flags" },
-  { "motor_run", "uint16", "Motor run safety flags", base.HEX, filter = "motor_run_flags" },
-  { "motor_start", "uint16", "Motor start safety flags", base.HEX, filter = "motor_start_flags" },
-  { "electrical", "uint24", "Electrical safety flags", base.HEX, filter = "electrical_flags" },
+  -- The status payload (message 01, 64 bytes: the document's "Status" table, eight bytes a row).
+  { "status", "layout", fields = {
+    { "suction_pressure", "float", "Suction pressure (bar-a)", at = 0 },
+    { "discharge_pressure", "float", "Discharge pressure (bar-a)", at = 4 },
+    { "suction_temperature", "float", "Suction temperature (degC)", at = 8 },
+    { "discharge_temperature", "float", "Discharge temperature (degC)", at = 12 },
+    { "suction_superheat", "float", "Suction superheat (K)", at = 16 },
+    { "discharge_superheat", "float", "Discharge superheat (K)", at = 20 },
+    { "rpm", "uint16", "Speed (rpm)", at = 24 },
+    { "volts", "uint16", "Voltage (V)", at = 26 },
+    { "watts", "uint16", "Power (W)", at = 28 },
+    { "torque", "uint16", "Torque (Nm)", at = 30 },
+    { "op_state", "uint8", "Operating state", at = 32 },
+    { "control_mode", "uint8", "Control mode", at = 33 },
+    { "demand", "uint8", "Demand (%)", at = 34 },
+    { "remote_enable", "uint8", "Remote enable", at = 35 },
+    { "anti_short", "uint8", "Anti-short cycle", at = 36 },
+    { "motor_temperature", "float", "Motor temperature (degC)", at = 40 },
+    { "switch_temperature", "float", "Switch temperature (degC)", at = 44 },
+    { "compressor_run", "uint16", "Compressor run safety flags", base.HEX,
+      filter = "compressor_run_flags", at = 48 },
+    { "compressor_start", "uint16", "Compressor start safety flags", base.HEX,
+      filter = "compressor_start_flags", at = 50 },
+    { "motor_run", "uint16", "Motor run safety flags", base.HEX, filter = "motor_run_flags",
+      at = 52 },
+    { "motor_start", "uint16", "Motor start safety flags", base.HEX,
+      filter = "motor_start_flags", at = 54 },
+    { "electrical", "uint24", "Electrical safety flags", base.HEX, filter = "electrical_flags",
+      at = 56 },
+  } },
   { "crc", "uint16", "CRC-16/XMODEM", base.HEX },
   { "crc_status", "uint8", "CRC status", base.DEC, drivegate.checksum_status,
     filter = "crc.status" },
@@ -67,31 +73,6 @@ local function crc_xmodem(tvb, len)
     end
   end
   return crc
-end
-
-local function status_fields(t, tvb, at)
-  t:add(f.suction_pressure, tvb(at, 4))
-  t:add(f.discharge_pressure, tvb(at + 4, 4))
-  t:add(f.suction_temperature, tvb(at + 8, 4))
-  t:add(f.discharge_temperature, tvb(at + 12, 4))
-  t:add(f.suction_superheat, tvb(at + 16, 4))
-  t:add(f.discharge_superheat, tvb(at + 20, 4))
-  t:add(f.rpm, tvb(at + 24, 2))
-  t:add(f.volts, tvb(at + 26, 2))
-  t:add(f.watts, tvb(at + 28, 2))
-  t:add(f.torque, tvb(at + 30, 2))
-  t:add(f.op_state, tvb(at + 32, 1))
-  t:add(f.control_mode, tvb(at + 33, 1))
-  t:add(f.demand, tvb(at + 34, 1))
-  t:add(f.remote_enable, tvb(at + 35, 1))
-  t:add(f.anti_short, tvb(at + 36, 1))
-  t:add(f.motor_temperature, tvb(at + 40, 4))
-  t:add(f.switch_temperature, tvb(at + 44, 4))
-  t:add(f.compressor_run, tvb(at + 48, 2))
-  t:add(f.compressor_start, tvb(at + 50, 2))
-  t:add(f.motor_run, tvb(at + 52, 2))
-  t:add(f.motor_start, tvb(at + 54, 2))
-  t:add(f.electrical, tvb(at + 56, 3))
 end
 
 function p.dissector(tvb, pinfo, tree)
@@ -132,7 +113,7 @@ function p.dissector(tvb, pinfo, tree)
   if plen > 0 then
     local pt = t:add(f.payload, u(8, plen))
     if msg == 0x01 and plen == 64 then
-      status_fields(pt, u, 8)
+      drivegate.add_layout(pt, u, 8, f.status)
       info = info .. string.format(", %d rpm", u(32, 2):uint())
     elseif msg == 0xC0 and plen == 2 then
       pt:add(f.speed, u(8, 2))

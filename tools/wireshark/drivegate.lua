@@ -32,20 +32,25 @@ function drivegate.first_load(id)
   return true
 end
 
--- The ProtoField constructors that take a display base; a row of one of them is shown in decimal
--- unless it says otherwise.
-local integer_types = { uint8 = true, uint16 = true, uint24 = true, uint32 = true, int8 = true,
-                        int16 = true, int32 = true }
+-- The ProtoField constructors of numbers, by the bytes of their value: a row of an integer one is
+-- shown in decimal unless it says otherwise; a "layout" row's fields take that many bytes.
+local widths = { uint8 = 1, uint16 = 2, uint24 = 3, uint32 = 4, int8 = 1, int16 = 2, int32 = 4 }
+local integer_types = {}
+for type in pairs(widths) do integer_types[type] = true end
+widths.float = 4
 
 -- `proto`'s fields, from rows { key, type, label, base, values, mask }: `type` names the
 -- ProtoField constructor (uint8, bytes, float, bool...); the field's filter is `abbrev.<key>`, or
 -- `abbrev.<filter>` where the row has one; an integer is shown in base.DEC unless the row says
--- otherwise. A row of type "bits" is one flag per bit of a byte, bit 0 first: its `flags` are
--- { name, label } each, filtered as `abbrev.<filter or key>.<name>`; its key gets the list of them
--- (drivegate.add_bits). Sets proto.fields; returns key -> field.
+-- otherwise. Two kinds of row stand for several fields, their key for the list of them:
+--   "bits", one flag per bit of a byte, bit 0 first: its `flags` are { name, label } each,
+--     filtered as `abbrev.<filter or key>.<name>` (drivegate.add_bits);
+--   "layout", the numbers of a block one after another: its `fields` are rows of their own, each
+--     with its offset in the block, `at` (drivegate.add_layout).
+-- Sets proto.fields; returns key -> field.
 function drivegate.fields(proto, abbrev, rows)
   local f, all = {}, {}
-  for _, r in ipairs(rows) do
+  local function add(r)
     local key, type, label = r[1], r[2], r[3]
     local filter = abbrev .. "." .. (r.filter or key)
     if type == "bits" then
@@ -55,13 +60,20 @@ function drivegate.fields(proto, abbrev, rows)
         f[key][i] = pf
         all[#all + 1] = pf
       end
+    elseif type == "layout" then
+      f[key] = {}
+      for _, field in ipairs(r.fields) do
+        f[key][#f[key] + 1] = { add(field), field.at, widths[field[2]] }
+      end
     else
       local display = r[4]
       if display == nil and integer_types[type] then display = base.DEC end
       f[key] = ProtoField[type](filter, label, display, r[5], r[6])
       all[#all + 1] = f[key]
     end
+    return f[key]
   end
+  for _, r in ipairs(rows) do add(r) end
   proto.fields = all
   return f
 end
@@ -69,6 +81,11 @@ end
 -- Each flag of a "bits" row (drivegate.fields) under `tree`, over the byte `range`.
 function drivegate.add_bits(tree, flags, range)
   for _, flag in ipairs(flags) do tree:add(flag, range) end
+end
+
+-- Each field of a "layout" row (drivegate.fields) under `tree`, at its offset from `from`.
+function drivegate.add_layout(tree, tvb, from, layout)
+  for _, l in ipairs(layout) do tree:add(l[1], tvb(from + l[2], l[3])) end
 end
 
 -- The tree of one frame of `proto`, its name in the Protocol column, and the frame's length; the
