@@ -27,8 +27,7 @@ local f = drivegate.fields(p, "ed3100", {
   { "exception_code", "uint8", "Exception code" },
   { "data", "bytes", "Data" },
   { "crc", "uint16", "CRC-16", base.HEX },
-  { "crc_status", "uint8", "CRC status", base.DEC, drivegate.checksum_status,
-    filter = "crc.status" },
+  { "crc_status", "checksum_status", "CRC status", filter = "crc.status" },
 })
 local e_bad, e_len = drivegate.experts(p, "ed3100.crc.bad", "Bad CRC",
                                        "ed3100.length", "Unexpected frame length")

@@ -37,8 +37,7 @@ local f = drivegate.fields(p, "fdc1", {
   { "checksum_odd", "uint8", "Checksum (odd bytes)", base.HEX },
   { "checksum_even", "uint8", "Checksum (even bytes)", base.HEX },
   { "checksum", "uint8", "Checksum (XOR of bytes 1..7)", base.HEX },
-  { "checksum_status", "uint8", "Checksum status", base.DEC, drivegate.checksum_status,
-    filter = "checksum.status" },
+  { "checksum_status", "checksum_status", "Checksum status", filter = "checksum.status" },
 })
 local e_bad, e_unknown = drivegate.experts(p, "fdc1.checksum.bad", "Bad checksum",
                                            "fdc1.unknown", "Not an FDC1 frame")

@@ -27,8 +27,7 @@ local f = drivegate.fields(p, "mdriver2400", {
   { "ipm", "uint8", "IPM temperature (deg C)", filter = "ipm_temp" },
   { "info", "uint8", "Info", base.HEX },
   { "cs", "uint8", "Checksum (sum = 0x55)", base.HEX, filter = "checksum" },
-  { "cs_status", "uint8", "Checksum status", base.DEC, drivegate.checksum_status,
-    filter = "checksum.status" },
+  { "cs_status", "checksum_status", "Checksum status", filter = "checksum.status" },
 })
 local e_bad, e_len = drivegate.experts(p, "mdriver2400.checksum.bad", "Bad checksum",
                                        "mdriver2400.length", "Length byte does not match the frame")

@@ -49,8 +49,7 @@ local f = drivegate.fields(p, "drivegate_modbus", {
   { "data", "bytes", "Data" },
   { "crc", "uint16", "CRC-16", base.HEX },
   { "lrc", "uint8", "LRC", base.HEX },
-  { "crc_status", "uint8", "Checksum status", base.DEC, drivegate.checksum_status,
-    filter = "crc.status" },
+  { "crc_status", "checksum_status", "Checksum status", filter = "crc.status" },
 })
 local e_bad, e_len = drivegate.experts(p, "drivegate_modbus.crc.bad", "Bad checksum",
                                        "drivegate_modbus.length", "Unexpected frame length")

@@ -36,8 +36,7 @@ local f = drivegate.fields(p, "nidec_washer", {
   } },
   { "e", "uint8", "e", base.HEX },
   { "checksum", "uint8", "Checksum (XOR)", base.HEX },
-  { "checksum_status", "uint8", "Checksum status", base.DEC, drivegate.checksum_status,
-    filter = "checksum.status" },
+  { "checksum_status", "checksum_status", "Checksum status", filter = "checksum.status" },
 })
 local e_bad, e_len = drivegate.experts(p, "nidec_washer.checksum.bad", "Bad checksum",
                                        "nidec_washer.length", "Unexpected frame length")

@@ -57,8 +57,7 @@ local f = drivegate.fields(p, "unicla_edrive", {
       at = 56 },
   } },
   { "crc", "uint16", "CRC-16/XMODEM", base.HEX },
-  { "crc_status", "uint8", "CRC status", base.DEC, drivegate.checksum_status,
-    filter = "crc.status" },
+  { "crc_status", "checksum_status", "CRC status", filter = "crc.status" },
 })
 local e_bad, e_frame = drivegate.experts(p, "unicla_edrive.crc.bad", "Bad CRC",
                                          "unicla_edrive.framing", "Bad framing or length")

@@ -42,7 +42,8 @@ widths.float = 4
 -- `proto`'s fields, from rows { key, type, label, base, values, mask }: `type` names the
 -- ProtoField constructor (uint8, bytes, float, bool...); the field's filter is `abbrev.<key>`, or
 -- `abbrev.<filter>` where the row has one; an integer is shown in base.DEC unless the row says
--- otherwise. Two kinds of row stand for several fields, their key for the list of them:
+-- otherwise. A row of type "checksum_status" is the Good / Bad of a checksum (add_checksum
+-- fills it). Two kinds of row stand for several fields, their key for the list of them:
 --   "bits", one flag per bit of a byte, bit 0 first: its `flags` are { name, label } each,
 --     filtered as `abbrev.<filter or key>.<name>` (drivegate.add_bits);
 --   "layout", the numbers of a block one after another: its `fields` are rows of their own, each
@@ -60,6 +61,9 @@ function drivegate.fields(proto, abbrev, rows)
         f[key][i] = pf
         all[#all + 1] = pf
       end
+    elseif type == "checksum_status" then
+      f[key] = ProtoField.uint8(filter, label, base.DEC, drivegate.checksum_status)
+      all[#all + 1] = f[key]
     elseif type == "layout" then
       f[key] = {}
       for _, field in ipairs(r.fields) do
