@@ -15,9 +15,7 @@ local commands = { [0x001E] = "Forward continuous", [0x0012] = "Forward one-shot
                    [0x002E] = "Reverse continuous", [0x0001] = "Stop" }
 
 local f = drivegate.fields(p, "ed3100", {
-  { "address", "uint8", "Address" },
-  { "func", "uint8", "Function", base.HEX, functions, 0x7F, filter = "function" },
-  { "exception_flag", "bool", "Exception", 8, nil, 0x80, filter = "exception" },
+  drivegate.modbus_rtu_rows(functions),
   { "register", "uint16", "Register", base.HEX, registers },
   { "count", "uint16", "Register count" },
   { "byte_count", "uint8", "Byte count" },

@@ -31,9 +31,7 @@ local mei_types = { [0x0D] = "CANopen general reference", [0x0E] = "Read device 
 
 local f = drivegate.fields(p, "drivegate_modbus", {
   { "framing", "string", "Framing" },
-  { "address", "uint8", "Address" },
-  { "func", "uint8", "Function", base.HEX, functions, 0x7F, filter = "function" },
-  { "exception_flag", "bool", "Exception", 8, nil, 0x80, filter = "exception" },
+  drivegate.modbus_rtu_rows(functions),
   { "exception_code", "uint8", "Exception code", base.DEC, exceptions },
   { "register", "uint16", "Start address" },
   { "count", "uint16", "Quantity" },

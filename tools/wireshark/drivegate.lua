@@ -36,7 +36,7 @@ end
 -- shown in decimal unless it says otherwise; a "layout" row's fields take that many bytes.
 local widths = { uint8 = 1, uint16 = 2, uint24 = 3, uint32 = 4, int8 = 1, int16 = 2, int32 = 4 }
 local integer_types = {}
-for type in pairs(widths) do integer_types[type] = true end
+for kind in pairs(widths) do integer_types[kind] = true end
 widths.float = 4
 
 -- `proto`'s fields, from rows { key, type, label, base, values, mask }: `type` names the
@@ -48,31 +48,35 @@ widths.float = 4
 --     filtered as `abbrev.<filter or key>.<name>` (drivegate.add_bits);
 --   "layout", the numbers of a block one after another: its `fields` are rows of their own, each
 --     with its offset in the block, `at` (drivegate.add_layout).
--- Sets proto.fields; returns key -> field.
+-- A row may also be a list of rows. Sets proto.fields; returns key -> field.
 function drivegate.fields(proto, abbrev, rows)
   local f, all = {}, {}
   local function add(r)
-    local key, type, label = r[1], r[2], r[3]
+    if type(r[1]) == "table" then  -- a list of rows (drivegate.modbus_rtu_rows)
+      for _, row in ipairs(r) do add(row) end
+      return
+    end
+    local key, kind, label = r[1], r[2], r[3]
     local filter = abbrev .. "." .. (r.filter or key)
-    if type == "bits" then
+    if kind == "bits" then
       f[key] = {}
       for i, flag in ipairs(r.flags) do
         local pf = ProtoField.bool(filter .. "." .. flag[1], flag[2], 8, nil, lshift(1, i - 1))
         f[key][i] = pf
         all[#all + 1] = pf
       end
-    elseif type == "checksum_status" then
+    elseif kind == "checksum_status" then
       f[key] = ProtoField.uint8(filter, label, base.DEC, drivegate.checksum_status)
       all[#all + 1] = f[key]
-    elseif type == "layout" then
+    elseif kind == "layout" then
       f[key] = {}
       for _, field in ipairs(r.fields) do
         f[key][#f[key] + 1] = { add(field), field.at, widths[field[2]] }
       end
     else
       local display = r[4]
-      if display == nil and integer_types[type] then display = base.DEC end
-      f[key] = ProtoField[type](filter, label, display, r[5], r[6])
+      if display == nil and integer_types[kind] then display = base.DEC end
+      f[key] = ProtoField[kind](filter, label, display, r[5], r[6])
       all[#all + 1] = f[key]
     end
     return f[key]
@@ -80,6 +84,17 @@ function drivegate.fields(proto, abbrev, rows)
   for _, r in ipairs(rows) do add(r) end
   proto.fields = all
   return f
+end
+
+-- The rows (drivegate.fields) of a Modbus RTU frame's address and function code, its exception
+-- bit apart (MODBUS over Serial Line V1.02, 2.5.1; Application Protocol V1.1b3, 7: an exception
+-- reply's function code is the request's + 0x80), `functions` naming the codes.
+function drivegate.modbus_rtu_rows(functions)
+  return {
+    { "address", "uint8", "Address" },
+    { "func", "uint8", "Function", base.HEX, functions, 0x7F, filter = "function" },
+    { "exception_flag", "bool", "Exception", 8, nil, 0x80, filter = "exception" },
+  }
 end
 
 -- Each flag of a "bits" row (drivegate.fields) under `tree`, over the byte `range`.
