@@ -224,7 +224,7 @@ local f = drivegate.fields(p, "drivegate", {
   { "version", "uint8", "Version" },
   { "direction", "uint8", "Direction", base.DEC, directions },
   { "flags", "uint8", "Flags", base.HEX },
-  { "flag_bits", "bits", filter = "flags", flags = {
+  { "flag_bits", "bits", filter = "flags", flags = {  -- docs/capture.md: 0x01, 0x02 ... 0x20
     { "bad_checksum", "Bad checksum (station's verdict)" },
     { "noise", "Noise (not a frame)" },
     { "nack", "NACK" },
