@@ -14,24 +14,19 @@ local registers = { [0x2000] = "Drive command", [0x2001] = "Frequency (0.01 Hz)"
 local commands = { [0x001E] = "Forward continuous", [0x0012] = "Forward one-shot",
                    [0x002E] = "Reverse continuous", [0x0001] = "Stop" }
 
-local f = {
-  address  = ProtoField.uint8("ed3100.address", "Address", base.DEC),
-  func     = ProtoField.uint8("ed3100.function", "Function", base.HEX, functions, 0x7F),
-  exception_flag = ProtoField.bool("ed3100.exception", "Exception", 8, nil, 0x80),
-  register = ProtoField.uint16("ed3100.register", "Register", base.HEX, registers),
-  count    = ProtoField.uint16("ed3100.count", "Register count", base.DEC),
-  byte_count = ProtoField.uint8("ed3100.byte_count", "Byte count", base.DEC),
-  value    = ProtoField.uint16("ed3100.value", "Value", base.HEX),
-  command  = ProtoField.uint16("ed3100.command", "Drive command", base.HEX, commands),
-  word     = ProtoField.uint16("ed3100.word", "Data word", base.HEX),
-  exception_code = ProtoField.uint8("ed3100.exception_code", "Exception code", base.DEC),
-  data     = ProtoField.bytes("ed3100.data", "Data"),
-  crc      = ProtoField.uint16("ed3100.crc", "CRC-16", base.HEX),
-  crc_status = ProtoField.uint8("ed3100.crc.status", "CRC status", base.DEC,
-                                drivegate.checksum_status),
-}
-p.fields = { f.address, f.func, f.exception_flag, f.register, f.count, f.byte_count, f.value,
-             f.command, f.word, f.exception_code, f.data, f.crc, f.crc_status }
+local f = drivegate.fields(p, "ed3100", {
+  drivegate.modbus_rtu_rows(functions),
+  { "register", "uint16", "Register", base.HEX, registers },
+  { "count", "uint16", "Register count" },
+  { "byte_count", "uint8", "Byte count" },
+  { "value", "uint16", "Value", base.HEX },
+  { "command", "uint16", "Drive command", base.HEX, commands },
+  { "word", "uint16", "Data word", base.HEX },
+  { "exception_code", "uint8", "Exception code" },
+  { "data", "bytes", "Data" },
+  { "crc", "uint16", "CRC-16", base.HEX },
+  { "crc_status", "checksum_status", "CRC status", filter = "crc.status" },
+})
 local e_bad, e_len = drivegate.experts(p, "ed3100.crc.bad", "Bad CRC",
                                        "ed3100.length", "Unexpected frame length")
 
@@ -55,9 +50,7 @@ function p.dissector(tvb, pinfo, tree)
   elseif fn == 0x03 then
     if to_drive then
       if body == 6 then
-        t:add(f.register, tvb(2, 2))
-        t:add(f.count, tvb(4, 2))
-        info = info .. string.format(" 0x%04x x%d", tvb(2, 2):uint(), tvb(4, 2):uint())
+        info = info .. drivegate.start_quantity(t, tvb, f.register, f.count, " 0x%04x x%d")
       else
         t:add_proto_expert_info(e_len)
       end
@@ -83,9 +76,7 @@ function p.dissector(tvb, pinfo, tree)
     end
   elseif fn == 0x10 then
     if body >= 6 then
-      t:add(f.register, tvb(2, 2))
-      t:add(f.count, tvb(4, 2))
-      info = info .. string.format(" 0x%04x x%d", tvb(2, 2):uint(), tvb(4, 2):uint())
+      info = info .. drivegate.start_quantity(t, tvb, f.register, f.count, " 0x%04x x%d")
       if to_drive and body >= 7 then
         t:add(f.byte_count, tvb(6, 1))
         words(t, tvb, 7, body)

@@ -20,29 +20,25 @@ local alarms = {
   [0xD] = "Motor overload, end of retries", [0xF] = "Internal error",
 }
 
-local f = {
-  header   = ProtoField.bytes("fdc1.header", "Header"),
-  b3       = ProtoField.uint8("fdc1.b3", "b3 (0: motor off)", base.DEC),
-  rpm      = ProtoField.uint16("fdc1.rpm", "Speed (rpm)", base.DEC),
-  alarm    = ProtoField.uint8("fdc1.alarm", "Alarm code", base.HEX),
-  current  = ProtoField.uint16("fdc1.current", "Current (A x 3160)", base.DEC),
-  restart  = ProtoField.uint16("fdc1.time_to_restart", "Time to next start (s x 122)", base.DEC),
-  min_rpm  = ProtoField.uint16("fdc1.min_rpm", "Minimum speed (rpm)", base.DEC),
-  max_rpm  = ProtoField.uint16("fdc1.max_rpm", "Maximum speed (rpm)", base.DEC),
-  fixed    = ProtoField.uint8("fdc1.fixed", "Fixed (85)", base.DEC),
-  reserved = ProtoField.uint8("fdc1.reserved", "Reserved", base.DEC),
-  mode     = ProtoField.uint8("fdc1.mode", "Mode", base.DEC),
-  level    = ProtoField.uint16("fdc1.level", "Level (V x 1187)", base.DEC),
-  data     = ProtoField.bytes("fdc1.data", "Data"),
-  checksum_odd = ProtoField.uint8("fdc1.checksum_odd", "Checksum (odd bytes)", base.HEX),
-  checksum_even = ProtoField.uint8("fdc1.checksum_even", "Checksum (even bytes)", base.HEX),
-  checksum = ProtoField.uint8("fdc1.checksum", "Checksum (XOR of bytes 1..7)", base.HEX),
-  checksum_status = ProtoField.uint8("fdc1.checksum.status", "Checksum status", base.DEC,
-                                     drivegate.checksum_status),
-}
-p.fields = { f.header, f.b3, f.rpm, f.alarm, f.current, f.restart, f.min_rpm, f.max_rpm, f.fixed,
-             f.reserved, f.mode, f.level, f.data, f.checksum_odd, f.checksum_even, f.checksum,
-             f.checksum_status }
+local f = drivegate.fields(p, "fdc1", {
+  { "header", "bytes", "Header" },
+  { "b3", "uint8", "b3 (0: motor off)" },
+  { "rpm", "uint16", "Speed (rpm)" },
+  { "alarm", "uint8", "Alarm code", base.HEX },
+  { "current", "uint16", "Current (A x 3160)" },
+  { "restart", "uint16", "Time to next start (s x 122)", filter = "time_to_restart" },
+  { "min_rpm", "uint16", "Minimum speed (rpm)" },
+  { "max_rpm", "uint16", "Maximum speed (rpm)" },
+  { "fixed", "uint8", "Fixed (85)" },
+  { "reserved", "uint8", "Reserved" },
+  { "mode", "uint8", "Mode" },
+  { "level", "uint16", "Level (V x 1187)" },
+  { "data", "bytes", "Data" },
+  { "checksum_odd", "uint8", "Checksum (odd bytes)", base.HEX },
+  { "checksum_even", "uint8", "Checksum (even bytes)", base.HEX },
+  { "checksum", "uint8", "Checksum (XOR of bytes 1..7)", base.HEX },
+  { "checksum_status", "checksum_status", "Checksum status", filter = "checksum.status" },
+})
 local e_bad, e_unknown = drivegate.experts(p, "fdc1.checksum.bad", "Bad checksum",
                                            "fdc1.unknown", "Not an FDC1 frame")
 

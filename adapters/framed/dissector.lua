@@ -1,10 +1,10 @@
 -- framed: every described protocol (docs/protocols.md), decoded from its description's data.
 -- One dissector reads them all: each description's data (`drivegate protocol dissector NAME`,
--- shipped ones in protocols/NAME.lua beside this file, installed ones as drivegate_framed_*.lua)
--- hands itself to it, and it registers a protocol `framed_NAME` under the adapter id
--- "framed/NAME" a capture names a described device's frames with. A frame is the first message of
--- its direction whose size and constants it fits (unstuffed between the flags, where the framing
--- stuffs); each field is shown by its name, each check verified into
+-- drivegate_framed_NAME.lua in the plugin folder; the build makes the shipped descriptions' in
+-- build/wireshark/) hands itself to it, and it registers a protocol `framed_NAME` under the
+-- adapter id "framed/NAME" a capture names a described device's frames with. A frame is the first
+-- message of its direction whose size and constants it fits (unstuffed between the flags, where
+-- the framing stuffs); each field is shown by its name, each check verified into
 -- framed_NAME.checksum.status (1 Good, 0 Bad, with an expert error on a mismatch).
 local drivegate = _G.drivegate
 if not drivegate.first_load("framed") then return end
@@ -57,20 +57,9 @@ end
 -- The bytes between the flags, unstuffed: a ByteArray, or nil and why.
 local function unstuff(p, tvb)
   local f = p.framing
-  local len = tvb:len()
-  if len < 2 or tvb(0, 1):uint() ~= f.start then return nil, "no start flag" end
-  local out = ByteArray.new()
-  local i = 1
-  while i < len - 1 do
-    local b = tvb(i, 1):uint()
-    if f.escape and b == f.escape then
-      if i + 1 >= len - 1 then return nil, "an escape at the end" end
-      b = bxor(tvb(i + 1, 1):uint(), f.escape_xor)
-      i = i + 1
-    end
-    out:append(ByteArray.new(string.format("%02x", b)))
-    i = i + 1
-  end
+  if tvb:len() < 2 or tvb(0, 1):uint() ~= f.start then return nil, "no start flag" end
+  local out = drivegate.unstuff(tvb, f.escape, f.escape_xor)
+  if not out then return nil, "an escape at the end" end
   return out
 end
 
@@ -192,12 +181,3 @@ end
 drivegate.framed_register = register
 drivegate.framed_protocols = drivegate.framed_protocols or {}
 for _, p in pairs(drivegate.framed_protocols) do register(p) end
-
--- The shipped descriptions' data, in the source tree: protocols/*.lua beside this file.
-local here = (debug and debug.getinfo(1, "S").source or ""):match("^@(.*[/\\])") or ""
-if here ~= "" and Dir and Dir.exists(here .. "protocols") then
-  local names = {}
-  for name in Dir.open(here .. "protocols", ".lua") do names[#names + 1] = name end
-  table.sort(names)
-  for _, name in ipairs(names) do dofile(here .. "protocols/" .. name) end
-end

@@ -12,26 +12,23 @@ local errors = {
   [0x00] = "None", [0x0C] = "No frame from the master for 6 s, motor stopped",
 }
 
-local f = {
-  src     = ProtoField.uint8("mdriver2400.src", "Source", base.HEX),
-  dst     = ProtoField.uint8("mdriver2400.dst", "Destination", base.HEX),
-  cmd     = ProtoField.uint8("mdriver2400.cmd", "Command", base.HEX, commands),
-  n       = ProtoField.uint8("mdriver2400.n", "n (data length - 1)", base.DEC),
-  data    = ProtoField.bytes("mdriver2400.data", "Data"),
-  code    = ProtoField.bytes("mdriver2400.fixed_code", "Fixed code"),
-  target  = ProtoField.uint8("mdriver2400.target_code", "Target frequency code", base.HEX),
-  change  = ProtoField.uint8("mdriver2400.change_time", "Change time", base.HEX, change_times),
-  actual  = ProtoField.uint8("mdriver2400.actual_code", "Actual frequency code", base.HEX),
-  reserved = ProtoField.uint8("mdriver2400.reserved", "Reserved", base.HEX),
-  error   = ProtoField.uint8("mdriver2400.error", "Error code", base.HEX, errors),
-  ipm     = ProtoField.uint8("mdriver2400.ipm_temp", "IPM temperature (deg C)", base.DEC),
-  info    = ProtoField.uint8("mdriver2400.info", "Info", base.HEX),
-  cs      = ProtoField.uint8("mdriver2400.checksum", "Checksum (sum = 0x55)", base.HEX),
-  cs_status = ProtoField.uint8("mdriver2400.checksum.status", "Checksum status", base.DEC,
-                               drivegate.checksum_status),
-}
-p.fields = { f.src, f.dst, f.cmd, f.n, f.data, f.code, f.target, f.change, f.actual, f.reserved,
-             f.error, f.ipm, f.info, f.cs, f.cs_status }
+local f = drivegate.fields(p, "mdriver2400", {
+  { "src", "uint8", "Source", base.HEX },
+  { "dst", "uint8", "Destination", base.HEX },
+  { "cmd", "uint8", "Command", base.HEX, commands },
+  { "n", "uint8", "n (data length - 1)" },
+  { "data", "bytes", "Data" },
+  { "code", "bytes", "Fixed code", filter = "fixed_code" },
+  { "target", "uint8", "Target frequency code", base.HEX, filter = "target_code" },
+  { "change", "uint8", "Change time", base.HEX, change_times, filter = "change_time" },
+  { "actual", "uint8", "Actual frequency code", base.HEX, filter = "actual_code" },
+  { "reserved", "uint8", "Reserved", base.HEX },
+  { "error", "uint8", "Error code", base.HEX, errors },
+  { "ipm", "uint8", "IPM temperature (deg C)", filter = "ipm_temp" },
+  { "info", "uint8", "Info", base.HEX },
+  { "cs", "uint8", "Checksum (sum = 0x55)", base.HEX, filter = "checksum" },
+  { "cs_status", "checksum_status", "Checksum status", filter = "checksum.status" },
+})
 local e_bad, e_len = drivegate.experts(p, "mdriver2400.checksum.bad", "Bad checksum",
                                        "mdriver2400.length", "Length byte does not match the frame")
 

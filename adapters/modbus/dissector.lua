@@ -29,34 +29,26 @@ local exceptions = {
 }
 local mei_types = { [0x0D] = "CANopen general reference", [0x0E] = "Read device identification" }
 
-local f = {
-  framing  = ProtoField.string("drivegate_modbus.framing", "Framing"),
-  address  = ProtoField.uint8("drivegate_modbus.address", "Address", base.DEC),
-  func     = ProtoField.uint8("drivegate_modbus.function", "Function", base.HEX, functions, 0x7F),
-  exception_flag = ProtoField.bool("drivegate_modbus.exception", "Exception", 8, nil, 0x80),
-  exception_code = ProtoField.uint8("drivegate_modbus.exception_code", "Exception code",
-                                    base.DEC, exceptions),
-  register = ProtoField.uint16("drivegate_modbus.register", "Start address", base.DEC),
-  count    = ProtoField.uint16("drivegate_modbus.count", "Quantity", base.DEC),
-  write_register = ProtoField.uint16("drivegate_modbus.write_register", "Write start address",
-                                     base.DEC),
-  write_count = ProtoField.uint16("drivegate_modbus.write_count", "Write quantity", base.DEC),
-  byte_count = ProtoField.uint8("drivegate_modbus.byte_count", "Byte count", base.DEC),
-  value    = ProtoField.uint16("drivegate_modbus.value", "Value", base.HEX),
-  and_mask = ProtoField.uint16("drivegate_modbus.and_mask", "AND mask", base.HEX),
-  or_mask  = ProtoField.uint16("drivegate_modbus.or_mask", "OR mask", base.HEX),
-  word     = ProtoField.uint16("drivegate_modbus.word", "Register", base.HEX),
-  bits     = ProtoField.bytes("drivegate_modbus.bits", "Bits"),
-  mei      = ProtoField.uint8("drivegate_modbus.mei", "MEI type", base.HEX, mei_types),
-  data     = ProtoField.bytes("drivegate_modbus.data", "Data"),
-  crc      = ProtoField.uint16("drivegate_modbus.crc", "CRC-16", base.HEX),
-  lrc      = ProtoField.uint8("drivegate_modbus.lrc", "LRC", base.HEX),
-  crc_status = ProtoField.uint8("drivegate_modbus.crc.status", "Checksum status", base.DEC,
-                                drivegate.checksum_status),
-}
-p.fields = { f.framing, f.address, f.func, f.exception_flag, f.exception_code, f.register,
-             f.count, f.write_register, f.write_count, f.byte_count, f.value, f.and_mask,
-             f.or_mask, f.word, f.bits, f.mei, f.data, f.crc, f.lrc, f.crc_status }
+local f = drivegate.fields(p, "drivegate_modbus", {
+  { "framing", "string", "Framing" },
+  drivegate.modbus_rtu_rows(functions),
+  { "exception_code", "uint8", "Exception code", base.DEC, exceptions },
+  { "register", "uint16", "Start address" },
+  { "count", "uint16", "Quantity" },
+  { "write_register", "uint16", "Write start address" },
+  { "write_count", "uint16", "Write quantity" },
+  { "byte_count", "uint8", "Byte count" },
+  { "value", "uint16", "Value", base.HEX },
+  { "and_mask", "uint16", "AND mask", base.HEX },
+  { "or_mask", "uint16", "OR mask", base.HEX },
+  { "word", "uint16", "Register", base.HEX },
+  { "bits", "bytes", "Bits" },
+  { "mei", "uint8", "MEI type", base.HEX, mei_types },
+  { "data", "bytes", "Data" },
+  { "crc", "uint16", "CRC-16", base.HEX },
+  { "lrc", "uint8", "LRC", base.HEX },
+  { "crc_status", "checksum_status", "Checksum status", filter = "crc.status" },
+})
 local e_bad, e_len = drivegate.experts(p, "drivegate_modbus.crc.bad", "Bad checksum",
                                        "drivegate_modbus.length", "Unexpected frame length")
 
@@ -91,9 +83,7 @@ local function pdu(t, tvb, body, to_drive)
   elseif fn >= 0x01 and fn <= 0x04 then
     if to_drive then
       if need(4) then
-        t:add(f.register, tvb(2, 2))
-        t:add(f.count, tvb(4, 2))
-        info = info .. string.format(" %d x%d", tvb(2, 2):uint(), tvb(4, 2):uint())
+        info = info .. drivegate.start_quantity(t, tvb, f.register, f.count, " %d x%d")
       end
     elseif n >= 1 then
       t:add(f.byte_count, tvb(2, 1))
@@ -113,9 +103,7 @@ local function pdu(t, tvb, body, to_drive)
     end
   elseif fn == 0x0F or fn == 0x10 then
     if n >= 4 then
-      t:add(f.register, tvb(2, 2))
-      t:add(f.count, tvb(4, 2))
-      info = info .. string.format(" %d x%d", tvb(2, 2):uint(), tvb(4, 2):uint())
+      info = info .. drivegate.start_quantity(t, tvb, f.register, f.count, " %d x%d")
       if to_drive and n >= 5 then
         t:add(f.byte_count, tvb(6, 1))
         if tvb(6, 1):uint() ~= n - 5 then t:add_proto_expert_info(e_len) end

@@ -14,32 +14,30 @@ local modes = {
 }
 local headers = { [0xA5] = "Frame (A5)", [0x5A] = "NACK (5A)" }
 
-local f = {
-  header  = ProtoField.uint8("nidec_washer.header", "Header", base.HEX, headers),
-  mode    = ProtoField.uint8("nidec_washer.mode", "Mode", base.HEX, modes),
-  data    = ProtoField.bytes("nidec_washer.data", "Data"),
-  d       = ProtoField.uint8("nidec_washer.d", "d", base.HEX),
-  speed   = ProtoField.uint16("nidec_washer.speed", "Speed (rpm)", base.DEC),
-  accel   = ProtoField.uint16("nidec_washer.accel", "Acceleration time (100 ms)", base.DEC),
-  platform = ProtoField.uint8("nidec_washer.platform", "Platform", base.DEC),
-  weight_raw = ProtoField.uint16("nidec_washer.empty_weight_raw", "Empty-basket raw weight", base.DEC),
-  error   = ProtoField.uint8("nidec_washer.error", "Error", base.HEX),
-  e_general = ProtoField.bool("nidec_washer.error.general", "General fault", 8, nil, 0x01),
-  e_ipm   = ProtoField.bool("nidec_washer.error.ipm_over_temp", "IPM over-temperature", 8, nil, 0x02),
-  e_ov    = ProtoField.bool("nidec_washer.error.dc_over_voltage", "DC bus over-voltage", 8, nil, 0x04),
-  e_stall = ProtoField.bool("nidec_washer.error.stall", "Stall / tacho missing", 8, nil, 0x08),
-  e_oc    = ProtoField.bool("nidec_washer.error.over_current", "Hardware over-current", 8, nil, 0x10),
-  e_uv    = ProtoField.bool("nidec_washer.error.under_voltage", "Bus under-voltage", 8, nil, 0x20),
-  e_phase = ProtoField.bool("nidec_washer.error.lost_phase", "Lost phase", 8, nil, 0x40),
-  e_mot   = ProtoField.bool("nidec_washer.error.motor_over_temp", "Motor over-temperature", 8, nil, 0x80),
-  e       = ProtoField.uint8("nidec_washer.e", "e", base.HEX),
-  checksum = ProtoField.uint8("nidec_washer.checksum", "Checksum (XOR)", base.HEX),
-  checksum_status = ProtoField.uint8("nidec_washer.checksum.status", "Checksum status", base.DEC,
-                                     drivegate.checksum_status),
-}
-p.fields = { f.header, f.mode, f.data, f.d, f.speed, f.accel, f.platform, f.weight_raw, f.error,
-             f.e_general, f.e_ipm, f.e_ov, f.e_stall, f.e_oc, f.e_uv, f.e_phase, f.e_mot, f.e,
-             f.checksum, f.checksum_status }
+local f = drivegate.fields(p, "nidec_washer", {
+  { "header", "uint8", "Header", base.HEX, headers },
+  { "mode", "uint8", "Mode", base.HEX, modes },
+  { "data", "bytes", "Data" },
+  { "d", "uint8", "d", base.HEX },
+  { "speed", "uint16", "Speed (rpm)" },
+  { "accel", "uint16", "Acceleration time (100 ms)" },
+  { "platform", "uint8", "Platform" },
+  { "weight_raw", "uint16", "Empty-basket raw weight", filter = "empty_weight_raw" },
+  { "error", "uint8", "Error", base.HEX },
+  { "error_bits", "bits", filter = "error", flags = {
+    { "general", "General fault" },
+    { "ipm_over_temp", "IPM over-temperature" },
+    { "dc_over_voltage", "DC bus over-voltage" },
+    { "stall", "Stall / tacho missing" },
+    { "over_current", "Hardware over-current" },
+    { "under_voltage", "Bus under-voltage" },
+    { "lost_phase", "Lost phase" },
+    { "motor_over_temp", "Motor over-temperature" },
+  } },
+  { "e", "uint8", "e", base.HEX },
+  { "checksum", "uint8", "Checksum (XOR)", base.HEX },
+  { "checksum_status", "checksum_status", "Checksum status", filter = "checksum.status" },
+})
 local e_bad, e_len = drivegate.experts(p, "nidec_washer.checksum.bad", "Bad checksum",
                                        "nidec_washer.length", "Unexpected frame length")
 
@@ -77,11 +75,7 @@ function p.dissector(tvb, pinfo, tree)
         end
       else
         if n ~= 4 and not (mode == 0x66 and n == 10) then t:add_proto_expert_info(e_len) end
-        local et = dt:add(f.error, tvb(2, 1))
-        for _, b in ipairs({ f.e_general, f.e_ipm, f.e_ov, f.e_stall, f.e_oc, f.e_uv, f.e_phase,
-                             f.e_mot }) do
-          et:add(b, tvb(2, 1))
-        end
+        drivegate.add_bits(dt:add(f.error, tvb(2, 1)), f.error_bits, tvb(2, 1))
         for i = 1, n - 1 do
           dt:add(f.e, tvb(2 + i, 1)):set_text(string.format("e%d: 0x%02x", i + 1, tvb(2 + i, 1):uint()))
         end

@@ -1,6 +1,6 @@
 // Captures end to end (docs/capture.md): drivegated on every built adapter's simulator, one bus
 // each, `drivegate capture` fetching ~2 s of each bus over /api/v1/capture, and tshark decoding
-// the pcaps with tools/wireshark/drivegate.lua, which loads every adapters/<id>/dissector.lua:
+// the pcaps with the build's Wireshark plugin folder (build/wireshark/, tools/wireshark/README.md):
 // every packet decoded by its adapter's protocol, no malformed packet and no Lua error, every
 // checksum good, both directions present. The adapters and what to expect of their captures come
 // from their own scenarios (adapters/<id>/tests/e2e_test.cpp, tests/support/e2e_adapters.h).
@@ -36,8 +36,10 @@ std::vector<AdapterCase> built_cases() {
   return out;
 }
 
+// The build's plugin folder, as installed: every adapter's dissector and the shipped
+// descriptions' generated data beside drivegate.lua, which loads them.
 std::filesystem::path dissector() {
-  return std::filesystem::path(DRIVEGATE_SOURCE_DIR) / "tools/wireshark/drivegate.lua";
+  return std::filesystem::path(DRIVEGATE_TEST_WIRESHARK_DIR) / "drivegate.lua";
 }
 
 std::optional<std::filesystem::path> tshark() {

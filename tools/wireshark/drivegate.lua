@@ -4,11 +4,12 @@
 --   tshark -X lua_script:tools/wireshark/drivegate.lua -r bus.pcap
 --
 -- This file loads every adapter's dissector (adapters/<id>/dissector.lua, or drivegate_<id>.lua
--- beside it once installed); see README.md.
+-- beside it in a plugin folder, the build's or installed); see README.md.
 
 local bxor = (bit32 and bit32.bxor) or bit.bxor
 local band = (bit32 and bit32.band) or bit.band
 local rshift = (bit32 and bit32.rshift) or bit.rshift
+local lshift = (bit32 and bit32.lshift) or bit.lshift
 
 -- Shared by the protocol files: one table in the Lua state's globals (a script's own globals
 -- may be private to it, so _G is named). They find it there because this file loads first:
@@ -20,7 +21,7 @@ drivegate.loaded = drivegate.loaded or {}
 drivegate.bxor = bxor
 drivegate.band = band
 drivegate.bor = (bit32 and bit32.bor) or bit.bor
-drivegate.lshift = (bit32 and bit32.lshift) or bit.lshift
+drivegate.lshift = lshift
 drivegate.rshift = rshift
 
 -- True the first time a protocol file `id` asks: each loads once, however it is found (from the
@@ -29,6 +30,81 @@ function drivegate.first_load(id)
   if drivegate.loaded[id] then return false end
   drivegate.loaded[id] = true
   return true
+end
+
+-- The ProtoField constructors of numbers, by the bytes of their value: a row of an integer one is
+-- shown in decimal unless it says otherwise; a "layout" row's fields take that many bytes.
+local widths = { uint8 = 1, uint16 = 2, uint24 = 3, uint32 = 4, int8 = 1, int16 = 2, int32 = 4 }
+local integer_types = {}
+for kind in pairs(widths) do integer_types[kind] = true end
+widths.float = 4
+
+-- `proto`'s fields, from rows { key, type, label, base, values, mask }: `type` names the
+-- ProtoField constructor (uint8, bytes, float, bool...); the field's filter is `abbrev.<key>`, or
+-- `abbrev.<filter>` where the row has one; an integer is shown in base.DEC unless the row says
+-- otherwise. A row of type "checksum_status" is the Good / Bad of a checksum (add_checksum
+-- fills it). Two kinds of row stand for several fields, their key for the list of them:
+--   "bits", one flag per bit of a byte, bit 0 first: its `flags` are { name, label } each,
+--     filtered as `abbrev.<filter or key>.<name>` (drivegate.add_bits);
+--   "layout", the numbers of a block one after another: its `fields` are rows of their own, each
+--     with its offset in the block, `at` (drivegate.add_layout).
+-- A row may also be a list of rows. Sets proto.fields; returns key -> field.
+function drivegate.fields(proto, abbrev, rows)
+  local f, all = {}, {}
+  local function add(r)
+    if type(r[1]) == "table" then  -- a list of rows (drivegate.modbus_rtu_rows)
+      for _, row in ipairs(r) do add(row) end
+      return
+    end
+    local key, kind, label = r[1], r[2], r[3]
+    local filter = abbrev .. "." .. (r.filter or key)
+    if kind == "bits" then
+      f[key] = {}
+      for i, flag in ipairs(r.flags) do
+        local pf = ProtoField.bool(filter .. "." .. flag[1], flag[2], 8, nil, lshift(1, i - 1))
+        f[key][i] = pf
+        all[#all + 1] = pf
+      end
+    elseif kind == "checksum_status" then
+      f[key] = ProtoField.uint8(filter, label, base.DEC, drivegate.checksum_status)
+      all[#all + 1] = f[key]
+    elseif kind == "layout" then
+      f[key] = {}
+      for _, field in ipairs(r.fields) do
+        f[key][#f[key] + 1] = { add(field), field.at, widths[field[2]] }
+      end
+    else
+      local display = r[4]
+      if display == nil and integer_types[kind] then display = base.DEC end
+      f[key] = ProtoField[kind](filter, label, display, r[5], r[6])
+      all[#all + 1] = f[key]
+    end
+    return f[key]
+  end
+  for _, r in ipairs(rows) do add(r) end
+  proto.fields = all
+  return f
+end
+
+-- The rows (drivegate.fields) of a Modbus RTU frame's address and function code, its exception
+-- bit apart (MODBUS over Serial Line V1.02, 2.5.1; Application Protocol V1.1b3, 7: an exception
+-- reply's function code is the request's + 0x80), `functions` naming the codes.
+function drivegate.modbus_rtu_rows(functions)
+  return {
+    { "address", "uint8", "Address" },
+    { "func", "uint8", "Function", base.HEX, functions, 0x7F, filter = "function" },
+    { "exception_flag", "bool", "Exception", 8, nil, 0x80, filter = "exception" },
+  }
+end
+
+-- Each flag of a "bits" row (drivegate.fields) under `tree`, over the byte `range`.
+function drivegate.add_bits(tree, flags, range)
+  for _, flag in ipairs(flags) do tree:add(flag, range) end
+end
+
+-- Each field of a "layout" row (drivegate.fields) under `tree`, at its offset from `from`.
+function drivegate.add_layout(tree, tvb, from, layout)
+  for _, l in ipairs(layout) do tree:add(l[1], tvb(from + l[2], l[3])) end
 end
 
 -- The tree of one frame of `proto`, its name in the Protocol column, and the frame's length; the
@@ -62,6 +138,35 @@ function drivegate.words(t, tvb, from, to, word_field, data_field)
     i = i + 2
   end
   if i < to then t:add(data_field, tvb(i, to - i)) end
+end
+
+-- A Modbus request's start address and quantity (MODBUS Application Protocol V1.1b3, 6.x: the
+-- two words after the function code, tvb[2, 6)) as `start_field` and `quantity_field`; the Info
+-- column's text of them, `format` given the two.
+function drivegate.start_quantity(tree, tvb, start_field, quantity_field, format)
+  tree:add(start_field, tvb(2, 2))
+  tree:add(quantity_field, tvb(4, 2))
+  return string.format(format, tvb(2, 2):uint(), tvb(4, 2):uint())
+end
+
+-- The bytes of tvb[1, len - 1), between a frame's two flags, unstuffed: an `escape` byte and the
+-- one after it stand for that one XOR `escape_xor` (a nil `escape`: nothing is stuffed). A
+-- ByteArray, or nil when the byte before the end flag is an escape.
+function drivegate.unstuff(tvb, escape, escape_xor)
+  local len = tvb:len()
+  local out = ByteArray.new()
+  local i = 1
+  while i < len - 1 do
+    local b = tvb(i, 1):uint()
+    if b == escape then
+      if i + 1 >= len - 1 then return nil end
+      b = bxor(tvb(i + 1, 1):uint(), escape_xor)
+      i = i + 1
+    end
+    out:append(ByteArray.new(string.format("%02x", b)))
+    i = i + 1
+  end
+  return out
 end
 
 -- CRC-16 of Modbus (MODBUS over Serial Line V1.02, 6.2.2: init FFFF, polynomial A001 reflected)
@@ -115,25 +220,25 @@ if not drivegate.first_load("drivegate") then return end
 local p = Proto("drivegate", "drivegate capture pseudo-header")
 
 local directions = { [0] = "gateway -> drive", [1] = "drive -> gateway" }
-local f = {
-  version   = ProtoField.uint8("drivegate.version", "Version", base.DEC),
-  direction = ProtoField.uint8("drivegate.direction", "Direction", base.DEC, directions),
-  flags     = ProtoField.uint8("drivegate.flags", "Flags", base.HEX),
-  bad       = ProtoField.bool("drivegate.flags.bad_checksum", "Bad checksum (station's verdict)", 8, nil, 0x01),
-  noise     = ProtoField.bool("drivegate.flags.noise", "Noise (not a frame)", 8, nil, 0x02),
-  nack      = ProtoField.bool("drivegate.flags.nack", "NACK", 8, nil, 0x04),
-  foreign   = ProtoField.bool("drivegate.flags.foreign", "Foreign (not for us)", 8, nil, 0x08),
-  echo      = ProtoField.bool("drivegate.flags.echo", "Echo mismatch", 8, nil, 0x10),
-  retry     = ProtoField.bool("drivegate.flags.retry", "Resend", 8, nil, 0x20),
-  unit      = ProtoField.uint8("drivegate.unit_id", "Unit id", base.DEC),
-  adapter_len = ProtoField.uint8("drivegate.adapter_len", "Adapter id length", base.DEC),
-  adapter   = ProtoField.string("drivegate.adapter", "Adapter id"),
-  device_len = ProtoField.uint8("drivegate.device_len", "Device name length", base.DEC),
-  device    = ProtoField.string("drivegate.device", "Device"),
-  noise_data = ProtoField.bytes("drivegate.noise_data", "Noise"),
-}
-p.fields = { f.version, f.direction, f.flags, f.bad, f.noise, f.nack, f.foreign, f.echo, f.retry,
-             f.unit, f.adapter_len, f.adapter, f.device_len, f.device, f.noise_data }
+local f = drivegate.fields(p, "drivegate", {
+  { "version", "uint8", "Version" },
+  { "direction", "uint8", "Direction", base.DEC, directions },
+  { "flags", "uint8", "Flags", base.HEX },
+  { "flag_bits", "bits", filter = "flags", flags = {  -- docs/capture.md: 0x01, 0x02 ... 0x20
+    { "bad_checksum", "Bad checksum (station's verdict)" },
+    { "noise", "Noise (not a frame)" },
+    { "nack", "NACK" },
+    { "foreign", "Foreign (not for us)" },
+    { "echo", "Echo mismatch" },
+    { "retry", "Resend" },
+  } },
+  { "unit", "uint8", "Unit id", filter = "unit_id" },
+  { "adapter_len", "uint8", "Adapter id length" },
+  { "adapter", "string", "Adapter id" },
+  { "device_len", "uint8", "Device name length" },
+  { "device", "string", "Device" },
+  { "noise_data", "bytes", "Noise" },
+})
 
 local e_short = ProtoExpert.new("drivegate.short", "Truncated pseudo-header",
                                 expert.group.MALFORMED, expert.severity.ERROR)
@@ -164,10 +269,7 @@ function p.dissector(tvb, pinfo, tree)
   local dir = tvb(1, 1):uint()
   t:add(f.direction, tvb(1, 1))
   local flags = tvb(2, 1):uint()
-  local ft = t:add(f.flags, tvb(2, 1))
-  for _, b in ipairs({ f.bad, f.noise, f.nack, f.foreign, f.echo, f.retry }) do
-    ft:add(b, tvb(2, 1))
-  end
+  drivegate.add_bits(t:add(f.flags, tvb(2, 1)), f.flag_bits, tvb(2, 1))
   t:add(f.unit, tvb(3, 1))
   local alen = tvb(4, 1):uint()
   t:add(f.adapter_len, tvb(4, 1))
@@ -219,9 +321,11 @@ end
 DissectorTable.get("wtap_encap"):add(wtap.USER0, p)
 
 -- The adapters' dissectors, found by a rule, never listed: in the source tree (this file is
--- tools/wireshark/drivegate.lua) every adapters/<id>/dissector.lua; installed, every
--- drivegate_<id>.lua beside this file (unless Wireshark loads them itself from its plugin
--- folder). Each loads once, however it is found.
+-- tools/wireshark/drivegate.lua) every adapters/<id>/dissector.lua; then every drivegate_*.lua
+-- beside this file: a plugin folder (the build's build/wireshark/, or installed) holds each
+-- adapter's as drivegate_<id>.lua and each described protocol's data as
+-- drivegate_framed_<NAME>.lua, unless Wireshark loads them itself from its plugin folder. Each
+-- loads once, however it is found.
 local here = (debug and debug.getinfo(1, "S").source or ""):match("^@(.*[/\\])") or ""
 local function load(path)
   local fh = io.open(path, "r")
@@ -239,9 +343,11 @@ local function entries(dir, ext)
   return names
 end
 if here ~= "" then
-  local adapters_dir = here .. "../../adapters"
-  for _, id in ipairs(entries(adapters_dir)) do
-    load(adapters_dir .. "/" .. id .. "/dissector.lua")
+  if here:match("tools[/\\]wireshark[/\\]$") then
+    local adapters_dir = here .. "../../adapters"
+    for _, id in ipairs(entries(adapters_dir)) do
+      load(adapters_dir .. "/" .. id .. "/dissector.lua")
+    end
   end
   for _, name in ipairs(entries(here, ".lua")) do
     if name:match("^drivegate_.+%.lua$") then load(here .. name) end
