@@ -1,6 +1,8 @@
 // NidecWasherSimulator: operator commands (`drivegate sim nidec-washer` passes stdin lines here).
 #include <cstdio>
 #include <sstream>
+#include <string>
+#include <type_traits>
 #include <vector>
 
 #include "drivegate/sim_text.h"
@@ -72,26 +74,16 @@ std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) 
   }
   const long n = arg.value_or(-1);
   if (n < 0) return error("unknown command or bad argument '" + std::string(line) + "'");
-  if (cmd == "corrupt") {
-    corrupt_ = static_cast<int>(n);
-    return "ok corrupt=" + std::to_string(corrupt_);
-  }
-  if (cmd == "nack") {
-    nack_ = static_cast<int>(n);
-    return "ok nack=" + std::to_string(nack_);
-  }
-  if (cmd == "load" && n <= 0xFF) {
-    load_ = static_cast<std::uint8_t>(n);
-    return "ok load=" + std::to_string(load_);
-  }
-  if (cmd == "bus") {
-    dc_bus_ = static_cast<std::uint16_t>(n);
-    return "ok dc_bus=" + std::to_string(dc_bus_);
-  }
-  if (cmd == "fabric" && n <= 0xFF) {
-    fabric_ = static_cast<std::uint8_t>(n);
-    return "ok fabric=" + std::to_string(fabric_);
-  }
+  // `field` set to the argument, and the line that says so.
+  const auto set = [n](auto& field, const char* name) {
+    field = static_cast<std::remove_reference_t<decltype(field)>>(n);
+    return std::string("ok ") + name + "=" + std::to_string(field);
+  };
+  if (cmd == "corrupt") return set(corrupt_, "corrupt");
+  if (cmd == "nack") return set(nack_, "nack");
+  if (cmd == "load" && n <= 0xFF) return set(load_, "load");
+  if (cmd == "bus") return set(dc_bus_, "dc_bus");
+  if (cmd == "fabric" && n <= 0xFF) return set(fabric_, "fabric");
   if (cmd == "version") {
     version_ = static_cast<std::uint16_t>(n);
     return "ok version=" + hex(version_, 4);
