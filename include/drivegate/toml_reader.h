@@ -13,6 +13,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -208,6 +209,21 @@ class TableReader {
     const auto* t = n->as_table();
     if (t == nullptr) diag_.error(n, qualified(key), "must be a table");
     return t;
+  }
+
+  // The table at `key`, read by `read(r)` or `read(r, table)` when it is there (as table()): `r`,
+  // its own reader, names its keys `key`.KEY and reports every key `read` did not ask for once
+  // `read` is done.
+  template <class Read>
+  void read_table(std::string_view key, bool required, Read read) {
+    const toml::table* t = table(key, required);
+    if (t == nullptr) return;
+    TableReader r(*t, std::string(key), diag_);
+    if constexpr (std::is_invocable_v<Read, TableReader&, const toml::table*>) {
+      read(r, t);
+    } else {
+      read(r);
+    }
   }
 
   // One of `names` at `key`: its index.
