@@ -40,16 +40,13 @@ std::string NidecWasherSimulator::state() const {
   return s.str();
 }
 
-std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) {
+std::string NidecWasherSimulator::control(std::string_view text, TimePoint now) {
   advance(now);
-  const std::vector<std::string> w = split_words(line);
-  const auto error = [&](const std::string& why) {
-    return "error: " + why + "; commands: " + kHelp;
-  };
-  if (w.empty()) return error("empty command");
+  const ControlLine line(text, kHelp);
+  if (auto answer = line.common()) return *answer;
+  const std::vector<std::string>& w = line.words();
   const std::string& cmd = w[0];
   const std::optional<long> arg = w.size() == 2 ? number(w[1], 65535) : std::nullopt;
-  if (cmd == "help" && w.size() == 1) return std::string("commands: ") + kHelp;
   if (cmd == "state" && w.size() == 1) return state();
   if (cmd == "clear" && w.size() == 1) {
     faults_ = 0;
@@ -63,7 +60,7 @@ std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) 
         bits = static_cast<std::uint8_t>(*raw);
       }
     }
-    if (!bits) return error("fault takes " + fault_names() + " or a raw bitmask 1..0xFF");
+    if (!bits) return line.error("fault takes " + fault_names() + " or a raw bitmask 1..0xFF");
     trip(*bits, now);
     return "ok faults=" + hex(faults_, 2);
   }
@@ -73,7 +70,7 @@ std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) 
     return std::string("ok silent=") + (silent_ ? "1" : "0");
   }
   const long n = arg.value_or(-1);
-  if (n < 0) return error("unknown command or bad argument '" + std::string(line) + "'");
+  if (n < 0) return line.unknown();
   // `field` set to the argument, and the line that says so.
   const auto set = [n](auto& field, const char* name) {
     field = static_cast<std::remove_reference_t<decltype(field)>>(n);
@@ -88,7 +85,7 @@ std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) 
     version_ = static_cast<std::uint16_t>(n);
     return "ok version=" + hex(version_, 4);
   }
-  return error("unknown command or bad argument '" + std::string(line) + "'");
+  return line.unknown();
 }
 
 }  // namespace drivegate::nidec
