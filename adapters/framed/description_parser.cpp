@@ -99,10 +99,10 @@ class Parser {
       read_checks(top);
       read_tables(top);
       add_builtins();
-      read_options(root, top);
-      read_states(root, top);
-      read_points(root, top);
-      read_messages(root, top);
+      read_options(top);
+      read_states(top);
+      read_points(top);
+      read_messages(top);
       // Everything the expressions may name is known from here.
       read_timing(top);
       compile_messages(root);
@@ -112,7 +112,7 @@ class Parser {
       read_commands(top);
       read_setpoint(top);
       read_unified(top);
-      read_faults(root, top);
+      read_faults(top);
       read_simulator(top);
       check_safety(top);
     }
@@ -515,26 +515,21 @@ class Parser {
     add("false", 0);
   }
 
-  void read_options(const toml::table& root, TableReader& top) {
-    top.node("option");
-    const toml::array* a = array_of_tables(root, "option", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "option", diag_);
+  void read_options(TableReader& top) {
+    top.read_each("option", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "type", "default", "min", "max", "choices", "description"});
       Option o;
       o.line = line_of_node(&t);
       const auto name = r.string("name", true);
-      if (!name) continue;
+      if (!name) return;
       if (*name == "protocol") {
         diag_.error(r.node("name"), "option.name", "'protocol' names the description itself");
-        continue;
+        return;
       }
       if (!valid_name(*name) || !option_names_.insert(*name).second) {
         diag_.error(r.node("name"), "option.name",
                     "'" + *name + "' is not a name, or is another option's");
-        continue;
+        return;
       }
       o.name = *name;
       o.type = static_cast<OptionType>(r.choice("type", kOptionTypeNames, true).value_or(0));
@@ -563,19 +558,14 @@ class Parser {
       o.var = d_->vars.size();
       d_->vars.push_back(std::move(v));
       d_->options.push_back(std::move(o));
-    }
+    });
   }
 
-  void read_states(const toml::table& root, TableReader& top) {
-    top.node("state");
-    const toml::array* a = array_of_tables(root, "state", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "state", diag_);
+  void read_states(TableReader& top) {
+    top.read_each("state", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "initial", "comm_lost", "description"});
       const auto name = r.string("name", true);
-      if (!name || !declare(r.node("name"), "state.name", *name)) continue;
+      if (!name || !declare(r.node("name"), "state.name", *name)) return;
       Var v;
       v.name = *name;
       v.kind = Var::Kind::state;
@@ -585,7 +575,7 @@ class Parser {
       r.node("comm_lost");
       pending_state_.emplace_back(d_->vars.size(), &t);
       d_->vars.push_back(std::move(v));
-    }
+    });
   }
 
   // ---- points ------------------------------------------------------------------------------
@@ -632,21 +622,15 @@ class Parser {
     for (const auto k : keys) r.node(k);
   }
 
-  void read_points(const toml::table& root, TableReader& top) {
-    top.node("point");
-    const toml::array* a = array_of_tables(root, "point", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      const std::string key = "point";
-      TableReader r(t, key, diag_);
+  void read_points(TableReader& top) {
+    top.read_each("point", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "table", "type", "scale", "unit", "description", "labels",
                       "bit_labels", "min", "max", "access", "trend", "registers", "initial",
                       "value", "on_write", "status", "comm_lost"});
       Point p;
       p.line = line_of_node(&t);
       const auto name = r.string("name", true);
-      if (!name || !declare(r.node("name"), "point.name", *name)) continue;
+      if (!name || !declare(r.node("name"), "point.name", *name)) return;
       p.spec.name = *name;
       if (auto tb = r.choice("table", kTableNames, true))
         p.spec.table = static_cast<drivegate::Table>(*tb);
@@ -698,7 +682,7 @@ class Parser {
       d_->vars.push_back(std::move(v));
       pending_points_.push_back(&t);
       d_->points.push_back(std::move(p));
-    }
+    });
   }
 
   // ---- messages ----------------------------------------------------------------------------
@@ -858,28 +842,20 @@ class Parser {
     }
   }
 
-  void read_messages(const toml::table& root, TableReader& top) {
+  void read_messages(TableReader& top) {
     read_frames(top);
-    top.node("message");
-    const toml::array* a = array_of_tables(root, "message", diag_);
-    if (a == nullptr) {
-      diag_.error_at(0, "message", "a description needs at least one [[message]]");
-      return;
-    }
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "message", diag_);
+    const bool any = top.read_each("message", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
                       "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
                       "timeout_ms", "attempts"});
       Message m;
       m.line = line_of_node(&t);
       const auto name = r.string("name", true);
-      if (!name) continue;
+      if (!name) return;
       if (!valid_name(*name) || d_->message(*name)) {
         diag_.error(r.node("name"), "message.name",
                     "'" + *name + "' is not a name, or is another message's");
-        continue;
+        return;
       }
       m.name = *name;
       m.summary = r.string("summary", false).value_or("");
@@ -893,18 +869,18 @@ class Parser {
         text = *layout;
       } else if (!layout && frame && body) {
         const auto envelope = frame_layout(frames_, *frame, r.node("frame"));
-        if (!envelope) continue;
+        if (!envelope) return;
         text = *envelope;
         text.replace(text.find("{body}"), 6, *body);
         m_frame_[d_->messages.size()] = *frame;
       } else {
         diag_.error(&t, "message." + *name, "needs a layout, or a frame and a body");
-        continue;
+        return;
       }
       std::string why;
       if (!parse_layout(text, m, why)) {
         diag_.error(r.node(layout ? "layout" : "body"), "message." + *name + ".layout", why);
-        continue;
+        return;
       }
       if (m.size > d_->framing.max_frame) {
         diag_.error(&t, "message." + *name,
@@ -923,7 +899,8 @@ class Parser {
       }
       pending_messages_.push_back(&t);
       d_->messages.push_back(std::move(m));
-    }
+    });
+    if (!any) diag_.error_at(0, "message", "a description needs at least one [[message]]");
   }
 
   void read_length(Message& m, const toml::node* n, const std::string& key) {
@@ -1386,13 +1363,8 @@ class Parser {
     }
   }
 
-  void read_faults(const toml::table& root, TableReader& top) {
-    top.node("fault");
-    const toml::array* a = array_of_tables(root, "fault", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "fault", diag_);
+  void read_faults(TableReader& top) {
+    top.read_each("fault", [&](TableReader& r, const toml::table& t) {
       r.expect({"when", "fault", "source", "bits", "values", "ranges", "other"});
       FaultRule rule;
       rule.line = line_of_node(&t);
@@ -1402,7 +1374,7 @@ class Parser {
         diag_.error(&t, "fault",
                     "a rule has when (and fault) or source (and bits, values or "
                     "ranges), one of the two");
-        continue;
+        return;
       }
       if (rule.when) {
         if (auto f = fault_at(r.node("fault"), "fault.fault")) rule.fault = *f;
@@ -1428,7 +1400,7 @@ class Parser {
         }
       }
       d_->unified.faults.push_back(std::move(rule));
-    }
+    });
   }
 
   void continue_if_extra(TableReader& r, std::initializer_list<const char*> keys) {

@@ -64,7 +64,7 @@ class Parser {
       read_line(top);
       read_modbus(top);
       bad_option_ = !read_profile_options(root, top, diag_, profile_);
-      read_points(root, top);
+      read_points(top);
       check_overlaps();
       read_common(top);
       read_profile_examples(root, top, diag_, profile_);
@@ -154,18 +154,13 @@ class Parser {
     });
   }
 
-  void read_points(const toml::table& root, TableReader& top) {
-    top.node("point");
-    const toml::array* points = array_of_tables(root, "point", diag_);
-    if (points == nullptr) {
-      diag_.error_at(0, "point", "a profile needs at least one [[point]]");
-      return;
-    }
-    for (const toml::node& n : *points) read_point(*n.as_table());
+  void read_points(TableReader& top) {
+    const bool any =
+        top.read_each("point", [&](TableReader& r, const toml::table& t) { read_point(r, t); });
+    if (!any) diag_.error_at(0, "point", "a profile needs at least one [[point]]");
   }
 
-  void read_point(const toml::table& t) {
-    TableReader r(t, "point", diag_);
+  void read_point(TableReader& r, const toml::table& t) {
     r.expect({"name", "table", "address", "type", "word_order", "scale", "unit", "description",
               "min", "max", "access", "poll_ms", "trend", "registers", "byte_order", "bits",
               "values", "mask"});
