@@ -36,6 +36,24 @@ Bytes fixed_frame(std::uint8_t address, std::uint8_t function, std::uint16_t reg
   return out;
 }
 
+// A reply of a length known from its first bytes: nothing until all `size` bytes are in, bad when
+// their CRC fails, else the reply of `function` and `kind` from `rx[0]`'s address, with what
+// `fill` reads of the rest.
+template <class Fill>
+Decoded<Reply> checked_reply(ByteView rx, std::size_t size, std::uint8_t function, ReplyKind kind,
+                             Fill fill) {
+  if (rx.size() < size) return {};
+  if (!crc16_modbus_holds(rx.first(size))) {
+    return decoded_bad<Reply>(size, FrameError::bad_checksum);
+  }
+  Reply r;
+  r.address = rx[0];
+  r.function = function;
+  r.kind = kind;
+  fill(r);
+  return decoded_frame(size, std::move(r));
+}
+
 }  // namespace
 
 Bytes encode_read(std::uint8_t address, std::uint16_t reg, std::uint16_t count) {
@@ -122,31 +140,16 @@ Decoded<Request> decode_request(ByteView rx) {
 Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
   if (rx.size() < 2) return {};
   if (rx[1] == (shape.function | kExceptionBit)) {
-    if (rx.size() < kExceptionSize) return {};
-    if (!crc16_modbus_holds(rx.first(kExceptionSize))) {
-      return decoded_bad<Reply>(kExceptionSize, FrameError::bad_checksum);
-    }
-    Reply r;
-    r.address = rx[0];
-    r.function = shape.function;
-    r.kind = ReplyKind::exception;
-    r.exception = rx[2];
-    return decoded_frame(kExceptionSize, std::move(r));
+    return checked_reply(rx, kExceptionSize, shape.function, ReplyKind::exception,
+                         [&](Reply& r) { r.exception = rx[2]; });
   }
   if (rx[1] != shape.function) return decoded_bad<Reply>(1, FrameError::bad_header);
 
   if (shape.function != kFnRead) {
-    if (rx.size() < kWriteReplySize) return {};
-    if (!crc16_modbus_holds(rx.first(kWriteReplySize))) {
-      return decoded_bad<Reply>(kWriteReplySize, FrameError::bad_checksum);
-    }
-    Reply r;
-    r.address = rx[0];
-    r.function = shape.function;
-    r.kind = ReplyKind::write_echo;
-    r.reg = be16(rx[2], rx[3]);
-    r.value = be16(rx[4], rx[5]);
-    return decoded_frame(kWriteReplySize, std::move(r));
+    return checked_reply(rx, kWriteReplySize, shape.function, ReplyKind::write_echo, [&](Reply& r) {
+      r.reg = be16(rx[2], rx[3]);
+      r.value = be16(rx[4], rx[5]);
+    });
   }
 
   // 03: the standard form is one byte shorter than the document's (a byte count instead of
@@ -164,16 +167,10 @@ Decoded<Reply> decode_reply(ByteView rx, const ReplyShape& shape) {
     r.words = words_at(rx, 3, shape.words);
     return decoded_frame(standard, std::move(r));
   }
-  if (rx.size() < document) return {};
-  if (!crc16_modbus_holds(rx.first(document)))
-    return decoded_bad<Reply>(document, FrameError::bad_checksum);
-  Reply r;
-  r.address = rx[0];
-  r.function = kFnRead;
-  r.kind = ReplyKind::read_document;
-  r.reg = be16(rx[2], rx[3]);
-  r.words = words_at(rx, 4, shape.words);
-  return decoded_frame(document, std::move(r));
+  return checked_reply(rx, document, kFnRead, ReplyKind::read_document, [&](Reply& r) {
+    r.reg = be16(rx[2], rx[3]);
+    r.words = words_at(rx, 4, shape.words);
+  });
 }
 
 }  // namespace drivegate::ed3100

@@ -202,8 +202,7 @@ void Ed3100Driver::on_no_reply(TimePoint now) {
 }
 
 void Ed3100Driver::on_comm_lost(TimePoint now) {
-  last_now_ = now;
-  fail_inflight();
+  on_no_reply(now);  // the exchange on the line, if any, is over unanswered
   // Nothing waiting is sent once the drive answers again: the PLC was told these failed.
   writes_.settle_all(WriteResult::no_response);
   reads_.clear();

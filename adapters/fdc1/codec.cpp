@@ -1,5 +1,10 @@
 #include "codec.h"
 
+#include <algorithm>
+#include <span>
+#include <utility>
+#include <variant>
+
 #include "drivegate/bytes.h"
 
 namespace drivegate::fdc1 {
@@ -43,6 +48,42 @@ Bytes program_frame(const Program& p) {
   out.push_back(sum[0]);
   out.push_back(sum[1]);
   return out;
+}
+
+// A frame, or why the bytes it takes are not one.
+template <class Frame>
+using Body = std::variant<Frame, FrameError>;
+
+// A frame's second byte, which names it, and its size.
+struct Shape {
+  std::uint8_t head1;
+  std::size_t size;
+};
+// What the controller sends (OUTPUT, the programming echo) and what the master sends (INPUT
+// speed, INPUT programming).
+constexpr std::array<Shape, 2> kDeviceFrames = {
+    {{kStatusHead1, kStatusSize}, {kProgramHead1, kProgramSize}}};
+constexpr std::array<Shape, 2> kMasterFrames = {
+    {{kSpeedHead1, kSpeedSize}, {kProgramHead1, kProgramSize}}};
+
+// One frame of the family whose frames all start with `head0`, the second byte naming the frame
+// (`shapes`): nothing until the second byte and then the whole frame are in; `body(frame)`
+// decodes the frame. A second byte the family has no frame for, or a frame `body` refuses: the
+// bytes up to the next `head0` are dropped.
+template <class Frame, class Decode>
+Decoded<Frame> decode_headed(ByteView rx, std::uint8_t head0, std::span<const Shape> shapes,
+                             Decode body) {
+  const auto bad = [&](FrameError e) { return decoded_bad<Frame>(resync(rx, head0), e); };
+  if (rx.empty()) return {};
+  if (rx[0] != head0) return bad(FrameError::bad_header);
+  if (rx.size() < 2) return {};
+  const auto shape =
+      std::find_if(shapes.begin(), shapes.end(), [&](const Shape& s) { return s.head1 == rx[1]; });
+  if (shape == shapes.end()) return bad(FrameError::bad_header);
+  if (rx.size() < shape->size) return {};
+  Body<Frame> b = body(rx.first(shape->size));
+  if (const auto* e = std::get_if<FrameError>(&b)) return bad(*e);
+  return decoded_frame<Frame>(shape->size, std::move(std::get<Frame>(b)));
 }
 
 }  // namespace
@@ -94,62 +135,43 @@ Bytes encode_echo(const Program& p) {
 }
 
 Decoded<DeviceFrame> decode_device(ByteView rx) {
-  if (rx.empty()) return {};
-  if (rx[0] != kStatusHead0)
-    return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_header);
-  if (rx.size() < 2) return {};
-  if (rx[1] == kStatusHead1) {
-    if (rx.size() < kStatusSize) return {};
-    const auto f = rx.first(kStatusSize);
-    if (!pair_holds(f))
-      return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
-    Status s;
-    s.motor_on = f[2] != 0;
-    if (s.motor_on) {
-      s.rpm = be16(f[2], f[3]);
-    } else {
-      s.alarm = f[3];
-    }
-    s.word = be16(f[4], f[5]);
-    return decoded_frame<DeviceFrame>(kStatusSize, s);
-  }
-  if (rx[1] == kProgramHead1) {
-    if (rx.size() < kProgramSize) return {};
-    Bytes f(rx.begin(), rx.begin() + kProgramSize);
-    bool holds = pair_holds(f);  // checksum recomputed over 27 80
-    if (!holds) {
-      f[0] = kMasterHead0;  // checksum left as sent over 72 80
-      holds = pair_holds(f);
-    }
-    if (!holds) return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_checksum);
-    return decoded_frame<DeviceFrame>(kProgramSize, Echo{program_fields(f)});
-  }
-  return decoded_bad<DeviceFrame>(resync(rx, kStatusHead0), FrameError::bad_header);
+  return decode_headed<DeviceFrame>(
+      rx, kStatusHead0, kDeviceFrames, [](ByteView f) -> Body<DeviceFrame> {
+        if (f[1] == kProgramHead1) {
+          Bytes g(f.begin(), f.end());
+          bool holds = pair_holds(g);  // checksum recomputed over 27 80
+          if (!holds) {
+            g[0] = kMasterHead0;  // checksum left as sent over 72 80
+            holds = pair_holds(g);
+          }
+          if (!holds) return FrameError::bad_checksum;
+          return DeviceFrame{Echo{program_fields(g)}};
+        }
+        if (!pair_holds(f)) return FrameError::bad_checksum;
+        Status s;
+        s.motor_on = f[2] != 0;
+        if (s.motor_on) {
+          s.rpm = be16(f[2], f[3]);
+        } else {
+          s.alarm = f[3];
+        }
+        s.word = be16(f[4], f[5]);
+        return DeviceFrame{s};
+      });
 }
 
 Decoded<MasterFrame> decode_master(ByteView rx) {
-  if (rx.empty()) return {};
-  if (rx[0] != kMasterHead0)
-    return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_header);
-  if (rx.size() < 2) return {};
-  if (rx[1] == kSpeedHead1) {
-    if (rx.size() < kSpeedSize) return {};
-    const auto f = rx.first(kSpeedSize);
-    if (xor_all(f.first(kSpeedSize - 1)) != f[kSpeedSize - 1]) {
-      return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
-    }
-    if (f[6] != kSpeedFixed)
-      return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_field);
-    return decoded_frame<MasterFrame>(kSpeedSize, Speed{be16(f[2], f[3]), be16(f[4], f[5])});
-  }
-  if (rx[1] == kProgramHead1) {
-    if (rx.size() < kProgramSize) return {};
-    const auto f = rx.first(kProgramSize);
-    if (!pair_holds(f))
-      return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_checksum);
-    return decoded_frame<MasterFrame>(kProgramSize, program_fields(f));
-  }
-  return decoded_bad<MasterFrame>(resync(rx, kMasterHead0), FrameError::bad_header);
+  return decode_headed<MasterFrame>(rx, kMasterHead0, kMasterFrames,
+                                    [](ByteView f) -> Body<MasterFrame> {
+                                      if (f[1] == kProgramHead1) {
+                                        if (!pair_holds(f)) return FrameError::bad_checksum;
+                                        return MasterFrame{program_fields(f)};
+                                      }
+                                      if (xor_all(f.first(kSpeedSize - 1)) != f[kSpeedSize - 1])
+                                        return FrameError::bad_checksum;
+                                      if (f[6] != kSpeedFixed) return FrameError::bad_field;
+                                      return MasterFrame{Speed{be16(f[2], f[3]), be16(f[4], f[5])}};
+                                    });
 }
 
 }  // namespace drivegate::fdc1

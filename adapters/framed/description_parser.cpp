@@ -99,10 +99,10 @@ class Parser {
       read_checks(top);
       read_tables(top);
       add_builtins();
-      read_options(root, top);
-      read_states(root, top);
-      read_points(root, top);
-      read_messages(root, top);
+      read_options(top);
+      read_states(top);
+      read_points(top);
+      read_messages(top);
       // Everything the expressions may name is known from here.
       read_timing(top);
       compile_messages(root);
@@ -112,7 +112,7 @@ class Parser {
       read_commands(top);
       read_setpoint(top);
       read_unified(top);
-      read_faults(root, top);
+      read_faults(top);
       read_simulator(top);
       check_safety(top);
     }
@@ -267,46 +267,44 @@ class Parser {
   // ---- [protocol], [line], [framing], [timing] ---------------------------------------------
 
   void read_protocol(TableReader& top) {
-    const toml::table* t = top.table("protocol", true);
-    if (t == nullptr) return;
-    TableReader r(*t, "protocol", diag_);
-    r.expect({"name", "summary", "document", "demo_rpm"});
-    if (auto name = r.file_name("name")) d_->name = *name;
-    d_->summary = r.string("summary", true).value_or("");
-    // Where every byte comes from: a description without it cannot be checked against anything.
-    d_->document = r.string("document", true).value_or("");
-    if (auto v = r.integer("demo_rpm", 1, 32767, false))
-      d_->demo_rpm = static_cast<std::int32_t>(*v);
+    top.read_table("protocol", true, [&](TableReader& r) {
+      r.expect({"name", "summary", "document", "demo_rpm"});
+      if (auto name = r.file_name("name")) d_->name = *name;
+      d_->summary = r.string("summary", true).value_or("");
+      // Where every byte comes from: a description without it cannot be checked against anything.
+      d_->document = r.string("document", true).value_or("");
+      if (auto v = r.integer("demo_rpm", 1, 32767, false))
+        d_->demo_rpm = static_cast<std::int32_t>(*v);
+    });
   }
 
   void read_line(TableReader& top) {
-    const toml::table* t = top.table("line", true);
-    if (t == nullptr) return;
-    TableReader r(*t, "line", diag_);
-    r.expect({"baud", "parity", "data_bits", "stop_bits", "echo", "streaming", "address"});
-    LineDefaults& l = d_->line;
-    if (auto v = r.integer("baud", 50, 4'000'000, true)) l.baud = static_cast<std::uint32_t>(*v);
-    if (auto p = r.choice("parity", kParityNames, false)) l.parity = static_cast<Parity>(*p);
-    if (auto v = r.integer("data_bits", 5, 8, false)) l.data_bits = static_cast<std::uint8_t>(*v);
-    if (auto v = r.integer("stop_bits", 1, 2, false)) l.stop_bits = static_cast<std::uint8_t>(*v);
-    l.echo = r.boolean("echo").value_or(false);
-    d_->streaming = r.boolean("streaming").value_or(false);
-    if (const toml::table* a = r.table("address", false)) {
-      TableReader ar(*a, "line.address", diag_);
-      ar.expect({"min", "max", "default"});
-      const auto lo = ar.integer("min", 0, 0xFFFF, true);
-      const auto hi = ar.integer("max", 1, 0xFFFF, true);
-      const auto def = ar.integer("default", 0, 0xFFFF, true);
-      if (lo && hi && def) {
-        if (*lo > *hi || *def < *lo || *def > *hi) {
-          diag_.error(a, "line.address", "needs min <= default <= max");
-        } else {
-          d_->address_min = static_cast<std::uint32_t>(*lo);
-          d_->address_max = static_cast<std::uint32_t>(*hi);
-          d_->address_default = static_cast<std::uint32_t>(*def);
+    top.read_table("line", true, [&](TableReader& r) {
+      r.expect({"baud", "parity", "data_bits", "stop_bits", "echo", "streaming", "address"});
+      LineDefaults& l = d_->line;
+      if (auto v = r.integer("baud", 50, 4'000'000, true)) l.baud = static_cast<std::uint32_t>(*v);
+      if (auto p = r.choice("parity", kParityNames, false)) l.parity = static_cast<Parity>(*p);
+      if (auto v = r.integer("data_bits", 5, 8, false)) l.data_bits = static_cast<std::uint8_t>(*v);
+      if (auto v = r.integer("stop_bits", 1, 2, false)) l.stop_bits = static_cast<std::uint8_t>(*v);
+      l.echo = r.boolean("echo").value_or(false);
+      d_->streaming = r.boolean("streaming").value_or(false);
+      if (const toml::table* a = r.table("address", false)) {
+        TableReader ar(*a, "line.address", diag_);
+        ar.expect({"min", "max", "default"});
+        const auto lo = ar.integer("min", 0, 0xFFFF, true);
+        const auto hi = ar.integer("max", 1, 0xFFFF, true);
+        const auto def = ar.integer("default", 0, 0xFFFF, true);
+        if (lo && hi && def) {
+          if (*lo > *hi || *def < *lo || *def > *hi) {
+            diag_.error(a, "line.address", "needs min <= default <= max");
+          } else {
+            d_->address_min = static_cast<std::uint32_t>(*lo);
+            d_->address_max = static_cast<std::uint32_t>(*hi);
+            d_->address_default = static_cast<std::uint32_t>(*def);
+          }
         }
       }
-    }
+    });
   }
 
   std::optional<std::uint8_t> byte_at(TableReader& r, std::string_view key) {
@@ -315,49 +313,48 @@ class Parser {
   }
 
   void read_framing(TableReader& top) {
-    const toml::table* t = top.table("framing", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "framing", diag_);
-    r.expect({"max_frame", "start", "end", "escape", "escaped", "escape_xor"});
-    Framing& f = d_->framing;
-    if (auto v = r.integer("max_frame", 2, static_cast<std::int64_t>(kMaxFrame), false)) {
-      f.max_frame = static_cast<std::size_t>(*v);
-    }
-    f.start = byte_at(r, "start");
-    f.end = byte_at(r, "end");
-    f.escape = byte_at(r, "escape");
-    if (auto v = byte_at(r, "escape_xor")) f.escape_xor = *v;
-    if (const toml::node* n = r.node("escaped")) {
-      const auto* a = n->as_array();
-      bool ok = a != nullptr;
-      if (ok) {
-        for (const auto& item : *a) {
-          const auto* i = item.as_integer();
-          if (i == nullptr || i->get() < 0 || i->get() > 255) {
-            ok = false;
-            break;
+    top.read_table("framing", false, [&](TableReader& r, const toml::table* t) {
+      r.expect({"max_frame", "start", "end", "escape", "escaped", "escape_xor"});
+      Framing& f = d_->framing;
+      if (auto v = r.integer("max_frame", 2, static_cast<std::int64_t>(kMaxFrame), false)) {
+        f.max_frame = static_cast<std::size_t>(*v);
+      }
+      f.start = byte_at(r, "start");
+      f.end = byte_at(r, "end");
+      f.escape = byte_at(r, "escape");
+      if (auto v = byte_at(r, "escape_xor")) f.escape_xor = *v;
+      if (const toml::node* n = r.node("escaped")) {
+        const auto* a = n->as_array();
+        bool ok = a != nullptr;
+        if (ok) {
+          for (const auto& item : *a) {
+            const auto* i = item.as_integer();
+            if (i == nullptr || i->get() < 0 || i->get() > 255) {
+              ok = false;
+              break;
+            }
+            f.escaped.push_back(static_cast<std::uint8_t>(i->get()));
           }
-          f.escaped.push_back(static_cast<std::uint8_t>(i->get()));
+        }
+        if (!ok) diag_.error(n, "framing.escaped", "must be a list of bytes (0..255)");
+      }
+      if (f.end && !f.start) diag_.error(t, "framing", "an end flag needs a start flag");
+      if (f.escape && !f.start) diag_.error(t, "framing", "stuffing needs start and end flags");
+      if (f.start && f.escape) {
+        // Every byte that means something on the line must be sent escaped inside a frame.
+        for (const std::uint8_t must : {*f.start, f.end.value_or(*f.start), *f.escape}) {
+          if (std::find(f.escaped.begin(), f.escaped.end(), must) == f.escaped.end()) {
+            diag_.error(t, "framing.escaped",
+                        "must hold the flags and the escape byte (missing " + hex(must) + ")");
+          }
         }
       }
-      if (!ok) diag_.error(n, "framing.escaped", "must be a list of bytes (0..255)");
-    }
-    if (f.end && !f.start) diag_.error(t, "framing", "an end flag needs a start flag");
-    if (f.escape && !f.start) diag_.error(t, "framing", "stuffing needs start and end flags");
-    if (f.start && f.escape) {
-      // Every byte that means something on the line must be sent escaped inside a frame.
-      for (const std::uint8_t must : {*f.start, f.end.value_or(*f.start), *f.escape}) {
-        if (std::find(f.escaped.begin(), f.escaped.end(), must) == f.escaped.end()) {
-          diag_.error(t, "framing.escaped",
-                      "must hold the flags and the escape byte (missing " + hex(must) + ")");
-        }
+      if (f.start && !f.escape) {
+        diag_.error(t, "framing",
+                    "start and end flags need an escape byte: a flag inside a frame "
+                    "would end it");
       }
-    }
-    if (f.start && !f.escape) {
-      diag_.error(t, "framing",
-                  "start and end flags need an escape byte: a flag inside a frame "
-                  "would end it");
-    }
+    });
   }
 
   static std::string hex(unsigned v) {
@@ -369,31 +366,32 @@ class Parser {
   }
 
   void read_timing(TableReader& top) {
-    const toml::table* t = top.table("timing", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "timing", diag_);
-    r.expect({"reply_timeout_ms", "attempts", "comm_timeout_ms", "gap_ms", "confirm_ms", "poll_ms",
-              "writes_before_ready"});
-    Timing& tm = d_->timing;
-    if (auto e = expr(r, "reply_timeout_ms")) tm.reply_timeout_ms = std::move(*e);
-    if (auto e = expr(r, "attempts")) tm.attempts = std::move(*e);
-    if (auto e = expr(r, "comm_timeout_ms")) tm.comm_timeout_ms = std::move(*e);
-    if (auto e = expr(r, "gap_ms")) tm.gap_ms = std::move(*e);
-    if (auto e = expr(r, "confirm_ms")) tm.confirm_ms = std::move(*e);
-    if (const toml::table* p = r.table("poll_ms", false)) {
-      TableReader pr(*p, "timing.poll_ms", diag_);
-      pr.expect({"min", "max"});
-      if (auto v = pr.integer("min", 1, 3'600'000, false)) tm.poll_min_ms = static_cast<double>(*v);
-      if (auto v = pr.integer("max", 1, 3'600'000, false)) tm.poll_max_ms = static_cast<double>(*v);
-    }
-    if (auto w = r.string("writes_before_ready", false)) {
-      if (*w == "wait" || *w == "refuse") {
-        tm.writes_wait_for_ready = *w == "wait";
-      } else {
-        diag_.error(r.node("writes_before_ready"), "timing.writes_before_ready",
-                    "must be wait or refuse");
+    top.read_table("timing", false, [&](TableReader& r) {
+      r.expect({"reply_timeout_ms", "attempts", "comm_timeout_ms", "gap_ms", "confirm_ms",
+                "poll_ms", "writes_before_ready"});
+      Timing& tm = d_->timing;
+      if (auto e = expr(r, "reply_timeout_ms")) tm.reply_timeout_ms = std::move(*e);
+      if (auto e = expr(r, "attempts")) tm.attempts = std::move(*e);
+      if (auto e = expr(r, "comm_timeout_ms")) tm.comm_timeout_ms = std::move(*e);
+      if (auto e = expr(r, "gap_ms")) tm.gap_ms = std::move(*e);
+      if (auto e = expr(r, "confirm_ms")) tm.confirm_ms = std::move(*e);
+      if (const toml::table* p = r.table("poll_ms", false)) {
+        TableReader pr(*p, "timing.poll_ms", diag_);
+        pr.expect({"min", "max"});
+        if (auto v = pr.integer("min", 1, 3'600'000, false))
+          tm.poll_min_ms = static_cast<double>(*v);
+        if (auto v = pr.integer("max", 1, 3'600'000, false))
+          tm.poll_max_ms = static_cast<double>(*v);
       }
-    }
+      if (auto w = r.string("writes_before_ready", false)) {
+        if (*w == "wait" || *w == "refuse") {
+          tm.writes_wait_for_ready = *w == "wait";
+        } else {
+          diag_.error(r.node("writes_before_ready"), "timing.writes_before_ready",
+                      "must be wait or refuse");
+        }
+      }
+    });
   }
 
   // ---- checks and tables -------------------------------------------------------------------
@@ -446,8 +444,10 @@ class Parser {
       } else if (c.kind == CheckKind::lrc && width != 1) {
         diag_.error(ct, key + ".width", "an LRC is one byte");
       }
-      if (auto v = r.integer("from", -static_cast<std::int64_t>(kMaxFrame), kMaxFrame, false)) c.from = static_cast<int>(*v);
-      if (auto v = r.integer("to", -static_cast<std::int64_t>(kMaxFrame), kMaxFrame, false)) c.to = static_cast<int>(*v);
+      if (auto v = r.integer("from", -static_cast<std::int64_t>(kMaxFrame), kMaxFrame, false))
+        c.from = static_cast<int>(*v);
+      if (auto v = r.integer("to", -static_cast<std::int64_t>(kMaxFrame), kMaxFrame, false))
+        c.to = static_cast<int>(*v);
       if (auto v = r.integer("step", 1, 8, false)) c.step = static_cast<std::uint8_t>(*v);
       d_->checks.push_back(std::move(c));
     }
@@ -515,26 +515,21 @@ class Parser {
     add("false", 0);
   }
 
-  void read_options(const toml::table& root, TableReader& top) {
-    top.node("option");
-    const toml::array* a = array_of_tables(root, "option", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "option", diag_);
+  void read_options(TableReader& top) {
+    top.read_each("option", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "type", "default", "min", "max", "choices", "description"});
       Option o;
       o.line = line_of_node(&t);
       const auto name = r.string("name", true);
-      if (!name) continue;
+      if (!name) return;
       if (*name == "protocol") {
         diag_.error(r.node("name"), "option.name", "'protocol' names the description itself");
-        continue;
+        return;
       }
       if (!valid_name(*name) || !option_names_.insert(*name).second) {
         diag_.error(r.node("name"), "option.name",
                     "'" + *name + "' is not a name, or is another option's");
-        continue;
+        return;
       }
       o.name = *name;
       o.type = static_cast<OptionType>(r.choice("type", kOptionTypeNames, true).value_or(0));
@@ -563,19 +558,14 @@ class Parser {
       o.var = d_->vars.size();
       d_->vars.push_back(std::move(v));
       d_->options.push_back(std::move(o));
-    }
+    });
   }
 
-  void read_states(const toml::table& root, TableReader& top) {
-    top.node("state");
-    const toml::array* a = array_of_tables(root, "state", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "state", diag_);
+  void read_states(TableReader& top) {
+    top.read_each("state", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "initial", "comm_lost", "description"});
       const auto name = r.string("name", true);
-      if (!name || !declare(r.node("name"), "state.name", *name)) continue;
+      if (!name || !declare(r.node("name"), "state.name", *name)) return;
       Var v;
       v.name = *name;
       v.kind = Var::Kind::state;
@@ -585,7 +575,7 @@ class Parser {
       r.node("comm_lost");
       pending_state_.emplace_back(d_->vars.size(), &t);
       d_->vars.push_back(std::move(v));
-    }
+    });
   }
 
   // ---- points ------------------------------------------------------------------------------
@@ -632,21 +622,15 @@ class Parser {
     for (const auto k : keys) r.node(k);
   }
 
-  void read_points(const toml::table& root, TableReader& top) {
-    top.node("point");
-    const toml::array* a = array_of_tables(root, "point", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      const std::string key = "point";
-      TableReader r(t, key, diag_);
+  void read_points(TableReader& top) {
+    top.read_each("point", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "table", "type", "scale", "unit", "description", "labels",
                       "bit_labels", "min", "max", "access", "trend", "registers", "initial",
                       "value", "on_write", "status", "comm_lost"});
       Point p;
       p.line = line_of_node(&t);
       const auto name = r.string("name", true);
-      if (!name || !declare(r.node("name"), "point.name", *name)) continue;
+      if (!name || !declare(r.node("name"), "point.name", *name)) return;
       p.spec.name = *name;
       if (auto tb = r.choice("table", kTableNames, true))
         p.spec.table = static_cast<drivegate::Table>(*tb);
@@ -698,7 +682,7 @@ class Parser {
       d_->vars.push_back(std::move(v));
       pending_points_.push_back(&t);
       d_->points.push_back(std::move(p));
-    }
+    });
   }
 
   // ---- messages ----------------------------------------------------------------------------
@@ -858,28 +842,20 @@ class Parser {
     }
   }
 
-  void read_messages(const toml::table& root, TableReader& top) {
+  void read_messages(TableReader& top) {
     read_frames(top);
-    top.node("message");
-    const toml::array* a = array_of_tables(root, "message", diag_);
-    if (a == nullptr) {
-      diag_.error_at(0, "message", "a description needs at least one [[message]]");
-      return;
-    }
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "message", diag_);
+    const bool any = top.read_each("message", [&](TableReader& r, const toml::table& t) {
       expect_read(r, {"name", "summary", "direction", "layout", "frame", "body", "values", "limits",
                       "length", "replies", "echo", "nack", "unsolicited", "state", "update", "sent",
                       "timeout_ms", "attempts"});
       Message m;
       m.line = line_of_node(&t);
       const auto name = r.string("name", true);
-      if (!name) continue;
+      if (!name) return;
       if (!valid_name(*name) || d_->message(*name)) {
         diag_.error(r.node("name"), "message.name",
                     "'" + *name + "' is not a name, or is another message's");
-        continue;
+        return;
       }
       m.name = *name;
       m.summary = r.string("summary", false).value_or("");
@@ -893,18 +869,18 @@ class Parser {
         text = *layout;
       } else if (!layout && frame && body) {
         const auto envelope = frame_layout(frames_, *frame, r.node("frame"));
-        if (!envelope) continue;
+        if (!envelope) return;
         text = *envelope;
         text.replace(text.find("{body}"), 6, *body);
         m_frame_[d_->messages.size()] = *frame;
       } else {
         diag_.error(&t, "message." + *name, "needs a layout, or a frame and a body");
-        continue;
+        return;
       }
       std::string why;
       if (!parse_layout(text, m, why)) {
         diag_.error(r.node(layout ? "layout" : "body"), "message." + *name + ".layout", why);
-        continue;
+        return;
       }
       if (m.size > d_->framing.max_frame) {
         diag_.error(&t, "message." + *name,
@@ -923,7 +899,8 @@ class Parser {
       }
       pending_messages_.push_back(&t);
       d_->messages.push_back(std::move(m));
-    }
+    });
+    if (!any) diag_.error_at(0, "message", "a description needs at least one [[message]]");
   }
 
   void read_length(Message& m, const toml::node* n, const std::string& key) {
@@ -1218,18 +1195,17 @@ class Parser {
   // ---- behaviour ---------------------------------------------------------------------------
 
   void read_periodic(TableReader& top, const char* key, std::optional<Periodic>& out) {
-    const toml::table* t = top.table(key, false);
-    if (t == nullptr) return;
-    TableReader r(*t, key, diag_);
-    r.expect({"send", "every_ms", "when", "at_ready"});
-    const auto send = message_ref(r, "send", Direction::request, true);
-    if (!send) return;
-    Periodic p;
-    p.send = *send;
-    p.every_ms = expr(r, "every_ms");
-    p.when = expr(r, "when");
-    p.at_ready = r.boolean("at_ready").value_or(false);
-    out = std::move(p);
+    top.read_table(key, false, [&](TableReader& r) {
+      r.expect({"send", "every_ms", "when", "at_ready"});
+      const auto send = message_ref(r, "send", Direction::request, true);
+      if (!send) return;
+      Periodic p;
+      p.send = *send;
+      p.every_ms = expr(r, "every_ms");
+      p.when = expr(r, "when");
+      p.at_ready = r.boolean("at_ready").value_or(false);
+      out = std::move(p);
+    });
   }
 
   Context reply_context(std::optional<std::size_t> send) {
@@ -1296,55 +1272,53 @@ class Parser {
   }
 
   void read_setpoint(TableReader& top) {
-    const toml::table* t = top.table("setpoint", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "setpoint", diag_);
-    r.expect({"min", "max", "invalid", "refuse", "accept", "until", "refuse_on"});
-    Setpoint s;
-    s.line = line_of_node(t);
-    const auto lo = r.number("min", -32768, 65535, false);
-    const auto hi = r.number("max", -32768, 65535, false);
-    if (lo && hi) {
-      if (*lo > *hi) diag_.error(r.node("min"), "setpoint.min", "must not exceed max");
-      s.min = *lo;
-      s.max = *hi;
-      s.limited = true;
-    } else if (lo || hi) {
-      diag_.error(t, "setpoint", "needs both min and max");
-    }
-    s.invalid = expr(r, "invalid");
-    s.refuse = expr(r, "refuse");
-    // The setpoint's frame is the command in force's: its replies are the command's.
-    Context any;
-    for (const auto& [c, alts] : d_->commands) {
-      for (const Alternative& a : alts) {
-        if (!a.send) continue;
-        for (const std::size_t rep : d_->messages[*a.send].replies) {
-          any.frames.push_back(&d_->messages[rep]);
+    top.read_table("setpoint", false, [&](TableReader& r, const toml::table* t) {
+      r.expect({"min", "max", "invalid", "refuse", "accept", "until", "refuse_on"});
+      Setpoint s;
+      s.line = line_of_node(t);
+      const auto lo = r.number("min", -32768, 65535, false);
+      const auto hi = r.number("max", -32768, 65535, false);
+      if (lo && hi) {
+        if (*lo > *hi) diag_.error(r.node("min"), "setpoint.min", "must not exceed max");
+        s.min = *lo;
+        s.max = *hi;
+        s.limited = true;
+      } else if (lo || hi) {
+        diag_.error(t, "setpoint", "needs both min and max");
+      }
+      s.invalid = expr(r, "invalid");
+      s.refuse = expr(r, "refuse");
+      // The setpoint's frame is the command in force's: its replies are the command's.
+      Context any;
+      for (const auto& [c, alts] : d_->commands) {
+        for (const Alternative& a : alts) {
+          if (!a.send) continue;
+          for (const std::size_t rep : d_->messages[*a.send].replies) {
+            any.frames.push_back(&d_->messages[rep]);
+          }
         }
       }
-    }
-    any.sent = true;
-    s.accept = expr(r, "accept", any);
-    s.until = expr(r, "until");
-    s.refuse_on = expr(r, "refuse_on");
-    d_->setpoint = std::move(s);
+      any.sent = true;
+      s.accept = expr(r, "accept", any);
+      s.until = expr(r, "until");
+      s.refuse_on = expr(r, "refuse_on");
+      d_->setpoint = std::move(s);
+    });
   }
 
   void read_unified(TableReader& top) {
-    const toml::table* t = top.table("unified", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "unified", diag_);
-    r.expect({"ready", "speed_rpm", "running", "warning", "native_fault", "stops_run",
-              "comm_lost_stops"});
-    Unified& u = d_->unified;
-    u.ready = expr(r, "ready");
-    u.speed_rpm = expr(r, "speed_rpm");
-    u.running = expr(r, "running");
-    u.warning = expr(r, "warning");
-    u.native_fault = expr(r, "native_fault");
-    u.stops_run = expr(r, "stops_run");
-    u.comm_lost_stops = r.boolean("comm_lost_stops").value_or(false);
+    top.read_table("unified", false, [&](TableReader& r) {
+      r.expect({"ready", "speed_rpm", "running", "warning", "native_fault", "stops_run",
+                "comm_lost_stops"});
+      Unified& u = d_->unified;
+      u.ready = expr(r, "ready");
+      u.speed_rpm = expr(r, "speed_rpm");
+      u.running = expr(r, "running");
+      u.warning = expr(r, "warning");
+      u.native_fault = expr(r, "native_fault");
+      u.stops_run = expr(r, "stops_run");
+      u.comm_lost_stops = r.boolean("comm_lost_stops").value_or(false);
+    });
   }
 
   std::optional<Fault> fault_at(const toml::node* n, const std::string& key) {
@@ -1389,13 +1363,8 @@ class Parser {
     }
   }
 
-  void read_faults(const toml::table& root, TableReader& top) {
-    top.node("fault");
-    const toml::array* a = array_of_tables(root, "fault", diag_);
-    if (a == nullptr) return;
-    for (const toml::node& n : *a) {
-      const auto& t = *n.as_table();
-      TableReader r(t, "fault", diag_);
+  void read_faults(TableReader& top) {
+    top.read_each("fault", [&](TableReader& r, const toml::table& t) {
       r.expect({"when", "fault", "source", "bits", "values", "ranges", "other"});
       FaultRule rule;
       rule.line = line_of_node(&t);
@@ -1405,7 +1374,7 @@ class Parser {
         diag_.error(&t, "fault",
                     "a rule has when (and fault) or source (and bits, values or "
                     "ranges), one of the two");
-        continue;
+        return;
       }
       if (rule.when) {
         if (auto f = fault_at(r.node("fault"), "fault.fault")) rule.fault = *f;
@@ -1431,7 +1400,7 @@ class Parser {
         }
       }
       d_->unified.faults.push_back(std::move(rule));
-    }
+    });
   }
 
   void continue_if_extra(TableReader& r, std::initializer_list<const char*> keys) {
@@ -1443,52 +1412,51 @@ class Parser {
   }
 
   void read_simulator(TableReader& top) {
-    const toml::table* t = top.table("simulator", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "simulator", diag_);
-    r.expect({"stream", "stream_ms", "nack", "tick", "on"});
-    Simulated& s = d_->sim;
-    if (const toml::node* n = r.node("stream")) {
-      const auto* a = n->as_array();
-      if (a == nullptr || !a->is_array_of_tables()) {
-        diag_.error(n, "simulator.stream", "must be an array of tables ([[simulator.stream]])");
+    top.read_table("simulator", false, [&](TableReader& r) {
+      r.expect({"stream", "stream_ms", "nack", "tick", "on"});
+      Simulated& s = d_->sim;
+      if (const toml::node* n = r.node("stream")) {
+        const auto* a = n->as_array();
+        if (a == nullptr || !a->is_array_of_tables()) {
+          diag_.error(n, "simulator.stream", "must be an array of tables ([[simulator.stream]])");
+        }
+        for (const auto& item : a != nullptr && a->is_array_of_tables() ? *a : toml::array{}) {
+          TableReader sr(*item.as_table(), "simulator.stream", diag_);
+          sr.expect({"when", "send"});
+          Simulated::Stream st;
+          st.when = expr(sr, "when");
+          const auto m = message_ref(sr, "send", Direction::reply, true);
+          if (!m) continue;
+          st.send = *m;
+          s.stream.push_back(std::move(st));
+        }
       }
-      for (const auto& item : a != nullptr && a->is_array_of_tables() ? *a : toml::array{}) {
-        TableReader sr(*item.as_table(), "simulator.stream", diag_);
-        sr.expect({"when", "send"});
-        Simulated::Stream st;
-        st.when = expr(sr, "when");
-        const auto m = message_ref(sr, "send", Direction::reply, true);
-        if (!m) continue;
-        st.send = *m;
-        s.stream.push_back(std::move(st));
+      if (auto e = expr(r, "stream_ms")) s.stream_ms = std::move(*e);
+      s.nack = message_ref(r, "nack", Direction::reply, false);
+      s.tick = assignments(r.node("tick"), "simulator.tick", {});
+      if (const toml::node* n = r.node("on")) {
+        const auto* a = n->as_array();
+        if (a == nullptr || !a->is_array_of_tables()) {
+          diag_.error(n, "simulator.on", "must be an array of tables ([[simulator.on]])");
+          return;
+        }
+        for (const auto& item : *a) {
+          const auto& ot = *item.as_table();
+          TableReader orr(ot, "simulator.on", diag_);
+          orr.expect({"request", "when", "reply", "update"});
+          Simulated::Rule rule;
+          const auto req = message_ref(orr, "request", Direction::request, true);
+          if (!req) continue;
+          rule.request = *req;
+          Context ctx;
+          ctx.own = &d_->messages[*req];
+          rule.when = expr(orr, "when", ctx);
+          rule.reply = message_ref(orr, "reply", Direction::reply, false);
+          rule.update = assignments(orr.node("update"), "simulator.on.update", ctx);
+          s.rules.push_back(std::move(rule));
+        }
       }
-    }
-    if (auto e = expr(r, "stream_ms")) s.stream_ms = std::move(*e);
-    s.nack = message_ref(r, "nack", Direction::reply, false);
-    s.tick = assignments(r.node("tick"), "simulator.tick", {});
-    if (const toml::node* n = r.node("on")) {
-      const auto* a = n->as_array();
-      if (a == nullptr || !a->is_array_of_tables()) {
-        diag_.error(n, "simulator.on", "must be an array of tables ([[simulator.on]])");
-        return;
-      }
-      for (const auto& item : *a) {
-        const auto& ot = *item.as_table();
-        TableReader orr(ot, "simulator.on", diag_);
-        orr.expect({"request", "when", "reply", "update"});
-        Simulated::Rule rule;
-        const auto req = message_ref(orr, "request", Direction::request, true);
-        if (!req) continue;
-        rule.request = *req;
-        Context ctx;
-        ctx.own = &d_->messages[*req];
-        rule.when = expr(orr, "when", ctx);
-        rule.reply = message_ref(orr, "reply", Direction::reply, false);
-        rule.update = assignments(orr.node("update"), "simulator.on.update", ctx);
-        s.rules.push_back(std::move(rule));
-      }
-    }
+    });
   }
 
   // ---- the rules a description must keep ---------------------------------------------------

@@ -137,14 +137,11 @@ std::string FramedSimulator::state() const {
   return s.str();
 }
 
-std::string FramedSimulator::control(std::string_view line, TimePoint now) {
+std::string FramedSimulator::control(std::string_view text, TimePoint now) {
   advance(now);
-  const std::vector<std::string> w = split_words(line);
-  const auto error = [&](const std::string& why) {
-    return "error: " + why + "; commands: " + kHelp;
-  };
-  if (w.empty()) return error("empty command");
-  if (w[0] == "help" && w.size() == 1) return std::string("commands: ") + kHelp;
+  const ControlLine line(text, kHelp);
+  if (auto answer = line.common()) return *answer;
+  const std::vector<std::string>& w = line.words();
   if (w[0] == "state" && w.size() == 1) return state();
   if (w[0] == "silent" && w.size() == 2 && parse_on_off(w[1])) {
     silent_ = *parse_on_off(w[1]);
@@ -161,14 +158,14 @@ std::string FramedSimulator::control(std::string_view line, TimePoint now) {
     const auto v = d_->var(w[1]);
     const auto x = number(w[2]);
     if (!v || (d_->vars[*v].kind != Var::Kind::point && d_->vars[*v].kind != Var::Kind::state)) {
-      return error("no point or state '" + w[1] + "'");
+      return line.error("no point or state '" + w[1] + "'");
     }
-    if (!x) return error("'" + w[2] + "' is not a number");
+    if (!x) return line.error("'" + w[2] + "' is not a number");
     state_.set(*v, *x);
     state_.derive();
     return "ok " + w[1] + "=" + w[2];
   }
-  return error("unknown command or bad argument '" + std::string(line) + "'");
+  return line.unknown();
 }
 
 }  // namespace drivegate::framed

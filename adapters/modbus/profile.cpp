@@ -64,7 +64,7 @@ class Parser {
       read_line(top);
       read_modbus(top);
       bad_option_ = !read_profile_options(root, top, diag_, profile_);
-      read_points(root, top);
+      read_points(top);
       check_overlaps();
       read_common(top);
       read_profile_examples(root, top, diag_, profile_);
@@ -82,16 +82,15 @@ class Parser {
 
  private:
   void read_identity(TableReader& top) {
-    const toml::table* t = top.table("profile", true);
-    if (t == nullptr) return;
-    TableReader r(*t, "profile", diag_);
-    r.expect({"name", "description", "source", "identification"});
-    // Found by name in the profile folders: a file name's safe set ("example-vfd").
-    if (auto name = r.file_name("name")) profile_.name = *name;
-    profile_.description = r.string("description", false).value_or("");
-    // Where every address comes from: a profile without it cannot be checked against anything.
-    profile_.source = r.string("source", true).value_or("");
-    if (const toml::node* n = r.node("identification")) read_identification(*n);
+    top.read_table("profile", true, [&](TableReader& r) {
+      r.expect({"name", "description", "source", "identification"});
+      // Found by name in the profile folders: a file name's safe set ("example-vfd").
+      if (auto name = r.file_name("name")) profile_.name = *name;
+      profile_.description = r.string("description", false).value_or("");
+      // Where every address comes from: a profile without it cannot be checked against anything.
+      profile_.source = r.string("source", true).value_or("");
+      if (const toml::node* n = r.node("identification")) read_identification(*n);
+    });
   }
 
   // identification = { vendor_name = "...", product_code = "..." }: both, so that a scan never
@@ -120,54 +119,48 @@ class Parser {
   }
 
   void read_line(TableReader& top) {
-    const toml::table* t = top.table("line", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "line", diag_);
-    r.expect({"baud", "parity", "stop_bits", "framing"});
-    LineSpec& line = profile_.line;
-    if (auto b = r.integer("baud", 300, 921600, false)) line.baud = static_cast<std::uint32_t>(*b);
-    if (auto p = r.choice("parity", kParityNames, false)) line.parity = static_cast<Parity>(*p);
-    if (auto s = r.integer("stop_bits", 1, 2, false))
-      line.stop_bits = static_cast<std::uint8_t>(*s);
-    if (auto f = r.choice("framing", kFramingNames, false)) {
-      line.framing = static_cast<Framing>(*f);
-    }
+    top.read_table("line", false, [&](TableReader& r) {
+      r.expect({"baud", "parity", "stop_bits", "framing"});
+      LineSpec& line = profile_.line;
+      if (auto b = r.integer("baud", 300, 921600, false))
+        line.baud = static_cast<std::uint32_t>(*b);
+      if (auto p = r.choice("parity", kParityNames, false)) line.parity = static_cast<Parity>(*p);
+      if (auto s = r.integer("stop_bits", 1, 2, false))
+        line.stop_bits = static_cast<std::uint8_t>(*s);
+      if (auto f = r.choice("framing", kFramingNames, false)) {
+        line.framing = static_cast<Framing>(*f);
+      }
+    });
   }
 
   void read_modbus(TableReader& top) {
-    const toml::table* t = top.table("modbus", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "modbus", diag_);
-    r.expect({"max_registers", "max_bits", "max_gap", "write", "timeout_ms"});
-    ModbusSpec& m = profile_.modbus;
-    if (auto v = r.integer("max_registers", 1, kMaxReadRegisters, false)) {
-      m.max_registers = static_cast<std::uint16_t>(*v);
-    }
-    if (auto v = r.integer("max_bits", 1, kMaxReadBits, false)) {
-      m.max_bits = static_cast<std::uint16_t>(*v);
-    }
-    if (auto v = r.integer("max_gap", 0, kMaxReadRegisters - 1, false))
-      m.max_gap = static_cast<std::uint16_t>(*v);
-    if (auto w = r.choice("write", kWriteFunctionNames, false)) {
-      m.write = static_cast<WriteFunction>(*w);
-    }
-    if (auto v = r.integer("timeout_ms", 10, 10000, false)) {
-      m.timeout_ms = static_cast<std::uint32_t>(*v);
-    }
+    top.read_table("modbus", false, [&](TableReader& r) {
+      r.expect({"max_registers", "max_bits", "max_gap", "write", "timeout_ms"});
+      ModbusSpec& m = profile_.modbus;
+      if (auto v = r.integer("max_registers", 1, kMaxReadRegisters, false)) {
+        m.max_registers = static_cast<std::uint16_t>(*v);
+      }
+      if (auto v = r.integer("max_bits", 1, kMaxReadBits, false)) {
+        m.max_bits = static_cast<std::uint16_t>(*v);
+      }
+      if (auto v = r.integer("max_gap", 0, kMaxReadRegisters - 1, false))
+        m.max_gap = static_cast<std::uint16_t>(*v);
+      if (auto w = r.choice("write", kWriteFunctionNames, false)) {
+        m.write = static_cast<WriteFunction>(*w);
+      }
+      if (auto v = r.integer("timeout_ms", 10, 10000, false)) {
+        m.timeout_ms = static_cast<std::uint32_t>(*v);
+      }
+    });
   }
 
-  void read_points(const toml::table& root, TableReader& top) {
-    top.node("point");
-    const toml::array* points = array_of_tables(root, "point", diag_);
-    if (points == nullptr) {
-      diag_.error_at(0, "point", "a profile needs at least one [[point]]");
-      return;
-    }
-    for (const toml::node& n : *points) read_point(*n.as_table());
+  void read_points(TableReader& top) {
+    const bool any =
+        top.read_each("point", [&](TableReader& r, const toml::table& t) { read_point(r, t); });
+    if (!any) diag_.error_at(0, "point", "a profile needs at least one [[point]]");
   }
 
-  void read_point(const toml::table& t) {
-    TableReader r(t, "point", diag_);
+  void read_point(TableReader& r, const toml::table& t) {
     r.expect({"name", "table", "address", "type", "word_order", "scale", "unit", "description",
               "min", "max", "access", "poll_ms", "trend", "registers", "byte_order", "bits",
               "values", "mask"});
@@ -797,30 +790,29 @@ class Parser {
   }
 
   void read_common(TableReader& top) {
-    const toml::table* t = top.table("common", false);
-    if (t == nullptr) return;
-    TableReader r(*t, "common", diag_);
-    r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward",
-              "run_reverse", "reset_fault", "unbound"});
-    read_unbound(r);
-    CommonBindings& c = profile_.common;
-    c.speed_rpm = rpm_point(r, "speed_rpm", Use::read, c.speed_factor, c.speed_offset);
-    c.setpoint_rpm =
-        rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor, c.setpoint_offset);
-    c.running = bit_binding(r, "running");
-    c.fault = bit_binding(r, "fault");
-    c.fault_code = fault_binding(r);
-    c.stop = value_binding(r, "stop");
-    c.run_forward = value_binding(r, "run_forward");
-    c.run_reverse = value_binding(r, "run_reverse");
-    c.reset_fault = value_binding(r, "reset_fault");
-    // A drive that can be started must be stoppable through the same profile.
-    if ((c.run_forward || c.run_reverse) && !c.stop && r.node("stop") == nullptr) {
-      diag_.error(t, "common",
-                  "run_forward or run_reverse without stop: a profile that can start "
-                  "the drive must say how to stop it");
-    }
-    refuse_own_intervals();
+    top.read_table("common", false, [&](TableReader& r, const toml::table* t) {
+      r.expect({"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop",
+                "run_forward", "run_reverse", "reset_fault", "unbound"});
+      read_unbound(r);
+      CommonBindings& c = profile_.common;
+      c.speed_rpm = rpm_point(r, "speed_rpm", Use::read, c.speed_factor, c.speed_offset);
+      c.setpoint_rpm =
+          rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor, c.setpoint_offset);
+      c.running = bit_binding(r, "running");
+      c.fault = bit_binding(r, "fault");
+      c.fault_code = fault_binding(r);
+      c.stop = value_binding(r, "stop");
+      c.run_forward = value_binding(r, "run_forward");
+      c.run_reverse = value_binding(r, "run_reverse");
+      c.reset_fault = value_binding(r, "reset_fault");
+      // A drive that can be started must be stoppable through the same profile.
+      if ((c.run_forward || c.run_reverse) && !c.stop && r.node("stop") == nullptr) {
+        diag_.error(t, "common",
+                    "run_forward or run_reverse without stop: a profile that can start "
+                    "the drive must say how to stop it");
+      }
+      refuse_own_intervals();
+    });
   }
 
   // unbound = { setpoint_rpm = "why" }: bindings left out on purpose, each with its reason.

@@ -1,37 +1,35 @@
 #include "settings.h"
 
-namespace drivegate::nidec {
+#include <string_view>
 
-std::optional<Settings> parse_settings(const Options& options, std::string& error) {
-  // Values the schema let through that a frame cannot carry: none today, as every range of
-  // kOptionSchema is the field's own. Checked all the same, so a widened schema fails loudly.
-  const std::int64_t platform = options.integer("platform");
-  const std::int64_t empty = options.integer("empty_raw_weight");
-  const std::int64_t accel_ms = options.integer("accel_time_ms");
-  const std::int64_t attempts = options.integer("attempts");
-  if (platform < 0 || platform > 0xFF) {
-    error = "platform: one byte (5.1), 0..255";
-    return std::nullopt;
+namespace drivegate::nidec {
+namespace {
+
+// Whether the schema's range of option `name` lies within [lo, hi].
+constexpr bool schema_within(std::string_view name, double lo, double hi) {
+  for (const OptionSpec& o : kOptionSchema) {
+    if (o.name == name) return o.min >= lo && o.max <= hi;
   }
-  if (empty < 0 || empty > 0xFFFF) {
-    error = "empty_raw_weight: two bytes (5.1), 0..65535";
-    return std::nullopt;
-  }
-  // 5.3: 100 ms units, rounded to the nearest.
-  const std::int64_t accel_100ms = (accel_ms + 50) / 100;
-  if (accel_ms < 0 || accel_100ms > 0xFFFF) {
-    error = "accel_time_ms: two bytes of 100 ms (5.3), 0..6553500";
-    return std::nullopt;
-  }
-  if (attempts < 1 || attempts > 0xFF) {
-    error = "attempts: 1..255";
-    return std::nullopt;
-  }
+  return false;
+}
+
+// Every range of kOptionSchema is the field's own, so every value the gateway lets through fits
+// its frame: a schema widened past its field does not compile.
+static_assert(schema_within("platform", 0, 0xFF));            // 5.1: ping byte 3
+static_assert(schema_within("empty_raw_weight", 0, 0xFFFF));  // 5.1: ping bytes 4-5
+// 5.3: two bytes of 100 ms, rounded to the nearest.
+static_assert(schema_within("accel_time_ms", 0, 0xFFFF * 100 + 49));
+static_assert(schema_within("attempts", 1, 0xFF));  // a byte counts them
+
+}  // namespace
+
+std::optional<Settings> parse_settings(const Options& options, std::string& /*error*/) {
   Settings s;
-  s.platform = static_cast<std::uint8_t>(platform);
-  s.empty_raw_weight = static_cast<std::uint16_t>(empty);
-  s.accel_100ms = static_cast<std::uint16_t>(accel_100ms);
-  s.attempts = static_cast<std::uint8_t>(attempts);
+  s.platform = static_cast<std::uint8_t>(options.integer("platform"));
+  s.empty_raw_weight = static_cast<std::uint16_t>(options.integer("empty_raw_weight"));
+  // 5.3: 100 ms units, rounded to the nearest.
+  s.accel_100ms = static_cast<std::uint16_t>((options.integer("accel_time_ms") + 50) / 100);
+  s.attempts = static_cast<std::uint8_t>(options.integer("attempts"));
   return s;
 }
 

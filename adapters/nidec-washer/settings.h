@@ -33,9 +33,9 @@ struct Settings {
   std::uint8_t attempts = 3;           // identical sends per turn (section 6: resend)
 };
 
-// The options as the driver uses them, accel_time_ms rounded to the 100 ms the frame carries. No
-// two options can contradict each other; nullopt with `error` naming the option only for a value
-// a frame cannot carry, which the schema's ranges (the fields' own) already keep out.
+// The options as the driver uses them, accel_time_ms rounded to the 100 ms the frame carries.
+// Never nullopt: no two options can contradict each other, and the schema's ranges are the
+// fields' own (settings.cpp has the compiler hold them to that), so every value fits its frame.
 std::optional<Settings> parse_settings(const Options& options, std::string& error);
 
 }  // namespace drivegate::nidec

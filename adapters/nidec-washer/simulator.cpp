@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "drivegate/bytes.h"
 #include "drivegate/sim_rx.h"
@@ -77,20 +78,12 @@ Bytes NidecWasherSimulator::handle(const Request& r, TimePoint now) {
       return encode_reply(Mode::ping, {platform_, hi8(version_), lo8(version_), 0});
     case Mode::request:
       return status_reply(Mode::request, weight());  // 5.2
-    case Mode::cw:
-      start(Motion::cw, r, now);
-      return status_reply(r.mode);
-    case Mode::ccw:
-      start(Motion::ccw, r, now);
-      return status_reply(r.mode);
-    case Mode::agitation:
-      start(Motion::agitation, r, now);
-      return status_reply(r.mode);
-    case Mode::spin:
-      start(Motion::spin, r, now);
-      return status_reply(r.mode);
-    case Mode::free_shaft_spin:
-      start(Motion::free_shaft_spin, r, now);
+    case Mode::cw:                                   // 5.3
+    case Mode::ccw:                                  // 5.4
+    case Mode::agitation:                            // 5.5
+    case Mode::spin:                                 // 5.6
+    case Mode::free_shaft_spin:                      // 5.14
+      start(rotation(r.mode), r, now);
       return status_reply(r.mode);
     case Mode::stop:  // 5.7
       if (motion_ != Motion::stopped) motion_ = Motion::stopping;
@@ -124,6 +117,21 @@ Bytes NidecWasherSimulator::handle(const Request& r, TimePoint now) {
     }
   }
   return encode_nack();
+}
+
+// The motion a rotation mode starts, of the same name.
+NidecWasherSimulator::Motion NidecWasherSimulator::rotation(Mode m) {
+  constexpr std::array<std::pair<Mode, Motion>, 5> kRotations = {{
+      {Mode::cw, Motion::cw},
+      {Mode::ccw, Motion::ccw},
+      {Mode::agitation, Motion::agitation},
+      {Mode::spin, Motion::spin},
+      {Mode::free_shaft_spin, Motion::free_shaft_spin},
+  }};
+  for (const auto& [mode, motion] : kRotations) {
+    if (mode == m) return motion;
+  }
+  return Motion::stopped;
 }
 
 void NidecWasherSimulator::start(Motion m, const Request& r, TimePoint now) {

@@ -32,6 +32,7 @@ class NidecWasherSimulator final : public Simulator {
     braking
   };
 
+  static Motion rotation(Mode m);
   Bytes handle(const Request& r, TimePoint now);
   Bytes status_reply(Mode m, std::uint8_t last = 0) const;
   Bytes send(Bytes frame);

@@ -1,6 +1,8 @@
 // NidecWasherSimulator: operator commands (`drivegate sim nidec-washer` passes stdin lines here).
 #include <cstdio>
 #include <sstream>
+#include <string>
+#include <type_traits>
 #include <vector>
 
 #include "drivegate/sim_text.h"
@@ -38,16 +40,13 @@ std::string NidecWasherSimulator::state() const {
   return s.str();
 }
 
-std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) {
+std::string NidecWasherSimulator::control(std::string_view text, TimePoint now) {
   advance(now);
-  const std::vector<std::string> w = split_words(line);
-  const auto error = [&](const std::string& why) {
-    return "error: " + why + "; commands: " + kHelp;
-  };
-  if (w.empty()) return error("empty command");
+  const ControlLine line(text, kHelp);
+  if (auto answer = line.common()) return *answer;
+  const std::vector<std::string>& w = line.words();
   const std::string& cmd = w[0];
   const std::optional<long> arg = w.size() == 2 ? number(w[1], 65535) : std::nullopt;
-  if (cmd == "help" && w.size() == 1) return std::string("commands: ") + kHelp;
   if (cmd == "state" && w.size() == 1) return state();
   if (cmd == "clear" && w.size() == 1) {
     faults_ = 0;
@@ -61,7 +60,7 @@ std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) 
         bits = static_cast<std::uint8_t>(*raw);
       }
     }
-    if (!bits) return error("fault takes " + fault_names() + " or a raw bitmask 1..0xFF");
+    if (!bits) return line.error("fault takes " + fault_names() + " or a raw bitmask 1..0xFF");
     trip(*bits, now);
     return "ok faults=" + hex(faults_, 2);
   }
@@ -71,32 +70,22 @@ std::string NidecWasherSimulator::control(std::string_view line, TimePoint now) 
     return std::string("ok silent=") + (silent_ ? "1" : "0");
   }
   const long n = arg.value_or(-1);
-  if (n < 0) return error("unknown command or bad argument '" + std::string(line) + "'");
-  if (cmd == "corrupt") {
-    corrupt_ = static_cast<int>(n);
-    return "ok corrupt=" + std::to_string(corrupt_);
-  }
-  if (cmd == "nack") {
-    nack_ = static_cast<int>(n);
-    return "ok nack=" + std::to_string(nack_);
-  }
-  if (cmd == "load" && n <= 0xFF) {
-    load_ = static_cast<std::uint8_t>(n);
-    return "ok load=" + std::to_string(load_);
-  }
-  if (cmd == "bus") {
-    dc_bus_ = static_cast<std::uint16_t>(n);
-    return "ok dc_bus=" + std::to_string(dc_bus_);
-  }
-  if (cmd == "fabric" && n <= 0xFF) {
-    fabric_ = static_cast<std::uint8_t>(n);
-    return "ok fabric=" + std::to_string(fabric_);
-  }
+  if (n < 0) return line.unknown();
+  // `field` set to the argument, and the line that says so.
+  const auto set = [n](auto& field, const char* name) {
+    field = static_cast<std::remove_reference_t<decltype(field)>>(n);
+    return std::string("ok ") + name + "=" + std::to_string(field);
+  };
+  if (cmd == "corrupt") return set(corrupt_, "corrupt");
+  if (cmd == "nack") return set(nack_, "nack");
+  if (cmd == "load" && n <= 0xFF) return set(load_, "load");
+  if (cmd == "bus") return set(dc_bus_, "dc_bus");
+  if (cmd == "fabric" && n <= 0xFF) return set(fabric_, "fabric");
   if (cmd == "version") {
     version_ = static_cast<std::uint16_t>(n);
     return "ok version=" + hex(version_, 4);
   }
-  return error("unknown command or bad argument '" + std::string(line) + "'");
+  return line.unknown();
 }
 
 }  // namespace drivegate::nidec

@@ -95,15 +95,19 @@ RxVerdict EDriveDriver::on_receive(ByteView rx, TimePoint now) {
 // message's ("Message IDs": 64 / 80 / 64 bytes) is not that reply: dropped as noise, so that the
 // read times out and goes again; a longer one is read up to its size.
 RxKind EDriveDriver::on_reply(MessageId id, const Frame& f, TimePoint now) {
+  // A start-up read answered: the next phase's request goes out at once.
+  const auto go_on = [&](Phase next) {
+    phase_ = next;
+    next_poll_ = now;
+    return RxKind::reply;
+  };
   switch (id) {
     case MessageId::build_information: {
       const auto b = parse_build_info(f.payload, settings_.byte_order);
       if (!b) return RxKind::noise;
       fill_build_info(values_, *b);
       build_speed_ = {b->min_speed, b->max_speed};
-      phase_ = Phase::running_limits;
-      next_poll_ = now;
-      return RxKind::reply;
+      return go_on(Phase::running_limits);
     }
     case MessageId::running_limits: {
       const auto l = parse_running_limits(f.payload, settings_.byte_order);
@@ -114,9 +118,7 @@ RxKind EDriveDriver::on_reply(MessageId id, const Frame& f, TimePoint now) {
       limits_ = (l->min_speed == 0 && l->max_speed == 0) ? build_speed_
                                                          : SpeedLimits{l->min_speed, l->max_speed};
       control_enabled_ = l->control_enabled;
-      phase_ = Phase::polling;
-      next_poll_ = now;
-      return RxKind::reply;
+      return go_on(Phase::polling);
     }
     case MessageId::status: {
       const auto s = parse_status(f.payload, settings_.byte_order);

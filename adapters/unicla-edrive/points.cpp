@@ -32,15 +32,37 @@ double d(float v) {
   return static_cast<double>(v);
 }
 
+// "Running Limits/ RS485 Config": the ranges, each the points `name`_low and `name`_high in this
+// order from pt::suction_pressure_low on.
+struct LimitRange {
+  const char* name;
+  const char* unit;
+  const char* label;
+  Range RunningLimits::*range;
+};
+constexpr std::array<LimitRange, 6> kLimitRanges = {{
+    {"suction_pressure", "bar", "suction pressure", &RunningLimits::suction_pressure},
+    {"discharge_pressure", "bar", "discharge pressure", &RunningLimits::discharge_pressure},
+    {"suction_temperature", "degC", "suction temperature", &RunningLimits::suction_temperature},
+    {"discharge_temperature", "degC", "discharge temperature",
+     &RunningLimits::discharge_temperature},
+    {"suction_superheat", "K", "suction superheat", &RunningLimits::suction_superheat},
+    {"discharge_superheat", "K", "discharge superheat", &RunningLimits::discharge_superheat},
+}};
+static_assert(pt::suction_pressure_low + 2 * kLimitRanges.size() == pt::rs485_device_id);
+
 }  // namespace
 
 std::vector<PointSpec> make_points() {
   std::vector<PointSpec> p(pt::count);
   // "Status" table.
-  p[pt::suction_pressure] = real("suction_pressure", "bar", "suction pressure (absolute)").trended();
-  p[pt::discharge_pressure] = real("discharge_pressure", "bar", "discharge pressure (absolute)").trended();
+  p[pt::suction_pressure] =
+      real("suction_pressure", "bar", "suction pressure (absolute)").trended();
+  p[pt::discharge_pressure] =
+      real("discharge_pressure", "bar", "discharge pressure (absolute)").trended();
   p[pt::suction_temperature] = real("suction_temperature", "degC", "suction temperature").trended();
-  p[pt::discharge_temperature] = real("discharge_temperature", "degC", "discharge temperature").trended();
+  p[pt::discharge_temperature] =
+      real("discharge_temperature", "degC", "discharge temperature").trended();
   p[pt::suction_superheat] = real("suction_superheat", "K", "suction superheat");
   p[pt::discharge_superheat] = real("discharge_superheat", "K", "discharge superheat");
   p[pt::compressor_rpm] = word("compressor_rpm", "rpm", "compressor speed as reported");
@@ -85,30 +107,14 @@ std::vector<PointSpec> make_points() {
       word("limit_min_speed", "rpm", "running limit: minimum speed (Set Run State floor)");
   p[pt::limit_max_speed] =
       word("limit_max_speed", "rpm", "running limit: maximum speed (Set Run State cap)");
-  p[pt::suction_pressure_low] =
-      real("suction_pressure_low", "bar", "running limit: suction pressure low");
-  p[pt::suction_pressure_high] =
-      real("suction_pressure_high", "bar", "running limit: suction pressure high");
-  p[pt::discharge_pressure_low] =
-      real("discharge_pressure_low", "bar", "running limit: discharge pressure low");
-  p[pt::discharge_pressure_high] =
-      real("discharge_pressure_high", "bar", "running limit: discharge pressure high");
-  p[pt::suction_temperature_low] =
-      real("suction_temperature_low", "degC", "running limit: suction temperature low");
-  p[pt::suction_temperature_high] =
-      real("suction_temperature_high", "degC", "running limit: suction temperature high");
-  p[pt::discharge_temperature_low] =
-      real("discharge_temperature_low", "degC", "running limit: discharge temperature low");
-  p[pt::discharge_temperature_high] =
-      real("discharge_temperature_high", "degC", "running limit: discharge temperature high");
-  p[pt::suction_superheat_low] =
-      real("suction_superheat_low", "K", "running limit: suction superheat low");
-  p[pt::suction_superheat_high] =
-      real("suction_superheat_high", "K", "running limit: suction superheat high");
-  p[pt::discharge_superheat_low] =
-      real("discharge_superheat_low", "K", "running limit: discharge superheat low");
-  p[pt::discharge_superheat_high] =
-      real("discharge_superheat_high", "K", "running limit: discharge superheat high");
+  // Each range a low and a high point, in the table's order.
+  std::size_t at = pt::suction_pressure_low;
+  for (const LimitRange& r : kLimitRanges) {
+    for (const std::string_view end : {"low", "high"}) {
+      p[at++] = real(std::string(r.name) + "_" + std::string(end), r.unit,
+                     "running limit: " + std::string(r.label) + " " + std::string(end));
+    }
+  }
   p[pt::rs485_device_id] = word("rs485_device_id", "", "RS485 config: device id");
   // "Control Enabled" is a flag: 0 the drive ignores writes from the bus (README.md).
   constexpr std::array<std::string_view, 2> kControlEnabled = {"disabled", "enabled"};
@@ -157,18 +163,11 @@ void fill_build_info(std::vector<Value>& v, const BuildInfo& b) {
 void fill_running_limits(std::vector<Value>& v, const RunningLimits& l) {
   v[pt::limit_min_speed] = i(l.min_speed);
   v[pt::limit_max_speed] = i(l.max_speed);
-  v[pt::suction_pressure_low] = d(l.suction_pressure.low);
-  v[pt::suction_pressure_high] = d(l.suction_pressure.high);
-  v[pt::discharge_pressure_low] = d(l.discharge_pressure.low);
-  v[pt::discharge_pressure_high] = d(l.discharge_pressure.high);
-  v[pt::suction_temperature_low] = d(l.suction_temperature.low);
-  v[pt::suction_temperature_high] = d(l.suction_temperature.high);
-  v[pt::discharge_temperature_low] = d(l.discharge_temperature.low);
-  v[pt::discharge_temperature_high] = d(l.discharge_temperature.high);
-  v[pt::suction_superheat_low] = d(l.suction_superheat.low);
-  v[pt::suction_superheat_high] = d(l.suction_superheat.high);
-  v[pt::discharge_superheat_low] = d(l.discharge_superheat.low);
-  v[pt::discharge_superheat_high] = d(l.discharge_superheat.high);
+  std::size_t at = pt::suction_pressure_low;
+  for (const LimitRange& r : kLimitRanges) {
+    v[at++] = d((l.*r.range).low);
+    v[at++] = d((l.*r.range).high);
+  }
   v[pt::rs485_device_id] = i(l.device_id);
   v[pt::control_enabled] = i(l.control_enabled);
 }

@@ -55,6 +55,34 @@ inline std::optional<bool> parse_on_off(std::string_view s) {
   return std::nullopt;
 }
 
+// An operator command line in words, and the answers simulators give alike: an error that gives
+// the reason and then lists the commands, the list on `help`, and the reason an empty line gets.
+class ControlLine {
+ public:
+  ControlLine(std::string_view line, std::string_view commands)
+      : line_(line), words_(split_words(line)), commands_(commands) {}
+
+  [[nodiscard]] const std::vector<std::string>& words() const { return words_; }
+  [[nodiscard]] std::string error(const std::string& why) const {
+    return "error: " + why + "; commands: " + std::string(commands_);
+  }
+  // The line is no command, or a command with an argument it does not take: quoted.
+  [[nodiscard]] std::string unknown() const {
+    return error("unknown command or bad argument '" + std::string(line_) + "'");
+  }
+  // The answer to an empty line or to `help`; nothing for any other line.
+  [[nodiscard]] std::optional<std::string> common() const {
+    if (words_.empty()) return error("empty command");
+    if (words_.size() == 1 && words_[0] == "help") return "commands: " + std::string(commands_);
+    return std::nullopt;
+  }
+
+ private:
+  std::string_view line_;
+  std::vector<std::string> words_;
+  std::string_view commands_;
+};
+
 enum class HexCase : std::uint8_t { upper, lower };
 
 // "0x" and `v` in at least `digits` hexadecimal digits, as a simulator's state line shows a

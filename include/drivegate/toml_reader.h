@@ -13,6 +13,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -102,6 +103,19 @@ inline bool valid_file_name(std::string_view name) {
   return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
   });
+}
+
+// `root[key]` as an array of tables ([[key]]); nullptr when absent or (with an error) not one.
+inline const toml::array* array_of_tables(const toml::table& root, std::string_view key,
+                                          Diagnostics& diag) {
+  const toml::node* n = root.get(key);
+  if (n == nullptr) return nullptr;
+  const auto* a = n->as_array();
+  if (a == nullptr || !a->is_array_of_tables()) {
+    diag.error(n, key, "must be an array of tables ([[" + std::string(key) + "]])");
+    return nullptr;
+  }
+  return a;
 }
 
 class TableReader {
@@ -210,6 +224,37 @@ class TableReader {
     return t;
   }
 
+  // Each table of the array of tables at `key` ([[key]]), read by `read(r, table)`, `r` its own
+  // reader as read_table() gives. False when there is none (with an error when `key` is there
+  // but not an array of tables).
+  template <class Read>
+  bool read_each(std::string_view key, Read read) {
+    node(key);
+    const toml::array* a = array_of_tables(table_, key, diag_);
+    if (a == nullptr) return false;
+    for (const toml::node& n : *a) {
+      const toml::table& t = *n.as_table();
+      TableReader r(t, std::string(key), diag_);
+      read(r, t);
+    }
+    return true;
+  }
+
+  // The table at `key`, read by `read(r)` or `read(r, table)` when it is there (as table()): `r`,
+  // its own reader, names its keys `key`.KEY and reports every key `read` did not ask for once
+  // `read` is done.
+  template <class Read>
+  void read_table(std::string_view key, bool required, Read read) {
+    const toml::table* t = table(key, required);
+    if (t == nullptr) return;
+    TableReader r(*t, std::string(key), diag_);
+    if constexpr (std::is_invocable_v<Read, TableReader&, const toml::table*>) {
+      read(r, t);
+    } else {
+      read(r);
+    }
+  }
+
   // One of `names` at `key`: its index.
   template <std::size_t N>
   std::optional<std::size_t> choice(std::string_view key,
@@ -274,19 +319,6 @@ std::optional<std::size_t> index_of(const Entries& entries, std::string_view nam
     if (entries[i].name == name) return i;
   }
   return std::nullopt;
-}
-
-// `root[key]` as an array of tables ([[key]]); nullptr when absent or (with an error) not one.
-inline const toml::array* array_of_tables(const toml::table& root, std::string_view key,
-                                          Diagnostics& diag) {
-  const toml::node* n = root.get(key);
-  if (n == nullptr) return nullptr;
-  const auto* a = n->as_array();
-  if (a == nullptr || !a->is_array_of_tables()) {
-    diag.error(n, key, "must be an array of tables ([[" + std::string(key) + "]])");
-    return nullptr;
-  }
-  return a;
 }
 
 }  // namespace drivegate

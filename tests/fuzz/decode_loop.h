@@ -24,4 +24,10 @@ void decode_all(std::span<const std::uint8_t> rx, Decode&& decode) {
   }
 }
 
+// Each of `decoders` (the master's and the simulator's, say) over the whole of `rx`, in turn.
+template <class... Decode>
+void decode_each(std::span<const std::uint8_t> rx, Decode&&... decoders) {
+  (decode_all(rx, decoders), ...);
+}
+
 }  // namespace drivegate::fuzz

@@ -6,9 +6,7 @@
 namespace drivegate::fuzz {
 
 void fuzz_codec(FuzzInput& in) {
-  const auto rx = in.rest();
-  decode_all(rx, [](std::span<const std::uint8_t> b) { return fdc1::decode_device(b); });
-  decode_all(rx, [](std::span<const std::uint8_t> b) { return fdc1::decode_master(b); });
+  decode_each(in.rest(), fdc1::decode_device, fdc1::decode_master);
 }
 
 }  // namespace drivegate::fuzz

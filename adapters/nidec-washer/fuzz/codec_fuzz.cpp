@@ -6,9 +6,7 @@
 namespace drivegate::fuzz {
 
 void fuzz_codec(FuzzInput& in) {
-  const auto rx = in.rest();
-  decode_all(rx, [](std::span<const std::uint8_t> b) { return nidec::decode_reply(b); });
-  decode_all(rx, [](std::span<const std::uint8_t> b) { return nidec::decode_request(b); });
+  decode_each(in.rest(), nidec::decode_reply, nidec::decode_request);
 }
 
 }  // namespace drivegate::fuzz

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "adapter_factories.h"
 #include "adapter_under_test.h"
@@ -84,6 +85,23 @@ TEST_F(Sim, NoMotionBeforePing_5_1) {
   wait(100ms);
   EXPECT_TRUE(has("motion=cw"));
   EXPECT_TRUE(has("speed_rpm=800"));
+}
+
+// 5.3 to 5.6 and 5.14: each rotation mode starts the motion of its own name.
+TEST_F(Sim, EachRotationModeStartsItsOwnMotion) {
+  send(encode(make_ping(7, 0)));
+  const std::pair<Request, std::string> cases[] = {
+      {make_run(Mode::cw, 800, 0), "motion=cw "},
+      {make_run(Mode::ccw, 800, 0), "motion=ccw "},
+      {make_agitation(800, {.cw_on = 10, .ccw_on = 10}), "motion=agitation "},
+      {make_run(Mode::spin, 800, 0), "motion=spin "},
+      {make_run(Mode::free_shaft_spin, 800, 0), "motion=free_shaft_spin "},
+  };
+  for (const auto& [request, motion] : cases) {
+    SCOPED_TRACE(motion);
+    send(encode(request));
+    EXPECT_TRUE(has(motion)) << state();
+  }
 }
 
 TEST_F(Sim, RampsWithTheAccelTime_5_6) {
