@@ -129,6 +129,7 @@ bool in_choices(std::string_view choices, std::string_view value) {
 
 std::string range_text(const OptionSpec& spec) {
   std::ostringstream out;
+  out.precision(15);  // a double's exact digits: 6553500, not 6.5535e+06
   out << spec.min << ".." << spec.max;
   return out.str();
 }

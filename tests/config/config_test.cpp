@@ -387,6 +387,11 @@ TEST_F(ConfigTest, OptionTextIntegersAreDecimalOnly) {
   EXPECT_THAT(refused(any, "9223372036854775808"), HasSubstr("out of the 64-bit integer range"));
   EXPECT_THAT(refused(any, "-9223372036854775809"), HasSubstr("out of the 64-bit integer range"));
   EXPECT_THAT(refused(any, "--1"), HasSubstr("is not a decimal integer"));
+  // A range says its bounds as written, not in a float's six digits (nidec-washer's
+  // accel_time_ms once read "must be in 0..6.5535e+06").
+  const OptionSpec wide{"accel_time_ms", OptionType::integer, "0", "two bytes of 100 ms", 0,
+                        6553500};
+  EXPECT_THAT(refused(wide, "-5"), HasSubstr("must be in 0..6553500 (got -5)"));
 }
 
 TEST_F(ConfigTest, OptionTextRealsAreFiniteDecimalOnly) {
