@@ -77,11 +77,6 @@ inline constexpr std::array<std::string_view, 2> kFramingNames = {"rtu", "ascii"
 inline constexpr std::array<std::string_view, 4> kProfileTableNames = {"coil", "discrete", "input",
                                                                        "holding"};
 
-// Coils and discrete inputs hold bits; input and holding registers 16-bit words.
-constexpr bool is_bit_table(Table t) {
-  return t == Table::coil || t == Table::discrete;
-}
-
 // A profile's name, found as a file name: 1..64 characters of a-z, 0-9, '-' and '_'.
 bool valid_profile_name(std::string_view name);
 

@@ -20,10 +20,6 @@ std::string_view label_of(const PointSpec& spec, const Value& value) {
 
 namespace {
 
-bool is_bit(Table t) {
-  return t == Table::coil || t == Table::discrete;
-}
-
 // What a point shows: its registers' value; Value{} where it is unknown (an adapter's point its
 // driver does not know, whatever its registers hold; a common row holding its unknown mark; a
 // float that is not a number); nothing where the registers cannot be read as its type.
@@ -33,7 +29,7 @@ std::optional<Value> value_of(const MappedPoint& p, std::span<const std::uint16_
       std::holds_alternative<std::monostate>(driver_values[p.index])) {
     return Value{};
   }
-  if (is_bit(p.spec.table)) return Value{std::int64_t{regs[0] != 0 ? 1 : 0}};
+  if (is_bit_table(p.spec.table)) return Value{std::int64_t{regs[0] != 0 ? 1 : 0}};
   if (p.spec.type == PointType::string) return decode_text(regs);  // a serial number, a name
   auto v = decode_value(p.spec, regs);
   if (!v) {  // a float that is NaN or infinite is unknown; other types always decode
@@ -80,7 +76,7 @@ void point_values(Device& device, TimePoint now, std::vector<PointValue>& out) {
   const std::vector<Value>& values = device.driver().values();
   for (const MappedPoint& p : map.points()) {
     const auto i = static_cast<std::size_t>(p.spec.table);
-    const std::size_t count = is_bit(p.spec.table) ? 1 : p.spec.register_count();
+    const std::size_t count = p.spec.address_count();
     if (std::size_t{p.address} + count > image[i].size() || !readable[i][p.address]) continue;
     if (auto v = value_of(p, std::span(image[i]).subspan(p.address, count), values)) {
       out.emplace_back(&p, std::move(*v));

@@ -13,8 +13,8 @@ RegisterImage::RegisterImage(const RegisterMap& map) : map_(map) {
 void RegisterImage::refresh_points(std::span<const Value> values) {
   for (const auto& p : map_.points()) {
     if (p.source != PointSource::adapter) continue;
-    const bool bits = p.spec.table == Table::discrete || p.spec.table == Table::coil;
-    auto regs = registers(p.spec.table).subspan(p.address, bits ? 1 : p.spec.register_count());
+    const bool bits = is_bit_table(p.spec.table);
+    auto regs = registers(p.spec.table).subspan(p.address, p.spec.address_count());
     const Value& v = p.index < values.size() ? values[p.index] : Value{};
     if (bits) {
       regs[0] = as_double(v) != 0.0 ? 1 : 0;

@@ -37,7 +37,7 @@ RegisterMap::RegisterMap(const std::vector<PointSpec>& adapter_points) {
     p.spec = adapter_points[i];
     p.index = i;
     p.address = sizes_[static_cast<int>(p.spec.table)];
-    if (p.spec.table == Table::discrete || p.spec.table == Table::coil) {
+    if (is_bit_table(p.spec.table)) {
       p.spec.type = PointType::u16;  // one bit
     }
     add(std::move(p));
@@ -73,8 +73,7 @@ void RegisterMap::add(MappedPoint p) {
                                 (find(p.spec.name)->common() ? " (by the common block)" : ""));
   }
   const int t = static_cast<int>(p.spec.table);
-  const bool bits = p.spec.table == Table::discrete || p.spec.table == Table::coil;
-  const std::uint16_t count = bits ? 1 : p.spec.register_count();
+  const std::uint16_t count = p.spec.address_count();
   if (count == 0) throw std::invalid_argument("point '" + p.spec.name + "' has no registers");
   const std::uint32_t end = std::uint32_t{p.address} + count;
   if (end > 0xFFFF) throw std::invalid_argument("register map overflows at '" + p.spec.name + "'");

@@ -32,14 +32,10 @@ constexpr Millis kHostSilence{5'000};
 // Sparkplug timestamps carry a value's age; a per-poll data age would be news at every poll.
 constexpr std::string_view kNotPublished = "data_age_ms";
 
-bool is_bit(const PointSpec& spec) {
-  return spec.table == Table::coil || spec.table == Table::discrete;
-}
-
 // The Sparkplug datatype of a point (docs/mqtt.md, "Metrics"). A 32-bit unsigned point goes out
 // as Int64: the specification and Eclipse Tahu disagree on which field carries a UInt32.
 DataType datatype_of(const PointSpec& spec) {
-  if (is_bit(spec)) return DataType::boolean;
+  if (is_bit_table(spec.table)) return DataType::boolean;
   switch (spec.type) {
     case PointType::string:
       return DataType::string;

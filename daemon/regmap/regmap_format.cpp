@@ -18,13 +18,9 @@ std::string number(double v) {
   return out.str();
 }
 
-bool is_bits(Table t) {
-  return t == Table::coil || t == Table::discrete;
-}
-
 // Coils and discrete inputs are single bits on the wire, whatever the point's value type.
 std::string type_of(const MappedPoint& p) {
-  return is_bits(p.spec.table) ? std::string("bit") : std::string(to_string(p.spec.type));
+  return is_bit_table(p.spec.table) ? std::string("bit") : std::string(to_string(p.spec.type));
 }
 
 // Who may write the point, as the listeners' `access` levels name it: "operate" (the command
@@ -67,7 +63,7 @@ std::vector<const MappedPoint*> in_reference_order(const RegisterMap& map) {
 int reference_digits(const std::vector<DeviceRegisters>& devices) {
   for (const auto& dev : devices) {
     for (const auto& p : dev.map.points()) {
-      const unsigned span = is_bits(p.spec.table) ? 1u : p.spec.register_count();
+      const unsigned span = p.spec.address_count();
       if (p.address + std::max(span, 1u) - 1 > 9998) return 6;
     }
   }
@@ -211,7 +207,8 @@ std::string to_markdown(const std::vector<DeviceRegisters>& devices,
       << " + address (mbpoll's `-r` is the reference without its table digit: address + 1). "
          "Coils and discrete inputs are single bits. 32-bit values and floats take two registers, "
          "64-bit ones (u64, i64, f64) four, a string two characters a register (the first in "
-         "the high byte); engineering value = register x scale. Access is the level a listener (or MQTT's "
+         "the high byte); engineering value = register x scale. Access is the level a listener (or "
+         "MQTT's "
          "`access`) must have to write the point: `operate` or `maintain`; `read` points are "
          "read-only.\n\n";
   if (listeners.empty()) {

@@ -111,10 +111,22 @@ struct PointSpec {
     return writable_table && write_level != WriteLevel::none ? Access::read_write : Access::read;
   }
   [[nodiscard]] std::uint16_t register_count() const;
+  // How many addresses of its table the point takes: one bit, or its registers.
+  [[nodiscard]] std::uint16_t address_count() const;
 };
+
+// Coils and discrete inputs hold one bit per address, whatever a point's value type; input and
+// holding registers a 16-bit word each.
+constexpr bool is_bit_table(Table t) {
+  return t == Table::coil || t == Table::discrete;
+}
 
 inline std::uint16_t PointSpec::register_count() const {
   return registers_of(type, string_registers);
+}
+
+inline std::uint16_t PointSpec::address_count() const {
+  return is_bit_table(table) ? 1 : register_count();
 }
 
 // Builders for the common shapes; the modifiers above add scale, limits and labels.
