@@ -373,7 +373,8 @@ std::string ModbusSimulator::state() const {
 std::string ModbusSimulator::control(std::string_view line, TimePoint) {
   const auto w = split_words(line);
   const std::string usage =
-      "commands: state | fault N (a native fault code; 0 clears) | set POINT VALUE (a string "
+      "commands: state | fault N (a native fault code; 0 clears) | run forward|reverse|off | "
+      "set POINT VALUE (a string "
       "point: TEXT) | "
       "raw TABLE ADDRESS WORD... | missing TABLE ADDRESS | refuse TABLE ADDRESS CODE [TIMES] | "
       "mute TABLE ADDRESS on|off | short TABLE ADDRESS on|off | silent on|off | late MS | "
@@ -386,6 +387,21 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
     fault_ = *code;
     drive();
     return "ok fault " + std::to_string(fault_);
+  }
+  if (w[0] == "run" && w.size() == 2) {
+    // Run or stop as from the drive's own terminals or keypad, not over the line: what a
+    // profile without run commands needs to show its running state and speed.
+    if (w[1] == "off") {
+      running_ = false;
+    } else if ((w[1] == "forward" || w[1] == "reverse") && fault_ == 0) {
+      running_ = true;
+      reverse_ = w[1] == "reverse";
+    } else {
+      return fault_ != 0 ? "error: the drive is faulted (fault 0 clears it)"
+                         : "error: run forward|reverse|off";
+    }
+    drive();
+    return "ok run " + w[1];
   }
   if (w[0] == "set" && w.size() >= 3 && profile_.find(w[1]) &&
       profile_.points[*profile_.find(w[1])].type == ValueType::string) {

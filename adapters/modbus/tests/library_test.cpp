@@ -104,6 +104,21 @@ TEST_P(Library, RunsAgainstItsOwnSimulatorOnItsOwnLine) {
     while (r > 1 && std::fabs(r / step - std::round(r / step)) > 1e-6) --r;
     rpm = static_cast<std::uint16_t>(r);
   }
+  // The speed read back within one raw step of the speed's point, in rpm.
+  const auto speed_follows = [&](int want) {
+    const ProfilePoint& sp = p.points[*c.speed_rpm];
+    const double step = std::fabs(sp.scale * factor_value(c.speed_factor, p.options));
+    const bool ok = rig.run_until(
+        [&] {
+          const auto got = static_cast<std::int16_t>(rig.value(d, "speed_rpm"));
+          return std::abs(got - want) <= step + 0.5;
+        },
+        3s);
+    if (!ok) {
+      ADD_FAILURE() << "speed_rpm " << static_cast<std::int16_t>(rig.value(d, "speed_rpm"))
+                    << ", wrote " << want;
+    }
+  };
   for (const auto& [bound, command] : {std::pair{c.run_forward.has_value(), cmd::run_forward},
                                        std::pair{c.run_reverse.has_value(), cmd::run_reverse}}) {
     if (!bound) continue;
@@ -116,26 +131,25 @@ TEST_P(Library, RunsAgainstItsOwnSimulatorOnItsOwnLine) {
       EXPECT_TRUE(rig.run_until(running, 3s));
     }
     if (c.setpoint_rpm && c.speed_rpm) {
-      // Within one raw step of the speed's point, in rpm.
-      const ProfilePoint& sp = p.points[*c.speed_rpm];
-      const double step = std::fabs(sp.scale * factor_value(c.speed_factor, p.options));
-      const int want =
-          command == cmd::run_reverse && sp.type != ValueType::u16 && sp.type != ValueType::u32
-              ? -rpm
-              : rpm;
-      EXPECT_TRUE(rig.run_until(
-          [&] {
-            const auto got = static_cast<std::int16_t>(rig.value(d, "speed_rpm"));
-            return std::abs(got - want) <= step + 0.5;
-          },
-          3s))
-          << "speed_rpm " << static_cast<std::int16_t>(rig.value(d, "speed_rpm")) << ", wrote "
-          << want;
+      const ValueType t = p.points[*c.speed_rpm].type;
+      const bool signed_speed = t != ValueType::u16 && t != ValueType::u32;
+      speed_follows(command == cmd::run_reverse && signed_speed ? -rpm : rpm);
     }
     ASSERT_EQ(rig.write_and_wait(d, Table::holding, kCommandRegister, {cmd::stop}), Outcome::ok);
     if (c.running) {
       EXPECT_TRUE(rig.run_until([&] { return !running(); }, 3s));
     }
+  }
+  // A profile that binds no run command: the drive run from its own terminals (the simulator's
+  // `run`), the setpoint written in rpm still reads back as speed_rpm.
+  if (c.setpoint_rpm && c.speed_rpm && !c.run_forward && !c.run_reverse) {
+    ASSERT_EQ(rig.simulator().control("run forward", rig.now()).rfind("ok", 0), 0u);
+    ASSERT_EQ(rig.write_and_wait(d, Table::holding, kSetpointRegister, {rpm}), Outcome::ok);
+    if (c.running) {
+      EXPECT_TRUE(rig.run_until(running, 3s));
+    }
+    speed_follows(rpm);
+    ASSERT_EQ(rig.simulator().control("run off", rig.now()).rfind("ok", 0), 0u);
   }
   if (c.reset_fault && (c.fault || c.fault_code)) {
     ASSERT_EQ(rig.simulator().control("fault 1", rig.now()).rfind("ok", 0), 0u);

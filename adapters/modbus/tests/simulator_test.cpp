@@ -49,6 +49,23 @@ TEST(ModbusOnTheBus, ANativeFaultIsTheProfilesUnifiedFault) {
   EXPECT_TRUE(b.until_reads("fault_code", 0, 2000ms));
 }
 
+// `run`: the drive run from its own terminals, not over the line (the library test runs the
+// profiles that bind no run command so). The PLC sees it run at its setpoint and stop; a faulted
+// drive does not start.
+TEST(ModbusOnTheBus, ADriveRunFromItsTerminalsShowsItsSpeed) {
+  test::AdapterBench b(drivegate_adapter);
+  ASSERT_TRUE(b.until_online());
+  ASSERT_EQ(b.write({700}, kSetpointRegister), Outcome::ok);
+  ASSERT_EQ(b.control("run reverse"), "ok run reverse");
+  EXPECT_TRUE(b.until_reads("speed_rpm", static_cast<std::uint16_t>(-700), 2000ms));
+  EXPECT_TRUE(b.rig.run_until([&] { return (b.status() & kRunning) != 0; }, 2s));
+  ASSERT_EQ(b.control("run off"), "ok run off");
+  EXPECT_TRUE(b.until_reads("speed_rpm", 0, 2000ms));
+  ASSERT_EQ(b.control("fault 3").rfind("ok", 0), 0u);
+  EXPECT_EQ(b.control("run forward").rfind("error: the drive is faulted", 0), 0u);
+  EXPECT_EQ(b.control("run sideways").rfind("error", 0), 0u);
+}
+
 TEST(ModbusOnTheBus, ARegisterTheSlaveLacksCostsOnePointNotTheDevice) {
   test::AdapterBench b(drivegate_adapter);
   ASSERT_EQ(b.control("missing input 202").rfind("ok", 0), 0u);
