@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "commands.h"
+#include "gateway/register_map.h"
 #include "modbus/profile_check.h"
 #include "modbus/settings.h"
 
@@ -23,8 +24,9 @@ constexpr const char* kAbout =
     "Checks Modbus device profiles (a path, or a name found as a device finds it):\n"
     "  check FILE...  every parse error (FILE:LINE: key: what), overlapping points, points\n"
     "                 wider than [modbus] max_registers, [[example]] frames the profile\n"
-    "                 contradicts; warnings for a common block left partly unbound and for\n"
-    "                 points whose address cites no source.\n"
+    "                 contradicts, point names the common block has; warnings for a common\n"
+    "                 block left partly unbound and for points whose address cites no\n"
+    "                 source.\n"
     "Exit status: 0 clean, 1 errors (or warnings with --strict), 2 usage. See docs/profiles.md.";
 
 }  // namespace
@@ -39,6 +41,11 @@ int profile(std::span<const std::string> args) {
   if (ops[0] != "check") return cli.usage_error("no such use '" + ops[0] + "' (check)");
   if (ops.size() < 2) return cli.usage_error("check needs one or more profiles: paths or names");
   const bool strict = parsed->has("strict");
+  // The names every device's register map has before its adapter's points: the daemon refuses a
+  // device whose profile gives a point one of them.
+  const RegisterMap common_only({});
+  std::vector<std::string_view> taken;
+  for (const MappedPoint& p : common_only.points()) taken.emplace_back(p.spec.name);
   bool failed = false;
   for (std::size_t i = 1; i < ops.size(); ++i) {
     std::string error;
@@ -50,7 +57,7 @@ int profile(std::span<const std::string> args) {
       failed = true;
       continue;
     }
-    const auto report = modbus_device::check_profile(text->text, text->source);
+    const auto report = modbus_device::check_profile(text->text, text->source, taken);
     for (const auto& e : report.errors) std::cout << e << "\n";
     for (const auto& w : report.warnings) std::cout << "warning: " << w << "\n";
     failed = failed || !report.errors.empty() || (strict && !report.warnings.empty());

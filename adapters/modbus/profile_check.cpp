@@ -63,7 +63,8 @@ bool cites(const std::vector<std::string_view>& lines, std::size_t line) {
 
 }  // namespace
 
-ProfileReport check_profile(std::string_view text, const std::string& source) {
+ProfileReport check_profile(std::string_view text, const std::string& source,
+                            std::span<const std::string_view> taken) {
   ProfileReport r;
   auto parsed = parse_profile(text, source);
   if (auto* errors = std::get_if<std::vector<std::string>>(&parsed)) {
@@ -72,6 +73,13 @@ ProfileReport check_profile(std::string_view text, const std::string& source) {
   }
   const Profile& p = std::get<Profile>(parsed);
   r.errors = check_examples(p, source);
+  for (const ProfilePoint& pt : p.points) {
+    if (std::find(taken.begin(), taken.end(), pt.name) != taken.end()) {
+      r.errors.push_back(source + ":" + std::to_string(pt.line) + ": point.name: '" + pt.name +
+                         "' is a name of the common block every device has "
+                         "(docs/register-map.md): choose another");
+    }
+  }
   const CommonBindings& c = p.common;
   std::string missing;
   const auto need = [&](bool bound, const char* key) {

@@ -3,9 +3,12 @@
 // points wider than [modbus] max_registers...) and every [[example]] the profile contradicts.
 // Warnings: a common block left partly unbound, and a point whose address cites no source (a
 // heuristic: no '#' comment on the address's line or the one above it, nor in the comment lines
-// right above its [[point]]). Pure.
+// right above its [[point]]). `taken`: the names a device's register map has before the
+// profile's points (the common block's, which the daemon owns: the CLI passes them); a point that
+// takes one is an error, as the daemon refuses such a device. Pure.
 #pragma once
 
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -17,6 +20,7 @@ struct ProfileReport {
   std::vector<std::string> warnings;  // the same form
 };
 
-ProfileReport check_profile(std::string_view text, const std::string& source);
+ProfileReport check_profile(std::string_view text, const std::string& source,
+                            std::span<const std::string_view> taken = {});
 
 }  // namespace drivegate::modbus_device

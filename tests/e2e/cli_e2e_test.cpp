@@ -247,6 +247,15 @@ TEST(Cli, ProfileCheckExitsZeroOneOrTwo) {
            (dir / "poles.toml").string()});
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_THAT(r.out, HasSubstr("bad.toml:1: profile.source: required key is missing"));
+  // A point named as the common block names one of its own (the daemon would refuse the device).
+  std::string taken = kPolesProfile;
+  taken.replace(taken.find("\"reference\""), 11, "\"fault_code\"");
+  taken.replace(taken.find("\"reference\""), 11, "\"fault_code\"");
+  std::ofstream(dir / "taken.toml") << taken;
+  r = run({drivegate(), "profile", "check", (dir / "taken.toml").string()});
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("taken.toml:9: point.name: 'fault_code' is a name of the common "
+                               "block every device has"));
   EXPECT_EQ(run({drivegate(), "profile"}).status, 2);
   EXPECT_EQ(run({drivegate(), "profile", "lint", "x"}).status, 2);
   EXPECT_EQ(run({drivegate(), "profile", "check"}).status, 2);
