@@ -100,15 +100,8 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
       reading_(profile_.points.size()),
       refused_(profile_.points.size(), false) {
   // Every point not bound to the common block is one of the device's own.
-  std::vector<bool> bound(profile_.points.size(), false);
+  const std::vector<bool> bound = profile_.bound_to_common();
   const CommonBindings& c = profile_.common;
-  for (const auto& p : {c.speed_rpm, c.setpoint_rpm}) {
-    if (p) bound[*p] = true;
-  }
-  for (const auto& b : {c.running, c.fault}) {
-    if (b) bound[b->point] = true;
-  }
-  if (c.fault_code) bound[c.fault_code->point] = true;
   std::vector<bool> state(profile_.points.size(), false);
   if (c.speed_rpm) state[*c.speed_rpm] = true;
   for (const auto& b : {c.running, c.fault}) {
@@ -117,10 +110,6 @@ ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
   if (c.fault_code) state[c.fault_code->point] = true;
   for (std::size_t i = 0; i < state.size(); ++i) {
     if (state[i]) state_points_.push_back(i);
-  }
-  for (const auto& v : {c.stop, c.run_forward, c.run_reverse, c.reset_fault}) {
-    if (!v) continue;
-    for (const std::size_t p : v->points) bound[p] = true;
   }
   for (std::size_t i = 0; i < profile_.points.size(); ++i) {
     if (bound[i]) continue;

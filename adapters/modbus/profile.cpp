@@ -889,6 +889,22 @@ std::optional<std::size_t> Profile::find_option(std::string_view option) const {
   return index_of(options, option);
 }
 
+std::vector<bool> Profile::bound_to_common() const {
+  std::vector<bool> bound(points.size(), false);
+  for (const auto& p : {common.speed_rpm, common.setpoint_rpm}) {
+    if (p) bound[*p] = true;
+  }
+  for (const auto& b : {common.running, common.fault}) {
+    if (b) bound[b->point] = true;
+  }
+  if (common.fault_code) bound[common.fault_code->point] = true;
+  for (const auto& v : {common.stop, common.run_forward, common.run_reverse, common.reset_fault}) {
+    if (!v) continue;
+    for (const std::size_t p : v->points) bound[p] = true;
+  }
+  return bound;
+}
+
 std::variant<Profile, std::vector<std::string>> parse_profile(std::string_view text,
                                                               const std::string& source) {
   return Parser(source).run(text, source);

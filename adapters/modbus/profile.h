@@ -262,6 +262,10 @@ struct Profile {
   [[nodiscard]] std::optional<std::size_t> find(std::string_view point) const;
   // The index of the option called `name`, if any.
   [[nodiscard]] std::optional<std::size_t> find_option(std::string_view option) const;
+  // Per point: whether the common block reads or commands through it (speed, setpoint, running,
+  // fault, fault code, a command's points). The others are the device's own points, named in its
+  // register map beside the common block's.
+  [[nodiscard]] std::vector<bool> bound_to_common() const;
 };
 
 // The profile in `text`, or every error found in it, each "SOURCE:LINE: key: what is wrong" as

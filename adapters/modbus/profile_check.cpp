@@ -73,8 +73,10 @@ ProfileReport check_profile(std::string_view text, const std::string& source,
   }
   const Profile& p = std::get<Profile>(parsed);
   r.errors = check_examples(p, source);
-  for (const ProfilePoint& pt : p.points) {
-    if (std::find(taken.begin(), taken.end(), pt.name) != taken.end()) {
+  const std::vector<bool> bound_points = p.bound_to_common();
+  for (std::size_t i = 0; i < p.points.size(); ++i) {
+    const ProfilePoint& pt = p.points[i];
+    if (!bound_points[i] && std::find(taken.begin(), taken.end(), pt.name) != taken.end()) {
       r.errors.push_back(source + ":" + std::to_string(pt.line) + ": point.name: '" + pt.name +
                          "' is a name of the common block every device has "
                          "(docs/register-map.md): choose another");

@@ -4,8 +4,9 @@
 // Warnings: a common block left partly unbound, and a point whose address cites no source (a
 // heuristic: no '#' comment on the address's line or the one above it, nor in the comment lines
 // right above its [[point]]). `taken`: the names a device's register map has before the
-// profile's points (the common block's, which the daemon owns: the CLI passes them); a point that
-// takes one is an error, as the daemon refuses such a device. Pure.
+// profile's points (the common block's, which the daemon owns: the CLI passes them); a point of
+// the device's own (not bound to the common block) that takes one is an error, as the daemon
+// refuses such a device. Pure.
 #pragma once
 
 #include <span>

@@ -247,14 +247,20 @@ TEST(Cli, ProfileCheckExitsZeroOneOrTwo) {
            (dir / "poles.toml").string()});
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_THAT(r.out, HasSubstr("bad.toml:1: profile.source: required key is missing"));
-  // A point named as the common block names one of its own (the daemon would refuse the device).
+  // A point of the device's own named as one of the common block's (the daemon would refuse the
+  // device); a point the common block binds is not in the map under its own name, so any name is.
   std::string taken = kPolesProfile;
-  taken.replace(taken.find("\"reference\""), 11, "\"fault_code\"");
-  taken.replace(taken.find("\"reference\""), 11, "\"fault_code\"");
+  taken.replace(taken.find("\"reference\""), 11, "\"command\"");
+  taken.replace(taken.find("\"reference\""), 11, "\"command\"");
   std::ofstream(dir / "taken.toml") << taken;
   r = run({drivegate(), "profile", "check", (dir / "taken.toml").string()});
+  EXPECT_EQ(r.status, 0) << r.out;
+  std::ofstream(dir / "taken.toml", std::ios::app)
+      << "[[point]]\nname = \"status\"\ntable = \"holding\"\naddress = 2   # a test's\n"
+      << "type = \"u16\"\n";
+  r = run({drivegate(), "profile", "check", (dir / "taken.toml").string()});
   EXPECT_EQ(r.status, 1) << r.out;
-  EXPECT_THAT(r.out, HasSubstr("taken.toml:9: point.name: 'fault_code' is a name of the common "
+  EXPECT_THAT(r.out, HasSubstr("taken.toml:17: point.name: 'status' is a name of the common "
                                "block every device has"));
   EXPECT_EQ(run({drivegate(), "profile"}).status, 2);
   EXPECT_EQ(run({drivegate(), "profile", "lint", "x"}).status, 2);
