@@ -10,7 +10,7 @@
 #include "config/config_loader.h"
 #include "fake_adapter.h"
 
-namespace drivegate {
+namespace drivegate::mqtt_config_test {
 namespace {
 
 using ::testing::AllOf;
@@ -304,4 +304,4 @@ TEST_F(MqttConfigTest, PasswordFileMustBePrivate) {
 }
 
 }  // namespace
-}  // namespace drivegate
+}  // namespace drivegate::mqtt_config_test

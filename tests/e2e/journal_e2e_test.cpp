@@ -13,7 +13,7 @@
 #include "e2e.h"
 #include "fake_journald.h"
 
-namespace drivegate::test {
+namespace drivegate::test::journal_e2e_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -152,4 +152,4 @@ TEST(Journal, AReadOnlyClientConnectingForEveryWriteIsAFewLinesNotOneAConnection
 }
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::journal_e2e_test

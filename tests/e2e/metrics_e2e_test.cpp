@@ -21,7 +21,7 @@
 #include "e2e_adapters.h"
 #include "http_get.h"
 
-namespace drivegate::test {
+namespace drivegate::test::metrics_e2e_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -376,4 +376,4 @@ TEST_F(MetricsE2EEveryAdapter, TheGrafanaDashboardQueriesOnlyWhatTheDaemonExport
 }
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::metrics_e2e_test

@@ -15,7 +15,7 @@
 
 #include "e2e.h"
 
-namespace drivegate::test {
+namespace drivegate::test::security_e2e_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -546,4 +546,4 @@ TEST_F(SecurityPlain, LittleWordOrderListenerSwapsThe32BitWords) {
 }
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::security_e2e_test

@@ -7,7 +7,7 @@
 #include "fake_adapter.h"
 #include "gateway/device.h"
 
-namespace drivegate {
+namespace drivegate::failsafe_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -368,4 +368,4 @@ TEST_F(FailsafeTest, TheGatewaysOwnCommandsNeitherFeedNorReset) {
 }
 
 }  // namespace
-}  // namespace drivegate
+}  // namespace drivegate::failsafe_test

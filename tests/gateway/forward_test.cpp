@@ -10,7 +10,7 @@
 #include "gateway/device.h"
 #include "rtu_frames.h"
 
-namespace drivegate {
+namespace drivegate::forward_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -126,4 +126,4 @@ TEST_F(ForwardTest, ReadsFillingTheQueueNeverRefuseAWriteBusy) {
 }
 
 }  // namespace
-}  // namespace drivegate
+}  // namespace drivegate::forward_test

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-namespace drivegate {
+namespace drivegate::write_queue_test {
 namespace {
 
 using State = WriteRequest::State;
@@ -218,4 +218,4 @@ TEST_F(WriteQueueTest, StopsAreNeitherTheHeadNorJoined) {
 }
 
 }  // namespace
-}  // namespace drivegate
+}  // namespace drivegate::write_queue_test

@@ -6,7 +6,7 @@
 
 #include <vector>
 
-namespace drivegate::modbus {
+namespace drivegate::modbus::mbap_test {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -138,4 +138,4 @@ TEST(Mbap, ErrorsHaveMessages) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus
+}  // namespace drivegate::modbus::mbap_test

@@ -11,7 +11,7 @@
 #include "fake_backend.h"
 #include "mbap.h"
 
-namespace drivegate::modbus {
+namespace drivegate::modbus::pdu_test {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
@@ -502,4 +502,4 @@ TEST(PduMayWrite, OnlyWritingFunctions) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus
+}  // namespace drivegate::modbus::pdu_test

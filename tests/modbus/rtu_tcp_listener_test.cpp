@@ -20,7 +20,7 @@
 #include "manual_clock.h"
 #include "modbus_serial/serial_codec.h"
 
-namespace drivegate::slave {
+namespace drivegate::slave::rtu_tcp_listener_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -158,4 +158,4 @@ TEST_F(RtuTcpListenerTest, AHalfClosedClientWithHalfAFrameIsClosed) {
 }
 
 }  // namespace
-}  // namespace drivegate::slave
+}  // namespace drivegate::slave::rtu_tcp_listener_test

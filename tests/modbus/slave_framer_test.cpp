@@ -25,7 +25,7 @@
 
 #include "drivegate/crc.h"
 
-namespace drivegate::modbus {
+namespace drivegate::modbus::slave_framer_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -817,4 +817,4 @@ TEST(SlaveFramerAscii, MoreThan513CharactersIsAnOverrun) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus
+}  // namespace drivegate::modbus::slave_framer_test

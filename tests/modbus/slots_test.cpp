@@ -5,7 +5,7 @@
 
 #include "harness.h"
 
-namespace drivegate::modbus {
+namespace drivegate::modbus::slots_test {
 namespace {
 
 using test::Bytes;
@@ -106,4 +106,4 @@ TEST(ListenerSlots, ServerMaxClientsIsEachListenersDefault) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus
+}  // namespace drivegate::modbus::slots_test

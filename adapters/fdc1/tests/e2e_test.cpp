@@ -12,7 +12,7 @@
 #include "e2e_adapters.h"
 #include "protocol_adapters.h"
 
-namespace drivegate::test {
+namespace drivegate::test::fdc1_e2e_test {
 namespace {
 
 // How the core's scenarios on every drive (tests/e2e: capture, status page) run this one:
@@ -327,4 +327,4 @@ TEST_F(Fdc1ProgramE2E, CutOutNotBelowCutInIsRefusedBeforeAnythingIsSent) {
 }
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::fdc1_e2e_test

@@ -10,7 +10,7 @@
 #include "feed.h"
 #include "protocol_fixture.h"
 
-namespace drivegate::framed {
+namespace drivegate::framed::framed_checks_test {
 namespace {
 
 using test::hex;
@@ -195,4 +195,4 @@ TEST(Encodings, BcdFloatsAndSignedInEitherOrder) {
 }
 
 }  // namespace
-}  // namespace drivegate::framed
+}  // namespace drivegate::framed::framed_checks_test

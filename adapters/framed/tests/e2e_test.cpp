@@ -10,7 +10,7 @@
 
 #include "e2e_adapters.h"
 
-namespace drivegate::test {
+namespace drivegate::test::framed_e2e_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -94,4 +94,4 @@ TEST_F(FramedE2E, ADescriptionByPathIsCheckedWithTheConfiguration) {
 }
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::framed_e2e_test

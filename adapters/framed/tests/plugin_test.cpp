@@ -10,12 +10,12 @@
 namespace drivegate::framed {
 namespace {
 
-using test::DescriptorContract;
+using ::drivegate::test::DescriptorContract;
 using ::testing::HasSubstr;
 
 // Its own schema is `protocol`; the line and addresses are the description's (below). The demo
 // runs the described washer at 800 rpm.
-const test::DescriptorFacts kFacts{.id = "framed",
+const ::drivegate::test::DescriptorFacts kFacts{.id = "framed",
                                    .options = kOptionSchema,
                                    .line = {9600, Parity::none, 8, 1, false},
                                    .demo_options = {{"protocol", "nidec-washer"}},

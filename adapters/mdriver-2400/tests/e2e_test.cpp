@@ -14,7 +14,7 @@
 #include "protocol_adapters.h"
 #include "trace_log.h"
 
-namespace drivegate::test {
+namespace drivegate::test::mdriver_2400_e2e_test {
 namespace {
 
 // How the core's scenarios on every drive (tests/e2e: capture, status page) run this one.
@@ -183,4 +183,4 @@ INSTANTIATE_TEST_SUITE_P(, MDriverKeepAliveE2E,
                          ::testing::ValuesIn(protocol_adapters("mdriver-2400")), adapter_name);
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::mdriver_2400_e2e_test

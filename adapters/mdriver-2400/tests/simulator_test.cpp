@@ -9,7 +9,7 @@
 #include "adapter_under_test.h"
 #include "codec.h"
 
-namespace drivegate::mdriver {
+namespace drivegate::mdriver::mdriver_2400_simulator_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -182,4 +182,4 @@ TEST(MdriverSim, StateLineHasStableKeys) {
 }
 
 }  // namespace
-}  // namespace drivegate::mdriver
+}  // namespace drivegate::mdriver::mdriver_2400_simulator_test

@@ -14,7 +14,7 @@
 #include "profile_support.h"
 #include "simulator.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_bindings_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -788,4 +788,4 @@ TEST(BindingsSimulator, StateCodesFollowTheDriveAndLeaveEachOthersCodeAlone) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_bindings_test

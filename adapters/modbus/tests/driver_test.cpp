@@ -9,7 +9,7 @@
 #include "example_profile.h"
 #include "profile_support.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_driver_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -313,4 +313,4 @@ TEST_F(ModbusDriverTest, TimingFollowsTheLine) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_driver_test

@@ -15,7 +15,7 @@
 #include "e2e_adapters.h"
 #include "pymodbus_slave.h"
 
-namespace drivegate::test {
+namespace drivegate::test::modbus_e2e_test {
 namespace {
 
 // How the core's scenarios on every drive (tests/e2e: capture, status page) run this one:
@@ -198,4 +198,4 @@ TEST(ModbusPassthroughE2E, EveryFunctionIsTheSlavesOwnAnswerAndReadListenersOnly
 }
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::modbus_e2e_test

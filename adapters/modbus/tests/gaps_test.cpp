@@ -17,7 +17,7 @@
 #include "common_block.h"
 #include "temp_dir.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_gaps_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -215,4 +215,4 @@ TEST(ModbusGaps, ASlaveRefusingEverythingGoesCommLostWithoutALoop) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_gaps_test

@@ -13,7 +13,7 @@
 #include "common_block.h"
 #include "line_timing.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_passthrough_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -429,4 +429,4 @@ TEST_F(PassthroughOnTheBus, WhileAPlanHealsForwardedRequestsKeepTheMicrosecondGa
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_passthrough_test

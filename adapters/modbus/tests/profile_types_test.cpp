@@ -6,7 +6,7 @@
 #include "profile.h"
 #include "profile_support.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_profile_types_test {
 namespace {
 
 using ::testing::ElementsAre;
@@ -196,4 +196,4 @@ TEST(ProfileTypes, BadLabelsNameTheLine) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_profile_types_test

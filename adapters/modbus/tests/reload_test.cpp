@@ -15,7 +15,7 @@
 #include "plugin/adapter_options.h"
 #include "profile_support.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_reload_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -187,4 +187,4 @@ TEST_F(ReloadMidSequence, AnUnchangedDeviceRunsItsSequenceOn) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_reload_test

@@ -16,7 +16,7 @@
 #include "profile_options.h"
 #include "profile_support.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_required_option_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -154,4 +154,4 @@ TEST(RequiredOption, OnTheBusTheDevicesValueIsOnTheWire) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_required_option_test

@@ -25,7 +25,7 @@
 #include "profile_support.h"
 #include "simulator.h"
 
-namespace drivegate::modbus_device {
+namespace drivegate::modbus_device::modbus_shipped_rpm_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -240,4 +240,4 @@ TEST(EatonDg1Rpm, TheActualSpeedReadsAsTheSynchronousSpeedOverTheSameSpan) {
 }
 
 }  // namespace
-}  // namespace drivegate::modbus_device
+}  // namespace drivegate::modbus_device::modbus_shipped_rpm_test

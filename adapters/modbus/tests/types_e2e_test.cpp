@@ -14,7 +14,7 @@
 #include "mqtt_e2e.h"
 #include "sparkplug_peer.h"
 
-namespace drivegate::test {
+namespace drivegate::test::modbus_types_e2e_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -244,4 +244,4 @@ TEST(ModbusTypesE2E, AStringPointReachesTheJsonMetricsAndSparkplug) {
   EXPECT_EQ(daemon.stop(), 0);
 }
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::modbus_types_e2e_test

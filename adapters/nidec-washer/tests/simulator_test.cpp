@@ -12,7 +12,7 @@
 #include "adapter_under_test.h"
 #include "codec.h"
 
-namespace drivegate::nidec {
+namespace drivegate::nidec::nidec_washer_simulator_test {
 namespace {
 
 using namespace std::chrono_literals;
@@ -209,4 +209,4 @@ TEST_F(Sim, ControlAnswersUnknownCommandsWithTheList) {
 }
 
 }  // namespace
-}  // namespace drivegate::nidec
+}  // namespace drivegate::nidec::nidec_washer_simulator_test

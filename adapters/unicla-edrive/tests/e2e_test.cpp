@@ -11,7 +11,7 @@
 #include "e2e.h"
 #include "e2e_adapters.h"
 
-namespace drivegate::test {
+namespace drivegate::test::unicla_edrive_e2e_test {
 namespace {
 
 // How the core's scenarios on every drive (tests/e2e: capture, status page) run this one.
@@ -268,4 +268,4 @@ TEST_F(TwoEDrivesE2E, ASilentDriveKeepsTheOthersDataFresh) {
 }
 
 }  // namespace
-}  // namespace drivegate::test
+}  // namespace drivegate::test::unicla_edrive_e2e_test
