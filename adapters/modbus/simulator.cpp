@@ -255,13 +255,18 @@ void ModbusSimulator::command(Table table, std::uint16_t address, std::uint16_t 
   if (is(c.reset_fault)) fault_ = 0;
   if (is(c.stop)) {
     running_ = false;
-  } else if (is(c.run_forward) && fault_ == 0) {
-    running_ = true;
-    reverse_ = false;
-  } else if (is(c.run_reverse) && fault_ == 0) {
-    running_ = true;
-    reverse_ = true;
+  } else if (is(c.run_forward)) {
+    start(false);
+  } else if (is(c.run_reverse)) {
+    start(true);
   }
+}
+
+bool ModbusSimulator::start(bool reverse) {
+  if (fault_ != 0) return false;  // a tripped drive does not start until the fault is cleared
+  running_ = true;
+  reverse_ = reverse;
+  return true;
 }
 
 std::optional<double> ModbusSimulator::point_value(std::size_t point) const {
@@ -393,10 +398,7 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
     // profile without run commands needs to show its running state and speed.
     if (w[1] == "off") {
       running_ = false;
-    } else if ((w[1] == "forward" || w[1] == "reverse") && fault_ == 0) {
-      running_ = true;
-      reverse_ = w[1] == "reverse";
-    } else {
+    } else if ((w[1] != "forward" && w[1] != "reverse") || !start(w[1] == "reverse")) {
       return fault_ != 0 ? "error: the drive is faulted (fault 0 clears it)"
                          : "error: run forward|reverse|off";
     }

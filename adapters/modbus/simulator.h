@@ -52,6 +52,8 @@ class ModbusSimulator final : public Simulator {
   void store(Table table, std::uint16_t address, std::uint16_t word);
   void command(Table table, std::uint16_t address, std::uint16_t word);
   void drive();  // the status word, the speed and the fault code from the drive's state
+  // Runs the motor (in reverse when asked) unless the drive is faulted; false when it is.
+  bool start(bool reverse);
   void set_point(std::size_t point, double engineering);
   // A point's registers as they are, and put in (nothing when `words` is none).
   [[nodiscard]] std::vector<std::uint16_t> words_of(const ProfilePoint& p) const;
