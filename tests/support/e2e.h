@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "free_port.h"
 #include "temp_dir.h"
 
 extern char** environ;
@@ -221,20 +222,6 @@ class Sim {
   Child child_;
   std::string path_;
 };
-
-// A TCP port nobody listens on right now (bound, then released).
-inline int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = 0;
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
 
 // Two Modbus TCP listeners, as a configuration's first lines: the one the harness moves to a free
 // port (Daemon's --listen), where a client may maintain, and one on `read_port` where a client
