@@ -12,7 +12,7 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kActionOptions[] = {
     kConfigOption, kDeviceOption, kTimeoutOption, kPluginDirOption, kHelpOption,
 };
 
@@ -66,7 +66,7 @@ int list_actions(const AdapterDescriptor& adapter, const DeviceConfig& dc) {
 
 int action(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate action", kOptions, {"-c FILE -d NAME [-t N] [-p DIR] [ACTION KEY=VALUE...]"},
+      "drivegate action", kActionOptions, {"-c FILE -d NAME [-t N] [-p DIR] [ACTION KEY=VALUE...]"},
       "Runs a maintenance action of the device's adapter (stop the daemon first if it owns the\n"
       "port): each KEY=VALUE sets one of the action's parameters, then the adapter validates them\n"
       "and carries the action out, confirmed by the device. Without ACTION, lists the actions of\n"

@@ -23,7 +23,7 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kCaptureOptions[] = {
     {"bus", 'b', "NAME", "the bus to capture, as the configuration names it"},
     {"seconds", 's', "N", "how long to capture: 1..300 seconds (default 10)"},
     {"write", 'w', "FILE", "write the pcap to FILE (default: standard output)"},
@@ -61,7 +61,7 @@ std::string configured_buses(const DaemonHttp& http) {
 
 int capture(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate capture", kOptions, {"-b NAME [-s N] [-w FILE] [-c FILE | --http HOST:PORT]"},
+      "drivegate capture", kCaptureOptions, {"-b NAME [-s N] [-w FILE] [-c FILE | --http HOST:PORT]"},
       "Captures every frame of bus NAME for N seconds from the running daemon ([http] capture =\n"
       "true) and writes a pcap (link type USER0 = 147, docs/capture.md). Open it with the\n"
       "dissectors of tools/wireshark/. The daemon is asked where the [http] listen of its\n"

@@ -26,7 +26,7 @@ namespace asio = boost::asio;
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kDcmdOptions[] = {
     kConfigOption,
     kDeviceOption,
     {"timeout-ms", 't', "N",
@@ -158,7 +158,7 @@ class DcmdRun {
 
 int dcmd(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate dcmd", kOptions, {"-c FILE -d NAME [-t N] [-p DIR] METRIC=VALUE..."},
+      "drivegate dcmd", kDcmdOptions, {"-c FILE -d NAME [-t N] [-p DIR] METRIC=VALUE..."},
       "Sends a Sparkplug B DCMD writing the metrics to device NAME of the running daemon, through\n"
       "the broker, group_id and edge_node_id of FILE's [mqtt] (commands = true), and prints the\n"
       "result the edge node publishes (Command/Last Result). VALUE is a number, true or false,\n"

@@ -29,7 +29,7 @@ namespace asio = boost::asio;
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kDemoOptions[] = {
     {"listen", 'l', "HOST:PORT", "where the daemon serves Modbus TCP (default 127.0.0.1:1502)"},
     {"no-start", 0, nullptr, "leave the drives stopped"},
     kPluginDirOption,
@@ -106,7 +106,7 @@ bool port_answers(const std::string& host, int port) {
 
 int demo(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate demo", kOptions, {"[-l HOST:PORT] [--no-start] [-p DIR]"},
+      "drivegate demo", kDemoOptions, {"[-l HOST:PORT] [--no-start] [-p DIR]"},
       "Starts a simulated drive for every installed adapter, the daemon on them (Modbus TCP on\n"
       "127.0.0.1:1502 by default, the status page on the Modbus port + 7000, 8502 by default),\n"
       "and each drive at a typical speed. Ctrl-C stops everything.");

@@ -16,7 +16,7 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kEventsOptions[] = {
     {"follow", 'f', nullptr, "keep printing new entries as they come, until interrupted"},
     {"lines", 'n', "N", "print the newest N entries first (1..1000, default 50)"},
     {"device", 'd', "NAME", "only entries of device NAME"},
@@ -34,7 +34,7 @@ constexpr std::chrono::seconds kFollowPeriod{1};
 
 int events(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate events", kOptions,
+      "drivegate events", kEventsOptions,
       {"[-f] [-n N] [-d NAME] [-k KIND] [-c FILE]",
        "[-f] [-n N] [-d NAME] [-k KIND] --http HOST:PORT"},
       "Prints the running daemon's history, oldest first, one entry a line: time (UTC), kind,\n"

@@ -15,12 +15,12 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kProfileOptions[] = {
     {"strict", 0, nullptr, "warnings count as errors (exit 1)"},
     kHelpOption,
 };
 
-constexpr const char* kAbout =
+constexpr const char* kProfileAbout =
     "Checks Modbus device profiles (a path, or a name found as a device finds it):\n"
     "  check FILE...  every parse error (FILE:LINE: key: what), overlapping points, points\n"
     "                 wider than [modbus] max_registers, [[example]] frames the profile\n"
@@ -32,7 +32,7 @@ constexpr const char* kAbout =
 }  // namespace
 
 int profile(std::span<const std::string> args) {
-  const CommandLine cli("drivegate profile", kOptions, {"check [--strict] FILE..."}, kAbout);
+  const CommandLine cli("drivegate profile", kProfileOptions, {"check [--strict] FILE..."}, kProfileAbout);
   int exit_status = 0;
   const auto parsed = parse_command(cli, args, exit_status);
   if (!parsed) return exit_status;

@@ -16,7 +16,7 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kProtocolOptions[] = {
     {"request", 0, nullptr, "decode: the bytes are the master's (requests)"},
     {"reply", 0, nullptr, "decode: the bytes are the device's (replies, streams)"},
     {"set", 0, "OPTION=VALUE",
@@ -24,7 +24,7 @@ constexpr Option kOptions[] = {
     kHelpOption,
 };
 
-constexpr const char* kAbout =
+constexpr const char* kProtocolAbout =
     "Checks a protocol description (a name, found as a device finds it, or a path):\n"
     "  check        validate it; every error FILE:LINE: key: what\n"
     "  decode HEX   the frames in the bytes, field by field\n"
@@ -85,11 +85,11 @@ std::optional<Options> options_of(const framed::Description& d, const ParsedArgs
 }  // namespace
 
 int protocol(std::span<const std::string> args) {
-  const CommandLine cli("drivegate protocol", kOptions,
+  const CommandLine cli("drivegate protocol", kProtocolOptions,
                         {"check NAME|FILE", "decode [--request|--reply] NAME|FILE HEX...",
                          "encode [--set OPTION=V]... NAME|FILE MESSAGE [F=V]...",
                          "list", "dissector NAME|FILE"},
-                        kAbout);
+                        kProtocolAbout);
   int exit_status = 0;
   const auto parsed = parse_command(cli, args, exit_status);
   if (!parsed) return exit_status;

@@ -10,7 +10,7 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kRegmapOptions[] = {
     kConfigOption,
     {"format", 'f', "FORMAT", "json (default), csv or md (Markdown)"},
     kPluginDirOption,
@@ -20,7 +20,7 @@ constexpr Option kOptions[] = {
 }  // namespace
 
 int regmap(std::span<const std::string> args) {
-  const CommandLine cli("drivegate regmap", kOptions, {"-c FILE [-f json|csv|md] [-p DIR]"},
+  const CommandLine cli("drivegate regmap", kRegmapOptions, {"-c FILE [-f json|csv|md] [-p DIR]"},
                         "Prints the Modbus register map the daemon serves for FILE: every unit's "
                         "points, table by\ntable, with their addresses and PLC references.");
   int exit_status = 0;

@@ -32,7 +32,7 @@ namespace md = modbus_device;
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kScanOptions[] = {
     {"port", 0, "DEVICE",
      "the line: a tty (/dev/ttyUSB0) or a serial device server (tcp://HOST:PORT, "
      "rfc2217://HOST:PORT); required"},
@@ -243,7 +243,7 @@ class ScanRun {
 
 int scan(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate scan", kOptions, {"--port DEVICE [--baud N] [--parity P] [OPTION]..."},
+      "drivegate scan", kScanOptions, {"--port DEVICE [--baud N] [--parity P] [OPTION]..."},
       "Probes each address with a read of holding register 0 (any reply, registers or an\n"
       "exception, is a slave), asks each slave found for its identification (FC 0x2B / 0x0E,\n"
       "basic), and prints a line per slave, a summary and the configuration for them, with the\n"

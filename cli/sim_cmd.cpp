@@ -18,7 +18,7 @@ namespace asio = boost::asio;
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kSimOptions[] = {
     {"address", 'a', "N",
      "the simulated device's bus address; repeat for several devices on one line (default: the "
      "adapter's default address)"},
@@ -85,7 +85,7 @@ class ControlConsole {
 
 int sim(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate sim", kOptions,
+      "drivegate sim", kSimOptions,
       {"ADAPTER [-a N]... [--set OPTION=VALUE]... [OPTION]...",
        "ADAPTER --port DEVICE [--baud N] [--parity P] [OPTION]..."},
       "Prints the line's path on the first line of stdout, then reads operator commands from\n"

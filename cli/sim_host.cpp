@@ -14,7 +14,7 @@ namespace drivegate {
 namespace asio = boost::asio;
 
 namespace {
-constexpr Millis kTickPeriod{10};
+constexpr Millis kSimTickPeriod{10};
 
 std::int64_t ns(TimePoint t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
@@ -207,7 +207,7 @@ void SimHost::tick() {
       send(std::move(out), std::chrono::microseconds(0));
     }
   }
-  tick_.expires_after(kTickPeriod);
+  tick_.expires_after(kSimTickPeriod);
   tick_.async_wait([this](const boost::system::error_code& ec) {
     if (!ec && running_) tick();
   });

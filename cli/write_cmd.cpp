@@ -7,7 +7,7 @@ namespace drivegate::cli {
 
 namespace {
 
-constexpr Option kOptions[] = {
+constexpr Option kWriteOptions[] = {
     kConfigOption, kDeviceOption, kTimeoutOption, kPluginDirOption, kHelpOption,
 };
 
@@ -15,7 +15,7 @@ constexpr Option kOptions[] = {
 
 int write(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate write", kOptions, {"-c FILE -d NAME [-t N] [-p DIR] POINT=VALUE..."},
+      "drivegate write", kWriteOptions, {"-c FILE -d NAME [-t N] [-p DIR] POINT=VALUE..."},
       "Opens only that device's bus (stop the daemon first if it owns the port), waits for the\n"
       "device to come online, then writes each point in order and waits for the device to confirm\n"
       "it. VALUE is a number or one of the point's labels (e.g. command=run_forward).");

@@ -1,17 +1,10 @@
 #include "passthrough.h"
 
 #include "line_timing.h"
+#include "presence_probe.h"
 #include "rejected.h"
 
 namespace drivegate::modbus_device {
-namespace {
-
-// The presence probe: read one holding register at 0 (Application Protocol 6.3). A slave that
-// has no register there answers exception 02, which proves it is there just as well.
-constexpr std::uint8_t kProbe[] = {fc::read_holding_registers, 0x00, 0x00, 0x00, 0x01};
-
-}  // namespace
-
 PassthroughDriver::PassthroughDriver(std::uint8_t address, PassthroughSettings settings,
                                      std::chrono::nanoseconds char_time, Millis poll_interval)
     : address_(address),
@@ -56,11 +49,11 @@ std::optional<Exchange> PassthroughDriver::next_exchange(TimePoint now) {
   }
   if (now < probe_due_) return std::nullopt;
   probe_due_ = now + poll_interval_;
-  ex.frame = encode(settings_.framing, address_, kProbe);
+  ex.frame = encode(settings_.framing, address_, kPresenceProbe);
   // The probe's reply is at most 7 bytes (exception: 5), 15 characters in ASCII.
   ex.timeout = reply_timeout(settings_.reply_timeout, char_time_, 15);
   ex.attempts = settings_.attempts;
-  inflight_ = InFlight{kProbe[0], std::nullopt};
+  inflight_ = InFlight{kPresenceProbe[0], std::nullopt};
   return ex;
 }
 

@@ -26,6 +26,10 @@ namespace drivegate::modbus_device {
 enum class ValueType : std::uint8_t { u16, s16, u32, s32, f32, bit, u64, s64, f64, string };
 inline constexpr std::array<std::string_view, 10> kValueTypeNames = {
     "u16", "s16", "u32", "s32", "f32", "bit", "u64", "s64", "f64", "string"};
+// True for the IEEE 754 types (f32, f64).
+constexpr bool is_float(ValueType type) {
+  return type == ValueType::f32 || type == ValueType::f64;
+}
 // Registers (or bits) a value of `type` occupies; a string its own `registers`.
 constexpr std::uint16_t width_of(ValueType type, std::uint16_t registers = 0) {
   switch (type) {

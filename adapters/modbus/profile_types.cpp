@@ -8,10 +8,6 @@
 namespace drivegate::modbus_device {
 namespace {
 
-bool is_float(ValueType t) {
-  return t == ValueType::f32 || t == ValueType::f64;
-}
-
 // A label's name: 1..40 characters of a-z, 0-9 and '_' (a metric's label value, a JSON key).
 bool valid_label_name(std::string_view name) {
   return !name.empty() && name.size() <= 40 && std::all_of(name.begin(), name.end(), [](char c) {

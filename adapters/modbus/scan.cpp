@@ -7,18 +7,14 @@
 #include <utility>
 
 #include "line_timing.h"
+#include "presence_probe.h"
 
 namespace drivegate::modbus_device {
 namespace {
 
-// The probe: read holding registers (Application Protocol 6.3) from address 0, quantity 1.
-constexpr std::array<std::uint8_t, 5> kProbe = {fc::read_holding_registers, 0x00, 0x00, 0x00, 0x01};
 Bytes probe_pdu() {
-  return {kProbe.begin(), kProbe.end()};
+  return {kPresenceProbe.begin(), kPresenceProbe.end()};
 }
-// Its longest good reply: function, byte count 2, one register (6.3, "Response"); an exception
-// reply (7) is shorter.
-constexpr std::size_t kProbeReplyPdu = 4;
 // The basic category is three objects (Application Protocol 6.21); a slave that sends one object
 // a reply at least, as each reply must, needs at most three requests for them.
 constexpr int kMaxIdentityRequests = 3;
@@ -35,7 +31,7 @@ constexpr std::size_t frame_size(Framing f, std::size_t pdu) {
 }
 
 // Surrounding spaces and NULs (a device pads a fixed-size string with either) removed.
-std::string_view trimmed(std::string_view s) {
+std::string_view unpadded(std::string_view s) {
   const auto pad = [](char c) { return c == ' ' || c == '\0'; };
   while (!s.empty() && pad(s.front())) s.remove_prefix(1);
   while (!s.empty() && pad(s.back())) s.remove_suffix(1);
@@ -108,7 +104,7 @@ ScanRequest Scanner::request(std::uint8_t address, const Bytes& pdu,
 }
 
 std::chrono::nanoseconds Scanner::probe_time() const {
-  const ScanRequest r = request(1, probe_pdu(), frame_size(settings_.framing, kProbeReplyPdu));
+  const ScanRequest r = request(1, probe_pdu(), frame_size(settings_.framing, kPresenceProbeReplyPdu));
   return r.gap + r.wait;
 }
 
@@ -119,7 +115,7 @@ std::chrono::nanoseconds Scanner::answer_time() const {
 }
 
 std::chrono::nanoseconds Scanner::time_left() const {
-  const ScanRequest r = request(1, probe_pdu(), frame_size(settings_.framing, kProbeReplyPdu));
+  const ScanRequest r = request(1, probe_pdu(), frame_size(settings_.framing, kPresenceProbeReplyPdu));
   return static_cast<long>(total() - probed_) * probe_time() +
          (listened_ ? std::chrono::nanoseconds(0) : r.wait);
 }
@@ -164,7 +160,7 @@ std::optional<ScanRequest> Scanner::next() {
     address_ = 0;
     echo_.clear();
     ScanRequest r = request(settings_.addresses.back(), probe_pdu(),
-                            frame_size(settings_.framing, kProbeReplyPdu));
+                            frame_size(settings_.framing, kPresenceProbeReplyPdu));
     r.address = 0;
     r.frame.clear();
     r.gap = {};
@@ -174,7 +170,7 @@ std::optional<ScanRequest> Scanner::next() {
     return std::nullopt;
   }
   ScanRequest r = asking_ == Asking::probe
-                      ? request(address_, pdu_, frame_size(settings_.framing, kProbeReplyPdu))
+                      ? request(address_, pdu_, frame_size(settings_.framing, kPresenceProbeReplyPdu))
                       : request(address_, pdu_, longest_frame(settings_.framing));
   echo_ = r.frame;
   return r;
@@ -320,9 +316,9 @@ void Scanner::on_timeout() {
 
 bool identifies(const ProfileIdentification& want, std::string_view vendor_name,
                 std::string_view product_code) {
-  if (!same_ignoring_case(trimmed(want.vendor_name), trimmed(vendor_name))) return false;
-  std::string_view product = trimmed(want.product_code);
-  const std::string_view have = trimmed(product_code);
+  if (!same_ignoring_case(unpadded(want.vendor_name), unpadded(vendor_name))) return false;
+  std::string_view product = unpadded(want.product_code);
+  const std::string_view have = unpadded(product_code);
   if (!product.empty() && product.back() == '*') {
     product.remove_suffix(1);
     return have.size() >= product.size() &&

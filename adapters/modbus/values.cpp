@@ -37,10 +37,6 @@ std::vector<std::uint16_t> words_of_bits(const ProfilePoint& p, std::uint64_t v)
   return in_abcd(p.byte_order, w);
 }
 
-bool is_float(ValueType t) {
-  return t == ValueType::f32 || t == ValueType::f64;
-}
-
 bool integral_scale_one(const ProfilePoint& p) {
   return !is_float(p.type) && p.scale == 1.0;
 }

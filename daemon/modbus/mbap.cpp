@@ -4,12 +4,10 @@
 #include <string>
 #include <string_view>
 
+#include "drivegate/bytes.h"
+
 namespace drivegate::modbus {
 namespace {
-
-constexpr std::uint16_t get16(std::span<const std::uint8_t> b, std::size_t at) {
-  return static_cast<std::uint16_t>((b[at] << 8) | b[at + 1]);
-}
 
 class MbapCategory final : public std::error_category {
  public:
@@ -38,16 +36,16 @@ std::error_code make_error_code(MbapError e) {
 MbapParse parse_mbap(std::span<const std::uint8_t> buffer) {
   MbapParse r;
   // Implementation Guide 3.1.3: bytes 0-1 transaction id, 2-3 protocol id, 4-5 length, 6 unit id.
-  if (buffer.size() >= 2) r.header.transaction = get16(buffer, 0);
+  if (buffer.size() >= 2) r.header.transaction = be16_at(buffer, 0);
   if (buffer.size() < 4) return r;
-  r.header.protocol = get16(buffer, 2);
+  r.header.protocol = be16_at(buffer, 2);
   if (r.header.protocol != 0) {
     r.status = MbapParse::Status::bad;
     r.error = MbapError::bad_protocol_id;
     return r;
   }
   if (buffer.size() < 6) return r;
-  r.header.length = get16(buffer, 4);
+  r.header.length = be16_at(buffer, 4);
   if (r.header.length == 0 || r.header.length == 1 || r.header.length > kMaxMbapLength) {
     r.status = MbapParse::Status::bad;
     r.error = r.header.length == 0   ? MbapError::length_zero

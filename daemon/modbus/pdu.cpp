@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "drivegate/bytes.h"
+
 namespace drivegate::modbus {
 namespace {
 
@@ -17,9 +19,6 @@ constexpr std::uint16_t kMaxRwWrite = 0x0079;         // 6.17: write 1..121 regi
 constexpr std::uint16_t kCoilOn = 0xFF00;
 constexpr std::uint16_t kCoilOff = 0x0000;
 
-constexpr std::uint16_t get16(std::span<const std::uint8_t> b, std::size_t at) {
-  return static_cast<std::uint16_t>((b[at] << 8) | b[at + 1]);
-}
 void put16(std::span<std::uint8_t> b, std::size_t at, std::uint16_t v) {
   b[at] = static_cast<std::uint8_t>(v >> 8);
   b[at + 1] = static_cast<std::uint8_t>(v);
@@ -123,8 +122,8 @@ Result Dispatcher::read_bits(std::uint8_t unit, Table table, std::span<const std
                              std::span<std::uint8_t> out) {
   const std::uint8_t fc = request[0];
   if (request.size() != 5) return fail(fc, Exception::illegal_data_value, out);
-  const std::uint16_t address = get16(request, 1);
-  const std::uint16_t count = get16(request, 3);
+  const std::uint16_t address = be16_at(request, 1);
+  const std::uint16_t count = be16_at(request, 3);
   if (count < 1 || count > kMaxReadBits) return fail(fc, Exception::illegal_data_value, out);
   if (overflows(address, count)) return fail(fc, Exception::illegal_data_address, out);
   const std::span<std::uint16_t> bits(scratch_.data(), count);
@@ -147,8 +146,8 @@ Result Dispatcher::read_registers(std::uint8_t unit, Table table,
                                   std::span<std::uint8_t> out) {
   const std::uint8_t fc = request[0];
   if (request.size() != 5) return fail(fc, Exception::illegal_data_value, out);
-  const std::uint16_t address = get16(request, 1);
-  const std::uint16_t count = get16(request, 3);
+  const std::uint16_t address = be16_at(request, 1);
+  const std::uint16_t count = be16_at(request, 3);
   if (count < 1 || count > kMaxReadRegisters) return fail(fc, Exception::illegal_data_value, out);
   if (overflows(address, count)) return fail(fc, Exception::illegal_data_address, out);
   return reply(read_registers_response(unit, table, address, count, fc, out));
@@ -186,10 +185,10 @@ Result Dispatcher::write_single_coil(std::uint8_t unit, std::span<const std::uin
                                      std::span<std::uint8_t> out, WriteDone done) {
   const std::uint8_t fc = request[0];
   if (request.size() != 5) return fail(fc, Exception::illegal_data_value, out);
-  const std::uint16_t value = get16(request, 3);
+  const std::uint16_t value = be16_at(request, 3);
   if (value != kCoilOn && value != kCoilOff) return fail(fc, Exception::illegal_data_value, out);
   scratch_[0] = value == kCoilOn ? 1 : 0;
-  return start_write(unit, Table::coil, get16(request, 1), 1, out, fc, std::move(done));
+  return start_write(unit, Table::coil, be16_at(request, 1), 1, out, fc, std::move(done));
 }
 
 // 6.6: fc | address (2) | value (2) -> echo of the request.
@@ -197,8 +196,8 @@ Result Dispatcher::write_single_register(std::uint8_t unit, std::span<const std:
                                          std::span<std::uint8_t> out, WriteDone done) {
   const std::uint8_t fc = request[0];
   if (request.size() != 5) return fail(fc, Exception::illegal_data_value, out);
-  scratch_[0] = get16(request, 3);
-  return start_write(unit, Table::holding, get16(request, 1), 1, out, fc, std::move(done));
+  scratch_[0] = be16_at(request, 3);
+  return start_write(unit, Table::holding, be16_at(request, 1), 1, out, fc, std::move(done));
 }
 
 // 6.11: fc | start (2) | quantity (2) | byte count = ceil(N / 8) | bits -> fc | start | quantity.
@@ -206,8 +205,8 @@ Result Dispatcher::write_multiple_coils(std::uint8_t unit, std::span<const std::
                                         std::span<std::uint8_t> out, WriteDone done) {
   const std::uint8_t fc = request[0];
   if (request.size() < 6) return fail(fc, Exception::illegal_data_value, out);
-  const std::uint16_t address = get16(request, 1);
-  const std::uint16_t count = get16(request, 3);
+  const std::uint16_t address = be16_at(request, 1);
+  const std::uint16_t count = be16_at(request, 3);
   const std::size_t bytes = request[5];
   if (count < 1 || count > kMaxWriteBits || bytes != (count + 7u) / 8u ||
       request.size() != 6 + bytes) {
@@ -224,15 +223,15 @@ Result Dispatcher::write_multiple_registers(std::uint8_t unit,
                                             std::span<std::uint8_t> out, WriteDone done) {
   const std::uint8_t fc = request[0];
   if (request.size() < 6) return fail(fc, Exception::illegal_data_value, out);
-  const std::uint16_t address = get16(request, 1);
-  const std::uint16_t count = get16(request, 3);
+  const std::uint16_t address = be16_at(request, 1);
+  const std::uint16_t count = be16_at(request, 3);
   const std::size_t bytes = request[5];
   if (count < 1 || count > kMaxWriteRegisters || bytes != 2u * count ||
       request.size() != 6 + bytes) {
     return fail(fc, Exception::illegal_data_value, out);
   }
   if (overflows(address, count)) return fail(fc, Exception::illegal_data_address, out);
-  for (std::size_t i = 0; i < count; ++i) scratch_[i] = get16(request, 6 + 2 * i);
+  for (std::size_t i = 0; i < count; ++i) scratch_[i] = be16_at(request, 6 + 2 * i);
   return start_write(unit, Table::holding, address, count, out, fc, std::move(done));
 }
 
@@ -245,10 +244,10 @@ Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::
                                         std::span<std::uint8_t> out, WriteDone done) {
   const std::uint8_t fc = request[0];
   if (request.size() < 10) return fail(fc, Exception::illegal_data_value, out);
-  const std::uint16_t read_address = get16(request, 1);
-  const std::uint16_t read_count = get16(request, 3);
-  const std::uint16_t write_address = get16(request, 5);
-  const std::uint16_t write_count = get16(request, 7);
+  const std::uint16_t read_address = be16_at(request, 1);
+  const std::uint16_t read_count = be16_at(request, 3);
+  const std::uint16_t write_address = be16_at(request, 5);
+  const std::uint16_t write_count = be16_at(request, 7);
   const std::size_t bytes = request[9];
   if (read_count < 1 || read_count > kMaxRwRead || write_count < 1 || write_count > kMaxRwWrite ||
       bytes != 2u * write_count || request.size() != 10 + bytes) {
@@ -267,7 +266,7 @@ Result Dispatcher::read_write_registers(std::uint8_t unit, std::span<const std::
       e != Exception::none) {
     return fail(fc, e, out);
   }
-  for (std::size_t i = 0; i < write_count; ++i) scratch_[i] = get16(request, 10 + 2 * i);
+  for (std::size_t i = 0; i < write_count; ++i) scratch_[i] = be16_at(request, 10 + 2 * i);
   return start_write(unit, Table::holding, write_address, write_count, out, fc, std::move(done));
 }
 
@@ -286,7 +285,7 @@ std::size_t Dispatcher::complete(const Session& session, std::uint8_t unit,
       std::copy_n(request.begin(), 5, out.begin());
       return 5;
     case Function::read_write_registers:
-      return read_registers_response(unit, Table::holding, get16(request, 1), get16(request, 3), fc,
+      return read_registers_response(unit, Table::holding, be16_at(request, 1), be16_at(request, 3), fc,
                                      out);
     default:
       return exception_pdu(fc, Exception::server_device_failure, out);  // not a write: a bug

@@ -28,7 +28,7 @@ namespace {
 
 // A typical document (six drives, one of each adapter) is about 105 KB: most of it the state
 // sets, a line per state with the device's labels.
-constexpr std::size_t kReserve = 128 * 1024;
+constexpr std::size_t kMetricsReserve = 128 * 1024;
 
 void append_escaped(std::string& out, std::string_view v) {
   // The runs between the characters to escape are appended whole (nearly always: all of it).
@@ -771,7 +771,7 @@ void metrics_text(const StatusView& view, std::string& out) {
 
 std::string metrics_text(const StatusView& view) {
   std::string out;
-  out.reserve(kReserve);
+  out.reserve(kMetricsReserve);
   metrics_text(view, out);
   return out;
 }

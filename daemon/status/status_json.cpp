@@ -15,7 +15,7 @@ namespace drivegate {
 namespace {
 
 // A typical document (five drives, one of them with 125 parameters) is 17 KB.
-constexpr std::size_t kReserve = 32 * 1024;
+constexpr std::size_t kJsonReserve = 32 * 1024;
 
 void append_json_value(std::string& out, const Value& v) {
   if (const auto* i = std::get_if<std::int64_t>(&v)) {
@@ -268,7 +268,7 @@ void status_json(const StatusView& view, std::string& out) {
 
 std::string status_json(const StatusView& view) {
   std::string out;
-  out.reserve(kReserve);
+  out.reserve(kJsonReserve);
   status_json(view, out);
   return out;
 }

@@ -3,6 +3,7 @@
 // differ.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -14,6 +15,10 @@ using ByteView = std::span<const std::uint8_t>;  // bytes received or to decode,
 
 constexpr std::uint16_t be16(std::uint8_t hi, std::uint8_t lo) {
   return static_cast<std::uint16_t>((hi << 8) | lo);
+}
+// The big-endian 16-bit field at byte `at` of `b` (the caller has checked the length).
+constexpr std::uint16_t be16_at(ByteView b, std::size_t at) {
+  return be16(b[at], b[at + 1]);
 }
 constexpr std::uint8_t hi8(std::uint16_t v) {
   return static_cast<std::uint8_t>(v >> 8);
