@@ -10,6 +10,7 @@
 
 #include "adapter_factories.h"
 #include "adapter_under_test.h"
+#include "bench.h"  // kPoll, the document's poll frame (5.2)
 #include "codec.h"
 
 namespace drivegate::nidec::nidec_washer_simulator_test {
@@ -17,7 +18,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const Bytes kPoll = {0xA5, 0x05, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xA0};  // 5.2
 const Bytes kNack = {0x5A, 0x00, 0xFF, 0x00, 0xFF, 0x00, 0x5A};                          // 5.16
 
 class Sim : public ::testing::Test {
