@@ -11,7 +11,9 @@ line in order, one line of output each:
                                   back within 300 ms, "" if none)
   rtu UNIT HEX                    the PDU HEX to UNIT with its CRC (a broadcast, FC 08): as raw
   ascii UNIT HEX                  the PDU HEX to UNIT as an ASCII frame (':', hex, LRC, CR LF):
-                                  as raw
+                                  as raw, but done at the reply's CR LF; with --ascii-wait MS
+                                  waits up to MS for it (a loaded machine's late reply is then
+                                  not taken for silence, nor heard by the next step)
   listen MS                       sends nothing: "heard HEX", what came within MS ("" if none)
   sleep MS
 """
@@ -62,6 +64,7 @@ def main():
     p.add_argument("--port", help="the master's end of the line")
     p.add_argument("--tcp", help="host:port: RTU / ASCII frames over TCP instead")
     p.add_argument("--framing", choices=["rtu", "ascii"], default="rtu")
+    p.add_argument("--ascii-wait", type=int, help="ms an ascii step waits for its reply's CR LF")
     p.add_argument("steps", nargs="*")
     a = p.parse_args()
     framer = ModbusRtuFramer if a.framing == "rtu" else ModbusAsciiFramer
@@ -115,9 +118,10 @@ def main():
                 s.reset_input_buffer()
                 s.write(data)
                 s.flush()
-                deadline = time.monotonic() + 0.3
+                until_crlf = op == "ascii" and a.ascii_wait is not None
+                deadline = time.monotonic() + (a.ascii_wait if until_crlf else 300) / 1000
                 got = b""
-                while time.monotonic() < deadline:
+                while time.monotonic() < deadline and not (until_crlf and got.endswith(b"\r\n")):
                     chunk = s.read(256)
                     got += chunk
                 print("reply " + got.hex(), flush=True)

@@ -50,7 +50,10 @@ std::string config(const std::filesystem::path& dir, int read_port) {
          (dir / "mb").string() +
          "\"\nbaud = 19200\nparity = \"even\"\n\n"
          "[[device]]\nname = \"meter\"\nbus = \"meters\"\nadapter = \"modbus\"\nunit_id = 3\n"
-         "address = 3\n[device.options]\npassthrough = true\n";
+         "address = 3\n[device.options]\npassthrough = true\n"
+         // A simulator under a sanitizer on a loaded machine can start its reply later than the
+         // default 100 ms: a write then ends 0x0B, which is not what the queue's test is about.
+         "timeout_ms = 1000\n";
 }
 
 std::string hex(const Pdu& bytes) {
@@ -115,8 +118,11 @@ class PassthroughE2E : public ::testing::Test {
   std::string log() { return slurp(dir_ / "daemon.log"); }
   // The read-only ASCII master's steps; one line of output each.
   std::vector<std::string> ascii_master(const std::vector<std::string>& steps) {
-    return run_serial_master({"--port", (dir_ / "m").string(), "--framing", "ascii"}, steps,
-                             dir_ / "master.err");
+    // Each reply awaited to its CR LF (up to 5 s): under a sanitizer on a loaded machine a refusal
+    // can take longer than the master's usual window, and must not be read as silence.
+    return run_serial_master(
+        {"--port", (dir_ / "m").string(), "--framing", "ascii", "--ascii-wait", "5000"}, steps,
+        dir_ / "master.err");
   }
 
   TempDir dir_;
