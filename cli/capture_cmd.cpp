@@ -61,7 +61,8 @@ std::string configured_buses(const DaemonHttp& http) {
 
 int capture(std::span<const std::string> args) {
   const CommandLine cli(
-      "drivegate capture", kCaptureOptions, {"-b NAME [-s N] [-w FILE] [-c FILE | --http HOST:PORT]"},
+      "drivegate capture", kCaptureOptions,
+      {"-b NAME [-s N] [-w FILE] [-c FILE | --http HOST:PORT]"},
       "Captures every frame of bus NAME for N seconds from the running daemon ([http] capture =\n"
       "true) and writes a pcap (link type USER0 = 147, docs/capture.md). Open it with the\n"
       "dissectors of tools/wireshark/. The daemon is asked where the [http] listen of its\n"

@@ -32,7 +32,8 @@ constexpr const char* kProfileAbout =
 }  // namespace
 
 int profile(std::span<const std::string> args) {
-  const CommandLine cli("drivegate profile", kProfileOptions, {"check [--strict] FILE..."}, kProfileAbout);
+  const CommandLine cli("drivegate profile", kProfileOptions, {"check [--strict] FILE..."},
+                        kProfileAbout);
   int exit_status = 0;
   const auto parsed = parse_command(cli, args, exit_status);
   if (!parsed) return exit_status;

@@ -85,11 +85,11 @@ std::optional<Options> options_of(const framed::Description& d, const ParsedArgs
 }  // namespace
 
 int protocol(std::span<const std::string> args) {
-  const CommandLine cli("drivegate protocol", kProtocolOptions,
-                        {"check NAME|FILE", "decode [--request|--reply] NAME|FILE HEX...",
-                         "encode [--set OPTION=V]... NAME|FILE MESSAGE [F=V]...",
-                         "list", "dissector NAME|FILE"},
-                        kProtocolAbout);
+  const CommandLine cli(
+      "drivegate protocol", kProtocolOptions,
+      {"check NAME|FILE", "decode [--request|--reply] NAME|FILE HEX...",
+       "encode [--set OPTION=V]... NAME|FILE MESSAGE [F=V]...", "list", "dissector NAME|FILE"},
+      kProtocolAbout);
   int exit_status = 0;
   const auto parsed = parse_command(cli, args, exit_status);
   if (!parsed) return exit_status;

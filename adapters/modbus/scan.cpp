@@ -104,7 +104,8 @@ ScanRequest Scanner::request(std::uint8_t address, const Bytes& pdu,
 }
 
 std::chrono::nanoseconds Scanner::probe_time() const {
-  const ScanRequest r = request(1, probe_pdu(), frame_size(settings_.framing, kPresenceProbeReplyPdu));
+  const ScanRequest r =
+      request(1, probe_pdu(), frame_size(settings_.framing, kPresenceProbeReplyPdu));
   return r.gap + r.wait;
 }
 
@@ -115,7 +116,8 @@ std::chrono::nanoseconds Scanner::answer_time() const {
 }
 
 std::chrono::nanoseconds Scanner::time_left() const {
-  const ScanRequest r = request(1, probe_pdu(), frame_size(settings_.framing, kPresenceProbeReplyPdu));
+  const ScanRequest r =
+      request(1, probe_pdu(), frame_size(settings_.framing, kPresenceProbeReplyPdu));
   return static_cast<long>(total() - probed_) * probe_time() +
          (listened_ ? std::chrono::nanoseconds(0) : r.wait);
 }
@@ -169,9 +171,10 @@ std::optional<ScanRequest> Scanner::next() {
     asking_ = Asking::nothing;
     return std::nullopt;
   }
-  ScanRequest r = asking_ == Asking::probe
-                      ? request(address_, pdu_, frame_size(settings_.framing, kPresenceProbeReplyPdu))
-                      : request(address_, pdu_, longest_frame(settings_.framing));
+  ScanRequest r =
+      asking_ == Asking::probe
+          ? request(address_, pdu_, frame_size(settings_.framing, kPresenceProbeReplyPdu))
+          : request(address_, pdu_, longest_frame(settings_.framing));
   echo_ = r.frame;
   return r;
 }

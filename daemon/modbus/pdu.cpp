@@ -285,8 +285,8 @@ std::size_t Dispatcher::complete(const Session& session, std::uint8_t unit,
       std::copy_n(request.begin(), 5, out.begin());
       return 5;
     case Function::read_write_registers:
-      return read_registers_response(unit, Table::holding, be16_at(request, 1), be16_at(request, 3), fc,
-                                     out);
+      return read_registers_response(unit, Table::holding, be16_at(request, 1), be16_at(request, 3),
+                                     fc, out);
     default:
       return exception_pdu(fc, Exception::server_device_failure, out);  // not a write: a bug
   }

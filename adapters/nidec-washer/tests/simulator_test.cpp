@@ -18,7 +18,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const Bytes kNack = {0x5A, 0x00, 0xFF, 0x00, 0xFF, 0x00, 0x5A};                          // 5.16
+const Bytes kNack = {0x5A, 0x00, 0xFF, 0x00, 0xFF, 0x00, 0x5A};  // 5.16
 
 class Sim : public ::testing::Test {
  protected:
