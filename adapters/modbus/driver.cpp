@@ -202,6 +202,8 @@ std::optional<Exchange> ModbusDriver::next_exchange(TimePoint now) {
   // The engine asks only once the exchange before ended; one it abandoned without a word still
   // owes its write an answer.
   fail_inflight();
+  // A cycle whose last read was abandoned is over too.
+  if (!unpublished_.empty()) end_of_read();
   if (!writes_.empty()) {
     inflight_ = write_job(writes_.take_front());
     return exchange(*inflight_);
@@ -285,10 +287,12 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
       if (job.probe && !searches_.empty()) searches_.pop_front();
       on_read_failed(*job.read, a.pdu[1]);
     }
+    end_of_read();
     return {RxKind::ack, d.consumed};
   }
   on_read(*job.read, a.pdu, now);
   if (job.probe && !searches_.empty()) on_probe(false);
+  end_of_read();
   return {RxKind::reply, d.consumed};
 }
 
@@ -305,13 +309,28 @@ void ModbusDriver::on_read(const Block& b, ByteView pdu, TimePoint now) {
         words.push_back(be16(data[2 * (offset + w)], data[2 * (offset + w) + 1]));
       }
     }
-    if (const auto e = exposed_index_[i]) values_[*e] = value_of(p, words);
     raw_[i] = std::move(words);
-    reading_[i] = Reading{now, 0, 0, 0};
+    unpublished_.emplace_back(i, now);
   }
   served_ = true;
   refusing_ = false;
   ++blocks_read_;
+}
+
+// The cycle is over once no read of it is left, nor a search it began.
+void ModbusDriver::end_of_read() {
+  if (reads_.empty() && searches_.empty()) publish();
+}
+
+// The values, the read times and the common block of the cycle's reads, at once.
+void ModbusDriver::publish() {
+  for (const auto& [i, at] : unpublished_) {
+    if (const auto e = exposed_index_[i]) {
+      values_[*e] = raw_[i] ? value_of(profile_.points[i], *raw_[i]) : Value{};
+    }
+    reading_[i] = Reading{at, 0, 0, 0};
+  }
+  unpublished_.clear();
   update_common();
   adopt();
 }
@@ -454,8 +473,10 @@ void ModbusDriver::on_no_reply(TimePoint now) {
   last_now_ = now;
   // A search whose read goes unanswered ends: begun again once the block is refused again.
   if (inflight_ && inflight_->probe && !searches_.empty()) searches_.pop_front();
-  if (inflight_ && inflight_->read) on_read_failed(*inflight_->read, std::nullopt);
+  const bool read = inflight_ && inflight_->read;
+  if (read) on_read_failed(*inflight_->read, std::nullopt);
   fail_inflight();
+  if (read) end_of_read();
 }
 
 void ModbusDriver::on_comm_lost(TimePoint now) {
@@ -464,6 +485,7 @@ void ModbusDriver::on_comm_lost(TimePoint now) {
   // Nothing waiting is sent once the slave answers again: the PLC was told these failed.
   writes_.settle_all(WriteResult::no_response);
   reads_.clear();
+  unpublished_.clear();
   blocks_read_ = 0;
   common_.ready = false;
   // Its state is whole again only once every part of it was read anew. What it refused stays

@@ -4,7 +4,10 @@
 // are in force once the slave's echo confirmed them.
 //
 // Freshness. The drive's state (speed, run and fault bits, fault code) may come in several
-// blocks: it is as old as the oldest of them (state_read_at(), DriverTraits::state_in_parts). A
+// blocks: it is as old as the oldest of them (state_read_at(), DriverTraits::state_in_parts).
+// The blocks of one cycle (those due at once, and the reads of a search among them) are
+// published together once the last of them was answered or failed (publish()): a PLC never
+// reads one block's fault bit beside the fault code of the cycle before. A
 // block the slave refuses or leaves unanswered is asked again at its next cycle, then backed off
 // (twice the wait each time, at most the comm timeout), its own points unknown meanwhile, never
 // left at their last value.
@@ -126,6 +129,9 @@ class ModbusDriver final : public DriverBase {
   [[nodiscard]] Millis send_limit() const;
   [[nodiscard]] Job read_job(const Block& b) const;
   void on_read(const Block& b, ByteView pdu, TimePoint now);
+  // After a read's answer or failure: at the cycle's end, what it read is published.
+  void end_of_read();
+  void publish();
   // The slave answered `b` with exception `code`, or (nothing) not at all.
   void on_read_failed(const Block& b, std::optional<std::uint8_t> code);
   // Whether a block refused with exception 02 is to be searched for what the slave refuses.
@@ -166,6 +172,8 @@ class ModbusDriver final : public DriverBase {
 
   std::vector<std::optional<std::vector<std::uint16_t>>> raw_;  // per profile point, last read
   std::vector<Reading> reading_;                                // per profile point
+  // Points read in the cycle under way, and when: published at its end (publish()).
+  std::vector<std::pair<std::size_t, TimePoint>> unpublished_;
   Skipped skipped_;                 // registers (and bits) the slave refuses: never read
   std::vector<bool> refused_;       // per profile point: the slave refuses it, never read
   std::deque<GapSearch> searches_;  // blocks refused with 02, searched one after the other

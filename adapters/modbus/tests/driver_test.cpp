@@ -179,7 +179,7 @@ TEST_F(ModbusDriverTest, ARefusedBlockIsSearchedAndAMissingPointLeftOut) {
   // alone (read), so the current holds it: refused twice in a row alone.
   ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 1)));
   EXPECT_EQ(answer(frame(words_pdu(0x04, {15000}))).kind, RxKind::reply);
-  EXPECT_EQ(d.common().speed_rpm, 1500);
+  EXPECT_EQ(d.common().speed_rpm, 0);  // read, and published once the search ends
   ASSERT_EQ(sent(), frame(read_pdu(0x04, 201, 1)));
   EXPECT_EQ(answer(frame(words_pdu(0x04, {0}))).kind, RxKind::reply);
   ASSERT_EQ(sent(), frame(read_pdu(0x04, 202, 2)));
@@ -191,6 +191,7 @@ TEST_F(ModbusDriverTest, ARefusedBlockIsSearchedAndAMissingPointLeftOut) {
   EXPECT_EQ(answer(frame({0x84, 0x02})).kind, RxKind::ack);
   // Unknown now, and skipped: said once, with the plan that reads the rest.
   EXPECT_TRUE(std::holds_alternative<std::monostate>(d.values()[0]));
+  EXPECT_EQ(d.common().speed_rpm, 1500);
   d.take_notices(notices);
   EXPECT_THAT(notices,
               ::testing::ElementsAre(
@@ -267,11 +268,48 @@ TEST_F(ModbusDriverTest, TheStateIsAsOldAsItsOldestPart) {
   answer(frame(words_pdu(0x03, {0})));
   EXPECT_EQ(d.state_read_at(), first);
   now = first + 500ms;
+  const TimePoint second = now;
   ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
   answer(frame(words_pdu(0x04, {0, 0, 0, 0})));
-  EXPECT_EQ(d.state_read_at(), first + 20ms);  // the fault code is now the oldest
+  // Until the cycle's last block, the state is the last cycle's, as old as it was.
+  EXPECT_EQ(d.state_read_at(), first);
+  now += 20ms;
+  rest_of_cycle();
+  EXPECT_EQ(d.state_read_at(), second);
   d.on_comm_lost(now);
   EXPECT_FALSE(d.state_read_at());  // whole again only once every part is read anew
+}
+
+// The fault bit (status word, holding 100) and the fault code (input 210) are read in different
+// blocks of one cycle: published together at the cycle's end, the PLC reads the fault with its
+// code, then no fault, and never one without the other (a fault of code 17, other, while the
+// code that clears it waits for the status word of the same cycle).
+TEST_F(ModbusDriverTest, AFaultAndItsCodeArePublishedTogether) {
+  cycle(/*status*/ 0x0000, /*speed*/ 0, /*fault*/ 0);
+  const auto only = [](Fault f) {
+    FaultSet s;
+    s.set(f);
+    return s;
+  };
+  const auto every_block = [&](std::uint16_t status, std::uint16_t fault,
+                               const FaultSet& before, const FaultSet& after) {
+    now += 500ms;
+    ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
+    answer(frame(words_pdu(0x04, {0, 0, 0, 0x4148})));
+    EXPECT_EQ(d.common().faults, before);
+    ASSERT_EQ(sent(), frame(read_pdu(0x04, 210, 1)));
+    answer(frame(words_pdu(0x04, {fault})));
+    EXPECT_EQ(d.common().faults, before);
+    ASSERT_EQ(sent(), frame(read_pdu(0x03, 0, 2)));
+    answer(frame(words_pdu(0x03, {6, 0})));
+    EXPECT_EQ(d.common().faults, before);
+    ASSERT_EQ(sent(), frame(read_pdu(0x03, 100, 1)));
+    answer(frame(words_pdu(0x03, {status})));
+    EXPECT_EQ(d.common().faults, after);
+  };
+  // Trips with code 5 (drive_over_temperature), then is reset: code 0 and the bit clear.
+  every_block(0x0008, 5, FaultSet{}, only(Fault::drive_over_temperature));
+  every_block(0x0000, 0, only(Fault::drive_over_temperature), FaultSet{});
 }
 
 TEST_F(ModbusDriverTest, OnlyTheAwaitedReplyIsTaken) {

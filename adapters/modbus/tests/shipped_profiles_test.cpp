@@ -247,6 +247,8 @@ TEST(EatonMMax, ItsDriverReadsTheOutputProcessDataIntoTheCommonBlock) {
   d.on_receive(encode(Framing::rtu, kMmxSlave,
                       words_pdu(0x04, {0x0009, 0x0003, 0, 0, 0, 0, 0, 0, 0, 540, 9})),
                now);
+  ASSERT_EQ(sent(), encode(Framing::rtu, kMmxSlave, read_pdu(0x03, 2000, 3)));
+  d.on_receive(encode(Framing::rtu, kMmxSlave, words_pdu(0x03, {0x0001, 0, 10000})), now);
   EXPECT_FALSE(d.common().running);
   EXPECT_TRUE(d.common().faults.has(Fault::other));
   EXPECT_EQ(d.common().native_fault, 9u);
@@ -426,6 +428,12 @@ TEST(Ed3100Standard, TheDocumentsMonitorExampleInTheStandardFormIs42_28Hz) {
   // the reference on display: the profile cannot tell (ed3100-standard.toml).
   EXPECT_EQ(d.on_receive(hex({0x1F, 0x03, 0x04, 0x10, 0x84, 0x41, 0x48, 0x70, 0xBD}), now).kind,
             RxKind::reply);
+  // The cycle's other blocks (fault code and state word; command and reference), a drive with no
+  // fault, stopped: the cycle is published with its last.
+  ASSERT_EQ(d.next_exchange(now)->frame, encode(Framing::rtu, kEd3100, read_pdu(0x03, 0x0E01, 2)));
+  d.on_receive(encode(Framing::rtu, kEd3100, words_pdu(0x03, {0, 0})), now);
+  ASSERT_EQ(d.next_exchange(now)->frame, encode(Framing::rtu, kEd3100, read_pdu(0x03, 0x2000, 2)));
+  d.on_receive(encode(Framing::rtu, kEd3100, words_pdu(0x03, {0x0001, 0})), now);
   EXPECT_EQ(d.common().speed_rpm, 1268);
   ASSERT_EQ(d.points()[0].name, "output_frequency_format");
   EXPECT_EQ(std::get<std::int64_t>(d.values()[0]), 0x4148);
