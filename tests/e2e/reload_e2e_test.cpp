@@ -398,13 +398,7 @@ std::string server_section(const std::string& keys) {
 // A TCP client that connects and never sends a byte.
 class SilentClient {
  public:
-  explicit SilentClient(int port) : fd_(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) {
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<std::uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
-  }
+  explicit SilentClient(int port) : fd_(connect_loopback(port)), connected_(fd_ >= 0) {}
   ~SilentClient() { ::close(fd_); }
   SilentClient(const SilentClient&) = delete;
   SilentClient& operator=(const SilentClient&) = delete;

@@ -17,6 +17,7 @@
 #include <functional>
 
 #include "hand_backend.h"
+#include "loopback.h"
 #include "manual_clock.h"
 #include "modbus_serial/serial_codec.h"
 
@@ -50,12 +51,8 @@ class RtuTcpListenerTest : public ::testing::Test {
   }
   // A client connected to the listener, and the listener's side of it accepted.
   void connect() {
-    fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    a.sin_port = htons(listener_->port());
-    ASSERT_EQ(::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    fd_ = test::connect_loopback(listener_->port());
+    ASSERT_GE(fd_, 0);
     ASSERT_TRUE(pump([&] { return listener_->clients() == 1; }));
   }
   void send(std::uint8_t unit, const Bytes& pdu) {

@@ -112,12 +112,9 @@ void pull(int port, int host, const std::string& target, const Switch& flood,
       sockaddr_in local{};
       local.sin_family = AF_INET;
       local.sin_addr.s_addr = htonl(0x7F000000U | static_cast<std::uint32_t>(host));
-      sockaddr_in a{};
-      a.sin_family = AF_INET;
-      a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-      a.sin_port = htons(static_cast<std::uint16_t>(port));
+      const sockaddr_in a = loopback(port);
       if (::bind(fd, reinterpret_cast<sockaddr*>(&local), sizeof local) != 0 ||
-          ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+          ::connect(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
         ::close(fd);
         fd = -1;
         std::this_thread::sleep_for(10ms);

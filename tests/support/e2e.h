@@ -284,18 +284,6 @@ class Plc {
   modbus_t* ctx_;
 };
 
-// A TCP connection to 127.0.0.1:`port`, or -1.
-inline int connect_loopback(int port) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) return fd;
-  ::close(fd);
-  return -1;
-}
-
 // A Modbus TCP request ADU: the MBAP header (transaction, protocol 0, length, unit) and `pdu`.
 inline std::vector<std::uint8_t> mbap_adu(std::uint16_t transaction, std::uint8_t unit,
                                           const std::vector<std::uint8_t>& pdu) {

@@ -37,6 +37,8 @@
 #include <thread>
 #include <vector>
 
+#include "loopback.h"
+
 namespace drivegate::test {
 
 class FaultProxy {
@@ -117,14 +119,6 @@ class FaultProxy {
     }
     [[nodiscard]] bool open() const { return client >= 0 && server >= 0; }
   };
-
-  static sockaddr_in loopback(int port) {
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    a.sin_port = htons(static_cast<std::uint16_t>(port));
-    return a;
-  }
 
   template <class F>
   void command(F f) {

@@ -22,16 +22,9 @@
 #include <stdexcept>
 #include <string>
 
-namespace drivegate::test {
+#include "loopback.h"
 
-// 127.0.0.1:`port`, for bind() or connect().
-inline sockaddr_in loopback(int port) {
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  return a;
-}
+namespace drivegate::test {
 
 namespace free_port_detail {
 

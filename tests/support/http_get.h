@@ -12,6 +12,8 @@
 #include <cstdlib>
 #include <string>
 
+#include "loopback.h"
+
 namespace drivegate::test {
 
 struct HttpReply {
@@ -23,15 +25,8 @@ struct HttpReply {
 // GET `target` from 127.0.0.1:`port` as HTTP/1.0 (no chunked answers), read to the close.
 inline HttpReply http_get(int port, const std::string& target) {
   HttpReply r;
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
-    ::close(fd);
-    return r;
-  }
+  const int fd = connect_loopback(port);
+  if (fd < 0) return r;
   const std::string request = "GET " + target + " HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n";
   if (::write(fd, request.data(), request.size()) != static_cast<ssize_t>(request.size())) {
     ::close(fd);

@@ -17,6 +17,8 @@
 #include <sstream>
 #include <string>
 
+#include "loopback.h"
+
 namespace drivegate::test {
 
 class TcpClient {
@@ -32,11 +34,8 @@ class TcpClient {
       ::inet_pton(AF_INET, from, &s.sin_addr);
       if (::bind(fd_, reinterpret_cast<sockaddr*>(&s), sizeof s) != 0) return;
     }
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+    const sockaddr_in a = loopback(port);
+    connected_ = ::connect(fd_, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
   }
   ~TcpClient() {
     if (fd_ >= 0) ::close(fd_);
