@@ -291,8 +291,8 @@ TEST_F(ModbusDriverTest, AFaultAndItsCodeArePublishedTogether) {
     s.set(f);
     return s;
   };
-  const auto every_block = [&](std::uint16_t status, std::uint16_t fault,
-                               const FaultSet& before, const FaultSet& after) {
+  const auto every_block = [&](std::uint16_t status, std::uint16_t fault, const FaultSet& before,
+                               const FaultSet& after) {
     now += 500ms;
     ASSERT_EQ(sent(), frame(read_pdu(0x04, 200, 4)));
     answer(frame(words_pdu(0x04, {0, 0, 0, 0x4148})));
