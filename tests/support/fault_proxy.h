@@ -139,10 +139,8 @@ class FaultProxy {
   void accept_one() {
     const int c = ::accept4(listener_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
     if (c < 0) return;
-    const int s = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    const sockaddr_in a = loopback(upstream_port_);
-    if (::connect(s, reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
-      ::close(s);
+    const int s = connect_loopback(upstream_port_);
+    if (s < 0) {
       ::close(c);
       return;
     }

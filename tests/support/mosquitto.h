@@ -118,11 +118,10 @@ class Broker {
 
  private:
   static bool accepts(int port) {
-    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    const sockaddr_in a = loopback(port);
-    const bool ok = ::connect(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+    const int fd = connect_loopback(port);
+    if (fd < 0) return false;
     ::close(fd);
-    return ok;
+    return true;
   }
 
   int end(int sig) {
