@@ -8,11 +8,13 @@
 // A device that leaves a required option out is refused, naming it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "adapter_under_test.h"
@@ -226,6 +228,18 @@ std::string profiles_doc() {
   return read(std::filesystem::path(DRIVEGATE_PROFILE_DIR) / "../../../docs/profiles.md");
 }
 
+// A table this test makes in docs/profiles.md: from the line after its marker ("<!-- NAME: made
+// by library_test.cpp -->") to the blank line that ends it; none without the marker.
+std::optional<std::string> generated_table(const std::string& name) {
+  const std::string doc = profiles_doc();
+  const std::string begin = "<!-- " + name + ": made by library_test.cpp -->\n";
+  const auto at = doc.find(begin);
+  if (at == std::string::npos) return std::nullopt;
+  const auto start = at + begin.size();
+  const auto end = doc.find("\n\n", start);
+  return doc.substr(start, end == std::string::npos ? end : end + 1 - start);
+}
+
 // docs/profiles.md lists the library as it is: the table between its markers is made here.
 TEST(LibraryDoc, TheTableInDocsIsTheLibrary) {
   std::string want;
@@ -234,16 +248,54 @@ TEST(LibraryDoc, TheTableInDocsIsTheLibrary) {
     ASSERT_TRUE(std::holds_alternative<Profile>(parsed)) << f;
     want += row_of(f, std::get<Profile>(parsed)) + "\n";
   }
-  const std::string doc = profiles_doc();
-  const std::string begin = "<!-- library table: made by library_test.cpp -->\n";
   const std::string header = "| vendor | drive | file | source | bound |\n|---|---|---|---|---|\n";
-  const auto at = doc.find(begin);
-  ASSERT_NE(at, std::string::npos) << "docs/profiles.md has no library table marker";
-  const auto start = at + begin.size();
-  const auto end = doc.find("\n\n", start);
-  const std::string have = doc.substr(start, end == std::string::npos ? end : end + 1 - start);
-  EXPECT_EQ(have, header + want) << "docs/profiles.md's library table should read:\n"
-                                 << header << want;
+  const auto have = generated_table("library table");
+  ASSERT_TRUE(have) << "docs/profiles.md has no library table marker";
+  EXPECT_EQ(*have, header + want) << "docs/profiles.md's library table should read:\n"
+                                  << header << want;
+}
+
+// The row of docs/profiles.md's "Pages wanted" table for a profile that leaves common bindings
+// out: which, and why, as its [common] unbound says (bindings left out for one reason share it).
+std::string wanted_row(const std::filesystem::path& file, const Profile& p) {
+  std::vector<std::pair<std::string, std::string>> reasons;  // why, and the bindings it leaves out
+  for (const char* key : {"speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop",
+                          "run_forward", "run_reverse", "reset_fault"}) {
+    const auto why = p.unbound.find(key);
+    if (why == p.unbound.end()) continue;
+    const auto same = std::find_if(reasons.begin(), reasons.end(),
+                                   [&](const auto& r) { return r.first == why->second; });
+    if (same == reasons.end()) {
+      reasons.emplace_back(why->second, key);
+    } else {
+      same->second += ", " + std::string(key);
+    }
+  }
+  std::string cell;
+  for (const auto& [why, keys] : reasons) {
+    cell += (cell.empty() ? "" : "; ") + keys + ": " + why;
+  }
+  for (char& ch : cell) {
+    if (ch == '|') ch = '/';
+  }
+  return "| `" + file.filename().string() + "` | " + cell + " |";
+}
+
+// docs/profiles.md's "Pages wanted" (what a contributor with the manual can complete) is the
+// library's own [common] unbound, made here: one fact, kept in the profile.
+TEST(LibraryDoc, ThePagesWantedAreTheLibrarysUnbound) {
+  std::string want;
+  for (const auto& f : library(true)) {
+    auto parsed = parse_profile(read(f), f.string());
+    ASSERT_TRUE(std::holds_alternative<Profile>(parsed)) << f;
+    const Profile& p = std::get<Profile>(parsed);
+    if (!p.unbound.empty()) want += wanted_row(f, p) + "\n";
+  }
+  const std::string header = "| file | left out: why |\n|---|---|\n";
+  const auto have = generated_table("pages wanted");
+  ASSERT_TRUE(have) << "docs/profiles.md has no pages-wanted marker";
+  EXPECT_EQ(*have, header + want) << "docs/profiles.md's pages-wanted table should read:\n"
+                                  << header << want;
 }
 
 // The library's measure (issue 41): how many real drives' profiles give the speed in rpm both ways,
@@ -265,7 +317,8 @@ TEST(LibraryDoc, SaysHowManyDrivesBindTheSpeedBothWays) {
   const std::string want = "**" + std::to_string(both) + " of the " + std::to_string(real) +
                            " real drives bind both `speed_rpm` and `setpoint_rpm`** (" +
                            std::to_string(both * 100 / real) + " %)";
-  EXPECT_NE(profiles_doc().find(want), std::string::npos) << "docs/profiles.md should say: " << want;
+  EXPECT_NE(profiles_doc().find(want), std::string::npos)
+      << "docs/profiles.md should say: " << want;
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, Library, testing::ValuesIn(library()),
