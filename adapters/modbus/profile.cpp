@@ -824,14 +824,13 @@ class Parser {
       diag_.error(n, "common.unbound", "must be a table of binding = \"why it is left out\"");
       return;
     }
-    static constexpr std::array<std::string_view, 7> kChecked = {
-        "speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward"};
     for (const auto& [k, v] : *t) {
       const std::string key(k.str());
       const auto* why = v.as_string();
-      if (std::find(kChecked.begin(), kChecked.end(), key) == kChecked.end()) {
-        diag_.error(&v, "common.unbound." + key,
-                    "not a binding the check asks for (" + TableReader::names_text(kChecked) + ")");
+      if (std::find(kUnboundable.begin(), kUnboundable.end(), key) == kUnboundable.end()) {
+        diag_.error(
+            &v, "common.unbound." + key,
+            "not a binding the check asks for (" + TableReader::names_text(kUnboundable) + ")");
       } else if (why == nullptr || why->get().empty()) {
         diag_.error(&v, "common.unbound." + key, "must say why it is left out");
       } else if (r.node(key) != nullptr) {

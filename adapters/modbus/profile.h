@@ -246,6 +246,11 @@ struct ProfileExample {
   std::uint32_t line = 0;
 };
 
+// The common bindings `drivegate profile check` asks of a profile, which [common] unbound may
+// leave out with a reason, in the common block's order.
+inline constexpr std::array<std::string_view, 7> kUnboundable = {
+    "speed_rpm", "setpoint_rpm", "running", "fault", "fault_code", "stop", "run_forward"};
+
 struct Profile {
   std::string name;
   std::string description;
@@ -259,7 +264,7 @@ struct Profile {
   std::vector<ProfileExample> examples;  // the manual's own frames ([[example]])
   // Common bindings the profile leaves out on purpose, and why ([common] unbound = { setpoint_rpm
   // = "a % of the range between minimum and maximum frequency" }): `drivegate profile check` does
-  // not warn of them.
+  // not warn of them. Its keys are among kUnboundable.
   std::map<std::string, std::string, std::less<>> unbound;
 
   // The index of the point called `name`, if any.
