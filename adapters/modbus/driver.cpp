@@ -557,8 +557,31 @@ void ModbusDriver::update_common() {
     }
   }
   const auto fault_bit = bit_of(c.fault);
-  const bool active = fault_bit ? *fault_bit : (coded && *coded != Fault::none);
-  if (active) faults.set(coded && *coded != Fault::none ? *coded : Fault::other);
+  bool active = fault_bit ? *fault_bit : (coded && *coded != Fault::none);
+  // The fault bit and its code in two reads of a cycle: a trip or a reset can land between them.
+  // The fault bit set beside a code that says none is, where a fault was already shown, a reset
+  // the code saw first (the kinds last read stand until the bit is read clear); where none was,
+  // a trip the code was read before: the fault shows at the next read of the code, with its kind
+  // (or `other`, a code that still says none once read after the bit).
+  FaultSet before = common_.faults;
+  before.clear(Fault::sensor_fault);
+  if (!active || !coded || *coded != Fault::none || !fault_bit) bit_set_at_.reset();
+  if (active && coded && *coded != Fault::none) {
+    faults.set(*coded);
+  } else if (active && coded && fault_bit && !before.empty()) {
+    faults = before;
+  } else if (active && coded && fault_bit) {
+    const auto bit_at = reading_[c.fault->point].at;
+    if (!bit_set_at_) bit_set_at_ = bit_at;
+    const auto code_at = reading_[c.fault_code->point].at;
+    if (code_at && bit_set_at_ && *code_at < *bit_set_at_) {
+      active = false;
+    } else {
+      faults.set(Fault::other);
+    }
+  } else if (active) {
+    faults.set(Fault::other);
+  }
   // A speed reading that is not a number is a measurement the drive cannot give: a fault of its
   // own, so that the PLC sees it (status bit fault) beside speed_rpm's unknown mark.
   if (common_.speed_unknown) faults.set(Fault::sensor_fault);

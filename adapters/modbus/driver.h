@@ -189,6 +189,8 @@ class ModbusDriver final : public DriverBase {
   TimePoint last_now_{};
   std::size_t blocks_read_ = 0;  // since the last (re)connect
   bool adopting_ = true;
+  // When the fault bit was first read set beside a code saying none (update_common).
+  std::optional<TimePoint> bit_set_at_;
 };
 
 }  // namespace drivegate::modbus_device

@@ -126,6 +126,82 @@ struct SpeedBench {
   test::AdapterBench b;
 };
 
+// The fault bit and the fault code in two reads of a cycle: a trip, or a reset, that lands between
+// them. The PLC never reads the fault bit beside a code that is not the drive's (over_current, 4,
+// here; never other, 17), whichever of the two is read first, and the trip shows, then clears,
+// within a cycle or two.
+struct Read {
+  std::uint8_t function;
+  std::uint16_t start;
+  [[nodiscard]] bool of(const Bytes& frame) const {
+    return frame.size() == 8 && frame[1] == function && frame[2] == (start >> 8) &&
+           frame[3] == (start & 0xFF);
+  }
+};
+
+void a_trip_or_reset_between_the_reads_never_shows_a_fault_without_its_code(test::AdapterBench& b,
+                                                                            Read status,
+                                                                            Read code) {
+  ASSERT_TRUE(b.until_online());
+  // Runs until the second of the two reads has just gone on the wire, its slave not yet asked.
+  const auto between_the_reads = [&] {
+    const std::size_t mark = b.rig.sent().size();
+    return b.rig.run_until(
+        [&] {
+          int first = 0;  // 1: the status word was read first in this cycle; 2: the fault code
+          for (const Bytes& f : b.frames_after(mark)) {
+            const int kind = status.of(f) ? 1 : code.of(f) ? 2 : 0;
+            if (kind == 0) continue;
+            if (first != 0 && kind != first) return true;
+            first = kind;
+          }
+          return false;
+        },
+        2s);
+  };
+  std::vector<std::uint32_t> codes;
+  const auto faulted = [&](bool want) {
+    return b.rig.run_until(
+        [&] {
+          const bool on = (b.status() & kFaulted) != 0;
+          if (on) codes.push_back(b.read("fault_code"));
+          return on == want;
+        },
+        1500ms);
+  };
+  ASSERT_TRUE(between_the_reads());
+  ASSERT_TRUE(ok(b.control("fault 2")));  // over_current
+  EXPECT_TRUE(faulted(true)) << "status " << b.status();
+  ASSERT_TRUE(between_the_reads());
+  ASSERT_TRUE(ok(b.control("fault 0")));
+  EXPECT_TRUE(faulted(false)) << "status " << b.status();
+  ASSERT_FALSE(codes.empty());
+  for (const std::uint32_t c : codes) {
+    EXPECT_EQ(c, static_cast<std::uint32_t>(Fault::over_current)) << "a fault read with code " << c;
+  }
+}
+
+// The example reads its fault code (input 210) before its status word (holding 100).
+TEST(ModbusFreshness, ATripOrResetBetweenTheCodeAndTheStatusWordShowsTheTripWhole) {
+  test::AdapterBench b(drivegate_adapter);
+  a_trip_or_reset_between_the_reads_never_shows_a_fault_without_its_code(b, {0x03, 100},
+                                                                         {0x04, 210});
+}
+
+// This one reads its status word (holding 0) before its fault code (holding 20).
+TEST(ModbusFreshness, ATripOrResetBetweenTheStatusWordAndTheCodeShowsTheTripWhole) {
+  const support::ProfileFile file(
+      "[profile]\nname = \"trip\"\nsource = \"a test\"\n[modbus]\nmax_gap = 0\n"
+      "[[point]]\nname = \"status_word\"\ntable = \"holding\"\naddress = 0\ntype = \"u16\"\n"
+      "[[point]]\nname = \"fault_number\"\ntable = \"holding\"\naddress = 20\ntype = \"u16\"\n"
+      "[common]\nfault = { point = \"status_word\", bit = 3 }\n"
+      "fault_code = { point = \"fault_number\", map = { 0 = \"none\", 2 = \"over_current\" }, "
+      "other = \"other\" }\n",
+      "trip.toml");
+  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path}}});
+  a_trip_or_reset_between_the_reads_never_shows_a_fault_without_its_code(b, {0x03, 0}, {0x03, 20});
+}
+
 constexpr std::int32_t kUnknownSpeed = -32768;
 
 // NaN, +-Inf and 2^32 in a float speed are no speed: speed_rpm reads the unknown mark, the status
