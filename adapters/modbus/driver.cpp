@@ -492,6 +492,7 @@ void ModbusDriver::on_comm_lost(TimePoint now) {
   // skipped (a slave that lacked a register still lacks it; one that refused everything was
   // never searched): a device whose state it refuses goes comm_lost once, not in a loop.
   std::fill(reading_.begin(), reading_.end(), Reading{});
+  bit_set_at_.reset();
   searches_.clear();
   served_ = false;
   for (Group& g : groups_) g.due = now;
@@ -559,28 +560,28 @@ void ModbusDriver::update_common() {
   const auto fault_bit = bit_of(c.fault);
   bool active = fault_bit ? *fault_bit : (coded && *coded != Fault::none);
   // The fault bit and its code in two reads of a cycle: a trip or a reset can land between them.
-  // The fault bit set beside a code that says none is, where a fault was already shown, a reset
-  // the code saw first (the kinds last read stand until the bit is read clear); where none was,
-  // a trip the code was read before: the fault shows at the next read of the code, with its kind
-  // (or `other`, a code that still says none once read after the bit).
+  // Only the first read of the bit set beside a code that says none can be such a race: a code read
+  // before that bit, with no fault shown yet, missed the trip (shown whole at the next cycle); a
+  // code read after it, beside a fault shown, saw the reset first (the kinds shown stand for this
+  // cycle). Any other fault bit beside a code saying none is a fault of kind `other`.
   FaultSet before = common_.faults;
   before.clear(Fault::sensor_fault);
-  if (!active || !coded || *coded != Fault::none || !fault_bit) bit_set_at_.reset();
-  if (active && coded && *coded != Fault::none) {
-    faults.set(*coded);
-  } else if (active && coded && fault_bit && !before.empty()) {
-    faults = before;
-  } else if (active && coded && fault_bit) {
+  const bool bare = active && fault_bit && coded && *coded == Fault::none;
+  if (!bare) bit_set_at_.reset();
+  if (bare) {
     const auto bit_at = reading_[c.fault->point].at;
-    if (!bit_set_at_) bit_set_at_ = bit_at;
     const auto code_at = reading_[c.fault_code->point].at;
-    if (code_at && bit_set_at_ && *code_at < *bit_set_at_) {
+    if (!bit_set_at_) bit_set_at_ = bit_at;
+    const bool first = bit_at && bit_at == bit_set_at_ && code_at;
+    if (first && *code_at < *bit_at && before.empty()) {
       active = false;
+    } else if (first && *code_at > *bit_at && !before.empty()) {
+      faults = before;
     } else {
       faults.set(Fault::other);
     }
   } else if (active) {
-    faults.set(Fault::other);
+    faults.set(coded && *coded != Fault::none ? *coded : Fault::other);
   }
   // A speed reading that is not a number is a measurement the drive cannot give: a fault of its
   // own, so that the PLC sees it (status bit fault) beside speed_rpm's unknown mark.
@@ -605,7 +606,8 @@ void ModbusDriver::adopt() {
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
     if (const auto rpm = rpm_of(setpoint_scale_.rpm(*reference))) common_.setpoint_rpm = *rpm;
   }
-  if (!common_.running || !common_.faults.empty()) return;
+  // A trip not shown yet (update_common) is no run to adopt either.
+  if (!common_.running || !common_.faults.empty() || bit_set_at_) return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;
 }
 

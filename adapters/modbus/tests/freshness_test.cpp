@@ -202,6 +202,20 @@ TEST(ModbusFreshness, ATripOrResetBetweenTheStatusWordAndTheCodeShowsTheTripWhol
   a_trip_or_reset_between_the_reads_never_shows_a_fault_without_its_code(b, {0x03, 0}, {0x03, 20});
 }
 
+// The fault code's block refused (exception 04) as the drive trips: the fault bit, read fresh, is
+// shown within a cycle or two as a fault of kind other (its code not read), never held back until
+// the code is read again.
+TEST(ModbusFreshness, ATripWhileItsCodeIsRefusedShowsAsOtherWithinTwoCycles) {
+  test::AdapterBench b(drivegate_adapter);
+  ASSERT_TRUE(b.until_online());
+  ASSERT_TRUE(ok(b.control("refuse input 210 4 20")));
+  ASSERT_TRUE(ok(b.control("fault 2")));
+  const TimePoint from = b.rig.now();
+  ASSERT_TRUE(b.rig.run_until([&] { return (b.status() & kFaulted) != 0; }, 3s));
+  EXPECT_LE(b.rig.now() - from, 1500ms);
+  EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::other));
+}
+
 constexpr std::int32_t kUnknownSpeed = -32768;
 
 // NaN, +-Inf and 2^32 in a float speed are no speed: speed_rpm reads the unknown mark, the status
