@@ -492,6 +492,9 @@ void ModbusDriver::on_comm_lost(TimePoint now) {
   // skipped (a slave that lacked a register still lacks it; one that refused everything was
   // never searched): a device whose state it refuses goes comm_lost once, not in a loop.
   std::fill(reading_.begin(), reading_.end(), Reading{});
+  // And nothing read before the loss stands beside what is read after it: a fault bit read anew
+  // beside a code not yet read again is a fault of kind other, never the kind read before.
+  std::fill(raw_.begin(), raw_.end(), std::nullopt);
   bit_set_at_.reset();
   searches_.clear();
   served_ = false;

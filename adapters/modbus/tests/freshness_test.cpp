@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "adapter_bench.h"
 #include "adapter_under_test.h"
@@ -214,6 +215,37 @@ TEST(ModbusFreshness, ATripWhileItsCodeIsRefusedShowsAsOtherWithinTwoCycles) {
   ASSERT_TRUE(b.rig.run_until([&] { return (b.status() & kFaulted) != 0; }, 3s));
   EXPECT_LE(b.rig.now() - from, 1500ms);
   EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::other));
+}
+
+// A comm loss forgets what was read. The drive trips anew (another kind) while silent, and once it
+// answers again its fault code is refused twice. While comm_lost, fault_mask keeps the faults last
+// known (device_image.cpp); once the drive is heard again, its fresh fault bit stands beside no
+// code: the fault is `other`, never the kind read before the loss, until the code is read.
+TEST(ModbusFreshness, AfterACommLossAFaultIsNeverShownWithTheCodeReadBeforeIt) {
+  test::AdapterBench b(drivegate_adapter);
+  ASSERT_TRUE(b.until_online());
+  ASSERT_TRUE(ok(b.control("fault 2")));  // over_current
+  const auto bit = [](Fault f) { return 1u << static_cast<unsigned>(f); };
+  ASSERT_TRUE(
+      b.rig.run_until([&] { return (b.read("fault_mask") & bit(Fault::over_current)) != 0; }, 2s));
+  ASSERT_TRUE(ok(b.control("silent on")));
+  ASSERT_TRUE(b.rig.run_until([&] { return (b.status() & kCommLost) != 0; }, 5s));
+  ASSERT_TRUE(ok(b.control("fault 5")));  // drive_over_temperature
+  ASSERT_TRUE(ok(b.control("refuse input 210 4 2")));
+  ASSERT_TRUE(ok(b.control("silent off")));
+  std::vector<std::uint32_t> masks{b.read("fault_mask")};
+  const bool back = b.rig.run_until(
+      [&] {
+        if (b.read("fault_mask") != masks.back()) masks.push_back(b.read("fault_mask"));
+        return (b.status() & kCommLost) == 0;
+      },
+      10s);
+  ASSERT_TRUE(back);
+  const std::uint32_t lost = bit(Fault::comm_lost);
+  EXPECT_EQ(masks,
+            (std::vector<std::uint32_t>{lost | bit(Fault::over_current), lost | bit(Fault::other),
+                                        bit(Fault::drive_over_temperature)}));
+  EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::drive_over_temperature));
 }
 
 constexpr std::int32_t kUnknownSpeed = -32768;
