@@ -204,8 +204,10 @@ std::optional<Exchange> ModbusDriver::next_exchange(TimePoint now) {
   fail_inflight();
   // A cycle whose last read was abandoned is over too.
   if (!unpublished_.empty()) end_of_read();
-  if (!writes_.empty()) {
-    inflight_ = write_job(writes_.take_front());
+  while (!writes_.empty()) {
+    Writes::Entry e = writes_.take_front();
+    if (!ready_to_send(e)) continue;
+    inflight_ = write_job(e);
     return exchange(*inflight_);
   }
   if (reads_.empty()) {
@@ -609,8 +611,11 @@ void ModbusDriver::adopt() {
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
     if (const auto rpm = rpm_of(setpoint_scale_.rpm(*reference))) common_.setpoint_rpm = *rpm;
   }
-  // A trip not shown yet (update_common) is no run to adopt either.
+  // A trip not shown yet (update_common) is no run to adopt either; nor, on a drive its set
+  // value runs, a motor still turning with that value 0 (coasting down from a stop).
   if (!common_.running || !common_.faults.empty() || bit_set_at_) return;
+  if (profile_.common.setpoint_runs && engineering(profile_.common.setpoint_rpm).value_or(0) == 0)
+    return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;
 }
 

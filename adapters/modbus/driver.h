@@ -87,6 +87,10 @@ class ModbusDriver final : public DriverBase {
     std::vector<std::uint16_t> sequence;
     std::vector<std::size_t> points;  // the point of each of `sequence`; `point` is the step's
     std::size_t step = 0;
+    // A write of the set value of a drive it runs (setpoint_rpm runs = true): its stop, its run,
+    // a setpoint. A command and a setpoint there do not overtake each other: a setpoint held for
+    // the next run is never lost to a stop, nor a run to a setpoint.
+    bool runs = false;
 
     // Whether this write puts a value in `p`.
     [[nodiscard]] bool writes_to(std::size_t p) const {
@@ -94,6 +98,8 @@ class ModbusDriver final : public DriverBase {
     }
     // Whether this write and `other` put values in one point: the newer overtakes the older.
     [[nodiscard]] bool meets(const Write& other) const {
+      if (runs && other.runs && (change == Change::setpoint) != (other.change == Change::setpoint))
+        return false;
       return writes_to(other.point) || std::any_of(other.points.begin(), other.points.end(),
                                                    [this](std::size_t p) { return writes_to(p); });
     }
@@ -151,7 +157,16 @@ class ModbusDriver final : public DriverBase {
 
   // driver_writes.cpp
   [[nodiscard]] std::optional<Write> write_of(const WriteOp& op) const;
-  [[nodiscard]] WriteCheck judge(const WriteOp& op) const;
+  [[nodiscard]] WriteCheck judge(const WriteOp& op, const Proposed& p) const;
+  // The registers setpoint_rpm's point takes for `rpm`; nothing outside its range.
+  [[nodiscard]] std::optional<std::vector<std::uint16_t>> setpoint_words(double rpm) const;
+  // A drive run by its set value (setpoint_rpm runs = true): the setpoint the next run writes,
+  // the newest of those waiting or on the line, else the one in force.
+  [[nodiscard]] std::int32_t held_setpoint() const;
+  // Whether a setpoint applied now is held at once rather than waiting for the line.
+  [[nodiscard]] bool holds_setpoint_now() const;
+  // A write first in line, decided from what is in force now: sent (true), or settled here.
+  bool ready_to_send(Writes::Entry& e);
   [[nodiscard]] Job write_job(const Writes::Entry& e) const;
   static void skip_the_way_in(Write& w);
   void confirm(const Job& j, ByteView pdu);

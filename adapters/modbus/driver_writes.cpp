@@ -25,6 +25,17 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
   Write w;
   switch (op.target) {
     case WriteOp::Target::command: {
+      // A drive its set value runs: stop writes 0 there, a run the setpoint held (its words once
+      // first in line, ready_to_send()); a set value says no direction.
+      if (c.setpoint_runs && op.command != Command::reset_fault) {
+        if (op.command == Command::run_reverse) return std::nullopt;
+        w.change = Change::command;
+        w.runs = true;
+        w.point = *c.setpoint_rpm;
+        w.command = op.command == Command::run_forward ? Command::run_forward : Command::stop;
+        if (w.command == Command::stop) w.words = {0};
+        return w;
+      }
       std::optional<ValueBinding> b;
       switch (op.command) {
         case Command::stop:
@@ -50,29 +61,26 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       w.points = b->points;
       w.sequence = b->sequence;
       if (w.command != Command::stop && common_.running) skip_the_way_in(w);
+      // A reset of a drive its set value runs, with no run in force, first sets that value to 0:
+      // a fault cleared must not start the motor at the set value the trip left (parse_profile
+      // makes such a set value one register).
+      if (c.setpoint_runs && !is_run(common_.command)) {
+        w.sequence.insert(w.sequence.begin(), 0);
+        w.points.insert(w.points.begin(), *c.setpoint_rpm);
+        w.runs = true;
+      }
       w.point = w.points.front();
       w.words = {w.sequence.front()};
       return w;
     }
     case WriteOp::Target::setpoint: {
-      if (!c.setpoint_rpm) return std::nullopt;
-      const ProfilePoint& p = profile_.points[*c.setpoint_rpm];
-      double v = op.rpm;
-      if (!c.setpoint_factor.terms.empty()) {
-        // rpm -> the point's value -> raw, rounded to the point's step (docs/profiles.md,
-        // "[common]"): a float point takes the value as it is.
-        v = setpoint_scale_.value(v);
-        if (p.type != ValueType::f32) v = std::round(v / p.scale) * p.scale;
-      }
-      // The point's range, after the conversion, allowing for a scale's binary fractions.
-      const double slack = 1e-9 * std::max(1.0, std::fabs(v));
-      if ((p.min && v < *p.min - slack) || (p.max && v > *p.max + slack)) return std::nullopt;
-      auto words = words_for(p, v);
+      auto words = setpoint_words(op.rpm);
       if (!words) return std::nullopt;
       w.change = Change::setpoint;
       w.point = *c.setpoint_rpm;
       w.words = std::move(*words);
       w.rpm = op.rpm;
+      w.runs = c.setpoint_runs;
       return w;
     }
     case WriteOp::Target::forward:  // the pass-through driver's (passthrough.h)
@@ -95,13 +103,99 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
   return w;
 }
 
-WriteCheck ModbusDriver::judge(const WriteOp& op) const {
-  return write_of(op) ? WriteCheck::ok : WriteCheck::invalid_value;
+std::optional<std::vector<std::uint16_t>> ModbusDriver::setpoint_words(double rpm) const {
+  const CommonBindings& c = profile_.common;
+  if (!c.setpoint_rpm) return std::nullopt;
+  const ProfilePoint& p = profile_.points[*c.setpoint_rpm];
+  double v = rpm;
+  if (!c.setpoint_factor.terms.empty()) {
+    // rpm -> the point's value -> raw, rounded to the point's step (docs/profiles.md,
+    // "[common]"): a float point takes the value as it is.
+    v = setpoint_scale_.value(v);
+    if (p.type != ValueType::f32) v = std::round(v / p.scale) * p.scale;
+  }
+  // The point's range, after the conversion, allowing for a scale's binary fractions.
+  const double slack = 1e-9 * std::max(1.0, std::fabs(v));
+  if ((p.min && v < *p.min - slack) || (p.max && v > *p.max + slack)) return std::nullopt;
+  return words_for(p, v);
 }
 
+// A drive its set value runs has nothing to run at while the setpoint is 0 (its set value 0 is
+// its stop): such a run is refused (0x04) rather than confirmed and never turning.
+WriteCheck ModbusDriver::judge(const WriteOp& op, const Proposed& p) const {
+  if (!write_of(op)) return WriteCheck::invalid_value;
+  if (profile_.common.setpoint_runs && op.target == WriteOp::Target::command &&
+      op.command == Command::run_forward) {
+    const auto words = setpoint_words(p.setpoint_rpm);
+    if (!words || std::all_of(words->begin(), words->end(), [](auto w) { return w == 0; }))
+      return WriteCheck::refused;
+  }
+  return WriteCheck::ok;
+}
+
+// A drive its set value runs: a request that writes the command and the setpoint together (the
+// common block's holding 0..1 in one FC 16) runs at that setpoint, whichever part comes first.
 WriteCheck ModbusDriver::check(std::span<const WriteOp> request) const {
-  return check_in_order(request, Proposed{common_.command, common_.setpoint_rpm},
-                        [this](const WriteOp& op, const Proposed&) { return judge(op); });
+  Proposed in_force{common_.command, common_.setpoint_rpm};
+  if (profile_.common.setpoint_runs) {
+    in_force.setpoint_rpm = held_setpoint();
+    for (const WriteOp& op : request) {
+      if (op.target == WriteOp::Target::setpoint) in_force.setpoint_rpm = op.rpm;
+    }
+  }
+  return check_in_order(request, in_force,
+                        [this](const WriteOp& op, const Proposed& p) { return judge(op, p); });
+}
+
+std::int32_t ModbusDriver::held_setpoint() const {
+  std::int32_t rpm = common_.setpoint_rpm;
+  if (inflight_ && inflight_->write && inflight_->write->job.change == Change::setpoint)
+    rpm = inflight_->write->job.rpm;
+  for (const Writes::Entry& e : writes_) {
+    if (e.job.change == Change::setpoint) rpm = e.job.rpm;
+  }
+  return rpm;
+}
+
+// Held at once: a setpoint a waiting command will use or override (a run writes the setpoint
+// held when first in line, a stop writes 0), or one that finds the drive stopped with nothing on
+// its way. Waiting for the line: one beside a run in force (it goes to the drive), a command on
+// the line (its outcome decides), or another setpoint on its way (the newer must stay newer).
+bool ModbusDriver::holds_setpoint_now() const {
+  const auto is_setpoint = [](const Write& w) { return w.change == Change::setpoint; };
+  const auto is_command = [](const Write& w) { return w.runs && w.change == Change::command; };
+  if (inflight_ && inflight_->write &&
+      (is_setpoint(inflight_->write->job) || is_command(inflight_->write->job)))
+    return false;
+  bool waiting_command = false;
+  for (const Writes::Entry& e : writes_) {
+    if (is_setpoint(e.job)) return false;
+    waiting_command = waiting_command || is_command(e.job);
+  }
+  return waiting_command || !is_run(common_.command);
+}
+
+// First in line, a drive its set value runs decides from what is in force now: a setpoint with
+// no run in force is held for the next run, never sent; a run writes the setpoint held, and is
+// refused where that is 0 (a setpoint of 0 written after the run was taken).
+bool ModbusDriver::ready_to_send(Writes::Entry& e) {
+  Write& w = e.job;
+  if (!w.runs) return true;
+  if (w.change == Change::setpoint && !is_run(common_.command)) {
+    common_.setpoint_rpm = w.rpm;
+    writes_.settle(e, WriteResult::ok);
+    return false;
+  }
+  if (w.change == Change::command && w.command == Command::run_forward) {
+    const auto words = setpoint_words(common_.setpoint_rpm);
+    if (!words || std::all_of(words->begin(), words->end(), [](auto x) { return x == 0; })) {
+      writes_.settle(e, WriteResult::refused);
+      return false;
+    }
+    w.words = *words;
+    w.rpm = common_.setpoint_rpm;
+  }
+  return true;
 }
 
 WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
@@ -110,6 +204,10 @@ WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   adopting_ = false;  // a client decides from now on
   auto w = write_of(op);
   if (!w) return WriteStatus::invalid_value;
+  if (w->runs && w->change == Change::setpoint && holds_setpoint_now()) {
+    common_.setpoint_rpm = op.rpm;
+    return WriteStatus::done;
+  }
   // A newer write to the same point wins: the older one, still waiting for the line, never
   // reaches the slave (a run then a stop in quick succession never starts the motor). A command
   // whose sequence writes several points meets every write to any of them.

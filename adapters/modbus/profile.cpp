@@ -383,13 +383,19 @@ class Parser {
   // motor_poles" }: a point of a register table, and what its engineering value is multiplied by;
   // rpm_offset, beside rpm_factor only, what is added then.
   std::optional<std::size_t> rpm_point(TableReader& common, std::string_view key, Use use,
-                                       RpmFactor& factor, std::optional<RpmFactor>& offset) {
+                                       RpmFactor& factor, std::optional<RpmFactor>& offset,
+                                       bool* runs = nullptr) {
     const toml::node* n = common.node(key);
     if (n == nullptr || n->as_string() != nullptr) return register_point(common, key, use);
     const toml::table* t = inline_table(common, key);
     if (t == nullptr) return std::nullopt;
     TableReader r(*t, "common." + std::string(key), diag_);
-    r.expect({"point", "rpm_factor", "rpm_offset"});
+    if (runs != nullptr) {
+      r.expect({"point", "rpm_factor", "rpm_offset", "runs"});
+      *runs = r.boolean("runs").value_or(false);
+    } else {
+      r.expect({"point", "rpm_factor", "rpm_offset"});
+    }
     if (r.node("point") == nullptr) r.missing("point");
     const auto index = register_point(r, "point", use);
     const auto factor_text = r.string("rpm_factor", false);
@@ -796,8 +802,8 @@ class Parser {
       read_unbound(r);
       CommonBindings& c = profile_.common;
       c.speed_rpm = rpm_point(r, "speed_rpm", Use::read, c.speed_factor, c.speed_offset);
-      c.setpoint_rpm =
-          rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor, c.setpoint_offset);
+      c.setpoint_rpm = rpm_point(r, "setpoint_rpm", Use::setpoint, c.setpoint_factor,
+                                 c.setpoint_offset, &c.setpoint_runs);
       c.running = bit_binding(r, "running");
       c.fault = bit_binding(r, "fault");
       c.fault_code = fault_binding(r);
@@ -805,6 +811,7 @@ class Parser {
       c.run_forward = value_binding(r, "run_forward");
       c.run_reverse = value_binding(r, "run_reverse");
       c.reset_fault = value_binding(r, "reset_fault");
+      if (c.setpoint_runs) check_set_value_runs(r);
       // A drive that can be started must be stoppable through the same profile.
       if ((c.run_forward || c.run_reverse) && !c.stop && r.node("stop") == nullptr) {
         diag_.error(t, "common",
@@ -813,6 +820,34 @@ class Parser {
       }
       refuse_own_intervals();
     });
+  }
+
+  // setpoint_rpm = { ..., runs = true }: the set value is the run command. Stop writes 0 to it and
+  // run_forward the setpoint held, so neither is bound apart, nor run_reverse (a set value says no
+  // direction); 0 must be a value the point takes.
+  void check_set_value_runs(TableReader& r) {
+    const CommonBindings& c = profile_.common;
+    const char* const key = "setpoint_rpm.runs";
+    for (const char* command : {"stop", "run_forward", "run_reverse"}) {
+      if (r.node(command) == nullptr && profile_.unbound.count(command) == 0) continue;
+      const toml::node* at = r.node(command) != nullptr ? r.node(command) : r.node("unbound");
+      diag_.error(at, std::string("common.") + command,
+                  "goes not with common." + std::string(key) +
+                      " = true: the set value is the run command (stop writes 0 to it, "
+                      "run_forward the setpoint)");
+    }
+    if (!c.setpoint_rpm) return;
+    const ProfilePoint& p = profile_.points[*c.setpoint_rpm];
+    if (p.width() != 1) {
+      diag_.error(r.node("setpoint_rpm"), std::string("common.") + key,
+                  "'" + p.name +
+                      "' must be one register (u16 or s16): a reset first writes 0 "
+                      "to it as one step of its sequence");
+    }
+    if ((p.min && *p.min > 0) || (p.max && *p.max < 0)) {
+      diag_.error(r.node("setpoint_rpm"), std::string("common.") + key,
+                  "'" + p.name + "' must take 0 (its min..max): stop writes 0 to it");
+    }
   }
 
   // unbound = { setpoint_rpm = "why" }: bindings left out on purpose, each with its reason.

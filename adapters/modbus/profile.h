@@ -210,6 +210,10 @@ struct CommonBindings {
   std::optional<ValueBinding> run_forward;
   std::optional<ValueBinding> run_reverse;
   std::optional<ValueBinding> reset_fault;
+  // setpoint_rpm = { ..., runs = true }: the drive runs while its set value is not 0 and has no
+  // run command (an EC fan, a BLDC driver). The gateway holds the setpoint while no run is in
+  // force; run_forward writes it, stop writes 0 (docs/profiles.md, "A set value that runs").
+  bool setpoint_runs = false;
 };
 
 struct LineSpec {

@@ -95,8 +95,9 @@ ProfileReport check_profile(std::string_view text, const std::string& source,
   need(c.running.has_value(), "running");
   need(c.fault.has_value(), "fault");
   need(c.fault_code.has_value(), "fault_code");
-  need(c.stop.has_value(), "stop");
-  need(c.run_forward.has_value(), "run_forward");
+  // A set value that runs the drive is its stop (0) and its run (the setpoint held).
+  need(c.stop.has_value() || c.setpoint_runs, "stop");
+  need(c.run_forward.has_value() || c.setpoint_runs, "run_forward");
   if (!missing.empty()) {
     r.warnings.push_back(source + ": common: not bound: " + missing +
                          " (the common block shows them unknown, a command refused)");

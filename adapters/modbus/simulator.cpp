@@ -335,6 +335,11 @@ void ModbusSimulator::drive() {
     const std::uint8_t bit = b->bits[std::min(nth, b->bits.size() - 1)];
     if (on) word = static_cast<std::uint16_t>(word | 1u << (bit + shift));
   };
+  // A drive its set value runs turns while that value is not 0 (setpoint_rpm runs = true).
+  if (c.setpoint_runs && c.setpoint_rpm) {
+    running_ = point_value(*c.setpoint_rpm).value_or(0) != 0;
+    reverse_ = false;
+  }
   if (fault_ != 0) running_ = false;  // a trip stops the output
   set_bit(c.running, running_, reverse_ ? 1 : 0);
   set_bit(c.fault, fault_ != 0);

@@ -123,7 +123,9 @@ TEST_P(Library, RunsAgainstItsOwnSimulatorOnItsOwnLine) {
                     << ", wrote " << want;
     }
   };
-  for (const auto& [bound, command] : {std::pair{c.run_forward.has_value(), cmd::run_forward},
+  // A set value that runs the drive (setpoint_rpm runs = true) is its run_forward and its stop.
+  const bool runs_forward = c.run_forward.has_value() || c.setpoint_runs;
+  for (const auto& [bound, command] : {std::pair{runs_forward, cmd::run_forward},
                                        std::pair{c.run_reverse.has_value(), cmd::run_reverse}}) {
     if (!bound) continue;
     SCOPED_TRACE(command);
@@ -146,7 +148,7 @@ TEST_P(Library, RunsAgainstItsOwnSimulatorOnItsOwnLine) {
   }
   // A profile that binds no run command: the drive run from its own terminals (the simulator's
   // `run`), the setpoint written in rpm still reads back as speed_rpm.
-  if (c.setpoint_rpm && c.speed_rpm && !c.run_forward && !c.run_reverse) {
+  if (c.setpoint_rpm && c.speed_rpm && !runs_forward && !c.run_reverse) {
     ASSERT_EQ(rig.simulator().control("run forward", rig.now()).rfind("ok", 0), 0u);
     ASSERT_EQ(rig.write_and_wait(d, Table::holding, kSetpointRegister, {rpm}), Outcome::ok);
     if (c.running) {
@@ -215,7 +217,8 @@ std::string row_of(const std::filesystem::path& file, const Profile& p) {
   for (const auto& [b, name] :
        {std::pair{&c.stop, "stop"}, std::pair{&c.run_forward, "run_forward"},
         std::pair{&c.run_reverse, "run_reverse"}, std::pair{&c.reset_fault, "reset_fault"}}) {
-    if (*b) commands += (commands.empty() ? "" : " ") + std::string(name);
+    const bool by_set_value = c.setpoint_runs && (b == &c.stop || b == &c.run_forward);
+    if (*b || by_set_value) commands += (commands.empty() ? "" : " ") + std::string(name);
   }
   add(!commands.empty(), commands);
   std::string source = p.source;

@@ -1,0 +1,214 @@
+// A drive its set value runs (`setpoint_rpm = { ..., runs = true }`: an EC fan, a BLDC driver with
+// no run command), on the real bus engine against the simulator (tests/support/adapter_bench.h):
+// a setpoint written while no run is in force is held by the gateway and never reaches the drive;
+// run_forward writes it, stop writes 0; a run with nothing to run at is refused; a reset with no
+// run in force writes 0 first, so a cleared trip does not restart the motor. Asserted on the
+// frames the master sent and on the registers a PLC reads.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "adapter_bench.h"
+#include "adapter_under_test.h"
+#include "common_block.h"
+#include "profile.h"
+#include "profile_support.h"
+
+namespace drivegate::modbus_device {
+namespace {
+
+using namespace std::chrono_literals;
+using namespace test::common_block;
+using testing::ElementsAre;
+using testing::HasSubstr;
+
+// Holding 0 resets the fan's errors (value 4), holding 1 is its set value in rpm, input 16 its
+// actual speed, input 17 bit 4 its error bit.
+constexpr std::string_view kFan =
+    "[profile]\nname = \"fan\"\nsource = \"a test\"\n[modbus]\nmax_gap = 0\nwrite = \"single\"\n"
+    "[[point]]\nname = \"reset\"\ntable = \"holding\"\naddress = 0\ntype = \"u16\"\n"
+    "access = \"operate\"\n"
+    "[[point]]\nname = \"set_value\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\n"
+    "min = 0\nmax = 3000\naccess = \"operate\"\n"
+    "[[point]]\nname = \"actual_speed\"\ntable = \"input\"\naddress = 16\ntype = \"u16\"\n"
+    "[[point]]\nname = \"motor_status\"\ntable = \"input\"\naddress = 17\ntype = \"u16\"\n"
+    "[common]\nspeed_rpm = \"actual_speed\"\n"
+    "setpoint_rpm = { point = \"set_value\", runs = true }\n"
+    "fault = { point = \"motor_status\", bit = 4 }\n"
+    "reset_fault = { point = \"reset\", value = 4 }\n";
+
+constexpr std::uint16_t kSetValue = 1;
+constexpr std::uint16_t kReset = 0;
+
+struct Fan {
+  support::ProfileFile file{std::string(kFan), "fan.toml"};
+  test::AdapterBench b{drivegate_adapter, {.options = {{"profile", file.path}}}};
+
+  // The values the master wrote to holding `address` with FC 06, from `from` on, in order.
+  [[nodiscard]] std::vector<std::uint16_t> written(std::uint16_t address, TimePoint from) const {
+    std::vector<std::uint16_t> out;
+    for (const Bytes& f : b.frames(from)) {
+      if (f.size() == 8 && f[1] == 0x06 && ((f[2] << 8) | f[3]) == address) {
+        out.push_back(static_cast<std::uint16_t>((f[4] << 8) | f[5]));
+      }
+    }
+    return out;
+  }
+  bool turning() { return b.sim_has("running"); }
+  bool speed_is(std::uint32_t rpm) {
+    return b.rig.run_until([&] { return b.read("speed_rpm") == rpm; }, 2s);
+  }
+};
+
+TEST(ModbusSetValueRuns, ASetpointWrittenWhileStoppedIsHeldAndNeverReachesTheDrive) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  const TimePoint from = f.b.rig.now();
+  EXPECT_EQ(f.b.write({1000}, kSetpointRegister), Outcome::ok);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 1000u);
+  f.b.rig.run_for(2s);
+  EXPECT_TRUE(f.written(kSetValue, from).empty());
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.status() & kRunning, 0u);
+  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 1000u);
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+}
+
+TEST(ModbusSetValueRuns, RunWritesTheHeldSetpointAndStopWritesZero) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.write({1000}, kSetpointRegister), Outcome::ok);
+  ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{1000});
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+  EXPECT_TRUE(f.speed_is(1000));
+  EXPECT_NE(f.b.status() & kRunning, 0u);
+  ASSERT_EQ(f.b.write({cmd::stop}), Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), (std::vector<std::uint16_t>{1000, 0}));
+  EXPECT_TRUE(f.speed_is(0));
+  EXPECT_FALSE(f.turning());
+  // The setpoint stays the gateway's, for the next run.
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 1000u);
+}
+
+// The common block's command and setpoint in one FC 16 (holding 0..1): the run goes at that
+// setpoint, though the command is the first register of the two.
+TEST(ModbusSetValueRuns, ACommandAndASetpointInOneRequestRunAtThatSetpoint) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1200}), Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{1200});
+  EXPECT_TRUE(f.speed_is(1200));
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 1200u);
+}
+
+// Nothing to run at: refused (0x04), nothing written, the fan still.
+TEST(ModbusSetValueRuns, ARunWithNoSetpointIsRefusedAndNothingIsSent) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  const TimePoint from = f.b.rig.now();
+  EXPECT_EQ(f.b.write({cmd::run_forward}), Outcome::refused);
+  EXPECT_EQ(f.b.write({cmd::run_forward, 0}), Outcome::refused);
+  f.b.rig.run_for(1s);
+  EXPECT_TRUE(f.written(kSetValue, from).empty());
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  // A set value says no direction.
+  EXPECT_EQ(f.b.write({cmd::run_reverse, 1000}), Outcome::invalid_value);
+  EXPECT_TRUE(f.written(kSetValue, from).empty());
+}
+
+TEST(ModbusSetValueRuns, ASetpointWhileRunningGoesToTheDriveAndIsConfirmed) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  const TimePoint from = f.b.rig.now();
+  EXPECT_EQ(f.b.write({600}, kSetpointRegister), Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{600});
+  EXPECT_TRUE(f.speed_is(600));
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 600u);
+}
+
+// The fan trips while running: the run in force is over (command stop), and its set value still
+// holds 1000. A reset writes 0 there before the reset bit: the error clears and the fan stays
+// still until a client runs it again, at the setpoint it had.
+TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  ASSERT_TRUE(f.speed_is(0));
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.write({cmd::reset_fault}), Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(f.written(kReset, from), std::vector<std::uint16_t>{4});
+  EXPECT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) == 0; }, 2s));
+  f.b.rig.run_for(2s);
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 1000u);
+  ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
+  EXPECT_TRUE(f.speed_is(1000));
+}
+
+// A stop sent while a setpoint waits behind a run on the line: neither is lost to the other; the
+// fan ends still, and the setpoint held is the newest.
+TEST(ModbusSetValueRuns, AStopAndASetpointInQuickSuccessionEndStillWithTheNewestSetpoint) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  const auto set = f.b.start_write({700}, kSetpointRegister);
+  const auto stop = f.b.start_write({cmd::stop});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return set->settled() && stop->settled(); }, 3s));
+  EXPECT_EQ(set->result, Outcome::ok);
+  EXPECT_EQ(stop->result, Outcome::ok);
+  EXPECT_TRUE(f.speed_is(0));
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 700u);
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+}
+
+std::vector<std::string> errors_of(const std::string& common) {
+  std::string text(kFan);
+  text = text.substr(0, text.find("[common]")) + common;
+  auto parsed = parse_profile(text, "p.toml");
+  if (std::holds_alternative<Profile>(parsed)) return {};
+  return std::get<std::vector<std::string>>(parsed);
+}
+
+TEST(ModbusSetValueRuns, AProfileSaysNoOtherRunOrStopAndASetValueThatTakesZero) {
+  const std::string runs = "[common]\nsetpoint_rpm = { point = \"set_value\", runs = true }\n";
+  EXPECT_THAT(errors_of(runs + "stop = { point = \"reset\", value = 0 }\n"),
+              ElementsAre(HasSubstr("common.stop: goes not with common.setpoint_rpm.runs")));
+  EXPECT_THAT(errors_of(runs + "unbound = { run_forward = \"none\" }\n"),
+              ElementsAre(HasSubstr("common.run_forward: goes not with")));
+  std::string text(kFan);
+  text.replace(text.find("min = 0"), 7, "min = 100");
+  text = text.substr(0, text.find("[common]")) + runs;
+  auto parsed = parse_profile(text, "p.toml");
+  ASSERT_TRUE(std::holds_alternative<std::vector<std::string>>(parsed));
+  EXPECT_THAT(std::get<std::vector<std::string>>(parsed),
+              ElementsAre(HasSubstr("'set_value' must take 0 (its min..max)")));
+  text = std::string(kFan);
+  text.replace(text.find("type = \"u16\"\nmin = 0"), 12, "type = \"u32\"");
+  text = text.substr(0, text.find("[common]")) + runs;
+  parsed = parse_profile(text, "p.toml");
+  ASSERT_TRUE(std::holds_alternative<std::vector<std::string>>(parsed));
+  EXPECT_THAT(std::get<std::vector<std::string>>(parsed),
+              ElementsAre(HasSubstr("'set_value' must be one register")));
+  EXPECT_TRUE(errors_of(runs).empty());
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device
