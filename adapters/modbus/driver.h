@@ -87,9 +87,10 @@ class ModbusDriver final : public DriverBase {
     std::vector<std::uint16_t> sequence;
     std::vector<std::size_t> points;  // the point of each of `sequence`; `point` is the step's
     std::size_t step = 0;
-    // A write of the set value of a drive it runs (setpoint_rpm runs = true): its stop, its run,
-    // a setpoint. A command and a setpoint there do not overtake each other: a setpoint held for
-    // the next run is never lost to a stop, nor a run to a setpoint.
+    // A write to a drive its set value runs (setpoint_rpm runs = true): a command or a setpoint.
+    // A command and a setpoint do not overtake each other (a setpoint held for the next run is
+    // never lost to a stop, nor a run to a setpoint); a newer command overtakes an older one,
+    // whichever points each writes (a stop of its own beside a run by the set value).
     bool runs = false;
 
     // Whether this write puts a value in `p`.
@@ -98,8 +99,11 @@ class ModbusDriver final : public DriverBase {
     }
     // Whether this write and `other` put values in one point: the newer overtakes the older.
     [[nodiscard]] bool meets(const Write& other) const {
-      if (runs && other.runs && (change == Change::setpoint) != (other.change == Change::setpoint))
-        return false;
+      if (runs && other.runs) {
+        const bool setpoint = change == Change::setpoint;
+        if (setpoint != (other.change == Change::setpoint)) return false;
+        if (!setpoint) return true;  // two commands (its stop may be a point of its own)
+      }
       return writes_to(other.point) || std::any_of(other.points.begin(), other.points.end(),
                                                    [this](std::size_t p) { return writes_to(p); });
     }

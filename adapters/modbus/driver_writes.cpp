@@ -25,16 +25,20 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
   Write w;
   switch (op.target) {
     case WriteOp::Target::command: {
-      // A drive its set value runs: stop writes 0 there, a run the setpoint held (its words once
-      // first in line, ready_to_send()); a set value says no direction.
+      // A drive its set value runs: a run writes the setpoint held there (its words once first in
+      // line, ready_to_send()), a stop 0 unless the drive has a stop of its own; a set value
+      // written 0 and up says no direction.
       if (c.setpoint_runs && op.command != Command::reset_fault) {
         if (op.command == Command::run_reverse) return std::nullopt;
-        w.change = Change::command;
-        w.runs = true;
-        w.point = *c.setpoint_rpm;
-        w.command = op.command == Command::run_forward ? Command::run_forward : Command::stop;
-        if (w.command == Command::stop) w.words = {0};
-        return w;
+        const bool run = op.command == Command::run_forward;
+        if (run || !c.stop) {
+          w.change = Change::command;
+          w.runs = true;
+          w.point = *c.setpoint_rpm;
+          w.command = run ? Command::run_forward : Command::stop;
+          if (!run) w.words = {0};
+          return w;
+        }
       }
       std::optional<ValueBinding> b;
       switch (op.command) {
@@ -58,6 +62,7 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       }
       if (!b) return std::nullopt;
       w.change = Change::command;
+      w.runs = c.setpoint_runs;
       w.points = b->points;
       w.sequence = b->sequence;
       if (w.command != Command::stop && common_.running) skip_the_way_in(w);
@@ -67,7 +72,6 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       if (c.setpoint_runs && !is_run(common_.command)) {
         w.sequence.insert(w.sequence.begin(), 0);
         w.points.insert(w.points.begin(), *c.setpoint_rpm);
-        w.runs = true;
       }
       w.point = w.points.front();
       w.words = {w.sequence.front()};
@@ -107,6 +111,8 @@ std::optional<std::vector<std::uint16_t>> ModbusDriver::setpoint_words(double rp
   const CommonBindings& c = profile_.common;
   if (!c.setpoint_rpm) return std::nullopt;
   const ProfilePoint& p = profile_.points[*c.setpoint_rpm];
+  // A set value that runs the drive says no direction: 0 and up (run_reverse is refused).
+  if (c.setpoint_runs && rpm < 0) return std::nullopt;
   double v = rpm;
   if (!c.setpoint_factor.terms.empty()) {
     // rpm -> the point's value -> raw, rounded to the point's step (docs/profiles.md,
@@ -157,43 +163,35 @@ std::int32_t ModbusDriver::held_setpoint() const {
   return rpm;
 }
 
-// Held at once: a setpoint a waiting command will use or override (a run writes the setpoint
-// held when first in line, a stop writes 0), or one that finds the drive stopped with nothing on
-// its way. Waiting for the line: one beside a run in force (it goes to the drive), a command on
-// the line (its outcome decides), or another setpoint on its way (the newer must stay newer).
+// Held at once only where nothing can change what is in force first: no run in force, and no
+// write waiting or on the line. Otherwise it waits for the line, where ready_to_send() decides
+// from what is in force then (a command ahead of it may be confirmed or fail meanwhile).
 bool ModbusDriver::holds_setpoint_now() const {
-  const auto is_setpoint = [](const Write& w) { return w.change == Change::setpoint; };
-  const auto is_command = [](const Write& w) { return w.runs && w.change == Change::command; };
-  if (inflight_ && inflight_->write &&
-      (is_setpoint(inflight_->write->job) || is_command(inflight_->write->job)))
-    return false;
-  bool waiting_command = false;
-  for (const Writes::Entry& e : writes_) {
-    if (is_setpoint(e.job)) return false;
-    waiting_command = waiting_command || is_command(e.job);
-  }
-  return waiting_command || !is_run(common_.command);
+  return !is_run(common_.command) && writes_.empty() && !(inflight_ && inflight_->write);
 }
 
-// First in line, a drive its set value runs decides from what is in force now: a setpoint with
-// no run in force is held for the next run, never sent; a run writes the setpoint held, and is
-// refused where that is 0 (a setpoint of 0 written after the run was taken).
+// First in line, a drive its set value runs decides from what is in force now. A setpoint with
+// no run in force is held for the next run, never sent; with a run in force it goes to the drive,
+// unless the drive already holds it (the run ahead of it wrote it). A run writes the newest
+// setpoint (held, or waiting behind it: a request of command and setpoint runs at its setpoint),
+// and is refused where that is 0.
 bool ModbusDriver::ready_to_send(Writes::Entry& e) {
   Write& w = e.job;
   if (!w.runs) return true;
-  if (w.change == Change::setpoint && !is_run(common_.command)) {
+  if (w.change == Change::setpoint && (!is_run(common_.command) || raw_[w.point] == w.words)) {
     common_.setpoint_rpm = w.rpm;
     writes_.settle(e, WriteResult::ok);
     return false;
   }
   if (w.change == Change::command && w.command == Command::run_forward) {
-    const auto words = setpoint_words(common_.setpoint_rpm);
+    const std::int32_t rpm = held_setpoint();
+    const auto words = setpoint_words(rpm);
     if (!words || std::all_of(words->begin(), words->end(), [](auto x) { return x == 0; })) {
       writes_.settle(e, WriteResult::refused);
       return false;
     }
     w.words = *words;
-    w.rpm = common_.setpoint_rpm;
+    w.rpm = rpm;
   }
   return true;
 }
@@ -307,6 +305,8 @@ void ModbusDriver::put_in_force(const Write& w) {
     case Change::command:
       // A reset clears a fault the next status read shows; it puts no command in force.
       if (w.command != Command::reset_fault) common_.command = w.command;
+      // A run by the set value: the setpoint it wrote is the one in force.
+      if (w.runs && w.command == Command::run_forward) common_.setpoint_rpm = w.rpm;
       break;
     case Change::setpoint:
       common_.setpoint_rpm = w.rpm;

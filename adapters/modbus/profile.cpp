@@ -822,19 +822,20 @@ class Parser {
     });
   }
 
-  // setpoint_rpm = { ..., runs = true }: the set value is the run command. Stop writes 0 to it and
-  // run_forward the setpoint held, so neither is bound apart, nor run_reverse (a set value says no
-  // direction); 0 must be a value the point takes.
+  // setpoint_rpm = { ..., runs = true }: the set value is the run command. run_forward writes the
+  // setpoint held, so it is not bound apart, nor run_reverse (the set value is written 0 and up);
+  // stop writes 0 to it unless the drive has a stop of its own (bound); 0 must be a value the point
+  // takes.
   void check_set_value_runs(TableReader& r) {
     const CommonBindings& c = profile_.common;
     const char* const key = "setpoint_rpm.runs";
-    for (const char* command : {"stop", "run_forward", "run_reverse"}) {
+    for (const char* command : {"run_forward", "run_reverse"}) {
       if (r.node(command) == nullptr && profile_.unbound.count(command) == 0) continue;
       const toml::node* at = r.node(command) != nullptr ? r.node(command) : r.node("unbound");
       diag_.error(at, std::string("common.") + command,
                   "goes not with common." + std::string(key) +
-                      " = true: the set value is the run command (stop writes 0 to it, "
-                      "run_forward the setpoint)");
+                      " = true: the set value is the run command (run_forward writes the "
+                      "setpoint to it)");
     }
     if (!c.setpoint_rpm) return;
     const ProfilePoint& p = profile_.points[*c.setpoint_rpm];

@@ -253,6 +253,11 @@ void ModbusSimulator::command(Table table, std::uint16_t address, std::uint16_t 
     return true;
   };
   if (is(c.reset_fault)) fault_ = 0;
+  if (c.setpoint_runs && c.setpoint_rpm) {
+    const ProfilePoint& sp = profile_.points[*c.setpoint_rpm];
+    if (sp.table == table && sp.address == address) stopped_ = false;
+    if (is(c.stop)) stopped_ = true;
+  }
   if (is(c.stop)) {
     running_ = false;
   } else if (is(c.run_forward)) {
@@ -335,9 +340,10 @@ void ModbusSimulator::drive() {
     const std::uint8_t bit = b->bits[std::min(nth, b->bits.size() - 1)];
     if (on) word = static_cast<std::uint16_t>(word | 1u << (bit + shift));
   };
-  // A drive its set value runs turns while that value is not 0 (setpoint_rpm runs = true).
+  // A drive its set value runs turns while that value is not 0 (setpoint_rpm runs = true), unless
+  // its own stop command stopped it since the value was written.
   if (c.setpoint_runs && c.setpoint_rpm) {
-    running_ = point_value(*c.setpoint_rpm).value_or(0) != 0;
+    running_ = !stopped_ && point_value(*c.setpoint_rpm).value_or(0) != 0;
     reverse_ = false;
   }
   if (fault_ != 0) running_ = false;  // a trip stops the output

@@ -77,6 +77,9 @@ class ModbusSimulator final : public Simulator {
   std::uint64_t heard_ = 0;  // requests for this slave, while every_other_
   bool running_ = false;
   bool reverse_ = false;
+  // A drive its set value runs, stopped by its own stop command: still until the set value is
+  // written again (setpoint_rpm runs = true with a stop bound).
+  bool stopped_ = false;
   std::uint32_t fault_ = 0;  // native fault code; 0: none
   bool silent_ = false;
 };

@@ -179,6 +179,72 @@ TEST(ModbusSetValueRuns, AStopAndASetpointInQuickSuccessionEndStillWithTheNewest
   EXPECT_EQ(f.b.read("command"), cmd::stop);
 }
 
+// The stop is the drive's to refuse: refused, the run stays in force, and a setpoint sent after
+// it goes to the drive, so the PLC reads the speed the motor turns at.
+TEST(ModbusSetValueRuns, AStopTheDriveRefusesLeavesTheRunAndTheNextSetpointGoesToTheDrive) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_EQ(f.b.control("refuse holding 1 4 1").rfind("ok", 0), 0u);
+  const TimePoint from = f.b.rig.now();
+  const auto stop = f.b.start_write({cmd::stop});
+  const auto set = f.b.start_write({600}, kSetpointRegister);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return set->settled() && stop->settled(); }, 3s));
+  EXPECT_EQ(stop->result, Outcome::refused);
+  EXPECT_EQ(set->result, Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), (std::vector<std::uint16_t>{0, 600}));
+  EXPECT_TRUE(f.speed_is(600));
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 600u);
+}
+
+// A set value written 0 and up: a negative setpoint is refused (0x03), nothing sent.
+TEST(ModbusSetValueRuns, ANegativeSetpointIsRefused) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  const TimePoint from = f.b.rig.now();
+  EXPECT_EQ(f.b.write({static_cast<std::uint16_t>(-500)}, kSetpointRegister),
+            Outcome::invalid_value);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 0u);
+  EXPECT_TRUE(f.written(kSetValue, from).empty());
+}
+
+// A drive with a stop of its own beside a set value that runs it (a BLDC driver's brake register):
+// stop writes that, not 0; the drive stays still while its set value still holds the last run's,
+// a setpoint written meanwhile is held, and the next run writes the set value again.
+TEST(ModbusSetValueRuns, AStopOfItsOwnIsWrittenAndTheNextRunWritesTheSetValueAgain) {
+  std::string text(kFan);
+  text += "stop = { point = \"brake\", value = 0 }\n";
+  text.insert(text.find("[common]"),
+              "[[point]]\nname = \"brake\"\ntable = \"holding\"\naddress = 2\ntype = \"u16\"\n"
+              "access = \"operate\"\n");
+  support::ProfileFile file(text, "bldc.toml");
+  test::AdapterBench b{drivegate_adapter, {.options = {{"profile", file.path}}}};
+  ASSERT_TRUE(b.until_online());
+  ASSERT_EQ(b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") == 1000u; }, 2s));
+  const TimePoint from = b.rig.now();
+  ASSERT_EQ(b.write({cmd::stop}), Outcome::ok);
+  ASSERT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") == 0u; }, 2s));
+  EXPECT_EQ(b.write({800}, kSetpointRegister), Outcome::ok);
+  b.rig.run_for(1s);
+  EXPECT_FALSE(b.sim_has("running"));
+  const auto fc06 = [&](std::uint16_t address) {
+    std::vector<std::uint16_t> out;
+    for (const Bytes& fr : b.frames(from)) {
+      if (fr.size() == 8 && fr[1] == 0x06 && ((fr[2] << 8) | fr[3]) == address)
+        out.push_back(static_cast<std::uint16_t>((fr[4] << 8) | fr[5]));
+    }
+    return out;
+  };
+  EXPECT_EQ(fc06(2), std::vector<std::uint16_t>{0});
+  EXPECT_TRUE(fc06(kSetValue).empty());
+  ASSERT_EQ(b.write({cmd::run_forward}), Outcome::ok);
+  EXPECT_EQ(fc06(kSetValue), std::vector<std::uint16_t>{800});
+  EXPECT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") == 800u; }, 2s));
+}
+
 std::vector<std::string> errors_of(const std::string& common) {
   std::string text(kFan);
   text = text.substr(0, text.find("[common]")) + common;
@@ -189,10 +255,12 @@ std::vector<std::string> errors_of(const std::string& common) {
 
 TEST(ModbusSetValueRuns, AProfileSaysNoOtherRunOrStopAndASetValueThatTakesZero) {
   const std::string runs = "[common]\nsetpoint_rpm = { point = \"set_value\", runs = true }\n";
-  EXPECT_THAT(errors_of(runs + "stop = { point = \"reset\", value = 0 }\n"),
-              ElementsAre(HasSubstr("common.stop: goes not with common.setpoint_rpm.runs")));
+  EXPECT_THAT(errors_of(runs + "run_forward = { point = \"reset\", value = 1 }\n"
+                               "stop = { point = \"reset\", value = 0 }\n"),
+              ElementsAre(HasSubstr("common.run_forward: goes not with common.setpoint_rpm.runs")));
   EXPECT_THAT(errors_of(runs + "unbound = { run_forward = \"none\" }\n"),
               ElementsAre(HasSubstr("common.run_forward: goes not with")));
+  EXPECT_TRUE(errors_of(runs + "stop = { point = \"reset\", value = 0 }\n").empty());
   std::string text(kFan);
   text.replace(text.find("min = 0"), 7, "min = 100");
   text = text.substr(0, text.find("[common]")) + runs;
