@@ -498,6 +498,7 @@ void ModbusDriver::on_comm_lost(TimePoint now) {
   // beside a code not yet read again is a fault of kind other, never the kind read before.
   std::fill(raw_.begin(), raw_.end(), std::nullopt);
   bit_set_at_.reset();
+  faults_read_ = false;
   searches_.clear();
   served_ = false;
   for (Group& g : groups_) g.due = now;
@@ -569,7 +570,7 @@ void ModbusDriver::update_common() {
   // before that bit, with no fault shown yet, missed the trip (shown whole at the next cycle); a
   // code read after it, beside a fault shown, saw the reset first (the kinds shown stand for this
   // cycle). Any other fault bit beside a code saying none is a fault of kind `other`.
-  FaultSet before = common_.faults;
+  FaultSet before = faults_read_ ? common_.faults : FaultSet{};
   before.clear(Fault::sensor_fault);
   const bool bare = active && fault_bit && coded && *coded == Fault::none;
   if (!bare) bit_set_at_.reset();
@@ -593,7 +594,14 @@ void ModbusDriver::update_common() {
   if (common_.speed_unknown) faults.set(Fault::sensor_fault);
   common_.faults = faults;
   // A trip stops the output: the run in force is over.
-  if (active && !common_.running && is_run(common_.command)) common_.command = Command::stop;
+  // A drive its set value runs shows no run bit: a fault ends its run whatever its speed (it may
+  // be coasting), and the driver stops it, so that the fault clearing (by itself, or a reset from
+  // its keypad) does not restart the motor while the command reads stop.
+  if (active && is_run(common_.command) && (!common_.running || c.setpoint_runs)) {
+    common_.command = Command::stop;
+    if (c.setpoint_runs) stop_after_trip();
+  }
+  faults_read_ = true;
   const std::size_t blocks =
       std::accumulate(groups_.begin(), groups_.end(), std::size_t{0},
                       [](std::size_t n, const Group& g) { return n + g.blocks.size(); });
@@ -611,6 +619,11 @@ void ModbusDriver::adopt() {
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
     if (const auto rpm = rpm_of(setpoint_scale_.rpm(*reference))) common_.setpoint_rpm = *rpm;
   }
+  // A drive its set value runs, found tripped with that value not 0, would restart when the fault
+  // clears: stopped, as after a trip seen while it ran (update_common).
+  const CommonBindings& c = profile_.common;
+  if (c.setpoint_runs && !common_.faults.empty() && engineering(c.setpoint_rpm).value_or(0) != 0)
+    stop_after_trip();
   // A trip not shown yet (update_common) is no run to adopt either; nor, on a drive its set
   // value runs, a motor still turning with that value 0 (coasting down from a stop).
   if (!common_.running || !common_.faults.empty() || bit_set_at_) return;

@@ -89,7 +89,7 @@ class ModbusDriver final : public DriverBase {
     std::size_t step = 0;
     // A write to a drive its set value runs (setpoint_rpm runs = true): a command or a setpoint.
     // A command and a setpoint do not overtake each other (a setpoint held for the next run is
-    // never lost to a stop, nor a run to a setpoint); a newer command overtakes an older one,
+    // never lost to a stop, nor a run to a setpoint); a newer run or stop overtakes an older one,
     // whichever points each writes (a stop of its own beside a run by the set value).
     bool runs = false;
 
@@ -102,7 +102,10 @@ class ModbusDriver final : public DriverBase {
       if (runs && other.runs) {
         const bool setpoint = change == Change::setpoint;
         if (setpoint != (other.change == Change::setpoint)) return false;
-        if (!setpoint) return true;  // two commands (its stop may be a point of its own)
+        // A run and a stop, whichever points each writes (a stop of its own beside a run by the
+        // set value); a reset meets what it writes to, as on any profile.
+        const auto reset = [](const Write& w) { return w.command == Command::reset_fault; };
+        if (!setpoint && !reset(*this) && !reset(other)) return true;
       }
       return writes_to(other.point) || std::any_of(other.points.begin(), other.points.end(),
                                                    [this](std::size_t p) { return writes_to(p); });
@@ -171,6 +174,9 @@ class ModbusDriver final : public DriverBase {
   [[nodiscard]] bool holds_setpoint_now() const;
   // A write first in line, decided from what is in force now: sent (true), or settled here.
   bool ready_to_send(Writes::Entry& e);
+  // A drive its set value runs tripped while a run was in force: its stop, the driver's own
+  // write (no ticket), so that the fault clearing does not restart the motor at its set value.
+  void stop_after_trip();
   [[nodiscard]] Job write_job(const Writes::Entry& e) const;
   static void skip_the_way_in(Write& w);
   void confirm(const Job& j, ByteView pdu);
@@ -210,6 +216,9 @@ class ModbusDriver final : public DriverBase {
   bool adopting_ = true;
   // When the fault bit was first read set beside a code saying none (update_common).
   std::optional<TimePoint> bit_set_at_;
+  // The faults shown come from reads since the start or the last comm loss (update_common's
+  // race rule never keeps a kind read before a loss).
+  bool faults_read_ = false;
 };
 
 }  // namespace drivegate::modbus_device

@@ -66,13 +66,6 @@ std::optional<ModbusDriver::Write> ModbusDriver::write_of(const WriteOp& op) con
       w.points = b->points;
       w.sequence = b->sequence;
       if (w.command != Command::stop && common_.running) skip_the_way_in(w);
-      // A reset of a drive its set value runs, with no run in force, first sets that value to 0:
-      // a fault cleared must not start the motor at the set value the trip left (parse_profile
-      // makes such a set value one register).
-      if (c.setpoint_runs && !is_run(common_.command)) {
-        w.sequence.insert(w.sequence.begin(), 0);
-        w.points.insert(w.points.begin(), *c.setpoint_rpm);
-      }
       w.point = w.points.front();
       w.words = {w.sequence.front()};
       return w;
@@ -178,20 +171,34 @@ bool ModbusDriver::holds_setpoint_now() const {
 bool ModbusDriver::ready_to_send(Writes::Entry& e) {
   Write& w = e.job;
   if (!w.runs) return true;
-  if (w.change == Change::setpoint && (!is_run(common_.command) || raw_[w.point] == w.words)) {
+  if (w.change == Change::setpoint && !is_run(common_.command)) {
     common_.setpoint_rpm = w.rpm;
     writes_.settle(e, WriteResult::ok);
     return false;
   }
+  // A reset with no run in force first sets the set value to 0: a fault cleared must not start
+  // the motor at the set value the trip left (parse_profile makes it one register).
+  if (w.change == Change::command && w.command == Command::reset_fault && w.step == 0 &&
+      !is_run(common_.command)) {
+    w.sequence.insert(w.sequence.begin(), 0);
+    w.points.insert(w.points.begin(), *profile_.common.setpoint_rpm);
+    w.point = w.points.front();
+    w.words = {0};
+  }
   if (w.change == Change::command && w.command == Command::run_forward) {
-    const std::int32_t rpm = held_setpoint();
-    const auto words = setpoint_words(rpm);
+    // The setpoints waiting behind it are carried out by its frame: they settle with it.
+    w.rpm = common_.setpoint_rpm;
+    for (const Writes::Entry& s :
+         writes_.take_if([](const Writes::Entry& x) { return x.job.change == Change::setpoint; })) {
+      w.rpm = s.job.rpm;
+      for (const Ticket t : s.tickets) writes_.join(e, t);
+    }
+    const auto words = setpoint_words(w.rpm);
     if (!words || std::all_of(words->begin(), words->end(), [](auto x) { return x == 0; })) {
       writes_.settle(e, WriteResult::refused);
       return false;
     }
     w.words = *words;
-    w.rpm = rpm;
   }
   return true;
 }
@@ -314,6 +321,16 @@ void ModbusDriver::put_in_force(const Write& w) {
     case Change::point:
       break;
   }
+}
+
+// The stop goes ahead of what waits, and a run that waits (asked before the trip was shown) is
+// over with it, as a newer stop overtakes it in apply().
+void ModbusDriver::stop_after_trip() {
+  auto w = write_of(WriteOp::of_command(Command::stop));
+  if (!w) return;
+  writes_.settle_if([&w](const Writes::Entry& e) { return e.job.meets(*w); },
+                    WriteResult::no_response);
+  writes_.push_front(std::move(*w), {}, last_now_ + send_limit());
 }
 
 // The exchange on the line ended without an answer to the write it carried, if any.

@@ -133,6 +133,21 @@ class WriteLedger {
     for (const Entry& e : out) finish(e, r);
     return out.size();
   }
+  // Every entry `pred` holds for, in order, out of the queue but not settled: a write another one
+  // carries out (its tickets joined to that one's, join()), or the driver settles later.
+  template <class Pred>
+  std::vector<Entry> take_if(Pred pred) {
+    std::vector<Entry> out;
+    for (auto it = entries_.begin(); it != entries_.end();) {
+      if (pred(static_cast<const Entry&>(*it))) {
+        out.push_back(std::move(*it));
+        it = entries_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    return out;
+  }
   // Superseded: the entries still waiting for the line (a later write decides what it carries).
   std::size_t settle_unsent(WriteResult r = WriteResult::no_response) {
     return settle_if([](const Entry& e) { return !e.sent; }, r);

@@ -248,6 +248,41 @@ TEST(ModbusFreshness, AfterACommLossAFaultIsNeverShownWithTheCodeReadBeforeIt) {
   EXPECT_EQ(b.read("fault_code"), static_cast<std::uint32_t>(Fault::drive_over_temperature));
 }
 
+// The race rule of update_common keeps the kind shown when a code read after its fault bit says
+// none (a reset landing between the reads); after a comm loss nothing is shown from reads, so the
+// first cycle that brings the device back never keeps the kind it had before the loss. Here the
+// status word (input 17) is read before the code (input 20).
+TEST(ModbusFreshness, TheFirstCycleAfterACommLossKeepsNoKindFromBeforeIt) {
+  const support::ProfileFile file(
+      "[profile]\nname = \"order\"\nsource = \"a test\"\n[modbus]\nmax_gap = 0\n"
+      "[[point]]\nname = \"status_word\"\ntable = \"input\"\naddress = 17\ntype = \"u16\"\n"
+      "[[point]]\nname = \"code\"\ntable = \"input\"\naddress = 20\ntype = \"u16\"\n"
+      "[common]\nfault = { point = \"status_word\", bit = 4 }\n"
+      "fault_code = { point = \"code\", map = { 0 = \"none\", 2 = \"over_current\" }, "
+      "other = \"other\" }\n",
+      "order.toml");
+  test::AdapterBench b(drivegate_adapter, {.options = {{"profile", file.path}}});
+  ASSERT_TRUE(b.until_online());
+  const auto bit = [](Fault f) { return 1u << static_cast<unsigned>(f); };
+  ASSERT_TRUE(ok(b.control("fault 2")));
+  ASSERT_TRUE(b.rig.run_until(
+      [&] { return b.read("fault_code") == static_cast<std::uint32_t>(Fault::over_current); }, 2s));
+  ASSERT_TRUE(ok(b.control("silent on")));
+  ASSERT_TRUE(b.rig.run_until([&] { return (b.status() & kCommLost) != 0; }, 5s));
+  ASSERT_TRUE(ok(b.control("fault 0")));
+  ASSERT_TRUE(ok(b.control("raw input 17 16")));  // a fault bit, its code none
+  ASSERT_TRUE(ok(b.control("silent off")));
+  ASSERT_TRUE(b.rig.run_until(
+      [&] {
+        if ((b.status() & kCommLost) == 0) {
+          EXPECT_EQ(b.read("fault_mask") & bit(Fault::over_current), 0u);
+        }
+        return (b.status() & kCommLost) == 0 &&
+               b.read("fault_code") == static_cast<std::uint32_t>(Fault::other);
+      },
+      5s));
+}
+
 constexpr std::int32_t kUnknownSpeed = -32768;
 
 // NaN, +-Inf and 2^32 in a float speed are no speed: speed_rpm reads the unknown mark, the status

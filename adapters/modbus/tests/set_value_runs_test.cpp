@@ -136,9 +136,47 @@ TEST(ModbusSetValueRuns, ASetpointWhileRunningGoesToTheDriveAndIsConfirmed) {
   EXPECT_EQ(f.b.read("setpoint_rpm"), 600u);
 }
 
-// The fan trips while running: the run in force is over (command stop), and its set value still
-// holds 1000. A reset writes 0 there before the reset bit: the error clears and the fan stays
-// still until a client runs it again, at the setpoint it had.
+// The fan trips while running: the run in force is over (command stop), and the driver writes its
+// set value 0 itself, so that the fault clearing by itself (a locked rotor freed, the mains back)
+// does not restart the fan while the PLC reads stop. The setpoint stays the gateway's.
+TEST(ModbusSetValueRuns, ATripStopsTheFanSoThatItsClearingNeverRestartsIt) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  EXPECT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 1s));
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);  // cleared by the fan itself
+  EXPECT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) == 0; }, 2s));
+  f.b.rig.run_for(2s);
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 1000u);
+}
+
+// The same while the tripped fan still coasts: with no run bit, a speed not 0 reads as running,
+// but a fault shown ends its run all the same.
+TEST(ModbusSetValueRuns, ATripWhileTheFanStillCoastsEndsTheRunAllTheSame) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_EQ(f.b.control("set actual_speed 800").rfind("ok", 0), 0u);  // coasting
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  EXPECT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 1s));
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
+}
+
+// A reset with no run in force writes 0 to the set value before the reset bit: the error clears
+// and the fan stays still until a client runs it again, at the setpoint it had.
 TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
   Fan f;
   ASSERT_TRUE(f.b.until_online());
@@ -147,7 +185,7 @@ TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
   ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
   ASSERT_TRUE(f.speed_is(0));
-  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  f.b.rig.run_for(500ms);  // the driver's own stop is written
   const TimePoint from = f.b.rig.now();
   ASSERT_EQ(f.b.write({cmd::reset_fault}), Outcome::ok);
   EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
@@ -159,6 +197,41 @@ TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
   EXPECT_EQ(f.b.read("setpoint_rpm"), 1000u);
   ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
   EXPECT_TRUE(f.speed_is(1000));
+}
+
+// "Stop, then acknowledge the fault": the reset does not overtake the stop, which is written.
+TEST(ModbusSetValueRuns, AResetNeverOvertakesAStop) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  const auto stop = f.b.start_write({cmd::stop});
+  const auto reset = f.b.start_write({cmd::reset_fault});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return stop->settled() && reset->settled(); }, 3s));
+  EXPECT_EQ(stop->result, Outcome::ok);
+  EXPECT_EQ(reset->result, Outcome::ok);
+  EXPECT_TRUE(f.speed_is(0));
+  EXPECT_FALSE(f.turning());
+}
+
+// A reset written while a run is on the line is decided when its turn comes: the run confirmed,
+// there is a run in force and no 0 is written; the registers and the fan agree.
+TEST(ModbusSetValueRuns, AResetBehindARunOnTheLineIsDecidedWhenItsTurnComes) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({1000}, kSetpointRegister), Outcome::ok);
+  ASSERT_EQ(f.b.control("late 40").rfind("ok", 0), 0u);
+  const TimePoint from = f.b.rig.now();
+  const auto run = f.b.start_write({cmd::run_forward});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 1s));
+  const auto reset = f.b.start_write({cmd::reset_fault});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return run->settled() && reset->settled(); }, 3s));
+  EXPECT_EQ(run->result, Outcome::ok);
+  EXPECT_EQ(reset->result, Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{1000});
+  f.b.rig.run_for(1s);
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+  EXPECT_TRUE(f.turning());
 }
 
 // A stop sent while a setpoint waits behind a run on the line: neither is lost to the other; the
