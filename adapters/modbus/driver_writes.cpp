@@ -237,12 +237,12 @@ ModbusDriver::Job ModbusDriver::write_job(const Writes::Entry& e) const {
     put_be16(j.pdu, p.address);
     put_be16(j.pdu, w.words.at(0) != 0 ? kCoilOn : 0);
   } else if (w.words.size() == 1 && profile_.modbus.write == WriteFunction::single) {
-    j.function = profile_.modbus.write_single_code;
+    j.function = fc::write_single_register;
     j.pdu = {j.function};
     put_be16(j.pdu, p.address);
     put_be16(j.pdu, w.words[0]);
   } else {
-    j.function = profile_.modbus.write_multiple_code;
+    j.function = fc::write_multiple_registers;
     j.pdu = {j.function};
     put_be16(j.pdu, p.address);
     put_be16(j.pdu, static_cast<std::uint16_t>(w.words.size()));

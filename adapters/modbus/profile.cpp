@@ -135,8 +135,7 @@ class Parser {
 
   void read_modbus(TableReader& top) {
     top.read_table("modbus", false, [&](TableReader& r) {
-      r.expect({"max_registers", "max_bits", "max_gap", "write", "timeout_ms", "write_single_code",
-                "write_multiple_code"});
+      r.expect({"max_registers", "max_bits", "max_gap", "write", "timeout_ms"});
       ModbusSpec& m = profile_.modbus;
       if (auto v = r.integer("max_registers", 1, kMaxReadRegisters, false)) {
         m.max_registers = static_cast<std::uint16_t>(*v);
@@ -152,26 +151,7 @@ class Parser {
       if (auto v = r.integer("timeout_ms", 10, 10000, false)) {
         m.timeout_ms = static_cast<std::uint32_t>(*v);
       }
-      write_code(r, "write_single_code", fc::write_single_register, m.write_single_code);
-      write_code(r, "write_multiple_code", fc::write_multiple_registers, m.write_multiple_code);
     });
-  }
-
-  // A register write's function code: the protocol's own, or a user-defined code (Application
-  // Protocol 5: 65-72 and 100-110) that the device's manual gives the same layout.
-  void write_code(TableReader& r, std::string_view key, std::uint8_t standard, std::uint8_t& code) {
-    const auto v = r.integer(key, 1, 127, false);
-    if (!v) return;
-    const bool user_defined = (*v >= 65 && *v <= 72) || (*v >= 100 && *v <= 110);
-    if (*v != standard && !user_defined) {
-      diag_.error(r.node(key), r.qualified(key),
-                  "must be " + std::to_string(standard) +
-                      " or a user-defined function code (65..72, 100..110: Application Protocol "
-                      "5), got " +
-                      std::to_string(*v));
-      return;
-    }
-    code = static_cast<std::uint8_t>(*v);
   }
 
   void read_points(TableReader& top) {

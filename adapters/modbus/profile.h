@@ -230,11 +230,6 @@ struct ModbusSpec {
   std::uint16_t max_gap = 0;  // unused registers read through to join two blocks
   WriteFunction write = WriteFunction::single;
   std::uint32_t timeout_ms = 100;
-  // The function codes registers are written with: the protocol's 0x06 and 0x10, or a vendor's own
-  // of the same layout and echo (a user-defined code, Application Protocol 5: 65-72, 100-110),
-  // such as the "write without saving to EEPROM" 0x41 / 0x42 of several inverters.
-  std::uint8_t write_single_code = fc::write_single_register;
-  std::uint8_t write_multiple_code = fc::write_multiple_registers;
 };
 
 // What the device answers to Read Device Identification (FC 0x2B / 0x0E, basic category,

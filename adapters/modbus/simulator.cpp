@@ -106,25 +106,7 @@ std::optional<ModbusSimulator::Range> ModbusSimulator::range_of(ByteView pdu) {
   }
 }
 
-std::optional<Bytes> ModbusSimulator::answer(ByteView request) {
-  // A profile's own write codes ([modbus] write_single_code, write_multiple_code) are served as
-  // the protocol's 0x06 and 0x10, and answered with the code asked.
-  Bytes pdu(request.begin(), request.end());
-  const ModbusSpec& m = profile_.modbus;
-  const std::uint8_t asked = pdu[0];
-  if (asked != fc::write_single_register && asked == m.write_single_code) {
-    pdu[0] = fc::write_single_register;
-  } else if (asked != fc::write_multiple_registers && asked == m.write_multiple_code) {
-    pdu[0] = fc::write_multiple_registers;
-  }
-  auto reply = answer_as_asked(pdu);
-  if (reply && !reply->empty() && asked != pdu[0]) {
-    (*reply)[0] = static_cast<std::uint8_t>(((*reply)[0] & kExceptionBit) | asked);
-  }
-  return reply;
-}
-
-std::optional<Bytes> ModbusSimulator::answer_as_asked(ByteView pdu) {
+std::optional<Bytes> ModbusSimulator::answer(ByteView pdu) {
   const auto range = range_of(pdu);
   if (range) {
     for (const Key& k : mute_) {

@@ -40,10 +40,7 @@ class ModbusSimulator final : public Simulator {
   [[nodiscard]] static std::optional<Range> range_of(ByteView pdu);
   // The reply to a request PDU as the operator's commands leave it: nothing (unanswered), an
   // exception (refused, the request not carried out), a read one register short, or handle()'s.
-  // answer() serves the profile's own write codes as 0x06 / 0x10 (answer_as_asked) and answers
-  // with the code asked.
-  std::optional<Bytes> answer(ByteView request);
-  std::optional<Bytes> answer_as_asked(ByteView pdu);
+  std::optional<Bytes> answer(ByteView pdu);
   [[nodiscard]] std::optional<Key> key_of(std::string_view table, std::string_view address) const;
 
   // The reply PDU to a request PDU (an exception where the slave would answer one).

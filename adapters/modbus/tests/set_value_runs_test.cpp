@@ -318,7 +318,7 @@ TEST(ModbusSetValueRuns, AStopOfItsOwnIsWrittenAndTheNextRunWritesTheSetValueAga
   EXPECT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") == 800u; }, 2s));
 }
 
-std::vector<std::string> set_value_errors_of(const std::string& common) {
+std::vector<std::string> errors_of(const std::string& common) {
   std::string text(kFan);
   text = text.substr(0, text.find("[common]")) + common;
   auto parsed = parse_profile(text, "p.toml");
@@ -328,12 +328,12 @@ std::vector<std::string> set_value_errors_of(const std::string& common) {
 
 TEST(ModbusSetValueRuns, AProfileSaysNoOtherRunOrStopAndASetValueThatTakesZero) {
   const std::string runs = "[common]\nsetpoint_rpm = { point = \"set_value\", runs = true }\n";
-  EXPECT_THAT(set_value_errors_of(runs + "run_forward = { point = \"reset\", value = 1 }\n"
-                                         "stop = { point = \"reset\", value = 0 }\n"),
+  EXPECT_THAT(errors_of(runs + "run_forward = { point = \"reset\", value = 1 }\n"
+                               "stop = { point = \"reset\", value = 0 }\n"),
               ElementsAre(HasSubstr("common.run_forward: goes not with common.setpoint_rpm.runs")));
-  EXPECT_THAT(set_value_errors_of(runs + "unbound = { run_forward = \"none\" }\n"),
+  EXPECT_THAT(errors_of(runs + "unbound = { run_forward = \"none\" }\n"),
               ElementsAre(HasSubstr("common.run_forward: goes not with")));
-  EXPECT_TRUE(set_value_errors_of(runs + "stop = { point = \"reset\", value = 0 }\n").empty());
+  EXPECT_TRUE(errors_of(runs + "stop = { point = \"reset\", value = 0 }\n").empty());
   std::string text(kFan);
   text.replace(text.find("min = 0"), 7, "min = 100");
   text = text.substr(0, text.find("[common]")) + runs;
@@ -348,7 +348,7 @@ TEST(ModbusSetValueRuns, AProfileSaysNoOtherRunOrStopAndASetValueThatTakesZero) 
   ASSERT_TRUE(std::holds_alternative<std::vector<std::string>>(parsed));
   EXPECT_THAT(std::get<std::vector<std::string>>(parsed),
               ElementsAre(HasSubstr("'set_value' must be one register")));
-  EXPECT_TRUE(set_value_errors_of(runs).empty());
+  EXPECT_TRUE(errors_of(runs).empty());
 }
 
 }  // namespace
