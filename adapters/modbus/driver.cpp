@@ -599,8 +599,11 @@ void ModbusDriver::update_common() {
   // its keypad) does not restart the motor while the command reads stop.
   if (active && is_run(common_.command) && (!common_.running || c.setpoint_runs)) {
     common_.command = Command::stop;
-    if (c.setpoint_runs) stop_after_trip();
+    if (c.setpoint_runs) stop_owed_ = true;
   }
+  // Owed until the drive confirms a stop (or a client's run): written again while none is on its
+  // way, after a refusal, no answer or a comm loss.
+  if (stop_owed_) stop_after_trip();
   faults_read_ = true;
   const std::size_t blocks =
       std::accumulate(groups_.begin(), groups_.end(), std::size_t{0},
@@ -620,10 +623,15 @@ void ModbusDriver::adopt() {
     if (const auto rpm = rpm_of(setpoint_scale_.rpm(*reference))) common_.setpoint_rpm = *rpm;
   }
   // A drive its set value runs, found tripped with that value not 0, would restart when the fault
-  // clears: stopped, as after a trip seen while it ran (update_common).
+  // clears: stopped, as after a trip seen while it ran (update_common). A speed it cannot read
+  // (sensor_fault) is no trip.
   const CommonBindings& c = profile_.common;
-  if (c.setpoint_runs && !common_.faults.empty() && engineering(c.setpoint_rpm).value_or(0) != 0)
+  FaultSet tripped = common_.faults;
+  tripped.clear(Fault::sensor_fault);
+  if (c.setpoint_runs && !tripped.empty() && engineering(c.setpoint_rpm).value_or(0) != 0) {
+    stop_owed_ = true;
     stop_after_trip();
+  }
   // A trip not shown yet (update_common) is no run to adopt either; nor, on a drive its set
   // value runs, a motor still turning with that value 0 (coasting down from a stop).
   if (!common_.running || !common_.faults.empty() || bit_set_at_) return;

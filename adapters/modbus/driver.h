@@ -103,9 +103,11 @@ class ModbusDriver final : public DriverBase {
         const bool setpoint = change == Change::setpoint;
         if (setpoint != (other.change == Change::setpoint)) return false;
         // A run and a stop, whichever points each writes (a stop of its own beside a run by the
-        // set value); a reset meets what it writes to, as on any profile.
+        // set value); a reset neither overtakes them nor is overtaken by them (its first step
+        // writes the set value too); two resets meet by their points.
         const auto reset = [](const Write& w) { return w.command == Command::reset_fault; };
-        if (!setpoint && !reset(*this) && !reset(other)) return true;
+        if (!setpoint && reset(*this) != reset(other)) return false;
+        if (!setpoint && !reset(*this)) return true;
       }
       return writes_to(other.point) || std::any_of(other.points.begin(), other.points.end(),
                                                    [this](std::size_t p) { return writes_to(p); });
@@ -174,9 +176,11 @@ class ModbusDriver final : public DriverBase {
   [[nodiscard]] bool holds_setpoint_now() const;
   // A write first in line, decided from what is in force now: sent (true), or settled here.
   bool ready_to_send(Writes::Entry& e);
-  // A drive its set value runs tripped while a run was in force: its stop, the driver's own
-  // write (no ticket), so that the fault clearing does not restart the motor at its set value.
+  // A drive its set value runs tripped while a run was in force (or was found tripped at start
+  // with its set value not 0): its stop, the driver's own write (no ticket), so that the fault
+  // clearing does not restart the motor at its set value; none while a stop is on its way.
   void stop_after_trip();
+  [[nodiscard]] bool stop_on_its_way() const;
   [[nodiscard]] Job write_job(const Writes::Entry& e) const;
   static void skip_the_way_in(Write& w);
   void confirm(const Job& j, ByteView pdu);
@@ -219,6 +223,9 @@ class ModbusDriver final : public DriverBase {
   // The faults shown come from reads since the start or the last comm loss (update_common's
   // race rule never keeps a kind read before a loss).
   bool faults_read_ = false;
+  // A stop the driver owes a drive its set value runs, after a trip (stop_after_trip): until the
+  // drive confirms a stop, or a client's run.
+  bool stop_owed_ = false;
 };
 
 }  // namespace drivegate::modbus_device

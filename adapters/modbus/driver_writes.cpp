@@ -312,6 +312,8 @@ void ModbusDriver::put_in_force(const Write& w) {
     case Change::command:
       // A reset clears a fault the next status read shows; it puts no command in force.
       if (w.command != Command::reset_fault) common_.command = w.command;
+      // A stop owed after a trip is paid by any stop the drive took, or ended by a client's run.
+      if (w.command != Command::reset_fault) stop_owed_ = false;
       // A run by the set value: the setpoint it wrote is the one in force.
       if (w.runs && w.command == Command::run_forward) common_.setpoint_rpm = w.rpm;
       break;
@@ -323,14 +325,29 @@ void ModbusDriver::put_in_force(const Write& w) {
   }
 }
 
-// The stop goes ahead of what waits, and a run that waits (asked before the trip was shown) is
-// over with it, as a newer stop overtakes it in apply().
+// A run that waits (asked before the trip was shown) is over, as a newer stop overtakes it in
+// apply(); a stop that waits, a client's or the driver's own, is the stop owed: none is added.
+// Otherwise the stop goes ahead of what waits.
 void ModbusDriver::stop_after_trip() {
+  writes_.settle_if(
+      [](const Writes::Entry& e) {
+        return e.job.runs && e.job.change == Change::command &&
+               e.job.command == Command::run_forward;
+      },
+      WriteResult::no_response);
+  if (stop_on_its_way()) return;
   auto w = write_of(WriteOp::of_command(Command::stop));
   if (!w) return;
-  writes_.settle_if([&w](const Writes::Entry& e) { return e.job.meets(*w); },
-                    WriteResult::no_response);
   writes_.push_front(std::move(*w), {}, last_now_ + send_limit());
+}
+
+bool ModbusDriver::stop_on_its_way() const {
+  const auto stop = [](const Write& w) {
+    return w.runs && w.change == Change::command && w.command == Command::stop;
+  };
+  if (inflight_ && inflight_->write && stop(inflight_->write->job)) return true;
+  return std::any_of(writes_.begin(), writes_.end(),
+                     [&](const Writes::Entry& e) { return stop(e.job); });
 }
 
 // The exchange on the line ended without an answer to the write it carried, if any.

@@ -175,6 +175,80 @@ TEST(ModbusSetValueRuns, ATripWhileTheFanStillCoastsEndsTheRunAllTheSame) {
   EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
 }
 
+// The driver's own stop after a trip goes unanswered (the set value's register muted): it is owed
+// and written again once the fan answers, so the fault clearing later does not restart the fan.
+TEST(ModbusSetValueRuns, AStopAfterATripThatFailsIsWrittenAgain) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("mute holding 1 on").rfind("ok", 0), 0u);
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  f.b.rig.run_for(2s);
+  ASSERT_FALSE(f.written(kSetValue, from).empty()) << "the stop was tried";
+  ASSERT_EQ(f.b.control("mute holding 1 off").rfind("ok", 0), 0u);
+  f.b.rig.run_for(2s);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  f.b.rig.run_for(2s);
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+}
+
+// A client's stop waiting for the line when the trip is shown is the stop owed: it is written and
+// answered ok, and the driver adds none of its own.
+TEST(ModbusSetValueRuns, AClientsStopWaitingAtATripIsWrittenAndAnsweredOk) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_EQ(f.b.control("late 40").rfind("ok", 0), 0u);
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  const std::size_t mark = f.b.rig.sent().size();
+  // The read of the status (input 16..17) that carries the trip is on the line, its reply late.
+  const auto status_read = [&] {
+    for (const Bytes& fr : f.b.frames_after(mark)) {
+      if (fr.size() == 8 && fr[1] == 0x04 && ((fr[2] << 8) | fr[3]) == 16) return true;
+    }
+    return false;
+  };
+  ASSERT_TRUE(f.b.rig.run_until(status_read, 2s));
+  const TimePoint from = f.b.rig.now();
+  const auto stop = f.b.start_write({cmd::stop});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return stop->settled(); }, 3s));
+  EXPECT_EQ(stop->result, Outcome::ok);
+  f.b.rig.run_for(1s);
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
+  EXPECT_FALSE(f.turning());
+}
+
+// "Reset, then run" in quick succession after a trip: neither overtakes the other; the reset is
+// written whole and the run starts the fan at its setpoint.
+TEST(ModbusSetValueRuns, AResetThenARunAreBothCarriedOut) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  f.b.rig.run_for(1s);  // the driver's own stop is written
+  ASSERT_EQ(f.b.control("late 40").rfind("ok", 0),
+            0u);  // the run comes while the reset is on the line
+  const TimePoint from = f.b.rig.now();
+  const auto reset = f.b.start_write({cmd::reset_fault});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 1s));
+  const auto run = f.b.start_write({cmd::run_forward});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return reset->settled() && run->settled(); }, 3s));
+  EXPECT_EQ(reset->result, Outcome::ok);
+  EXPECT_EQ(run->result, Outcome::ok);
+  EXPECT_EQ(f.written(kReset, from), std::vector<std::uint16_t>{4});
+  EXPECT_EQ(f.written(kSetValue, from), (std::vector<std::uint16_t>{0, 1000}));
+  EXPECT_TRUE(f.speed_is(1000));
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+}
+
 // A reset with no run in force writes 0 to the set value before the reset bit: the error clears
 // and the fan stays still until a client runs it again, at the setpoint it had.
 TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
