@@ -334,7 +334,23 @@ void ModbusDriver::publish() {
   }
   unpublished_.clear();
   update_common();
+  check_tripped_at_start();
   adopt();
+}
+
+// A drive its set value runs, found tripped with that value not 0 at the first whole cycle, would
+// restart when the fault clears: a stop is owed, as after a trip seen while it ran
+// (update_common), whatever a client wrote meanwhile. A speed it cannot read (sensor_fault) is no
+// trip.
+void ModbusDriver::check_tripped_at_start() {
+  const CommonBindings& c = profile_.common;
+  if (start_checked_ || !common_.ready) return;
+  start_checked_ = true;
+  FaultSet tripped = common_.faults;
+  tripped.clear(Fault::sensor_fault);
+  if (!c.setpoint_runs || tripped.empty() || engineering(c.setpoint_rpm).value_or(0) == 0) return;
+  stop_owed_ = true;
+  stop_after_trip();
 }
 
 // A slave that refuses a block with exception 02 (illegal data address) may lack a register in
@@ -602,8 +618,12 @@ void ModbusDriver::update_common() {
     if (c.setpoint_runs) stop_owed_ = true;
   }
   // Owed until the drive confirms a stop (or a client's run): written again while none is on its
-  // way, after a refusal, no answer or a comm loss.
-  if (stop_owed_) stop_after_trip();
+  // way, after a refusal, no answer or a comm loss, backed off (stop_after_trip). A run waiting
+  // while the fault is shown was asked before it was: over.
+  if (stop_owed_) {
+    if (active) settle_waiting_runs();
+    stop_after_trip();
+  }
   faults_read_ = true;
   const std::size_t blocks =
       std::accumulate(groups_.begin(), groups_.end(), std::size_t{0},
@@ -622,21 +642,19 @@ void ModbusDriver::adopt() {
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
     if (const auto rpm = rpm_of(setpoint_scale_.rpm(*reference))) common_.setpoint_rpm = *rpm;
   }
-  // A drive its set value runs, found tripped with that value not 0, would restart when the fault
-  // clears: stopped, as after a trip seen while it ran (update_common). A speed it cannot read
-  // (sensor_fault) is no trip.
+  // A drive its set value runs is commanded to run by that value not 0, untripped (a speed it
+  // cannot read, sensor_fault, is no trip: it may turn); with 0 it is not (one still turning is
+  // coasting down from a stop). A tripped one was handled by check_tripped_at_start().
   const CommonBindings& c = profile_.common;
-  FaultSet tripped = common_.faults;
-  tripped.clear(Fault::sensor_fault);
-  if (c.setpoint_runs && !tripped.empty() && engineering(c.setpoint_rpm).value_or(0) != 0) {
-    stop_owed_ = true;
-    stop_after_trip();
-  }
-  // A trip not shown yet (update_common) is no run to adopt either; nor, on a drive its set
-  // value runs, a motor still turning with that value 0 (coasting down from a stop).
-  if (!common_.running || !common_.faults.empty() || bit_set_at_) return;
-  if (profile_.common.setpoint_runs && engineering(profile_.common.setpoint_rpm).value_or(0) == 0)
+  if (c.setpoint_runs) {
+    FaultSet tripped = common_.faults;
+    tripped.clear(Fault::sensor_fault);
+    if (tripped.empty() && !bit_set_at_ && engineering(c.setpoint_rpm).value_or(0) != 0)
+      common_.command = Command::run_forward;
     return;
+  }
+  // A trip not shown yet (update_common) is no run to adopt either.
+  if (!common_.running || !common_.faults.empty() || bit_set_at_) return;
   common_.command = common_.speed_rpm < 0 ? Command::run_reverse : Command::run_forward;
 }
 

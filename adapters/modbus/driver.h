@@ -181,6 +181,8 @@ class ModbusDriver final : public DriverBase {
   // clearing does not restart the motor at its set value; none while a stop is on its way.
   void stop_after_trip();
   [[nodiscard]] bool stop_on_its_way() const;
+  void settle_waiting_runs();
+  void check_tripped_at_start();
   [[nodiscard]] Job write_job(const Writes::Entry& e) const;
   static void skip_the_way_in(Write& w);
   void confirm(const Job& j, ByteView pdu);
@@ -226,6 +228,11 @@ class ModbusDriver final : public DriverBase {
   // A stop the driver owes a drive its set value runs, after a trip (stop_after_trip): until the
   // drive confirms a stop, or a client's run.
   bool stop_owed_ = false;
+  bool start_checked_ = false;  // check_tripped_at_start() done
+  // The owed stop's tries: not written again before `stop_retry_at_`, the wait doubling from the
+  // poll interval up to the comm timeout; the first failure is logged once.
+  int stop_tries_ = 0;
+  TimePoint stop_retry_at_{};
 };
 
 }  // namespace drivegate::modbus_device

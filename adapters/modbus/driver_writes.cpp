@@ -313,7 +313,11 @@ void ModbusDriver::put_in_force(const Write& w) {
       // A reset clears a fault the next status read shows; it puts no command in force.
       if (w.command != Command::reset_fault) common_.command = w.command;
       // A stop owed after a trip is paid by any stop the drive took, or ended by a client's run.
-      if (w.command != Command::reset_fault) stop_owed_ = false;
+      if (w.command != Command::reset_fault) {
+        stop_owed_ = false;
+        stop_tries_ = 0;
+        stop_retry_at_ = {};
+      }
       // A run by the set value: the setpoint it wrote is the one in force.
       if (w.runs && w.command == Command::run_forward) common_.setpoint_rpm = w.rpm;
       break;
@@ -325,19 +329,34 @@ void ModbusDriver::put_in_force(const Write& w) {
   }
 }
 
-// A run that waits (asked before the trip was shown) is over, as a newer stop overtakes it in
-// apply(); a stop that waits, a client's or the driver's own, is the stop owed: none is added.
-// Otherwise the stop goes ahead of what waits.
-void ModbusDriver::stop_after_trip() {
+// A run that waits while a trip is shown was asked before the trip was: over, as a newer stop
+// overtakes it in apply().
+void ModbusDriver::settle_waiting_runs() {
   writes_.settle_if(
       [](const Writes::Entry& e) {
         return e.job.runs && e.job.change == Change::command &&
                e.job.command == Command::run_forward;
       },
       WriteResult::no_response);
-  if (stop_on_its_way()) return;
+}
+
+// A stop that waits or is on the line, a client's or the driver's own, is the stop owed: none is
+// added. Otherwise the stop goes ahead of what waits, once its back-off allows: a drive that
+// refuses it is not asked every cycle, and the first failure is logged (the write has no ticket:
+// the log is where a stop that did not land shows).
+void ModbusDriver::stop_after_trip() {
+  if (stop_on_its_way() || last_now_ < stop_retry_at_) return;
   auto w = write_of(WriteOp::of_command(Command::stop));
   if (!w) return;
+  if (stop_tries_ == 1) {
+    notices_.push_back(
+        "the stop owed after a trip was not taken by the drive: written again, "
+        "backed off up to the comm timeout, until it is");
+  }
+  const auto wait =
+      std::min<Millis>(poll_interval_ * (1 << std::min(stop_tries_, 10)), timing_.comm_timeout);
+  ++stop_tries_;
+  stop_retry_at_ = last_now_ + wait;
   writes_.push_front(std::move(*w), {}, last_now_ + send_limit());
 }
 

@@ -249,6 +249,56 @@ TEST(ModbusSetValueRuns, AResetThenARunAreBothCarriedOut) {
   EXPECT_EQ(f.b.read("command"), cmd::run_forward);
 }
 
+// Found tripped at start with a set value, while a client writes its setpoint before the first
+// whole cycle: the stop is owed all the same, so the fault clearing does not start the fan.
+TEST(ModbusSetValueRuns, AFanFoundTrippedAtStartIsStoppedWhateverAClientWroteFirst) {
+  Fan f;
+  ASSERT_EQ(f.b.control("set set_value 1000").rfind("ok", 0), 0u);
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  const auto early = f.b.start_write({500}, kSetpointRegister);
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, {}).empty(); }, 2s));
+  EXPECT_EQ(f.written(kSetValue, {}), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(early->result, Outcome::ok);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  f.b.rig.run_for(2s);
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 500u);
+}
+
+// Found at start with a set value and a speed it cannot read (sensor_fault, no trip): its set value
+// commands it to run, so it is adopted running, never shown stopped over a turning fan, and no 0
+// is written.
+TEST(ModbusSetValueRuns, AFanFoundRunningWithASpeedNobodyCanReadIsAdopted) {
+  Fan f;
+  ASSERT_EQ(f.b.control("set set_value 800").rfind("ok", 0), 0u);
+  ASSERT_EQ(f.b.control("set actual_speed 40000").rfind("ok", 0), 0u);  // beyond speed_rpm
+  ASSERT_TRUE(f.b.until_online());
+  f.b.rig.run_for(1s);
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+  EXPECT_EQ(f.b.read("setpoint_rpm"), 800u);
+  EXPECT_TRUE(f.written(kSetValue, {}).empty());
+}
+
+// A drive that refuses the owed stop for good (a locked rotor, the drive in local mode) is asked
+// again backed off, up to the comm timeout apart, not at every cycle.
+TEST(ModbusSetValueRuns, AStopTheDriveKeepsRefusingIsAskedAgainBackedOff) {
+  Fan f;
+  ASSERT_TRUE(f.b.until_online());
+  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
+  ASSERT_TRUE(f.speed_is(1000));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("refuse holding 1 4 100000").rfind("ok", 0), 0u);
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  f.b.rig.run_for(20s);
+  const std::size_t tries = f.written(kSetValue, from).size();
+  EXPECT_GE(tries, 3u);
+  EXPECT_LE(tries, 12u) << "asked at every cycle";
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  EXPECT_EQ(f.b.status() & kCommLost, 0u) << "the fan's state still read";
+}
+
 // A reset with no run in force writes 0 to the set value before the reset bit: the error clears
 // and the fan stays still until a client runs it again, at the setpoint it had.
 TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
