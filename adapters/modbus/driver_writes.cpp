@@ -349,7 +349,7 @@ void ModbusDriver::stop_after_trip() {
   auto w = write_of(WriteOp::of_command(Command::stop));
   if (!w) return;
   if (stop_tries_ == 1) {
-    notices_.push_back(
+    notices_.emplace_back(
         "the stop owed after a trip was not taken by the drive: written again, "
         "backed off up to the comm timeout, until it is");
   }
