@@ -169,6 +169,9 @@ class ModbusDriver final : public DriverBase {
   [[nodiscard]] WriteCheck judge(const WriteOp& op, const Proposed& p) const;
   // The registers setpoint_rpm's point takes for `rpm`; nothing outside its range.
   [[nodiscard]] std::optional<std::vector<std::uint16_t>> setpoint_words(double rpm) const;
+  // What a run of a drive its set value runs writes for `rpm`; nothing where that is 0 (nothing
+  // to run at) or beyond the set value's range.
+  [[nodiscard]] std::optional<std::vector<std::uint16_t>> run_words(double rpm) const;
   // A drive run by its set value (setpoint_rpm runs = true): the setpoint the next run writes,
   // the newest of those waiting or on the line, else the one in force.
   [[nodiscard]] std::int32_t held_setpoint() const;

@@ -119,15 +119,20 @@ std::optional<std::vector<std::uint16_t>> ModbusDriver::setpoint_words(double rp
   return words_for(p, v);
 }
 
+std::optional<std::vector<std::uint16_t>> ModbusDriver::run_words(double rpm) const {
+  auto words = setpoint_words(rpm);
+  if (!words || std::all_of(words->begin(), words->end(), [](auto w) { return w == 0; }))
+    return std::nullopt;
+  return words;
+}
+
 // A drive its set value runs has nothing to run at while the setpoint is 0 (its set value 0 is
 // its stop): such a run is refused (0x04) rather than confirmed and never turning.
 WriteCheck ModbusDriver::judge(const WriteOp& op, const Proposed& p) const {
   if (!write_of(op)) return WriteCheck::invalid_value;
   if (profile_.common.setpoint_runs && op.target == WriteOp::Target::command &&
       op.command == Command::run_forward) {
-    const auto words = setpoint_words(p.setpoint_rpm);
-    if (!words || std::all_of(words->begin(), words->end(), [](auto w) { return w == 0; }))
-      return WriteCheck::refused;
+    if (!run_words(p.setpoint_rpm)) return WriteCheck::refused;
   }
   return WriteCheck::ok;
 }
@@ -193,8 +198,8 @@ bool ModbusDriver::ready_to_send(Writes::Entry& e) {
       w.rpm = s.job.rpm;
       for (const Ticket t : s.tickets) writes_.join(e, t);
     }
-    const auto words = setpoint_words(w.rpm);
-    if (!words || std::all_of(words->begin(), words->end(), [](auto x) { return x == 0; })) {
+    const auto words = run_words(w.rpm);
+    if (!words) {
       writes_.settle(e, WriteResult::refused);
       return false;
     }

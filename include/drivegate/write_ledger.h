@@ -121,15 +121,7 @@ class WriteLedger {
   // Every entry `pred` holds for, in order; how many.
   template <class Pred>
   std::size_t settle_if(Pred pred, WriteResult r) {
-    std::vector<Entry> out;
-    for (auto it = entries_.begin(); it != entries_.end();) {
-      if (pred(static_cast<const Entry&>(*it))) {
-        out.push_back(std::move(*it));
-        it = entries_.erase(it);
-      } else {
-        ++it;
-      }
-    }
+    const std::vector<Entry> out = take_if(pred);
     for (const Entry& e : out) finish(e, r);
     return out.size();
   }

@@ -43,23 +43,37 @@ constexpr std::string_view kFan =
 constexpr std::uint16_t kSetValue = 1;
 constexpr std::uint16_t kReset = 0;
 
+// The values the master wrote to holding `address` with FC 06, from `from` on, in order.
+std::vector<std::uint16_t> written(const test::AdapterBench& b, std::uint16_t address,
+                                   TimePoint from) {
+  std::vector<std::uint16_t> out;
+  for (const Bytes& f : b.frames(from)) {
+    if (f.size() == 8 && f[1] == 0x06 && ((f[2] << 8) | f[3]) == address) {
+      out.push_back(static_cast<std::uint16_t>((f[4] << 8) | f[5]));
+    }
+  }
+  return out;
+}
+
 struct Fan {
   support::ProfileFile file{std::string(kFan), "fan.toml"};
   test::AdapterBench b{drivegate_adapter, {.options = {{"profile", file.path}}}};
 
-  // The values the master wrote to holding `address` with FC 06, from `from` on, in order.
   [[nodiscard]] std::vector<std::uint16_t> written(std::uint16_t address, TimePoint from) const {
-    std::vector<std::uint16_t> out;
-    for (const Bytes& f : b.frames(from)) {
-      if (f.size() == 8 && f[1] == 0x06 && ((f[2] << 8) | f[3]) == address) {
-        out.push_back(static_cast<std::uint16_t>((f[4] << 8) | f[5]));
-      }
-    }
-    return out;
+    return modbus_device::written(b, address, from);
   }
   bool turning() { return b.sim_has("running"); }
   bool speed_is(std::uint32_t rpm) {
     return b.rig.run_until([&] { return b.read("speed_rpm") == rpm; }, 2s);
+  }
+  // Online, then run at `rpm` in one request (command and setpoint), turning at it.
+  testing::AssertionResult running_at(std::uint16_t rpm) {
+    if (!b.until_online()) return testing::AssertionFailure() << "not online";
+    if (b.write({cmd::run_forward, rpm}) != Outcome::ok) {
+      return testing::AssertionFailure() << "run at " << rpm << " not taken";
+    }
+    if (!speed_is(rpm)) return testing::AssertionFailure() << "speed_rpm " << b.read("speed_rpm");
+    return testing::AssertionSuccess();
   }
 };
 
@@ -126,9 +140,7 @@ TEST(ModbusSetValueRuns, ARunWithNoSetpointIsRefusedAndNothingIsSent) {
 
 TEST(ModbusSetValueRuns, ASetpointWhileRunningGoesToTheDriveAndIsConfirmed) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   const TimePoint from = f.b.rig.now();
   EXPECT_EQ(f.b.write({600}, kSetpointRegister), Outcome::ok);
   EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{600});
@@ -141,9 +153,7 @@ TEST(ModbusSetValueRuns, ASetpointWhileRunningGoesToTheDriveAndIsConfirmed) {
 // does not restart the fan while the PLC reads stop. The setpoint stays the gateway's.
 TEST(ModbusSetValueRuns, ATripStopsTheFanSoThatItsClearingNeverRestartsIt) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   const TimePoint from = f.b.rig.now();
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
   ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
@@ -163,9 +173,7 @@ TEST(ModbusSetValueRuns, ATripStopsTheFanSoThatItsClearingNeverRestartsIt) {
 // but a fault shown ends its run all the same.
 TEST(ModbusSetValueRuns, ATripWhileTheFanStillCoastsEndsTheRunAllTheSame) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   const TimePoint from = f.b.rig.now();
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
   ASSERT_EQ(f.b.control("set actual_speed 800").rfind("ok", 0), 0u);  // coasting
@@ -179,9 +187,7 @@ TEST(ModbusSetValueRuns, ATripWhileTheFanStillCoastsEndsTheRunAllTheSame) {
 // and written again once the fan answers, so the fault clearing later does not restart the fan.
 TEST(ModbusSetValueRuns, AStopAfterATripThatFailsIsWrittenAgain) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   const TimePoint from = f.b.rig.now();
   ASSERT_EQ(f.b.control("mute holding 1 on").rfind("ok", 0), 0u);
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
@@ -201,9 +207,7 @@ TEST(ModbusSetValueRuns, AStopAfterATripThatFailsIsWrittenAgain) {
 // answered ok, and the driver adds none of its own.
 TEST(ModbusSetValueRuns, AClientsStopWaitingAtATripIsWrittenAndAnsweredOk) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   ASSERT_EQ(f.b.control("late 40").rfind("ok", 0), 0u);
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
   const std::size_t mark = f.b.rig.sent().size();
@@ -228,9 +232,7 @@ TEST(ModbusSetValueRuns, AClientsStopWaitingAtATripIsWrittenAndAnsweredOk) {
 // written whole and the run starts the fan at its setpoint.
 TEST(ModbusSetValueRuns, AResetThenARunAreBothCarriedOut) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
   ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
   f.b.rig.run_for(1s);  // the driver's own stop is written
@@ -285,9 +287,7 @@ TEST(ModbusSetValueRuns, AFanFoundRunningWithASpeedNobodyCanReadIsAdopted) {
 // again backed off, up to the comm timeout apart, not at every cycle.
 TEST(ModbusSetValueRuns, AStopTheDriveKeepsRefusingIsAskedAgainBackedOff) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   const TimePoint from = f.b.rig.now();
   ASSERT_EQ(f.b.control("refuse holding 1 4 100000").rfind("ok", 0), 0u);
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
@@ -303,9 +303,7 @@ TEST(ModbusSetValueRuns, AStopTheDriveKeepsRefusingIsAskedAgainBackedOff) {
 // and the fan stays still until a client runs it again, at the setpoint it had.
 TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
   ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
   ASSERT_TRUE(f.speed_is(0));
@@ -326,9 +324,7 @@ TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
 // "Stop, then acknowledge the fault": the reset does not overtake the stop, which is written.
 TEST(ModbusSetValueRuns, AResetNeverOvertakesAStop) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   const auto stop = f.b.start_write({cmd::stop});
   const auto reset = f.b.start_write({cmd::reset_fault});
   ASSERT_TRUE(f.b.rig.run_until([&] { return stop->settled() && reset->settled(); }, 3s));
@@ -362,9 +358,7 @@ TEST(ModbusSetValueRuns, AResetBehindARunOnTheLineIsDecidedWhenItsTurnComes) {
 // fan ends still, and the setpoint held is the newest.
 TEST(ModbusSetValueRuns, AStopAndASetpointInQuickSuccessionEndStillWithTheNewestSetpoint) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   const auto set = f.b.start_write({700}, kSetpointRegister);
   const auto stop = f.b.start_write({cmd::stop});
   ASSERT_TRUE(f.b.rig.run_until([&] { return set->settled() && stop->settled(); }, 3s));
@@ -380,9 +374,7 @@ TEST(ModbusSetValueRuns, AStopAndASetpointInQuickSuccessionEndStillWithTheNewest
 // it goes to the drive, so the PLC reads the speed the motor turns at.
 TEST(ModbusSetValueRuns, AStopTheDriveRefusesLeavesTheRunAndTheNextSetpointGoesToTheDrive) {
   Fan f;
-  ASSERT_TRUE(f.b.until_online());
-  ASSERT_EQ(f.b.write({cmd::run_forward, 1000}), Outcome::ok);
-  ASSERT_TRUE(f.speed_is(1000));
+  ASSERT_TRUE(f.running_at(1000));
   ASSERT_EQ(f.b.control("refuse holding 1 4 1").rfind("ok", 0), 0u);
   const TimePoint from = f.b.rig.now();
   const auto stop = f.b.start_write({cmd::stop});
@@ -427,14 +419,7 @@ TEST(ModbusSetValueRuns, AStopOfItsOwnIsWrittenAndTheNextRunWritesTheSetValueAga
   EXPECT_EQ(b.write({800}, kSetpointRegister), Outcome::ok);
   b.rig.run_for(1s);
   EXPECT_FALSE(b.sim_has("running"));
-  const auto fc06 = [&](std::uint16_t address) {
-    std::vector<std::uint16_t> out;
-    for (const Bytes& fr : b.frames(from)) {
-      if (fr.size() == 8 && fr[1] == 0x06 && ((fr[2] << 8) | fr[3]) == address)
-        out.push_back(static_cast<std::uint16_t>((fr[4] << 8) | fr[5]));
-    }
-    return out;
-  };
+  const auto fc06 = [&](std::uint16_t address) { return written(b, address, from); };
   EXPECT_EQ(fc06(2), std::vector<std::uint16_t>{0});
   EXPECT_TRUE(fc06(kSetValue).empty());
   ASSERT_EQ(b.write({cmd::run_forward}), Outcome::ok);
