@@ -18,6 +18,59 @@ constexpr std::uint8_t kLf = '\n';
 // MEI type 0x0E of function 0x2B: read device identification (Application Protocol 6.21).
 constexpr std::uint8_t kReadDeviceId = 0x0E;
 
+// The public code whose layout `function` has: itself, or the `like` of a code of `layouts`, the
+// exception bit kept.
+std::uint8_t laid_out(std::uint8_t function, CodeLayouts layouts) {
+  const auto code = static_cast<std::uint8_t>(function & ~kExceptionBit);
+  for (const CodeLayout& l : layouts) {
+    if (l.code == code) return static_cast<std::uint8_t>((function & kExceptionBit) | l.like);
+  }
+  return function;
+}
+
+// The length of request `pdu` as if its function code were `function`.
+RequestLength length_of_request(std::uint8_t function, ByteView pdu) {
+  using Status = RequestLength::Status;
+  // A byte count at `at`, then that many bytes after the `fixed` ones.
+  const auto counted = [&](std::size_t at, std::size_t fixed) -> RequestLength {
+    if (pdu.size() <= at) return {Status::incomplete, 0};
+    return {Status::known, fixed + pdu[at]};
+  };
+  switch (function) {
+    case fc::read_coils:
+    case fc::read_discrete_inputs:
+    case fc::read_holding_registers:
+    case fc::read_input_registers:
+    case fc::write_single_coil:
+    case fc::write_single_register:
+      return {Status::known, 5};  // function, address, quantity or value
+    case fc::read_exception_status:
+    case fc::get_comm_event_counter:
+    case fc::get_comm_event_log:
+    case fc::report_server_id:
+      return {Status::known, 1};  // the function alone
+    case fc::write_multiple_coils:
+    case fc::write_multiple_registers:
+      return counted(5, 6);  // function, address, quantity, byte count, data
+    case fc::read_file_record:
+    case fc::write_file_record:
+      return counted(1, 2);  // function, byte count, sub-requests
+    case fc::mask_write_register:
+      return {Status::known, 7};  // function, address, AND mask, OR mask
+    case fc::read_write_registers:
+      return counted(9, 10);  // function, 4 x 2-byte fields, byte count, data
+    case fc::read_fifo_queue:
+      return {Status::known, 3};  // function, FIFO pointer address
+    case fc::encapsulated_interface:
+      if (pdu.size() < 2) return {Status::incomplete, 0};
+      // Function, MEI type, read device id code, object id (6.21).
+      if (pdu[1] == kReadDeviceId) return {Status::known, 4};
+      return {Status::unknown, 0};
+    default:
+      return {Status::unknown, 0};
+  }
+}
+
 // How the length of an RTU reply is found from its first bytes.
 enum class Length : std::uint8_t {
   fixed,         // `size` bytes in all
@@ -106,8 +159,8 @@ Decoded<Adu> decode_rtu_by_crc(ByteView rx) {
 
 // The whole length of the RTU reply at the start of `rx` (address and CRC included), or the
 // decoding of one that is not all in yet or is delimited by its CRC (`done`).
-std::optional<std::size_t> reply_size(ByteView rx, Decoded<Adu>& done) {
-  const Rule rule = reply_rule(rx[1]);
+std::optional<std::size_t> reply_size(ByteView rx, CodeLayouts layouts, Decoded<Adu>& done) {
+  const Rule rule = reply_rule(laid_out(rx[1], layouts));
   switch (rule.how) {
     case Length::fixed:
       return rule.size;
@@ -130,18 +183,18 @@ std::optional<std::size_t> reply_size(ByteView rx, Decoded<Adu>& done) {
   return std::nullopt;
 }
 
-Decoded<Adu> decode_rtu(ByteView rx, bool reply) {
+Decoded<Adu> decode_rtu(ByteView rx, bool reply, CodeLayouts layouts) {
   if (rx.empty()) return {};
   if (rx[0] > kMaxSlave) return decoded_bad<Adu>(1, FrameError::bad_header);
   if (rx.size() < 2) return {};
   std::size_t size = 0;
   if (reply) {
     Decoded<Adu> done;
-    const auto s = reply_size(rx, done);
+    const auto s = reply_size(rx, layouts, done);
     if (!s) return done;
     size = *s;
   } else {
-    const RequestLength length = request_length(rx.subspan(1));
+    const RequestLength length = length_of_request(laid_out(rx[1], layouts), rx.subspan(1));
     switch (length.status) {
       case RequestLength::Status::incomplete:
         return {};
@@ -244,12 +297,12 @@ Bytes encode(Framing framing, std::uint8_t address, ByteView pdu) {
   return out;
 }
 
-Decoded<Adu> decode_reply(Framing framing, ByteView rx) {
-  return framing == Framing::rtu ? decode_rtu(rx, true) : decode_ascii(rx);
+Decoded<Adu> decode_reply(Framing framing, ByteView rx, CodeLayouts layouts) {
+  return framing == Framing::rtu ? decode_rtu(rx, true, layouts) : decode_ascii(rx);
 }
 
-Decoded<Adu> decode_request(Framing framing, ByteView rx) {
-  return framing == Framing::rtu ? decode_rtu(rx, false) : decode_ascii(rx);
+Decoded<Adu> decode_request(Framing framing, ByteView rx, CodeLayouts layouts) {
+  return framing == Framing::rtu ? decode_rtu(rx, false, layouts) : decode_ascii(rx);
 }
 
 // One running CRC over the bytes: each prefix's is the one before it and a byte more, so a noisy
@@ -265,46 +318,8 @@ std::optional<std::size_t> crc_end(ByteView rx) {
 }
 
 RequestLength request_length(ByteView pdu) {
-  using Status = RequestLength::Status;
-  if (pdu.empty()) return {Status::incomplete, 0};
-  // A byte count at `at`, then that many bytes after the `fixed` ones.
-  const auto counted = [&](std::size_t at, std::size_t fixed) -> RequestLength {
-    if (pdu.size() <= at) return {Status::incomplete, 0};
-    return {Status::known, fixed + pdu[at]};
-  };
-  switch (pdu[0]) {
-    case fc::read_coils:
-    case fc::read_discrete_inputs:
-    case fc::read_holding_registers:
-    case fc::read_input_registers:
-    case fc::write_single_coil:
-    case fc::write_single_register:
-      return {Status::known, 5};  // function, address, quantity or value
-    case fc::read_exception_status:
-    case fc::get_comm_event_counter:
-    case fc::get_comm_event_log:
-    case fc::report_server_id:
-      return {Status::known, 1};  // the function alone
-    case fc::write_multiple_coils:
-    case fc::write_multiple_registers:
-      return counted(5, 6);  // function, address, quantity, byte count, data
-    case fc::read_file_record:
-    case fc::write_file_record:
-      return counted(1, 2);  // function, byte count, sub-requests
-    case fc::mask_write_register:
-      return {Status::known, 7};  // function, address, AND mask, OR mask
-    case fc::read_write_registers:
-      return counted(9, 10);  // function, 4 x 2-byte fields, byte count, data
-    case fc::read_fifo_queue:
-      return {Status::known, 3};  // function, FIFO pointer address
-    case fc::encapsulated_interface:
-      if (pdu.size() < 2) return {Status::incomplete, 0};
-      // Function, MEI type, read device id code, object id (6.21).
-      if (pdu[1] == kReadDeviceId) return {Status::known, 4};
-      return {Status::unknown, 0};
-    default:
-      return {Status::unknown, 0};
-  }
+  if (pdu.empty()) return {RequestLength::Status::incomplete, 0};
+  return length_of_request(pdu[0], pdu);
 }
 
 bool request_counts_agree(ByteView pdu) {

@@ -79,17 +79,34 @@ struct Adu {
 // The frame for `address` and `pdu` in `framing`; empty when the PDU is empty or too long.
 Bytes encode(Framing framing, std::uint8_t address, ByteView pdu);
 
+// A user-defined function code (Application Protocol 5: 65..72, 100..110) whose request and reply
+// have the layout of a public one: the "write without saving to EEPROM" 0x41 of several inverters
+// is laid out as 0x06.
+struct CodeLayout {
+  std::uint8_t code = 0;
+  std::uint8_t like = 0;
+};
+using CodeLayouts = std::span<const CodeLayout>;
+
+// Whether `code` is a user-defined function code (Application Protocol 5).
+constexpr bool user_defined_code(unsigned code) {
+  return (code >= 65 && code <= 72) || (code >= 100 && code <= 110);
+}
+
 // A reply at the start of `rx` (a master's receive buffer). RTU: the length follows from the
-// reply's function code and the byte counts in it (Application Protocol 6.x); for a function the
-// codec does not know, the frame ends where the bytes so far first carry a good CRC (the line's
-// silence, which the bus engine does not report, would say the same). ASCII: the frame is what
-// lies between ':' and CR LF. Bytes that cannot start a frame (RTU: a reserved address 248..255;
-// ASCII: anything before ':') are `bad` with `bad_header`.
-Decoded<Adu> decode_reply(Framing framing, ByteView rx);
+// reply's function code and the byte counts in it (Application Protocol 6.x), a code of
+// `layouts` (and its exception, code | 0x80) taken as its `like`; for a function the codec does not
+// know, the frame ends where the bytes so far first carry a good CRC (the line's silence, which the
+// bus engine does not report, would say the same; an echo can hold a good CRC before its end, so a
+// master that sent a code of known layout names it). ASCII: the frame is what lies between ':'
+// and CR LF. Bytes that cannot start a frame (RTU: a reserved address 248..255; ASCII: anything
+// before ':') are `bad` with `bad_header`.
+Decoded<Adu> decode_reply(Framing framing, ByteView rx, CodeLayouts layouts = {});
 
 // A request at the start of `rx` (a slave's receive buffer), for the simulator. RTU lengths follow
-// from the function code (request_length); an unknown function is delimited by its CRC.
-Decoded<Adu> decode_request(Framing framing, ByteView rx);
+// from the function code (request_length), a code of `layouts` taken as its `like`; an unknown
+// function is delimited by its CRC.
+Decoded<Adu> decode_request(Framing framing, ByteView rx, CodeLayouts layouts = {});
 
 // Where the RTU frame at the start of `rx` ends for a slave that finds its end by its CRC alone,
 // as decode_reply and decode_request do for a function of unknown length: the least size of at

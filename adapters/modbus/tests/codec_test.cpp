@@ -6,10 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <string>
 
 #include "drivegate/crc.h"
-
 #include "feed.h"
 
 namespace drivegate::modbus_device {
@@ -24,8 +24,7 @@ Buffer bytes_of(std::string_view text) {
 
 // Simply Modbus, "Function 03": read holding registers 40108..40110 of slave 17.
 const Buffer kReadHolding = {0x11, 0x03, 0x00, 0x6B, 0x00, 0x03, 0x76, 0x87};
-const Buffer kReadHoldingReply = {0x11, 0x03, 0x06, 0xAE, 0x41, 0x56,
-                                  0x52, 0x43, 0x40, 0x49, 0xAD};
+const Buffer kReadHoldingReply = {0x11, 0x03, 0x06, 0xAE, 0x41, 0x56, 0x52, 0x43, 0x40, 0x49, 0xAD};
 // "Function 01": read coils 00020..00056.
 const Buffer kReadCoils = {0x11, 0x01, 0x00, 0x13, 0x00, 0x25, 0x0E, 0x84};
 // "Function 05": coil 00173 ON; the reply is the request echoed.
@@ -35,6 +34,10 @@ const Buffer kWriteRegister = {0x11, 0x06, 0x00, 0x01, 0x00, 0x03, 0x9A, 0x9B};
 // "Function 16": registers 40002..40003 = 0x000A, 0x0102.
 const Buffer kWriteRegisters = {0x11, 0x10, 0x00, 0x01, 0x00, 0x02, 0x04,
                                 0x00, 0x0A, 0x01, 0x02, 0xC6, 0xF0};
+// decode_reply and decode_request with no code of known layout, as values
+// expect_frame_everywhere can take.
+const auto reply = [](Framing framing, ByteView rx) { return decode_reply(framing, rx); };
+const auto request_of = [](Framing framing, ByteView rx) { return decode_request(framing, rx); };
 // The "Function 03" request in ASCII (Simply Modbus, "Modbus ASCII"): LRC 0x7E.
 const std::string_view kReadHoldingAscii = ":1103006B00037E\r\n";
 
@@ -42,8 +45,7 @@ Buffer pdu_of(const Buffer& rtu) {
   return {rtu.begin() + 1, rtu.end() - 2};
 }
 
-using Decode = Decoded<Adu> (*)(Framing, ByteView);
-
+template <typename Decode>
 void expect_frame_everywhere(Decode decode, Framing framing, const Buffer& wire,
                              std::uint8_t address, const Buffer& pdu) {
   for (std::size_t split = 0; split <= wire.size(); ++split) {
@@ -65,8 +67,8 @@ TEST(ModbusCodec, CrcOfThePublishedFrames) {
 }
 
 TEST(ModbusCodec, EncodesThePublishedRequestsInRtu) {
-  for (const Buffer* f : {&kReadHolding, &kReadCoils, &kWriteCoil, &kWriteRegister,
-                          &kWriteRegisters}) {
+  for (const Buffer* f :
+       {&kReadHolding, &kReadCoils, &kWriteCoil, &kWriteRegister, &kWriteRegisters}) {
     EXPECT_EQ(encode(Framing::rtu, 0x11, pdu_of(*f)), *f);
   }
 }
@@ -77,27 +79,24 @@ TEST(ModbusCodec, EncodesThePublishedRequestInAscii) {
 }
 
 TEST(ModbusCodec, ASlaveDecodesEachRequestWholeAndSplit) {
-  for (const Buffer* f : {&kReadHolding, &kReadCoils, &kWriteCoil, &kWriteRegister,
-                          &kWriteRegisters}) {
-    expect_frame_everywhere(decode_request, Framing::rtu, *f, 0x11, pdu_of(*f));
+  for (const Buffer* f :
+       {&kReadHolding, &kReadCoils, &kWriteCoil, &kWriteRegister, &kWriteRegisters}) {
+    expect_frame_everywhere(request_of, Framing::rtu, *f, 0x11, pdu_of(*f));
   }
-  expect_frame_everywhere(decode_request, Framing::ascii, bytes_of(kReadHoldingAscii), 0x11,
+  expect_frame_everywhere(request_of, Framing::ascii, bytes_of(kReadHoldingAscii), 0x11,
                           pdu_of(kReadHolding));
 }
 
 TEST(ModbusCodec, AMasterDecodesEachReplyWholeAndSplit) {
   // 03 by its byte count; 05, 06 and 16 are 8 bytes (Application Protocol 6.5, 6.6, 6.12).
-  expect_frame_everywhere(decode_reply, Framing::rtu, kReadHoldingReply, 0x11,
-                          pdu_of(kReadHoldingReply));
-  expect_frame_everywhere(decode_reply, Framing::rtu, kWriteCoil, 0x11, pdu_of(kWriteCoil));
-  expect_frame_everywhere(decode_reply, Framing::rtu, kWriteRegister, 0x11,
-                          pdu_of(kWriteRegister));
+  expect_frame_everywhere(reply, Framing::rtu, kReadHoldingReply, 0x11, pdu_of(kReadHoldingReply));
+  expect_frame_everywhere(reply, Framing::rtu, kWriteCoil, 0x11, pdu_of(kWriteCoil));
+  expect_frame_everywhere(reply, Framing::rtu, kWriteRegister, 0x11, pdu_of(kWriteRegister));
   const Buffer written = encode(Framing::rtu, 0x11, Buffer{0x10, 0x00, 0x01, 0x00, 0x02});
-  expect_frame_everywhere(decode_reply, Framing::rtu, written, 0x11,
-                          Buffer{0x10, 0x00, 0x01, 0x00, 0x02});
+  expect_frame_everywhere(reply, Framing::rtu, written, 0x11, Buffer{0x10, 0x00, 0x01, 0x00, 0x02});
   const Buffer ascii = encode(Framing::ascii, 0x11, pdu_of(kReadHoldingReply));
   EXPECT_EQ(ascii, bytes_of(":110306AE4156524340CC\r\n"));  // LRC: 0x100 - (0x234 & 0xFF)
-  expect_frame_everywhere(decode_reply, Framing::ascii, ascii, 0x11, pdu_of(kReadHoldingReply));
+  expect_frame_everywhere(reply, Framing::ascii, ascii, 0x11, pdu_of(kReadHoldingReply));
 }
 
 TEST(ModbusCodec, ExceptionRepliesAreFiveBytesAndNameTheirCode) {
@@ -105,7 +104,7 @@ TEST(ModbusCodec, ExceptionRepliesAreFiveBytesAndNameTheirCode) {
   EXPECT_EQ(pdu, (Buffer{0x83, 0x02}));
   const Buffer wire = encode(Framing::rtu, 0x11, pdu);
   ASSERT_EQ(wire.size(), 5u);
-  expect_frame_everywhere(decode_reply, Framing::rtu, wire, 0x11, pdu);
+  expect_frame_everywhere(reply, Framing::rtu, wire, 0x11, pdu);
   EXPECT_EQ(exception_code(pdu), 0x02);
   EXPECT_EQ(exception_code(pdu_of(kReadHoldingReply)), std::nullopt);
 }
@@ -114,7 +113,7 @@ TEST(ModbusCodec, AReplyOfAnUnknownFunctionEndsWhereItsCrcHolds) {
   // 0x41 is in the user-defined range (Application Protocol 5).
   const Buffer pdu = {0x41, 0x01, 0x02, 0x03, 0x04, 0x05};
   const Buffer wire = encode(Framing::rtu, 0x05, pdu);
-  expect_frame_everywhere(decode_reply, Framing::rtu, wire, 0x05, pdu);
+  expect_frame_everywhere(reply, Framing::rtu, wire, 0x05, pdu);
   // 256 bytes with no CRC anywhere: a bad frame, not a buffer that grows for ever.
   Buffer junk(256, 0x00);
   junk[0] = 0x05;
@@ -122,12 +121,53 @@ TEST(ModbusCodec, AReplyOfAnUnknownFunctionEndsWhereItsCrcHolds) {
   for (std::size_t i = 2; i < junk.size(); ++i) junk[i] = static_cast<std::uint8_t>(i * 7);
   bool found_crc = false;
   for (std::size_t n = 4; n <= junk.size(); ++n) {
-    if (crc16_modbus(ByteView(junk).first(n - 2)) == be16(junk[n - 1], junk[n - 2])) found_crc = true;
+    if (crc16_modbus(ByteView(junk).first(n - 2)) == be16(junk[n - 1], junk[n - 2]))
+      found_crc = true;
   }
   ASSERT_FALSE(found_crc) << "the junk must hold no CRC for this test to mean anything";
   const auto d = decode_reply(Framing::rtu, junk);
   EXPECT_EQ(d.status, DecodeStatus::bad);
   EXPECT_EQ(d.consumed, 256u);
+}
+
+// An inverter's "write without saving" 0x41 has 0x06's layout (V&T E5-H manual p.116: "Function
+// 0x06(0x41) rewrites single function code or control parameter"). Its echo ends where 0x06's does:
+// found by its CRC alone, an echo whose first bytes happen to end in a good CRC would be cut short
+// and the rest taken for noise, the write answered as if the drive had not taken it.
+TEST(ModbusCodec, AUserCodeOfKnownLayoutEndsWhereThatLayoutSays) {
+  const CodeLayout like06[] = {{0x41, fc::write_single_register}};
+  std::optional<Buffer> early;  // an echo of 0x8001 holding a good CRC before its end
+  for (std::uint32_t value = 0; value <= 0xFFFF && !early; ++value) {
+    const Buffer pdu = {0x41, 0x80, 0x01, static_cast<std::uint8_t>(value >> 8),
+                        static_cast<std::uint8_t>(value & 0xFF)};
+    const Buffer wire = encode(Framing::rtu, 0x01, pdu);
+    if (crc_end(wire) != wire.size()) early = wire;
+  }
+  ASSERT_TRUE(early)
+      << "some value's echo must end early by its CRC for this test to mean anything";
+  const auto by_crc = decode_reply(Framing::rtu, *early);
+  ASSERT_EQ(by_crc.status, DecodeStatus::frame);
+  EXPECT_LT(by_crc.consumed, early->size());
+  const Buffer pdu(early->begin() + 1, early->end() - 2);
+  const auto laid_out = [&](Framing f, ByteView rx) { return decode_reply(f, rx, like06); };
+  const auto whole = [&](ByteView rx) { return laid_out(Framing::rtu, rx); };
+  expect_frame_everywhere(laid_out, Framing::rtu, *early, 0x01, pdu);
+  EXPECT_EQ(whole(*early).consumed, 8u);
+  // Its exception, 0xC1, is five bytes as every exception is; the public code's echo and
+  // exception (a drive that answers 0x41 with 0x06) keep their own lengths.
+  const Buffer refused = encode(Framing::rtu, 0x01, Buffer{0xC1, 0x04});
+  EXPECT_EQ(whole(refused).consumed, 5u);
+  const Buffer as06 = encode(Framing::rtu, 0x01, Buffer{0x06, 0x80, 0x01, 0x13, 0x88});
+  EXPECT_EQ(whole(as06).consumed, 8u);
+  // 0x42 laid out as 0x10: address and quantity echoed.
+  const CodeLayout like10[] = {{0x42, fc::write_multiple_registers}};
+  const Buffer multi = encode(Framing::rtu, 0x01, Buffer{0x42, 0x80, 0x00, 0x00, 0x02});
+  EXPECT_EQ(decode_reply(Framing::rtu, multi, like10).consumed, 8u);
+  // A slave finds the request's end the same way: 0x41's request is 0x06's, 0x42's is 0x10's.
+  EXPECT_EQ(decode_request(Framing::rtu, *early, like06).consumed, 8u);
+  const Buffer request10 =
+      encode(Framing::rtu, 0x01, Buffer{0x42, 0x80, 0x00, 0x00, 0x02, 0x04, 0, 1, 0, 2});
+  EXPECT_EQ(decode_request(Framing::rtu, request10, like10).consumed, request10.size());
 }
 
 TEST(ModbusCodec, DeviceIdentificationRepliesAreWalkedObjectByObject) {
@@ -136,16 +176,16 @@ TEST(ModbusCodec, DeviceIdentificationRepliesAreWalkedObjectByObject) {
                       0x00, 0x03, 'A',  'B',  'B',               // VendorName
                       0x01, 0x04, 'A',  'C',  'S',  '5',         // ProductCode
                       0x02, 0x02, '1',  '0'};                    // MajorMinorRevision
-  expect_frame_everywhere(decode_reply, Framing::rtu, encode(Framing::rtu, 0x07, pdu), 0x07, pdu);
+  expect_frame_everywhere(reply, Framing::rtu, encode(Framing::rtu, 0x07, pdu), 0x07, pdu);
   const Buffer request = {0x2B, 0x0E, 0x01, 0x00};
-  expect_frame_everywhere(decode_request, Framing::rtu, encode(Framing::rtu, 0x07, request), 0x07,
+  expect_frame_everywhere(request_of, Framing::rtu, encode(Framing::rtu, 0x07, request), 0x07,
                           request);
 }
 
 TEST(ModbusCodec, ReadFifoRepliesCarryATwoByteCount) {
   // Application Protocol 6.18: byte count 6 = FIFO count (2) + two registers.
   const Buffer pdu = {0x18, 0x00, 0x06, 0x00, 0x02, 0x01, 0xB8, 0x12, 0x84};
-  expect_frame_everywhere(decode_reply, Framing::rtu, encode(Framing::rtu, 0x11, pdu), 0x11, pdu);
+  expect_frame_everywhere(reply, Framing::rtu, encode(Framing::rtu, 0x11, pdu), 0x11, pdu);
 }
 
 TEST(ModbusCodec, ABadCrcCostsTheWholeFrame) {
