@@ -173,6 +173,18 @@ DriverTraits ModbusDriver::traits() const {
   return t;
 }
 
+// A drive that takes a user-defined write code may answer under it or under the code whose layout
+// it has (the V&T and Honwin manuals print 0x06 in the reply beside "0x06 (0x41)"): either is the
+// echo, which confirm() then checks.
+bool ModbusDriver::Job::answered_by(std::uint8_t reply_function) const {
+  return reply_function == function || (layout.code != 0 && reply_function == layout.like);
+}
+
+bool ModbusDriver::Job::refused_by(std::uint8_t reply_function) const {
+  return (reply_function & kExceptionBit) != 0 &&
+         answered_by(static_cast<std::uint8_t>(reply_function & ~kExceptionBit));
+}
+
 ModbusDriver::Job ModbusDriver::read_job(const Block& b) const {
   Job j;
   j.read = b;
@@ -251,7 +263,8 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
   last_now_ = now;
   if (rx.empty()) return {};
   if (!inflight_) return {RxKind::noise, rx.size()};
-  const Decoded<Adu> d = decode_reply(profile_.line.framing, rx);
+  const CodeLayouts layouts(&inflight_->layout, inflight_->layout.code != 0 ? 1 : 0);
+  const Decoded<Adu> d = decode_reply(profile_.line.framing, rx, layouts);
   switch (d.status) {
     case DecodeStatus::incomplete:
       return {};
@@ -261,9 +274,10 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
       break;
   }
   const Adu& a = d.frame;
-  const std::uint8_t fn = inflight_->function;
-  const bool exception = a.pdu[0] == (fn | kExceptionBit) && a.pdu.size() == 2;
-  if (a.address != address_ || (a.pdu[0] != fn && !exception)) return {RxKind::foreign, d.consumed};
+  const bool exception = inflight_->refused_by(a.pdu[0]) && a.pdu.size() == 2;
+  if (a.address != address_ || (!inflight_->answered_by(a.pdu[0]) && !exception)) {
+    return {RxKind::foreign, d.consumed};
+  }
   if (inflight_->read && !exception) {
     // A read reply carries exactly the bytes asked for (Application Protocol 6.1 - 6.4).
     const Block& b = *inflight_->read;

@@ -133,7 +133,14 @@ class ModbusDriver final : public DriverBase {
     bool probe = false;                  // a read of searches_.front()
     std::optional<Writes::Entry> write;  // out of the ledger while on the line
     std::uint8_t function = 0;
+    // A user-defined write code's layout ({} for the protocol's codes): its reply is that of
+    // `like`, and an echo or exception under `like`'s own code is its reply too.
+    CodeLayout layout;
     Bytes pdu;
+
+    // Whether `reply_function` answers this job, and whether as an exception.
+    [[nodiscard]] bool answered_by(std::uint8_t reply_function) const;
+    [[nodiscard]] bool refused_by(std::uint8_t reply_function) const;
   };
 
   // driver.cpp

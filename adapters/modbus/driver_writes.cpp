@@ -230,24 +230,25 @@ WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   return WriteStatus::pending;
 }
 
-// FC 05 for a coil, FC 06 for one register where the profile says "single", FC 16 otherwise.
+// FC 05 for a coil, FC 06 for one register where the profile says "single", FC 16 otherwise
+// (write_function), or the point's own code of that layout (write_code).
 ModbusDriver::Job ModbusDriver::write_job(const Writes::Entry& e) const {
   const Write& w = e.job;
   const ProfilePoint& p = profile_.points[w.point];
+  const std::uint8_t layout = write_function(profile_.modbus, p);
   Job j;
   j.write = e;
-  if (p.table == Table::coil) {
-    j.function = fc::write_single_coil;
+  j.function = write_code_of(profile_.modbus, p);
+  if (j.function != layout) j.layout = {j.function, layout};
+  if (layout == fc::write_single_coil) {
     j.pdu = {j.function};
     put_be16(j.pdu, p.address);
     put_be16(j.pdu, w.words.at(0) != 0 ? kCoilOn : 0);
-  } else if (w.words.size() == 1 && profile_.modbus.write == WriteFunction::single) {
-    j.function = fc::write_single_register;
+  } else if (layout == fc::write_single_register) {
     j.pdu = {j.function};
     put_be16(j.pdu, p.address);
     put_be16(j.pdu, w.words[0]);
   } else {
-    j.function = fc::write_multiple_registers;
     j.pdu = {j.function};
     put_be16(j.pdu, p.address);
     put_be16(j.pdu, static_cast<std::uint16_t>(w.words.size()));
@@ -279,8 +280,10 @@ void ModbusDriver::skip_the_way_in(Write& w) {
 
 // The slave's echo: FC 05 and 06 repeat the request, FC 16 its address and quantity.
 void ModbusDriver::confirm(const Job& j, ByteView pdu) {
-  const bool took =
-      pdu.size() == 5 && j.pdu.size() >= 5 && std::equal(pdu.begin(), pdu.end(), j.pdu.begin());
+  // The echo: address and value (05, 06) or address and quantity (16), after a function code
+  // answered_by() accepted.
+  const bool took = pdu.size() == 5 && j.pdu.size() >= 5 &&
+                    std::equal(pdu.begin() + 1, pdu.end(), j.pdu.begin() + 1);
   if (!took) {
     writes_.settle(*j.write, WriteResult::refused);
     return;

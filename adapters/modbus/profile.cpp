@@ -163,7 +163,7 @@ class Parser {
   void read_point(TableReader& r, const toml::table& t) {
     r.expect({"name", "table", "address", "type", "word_order", "scale", "unit", "description",
               "min", "max", "access", "poll_ms", "trend", "registers", "byte_order", "bits",
-              "values", "mask"});
+              "values", "mask", "write_code"});
     ProfilePoint p;
     p.line = static_cast<std::uint32_t>(t.source().begin.line);
     bool ok = true;
@@ -214,6 +214,11 @@ class Parser {
       r.node("values");
     }
     if (ok) ok = read_mask(r, p);
+    if (ok) {
+      ok = read_write_code(r, p);
+    } else {
+      r.node("write_code");
+    }
     if (auto v = r.integer("poll_ms", 10, 3600000, false))
       p.poll_ms = static_cast<std::uint32_t>(*v);
     if (ok)
@@ -304,6 +309,40 @@ class Parser {
     }
     p.mask = static_cast<std::uint16_t>(*mask);
     p.access = PointAccess::read;
+    return true;
+  }
+
+  // write_code = 0x41: a user-defined code (Application Protocol 5) a writable holding register is
+  // written with, laid out as the code it would otherwise go with; one code, one layout.
+  bool read_write_code(TableReader& r, ProfilePoint& p) {
+    const toml::node* n = r.node("write_code");
+    if (n == nullptr) return true;
+    const auto code = r.integer("write_code", 0, 255, true);
+    if (!code) return false;
+    if (!user_defined_code(static_cast<unsigned>(*code))) {
+      diag_.error(n, "point.write_code",
+                  "must be a user-defined function code (65..72 or 100..110, Application "
+                  "Protocol 5) that the device's manual lays out as 6 or 16, got " +
+                      std::to_string(*code));
+      return false;
+    }
+    if (p.table != Table::holding || p.access == PointAccess::read) {
+      diag_.error(n, "point.write_code",
+                  "names how a point is written: only a writable holding register has one");
+      return false;
+    }
+    p.write_code = static_cast<std::uint8_t>(*code);
+    const std::uint8_t like = write_function(profile_.modbus, p);
+    for (const ProfilePoint& q : profile_.points) {
+      if (q.write_code == p.write_code && write_function(profile_.modbus, q) != like) {
+        diag_.error(n, "point.write_code",
+                    std::to_string(p.write_code) + " is laid out as " + std::to_string(like) +
+                        " here, and as " + std::to_string(write_function(profile_.modbus, q)) +
+                        " for '" + q.name + "' (line " + std::to_string(q.line) +
+                        "): one code has one layout");
+        return false;
+      }
+    }
     return true;
   }
 
@@ -938,6 +977,27 @@ std::vector<bool> Profile::bound_to_common() const {
     for (const std::size_t p : v->points) bound[p] = true;
   }
   return bound;
+}
+
+std::uint8_t write_function(const ModbusSpec& m, const ProfilePoint& p) {
+  if (p.table == Table::coil) return fc::write_single_coil;
+  if (p.width() == 1 && m.write == WriteFunction::single) return fc::write_single_register;
+  return fc::write_multiple_registers;
+}
+
+std::uint8_t write_code_of(const ModbusSpec& m, const ProfilePoint& p) {
+  return p.write_code != 0 ? p.write_code : write_function(m, p);
+}
+
+std::vector<CodeLayout> write_layouts(const Profile& profile) {
+  std::vector<CodeLayout> layouts;
+  for (const ProfilePoint& p : profile.points) {
+    if (p.write_code == 0) continue;
+    const bool known = std::any_of(layouts.begin(), layouts.end(),
+                                   [&](const CodeLayout& l) { return l.code == p.write_code; });
+    if (!known) layouts.push_back({p.write_code, write_function(profile.modbus, p)});
+  }
+  return layouts;
 }
 
 std::variant<Profile, std::vector<std::string>> parse_profile(std::string_view text,

@@ -107,6 +107,11 @@ struct ProfilePoint {
   // A u16 register point that is some of its register's bits: value = (raw & mask) >> the
   // mask's lowest set bit. Read-only; points whose masks do not overlap share a register.
   std::optional<std::uint16_t> mask;
+  // A holding register point written with a user-defined function code of the device (write_code
+  // = 0x41) laid out as the protocol's code it would otherwise be written with (write_function):
+  // the "write without saving to EEPROM" 0x41 / 0x42 of inverters whose 0x06 / 0x10 save every
+  // write. 0: the protocol's code.
+  std::uint8_t write_code = 0;
 
   [[nodiscard]] std::uint16_t width() const { return width_of(type, registers); }
   [[nodiscard]] bool writable() const { return table == Table::holding || table == Table::coil; }
@@ -280,6 +285,14 @@ struct Profile {
   // register map beside the common block's.
   [[nodiscard]] std::vector<bool> bound_to_common() const;
 };
+
+// The protocol's function code `p` is written with: 0x05 for a coil, 0x06 for one register where
+// the profile says "single", 0x10 otherwise (Application Protocol 6.5, 6.6, 6.12).
+std::uint8_t write_function(const ModbusSpec& m, const ProfilePoint& p);
+// The code on the wire: the point's own write_code, else write_function's.
+std::uint8_t write_code_of(const ModbusSpec& m, const ProfilePoint& p);
+// The user-defined codes the profile's points are written with, each with its layout.
+std::vector<CodeLayout> write_layouts(const Profile& profile);
 
 // The profile in `text`, or every error found in it, each "SOURCE:LINE: key: what is wrong" as
 // the daemon's own configuration errors read (drivegate/toml_reader.h). `source` names the file.

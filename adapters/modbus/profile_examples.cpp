@@ -64,8 +64,9 @@ std::optional<Adu> decode_whole(const Profile& profile, const std::string& text,
     out.push_back(std::string(what) + " is not a frame's bytes in hex");
     return std::nullopt;
   }
-  const auto d = request ? decode_request(profile.line.framing, *frame)
-                         : decode_reply(profile.line.framing, *frame);
+  const std::vector<CodeLayout> layouts = write_layouts(profile);
+  const auto d = request ? decode_request(profile.line.framing, *frame, layouts)
+                         : decode_reply(profile.line.framing, *frame, layouts);
   if (d.status != DecodeStatus::frame) {
     const bool rtu = profile.line.framing == Framing::rtu;
     std::string why = std::string(what) + " " + hex_text(*frame) + " is not a good frame";
@@ -145,9 +146,10 @@ void check_read(const Profile& profile, const ProfileExample& e, const Adu& requ
   }
 }
 
+// `fn` is the protocol's code the request is laid out as: its own, or the one a point's own
+// write code (write_code) is laid out as.
 void check_write(const Profile& profile, const ProfileExample& e, const Adu& request,
-                 std::vector<std::string>& out) {
-  const std::uint8_t fn = request.pdu[0];
+                 std::uint8_t fn, std::vector<std::string>& out) {
   const ByteView pdu = request.pdu;
   const Table table = fn == fc::write_single_coil ? Table::coil : Table::holding;
   std::uint16_t start = 0;
@@ -211,10 +213,12 @@ void check_write(const Profile& profile, const ProfileExample& e, const Adu& req
   if (e.reply.empty()) return;
   const auto reply = decode_whole(profile, e.reply, false, out);
   if (!reply) return;
-  // FC 05 and 06 echo the request, FC 16 its address and quantity (6.5, 6.6, 6.12).
+  // FC 05 and 06 echo the request, FC 16 its address and quantity (6.5, 6.6, 6.12); a write
+  // code's echo is under that code or the one it is laid out as.
   const std::size_t echo = 5;
   if (reply->address != request.address || reply->pdu.size() != echo ||
-      !std::equal(reply->pdu.begin(), reply->pdu.end(), request.pdu.begin())) {
+      (reply->pdu[0] != request.pdu[0] && reply->pdu[0] != fn) ||
+      !std::equal(reply->pdu.begin() + 1, reply->pdu.end(), request.pdu.begin() + 1)) {
     out.emplace_back("the reply is not the slave's echo of the request");
   }
 }
@@ -283,12 +287,15 @@ std::vector<std::string> check_example(const Profile& profile, const ProfileExam
   std::vector<std::string> out;
   const auto request = decode_whole(profile, example.request, true, out);
   if (!request) return out;
-  const std::uint8_t fn = request->pdu[0];
+  std::uint8_t fn = request->pdu[0];
+  for (const CodeLayout& l : write_layouts(profile)) {
+    if (l.code == fn) fn = l.like;
+  }
   if (table_read_by(fn)) {
     check_read(profile, example, *request, out);
   } else if (fn == fc::write_single_coil || fn == fc::write_single_register ||
              fn == fc::write_multiple_registers) {
-    check_write(profile, example, *request, out);
+    check_write(profile, example, *request, fn, out);
   } else {
     out.push_back("function " + hex_text(Bytes{fn}) +
                   " is not a read (01 - 04) or a write (05, 06, 10) a profile describes");

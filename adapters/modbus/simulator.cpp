@@ -23,7 +23,7 @@ constexpr Millis kStaleRx{100};
 }  // namespace
 
 ModbusSimulator::ModbusSimulator(std::uint8_t address, Profile profile)
-    : address_(address), profile_(std::move(profile)) {
+    : address_(address), profile_(std::move(profile)), layouts_(write_layouts(profile_)) {
   for (const ProfilePoint& p : profile_.points) {
     for (std::uint16_t w = 0; w < p.width(); ++w) {
       memory_[{p.table, static_cast<std::uint16_t>(p.address + w)}] = 0;
@@ -55,7 +55,7 @@ Bytes ModbusSimulator::on_receive(ByteView rx, TimePoint now) {
   rx_.insert(rx_.end(), rx.begin(), rx.end());
   Bytes out;
   while (!rx_.empty()) {
-    const Decoded<Adu> d = decode_request(profile_.line.framing, rx_);
+    const Decoded<Adu> d = decode_request(profile_.line.framing, rx_, layouts_);
     if (d.status == DecodeStatus::incomplete) break;
     rx_.erase(rx_.begin(), rx_.begin() + static_cast<long>(d.consumed));
     if (d.status == DecodeStatus::bad) continue;  // a slave ignores a frame it cannot check
@@ -106,7 +106,20 @@ std::optional<ModbusSimulator::Range> ModbusSimulator::range_of(ByteView pdu) {
   }
 }
 
-std::optional<Bytes> ModbusSimulator::answer(ByteView pdu) {
+std::optional<Bytes> ModbusSimulator::answer(ByteView request) {
+  const auto own = std::find_if(layouts_.begin(), layouts_.end(),
+                                [&](const CodeLayout& l) { return l.code == request[0]; });
+  if (own == layouts_.end()) return answer_laid_out(request);
+  Bytes pdu(request.begin(), request.end());
+  pdu[0] = own->like;
+  auto reply = answer_laid_out(pdu);
+  if (reply && !reply->empty() && !reply_as_layout_) {
+    (*reply)[0] = static_cast<std::uint8_t>(((*reply)[0] & kExceptionBit) | own->code);
+  }
+  return reply;
+}
+
+std::optional<Bytes> ModbusSimulator::answer_laid_out(ByteView pdu) {
   const auto range = range_of(pdu);
   if (range) {
     for (const Key& k : mute_) {
@@ -394,7 +407,7 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
       "point: TEXT) | "
       "raw TABLE ADDRESS WORD... | missing TABLE ADDRESS | refuse TABLE ADDRESS CODE [TIMES] | "
       "mute TABLE ADDRESS on|off | short TABLE ADDRESS on|off | silent on|off | late MS | "
-      "every-other on|off | help";
+      "every-other on|off | reply-code asked|layout | help";
   if (w.empty() || w[0] == "help") return "ok " + usage;
   if (w[0] == "state") return state();
   if (w[0] == "fault" && w.size() == 2) {
@@ -494,6 +507,11 @@ std::string ModbusSimulator::control(std::string_view line, TimePoint) {
     every_other_ = *parse_on_off(w[1]);
     heard_ = 0;
     return "ok every-other " + w[1];
+  }
+  if (w[0] == "reply-code" && w.size() == 2 && (w[1] == "asked" || w[1] == "layout")) {
+    reply_as_layout_ = w[1] == "layout";
+    return "ok own write codes answered under " +
+           std::string(reply_as_layout_ ? "the code they are laid out as" : "the code asked");
   }
   if (w[0] == "silent" && w.size() == 2 && parse_on_off(w[1])) {
     silent_ = *parse_on_off(w[1]);

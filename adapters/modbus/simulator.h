@@ -40,7 +40,10 @@ class ModbusSimulator final : public Simulator {
   [[nodiscard]] static std::optional<Range> range_of(ByteView pdu);
   // The reply to a request PDU as the operator's commands leave it: nothing (unanswered), an
   // exception (refused, the request not carried out), a read one register short, or handle()'s.
-  std::optional<Bytes> answer(ByteView pdu);
+  // A point's own write code (write_code) is served as the code it is laid out as, and answered
+  // under the code asked (or, after "reply-code layout", under the code it is laid out as).
+  std::optional<Bytes> answer(ByteView request);
+  std::optional<Bytes> answer_laid_out(ByteView pdu);
   [[nodiscard]] std::optional<Key> key_of(std::string_view table, std::string_view address) const;
 
   // The reply PDU to a request PDU (an exception where the slave would answer one).
@@ -63,6 +66,8 @@ class ModbusSimulator final : public Simulator {
 
   std::uint8_t address_;
   Profile profile_;
+  std::vector<CodeLayout> layouts_;  // the points' own write codes (write_layouts)
+  bool reply_as_layout_ = false;     // "reply-code layout": 0x41 answered as 0x06
   Bytes rx_;
   std::optional<TimePoint> last_rx_;
   std::map<Key, std::uint16_t> memory_;  // every register (or bit) of every point
