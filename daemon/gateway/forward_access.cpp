@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <optional>
+#include <vector>
 
 #include "drivegate/crc.h"
 #include "modbus_serial/serial_codec.h"
@@ -40,14 +42,32 @@ AccessLevel level_of(std::span<const std::uint8_t> pdu) {
   }
 }
 
-// The whole size of the request a length-parsing slave takes at the start of `rx` (address, PDU,
-// CRC), if it can tell: by the codec's lengths, and FC 08 at its forwarded length.
-std::optional<std::size_t> taken_at(ByteView rx) {
-  if (rx.size() < 2 || rx[0] > modbus_serial::kMaxSlave) return std::nullopt;
-  if (rx[1] == fc::diagnostics) return kForwardedDiagnostics + kRtuOverhead;
+// The whole sizes (address, PDU, CRC) a length-parsing slave may take the request at the start
+// of `rx` to have, where it can tell: by the codec's lengths, and FC 08 at its forwarded length.
+// A user-defined code (Application Protocol 5) has the layout its drive's manual gives it, such
+// as the "write without saving" 0x41 laid out as 0x06 (docs/profiles.md, "Writes that are not
+// saved"): either public write's, whichever a slave knows it by.
+std::vector<std::size_t> taken_at(ByteView rx) {
+  if (rx.size() < 2 || rx[0] > modbus_serial::kMaxSlave) return {};
+  if (rx[1] == fc::diagnostics) return {kForwardedDiagnostics + kRtuOverhead};
+  const auto size_as = [&](std::uint8_t layout) -> std::optional<std::size_t> {
+    // The PDU's first bytes with the code it is laid out as: FC 16's byte count is its sixth.
+    Bytes head(rx.begin() + 1, rx.begin() + static_cast<long>(std::min<std::size_t>(rx.size(), 7)));
+    head[0] = layout;
+    const RequestLength l = modbus_serial::request_length(head);
+    if (l.status != RequestLength::Status::known) return std::nullopt;
+    return l.size + kRtuOverhead;
+  };
+  std::vector<std::size_t> sizes;
+  if (modbus_serial::user_defined_code(rx[1])) {
+    for (const std::uint8_t layout : {fc::write_single_register, fc::write_multiple_registers}) {
+      if (const auto size = size_as(layout)) sizes.push_back(*size);
+    }
+    return sizes;
+  }
   const RequestLength l = modbus_serial::request_length(rx.subspan(1));
-  if (l.status != RequestLength::Status::known) return std::nullopt;
-  return l.size + kRtuOverhead;
+  if (l.status == RequestLength::Status::known) sizes.push_back(l.size + kRtuOverhead);
+  return sizes;
 }
 
 // Where a slave would find a request in `frame` (address, PDU, CRC) other than the frame itself:
@@ -57,8 +77,9 @@ std::optional<std::size_t> frame_inside(ByteView frame) {
   if (modbus_serial::crc_end(frame) != frame.size()) return 0;
   for (std::size_t at = 1; at + kRtuMinFrame <= frame.size(); ++at) {
     const ByteView rest = frame.subspan(at);
-    const auto size = taken_at(rest);
-    if (size && *size <= rest.size() && crc16_modbus_holds(rest.first(*size))) return at;
+    for (const std::size_t size : taken_at(rest)) {
+      if (size <= rest.size() && crc16_modbus_holds(rest.first(size))) return at;
+    }
   }
   return std::nullopt;
 }

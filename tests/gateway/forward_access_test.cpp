@@ -94,5 +94,38 @@ TEST(ForwardAccess, NoFrameALengthParsingSlaveWouldTakeMayHideInsideOne) {
             Outcome::ok);
 }
 
+// A drive of the library's own profiles takes the user-defined 0x41 ("write without saving") laid
+// out as FC 06 (vandt-e5-h, honwin-h120: docs/profiles.md, "Writes that are not saved"). A frame
+// under that code hidden in a forwarded request is a frame a slave would take: refused as the
+// same frame under 0x06 is, for the lowest access too. (Found by the write_code change's review.)
+TEST(ForwardAccess, AFrameUnderAUserDefinedCodeMayNotHideInsideOneEither) {
+  // FC 16 of 4 registers whose 8 data bytes are the V&T run, 0x8000 := 1, under 0x06 and 0x41.
+  for (const std::uint8_t code : {std::uint8_t{0x06}, std::uint8_t{0x41}}) {
+    const Bytes inner = with_crc({0x01, code, 0x80, 0x00, 0x00, 0x01});
+    Bytes pdu = {0x10, 0x01, 0x00, 0x00, 0x04, 0x08};
+    pdu.insert(pdu.end(), inner.begin(), inner.end());
+    const ForwardVerdict v = judge_forward(pdu, kSlave);
+    EXPECT_EQ(v.refusal, Outcome::invalid_value) << "code " << int{code};
+    EXPECT_THAT(v.why, HasSubstr("a whole request inside it")) << "code " << int{code};
+  }
+  // A read file record (FC 14: read access) whose reference-type bytes (6) frame the V&T
+  // frequency setting 0x8001 := 0x0600 under 0x41.
+  const Bytes inner = with_crc({0x01, 0x41, 0x80, 0x01, 0x06, 0x00});
+  Bytes pdu = {0x14, 14, 0x06, 0x00, 0x00};
+  pdu.insert(pdu.end(), inner.begin(), inner.end());
+  pdu.insert(pdu.end(), {0x00, 0x00, 0x01});
+  const ForwardVerdict v = judge_forward(pdu, kSlave);
+  EXPECT_EQ(v.needs, AccessLevel::read);
+  EXPECT_EQ(v.refusal, Outcome::invalid_value);
+  EXPECT_THAT(v.why, HasSubstr("a whole request inside it"));
+  // Laid out as FC 16 (0x42 on the same drives): address, quantity, byte count, data.
+  const Bytes multi = with_crc({0x01, 0x42, 0x80, 0x00, 0x00, 0x01, 0x02, 0x00, 0x01});
+  Bytes carrier = {0x10, 0x01, 0x00, 0x00, 0x06, 0x0C};
+  carrier.insert(carrier.end(), multi.begin(), multi.end());
+  carrier.insert(carrier.end(), {0x00});
+  ASSERT_EQ(carrier.size(), 6u + 12u);
+  EXPECT_EQ(judge_forward(carrier, kSlave).refusal, Outcome::invalid_value);
+}
+
 }  // namespace
 }  // namespace drivegate
