@@ -87,6 +87,7 @@ Fault fault_of(const FaultBinding& b, std::uint32_t native) {
 ModbusDriver::ModbusDriver(std::uint8_t address, Profile profile, Timing timing,
                            Millis poll_interval, std::string files_read)
     : profile_(std::move(profile)),
+      layouts_(write_layouts(profile_)),
       speed_scale_(
           rpm_scale(profile_.common.speed_factor, profile_.common.speed_offset, profile_.options)),
       setpoint_scale_(rpm_scale(profile_.common.setpoint_factor, profile_.common.setpoint_offset,
@@ -174,8 +175,8 @@ DriverTraits ModbusDriver::traits() const {
 }
 
 // A drive that takes a user-defined write code may answer under it or under the code whose layout
-// it has (the V&T and Honwin manuals print 0x06 in the reply beside "0x06 (0x41)"): either is the
-// echo, which confirm() then checks.
+// it has: the V&T and Honwin manuals describe 0x41 with 0x06's frame ("0x06 (0x41)") and print no
+// reply of it. Either is the echo, which confirm() then checks.
 bool ModbusDriver::Job::answered_by(std::uint8_t reply_function) const {
   return reply_function == function || (layout.code != 0 && reply_function == layout.like);
 }
@@ -263,8 +264,7 @@ RxVerdict ModbusDriver::on_receive(ByteView rx, TimePoint now) {
   last_now_ = now;
   if (rx.empty()) return {};
   if (!inflight_) return {RxKind::noise, rx.size()};
-  const CodeLayouts layouts(&inflight_->layout, inflight_->layout.code != 0 ? 1 : 0);
-  const Decoded<Adu> d = decode_reply(profile_.line.framing, rx, layouts);
+  const Decoded<Adu> d = decode_reply(profile_.line.framing, rx, layouts_);
   switch (d.status) {
     case DecodeStatus::incomplete:
       return {};

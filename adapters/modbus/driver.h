@@ -200,6 +200,9 @@ class ModbusDriver final : public DriverBase {
   void fail_inflight();
 
   Profile profile_;
+  // The points' own write codes (write_layouts): every reply is delimited with them, so that an
+  // echo arriving late, after its write timed out, is still taken whole (and is foreign).
+  std::vector<CodeLayout> layouts_;
   // rpm = engineering value x factor + offset (the profile's rpm_factor and rpm_offset with the
   // device's options).
   RpmScale speed_scale_;

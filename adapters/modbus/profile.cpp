@@ -312,8 +312,10 @@ class Parser {
     return true;
   }
 
-  // write_code = 0x41: a user-defined code (Application Protocol 5) a writable holding register is
-  // written with, laid out as the code it would otherwise go with; one code, one layout.
+  // write_code = 0x41: a user-defined code (Application Protocol 5) a writable one-register
+  // holding point is written with, laid out as FC 06 (the manuals that give such a code for one
+  // register lay it out so); a point written with FC 16 has none (no manual read lays out a code
+  // for several registers the same way).
   bool read_write_code(TableReader& r, ProfilePoint& p) {
     const toml::node* n = r.node("write_code");
     if (n == nullptr) return true;
@@ -322,7 +324,7 @@ class Parser {
     if (!user_defined_code(static_cast<unsigned>(*code))) {
       diag_.error(n, "point.write_code",
                   "must be a user-defined function code (65..72 or 100..110, Application "
-                  "Protocol 5) that the device's manual lays out as 6 or 16, got " +
+                  "Protocol 5) that the device's manual lays out as 6, got " +
                       std::to_string(*code));
       return false;
     }
@@ -331,18 +333,13 @@ class Parser {
                   "names how a point is written: only a writable holding register has one");
       return false;
     }
-    p.write_code = static_cast<std::uint8_t>(*code);
-    const std::uint8_t like = write_function(profile_.modbus, p);
-    for (const ProfilePoint& q : profile_.points) {
-      if (q.write_code == p.write_code && write_function(profile_.modbus, q) != like) {
-        diag_.error(n, "point.write_code",
-                    std::to_string(p.write_code) + " is laid out as " + std::to_string(like) +
-                        " here, and as " + std::to_string(write_function(profile_.modbus, q)) +
-                        " for '" + q.name + "' (line " + std::to_string(q.line) +
-                        "): one code has one layout");
-        return false;
-      }
+    if (write_function(profile_.modbus, p) != fc::write_single_register) {
+      diag_.error(n, "point.write_code",
+                  "is laid out as FC 06: only a one-register point under [modbus] write = "
+                  "\"single\" has one (this one is written with FC 16)");
+      return false;
     }
+    p.write_code = static_cast<std::uint8_t>(*code);
     return true;
   }
 

@@ -107,10 +107,9 @@ struct ProfilePoint {
   // A u16 register point that is some of its register's bits: value = (raw & mask) >> the
   // mask's lowest set bit. Read-only; points whose masks do not overlap share a register.
   std::optional<std::uint16_t> mask;
-  // A holding register point written with a user-defined function code of the device (write_code
-  // = 0x41) laid out as the protocol's code it would otherwise be written with (write_function):
-  // the "write without saving to EEPROM" 0x41 / 0x42 of inverters whose 0x06 / 0x10 save every
-  // write. 0: the protocol's code.
+  // A one-register holding point written with a user-defined function code of the device
+  // (write_code = 0x41) laid out as FC 06: the "write without saving to EEPROM" of inverters
+  // whose 0x06 saves every write. 0: the protocol's code (write_function).
   std::uint8_t write_code = 0;
 
   [[nodiscard]] std::uint16_t width() const { return width_of(type, registers); }

@@ -187,6 +187,13 @@ void check_write(const Profile& profile, const ProfileExample& e, const Adu& req
       out.push_back("'" + name + "' is not in the registers the request writes");
       continue;
     }
+    // A device's own code writes the points that name it (the protocol's codes may write those
+    // too: a manual's frames that save).
+    if (request.pdu[0] != fn && p.write_code != request.pdu[0]) {
+      const std::string code = "0x" + hex_text(Bytes{request.pdu[0]});
+      out.push_back("'" + name + "' is not written with " + code +
+                    " (its point has no write_code = " + code + ")");
+    }
     const auto mine = words_for(p, want);
     if (!mine) {
       out.push_back("'" + name + "' cannot carry " + number_text(want));

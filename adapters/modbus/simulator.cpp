@@ -112,6 +112,14 @@ std::optional<Bytes> ModbusSimulator::answer(ByteView request) {
   if (own == layouts_.end()) return answer_laid_out(request);
   Bytes pdu(request.begin(), request.end());
   pdu[0] = own->like;
+  // The code writes the registers of the points that name it, and no other (illegal function).
+  const auto range = range_of(pdu);
+  const bool its_own =
+      range &&
+      std::any_of(profile_.points.begin(), profile_.points.end(), [&](const ProfilePoint& p) {
+        return p.write_code == own->code && p.table == range->table && p.address == range->start;
+      });
+  if (!its_own) return exception_pdu(request[0], kIllegalFunction);
   auto reply = answer_laid_out(pdu);
   if (reply && !reply->empty() && !reply_as_layout_) {
     (*reply)[0] = static_cast<std::uint8_t>(((*reply)[0] & kExceptionBit) | own->code);

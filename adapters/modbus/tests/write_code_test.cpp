@@ -1,6 +1,6 @@
-// A point's own write code (point.write_code): inverters whose 0x06 / 0x10 save every write to
-// EEPROM offer 0x41 / 0x42 "without saving", of the same layout (docs/profiles.md, "Writes that
-// are not saved"). On the real bus engine against the simulator (tests/support/adapter_bench.h):
+// A point's own write code (point.write_code): inverters whose 0x06 saves every write to EEPROM
+// offer 0x41 "without saving", of the same layout (docs/profiles.md, "Writes that are not
+// saved"). On the real bus engine against the simulator (tests/support/adapter_bench.h):
 // the frames on the wire carry the point's code and only its; the echo confirms a write whether
 // the drive answers under the code sent or under the one it is laid out as; an echo that holds a
 // good CRC before its end is still taken whole; an exception under either code is a refusal; a
@@ -22,6 +22,7 @@
 #include "profile.h"
 #include "profile_examples.h"
 #include "profile_support.h"
+#include "simulator.h"
 
 namespace drivegate::modbus_device {
 namespace {
@@ -32,7 +33,7 @@ using testing::ElementsAre;
 using testing::HasSubstr;
 
 // Holding 0 its command word (FC 06), holding 1 its frequency (rpm, written with `code`),
-// holding 4..5 a two-register limit (written with `code2` when given); input 16 its actual speed,
+// holding 4..5 a two-register limit (FC 16; `code2` added to it); input 16 its actual speed,
 // input 17 its status (bit 0 running).
 std::string unsaved_inverter(const std::string& code, const std::string& code2 = "",
                              const std::string& extra = "") {
@@ -54,7 +55,6 @@ std::string unsaved_inverter(const std::string& code, const std::string& code2 =
 }
 
 const std::string kUnsaved = "write_code = 0x41\n";
-const std::string kUnsavedPair = "write_code = 0x42\n";
 
 // The RTU frame to unit 1: the PDU and its CRC, low byte first (Serial Line 6.2.2).
 Bytes unit1_rtu(Bytes pdu) {
@@ -76,7 +76,7 @@ std::string example_hex(const Bytes& frame) {
 }
 
 TEST(ModbusWriteCode, APointsWritesGoWithItsCodeAndOnlyItsAndTheEchoConfirmsThem) {
-  const support::ProfileFile file(unsaved_inverter(kUnsaved, kUnsavedPair), "inv.toml");
+  const support::ProfileFile file(unsaved_inverter(kUnsaved), "inv.toml");
   test::AdapterBench b{drivegate_adapter, {.options = {{"profile", file.path}}}};
   ASSERT_TRUE(b.until_online());
   TimePoint from = b.rig.now();
@@ -87,25 +87,23 @@ TEST(ModbusWriteCode, APointsWritesGoWithItsCodeAndOnlyItsAndTheEchoConfirmsThem
   EXPECT_EQ(b.count(unit1_rtu({0x06, 0x00, 0x00, 0x00, 0x01}), from), 1u);
   EXPECT_TRUE(b.rig.run_until([&] { return b.read("speed_rpm") == 1200u; }, 2s));
   EXPECT_EQ(b.read("setpoint_rpm"), 1200u);
-  // Two registers: 0x42 in FC 16's layout.
+  // A point without the code keeps the protocol's: the limit with FC 16.
   from = b.rig.now();
   ASSERT_EQ(b.write_point("limit", 70000), Outcome::ok);
-  EXPECT_EQ(b.count(unit1_rtu({0x42, 0x00, 0x04, 0x00, 0x02, 0x04, 0x00, 0x01, 0x11, 0x70}), from),
+  EXPECT_EQ(b.count(unit1_rtu({0x10, 0x00, 0x04, 0x00, 0x02, 0x04, 0x00, 0x01, 0x11, 0x70}), from),
             1u);
   EXPECT_EQ(b.read("limit"), 70000u);
-  // The frequency and the limit never went with the saving codes.
+  // The frequency never went with the saving code.
   for (const Bytes& f : b.frames()) {
     ASSERT_GE(f.size(), 4u);
-    const bool frequency = f[1] == 0x06 && f[2] == 0x00 && f[3] == 0x01;
-    const bool limit = f[1] == 0x10 && f[2] == 0x00 && f[3] == 0x04;
-    EXPECT_FALSE(frequency || limit) << "a saving write went out";
+    EXPECT_FALSE(f[1] == 0x06 && f[2] == 0x00 && f[3] == 0x01) << "a saving write went out";
   }
 }
 
 // The manuals describe 0x41 with 0x06's frame and print no 0x41 reply: a drive that answers under
 // 0x06 has taken the write, and the PLC is told so.
 TEST(ModbusWriteCode, AnEchoUnderTheCodeOfItsLayoutConfirmsTheWrite) {
-  const support::ProfileFile file(unsaved_inverter(kUnsaved, kUnsavedPair), "inv.toml");
+  const support::ProfileFile file(unsaved_inverter(kUnsaved), "inv.toml");
   test::AdapterBench b{drivegate_adapter, {.options = {{"profile", file.path}}}};
   ASSERT_TRUE(b.until_online());
   ASSERT_EQ(b.control("reply-code layout").rfind("ok", 0), 0u);
@@ -113,8 +111,21 @@ TEST(ModbusWriteCode, AnEchoUnderTheCodeOfItsLayoutConfirmsTheWrite) {
   ASSERT_EQ(b.write({900}, kSetpointRegister), Outcome::ok);
   EXPECT_EQ(b.count(unit1_rtu({0x41, 0x00, 0x01, 0x03, 0x84}), from), 1u);
   EXPECT_EQ(b.read("setpoint_rpm"), 900u);
-  ASSERT_EQ(b.write_point("limit", 5), Outcome::ok);
-  EXPECT_EQ(b.read("limit"), 5u);
+}
+
+// The simulator plays a drive that knows the code for the points that name it only: any other
+// register written with it is an illegal function (01), as a drive whose manual gives the code
+// for some registers would answer for the others.
+TEST(ModbusWriteCode, TheSimulatorServesTheCodeOnItsPointsOnly) {
+  const support::ProfileFile file(unsaved_inverter(kUnsaved), "inv.toml");
+  auto parsed = parse_profile(unsaved_inverter(kUnsaved), "inv.toml");
+  ASSERT_TRUE(std::holds_alternative<Profile>(parsed));
+  ModbusSimulator sim(1, std::get<Profile>(std::move(parsed)));
+  const TimePoint t{};
+  const Bytes own = sim.on_receive(unit1_rtu({0x41, 0x00, 0x01, 0x05, 0xDC}), t);
+  EXPECT_EQ(own, unit1_rtu({0x41, 0x00, 0x01, 0x05, 0xDC}));
+  const Bytes other = sim.on_receive(unit1_rtu({0x41, 0x00, 0x00, 0x00, 0x01}), t + 1s);
+  EXPECT_EQ(other, unit1_rtu({0xC1, 0x01}));
 }
 
 // An exception under either code (0xC1, or 0x86 from a drive that answers as 0x06) is the drive's
@@ -163,9 +174,10 @@ std::vector<std::string> code_errors_of(const std::string& text) {
   return std::get<std::vector<std::string>>(parsed);
 }
 
-TEST(ModbusWriteCode, ACodeIsAUserDefinedOneOnAWritableRegisterWithOneLayout) {
-  EXPECT_TRUE(code_errors_of(unsaved_inverter(kUnsaved, kUnsavedPair)).empty());
-  EXPECT_TRUE(code_errors_of(unsaved_inverter("write_code = 100\n", "write_code = 110\n")).empty());
+TEST(ModbusWriteCode, ACodeIsAUserDefinedOneOnAWritableRegisterWrittenWithFc06) {
+  EXPECT_TRUE(code_errors_of(unsaved_inverter(kUnsaved)).empty());
+  EXPECT_TRUE(code_errors_of(unsaved_inverter("write_code = 100\n")).empty());
+  EXPECT_TRUE(code_errors_of(unsaved_inverter("write_code = 110\n")).empty());
   // The protocol's own codes, a public one and an exception code are not a device's own.
   for (const char* code : {"write_code = 6\n", "write_code = 0x10\n", "write_code = 0x07\n",
                            "write_code = 0xC1\n", "write_code = 73\n"}) {
@@ -182,19 +194,17 @@ TEST(ModbusWriteCode, ACodeIsAUserDefinedOneOnAWritableRegisterWithOneLayout) {
                 ElementsAre(HasSubstr("point.write_code: names how a point is written")))
         << table;
   }
-  // One code, one layout: 0x41 as FC 06 for the frequency cannot be FC 16 for the limit.
-  EXPECT_THAT(
-      code_errors_of(unsaved_inverter(kUnsaved, kUnsaved)),
-      ElementsAre(HasSubstr("p.toml:26: point.write_code: 65 is laid out as 16 here, and as 6 "
-                            "for 'frequency' (line 12): one code has one layout")));
-  const Profile p =
-      std::get<Profile>(parse_profile(unsaved_inverter(kUnsaved, kUnsavedPair), "p.toml"));
+  // Laid out as FC 06: not on a point written with FC 16 (two registers, or write = "multiple").
+  EXPECT_THAT(code_errors_of(unsaved_inverter("", kUnsaved)),
+              ElementsAre(HasSubstr("p.toml:25: point.write_code: is laid out as FC 06")));
+  EXPECT_THAT(code_errors_of(support::replaced(unsaved_inverter(kUnsaved), "max_gap = 0\n",
+                                               "max_gap = 0\nwrite = \"multiple\"\n")),
+              ElementsAre(HasSubstr("point.write_code: is laid out as FC 06")));
+  const Profile p = std::get<Profile>(parse_profile(unsaved_inverter(kUnsaved), "p.toml"));
   const std::vector<CodeLayout> layouts = write_layouts(p);
-  ASSERT_EQ(layouts.size(), 2u);
+  ASSERT_EQ(layouts.size(), 1u);
   EXPECT_EQ(layouts[0].code, 0x41);
   EXPECT_EQ(layouts[0].like, fc::write_single_register);
-  EXPECT_EQ(layouts[1].code, 0x42);
-  EXPECT_EQ(layouts[1].like, fc::write_multiple_registers);
 }
 
 // The manual's own frames may use the code: its request writes the point, its echo may be under
@@ -220,6 +230,14 @@ TEST(ModbusWriteCode, AnExampleFrameMayUseThePointsCode) {
   ASSERT_TRUE(std::holds_alternative<Profile>(bad));
   EXPECT_THAT(check_examples(std::get<Profile>(bad), "p.toml"),
               ElementsAre(HasSubstr("the reply is not the slave's echo of the request")));
+  // The code writes the points that name it: not the command word.
+  const std::string elsewhere = "[[example]]\nrequest = \"" +
+                                example_hex(unit1_rtu({0x41, 0x00, 0x00, 0x00, 0x01})) +
+                                "\"\nexpect = { control = 1 }\n";
+  const auto other = parse_profile(unsaved_inverter(kUnsaved) + elsewhere, "p.toml");
+  ASSERT_TRUE(std::holds_alternative<Profile>(other));
+  EXPECT_THAT(check_examples(std::get<Profile>(other), "p.toml"),
+              ElementsAre(HasSubstr("'control' is not written with 0x41")));
 }
 
 }  // namespace
