@@ -352,6 +352,20 @@ void ModbusDriver::publish() {
   adopt();
 }
 
+// A fault shown, but for a speed the drive cannot read (sensor_fault): that is no trip, the
+// motor may turn.
+bool ModbusDriver::tripped() const {
+  FaultSet faults = common_.faults;
+  faults.clear(Fault::sensor_fault);
+  return !faults.empty();
+}
+
+// A reload made this driver in place of one that owed its drive a stop after a trip: owed here
+// too, so that the drive found turning (the fault cleared meanwhile) is stopped, not adopted.
+void ModbusDriver::take_over(const Owed& owed) {
+  if (owed.stop_after_trip && profile_.common.setpoint_runs) stop_owed_ = true;
+}
+
 // A drive its set value runs, found tripped with that value not 0 at the first whole cycle, would
 // restart when the fault clears: a stop is owed, as after a trip seen while it ran
 // (update_common), whatever a client wrote meanwhile. A speed it cannot read (sensor_fault) is no
@@ -360,9 +374,7 @@ void ModbusDriver::check_tripped_at_start() {
   const CommonBindings& c = profile_.common;
   if (start_checked_ || !common_.ready) return;
   start_checked_ = true;
-  FaultSet tripped = common_.faults;
-  tripped.clear(Fault::sensor_fault);
-  if (!c.setpoint_runs || tripped.empty() || engineering(c.setpoint_rpm).value_or(0) == 0) return;
+  if (!c.setpoint_runs || !tripped() || engineering(c.setpoint_rpm).value_or(0) == 0) return;
   stop_owed_ = true;
   stop_after_trip();
 }
@@ -659,11 +671,10 @@ void ModbusDriver::adopt() {
   // A drive its set value runs is commanded to run by that value not 0, untripped (a speed it
   // cannot read, sensor_fault, is no trip: it may turn); with 0 it is not (one still turning is
   // coasting down from a stop). A tripped one was handled by check_tripped_at_start().
+  // One a stop is owed to (its trip carried over a reload, Owed) is not adopted: the stop goes.
   const CommonBindings& c = profile_.common;
   if (c.setpoint_runs) {
-    FaultSet tripped = common_.faults;
-    tripped.clear(Fault::sensor_fault);
-    if (tripped.empty() && !bit_set_at_ && engineering(c.setpoint_rpm).value_or(0) != 0)
+    if (!stop_owed_ && !tripped() && !bit_set_at_ && engineering(c.setpoint_rpm).value_or(0) != 0)
       common_.command = Command::run_forward;
     return;
   }

@@ -63,6 +63,8 @@ class ModbusDriver final : public DriverBase {
   DRIVEGATE_DRIVER_OVERRIDES;
   [[nodiscard]] std::optional<TimePoint> state_read_at() const override;
   [[nodiscard]] std::string files_read() const override { return files_read_; }
+  [[nodiscard]] Owed owed() const override { return {.stop_after_trip = stop_owed_}; }
+  void take_over(const Owed& owed) override;
 
   // Which profile point each of points() is.
   [[nodiscard]] std::size_t profile_point(std::size_t point) const { return exposed_.at(point); }
@@ -190,9 +192,12 @@ class ModbusDriver final : public DriverBase {
   // with its set value not 0): its stop, the driver's own write (no ticket), so that the fault
   // clearing does not restart the motor at its set value; none while a stop is on its way.
   void stop_after_trip();
-  [[nodiscard]] bool stop_on_its_way() const;
+  // A command of a drive its set value runs waiting for the line or on it.
+  [[nodiscard]] bool on_its_way(Command command) const;
   void settle_waiting_runs();
   void check_tripped_at_start();
+  // A fault shown other than sensor_fault (a speed it cannot read is no trip).
+  [[nodiscard]] bool tripped() const;
   [[nodiscard]] Job write_job(const Writes::Entry& e) const;
   static void skip_the_way_in(Write& w);
   void confirm(const Job& j, ByteView pdu);

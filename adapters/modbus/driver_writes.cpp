@@ -130,9 +130,13 @@ std::optional<std::vector<std::uint16_t>> ModbusDriver::run_words(double rpm) co
 // its stop): such a run is refused (0x04) rather than confirmed and never turning.
 WriteCheck ModbusDriver::judge(const WriteOp& op, const Proposed& p) const {
   if (!write_of(op)) return WriteCheck::invalid_value;
+  // A drive its set value runs, tripped with no reset on its way: the run would be taken back by
+  // the trip's own stop at the next read, and a PLC asking again each cycle would flip the set
+  // value between its setpoint and 0. Reset first (a run behind a reset goes, as asked).
   if (profile_.common.setpoint_runs && op.target == WriteOp::Target::command &&
       op.command == Command::run_forward) {
     if (!run_words(p.setpoint_rpm)) return WriteCheck::refused;
+    if (tripped() && !on_its_way(Command::reset_fault)) return WriteCheck::refused;
   }
   return WriteCheck::ok;
 }
@@ -353,7 +357,7 @@ void ModbusDriver::settle_waiting_runs() {
 // refuses it is not asked every cycle, and the first failure is logged (the write has no ticket:
 // the log is where a stop that did not land shows).
 void ModbusDriver::stop_after_trip() {
-  if (stop_on_its_way() || last_now_ < stop_retry_at_) return;
+  if (on_its_way(Command::stop) || last_now_ < stop_retry_at_) return;
   auto w = write_of(WriteOp::of_command(Command::stop));
   if (!w) return;
   if (stop_tries_ == 1) {
@@ -368,13 +372,13 @@ void ModbusDriver::stop_after_trip() {
   writes_.push_front(std::move(*w), {}, last_now_ + send_limit());
 }
 
-bool ModbusDriver::stop_on_its_way() const {
-  const auto stop = [](const Write& w) {
-    return w.runs && w.change == Change::command && w.command == Command::stop;
+bool ModbusDriver::on_its_way(Command command) const {
+  const auto is = [command](const Write& w) {
+    return w.runs && w.change == Change::command && w.command == command;
   };
-  if (inflight_ && inflight_->write && stop(inflight_->write->job)) return true;
+  if (inflight_ && inflight_->write && is(inflight_->write->job)) return true;
   return std::any_of(writes_.begin(), writes_.end(),
-                     [&](const Writes::Entry& e) { return stop(e.job); });
+                     [&](const Writes::Entry& e) { return is(e.job); });
 }
 
 // The exchange on the line ended without an answer to the write it carried, if any.

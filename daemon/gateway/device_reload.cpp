@@ -7,6 +7,15 @@ namespace drivegate {
 void Device::take_over(const Device& old) {
   heartbeat_ = old.heartbeat_;
   image_.stale();
+  // Owed to the drive at that address on that bus: another drive is owed nothing.
+  const bool same_drive = old.config_.adapter == config_.adapter &&
+                          old.config_.bus == config_.bus && old.config_.address == config_.address;
+  const Owed owed = same_drive ? old.driver_->owed() : Owed{};
+  driver_->take_over(owed);
+  if (owed.stop_after_trip) {
+    log_->warn("device {}: the stop owed to the drive after its trip is carried over the reload",
+               config_.name);
+  }
   failsafe_.carry_over(old.failsafe_);
   if (failsafe_.state() == FailsafeWatchdog::State::armed) {
     log_->info("device {}: the failsafe stays armed across the reload, its deadline unchanged",

@@ -252,6 +252,14 @@ struct DeviceEnv {
   std::optional<LineDefaults> bus_line;
 };
 
+// What a driver owes its drive that a reload must not forget. A reload that changes a device
+// makes a new driver for it, which starts from what it reads (Device::take_over hands this over):
+// a stop owed after a trip (a drive its set value runs, which the fault clearing would restart)
+// would otherwise be forgotten, and the turning drive adopted as running.
+struct Owed {
+  bool stop_after_trip = false;
+};
+
 class Driver {
  public:
   virtual ~Driver() = default;
@@ -308,6 +316,11 @@ class Driver {
   // read nothing. A reload compares it like a setting: a device whose file changed is a changed
   // device, started afresh with the new content.
   [[nodiscard]] virtual std::string files_read() const { return {}; }
+
+  // What this driver owes its drive (Owed), and, on the driver a reload made in its place, taking
+  // that over before its first exchange. Drivers that owe nothing leave both.
+  [[nodiscard]] virtual Owed owed() const { return {}; }
+  virtual void take_over(const Owed& owed) { (void)owed; }
 };
 
 }  // namespace drivegate

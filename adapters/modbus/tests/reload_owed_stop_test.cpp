@@ -1,0 +1,206 @@
+// A reload while a stop is owed to a fan its set value runs (docs/profiles.md, "A set value that
+// runs the drive"): the fan tripped while running, the driver's own stop (set value 0) did not
+// reach it, and the device is changed by a reload before it did. The new driver owes the same
+// stop (Driver::owed, Device::take_over), so that a fan whose fault cleared meanwhile, turning
+// again at its old set value, is stopped rather than adopted as running. The real modbus driver in
+// devices the gateway builds and replaces, driven through their Station calls on a time the test
+// sets, the slave played by hand (as reload_test.cpp does).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <spdlog/sinks/null_sink.h>
+
+#include <boost/asio/io_context.hpp>
+
+#include "adapter_under_test.h"
+#include "bus/station.h"
+#include "gateway/gateway.h"
+#include "plugin/adapter_options.h"
+#include "profile_support.h"
+
+namespace drivegate::modbus_device::modbus_reload_owed_stop_test {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr std::uint8_t kSlave = 9;
+
+// Holding 0 resets the fan (4), holding 1 is its set value in rpm; input 16 its speed, input 17
+// bit 4 its error bit.
+constexpr std::string_view kFan =
+    "[profile]\nname = \"fan\"\nsource = \"a test\"\n[modbus]\nmax_gap = 0\nwrite = \"single\"\n"
+    "[[point]]\nname = \"reset\"\ntable = \"holding\"\naddress = 0\ntype = \"u16\"\n"
+    "access = \"operate\"\n"
+    "[[point]]\nname = \"set_value\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\n"
+    "min = 0\nmax = 3000\naccess = \"operate\"\n"
+    "[[point]]\nname = \"actual_speed\"\ntable = \"input\"\naddress = 16\ntype = \"u16\"\n"
+    "[[point]]\nname = \"motor_status\"\ntable = \"input\"\naddress = 17\ntype = \"u16\"\n"
+    "[common]\nspeed_rpm = \"actual_speed\"\n"
+    "setpoint_rpm = { point = \"set_value\", runs = true }\n"
+    "fault = { point = \"motor_status\", bit = 4 }\n"
+    "reset_fault = { point = \"reset\", value = 4 }\n";
+
+constexpr std::uint16_t kErrorBit = 1u << 4;
+
+// The fan as the test plays it: its registers, and whether it answers writes.
+struct FanState {
+  std::uint16_t set_value = 0;
+  std::uint16_t speed = 0;
+  std::uint16_t status = 0;
+  bool answers_writes = true;
+};
+
+class ReloadOwedStop : public ::testing::Test {
+ protected:
+  ReloadOwedStop() { plugins_.add(drivegate_adapter); }
+
+  Config config(Millis poll, std::uint32_t address = kSlave) const {
+    Config c;
+    c.path = "drivegate.toml";
+    BusConfig b;
+    b.name = "a";
+    b.port = "/nonexistent/tty-a";  // never opened: the test is the line
+    b.baud = 19200;
+    b.parity = Parity::even;
+    c.buses.push_back(b);
+    DeviceConfig d;
+    d.name = "fan";
+    d.bus = "a";
+    d.adapter = "modbus";
+    d.unit_id = 1;
+    d.address = address;
+    d.poll_interval = poll;
+    d.options = default_options(support::specialised_for(file_.path));
+    d.options.set("profile", file_.path);
+    c.devices.push_back(d);
+    return c;
+  }
+  std::unique_ptr<Gateway> build(const Config& c) {
+    std::vector<std::string> errors;
+    auto gw = Gateway::build(io_, c, plugins_, log_, errors);
+    EXPECT_TRUE(errors.empty()) << errors.front();
+    return gw;
+  }
+  TimePoint at(Millis ms) const { return t0_ + ms; }
+
+  // One exchange of `d` on a write turn, or a poll turn when it has no write: each frame kept in
+  // sent_, reads answered from fan_, FC 06 writes put in force and echoed (or unanswered).
+  void exchange(Device& d, Millis ms) {
+    auto ex = d.next_exchange(at(ms), Turn::write);
+    if (!ex) ex = d.next_exchange(at(ms), Turn::poll);
+    if (!ex) {
+      d.on_tick(at(ms));
+      return;
+    }
+    const Bytes& f = ex->frame;
+    sent_.push_back(f);
+    const std::uint8_t address = f[0];
+    const std::uint16_t start = static_cast<std::uint16_t>(f[2] << 8 | f[3]);
+    const std::uint16_t value = static_cast<std::uint16_t>(f[4] << 8 | f[5]);
+    if (f[1] == 0x06) {
+      if (!fan_.answers_writes) {
+        d.on_no_reply(at(ms));
+        d.on_tick(at(ms));
+        return;
+      }
+      if (start == 1) fan_.set_value = value;
+      d.on_receive(f, at(ms));
+    } else {
+      std::vector<std::uint16_t> words(value, 0);
+      for (std::uint16_t i = 0; i < value; ++i) {
+        const auto a = static_cast<std::uint16_t>(start + i);
+        if (f[1] == 0x03 && a == 1) words[i] = fan_.set_value;
+        if (f[1] == 0x04 && a == 16) words[i] = fan_.speed;
+        if (f[1] == 0x04 && a == 17) words[i] = fan_.status;
+      }
+      d.link().health.frame_good(at(ms));
+      d.on_receive(encode(Framing::rtu, address, support::words_pdu(f[1], words)), at(ms));
+      d.link().health.data_good(at(ms), at(ms));
+    }
+    d.on_tick(at(ms));
+  }
+  // Exchanges every `step` from `from` for `count` turns.
+  void run(Device& d, Millis from, int count, Millis step = 10ms) {
+    for (int i = 0; i < count; ++i) exchange(d, from + i * step);
+  }
+  // The FC 06 writes of the set value sent from `from` on.
+  std::vector<std::uint16_t> set_values_from(std::size_t from) const {
+    std::vector<std::uint16_t> out;
+    for (std::size_t i = from; i < sent_.size(); ++i) {
+      const Bytes& f = sent_[i];
+      if (f[1] == 0x06 && f[2] == 0 && f[3] == 1)
+        out.push_back(static_cast<std::uint16_t>(f[4] << 8 | f[5]));
+    }
+    return out;
+  }
+
+  // The old gateway's fan: found running at 1000 rpm (adopted), then tripped, its stop written
+  // and never answered: owed. Returns that gateway.
+  std::unique_ptr<Gateway> tripped_with_a_stop_owed() {
+    auto old = build(config(500ms));
+    Device& d = *old->find("fan");
+    fan_ = {1000, 1000, 0, true};
+    run(d, 0ms, 10);
+    EXPECT_TRUE(d.online());
+    EXPECT_EQ(d.state().command, Command::run_forward);  // adopted: its set value runs it
+    fan_.status = kErrorBit;
+    fan_.speed = 0;
+    fan_.answers_writes = false;
+    const std::size_t mark = sent_.size();
+    run(d, 600ms, 20);
+    EXPECT_EQ(d.state().command, Command::stop);
+    EXPECT_THAT(set_values_from(mark), ::testing::Contains(0));  // its stop, not answered
+    EXPECT_EQ(fan_.set_value, 1000);
+    EXPECT_TRUE(d.driver().owed().stop_after_trip);
+    return old;
+  }
+
+  const support::ProfileFile file_{std::string(kFan), "fan.toml"};
+  PluginRegistry plugins_;
+  boost::asio::io_context io_;
+  std::shared_ptr<spdlog::logger> log_ =
+      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>());
+  const TimePoint t0_ = Clock::now();
+  std::vector<Bytes> sent_;
+  FanState fan_;
+};
+
+// The fault clears during the reload and the fan turns again at its old set value: the new driver
+// writes the stop owed, and the PLC reads stop, never a run nobody asked for.
+TEST_F(ReloadOwedStop, TheNewDriverWritesTheStopTheOldOneOwed) {
+  auto old = tripped_with_a_stop_owed();
+  auto next = build(config(250ms));  // the poll interval changed: a changed device
+  old->hold_for_reload(*next);
+  next->adopt(*old);
+  old->stop();
+  Device& fresh = *next->find("fan");
+  fan_.status = 0;  // the fault cleared by itself: the fan turns at its old set value
+  fan_.speed = 1000;
+  fan_.answers_writes = true;
+  const std::size_t mark = sent_.size();
+  run(fresh, 2000ms, 20);
+  ASSERT_TRUE(fresh.online());
+  EXPECT_EQ(set_values_from(mark), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(fan_.set_value, 0);
+  EXPECT_EQ(fresh.state().command, Command::stop);
+  EXPECT_FALSE(fresh.driver().owed().stop_after_trip);  // paid: the drive confirmed it
+}
+
+// Moved to another address, it is another fan: nothing is owed to it, and one found turning is
+// adopted as running, as at any start.
+TEST_F(ReloadOwedStop, AnotherDriveIsOwedNothing) {
+  auto old = tripped_with_a_stop_owed();
+  auto next = build(config(500ms, kSlave + 1));
+  old->hold_for_reload(*next);
+  next->adopt(*old);
+  old->stop();
+  Device& fresh = *next->find("fan");
+  fan_ = {1000, 1000, 0, true};
+  const std::size_t mark = sent_.size();
+  run(fresh, 2000ms, 20);
+  ASSERT_TRUE(fresh.online());
+  EXPECT_THAT(set_values_from(mark), ::testing::IsEmpty());
+  EXPECT_EQ(fresh.state().command, Command::run_forward);
+}
+
+}  // namespace
+}  // namespace drivegate::modbus_device::modbus_reload_owed_stop_test
