@@ -130,13 +130,9 @@ std::optional<std::vector<std::uint16_t>> ModbusDriver::run_words(double rpm) co
 // its stop): such a run is refused (0x04) rather than confirmed and never turning.
 WriteCheck ModbusDriver::judge(const WriteOp& op, const Proposed& p) const {
   if (!write_of(op)) return WriteCheck::invalid_value;
-  // A drive its set value runs, tripped with no reset on its way: the run would be taken back by
-  // the trip's own stop at the next read, and a PLC asking again each cycle would flip the set
-  // value between its setpoint and 0. Reset first (a run behind a reset goes, as asked).
   if (profile_.common.setpoint_runs && op.target == WriteOp::Target::command &&
       op.command == Command::run_forward) {
     if (!run_words(p.setpoint_rpm)) return WriteCheck::refused;
-    if (tripped() && !on_its_way(Command::reset_fault)) return WriteCheck::refused;
   }
   return WriteCheck::ok;
 }

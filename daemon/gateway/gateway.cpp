@@ -166,10 +166,13 @@ void Gateway::adopt(Gateway& old) {
   std::erase(old.devices_, nullptr);
   for (const auto& gone : old.devices_) {
     if (!listed(diff.devices_removed, gone->config().name)) continue;
-    if (gone->failsafe_latched() || gone->state().running) {
+    const bool owed_stop = gone->driver().owed().stop_after_trip;
+    if (gone->failsafe_latched() || gone->state().running || owed_stop) {
       log_->warn("device {}: removed by the reload while {}: the gateway no longer watches it",
                  gone->config().name,
-                 gone->failsafe_latched() ? "its failsafe is latched" : "its drive runs");
+                 gone->failsafe_latched() ? "its failsafe is latched"
+                 : owed_stop              ? "its drive is owed a stop after a trip"
+                                          : "its drive runs");
     }
   }
   // Buses: the running one, port open, wherever its own settings are the same.
@@ -278,12 +281,11 @@ void Gateway::refused_broadcast(const Session& session, std::span<const std::uin
 
 void Gateway::refused_write(const Source& source, const Device* device, std::string asked,
                             Outcome result, std::string why) {
-  record_refusal(source, device, device != nullptr ? device->config().unit_id : 0,
-                 std::move(asked), result, std::move(why));
+  record_refusal(source, device, device != nullptr ? device->config().unit_id : 0, std::move(asked),
+                 result, std::move(why));
 }
 
-Outcome Gateway::refuse(const Session& session, std::uint8_t unit, std::string asked,
-                        Outcome why) {
+Outcome Gateway::refuse(const Session& session, std::uint8_t unit, std::string asked, Outcome why) {
   std::string more;
   if (why == Outcome::no_response) more = "the gateway is not running";
   if (why == Outcome::denied) more = "beyond access " + std::string(to_string(session.access));

@@ -299,31 +299,6 @@ TEST(ModbusSetValueRuns, AStopTheDriveKeepsRefusingIsAskedAgainBackedOff) {
   EXPECT_EQ(f.b.status() & kCommLost, 0u) << "the fan's state still read";
 }
 
-// A PLC that asks for a run again and again while the fan shows its trip: each run is refused
-// (0x04) and nothing is written, so the set value never flips between the setpoint and the trip's
-// own 0 at every cycle. Once the fault clears, the next run goes.
-TEST(ModbusSetValueRuns, ARunWhileTheTripIsShownIsRefusedUntilItClears) {
-  Fan f;
-  ASSERT_TRUE(f.running_at(1000));
-  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
-  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
-  f.b.rig.run_for(1s);  // the driver's own stop is written
-  const TimePoint from = f.b.rig.now();
-  for (int i = 0; i < 5; ++i) {
-    EXPECT_EQ(f.b.write({cmd::run_forward}), Outcome::refused);
-    f.b.rig.run_for(300ms);
-  }
-  EXPECT_TRUE(f.written(kSetValue, from).empty());
-  EXPECT_EQ(f.b.read("command"), cmd::stop);
-  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);  // cleared by the fan itself
-  f.b.rig.run_for(1s);
-  EXPECT_FALSE(f.turning());
-  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
-  ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
-  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{1000});
-  EXPECT_TRUE(f.speed_is(1000));
-}
-
 // A reset with no run in force writes 0 to the set value before the reset bit: the error clears
 // and the fan stays still until a client runs it again, at the setpoint it had.
 TEST(ModbusSetValueRuns, AResetAfterATripNeverRestartsTheFan) {
