@@ -224,13 +224,17 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   // the stop); the stops below drop the runs already queued.
   for (auto& d : devices_) d->close_to_clients();
   for (auto& d : devices_) {
-    if (!d->state().running || d->comm_lost()) continue;
+    // A drive owed a stop after a trip (Driver::owed) may read stopped while its set value would
+    // restart it once the fault clears, the daemon gone: it is stopped too.
+    const bool owed = d->driver().owed().stop_after_trip;
+    if ((!d->state().running && !owed) || d->comm_lost()) continue;
     if (d->config().on_shutdown == ShutdownAction::hold) {
       log_->info("device {}: left as it is for shutdown (on_shutdown = hold)", d->config().name);
       continue;
     }
     ++waiter->outstanding;
-    log_->info("device {}: stopping for shutdown", d->config().name);
+    log_->info("device {}: stopping for shutdown{}", d->config().name,
+               owed ? " (a stop is owed to it after a trip)" : "");
     d->command(
         Command::stop,
         [waiter, name = d->config().name, log = log_](Outcome outcome) {

@@ -1,10 +1,10 @@
-// A reload while a stop is owed to a fan its set value runs (docs/profiles.md, "A set value that
-// runs the drive"): the fan tripped while running, the driver's own stop (set value 0) did not
-// reach it, and the device is changed by a reload before it did. The new driver owes the same
-// stop (Driver::owed, Device::take_over), so that a fan whose fault cleared meanwhile, turning
-// again at its old set value, is stopped rather than adopted as running. The real modbus driver in
-// devices the gateway builds and replaces, driven through their Station calls on a time the test
-// sets, the slave played by hand (as reload_test.cpp does).
+// A reload (or a shutdown) while a stop is owed to a fan its set value runs (docs/profiles.md, "A
+// set value that runs the drive"): the fan tripped while running, the driver's own stop (set value
+// 0) did not reach it, and the device is changed by a reload, or the daemon stops, before it did.
+// The new driver owes the same stop (Driver::owed, Device::take_over), so that a fan whose fault
+// cleared meanwhile, turning again at its old set value, is stopped rather than adopted as running.
+// The real modbus driver in devices the gateway builds and replaces, driven through their Station
+// calls on a time the test sets, the slave played by hand (as reload_test.cpp does).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
@@ -200,6 +200,24 @@ TEST_F(ReloadOwedStop, AnotherDriveIsOwedNothing) {
   ASSERT_TRUE(fresh.online());
   EXPECT_THAT(set_values_from(mark), ::testing::IsEmpty());
   EXPECT_EQ(fresh.state().command, Command::run_forward);
+}
+
+// The daemon shutting down while the stop is owed: the fan reads stopped (tripped), but its set
+// value would restart it once the fault clears with no gateway left to stop it. Shutdown stops it,
+// and waits for its answer before the daemon goes on to exit.
+TEST_F(ReloadOwedStop, ShutdownWritesTheStopOwed) {
+  auto gw = tripped_with_a_stop_owed();
+  Device& d = *gw->find("fan");
+  fan_.answers_writes = true;
+  bool done = false;
+  gw->stop_drives(2000ms, [&] { done = true; });
+  EXPECT_FALSE(done) << "shutdown went on without the stop owed";
+  const std::size_t mark = sent_.size();
+  run(d, 3000ms, 10);
+  EXPECT_EQ(set_values_from(mark), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(fan_.set_value, 0);
+  EXPECT_TRUE(done);
+  EXPECT_FALSE(d.driver().owed().stop_after_trip);
 }
 
 }  // namespace

@@ -117,7 +117,6 @@ TEST(ModbusWriteCode, AnEchoUnderTheCodeOfItsLayoutConfirmsTheWrite) {
 // register written with it is an illegal function (01), as a drive whose manual gives the code
 // for some registers would answer for the others.
 TEST(ModbusWriteCode, TheSimulatorServesTheCodeOnItsPointsOnly) {
-  const support::ProfileFile file(unsaved_inverter(kUnsaved), "inv.toml");
   auto parsed = parse_profile(unsaved_inverter(kUnsaved), "inv.toml");
   ASSERT_TRUE(std::holds_alternative<Profile>(parsed));
   ModbusSimulator sim(1, std::get<Profile>(std::move(parsed)));
