@@ -39,6 +39,11 @@ inline const std::string kHzProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "
 // motor_poles / 100).
 inline const std::string kPercentProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "pct-drive");
 
+// fan: an EC fan its set value runs (setpoint_rpm runs = true): holding 0 resets its errors
+// (value 4), holding 1 is its set value in rpm, input 16 its actual speed, input 17 bit 4 its
+// error bit (set_value_runs_test.cpp, reload_owed_stop_test.cpp).
+inline const std::string kFanProfile = profile_text(DRIVEGATE_TEST_PROFILE_DIR, "fan");
+
 // A profile's [[point]] `name` in `table` at `address`, of `type`, with the keys in `more` (five
 // lines and those of `more`).
 inline std::string point(const std::string& name, const std::string& table, int address,

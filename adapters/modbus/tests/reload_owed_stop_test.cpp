@@ -24,21 +24,6 @@ using namespace std::chrono_literals;
 
 constexpr std::uint8_t kSlave = 9;
 
-// Holding 0 resets the fan (4), holding 1 is its set value in rpm; input 16 its speed, input 17
-// bit 4 its error bit.
-constexpr std::string_view kFan =
-    "[profile]\nname = \"fan\"\nsource = \"a test\"\n[modbus]\nmax_gap = 0\nwrite = \"single\"\n"
-    "[[point]]\nname = \"reset\"\ntable = \"holding\"\naddress = 0\ntype = \"u16\"\n"
-    "access = \"operate\"\n"
-    "[[point]]\nname = \"set_value\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\n"
-    "min = 0\nmax = 3000\naccess = \"operate\"\n"
-    "[[point]]\nname = \"actual_speed\"\ntable = \"input\"\naddress = 16\ntype = \"u16\"\n"
-    "[[point]]\nname = \"motor_status\"\ntable = \"input\"\naddress = 17\ntype = \"u16\"\n"
-    "[common]\nspeed_rpm = \"actual_speed\"\n"
-    "setpoint_rpm = { point = \"set_value\", runs = true }\n"
-    "fault = { point = \"motor_status\", bit = 4 }\n"
-    "reset_fault = { point = \"reset\", value = 4 }\n";
-
 constexpr std::uint16_t kErrorBit = 1u << 4;
 
 // The fan as the test plays it: its registers, and whether it answers writes.
@@ -154,7 +139,7 @@ class ReloadOwedStop : public ::testing::Test {
     return old;
   }
 
-  const support::ProfileFile file_{std::string(kFan), "fan.toml"};
+  const support::ProfileFile file_{support::kFanProfile, "fan.toml"};
   PluginRegistry plugins_;
   boost::asio::io_context io_;
   std::shared_ptr<spdlog::logger> log_ =

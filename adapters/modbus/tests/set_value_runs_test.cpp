@@ -25,21 +25,6 @@ using namespace test::common_block;
 using testing::ElementsAre;
 using testing::HasSubstr;
 
-// Holding 0 resets the fan's errors (value 4), holding 1 is its set value in rpm, input 16 its
-// actual speed, input 17 bit 4 its error bit.
-constexpr std::string_view kFan =
-    "[profile]\nname = \"fan\"\nsource = \"a test\"\n[modbus]\nmax_gap = 0\nwrite = \"single\"\n"
-    "[[point]]\nname = \"reset\"\ntable = \"holding\"\naddress = 0\ntype = \"u16\"\n"
-    "access = \"operate\"\n"
-    "[[point]]\nname = \"set_value\"\ntable = \"holding\"\naddress = 1\ntype = \"u16\"\n"
-    "min = 0\nmax = 3000\naccess = \"operate\"\n"
-    "[[point]]\nname = \"actual_speed\"\ntable = \"input\"\naddress = 16\ntype = \"u16\"\n"
-    "[[point]]\nname = \"motor_status\"\ntable = \"input\"\naddress = 17\ntype = \"u16\"\n"
-    "[common]\nspeed_rpm = \"actual_speed\"\n"
-    "setpoint_rpm = { point = \"set_value\", runs = true }\n"
-    "fault = { point = \"motor_status\", bit = 4 }\n"
-    "reset_fault = { point = \"reset\", value = 4 }\n";
-
 constexpr std::uint16_t kSetValue = 1;
 constexpr std::uint16_t kReset = 0;
 
@@ -56,7 +41,7 @@ std::vector<std::uint16_t> written(const test::AdapterBench& b, std::uint16_t ad
 }
 
 struct Fan {
-  support::ProfileFile file{std::string(kFan), "fan.toml"};
+  support::ProfileFile file{support::kFanProfile, "fan.toml"};
   test::AdapterBench b{drivegate_adapter, {.options = {{"profile", file.path}}}};
 
   [[nodiscard]] std::vector<std::uint16_t> written(std::uint16_t address, TimePoint from) const {
@@ -403,7 +388,7 @@ TEST(ModbusSetValueRuns, ANegativeSetpointIsRefused) {
 // stop writes that, not 0; the drive stays still while its set value still holds the last run's,
 // a setpoint written meanwhile is held, and the next run writes the set value again.
 TEST(ModbusSetValueRuns, AStopOfItsOwnIsWrittenAndTheNextRunWritesTheSetValueAgain) {
-  std::string text(kFan);
+  std::string text(support::kFanProfile);
   text += "stop = { point = \"brake\", value = 0 }\n";
   text.insert(text.find("[common]"),
               "[[point]]\nname = \"brake\"\ntable = \"holding\"\naddress = 2\ntype = \"u16\"\n"
@@ -428,7 +413,7 @@ TEST(ModbusSetValueRuns, AStopOfItsOwnIsWrittenAndTheNextRunWritesTheSetValueAga
 }
 
 std::vector<std::string> errors_of(const std::string& common) {
-  std::string text(kFan);
+  std::string text(support::kFanProfile);
   text = text.substr(0, text.find("[common]")) + common;
   auto parsed = parse_profile(text, "p.toml");
   if (std::holds_alternative<Profile>(parsed)) return {};
@@ -443,14 +428,14 @@ TEST(ModbusSetValueRuns, AProfileSaysNoOtherRunOrStopAndASetValueThatTakesZero) 
   EXPECT_THAT(errors_of(runs + "unbound = { run_forward = \"none\" }\n"),
               ElementsAre(HasSubstr("common.run_forward: goes not with")));
   EXPECT_TRUE(errors_of(runs + "stop = { point = \"reset\", value = 0 }\n").empty());
-  std::string text(kFan);
+  std::string text(support::kFanProfile);
   text.replace(text.find("min = 0"), 7, "min = 100");
   text = text.substr(0, text.find("[common]")) + runs;
   auto parsed = parse_profile(text, "p.toml");
   ASSERT_TRUE(std::holds_alternative<std::vector<std::string>>(parsed));
   EXPECT_THAT(std::get<std::vector<std::string>>(parsed),
               ElementsAre(HasSubstr("'set_value' must take 0 (its min..max)")));
-  text = std::string(kFan);
+  text = support::kFanProfile;
   text.replace(text.find("type = \"u16\"\nmin = 0"), 12, "type = \"u32\"");
   text = text.substr(0, text.find("[common]")) + runs;
   parsed = parse_profile(text, "p.toml");
