@@ -639,7 +639,12 @@ void ModbusDriver::update_common() {
   // A drive its set value runs shows no run bit: a fault ends its run whatever its speed (it may
   // be coasting), and the driver stops it, so that the fault clearing (by itself, or a reset from
   // its keypad) does not restart the motor while the command reads stop.
-  if (active && is_run(common_.command) && (!common_.running || c.setpoint_runs)) {
+  // A run a client asked for while this trip was shown is not ended by it: the PLC asked with the
+  // fault in view (a PLC that re-sends run each cycle would otherwise see the fan's set value
+  // written and stopped in turn); the fan runs once the fault clears, as its command reads.
+  if (!active) run_in_trip_ = false;
+  const bool ends_run = c.setpoint_runs ? !run_in_trip_ : !common_.running;
+  if (active && is_run(common_.command) && ends_run) {
     common_.command = Command::stop;
     if (c.setpoint_runs) stop_owed_ = true;
   }

@@ -94,6 +94,9 @@ class ModbusDriver final : public DriverBase {
     // never lost to a stop, nor a run to a setpoint); a newer run or stop overtakes an older one,
     // whichever points each writes (a stop of its own beside a run by the set value).
     bool runs = false;
+    // A run a client asked for while the drive's trip was shown (apply): the trip does not end it
+    // (update_common), so that a PLC re-sending run is not answered by the trip's stop each cycle.
+    bool asked_in_trip = false;
 
     // Whether this write puts a value in `p`.
     [[nodiscard]] bool writes_to(std::size_t p) const {
@@ -246,6 +249,9 @@ class ModbusDriver final : public DriverBase {
   // A stop the driver owes a drive its set value runs, after a trip (stop_after_trip): until the
   // drive confirms a stop, or a client's run.
   bool stop_owed_ = false;
+  // The run in force was asked for while the trip was shown (Write::asked_in_trip): that trip does
+  // not end it; the next read showing no trip does (a later trip is a new one).
+  bool run_in_trip_ = false;
   bool start_checked_ = false;  // check_tripped_at_start() done
   // The owed stop's tries: not written again before `stop_retry_at_`, the wait doubling from the
   // poll interval up to the comm timeout; the first failure is logged once.

@@ -214,6 +214,7 @@ WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   adopting_ = false;  // a client decides from now on
   auto w = write_of(op);
   if (!w) return WriteStatus::invalid_value;
+  w->asked_in_trip = w->runs && w->change == Change::command && is_run(w->command) && tripped();
   if (w->runs && w->change == Change::setpoint && holds_setpoint_now()) {
     common_.setpoint_rpm = op.rpm;
     return WriteStatus::done;
@@ -322,6 +323,7 @@ void ModbusDriver::put_in_force(const Write& w) {
       if (w.command != Command::reset_fault) common_.command = w.command;
       // A stop owed after a trip is paid by any stop the drive took, or ended by a client's run.
       if (w.command != Command::reset_fault) {
+        run_in_trip_ = w.asked_in_trip;
         stop_owed_ = false;
         stop_tries_ = 0;
         stop_retry_at_ = {};
@@ -337,13 +339,13 @@ void ModbusDriver::put_in_force(const Write& w) {
   }
 }
 
-// A run that waits while a trip is shown was asked before the trip was: over, as a newer stop
-// overtakes it in apply().
+// A run that waits while a trip is shown, asked before the trip was, is over, as a newer stop
+// overtakes it in apply(). One asked with the trip shown goes after the stop owed.
 void ModbusDriver::settle_waiting_runs() {
   writes_.settle_if(
       [](const Writes::Entry& e) {
         return e.job.runs && e.job.change == Change::command &&
-               e.job.command == Command::run_forward;
+               e.job.command == Command::run_forward && !e.job.asked_in_trip;
       },
       WriteResult::no_response);
 }

@@ -236,6 +236,55 @@ TEST(ModbusSetValueRuns, AResetThenARunAreBothCarriedOut) {
   EXPECT_EQ(f.b.read("command"), cmd::run_forward);
 }
 
+// A PLC that re-sends run each cycle to a fan whose trip stays: the trip's own stop is written
+// once; the runs asked with the trip shown are written as asked and the trip does not end them, so
+// the set value is not written and stopped in turn. The fan runs once the fault clears, as the
+// command the PLC reads (run) says.
+TEST(ModbusSetValueRuns, ARunResentWhileTheTripStaysIsNotStoppedEachCycle) {
+  Fan f;
+  ASSERT_TRUE(f.running_at(1000));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  ASSERT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 1s));
+  for (int cycle = 0; cycle < 8; ++cycle) {
+    EXPECT_EQ(f.b.write({cmd::run_forward}), Outcome::ok) << "cycle " << cycle;
+    f.b.rig.run_for(500ms);
+  }
+  const auto values = f.written(kSetValue, from);
+  ASSERT_GE(values.size(), 2u);
+  EXPECT_EQ(values.front(), 0u) << "the trip's own stop";
+  EXPECT_THAT(std::vector<std::uint16_t>(values.begin() + 1, values.end()),
+              testing::Each(1000u))
+      << "no 0 after the first run asked with the trip shown";
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+  EXPECT_NE(f.b.status() & kFaulted, 0u);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  EXPECT_TRUE(f.speed_is(1000));
+}
+
+// The run asked with a trip shown outlives that trip only: once a read shows the fault gone, a
+// new trip ends it and the driver writes the stop, as for any run.
+TEST(ModbusSetValueRuns, ARunAskedInATripIsEndedByTheNextTrip) {
+  Fan f;
+  ASSERT_TRUE(f.running_at(1000));
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  f.b.rig.run_for(1s);  // the trip's own stop is written
+  ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.speed_is(1000));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  EXPECT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 1s));
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  f.b.rig.run_for(2s);
+  EXPECT_FALSE(f.turning());
+}
+
 // Found tripped at start with a set value, while a client writes its setpoint before the first
 // whole cycle: the stop is owed all the same, so the fault clearing does not start the fan.
 TEST(ModbusSetValueRuns, AFanFoundTrippedAtStartIsStoppedWhateverAClientWroteFirst) {
