@@ -4,18 +4,11 @@
 // The new driver owes the same stop (Driver::owed, Device::take_over), so that a fan whose fault
 // cleared meanwhile, turning again at its old set value, is stopped rather than adopted as running.
 // The real modbus driver in devices the gateway builds and replaces, driven through their Station
-// calls on a time the test sets, the slave played by hand (as reload_test.cpp does).
+// calls on a time the test sets, the slave played by hand (support::ReloadRig).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <spdlog/sinks/null_sink.h>
 
-#include <boost/asio/io_context.hpp>
-
-#include "adapter_under_test.h"
-#include "bus/station.h"
-#include "gateway/gateway.h"
-#include "plugin/adapter_options.h"
-#include "profile_support.h"
+#include "reload_support.h"
 
 namespace drivegate::modbus_device::modbus_reload_owed_stop_test {
 namespace {
@@ -34,38 +27,15 @@ struct FanState {
   bool answers_writes = true;
 };
 
-class ReloadOwedStop : public ::testing::Test {
+class ReloadOwedStop : public support::ReloadRig {
  protected:
-  ReloadOwedStop() { plugins_.add(drivegate_adapter); }
+  ReloadOwedStop() : ReloadRig(support::kFanProfile, "fan.toml") {}
 
-  Config config(Millis poll, std::uint32_t address = kSlave) const {
-    Config c;
-    c.path = "drivegate.toml";
-    BusConfig b;
-    b.name = "a";
-    b.port = "/nonexistent/tty-a";  // never opened: the test is the line
-    b.baud = 19200;
-    b.parity = Parity::even;
-    c.buses.push_back(b);
-    DeviceConfig d;
-    d.name = "fan";
-    d.bus = "a";
-    d.adapter = "modbus";
-    d.unit_id = 1;
-    d.address = address;
+  [[nodiscard]] Config config(Millis poll, std::uint32_t address = kSlave) const {
+    DeviceConfig d = device("fan", address);
     d.poll_interval = poll;
-    d.options = default_options(support::specialised_for(file_.path));
-    d.options.set("profile", file_.path);
-    c.devices.push_back(d);
-    return c;
+    return ReloadRig::config(d);
   }
-  std::unique_ptr<Gateway> build(const Config& c) {
-    std::vector<std::string> errors;
-    auto gw = Gateway::build(io_, c, plugins_, log_, errors);
-    EXPECT_TRUE(errors.empty()) << errors.front();
-    return gw;
-  }
-  TimePoint at(Millis ms) const { return t0_ + ms; }
 
   // One exchange of `d` on a write turn, or a poll turn when it has no write: each frame kept in
   // sent_, reads answered from fan_, FC 06 writes put in force and echoed (or unanswered).
@@ -139,13 +109,6 @@ class ReloadOwedStop : public ::testing::Test {
     return old;
   }
 
-  const support::ProfileFile file_{support::kFanProfile, "fan.toml"};
-  PluginRegistry plugins_;
-  boost::asio::io_context io_;
-  std::shared_ptr<spdlog::logger> log_ =
-      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>());
-  const TimePoint t0_ = Clock::now();
-  std::vector<Bytes> sent_;
   FanState fan_;
 };
 
@@ -154,10 +117,7 @@ class ReloadOwedStop : public ::testing::Test {
 TEST_F(ReloadOwedStop, TheNewDriverWritesTheStopTheOldOneOwed) {
   auto old = tripped_with_a_stop_owed();
   auto next = build(config(250ms));  // the poll interval changed: a changed device
-  old->hold_for_reload(*next);
-  next->adopt(*old);
-  old->stop();
-  Device& fresh = *next->find("fan");
+  Device& fresh = reload(*old, *next, "fan");
   fan_.status = 0;  // the fault cleared by itself: the fan turns at its old set value
   fan_.speed = 1000;
   fan_.answers_writes = true;
@@ -175,10 +135,7 @@ TEST_F(ReloadOwedStop, TheNewDriverWritesTheStopTheOldOneOwed) {
 TEST_F(ReloadOwedStop, AnotherDriveIsOwedNothing) {
   auto old = tripped_with_a_stop_owed();
   auto next = build(config(500ms, kSlave + 1));
-  old->hold_for_reload(*next);
-  next->adopt(*old);
-  old->stop();
-  Device& fresh = *next->find("fan");
+  Device& fresh = reload(*old, *next, "fan");
   fan_ = {1000, 1000, 0, true};
   const std::size_t mark = sent_.size();
   run(fresh, 2000ms, 20);

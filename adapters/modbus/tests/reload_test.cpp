@@ -1,19 +1,11 @@
 // A reload while a command's sequence is on the line (ABB Drives' 0x047E then 0x047F): the real
 // modbus driver in devices the gateway builds and replaces, driven through their Station calls
-// (as the bus engine calls them) on a time the test sets, the slave's echoes given by hand. The
-// bus rig runs one gateway and cannot reload; the gateway's reload is hold_for_reload(), then the
-// held writes settle, then adopt() and the old gateway's stop(), as the daemon does.
+// (as the bus engine calls them) on a time the test sets, the slave's echoes given by hand
+// (support::ReloadRig).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <spdlog/sinks/null_sink.h>
 
-#include <boost/asio/io_context.hpp>
-
-#include "adapter_under_test.h"
-#include "bus/station.h"
-#include "gateway/gateway.h"
-#include "plugin/adapter_options.h"
-#include "profile_support.h"
+#include "reload_support.h"
 
 namespace drivegate::modbus_device::modbus_reload_test {
 namespace {
@@ -36,38 +28,15 @@ Bytes fc06(std::uint16_t address, std::uint16_t value) {
   return support::fc06_frame(kSlave, address, value);
 }
 
-class ReloadMidSequence : public ::testing::Test {
+class ReloadMidSequence : public support::ReloadRig {
  protected:
-  ReloadMidSequence() { plugins_.add(drivegate_adapter); }
+  ReloadMidSequence() : ReloadRig(kProfile, "seq.toml") {}
 
-  Config config(double poles) const {
-    Config c;
-    c.path = "drivegate.toml";
-    BusConfig b;
-    b.name = "a";
-    b.port = "/nonexistent/tty-a";  // never opened: the test is the line
-    b.baud = 19200;                 // the profile's [line]: its default
-    b.parity = Parity::even;
-    c.buses.push_back(b);
-    DeviceConfig d;
-    d.name = "drive";
-    d.bus = "a";
-    d.adapter = "modbus";
-    d.unit_id = 1;
-    d.address = kSlave;
-    d.options = default_options(support::specialised_for(file_.path));
-    d.options.set("profile", file_.path);
+  [[nodiscard]] Config config(double poles) const {
+    DeviceConfig d = device("drive", kSlave);
     d.options.set("motor_poles", poles);
-    c.devices.push_back(d);
-    return c;
+    return ReloadRig::config(d);
   }
-  std::unique_ptr<Gateway> build(const Config& c) {
-    std::vector<std::string> errors;
-    auto gw = Gateway::build(io_, c, plugins_, log_, errors);
-    EXPECT_TRUE(errors.empty()) << errors.front();
-    return gw;
-  }
-  TimePoint at(Millis ms) const { return t0_ + ms; }
 
   // Every poll the device sends until it is online is answered: control word 0x047E, reference
   // 0, status 0 (stopped); each frame sent is kept in sent_.
@@ -112,15 +81,6 @@ class ReloadMidSequence : public ::testing::Test {
     }
     return out;
   }
-
-  static inline const Session kPlc{AccessLevel::operate, WordOrder::big};
-  const support::ProfileFile file_{kProfile, "seq.toml"};
-  PluginRegistry plugins_;
-  boost::asio::io_context io_;
-  std::shared_ptr<spdlog::logger> log_ =
-      std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::null_sink_mt>());
-  const TimePoint t0_ = Clock::now();
-  std::vector<Bytes> sent_;
 };
 
 // The profile changed (an option): the held device lets its writes in flight settle

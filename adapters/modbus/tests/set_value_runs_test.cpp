@@ -254,8 +254,7 @@ TEST(ModbusSetValueRuns, ARunResentWhileTheTripStaysIsNotStoppedEachCycle) {
   const auto values = f.written(kSetValue, from);
   ASSERT_GE(values.size(), 2u);
   EXPECT_EQ(values.front(), 0u) << "the trip's own stop";
-  EXPECT_THAT(std::vector<std::uint16_t>(values.begin() + 1, values.end()),
-              testing::Each(1000u))
+  EXPECT_THAT(std::vector<std::uint16_t>(values.begin() + 1, values.end()), testing::Each(1000u))
       << "no 0 after the first run asked with the trip shown";
   EXPECT_EQ(f.b.read("command"), cmd::run_forward);
   EXPECT_NE(f.b.status() & kFaulted, 0u);
