@@ -360,10 +360,26 @@ bool ModbusDriver::tripped() const {
   return !faults.empty();
 }
 
+// A drive its set value runs: the stop it is owed after a trip, and the setpoint held for its next
+// run while no run is in force (with one, its set value holds it, read back at adoption).
+Owed ModbusDriver::owed() const {
+  Owed o{.stop_after_trip = stop_owed_, .setpoint_held_rpm = std::nullopt};
+  if (profile_.common.setpoint_runs && !is_run(common_.command) && common_.setpoint_rpm != 0) {
+    o.setpoint_held_rpm = common_.setpoint_rpm;
+  }
+  return o;
+}
+
 // A reload made this driver in place of one that owed its drive a stop after a trip: owed here
-// too, so that the drive found turning (the fault cleared meanwhile) is stopped, not adopted.
+// too, so that the drive found turning (the fault cleared meanwhile) is stopped, not adopted. The
+// setpoint the old one held is held here, so that the clients' next run runs at it.
 void ModbusDriver::take_over(const Owed& owed) {
-  if (owed.stop_after_trip && profile_.common.setpoint_runs) stop_owed_ = true;
+  if (!profile_.common.setpoint_runs) return;
+  if (owed.stop_after_trip) stop_owed_ = true;
+  if (owed.setpoint_held_rpm) {
+    setpoint_taken_over_ = owed.setpoint_held_rpm;
+    common_.setpoint_rpm = *owed.setpoint_held_rpm;
+  }
 }
 
 // A drive its set value runs, found tripped with that value not 0 at the first whole cycle, would
@@ -670,8 +686,11 @@ void ModbusDriver::update_common() {
 void ModbusDriver::adopt() {
   if (!adopting_ || !common_.ready) return;
   adopting_ = false;
+  // A set value reading 0 beside a setpoint taken over from a reload: the drive stands still, and
+  // the setpoint held for its next run is the one its clients wrote.
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
-    if (const auto rpm = rpm_of(setpoint_scale_.rpm(*reference))) common_.setpoint_rpm = *rpm;
+    const auto rpm = rpm_of(setpoint_scale_.rpm(*reference));
+    if (rpm && !(*rpm == 0 && setpoint_taken_over_)) common_.setpoint_rpm = *rpm;
   }
   // A drive its set value runs is commanded to run by that value not 0, untripped (a speed it
   // cannot read, sensor_fault, is no trip: it may turn); with 0 it is not (one still turning is

@@ -63,7 +63,7 @@ class ModbusDriver final : public DriverBase {
   DRIVEGATE_DRIVER_OVERRIDES;
   [[nodiscard]] std::optional<TimePoint> state_read_at() const override;
   [[nodiscard]] std::string files_read() const override { return files_read_; }
-  [[nodiscard]] Owed owed() const override { return {.stop_after_trip = stop_owed_}; }
+  [[nodiscard]] Owed owed() const override;
   void take_over(const Owed& owed) override;
 
   // Which profile point each of points() is.
@@ -253,6 +253,9 @@ class ModbusDriver final : public DriverBase {
   // not end it; the next read showing no trip does (a later trip is a new one).
   bool run_in_trip_ = false;
   bool start_checked_ = false;  // check_tripped_at_start() done
+  // The setpoint held for a drive its set value runs, taken over from the driver a reload replaced
+  // (Owed): adoption keeps it over a set value reading 0.
+  std::optional<std::int32_t> setpoint_taken_over_;
   // The owed stop's tries: not written again before `stop_retry_at_`, the wait doubling from the
   // poll interval up to the comm timeout; the first failure is logged once.
   int stop_tries_ = 0;

@@ -10,10 +10,17 @@ void Device::take_over(const Device& old) {
   // Owed to the drive at that address on that bus: another drive is owed nothing.
   const bool same_drive = old.config_.adapter == config_.adapter &&
                           old.config_.bus == config_.bus && old.config_.address == config_.address;
-  driver_->take_over(same_drive ? old.driver_->owed() : Owed{});
+  const Owed owed = same_drive ? old.driver_->owed() : Owed{};
+  driver_->take_over(owed);
   if (driver_->owed().stop_after_trip) {
     log_->warn("device {}: the stop owed to the drive after its trip is carried over the reload",
                config_.name);
+  }
+  if (owed.setpoint_held_rpm) {
+    log_->info(
+        "device {}: the setpoint held for the drive's next run ({} rpm) is carried over the "
+        "reload",
+        config_.name, *owed.setpoint_held_rpm);
   }
   failsafe_.carry_over(old.failsafe_);
   if (failsafe_.state() == FailsafeWatchdog::State::armed) {

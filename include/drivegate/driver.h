@@ -252,12 +252,15 @@ struct DeviceEnv {
   std::optional<LineDefaults> bus_line;
 };
 
-// What a driver owes its drive that a reload must not forget. A reload that changes a device
-// makes a new driver for it, which starts from what it reads (Device::take_over hands this over):
-// a stop owed after a trip (a drive its set value runs, which the fault clearing would restart)
-// would otherwise be forgotten, and the turning drive adopted as running.
+// What a driver owes its drive, and its clients, that a reload must not forget. A reload that
+// changes a device makes a new driver for it, which starts from what it reads (Device::take_over
+// hands this over): a stop owed after a trip (a drive its set value runs, which the fault clearing
+// would restart) would otherwise be forgotten, and the turning drive adopted as running; and the
+// setpoint such a drive's clients wrote while it stood still, held by the driver for its next run
+// and never written to the drive (its set value reads 0), would be lost, refusing that run.
 struct Owed {
   bool stop_after_trip = false;
+  std::optional<std::int32_t> setpoint_held_rpm;
 };
 
 class Driver {

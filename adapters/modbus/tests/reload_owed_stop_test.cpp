@@ -144,6 +144,63 @@ TEST_F(ReloadOwedStop, AnotherDriveIsOwedNothing) {
   EXPECT_EQ(fresh.state().command, Command::run_forward);
 }
 
+// A setpoint a PLC wrote while the fan stood still is held by the driver and never written to the
+// fan (its set value reads 0). A reload that changes the device hands it to the new driver, so the
+// PLC reads it still and its next bare run runs at it, rather than being refused with nothing to
+// run at.
+TEST_F(ReloadOwedStop, TheSetpointHeldForTheNextRunIsCarriedOver) {
+  auto old = build(config(500ms));
+  Device& d = *old->find("fan");
+  fan_ = {0, 0, 0, true};
+  run(d, 0ms, 10);
+  ASSERT_TRUE(d.online());
+  std::vector<Outcome> answers;
+  const auto answered = [&](Outcome o) { answers.push_back(o); };
+  const std::uint16_t rpm = 800;
+  ASSERT_EQ(d.write(kPlc, Table::holding, 1, std::span(&rpm, 1), answered, at(200ms)), Outcome::ok);
+  run(d, 200ms, 5);
+  EXPECT_THAT(answers, ::testing::ElementsAre(Outcome::ok));
+  EXPECT_EQ(d.state().setpoint_rpm, 800);
+  EXPECT_EQ(fan_.set_value, 0);  // held, not written
+
+  auto next = build(config(250ms));
+  Device& fresh = reload(*old, *next, "fan");
+  run(fresh, 1000ms, 20);
+  ASSERT_TRUE(fresh.online());
+  EXPECT_EQ(fresh.state().setpoint_rpm, 800);
+  EXPECT_EQ(fresh.state().command, Command::stop);
+  const std::size_t mark = sent_.size();
+  const std::uint16_t go = 1;  // run_forward
+  ASSERT_EQ(fresh.write(kPlc, Table::holding, 0, std::span(&go, 1), answered, at(2000ms)),
+            Outcome::ok);
+  run(fresh, 2000ms, 5);
+  EXPECT_THAT(answers, ::testing::ElementsAre(Outcome::ok, Outcome::ok));
+  EXPECT_EQ(set_values_from(mark), std::vector<std::uint16_t>{800});
+  EXPECT_EQ(fresh.state().command, Command::run_forward);
+}
+
+// The fan found turning by the new driver (another master ran it meanwhile): its set value is the
+// setpoint in force, whatever the old driver held.
+TEST_F(ReloadOwedStop, ASetValueReadNotZeroOutranksTheSetpointCarried) {
+  auto old = build(config(500ms));
+  Device& d = *old->find("fan");
+  fan_ = {0, 0, 0, true};
+  run(d, 0ms, 10);
+  ASSERT_TRUE(d.online());
+  const std::uint16_t rpm = 800;
+  ASSERT_EQ(d.write(
+                kPlc, Table::holding, 1, std::span(&rpm, 1), [](Outcome) {}, at(200ms)),
+            Outcome::ok);
+  run(d, 200ms, 5);
+  auto next = build(config(250ms));
+  Device& fresh = reload(*old, *next, "fan");
+  fan_ = {1200, 1200, 0, true};
+  run(fresh, 1000ms, 20);
+  ASSERT_TRUE(fresh.online());
+  EXPECT_EQ(fresh.state().setpoint_rpm, 1200);
+  EXPECT_EQ(fresh.state().command, Command::run_forward);  // adopted, as at any start
+}
+
 // The daemon shutting down while the stop is owed: the fan reads stopped (tripped), but its set
 // value would restart it once the fault clears with no gateway left to stop it. Shutdown stops it,
 // and waits for its answer before the daemon goes on to exit.
