@@ -1,5 +1,6 @@
 #include "profile_examples.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -55,6 +56,30 @@ bool same_value(double a, double b) {
   return std::fabs(a - b) <= 1e-9 * std::max(1.0, std::fabs(b));
 }
 
+// Why an RTU example's bytes are no frame: a CRC that does not hold gives the one that would (a
+// manual's misprint is most often its CRC's two bytes swapped); one that holds means the bytes
+// are not as long as the function's layout and counts (Application Protocol 6.x) make its frame.
+std::string why_not_a_frame(Framing framing, const Bytes& frame, bool request) {
+  if (framing != Framing::rtu || frame.size() < 4) return {};
+  const ByteView body(frame.data(), frame.size() - 2);
+  const std::uint16_t crc = crc16_modbus(body);
+  const Bytes wanted{static_cast<std::uint8_t>(crc & 0xFF), static_cast<std::uint8_t>(crc >> 8)};
+  if (!std::equal(wanted.begin(), wanted.end(), frame.end() - 2)) {
+    return " (the CRC of its bytes is " + hex_text(wanted) + ")";
+  }
+  const std::string function = "function " + hex_text(Bytes{frame[1]});
+  if (request) {
+    const RequestLength length = request_length(ByteView(frame.data() + 1, frame.size() - 3));
+    if (length.status == RequestLength::Status::known) {
+      // The address, the PDU, the CRC.
+      return ": its CRC holds, but a " + function + " request of these counts is " +
+             std::to_string(length.size + 3) + " bytes, not " + std::to_string(frame.size());
+    }
+  }
+  return ": its CRC holds, but not where the layout and counts of " + function + " end its " +
+         (request ? "request" : "reply");
+}
+
 // One frame, decoded whole: `what` says which ("request", "reply").
 std::optional<Adu> decode_whole(const Profile& profile, const std::string& text, bool request,
                                 std::vector<std::string>& out) {
@@ -68,17 +93,8 @@ std::optional<Adu> decode_whole(const Profile& profile, const std::string& text,
   const auto d = request ? decode_request(profile.line.framing, *frame, layouts)
                          : decode_reply(profile.line.framing, *frame, layouts);
   if (d.status != DecodeStatus::frame) {
-    const bool rtu = profile.line.framing == Framing::rtu;
-    std::string why = std::string(what) + " " + hex_text(*frame) + " is not a good frame";
-    if (rtu && frame->size() >= 4) {
-      const ByteView body(frame->data(), frame->size() - 2);
-      const std::uint16_t crc = crc16_modbus(body);
-      why += " (the CRC of its bytes is " +
-             hex_text(Bytes{static_cast<std::uint8_t>(crc & 0xFF),
-                            static_cast<std::uint8_t>(crc >> 8)}) +
-             ")";
-    }
-    out.push_back(why);
+    out.push_back(std::string(what) + " " + hex_text(*frame) + " is not a good frame" +
+                  why_not_a_frame(profile.line.framing, *frame, request));
     return std::nullopt;
   }
   if (d.consumed != frame->size()) {

@@ -101,6 +101,24 @@ expect = { motor_speed = 1495 }
         {"reply 05 04 04 05 D7 00 18 0E BB is not a good frame"}}});
 }
 
+// A frame whose CRC holds over bytes of the wrong length (a byte left out, or one too many, and
+// its CRC recomputed): the length is what is wrong, and the error says so, not the CRC.
+TEST(ProfileExamples, AGoodCrcOverTheWrongLengthIsCalledAWrongLength) {
+  // CRC-16/MODBUS of the bytes before it (Modbus over Serial Line 6.2.2).
+  const std::string long_write = "05 06 07 D0 00 03 00 C3 96";
+  const std::string short_reply = "05 04 04 05 D7 00 BF 4F";
+  support::expect_refused(
+      check, {{"[[example]]\nrequest = \"" + long_write + "\"\nexpect = { control_word = 3 }\n",
+               {"request " + long_write +
+                " is not a good frame: its CRC holds, but a function 06 request of these counts "
+                "is 8 bytes, not 9"}},
+              {"[[example]]\nrequest = \"05 04 08 38 00 02 F3 E2\"\nreply = \"" + short_reply +
+                   "\"\nexpect = { motor_speed = 1495 }\n",
+               {"reply " + short_reply +
+                " is not a good frame: its CRC holds, but not where the layout and counts of "
+                "function 04 end its reply"}}});
+}
+
 TEST(ProfileExamples, AWriteMustBeTheRequestsDataWhole) {
   // FC 10 of 2000 - 2002: 2001 is no point of this profile.
   support::expect_refused(check, {{R"toml(
