@@ -376,7 +376,9 @@ Owed ModbusDriver::owed() const {
 void ModbusDriver::take_over(const Owed& owed) {
   if (!profile_.common.setpoint_runs) return;
   if (owed.stop_after_trip) stop_owed_ = true;
-  if (owed.setpoint_held_rpm) {
+  // One this profile cannot write (its range or options changed) is not held: the PLC reads 0 and
+  // its bare run is refused with nothing to run at, as it would be at any start.
+  if (owed.setpoint_held_rpm && run_words(*owed.setpoint_held_rpm)) {
     setpoint_taken_over_ = owed.setpoint_held_rpm;
     common_.setpoint_rpm = *owed.setpoint_held_rpm;
   }
@@ -658,7 +660,12 @@ void ModbusDriver::update_common() {
   // A run a client asked for while this trip was shown is not ended by it: the PLC asked with the
   // fault in view (a PLC that re-sends run each cycle would otherwise see the fan's set value
   // written and stopped in turn); the fan runs once the fault clears, as its command reads.
-  if (!active) run_in_trip_ = false;
+  if (!active) {
+    run_in_trip_ = false;
+    trip_shown_at_.reset();
+  } else if (!trip_shown_at_) {
+    trip_shown_at_ = last_now_;
+  }
   const bool ends_run = c.setpoint_runs ? !run_in_trip_ : !common_.running;
   if (active && is_run(common_.command) && ends_run) {
     common_.command = Command::stop;
@@ -690,7 +697,7 @@ void ModbusDriver::adopt() {
   // the setpoint held for its next run is the one its clients wrote.
   if (const auto reference = engineering(profile_.common.setpoint_rpm)) {
     const auto rpm = rpm_of(setpoint_scale_.rpm(*reference));
-    if (rpm && !(*rpm == 0 && setpoint_taken_over_)) common_.setpoint_rpm = *rpm;
+    if (rpm && !(*reference == 0 && setpoint_taken_over_)) common_.setpoint_rpm = *rpm;
   }
   // A drive its set value runs is commanded to run by that value not 0, untripped (a speed it
   // cannot read, sensor_fault, is no trip: it may turn); with 0 it is not (one still turning is

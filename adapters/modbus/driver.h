@@ -94,8 +94,9 @@ class ModbusDriver final : public DriverBase {
     // never lost to a stop, nor a run to a setpoint); a newer run or stop overtakes an older one,
     // whichever points each writes (a stop of its own beside a run by the set value).
     bool runs = false;
-    // A run a client asked for while the drive's trip was shown (apply): the trip does not end it
-    // (update_common), so that a PLC re-sending run is not answered by the trip's stop each cycle.
+    // A run a client asked for with the drive's trip shown (apply, from WriteOp::asked): that trip
+    // does not end it (update_common), so that a PLC re-sending run is not answered by the trip's
+    // stop each cycle.
     bool asked_in_trip = false;
 
     // Whether this write puts a value in `p`.
@@ -249,8 +250,12 @@ class ModbusDriver final : public DriverBase {
   // A stop the driver owes a drive its set value runs, after a trip (stop_after_trip): until the
   // drive confirms a stop, or a client's run.
   bool stop_owed_ = false;
-  // The run in force was asked for while the trip was shown (Write::asked_in_trip): that trip does
-  // not end it; the next read showing no trip does (a later trip is a new one).
+  // When the fault shown now was first shown (update_common's `active`, a fault that ends a run);
+  // none while no fault is shown. A client's run asked after it (WriteOp::asked) was asked with
+  // the trip in view.
+  std::optional<TimePoint> trip_shown_at_;
+  // The run in force was asked for with the trip shown (Write::asked_in_trip): that trip does not
+  // end it; the next read showing no trip does (a later trip is a new one).
   bool run_in_trip_ = false;
   bool start_checked_ = false;  // check_tripped_at_start() done
   // The setpoint held for a drive its set value runs, taken over from the driver a reload replaced

@@ -214,7 +214,11 @@ WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   adopting_ = false;  // a client decides from now on
   auto w = write_of(op);
   if (!w) return WriteStatus::invalid_value;
-  w->asked_in_trip = w->runs && w->change == Change::command && is_run(w->command) && tripped();
+  // Asked with the trip shown: after the read that first showed it, by the client's clock (a part
+  // of a request that waited behind another was asked when the request was). Asked at the same
+  // instant is asked before: the exemption is never given on a tie.
+  w->asked_in_trip = w->runs && w->change == Change::command && is_run(w->command) &&
+                     trip_shown_at_ && op.asked && *op.asked > *trip_shown_at_;
   if (w->runs && w->change == Change::setpoint && holds_setpoint_now()) {
     common_.setpoint_rpm = op.rpm;
     return WriteStatus::done;
@@ -323,7 +327,7 @@ void ModbusDriver::put_in_force(const Write& w) {
       if (w.command != Command::reset_fault) common_.command = w.command;
       // A stop owed after a trip is paid by any stop the drive took, or ended by a client's run.
       if (w.command != Command::reset_fault) {
-        run_in_trip_ = w.asked_in_trip;
+        run_in_trip_ = w.asked_in_trip && trip_shown_at_;
         stop_owed_ = false;
         stop_tries_ = 0;
         stop_retry_at_ = {};

@@ -361,7 +361,7 @@ void Daemon::shutdown() {
   signals_.cancel();
   reload_timer_.cancel();
   pending_reload_.reset();  // never started: nothing of it runs
-  gateway_->stop_drives(kStopLimit, [this] {
+  gateway_->stop_drives(kStopLimit, Clock::now(), [this] {
     if (mqtt_) mqtt_->stop();
     if (http_) http_->close();
     server_->close();

@@ -16,10 +16,15 @@ void Device::take_over(const Device& old) {
     log_->warn("device {}: the stop owed to the drive after its trip is carried over the reload",
                config_.name);
   }
-  if (owed.setpoint_held_rpm) {
+  if (const auto held = driver_->owed().setpoint_held_rpm) {
     log_->info(
         "device {}: the setpoint held for the drive's next run ({} rpm) is carried over the "
         "reload",
+        config_.name, *held);
+  } else if (owed.setpoint_held_rpm) {
+    log_->warn(
+        "device {}: the setpoint held for the drive's next run ({} rpm) is not carried over "
+        "the reload: the new profile cannot write it",
         config_.name, *owed.setpoint_held_rpm);
   }
   failsafe_.carry_over(old.failsafe_);

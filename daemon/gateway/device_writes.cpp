@@ -385,13 +385,14 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
   if (r.forward) return advance_forward(r, now, failure);
   while (r.next < r.parts.size()) {
     const Part& part = r.parts[r.next++];
-    const std::optional<WriteOp> maybe_op = op_of(*part.point, part.value);
+    std::optional<WriteOp> maybe_op = op_of(*part.point, part.value);
     if (!maybe_op) {
       heartbeat_ = static_cast<std::uint16_t>(whole(part.value));
       image_.stale();
       continue;
     }
-    const WriteOp& op = *maybe_op;
+    WriteOp& op = *maybe_op;
+    if (!r.answers.empty()) op.asked = r.answers.front().since;
     const bool run = op.target == WriteOp::Target::command && is_run(op.command);
     // The failsafe may have latched while the request waited.
     if (run && failsafe_.latched() && !r.feeds_failsafe) {

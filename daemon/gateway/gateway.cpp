@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <boost/asio/steady_timer.hpp>
 
+#include "base/log_context.h"
 #include "config/config_diff.h"
 #include "gateway/forward_access.h"
-#include "base/log_context.h"
 
 namespace drivegate {
 
@@ -167,7 +167,8 @@ void Gateway::adopt(Gateway& old) {
   for (const auto& gone : old.devices_) {
     if (!listed(diff.devices_removed, gone->config().name)) continue;
     const bool owed_stop = gone->driver().owed().stop_after_trip;
-    if (gone->failsafe_latched() || gone->state().running || owed_stop) {
+    const bool runs = gone->state().running || is_run(gone->state().command);
+    if (gone->failsafe_latched() || runs || owed_stop) {
       log_->warn("device {}: removed by the reload while {}: the gateway no longer watches it",
                  gone->config().name,
                  gone->failsafe_latched() ? "its failsafe is latched"
@@ -203,7 +204,7 @@ void Gateway::stop() {
   for (auto& d : devices_) d->fail_pending(Outcome::no_response, now, "the gateway stopped");
 }
 
-void Gateway::stop_drives(Millis limit, std::function<void()> done) {
+void Gateway::stop_drives(Millis limit, TimePoint now, std::function<void()> done) {
   struct Waiter {
     int outstanding = 0;
     std::function<void()> done;
@@ -219,15 +220,17 @@ void Gateway::stop_drives(Millis limit, std::function<void()> done) {
   };
   auto waiter = std::make_shared<Waiter>(io_);
   waiter->done = std::move(done);
-  const auto now = Clock::now();
   // No client may start a drive once shutdown has begun (a run queued now would reach it after
   // the stop); the stops below drop the runs already queued.
   for (auto& d : devices_) d->close_to_clients();
   for (auto& d : devices_) {
     // A drive owed a stop after a trip (Driver::owed) may read stopped while its set value would
-    // restart it once the fault clears, the daemon gone: it is stopped too.
+    // restart it once the fault clears, the daemon gone: it is stopped too; and so is one whose
+    // command in force is a run though it does not turn (yet: still starting, or a tripped fan a
+    // client ran with the fault shown, which turns once the fault clears).
     const bool owed = d->driver().owed().stop_after_trip;
-    if ((!d->state().running && !owed) || d->comm_lost()) continue;
+    const bool commanded = is_run(d->state().command);
+    if ((!d->state().running && !owed && !commanded) || d->comm_lost()) continue;
     if (d->config().on_shutdown == ShutdownAction::hold) {
       log_->info("device {}: left as it is for shutdown (on_shutdown = hold)", d->config().name);
       continue;

@@ -68,8 +68,8 @@ class Gateway {
   void stop();   // closes the buses; pending writes fail (no_response)
   // Puts every running drive whose on_shutdown is stop in its stop state (on_shutdown = hold
   // leaves it) and calls `done` once they confirmed or `limit` passed. From then on every
-  // client's write is refused (no_response).
-  void stop_drives(Millis limit, std::function<void()> done);
+  // client's write is refused (no_response). `now`: the time the stops are asked at.
+  void stop_drives(Millis limit, TimePoint now, std::function<void()> done);
 
   // A read (Device::read) or a write (Device::write) at the device whose unit id is `unit`:
   // no_such_device where there is none. A write before start() or after stop() is no_response.

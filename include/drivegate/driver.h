@@ -149,16 +149,20 @@ struct WriteOp {
   std::size_t point = 0;            // Target::point: index into points()
   Value value;                      // Target::point: the engineering value
   Bytes pdu;                        // Target::forward: function code and data, 1..253 bytes
+  // When the client asked (its request accepted): what it could have read of the drive then. A
+  // part applied later (behind another, or after the request waited) was still asked then. None:
+  // asked as it is applied (the gateway's own writes).
+  std::optional<TimePoint> asked;
 
-  static WriteOp of_command(Command c) { return {Target::command, c, 0, 0, {}, {}}; }
+  static WriteOp of_command(Command c) { return {Target::command, c, 0, 0, {}, {}, {}}; }
   static WriteOp of_setpoint(std::int32_t rpm) {
-    return {Target::setpoint, Command::stop, rpm, 0, {}, {}};
+    return {Target::setpoint, Command::stop, rpm, 0, {}, {}, {}};
   }
   static WriteOp of_point(std::size_t index, Value v) {
-    return {Target::point, Command::stop, 0, index, std::move(v), {}};
+    return {Target::point, Command::stop, 0, index, std::move(v), {}, {}};
   }
   static WriteOp of_forward(Bytes pdu) {
-    return {Target::forward, Command::stop, 0, 0, {}, std::move(pdu)};
+    return {Target::forward, Command::stop, 0, 0, {}, std::move(pdu), {}};
   }
 };
 

@@ -109,6 +109,30 @@ class ReloadOwedStop : public support::ReloadRig {
     return old;
   }
 
+  // The old gateway's fan: adopted running at 1000 rpm, tripped (the driver's stop written and
+  // taken), then run again by the PLC with the trip shown: that run is in force, not ended by the
+  // trip, the fan still (tripped) at set value 1000, and no stop owed.
+  std::unique_ptr<Gateway> run_with_its_trip_shown() {
+    auto gw = build(config(500ms));
+    Device& d = *gw->find("fan");
+    fan_ = {1000, 1000, 0, true};
+    run(d, 0ms, 10);
+    fan_.status = kErrorBit;
+    fan_.speed = 0;
+    run(d, 600ms, 20);
+    EXPECT_EQ(fan_.set_value, 0);  // the trip's stop
+    const std::uint16_t go = 1;    // run_forward
+    EXPECT_EQ(d.write(
+                  kPlc, Table::holding, 0, std::span(&go, 1), [](Outcome) {}, at(1000ms)),
+              Outcome::ok);
+    run(d, 1000ms, 80);  // past two more polls showing the trip
+    EXPECT_EQ(fan_.set_value, 1000);
+    EXPECT_EQ(d.state().command, Command::run_forward);
+    EXPECT_FALSE(d.state().running);
+    EXPECT_FALSE(d.driver().owed().stop_after_trip);
+    return gw;
+  }
+
   FanState fan_;
 };
 
@@ -201,6 +225,43 @@ TEST_F(ReloadOwedStop, ASetValueReadNotZeroOutranksTheSetpointCarried) {
   EXPECT_EQ(fresh.state().command, Command::run_forward);  // adopted, as at any start
 }
 
+// A new profile that cannot write the setpoint held (its set value's range now ends below it):
+// nothing is carried. The PLC reads 0, and its bare run is refused with nothing to run at, as at
+// any start, rather than taken at a setpoint the profile cannot write.
+TEST_F(ReloadOwedStop, ASetpointTheNewProfileCannotWriteIsNotCarried) {
+  auto old = build(config(500ms));
+  Device& d = *old->find("fan");
+  fan_ = {0, 0, 0, true};
+  run(d, 0ms, 10);
+  ASSERT_TRUE(d.online());
+  const std::uint16_t rpm = 2500;
+  ASSERT_EQ(d.write(
+                kPlc, Table::holding, 1, std::span(&rpm, 1), [](Outcome) {}, at(200ms)),
+            Outcome::ok);
+  run(d, 200ms, 5);
+  ASSERT_EQ(d.state().setpoint_rpm, 2500);
+
+  const support::ProfileFile narrow{
+      support::replaced(support::kFanProfile, "max = 3000\n", "max = 2000\n"), "narrow.toml"};
+  DeviceConfig changed = device("fan", kSlave);
+  changed.options.set("profile", narrow.path);
+  auto next = build(ReloadRig::config(changed));
+  Device& fresh = reload(*old, *next, "fan");
+  run(fresh, 1000ms, 20);
+  ASSERT_TRUE(fresh.online());
+  EXPECT_EQ(fresh.state().setpoint_rpm, 0);
+  const std::size_t mark = sent_.size();
+  std::vector<Outcome> answers;
+  const std::uint16_t go = 1;  // run_forward
+  const Outcome accepted = fresh.write(
+      kPlc, Table::holding, 0, std::span(&go, 1), [&](Outcome o) { answers.push_back(o); },
+      at(2000ms));
+  run(fresh, 2000ms, 5);
+  EXPECT_TRUE(accepted != Outcome::ok || (!answers.empty() && answers.front() != Outcome::ok));
+  EXPECT_THAT(set_values_from(mark), ::testing::IsEmpty());
+  EXPECT_EQ(fresh.state().command, Command::stop);
+}
+
 // The daemon shutting down while the stop is owed: the fan reads stopped (tripped), but its set
 // value would restart it once the fault clears with no gateway left to stop it. Shutdown stops it,
 // and waits for its answer before the daemon goes on to exit.
@@ -209,7 +270,7 @@ TEST_F(ReloadOwedStop, ShutdownWritesTheStopOwed) {
   Device& d = *gw->find("fan");
   fan_.answers_writes = true;
   bool done = false;
-  gw->stop_drives(2000ms, [&] { done = true; });
+  gw->stop_drives(2000ms, at(3000ms), [&] { done = true; });
   EXPECT_FALSE(done) << "shutdown went on without the stop owed";
   const std::size_t mark = sent_.size();
   run(d, 3000ms, 10);
@@ -217,6 +278,37 @@ TEST_F(ReloadOwedStop, ShutdownWritesTheStopOwed) {
   EXPECT_EQ(fan_.set_value, 0);
   EXPECT_TRUE(done);
   EXPECT_FALSE(d.driver().owed().stop_after_trip);
+}
+
+// The daemon shutting down with a fan a PLC ran while its trip was shown: it reads stopped (no run
+// bit, speed 0) and owes no stop, but its set value turns it once the fault clears, the gateway
+// gone. Its command in force is a run: shutdown stops it, and waits for its answer.
+TEST_F(ReloadOwedStop, ShutdownStopsAFanRunWithItsTripShown) {
+  auto gw = run_with_its_trip_shown();
+  Device& d = *gw->find("fan");
+  bool done = false;
+  gw->stop_drives(2000ms, at(3000ms), [&] { done = true; });
+  EXPECT_FALSE(done) << "shutdown went on without stopping the fan";
+  const std::size_t mark = sent_.size();
+  run(d, 3000ms, 10);
+  EXPECT_EQ(set_values_from(mark), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(fan_.set_value, 0);
+  EXPECT_TRUE(done);
+}
+
+// That run does not survive a reload that changes the device (docs/profiles.md, "A trip stops
+// it"): the new driver finds the fan tripped with its set value not 0, and stops it, as at any
+// start.
+TEST_F(ReloadOwedStop, ARunAskedInATripDoesNotOutliveAReload) {
+  auto old = run_with_its_trip_shown();
+  auto next = build(config(250ms));
+  Device& fresh = reload(*old, *next, "fan");
+  const std::size_t mark = sent_.size();
+  run(fresh, 2000ms, 20);
+  ASSERT_TRUE(fresh.online());
+  EXPECT_EQ(set_values_from(mark), std::vector<std::uint16_t>{0});
+  EXPECT_EQ(fan_.set_value, 0);
+  EXPECT_EQ(fresh.state().command, Command::stop);
 }
 
 }  // namespace

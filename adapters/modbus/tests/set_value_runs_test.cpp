@@ -41,7 +41,9 @@ std::vector<std::uint16_t> written(const test::AdapterBench& b, std::uint16_t ad
 }
 
 struct Fan {
-  support::ProfileFile file{support::kFanProfile, "fan.toml"};
+  explicit Fan(const std::string& profile = support::kFanProfile) : file{profile, "fan.toml"} {}
+
+  support::ProfileFile file;
   test::AdapterBench b{drivegate_adapter, {.options = {{"profile", file.path}}}};
 
   [[nodiscard]] std::vector<std::uint16_t> written(std::uint16_t address, TimePoint from) const {
@@ -260,6 +262,59 @@ TEST(ModbusSetValueRuns, ARunResentWhileTheTripStaysIsNotStoppedEachCycle) {
   EXPECT_NE(f.b.status() & kFaulted, 0u);
   ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
   EXPECT_TRUE(f.speed_is(1000));
+}
+
+// The same where the fault's code is a sensor's (ebm-papst's Hall error): a fault shown all the
+// same, which ends a run in force; the run asked with it shown is not ended by it either.
+TEST(ModbusSetValueRuns, ARunResentWhileASensorFaultStaysIsNotStoppedEachCycle) {
+  Fan f{support::replaced(
+      support::kFanProfile, "fault = { point = \"motor_status\", bit = 4 }\n",
+      "fault = { point = \"motor_status\", bit = 4 }\n"
+      "fault_code = { point = \"motor_status\", bits = { 4 = \"sensor_fault\" } }\n")};
+  ASSERT_TRUE(f.running_at(1000));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("fault 16").rfind("ok", 0), 0u);  // motor_status bit 4
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  ASSERT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 1s));
+  for (int cycle = 0; cycle < 8; ++cycle) {
+    EXPECT_EQ(f.b.write({cmd::run_forward}), Outcome::ok) << "cycle " << cycle;
+    f.b.rig.run_for(500ms);
+  }
+  const auto values = f.written(kSetValue, from);
+  ASSERT_GE(values.size(), 2u);
+  EXPECT_EQ(values.front(), 0u) << "the trip's own stop";
+  EXPECT_THAT(std::vector<std::uint16_t>(values.begin() + 1, values.end()), testing::Each(1000u));
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+}
+
+// A request of setpoint and run sent before the trip showed, its run applied after: the read that
+// shows the trip is on the line when the request comes, its setpoint part waits for the line and
+// is then held (no run in force any more), and only then is the run part applied. Asked before
+// the trip, the run is ended by it like any run in force, and the fan's clearing fault never
+// restarts it.
+TEST(ModbusSetValueRuns, ARunAskedBeforeTheTripShowedIsEndedByIt) {
+  Fan f;
+  ASSERT_TRUE(f.running_at(1000));
+  ASSERT_EQ(f.b.control("late 40").rfind("ok", 0), 0u);
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  const std::size_t mark = f.b.rig.sent().size();
+  // The read of the status (input 16..17) that carries the trip is on the line, its reply late.
+  const auto status_read = [&] {
+    for (const Bytes& fr : f.b.frames_after(mark)) {
+      if (fr.size() == 8 && fr[1] == 0x04 && ((fr[2] << 8) | fr[3]) == 16) return true;
+    }
+    return false;
+  };
+  ASSERT_TRUE(f.b.rig.run_until(status_read, 2s));
+  const auto request = f.b.start_write({cmd::run_forward, 1200});
+  ASSERT_TRUE(f.b.rig.run_until([&] { return request->settled(); }, 3s));
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  f.b.rig.run_for(2s);
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  f.b.rig.run_for(2s);
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
 }
 
 // The run asked with a trip shown outlives that trip only: once a read shows the fault gone, a
