@@ -559,6 +559,10 @@ void ModbusDriver::on_comm_lost(TimePoint now) {
   std::fill(raw_.begin(), raw_.end(), std::nullopt);
   bit_set_at_.reset();
   faults_read_ = false;
+  // A trip shown before the loss is not the one read after it (the fault may have cleared and
+  // another come, unseen): a run asked with the first shown is no run asked with the second.
+  trip_shown_at_.reset();
+  run_in_trip_ = false;
   searches_.clear();
   served_ = false;
   for (Group& g : groups_) g.due = now;

@@ -223,6 +223,15 @@ WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
     common_.setpoint_rpm = op.rpm;
     return WriteStatus::done;
   }
+  // A run asked before the trip now shown, applied after it (a part that waited behind another):
+  // overtaken by the trip, it is over (no_response), as one that waited in the driver when the
+  // trip showed (settle_waiting_runs), and it never overtakes the stop owed.
+  if (w->runs && w->change == Change::command && w->command == Command::run_forward &&
+      trip_shown_at_ && !w->asked_in_trip) {
+    writes_.push(std::move(*w), t, now + send_limit());
+    settle_waiting_runs();
+    return WriteStatus::pending;
+  }
   // A newer write to the same point wins: the older one, still waiting for the line, never
   // reaches the slave (a run then a stop in quick succession never starts the motor). A command
   // whose sequence writes several points meets every write to any of them.

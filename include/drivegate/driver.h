@@ -149,9 +149,10 @@ struct WriteOp {
   std::size_t point = 0;            // Target::point: index into points()
   Value value;                      // Target::point: the engineering value
   Bytes pdu;                        // Target::forward: function code and data, 1..253 bytes
-  // When the client asked (its request accepted): what it could have read of the drive then. A
-  // part applied later (behind another, or after the request waited) was still asked then. None:
-  // asked as it is applied (the gateway's own writes).
+  // When the client asked (its request accepted: the gateway stamps every request, its own
+  // included): what it could have read of the drive then. A part applied later (behind another,
+  // or after the request waited) was still asked then. None: a driver takes it as asked before
+  // anything it shows.
   std::optional<TimePoint> asked;
 
   static WriteOp of_command(Command c) { return {Target::command, c, 0, 0, {}, {}, {}}; }

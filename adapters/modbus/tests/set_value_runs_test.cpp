@@ -290,8 +290,9 @@ TEST(ModbusSetValueRuns, ARunResentWhileASensorFaultStaysIsNotStoppedEachCycle) 
 // A request of setpoint and run sent before the trip showed, its run applied after: the read that
 // shows the trip is on the line when the request comes, its setpoint part waits for the line and
 // is then held (no run in force any more), and only then is the run part applied. Asked before
-// the trip, the run is ended by it like any run in force, and the fan's clearing fault never
-// restarts it.
+// the trip, the run is over (no_response) like one that waited in the driver when the trip
+// showed: it never overtakes the stop the trip owes, and the fault clearing at once, before
+// another read, never restarts the fan.
 TEST(ModbusSetValueRuns, ARunAskedBeforeTheTripShowedIsEndedByIt) {
   Fan f;
   ASSERT_TRUE(f.running_at(1000));
@@ -306,15 +307,44 @@ TEST(ModbusSetValueRuns, ARunAskedBeforeTheTripShowedIsEndedByIt) {
     return false;
   };
   ASSERT_TRUE(f.b.rig.run_until(status_read, 2s));
+  const TimePoint from = f.b.rig.now();
   const auto request = f.b.start_write({cmd::run_forward, 1200});
   ASSERT_TRUE(f.b.rig.run_until([&] { return request->settled(); }, 3s));
-  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  EXPECT_EQ(request->result, Outcome::no_response);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);  // cleared before another read
   f.b.rig.run_for(2s);
+  // The setpoint part may reach the fan while its run still reads in force (the read showing the
+  // trip is not published until its cycle ends); the last value written is the trip's stop.
+  const auto values = f.written(kSetValue, from);
+  ASSERT_FALSE(values.empty());
+  EXPECT_EQ(values.back(), 0u);
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  EXPECT_FALSE(f.turning());
+  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
+}
+
+// A comm loss ends that exemption: the fault read once the line is back may be another trip, come
+// unseen while the line was down. The run asked with the first one shown is ended by it, and its
+// stop written, so the fault clearing then does not restart the fan.
+TEST(ModbusSetValueRuns, ACommLossEndsTheExemptionOfARunAskedInATrip) {
+  Fan f;
+  ASSERT_TRUE(f.running_at(1000));
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
+  f.b.rig.run_for(1s);  // the trip's own stop is written
+  ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
+  f.b.rig.run_for(1s);
+  ASSERT_EQ(f.b.read("command"), cmd::run_forward);  // asked in the trip: not ended by it
+  ASSERT_EQ(f.b.control("silent on").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kCommLost) != 0; }, 30s));
+  const TimePoint from = f.b.rig.now();
+  ASSERT_EQ(f.b.control("silent off").rfind("ok", 0), 0u);
+  EXPECT_TRUE(f.b.rig.run_until([&] { return !f.written(kSetValue, from).empty(); }, 10s));
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{0});
   EXPECT_EQ(f.b.read("command"), cmd::stop);
   ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
   f.b.rig.run_for(2s);
   EXPECT_FALSE(f.turning());
-  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
 }
 
 // The run asked with a trip shown outlives that trip only: once a read shows the fault gone, a
