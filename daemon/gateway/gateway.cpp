@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <boost/asio/steady_timer.hpp>
 
-#include "base/log_context.h"
 #include "config/config_diff.h"
 #include "gateway/forward_access.h"
+#include "base/log_context.h"
 
 namespace drivegate {
 
