@@ -94,7 +94,7 @@ class ModbusDriver final : public DriverBase {
     // never lost to a stop, nor a run to a setpoint); a newer run or stop overtakes an older one,
     // whichever points each writes (a stop of its own beside a run by the set value).
     bool runs = false;
-    // A run a client asked for with the drive's trip shown (apply, from WriteOp::asked): that trip
+    // A run a client asked for with the trip in view (apply, from WriteOp::fault_seen): that trip
     // does not end it (update_common), so that a PLC re-sending run is not answered by the trip's
     // stop each cycle.
     bool asked_in_trip = false;
@@ -251,8 +251,8 @@ class ModbusDriver final : public DriverBase {
   // drive confirms a stop, or a client's run.
   bool stop_owed_ = false;
   // When the fault shown now was first shown (update_common's `active`, a fault that ends a run);
-  // none while no fault is shown. A client's run asked after it (WriteOp::asked) was asked with
-  // the trip in view.
+  // none while no fault is shown. A client's run whose last read showed a fault at or after it
+  // (WriteOp::fault_seen) was asked with the trip in view.
   std::optional<TimePoint> trip_shown_at_;
   // The run in force was asked for with the trip shown (Write::asked_in_trip): that trip does not
   // end it; the next read showing no trip does (a later trip is a new one).

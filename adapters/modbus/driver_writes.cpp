@@ -214,11 +214,11 @@ WriteStatus ModbusDriver::apply(const WriteOp& op, Ticket t, TimePoint now) {
   adopting_ = false;  // a client decides from now on
   auto w = write_of(op);
   if (!w) return WriteStatus::invalid_value;
-  // Asked with the trip shown: after the read that first showed it, by the client's clock (a part
-  // of a request that waited behind another was asked when the request was). Asked at the same
-  // instant is asked before: the exemption is never given on a tie.
+  // Asked with the trip in view: the client's last read of the fault state before it asked
+  // showed a fault, and was made once this trip was shown (a read that showed an earlier fault
+  // is older than this trip). A client that had not read the trip, or cannot tell, asked before.
   w->asked_in_trip = w->runs && w->change == Change::command && is_run(w->command) &&
-                     trip_shown_at_ && op.asked && *op.asked > *trip_shown_at_;
+                     trip_shown_at_ && op.fault_seen && *op.fault_seen >= *trip_shown_at_;
   if (w->runs && w->change == Change::setpoint && holds_setpoint_now()) {
     common_.setpoint_rpm = op.rpm;
     return WriteStatus::done;

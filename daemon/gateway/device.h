@@ -92,7 +92,8 @@ class Device final : public Station {
 
   // --- The northbounds' side (Modbus through the gateway, MQTT) ---
   // Fills `out` from the register image, 32-bit values in the session's word order; no_such_point
-  // when any address of the range is unmapped.
+  // when any address of the range is unmapped. A read of the fault state tells the session's
+  // FaultReads (fault_reads.h) what it showed.
   Outcome read(const Session& session, Table table, std::uint16_t address,
                std::span<std::uint16_t> out, TimePoint now);
   // A write request of registers (or bits) as a Modbus client sends it: validated against the
@@ -176,6 +177,9 @@ class Device final : public Station {
   // device_image.cpp
   void refresh_image(TimePoint now);
   void refresh_common(Table table, TimePoint now);
+  // Whether the range holds a whole point of the fault state: status, fault_code, fault_mask
+  // (both its words: either alone may read 0 with a fault shown), or the fault status bit.
+  [[nodiscard]] bool shows_faults(Table table, std::uint16_t address, std::size_t n) const;
   // device_writes.cpp
   // Hands the oldest queued write's next parts to the driver, on a write turn or whenever the
   // device owes no poll (may_release); true if any part was applied.

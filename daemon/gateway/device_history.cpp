@@ -21,6 +21,7 @@ Device::Answer Device::answer_to(const Session& session, WriteDone done, std::st
   a.record.unit = config_.unit_id;
   a.record.points = std::move(asked);
   a.since = now;
+  if (session.fault_reads) a.fault_seen = session.fault_reads->fault_seen(this);
   a.access = session.access;
   return a;
 }

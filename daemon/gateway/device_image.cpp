@@ -66,7 +66,27 @@ Outcome Device::read(const Session& session, Table table, std::uint16_t address,
   if (image_.is_stale()) refresh_image(now);
   if (table == Table::input || table == Table::discrete) refresh_common(table, now);
   image_.copy(table, address, out, session.word_order);
+  if (session.fault_reads && shows_faults(table, address, out.size())) {
+    session.fault_reads->served(this, !driver_->common().faults.empty() || comm_lost(), now);
+  }
   return Outcome::ok;
+}
+
+bool Device::shows_faults(Table table, std::uint16_t address, std::size_t n) const {
+  const auto shows = [](const MappedPoint& p) {
+    if (p.source == PointSource::status_bit) {
+      return p.index == static_cast<std::size_t>(StatusBit::fault);
+    }
+    const CommonRow* row = p.row();
+    return row != nullptr &&
+           (row->labels == CommonLabels::status_bits || row->labels == CommonLabels::faults ||
+            row->labels == CommonLabels::fault_bits);
+  };
+  const std::size_t end = address + n;
+  const auto common = map_.common_points(table);
+  return std::any_of(common.begin(), common.end(), [&](const MappedPoint& p) {
+    return shows(p) && address <= p.address && p.address + p.spec.address_count() <= end;
+  });
 }
 
 }  // namespace drivegate

@@ -297,8 +297,11 @@ Outcome Device::enqueue(const Session& session, std::vector<Part> parts, Answer&
       origin == Origin::gateway || (commands(parts, &is_stop) && !commands(parts, &is_run));
   if (!urgent && !heartbeat_only) {
     // Equal to the request queued last, which has not started: the same effect, one answer.
+    // Asked with the same fault in view (a run from a client that read a trip is not the run of
+    // one that did not: WriteOp::fault_seen).
     Request* last = writes_.last_queued();
-    if (last != nullptr && last->feeds_failsafe == feeds &&
+    if (last != nullptr && last->feeds_failsafe == feeds && !last->answers.empty() &&
+        last->answers.front().fault_seen == answer.fault_seen &&
         std::equal(parts.begin(), parts.end(), last->parts.begin(), last->parts.end(),
                    [](const Part& a, const Part& b) {
                      return a.point == b.point && a.value == b.value;
@@ -392,7 +395,7 @@ Device::Progress Device::advance(Request& r, TimePoint now, Outcome& failure) {
       continue;
     }
     WriteOp& op = *maybe_op;
-    if (!r.answers.empty()) op.asked = r.answers.front().since;
+    if (!r.answers.empty()) op.fault_seen = r.answers.front().fault_seen;
     const bool run = op.target == WriteOp::Target::command && is_run(op.command);
     // The failsafe may have latched while the request waited.
     if (run && failsafe_.latched() && !r.feeds_failsafe) {

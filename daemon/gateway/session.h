@@ -10,8 +10,10 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string_view>
 
+#include "gateway/fault_reads.h"
 #include "gateway/source.h"
 
 namespace drivegate {
@@ -50,6 +52,9 @@ struct Session {
   bool feeds_failsafe = true;
   // Who it is, for the audit trail (source.h).
   Source source{};
+  // What this client has read of each drive's faults (fault_reads.h): its connection's own, kept
+  // across its requests; none where the northbound cannot tell (MQTT) or for the gateway's own.
+  std::shared_ptr<FaultReads> fault_reads{};
 };
 
 }  // namespace drivegate

@@ -69,6 +69,9 @@ struct WriteAnswer {
                    // at once
   CommandRecord record;
   TimePoint since;
+  // When the client's last read of the drive's fault state, before it asked, showed a fault
+  // (fault_reads.h); none if it showed none or the client cannot tell.
+  std::optional<TimePoint> fault_seen;
   // Recorded (a write), counted only (the heartbeat alone, command_audit.h), or neither (a
   // forwarded read: not a write at all).
   enum class Audit : std::uint8_t { record, count, none };

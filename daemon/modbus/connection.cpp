@@ -39,6 +39,8 @@ Connection::Connection(std::shared_ptr<ServerState> state, std::shared_ptr<Liste
       writes_(std::max<std::size_t>(1, state_->options.max_pending_writes)) {
   tx_pending_.reserve(kReceiveBuffer);
   tx_inflight_.reserve(kReceiveBuffer);
+  // What this client reads of the drives' faults, for the runs it asks (fault_reads.h).
+  session_.fault_reads = std::make_shared<FaultReads>();
 }
 
 Connection::~Connection() {
@@ -224,6 +226,10 @@ void Connection::on_read(const boost::system::error_code& ec, std::size_t n) {
     close();
     return;
   }
+  // Bytes that begin a new request: the client sent them after the replies gone out before,
+  // which count as read from now (fault_reads.h). Bytes that finish a request already begun (or
+  // follow one held at the write cap) were sent before.
+  if (rx_len_ == 0) session_.fault_reads->received();
   rx_len_ += n;
   listener_->stats.bytes_received += n;
   process_input(state_->clock.now());
@@ -458,6 +464,7 @@ void Connection::flush() {
   std::swap(tx_pending_, tx_inflight_);
   tx_pending_.clear();
   writing_ = true;
+  flushing_reads_ = session_.fault_reads->served_count();  // their replies are in this batch
   auto done = [self = shared_from_this()](const boost::system::error_code& ec, std::size_t) {
     self->on_flushed(ec);
   };
@@ -476,6 +483,7 @@ void Connection::on_flushed(const boost::system::error_code& ec) {
     return;
   }
   tx_inflight_.clear();
+  session_.fault_reads->sent(flushing_reads_);
   flush();
   read();
 }

@@ -118,6 +118,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   // Replies being gathered for the next write, and the write in flight.
   std::vector<std::uint8_t> tx_pending_;
   std::vector<std::uint8_t> tx_inflight_;
+  std::uint64_t flushing_reads_ = 0;  // FaultReads::served_count() when tx_inflight_ was filled
 
   std::vector<PendingWrite> writes_;
   std::size_t outstanding_ = 0;

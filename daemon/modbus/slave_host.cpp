@@ -35,9 +35,19 @@ SlaveHost::SlaveHost(asio::io_context& io, net::Clock& clock, modbus::Backend& b
       log_(std::move(log)),
       name_(std::move(name)),
       send_(std::move(send)),
-      timer_(io.get_executor(), clock) {}
+      timer_(io.get_executor(), clock) {
+  set_policy(policy_);
+}
 
 SlaveHost::~SlaveHost() = default;
+
+void SlaveHost::set_policy(std::shared_ptr<const SlavePolicy> policy) {
+  policy_ = std::move(policy);
+  std::shared_ptr<FaultReads> reads =
+      session_.fault_reads ? std::move(session_.fault_reads) : std::make_shared<FaultReads>();
+  session_ = policy_->session;
+  session_.fault_reads = std::move(reads);
+}
 
 void SlaveHost::stop() {
   stopped_ = true;
@@ -46,7 +56,10 @@ void SlaveHost::stop() {
 
 void SlaveHost::reset() {
   framer_.reset();
-  if (due_) ++counters_.server_no_response;  // the line went before it could be sent
+  if (due_) {  // the line went before it could be sent
+    ++counters_.server_no_response;
+    session_.fault_reads->unsent_dropped();
+  }
   due_.reset();
   timer_.cancel();
   timer_armed_ = false;
@@ -61,7 +74,11 @@ void SlaveHost::receive(ByteView bytes) {
   if (due_) {  // the line was to stay silent until our reply: the master did not wait for it
     due_.reset();
     ++counters_.server_no_response;
+    session_.fault_reads->unsent_dropped();
   }
+  // Bytes that begin a new request: the master sent them after the replies gone out before,
+  // which count as read from now (fault_reads.h).
+  if (!framer_.partial()) session_.fault_reads->received();
   framer_.feed(bytes, clock_.now());
   drain();
 }
@@ -128,7 +145,7 @@ void SlaveHost::serve(FramerEvent& e) {
     pending_.reset();
   }
   const std::span<const std::uint8_t> pdu = adu.pdu;
-  const Session& session = policy_->session;
+  const Session& session = session_;
   if (pdu[0] == kDiagnostics && !dispatcher_.forwards(unit)) {
     const std::size_t n = modbus::diagnostics(pdu, line_.counts, line_.cleared, out_);
     reply(unit, std::span(out_).first(n), e.reply_at);
@@ -197,7 +214,7 @@ void SlaveHost::serve_broadcast(const modbus_serial::Adu& adu) {
   const std::span<const std::uint8_t> pdu = adu.pdu;
   // Writes only: 0x17 reads too, and a broadcast has nobody to answer (Serial Line 2.1).
   if (!modbus::may_write(pdu[0]) || pdu[0] == kReadWrite) return;
-  const Session& session = policy_->session;
+  const Session& session = session_;
   if (!policy_->broadcast) {
     ++counters_.broadcasts_refused;
     backend_.refused_broadcast(session, pdu);
@@ -261,7 +278,7 @@ void SlaveHost::settle(std::uint32_t generation, Exception result, const Bytes& 
   } else if (p->forwarded) {
     n = modbus::exception_pdu(p->request.at(0), result, out_);
   } else {
-    n = dispatcher_.complete(policy_->session, p->unit, p->request, result, out_);
+    n = dispatcher_.complete(session_, p->unit, p->request, result, out_);
   }
   const auto unit = p->unit;
   const auto at = p->reply_at;
@@ -297,6 +314,7 @@ void SlaveHost::put(Bytes frame) {
   }
   framer_.replied();
   send_(std::move(frame));
+  session_.fault_reads->all_sent();  // one request at a time: this is its reply
 }
 
 void SlaveHost::arm() {

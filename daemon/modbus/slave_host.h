@@ -79,7 +79,7 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   // The line is gone for good (listener closed, connection closed): reset, and nothing more is
   // sent.
   void stop();
-  void set_policy(std::shared_ptr<const SlavePolicy> policy) { policy_ = std::move(policy); }
+  void set_policy(std::shared_ptr<const SlavePolicy> policy);
   // A request is waiting for its device, or its reply for its moment on the line.
   [[nodiscard]] bool busy() const { return pending_.has_value() || due_.has_value(); }
   // Called each time a request that waited for its device has been answered or given up on:
@@ -130,6 +130,9 @@ class SlaveHost : public std::enable_shared_from_this<SlaveHost> {
   modbus_serial::Framing framing_;
   modbus::SlaveFramer framer_;
   std::shared_ptr<const SlavePolicy> policy_;
+  // The policy's session with this host's own FaultReads (what its masters read of the drives'
+  // faults), kept across a policy change.
+  Session session_;
   LineCounters& line_;
   modbus::SerialCounters& counters_;  // line_.counts
   std::shared_ptr<spdlog::logger> log_;

@@ -27,7 +27,7 @@
 namespace drivegate {
 
 // Bumped whenever anything in include/drivegate/ changes layout or meaning.
-inline constexpr std::uint32_t kAdapterApiVersion = 7;
+inline constexpr std::uint32_t kAdapterApiVersion = 8;
 inline constexpr const char* kDescriptorSymbol = "drivegate_adapter";
 
 // Returns nullptr and sets `error` (one line, naming the option) when the options are

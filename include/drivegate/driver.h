@@ -149,11 +149,12 @@ struct WriteOp {
   std::size_t point = 0;            // Target::point: index into points()
   Value value;                      // Target::point: the engineering value
   Bytes pdu;                        // Target::forward: function code and data, 1..253 bytes
-  // When the client asked (its request accepted: the gateway stamps every request, its own
-  // included): what it could have read of the drive then. A part applied later (behind another,
-  // or after the request waited) was still asked then. None: a driver takes it as asked before
-  // anything it shows.
-  std::optional<TimePoint> asked;
+  // When the client's last read of the drive's fault state before it asked showed a fault: the
+  // trip it asked with in view (the gateway tracks each client's reads). A part applied later
+  // (behind another, or after the request waited) carries the same. None: the client had read no
+  // fault (or cannot tell: MQTT, the gateway's own writes), and a driver takes the request as
+  // asked before anything it shows.
+  std::optional<TimePoint> fault_seen;
 
   static WriteOp of_command(Command c) { return {Target::command, c, 0, 0, {}, {}, {}}; }
   static WriteOp of_setpoint(std::int32_t rpm) {

@@ -456,6 +456,128 @@ TEST_F(DeviceTest, WhileCommLostFaultCodeSaysSo) {
   EXPECT_EQ(r[5], 0x10);
 }
 
+// --- What each client read of the fault state (gateway/fault_reads.h), and its runs stamped
+// with it (WriteOp::fault_seen): a read of status, fault_code, fault_mask or the fault status bit
+// that showed a fault is the client's own, until one of its reads shows none. No other read
+// counts, nor another client's.
+
+// A client that keeps its record, as a Modbus connection does.
+Session reading_client() {
+  return Session{AccessLevel::operate, WordOrder::big, true, {}, std::make_shared<FaultReads>()};
+}
+
+class DeviceFaultState : public DeviceTest {
+ protected:
+  DeviceFaultState() {
+    fake_->answer = WriteStatus::done;  // each run applied at once: none waits behind another
+    fake_->common_.ready = true;
+    heard(t0_);
+  }
+  void tripped() { fake_->common_.faults.set(Fault::over_current); }
+  // A read whose reply the client has before it sends anything more (fault_reads.h).
+  void read(const Session& s, Table t, std::uint16_t address, std::size_t n, TimePoint at) {
+    std::vector<std::uint16_t> out(n);
+    ASSERT_EQ(device_->read(s, t, address, out, at), Outcome::ok);
+    s.fault_reads->all_sent();
+    s.fault_reads->received();
+  }
+  // The client asks for run_forward at `at`; what the driver was handed as fault_seen.
+  std::optional<TimePoint> run_asked(const Session& s, TimePoint at) {
+    const std::uint16_t go = 1;  // run_forward
+    EXPECT_EQ(device_->write(
+                  s, Table::holding, 0, std::span(&go, 1), [](Outcome) {}, at),
+              Outcome::ok);
+    device_->next_exchange(at, Turn::write);
+    EXPECT_FALSE(fake_->fault_seen.empty());
+    return fake_->fault_seen.empty() ? std::nullopt : fake_->fault_seen.back();
+  }
+};
+
+TEST_F(DeviceFaultState, ARunIsStampedWithTheClientsLastReadOfTheFaultShown) {
+  const Session plc = reading_client();
+  tripped();
+  read(plc, Table::input, 0, 1, t0_ + Millis(100));  // status
+  EXPECT_EQ(run_asked(plc, t0_ + Millis(300)), t0_ + Millis(100));
+}
+
+TEST_F(DeviceFaultState, EveryRegisterOrBitOfTheFaultStateCounts) {
+  tripped();
+  const Session by_code = reading_client();
+  read(by_code, Table::input, 1, 1, t0_ + Millis(100));  // fault_code
+  EXPECT_EQ(run_asked(by_code, t0_ + Millis(200)), t0_ + Millis(100));
+  const Session by_mask = reading_client();
+  read(by_mask, Table::input, 2, 2, t0_ + Millis(300));  // fault_mask (input 2..3)
+  EXPECT_EQ(run_asked(by_mask, t0_ + Millis(400)), t0_ + Millis(300));
+  const Session by_bit = reading_client();
+  read(by_bit, Table::discrete, 2, 1, t0_ + Millis(500));  // status_fault
+  EXPECT_EQ(run_asked(by_bit, t0_ + Millis(600)), t0_ + Millis(500));
+  const Session in_a_block = reading_client();
+  read(in_a_block, Table::input, 0, 16, t0_ + Millis(700));
+  EXPECT_EQ(run_asked(in_a_block, t0_ + Millis(800)), t0_ + Millis(700));
+}
+
+TEST_F(DeviceFaultState, AReadOfAnythingElseSeesNoFault) {
+  tripped();
+  const Session plc = reading_client();
+  read(plc, Table::input, 4, 4, t0_ + Millis(100));     // past the fault state: speed and more
+  read(plc, Table::discrete, 0, 2, t0_ + Millis(100));  // online, running
+  read(plc, Table::holding, 0, 2, t0_ + Millis(100));   // command, setpoint_rpm
+  EXPECT_EQ(run_asked(plc, t0_ + Millis(200)), std::nullopt);
+}
+
+// Either word of fault_mask alone may read 0 with a fault shown (over_current is bit 4: the high
+// word is 0): the client has not read the fault.
+TEST_F(DeviceFaultState, HalfOfFaultMaskIsNotTheFaultRead) {
+  tripped();
+  const Session plc = reading_client();
+  read(plc, Table::input, 2, 1, t0_ + Millis(100));
+  read(plc, Table::input, 3, 1, t0_ + Millis(100));
+  EXPECT_EQ(run_asked(plc, t0_ + Millis(200)), std::nullopt);
+}
+
+TEST_F(DeviceFaultState, AReadShowingNoFaultForgetsTheOneSeenBefore) {
+  const Session plc = reading_client();
+  tripped();
+  read(plc, Table::input, 0, 1, t0_ + Millis(100));
+  fake_->common_.faults = FaultSet{};
+  read(plc, Table::input, 0, 1, t0_ + Millis(200));
+  tripped();  // a new trip, not read
+  EXPECT_EQ(run_asked(plc, t0_ + Millis(300)), std::nullopt);
+}
+
+// Two equal runs queued one after the other are joined into one request, unless one was asked
+// with the fault in view and the other not: each is then applied with its own.
+TEST_F(DeviceFaultState, RunsAskedWithAndWithoutTheFaultInViewAreNotJoined) {
+  tripped();
+  fake_->answer = WriteStatus::pending;
+  const Session reader = reading_client();
+  const Session other = reading_client();
+  read(reader, Table::input, 0, 1, t0_ + Millis(100));
+  const std::uint16_t go = 1;                           // run_forward
+  for (const Session* s : {&other, &other, &reader}) {  // the first with the driver, two queued
+    EXPECT_EQ(device_->write(
+                  *s, Table::holding, 0, std::span(&go, 1), [](Outcome) {}, t0_ + Millis(200)),
+              Outcome::ok);
+    device_->next_exchange(t0_ + Millis(200), Turn::write);
+  }
+  complete(WriteResult::ok, t0_ + Millis(300));
+  complete(WriteResult::ok, t0_ + Millis(400));
+  EXPECT_EQ(fake_->fault_seen,
+            (std::vector<std::optional<TimePoint>>{std::nullopt, std::nullopt, t0_ + Millis(100)}));
+}
+
+TEST_F(DeviceFaultState, WhatOneClientReadIsNotAnothers) {
+  tripped();
+  const Session reader = reading_client();
+  const Session other = reading_client();
+  read(reader, Table::input, 0, 1, t0_ + Millis(100));
+  EXPECT_EQ(run_asked(other, t0_ + Millis(200)), std::nullopt);
+  const Session no_record{AccessLevel::operate, WordOrder::big};  // MQTT's, the gateway's own
+  std::vector<std::uint16_t> status(1);
+  ASSERT_EQ(device_->read(no_record, Table::input, 0, status, t0_ + Millis(300)), Outcome::ok);
+  EXPECT_EQ(run_asked(no_record, t0_ + Millis(400)), std::nullopt);
+}
+
 TEST(LinkHealth, ASilentDeviceIsBackedOffButProbed) {
   const TimePoint t0 = TimePoint{} + std::chrono::hours(1);
   LinkPolicy policy;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -38,6 +39,9 @@ class FakeBackend : public Backend {
     ++reads;
     last_session = session;
     if (auto e = check(unit, address, out.size()); e != Exception::none) return e;
+    if (t == Table::input && address == kFaultState && session.fault_reads) {
+      session.fault_reads->served(this, true, std::chrono::steady_clock::now());
+    }
     for (std::size_t i = 0; i < out.size(); ++i) out[i] = table(t)[address + i];
     return Exception::none;
   }
@@ -45,6 +49,8 @@ class FakeBackend : public Backend {
   Exception write(const Session& session, std::uint8_t unit, Table t, std::uint16_t address,
                   std::span<const std::uint16_t> values, WriteDone done) override {
     last_session = session;
+    writes_fault_seen.push_back(session.fault_reads ? session.fault_reads->fault_seen(this)
+                                                    : std::nullopt);
     if (auto e = check(unit, address, values.size()); e != Exception::none) return e;
     // As the gateway does for points beyond the common block: backend.h's only 0x01.
     if (maintain_from && address + values.size() > *maintain_from &&
@@ -112,6 +118,10 @@ class FakeBackend : public Backend {
   // answers for points beyond the common command block).
   std::optional<std::uint16_t> maintain_from;
   Session last_session;  // of the last read or write
+  // Input register kFaultState reads as the gateway's fault state does: the session's FaultReads
+  // is told it showed a fault (gateway/fault_reads.h). What each write found there, in order.
+  static constexpr std::uint16_t kFaultState = 0;
+  std::vector<std::optional<FaultReads::TimePoint>> writes_fault_seen;
 
  private:
   Exception check(std::uint8_t unit, std::uint16_t address, std::size_t count) const {

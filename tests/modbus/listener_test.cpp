@@ -105,6 +105,52 @@ TEST(Listener, EachListenersAccessAndWordOrderTravelWithItsRequests) {
   EXPECT_EQ(s.word_order, WordOrder::big);
 }
 
+// What a client read of the drives' faults (gateway/fault_reads.h) is its connection's own: the
+// same record with each of its requests, and another connection's is another.
+TEST(Listener, EachConnectionKeepsItsOwnRecordOfTheFaultsItRead) {
+  Harness h(with({{.access = AccessLevel::operate}}));
+  RawClient first(h.port());
+  RawClient second(h.port());
+  const auto reads = [&] {
+    return h.with_backend([](test::FakeBackend& b) { return b.last_session.fault_reads; });
+  };
+  first.send(kReadHolding);
+  first.reply();
+  const std::shared_ptr<FaultReads> of_first = reads();
+  ASSERT_NE(of_first, nullptr);
+  first.send(kWriteSetpoint);
+  first.reply();
+  EXPECT_EQ(reads(), of_first);
+  second.send(kReadHolding);
+  second.reply();
+  ASSERT_NE(reads(), nullptr);
+  EXPECT_NE(reads(), of_first);
+}
+
+// A read of the fault state counts for the client's runs once its reply went out and the client
+// sent more after it: a read and a write sent in one segment (pipelined) were decided before the
+// read's reply, and the write finds nothing seen; the next write, sent after the reply came,
+// finds the fault the read showed.
+TEST(Listener, AReadCountsForWhatTheClientSendsAfterItsReplyNotWithIt) {
+  Harness h(with({{.access = AccessLevel::operate}}));
+  RawClient c(h.port());
+  const Bytes read_state = request(3, 1, {0x04, 0x00, 0x00, 0x00, 0x01});  // input 0: kFaultState
+  Bytes pipelined = read_state;
+  pipelined.insert(pipelined.end(), kWriteSetpoint.begin(), kWriteSetpoint.end());
+  ASSERT_TRUE(c.send(pipelined));
+  EXPECT_EQ(c.reply().size(), 11u);
+  EXPECT_EQ(c.reply(), kWriteSetpoint);
+  const auto seen = [&] {
+    return h.with_backend([](test::FakeBackend& b) { return b.writes_fault_seen; });
+  };
+  ASSERT_EQ(seen().size(), 1u);
+  EXPECT_FALSE(seen().back()) << "sent with the read, before its reply";
+  ASSERT_TRUE(c.send(kWriteSetpoint));
+  EXPECT_EQ(c.reply(), kWriteSetpoint);
+  ASSERT_EQ(seen().size(), 2u);
+  EXPECT_TRUE(seen().back()) << "sent after the read's reply";
+}
+
 TEST(Listener, AReloadChangesTheAccessOfOpenConnectionsAndClosesThoseNoLongerAllowed) {
   Harness h(with({{.access = AccessLevel::maintain}}));
   RawClient c(h.port());

@@ -90,6 +90,44 @@ TEST_F(SlaveHostTest, AReadIsAnsweredOnceTheSilenceHasPassedNotBefore) {
   EXPECT_EQ(counters_.counts.bus_messages, 1U);
 }
 
+// What the line's masters read of the drives' faults (gateway/fault_reads.h) is the host's own
+// record: the same with each request, and kept when a reload changes the listener's policy.
+TEST_F(SlaveHostTest, ItsRecordOfTheFaultsReadGoesWithEveryRequestAndOutlivesAReload) {
+  make();
+  receive(1, kRead);
+  advance(1s);
+  ASSERT_EQ(backend_.fault_reads.size(), 1u);
+  const std::shared_ptr<FaultReads> record = backend_.fault_reads.front();
+  ASSERT_NE(record, nullptr);
+  host_->set_policy(policy(WriteReply::confirmed, false, AccessLevel::maintain, Millis(0)));
+  receive(1, kWrite);
+  ASSERT_EQ(backend_.fault_reads.size(), 2u);
+  EXPECT_EQ(backend_.fault_reads.back(), record);
+}
+
+// A read of the fault state counts for what the master sends after its reply went out; a reply
+// that never went out (the line went before it was due) never counts.
+TEST_F(SlaveHostTest, AReadCountsOnceItsReplyWentOutNeverIfItWasDropped) {
+  make();
+  const Bytes read_state = {0x03, 0x00, 0x00, 0x00, 0x01};  // holding 0: kFaultState
+  receive(1, read_state);
+  host_->reset();  // the line went: the reply is dropped
+  advance(1s);
+  ASSERT_TRUE(sent_.empty());
+  receive(1, kWrite);
+  ASSERT_EQ(backend_.writes_fault_seen.size(), 1u);
+  EXPECT_FALSE(backend_.writes_fault_seen.back()) << "the dropped reply's read never counts";
+  backend_.pending.front()(Exception::none);
+  advance(1s);
+
+  receive(1, read_state);
+  advance(timing_.t35);         // the reply goes out
+  ASSERT_EQ(sent_.size(), 2u);  // the write's echo, this reply
+  receive(1, kWrite);
+  ASSERT_EQ(backend_.writes_fault_seen.size(), 2u);
+  EXPECT_TRUE(backend_.writes_fault_seen.back());
+}
+
 TEST_F(SlaveHostTest, AUnitNobodyServesGetsSilence) {
   make();
   receive(9, kRead);

@@ -6,8 +6,8 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "plugin/adapter_options.h"
 #include "gateway/gateway.h"
+#include "plugin/adapter_options.h"
 
 namespace drivegate::test {
 
@@ -145,6 +145,11 @@ std::vector<std::uint16_t> BusRig::read(Device& d, Table table, std::uint16_t ad
                                         std::size_t n, const Session& session) {
   std::vector<std::uint16_t> out(n);
   if (d.read(session, table, address, out, now()) != Outcome::ok) out.clear();
+  // The client has its reply before it asks anything more, as a PLC that waits for each.
+  if (session.fault_reads) {
+    session.fault_reads->all_sent();
+    session.fault_reads->received();
+  }
   return out;
 }
 

@@ -76,22 +76,37 @@ class BusRig {
   }
   [[nodiscard]] TimePoint now() const { return clock_.now(); }
 
-  // A client with every right, in the register map's word order (a `maintain` listener).
+  // A client with every right, in the register map's word order (a `maintain` listener), that
+  // keeps no record of what it read (a Session without FaultReads): an onlooker.
   static inline const Session kMaintain{AccessLevel::maintain, WordOrder::big};
+  // The PLC: the same rights, and like a Modbus connection it keeps what it read of the drives'
+  // faults for the runs it asks. Reads and writes that name no session are its.
+  [[nodiscard]] const Session& plc() const { return plc_; }
 
   // A Modbus write request, as the server makes it (registers, or 0 / 1 per coil).
   std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
-                                      std::vector<std::uint16_t> values,
-                                      const Session& session = kMaintain);
+                                      std::vector<std::uint16_t> values) {
+    return write(d, table, address, std::move(values), plc_);
+  }
+  std::shared_ptr<WriteOutcome> write(Device& d, Table table, std::uint16_t address,
+                                      std::vector<std::uint16_t> values, const Session& session);
   // Runs until the write settled or `limit` passed; its outcome, nullopt if still pending.
   std::optional<Outcome> wait(const std::shared_ptr<WriteOutcome>& w, Millis limit = Millis(5000));
   std::optional<Outcome> write_and_wait(Device& d, Table table, std::uint16_t address,
                                         std::vector<std::uint16_t> values,
-                                        Millis limit = Millis(5000),
-                                        const Session& session = kMaintain);
-  // Registers (or bits) as a PLC reads them; empty when the read fails.
+                                        Millis limit = Millis(5000)) {
+    return write_and_wait(d, table, address, std::move(values), limit, plc_);
+  }
+  std::optional<Outcome> write_and_wait(Device& d, Table table, std::uint16_t address,
+                                        std::vector<std::uint16_t> values, Millis limit,
+                                        const Session& session);
+  // Registers (or bits) as a PLC reads them, its reply in hand before it asks anything more;
+  // empty when the read fails.
+  std::vector<std::uint16_t> read(Device& d, Table table, std::uint16_t address, std::size_t n) {
+    return read(d, table, address, n, plc_);
+  }
   std::vector<std::uint16_t> read(Device& d, Table table, std::uint16_t address, std::size_t n,
-                                  const Session& session = kMaintain);
+                                  const Session& session);
   // The named point's registers.
   std::vector<std::uint16_t> read(Device& d, std::string_view point);
   // The named point's value as a PLC reads it: a u16 point's register, a u32 one's two high word
@@ -121,6 +136,7 @@ class BusRig {
   std::vector<std::unique_ptr<Device>> devices_;
   std::vector<std::unique_ptr<Simulator>> sims_;
   std::unique_ptr<BusEngine> engine_;
+  Session plc_{AccessLevel::maintain, WordOrder::big, true, {}, std::make_shared<FaultReads>()};
 };
 
 }  // namespace drivegate::test

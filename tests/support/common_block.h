@@ -21,6 +21,10 @@ inline constexpr std::uint16_t stop = 0, run_forward = 1, run_reverse = 2, quick
                                reset_fault = 4;
 }  // namespace cmd
 
+// Input register status (30001), then fault_code (30002).
+inline constexpr std::uint16_t kStatusRegister = 0;
+inline constexpr std::uint16_t kFaultCodeRegister = 1;
+
 // The bits of input register status.
 inline constexpr std::uint16_t kOnline = 1u << 0, kRunning = 1u << 1, kFaulted = 1u << 2,
                                kWarning = 1u << 3, kCommLost = 1u << 4, kFailsafe = 1u << 5,

@@ -67,6 +67,7 @@ class FakeDriver final : public Driver {
     switch (op.target) {
       case WriteOp::Target::command:
         commands.push_back(op.command);
+        fault_seen.push_back(op.fault_seen);
         return answer;
       case WriteOp::Target::setpoint:
         setpoints.push_back(op.rpm);
@@ -100,6 +101,7 @@ class FakeDriver final : public Driver {
   WriteStatus answer = WriteStatus::pending;
   WriteStatus setpoint_answer = WriteStatus::done;
   std::vector<Command> commands;
+  std::vector<std::optional<TimePoint>> fault_seen;  // each command's WriteOp::fault_seen
   std::vector<std::int32_t> setpoints;
   std::vector<std::pair<std::size_t, Value>> writes;
   bool forwarding = false;       // a pass-through driver: every request is forwarded

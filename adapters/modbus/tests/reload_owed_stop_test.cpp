@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "common_block.h"
 #include "reload_support.h"
 
 namespace drivegate::modbus_device::modbus_reload_owed_stop_test {
@@ -121,7 +122,9 @@ class ReloadOwedStop : public support::ReloadRig {
     fan_.speed = 0;
     run(d, 600ms, 20);
     EXPECT_EQ(fan_.set_value, 0);  // the trip's stop
-    const std::uint16_t go = 1;    // run_forward
+    // The PLC reads the trip, then asks for the run.
+    EXPECT_NE(plc_reads_status(d, at(1000ms)) & test::common_block::kFaulted, 0u);
+    const std::uint16_t go = 1;  // run_forward
     EXPECT_EQ(d.write(
                   kPlc, Table::holding, 0, std::span(&go, 1), [](Outcome) {}, at(1000ms)),
               Outcome::ok);

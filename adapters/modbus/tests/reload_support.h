@@ -66,8 +66,20 @@ class ReloadRig : public ::testing::Test {
     return *next.find(name);
   }
   [[nodiscard]] TimePoint at(Millis ms) const { return t0_ + ms; }
+  // The status register as the PLC reads it at `at`, its reply in hand before it asks anything
+  // more (gateway/fault_reads.h).
+  std::uint16_t plc_reads_status(Device& d, TimePoint at) {
+    std::uint16_t status = 0xFFFF;
+    EXPECT_EQ(d.read(kPlc, Table::input, 0, std::span(&status, 1), at), Outcome::ok);
+    kPlc.fault_reads->all_sent();
+    kPlc.fault_reads->received();
+    return status;
+  }
 
-  static inline const Session kPlc{AccessLevel::operate, WordOrder::big};
+  // The PLC, an operate client that keeps what it read of the drives' faults, as a Modbus
+  // connection does.
+  const Session kPlc{
+      AccessLevel::operate, WordOrder::big, true, {}, std::make_shared<FaultReads>()};
   const ProfileFile file_;
   PluginRegistry plugins_;
   boost::asio::io_context io_;

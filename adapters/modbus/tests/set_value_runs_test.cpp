@@ -69,6 +69,17 @@ struct Fan {
     if (!b.rig.run_until(status_read, 2s)) return testing::AssertionFailure() << "no status read";
     return testing::AssertionSuccess();
   }
+  // Running at 1000 rpm, the fan trips; the PLC (the bench's client) reads the fault, and the
+  // trip's own stop is written.
+  testing::AssertionResult tripped_and_read_by_the_plc() {
+    if (const auto running = running_at(1000); !running) return running;
+    if (b.control("fault 1").rfind("ok", 0) != 0) return testing::AssertionFailure() << "fault 1";
+    if (!b.rig.run_until([&] { return (b.status() & kFaulted) != 0; }, 2s)) {
+      return testing::AssertionFailure() << "no trip read";
+    }
+    b.rig.run_for(1s);
+    return testing::AssertionSuccess();
+  }
   // Online, then run at `rpm` in one request (command and setpoint), turning at it.
   testing::AssertionResult running_at(std::uint16_t rpm) {
     if (!b.until_online()) return testing::AssertionFailure() << "not online";
@@ -314,15 +325,90 @@ TEST(ModbusSetValueRuns, ARunAskedBeforeTheTripShowedIsEndedByIt) {
   EXPECT_EQ(f.b.read("speed_rpm"), 0u);
 }
 
+// Whether a client that keeps no record of its reads (test::BusRig::kMaintain) reads the fault
+// bit: what the fan shows, without the PLC having read it.
+bool onlooker_sees_a_fault(Fan& f) {
+  const auto r =
+      f.b.rig.read(*f.b.drive, Table::input, kStatusRegister, 1, test::BusRig::kMaintain);
+  return !r.empty() && (r[0] & kFaulted) != 0;
+}
+
+// Running at 1000 rpm, the fan trips and its own stop is written, while the PLC (the bench's
+// client) reads nothing of the fault state: an onlooker, a client that keeps no record of its
+// reads, watches the fault bit instead.
+testing::AssertionResult tripped_unread_by_the_plc(Fan& f) {
+  if (const auto running = f.running_at(1000); !running) return running;
+  if (f.b.control("fault 1").rfind("ok", 0) != 0) return testing::AssertionFailure() << "fault 1";
+  if (!f.b.rig.run_until([&] { return onlooker_sees_a_fault(f); }, 2s)) {
+    return testing::AssertionFailure() << "no trip shown";
+  }
+  f.b.rig.run_for(1s);  // the trip's own stop is written
+  return testing::AssertionSuccess();
+}
+
+// The trip shown, the PLC asks for run without having read it: its run is over (no_response),
+// nothing is written, the command reads stop, and the fault clearing does not restart the fan.
+void expect_the_plcs_run_over_and_the_fan_kept_still(Fan& f) {
+  const TimePoint from = f.b.rig.now();
+  EXPECT_EQ(f.b.write({cmd::run_forward}), Outcome::no_response);
+  f.b.rig.run_for(1s);
+  EXPECT_THAT(f.written(kSetValue, from), testing::IsEmpty());
+  EXPECT_EQ(f.b.read("command"), cmd::stop);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  f.b.rig.run_for(2s);
+  EXPECT_FALSE(f.turning());
+}
+
+// The trip shown, but the PLC has not read it (it polls the speed only, or its run was sent
+// before the trip and read from the socket after it): its run is not a choice made with the trip
+// in view. It is over (no_response) as a run asked before the trip, the trip's stop stands, and
+// the fault clearing does not restart the fan.
+TEST(ModbusSetValueRuns, ARunFromAClientThatHadNotReadTheTripIsEndedByIt) {
+  Fan f;
+  ASSERT_TRUE(tripped_unread_by_the_plc(f));
+  expect_the_plcs_run_over_and_the_fan_kept_still(f);
+  EXPECT_EQ(f.b.read("speed_rpm"), 0u);
+}
+
+// The PLC read a first trip; the fault cleared and the fan tripped again, neither read by the
+// PLC. The fault it saw is not this trip: its run is over (no_response), the fan stays stopped.
+TEST(ModbusSetValueRuns, ARunFromAClientThatReadOnlyAnEarlierTripIsEndedByTheNewOne) {
+  Fan f;
+  ASSERT_TRUE(f.tripped_and_read_by_the_plc());
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return !onlooker_sees_a_fault(f); }, 2s));
+  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
+  ASSERT_TRUE(f.b.rig.run_until([&] { return onlooker_sees_a_fault(f); }, 2s));
+  expect_the_plcs_run_over_and_the_fan_kept_still(f);
+}
+
+// What counts is what the asking client read: of two clients sending the same run in the same
+// trip, the one that had not read the fault is refused the exemption (no_response) and the one
+// that had is taken (ok): the command reads run, and the fan runs once the fault clears.
+TEST(ModbusSetValueRuns, OnlyTheClientThatReadTheTripRunsThroughIt) {
+  Fan f;
+  ASSERT_TRUE(tripped_unread_by_the_plc(f));
+  const Session reader{
+      AccessLevel::operate, WordOrder::big, true, {}, std::make_shared<FaultReads>()};
+  ASSERT_NE(f.b.rig.read(*f.b.drive, Table::input, kStatusRegister, 1, reader).at(0) & kFaulted,
+            0u);
+  const TimePoint from = f.b.rig.now();
+  EXPECT_EQ(f.b.write({cmd::run_forward}), Outcome::no_response);  // the PLC: not read
+  EXPECT_EQ(f.b.rig.write_and_wait(*f.b.drive, Table::holding, kCommandRegister, {cmd::run_forward},
+                                   5s, reader),
+            Outcome::ok);
+  EXPECT_EQ(f.written(kSetValue, from), std::vector<std::uint16_t>{1000});
+  EXPECT_EQ(f.b.read("command"), cmd::run_forward);
+  ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
+  EXPECT_TRUE(f.speed_is(1000));
+}
+
 // A comm loss ends that exemption: the fault read once the line is back may be another trip, come
 // unseen while the line was down. The run asked with the first one shown is ended by it, and its
 // stop written, so the fault clearing then does not restart the fan.
 TEST(ModbusSetValueRuns, ACommLossEndsTheExemptionOfARunAskedInATrip) {
   Fan f;
-  ASSERT_TRUE(f.running_at(1000));
-  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
-  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
-  f.b.rig.run_for(1s);  // the trip's own stop is written
+  ASSERT_TRUE(f.tripped_and_read_by_the_plc());
   ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
   f.b.rig.run_for(1s);
   ASSERT_EQ(f.b.read("command"), cmd::run_forward);  // asked in the trip: not ended by it
@@ -342,10 +428,7 @@ TEST(ModbusSetValueRuns, ACommLossEndsTheExemptionOfARunAskedInATrip) {
 // new trip ends it and the driver writes the stop, as for any run.
 TEST(ModbusSetValueRuns, ARunAskedInATripIsEndedByTheNextTrip) {
   Fan f;
-  ASSERT_TRUE(f.running_at(1000));
-  ASSERT_EQ(f.b.control("fault 1").rfind("ok", 0), 0u);
-  ASSERT_TRUE(f.b.rig.run_until([&] { return (f.b.status() & kFaulted) != 0; }, 2s));
-  f.b.rig.run_for(1s);  // the trip's own stop is written
+  ASSERT_TRUE(f.tripped_and_read_by_the_plc());
   ASSERT_EQ(f.b.write({cmd::run_forward}), Outcome::ok);
   ASSERT_EQ(f.b.control("fault 0").rfind("ok", 0), 0u);
   ASSERT_TRUE(f.speed_is(1000));
