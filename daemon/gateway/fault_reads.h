@@ -9,8 +9,9 @@
 // after that: served (the gateway answered it), then sent (its reply went out), then seen (the
 // client sent more bytes since). A run sent in the same segment as the read before it (a
 // pipelining client), or after a read whose reply was dropped (the serial master had already
-// given up), was decided without that reply. A client that sends a run after the reply went out
-// but before it arrived cannot be told from one that read it: the gateway takes it as read.
+// given up, or the line went), was decided without that reply. A run sent before the reply
+// arrived but read from the socket later (a second TLS record or packet) cannot be told from one
+// sent after it: the gateway takes it as read (docs/profiles.md says what else it cannot tell).
 //
 // One per connection (a Modbus TCP / TLS client, a serial listener's line, an RTU-over-TCP
 // client); none for a northbound that cannot tell what its client read (MQTT: a DDATA is
@@ -62,6 +63,12 @@ class FaultReads {
   void all_sent() { sent_ = in_flight_.size(); }
   // The replies of the reads served and not sent will never go out (dropped): they never count.
   void unsent_dropped() { in_flight_.resize(sent_); }
+  // The line went: a reply handed to it may not have gone out either. Nothing served before
+  // counts.
+  void forget_in_flight() {
+    in_flight_.clear();
+    sent_ = 0;
+  }
   // The client sent more: the reads whose replies went out before count from now on.
   void received() {
     for (std::size_t i = 0; i < sent_; ++i) {

@@ -56,10 +56,9 @@ void SlaveHost::stop() {
 
 void SlaveHost::reset() {
   framer_.reset();
-  if (due_) {  // the line went before it could be sent
-    ++counters_.server_no_response;
-    session_.fault_reads->unsent_dropped();
-  }
+  if (due_) ++counters_.server_no_response;  // the line went before it could be sent
+  // Nor is a reply handed to the line known to have gone out: the reads before never count.
+  session_.fault_reads->forget_in_flight();
   due_.reset();
   timer_.cancel();
   timer_armed_ = false;

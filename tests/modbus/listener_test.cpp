@@ -151,6 +151,22 @@ TEST(Listener, AReadCountsForWhatTheClientSendsAfterItsReplyNotWithIt) {
   EXPECT_TRUE(seen().back()) << "sent after the read's reply";
 }
 
+// A write whose first bytes came with a read (its rest after the read's reply) was begun before
+// that reply: it finds nothing seen.
+TEST(Listener, AWriteBegunBeforeTheReadsReplyDoesNotCountIt) {
+  Harness h(with({{.access = AccessLevel::operate}}));
+  RawClient c(h.port());
+  Bytes first = request(3, 1, {0x04, 0x00, 0x00, 0x00, 0x01});  // input 0: kFaultState
+  first.insert(first.end(), kWriteSetpoint.begin(), kWriteSetpoint.begin() + 5);
+  ASSERT_TRUE(c.send(first));
+  EXPECT_EQ(c.reply().size(), 11u);
+  ASSERT_TRUE(c.send(Bytes(kWriteSetpoint.begin() + 5, kWriteSetpoint.end())));
+  EXPECT_EQ(c.reply(), kWriteSetpoint);
+  const auto seen = h.with_backend([](test::FakeBackend& b) { return b.writes_fault_seen; });
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_FALSE(seen.back());
+}
+
 TEST(Listener, AReloadChangesTheAccessOfOpenConnectionsAndClosesThoseNoLongerAllowed) {
   Harness h(with({{.access = AccessLevel::maintain}}));
   RawClient c(h.port());
